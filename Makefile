@@ -1,0 +1,29 @@
+# The two commands: `make demo` (the main job) and `make test` (the whole suite).
+# Each creates the virtual environment it needs.
+PYTHON ?= python3
+VENV   ?= .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+
+.PHONY: demo test bench devices clean
+
+$(STAMP): pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --upgrade pip
+	$(PY) -m pip install -e '.[test]'
+	touch $@
+
+demo: $(STAMP)
+	$(PY) -m holo_core demo -o out
+
+test: $(STAMP)
+	$(PY) -m pytest
+
+bench: $(STAMP)
+	$(PY) bench/propagation.py
+
+devices: $(STAMP)
+	$(PY) -m holo_core devices
+
+clean:
+	rm -rf $(VENV) out build *.egg-info

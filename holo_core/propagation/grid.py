@@ -1,0 +1,60 @@
+"""Sampling grids: pixel centres, DFT frequencies, padded sizes, and the checks every stage shares.
+
+Column j of a W-wide field lies at x = (j - (W-1)/2)·pitch, row i at y = (i - (H-1)/2)·pitch:
+the centre of the array is the optical axis. Frequencies are ``numpy.fft.fftfreq`` of the grid.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import validate
+
+
+def coords(n: int, pitch: float) -> np.ndarray:
+    """Pixel-centre positions [m] of ``n`` samples at ``pitch`` [m], centred on 0."""
+    return (np.arange(n) - (n - 1) / 2) * pitch
+
+
+def freqs(n: int, pitch: float) -> np.ndarray:
+    """DFT frequencies [1/m] of ``n`` samples at ``pitch`` [m], in FFT order."""
+    return np.fft.fftfreq(n, pitch)
+
+
+def next_fast_len(n: int) -> int:
+    """The smallest 2^a 3^b 5^c 7^d >= n (fast sizes for FFTW and VkFFT)."""
+    best = 1 << max(0, math.ceil(math.log2(max(n, 1))))
+    p7 = 1
+    while p7 < best:
+        p5 = p7
+        while p5 < best:
+            p3 = p5
+            while p3 < best:
+                m = p3
+                while m < n:
+                    m *= 2
+                best = min(best, m)
+                p3 *= 3
+            p5 *= 5
+        p7 *= 7
+    return best
+
+
+def padded_shape(shape: tuple[int, int], padding: float) -> tuple[int, int]:
+    """Grid size after zero-padding each axis by ``padding`` (>= 1), rounded up to a fast size."""
+    return tuple(next_fast_len(math.ceil(padding * n - 1e-9)) for n in shape)
+
+
+def wave(wavelength, pitch) -> tuple[float, float]:
+    """Checked (wavelength [m], pitch [m])."""
+    return (validate.positive("wavelength", wavelength, "m"),
+            validate.positive("pitch", pitch, "m"))
+
+
+def padding_factor(padding) -> float:
+    p = validate.at_least("padding", padding, 1.0)
+    if p > 16:
+        raise ValueError(f"padding must be in [1, 16]; got {padding!r}")
+    return p
