@@ -7,5 +7,6 @@ placed planes · resample.py: the four cases of Fig. 4 · fresnel.py: Fresnel an
 """
 
 from .angular_spectrum import alias_free_distance, angular_spectrum, transfer_function
+from .rayleigh_sommerfeld import rayleigh_sommerfeld
 
-__all__ = ["alias_free_distance", "angular_spectrum", "transfer_function"]
+__all__ = ["alias_free_distance", "angular_spectrum", "rayleigh_sommerfeld", "transfer_function"]
