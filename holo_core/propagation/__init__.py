@@ -7,6 +7,11 @@ placed planes · resample.py: the four cases of Fig. 4 · fresnel.py: Fresnel an
 """
 
 from .angular_spectrum import alias_free_distance, angular_spectrum, transfer_function
+from .fresnel import fraunhofer, fresnel
 from .rayleigh_sommerfeld import rayleigh_sommerfeld
+from .resample import interpolation_matrix, resample
+from .tilt import propagate_to_plane, tilt
 
-__all__ = ["alias_free_distance", "angular_spectrum", "rayleigh_sommerfeld", "transfer_function"]
+__all__ = ["alias_free_distance", "angular_spectrum", "fraunhofer", "fresnel",
+           "interpolation_matrix", "propagate_to_plane", "rayleigh_sommerfeld", "resample",
+           "tilt", "transfer_function"]

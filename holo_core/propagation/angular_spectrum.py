@@ -15,7 +15,8 @@ import numpy as np
 from .. import validate
 from ..opencl import as_device, like_input
 from . import grid
-from .convolution import cached, convolve
+from ..opencl.arrays import cached
+from .convolution import convolve
 
 
 def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,

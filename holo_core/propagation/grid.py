@@ -47,6 +47,14 @@ def padded_shape(shape: tuple[int, int], padding: float) -> tuple[int, int]:
     return tuple(next_fast_len(math.ceil(padding * n - 1e-9)) for n in shape)
 
 
+def support(field: np.ndarray):
+    """The field cropped to its non-zero bounding box, and the box's (row, col) origin."""
+    rows, cols = np.nonzero(field.any(axis=1))[0], np.nonzero(field.any(axis=0))[0]
+    if rows.size == 0:
+        return field[:1, :1], (0, 0)
+    return field[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1], (int(rows[0]), int(cols[0]))
+
+
 def wave(wavelength, pitch) -> tuple[float, float]:
     """Checked (wavelength [m], pitch [m])."""
     return (validate.positive("wavelength", wavelength, "m"),

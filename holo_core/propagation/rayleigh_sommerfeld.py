@@ -11,9 +11,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pyopencl.array as cla
 
 from .. import validate
+from ..opencl.arrays import empty
 from ..opencl import as_device, is_device_array, like_input
 from . import grid
 
@@ -53,7 +53,7 @@ def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0)
     out_pitch = pitch if out_pitch is None else validate.positive("out_pitch", out_pitch, "m")
     src_x0, src_y0 = -(field.shape[1] - 1) / 2 * pitch, -(field.shape[0] - 1) / 2 * pitch
     if not is_device_array(field):
-        field, (r0, c0) = _support(validate.host_field("field", field))
+        field, (r0, c0) = grid.support(validate.host_field("field", field))
         src_x0, src_y0 = src_x0 + c0 * pitch, src_y0 + r0 * pitch
     rt, src, from_host = as_device(field)
     out_shape = src.shape if out_shape is None and not from_host else out_shape
@@ -66,20 +66,12 @@ def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0)
     g = pitch**2 * np.exp(1j * math.remainder(sgn * k * abs(z), 2 * math.pi))
     real = np.float64 if rt.has_fp64 else np.float32
     options = ("-DHOLO_FP64",) if rt.has_fp64 else ()
-    out = cla.empty(rt.queue, out_shape, np.complex64)
+    out = empty(rt, out_shape)
     args = [pitch, src_x0, src_y0, out_pitch, out_x0, out_y0, abs(z), k, sgn, g.real, g.imag]
     rt.kernel("rayleigh_sommerfeld", "rs_direct", options)(
         rt.queue, out_shape, None, out.data, src.data, np.int32(src.shape[0]),
         np.int32(src.shape[1]), *(real(a) for a in args))
     return like_input(out, from_host)
-
-
-def _support(field: np.ndarray):
-    """The field cropped to its non-zero bounding box, and the box's (row, col) origin."""
-    rows, cols = np.nonzero(field.any(axis=1))[0], np.nonzero(field.any(axis=0))[0]
-    if rows.size == 0:
-        return field[:1, :1], (0, 0)
-    return field[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1], (rows[0], cols[0])
 
 
 def _check_aliasing(shape, pitch, src0, out_shape, out_pitch, out0, wavelength, z):

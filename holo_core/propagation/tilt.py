@@ -9,13 +9,12 @@ linearly (after Delen & Hooker) on the zero-padded grid, so ``padding`` also ref
 from __future__ import annotations
 
 import numpy as np
-import pyopencl.array as cla
 
 from .. import validate
 from ..opencl import as_device, like_input
 from . import grid
 from .angular_spectrum import angular_spectrum
-from .convolution import embed, window
+from ..opencl.arrays import embed, empty, window
 
 
 def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_pitch=None):
@@ -55,7 +54,7 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     (r0, c0), (t0, u0) = _corner(src.shape, (hs, ws)), _corner(out_shape, (ht, wt))
     embed(rt, spectrum, src, r0, c0)
     rt.fft.forward(spectrum)
-    target = cla.empty(rt.queue, (ht, wt), np.complex64)
+    target = empty(rt, (ht, wt))
     real = np.float64 if rt.has_fp64 else np.float32
     options = ("-DHOLO_FP64",) if rt.has_fp64 else ()
     freq = [1 / (ht * out_pitch), 1 / (wt * out_pitch), 1 / (hs * pitch), 1 / (ws * pitch),

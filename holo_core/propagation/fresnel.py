@@ -1,0 +1,92 @@
+"""Paraxial propagation, for comparison and for the far field.
+
+``fresnel`` is the Fresnel transfer function exp(ikz)·exp(-iπλz(fx² + fy²)) on the same padded
+grid as the angular spectrum (band-limited the same way); ``fraunhofer`` is the far field as one
+centred Fourier transform, on the grid of pitch λz/(W·pitch) it implies.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import validate
+from ..opencl import as_device, is_device_array, like_input
+from . import grid
+from ..opencl.arrays import cached, copy
+from .convolution import convolve
+
+
+def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2):
+    """The paraxial (Fresnel) field on the parallel plane at ``distance``.
+
+    Same parameters and result as :func:`~holo_core.propagation.angular_spectrum` (``wavelength``,
+    ``pitch``, ``distance``, ``offset`` in metres); accurate only where the paraxial
+    approximation holds.
+    """
+    wavelength, pitch = grid.wave(wavelength, pitch)
+    z = validate.finite("distance", distance, "m")
+    x0, y0 = validate.pair("offset", offset, "m")
+    padding = grid.padding_factor(padding)
+    rt, dev, from_host = as_device(field, check=False)  # convolve checks the DC term
+    shape = grid.padded_shape(dev.shape, padding)
+
+    def make():
+        fy, fx = grid.freqs(shape[0], pitch)[:, None], grid.freqs(shape[1], pitch)[None, :]
+        carrier = math.remainder(2 * math.pi * z / wavelength, 2 * math.pi)
+        phase = carrier - np.pi * wavelength * z * (fx**2 + fy**2) + 2 * np.pi * (fx * x0 + fy * y0)
+        # the ray of frequency f lands at x0 - λz·f: keep those inside half the padded window
+        keep = (np.abs(x0 - wavelength * z * fx) <= shape[1] * pitch / 2) \
+            & (np.abs(y0 - wavelength * z * fy) <= shape[0] * pitch / 2)
+        return np.where(keep, np.exp(1j * phase), 0) / (shape[0] * shape[1]), []
+
+    tf, _ = cached(rt, ("fresnel", dev.shape, shape, wavelength, pitch, z, x0, y0), make)
+    return like_input(convolve(rt, dev, tf), from_host)
+
+
+def fraunhofer(field, *, wavelength, pitch, distance):
+    """The far field at ``distance`` > 0 and the pitch of its grid.
+
+    U(x', y') = exp(ikz)·exp(ik(x'² + y'²)/(2z))/(iλz) · pitch² · Σ U(x, y)·exp(-i2π(x x' + y y')/(λz))
+    on the centred grid of the input's shape with pitch λz/(W·pitch) (per axis: λz/(H·pitch)
+    for rows). ``wavelength``, ``pitch``, ``distance`` in metres. Warns when ``distance`` is
+    short of the Fraunhofer distance 2·D²/λ of the field's non-zero extent D.
+
+    Returns
+    -------
+    (field, (row pitch, column pitch)): complex64 like the input, pitches in metres.
+    """
+    wavelength, pitch = grid.wave(wavelength, pitch)
+    z = validate.positive("distance", distance, "m")
+    if not is_device_array(field):
+        support = grid.support(validate.host_field("field", field))[0].shape
+        extent = math.hypot(*support) * pitch
+        if z < 2 * extent**2 / wavelength:
+            validate.warn_sampling(
+                f"fraunhofer: distance {z:.4g} m is short of the far field of this field "
+                f"(2·D²/λ = {2 * extent**2 / wavelength:.4g} m); use fresnel or angular_spectrum")
+    rt, dev, from_host = as_device(field)
+    h, w = dev.shape
+    out_pitch = (wavelength * z / (h * pitch), wavelength * z / (w * pitch))
+
+    # centred DFT: exp(-i2π(j-c)(n-c)/N) = ramp(n)·ramp(j)·exp(-i2πc²/N), c = (N-1)/2
+    def ramp():
+        ry, rx = [np.exp(1j * np.pi * (n - 1) * np.arange(n) / n) for n in (h, w)]
+        return ry[:, None] * rx[None, :]
+
+    def far_phase():
+        yo, xo = grid.coords(h, out_pitch[0])[:, None], grid.coords(w, out_pitch[1])[None, :]
+        k = 2 * np.pi / wavelength
+        phase = math.remainder(k * z, 2 * math.pi) + k * (xo**2 + yo**2) / (2 * z) \
+            - np.pi * ((h - 1) ** 2 / (2 * h) + (w - 1) ** 2 / (2 * w))
+        return ramp() * np.exp(1j * phase) * pitch**2 / (1j * wavelength * z), []
+
+    pre, _ = cached(rt, ("centred-dft", (h, w)), lambda: (ramp(), []))
+    post, _ = cached(rt, ("fraunhofer", (h, w), wavelength, pitch, z), far_phase)
+    out = copy(dev)
+    multiply = rt.kernel("spectral", "multiply")
+    multiply(rt.queue, (h * w,), None, out.data, pre.data)
+    rt.fft.forward(out)
+    multiply(rt.queue, (h * w,), None, out.data, post.data)
+    return like_input(out, from_host), out_pitch
