@@ -1,0 +1,22 @@
+"""Tolerances shared by the tests, with the reason for each (pyvkfft's accuracy.py in spirit)."""
+
+import numpy as np
+
+# complex64 device pipelines against float64 NumPy: ~1e-7 per FFT pass, a few passes
+FLOAT32_PIPELINE = 1e-5
+# float32 kernels doing O(N) sums per output (direct RS, resampling matrix products)
+FLOAT32_SUM = 1e-5
+# band-limited ASM against direct Rayleigh-Sommerfeld (the issue's bounds; measured with the
+# rolled-off band edge: 3e-4, 5e-5, 2.6e-3 and 1e-5, see test_angular_spectrum)
+ASM_VS_RS = {"fresnel 1-5": 5e-3, "fresnel 0.25": 1e-2, "fresnel 0.25 padded 4x": 3e-3}
+# paraxial Gaussian beam formula vs exact propagation, w0 >> λ: (λ/(π w0))² ~ 1e-5
+GAUSSIAN_BEAM = 1e-4
+# spectrum rotation with linear interpolation (Delen & Hooker), measured on a tilted beam
+TILT_PADDED_2 = 1.5e-2
+TILT_PADDED_4 = 4e-3
+
+
+def rel_err(a, ref) -> float:
+    """Relative complex error ||a - ref|| / ||ref|| in float64."""
+    a, ref = np.asarray(a, np.complex128), np.asarray(ref, np.complex128)
+    return float(np.linalg.norm(a - ref) / np.linalg.norm(ref))
