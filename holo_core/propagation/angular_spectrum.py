@@ -17,10 +17,10 @@ import math
 import numpy as np
 
 from .. import validate
-from ..opencl import as_device, like_input
+from ..opencl import like_input
 from . import grid
 from ..opencl.arrays import cached
-from .convolution import convolve
+from .convolution import convolution_setup, convolve
 
 BAND_EDGE = 0.2  # fraction of the band-limited ray range given to the cosine roll-off
 
@@ -51,12 +51,9 @@ def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), p
     -------
     Complex64 array of the input's shape and pitch, NumPy or device array like the input.
     """
-    wavelength, pitch = grid.wave(wavelength, pitch)
-    z = validate.finite("distance", distance, "m")
-    x0, y0 = validate.pair("offset", offset, "m")
-    padding = grid.padding_factor(padding)
-    rt, dev, from_host = as_device(field, check=False)  # convolve checks the DC term
-    shape = grid.padded_shape(dev.shape, padding)
+    s = convolution_setup(field, wavelength, pitch, distance, offset, padding)
+    wavelength, pitch, z, (x0, y0), padding = s.wavelength, s.pitch, s.z, s.offset, s.padding
+    rt, dev, from_host, shape = s.rt, s.dev, s.from_host, s.shape
 
     def make():
         tf = transfer_function(shape, wavelength=wavelength, pitch=pitch, distance=z,

@@ -6,9 +6,38 @@ uploaded once into the runtime's cache (``holo_core.opencl.arrays.cached``).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
+from .. import validate
+from ..opencl import as_device
 from ..opencl.arrays import embed, read_first, window
+from . import grid
+
+
+class Setup(NamedTuple):
+    wavelength: float
+    pitch: float
+    z: float
+    offset: tuple[float, float]
+    padding: float
+    rt: object
+    dev: object
+    from_host: bool
+    shape: tuple[int, int]
+
+
+def convolution_setup(field, wavelength, pitch, distance, offset, padding) -> Setup:
+    """Checked settings (λ, pitch, distance, offset in metres), the field on the device and
+    the padded grid: what every transfer-function propagation starts from."""
+    wavelength, pitch = grid.wave(wavelength, pitch)
+    z = validate.finite("distance", distance, "m")
+    offset = validate.pair("offset", offset, "m")
+    padding = grid.padding_factor(padding)
+    rt, dev, from_host = as_device(field, check=False)  # convolve checks the DC term
+    return Setup(wavelength, pitch, z, offset, padding, rt, dev, from_host,
+                 grid.padded_shape(dev.shape, padding))
 
 
 def convolve(rt, field, transfer):

@@ -15,7 +15,7 @@ from .. import validate
 from ..opencl import as_device, is_device_array, like_input
 from . import grid
 from ..opencl.arrays import cached, copy
-from .convolution import convolve
+from .convolution import convolution_setup, convolve
 
 
 def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2):
@@ -25,12 +25,9 @@ def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2)
     ``pitch``, ``distance``, ``offset`` in metres); accurate only where the paraxial
     approximation holds.
     """
-    wavelength, pitch = grid.wave(wavelength, pitch)
-    z = validate.finite("distance", distance, "m")
-    x0, y0 = validate.pair("offset", offset, "m")
-    padding = grid.padding_factor(padding)
-    rt, dev, from_host = as_device(field, check=False)  # convolve checks the DC term
-    shape = grid.padded_shape(dev.shape, padding)
+    s = convolution_setup(field, wavelength, pitch, distance, offset, padding)
+    wavelength, pitch, z, (x0, y0), padding = s.wavelength, s.pitch, s.z, s.offset, s.padding
+    rt, dev, from_host, shape = s.rt, s.dev, s.from_host, s.shape
 
     def make():
         fy, fx = grid.freqs(shape[0], pitch)[:, None], grid.freqs(shape[1], pitch)[None, :]

@@ -14,6 +14,7 @@ from .. import validate
 from ..opencl import as_device, like_input
 from . import grid
 from .angular_spectrum import angular_spectrum
+from .resample import resample
 from ..opencl.arrays import embed, empty, window
 
 
@@ -102,7 +103,6 @@ def propagate_to_plane(field, *, wavelength, pitch, rotation, position, padding=
                       out_shape=out_shape, out_pitch=out_pitch)
         pitch = out_pitch or pitch
     elif out_shape is not None or out_pitch is not None:
-        from .resample import resample
         tilted = resample(field, pitch=pitch, out_shape=out_shape or np.shape(field),
                           out_pitch=out_pitch or pitch)
         pitch = out_pitch or pitch
