@@ -17,6 +17,7 @@ from __future__ import annotations
 import logging
 import os
 import threading
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -107,7 +108,9 @@ class Runtime:
         if key not in self._programs:
             source = (KERNELS / f"{name}.cl").read_text()
             opts = [f"-I{KERNELS}", *options]
-            self._programs[key] = cl.Program(self.context, source).build(options=opts)
+            with warnings.catch_warnings():  # PoCL's clang notes vector ABIs; not our concern
+                warnings.simplefilter("ignore", cl.CompilerWarning)
+                self._programs[key] = cl.Program(self.context, source).build(options=opts)
         return self._programs[key]
 
     def kernel(self, program: str, name: str, options: tuple[str, ...] = ()) -> cl.Kernel:

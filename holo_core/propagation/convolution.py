@@ -40,11 +40,13 @@ def convolution_setup(field, wavelength, pitch, distance, offset, padding) -> Se
                  grid.padded_shape(dev.shape, padding))
 
 
-def convolve(rt, field, transfer):
+def convolve(rt, field, transfer, chirp=None):
     """``field`` (h, w) convolved on the padded grid of ``transfer`` (H, W), cropped to (h, w).
 
-    ``transfer`` is in FFT order and carries the 1/(H·W) of the inverse FFT. Raises
-    ``ValueError`` if the field holds NaN or Inf (seen in its DC term, the sum of all samples).
+    ``transfer`` is in FFT order and carries the 1/(H·W) of the inverse FFT. With ``chirp`` =
+    (c [rad], d [m]) it holds (w, g) pairs instead, and the transfer function is w·exp(i(c-d·g)).
+    Raises ``ValueError`` if the field holds NaN or Inf (seen in its DC term, the sum of all
+    samples).
     """
     (h, w), (H, W) = field.shape, transfer.shape
     r0, c0 = (H - h) // 2, (W - w) // 2
@@ -54,6 +56,10 @@ def convolve(rt, field, transfer):
     rt.fft.forward(work, cols)
     if not np.isfinite(read_first(rt, work)).all():
         raise ValueError("field must be finite; it holds NaN or infinite values")
-    rt.kernel("spectral", "multiply")(rt.queue, (H * W,), None, work.data, transfer.data)
+    if chirp is None:
+        rt.kernel("spectral", "multiply")(rt.queue, (H * W,), None, work.data, transfer.data)
+    else:
+        rt.kernel("spectral", "multiply_chirp")(rt.queue, (H * W,), None, work.data,
+                                                transfer.data, *map(np.float32, chirp))
     rt.fft.backward(work, cols)
     return window(rt, work, (h, w), r0, c0)
