@@ -21,6 +21,7 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) bench/propagation.py
+	$(PY) bench/record.py
 
 devices: $(STAMP)
 	$(PY) -m holo_core devices

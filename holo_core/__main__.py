@@ -1,4 +1,4 @@
-"""Command line: ``python -m holo_core devices | demo``."""
+"""Command line: ``python -m holo_core devices | demo | record | info``."""
 
 from __future__ import annotations
 
@@ -26,6 +26,48 @@ def demo(args) -> int:
     return 0
 
 
+def record(args) -> int:
+    import numpy as np
+    from .emitters import default_spacing, read_mesh, sample_points
+    from .hologram_io import write_hologram
+    from .record import Reference, record_points
+    mesh = read_mesh(args.mesh)
+    shape = (args.resolution[1], args.resolution[0])
+    wavelengths = tuple(w * 1e-9 for w in args.wavelengths)
+    vertices = mesh.vertices.copy()
+    if args.distance is not None:  # place the mesh's nearest point at -distance, centred
+        lo, hi = vertices.min(0), vertices.max(0)
+        vertices -= [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, hi[2] + args.distance]
+        mesh = type(mesh)(vertices=vertices, triangles=mesh.triangles, colours=mesh.colours)
+    spacing = args.spacing or default_spacing(max(wavelengths), args.pitch, shape, vertices)
+    pos, colours = sample_points(mesh, spacing, channels=len(wavelengths),
+                                 max_points=args.max_points)
+    colours = colours[:, :len(wavelengths)] if colours.shape[1] >= len(wavelengths) else \
+        np.repeat(colours.mean(1, keepdims=True), len(wavelengths), 1)
+    print(f"{len(pos)} point emitters ({spacing:.3g} m apart) -> {shape[1]}x{shape[0]} "
+          f"hologram, pitch {args.pitch:.3g} m, wavelengths {args.wavelengths} nm")
+    holo = record_points(pos, colours, shape=shape, pitch=args.pitch, wavelengths=wavelengths,
+                         reference=Reference(angle=args.reference_angle), method=args.method,
+                         progress=_progress_bar())
+    print()
+    print(write_hologram(args.output, holo))
+    return 0
+
+
+def info(args) -> int:
+    import json
+    from .hologram_io import metadata, read_hologram
+    print(json.dumps(metadata(read_hologram(args.hologram)), indent=2))
+    return 0
+
+
+def _progress_bar(width=40):
+    def show(fraction):
+        done = int(round(fraction * width))
+        print(f"\r[{'#' * done}{'.' * (width - done)}] {fraction:6.1%}", end="", flush=True)
+    return show
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m holo_core", description=__doc__)
     parser.add_argument("-v", "--verbose", action="store_true")
@@ -33,11 +75,30 @@ def main(argv=None) -> int:
     sub.add_parser("devices", help="list OpenCL devices and the one Holo would use")
     p = sub.add_parser("demo", help="render the built-in demo to image files")
     p.add_argument("-o", "--output", default="out", help="output folder (default: out)")
+    p = sub.add_parser("record", help="record a hologram of a PLY or OBJ mesh")
+    p.add_argument("mesh", help="mesh file (.ply or .obj), units taken as metres")
+    p.add_argument("-o", "--output", required=True, help="hologram file to write (.exr)")
+    p.add_argument("--resolution", type=int, nargs=2, default=(1024, 1024),
+                   metavar=("W", "H"), help="hologram size in pixels (default 1024 1024)")
+    p.add_argument("--pitch", type=float, default=8e-6, help="sample spacing [m] (8e-6)")
+    p.add_argument("--wavelengths", type=float, nargs="+", default=[633, 532, 473],
+                   help="wavelengths [nm] (633 532 473)")
+    p.add_argument("--reference-angle", type=float, default=0.0, help="ϑ [rad] (0)")
+    p.add_argument("--distance", type=float, default=None,
+                   help="move the mesh so its nearest point is this far in front [m]")
+    p.add_argument("--spacing", type=float, default=None,
+                   help="point spacing on the surface [m] (default: the hologram's resolution)")
+    p.add_argument("--max-points", type=int, default=200_000)
+    p.add_argument("--method", choices=["auto", "direct", "wrp"], default="auto",
+                   help="point emitter sum (default: the faster)")
+    p = sub.add_parser("info", help="print a hologram file's metadata")
+    p.add_argument("hologram")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     try:
-        return {"devices": devices, "demo": demo}[args.command](args)
+        return {"devices": devices, "demo": demo, "record": record, "info": info}[
+            args.command](args)
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

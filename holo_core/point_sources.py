@@ -19,7 +19,6 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-import pyopencl as cl
 
 from . import jobs, validate
 from .opencl import get_runtime

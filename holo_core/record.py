@@ -1,0 +1,150 @@
+"""Recording: object wave, reference wave and the intensity hologram H = |O + R|² (Sect. V-B).
+
+The hologram lies in the plane z = 0 of its own frame, objects at z < 0, light travelling +z.
+One hologram is recorded per wavelength of the same scene (Sect. VII-B).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import jobs, validate
+from .hologram_io import Hologram
+from .point_sources import point_wave
+from .propagation import grid
+
+DEFAULT_WAVELENGTHS = (633e-9, 532e-9, 473e-9)  # HeNe red, Nd:YAG green, DPSS blue [m]
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Reference:
+    """The plane reference wave of Eq. 4 on z = 0.
+
+    angle : float
+        ϑ [rad], between the reference's direction and the hologram normal (+z), in [0, π/2).
+    azimuth : float
+        φ [rad], direction of the tilt in the hologram plane, from +x towards +y.
+    beam_ratio : float
+        |R|² / mean |O|², > 0: the reference's intensity against the object wave's.
+    allow_aliasing : bool
+        Record even when the pitch violates Eq. 19 (the message names the largest safe angle).
+    """
+
+    angle: float = 0.0
+    azimuth: float = 0.0
+    beam_ratio: float = 4.0
+    allow_aliasing: bool = False
+
+    def __post_init__(self):
+        a = validate.finite("reference angle", self.angle, "rad")
+        if not 0 <= a < math.pi / 2:
+            raise ValueError(f"reference angle must be in [0, π/2) rad; got {self.angle!r}")
+        validate.finite("reference azimuth", self.azimuth, "rad")
+        validate.positive("reference beam_ratio", self.beam_ratio)
+
+    def direction(self) -> np.ndarray:
+        """Unit propagation direction (α, β, γ) (direction cosines of Eq. 4)."""
+        s = math.sin(self.angle)
+        return np.array([s * math.cos(self.azimuth), s * math.sin(self.azimuth),
+                         math.cos(self.angle)])
+
+    def check(self, wavelength: float, pitch: float) -> None:
+        """Eq. 19: the carrier fringes need pitch <= λ / (2 sin ϑ)."""
+        if self.angle == 0:
+            return
+        limit = wavelength / (2 * math.sin(self.angle))
+        if pitch > limit:
+            safe = math.asin(min(1.0, wavelength / (2 * pitch)))
+            message = (f"reference angle {self.angle:.4g} rad needs a pitch <= {limit:.4g} m "
+                       f"at λ = {wavelength:.4g} m (Eq. 19); with pitch {pitch:.4g} m the "
+                       f"largest safe angle is {safe:.4g} rad")
+            if not self.allow_aliasing:
+                raise ValueError(message)
+            validate.warn_sampling(message)
+
+
+def reference_wave(shape, *, wavelength, pitch, reference: Reference, amplitude=1.0):
+    """R = A·exp(ik(α·x + β·y)) on the hologram's pixel centres (Eq. 4 on z = 0), complex64.
+
+    ``shape`` (rows, cols); ``wavelength``, ``pitch`` [m]; ``amplitude`` A [field units].
+    The phase is formed in float64 and reduced before the cast.
+    """
+    h, w = validate.shape2d("shape", shape)
+    wavelength, pitch = grid.wave(wavelength, pitch)
+    alpha, beta, _ = reference.direction()
+    k = 2 * np.pi / wavelength
+    px = np.remainder(k * alpha * grid.coords(w, pitch), 2 * np.pi)
+    py = np.remainder(k * beta * grid.coords(h, pitch), 2 * np.pi)
+    return (amplitude * np.exp(1j * py)[:, None] * np.exp(1j * px)[None, :]).astype(np.complex64)
+
+
+def interfere(object_wave, reference_wave) -> np.ndarray:
+    """H = |O + R|² (Eq. 16), float32."""
+    u = np.asarray(object_wave, np.complex64) + np.asarray(reference_wave, np.complex64)
+    return (u.real * u.real + u.imag * u.imag).astype(np.float32)
+
+
+def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVELENGTHS,
+                  phases=None, seed=0, reference=Reference(), obliquity=False,
+                  keep_object_wave=True, plate=None, method="auto",
+                  progress: jobs.Progress = None) -> Hologram:
+    """Holograms of point emitters, one per wavelength.
+
+    Parameters
+    ----------
+    positions : (N, 3) float array
+        Points [m] in the hologram's frame (z < 0).
+    colours : (N, C) float array
+        Intensity I >= 0 per point and wavelength; the amplitude is A0 = √I (Sect. VII-B).
+    shape : (int, int)
+        Hologram (rows, cols).
+    pitch : float
+        Hologram sample spacing [m].
+    wavelengths : sequence of float
+        One λ [m] per colour channel; equal values are allowed.
+    phases : (N,) float array, optional
+        Initial phases φ0 [rad]; default uniformly random (a diffuse surface), from ``seed``.
+    reference : Reference
+        The reference wave; its amplitude follows from ``beam_ratio`` per colour.
+    plate : (4, 4) array, optional
+        The hologram frame's pose in the world (hologram-to-world), stored with it.
+    method, obliquity
+        As for :func:`holo_core.point_sources.point_wave`.
+    """
+    pos = np.asarray(positions, np.float64)
+    lambdas = tuple(validate.positive("wavelengths", w, "m") for w in np.atleast_1d(wavelengths))
+    if not lambdas:
+        raise ValueError("wavelengths must hold at least one wavelength [m]")
+    cols = np.asarray(colours, np.float64).reshape(len(pos), -1)
+    if cols.shape[1] != len(lambdas):
+        raise ValueError(f"colours must have one column per wavelength ({len(lambdas)}); "
+                         f"got {cols.shape[1]}")
+    if not np.isfinite(cols).all() or (cols < 0).any():
+        raise ValueError("colours must be finite intensities >= 0")
+    if phases is None:
+        phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, len(pos))
+    phases = np.asarray(phases, np.float64).reshape(len(pos))
+    shape = validate.shape2d("shape", shape)
+    pitch = validate.positive("pitch", pitch, "m")
+    for lam in lambdas:
+        reference.check(lam, pitch)
+    intensity, waves, amplitudes = [], [], []
+    for c, lam in enumerate(lambdas):
+        o = point_wave(pos, np.sqrt(cols[:, c]) * np.exp(1j * phases), wavelength=lam,
+                       pitch=pitch, shape=shape, obliquity=obliquity, method=method,
+                       progress=jobs.scaled(progress, c / len(lambdas), (c + 1) / len(lambdas)))
+        a_r = math.sqrt(reference.beam_ratio * max(float(np.mean(np.abs(o) ** 2)), 1e-30))
+        intensity.append(interfere(o, reference_wave(shape, wavelength=lam, pitch=pitch,
+                                                     reference=reference, amplitude=a_r)))
+        waves.append(o)
+        amplitudes.append(a_r)
+    bounds = np.array([pos.min(0), pos.max(0)]) if len(pos) else np.zeros((2, 3))
+    return Hologram(intensity=np.stack(intensity), wavelengths=lambdas, pitch=pitch,
+                    reference_angle=reference.angle, reference_azimuth=reference.azimuth,
+                    reference_amplitudes=tuple(amplitudes),
+                    object_wave=np.stack(waves) if keep_object_wave else None,
+                    plate=np.eye(4) if plate is None else np.asarray(plate, np.float64),
+                    bounds=bounds)

@@ -1,0 +1,178 @@
+"""Recording and reconstruction against analytic waves and float64 NumPy (Sect. V-VI)."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+from accuracy import POINT_SUM, WRP_VS_DIRECT, PRIMITIVE_VS_POINTS, rel_err
+from holo_core.emitters import Primitive, primitive_wave, surface_field, surface_pitch
+from holo_core.point_sources import Grid, cone_weight, point_wave
+from holo_core.propagation import angular_spectrum, grid
+from holo_core.reconstruct import reconstruct
+from holo_core.record import Reference, record_points, reference_wave
+from holo_core.validate import SamplingWarning
+
+LAM, PITCH = 633e-9, 8e-6
+
+
+def numpy_point_wave(pos, amp, shape, obliquity=False, lam=LAM, pitch=PITCH):
+    """Eq. 3 summed in float64, each point weighted by its sampling cone."""
+    g = Grid(shape, pitch, lam)
+    y, x = grid.coords(shape[0], pitch)[:, None], grid.coords(shape[1], pitch)[None, :]
+    out = np.zeros(shape, np.complex128)
+    for (px, py, pz), a in zip(pos, amp):
+        rho2 = (x - px) ** 2 + (y - py) ** 2
+        r = np.sqrt(rho2 + pz * pz)
+        w = a * np.exp(2j * np.pi / lam * r) / r * cone_weight(rho2, (g.cone * pz) ** 2)
+        out += w * (abs(pz) / r if obliquity else 1)
+    return out
+
+
+def max_rel(a, ref):
+    return float(np.abs(a - ref).max() / np.abs(ref).max())
+
+
+def test_one_point_is_the_spherical_wave():
+    shape, z = (128, 160), -0.03
+    o = point_wave([[1e-4, -5e-5, z]], [2.0], wavelength=LAM, pitch=PITCH, shape=shape)
+    y, x = grid.coords(shape[0], PITCH)[:, None], grid.coords(shape[1], PITCH)[None, :]
+    r = np.sqrt((x - 1e-4) ** 2 + (y + 5e-5) ** 2 + z * z)
+    inner = (x - 1e-4) ** 2 + (y + 5e-5) ** 2 <= (0.5 * Grid(shape, PITCH, LAM).cone * z) ** 2
+    analytic = 2.0 * np.exp(2j * np.pi / LAM * r) / r
+    err = max_rel(o[inner], analytic[inner])
+    assert err < POINT_SUM, f"point wave vs 2·exp(ikr)/r inside the cone: {err:.2e}"
+
+
+@pytest.mark.parametrize("obliquity", [False, True])
+def test_device_sum_equals_float64_numpy(rng, obliquity):
+    shape = (96, 136)
+    g = Grid(shape, PITCH, LAM)
+    z = rng.uniform(-0.05, -0.004, 40)
+    near_axis = np.c_[rng.normal(0, 2e-4, 20), rng.normal(0, 2e-4, 20)]
+    edge = rng.uniform(-1, 1, (20, 2))  # at the rim of the cone over the hologram's centre
+    edge = edge / np.linalg.norm(edge, axis=1)[:, None] * (0.95 * g.cone * np.abs(z[20:]))[:, None]
+    pos = np.c_[np.r_[near_axis, edge], z]
+    amp = rng.uniform(0.5, 1, 40) * np.exp(2j * np.pi * rng.random(40))
+    o = point_wave(pos, amp, wavelength=LAM, pitch=PITCH, shape=shape, obliquity=obliquity,
+                   method="direct")
+    err = max_rel(o, numpy_point_wave(pos, amp, shape, obliquity))
+    assert err < POINT_SUM, f"OpenCL point sum vs float64 NumPy: max relative error {err:.2e}"
+
+
+def test_recording_planes_match_the_direct_sum(rng):
+    shape, n = (256, 256), 3000
+    half = shape[0] * PITCH / 2
+    pos = np.c_[rng.uniform(-half, half, (n, 2)), rng.uniform(-0.2, -0.1, n)]
+    amp = np.exp(2j * np.pi * rng.random(n))
+    direct = point_wave(pos, amp, wavelength=LAM, pitch=PITCH, shape=shape, method="direct")
+    wrp = point_wave(pos, amp, wavelength=LAM, pitch=PITCH, shape=shape, method="wrp")
+    err = rel_err(wrp, direct)
+    assert err < WRP_VS_DIRECT, f"wavefront recording planes vs direct sum: {err:.2e}"
+
+
+def test_points_behind_the_hologram_are_refused():
+    with pytest.raises(ValueError, match="z must be < 0"):
+        point_wave([[0, 0, 0.01]], [1], wavelength=LAM, pitch=PITCH, shape=(8, 8))
+
+
+def _cloud(rng, z):
+    """Six points on a 3x2 lattice 20 pixels apart, jittered by up to a pixel."""
+    lattice = np.array([(i, j) for i in (-1, 0, 1) for j in (-0.5, 0.5)]) * 20 * PITCH
+    return np.c_[lattice + rng.uniform(-PITCH, PITCH, (6, 2)), np.full(6, z)]
+
+
+def test_reconstruction_focuses_every_point(rng):
+    shape, z = (256, 256), -0.15
+    pts = _cloud(rng, z)
+    holo = record_points(pts, np.ones((6, 1)), shape=shape, pitch=PITCH, wavelengths=(LAM,),
+                         reference=Reference(angle=0.03), seed=3)
+    image = np.abs(angular_spectrum(reconstruct(holo), wavelength=LAM, pitch=PITCH,
+                                    distance=z)) ** 2
+    for x, y, _ in pts:
+        col, row = x / PITCH + (shape[1] - 1) / 2, y / PITCH + (shape[0] - 1) / 2
+        r0, c0 = int(round(row)) - 6, int(round(col)) - 6
+        win = image[r0:r0 + 13, c0:c0 + 13]
+        pr, pc = np.unravel_index(win.argmax(), win.shape)
+        off = math.hypot(r0 + pr - row, c0 + pc - col)
+        assert off <= 1.0, f"point at ({x:.2e}, {y:.2e}) focuses {off:.2f} px away"
+
+
+def test_dc_suppression_removes_the_reference_term(rng):
+    """Fig. 7: the reference term R(|O|² + |R|²) is the reconstruction's component along R."""
+    shape, z = (256, 256), -0.05
+    ref = Reference(angle=0.03, beam_ratio=4.0)
+    holo = record_points(_cloud(rng, z), np.ones((6, 1)), shape=shape, pitch=PITCH,
+                         wavelengths=(LAM,), reference=ref)
+    r = reference_wave(shape, wavelength=LAM, pitch=PITCH, reference=ref)
+
+    def reference_energy(u):  # energy in the 3x3 spectral bins around R's carrier
+        s = np.fft.fft2(u * np.conj(r))
+        s = np.fft.fftshift(s)
+        c = np.array(shape) // 2
+        return float((np.abs(s[c[0] - 1:c[0] + 2, c[1] - 1:c[1] + 2]) ** 2).sum())
+
+    plain = reference_energy(reconstruct(holo, dc_suppression=False))
+    suppressed = reference_energy(reconstruct(holo, dc_suppression=True))
+    db = 10 * math.log10(plain / suppressed)
+    assert db >= 20, f"DC suppression lowers the reference term by only {db:.1f} dB"
+
+
+def test_off_axis_reference_separates_the_twin_image(rng):
+    """The object's band is |f| <= D/(λ|z|)-ish; the twin sits at 2 sin ϑ/λ."""
+    shape, z = (256, 256), -0.3
+    pts = np.c_[rng.uniform(-5e-5, 5e-5, (4, 2)), np.full(4, z)]
+    aperture = shape[0] * PITCH
+    f_obj = (aperture / 2 + 1e-4) / (LAM * abs(z))
+    fy, fx = grid.freqs(shape[0], PITCH)[:, None], grid.freqs(shape[1], PITCH)[None, :]
+    band = np.hypot(fx, fy) <= f_obj
+
+    def twin_in_band(angle):
+        holo = record_points(pts, np.ones((4, 1)), shape=shape, pitch=PITCH, wavelengths=(LAM,),
+                             reference=Reference(angle=angle, beam_ratio=25.0))
+        err = np.fft.fft2(reconstruct(holo) - holo.object_wave[0]) * band
+        return float(np.linalg.norm(err) / np.linalg.norm(np.fft.fft2(holo.object_wave[0])))
+
+    on_axis = twin_in_band(0.0)
+    separated = twin_in_band(math.asin(3.2 * f_obj * LAM))
+    assert on_axis > 0.5, f"on axis the twin should overlap the virtual image: {on_axis:.2e}"
+    assert separated < 0.05, f"off axis the twin still overlaps: {separated:.2e}"
+
+
+def test_reference_angle_sampling_condition():
+    safe = math.asin(LAM / (2 * PITCH))
+    with pytest.raises(ValueError, match=f"largest safe angle is {safe:.4g}"):
+        Reference(angle=2 * safe).check(LAM, PITCH)
+    with pytest.warns(SamplingWarning):
+        Reference(angle=2 * safe, allow_aliasing=True).check(LAM, PITCH)
+    Reference(angle=0.9 * safe).check(LAM, PITCH)
+    with pytest.raises(ValueError, match=r"reference angle must be in \[0, π/2\)"):
+        Reference(angle=2.0)
+
+
+def test_flat_triangle_equals_dense_point_sum():
+    """A coherent triangle aperture 10 mm in front of the hologram: the primitive pipeline
+    (resample + offset angular spectrum) against its surface samples summed as first-kind
+    Rayleigh-Sommerfeld sources in float64."""
+    lam, pitch, shape = 633e-9, 4e-6, (128, 128)
+    corners = np.array([[-60e-6, -50e-6, -0.01], [60e-6, -50e-6, -0.01], [5e-6, 60e-6, -0.01]])
+    prim = Primitive(corners=corners, uvs=np.array([[0, 0], [1, 0], [0.5, 1]]),
+                     texture=np.ones((2, 2, 3)))
+    u = primitive_wave(prim, wavelength=lam, pitch=pitch, shape=shape, diffuse=False)
+    m, centre = prim.frame()
+    q = surface_pitch(prim, wavelength=lam, pitch=pitch)
+    f, mid = surface_field(prim, pitch=q, diffuse=False)
+    eta, xi = (grid.coords(n, q) + c for n, c in zip(f.shape, mid[::-1]))
+    src = centre + np.add.outer(eta, np.zeros_like(xi))[..., None] * m[:, 1] \
+        + np.add.outer(np.zeros_like(eta), xi)[..., None] * m[:, 0]
+    src, amp = src[f != 0], f[f != 0]
+    y, x = np.meshgrid(grid.coords(shape[0], pitch), grid.coords(shape[1], pitch), indexing="ij")
+    k, ref = 2 * np.pi / lam, np.zeros(shape, complex)
+    for s, a in zip(src, amp):
+        d = np.stack([x - s[0], y - s[1], -s[2] + 0 * x], -1)
+        r = np.linalg.norm(d, axis=-1)
+        cos = d @ m[:, 2] / r
+        ref += a * q * q * cos / (2 * np.pi) * (1 / r - 1j * k) * np.exp(1j * k * r) / r
+    err = rel_err(u, ref)
+    assert err < PRIMITIVE_VS_POINTS, f"triangle primitive vs dense point sum: {err:.2e}"
