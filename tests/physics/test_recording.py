@@ -1,7 +1,6 @@
 """Recording and reconstruction against analytic waves and float64 NumPy (Sect. V-VI)."""
 
 import math
-import warnings
 
 import numpy as np
 import pytest
