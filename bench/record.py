@@ -10,9 +10,8 @@ import warnings
 import numpy as np
 
 from holo_core.opencl import get_runtime
-from holo_core.point_sources import point_wave
+from holo_core.point_sources import Grid, cone_weight, point_wave
 from holo_core.propagation import grid
-from holo_core.point_sources import Grid, cone_weight
 
 LAM, PITCH, SHAPE = 633e-9, 8e-6, (1024, 1024)
 

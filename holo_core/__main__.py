@@ -27,6 +27,8 @@ def demo(args) -> int:
 
 
 def record(args) -> int:
+    import dataclasses
+
     import numpy as np
     from .emitters import default_spacing, read_mesh, sample_points
     from .hologram_io import write_hologram
@@ -38,7 +40,7 @@ def record(args) -> int:
     if args.distance is not None:  # place the mesh's nearest point at -distance, centred
         lo, hi = vertices.min(0), vertices.max(0)
         vertices -= [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, hi[2] + args.distance]
-        mesh = type(mesh)(vertices=vertices, triangles=mesh.triangles, colours=mesh.colours)
+        mesh = dataclasses.replace(mesh, vertices=vertices)
     spacing = args.spacing or default_spacing(max(wavelengths), args.pitch, shape, vertices)
     pos, colours = sample_points(mesh, spacing, channels=len(wavelengths),
                                  max_points=args.max_points)

@@ -266,6 +266,7 @@ def _read_ply(path: Path) -> Mesh:
 
 
 def default_spacing(wavelength, pitch, shape, positions) -> float:
-    """:func:`point_spacing` at the nearest depth of ``positions`` [m] (at least one pitch)."""
+    """:func:`point_spacing` at the nearest depth of ``positions`` [m], at least one ``pitch``
+    [m], over √2: two samples per resolved spot along the diagonal (``wavelength`` [m])."""
     z = np.abs(np.asarray(positions)[:, 2]).min()
-    return max(point_spacing(wavelength, pitch, shape, z), pitch, 1e-12) / math.sqrt(2)
+    return max(point_spacing(wavelength, pitch, shape, z), pitch) / math.sqrt(2)

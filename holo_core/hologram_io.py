@@ -8,14 +8,13 @@ the metadata (see :func:`metadata`); files are written atomically and read back 
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from . import __version__, validate
+from .image_files import atomic_path
 
 FORMAT = "holo-hologram"
 FORMAT_VERSION = 1
@@ -84,16 +83,8 @@ def write_hologram(path, h: Hologram) -> Path:
             channels[f"c{c}.O.im"] = np.ascontiguousarray(h.object_wave[c].imag, np.float32)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
               "holo": json.dumps(metadata(h))}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".exr", dir=path.parent)
-    os.close(fd)
-    try:
-        with OpenEXR.File(header, channels) as f:
-            f.write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+    with atomic_path(path) as tmp, OpenEXR.File(header, channels) as f:
+        f.write(tmp)
     return path
 
 
@@ -170,7 +161,6 @@ def import_acquired(path, *, pitch, wavelength, reference_angle=0.0, reference_a
     ``pitch`` and ``wavelength`` [m], ``reference_angle`` ϑ and ``reference_azimuth`` φ [rad]
     describe the recording. Colour images are averaged to grey; integers scale to [0, 1].
     """
-    from . import validate
     pitch = validate.positive("pitch", pitch, "m")
     wavelength = validate.positive("wavelength", wavelength, "m")
     path = Path(path)

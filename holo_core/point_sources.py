@@ -229,14 +229,12 @@ def _upload(rt, pos, amp, wavelength):
 def _slab_plan(pos, g: Grid):
     """Slab edges (far to near, [m]) and the modelled seconds, for the cheapest slab thickness."""
     z = np.sort(pos[:, 2])
-    gap = MIN_CONE_PIXELS * g.pitch / g.cone
     depth = z[-1] - z[0]
     best = (None, math.inf)
-    for slabs in sorted({1, 2, 4, 8, 16, 32, 64, 128, 256}):
+    for slabs in (1, 2, 4, 8, 16, 32, 64, 128, 256):
         edges = np.linspace(z[0], z[-1], slabs + 1)
         edges[-1] = np.nextafter(edges[-1], 0)
-        which = np.clip(np.searchsorted(edges, z, side="right") - 1, 0, slabs - 1)
-        plane = np.minimum(edges[which + 1] + gap, 0)
+        plane = np.minimum(edges[_slab_of(z, edges) + 1] + _gap(g), 0)
         pairs = _pixels_reached(pos, g, plane - z).sum()
         h, w = _plane_shape(g, plane.min())
         fft = slabs * h * w * FFT_SECONDS_PER_SAMPLE
@@ -250,9 +248,8 @@ def _slab_plan(pos, g: Grid):
 
 def _wrp(rt, out, pos, amp, g: Grid, obliquity, progress):
     edges, _ = _slab_plan(pos, g)
-    gap = MIN_CONE_PIXELS * g.pitch / g.cone
-    slabs = len(edges) - 1
-    which = np.clip(np.searchsorted(edges, pos[:, 2], side="right") - 1, 0, slabs - 1)
+    gap, slabs = _gap(g), len(edges) - 1
+    which = _slab_of(pos[:, 2], edges)
     w_shape = _plane_shape(g, min(edges[1] + gap, 0.0))  # one grid for all: one FFT plan
     for s in range(slabs):
         sel = which == s
@@ -260,6 +257,16 @@ def _wrp(rt, out, pos, amp, g: Grid, obliquity, progress):
             plane = min(pos[sel, 2].max() + gap, 0.0)
             _slab(rt, out, pos[sel], amp[sel], plane, g, w_shape, obliquity)
         jobs.report(progress, s + 1, slabs)
+
+
+def _gap(g: Grid) -> float:
+    """How far [m] a recording plane stays in front of its nearest point."""
+    return MIN_CONE_PIXELS * g.pitch / g.cone
+
+
+def _slab_of(z, edges) -> np.ndarray:
+    """The slab index of each depth ``z`` [m] between ascending ``edges`` [m]."""
+    return np.clip(np.searchsorted(edges, z, side="right") - 1, 0, len(edges) - 2)
 
 
 def _plane_shape(g: Grid, plane):

@@ -8,8 +8,8 @@
  * exp(ik|z|) and the amplitude come folded from the host (float64).
  *
  * Each point reaches only the disc rho <= cone*|z| its pitch samples alias-free, with a smooth
- * rim (see point_sources.py, cone_weight). Points are
- * read in [first, last), or, when `binned`, from this tile's list in `order`.
+ * rim (see point_sources.py, cone_weight). Points are read in [first, last), or, when
+ * `binned`, from this tile's list in `order`.
  * Options: -DVEC=1|4|8|16, -DSEG=<columns>, -DOBLIQUITY (A = |z|/r^2 instead of 1/r). */
 #include "holo_complex.h"
 
@@ -29,14 +29,12 @@ typedef real realv;
 #define TO_FLOAT(x) ((float)(x))
 #define TO_REAL(x) ((real)(x))
 #define LANE_ID(c) 0.0f
-#define ALL(x) (x)
 #else
 typedef CAT(float, VEC) floatv;
 typedef CAT(REALNAME, VEC) realv;
 #define TO_FLOAT(x) CAT(convert_float, VEC)(x)
 #define TO_REAL(x) CAT(CAT(convert_, REALNAME), VEC)(x)
 #define LANE_ID(c) CAT(vload, VEC)(0, c)
-#define ALL(x) all(x)
 #endif
 
 #ifdef OBLIQUITY
@@ -70,6 +68,17 @@ static floatv exp_small(floatv x)       /* exp(x), |x| << 1 (a relative amplitud
                     + q_ * (-1 / 3628800.0f + q_ * (1 / 479001600.0f))))));                 \
         re = (m) * (c_ * c_ - s_ * s_);                                                      \
         im = (m) * (2 * s_ * c_);                                                            \
+    } while (0)
+
+/* one pixel along the row: E <- E*D, D <- D*C */
+#define STEP(er, ei, dr, di, cr, ci, t)   \
+    do {                                  \
+        t = er * dr - ei * di;            \
+        ei = er * di + ei * dr;           \
+        er = t;                           \
+        t = dr * cr - di * ci;            \
+        di = dr * ci + di * cr;           \
+        dr = t;                           \
     } while (0)
 
 __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0, real y0,
@@ -133,12 +142,7 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
             for (int m = 0; m < SEG; m++) {
                 acc_r[m] += er;
                 acc_i[m] += ei;
-                t = er * dr - ei * di;
-                ei = er * di + ei * dr;
-                er = t;
-                t = dr * cr - di * ci;
-                di = dr * ci + di * cr;
-                dr = t;
+                STEP(er, ei, dr, di, cr, ci, t);
             }
         } else {
             /* in pixel units, where float is ample for a weight */
@@ -152,12 +156,7 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
                 floatv keep = 1.0f - u * u * (3.0f - 2.0f * u);
                 acc_r[m] += keep * er;
                 acc_i[m] += keep * ei;
-                t = er * dr - ei * di;
-                ei = er * di + ei * dr;
-                er = t;
-                t = dr * cr - di * ci;
-                di = dr * ci + di * cr;
-                dr = t;
+                STEP(er, ei, dr, di, cr, ci, t);
             }
         }
     }
