@@ -6,3 +6,14 @@ towards +z; fields are exp(+ikr) waves (time dependence exp(-iωt)); arrays are 
 """
 
 __version__ = "0.1.0"
+
+_API = {"record_hologram": ".record", "Plate": ".record", "render_view": ".render",
+        "write_view": ".render", "Camera": ".camera", "look_at": ".camera",
+        "read_hologram": ".hologram_io", "write_hologram": ".hologram_io"}
+
+
+def __getattr__(name):  # the top-level API, imported on first use (keeps `import` light)
+    if name not in _API:
+        raise AttributeError(f"module 'holo_core' has no attribute {name!r}")
+    from importlib import import_module
+    return getattr(import_module(_API[name], __name__), name)

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__, validate
-from .image_files import atomic_path
+from .image_files import write_exr
 
 FORMAT = "holo-hologram"
 FORMAT_VERSION = 1
@@ -37,6 +37,11 @@ class Hologram:
     object_wave : (C, H, W) complex64 or None
     plate : (4, 4) hologram-to-world pose (the hologram plane is z = 0 of its frame) [m]
     bounds : (2, 3) the objects' min and max corners in the hologram frame [m]
+    band : sin θ of the object wave's cone, the band its reconstruction keeps (0: all)
+    channels : one role per wavelength: 'R', 'G', 'B' (or 'Y') colour, 'Z' the depth partner
+        λ2 of the colour channels at channel 0's wavelength λ1, recorded with amplitudes
+        Σ√I over them (their summed image is the λ1 image, Sect. VII-C)
+    point_density : emitters per m² of surface, which calibrates radiance (0: unknown)
     """
 
     intensity: np.ndarray
@@ -48,6 +53,26 @@ class Hologram:
     object_wave: np.ndarray | None = None
     plate: np.ndarray = field(default_factory=lambda: np.eye(4))
     bounds: np.ndarray = field(default_factory=lambda: np.zeros((2, 3)))
+    band: float = 0.0
+    channels: tuple = ()
+    point_density: float = 0.0
+
+    def __post_init__(self):
+        if not self.channels:
+            names = ("R", "G", "B") if len(self.wavelengths) == 3 else ("Y",) * 99
+            object.__setattr__(self, "channels", names[:len(self.wavelengths)])
+        if len(self.channels) != len(self.wavelengths):
+            raise ValueError(f"channels must name each of the {len(self.wavelengths)} "
+                             f"wavelengths; got {self.channels!r}")
+        if "Z" in self.channels[:1]:
+            raise ValueError("channel 0 must be a colour channel (the depth pair's λ1)")
+
+    def colour_channels(self) -> list[int]:
+        return [i for i, c in enumerate(self.channels) if c != "Z"]
+
+    def depth_channel(self) -> int | None:
+        """The index of λ2 = ε·λ1 (λ1: channel 0's wavelength), or None."""
+        return self.channels.index("Z") if "Z" in self.channels else None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -68,23 +93,20 @@ def metadata(h: Hologram) -> dict:
                       "azimuth_rad": float(h.reference_azimuth),
                       "amplitudes": list(map(float, h.reference_amplitudes))},
         "bounds_m": np.asarray(h.bounds).tolist(), "object_wave": h.object_wave is not None,
+        "band_sin": float(h.band), "channels": list(h.channels),
+        "point_density_per_m2": float(h.point_density),
     }
 
 
 def write_hologram(path, h: Hologram) -> Path:
     """Write ``h`` to ``path`` (.exr) through a temporary file and a rename."""
-    import OpenEXR
-    path = Path(path)
     channels = {}
     for c in range(len(h.wavelengths)):
-        channels[f"c{c}.H"] = np.ascontiguousarray(h.intensity[c], np.float32)
+        channels[f"c{c}.H"] = h.intensity[c]
         if h.object_wave is not None:
-            channels[f"c{c}.O.re"] = np.ascontiguousarray(h.object_wave[c].real, np.float32)
-            channels[f"c{c}.O.im"] = np.ascontiguousarray(h.object_wave[c].imag, np.float32)
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
-              "holo": json.dumps(metadata(h))}
-    with atomic_path(path) as tmp, OpenEXR.File(header, channels) as f:
-        f.write(tmp)
+            channels[f"c{c}.O.re"] = h.object_wave[c].real
+            channels[f"c{c}.O.im"] = h.object_wave[c].imag
+    write_exr(path, channels, holo=json.dumps(metadata(h)))
     return path
 
 
@@ -126,7 +148,9 @@ def read_hologram(path) -> Hologram:
                     reference_angle=ref["angle_rad"], reference_azimuth=ref["azimuth_rad"],
                     reference_amplitudes=tuple(ref["amplitudes"]), object_wave=wave,
                     plate=np.array(meta["plate_to_world"], np.float64).reshape(4, 4),
-                    bounds=np.array(meta["bounds_m"], np.float64))
+                    bounds=np.array(meta["bounds_m"], np.float64),
+                    band=meta.get("band_sin", 0.0), channels=tuple(meta.get("channels", ())),
+                    point_density=meta.get("point_density_per_m2", 0.0))
 
 
 def _check_exr(path: Path) -> None:

@@ -54,3 +54,20 @@ def write_png(path, image: np.ndarray) -> Path:
     data = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw, 6)) \
         + chunk(b"IEND", b"")
     return write_atomic(path, data)
+
+
+def write_exr(path, channels: dict, **header) -> Path:
+    """Float32 OpenEXR (ZIP) of named (H, W) ``channels``, row 0 at the top, with extra
+    ``header`` attributes, written atomically."""
+    import OpenEXR
+    data = {n: np.ascontiguousarray(a, np.float32) for n, a in channels.items()}
+    head = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage, **header}
+    with atomic_path(path) as tmp, OpenEXR.File(head, data) as f:
+        f.write(tmp)
+    return Path(path)
+
+
+def srgb(linear: np.ndarray) -> np.ndarray:
+    """Linear [0, 1] to sRGB display values."""
+    a = np.clip(linear, 0, 1)
+    return np.where(a <= 0.0031308, 12.92 * a, 1.055 * a ** (1 / 2.4) - 0.055)

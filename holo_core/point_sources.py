@@ -56,7 +56,7 @@ class Grid(NamedTuple):
         return math.inf if s >= 1 else s / math.sqrt(1 - s * s)
 
 
-def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=False,
+def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=False, band=None,
                method="auto", progress: jobs.Progress = None, as_device=False):
     """The object wave O on the plane z = 0 from point emitters (Eq. 3).
 
@@ -76,6 +76,10 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
     obliquity : bool
         False: the spherical wave A0·exp(ikr)/r of Eq. 3. True: times the obliquity factor
         cos θ = |z|/r of the Rayleigh-Sommerfeld integral.
+    band : float, optional
+        sin θ of each point's cone edge; default ``CONE_FILL`` of the grid's Nyquist angle
+        λ/(2·pitch), which is also its largest allowed value. An off-axis hologram narrows it
+        to leave room for the reference's carrier (Sect. VI).
     method : {'auto', 'direct', 'wrp'}
         'auto' takes the faster by a cost model (see the module docstring).
     progress : callable, optional
@@ -88,6 +92,12 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
     Complex64 (rows, cols) field.
     """
     g = Grid(validate.shape2d("shape", shape), *reversed(grid.wave(wavelength, pitch)))
+    if band is not None:
+        most = CONE_FILL * g.wavelength / (2 * g.pitch)
+        if not 0 < band <= most * (1 + 1e-9):
+            raise ValueError(f"band must be in (0, {most:.4g}] (sin θ the pitch samples); "
+                             f"got {band!r}")
+        g = g._replace(fill=band * 2 * g.pitch / g.wavelength)
     pos, amp = _points(positions, amplitudes)
     if method not in ("auto", "direct", "wrp"):
         raise ValueError(f"method must be 'auto', 'direct' or 'wrp'; got {method!r}")

@@ -89,8 +89,8 @@ def interfere(object_wave, reference_wave) -> np.ndarray:
 
 def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVELENGTHS,
                   phases=None, seed=0, reference=Reference(), obliquity=False,
-                  keep_object_wave=True, plate=None, method="auto",
-                  progress: jobs.Progress = None) -> Hologram:
+                  keep_object_wave=True, plate=None, method="auto", band=None,
+                  channels=(), point_density=0.0, progress: jobs.Progress = None) -> Hologram:
     """Holograms of point emitters, one per wavelength.
 
     Parameters
@@ -111,8 +111,11 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
         The reference wave; its amplitude follows from ``beam_ratio`` per colour.
     plate : (4, 4) array, optional
         The hologram frame's pose in the world (hologram-to-world), stored with it.
-    method, obliquity
-        As for :func:`holo_core.point_sources.point_wave`.
+    method, obliquity, band
+        As for :func:`holo_core.point_sources.point_wave`; ``band`` is stored for the
+        reconstruction's filter.
+    channels, point_density
+        Stored with the hologram (see :class:`holo_core.hologram_io.Hologram`).
     """
     pos = np.asarray(positions, np.float64)
     lambdas = tuple(validate.positive("wavelengths", w, "m") for w in np.atleast_1d(wavelengths))
@@ -134,7 +137,7 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     intensity, waves, amplitudes = [], [], []
     for c, lam in enumerate(lambdas):
         o = point_wave(pos, np.sqrt(cols[:, c]) * np.exp(1j * phases), wavelength=lam,
-                       pitch=pitch, shape=shape, obliquity=obliquity, method=method,
+                       pitch=pitch, shape=shape, obliquity=obliquity, method=method, band=band,
                        progress=jobs.scaled(progress, c / len(lambdas), (c + 1) / len(lambdas)))
         a_r = math.sqrt(reference.beam_ratio * max(float(np.mean(np.abs(o) ** 2)), 1e-30))
         intensity.append(interfere(o, reference_wave(shape, wavelength=lam, pitch=pitch,
@@ -147,4 +150,86 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
                     reference_amplitudes=tuple(amplitudes),
                     object_wave=np.stack(waves) if keep_object_wave else None,
                     plate=np.eye(4) if plate is None else np.asarray(plate, np.float64),
-                    bounds=bounds)
+                    bounds=bounds, band=band or 0.0, channels=tuple(channels),
+                    point_density=point_density)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True, eq=False)
+class Plate:
+    """The holographic plate in the world: ``matrix_world`` (4, 4) plate-to-world pose [m]
+    (rotation and translation; the hologram is its z = 0 plane, viewers at z > 0) and its
+    physical ``width``, ``height`` [m]."""
+
+    matrix_world: np.ndarray
+    width: float
+    height: float
+
+    def __post_init__(self):
+        m = np.asarray(self.matrix_world, np.float64)
+        if m.shape != (4, 4) or not np.isfinite(m).all():
+            raise ValueError(f"plate matrix_world must be a finite 4x4 matrix; got {m.shape}")
+        validate.rotation("plate rotation", m[:3, :3])
+        object.__setattr__(self, "matrix_world", m)
+        validate.positive("plate width", self.width, "m")
+        validate.positive("plate height", self.height, "m")
+
+    def to_plate(self, points) -> np.ndarray:
+        """World points (N, 3) [m] in the plate's frame."""
+        m = self.matrix_world
+        return (np.asarray(points, np.float64) - m[:3, 3]) @ m[:3, :3]
+
+
+def record_hologram(emitters, *, plate: Plate, camera=None, resolution=None,
+                    max_resolution=2048, wavelength=None, depth=True, seed=0, method="auto",
+                    progress: jobs.Progress = None) -> Hologram:
+    """Record a scene in world metres onto ``plate``, choosing the optics automatically
+    (:mod:`holo_core.sampling`; the choice is logged and stored in the hologram).
+
+    Parameters
+    ----------
+    emitters : Mesh, sequence of Mesh, or (positions (N, 3) [m], colours (N, 3))
+        World-space emitters; meshes become points at the chosen spacing. Colours are linear
+        RGB intensities.
+    plate : Plate
+    camera : holo_core.camera.Camera, optional
+        Sizes the cone and the wavelength to this view.
+    resolution, max_resolution, wavelength
+        As for :func:`holo_core.sampling.choose`.
+    depth : bool
+        Also record the depth partner λ2 (Sect. VII-C).
+    seed : int
+        Seeds the emitters' random phases (and the mesh sampling).
+    """
+    from . import emitters as em
+    from .sampling import choose
+    meshes = [emitters] if isinstance(emitters, em.Mesh) else None
+    if meshes is None and emitters and all(isinstance(e, em.Mesh) for e in emitters):
+        meshes = list(emitters)
+    probe = (np.concatenate([m.vertices for m in meshes]) if meshes
+             else np.asarray(emitters[0], np.float64))
+    view = None
+    if camera is not None:
+        view = (plate.to_plate(camera.position[None])[0], camera.pixel_angle())
+    s = choose((plate.width, plate.height), plate.to_plate(probe), camera=view,
+               resolution=resolution, max_resolution=max_resolution, wavelength=wavelength)
+    if meshes:
+        parts = [em.sample_points(m, s.spacing, channels=3, seed=seed + i)
+                 for i, m in enumerate(meshes)]
+        pos = np.concatenate([p for p, _ in parts])
+        rgb = np.concatenate([np.broadcast_to(c, (len(c), 3)) for _, c in parts])
+        density = 1 / s.spacing**2
+    else:
+        pos, rgb = np.asarray(emitters[0], np.float64), np.asarray(emitters[1], np.float64)
+        density = 0.0
+    rgb = np.asarray(rgb, np.float64).reshape(len(pos), 3)
+    lambdas, channels, colours = [s.wavelength] * 3, ["R", "G", "B"], [rgb]
+    if depth:
+        lambdas.append(s.depth_wavelength)
+        channels.append("Z")
+        colours.append(np.sqrt(np.clip(rgb, 0, None)).sum(1, keepdims=True) ** 2)
+    reference = Reference(angle=s.reference_angle)
+    return record_points(plate.to_plate(pos), np.concatenate(colours, 1), shape=s.shape,
+                         pitch=s.pitch, wavelengths=tuple(lambdas), seed=seed,
+                         reference=reference, plate=plate.matrix_world, method=method,
+                         band=s.band, channels=channels, point_density=density,
+                         progress=progress)

@@ -1,0 +1,337 @@
+"""Image generation: a camera anywhere in front of the hologram (Sect. VII).
+
+Per wavelength: the reconstructed wave (Sect. VI) is carried to the camera's aperture plane by
+tilt plus offset propagation (Sect. IV-D); the aperture is cut out as a disc, apodized by the
+cosine window of Fig. 9 and, for a thin lens, multiplied by Eq. 24's phase; its angular
+spectrum is then read at each pixel's direction cosines (Eq. 22) by bilinear weighting. The
+image holds the complex amplitude A(α/λ, β/λ) [field·m²] of the plane wave from each pixel's
+direction; the radiance is |A|² / (λ²·∫w²) (power per aperture area and projected solid
+angle), so a surface of point emitters of intensity I and density σ shows radiance σ·I.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import depth as depth_mod
+from . import jobs, speckle, validate
+from .camera import Camera
+from .hologram_io import Hologram
+from .image_files import srgb, write_exr, write_png
+from .opencl import get_runtime
+from .opencl.arrays import cached
+from .propagation import grid
+from .propagation.convolution import convolve
+from .propagation.tilt import propagate_to_plane
+from .reconstruct import reconstruct
+
+log = logging.getLogger(__name__)
+SPECTRUM_OVERSAMPLING = 4   # spectrum samples per λ/D (the aperture's resolution), at least
+MAX_SPECTRUM = 4096         # largest FFT of the aperture per axis
+PINHOLE_SAMPLES = 2         # a pinhole's resolution λ/D spans this many pixels (alias-free |A|²)
+BACKGROUND_DEPTH = 1e10     # depth of empty pixels [m], as Blender's Cycles and Workbench
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Aperture:
+    """The camera's entrance pupil.
+
+    diameter : [m]
+    focus : distance [m] of the plane in focus (thin lens, Eq. 24), or None for a pinhole
+    apodize : the cosine window of Fig. 9 (1 at the centre, 0 at the rim) instead of a hard edge
+    lens_wavelength : λ [m] the lens is designed for; other wavelengths focus at
+        focus·λ_lens/λ (chromatic aberration, Sect. VII-B). None: no aberration.
+    """
+
+    diameter: float
+    focus: float | None = None
+    apodize: bool = True
+    lens_wavelength: float | None = None
+
+    def __post_init__(self):
+        validate.positive("aperture diameter", self.diameter, "m")
+        if self.focus is not None:
+            validate.positive("focus distance", self.focus, "m")
+        if self.lens_wavelength is not None:
+            validate.positive("lens_wavelength", self.lens_wavelength, "m")
+
+
+def camera_aperture(camera: Camera, wavelength: float, distance: float, *,
+                    apodize=True) -> Aperture:
+    """The camera's own lens (diameter lens/N, its focus), or a pinhole at ``wavelength`` [m]
+    for objects ``distance`` [m] away: as wide as the alias-free size λ/D = PINHOLE_SAMPLES
+    pixels (Sect. VII-A, VII-D) allows, but no wider than √(λ·distance), beyond which its own
+    geometric blur D/distance outgrows its diffraction λ/D."""
+    if camera.fstop is not None:
+        return Aperture(diameter=camera.aperture_diameter, focus=camera.focus_distance,
+                        apodize=apodize)
+    alias_free = wavelength / (PINHOLE_SAMPLES * camera.pixel_angle())
+    return Aperture(diameter=min(alias_free, math.sqrt(wavelength * distance)),
+                    apodize=apodize)
+
+
+def camera_in_plate(hologram: Hologram, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
+    """The camera's axes (columns) and aperture centre [m] in the hologram's frame."""
+    plate = np.asarray(hologram.plate, np.float64)
+    axes = plate[:3, :3] / np.linalg.norm(plate[:3, :3], axis=0)
+    rotation = axes.T @ camera.rotation
+    u, _, vt = np.linalg.svd(rotation)  # re-orthonormalise what float round-off bent
+    rotation = u @ vt
+    position = axes.T @ (camera.position - plate[:3, 3])
+    if position[2] <= 0:
+        raise ValueError(f"the camera must be in front of the hologram (z > 0 in the plate's "
+                         f"frame); it is at z = {position[2]:.4g} m")
+    if rotation[2, 2] <= 0:
+        raise ValueError("the camera must look towards the hologram (its view axis has to "
+                         "point to −z of the plate)")
+    return rotation, position
+
+
+def plate_wave(hologram: Hologram, channel: int, *, source="hologram"):
+    """The object wave leaving the hologram for one channel, complex64 (H, W): R'·H' with the
+    DC term suppressed and the band outside the recorded cone removed (Sect. VI), or the
+    stored object wave (``source='object_wave'``, the ideal reconstruction)."""
+    if source == "object_wave":
+        if hologram.object_wave is None:
+            raise ValueError("source 'object_wave' needs a hologram that stores the object wave")
+        return hologram.object_wave[channel]
+    if source != "hologram":
+        raise ValueError(f"source must be 'hologram' or 'object_wave'; got {source!r}")
+    u = reconstruct(hologram, channel)
+    if not hologram.band:
+        return u
+    rt = get_runtime()
+    lam, shape = hologram.wavelengths[channel], u.shape
+
+    def make():
+        fy, fx = (grid.freqs(n, hologram.pitch) for n in shape)
+        keep = (fx[None, :] ** 2 + fy[:, None] ** 2) * lam**2 <= hologram.band**2
+        return (keep / keep.size).astype(np.complex64), ()
+
+    mask, _ = cached(rt, ("band", shape, hologram.pitch, lam, hologram.band), make)
+    return convolve(rt, rt.to_device(u), mask).get()
+
+
+def image_wave(wave, *, wavelength, pitch, rotation, position, camera: Camera,
+               aperture: Aperture) -> tuple[np.ndarray, float]:
+    """Complex image (H, W) [field·m²] of a plate wave seen by ``camera``, and the aperture's
+    ∫w² [m²] (for radiance).
+
+    ``wave`` is the field on the plate (z = 0) at ``pitch`` [m], ``wavelength`` [m];
+    ``rotation``, ``position``: the camera in the plate's frame (see :func:`camera_in_plate`).
+    """
+    at_camera = propagate_to_plane(wave, wavelength=wavelength, pitch=pitch, rotation=rotation,
+                                   position=position)
+    if not isinstance(at_camera, np.ndarray):
+        at_camera = at_camera.get()
+    pupil, weight = _pupil(at_camera, wavelength, pitch, aperture)
+    spectrum, n = _spectrum(pupil, wavelength, pitch, camera, aperture)
+    alpha, beta, _ = camera.direction_cosines()
+    q = np.stack([beta, alpha]) / wavelength * (n * pitch) + n // 2  # fractional FFT indices
+    return _bilinear(spectrum, q[0], q[1]), weight
+
+
+def _pupil(field, wavelength, pitch, aperture: Aperture):
+    """The aperture disc cut from the field at the camera, windowed and lensed (Eq. 24)."""
+    n_full = field.shape[0]
+    n = min(n_full, math.ceil(aperture.diameter / pitch) + 1)
+    n += (n_full - n) % 2  # keep the crop centred on the camera exactly
+    if n == n_full and aperture.diameter > n_full * pitch:
+        validate.warn_sampling(f"the aperture ({aperture.diameter:.4g} m) is wider than the "
+                               f"propagated field ({n_full * pitch:.4g} m); it is cut there")
+    r0, c0 = (field.shape[0] - n) // 2, (field.shape[1] - n) // 2
+    crop = field[r0:r0 + n, c0:c0 + n].astype(np.complex128)
+    x = grid.coords(n, pitch)
+    rho = np.hypot(x[None, :], x[:, None])
+    radius = aperture.diameter / 2
+    w = np.where(rho <= radius, np.cos(np.pi * rho / aperture.diameter)
+                 if aperture.apodize else 1.0, 0.0)
+    if aperture.focus is not None:
+        k = 2 * np.pi / (aperture.lens_wavelength or wavelength)
+        f = aperture.focus
+        w = w * np.exp(-1j * np.remainder(k * np.sqrt(rho * rho + f * f), 2 * np.pi))
+    return crop * w, float(np.sum(np.abs(w) ** 2) * pitch * pitch)
+
+
+def _spectrum(pupil, wavelength, pitch, camera: Camera, aperture: Aperture):
+    """The continuous Fourier transform of the pupil, centred (fftshift order), sampled finely
+    enough for bilinear reading at the pixels: n×n, spacing 1/(n·pitch)."""
+    n_a = pupil.shape[0]
+    need = max(SPECTRUM_OVERSAMPLING * aperture.diameter / pitch,
+               2 * wavelength / (pitch * camera.pixel_angle()), 2 * n_a)
+    n = grid.next_fast_len(min(MAX_SPECTRUM, math.ceil(need)))
+    n = max(n, n_a + (n - n_a) % 2)
+    c0 = (n - n_a) // 2
+    rt = get_runtime()
+    work = rt.scratch("image-spectrum", (n, n))
+    buf = np.zeros((n, n), np.complex64)
+    buf[c0:c0 + n_a, c0:c0 + n_a] = pupil
+    work.set(buf)
+    rt.fft.forward(work)
+    s = np.fft.fftshift(work.get())
+    # x of FFT sample j is (j - c0 - (n_a-1)/2)·pitch: restore that origin's phase (Eq. 8)
+    f = (np.arange(n) - n // 2) / (n * pitch)
+    ramp = np.exp(2j * np.pi * np.remainder(f * (c0 + (n_a - 1) / 2) * pitch, 1.0))
+    return s * ramp[:, None] * ramp[None, :] * pitch**2, n
+
+
+def _bilinear(a, rows, cols):
+    """``a`` read at fractional (rows, cols) with bilinear weights; zero outside."""
+    r0, c0 = np.floor(rows).astype(np.int64), np.floor(cols).astype(np.int64)
+    fr, fc = rows - r0, cols - c0
+    out = np.zeros(rows.shape, np.complex128)
+    h, w = a.shape
+    for dr, wr in ((0, 1 - fr), (1, fr)):
+        for dc, wc in ((0, 1 - fc), (1, fc)):
+            r, c = r0 + dr, c0 + dc
+            ok = (r >= 0) & (r < h) & (c >= 0) & (c < w)
+            out[ok] += (wr * wc)[ok] * a[r[ok], c[ok]]
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class RenderResult:
+    """A rendered view: ``rgb`` (H, W, 3) radiance, ``alpha`` (H, W) opacity, ``depth``
+    (H, W) planar camera-space depth [m] (BACKGROUND_DEPTH where empty); row 0 at the top.
+    ``info`` holds the optics used (aperture, resolution limit, wavelengths)."""
+
+    rgb: np.ndarray
+    alpha: np.ndarray
+    depth: np.ndarray
+    info: dict = field(default_factory=dict)
+
+
+def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, apodize=True,
+                chromatic=True, composition="mean", supersample=1, exposure=None,
+                opacity_threshold=0.1, source="hologram",
+                progress: jobs.Progress = None) -> RenderResult:
+    """Render a view of one hologram, or several of the same scene recorded with independent
+    random phases (temporal composition, Sect. VII-C and VII-E).
+
+    Parameters
+    ----------
+    holograms : Hologram or sequence of Hologram
+        Same wavelengths, pitch and pose; each one an iteration.
+    camera : Camera
+        Blender camera; its lens (``fstop``, ``focus_distance``) or a pinhole.
+    aperture : Aperture, optional
+        Overrides the camera's pupil (see :func:`camera_aperture`).
+    apodize : bool
+        Cosine-window the aperture (Fig. 9).
+    chromatic : bool
+        A lens designed for the first colour's wavelength focuses the others at f·λ/λ₀
+        (Sect. VII-B); False makes it perfect for every wavelength.
+    composition : {'mean', 'max'}
+        How the iterations' intensities combine (Sect. VII-E).
+    supersample : int
+        Render at this many times the resolution, then average blocks (speckle reduction by
+        spatial low-pass and downsampling, Sect. VII-E).
+    exposure : float, optional
+        Radiance to pixel value; default 1/point density (a surface shows its emitters'
+        colour), or when that is unknown, the 99.5th percentile maps to 1.
+    opacity_threshold : float
+        Alpha is 1 where the luminance exceeds this fraction of the 99.5th percentile.
+    source : {'hologram', 'object_wave'}
+        Reconstruct from the intensity hologram (default) or use the stored object wave.
+    """
+    holos = [holograms] if isinstance(holograms, Hologram) else list(holograms)
+    if not holos:
+        raise ValueError("holograms must hold at least one hologram")
+    first = holos[0]
+    if composition not in ("mean", "max"):
+        raise ValueError(f"composition must be 'mean' or 'max'; got {composition!r}")
+    supersample = int(validate.at_least("supersample", supersample, 1))
+    fine = _supersampled(camera, supersample)
+    colours, z_ch = first.colour_channels(), first.depth_channel()
+    lam0 = first.wavelengths[colours[0]]
+    pupil = aperture or camera_aperture(fine, lam0, _centre_distance(first, camera),
+                                        apodize=apodize)
+    lens_lam = lam0 if chromatic and pupil.focus is not None else None
+    rotation, position = camera_in_plate(first, camera)
+    stages = len(holos) * (len(colours) + (z_ch is not None))
+    intensities, ranges, brightness = [], [], []
+    for i, h in enumerate(holos):
+        done = jobs.scaled(progress, i / len(holos), (i + 1) / len(holos))
+        planes, images = [], {}
+        for c in colours + ([z_ch] if z_ch is not None else []):
+            lam = h.wavelengths[c]
+            lens = pupil if c == z_ch else Aperture(
+                diameter=pupil.diameter, focus=pupil.focus, apodize=pupil.apodize,
+                lens_wavelength=lens_lam)
+            u, area = image_wave(plate_wave(h, c, source=source), wavelength=lam, pitch=h.pitch,
+                                 rotation=rotation, position=position, camera=fine, aperture=lens)
+            images[c] = u
+            if c != z_ch:
+                planes.append(np.abs(u) ** 2 / (lam * lam * area))
+            jobs.report(done, len(images), stages / len(holos))
+        intensities.append(np.stack(planes, -1))
+        if z_ch is not None:
+            u1 = sum(images[c] for c in colours if h.wavelengths[c] == h.wavelengths[0])
+            ranges.append(depth_mod.from_phase_difference(
+                u1, images[z_ch], wavelengths=(h.wavelengths[0], h.wavelengths[z_ch]),
+                centre=_centre_distance(first, camera), focus=pupil.focus))
+            brightness.append(np.abs(u1))
+    radiance = speckle.compose(intensities, composition)
+    ray = None
+    if ranges:
+        ray, bright = depth_mod.keep_brightest(ranges, brightness)
+        tx, ty = fine.pixel_tangents()
+        ray = speckle.pick_brightest(ray / np.sqrt(1 + tx * tx + ty * ty), bright, supersample)
+    radiance = speckle.downsample(radiance, supersample)
+    return _finish(radiance, ray, first, camera, pupil, exposure, opacity_threshold, lam0)
+
+
+def _supersampled(camera: Camera, s: int) -> Camera:
+    if s == 1:
+        return camera
+    from dataclasses import replace
+    w, h = camera.resolution
+    return replace(camera, resolution=(w * s, h * s))
+
+
+def _centre_distance(h: Hologram, camera: Camera) -> float:
+    """Distance [m] from the camera to the objects' bounding-box centre (the depth range's
+    centre, Eq. 30)."""
+    centre = np.asarray(h.plate, np.float64) @ np.append(np.asarray(h.bounds).mean(0), 1.0)
+    return float(np.linalg.norm(centre[:3] - camera.position))
+
+
+def _finish(radiance, ray, h: Hologram, camera, pupil, exposure, threshold, lam0):
+    lum = radiance.mean(-1)
+    ref = float(np.percentile(lum, 99.5))
+    if exposure is None:
+        exposure = 1 / h.point_density if h.point_density else (1 / ref if ref > 0 else 1.0)
+    rgb = radiance * exposure
+    if rgb.shape[-1] == 1:
+        rgb = np.repeat(rgb, 3, -1)
+    alpha = (lum > threshold * ref).astype(np.float32) if ref > 0 else np.zeros_like(lum)
+    depth = np.full(lum.shape, BACKGROUND_DEPTH, np.float32)
+    if ray is not None:
+        depth = np.where(alpha > 0, ray, BACKGROUND_DEPTH).astype(np.float32)
+    limit = lam0 / pupil.diameter
+    info = {"aperture_m": pupil.diameter, "focus_m": pupil.focus,
+            "resolution_limit_rad": limit, "pixel_angle_rad": camera.pixel_angle(),
+            "resolution_limit_px": limit / camera.pixel_angle(),
+            "wavelengths_m": list(h.wavelengths), "exposure": exposure}
+    log.info("render: aperture %.4g m, resolution limit λ/W = %.3g rad = %.2f px",
+             pupil.diameter, limit, info["resolution_limit_px"])
+    return RenderResult(rgb=rgb.astype(np.float32), alpha=alpha, depth=depth, info=info)
+
+
+def write_view(result: RenderResult, path, *, layer="ViewLayer") -> tuple[Path, Path]:
+    """Write ``path`` (.exr, multilayer: ``<layer>.Combined.R/G/B/A`` premultiplied float32 and
+    ``<layer>.Depth.Z``, as Blender's Image node reads them) and a PNG preview beside it."""
+    path = Path(path).with_suffix(".exr")
+    rgb = result.rgb * result.alpha[..., None]  # premultiplied (emission: dark where clear)
+    channels = {f"{layer}.Combined.{c}": rgb[..., i] for i, c in enumerate("RGB")}
+    channels[f"{layer}.Combined.A"] = result.alpha
+    channels[f"{layer}.Depth.Z"] = result.depth
+    write_exr(path, channels, holo=json.dumps(result.info, default=float))
+    png = write_png(path.with_suffix(".png"), srgb(result.rgb))
+    return path, png
