@@ -29,3 +29,10 @@ WRP_VS_DIRECT = 1e-2
 # a flat coherent triangle: band-limited primitive pipeline vs its samples as point sources
 # (the two discretisations differ at the band edge; measured 1.6e-2)
 PRIMITIVE_VS_POINTS = 3e-2
+# image generation (Sect. VII)
+PIXEL_POSITION = 0.5        # px, the bound for a point through a pinhole
+AIRY_RADIUS = 0.05          # first zero vs 1.22 λ/D (measured ~2 % with 4 spectrum samples/λ/D)
+DEFOCUS_DIAMETER = 0.10     # blur disc vs D·|1/r - 1/f| (geometric optics)
+DEPTH_SINGLE_POINT = 5e-3   # two-wavelength depth vs the true planar depth (measured 2e-5)
+ALIAS_ENERGY = 1e-2         # energy above the new Nyquist, against a point-sampled raster's
+SPECKLE_SQRT_N = 0.3        # contrast ratio of 1 vs N renders against √N (finite-N scatter)
