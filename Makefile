@@ -22,6 +22,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(PY) bench/propagation.py
 	$(PY) bench/record.py
+	$(PY) bench/render.py
 
 devices: $(STAMP)
 	$(PY) -m holo_core devices

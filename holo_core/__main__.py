@@ -1,4 +1,4 @@
-"""Command line: ``python -m holo_core devices | demo | record | info``."""
+"""Command line: ``python -m holo_core devices | demo | record | info | render``."""
 
 from __future__ import annotations
 
@@ -63,6 +63,30 @@ def info(args) -> int:
     return 0
 
 
+def render(args) -> int:
+    import numpy as np
+    from .camera import Camera, look_at
+    from .hologram_io import read_hologram
+    from .render import render_view, write_view
+    h = read_hologram(args.hologram)
+    plate = np.asarray(h.plate)
+    centre = (plate @ np.append(np.asarray(h.bounds).mean(0), 1.0))[:3]
+    eye = args.camera if args.camera else plate[:3, 3] + plate[:3, 2] * 3 * max(h.size)
+    target = args.look_at if args.look_at else centre
+    focus = args.focus_distance
+    if args.fstop and focus is None:
+        focus = float(np.linalg.norm(np.asarray(eye) - centre))
+    cam = Camera(matrix_world=look_at(eye, target, up=plate[:3, 1]), lens=args.lens,
+                 sensor_width=args.sensor_width, resolution=tuple(args.resolution),
+                 fstop=args.fstop, focus_distance=focus if args.fstop else None)
+    view = render_view(h, cam, supersample=args.supersample, composition=args.composition,
+                       source=args.source, progress=_progress_bar())
+    print()
+    for path in write_view(view, args.output):
+        print(path)
+    return 0
+
+
 def _progress_bar(width=40):
     def show(fraction):
         done = int(round(fraction * width))
@@ -95,11 +119,28 @@ def main(argv=None) -> int:
                    help="point emitter sum (default: the faster)")
     p = sub.add_parser("info", help="print a hologram file's metadata")
     p.add_argument("hologram")
+    p = sub.add_parser("render", help="render a view of a hologram to EXR (+ PNG preview)")
+    p.add_argument("hologram")
+    p.add_argument("-o", "--output", required=True, help="view file to write (.exr)")
+    p.add_argument("--camera", type=float, nargs=3, metavar=("X", "Y", "Z"),
+                   help="camera position [m], world (default: 3 plate sizes in front)")
+    p.add_argument("--look-at", type=float, nargs=3, metavar=("X", "Y", "Z"),
+                   help="point the camera looks at [m] (default: the objects' centre)")
+    p.add_argument("--lens", type=float, default=50.0, help="focal length [mm] (50)")
+    p.add_argument("--sensor-width", type=float, default=36.0, help="[mm] (36)")
+    p.add_argument("--resolution", type=int, nargs=2, default=(256, 256), metavar=("W", "H"))
+    p.add_argument("--fstop", type=float, default=None, help="f-number (default: pinhole)")
+    p.add_argument("--focus-distance", type=float, default=None,
+                   help="[m] (default with --fstop: the objects' centre)")
+    p.add_argument("--supersample", type=int, default=1, help="speckle low-pass factor (1)")
+    p.add_argument("--composition", choices=["mean", "max"], default="mean")
+    p.add_argument("--source", choices=["hologram", "object_wave"], default="hologram")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     try:
-        return {"devices": devices, "demo": demo, "record": record, "info": info}[
+        return {"devices": devices, "demo": demo, "record": record, "info": info,
+                "render": render}[
             args.command](args)
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
