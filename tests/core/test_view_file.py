@@ -15,7 +15,7 @@ def test_view_exr_has_blenders_multilayer_channels(tmp_path, rng):
     exr, png = write_view(RenderResult(rgb=rgb, alpha=alpha, depth=depth), tmp_path / "v.exr",
                           layer="Holo")
     assert png.is_file() and png.read_bytes()[:4] == b"\x89PNG"
-    with OpenEXR.File(str(exr)) as f:
+    with OpenEXR.File(str(exr), separate_channels=True) as f:
         ch = {n: np.array(c.pixels) for n, c in f.channels().items()}
     assert set(ch) == {"Holo.Combined.R", "Holo.Combined.G", "Holo.Combined.B",
                        "Holo.Combined.A", "Holo.Depth.Z"}
