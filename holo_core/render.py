@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -94,7 +94,8 @@ def camera_in_plate(hologram: Hologram, camera: Camera) -> tuple[np.ndarray, np.
 
 
 def plate_wave(hologram: Hologram, channel: int, *, source="hologram"):
-    """The object wave leaving the hologram for one channel, complex64 (H, W): R'·H' with the
+    """The object wave leaving the hologram for one channel, complex64 (H, W) (NumPy, or a
+    device array that the propagation takes without a host round trip): R'·H' with the
     DC term suppressed and the band outside the recorded cone removed (Sect. VI), or the
     stored object wave (``source='object_wave'``, the ideal reconstruction)."""
     if source == "object_wave":
@@ -115,7 +116,7 @@ def plate_wave(hologram: Hologram, channel: int, *, source="hologram"):
         return (keep / keep.size).astype(np.complex64), ()
 
     mask, _ = cached(rt, ("band", shape, hologram.pitch, lam, hologram.band), make)
-    return convolve(rt, rt.to_device(u), mask).get()
+    return convolve(rt, rt.to_device(u), mask)
 
 
 def image_wave(wave, *, wavelength, pitch, rotation, position, camera: Camera,
@@ -233,7 +234,7 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
         Render at this many times the resolution, then average blocks (speckle reduction by
         spatial low-pass and downsampling, Sect. VII-E).
     exposure : float, optional
-        Radiance to pixel value; default 1/point density (a surface shows its emitters'
+        Radiance to pixel value [m²: 1/(emitters per m²)]; default 1/point density (a surface shows its emitters'
         colour), or when that is unknown, the 99.5th percentile maps to 1.
     opacity_threshold : float
         Alpha is 1 where the luminance exceeds this fraction of the 99.5th percentile.
@@ -250,32 +251,30 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
     fine = _supersampled(camera, supersample)
     colours, z_ch = first.colour_channels(), first.depth_channel()
     lam0 = first.wavelengths[colours[0]]
-    pupil = aperture or camera_aperture(fine, lam0, _centre_distance(first, camera),
-                                        apodize=apodize)
-    lens_lam = lam0 if chromatic and pupil.focus is not None else None
+    centre = _centre_distance(first, camera)
+    pupil = aperture or camera_aperture(fine, lam0, centre, apodize=apodize)
+    chromatic_pupil = replace(pupil, lens_wavelength=lam0) if chromatic and pupil.focus else pupil
     rotation, position = camera_in_plate(first, camera)
-    stages = len(holos) * (len(colours) + (z_ch is not None))
+    channels = colours + ([z_ch] if z_ch is not None else [])
     intensities, ranges, brightness = [], [], []
     for i, h in enumerate(holos):
         done = jobs.scaled(progress, i / len(holos), (i + 1) / len(holos))
         planes, images = [], {}
-        for c in colours + ([z_ch] if z_ch is not None else []):
+        for c in channels:
             lam = h.wavelengths[c]
-            lens = pupil if c == z_ch else Aperture(
-                diameter=pupil.diameter, focus=pupil.focus, apodize=pupil.apodize,
-                lens_wavelength=lens_lam)
+            lens = pupil if c == z_ch else chromatic_pupil  # the depth pair's lens is perfect
             u, area = image_wave(plate_wave(h, c, source=source), wavelength=lam, pitch=h.pitch,
                                  rotation=rotation, position=position, camera=fine, aperture=lens)
             images[c] = u
             if c != z_ch:
                 planes.append(np.abs(u) ** 2 / (lam * lam * area))
-            jobs.report(done, len(images), stages / len(holos))
+            jobs.report(done, len(images), len(channels))
         intensities.append(np.stack(planes, -1))
         if z_ch is not None:
             u1 = sum(images[c] for c in colours if h.wavelengths[c] == h.wavelengths[0])
             ranges.append(depth_mod.from_phase_difference(
                 u1, images[z_ch], wavelengths=(h.wavelengths[0], h.wavelengths[z_ch]),
-                centre=_centre_distance(first, camera), focus=pupil.focus))
+                centre=centre, focus=pupil.focus))
             brightness.append(np.abs(u1))
     radiance = speckle.compose(intensities, composition)
     ray = None
@@ -290,7 +289,6 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
 def _supersampled(camera: Camera, s: int) -> Camera:
     if s == 1:
         return camera
-    from dataclasses import replace
     w, h = camera.resolution
     return replace(camera, resolution=(w * s, h * s))
 

@@ -94,7 +94,7 @@ def choose(plate_size, points, *, camera=None, resolution=None,
             resolution = DEFAULT_RESOLUTION
     resolution = int(validate.at_least("resolution", resolution, 16))
     pitch = side / resolution
-    lam = wavelength or MARGIN ** -1 * 8 * pitch * band
+    lam = wavelength or 8 * pitch * band / MARGIN
     extent = float(np.linalg.norm(pts.max(0) - pts.min(0)))
     lam2 = partner_wavelength(lam, DEPTH_MARGIN * max(extent, lam) / 2)
     band = MARGIN * lam2 / (8 * pitch)  # λ2 < λ1 is the tighter one

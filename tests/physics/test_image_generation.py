@@ -1,6 +1,7 @@
 """Image generation against geometric and wave optics (Sect. VII): pixel positions, Airy spot,
 defocus blur, two-wavelength depth, anti-aliasing, speckle composition."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -155,7 +156,7 @@ def test_two_wavelength_depth_of_a_point():
                                                  up=(0, 1, 0)))
     for focus in (None, 6.5e-3):
         kw = {} if focus is None else dict(fstop=50e-3 / 0.1e-3, focus_distance=focus)
-        cam_k = Camera(**{**{s: getattr(cam, s) for s in Camera.__slots__}, **kw})
+        cam_k = dataclasses.replace(cam, **kw)
         r = render_view(point_hologram(p, lams, names), cam_k)
         i, j = np.unravel_index(np.argmax(r.rgb[..., 0]), r.alpha.shape)
         true = cam_k.project(p)[1][0]
