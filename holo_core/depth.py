@@ -27,13 +27,21 @@ def from_phase_difference(u1, u2, *, wavelengths, centre, focus=None) -> np.ndar
     """Distance r [m] along each pixel's ray from the complex images ``u1`` at λ1 and ``u2`` at
     λ2 (Eq. 26-29), unwrapped around ``centre`` [m]; ``focus`` f [m] of a thin lens (r = r_f
     in the paper's notation, Eq. 29), None for a pinhole."""
+    return from_cross_spectrum(np.asarray(u1) * np.conj(u2), wavelengths=wavelengths,
+                               centre=centre, focus=focus)
+
+
+def from_cross_spectrum(cross, *, wavelengths, centre, focus=None) -> np.ndarray:
+    """As :func:`from_phase_difference`, from u1·conj(u2) summed over looks (iterations,
+    neighbouring samples): the phase of the sum is the intensity-weighted consensus, which
+    dark speckles, whose phase is noise, barely move."""
     lam1, lam2 = (validate.positive("wavelengths", w, "m") for w in wavelengths)
     if lam1 == lam2:
         raise ValueError("the depth pair needs two different wavelengths")
     dk = 2 * np.pi * (1 / lam1 - 1 / lam2)
     f = 0.0 if focus is None else focus
     x_c = centre - f
-    dphi = np.angle(np.asarray(u1) * np.conj(u2))
+    dphi = np.angle(cross)
     wrapped = np.angle(np.exp(1j * (dphi - dk * x_c)))
     return f + x_c + wrapped / dk
 

@@ -46,6 +46,14 @@ def sample_points(mesh: Mesh, spacing: float, *, channels=3, seed=0, max_points=
     Returns (positions (N, 3) [m], colours (N, C)) with colours interpolated from the vertex
     colours, looked up in the texture through the UVs, or white.
     """
+    tri, bary = _sample(mesh, spacing, seed, max_points)
+    corners = mesh.triangles[tri]
+    pos = np.einsum("nk,nkd->nd", bary, mesh.vertices[corners])
+    return pos, _colour(mesh, corners, bary, channels)
+
+
+def _sample(mesh: Mesh, spacing, seed, max_points):
+    """(triangle index (N,), barycentric weights (N, 3)) of area-uniform random points."""
     spacing = validate.positive("spacing", spacing, "m")
     areas = mesh.areas()
     n = int(min(max_points, max(1, round(areas.sum() / spacing**2))))
@@ -53,10 +61,39 @@ def sample_points(mesh: Mesh, spacing: float, *, channels=3, seed=0, max_points=
     tri = rng.choice(len(areas), size=n, p=areas / areas.sum())
     r1, r2 = rng.random(n), rng.random(n)
     s = np.sqrt(r1)
-    bary = np.stack([1 - s, s * (1 - r2), s * r2], axis=1)  # uniform in each triangle
-    corners = mesh.triangles[tri]
-    pos = np.einsum("nk,nkd->nd", bary, mesh.vertices[corners])
-    return pos, _colour(mesh, corners, bary, channels)
+    return tri, np.stack([1 - s, s * (1 - r2), s * r2], axis=1)  # uniform in each triangle
+
+
+def visible_from(camera, positions, spacing: float) -> np.ndarray:
+    """Mask of the points (N, 3) [m] that ``camera`` sees: its own surface is the nearest within
+    a few samples (``spacing`` [m] apart) along the pixel's line of sight.
+
+    A hologram recorded for one viewpoint holds only the surfaces seen from there, as a raster
+    renderer would draw them (surfaces are two-sided). The points themselves form the depth
+    buffer: each cell of the camera's grid keeps the nearest depth in its 3×3 neighbourhood, so a
+    cell the random sampling left empty does not let a hidden surface through. Points outside
+    the frame are kept.
+    """
+    xy, depth = camera.project(positions)
+    w, h = camera.resolution
+    footprint = camera.pixel_angle() * np.nanmin(np.where(depth > 0, depth, np.nan))
+    cell = max(1.0, 2 * spacing / footprint)         # a few points per cell
+    cols, rows = math.ceil(w / cell), math.ceil(h / cell)
+    inside = (depth > 0) & (xy[:, 0] >= 0) & (xy[:, 0] < w) & (xy[:, 1] >= 0) & (xy[:, 1] < h)
+    c = (xy[inside, 0] / cell).astype(int)
+    r = (xy[inside, 1] / cell).astype(int)
+    near = np.full((rows + 2, cols + 2), np.inf)
+    np.minimum.at(near, (r + 1, c + 1), depth[inside])
+    nearest = near.copy()
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            nearest[1:-1, 1:-1] = np.minimum(nearest[1:-1, 1:-1],
+                                             near[1 + dr:rows + 1 + dr, 1 + dc:cols + 1 + dc])
+    # A surface's depth changes by about one cell across three cells at 45° incidence.
+    tolerance = 3 * cell * camera.pixel_angle() * depth[inside] + 2 * spacing
+    keep = np.ones(len(depth), bool)
+    keep[inside] = depth[inside] <= nearest[r + 1, c + 1] + tolerance
+    return keep
 
 
 def _colour(mesh: Mesh, corners, bary, channels):
@@ -158,18 +195,50 @@ def surface_pitch(prim: Primitive, *, wavelength, pitch) -> float:
 
 
 def primitive_wave(prim: Primitive, *, wavelength, pitch, shape, channel=0, seed=0, padding=2,
-                   diffuse=True):
+                   diffuse=True, sampled_for=None):
     """The primitive's wave on the hologram (z = 0, ``shape``, ``pitch`` [m]) at ``wavelength``
     [m]: its surface field, sampled at :func:`surface_pitch`, carried by spectrum rotation plus
-    offset propagation (Sect. IV-D)."""
+    offset propagation (Sect. IV-D). ``sampled_for``: the shortest wavelength [m] of a set
+    recorded together, so that all share one surface grid and so one diffuse phase pattern
+    (the depth pair needs it)."""
     m, centre = prim.frame()
-    q = surface_pitch(prim, wavelength=wavelength, pitch=pitch)
+    q = surface_pitch(prim, wavelength=min(wavelength, sampled_for or wavelength), pitch=pitch)
     field, mid = surface_field(prim, pitch=q, channel=channel, seed=seed, diffuse=diffuse)
     grid_centre = centre + m[:, :2] @ mid  # the surface grid's centre in the hologram frame
     # the hologram plane seen from the primitive: axes = rows of m, centre at -grid_centre
     return propagate_to_plane(field.astype(np.complex64), wavelength=wavelength, pitch=q,
                               rotation=m.T, position=m.T @ (-grid_centre), padding=padding,
                               out_shape=shape, out_pitch=pitch)
+
+
+def mesh_primitives(mesh: Mesh, *, visible_to=None, spacing=None) -> list[Primitive]:
+    """The mesh's triangles as primitives, textured by the mesh's texture or, without one,
+    by the mean of their corners' colours; with a camera ``visible_to``, only those it sees
+    (tested on points ``spacing`` [m] apart, see :func:`visible_from`)."""
+    keep = np.arange(len(mesh.triangles))
+    if visible_to is not None:
+        tri, bary = _sample(mesh, spacing, 0, 2_000_000)
+        pos = np.einsum("nk,nkd->nd", bary, mesh.vertices[mesh.triangles[tri]])
+        keep = np.unique(tri[visible_from(visible_to, pos, spacing)])
+    prims = []
+    for t in keep:
+        idx = mesh.triangles[t]
+        if mesh.texture is not None and mesh.uvs is not None:
+            uvs, tex = mesh.uvs[idx], mesh.texture
+        else:
+            colour = (np.asarray(mesh.colours, np.float64)[idx].mean(0)
+                      if mesh.colours is not None else np.ones(3))
+            uvs, tex = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]), colour[None, None, :]
+        if np.linalg.norm(np.cross(*(mesh.vertices[idx[1:]] - mesh.vertices[idx[0]]))) > 0:
+            prims.append(Primitive(corners=mesh.vertices[idx], uvs=uvs, texture=tex))
+    return prims
+
+
+def depth_texture(texture) -> np.ndarray:
+    """The depth partner's texture: (Σ_c √I_c)², one channel (Sect. VII-C)."""
+    t = np.asarray(texture, np.float64)
+    t = t[..., None] if t.ndim == 2 else t
+    return np.sqrt(np.clip(t, 0, None)).sum(-1, keepdims=True) ** 2
 
 
 # --- mesh files ----------------------------------------------------------------------------------

@@ -7,7 +7,7 @@ One hologram is recorded per wavelength of the same scene (Sect. VII-B).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -90,7 +90,8 @@ def interfere(object_wave, reference_wave) -> np.ndarray:
 def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVELENGTHS,
                   phases=None, seed=0, reference=Reference(), obliquity=False,
                   keep_object_wave=True, plate=None, method="auto", band=None,
-                  channels=(), point_density=0.0, progress: jobs.Progress = None) -> Hologram:
+                  channels=(), point_density=0.0, extra_wave=None, bounds=None,
+                  progress: jobs.Progress = None) -> Hologram:
     """Holograms of point emitters, one per wavelength.
 
     Parameters
@@ -116,12 +117,16 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
         reconstruction's filter.
     channels, point_density
         Stored with the hologram (see :class:`holo_core.hologram_io.Hologram`).
+    extra_wave : callable (channel, wavelength [m]) -> complex (H, W) array, optional
+        Further object wave on the hologram from other emitters (textured primitives).
+    bounds : (2, 3) array, optional
+        The objects' bounding box [m] in the hologram frame; default: the points'.
     """
     pos = np.asarray(positions, np.float64)
     lambdas = tuple(validate.positive("wavelengths", w, "m") for w in np.atleast_1d(wavelengths))
     if not lambdas:
         raise ValueError("wavelengths must hold at least one wavelength [m]")
-    cols = np.asarray(colours, np.float64).reshape(len(pos), -1)
+    cols = np.asarray(colours, np.float64).reshape(len(pos), -1 if len(pos) else len(lambdas))
     if cols.shape[1] != len(lambdas):
         raise ValueError(f"colours must have one column per wavelength ({len(lambdas)}); "
                          f"got {cols.shape[1]}")
@@ -139,12 +144,15 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
         o = point_wave(pos, np.sqrt(cols[:, c]) * np.exp(1j * phases), wavelength=lam,
                        pitch=pitch, shape=shape, obliquity=obliquity, method=method, band=band,
                        progress=jobs.scaled(progress, c / len(lambdas), (c + 1) / len(lambdas)))
+        if extra_wave is not None:
+            o = o + extra_wave(c, lam)
         a_r = math.sqrt(reference.beam_ratio * max(float(np.mean(np.abs(o) ** 2)), 1e-30))
         intensity.append(interfere(o, reference_wave(shape, wavelength=lam, pitch=pitch,
                                                      reference=reference, amplitude=a_r)))
         waves.append(o)
         amplitudes.append(a_r)
-    bounds = np.array([pos.min(0), pos.max(0)]) if len(pos) else np.zeros((2, 3))
+    if bounds is None:
+        bounds = np.array([pos.min(0), pos.max(0)]) if len(pos) else np.zeros((2, 3))
     return Hologram(intensity=np.stack(intensity), wavelengths=lambdas, pitch=pitch,
                     reference_angle=reference.angle, reference_azimuth=reference.azimuth,
                     reference_amplitudes=tuple(amplitudes),
@@ -179,18 +187,21 @@ class Plate:
         return (np.asarray(points, np.float64) - m[:3, 3]) @ m[:3, :3]
 
 
-def record_hologram(emitters, *, plate: Plate, camera=None, resolution=None,
+def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, resolution=None,
                     max_resolution=2048, wavelength=None, depth=True, seed=0, method="auto",
-                    progress: jobs.Progress = None) -> Hologram:
+                    cull=True, progress: jobs.Progress = None) -> Hologram:
     """Record a scene in world metres onto ``plate``, choosing the optics automatically
     (:mod:`holo_core.sampling`; the choice is logged and stored in the hologram).
 
     Parameters
     ----------
     emitters : Mesh, sequence of Mesh, or (positions (N, 3) [m], colours (N, 3))
-        World-space emitters; meshes become points at the chosen spacing. Colours are linear
-        RGB intensities.
+        World-space point emitters; meshes become points at the chosen spacing. Colours are
+        linear RGB intensities.
     plate : Plate
+    triangles : sequence of Mesh
+        World-space meshes recorded as textured triangles (their texture, else the mean of
+        their corners' colours), each carried to the plate by tilted-plane propagation.
     camera : holo_core.camera.Camera, optional
         Sizes the cone and the wavelength to this view.
     resolution, max_resolution, wavelength
@@ -199,37 +210,71 @@ def record_hologram(emitters, *, plate: Plate, camera=None, resolution=None,
         Also record the depth partner λ2 (Sect. VII-C).
     seed : int
         Seeds the emitters' random phases (and the mesh sampling).
+    cull : bool
+        With a camera, keep only the points and triangles it sees
+        (:func:`holo_core.emitters.visible_from`): a hologram shows surfaces hidden from its
+        recording viewpoint through the ones in front, as light does not occlude itself.
     """
     from . import emitters as em
     from .sampling import choose
     meshes = [emitters] if isinstance(emitters, em.Mesh) else None
-    if meshes is None and emitters and all(isinstance(e, em.Mesh) for e in emitters):
+    if meshes is None and all(isinstance(e, em.Mesh) for e in emitters):
         meshes = list(emitters)
-    probe = (np.concatenate([m.vertices for m in meshes]) if meshes
-             else np.asarray(emitters[0], np.float64))
+    triangles = list(triangles)
+    probe = [m.vertices for m in meshes + triangles] if meshes is not None else \
+        [np.asarray(emitters[0], np.float64)] + [m.vertices for m in triangles]
+    if not sum(len(p) for p in probe):
+        raise ValueError("record_hologram needs emitters or triangles")
     view = None
     if camera is not None:
         view = (plate.to_plate(camera.position[None])[0], camera.pixel_angle())
-    s = choose((plate.width, plate.height), plate.to_plate(probe), camera=view,
+    local = plate.to_plate(np.concatenate(probe))
+    s = choose((plate.width, plate.height), local, camera=view,
                resolution=resolution, max_resolution=max_resolution, wavelength=wavelength)
-    if meshes:
+    if meshes is not None:
         parts = [em.sample_points(m, s.spacing, channels=3, seed=seed + i)
                  for i, m in enumerate(meshes)]
-        pos = np.concatenate([p for p, _ in parts])
-        rgb = np.concatenate([np.broadcast_to(c, (len(c), 3)) for _, c in parts])
+        pos = np.concatenate([p for p, _ in parts] or [np.zeros((0, 3))])
+        rgb = np.concatenate([np.broadcast_to(c, (len(c), 3)) for _, c in parts]
+                             or [np.zeros((0, 3))])
         density = 1 / s.spacing**2
+        if cull and camera is not None and len(pos):
+            seen = em.visible_from(camera, pos, s.spacing)
+            pos, rgb = pos[seen], rgb[seen]
     else:
         pos, rgb = np.asarray(emitters[0], np.float64), np.asarray(emitters[1], np.float64)
         density = 0.0
+    prims = [p for m in triangles for p in em.mesh_primitives(
+        m, visible_to=camera if cull else None, spacing=s.spacing)]
+    if prims:
+        density = 1 / s.spacing**2 if not density else density
     rgb = np.asarray(rgb, np.float64).reshape(len(pos), 3)
     lambdas, channels, colours = [s.wavelength] * 3, ["R", "G", "B"], [rgb]
     if depth:
         lambdas.append(s.depth_wavelength)
         channels.append("Z")
         colours.append(np.sqrt(np.clip(rgb, 0, None)).sum(1, keepdims=True) ** 2)
+    shape, to_plate = s.shape, plate.to_plate
+
+    def triangle_waves(c, lam):
+        total = np.zeros(shape, np.complex128)
+        z = channels[c] == "Z"  # the depth partner carries (Σ√I)², like the points
+        for i, p in enumerate(prims):
+            # intensity per surface sample, scaled to the points' density 1/spacing²
+            local = em.Primitive(corners=to_plate(p.corners), uvs=p.uvs,
+                                 texture=em.depth_texture(p.texture) if z else p.texture)
+            q = em.surface_pitch(local, wavelength=min(lambdas), pitch=s.pitch)
+            local = replace(local, texture=local.texture * (q / s.spacing) ** 2)
+            u = em.primitive_wave(local, wavelength=lam, pitch=s.pitch, shape=shape,
+                                  channel=0 if z else c, seed=seed + 7919 * (i + 1),
+                                  sampled_for=min(lambdas))
+            total += u if isinstance(u, np.ndarray) else u.get()
+        return total
+
     reference = Reference(angle=s.reference_angle)
-    return record_points(plate.to_plate(pos), np.concatenate(colours, 1), shape=s.shape,
+    return record_points(to_plate(pos), np.concatenate(colours, 1), shape=shape,
                          pitch=s.pitch, wavelengths=tuple(lambdas), seed=seed,
                          reference=reference, plate=plate.matrix_world, method=method,
                          band=s.band, channels=channels, point_density=density,
-                         progress=progress)
+                         extra_wave=triangle_waves if prims else None, progress=progress,
+                         bounds=np.array([local.min(0), local.max(0)]))

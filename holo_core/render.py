@@ -127,15 +127,39 @@ def image_wave(wave, *, wavelength, pitch, rotation, position, camera: Camera,
     ``wave`` is the field on the plate (z = 0) at ``pitch`` [m], ``wavelength`` [m];
     ``rotation``, ``position``: the camera in the plate's frame (see :func:`camera_in_plate`).
     """
+    at_camera = camera_field(wave, wavelength=wavelength, pitch=pitch, rotation=rotation,
+                             position=position)
+    return pupil_image(at_camera, wavelength=wavelength, pitch=pitch, camera=camera,
+                       aperture=aperture)
+
+
+def camera_field(wave, *, wavelength, pitch, rotation, position) -> np.ndarray:
+    """The plate wave carried to the camera's aperture plane (tilt plus offset propagation),
+    on the host, centred on the aperture."""
     at_camera = propagate_to_plane(wave, wavelength=wavelength, pitch=pitch, rotation=rotation,
                                    position=position)
-    if not isinstance(at_camera, np.ndarray):
-        at_camera = at_camera.get()
+    return at_camera if isinstance(at_camera, np.ndarray) else at_camera.get()
+
+
+def pupil_image(at_camera, *, wavelength, pitch, camera: Camera,
+                aperture: Aperture) -> tuple[np.ndarray, float]:
+    """The image of the field at the camera (:func:`camera_field`) through ``aperture``: its
+    angular spectrum read at the pixels' direction cosines (Eq. 22), and ∫w² [m²]."""
     pupil, weight = _pupil(at_camera, wavelength, pitch, aperture)
     spectrum, n = _spectrum(pupil, wavelength, pitch, camera, aperture)
     alpha, beta, _ = camera.direction_cosines()
     q = np.stack([beta, alpha]) / wavelength * (n * pitch) + n // 2  # fractional FFT indices
     return _bilinear(spectrum, q[0], q[1]), weight
+
+
+def depth_aperture(camera: Camera, hologram: Hologram, wavelength: float,
+                   centre: float) -> Aperture:
+    """The pupil the depth pair is imaged through: a lens focused on the objects' centre, as
+    wide as alias-free sampling of the pixels allows (at most half the plate). Like a
+    renderer's Depth pass it ignores the camera's depth of field, and its small spot keeps few
+    surface points in each pixel's phase average (Sect. VII-C)."""
+    alias_free = wavelength / (PINHOLE_SAMPLES * camera.pixel_angle())
+    return Aperture(diameter=min(alias_free, min(hologram.size) / 2), focus=centre)
 
 
 def _pupil(field, wavelength, pitch, aperture: Aperture):
@@ -210,7 +234,7 @@ class RenderResult:
 
 def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, apodize=True,
                 chromatic=True, composition="mean", supersample=1, exposure=None,
-                opacity_threshold=0.1, source="hologram",
+                opacity_threshold=0.1, source="hologram", depth_estimate="consensus",
                 progress: jobs.Progress = None) -> RenderResult:
     """Render a view of one hologram, or several of the same scene recorded with independent
     random phases (temporal composition, Sect. VII-C and VII-E).
@@ -240,6 +264,10 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
         Alpha is 1 where the luminance exceeds this fraction of the 99.5th percentile.
     source : {'hologram', 'object_wave'}
         Reconstruct from the intensity hologram (default) or use the stored object wave.
+    depth_estimate : {'consensus', 'brightest'}
+        Depth from the phase of u1·conj(u2) summed over iterations and supersamples (the
+        intensity-weighted consensus), or per pixel from the brightest iteration (Fig. 11c).
+        Either way the depth pair is imaged through :func:`depth_aperture`.
     """
     holos = [holograms] if isinstance(holograms, Hologram) else list(holograms)
     if not holos:
@@ -247,6 +275,9 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
     first = holos[0]
     if composition not in ("mean", "max"):
         raise ValueError(f"composition must be 'mean' or 'max'; got {composition!r}")
+    if depth_estimate not in ("consensus", "brightest"):
+        raise ValueError(f"depth_estimate must be 'consensus' or 'brightest'; "
+                         f"got {depth_estimate!r}")
     supersample = int(validate.at_least("supersample", supersample, 1))
     fine = _supersampled(camera, supersample)
     colours, z_ch = first.colour_channels(), first.depth_channel()
@@ -255,35 +286,56 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
     pupil = aperture or camera_aperture(fine, lam0, centre, apodize=apodize)
     chromatic_pupil = replace(pupil, lens_wavelength=lam0) if chromatic and pupil.focus else pupil
     rotation, position = camera_in_plate(first, camera)
-    channels = colours + ([z_ch] if z_ch is not None else [])
-    intensities, ranges, brightness = [], [], []
+    depth_pupil = None
+    if z_ch is not None:
+        depth_pupil = depth_aperture(fine, first, first.wavelengths[z_ch], centre)
+        lam_pair = (lam0, first.wavelengths[z_ch])
+        depth_sources = [c for c in colours if first.wavelengths[c] == lam0] + [z_ch]
+    intensities, crosses, brightness = [], [], []
     for i, h in enumerate(holos):
         done = jobs.scaled(progress, i / len(holos), (i + 1) / len(holos))
-        planes, images = [], {}
-        for c in channels:
+        planes, depth_images = [], {}
+        channels = colours + ([z_ch] if z_ch is not None else [])
+        for n, c in enumerate(channels):
             lam = h.wavelengths[c]
-            lens = pupil if c == z_ch else chromatic_pupil  # the depth pair's lens is perfect
-            u, area = image_wave(plate_wave(h, c, source=source), wavelength=lam, pitch=h.pitch,
-                                 rotation=rotation, position=position, camera=fine, aperture=lens)
-            images[c] = u
+            at = camera_field(plate_wave(h, c, source=source), wavelength=lam, pitch=h.pitch,
+                              rotation=rotation, position=position)
             if c != z_ch:
+                u, area = pupil_image(at, wavelength=lam, pitch=h.pitch, camera=fine,
+                                      aperture=chromatic_pupil)
                 planes.append(np.abs(u) ** 2 / (lam * lam * area))
-            jobs.report(done, len(images), len(channels))
+            if depth_pupil is not None and c in depth_sources:
+                depth_images[c], _ = pupil_image(at, wavelength=lam, pitch=h.pitch, camera=fine,
+                                                 aperture=depth_pupil)
+            jobs.report(done, n + 1, len(channels))
         intensities.append(np.stack(planes, -1))
-        if z_ch is not None:
-            u1 = sum(images[c] for c in colours if h.wavelengths[c] == h.wavelengths[0])
-            ranges.append(depth_mod.from_phase_difference(
-                u1, images[z_ch], wavelengths=(h.wavelengths[0], h.wavelengths[z_ch]),
-                centre=centre, focus=pupil.focus))
+        if depth_pupil is not None:
+            u1 = sum(depth_images[c] for c in depth_sources[:-1])
+            crosses.append(u1 * np.conj(depth_images[z_ch]))
             brightness.append(np.abs(u1))
     radiance = speckle.compose(intensities, composition)
     ray = None
-    if ranges:
-        ray, bright = depth_mod.keep_brightest(ranges, brightness)
-        tx, ty = fine.pixel_tangents()
-        ray = speckle.pick_brightest(ray / np.sqrt(1 + tx * tx + ty * ty), bright, supersample)
+    if crosses:
+        ray = _depth(crosses, brightness, estimate=depth_estimate, wavelengths=lam_pair,
+                     centre=centre, focus=depth_pupil.focus, camera=camera, supersample=supersample)
     radiance = speckle.downsample(radiance, supersample)
     return _finish(radiance, ray, first, camera, pupil, exposure, opacity_threshold, lam0)
+
+
+def _depth(crosses, brightness, *, estimate, wavelengths, centre, focus, camera: Camera,
+           supersample) -> np.ndarray:
+    """Planar depth [m] from the per-iteration cross images u1·conj(u2) of the depth pair."""
+    if estimate == "consensus":
+        cross = speckle.downsample(sum(crosses), supersample)
+        ray = depth_mod.from_cross_spectrum(cross, wavelengths=wavelengths, centre=centre,
+                                            focus=focus)
+        tx, ty = camera.pixel_tangents()
+        return ray / np.sqrt(1 + tx * tx + ty * ty)
+    ranges = [depth_mod.from_cross_spectrum(c, wavelengths=wavelengths, centre=centre,
+                                            focus=focus) for c in crosses]
+    ray, bright = depth_mod.keep_brightest(ranges, brightness)
+    tx, ty = _supersampled(camera, supersample).pixel_tangents()
+    return speckle.pick_brightest(ray / np.sqrt(1 + tx * tx + ty * ty), bright, supersample)
 
 
 def _supersampled(camera: Camera, s: int) -> Camera:

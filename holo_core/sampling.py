@@ -8,6 +8,8 @@ wavelength is chosen for the plate's sampling and the image's resolution.
 - Off-axis recording: the virtual image, the twin image and the |O|² term separate when the
   reference's sin ϑ = 3b, and the hologram samples the carrier when sin ϑ + b <= λ/(2d)
   (Eq. 19): b = λ/(8d) at the limit, kept ``MARGIN`` below it.
+- Points: two per resolved spot of the plate (λ/(2b)) along the diagonal, or two per pixel
+  footprint of the camera when that is coarser (finer points are never resolved).
 - Image: a pinhole of diameter D resolves λ/D (Sect. VII-A) and blurs by D/r at distance r;
   both reach two pixels Δ when λ = 4Δ²r: the wavelength that serves that image resolution
   without filtering (Sect. VII-D), which fixes the hologram's size N = 8·S·b/λ.
@@ -80,12 +82,13 @@ def choose(plate_size, points, *, camera=None, resolution=None,
         raise ValueError("points must be behind the plate (z < 0 in its frame)")
     side = max(width, height)
     band = DEFAULT_BAND
-    lam_image = None
+    lam_image, footprint = None, 0.0
     if camera is not None:
         position, pixel = camera
         band = min(0.9, 1.1 * band_towards(pts, position))
         r = float(np.min(np.linalg.norm(pts - position, axis=1)))
         lam_image = 4 * pixel * pixel * r
+        footprint = pixel * r
     if resolution is None:
         if wavelength or lam_image:
             resolution = math.ceil(8 * side * band / (MARGIN * (wavelength or lam_image)))
@@ -101,7 +104,7 @@ def choose(plate_size, points, *, camera=None, resolution=None,
     s = Sampling(shape=(max(1, round(height / pitch)), max(1, round(width / pitch))),
                  pitch=pitch, wavelength=lam, depth_wavelength=lam2, band=band,
                  reference_angle=math.asin(min(0.99, 3 * lam2 / (8 * pitch))),
-                 spacing=lam / (2 * band) / math.sqrt(2))
+                 spacing=max(lam / (2 * band) / math.sqrt(2), footprint / 2))
     log.info("sampling: %s", s.describe())
     if lam_image is not None and lam > 1.5 * lam_image:
         log.warning("sampling: the image needs λ <= %.3g m for two-pixel sharpness; the "
