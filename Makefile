@@ -5,15 +5,18 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test bench devices clean
+.PHONY: demo figures test bench devices extension clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --upgrade pip
-	$(PY) -m pip install -e '.[test]'
+	$(PY) -m pip install -e '.[test,blender]'
 	touch $@
 
 demo: $(STAMP)
+	$(PY) -m holo_addon.demo -o out
+
+figures: $(STAMP)
 	$(PY) -m holo_core demo -o out
 
 test: $(STAMP)
@@ -27,5 +30,8 @@ bench: $(STAMP)
 devices: $(STAMP)
 	$(PY) -m holo_core devices
 
+extension: $(STAMP)
+	$(PY) -m holo_addon.build -o dist
+
 clean:
-	rm -rf $(VENV) out build *.egg-info
+	rm -rf $(VENV) out build dist *.egg-info

@@ -1,0 +1,142 @@
+"""Build the Blender extension zip(s) with Blender's own builder (``make extension``).
+
+The repository root is the extension root. This stages ``__init__.py``, ``holo_addon/`` and
+the manifest into ``build/extension/``, adds wheels — the core as the ``holo`` wheel, and the
+runtime dependencies from ``pyproject.toml`` downloaded from the package index for each
+platform and Python that Blender 4.2 … 5.x uses (numpy comes with Blender) — lists them in the
+staged manifest, and runs ``blender_ext.py build --split-platforms`` from the bpy wheel.
+Wheels are fetched at build time and never committed.
+
+    python -m holo_addon.build [--platform linux-x64 ...] [--python 3.11 ...] [-o dist]
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import re
+import shutil
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+log = logging.getLogger("holo_addon.build")
+
+# Blender's platform names → pip platform tags (newest first).
+PLATFORMS = {
+    "linux-x64": ["manylinux_2_28_x86_64", "manylinux_2_17_x86_64", "manylinux2014_x86_64"],
+    "windows-x64": ["win_amd64"],
+    "macos-arm64": ["macosx_11_0_arm64", "macosx_12_0_arm64", "macosx_14_0_arm64"],
+    "macos-x64": ["macosx_10_9_x86_64", "macosx_10_15_x86_64", "macosx_11_0_x86_64"],
+}
+PYTHONS = ("3.11", "3.13")        # Blender 4.2-5.0 and 5.1+
+PROVIDED = {"numpy"}              # Blender bundles these
+
+
+def runtime_requirements() -> list[str]:
+    """pyproject's dependencies, less those Blender provides and their environment markers
+    (pip evaluates markers for the host, not the target; a package with no wheel for a target
+    is left out there and reported)."""
+    deps = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["dependencies"]
+    reqs = [d.split(";")[0].strip() for d in deps]
+    return [r for r in reqs if re.split(r"[<>=!~ \[]", r)[0].lower() not in PROVIDED]
+
+
+def _pip(*args) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "pip", *args], capture_output=True, text=True)
+
+
+def download_wheels(dest: Path, platform: str, python: str) -> list[str]:
+    """Download the runtime wheels for one target into ``dest``; returns what had no wheel."""
+    tags = [a for t in PLATFORMS[platform] for a in ("--platform", t)]
+    common = ["download", "--only-binary=:all:", "--python-version", python,
+              "--implementation", "cp", *tags, "-d", str(dest), "--quiet"]
+    missing = []
+    for req in runtime_requirements():
+        if _pip(*common, req).returncode != 0:
+            missing.append(req)
+    for whl in dest.glob("*.whl"):
+        if whl.name.split("-")[0].lower() in PROVIDED:
+            whl.unlink()
+    return missing
+
+
+def blender_builder() -> Path:
+    import importlib.util
+    spec = importlib.util.find_spec("bpy")
+    if spec is None or not spec.submodule_search_locations:
+        raise SystemExit("the bpy module is needed for Blender's extension builder "
+                         "(make extension installs it)")
+    found = sorted(Path(spec.submodule_search_locations[0]).glob(
+        "*/scripts/addons_core/bl_pkg/cli/blender_ext.py"))
+    if not found:
+        raise SystemExit("Blender's extension builder (blender_ext.py) is not in the bpy wheel")
+    return found[-1]
+
+
+def stage(dest: Path, platforms, pythons) -> Path:
+    """The extension source tree with its wheels and a manifest listing them."""
+    if dest.exists():
+        shutil.rmtree(dest)
+    wheels = dest / "wheels"
+    wheels.mkdir(parents=True)
+    shutil.copy2(ROOT / "__init__.py", dest / "__init__.py")
+    shutil.copytree(ROOT / "holo_addon", dest / "holo_addon",
+                    ignore=shutil.ignore_patterns("__pycache__", "build.py"))
+    result = _pip("wheel", str(ROOT), "--no-deps", "-w", str(wheels),
+                  "--quiet")
+    if result.returncode != 0:
+        raise SystemExit(f"building the holo wheel failed:\n{result.stderr}")
+    for platform in platforms:
+        for python in pythons:
+            missing = download_wheels(wheels, platform, python)
+            if missing:
+                log.warning("%s, Python %s: no wheel for %s", platform, python,
+                            ", ".join(missing))
+    manifest = (ROOT / "blender_manifest.toml").read_text()
+    names = sorted(f"./wheels/{w.name}" for w in wheels.glob("*.whl"))
+    keys = ("platforms = [" + ", ".join(f'"{p}"' for p in platforms) + "]\n" +
+            "wheels = [\n" + "".join(f'  "{n}",\n' for n in names) + "]\n\n")
+    first_table = manifest.index("\n[") + 1  # top-level keys go before the first table
+    (dest / "blender_manifest.toml").write_text(manifest[:first_table] + keys +
+                                                manifest[first_table:])
+    return dest
+
+
+def build(out: Path, platforms=tuple(PLATFORMS), pythons=PYTHONS) -> list[Path]:
+    """Build one zip per platform into ``out``; returns their paths."""
+    src = stage(ROOT / "build" / "extension", platforms, pythons)
+    out.mkdir(parents=True, exist_ok=True)
+    before = set(out.glob("*.zip"))
+    cmd = [sys.executable, str(blender_builder()), "build", "--source-dir", str(src),
+           "--output-dir", str(out)]
+    if len(platforms) > 1:
+        cmd.append("--split-platforms")
+    result = subprocess.run(cmd, capture_output=True, text=True)
+    if result.returncode != 0:
+        raise SystemExit(f"Blender's builder failed:\n{result.stdout}\n{result.stderr}")
+    check = subprocess.run([sys.executable, str(blender_builder()), "validate", str(src)],
+                           capture_output=True, text=True)
+    if check.returncode != 0:
+        raise SystemExit(f"the extension does not validate:\n{check.stdout}{check.stderr}")
+    return sorted(set(out.glob("*.zip")) - before) or sorted(out.glob("*.zip"))
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(prog="python -m holo_addon.build", description=__doc__.split(
+        "\n\n")[0])
+    p.add_argument("--platform", action="append", choices=sorted(PLATFORMS),
+                   help="Blender platform (repeatable; default: all)")
+    p.add_argument("--python", action="append", help="Python version (default: 3.11 and 3.13)")
+    p.add_argument("-o", "--output", type=Path, default=ROOT / "dist")
+    args = p.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
+    zips = build(args.output, tuple(args.platform or PLATFORMS), tuple(args.python or PYTHONS))
+    for z in zips:
+        print(f"built {z} ({z.stat().st_size / 1e6:.1f} MB)")
+
+
+if __name__ == "__main__":
+    main()

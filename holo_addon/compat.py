@@ -1,0 +1,79 @@
+"""Blender 4.x / 5.x differences, in one place (facts.md §2).
+
+5.0 made the compositor a node-group data-block with a Group Output instead of the Composite
+node, turned Depth Combine's options into input sockets and multilayer EXR output into a
+media type; 4.2-4.5 call EEVEE ``BLENDER_EEVEE_NEXT``.
+"""
+
+from __future__ import annotations
+
+import bpy
+
+TREE_NAME = "Holo Compositing"
+
+
+def compositor_is_group(scene) -> bool:
+    return hasattr(scene, "compositing_node_group")
+
+
+def compositor_tree(scene):
+    """The scene's compositing node tree, created when missing."""
+    if compositor_is_group(scene):
+        tree = scene.compositing_node_group
+        if tree is None:
+            tree = bpy.data.node_groups.new(TREE_NAME, "CompositorNodeTree")
+            scene.compositing_node_group = tree
+        return tree
+    scene.use_nodes = True
+    return scene.node_tree
+
+
+def output_socket(tree):
+    """The input socket whose image becomes the render result."""
+    if hasattr(bpy.types, "CompositorNodeComposite"):
+        node = next((n for n in tree.nodes if n.bl_idname == "CompositorNodeComposite"), None)
+        node = node or tree.nodes.new("CompositorNodeComposite")
+        return node.inputs[0]
+    if not any(s.in_out == "OUTPUT" for s in tree.interface.items_tree
+               if getattr(s, "item_type", "SOCKET") == "SOCKET"):
+        tree.interface.new_socket(name="Image", in_out="OUTPUT", socket_type="NodeSocketColor")
+    node = next((n for n in tree.nodes if n.bl_idname == "NodeGroupOutput"), None)
+    node = node or tree.nodes.new("NodeGroupOutput")
+    return node.inputs[0]
+
+
+def depth_combine(tree):
+    """A Depth Combine node that blends by alpha; inputs by index: 0 image A, 1 depth A,
+    2 image B, 3 depth B; output 0 the result, 1 the depth."""
+    node = tree.nodes.new("CompositorNodeZcombine")
+    if "Use Alpha" in node.inputs:
+        node.inputs["Use Alpha"].default_value = True
+        node.inputs["Anti-Alias"].default_value = False
+    else:
+        node.use_alpha = True
+        node.use_antialias_z = False
+    return node
+
+
+def set_exr_output(scene, *, multilayer: bool):
+    """Render output as float EXR (32-bit; multilayer keeps every pass, Depth included)."""
+    s = scene.render.image_settings
+    if hasattr(s, "media_type"):
+        s.media_type = "MULTI_LAYER_IMAGE" if multilayer else "IMAGE"
+        if not multilayer:
+            s.file_format = "OPEN_EXR"
+    else:
+        s.file_format = "OPEN_EXR_MULTILAYER" if multilayer else "OPEN_EXR"
+    s.color_depth = "32"
+
+
+def set_png_output(scene):
+    s = scene.render.image_settings
+    if hasattr(s, "media_type"):
+        s.media_type = "IMAGE"
+    s.file_format = "PNG"
+    s.color_depth = "8"
+
+
+def eevee_engine() -> str:
+    return "BLENDER_EEVEE" if bpy.app.version >= (5, 0, 0) else "BLENDER_EEVEE_NEXT"

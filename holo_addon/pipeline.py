@@ -1,0 +1,178 @@
+"""The holographic pipeline for a scene: prepare on Blender's main thread, run anywhere.
+
+:func:`prepare` reads the scene into a :class:`Job` of plain data; :func:`run` records (unless
+the plate's hologram is current) and renders the holographic pass without touching bpy, so it
+can run on a worker thread; :func:`apply` stores the results in the scene. Nothing is written
+until every stage has finished, and each file is written atomically, so a failed or cancelled
+run leaves earlier holograms and passes as they were.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import shutil
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import bpy
+
+import holo_core
+from holo_core import jobs
+from holo_core.hologram_io import read_hologram, write_hologram
+
+from .scene_export import SceneData, export_scene
+
+log = logging.getLogger(__name__)
+PASS_NAME = "holo_pass.exr"
+
+
+@dataclass(frozen=True)
+class Settings:
+    """``Scene.holo`` as plain values (lengths in metres)."""
+
+    max_resolution: int
+    wavelength: float | None
+    iterations: int
+    supersample: int
+    composition: str
+    exposure: float
+    opacity_threshold: float
+    seed: int
+
+    @classmethod
+    def from_scene(cls, scene, unit: float) -> "Settings":
+        h = scene.holo
+        return cls(max_resolution=h.max_resolution,
+                   wavelength=h.wavelength * unit if h.wavelength > 0 else None,
+                   iterations=h.iterations, supersample=h.supersample,
+                   composition=h.composition, exposure=h.exposure,
+                   opacity_threshold=h.opacity_threshold, seed=h.seed)
+
+    def recording(self) -> tuple:
+        """The settings a hologram depends on."""
+        return (self.max_resolution, self.wavelength, self.iterations, self.seed)
+
+
+@dataclass(frozen=True)
+class Job:
+    scene: SceneData
+    settings: Settings
+    output_dir: Path
+    frame: int
+    fingerprint: str
+    current: bool                 # the plate's stored hologram matches the scene
+    holograms: tuple              # paths of the iterations' hologram files
+    render: bool = True           # also render the holographic pass
+
+
+@dataclass
+class Outcome:
+    holograms: tuple
+    fingerprint: str
+    recorded: bool
+    pass_path: Path | None = None
+    frame_path: Path | None = None
+    info: dict = field(default_factory=dict)
+
+
+def output_dir(scene) -> Path:
+    """``Scene.holo.output_dir`` made absolute: relative to the .blend, or when it is not
+    saved yet, to the render output's folder."""
+    raw = scene.holo.output_dir or "//holo/"
+    if raw.startswith("//") and not bpy.data.filepath:
+        base = Path(bpy.path.abspath(scene.render.filepath) or ".")
+        base = base if scene.render.filepath.endswith(("/", os.sep)) else base.parent
+        return (base / raw[2:]).resolve()
+    return Path(bpy.path.abspath(raw)).resolve()
+
+
+def hologram_paths(out: Path, plate_name: str, n: int) -> tuple:
+    stem = bpy.path.clean_name(plate_name)
+    return tuple(out / (f"{stem}_hologram.exr" if i == 0 else f"{stem}_hologram.{i}.exr")
+                 for i in range(n))
+
+
+def prepare(scene, depsgraph, *, render=True) -> Job:
+    """Read the scene (main thread). Raises :class:`scene_export.ExportError` for a scene that
+    cannot be recorded."""
+    data = export_scene(scene, depsgraph)
+    from .scene_export import scale
+    settings = Settings.from_scene(scene, scale(scene))
+    fingerprint = data.fingerprint(*settings.recording())
+    out = output_dir(scene)
+    paths = hologram_paths(out, data.plate_name, settings.iterations)
+    plate = scene.objects[data.plate_name].holo
+    current = (plate.fingerprint == fingerprint and
+               Path(bpy.path.abspath(plate.hologram)) == paths[0] and
+               all(p.is_file() for p in paths))
+    return Job(scene=data, settings=settings, output_dir=out, frame=scene.frame_current,
+               fingerprint=fingerprint, current=current, holograms=paths, render=render)
+
+
+def run(job: Job, progress: jobs.Progress = None) -> Outcome:
+    """Record (when needed) and render the pass; no bpy. ``progress`` may raise
+    :class:`holo_core.jobs.Cancelled`."""
+    s, data = job.settings, job.scene
+    record_share = 0.0 if job.current else (0.85 if job.render else 1.0)
+    if job.current:
+        holos = [read_hologram(p) for p in job.holograms]
+    else:
+        holos = []
+        for i in range(s.iterations):
+            step = jobs.scaled(progress, record_share * i / s.iterations,
+                               record_share * (i + 1) / s.iterations)
+            holos.append(holo_core.record_hologram(
+                data.points, triangles=data.triangles, plate=data.plate, camera=data.camera,
+                max_resolution=s.max_resolution, wavelength=s.wavelength, seed=s.seed + i,
+                progress=step))
+    outcome = Outcome(holograms=job.holograms, fingerprint=job.fingerprint,
+                      recorded=not job.current)
+    view = None
+    if job.render:
+        view = holo_core.render_view(
+            holos, data.camera, supersample=s.supersample, composition=s.composition,
+            opacity_threshold=s.opacity_threshold,
+            progress=jobs.scaled(progress, record_share, 1.0))
+        view.rgb[...] *= s.exposure
+    # every stage has finished: only now are files replaced (each one atomically)
+    job.output_dir.mkdir(parents=True, exist_ok=True)
+    if not job.current:
+        for path, h in zip(job.holograms, holos):
+            write_hologram(path, h)
+    if view is not None:
+        frame_path = job.output_dir / f"holo_pass_{job.frame:04d}.exr"
+        holo_core.write_view(view, frame_path)
+        pass_path = job.output_dir / PASS_NAME
+        tmp = pass_path.with_name(f".{pass_path.name}.tmp")
+        shutil.copyfile(frame_path, tmp)
+        os.replace(tmp, pass_path)
+        outcome.pass_path, outcome.frame_path, outcome.info = pass_path, frame_path, view.info
+    return outcome
+
+
+def apply(scene, job: Job, outcome: Outcome) -> None:
+    """Store the outcome in the scene (main thread): the plate references its hologram, and
+    images showing the pass are reloaded."""
+    plate = scene.objects.get(job.scene.plate_name)
+    if plate is not None:
+        plate.holo.hologram = str(outcome.holograms[0])
+        plate.holo.fingerprint = outcome.fingerprint
+    if outcome.pass_path is not None:
+        for image in bpy.data.images:
+            if image.filepath and Path(bpy.path.abspath(image.filepath)) == outcome.pass_path:
+                image.reload()
+
+
+def check_hologram(scene) -> Path:
+    """The plate's hologram file, read and checked; a clear error when it is missing or
+    corrupt."""
+    from .scene_export import ExportError
+    plates = [o for o in scene.objects if o.holo.is_plate]
+    if not plates or not plates[0].holo.hologram:
+        raise ExportError("no hologram recorded yet: run Record Hologram first")
+    path = Path(bpy.path.abspath(plates[0].holo.hologram))
+    if not path.is_file():
+        raise ExportError(f"the hologram file {path} is missing: record it again")
+    read_hologram(path)  # HologramFileError names the file and the problem
+    return path

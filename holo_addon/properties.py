@@ -1,0 +1,86 @@
+"""Holo settings stored in the .blend: ``Object.holo`` and ``Scene.holo``."""
+
+from __future__ import annotations
+
+import bpy
+from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty,
+                       StringProperty)
+
+EMITTERS = [("NONE", "None", "An ordinary object, rasterized by Blender"),
+            ("POINTS", "Points", "Area-uniform point emitters on the surface (spherical waves)"),
+            ("TRIANGLES", "Triangles", "Textured planar triangles carried by tilted-plane "
+                                       "propagation")]
+
+
+def _emitter_changed(self, context):
+    # A holographic emitter appears only through the holographic pass.
+    self.id_data.hide_render = self.emitter != "NONE" or self.is_plate
+
+
+def _plate_changed(self, context):
+    obj = self.id_data
+    obj.hide_render = self.is_plate or self.emitter != "NONE"
+    if self.is_plate:
+        obj.display_type = "WIRE"
+
+
+class HoloObjectSettings(bpy.types.PropertyGroup):
+    emitter: EnumProperty(name="Emitter", items=EMITTERS, default="NONE",
+                          update=_emitter_changed,
+                          description="How this mesh is recorded into the hologram")
+    is_plate: BoolProperty(name="Hologram Plate", default=False, update=_plate_changed,
+                           description="This plane is the holographic plate: its local z = 0 "
+                                       "plane, viewed from its +Z side")
+    hologram: StringProperty(name="Hologram", subtype="FILE_PATH", default="",
+                             description="The recorded hologram file (first iteration)")
+    fingerprint: StringProperty(name="Fingerprint", default="", options={"HIDDEN"},
+                                description="Digest of what the hologram was recorded from")
+
+
+class HoloSceneSettings(bpy.types.PropertyGroup):
+    output_dir: StringProperty(name="Output Folder", subtype="DIR_PATH", default="//holo/",
+                               description="Where holograms and holographic passes are written "
+                                           "(// is the .blend's folder)")
+    max_resolution: IntProperty(name="Max Hologram Size", default=1024, min=64, max=8192,
+                                description="Largest hologram side in samples; the optics are "
+                                            "chosen automatically up to this size")
+    wavelength: FloatProperty(name="Wavelength", default=0.0, min=0.0, max=1.0, precision=6,
+                              subtype="DISTANCE", unit="LENGTH",
+                              description="Recording wavelength (0: chosen for the image's "
+                                          "resolution)")
+    iterations: IntProperty(name="Iterations", default=4, min=1, max=64,
+                            description="Recordings with independent random phases, averaged "
+                                        "(speckle, Sect. VII-E) and used for depth")
+    supersample: IntProperty(name="Supersample", default=2, min=1, max=4,
+                             description="Render at this multiple of the resolution, then "
+                                         "low-pass and downsample")
+    composition: EnumProperty(name="Composition", default="mean",
+                              items=[("mean", "Mean", "Average the iterations' intensities"),
+                                     ("max", "Maximum", "Brightest iteration per pixel")])
+    exposure: FloatProperty(name="Exposure", default=1.0, min=0.0, soft_max=16.0,
+                            description="Multiplier on the holographic pass's radiance")
+    opacity_threshold: FloatProperty(name="Opacity Threshold", default=0.05, min=0.0, max=1.0,
+                                     description="Alpha is 1 where the luminance exceeds this "
+                                                 "fraction of the bright end")
+    seed: IntProperty(name="Seed", default=0, min=0, description="Random phases and sampling")
+    pass_on_render: BoolProperty(name="Pass on Every Render", default=True,
+                                 description="Render the holographic pass before each Blender "
+                                             "render or animation frame (recording again only "
+                                             "when the scene changed)")
+
+
+CLASSES = (HoloObjectSettings, HoloSceneSettings)
+
+
+def register():
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+    bpy.types.Object.holo = PointerProperty(type=HoloObjectSettings)
+    bpy.types.Scene.holo = PointerProperty(type=HoloSceneSettings)
+
+
+def unregister():
+    del bpy.types.Scene.holo
+    del bpy.types.Object.holo
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

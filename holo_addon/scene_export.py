@@ -1,0 +1,215 @@
+"""Blender scene → plain data in metres for holo_core (runs on Blender's main thread).
+
+Lengths are Blender units × ``unit_settings.scale_length``. Meshes are exported unindexed
+(three vertices per triangle) so that per-corner colours and UVs survive. Colour comes from
+the active colour attribute, else the material's image texture on Base Color, else its Base
+Color (per triangle, by material slot), else white; all linear.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from holo_core.camera import Camera
+from holo_core.emitters import Mesh
+from holo_core.record import Plate
+
+
+class ExportError(ValueError):
+    """The scene cannot be recorded as it is; the message says what to change."""
+
+
+@dataclass(frozen=True, eq=False)
+class SceneData:
+    """What the pipeline needs, with no reference to Blender: emitter meshes in world metres
+    (``points`` and ``triangles`` kinds), the plate, the camera and a fingerprint of them."""
+
+    points: list
+    triangles: list
+    plate: Plate
+    plate_name: str
+    camera: Camera
+
+    def fingerprint(self, *settings) -> str:
+        """A digest of everything the hologram depends on (the camera sizes its optics)."""
+        h = hashlib.sha256()
+        for mesh in self.points + self.triangles:
+            for a in (mesh.vertices, mesh.colours, mesh.uvs, mesh.texture):
+                if a is not None:
+                    h.update(np.ascontiguousarray(a, np.float64).tobytes())
+            h.update(b"|")
+        for a in (self.plate.matrix_world, (self.plate.width, self.plate.height),
+                  self.camera.matrix_world):
+            h.update(np.asarray(a, np.float64).tobytes())
+        h.update(repr((self.camera.lens, self.camera.sensor_width, self.camera.sensor_height,
+                       self.camera.sensor_fit, self.camera.shift_x, self.camera.shift_y,
+                       self.camera.resolution, self.camera.pixel_aspect) + settings).encode())
+        return h.hexdigest()[:16]
+
+
+def scale(scene) -> float:
+    """Metres per Blender unit."""
+    return float(scene.unit_settings.scale_length) or 1.0
+
+
+def _matrix(m, unit: float, *, normalise: bool) -> np.ndarray:
+    a = np.array(m, np.float64).reshape(4, 4)
+    a[:3, 3] *= unit
+    if normalise:  # the nearest rotation (polar decomposition): no scale, float32 noise gone
+        u, _, vt = np.linalg.svd(a[:3, :3])
+        a[:3, :3] = u @ vt
+        if np.linalg.det(a[:3, :3]) < 0:
+            raise ExportError("a mirrored (negative-scale) camera or plate cannot be used")
+    return a
+
+
+def mesh_from_object(obj, depsgraph, unit: float) -> Mesh:
+    """The evaluated mesh of ``obj`` (modifiers applied) as world-space triangles [m]."""
+    ev = obj.evaluated_get(depsgraph)
+    me = ev.to_mesh()
+    try:
+        me.calc_loop_triangles()
+        nt = len(me.loop_triangles)
+        if nt == 0:
+            raise ExportError(f"object '{obj.name}' has no faces to emit from")
+        co = np.empty(len(me.vertices) * 3)
+        me.vertices.foreach_get("co", co)
+        loops = np.empty(nt * 3, np.int64)
+        me.loop_triangles.foreach_get("loops", loops)
+        lv = np.empty(len(me.loops), np.int64)
+        me.loops.foreach_get("vertex_index", lv)
+        m = np.array(ev.matrix_world, np.float64)
+        world = co.reshape(-1, 3) @ m[:3, :3].T + m[:3, 3]
+        vertices = world[lv[loops]] * unit
+        mat_index = np.empty(nt, np.int64)
+        me.loop_triangles.foreach_get("material_index", mat_index)
+        colours, uvs, texture = _colours(obj, me, loops, lv, mat_index)
+    finally:
+        ev.to_mesh_clear()
+    return Mesh(vertices=vertices, triangles=np.arange(nt * 3).reshape(nt, 3),
+                colours=colours, uvs=uvs, texture=texture)
+
+
+def _colours(obj, me, loops, loop_vertex, mat_index):
+    """(per-corner colours or None, per-corner UVs or None, texture or None)."""
+    attr = me.color_attributes.active_color if hasattr(me, "color_attributes") else None
+    if attr is not None and len(attr.data):
+        data = np.empty(len(attr.data) * 4, np.float64)
+        attr.data.foreach_get("color", data)  # linear
+        data = data.reshape(-1, 4)[:, :3]
+        per = data[loop_vertex[loops]] if attr.domain == "POINT" else data[loops]
+        return per, None, None
+    image = _base_texture(obj)
+    if image is not None and me.uv_layers.active is not None:
+        uv = np.empty(len(me.loops) * 2)
+        me.uv_layers.active.uv.foreach_get("vector", uv)
+        return None, uv.reshape(-1, 2)[loops], _pixels(image)
+    base = np.array([_base_colour(slot.material) for slot in obj.material_slots] or
+                    [(1.0, 1.0, 1.0)], np.float64)
+    return np.repeat(base[np.clip(mat_index, 0, len(base) - 1)], 3, axis=0), None, None
+
+
+def _principled(material):
+    if material is None or not material.use_nodes or material.node_tree is None:
+        return None
+    return next((n for n in material.node_tree.nodes if n.type == "BSDF_PRINCIPLED"), None)
+
+
+def _base_colour(material) -> tuple:
+    if material is None:
+        return (1.0, 1.0, 1.0)
+    node = _principled(material)
+    if node is not None:
+        return tuple(node.inputs["Base Color"].default_value[:3])
+    return tuple(material.diffuse_color[:3])
+
+
+def _base_texture(obj):
+    for slot in obj.material_slots:
+        node = _principled(slot.material)
+        if node is None or not node.inputs["Base Color"].is_linked:
+            continue
+        src = node.inputs["Base Color"].links[0].from_node
+        if src.type == "TEX_IMAGE" and src.image is not None:
+            return src.image
+    return None
+
+
+def _pixels(image) -> np.ndarray:
+    """Image pixels (h, w, 3), row 0 at the top as :func:`holo_core.emitters.texture_lookup`
+    expects. Blender stores rows bottom-up; byte images are sRGB, float images linear."""
+    w, h = image.size
+    if not w or not h:
+        raise ExportError(f"image '{image.name}' has no pixels (is the file missing?)")
+    px = np.empty(w * h * image.channels, np.float32)
+    image.pixels.foreach_get(px)
+    px = px.reshape(h, w, image.channels)[::-1, :, :3].astype(np.float64)
+    if not image.is_float and image.colorspace_settings.name == "sRGB":
+        px = np.where(px <= 0.04045, px / 12.92, ((px + 0.055) / 1.055) ** 2.4)
+    return px
+
+
+def plate_from_object(obj, unit: float) -> Plate:
+    """The plate: the object's pose (scale removed) and its width and height [m] from its
+    dimensions; the hologram is its local z = 0 plane and viewers are on its +Z side."""
+    w, h = obj.dimensions.x * unit, obj.dimensions.y * unit
+    if w <= 0 or h <= 0:
+        raise ExportError(f"plate '{obj.name}' must have a width and height (a plane)")
+    return Plate(matrix_world=_matrix(obj.matrix_world, unit, normalise=True), width=w, height=h)
+
+
+def camera_from_object(scene, obj, unit: float) -> Camera:
+    """Blender's camera (lens, sensor, fit, shift, render size, pixel aspect, depth of field)
+    as :class:`holo_core.camera.Camera`."""
+    cam, r = obj.data, scene.render
+    if cam.type != "PERSP":
+        raise ExportError(f"camera '{obj.name}' must be perspective (it is {cam.type})")
+    pct = r.resolution_percentage / 100
+    res = (max(1, int(r.resolution_x * pct)), max(1, int(r.resolution_y * pct)))
+    m = _matrix(obj.matrix_world, unit, normalise=True)
+    fstop = focus = None
+    if cam.dof.use_dof:
+        fstop = cam.dof.aperture_fstop
+        if cam.dof.focus_object is not None:
+            target = np.array(cam.dof.focus_object.matrix_world.translation) * unit
+            focus = float(-(target - m[:3, 3]) @ m[:3, 2])  # along the view axis
+        else:
+            focus = cam.dof.focus_distance * unit
+        if focus <= 0:
+            raise ExportError("the camera's focus must lie in front of it (focus distance > 0)")
+    return Camera(matrix_world=m, lens=cam.lens, sensor_width=cam.sensor_width,
+                  sensor_height=cam.sensor_height, sensor_fit=cam.sensor_fit,
+                  shift_x=cam.shift_x, shift_y=cam.shift_y, resolution=res,
+                  pixel_aspect=(r.pixel_aspect_x, r.pixel_aspect_y),
+                  focus_distance=focus, fstop=fstop)
+
+
+def export_scene(scene, depsgraph) -> SceneData:
+    """The scene's emitters, plate and camera; a clear :class:`ExportError` when one is
+    missing or ill-placed."""
+    unit = scale(scene)
+    plates = [o for o in scene.objects if o.holo.is_plate]
+    if not plates:
+        raise ExportError("no hologram plate: mark a plane with Object ▸ Holo ▸ Plate")
+    if len(plates) > 1:
+        raise ExportError(f"one plate per scene; found {', '.join(o.name for o in plates)}")
+    if scene.camera is None:
+        raise ExportError("the scene has no camera")
+    emitters = [o for o in scene.objects if o.type == "MESH" and o.holo.emitter != "NONE"
+                and not o.holo.is_plate]
+    if not emitters:
+        raise ExportError("no holographic emitters: set Object ▸ Holo ▸ Emitter on a mesh")
+    points = [mesh_from_object(o, depsgraph, unit) for o in emitters
+              if o.holo.emitter == "POINTS"]
+    triangles = [mesh_from_object(o, depsgraph, unit) for o in emitters
+                 if o.holo.emitter == "TRIANGLES"]
+    plate = plate_from_object(plates[0], unit)
+    camera = camera_from_object(scene, scene.camera, unit)
+    if plate.to_plate(camera.position[None])[0, 2] <= 0:
+        raise ExportError(f"the camera is behind plate '{plates[0].name}': viewers must be on "
+                          f"its +Z side (rotate the plate 180°)")
+    return SceneData(points=points, triangles=triangles, plate=plate, plate_name=plates[0].name,
+                     camera=camera)

@@ -1,0 +1,68 @@
+"""Panels in the Properties editor: Scene ▸ Holo (settings and actions), Object ▸ Holo."""
+
+from __future__ import annotations
+
+import bpy
+
+
+class HOLO_PT_scene(bpy.types.Panel):
+    bl_label = "Holo"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "scene"
+
+    def draw(self, context):
+        h = context.scene.holo
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(h, "output_dir")
+        col = layout.column(heading="Recording")
+        col.prop(h, "max_resolution")
+        col.prop(h, "wavelength")
+        col.prop(h, "iterations")
+        col.prop(h, "seed")
+        col = layout.column(heading="Image")
+        col.prop(h, "supersample")
+        col.prop(h, "composition")
+        col.prop(h, "exposure")
+        col.prop(h, "opacity_threshold")
+        layout.prop(h, "pass_on_render")
+        col = layout.column(align=True)
+        col.operator("holo.record_hologram", icon="REC")
+        col.operator("holo.render_pass", icon="RENDER_STILL")
+        col.operator("holo.setup_compositing", icon="NODE_COMPOSITING")
+        col.operator("holo.render", icon="RENDER_RESULT")
+
+
+class HOLO_PT_object(bpy.types.Panel):
+    bl_label = "Holo"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "object"
+
+    @classmethod
+    def poll(cls, context):
+        return context.object is not None and context.object.type == "MESH"
+
+    def draw(self, context):
+        h = context.object.holo
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(h, "is_plate")
+        if h.is_plate:
+            layout.prop(h, "hologram")
+        else:
+            layout.prop(h, "emitter")
+
+
+CLASSES = (HOLO_PT_scene, HOLO_PT_object)
+
+
+def register():
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)
