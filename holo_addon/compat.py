@@ -77,3 +77,13 @@ def set_png_output(scene):
 
 def eevee_engine() -> str:
     return "BLENDER_EEVEE" if bpy.app.version >= (5, 0, 0) else "BLENDER_EEVEE_NEXT"
+
+
+def uses_nodes(material) -> bool:
+    """5.x materials always use their node tree (``use_nodes`` is deprecated)."""
+    return bpy.app.version >= (5, 0, 0) or material.use_nodes
+
+
+def enable_nodes(material) -> None:
+    if bpy.app.version < (5, 0, 0):
+        material.use_nodes = True

@@ -17,6 +17,8 @@ from holo_core.camera import Camera
 from holo_core.emitters import Mesh
 from holo_core.record import Plate
 
+from . import compat
+
 
 class ExportError(ValueError):
     """The scene cannot be recorded as it is; the message says what to change."""
@@ -113,7 +115,7 @@ def _colours(obj, me, loops, loop_vertex, mat_index):
 
 
 def _principled(material):
-    if material is None or not material.use_nodes or material.node_tree is None:
+    if material is None or material.node_tree is None or not compat.uses_nodes(material):
         return None
     return next((n for n in material.node_tree.nodes if n.type == "BSDF_PRINCIPLED"), None)
 

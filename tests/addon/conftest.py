@@ -1,0 +1,30 @@
+"""bpy in-process, isolated from the user's Blender configuration; the add-on registered from
+the source tree. Skips cleanly where the bpy module is not installed."""
+
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import pytest
+
+os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="holo-blender-"))
+bpy = pytest.importorskip("bpy")
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+
+
+@pytest.fixture(scope="session")
+def addon():
+    import holo_addon
+    holo_addon.register()
+    yield holo_addon
+    holo_addon.unregister()
+
+
+@pytest.fixture
+def empty_scene(addon, tmp_path):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.holo.output_dir = str(tmp_path / "holo") + os.sep
+    scene.render.filepath = str(tmp_path / "render") + os.sep
+    return scene

@@ -1,0 +1,214 @@
+"""The Blender extension: export in metres, compositing in depth, cancel safety, clear
+reports, and the built zip installing into Blender."""
+
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+from holo_core import jobs  # noqa: E402
+from holo_core.render import RenderResult, write_view  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _plate_camera_cube(scene, *, cube_size=0.5):
+    from holo_addon.demo import point_at
+    bpy.ops.mesh.primitive_cube_add(size=cube_size, location=(0, 0, 0))
+    cube = bpy.context.object
+    cube.holo.emitter = "POINTS"
+    bpy.ops.object.camera_add(location=(0.0, -3.0, 0.0))
+    cam = bpy.context.object
+    point_at(cam, (0, 0, 0))
+    scene.camera = cam
+    bpy.ops.mesh.primitive_plane_add(size=0.6, location=(0, -1.5, 0))
+    plate = bpy.context.object
+    point_at(plate, (0, 0, 0))  # −Z away from the camera: +Z faces it
+    plate.holo.is_plate = True
+    bpy.context.view_layer.update()
+    return cube, cam, plate
+
+
+def test_export_known_mesh_in_metres(empty_scene):
+    from holo_addon.scene_export import export_scene
+    scene = empty_scene
+    scene.unit_settings.scale_length = 0.01          # 1 Blender unit = 1 cm
+    cube, cam, plate = _plate_camera_cube(scene, cube_size=50)  # 50 units = 0.5 m
+    cube.location = (10, 20, 30)
+    mat = bpy.data.materials.new("c")
+    from holo_addon import compat
+    compat.enable_nodes(mat)
+    bsdf = next(n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
+    bsdf.inputs["Base Color"].default_value = (0.2, 0.4, 0.6, 1)
+    cube.data.materials.append(mat)
+    cam.location = (0, -300, 0)
+    cam.data.dof.use_dof = True
+    cam.data.dof.focus_object = cube
+    cam.data.dof.aperture_fstop = 2.0
+    plate.location = (0, -150, 0)
+    plate.scale = (2, 2, 2)
+    bpy.context.view_layer.update()
+    data = export_scene(scene, bpy.context.evaluated_depsgraph_get())
+    (mesh,) = data.points
+    assert len(mesh.triangles) == 12
+    expected = {(x, y, z) for x in (-0.15, 0.35) for y in (-0.05, 0.45) for z in (0.05, 0.55)}
+    got = {tuple(np.round(v, 6) + 0.0) for v in mesh.vertices}  # float32 in Blender
+    assert got == expected, got
+    np.testing.assert_allclose(mesh.colours, [[0.2, 0.4, 0.6]] * 36, atol=1e-6)
+    assert data.plate.width == pytest.approx(0.012) and data.plate.height == pytest.approx(0.012)
+    np.testing.assert_allclose(data.plate.matrix_world[:3, 3], (0, -1.5, 0), atol=1e-7)
+    np.testing.assert_allclose(data.camera.position, (0, -3, 0), atol=1e-7)
+    assert data.camera.fstop == 2.0
+    # the focus object's distance along the view axis, in metres
+    assert data.camera.focus_distance == pytest.approx(3.0 + 0.2, abs=1e-6)
+    assert cube.hide_render and plate.hide_render, "emitters and plate stay out of the raster"
+
+
+def _read_exr(path):
+    import OpenEXR
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        return {k: v.pixels.copy() for k, v in f.channels().items()}
+
+
+def _flat_plane(name, size, location, rgb):
+    bpy.ops.mesh.primitive_plane_add(size=size, location=location, rotation=(np.pi / 2, 0, 0))
+    obj = bpy.context.object
+    obj.name = name
+    mat = bpy.data.materials.new(name)
+    mat.diffuse_color = (*rgb, 1)
+    obj.data.materials.append(mat)
+    return obj
+
+
+def test_compositing_keeps_the_nearer_surface(empty_scene, tmp_path):
+    """A holographic pass (green square at 2 m) against rasterized planes: red at 1.5 m over
+    the left half, blue at 3 m behind everything. Each pixel must show the nearer one."""
+    from holo_addon import compat, pipeline
+    from holo_addon.demo import point_at
+    scene = empty_scene
+    scene.render.engine = "BLENDER_WORKBENCH"
+    scene.display.shading.light = "FLAT"
+    scene.display.shading.color_type = "MATERIAL"
+    scene.view_settings.view_transform = "Standard"
+    w, h = 64, 48
+    scene.render.resolution_x, scene.render.resolution_y = w, h
+    scene.render.resolution_percentage = 100
+    bpy.ops.object.camera_add(location=(0, -5, 0))
+    point_at(bpy.context.object, (0, 0, 0))
+    scene.camera = bpy.context.object
+    _flat_plane("red", 4, (-2.0, -3.5, 0), (1, 0, 0))     # 1.5 m from the camera, left half
+    _flat_plane("blue", 20, (0, -2.0, 0), (0, 0, 1))      # 3 m, fills the frame
+    rgb = np.zeros((h, w, 3), np.float32)
+    alpha = np.zeros((h, w), np.float32)
+    depth = np.full((h, w), 1e10, np.float32)
+    square = (slice(12, 36), slice(16, 48))
+    rgb[square] = (0, 1, 0)
+    alpha[square] = 1
+    depth[square] = 2.0
+    out = pipeline.output_dir(scene)
+    out.mkdir(parents=True)
+    write_view(RenderResult(rgb=rgb, alpha=alpha, depth=depth), out / pipeline.PASS_NAME)
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    compat.set_exr_output(scene, multilayer=False)
+    scene.render.filepath = str(tmp_path / "composite.exr")
+    bpy.ops.render.render(write_still=True)
+    c = _read_exr(tmp_path / "composite.exr")
+    img = np.stack([c["R"], c["G"], c["B"]], -1)
+    dominant = np.argmax(img, -1)               # 0 red, 1 green, 2 blue
+    cols = np.arange(w)[None, :].repeat(h, 0)
+    in_square = np.zeros((h, w), bool)
+    in_square[square] = True
+    red_side = cols < w // 2 - 2                 # the red plane's half, clear of its edge
+    blue_side = cols >= w // 2 + 2
+    assert (dominant[in_square & red_side] == 0).mean() > 0.99, "red (nearer) must cover"
+    assert (dominant[in_square & blue_side] == 1).mean() > 0.99, "green (nearer) must show"
+    assert (dominant[~in_square & blue_side] == 2).mean() > 0.99
+    assert (dominant[~in_square & red_side] == 0).mean() > 0.99
+
+
+def test_cancelled_run_keeps_earlier_outputs(empty_scene):
+    from holo_addon import pipeline
+    scene = empty_scene
+    _plate_camera_cube(scene)
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    scene.holo.iterations = 1
+    scene.holo.max_resolution = 256
+    job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
+    out = job.output_dir
+    out.mkdir(parents=True)
+    earlier = {p: os.urandom(64) for p in (job.holograms[0], out / pipeline.PASS_NAME)}
+    for p, data in earlier.items():
+        p.write_bytes(data)
+    calls = []
+
+    def cancel(f):
+        calls.append(f)
+        if len(calls) > 1:
+            raise jobs.Cancelled()
+
+    with pytest.raises(jobs.Cancelled):
+        pipeline.run(job, cancel)
+    assert len(calls) == 2, f"the run must stop at the cancel, not later: {len(calls)} calls"
+    for p, data in earlier.items():
+        assert p.read_bytes() == data, f"{p.name} changed by a cancelled run"
+    assert sorted(x.name for x in out.iterdir()) == sorted(p.name for p in earlier)
+
+
+def test_missing_or_corrupt_hologram_is_reported(empty_scene):
+    from holo_addon import pipeline
+    scene = empty_scene
+    _, _, plate = _plate_camera_cube(scene)
+    with pytest.raises(ValueError, match="no hologram recorded"):
+        pipeline.check_hologram(scene)
+    missing = pipeline.output_dir(scene) / "gone.exr"
+    plate.holo.hologram = str(missing)
+    with pytest.raises(ValueError, match="gone.exr is missing"):
+        pipeline.check_hologram(scene)
+    # a corrupt file the plate believes current: the operator reports it, naming the file
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
+    job.output_dir.mkdir(parents=True)
+    for p in job.holograms:
+        p.write_bytes(b"not an exr")
+    plate.holo.hologram = str(job.holograms[0])
+    plate.holo.fingerprint = job.fingerprint
+    with pytest.raises(RuntimeError, match="Plane_hologram.exr: not an OpenEXR file"):
+        bpy.ops.holo.render_pass()
+
+
+INSTALL = textwrap.dedent("""
+    import sys, bpy
+    from bl_pkg import cli_extension
+    bpy.ops.wm.read_homefile(app_template="")
+    rc = cli_extension(["install-file", sys.argv[1], "--repo", "user_default", "--enable"])
+    assert not rc, rc
+""")
+CHECK = textwrap.dedent("""
+    assert hasattr(bpy.types.Scene, "holo"), "Scene.holo not registered"
+    assert bpy.ops.holo.record_hologram.get_rna_type() is not None
+    import holo_core, pyopencl
+    print("registered from", holo_core.__file__, "platforms", len(pyopencl.get_platforms()))
+""")
+
+
+@pytest.mark.slow
+def test_built_zip_installs_and_registers(tmp_path):
+    """make extension's build for this machine, installed with Blender's own installer into a
+    fresh user folder, registers the operators and imports the core from its wheels."""
+    from holo_addon import build
+    py = f"{sys.version_info.major}.{sys.version_info.minor}"
+    (zip_path,) = build.build(tmp_path / "dist", ("linux-x64",), (py,))
+    env = {**os.environ, "BLENDER_USER_RESOURCES": str(tmp_path / "user"),
+           "PYTHONPATH": "", "PYTHONNOUSERSITE": "1"}
+    bl_pkg = Path(build.blender_builder()).parents[1].parent
+    r = subprocess.run([sys.executable, "-I", "-c",
+                        f"import sys; sys.path.insert(0, {str(bl_pkg)!r})\n" + INSTALL + CHECK,
+                        str(zip_path)], env=env, capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    assert "registered from" in r.stdout and str(tmp_path / "user") in r.stdout, r.stdout
