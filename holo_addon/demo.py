@@ -119,9 +119,9 @@ def main(argv=None):
     p = argparse.ArgumentParser(prog="python -m holo_addon.demo", description=__doc__.split(
         "\n\n")[0])
     p.add_argument("-o", "--output", type=Path, default=Path("out"))
-    p.add_argument("--resolution", type=int, nargs=2, default=(192, 144), metavar=("W", "H"))
-    p.add_argument("--iterations", type=int, default=3)
-    p.add_argument("--max-resolution", type=int, default=1024)
+    p.add_argument("--resolution", type=int, nargs=2, default=(160, 120), metavar=("W", "H"))
+    p.add_argument("--iterations", type=int, default=2)
+    p.add_argument("--max-resolution", type=int, default=768)
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(name)s: %(message)s")
     import bpy
