@@ -13,6 +13,7 @@ Wheels are fetched at build time and never committed.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import logging
 import re
 import shutil
@@ -64,7 +65,6 @@ def download_wheels(dest: Path, platform: str, python: str) -> list[str]:
 
 
 def blender_builder() -> Path:
-    import importlib.util
     spec = importlib.util.find_spec("bpy")
     if spec is None or not spec.submodule_search_locations:
         raise SystemExit("the bpy module is needed for Blender's extension builder "

@@ -103,15 +103,17 @@ def build_scene(bpy, *, resolution=(192, 144)):
 
 def render_still(bpy, scene, out: Path) -> tuple[Path, Path]:
     """Blender's render of the composited frame: ``demo.png`` and float ``demo.exr``."""
+    from holo_core.image_files import atomic_path
+
     from . import compat
     png, exr = out / "demo.png", out / "demo.exr"
     for path, setter in ((exr, lambda: compat.set_exr_output(scene, multilayer=False)),
                          (png, lambda: compat.set_png_output(scene))):
         setter()
-        scene.render.filepath = str(path.with_name(f".{path.stem}.tmp{path.suffix}"))
-        scene.holo["skip_pass_once"] = True  # the pass was just rendered
-        bpy.ops.render.render(write_still=True)
-        os.replace(scene.render.filepath, path)  # atomic: a failed run keeps the last demo
+        with atomic_path(path) as tmp:  # a failed run keeps the last demo
+            scene.render.filepath = tmp
+            scene.holo["skip_pass_once"] = True  # the pass was just rendered
+            bpy.ops.render.render(write_still=True)
     return png, exr
 
 

@@ -230,12 +230,4 @@ class HOLO_OT_render(_PipelineOperator, bpy.types.Operator):
 CLASSES = (HOLO_OT_record_hologram, HOLO_OT_render_pass, HOLO_OT_setup_compositing,
            HOLO_OT_render)
 
-
-def register():
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(CLASSES)

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import logging
 import os
-import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -20,8 +19,9 @@ import bpy
 import holo_core
 from holo_core import jobs
 from holo_core.hologram_io import read_hologram, write_hologram
+from holo_core.image_files import write_atomic
 
-from .scene_export import SceneData, export_scene
+from .scene_export import ExportError, SceneData, export_scene, scale
 
 log = logging.getLogger(__name__)
 PASS_NAME = "holo_pass.exr"
@@ -97,7 +97,6 @@ def prepare(scene, depsgraph, *, render=True) -> Job:
     """Read the scene (main thread). Raises :class:`scene_export.ExportError` for a scene that
     cannot be recorded."""
     data = export_scene(scene, depsgraph)
-    from .scene_export import scale
     settings = Settings.from_scene(scene, scale(scene))
     fingerprint = data.fingerprint(*settings.recording())
     out = output_dir(scene)
@@ -143,10 +142,7 @@ def run(job: Job, progress: jobs.Progress = None) -> Outcome:
     if view is not None:
         frame_path = job.output_dir / f"holo_pass_{job.frame:04d}.exr"
         holo_core.write_view(view, frame_path)
-        pass_path = job.output_dir / PASS_NAME
-        tmp = pass_path.with_name(f".{pass_path.name}.tmp")
-        shutil.copyfile(frame_path, tmp)
-        os.replace(tmp, pass_path)
+        pass_path = write_atomic(job.output_dir / PASS_NAME, frame_path.read_bytes())
         outcome.pass_path, outcome.frame_path, outcome.info = pass_path, frame_path, view.info
     return outcome
 
@@ -167,7 +163,6 @@ def apply(scene, job: Job, outcome: Outcome) -> None:
 def check_hologram(scene) -> Path:
     """The plate's hologram file, read and checked; a clear error when it is missing or
     corrupt."""
-    from .scene_export import ExportError
     plates = [o for o in scene.objects if o.holo.is_plate]
     if not plates or not plates[0].holo.hologram:
         raise ExportError("no hologram recorded yet: run Record Hologram first")

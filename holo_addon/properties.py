@@ -72,9 +72,11 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
 CLASSES = (HoloObjectSettings, HoloSceneSettings)
 
 
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(CLASSES)
+
+
 def register():
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
+    _register_classes()
     bpy.types.Object.holo = PointerProperty(type=HoloObjectSettings)
     bpy.types.Scene.holo = PointerProperty(type=HoloSceneSettings)
 
@@ -82,5 +84,4 @@ def register():
 def unregister():
     del bpy.types.Scene.holo
     del bpy.types.Object.holo
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+    _unregister_classes()

@@ -97,7 +97,7 @@ def mesh_from_object(obj, depsgraph, unit: float) -> Mesh:
 
 def _colours(obj, me, loops, loop_vertex, mat_index):
     """(per-corner colours or None, per-corner UVs or None, texture or None)."""
-    attr = me.color_attributes.active_color if hasattr(me, "color_attributes") else None
+    attr = me.color_attributes.active_color
     if attr is not None and len(attr.data):
         data = np.empty(len(attr.data) * 4, np.float64)
         attr.data.foreach_get("color", data)  # linear

@@ -57,12 +57,4 @@ class HOLO_PT_object(bpy.types.Panel):
 
 CLASSES = (HOLO_PT_scene, HOLO_PT_object)
 
-
-def register():
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+register, unregister = bpy.utils.register_classes_factory(CLASSES)

@@ -46,14 +46,13 @@ def sample_points(mesh: Mesh, spacing: float, *, channels=3, seed=0, max_points=
     Returns (positions (N, 3) [m], colours (N, C)) with colours interpolated from the vertex
     colours, looked up in the texture through the UVs, or white.
     """
-    tri, bary = _sample(mesh, spacing, seed, max_points)
-    corners = mesh.triangles[tri]
-    pos = np.einsum("nk,nkd->nd", bary, mesh.vertices[corners])
-    return pos, _colour(mesh, corners, bary, channels)
+    tri, bary, pos = _sample(mesh, spacing, seed, max_points)
+    return pos, _colour(mesh, mesh.triangles[tri], bary, channels)
 
 
 def _sample(mesh: Mesh, spacing, seed, max_points):
-    """(triangle index (N,), barycentric weights (N, 3)) of area-uniform random points."""
+    """(triangle index (N,), barycentric weights (N, 3), positions (N, 3) [m]) of area-uniform
+    random points ``spacing`` [m] apart on average."""
     spacing = validate.positive("spacing", spacing, "m")
     areas = mesh.areas()
     n = int(min(max_points, max(1, round(areas.sum() / spacing**2))))
@@ -61,7 +60,8 @@ def _sample(mesh: Mesh, spacing, seed, max_points):
     tri = rng.choice(len(areas), size=n, p=areas / areas.sum())
     r1, r2 = rng.random(n), rng.random(n)
     s = np.sqrt(r1)
-    return tri, np.stack([1 - s, s * (1 - r2), s * r2], axis=1)  # uniform in each triangle
+    bary = np.stack([1 - s, s * (1 - r2), s * r2], axis=1)  # uniform in each triangle
+    return tri, bary, np.einsum("nk,nkd->nd", bary, mesh.vertices[mesh.triangles[tri]])
 
 
 def visible_from(camera, positions, spacing: float) -> np.ndarray:
@@ -217,8 +217,7 @@ def mesh_primitives(mesh: Mesh, *, visible_to=None, spacing=None) -> list[Primit
     (tested on points ``spacing`` [m] apart, see :func:`visible_from`)."""
     keep = np.arange(len(mesh.triangles))
     if visible_to is not None:
-        tri, bary = _sample(mesh, spacing, 0, 2_000_000)
-        pos = np.einsum("nk,nkd->nd", bary, mesh.vertices[mesh.triangles[tri]])
+        tri, _, pos = _sample(mesh, spacing, 0, 2_000_000)
         keep = np.unique(tri[visible_from(visible_to, pos, spacing)])
     prims = []
     for t in keep:

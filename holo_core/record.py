@@ -247,32 +247,32 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
     prims = [p for m in triangles for p in em.mesh_primitives(
         m, visible_to=camera if cull else None, spacing=s.spacing)]
     if prims:
-        density = 1 / s.spacing**2 if not density else density
+        density = 1 / s.spacing**2
     rgb = np.asarray(rgb, np.float64).reshape(len(pos), 3)
     lambdas, channels, colours = [s.wavelength] * 3, ["R", "G", "B"], [rgb]
     if depth:
         lambdas.append(s.depth_wavelength)
         channels.append("Z")
         colours.append(np.sqrt(np.clip(rgb, 0, None)).sum(1, keepdims=True) ** 2)
-    shape, to_plate = s.shape, plate.to_plate
+    shape, shortest = s.shape, min(lambdas)
+    prims = [em.Primitive(corners=plate.to_plate(p.corners), uvs=p.uvs, texture=p.texture)
+             for p in prims]
+    # intensity per surface sample, scaled to the points' density 1/spacing²
+    gains = [(em.surface_pitch(p, wavelength=shortest, pitch=s.pitch) / s.spacing) ** 2
+             for p in prims]
 
     def triangle_waves(c, lam):
         total = np.zeros(shape, np.complex128)
         z = channels[c] == "Z"  # the depth partner carries (Σ√I)², like the points
-        for i, p in enumerate(prims):
-            # intensity per surface sample, scaled to the points' density 1/spacing²
-            local = em.Primitive(corners=to_plate(p.corners), uvs=p.uvs,
-                                 texture=em.depth_texture(p.texture) if z else p.texture)
-            q = em.surface_pitch(local, wavelength=min(lambdas), pitch=s.pitch)
-            local = replace(local, texture=local.texture * (q / s.spacing) ** 2)
-            u = em.primitive_wave(local, wavelength=lam, pitch=s.pitch, shape=shape,
-                                  channel=0 if z else c, seed=seed + 7919 * (i + 1),
-                                  sampled_for=min(lambdas))
-            total += u if isinstance(u, np.ndarray) else u.get()
+        for i, (p, gain) in enumerate(zip(prims, gains)):
+            tex = (em.depth_texture(p.texture) if z else p.texture) * gain
+            total += em.primitive_wave(replace(p, texture=tex), wavelength=lam, pitch=s.pitch,
+                                       shape=shape, channel=0 if z else c,
+                                       seed=seed + 7919 * (i + 1), sampled_for=shortest)
         return total
 
     reference = Reference(angle=s.reference_angle)
-    return record_points(to_plate(pos), np.concatenate(colours, 1), shape=shape,
+    return record_points(plate.to_plate(pos), np.concatenate(colours, 1), shape=shape,
                          pitch=s.pitch, wavelengths=tuple(lambdas), seed=seed,
                          reference=reference, plate=plate.matrix_world, method=method,
                          band=s.band, channels=channels, point_density=density,

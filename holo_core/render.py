@@ -154,7 +154,8 @@ def pupil_image(at_camera, *, wavelength, pitch, camera: Camera,
 
 def depth_aperture(camera: Camera, hologram: Hologram, wavelength: float,
                    centre: float) -> Aperture:
-    """The pupil the depth pair is imaged through: a lens focused on the objects' centre, as
+    """The pupil the depth pair (λ2 = ``wavelength`` [m]) is imaged through: a lens focused on
+    the objects' centre ``centre`` [m] away, as
     wide as alias-free sampling of the pixels allows (at most half the plate). Like a
     renderer's Depth pass it ignores the camera's depth of field, and its small spot keeps few
     surface points in each pixel's phase average (Sect. VII-C)."""
@@ -291,11 +292,11 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
         depth_pupil = depth_aperture(fine, first, first.wavelengths[z_ch], centre)
         lam_pair = (lam0, first.wavelengths[z_ch])
         depth_sources = [c for c in colours if first.wavelengths[c] == lam0] + [z_ch]
+    channels = colours + ([z_ch] if z_ch is not None else [])
     intensities, crosses, brightness = [], [], []
     for i, h in enumerate(holos):
         done = jobs.scaled(progress, i / len(holos), (i + 1) / len(holos))
         planes, depth_images = [], {}
-        channels = colours + ([z_ch] if z_ch is not None else [])
         for n, c in enumerate(channels):
             lam = h.wavelengths[c]
             at = camera_field(plate_wave(h, c, source=source), wavelength=lam, pitch=h.pitch,
@@ -325,17 +326,19 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
 def _depth(crosses, brightness, *, estimate, wavelengths, centre, focus, camera: Camera,
            supersample) -> np.ndarray:
     """Planar depth [m] from the per-iteration cross images u1·conj(u2) of the depth pair."""
-    if estimate == "consensus":
-        cross = speckle.downsample(sum(crosses), supersample)
-        ray = depth_mod.from_cross_spectrum(cross, wavelengths=wavelengths, centre=centre,
-                                            focus=focus)
-        tx, ty = camera.pixel_tangents()
+    def ranges(cross):
+        return depth_mod.from_cross_spectrum(cross, wavelengths=wavelengths, centre=centre,
+                                             focus=focus)
+
+    def planar(ray, cam):
+        tx, ty = cam.pixel_tangents()
         return ray / np.sqrt(1 + tx * tx + ty * ty)
-    ranges = [depth_mod.from_cross_spectrum(c, wavelengths=wavelengths, centre=centre,
-                                            focus=focus) for c in crosses]
-    ray, bright = depth_mod.keep_brightest(ranges, brightness)
-    tx, ty = _supersampled(camera, supersample).pixel_tangents()
-    return speckle.pick_brightest(ray / np.sqrt(1 + tx * tx + ty * ty), bright, supersample)
+
+    if estimate == "consensus":
+        return planar(ranges(speckle.downsample(sum(crosses), supersample)), camera)
+    ray, bright = depth_mod.keep_brightest([ranges(c) for c in crosses], brightness)
+    return speckle.pick_brightest(planar(ray, _supersampled(camera, supersample)), bright,
+                                  supersample)
 
 
 def _supersampled(camera: Camera, s: int) -> Camera:
