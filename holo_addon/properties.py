@@ -59,9 +59,10 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                                      ("max", "Maximum", "Brightest iteration per pixel")])
     exposure: FloatProperty(name="Exposure", default=1.0, min=0.0, soft_max=16.0,
                             description="Multiplier on the holographic pass's radiance")
-    opacity_threshold: FloatProperty(name="Opacity Threshold", default=0.05, min=0.0, max=1.0,
-                                     description="Alpha is 1 where the luminance exceeds this "
-                                                 "fraction of the bright end")
+    opacity_threshold: FloatProperty(name="Opacity Threshold", default=0.5, min=0.0, max=1.0,
+                                     description="Alpha is 1 where the holographic surfaces "
+                                                 "cover more than this fraction of a pixel "
+                                                 "(0.5: at the geometric silhouette)")
     seed: IntProperty(name="Seed", default=0, min=0, description="Random phases and sampling")
     pass_on_render: BoolProperty(name="Pass on Every Render", default=True,
                                  description="Render the holographic pass before each Blender "

@@ -39,15 +39,25 @@ class Mesh:
         a, b, c = (self.vertices[self.triangles[:, i]] for i in range(3))
         return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
 
+    def normals(self) -> np.ndarray:
+        """Unit face normals (T, 3) (zero for degenerate triangles)."""
+        a, b, c = (self.vertices[self.triangles[:, i]] for i in range(3))
+        n = np.cross(b - a, c - a)
+        length = np.linalg.norm(n, axis=1, keepdims=True)
+        return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
 
-def sample_points(mesh: Mesh, spacing: float, *, channels=3, seed=0, max_points=2_000_000):
+
+def sample_points(mesh: Mesh, spacing: float, *, channels=3, seed=0, max_points=2_000_000,
+                  normals=False):
     """Area-uniform random points on ``mesh``, one per ``spacing``² [m] of surface on average.
 
     Returns (positions (N, 3) [m], colours (N, C)) with colours interpolated from the vertex
-    colours, looked up in the texture through the UVs, or white.
+    colours, looked up in the texture through the UVs, or white; with ``normals``, also each
+    point's unit surface normal (N, 3).
     """
     tri, bary, pos = _sample(mesh, spacing, seed, max_points)
-    return pos, _colour(mesh, mesh.triangles[tri], bary, channels)
+    colours = _colour(mesh, mesh.triangles[tri], bary, channels)
+    return (pos, colours, mesh.normals()[tri]) if normals else (pos, colours)
 
 
 def _sample(mesh: Mesh, spacing, seed, max_points):
@@ -64,15 +74,18 @@ def _sample(mesh: Mesh, spacing, seed, max_points):
     return tri, bary, np.einsum("nk,nkd->nd", bary, mesh.vertices[mesh.triangles[tri]])
 
 
-def visible_from(camera, positions, spacing: float) -> np.ndarray:
+def visible_from(camera, positions, spacing: float, normals=None) -> np.ndarray:
     """Mask of the points (N, 3) [m] that ``camera`` sees: its own surface is the nearest within
     a few samples (``spacing`` [m] apart) along the pixel's line of sight.
 
     A hologram recorded for one viewpoint holds only the surfaces seen from there, as a raster
     renderer would draw them (surfaces are two-sided). The points themselves form the depth
-    buffer: each cell of the camera's grid keeps the nearest depth in its 3×3 neighbourhood, so a
-    cell the random sampling left empty does not let a hidden surface through. Points outside
-    the frame are kept.
+    buffer: each cell of the camera's grid holds its nearest point, and a point is seen when it
+    lies no deeper than what the nearest surface in its 3×3 neighbourhood can reach there, so a
+    cell the random sampling left empty does not let a hidden surface through. That reach is
+    the depth the nearest surface spans across three cells: one cell per cell (45°) without
+    ``normals``; with the points' unit normals (N, 3), tan(incidence) cells, so the rim of a
+    sphere, seen at a grazing angle, stays. Points outside the frame are kept.
     """
     xy, depth = camera.project(positions)
     w, h = camera.resolution
@@ -80,20 +93,36 @@ def visible_from(camera, positions, spacing: float) -> np.ndarray:
     cell = max(1.0, 2 * spacing / footprint)         # a few points per cell
     cols, rows = math.ceil(w / cell), math.ceil(h / cell)
     inside = (depth > 0) & (xy[:, 0] >= 0) & (xy[:, 0] < w) & (xy[:, 1] >= 0) & (xy[:, 1] < h)
-    c = (xy[inside, 0] / cell).astype(int)
-    r = (xy[inside, 1] / cell).astype(int)
-    near = np.full((rows + 2, cols + 2), np.inf)
-    np.minimum.at(near, (r + 1, c + 1), depth[inside])
-    nearest = near.copy()
+    keep = np.ones(len(depth), bool)
+    if not inside.any():
+        return keep
+    c = (xy[inside, 0] / cell).astype(int) + 1
+    r = (xy[inside, 1] / cell).astype(int) + 1
+    d = depth[inside]
+    slope = np.ones(len(d))
+    if normals is not None:
+        cos = facing(camera.position, positions[inside], normals[inside])
+        slope = np.maximum(1.0, np.sqrt(1 - np.minimum(cos, 1) ** 2) / np.maximum(cos, 1 / 30))
+    # per cell, the nearest point and the deepest its surface reaches three cells away
+    cell_id = r * (cols + 2) + c
+    order = np.lexsort((d, cell_id))
+    first = order[np.unique(cell_id[order], return_index=True)[1]]
+    reach = np.full((rows + 2, cols + 2), np.inf)
+    reach[r[first], c[first]] = d[first] * (1 + 3 * cell * camera.pixel_angle() * slope[first])
+    bound = reach.copy()
     for dr in (-1, 0, 1):
         for dc in (-1, 0, 1):
-            nearest[1:-1, 1:-1] = np.minimum(nearest[1:-1, 1:-1],
-                                             near[1 + dr:rows + 1 + dr, 1 + dc:cols + 1 + dc])
-    # A surface's depth changes by about one cell across three cells at 45° incidence.
-    tolerance = 3 * cell * camera.pixel_angle() * depth[inside] + 2 * spacing
-    keep = np.ones(len(depth), bool)
-    keep[inside] = depth[inside] <= nearest[r + 1, c + 1] + tolerance
+            bound[1:-1, 1:-1] = np.minimum(bound[1:-1, 1:-1],
+                                           reach[1 + dr:rows + 1 + dr, 1 + dc:cols + 1 + dc])
+    keep[inside] = d <= bound[r, c] + 2 * spacing
     return keep
+
+
+def facing(eye, positions, normals) -> np.ndarray:
+    """|cos| of the angle between each surface normal (N, 3) and the line from its point
+    (N, 3) [m] to ``eye`` [m]: the projected area per unit of surface seen from there."""
+    ray = np.asarray(eye, np.float64) - positions
+    return np.abs(np.einsum("nd,nd->n", normals, ray)) / np.linalg.norm(ray, axis=1)
 
 
 def _colour(mesh: Mesh, corners, bary, channels):
@@ -218,7 +247,7 @@ def mesh_primitives(mesh: Mesh, *, visible_to=None, spacing=None) -> list[Primit
     keep = np.arange(len(mesh.triangles))
     if visible_to is not None:
         tri, _, pos = _sample(mesh, spacing, 0, 2_000_000)
-        keep = np.unique(tri[visible_from(visible_to, pos, spacing)])
+        keep = np.unique(tri[visible_from(visible_to, pos, spacing, mesh.normals()[tri])])
     prims = []
     for t in keep:
         idx = mesh.triangles[t]
@@ -234,10 +263,12 @@ def mesh_primitives(mesh: Mesh, *, visible_to=None, spacing=None) -> list[Primit
 
 
 def depth_texture(texture) -> np.ndarray:
-    """The depth partner's texture: (Σ_c √I_c)², one channel (Sect. VII-C)."""
+    """The depth partner's texture: unit intensity, one channel (the recording scales it by
+    the surface's cosine towards the camera). Its image is the surface's coverage of each
+    pixel, whatever the colour, which gives the opacity mask; the depth pair's cross term
+    u1·conj(u2) still weighs each emitter by its colour amplitude."""
     t = np.asarray(texture, np.float64)
-    t = t[..., None] if t.ndim == 2 else t
-    return np.sqrt(np.clip(t, 0, None)).sum(-1, keepdims=True) ** 2
+    return np.ones(t.shape[:2] + (1,))
 
 
 # --- mesh files ----------------------------------------------------------------------------------

@@ -17,7 +17,7 @@ from . import __version__, validate
 from .image_files import write_exr
 
 FORMAT = "holo-hologram"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: the depth partner 'Z' records every emitter at unit intensity
 EXR_MAGIC = b"\x76\x2f\x31\x01"
 
 
@@ -38,7 +38,7 @@ class Hologram:
     plate : (4, 4) hologram-to-world pose (the hologram plane is z = 0 of its frame) [m]
     bounds : (2, 3) the objects' min and max corners in the hologram frame [m]
     band : sin θ of the object wave's cone, the band its reconstruction keeps (0: all)
-    channels : one role per wavelength: 'R', 'G', 'B' (or 'Y') colour, 'Z' the depth partner
+    channels : one role per wavelength: 'R', 'G', 'B' (or 'Y') colour, 'Z' the depth partner, every emitter at unit intensity (its image is the surfaces' coverage)
         λ2 of the colour channels at channel 0's wavelength λ1, recorded with amplitudes
         Σ√I over them (their summed image is the λ1 image, Sect. VII-C)
     point_density : emitters per m² of surface, which calibrates radiance (0: unknown)

@@ -30,12 +30,15 @@ SEGMENTS = (32, 16, 8, 4)  # columns per recurrence segment, longest first (erro
 PHASE_TOLERANCE = 5e-5  # rad, the recurrence's largest phase error (see ``segment``) ...
 WRP_PHASE_TOLERANCE = 2e-3  # ... and on recording planes, whose method errs by ~5e-3 anyway
 CONE_FILL = 0.8      # a point's cone ends at this fraction of the Nyquist angle ...
-CONE_RIM = 0.5     # ... and its outer fraction (of the radius) is a soft rim
-WRP_FILL, WRP_RIM = 1.2, 0.17  # on a recording plane: past Nyquist, aliases land beyond the cone
+CONE_RIM = 0.25    # ... and its outer fraction (of the radius) is a soft rim
+WRP_WIDEN, WRP_RIM = 1.5, 0.17  # on a recording plane the cone reaches 1.5x the band (past
+                                 # Nyquist for the full band: aliases land beyond the cone)
 CPU_LANES = 16       # rows per work item on CPU devices (two AVX2 or one AVX-512 register)
 PAIRS_PER_LAUNCH = 2e9  # point-pixel pairs per kernel launch, between progress reports
 MIN_CONE_PIXELS = 32  # a recording plane keeps this many pixels of cone radius to its points
-DIRECT_RATE = 4e9    # pairs/s of the direct kernel (the cost model of the automatic choice)
+DIRECT_RATE = 3e9    # pairs/s of the direct kernel at 32-column segments (the cost model of
+                     # the automatic choice; shorter segments are proportionally slower) ...
+TILE_CHECKS = 3e8    # ... plus its point-tile cone tests per second (it bins nothing)
 BINNED_RATE = 6e8     # pairs/s on recording planes (small cones: setup-bound)
 FFT_SECONDS_PER_SAMPLE = 3.5e-8  # one plane carried to the hologram, per plane sample
 
@@ -137,7 +140,10 @@ def _pixels_reached(pos, g: Grid, z) -> np.ndarray:
 
 
 def direct_seconds(pos, g: Grid) -> float:
-    return float(_pixels_reached(pos, g, pos[:, 2]).sum()) / DIRECT_RATE
+    seg = segment(pos[:, 2], g)
+    pairs = _pixels_reached(pos, g, pos[:, 2]) * (SEGMENTS[0] / seg)
+    tiles = -(-g.shape[0] // CPU_LANES) * (-(-g.shape[1] // seg))
+    return float(pairs.sum() / DIRECT_RATE + (tiles.sum() / TILE_CHECKS))
 
 
 def wrp_seconds(pos, g: Grid) -> float:
@@ -160,9 +166,10 @@ def cone_weight(rho2, rho_max2, rim=CONE_RIM):
 
 def segment(z, g: Grid, tolerance=None) -> np.ndarray:
     """Per point, the longest recurrence segment whose phase error k·sinθ·h³/(2z²) (the cubic
-    Taylor term over half a segment h) stays below ``PHASE_TOLERANCE``."""
+    Taylor term over half a segment h, θ up to the cone's edge) stays below
+    ``PHASE_TOLERANCE``."""
     k = 2 * np.pi / g.wavelength
-    sin_max = min(1.0, g.wavelength / (2 * g.pitch))
+    sin_max = min(1.0, g.fill * g.wavelength / (2 * g.pitch))
     seg = np.full(len(z), SEGMENTS[-1])
     for n in reversed(SEGMENTS[:-1]):
         h = n / 2 * g.pitch
@@ -245,7 +252,7 @@ def _slab_plan(pos, g: Grid):
         edges = np.linspace(z[0], z[-1], slabs + 1)
         edges[-1] = np.nextafter(edges[-1], 0)
         plane = np.minimum(edges[_slab_of(z, edges) + 1] + _gap(g), 0)
-        pairs = _pixels_reached(pos, g, plane - z).sum()
+        pairs = _pixels_reached(pos, _on_plane(g, g.shape), plane - z).sum()
         h, w = _plane_shape(g, plane.min())
         fft = slabs * h * w * FFT_SECONDS_PER_SAMPLE
         seconds = pairs / BINNED_RATE + fft
@@ -279,6 +286,13 @@ def _slab_of(z, edges) -> np.ndarray:
     return np.clip(np.searchsorted(edges, z, side="right") - 1, 0, len(edges) - 2)
 
 
+def _on_plane(g: Grid, shape) -> Grid:
+    """A recording plane's grid: its points light a cone wider than the hologram's band (the
+    transfer function cuts the band with its own soft rim), not the plane's whole Nyquist cone,
+    which would cost (Nyquist / band)² more pairs for a narrow band."""
+    return g._replace(shape=shape, fill=WRP_WIDEN * g.fill, rim=WRP_RIM)
+
+
 def _plane_shape(g: Grid, plane):
     """A recording plane at z = ``plane`` [m]: the hologram plus the margin its light crosses."""
     margin = math.ceil(abs(plane) * g.cone / g.pitch)
@@ -293,8 +307,7 @@ def _slab(rt, out, pos, amp, plane, g: Grid, w_shape, obliquity):
         return
     wrp = empty(rt, w_shape)
     wrp.fill(0)
-    _sum(rt, wrp, local, amp, g._replace(shape=w_shape, fill=WRP_FILL, rim=WRP_RIM), obliquity,
-         binned=True)
+    _sum(rt, wrp, local, amp, _on_plane(g, w_shape), obliquity, binned=True)
     padded = tuple(grid.next_fast_len(n) for n in w_shape)  # no wrap: the margin holds it
 
     wg, _ = cached(rt, ("wrp-chirp", padded, g), lambda: (_chirp(padded, g), ()))

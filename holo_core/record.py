@@ -187,6 +187,13 @@ class Plate:
         return (np.asarray(points, np.float64) - m[:3, 3]) @ m[:3, :3]
 
 
+def _normal(p) -> np.ndarray:
+    """A primitive's unit normal (1, 3)."""
+    a, b, c = p.corners[:3]
+    n = np.cross(b - a, c - a)
+    return (n / np.linalg.norm(n))[None]
+
+
 def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, resolution=None,
                     max_resolution=2048, wavelength=None, depth=True, seed=0, method="auto",
                     cull=True, progress: jobs.Progress = None) -> Hologram:
@@ -232,18 +239,23 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
     s = choose((plate.width, plate.height), local, camera=view,
                resolution=resolution, max_resolution=max_resolution, wavelength=wavelength)
     if meshes is not None:
-        parts = [em.sample_points(m, s.spacing, channels=3, seed=seed + i)
+        parts = [em.sample_points(m, s.spacing, channels=3, seed=seed + i, normals=True)
                  for i, m in enumerate(meshes)]
-        pos = np.concatenate([p for p, _ in parts] or [np.zeros((0, 3))])
-        rgb = np.concatenate([np.broadcast_to(c, (len(c), 3)) for _, c in parts]
+        pos = np.concatenate([p for p, _, _ in parts] or [np.zeros((0, 3))])
+        rgb = np.concatenate([np.broadcast_to(c, (len(c), 3)) for _, c, _ in parts]
                              or [np.zeros((0, 3))])
         density = 1 / s.spacing**2
+        normals = np.concatenate([n for _, _, n in parts] or [np.zeros((0, 3))])
         if cull and camera is not None and len(pos):
-            seen = em.visible_from(camera, pos, s.spacing)
-            pos, rgb = pos[seen], rgb[seen]
+            seen = em.visible_from(camera, pos, s.spacing, normals)
+            pos, rgb, normals = pos[seen], rgb[seen], normals[seen]
     else:
         pos, rgb = np.asarray(emitters[0], np.float64), np.asarray(emitters[1], np.float64)
-        density = 0.0
+        density, normals = 0.0, None
+    # the depth partner's emitters: unit intensity, times the cosine towards the camera, so
+    # that its image is the projected area covered (a tilted surface holds more emitters)
+    cover = np.ones(len(pos)) if normals is None or camera is None else \
+        em.facing(camera.position, pos, normals)
     prims = [p for m in triangles for p in em.mesh_primitives(
         m, visible_to=camera if cull else None, spacing=s.spacing)]
     if prims:
@@ -253,19 +265,25 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
     if depth:
         lambdas.append(s.depth_wavelength)
         channels.append("Z")
-        colours.append(np.sqrt(np.clip(rgb, 0, None)).sum(1, keepdims=True) ** 2)
+        colours.append(cover[:, None])
     shape, shortest = s.shape, min(lambdas)
     prims = [em.Primitive(corners=plate.to_plate(p.corners), uvs=p.uvs, texture=p.texture)
              for p in prims]
     # intensity per surface sample, scaled to the points' density 1/spacing²
     gains = [(em.surface_pitch(p, wavelength=shortest, pitch=s.pitch) / s.spacing) ** 2
              for p in prims]
+    if camera is not None:
+        cover_prims = [float(em.facing(plate.to_plate(camera.position[None])[0],
+                                        p.corners.mean(0, keepdims=True), _normal(p)))
+                       for p in prims]
+    else:
+        cover_prims = [1.0] * len(prims)
 
     def triangle_waves(c, lam):
         total = np.zeros(shape, np.complex128)
-        z = channels[c] == "Z"  # the depth partner carries (Σ√I)², like the points
-        for i, (p, gain) in enumerate(zip(prims, gains)):
-            tex = (em.depth_texture(p.texture) if z else p.texture) * gain
+        z = channels[c] == "Z"  # the depth partner: unit intensity, like the points
+        for i, (p, gain, cov) in enumerate(zip(prims, gains, cover_prims)):
+            tex = em.depth_texture(p.texture) * gain * cov if z else p.texture * gain
             total += em.primitive_wave(replace(p, texture=tex), wavelength=lam, pitch=s.pitch,
                                        shape=shape, channel=0 if z else c,
                                        seed=seed + 7919 * (i + 1), sampled_for=shortest)

@@ -34,6 +34,7 @@ from .reconstruct import reconstruct
 log = logging.getLogger(__name__)
 SPECTRUM_OVERSAMPLING = 4   # spectrum samples per λ/D (the aperture's resolution), at least
 MAX_SPECTRUM = 4096         # largest FFT of the aperture per axis
+COVERAGE_RADIUS = 1  # the coverage's speckle is averaged over (2r+1)² pixels before alpha
 PINHOLE_SAMPLES = 2         # a pinhole's resolution λ/D spans this many pixels (alias-free |A|²)
 BACKGROUND_DEPTH = 1e10     # depth of empty pixels [m], as Blender's Cycles and Workbench
 
@@ -235,7 +236,7 @@ class RenderResult:
 
 def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, apodize=True,
                 chromatic=True, composition="mean", supersample=1, exposure=None,
-                opacity_threshold=0.1, source="hologram", depth_estimate="consensus",
+                opacity_threshold=0.5, source="hologram", depth_estimate="consensus",
                 progress: jobs.Progress = None) -> RenderResult:
     """Render a view of one hologram, or several of the same scene recorded with independent
     random phases (temporal composition, Sect. VII-C and VII-E).
@@ -262,7 +263,10 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
         Radiance to pixel value [m²: 1/(emitters per m²)]; default 1/point density (a surface shows its emitters'
         colour), or when that is unknown, the 99.5th percentile maps to 1.
     opacity_threshold : float
-        Alpha is 1 where the luminance exceeds this fraction of the 99.5th percentile.
+        Alpha is 1 where the surfaces cover more than this fraction of a pixel (0.5 puts the
+        silhouette at the geometric edge), seen in the depth partner's image, whose emitters
+        all have unit intensity. Holograms of bare points (no known emitter density): where
+        the luminance exceeds this fraction of its 99.5th percentile.
     source : {'hologram', 'object_wave'}
         Reconstruct from the intensity hologram (default) or use the stored object wave.
     depth_estimate : {'consensus', 'brightest'}
@@ -293,7 +297,7 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
         lam_pair = (lam0, first.wavelengths[z_ch])
         depth_sources = [c for c in colours if first.wavelengths[c] == lam0] + [z_ch]
     channels = colours + ([z_ch] if z_ch is not None else [])
-    intensities, crosses, brightness = [], [], []
+    intensities, crosses, brightness, coverage = [], [], [], []
     for i, h in enumerate(holos):
         done = jobs.scaled(progress, i / len(holos), (i + 1) / len(holos))
         planes, depth_images = [], {}
@@ -306,8 +310,10 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
                                       aperture=chromatic_pupil)
                 planes.append(np.abs(u) ** 2 / (lam * lam * area))
             if depth_pupil is not None and c in depth_sources:
-                depth_images[c], _ = pupil_image(at, wavelength=lam, pitch=h.pitch, camera=fine,
-                                                 aperture=depth_pupil)
+                depth_images[c], area = pupil_image(at, wavelength=lam, pitch=h.pitch,
+                                                    camera=fine, aperture=depth_pupil)
+                if c == z_ch:  # unit emitters: their radiance is point density × coverage
+                    coverage.append(np.abs(depth_images[c]) ** 2 / (lam * lam * area))
             jobs.report(done, n + 1, len(channels))
         intensities.append(np.stack(planes, -1))
         if depth_pupil is not None:
@@ -320,7 +326,13 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
         ray = _depth(crosses, brightness, estimate=depth_estimate, wavelengths=lam_pair,
                      centre=centre, focus=depth_pupil.focus, camera=camera, supersample=supersample)
     radiance = speckle.downsample(radiance, supersample)
-    return _finish(radiance, ray, first, camera, pupil, exposure, opacity_threshold, lam0)
+    if coverage and first.point_density:
+        coverage = speckle.downsample(np.mean(coverage, 0)[..., None], supersample)[..., 0]
+        coverage = speckle.box_mean(coverage, COVERAGE_RADIUS) / first.point_density
+    else:
+        coverage = None
+    return _finish(radiance, ray, coverage, first, camera, pupil, exposure, opacity_threshold,
+                   lam0)
 
 
 def _depth(crosses, brightness, *, estimate, wavelengths, centre, focus, camera: Camera,
@@ -355,7 +367,7 @@ def _centre_distance(h: Hologram, camera: Camera) -> float:
     return float(np.linalg.norm(centre[:3] - camera.position))
 
 
-def _finish(radiance, ray, h: Hologram, camera, pupil, exposure, threshold, lam0):
+def _finish(radiance, ray, coverage, h: Hologram, camera, pupil, exposure, threshold, lam0):
     lum = radiance.mean(-1)
     ref = float(np.percentile(lum, 99.5))
     if exposure is None:
@@ -363,7 +375,11 @@ def _finish(radiance, ray, h: Hologram, camera, pupil, exposure, threshold, lam0
     rgb = radiance * exposure
     if rgb.shape[-1] == 1:
         rgb = np.repeat(rgb, 3, -1)
-    alpha = (lum > threshold * ref).astype(np.float32) if ref > 0 else np.zeros_like(lum)
+
+    if coverage is not None:  # geometric: half covered at a silhouette edge, whatever the colour
+        alpha = (coverage > threshold).astype(np.float32)
+    else:  # unknown emitter density: relative to the brightest pixels
+        alpha = (lum > threshold * ref).astype(np.float32) if ref > 0 else np.zeros_like(lum)
     depth = np.full(lum.shape, BACKGROUND_DEPTH, np.float32)
     if ray is not None:
         depth = np.where(alpha > 0, ray, BACKGROUND_DEPTH).astype(np.float32)

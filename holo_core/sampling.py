@@ -3,8 +3,9 @@
 Wavelengths need not be those of light (Sect. VII-B): the pipeline is scale-free, so the
 wavelength is chosen for the plate's sampling and the image's resolution.
 
-- Band: an object point lights a cone of sin θ = b; b covers the directions from the objects
-  towards the camera (or ``DEFAULT_BAND`` when no camera is given).
+- Band: an object point lights a cone of sin θ = b; the cone's flat part (inside its soft
+  rim) covers the directions from the objects towards the camera (or ``DEFAULT_BAND`` when no
+  camera is given).
 - Off-axis recording: the virtual image, the twin image and the |O|² term separate when the
   reference's sin ϑ = 3b, and the hologram samples the carrier when sin ϑ + b <= λ/(2d)
   (Eq. 19): b = λ/(8d) at the limit, kept ``MARGIN`` below it.
@@ -25,6 +26,7 @@ import numpy as np
 
 from . import validate
 from .depth import partner_wavelength
+from .point_sources import CONE_RIM
 
 log = logging.getLogger(__name__)
 DEFAULT_BAND = 0.25      # sin θ of the viewing zone without a camera
@@ -85,7 +87,8 @@ def choose(plate_size, points, *, camera=None, resolution=None,
     lam_image, footprint = None, 0.0
     if camera is not None:
         position, pixel = camera
-        band = min(0.9, 1.1 * band_towards(pts, position))
+        # the camera inside every point's cone where it is flat, clear of its soft rim
+        band = min(0.9, 1.1 * band_towards(pts, position) / (1 - CONE_RIM))
         r = float(np.min(np.linalg.norm(pts - position, axis=1)))
         lam_image = 4 * pixel * pixel * r
         footprint = pixel * r

@@ -26,6 +26,21 @@ def downsample(image, factor: int) -> np.ndarray:
     return blocks.mean((1, 3))
 
 
+def box_mean(image, radius: int) -> np.ndarray:
+    """The mean over (2r+1)² neighbourhoods, edges repeated: a symmetric low-pass, so a step
+    edge keeps its half-way crossing where it was."""
+    if radius == 0:
+        return image
+    a = np.pad(np.asarray(image, np.float64), radius, mode="edge")
+    for axis in (0, 1):
+        c = np.cumsum(a, axis)
+        c = np.concatenate([np.zeros_like(c.take([0], axis)), c], axis)
+        n = a.shape[axis] - 2 * radius
+        a = (c.take(range(2 * radius + 1, n + 2 * radius + 1), axis) - c.take(range(n), axis))
+        a = a / (2 * radius + 1)
+    return a
+
+
 def pick_brightest(values, brightness, factor: int) -> np.ndarray:
     """Per ``factor``×``factor`` block, the value at its brightest sample (depth is not
     averaged across an edge)."""

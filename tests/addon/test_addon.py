@@ -132,6 +132,70 @@ def test_compositing_keeps_the_nearer_surface(empty_scene, tmp_path):
     assert (dominant[~in_square & red_side] == 0).mean() > 0.99
 
 
+def _raster_alpha_and_depth(scene, tmp_path):
+    """Blender's own render of the scene (Cycles, box filter): alpha (16 samples) and the
+    planar Depth pass (through the compositor: multilayer stills keep only Combined)."""
+    from holo_addon import compat
+    scene.render.engine = "CYCLES"
+    scene.cycles.samples = 16
+    scene.cycles.pixel_filter_type = "BOX"
+    scene.render.film_transparent = True
+    scene.view_layers[0].use_pass_z = True
+    compat.set_exr_output(scene, multilayer=False)
+    scene.render.filepath = str(tmp_path / "raster.exr")
+    bpy.ops.render.render(write_still=True)
+    alpha = _read_exr(tmp_path / "raster.exr")["A"]
+    tree = compat.compositor_tree(scene)
+    layers = tree.nodes.new("CompositorNodeRLayers")
+    layers.scene = scene
+    tree.links.new(layers.outputs["Depth"], compat.output_socket(tree))
+    scene.render.filepath = str(tmp_path / "depth.exr")
+    bpy.ops.render.render(write_still=True)
+    return alpha, _read_exr(tmp_path / "depth.exr")["R"]
+
+
+@pytest.mark.parametrize("shape", ["sphere", "cube"])
+def test_silhouette_and_depth_match_blenders_raster(empty_scene, tmp_path, shape):
+    """A holographic object's pass against Blender's render of the same object from the same
+    pinhole camera: silhouette IoU >= 0.9 (alpha > 0.5 both), and the median depth error
+    over pixels both cover <= 1 % of the object's depth extent in Blender's Depth pass."""
+    from holo_addon import pipeline
+    from holo_addon.demo import point_at
+    scene = empty_scene
+    scene.render.resolution_x, scene.render.resolution_y = 96, 72
+    scene.render.resolution_percentage = 100
+    if shape == "sphere":  # a curved rim, seen at grazing angles
+        bpy.ops.mesh.primitive_uv_sphere_add(radius=0.3)
+    else:  # straight edges and corners, three faces at different slants
+        bpy.ops.mesh.primitive_cube_add(size=0.45, rotation=(0.5, 0.3, 0.2))
+    obj = bpy.context.object
+    obj.holo.emitter = "POINTS"
+    bpy.ops.object.camera_add(location=(0.8, -2.6, 0.9))
+    cam = bpy.context.object
+    point_at(cam, (0, 0, 0))
+    cam.data.lens = 100
+    scene.camera = cam
+    bpy.ops.mesh.primitive_plane_add(size=0.8, location=(0.4, -1.3, 0.45))  # half way
+    plate = bpy.context.object
+    point_at(plate, (0, 0, 0))  # its −Z away from the camera: +Z faces it
+    plate.holo.is_plate = True
+    scene.holo.iterations = 3
+    scene.holo.supersample = 2
+    bpy.context.view_layer.update()
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    holo = _read_exr(pipeline.output_dir(scene) / pipeline.PASS_NAME)
+    obj.hide_render = False
+    alpha, depth = _raster_alpha_and_depth(scene, tmp_path)
+    mine, theirs = holo["ViewLayer.Combined.A"] > 0.5, alpha > 0.5
+    iou = (mine & theirs).sum() / (mine | theirs).sum()
+    assert iou >= 0.9, f"silhouette IoU {iou:.3f} ({mine.sum()} px, Blender's {theirs.sum()} px)"
+    extent = np.ptp(depth[theirs & (depth < 1e9)])
+    both = mine & theirs & (depth < 1e9)
+    err = np.median(np.abs(holo["ViewLayer.Depth.Z"][both] - depth[both])) / extent
+    print(f"{shape}: silhouette IoU {iou:.3f}, median depth error {err:.2%} of {extent:.3f} m")
+    assert err <= 0.01, f"median depth error {err:.2%} of the depth extent {extent:.3f} m"
+
+
 def test_cancelled_run_keeps_earlier_outputs(empty_scene):
     from holo_addon import pipeline
     scene = empty_scene
