@@ -30,7 +30,7 @@ SEGMENTS = (32, 16, 8, 4)  # columns per recurrence segment, longest first (erro
 PHASE_TOLERANCE = 5e-5  # rad, the recurrence's largest phase error (see ``segment``) ...
 WRP_PHASE_TOLERANCE = 2e-3  # ... and on recording planes, whose method errs by ~5e-3 anyway
 CONE_FILL = 0.8      # a point's cone ends at this fraction of the Nyquist angle ...
-CONE_RIM = 0.25    # ... and its outer fraction (of the radius) is a soft rim
+CONE_RIM = 0.5     # ... and its outer fraction (of the radius) is a soft rim
 WRP_WIDEN, WRP_RIM = 1.5, 0.17  # on a recording plane the cone reaches 1.5x the band (past
                                  # Nyquist for the full band: aliases land beyond the cone)
 CPU_LANES = 16       # rows per work item on CPU devices (two AVX2 or one AVX-512 register)

@@ -179,7 +179,7 @@ def test_silhouette_and_depth_match_blenders_raster(empty_scene, tmp_path, shape
     plate = bpy.context.object
     point_at(plate, (0, 0, 0))  # its −Z away from the camera: +Z faces it
     plate.holo.is_plate = True
-    scene.holo.iterations = 3
+    scene.holo.iterations = 4
     scene.holo.supersample = 2
     bpy.context.view_layer.update()
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
