@@ -16,6 +16,8 @@ import numpy as np
 from . import validate
 from .propagation import propagate_to_plane
 
+MAX_SLANT = 30.0  # visibility: a surface's depth slope (tan of its incidence) is capped here (88°)
+
 
 @dataclass(frozen=True, eq=False, kw_only=True)
 class Mesh:
@@ -102,7 +104,8 @@ def visible_from(camera, positions, spacing: float, normals=None) -> np.ndarray:
     slope = np.ones(len(d))
     if normals is not None:
         cos = facing(camera.position, positions[inside], normals[inside])
-        slope = np.maximum(1.0, np.sqrt(1 - np.minimum(cos, 1) ** 2) / np.maximum(cos, 1 / 30))
+        tan = np.sqrt(1 - np.minimum(cos, 1) ** 2) / np.maximum(cos, 1 / MAX_SLANT)
+        slope = np.maximum(1.0, tan)
     # per cell, the nearest point and the deepest its surface reaches three cells away
     cell_id = r * (cols + 2) + c
     order = np.lexsort((d, cell_id))

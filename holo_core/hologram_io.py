@@ -38,9 +38,10 @@ class Hologram:
     plate : (4, 4) hologram-to-world pose (the hologram plane is z = 0 of its frame) [m]
     bounds : (2, 3) the objects' min and max corners in the hologram frame [m]
     band : sin θ of the object wave's cone, the band its reconstruction keeps (0: all)
-    channels : one role per wavelength: 'R', 'G', 'B' (or 'Y') colour, 'Z' the depth partner, every emitter at unit intensity (its image is the surfaces' coverage)
-        λ2 of the colour channels at channel 0's wavelength λ1, recorded with amplitudes
-        Σ√I over them (their summed image is the λ1 image, Sect. VII-C)
+    channels : one role per wavelength: 'R', 'G', 'B' (or 'Y') colour, 'Z' the depth partner
+        λ2 of the colour channels at channel 0's wavelength λ1 (Sect. VII-C), every emitter
+        at unit intensity times its surface's cosine towards the camera (its image is the
+        surfaces' coverage of each pixel)
     point_density : emitters per m² of surface, which calibrates radiance (0: unknown)
     """
 

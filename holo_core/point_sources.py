@@ -143,7 +143,7 @@ def direct_seconds(pos, g: Grid) -> float:
     seg = segment(pos[:, 2], g)
     pairs = _pixels_reached(pos, g, pos[:, 2]) * (SEGMENTS[0] / seg)
     tiles = -(-g.shape[0] // CPU_LANES) * (-(-g.shape[1] // seg))
-    return float(pairs.sum() / DIRECT_RATE + (tiles.sum() / TILE_CHECKS))
+    return float(pairs.sum() / DIRECT_RATE + tiles.sum() / TILE_CHECKS)
 
 
 def wrp_seconds(pos, g: Grid) -> float:

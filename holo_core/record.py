@@ -187,13 +187,6 @@ class Plate:
         return (np.asarray(points, np.float64) - m[:3, 3]) @ m[:3, :3]
 
 
-def _normal(p) -> np.ndarray:
-    """A primitive's unit normal (1, 3)."""
-    a, b, c = p.corners[:3]
-    n = np.cross(b - a, c - a)
-    return (n / np.linalg.norm(n))[None]
-
-
 def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, resolution=None,
                     max_resolution=2048, wavelength=None, depth=True, seed=0, method="auto",
                     cull=True, progress: jobs.Progress = None) -> Hologram:
@@ -272,12 +265,9 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
     # intensity per surface sample, scaled to the points' density 1/spacing²
     gains = [(em.surface_pitch(p, wavelength=shortest, pitch=s.pitch) / s.spacing) ** 2
              for p in prims]
-    if camera is not None:
-        cover_prims = [float(em.facing(plate.to_plate(camera.position[None])[0],
-                                        p.corners.mean(0, keepdims=True), _normal(p)))
-                       for p in prims]
-    else:
-        cover_prims = [1.0] * len(prims)
+    cover_prims = [1.0 if view is None else
+                   float(em.facing(view[0], frame[1][None], frame[0][:, 2][None]))
+                   for frame in (p.frame() for p in prims)]
 
     def triangle_waves(c, lam):
         total = np.zeros(shape, np.complex128)

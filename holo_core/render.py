@@ -375,7 +375,6 @@ def _finish(radiance, ray, coverage, h: Hologram, camera, pupil, exposure, thres
     rgb = radiance * exposure
     if rgb.shape[-1] == 1:
         rgb = np.repeat(rgb, 3, -1)
-
     if coverage is not None:  # geometric: half covered at a silhouette edge, whatever the colour
         alpha = (coverage > threshold).astype(np.float32)
     else:  # unknown emitter density: relative to the brightest pixels
