@@ -25,7 +25,7 @@ from .camera import Camera
 from .hologram_io import Hologram
 from .image_files import srgb, write_exr, write_png
 from .opencl import get_runtime
-from .opencl.arrays import cached
+from .opencl.arrays import cached, embed, empty
 from .propagation import grid
 from .propagation.convolution import convolve
 from .propagation.tilt import propagate_to_plane
@@ -147,10 +147,7 @@ def pupil_image(at_camera, *, wavelength, pitch, camera: Camera,
     """The image of the field at the camera (:func:`camera_field`) through ``aperture``: its
     angular spectrum read at the pixels' direction cosines (Eq. 22), and ∫w² [m²]."""
     pupil, weight = _pupil(at_camera, wavelength, pitch, aperture)
-    spectrum, n = _spectrum(pupil, wavelength, pitch, camera, aperture)
-    alpha, beta, _ = camera.direction_cosines()
-    q = np.stack([beta, alpha]) / wavelength * (n * pitch) + n // 2  # fractional FFT indices
-    return _bilinear(spectrum, q[0], q[1]), weight
+    return _spectrum_at_pixels(pupil, wavelength, pitch, camera, aperture), weight
 
 
 def depth_aperture(camera: Camera, hologram: Hologram, wavelength: float,
@@ -186,9 +183,9 @@ def _pupil(field, wavelength, pitch, aperture: Aperture):
     return crop * w, float(np.sum(np.abs(w) ** 2) * pitch * pitch)
 
 
-def _spectrum(pupil, wavelength, pitch, camera: Camera, aperture: Aperture):
-    """The continuous Fourier transform of the pupil, centred (fftshift order), sampled finely
-    enough for bilinear reading at the pixels: n×n, spacing 1/(n·pitch)."""
+def _spectrum_at_pixels(pupil, wavelength, pitch, camera: Camera, aperture: Aperture):
+    """The pupil's continuous Fourier transform at each pixel's frequency (α/λ, β/λ): an FFT
+    zero-padded to n×n, fine enough for bilinear reading, read on the device."""
     n_a = pupil.shape[0]
     need = max(SPECTRUM_OVERSAMPLING * aperture.diameter / pitch,
                2 * wavelength / (pitch * camera.pixel_angle()), 2 * n_a)
@@ -197,29 +194,16 @@ def _spectrum(pupil, wavelength, pitch, camera: Camera, aperture: Aperture):
     c0 = (n - n_a) // 2
     rt = get_runtime()
     work = rt.scratch("image-spectrum", (n, n))
-    buf = np.zeros((n, n), np.complex64)
-    buf[c0:c0 + n_a, c0:c0 + n_a] = pupil
-    work.set(buf)
-    rt.fft.forward(work)
-    s = np.fft.fftshift(work.get())
-    # x of FFT sample j is (j - c0 - (n_a-1)/2)·pitch: restore that origin's phase (Eq. 8)
-    f = (np.arange(n) - n // 2) / (n * pitch)
-    ramp = np.exp(2j * np.pi * np.remainder(f * (c0 + (n_a - 1) / 2) * pitch, 1.0))
-    return s * ramp[:, None] * ramp[None, :] * pitch**2, n
-
-
-def _bilinear(a, rows, cols):
-    """``a`` read at fractional (rows, cols) with bilinear weights; zero outside."""
-    r0, c0 = np.floor(rows).astype(np.int64), np.floor(cols).astype(np.int64)
-    fr, fc = rows - r0, cols - c0
-    out = np.zeros(rows.shape, np.complex128)
-    h, w = a.shape
-    for dr, wr in ((0, 1 - fr), (1, fr)):
-        for dc, wc in ((0, 1 - fc), (1, fc)):
-            r, c = r0 + dr, c0 + dc
-            ok = (r >= 0) & (r < h) & (c >= 0) & (c < w)
-            out[ok] += (wr * wc)[ok] * a[r[ok], c[ok]]
-    return out
+    embed(rt, work, rt.to_device(pupil, np.complex64), c0, c0)
+    rt.fft.forward(work, (c0, c0 + n_a))
+    alpha, beta, _ = camera.direction_cosines()
+    bins = [rt.to_device(a * (n * pitch / wavelength), np.float32) for a in (alpha, beta)]
+    out = empty(rt, alpha.shape)
+    real = np.float64 if rt.has_fp64 else np.float32
+    rt.kernel("spectral", "read_spectrum", ("-DHOLO_FP64",) if rt.has_fp64 else ())(
+        rt.queue, (alpha.size,), None, out.data, work.data, np.int32(n), *(b.data for b in bins),
+        real((c0 + (n_a - 1) / 2) / n), np.float32(pitch * pitch))
+    return out.get()
 
 
 @dataclass(frozen=True, eq=False)
@@ -300,7 +284,7 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
     intensities, crosses, brightness, coverage = [], [], [], []
     for i, h in enumerate(holos):
         done = jobs.scaled(progress, i / len(holos), (i + 1) / len(holos))
-        planes, depth_images = [], {}
+        planes, depth_fields = [], {}
         for n, c in enumerate(channels):
             lam = h.wavelengths[c]
             at = camera_field(plate_wave(h, c, source=source), wavelength=lam, pitch=h.pitch,
@@ -309,17 +293,19 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
                 u, area = pupil_image(at, wavelength=lam, pitch=h.pitch, camera=fine,
                                       aperture=chromatic_pupil)
                 planes.append(np.abs(u) ** 2 / (lam * lam * area))
-            if depth_pupil is not None and c in depth_sources:
-                depth_images[c], area = pupil_image(at, wavelength=lam, pitch=h.pitch,
-                                                    camera=fine, aperture=depth_pupil)
-                if c == z_ch:  # unit emitters: their radiance is point density × coverage
-                    coverage.append(np.abs(depth_images[c]) ** 2 / (lam * lam * area))
+            if depth_pupil is not None and c in depth_sources:  # imaging is linear: sum first
+                pair = int(c == z_ch)
+                depth_fields[pair] = depth_fields.get(pair, 0) + at
             jobs.report(done, n + 1, len(channels))
         intensities.append(np.stack(planes, -1))
         if depth_pupil is not None:
-            u1 = sum(depth_images[c] for c in depth_sources[:-1])
-            crosses.append(u1 * np.conj(depth_images[z_ch]))
+            (u1, _), (u2, area) = (pupil_image(depth_fields[p], wavelength=lam_pair[p],
+                                               pitch=h.pitch, camera=fine, aperture=depth_pupil)
+                                   for p in (0, 1))
+            crosses.append(u1 * np.conj(u2))
             brightness.append(np.abs(u1))
+            # the depth partner's emitters have unit intensity: radiance = density × coverage
+            coverage.append(np.abs(u2) ** 2 / (lam_pair[1] ** 2 * area))
     radiance = speckle.compose(intensities, composition)
     ray = None
     if crosses:

@@ -58,16 +58,13 @@ static floatv exp_small(floatv x)       /* exp(x), |x| << 1 (a relative amplitud
            + x * (1 / 720.0f))))));
 }
 
-/* (re, im) = m * exp(i x) for x in [-pi, pi]: Taylor series at x/2, then the double angle */
-#define CIS(x, m, re, im)                                                                    \
-    do {                                                                                     \
-        floatv h_ = 0.5f * (x), q_ = h_ * h_;                                                \
-        floatv s_ = h_ * (1 + q_ * (-1 / 6.0f + q_ * (1 / 120.0f + q_ * (-1 / 5040.0f        \
-                    + q_ * (1 / 362880.0f + q_ * (-1 / 39916800.0f + q_ * (1 / 6227020800.0f)))))));  \
-        floatv c_ = 1 + q_ * (-0.5f + q_ * (1 / 24.0f + q_ * (-1 / 720.0f + q_ * (1 / 40320.0f \
-                    + q_ * (-1 / 3628800.0f + q_ * (1 / 479001600.0f))))));                 \
-        re = (m) * (c_ * c_ - s_ * s_);                                                      \
-        im = (m) * (2 * s_ * c_);                                                            \
+/* (re, im) = m * exp(i x) for x in [-pi, pi] */
+#define CIS(x, m, re, im)                  \
+    do {                                   \
+        floatv cos_, sin_;                 \
+        HOLO_CIS(floatv, x, cos_, sin_);   \
+        re = (m) * cos_;                   \
+        im = (m) * sin_;                   \
     } while (0)
 
 /* one pixel along the row: E <- E*D, D <- D*C */

@@ -38,19 +38,19 @@ inline float2 sample_spectrum(__global const float2 *A, int h, int w, real u, re
 {
     int u0 = (int)floor(u), v0 = (int)floor(v);
     float fu = (float)(u - u0), fv = (float)(v - v0);
+    /* the centring phase at (u0, v0), and its steps to the next column and row */
+    float2 at = turn(u0 * cu + v0 * cv), step_u = turn(cu), step_v = turn(cv);
     float2 acc = (float2)(0.0f, 0.0f);
-    for (int dv = 0; dv < 2; dv++) {
+    for (int dv = 0; dv < 2; dv++, at = cmul(at, step_v)) {
         int m = v0 + dv;
-        if (m < -(h / 2) || m > (h - 1) / 2)
-            continue;
+        float2 ph = at;
         float wv = dv ? fv : 1.0f - fv;
-        for (int du = 0; du < 2; du++) {
+        for (int du = 0; du < 2; du++, ph = cmul(ph, step_u)) {
             int n = u0 + du;
-            if (n < -(w / 2) || n > (w - 1) / 2)
+            if (m < -(h / 2) || m > (h - 1) / 2 || n < -(w / 2) || n > (w - 1) / 2)
                 continue;
             float wgt = wv * (du ? fu : 1.0f - fu);
-            float2 a = A[(m < 0 ? m + h : m) * w + (n < 0 ? n + w : n)];
-            acc += wgt * cmul(a, turn(n * cu + m * cv));
+            acc += wgt * cmul(A[(m < 0 ? m + h : m) * w + (n < 0 ? n + w : n)], ph);
         }
     }
     return acc;
@@ -87,6 +87,16 @@ __kernel void rotate_spectrum(__global float2 *dst, __global const float2 *A, in
         }
     }
     dst[i * wt + j] = v;
+}
+
+/* An image from its pupil's spectrum A (n, n, FFT order): pixel i reads the bin (u, v) of its
+ * direction (Eq. 22); c: the pupil centre's index over n; scale: the sample area [m²]. */
+__kernel void read_spectrum(__global float2 *dst, __global const float2 *A, int n,
+                            __global const float *u, __global const float *v, real c,
+                            float scale)
+{
+    int i = get_global_id(0);
+    dst[i] = scale * sample_spectrum(A, n, n, u[i], v[i], c, c);
 }
 
 /* One axis of band-limited resampling: out = K · in along rows (axis 0) or columns (axis 1).
