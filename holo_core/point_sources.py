@@ -68,8 +68,9 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
     positions : (N, 3) float array
         Point positions (x, y, z) [m] in the hologram's frame; every z must be < 0 (light
         travels towards +z, through the hologram).
-    amplitudes : (N,) complex array
-        Complex amplitude A0·exp(iφ0) of each point [field units · m].
+    amplitudes : (N,) or (N, C) complex array
+        Complex amplitude A0·exp(iφ0) of each point [field units · m]; C columns give C waves
+        of the same points and wavelength (colours) in one pass, which shares the geometry.
     wavelength : float
         λ [m].
     pitch : float
@@ -92,7 +93,7 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
 
     Returns
     -------
-    Complex64 (rows, cols) field.
+    Complex64 (rows, cols) field, or (C, rows, cols) for (N, C) amplitudes.
     """
     g = Grid(validate.shape2d("shape", shape), *reversed(grid.wave(wavelength, pitch)))
     if band is not None:
@@ -107,24 +108,27 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
     if method == "auto":
         method = "wrp" if wrp_seconds(pos, g) < direct_seconds(pos, g) else "direct"
     rt = get_runtime()
-    out = empty(rt, g.shape)
+    out = empty(rt, (amp.shape[1],) + g.shape)
     out.fill(0)
     if len(pos):
         if method == "wrp":
             _wrp(rt, out, pos, amp, g, obliquity, progress)
         else:
             _sum(rt, out, pos, amp, g, obliquity, binned=False, progress=progress)
+    if np.ndim(amplitudes) == 1:
+        out = out.reshape(g.shape)
     return out if as_device else out.get()
 
 
 def _points(positions, amplitudes):
     pos = np.asarray(positions, np.float64)
-    amp = np.asarray(amplitudes, np.complex128).reshape(-1)
+    amp = np.asarray(amplitudes, np.complex128)
     if pos.ndim != 2 or pos.shape[1] != 3:
         raise ValueError(f"positions must be an (N, 3) array [m]; got shape {pos.shape}")
-    if amp.shape != (len(pos),):
-        raise ValueError(f"amplitudes must hold one value per point ({len(pos)}); "
-                         f"got {amp.shape[0]}")
+    if amp.ndim not in (1, 2) or len(amp) != len(pos) or (amp.ndim == 2 and not amp.shape[1]):
+        raise ValueError(f"amplitudes must be (N,) or (N, C) with N = {len(pos)} points; "
+                         f"got shape {amp.shape}")
+    amp = amp.reshape(len(pos), -1)
     if not (np.isfinite(pos).all() and np.isfinite(amp).all()):
         raise ValueError("positions and amplitudes must be finite")
     if len(pos) and pos[:, 2].max() >= 0:
@@ -188,10 +192,13 @@ def _sum(rt, out, pos, amp, g: Grid, obliquity, *, binned, progress=None):
         sel = seg == n
         if not sel.any():
             continue
-        dpos, damp = _upload(rt, pos[sel], amp[sel], g.wavelength)
         if binned:
-            _launch(rt, out, dpos, damp, g, obliquity, n, tiles=_tiles(rt, pos[sel], g, n))
+            order, starts, reach = _bins(rt, pos[sel], g, n)
+            dpos, damp = _upload(rt, pos[sel][order], amp[sel][order], g.wavelength)
+            _launch(rt, out, dpos, damp, g, obliquity, n, bins=(rt.to_device(starts, np.int32),
+                                                              reach))
             continue
+        dpos, damp = _upload(rt, pos[sel], amp[sel], g.wavelength)
         per_launch = max(1, int(PAIRS_PER_LAUNCH / (g.shape[0] * g.shape[1])))
         cum = np.cumsum(pairs[sel])
         for first in range(0, int(sel.sum()), per_launch):
@@ -202,23 +209,26 @@ def _sum(rt, out, pos, amp, g: Grid, obliquity, *, binned, progress=None):
         done += cum[-1]
 
 
-def _launch(rt, out, pos, amp, g: Grid, obliquity, seg, *, first=0, last=None, tiles=None):
+def _launch(rt, out, pos, amp, g: Grid, obliquity, seg, *, first=0, last=None, bins=None):
     lanes = CPU_LANES if rt.is_cpu else 1
-    options = (f"-DVEC={lanes}", f"-DSEG={seg}", "-cl-fast-relaxed-math") + \
+    channels = amp.shape[1]
+    options = (f"-DVEC={lanes}", f"-DSEG={seg}", f"-DCHANNELS={channels}",
+               "-cl-fast-relaxed-math") + \
         (("-DHOLO_FP64",) if rt.has_fp64 else ()) + (("-DOBLIQUITY",) if obliquity else ())
     real = np.float64 if rt.has_fp64 else np.float32
     h, w = g.shape
     x0, y0 = -(w - 1) / 2 * g.pitch, -(h - 1) / 2 * g.pitch
     cone2 = min(g.cone, 1e15) ** 2
     k = 2 * np.pi / g.wavelength
-    binned = tiles is not None
-    start, order = tiles if binned else (_dummy(rt), _dummy(rt))
+    binned = bins is not None
+    starts, (reach_x, reach_y) = bins if binned else (_dummy(rt), (0, 0))
     last = len(pos.x) if last is None else last
     rt.kernel("point_sources", "point_wave", options)(
         rt.queue, (-(-h // lanes), -(-w // seg)), (1, 1), out.data, np.int32(h), np.int32(w),
         *(real(v) for v in (g.pitch, x0, y0, k, cone2, (1 - g.rim) ** 2)),
         pos.x.data, pos.y.data, pos.z.data, amp.data,
-        np.int32(first), np.int32(last), np.int32(binned), start.data, order.data)
+        np.int32(first), np.int32(last), np.int32(binned), starts.data, np.int32(reach_x),
+        np.int32(reach_y))
 
 
 def _dummy(rt):
@@ -238,7 +248,7 @@ def _upload(rt, pos, amp, wavelength):
     real = np.float64 if rt.has_fp64 else np.float32
     carrier = np.exp(1j * np.remainder(2 * np.pi / wavelength * np.abs(pos[:, 2]), 2 * np.pi))
     dev = _DevicePoints(*(rt.to_device(pos[:, i], real) for i in range(3)))
-    return dev, rt.to_device(amp * carrier, np.complex64)
+    return dev, rt.to_device(amp * carrier[:, None], np.complex64)
 
 
 # --- wavefront recording planes ---------------------------------------------------------------
@@ -305,16 +315,17 @@ def _slab(rt, out, pos, amp, plane, g: Grid, w_shape, obliquity):
     if plane == 0:  # the slab touches the hologram: sum directly, its cones are small
         _sum(rt, out, local, amp, g, obliquity, binned=True)
         return
-    wrp = empty(rt, w_shape)
+    wrp = empty(rt, out.shape[:1] + w_shape)
     wrp.fill(0)
     _sum(rt, wrp, local, amp, _on_plane(g, w_shape), obliquity, binned=True)
     padded = tuple(grid.next_fast_len(n) for n in w_shape)  # no wrap: the margin holds it
 
     wg, _ = cached(rt, ("wrp-chirp", padded, g), lambda: (_chirp(padded, g), ()))
     carrier = math.remainder(-2 * math.pi * plane / g.wavelength, 2 * math.pi)
-    at_hologram = convolve(rt, wrp, wg, chirp=(carrier, -plane))
     r0, c0 = (w_shape[0] - g.shape[0]) // 2, (w_shape[1] - g.shape[1]) // 2
-    out += window(rt, at_hologram, g.shape, r0, c0)
+    for c in range(len(out)):
+        at_hologram = convolve(rt, wrp[c].copy(), wg, chirp=(carrier, -plane))
+        out[c] += window(rt, at_hologram, g.shape, r0, c0)
 
 
 def _chirp(shape, g: Grid) -> np.ndarray:
@@ -329,23 +340,17 @@ def _chirp(shape, g: Grid) -> np.ndarray:
     return w / (shape[0] * shape[1]) + 1j * (2 * np.pi * f2 / (1 / g.wavelength + fz))
 
 
-def _tiles(rt, pos, g: Grid, seg):
-    """Per tile of the kernel, the points whose cone touches it: (starts, order) on the device."""
+def _bins(rt, pos, g: Grid, seg):
+    """The points binned by the kernel tile that holds them (clipped to the grid): their sort
+    order, each bin's first point in it (one entry per tile, and the end), and how many tiles
+    (cols, rows) the widest cone reaches beyond its own."""
     lanes = CPU_LANES if rt.is_cpu else 1
     h, w = g.shape
     ty_n, tx_n = -(-h // lanes), -(-w // seg)
-    col = pos[:, 0] / g.pitch + (w - 1) / 2
-    row = pos[:, 1] / g.pitch + (h - 1) / 2
-    reach = np.abs(pos[:, 2]) * g.cone / g.pitch + 1
-    tx0 = np.clip(np.floor((col - reach) / seg), 0, tx_n).astype(np.int64)
-    tx1 = np.clip(np.floor((col + reach) / seg), -1, tx_n - 1).astype(np.int64)
-    ty0 = np.clip(np.floor((row - reach) / lanes), 0, ty_n).astype(np.int64)
-    ty1 = np.clip(np.floor((row + reach) / lanes), -1, ty_n - 1).astype(np.int64)
-    nx, ny = np.maximum(tx1 - tx0 + 1, 0), np.maximum(ty1 - ty0 + 1, 0)
-    counts = nx * ny
-    point = np.repeat(np.arange(len(pos)), counts)
-    offset = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
-    tile = (ty0[point] + offset // nx[point]) * tx_n + tx0[point] + offset % nx[point]
+    tx = np.clip(np.floor((pos[:, 0] / g.pitch + (w - 1) / 2) / seg), 0, tx_n - 1)
+    ty = np.clip(np.floor((pos[:, 1] / g.pitch + (h - 1) / 2) / lanes), 0, ty_n - 1)
+    tile = ty.astype(np.int64) * tx_n + tx.astype(np.int64)
     order = np.argsort(tile, kind="stable")
-    starts = np.searchsorted(tile[order], np.arange(ty_n * tx_n + 1))
-    return (rt.to_device(starts, np.int32), rt.to_device(point[order], np.int32))
+    starts = np.concatenate([[0], np.cumsum(np.bincount(tile, minlength=ty_n * tx_n))])
+    reach = min(np.abs(pos[:, 2]).max() * min(g.cone, 1e6) / g.pitch + 1, max(h, w))
+    return order, starts, (math.ceil(reach / seg) + 1, math.ceil(reach / lanes) + 1)

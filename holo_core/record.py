@@ -139,11 +139,18 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     pitch = validate.positive("pitch", pitch, "m")
     for lam in lambdas:
         reference.check(lam, pitch)
+    amplitude = np.sqrt(cols) * np.exp(1j * phases)[:, None]
+    groups = [[c for c in range(len(lambdas)) if lambdas[c] == lam] for lam in dict.fromkeys(lambdas)]
+    objects = {}
+    for g, chans in enumerate(groups):  # equal wavelengths (colours) share one pass
+        lam = lambdas[chans[0]]
+        waves = point_wave(pos, amplitude[:, chans], wavelength=lam, pitch=pitch, shape=shape,
+                           obliquity=obliquity, method=method, band=band,
+                           progress=jobs.scaled(progress, g / len(groups), (g + 1) / len(groups)))
+        objects.update(zip(chans, waves))
     intensity, waves, amplitudes = [], [], []
     for c, lam in enumerate(lambdas):
-        o = point_wave(pos, np.sqrt(cols[:, c]) * np.exp(1j * phases), wavelength=lam,
-                       pitch=pitch, shape=shape, obliquity=obliquity, method=method, band=band,
-                       progress=jobs.scaled(progress, c / len(lambdas), (c + 1) / len(lambdas)))
+        o = objects[c]
         if extra_wave is not None:
             o = o + extra_wave(c, lam)
         a_r = math.sqrt(reference.beam_ratio * max(float(np.mean(np.abs(o) ** 2)), 1e-30))

@@ -9,8 +9,12 @@
  *
  * Each point reaches only the disc rho <= cone*|z| its pitch samples alias-free, with a smooth
  * rim (see point_sources.py, cone_weight). Points are read in [first, last), or, when
- * `binned`, from this tile's list in `order`.
- * Options: -DVEC=1|4|8|16, -DSEG=<columns>, -DOBLIQUITY (A = |z|/r^2 instead of 1/r). */
+ * `binned`, sorted by the tile holding their centre, from the bins within (reach_x, reach_y)
+ * tiles of this one (bin b's points start at bin_start[b]).
+ * CHANNELS waves with the same wavelength and points (colours) share the geometry: each adds
+ * its amplitude times exp(psi) to its own plane of `out` (stride h*w).
+ * Options: -DVEC=1|4|8|16, -DSEG=<columns>, -DCHANNELS=<n>, -DOBLIQUITY (A = |z|/r^2
+ * instead of 1/r). */
 #include "holo_complex.h"
 
 #define CAT_(a, b) a##b
@@ -78,14 +82,32 @@ static floatv exp_small(floatv x)       /* exp(x), |x| << 1 (a relative amplitud
         dr = t;                           \
     } while (0)
 
+/* acc[m][c] += v * amplitude c (with one channel the amplitude is folded into v already) */
+#if CHANNELS == 1
+#define ADD(m, vr, vi)           \
+    do {                         \
+        acc_r[m][0] += vr;       \
+        acc_i[m][0] += vi;       \
+    } while (0)
+#else
+#define ADD(m, vr, vi)                                     \
+    do {                                                   \
+        for (int c = 0; c < CHANNELS; c++) {               \
+            acc_r[m][c] += a[c].x * (vr) - a[c].y * (vi);  \
+            acc_i[m][c] += a[c].x * (vi) + a[c].y * (vr);  \
+        }                                                  \
+    } while (0)
+#endif
+
 __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0, real y0,
                          real k, real cone2, real inner2,
                          __global const real *px, __global const real *py,
                          __global const real *pz, __global const float2 *amp,
                          int first, int last, int binned,
-                         __global const int *tile_start, __global const int *order)
+                         __global const int *bin_start, int reach_x, int reach_y)
 {
-    int ty = get_global_id(0), tx = get_global_id(1), tiles_x = get_global_size(1);
+    int ty = get_global_id(0), tx = get_global_id(1);
+    int tiles_y = get_global_size(0), tiles_x = get_global_size(1);
     int row0 = ty * VEC, col0 = tx * SEG;
     real half_seg = (SEG - 1) * (real)0.5 * pitch, half_rows = (VEC - 1) * (real)0.5 * pitch;
     real xc = x0 + col0 * pitch + half_seg;              /* segment centre */
@@ -93,14 +115,18 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
     realv yrow = y0 + (row0 + TO_REAL(LANE_ID(LANES))) * pitch;
     real u0 = -half_seg, du = pitch;
 
-    floatv acc_r[SEG], acc_i[SEG];
+    floatv acc_r[SEG][CHANNELS], acc_i[SEG][CHANNELS];
     for (int m = 0; m < SEG; m++)
-        acc_r[m] = acc_i[m] = 0;
+        for (int c = 0; c < CHANNELS; c++)
+            acc_r[m][c] = acc_i[m][c] = 0;
 
-    int n0 = binned ? tile_start[ty * tiles_x + tx] : first;
-    int n1 = binned ? tile_start[ty * tiles_x + tx + 1] : last;
-    for (int q = n0; q < n1; q++) {
-        int j = binned ? order[q] : q;
+    /* the points to visit: one range, or one per bin row within reach */
+    int by0 = max(ty - reach_y, 0), bx0 = max(tx - reach_x, 0);
+    int bx1 = min(tx + reach_x, tiles_x - 1) + 1;
+    int ranges = binned ? min(ty + reach_y, tiles_y - 1) - by0 + 1 : 1;
+    for (int range = 0; range < ranges; range++)
+    for (int j = binned ? bin_start[(by0 + range) * tiles_x + bx0] : first,
+             j1 = binned ? bin_start[(by0 + range) * tiles_x + bx1] : last; j < j1; j++) {
         real xj = px[j], yj = py[j], zj = pz[j], az = fabs(zj);
         real rho_max2 = cone2 * zj * zj;
         real dxc = xc - xj;
@@ -122,13 +148,17 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
 #else
         floatv a0 = inv_r;
 #endif
-        float2 a = amp[j];
+        float2 a[CHANNELS];
+        for (int c = 0; c < CHANNELS; c++)
+            a[c] = amp[j * CHANNELS + c];
         floatv er, ei, dr, di, cr, ci, t;
         t = a0 * exp_small(d1r * u + d2r * (u * u / 2));
         CIS(wrap(TO_FLOAT(phase) + d1i * u + d2i * (u * u / 2)), t, er, ei);
-        t = er * a.x - ei * a.y;
-        ei = er * a.y + ei * a.x;
+#if CHANNELS == 1
+        t = er * a[0].x - ei * a[0].y;
+        ei = er * a[0].y + ei * a[0].x;
         er = t;
+#endif
         CIS(wrap(d1i * p + d2i * ud), exp_small(d1r * p + d2r * ud), dr, di);
         CIS(d2i * (p * p), exp_small(d2r * (p * p)), cr, ci);
 
@@ -137,8 +167,7 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
         real far_x = fabs(dxc) + half_seg, far_y = fabs(yt - yj) + half_rows;
         if (far_x * far_x + far_y * far_y <= inner2 * rho_max2) {
             for (int m = 0; m < SEG; m++) {
-                acc_r[m] += er;
-                acc_i[m] += ei;
+                ADD(m, er, ei);
                 STEP(er, ei, dr, di, cr, ci, t);
             }
         } else {
@@ -151,27 +180,27 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
                 float dx = (float)m - xrel;
                 floatv u = clamp((dx * dx + dy2 - in2) * band, 0.0f, 1.0f);
                 floatv keep = 1.0f - u * u * (3.0f - 2.0f * u);
-                acc_r[m] += keep * er;
-                acc_i[m] += keep * ei;
+                ADD(m, keep * er, keep * ei);
                 STEP(er, ei, dr, di, cr, ci, t);
             }
         }
     }
 
     float lane_r[VEC], lane_i[VEC];
+    for (int c = 0; c < CHANNELS; c++)
     for (int m = 0; m < SEG; m++) {
         int col = col0 + m;
 #if VEC == 1
-        lane_r[0] = acc_r[m];
-        lane_i[0] = acc_i[m];
+        lane_r[0] = acc_r[m][c];
+        lane_i[0] = acc_i[m][c];
 #else
-        CAT(vstore, VEC)(acc_r[m], 0, lane_r);
-        CAT(vstore, VEC)(acc_i[m], 0, lane_i);
+        CAT(vstore, VEC)(acc_r[m][c], 0, lane_r);
+        CAT(vstore, VEC)(acc_i[m][c], 0, lane_i);
 #endif
         for (int l = 0; l < VEC; l++) {
             int row = row0 + l;
             if (row < h && col < w)
-                out[row * w + col] += (float2)(lane_r[l], lane_i[l]);
+                out[(c * h + row) * w + col] += (float2)(lane_r[l], lane_i[l]);
         }
     }
 }
