@@ -1,6 +1,6 @@
 """The built-in demo: a holographic scene and diffraction figures.
 
-The scene (Fig. 13 and 15c in spirit): bright points, a tilted textured checkerboard and a
+The scene (Fig. 13 and 15c in spirit): bright beads, a tilted textured checkerboard and a
 vertex-coloured mesh, recorded once onto a 30 cm plate (RGB plus the depth wavelength), then
 rendered from two camera positions and with two focus settings: ``scene_<view>.exr`` (Combined
 and Depth, as Blender reads them), ``.png`` previews and ``scene_<view>_depth.png``.
@@ -67,53 +67,57 @@ def tilted_beam(n=256, pitch=0.5e-6, w0=20e-6, degrees=20.0):
     return np.concatenate([phase_before, _tone(np.abs(out) ** 2)], axis=1)
 
 
+def _octahedron(centre, radius, colours=None) -> "Mesh":
+    from .emitters import Mesh
+    v = np.asarray(centre) + radius * np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0],
+                                                [0, 0, 1], [0, 0, -1.0]])
+    tri = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5],
+                    [3, 1, 5], [0, 3, 5]])
+    return Mesh(vertices=v, triangles=tri, colours=colours)
+
+
 def scene_emitters():
-    """Points, a tilted 8×8 checkerboard and a coloured octahedron, in metres (plate at z=0)."""
-    from .emitters import Mesh, sample_points
+    """A tilted 8×8 checkerboard, a vertex-coloured octahedron and three small bright
+    beads (the paper's points), in metres (plate at z = 0)."""
+    from .emitters import Mesh
     tex = (np.add.outer(np.arange(8), np.arange(8)) % 2)[..., None] * [0.75, 0.7, 0.6] + 0.05
     board = Mesh(vertices=np.array([[-0.1, -0.08, -0.03], [0.1, -0.08, -0.03],
                                     [0.1, 0.06, -0.16], [-0.1, 0.06, -0.16]]),
-                 triangles=np.array([[0, 1, 2], [0, 2, 3]]),
+                 triangles=np.array([[0, 2, 1], [0, 3, 2]]),
                  uvs=np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]]), texture=tex)
-    c, r = np.array([0.03, 0.0, -0.09]), 0.04
-    octa = Mesh(vertices=c + r * np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0],
-                                           [0, 0, 1], [0, 0, -1.0]]),
-                triangles=np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5],
-                                    [1, 2, 5], [3, 1, 5], [0, 3, 5]]),
-                colours=np.array([[1, .2, .1], [.1, .3, 1], [.2, 1, .2], [1, 1, .1],
-                                  [1, .2, 1], [.1, 1, 1.0]]))
-    points = np.array([[-0.07, 0.05, -0.05], [-0.05, 0.07, -0.12], [0.08, 0.06, -0.07]])
-    return [board, octa], points
+    octa = _octahedron((0.03, 0.0, -0.09), 0.04,
+                       np.array([[1, .2, .1], [.1, .3, 1], [.2, 1, .2], [1, 1, .1],
+                                 [1, .2, 1], [.1, 1, 1.0]]))
+    beads = [_octahedron(c, 0.004, np.full((6, 3), 3.0))
+             for c in ((-0.07, 0.05, -0.05), (-0.05, 0.07, -0.12), (0.08, 0.06, -0.07))]
+    return [board, octa, *beads]
 
 
-def holographic_scene(out: Path, resolution=1024) -> list[Path]:
+def holographic_scene(out: Path, resolution=1024, iterations=4) -> list[Path]:
+    """One recording (``iterations`` random-phase sets, for the temporal composition) seen from
+    two viewpoints at two focus settings each: a hologram is recorded once and viewed from
+    anywhere in front of it. Recorded without a camera, nothing is culled: surfaces hidden from
+    a view show through the ones in front, as light does not occlude light."""
     from .camera import Camera, look_at
-    from .emitters import sample_points
     from .hologram_io import write_hologram
     from .record import Plate, record_hologram
     from .render import render_view, write_view
-    from .sampling import choose
-    meshes, points = scene_emitters()
     plate = Plate(matrix_world=np.eye(4), width=0.3, height=0.3)
-    s = choose((0.3, 0.3), np.concatenate([m.vertices for m in meshes]), resolution=resolution)
-    parts = [sample_points(m, s.spacing, seed=i) for i, m in enumerate(meshes)]
-    pos = np.concatenate([p for p, _ in parts] + [points])
-    rgb = np.concatenate([c for _, c in parts] + [np.full((len(points), 3), 40.0)])
-    log.info("demo: recording %d emitters", len(pos))
-    h = record_hologram((pos, rgb), plate=plate, resolution=resolution)
-    written = [write_hologram(out / "scene_hologram.exr", h)]
-    left, right = (-0.08, 0.05, 0.6), (0.1, -0.03, 0.6)
-    views = {"left_far_focus": (left, 0.72), "left_near_focus": (left, 0.62),
-             "right_far_focus": (right, 0.72), "right_near_focus": (right, 0.62)}
-    for name, (eye, focus) in views.items():
-        cam = Camera(matrix_world=look_at(eye, (0, 0, -0.09), up=(0, 1, 0)), lens=50,
-                     sensor_width=24, resolution=(256, 256), fstop=0.5, focus_distance=focus)
-        view = render_view(h, cam, supersample=2)  # exposure: 99.5th percentile → 1
-        written += write_view(view, out / f"scene_{name}.exr")
-        z = np.where(view.alpha > 0, view.depth, np.nan)
-        lo, hi = np.nanmin(z), np.nanmax(z)
-        written.append(write_png(out / f"scene_{name}_depth.png",
-                                 np.nan_to_num(1 - (z - lo) / max(hi - lo, 1e-9))))
+    log.info("demo: recording %d random-phase holograms", iterations)
+    holos = [record_hologram(scene_emitters(), plate=plate, seed=i, resolution=resolution)
+             for i in range(iterations)]
+    written = [write_hologram(out / "scene_hologram.exr", holos[0])]
+    for side, eye in {"left": (-0.06, 0.04, 0.6), "right": (0.07, -0.03, 0.6)}.items():
+        for name, focus in (("near", 0.64), ("far", 0.74)):
+            cam = Camera(matrix_world=look_at(eye, (0, 0, -0.09), up=(0, 1, 0)), lens=50,
+                         sensor_width=24, resolution=(256, 256), fstop=0.5,
+                         focus_distance=focus)
+            view = render_view(holos, cam, supersample=2)
+            written += write_view(view, out / f"scene_{side}_{name}_focus.exr")
+            z = np.where(view.alpha > 0, view.depth, np.nan)
+            lo, hi = np.nanmin(z), np.nanmax(z)
+            written.append(write_png(out / f"scene_{side}_{name}_focus_depth.png",
+                                     np.nan_to_num(1 - (z - lo) / max(hi - lo, 1e-9))))
     return written
 
 
