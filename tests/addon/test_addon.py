@@ -227,6 +227,61 @@ def test_silhouette_and_depth_match_blenders_raster(empty_scene, tmp_path, shape
     assert err <= 0.01, f"median depth error {err:.2%} of the depth extent {extent:.3f} m"
 
 
+def test_animation_renders_a_pass_per_frame(empty_scene, tmp_path):
+    """Rendering an animation (what ``blender -b file.blend -a`` runs) gives each frame its
+    own holographic pass: a cube keyframed to move 0.3 m right between frames 1 and 2 moves
+    in the passes as its projected corners do (within a pixel: two edges, each ±0.5 px); the
+    hologram is recorded again only for the frame whose scene changed."""
+    from holo_addon import compat, pipeline
+    scene = empty_scene
+    cube, cam, plate = _plate_camera_cube(scene, cube_size=0.4)
+    scene.render.resolution_x, scene.render.resolution_y = 48, 36
+    scene.render.resolution_percentage = 100
+    scene.render.engine = "BLENDER_WORKBENCH"
+    scene.holo.iterations = 1
+    scene.holo.max_resolution = 512
+    for frame, x in ((1, -0.15), (2, 0.15), (3, 0.15)):
+        cube.location.x = x
+        cube.keyframe_insert("location", frame=frame)
+    scene.frame_start, scene.frame_end = 1, 3
+    scene.frame_set(1)
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    compat.set_png_output(scene)
+    scene.render.filepath = str(tmp_path / "frame_")
+    recorded = []
+    original = pipeline.run
+    def run(job, progress=None):
+        recorded.append(not job.current)
+        return original(job, progress)
+    pipeline.run = run
+    try:
+        bpy.ops.render.render(animation=True)
+    finally:
+        pipeline.run = original
+    assert recorded == [False, True, False], recorded  # frame 1's hologram was current
+    out = pipeline.output_dir(scene)
+    middles = []
+    for frame in (1, 2, 3):
+        assert (tmp_path / f"frame_{frame:04d}.png").is_file()
+        alpha = _read_exr(out / f"holo_pass_{frame:04d}.exr")["ViewLayer.Combined.A"]
+        cols = np.nonzero(alpha > 0.5)[1]
+        assert cols.size, f"frame {frame}: the cube is missing from its pass"
+        middles.append((cols.min() + cols.max() + 1) / 2)  # the silhouette's horizontal middle
+    corners = np.array([(x, y, z) for x in (-0.2, 0.2) for y in (-0.2, 0.2) for z in (-0.2, 0.2)])
+    expected = [np.mean([f(_camera_columns(scene, cam, corners + (x, 0, 0))) for f in (min, max)])
+                for x in (-0.15, 0.15)]
+    print(f"animation: silhouette middles {middles} px, projected {np.round(expected, 2)} px")
+    assert abs((middles[1] - middles[0]) - (expected[1] - expected[0])) <= 1.0
+    assert middles[2] == middles[1]
+
+
+def _camera_columns(scene, cam, points):
+    from holo_addon.scene_export import camera_from_object
+    cols, _ = camera_from_object(scene, cam, 1.0).project(np.asarray(points, float))
+    return cols[:, 0]
+
+
 def test_cancelled_run_keeps_earlier_outputs(empty_scene):
     from holo_addon import pipeline
     scene = empty_scene
