@@ -5,7 +5,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo figures test bench devices extension clean
+.PHONY: demo figures test bench devices extension check-lts clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -33,5 +33,18 @@ devices: $(STAMP)
 extension: $(STAMP)
 	$(PY) -m holo_addon.build -o dist
 
+# The built extension in Blender's LTS releases (bpy modules for Python 3.11, 370 MB each):
+# installed, registered, recorded, rendered and composited (tests/blender_lts.py).
+LTS ?= 4.2.0 4.5.15
+check-lts: $(STAMP)
+	rm -rf build/lts && $(PY) -m holo_addon.build --platform linux-x64 --python 3.11 -o build/lts
+	set -e; for v in $(LTS); do \
+	  test -x .venv-bpy$$v/bin/python || \
+	    { $(PYTHON) -m venv .venv-bpy$$v && .venv-bpy$$v/bin/pip install "bpy==$$v" "numpy<2"; }; \
+	  mkdir -p build/lts/$$v; \
+	  BLENDER_USER_RESOURCES=$$PWD/build/lts/$$v/user PYTHONNOUSERSITE=1 \
+	    .venv-bpy$$v/bin/python tests/blender_lts.py build/lts/holo-*.zip build/lts/$$v; \
+	done
+
 clean:
-	rm -rf $(VENV) out build dist *.egg-info
+	rm -rf $(VENV) .venv-bpy* out build dist *.egg-info
