@@ -214,8 +214,7 @@ def _launch(rt, out, pos, amp, g: Grid, obliquity, seg, *, first=0, last=None, b
     channels = amp.shape[1]
     options = (f"-DVEC={lanes}", f"-DSEG={seg}", f"-DCHANNELS={channels}",
                "-cl-fast-relaxed-math") + \
-        (("-DHOLO_FP64",) if rt.has_fp64 else ()) + (("-DOBLIQUITY",) if obliquity else ())
-    real = np.float64 if rt.has_fp64 else np.float32
+        rt.real_options + (("-DOBLIQUITY",) if obliquity else ())
     h, w = g.shape
     x0, y0 = -(w - 1) / 2 * g.pitch, -(h - 1) / 2 * g.pitch
     cone2 = min(g.cone, 1e15) ** 2
@@ -225,7 +224,7 @@ def _launch(rt, out, pos, amp, g: Grid, obliquity, seg, *, first=0, last=None, b
     last = len(pos.x) if last is None else last
     rt.kernel("point_sources", "point_wave", options)(
         rt.queue, (-(-h // lanes), -(-w // seg)), (1, 1), out.data, np.int32(h), np.int32(w),
-        *(real(v) for v in (g.pitch, x0, y0, k, cone2, (1 - g.rim) ** 2)),
+        *(rt.real(v) for v in (g.pitch, x0, y0, k, cone2, (1 - g.rim) ** 2)),
         pos.x.data, pos.y.data, pos.z.data, amp.data,
         np.int32(first), np.int32(last), np.int32(binned), starts.data, np.int32(reach_x),
         np.int32(reach_y))
@@ -245,9 +244,8 @@ class _DevicePoints(NamedTuple):
 
 def _upload(rt, pos, amp, wavelength):
     """Points as separate arrays; the carrier exp(ik|z|) folded into the amplitude in float64."""
-    real = np.float64 if rt.has_fp64 else np.float32
     carrier = np.exp(1j * np.remainder(2 * np.pi / wavelength * np.abs(pos[:, 2]), 2 * np.pi))
-    dev = _DevicePoints(*(rt.to_device(pos[:, i], real) for i in range(3)))
+    dev = _DevicePoints(*(rt.to_device(pos[:, i], rt.real) for i in range(3)))
     return dev, rt.to_device(amp * carrier[:, None], np.complex64)
 
 
@@ -324,7 +322,7 @@ def _slab(rt, out, pos, amp, plane, g: Grid, w_shape, obliquity):
     carrier = math.remainder(-2 * math.pi * plane / g.wavelength, 2 * math.pi)
     r0, c0 = (w_shape[0] - g.shape[0]) // 2, (w_shape[1] - g.shape[1]) // 2
     for c in range(len(out)):
-        at_hologram = convolve(rt, wrp[c].copy(), wg, chirp=(carrier, -plane))
+        at_hologram = convolve(rt, wrp[c], wg, chirp=(carrier, -plane))
         out[c] += window(rt, at_hologram, g.shape, r0, c0)
 
 

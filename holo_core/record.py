@@ -140,14 +140,13 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     for lam in lambdas:
         reference.check(lam, pitch)
     amplitude = np.sqrt(cols) * np.exp(1j * phases)[:, None]
-    groups = [[c for c in range(len(lambdas)) if lambdas[c] == lam] for lam in dict.fromkeys(lambdas)]
+    groups = {lam: [c for c, other in enumerate(lambdas) if other == lam] for lam in lambdas}
     objects = {}
-    for g, chans in enumerate(groups):  # equal wavelengths (colours) share one pass
-        lam = lambdas[chans[0]]
-        waves = point_wave(pos, amplitude[:, chans], wavelength=lam, pitch=pitch, shape=shape,
-                           obliquity=obliquity, method=method, band=band,
-                           progress=jobs.scaled(progress, g / len(groups), (g + 1) / len(groups)))
-        objects.update(zip(chans, waves))
+    for g, (lam, chans) in enumerate(groups.items()):  # equal wavelengths share one pass
+        objects.update(zip(chans, point_wave(
+            pos, amplitude[:, chans], wavelength=lam, pitch=pitch, shape=shape,
+            obliquity=obliquity, method=method, band=band,
+            progress=jobs.scaled(progress, g / len(groups), (g + 1) / len(groups)))))
     intensity, waves, amplitudes = [], [], []
     for c, lam in enumerate(lambdas):
         o = objects[c]

@@ -199,10 +199,9 @@ def _spectrum_at_pixels(pupil, wavelength, pitch, camera: Camera, aperture: Aper
     alpha, beta, _ = camera.direction_cosines()
     bins = [rt.to_device(a * (n * pitch / wavelength), np.float32) for a in (alpha, beta)]
     out = empty(rt, alpha.shape)
-    real = np.float64 if rt.has_fp64 else np.float32
-    rt.kernel("spectral", "read_spectrum", ("-DHOLO_FP64",) if rt.has_fp64 else ())(
+    rt.kernel("spectral", "read_spectrum", rt.real_options)(
         rt.queue, (alpha.size,), None, out.data, work.data, np.int32(n), *(b.data for b in bins),
-        real((c0 + (n_a - 1) / 2) / n), np.float32(pitch * pitch))
+        rt.real((c0 + (n_a - 1) / 2) / n), np.float32(pitch * pitch))
     return out.get()
 
 

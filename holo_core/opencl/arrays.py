@@ -90,10 +90,21 @@ def window(rt: Runtime, src: cla.Array, shape, r0: int, c0: int) -> cla.Array:
 
 def _rect(rt, dst, src, src_rc, dst_rc, shape):
     item = src.dtype.itemsize
-    cl.enqueue_copy(rt.queue, dst.data, src.data,
-                    src_origin=(src_rc[1] * item, src_rc[0]), dst_origin=(dst_rc[1] * item, dst_rc[0]),
+    (src_buf, src_row), (dst_buf, dst_row) = _rows(src), _rows(dst)
+    cl.enqueue_copy(rt.queue, dst_buf, src_buf,
+                    src_origin=(src_rc[1] * item, src_rc[0] + src_row),
+                    dst_origin=(dst_rc[1] * item, dst_rc[0] + dst_row),
                     region=(shape[1] * item, shape[0]),
-                    src_pitches=(src.shape[1] * item,), dst_pitches=(dst.shape[1] * item,))
+                    src_pitches=(src.shape[-1] * item,), dst_pitches=(dst.shape[-1] * item,))
+
+
+def _rows(a: cla.Array):
+    """(buffer, first row) of a 2-D array, also of a view starting on a row of a larger one
+    (a plane of a stack, ``stack[c]``), read in place: no sub-buffer, no copy."""
+    row = a.shape[-1] * a.dtype.itemsize
+    if a.offset % row:
+        raise ValueError("a view must start on a row of its buffer")
+    return a.base_data, a.offset // row
 
 
 def cached(rt, key, make):

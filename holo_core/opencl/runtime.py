@@ -103,6 +103,16 @@ class Runtime:
     def has_fp64(self) -> bool:
         return bool(self.device.double_fp_config) or "cl_khr_fp64" in self.device.extensions
 
+    @cached_property
+    def real(self) -> type:
+        """The kernels' ``real`` (coordinates, phases): float64 where the device has it."""
+        return np.float64 if self.has_fp64 else np.float32
+
+    @cached_property
+    def real_options(self) -> tuple[str, ...]:
+        """Build options that make the kernels' ``real`` match :attr:`real`."""
+        return ("-DHOLO_FP64",) if self.has_fp64 else ()
+
     def program(self, name: str, options: tuple[str, ...] = ()) -> cl.Program:
         """``kernels/<name>.cl`` built for this context, once per option set."""
         key = (name, options)

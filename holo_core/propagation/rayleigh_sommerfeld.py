@@ -64,13 +64,11 @@ def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0)
                     wavelength, abs(z))
     k, sgn = 2 * math.pi / wavelength, math.copysign(1.0, z)
     g = pitch**2 * np.exp(1j * math.remainder(sgn * k * abs(z), 2 * math.pi))
-    real = np.float64 if rt.has_fp64 else np.float32
-    options = ("-DHOLO_FP64",) if rt.has_fp64 else ()
     out = empty(rt, out_shape)
     args = [pitch, src_x0, src_y0, out_pitch, out_x0, out_y0, abs(z), k, sgn, g.real, g.imag]
-    rt.kernel("rayleigh_sommerfeld", "rs_direct", options)(
+    rt.kernel("rayleigh_sommerfeld", "rs_direct", rt.real_options)(
         rt.queue, out_shape, None, out.data, src.data, np.int32(src.shape[0]),
-        np.int32(src.shape[1]), *(real(a) for a in args))
+        np.int32(src.shape[1]), *(rt.real(a) for a in args))
     return like_input(out, from_host)
 
 

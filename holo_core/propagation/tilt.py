@@ -56,16 +56,14 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     embed(rt, spectrum, src, r0, c0)
     rt.fft.forward(spectrum)
     target = empty(rt, (ht, wt))
-    real = np.float64 if rt.has_fp64 else np.float32
-    options = ("-DHOLO_FP64",) if rt.has_fp64 else ()
     freq = [1 / (ht * out_pitch), 1 / (wt * out_pitch), 1 / (hs * pitch), 1 / (ws * pitch),
             1 / wavelength**2, *m.ravel(),
             (r0 + (src.shape[0] - 1) / 2) / hs, (c0 + (src.shape[1] - 1) / 2) / ws,
             (t0 + (out_shape[0] - 1) / 2) / ht, (u0 + (out_shape[1] - 1) / 2) / wt]
     scale = np.float32(pitch**2 / (out_pitch**2 * ht * wt))
-    rt.kernel("spectral", "rotate_spectrum", options)(
+    rt.kernel("spectral", "rotate_spectrum", rt.real_options)(
         rt.queue, (ht, wt), None, target.data, spectrum.data, np.int32(hs), np.int32(ws),
-        *(real(f) for f in freq), scale)
+        *(rt.real(f) for f in freq), scale)
     rt.fft.backward(target)
     return like_input(window(rt, target, out_shape, t0, u0), from_host)
 
