@@ -2,8 +2,13 @@
 
 A rotation ``M`` has the target plane's axes (ξ, η, ζ) as its columns, in source coordinates:
 it maps target coordinates to source coordinates, and target frequencies to source ones,
-f = M·f'. Both planes pass through the source grid's centre. The spectrum is interpolated
-linearly (after Delen & Hooker) on the zero-padded grid, so ``padding`` also refines it.
+f = M·f'. Both planes pass through the source grid's centre. The rotated spectrum is read
+between the source's bins as a non-uniform FFT reads them: a TAPS-wide "exponential of
+semicircle" kernel, with the source divided beforehand by the kernel's Fourier transform
+(deapodization), so that ``padding`` >= 2 gives ~1e-5 for any target grid. Linear interpolation
+(Delen & Hooker) erred by 1e-2 on a tilted beam, and by 10-25 % where the target grid is larger
+than the source (a primitive carried to a hologram): it copies the source at every padded
+period, attenuated only by sinc².
 """
 
 from __future__ import annotations
@@ -14,8 +19,11 @@ from .. import validate
 from ..opencl import as_device, like_input
 from . import grid
 from .angular_spectrum import angular_spectrum
-from .resample import resample
-from ..opencl.arrays import embed, empty, window
+from ..opencl.arrays import cached, embed, empty, window
+
+TAPS = 6                # spectrum interpolation taps per axis (error ~10^-(TAPS-1) at padding 2)
+ES_BETA = 2.30 * TAPS   # the kernel's shape for 2x oversampling (Barnett et al. 2019)
+ES_TABLE = 4096         # kernel samples, linearly interpolated (error ~1e-6)
 
 
 def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_pitch=None):
@@ -32,7 +40,8 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     rotation : (3, 3) array
         Rotation matrix M whose columns are the target axes ξ, η, ζ in source coordinates.
     padding : float
-        Zero-padding factor (>= 1) of source and target grids; finer spectra interpolate better.
+        Zero-padding factor of source and target grids, >= 2 for the interpolation's accuracy
+        (at 1 the field may fill the window, where the deapodization grows large).
     out_shape : (int, int), optional
         Target grid (rows, cols); default the source shape.
     out_pitch : float, optional
@@ -54,18 +63,60 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     spectrum = rt.scratch("tilt-source", (hs, ws))
     (r0, c0), (t0, u0) = _corner(src.shape, (hs, ws)), _corner(out_shape, (ht, wt))
     embed(rt, spectrum, src, r0, c0)
+    centre = ((r0 + (src.shape[0] - 1) / 2) / hs, (c0 + (src.shape[1] - 1) / 2) / ws)
+    multiply = rt.kernel("spectral", "multiply")
+    multiply(rt.queue, (hs * ws,), None, spectrum.data,
+             _cached(rt, "deapodize", _deapodization, (hs, ws), centre).data)
     rt.fft.forward(spectrum)
+    multiply(rt.queue, (hs * ws,), None, spectrum.data,
+             _cached(rt, "centring", _centring, (hs, ws), centre).data)
     target = empty(rt, (ht, wt))
     freq = [1 / (ht * out_pitch), 1 / (wt * out_pitch), 1 / (hs * pitch), 1 / (ws * pitch),
             1 / wavelength**2, *m.ravel(),
-            (r0 + (src.shape[0] - 1) / 2) / hs, (c0 + (src.shape[1] - 1) / 2) / ws,
             (t0 + (out_shape[0] - 1) / 2) / ht, (u0 + (out_shape[1] - 1) / 2) / wt]
     scale = np.float32(pitch**2 / (out_pitch**2 * ht * wt))
-    rt.kernel("spectral", "rotate_spectrum", rt.real_options)(
+    options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
+    rt.kernel("spectral", "rotate_spectrum", options)(
         rt.queue, (ht, wt), None, target.data, spectrum.data, np.int32(hs), np.int32(ws),
-        *(rt.real(f) for f in freq), scale)
+        *(rt.real(f) for f in freq), scale, _cached(rt, "es-table", _es_table).data)
     rt.fft.backward(target)
     return like_input(window(rt, target, out_shape, t0, u0), from_host)
+
+
+def es_kernel(t) -> np.ndarray:
+    """The spectrum's interpolation kernel at ``t`` [bins]: exp(β(√(1 - (2t/TAPS)²) - 1))."""
+    s = 1 - (2 * np.asarray(t, np.float64) / TAPS) ** 2
+    return np.where(s > 0, np.exp(ES_BETA * (np.sqrt(np.clip(s, 0, None)) - 1)), 0.0)
+
+
+def es_transform(xi) -> np.ndarray:
+    """The kernel's Fourier transform at ``xi`` = position over the padded size: the factor
+    interpolation lays on the field."""
+    t, dt = np.linspace(-TAPS / 2, TAPS / 2, 64 * TAPS + 1, retstep=True)
+    return (es_kernel(t) * np.cos(2 * np.pi * np.multiply.outer(xi, t))).sum(-1) * dt
+
+
+def _cached(rt, name, make, *args):
+    return cached(rt, (name, *args), lambda: (make(*args), None))[0]
+
+
+def _es_table():
+    """(value, slope) per table interval, packed as complex: what ``es_weight`` reads."""
+    phi = es_kernel(np.linspace(-TAPS / 2, TAPS / 2, ES_TABLE + 1))
+    return phi[:-1] + 1j * np.diff(phi)
+
+
+def _deapodization(padded, centre):
+    """1 / es_transform about the field's centre (fractions of the padded size), per axis."""
+    w = [1 / es_transform(np.arange(n) / n - c) for n, c in zip(padded, centre)]
+    return np.outer(*w)
+
+
+def _centring(padded, centre):
+    """exp(i2π·bin·centre) in FFT order: the spectrum of the field moved to the origin, smooth
+    between bins (the field's own spectrum turns by 2π·centre per bin)."""
+    ramps = [np.exp(2j * np.pi * np.fft.fftfreq(n, 1 / n) * c) for n, c in zip(padded, centre)]
+    return np.outer(*ramps)
 
 
 def _corner(shape, padded):
@@ -96,13 +147,11 @@ def propagate_to_plane(field, *, wavelength, pitch, rotation, position, padding=
         raise ValueError(f"position must be 3 finite coordinates [m]; got {position!r}")
     x0, y0, z = m.T @ p
     tilted = field
-    if not np.allclose(m, np.eye(3), atol=1e-12):
+    if out_shape is not None or out_pitch is not None or not np.allclose(m, np.eye(3), atol=1e-12):
+        # also without a tilt: the interpolated spectrum places a small field in a large grid
+        # without the wrap-around of resampling on the small grid
         tilted = tilt(field, wavelength=wavelength, pitch=pitch, rotation=m, padding=padding,
                       out_shape=out_shape, out_pitch=out_pitch)
-        pitch = out_pitch or pitch
-    elif out_shape is not None or out_pitch is not None:
-        tilted = resample(field, pitch=pitch, out_shape=out_shape or np.shape(field),
-                          out_pitch=out_pitch or pitch)
         pitch = out_pitch or pitch
     if z == 0 and x0 == 0 and y0 == 0:
         return tilted

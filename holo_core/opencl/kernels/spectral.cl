@@ -56,17 +56,59 @@ inline float2 sample_spectrum(__global const float2 *A, int h, int w, real u, re
     return acc;
 }
 
+/* Centred spectrum A (h, w, FFT order) at continuous bin (u, v), interpolated with TAPS × TAPS
+ * weights of the "exponential of semicircle" kernel exp(β(√(1 - (2t/TAPS)²) - 1)) (Barnett et
+ * al., FINUFFT), read from `es` (ES_TABLE (value, slope) pairs over t in [-TAPS/2, TAPS/2]):
+ * PoCL's exp and sqrt are library calls. Interpolating multiplies the field by the kernel's
+ * Fourier transform, which the caller divides out of the source beforehand (tilt.py); the
+ * source's copies at whole padded periods that it also makes are ~10^-(TAPS-1) weak. */
+#ifdef TAPS
+inline float es_weight(__global const float2 *es, float t)
+{
+    float x = (t + 0.5f * TAPS) * ((float)ES_TABLE / TAPS);
+    int i = (int)floor(x);
+    if (i < 0 || i >= ES_TABLE)
+        return 0.0f;
+    float2 e = es[i];
+    return e.x + (x - i) * e.y;
+}
+
+inline float2 sample_spectrum_es(__global const float2 *A, int h, int w, real u, real v,
+                                 __global const float2 *es)
+{
+    int u0 = (int)floor(u) - TAPS / 2 + 1, v0 = (int)floor(v) - TAPS / 2 + 1;
+    float fu = (float)(u - u0), fv = (float)(v - v0);
+    float wu[TAPS];
+    for (int du = 0; du < TAPS; du++)
+        wu[du] = es_weight(es, fu - du);
+    float2 acc = (float2)(0.0f, 0.0f);
+    for (int dv = 0; dv < TAPS; dv++) {
+        int m = v0 + dv;
+        if (m < -(h / 2) || m > (h - 1) / 2)
+            continue;
+        __global const float2 *row = A + (m < 0 ? m + h : m) * w;
+        float2 sum = (float2)(0.0f, 0.0f);
+        for (int du = 0; du < TAPS; du++) {
+            int n = u0 + du;
+            if (n >= -(w / 2) && n <= (w - 1) / 2)
+                sum += wu[du] * row[n < 0 ? n + w : n];
+        }
+        acc += es_weight(es, fv - dv) * sum;
+    }
+    return acc;
+}
+
 /* Spectrum rotation (Eq. 11): the target spectrum at frequency (fξ, fη) of its (ht, wt) grid
  * is the source spectrum at f = M·(fξ, fη, fζ), times the Jacobian |∂(fx,fy)/∂(fξ,fη)|;
  * waves travelling backwards in either frame are dropped. m: row-major M (target -> source
  * axes). dft, dfs: frequency steps (row, col) of target and source; c*: centre (row, col)
- * indices over the grid size, of source and target; scale: sample areas and the inverse FFT's
- * 1/N. Global size (ht, wt). */
+ * indices over the grid size, of the target (A comes centred); scale: sample areas and the
+ * inverse FFT's 1/N. Global size (ht, wt). Options: -DTAPS=<n> -DES_TABLE=<entries>. */
 __kernel void rotate_spectrum(__global float2 *dst, __global const float2 *A, int hs, int ws,
                               real dft_y, real dft_x, real dfs_y, real dfs_x, real inv_l2,
                               real m00, real m01, real m02, real m10, real m11, real m12,
-                              real m20, real m21, real m22,
-                              real cs_y, real cs_x, real ct_y, real ct_x, float scale)
+                              real m20, real m21, real m22, real ct_y, real ct_x, float scale,
+                              __global const float2 *es)
 {
     int i = get_global_id(0), j = get_global_id(1), ht = get_global_size(0), wt = get_global_size(1);
     int ie = i <= (ht - 1) / 2 ? i : i - ht, jk = j <= (wt - 1) / 2 ? j : j - wt;
@@ -82,12 +124,13 @@ __kernel void rotate_spectrum(__global float2 *dst, __global const float2 *A, in
             real a = m00 - m02 * fk / fz, b = m01 - m02 * fe / fz;
             real c = m10 - m12 * fk / fz, d = m11 - m12 * fe / fz;
             float jac = (float)fabs(a * d - b * c);
-            float2 s = sample_spectrum(A, hs, ws, fx / dfs_x, fy / dfs_y, cs_x, cs_y);
+            float2 s = sample_spectrum_es(A, hs, ws, fx / dfs_x, fy / dfs_y, es);
             v = (scale * jac) * cmul(s, turn(-(jk * ct_x + ie * ct_y)));
         }
     }
     dst[i * wt + j] = v;
 }
+#endif
 
 /* An image from its pupil's spectrum A (n, n, FFT order): pixel i reads the bin (u, v) of its
  * direction (Eq. 22); c: the pupil centre's index over n; scale: the sample area [m²]. */
