@@ -27,6 +27,17 @@ def numpy_sum(pos, amp, shape):
     return out
 
 
+def pairs_in_cones(pos, shape):
+    """Point-pixel pairs inside the points' cones: the pairs the kernel computes (each
+    point's disc of radius cone·|z|, row by row, clipped to the hologram)."""
+    g = Grid(shape, PITCH, LAM)
+    y, x = grid.coords(shape[0], PITCH), grid.coords(shape[1], PITCH)
+    half = np.sqrt(np.clip((g.cone * pos[:, 2:]) ** 2 - (y - pos[:, 1:2]) ** 2, 0, None))
+    lo = np.searchsorted(x, pos[:, :1] - half, "left")
+    hi = np.searchsorted(x, pos[:, :1] + half, "right")
+    return int((hi - lo).sum())
+
+
 def best(f, runs=3):
     times = []
     for _ in range(runs):
@@ -54,12 +65,15 @@ def main():
     t_np, ref = best(lambda: numpy_sum(pos[:few], amp[:few], SHAPE), runs=1)
     sub = point_wave(pos[:few], amp[:few], wavelength=LAM, pitch=PITCH, shape=SHAPE,
                      method="direct")
-    pairs = len(pos) * SHAPE[0] * SHAPE[1]
+    pairs = pairs_in_cones(pos, SHAPE)
     err = np.abs(sub - ref).max() / np.abs(ref).max()
-    rate_np = few * SHAPE[0] * SHAPE[1] / t_np
+    rate_np = pairs_in_cones(pos[:few], SHAPE) / t_np
     print(f"direct sum, {len(pos)} points x {SHAPE[0]}x{SHAPE[1]}: {t_cl:.3f} s, "
-          f"{pairs / t_cl:.3g} pairs/s (target 8e9); float64 NumPy {rate_np:.3g} pairs/s; "
-          f"ratio {pairs / t_cl / rate_np:.0f}x; max relative error {err:.2e} (target 1e-4)")
+          f"{pairs / t_cl:.3g} pairs/s in the cones (target 8e9; "
+          f"{len(pos) * SHAPE[0] * SHAPE[1] / t_cl:.3g} counting every pixel, "
+          f"{pairs / (len(pos) * SHAPE[0] * SHAPE[1]):.0%} of which are in a cone); "
+          f"float64 NumPy {rate_np:.3g} pairs/s; ratio {pairs / t_cl / rate_np:.0f}x; "
+          f"max relative error {err:.2e} (target 1e-4)")
 
     pos, amp = scene(100_000, rng)
     point_wave(pos[:1000], amp[:1000], wavelength=LAM, pitch=PITCH, shape=SHAPE, method="wrp")

@@ -51,13 +51,12 @@ def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0)
                          "singular on the source plane)")
     x0, y0 = validate.pair("offset", offset, "m")
     out_pitch = pitch if out_pitch is None else validate.positive("out_pitch", out_pitch, "m")
+    out_shape = validate.shape2d("out_shape", field.shape if out_shape is None else out_shape)
     src_x0, src_y0 = -(field.shape[1] - 1) / 2 * pitch, -(field.shape[0] - 1) / 2 * pitch
     if not is_device_array(field):
         field, (r0, c0) = grid.support(validate.host_field("field", field))
         src_x0, src_y0 = src_x0 + c0 * pitch, src_y0 + r0 * pitch
     rt, src, from_host = as_device(field)
-    out_shape = src.shape if out_shape is None and not from_host else out_shape
-    out_shape = validate.shape2d("out_shape", out_shape if out_shape is not None else src.shape)
     out_x0 = x0 - (out_shape[1] - 1) / 2 * out_pitch
     out_y0 = y0 - (out_shape[0] - 1) / 2 * out_pitch
     _check_aliasing(src.shape, pitch, (src_x0, src_y0), out_shape, out_pitch, (out_x0, out_y0),

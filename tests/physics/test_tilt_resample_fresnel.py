@@ -5,6 +5,7 @@ import pytest
 from accuracy import FLOAT32_SUM, GAUSSIAN_BEAM, TILT, rel_err
 from beams import gaussian_beam, mesh, rot_x, rot_y
 
+from holo_core.opencl import get_runtime
 from holo_core.propagation import (angular_spectrum, fraunhofer, fresnel, interpolation_matrix,
                                    propagate_to_plane, rayleigh_sommerfeld, resample, tilt)
 
@@ -124,6 +125,18 @@ def test_rayleigh_sommerfeld_kernel_equals_float64_numpy(rng):
     h = np.conj(z / (2 * np.pi * r**2) * (1 / r - 1j * k) * np.exp(1j * k * r))  # backwards
     ref = (h @ field.ravel() * pitch**2).reshape(9, 7)
     assert rel_err(out, ref) <= FLOAT32_SUM, rel_err(out, ref)
+
+
+def test_rayleigh_sommerfeld_defaults_to_the_source_grid(rng):
+    # zero samples are skipped, but the default output stays the whole source grid
+    field = np.zeros((32, 24), complex)
+    field[10:14, 5:9] = rng.normal(size=(4, 4))
+    kw = dict(wavelength=LAM, pitch=1e-6, distance=300e-6)
+    out = rayleigh_sommerfeld(field, **kw)
+    assert out.shape == field.shape
+    assert rel_err(out, rayleigh_sommerfeld(field, **kw, out_shape=field.shape)) == 0
+    device = rayleigh_sommerfeld(get_runtime().to_device(field.astype(np.complex64)), **kw)
+    assert rel_err(device.get(), out) <= FLOAT32_SUM
 
 
 def test_direct_sum_warns_where_it_is_aliased():
