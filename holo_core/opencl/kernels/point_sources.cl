@@ -2,7 +2,8 @@
  *
  * A work item owns a tile of VEC rows (the vector lanes) by SEG columns. For each point the
  * complex log-field psi(x) = ln A(x) + i k (r(x) - |z|) of a row is expanded to second order
- * about the segment centre, exactly (REAL is double where the device has it); along the row
+ * about the segment centre, exactly (the tile's centre phase in REAL, double where the device
+ * has it; each row's difference to it in float); along the row
  * exp(psi) then costs two complex multiplies per pixel: E <- E*D, D <- D*C. PoCL does not
  * vectorise scalar loops with builtins, hence the explicit vector types. The carrier
  * exp(ik|z|) and the amplitude come folded from the host (float64).
@@ -21,23 +22,15 @@
 #define CAT(a, b) CAT_(a, b)
 #ifdef HOLO_FP64
 typedef double real;
-#define REALNAME double
 #else
 typedef float real;
-#define REALNAME float
 #endif
 
 #if VEC == 1
 typedef float floatv;
-typedef real realv;
-#define TO_FLOAT(x) ((float)(x))
-#define TO_REAL(x) ((real)(x))
 #define LANE_ID(c) 0.0f
 #else
 typedef CAT(float, VEC) floatv;
-typedef CAT(REALNAME, VEC) realv;
-#define TO_FLOAT(x) CAT(convert_float, VEC)(x)
-#define TO_REAL(x) CAT(CAT(convert_, REALNAME), VEC)(x)
 #define LANE_ID(c) CAT(vload, VEC)(0, c)
 #endif
 
@@ -112,7 +105,7 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
     real half_seg = (SEG - 1) * (real)0.5 * pitch, half_rows = (VEC - 1) * (real)0.5 * pitch;
     real xc = x0 + col0 * pitch + half_seg;              /* segment centre */
     real yt = y0 + row0 * pitch + half_rows;             /* tile centre row */
-    realv yrow = y0 + (row0 + TO_REAL(LANE_ID(LANES))) * pitch;
+    floatv lane_v = (LANE_ID(LANES) - 0.5f * (VEC - 1)) * (float)pitch;  /* row - tile centre */
     real u0 = -half_seg, du = pitch;
 
     floatv acc_r[SEG][CHANNELS], acc_i[SEG][CHANNELS];
@@ -133,13 +126,17 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
         real ex = fmax(fabs(dxc) - half_seg, (real)0), ey = fmax(fabs(yt - yj) - half_rows, (real)0);
         if (ex * ex + ey * ey > rho_max2)
             continue;                                    /* tile outside the point's cone */
-        realv dy = yrow - yj;
-        realv c2 = dy * dy + zj * zj, r = sqrt(dxc * dxc + c2);
-        realv phase = k * (dxc * dxc + dy * dy) / (r + az);  /* k(r - |z|): the only float64 */
-        phase -= (real)(2 * M_PI) * rint(phase * (real)(0.5 / M_PI));
-        /* psi' and psi'' at the segment centre, in float */
-        floatv inv_r = 1.0f / TO_FLOAT(r), inv_r2 = inv_r * inv_r, c2f = TO_FLOAT(c2);
+        /* k(r - |z|) at the tile's centre in REAL (float64 where the device has it), reduced;
+         * each row adds k(r_l - r_c) = k·v(2·dy_c + v)/(r_l + r_c) in float, v its offset */
+        real dyc = yt - yj, rho2 = dxc * dxc + dyc * dyc, rc = sqrt(rho2 + zj * zj);
+        real pc = k * rho2 / (rc + az);
+        pc -= (real)(2 * M_PI) * rint(pc * (real)(0.5 / M_PI));
         float dx = (float)dxc, kf = (float)k, u = (float)u0, p = (float)pitch;
+        floatv v = lane_v, dy = (float)dyc + v;
+        floatv c2f = dy * dy + (float)(zj * zj), r = sqrt(dx * dx + c2f);
+        floatv phase = (float)pc + kf * (v * (2 * (float)dyc + v)) / (r + (float)rc);
+        /* psi' and psi'' at the segment centre */
+        floatv inv_r = 1.0f / r, inv_r2 = inv_r * inv_r;
         floatv d1r = -NAMP * dx * inv_r2, d1i = kf * dx * inv_r;
         floatv d2r = -NAMP * (c2f - dx * dx) * inv_r2 * inv_r2, d2i = kf * c2f * inv_r2 * inv_r;
         float ud = u * p + p * p / 2;
@@ -153,7 +150,7 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
             a[c] = amp[j * CHANNELS + c];
         floatv er, ei, dr, di, cr, ci, t;
         t = a0 * exp_small(d1r * u + d2r * (u * u / 2));
-        CIS(wrap(TO_FLOAT(phase) + d1i * u + d2i * (u * u / 2)), t, er, ei);
+        CIS(wrap(phase + d1i * u + d2i * (u * u / 2)), t, er, ei);
 #if CHANNELS == 1
         t = er * a[0].x - ei * a[0].y;
         ei = er * a[0].y + ei * a[0].x;
@@ -174,7 +171,7 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
             /* in pixel units, where float is ample for a weight */
             float pix2 = (float)(pitch * pitch), rim2 = (float)(rho_max2 / (pitch * pitch));
             float in2 = (float)inner2 * rim2, band = 1.0f / (rim2 - in2);
-            floatv dy2 = TO_FLOAT(dy * dy) / pix2;
+            floatv dy2 = dy * dy / pix2;
             float xrel = (float)((xj - xc + half_seg) / pitch);
             for (int m = 0; m < SEG; m++) {
                 float dx = (float)m - xrel;
