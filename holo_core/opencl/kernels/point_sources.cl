@@ -171,14 +171,27 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
             /* in pixel units, where float is ample for a weight */
             float pix2 = (float)(pitch * pitch), rim2 = (float)(rho_max2 / (pitch * pitch));
             float in2 = (float)inner2 * rim2, band = 1.0f / (rim2 - in2);
-            floatv dy2 = dy * dy / pix2;
+            floatv ub = (dy * dy / pix2 - in2) * band;   /* u = ub + dx²·band */
             float xrel = (float)((xj - xc + half_seg) / pitch);
-            for (int m = 0; m < SEG; m++) {
-                float dx = (float)m - xrel;
-                floatv u = clamp((dx * dx + dy2 - in2) * band, 0.0f, 1.0f);
-                floatv keep = 1.0f - u * u * (3.0f - 2.0f * u);
-                ADD(m, keep * er, keep * ei);
-                STEP(er, ei, dr, di, cr, ci, t);
+            real near_x = ex, near_y = ey;
+            if (near_x * near_x + near_y * near_y >= inner2 * rho_max2
+                && far_x * far_x + far_y * far_y <= rho_max2) {
+                /* the tile lies within the rim: u in [0, 1] without clamping */
+                for (int m = 0; m < SEG; m++) {
+                    float dx = (float)m - xrel;
+                    floatv u = ub + dx * dx * band;
+                    floatv keep = (1.0f - u) * (1.0f - u) * (1.0f + 2.0f * u);
+                    ADD(m, keep * er, keep * ei);
+                    STEP(er, ei, dr, di, cr, ci, t);
+                }
+            } else {
+                for (int m = 0; m < SEG; m++) {
+                    float dx = (float)m - xrel;
+                    floatv u = clamp(ub + dx * dx * band, 0.0f, 1.0f);
+                    floatv keep = (1.0f - u) * (1.0f - u) * (1.0f + 2.0f * u);
+                    ADD(m, keep * er, keep * ei);
+                    STEP(er, ei, dr, di, cr, ci, t);
+                }
             }
         }
     }
