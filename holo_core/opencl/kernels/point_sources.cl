@@ -75,6 +75,17 @@ static floatv exp_small(floatv x)       /* exp(x), |x| << 1 (a relative amplitud
         dr = t;                           \
     } while (0)
 
+/* the pixels of a segment in the cone's rim, weighted 1 - smoothstep(u) = (1-u)²(1+2u), where
+ * the arguments give u from the pixel's column offset dx to the point */
+#define RIM_LOOP(...)                                                  \
+    for (int m = 0; m < SEG; m++) {                                    \
+        float dx = (float)m - xrel;                                    \
+        floatv u = __VA_ARGS__;                                        \
+        floatv keep = (1.0f - u) * (1.0f - u) * (1.0f + 2.0f * u);     \
+        ADD(m, keep * er, keep * ei);                                  \
+        STEP(er, ei, dr, di, cr, ci, t);                               \
+    }
+
 /* acc[m][c] += v * amplitude c (with one channel the amplitude is folded into v already) */
 #if CHANNELS == 1
 #define ADD(m, vr, vi)           \
@@ -176,22 +187,9 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
             real near_x = ex, near_y = ey;
             if (near_x * near_x + near_y * near_y >= inner2 * rho_max2
                 && far_x * far_x + far_y * far_y <= rho_max2) {
-                /* the tile lies within the rim: u in [0, 1] without clamping */
-                for (int m = 0; m < SEG; m++) {
-                    float dx = (float)m - xrel;
-                    floatv u = ub + dx * dx * band;
-                    floatv keep = (1.0f - u) * (1.0f - u) * (1.0f + 2.0f * u);
-                    ADD(m, keep * er, keep * ei);
-                    STEP(er, ei, dr, di, cr, ci, t);
-                }
+                RIM_LOOP(ub + dx * dx * band)   /* the tile lies within the rim: u in [0, 1] */
             } else {
-                for (int m = 0; m < SEG; m++) {
-                    float dx = (float)m - xrel;
-                    floatv u = clamp(ub + dx * dx * band, 0.0f, 1.0f);
-                    floatv keep = (1.0f - u) * (1.0f - u) * (1.0f + 2.0f * u);
-                    ADD(m, keep * er, keep * ei);
-                    STEP(er, ei, dr, di, cr, ci, t);
-                }
+                RIM_LOOP(clamp(ub + dx * dx * band, 0.0f, 1.0f))
             }
         }
     }
