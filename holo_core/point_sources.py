@@ -36,7 +36,7 @@ WRP_WIDEN, WRP_RIM = 1.5, 0.17  # on a recording plane the cone reaches 1.5x the
 CPU_LANES = 16       # rows per work item on CPU devices (two AVX2 or one AVX-512 register)
 PAIRS_PER_LAUNCH = 2e9  # point-pixel pairs per kernel launch, between progress reports
 MIN_CONE_PIXELS = 32  # a recording plane keeps this many pixels of cone radius to its points
-DIRECT_RATE = 3e9    # pairs/s of the direct kernel at 32-column segments (the cost model of
+DIRECT_RATE = 3.3e9  # pairs/s of the direct kernel at 32-column segments (the cost model of
                      # the automatic choice; shorter segments are proportionally slower) ...
 TILE_CHECKS = 3e8    # ... plus its point-tile cone tests per second (it bins nothing)
 BINNED_RATE = 6e8     # pairs/s on recording planes (small cones: setup-bound)
