@@ -17,6 +17,7 @@ from . import validate
 from .propagation import propagate_to_plane
 
 MAX_SLANT = 30.0  # visibility: a surface's depth slope (tan of its incidence) is capped here (88°)
+SAMPLING_STREAM = 0x5A4D  # seeds mesh sampling apart from the phases (see _sample)
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -68,7 +69,9 @@ def _sample(mesh: Mesh, spacing, seed, max_points):
     spacing = validate.positive("spacing", spacing, "m")
     areas = mesh.areas()
     n = int(min(max_points, max(1, round(areas.sum() / spacing**2))))
-    rng = np.random.default_rng(seed)
+    # a stream of its own: record_points draws the phases from default_rng(seed), and phases
+    # that follow the sampling's numbers would make each triangle's points coherent
+    rng = np.random.default_rng([SAMPLING_STREAM, seed])
     tri = rng.choice(len(areas), size=n, p=areas / areas.sum())
     r1, r2 = rng.random(n), rng.random(n)
     s = np.sqrt(r1)

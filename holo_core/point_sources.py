@@ -128,7 +128,7 @@ def _points(positions, amplitudes):
     if amp.ndim not in (1, 2) or len(amp) != len(pos) or (amp.ndim == 2 and not amp.shape[1]):
         raise ValueError(f"amplitudes must be (N,) or (N, C) with N = {len(pos)} points; "
                          f"got shape {amp.shape}")
-    amp = amp.reshape(len(pos), -1)
+    amp = amp[:, None] if amp.ndim == 1 else amp
     if not (np.isfinite(pos).all() and np.isfinite(amp).all()):
         raise ValueError("positions and amplitudes must be finite")
     if len(pos) and pos[:, 2].max() >= 0:
@@ -330,12 +330,33 @@ def _chirp(shape, g: Grid) -> np.ndarray:
     """(w, g) packed as complex: the transfer function from a recording plane at distance d is
     w·exp(ikd - i·d·g) (the stable form of exp(i2πd·fz)), w the hologram's cone as angles and
     the inverse FFT's 1/N; evanescent waves have w = 0."""
+    w, f2, fz = _cone_in_angle(shape, g)
+    return w + 1j * (2 * np.pi * f2 / (1 / g.wavelength + fz))
+
+
+def _cone_in_angle(shape, g: Grid):
+    """(w, f², fz) on the FFT grid of ``shape``: w the cone's weight at each direction (the
+    soft rim of :func:`cone_weight` in tan θ) over the inverse FFT's N, 0 for evanescent waves."""
     fy, fx = grid.freqs(shape[0], g.pitch)[:, None], grid.freqs(shape[1], g.pitch)[None, :]
     f2 = fx * fx + fy * fy
     fz2 = 1 / g.wavelength**2 - f2
-    fz = np.sqrt(np.maximum(fz2, 0))
     w = np.where(fz2 > 0, cone_weight(f2 / np.maximum(fz2, 1e-300), g.cone**2, g.rim), 0)
-    return w / (shape[0] * shape[1]) + 1j * (2 * np.pi * f2 / (1 / g.wavelength + fz))
+    return w / (shape[0] * shape[1]), f2, np.sqrt(np.maximum(fz2, 0))
+
+
+def cone_filter(field, *, wavelength, pitch, band=None):
+    """``field`` (H, W) on the hologram (``pitch`` [m], ``wavelength`` [m]) limited to the
+    directions the points' cones light (``band`` as for :func:`point_wave`), with the same soft
+    rim in angle: for waves of other emitters (textured primitives) recorded with the points.
+    Returns a complex64 NumPy array."""
+    rt = get_runtime()
+    dev = rt.to_device(np.asarray(field), np.complex64)
+    g = Grid(dev.shape, *reversed(grid.wave(wavelength, pitch)))
+    if band is not None:
+        g = g._replace(fill=band * 2 * g.pitch / g.wavelength)
+    padded = grid.padded_shape(dev.shape, 2)
+    w, _ = cached(rt, ("cone-filter", padded, g), lambda: (_cone_in_angle(padded, g)[0], ()))
+    return convolve(rt, dev, w).get()
 
 
 def _bins(rt, pos, g: Grid, seg):

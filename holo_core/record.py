@@ -13,10 +13,11 @@ import numpy as np
 
 from . import jobs, validate
 from .hologram_io import Hologram
-from .point_sources import point_wave
+from .point_sources import cone_filter, point_wave
 from .propagation import grid
 
 DEFAULT_WAVELENGTHS = (633e-9, 532e-9, 473e-9)  # HeNe red, Nd:YAG green, DPSS blue [m]
+MIN_OBLIQUITY = 0.1  # a primitive seen more edge-on than this (cos) gets no brighter
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -268,22 +269,26 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
     shape, shortest = s.shape, min(lambdas)
     prims = [em.Primitive(corners=plate.to_plate(p.corners), uvs=p.uvs, texture=p.texture)
              for p in prims]
-    # intensity per surface sample, scaled to the points' density 1/spacing²
-    gains = [(em.surface_pitch(p, wavelength=shortest, pitch=s.pitch) / s.spacing) ** 2
-             for p in prims]
-    cover_prims = [1.0 if view is None else
-                   float(em.facing(view[0], frame[1][None], frame[0][:, 2][None]))
-                   for frame in (p.frame() for p in prims)]
+    # a surface field u radiates like points of density ρ and amplitude A when u = A·√ρ·λ/q
+    # (q² per sample, the 1/λ of Eq. 7) over the obliquity cos α of Eq. 7 towards the viewer
+    # (the camera, else the plate's normal), which isotropic points do not have
+    frames = [p.frame() for p in prims]
+    pitches = [em.surface_pitch(p, wavelength=shortest, pitch=s.pitch) for p in prims]
+    toward = [abs(m[2, 2]) if view is None else
+              float(em.facing(view[0], centre[None], m[:, 2][None])[0]) for m, centre in frames]
+    cover_prims = [1.0 if view is None else cos for cos in toward]
 
     def triangle_waves(c, lam):
         total = np.zeros(shape, np.complex128)
         z = channels[c] == "Z"  # the depth partner: unit intensity, like the points
-        for i, (p, gain, cov) in enumerate(zip(prims, gains, cover_prims)):
+        for i, (p, q, cos, cov) in enumerate(zip(prims, pitches, toward, cover_prims)):
+            gain = (lam / (q * s.spacing * max(cos, MIN_OBLIQUITY))) ** 2
             tex = em.depth_texture(p.texture) * gain * cov if z else p.texture * gain
             total += em.primitive_wave(replace(p, texture=tex), wavelength=lam, pitch=s.pitch,
                                        shape=shape, channel=0 if z else c,
                                        seed=seed + 7919 * (i + 1), sampled_for=shortest)
-        return total
+        # the points' cone, in angle: the band the off-axis reference leaves free
+        return cone_filter(total, wavelength=lam, pitch=s.pitch, band=s.band)
 
     reference = Reference(angle=s.reference_angle)
     return record_points(plate.to_plate(pos), np.concatenate(colours, 1), shape=shape,
