@@ -278,17 +278,39 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
               float(em.facing(view[0], centre[None], m[:, 2][None])[0]) for m, centre in frames]
     cover_prims = [1.0 if view is None else cos for cos in toward]
 
-    def triangle_waves(c, lam):
-        total = np.zeros(shape, np.complex128)
-        z = channels[c] == "Z"  # the depth partner: unit intensity, like the points
-        for i, (p, q, cos, cov) in enumerate(zip(prims, pitches, toward, cover_prims)):
-            gain = (lam / (q * s.spacing * max(cos, MIN_OBLIQUITY))) ** 2
-            tex = em.depth_texture(p.texture) * gain * cov if z else p.texture * gain
-            total += em.primitive_wave(replace(p, texture=tex), wavelength=lam, pitch=s.pitch,
-                                       shape=shape, channel=0 if z else c,
-                                       seed=seed + 7919 * (i + 1), sampled_for=shortest)
+    def intensities(i, p, lam, chans):
+        """Per channel in ``chans`` (all at ``lam`` [m]): the primitive's texture as surface
+        intensity (the depth partner: unit intensity times its coverage)."""
+        gain = (lam / (pitches[i] * s.spacing * max(toward[i], MIN_OBLIQUITY))) ** 2
+        return [em.depth_texture(p.texture)[..., 0] * gain * cover_prims[i]
+                if channels[c] == "Z" else p.texture[..., c] * gain for c in chans]
+
+    def waves_at(lam):
+        """The triangles' waves of every channel at ``lam`` [m]. A single-colour primitive's
+        channels differ only in amplitude: one propagation serves them all."""
+        chans = [c for c, other in enumerate(lambdas) if other == lam]
+        totals = np.zeros((len(chans),) + shape, np.complex128)
+        for i, p in enumerate(prims):
+            texs = intensities(i, p, lam, chans)
+            flat = all(t.shape[:2] == (1, 1) for t in texs)
+            for k, tex in enumerate([np.ones((1, 1))] if flat else texs):
+                wave = em.primitive_wave(replace(p, texture=tex[..., None]), wavelength=lam,
+                                         pitch=s.pitch, shape=shape, seed=seed + 7919 * (i + 1),
+                                         sampled_for=shortest)
+                if flat:
+                    totals += np.sqrt([t[0, 0] for t in texs])[:, None, None] * wave
+                else:
+                    totals[k] += wave
         # the points' cone, in angle: the band the off-axis reference leaves free
-        return cone_filter(total, wavelength=lam, pitch=s.pitch, band=s.band)
+        return {c: cone_filter(t, wavelength=lam, pitch=s.pitch, band=s.band)
+                for c, t in zip(chans, totals)}
+
+    done = {}
+
+    def triangle_waves(c, lam):
+        if lam not in done:
+            done[lam] = waves_at(lam)
+        return done[lam].pop(c)
 
     reference = Reference(angle=s.reference_angle)
     return record_points(plate.to_plate(pos), np.concatenate(colours, 1), shape=shape,
