@@ -17,6 +17,8 @@ from . import validate
 from .propagation import propagate_to_plane
 
 MAX_SLANT = 30.0  # visibility: a surface's depth slope (tan of its incidence) is capped here (88°)
+MIN_SEEN = 0.3  # a primitive is recorded when the camera sees this share of its samples
+                # (a cube: its hidden faces 0-0.15 through their rims, a grazing seen face 0.47)
 SAMPLING_STREAM = 0x5A4D  # seeds mesh sampling apart from the phases (see _sample)
 
 
@@ -251,9 +253,12 @@ def mesh_primitives(mesh: Mesh, *, visible_to=None, spacing=None) -> list[Primit
     by the mean of their corners' colours; with a camera ``visible_to``, only those it sees
     (tested on points ``spacing`` [m] apart, see :func:`visible_from`)."""
     keep = np.arange(len(mesh.triangles))
-    if visible_to is not None:
+    if visible_to is not None:  # seen: most of its samples (a hidden face's rim passes)
         tri, _, pos = _sample(mesh, spacing, 0, 2_000_000)
-        keep = np.unique(tri[visible_from(visible_to, pos, spacing, mesh.normals()[tri])])
+        seen = visible_from(visible_to, pos, spacing, mesh.normals()[tri])
+        share = np.bincount(tri[seen], minlength=len(keep)) / \
+            np.maximum(np.bincount(tri, minlength=len(keep)), 1)
+        keep = np.flatnonzero(share >= MIN_SEEN)
     prims = []
     for t in keep:
         idx = mesh.triangles[t]

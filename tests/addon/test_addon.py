@@ -185,8 +185,9 @@ def _raster_alpha_and_depth(scene, tmp_path):
     return alpha, _read_exr(tmp_path / "depth.exr")["R"]
 
 
-@pytest.mark.parametrize("shape", ["sphere", "cube"])
-def test_silhouette_and_depth_match_blenders_raster(empty_scene, tmp_path, shape):
+@pytest.mark.parametrize("shape, emitter", [("sphere", "POINTS"), ("cube", "POINTS"),
+                                            ("cube", "TRIANGLES")])
+def test_silhouette_and_depth_match_blenders_raster(empty_scene, tmp_path, shape, emitter):
     """A holographic object's pass against Blender's render of the same object from the same
     pinhole camera: silhouette IoU >= 0.9 (alpha > 0.5 both), and the median depth error
     over pixels both cover <= 1 % of the object's depth extent in Blender's Depth pass."""
@@ -200,7 +201,7 @@ def test_silhouette_and_depth_match_blenders_raster(empty_scene, tmp_path, shape
     else:  # straight edges and corners, three faces at different slants
         bpy.ops.mesh.primitive_cube_add(size=0.45, rotation=(0.5, 0.3, 0.2))
     obj = bpy.context.object
-    obj.holo.emitter = "POINTS"
+    obj.holo.emitter = emitter  # TRIANGLES: the cube's twelve, as textured primitives
     bpy.ops.object.camera_add(location=(0.8, -2.6, 0.9))
     cam = bpy.context.object
     point_at(cam, (0, 0, 0))
@@ -223,7 +224,7 @@ def test_silhouette_and_depth_match_blenders_raster(empty_scene, tmp_path, shape
     extent = np.ptp(depth[theirs & (depth < 1e9)])
     both = mine & theirs & (depth < 1e9)
     err = np.median(np.abs(holo["ViewLayer.Depth.Z"][both] - depth[both])) / extent
-    print(f"{shape}: silhouette IoU {iou:.3f}, median depth error {err:.2%} of {extent:.3f} m")
+    print(f"{shape} {emitter}: silhouette IoU {iou:.3f}, median depth error {err:.2%} of {extent:.3f} m")
     assert err <= 0.01, f"median depth error {err:.2%} of the depth extent {extent:.3f} m"
 
 
