@@ -6,6 +6,7 @@ One hologram is recorded per wavelength of the same scene (Sect. VII-B).
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass, replace
 
@@ -18,6 +19,10 @@ from .propagation import grid
 
 DEFAULT_WAVELENGTHS = (633e-9, 532e-9, 473e-9)  # HeNe red, Nd:YAG green, DPSS blue [m]
 MIN_OBLIQUITY = 0.1  # a primitive seen more edge-on than this (cos) gets no brighter
+ROTATION_SECONDS = 2e-7  # a primitive's rotation and propagation per padded hologram sample
+                         # and wavelength (2-core CPU: 0.4-0.9 s at 1024²) ...
+SLOW_TRIANGLES = 60.0    # ... and the estimate [s] above which the user is warned
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -260,6 +265,12 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
         m, visible_to=camera if cull else None, spacing=s.spacing)]
     if prims:
         density = 1 / s.spacing**2
+        seconds = len(prims) * 2 * math.prod(grid.padded_shape(s.shape, 2)) * ROTATION_SECONDS
+        (log.warning if seconds > SLOW_TRIANGLES else log.info)(
+            "triangles: %d primitives, about %.0f s to record on a 2-core CPU (a rotation "
+            "and a propagation per primitive and wavelength); points record tessellated "
+            "meshes much faster",
+            len(prims), seconds)
     rgb = np.asarray(rgb, np.float64).reshape(len(pos), 3)
     lambdas, channels, colours = [s.wavelength] * 3, ["R", "G", "B"], [rgb]
     if depth:
