@@ -95,13 +95,7 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
     -------
     Complex64 (rows, cols) field, or (C, rows, cols) for (N, C) amplitudes.
     """
-    g = Grid(validate.shape2d("shape", shape), *reversed(grid.wave(wavelength, pitch)))
-    if band is not None:
-        most = CONE_FILL * g.wavelength / (2 * g.pitch)
-        if not 0 < band <= most * (1 + 1e-9):
-            raise ValueError(f"band must be in (0, {most:.4g}] (sin θ the pitch samples); "
-                             f"got {band!r}")
-        g = g._replace(fill=band * 2 * g.pitch / g.wavelength)
+    g = _grid(validate.shape2d("shape", shape), wavelength, pitch, band)
     pos, amp = _points(positions, amplitudes)
     if method not in ("auto", "direct", "wrp"):
         raise ValueError(f"method must be 'auto', 'direct' or 'wrp'; got {method!r}")
@@ -118,6 +112,18 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
     if np.ndim(amplitudes) == 1:
         out = out.reshape(g.shape)
     return out if as_device else out.get()
+
+
+def _grid(shape, wavelength, pitch, band) -> Grid:
+    """The hologram's Grid, its cone narrowed to sin θ = ``band`` when given (checked)."""
+    g = Grid(shape, *reversed(grid.wave(wavelength, pitch)))
+    if band is None:
+        return g
+    most = CONE_FILL * g.wavelength / (2 * g.pitch)
+    if not 0 < band <= most * (1 + 1e-9):
+        raise ValueError(f"band must be in (0, {most:.4g}] (sin θ the pitch samples); "
+                         f"got {band!r}")
+    return g._replace(fill=band * 2 * g.pitch / g.wavelength)
 
 
 def _points(positions, amplitudes):
@@ -351,9 +357,7 @@ def cone_filter(field, *, wavelength, pitch, band=None):
     Returns a complex64 NumPy array."""
     rt = get_runtime()
     dev = rt.to_device(np.asarray(field), np.complex64)
-    g = Grid(dev.shape, *reversed(grid.wave(wavelength, pitch)))
-    if band is not None:
-        g = g._replace(fill=band * 2 * g.pitch / g.wavelength)
+    g = _grid(dev.shape, wavelength, pitch, band)
     padded = grid.padded_shape(dev.shape, 2)
     w, _ = cached(rt, ("cone-filter", padded, g), lambda: (_cone_in_angle(padded, g)[0], ()))
     return convolve(rt, dev, w).get()

@@ -261,25 +261,40 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
     # that its image is the projected area covered (a tilted surface holds more emitters)
     cover = np.ones(len(pos)) if normals is None or camera is None else \
         em.facing(camera.position, pos, normals)
-    prims = [p for m in triangles for p in em.mesh_primitives(
-        m, visible_to=camera if cull else None, spacing=s.spacing)]
+    prims = [replace(p, corners=plate.to_plate(p.corners)) for m in triangles
+             for p in em.mesh_primitives(m, visible_to=camera if cull else None,
+                                         spacing=s.spacing)]  # in the plate's frame
     if prims:
         density = 1 / s.spacing**2
-        seconds = len(prims) * 2 * math.prod(grid.padded_shape(s.shape, 2)) * ROTATION_SECONDS
-        (log.warning if seconds > SLOW_TRIANGLES else log.info)(
-            "triangles: %d primitives, about %.0f s to record on a 2-core CPU (a rotation "
-            "and a propagation per primitive and wavelength); points record tessellated "
-            "meshes much faster",
-            len(prims), seconds)
     rgb = np.asarray(rgb, np.float64).reshape(len(pos), 3)
     lambdas, channels, colours = [s.wavelength] * 3, ["R", "G", "B"], [rgb]
     if depth:
         lambdas.append(s.depth_wavelength)
         channels.append("Z")
         colours.append(cover[:, None])
-    shape, shortest = s.shape, min(lambdas)
-    prims = [em.Primitive(corners=plate.to_plate(p.corners), uvs=p.uvs, texture=p.texture)
-             for p in prims]
+    reference = Reference(angle=s.reference_angle)
+    return record_points(plate.to_plate(pos), np.concatenate(colours, 1), shape=s.shape,
+                         pitch=s.pitch, wavelengths=tuple(lambdas), seed=seed,
+                         reference=reference, plate=plate.matrix_world, method=method,
+                         band=s.band, channels=channels, point_density=density,
+                         extra_wave=_triangle_waves(prims, s, lambdas, channels, view, seed)
+                         if prims else None, progress=progress,
+                         bounds=np.array([local.min(0), local.max(0)]))
+
+
+def _triangle_waves(prims, s, lambdas, channels, view, seed):
+    """``record_points``' ``extra_wave`` for textured primitives (in the plate's frame) recorded
+    with the sampling ``s``: per channel (``channels``, at ``lambdas`` [m]) their summed wave;
+    ``view`` = (camera position [m], pixel angle [rad]) or None. One pass per wavelength serves
+    all its channels."""
+    from . import emitters as em
+    shortest = min(lambdas)
+    seconds = len(prims) * len(set(lambdas)) * math.prod(grid.padded_shape(s.shape, 2)) \
+        * ROTATION_SECONDS
+    (log.warning if seconds > SLOW_TRIANGLES else log.info)(
+        "triangles: %d primitives, about %.0f s to record on a 2-core CPU (a rotation and a "
+        "propagation per primitive and wavelength); points record tessellated meshes much "
+        "faster", len(prims), seconds)
     # a surface field u radiates like points of density ρ and amplitude A when u = A·√ρ·λ/q
     # (q² per sample, the 1/λ of Eq. 7) over the obliquity cos α of Eq. 7 towards the viewer
     # (the camera, else the plate's normal), which isotropic points do not have
@@ -287,26 +302,26 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
     pitches = [em.surface_pitch(p, wavelength=shortest, pitch=s.pitch) for p in prims]
     toward = [abs(m[2, 2]) if view is None else
               float(em.facing(view[0], centre[None], m[:, 2][None])[0]) for m, centre in frames]
-    cover_prims = [1.0 if view is None else cos for cos in toward]
 
     def intensities(i, p, lam, chans):
         """Per channel in ``chans`` (all at ``lam`` [m]): the primitive's texture as surface
-        intensity (the depth partner: unit intensity times its coverage)."""
+        intensity (the depth partner: unit intensity times its coverage seen by the camera)."""
         gain = (lam / (pitches[i] * s.spacing * max(toward[i], MIN_OBLIQUITY))) ** 2
-        return [em.depth_texture(p.texture)[..., 0] * gain * cover_prims[i]
+        cover = 1.0 if view is None else toward[i]
+        return [em.depth_texture(p.texture)[..., 0] * gain * cover
                 if channels[c] == "Z" else p.texture[..., c] * gain for c in chans]
 
     def waves_at(lam):
-        """The triangles' waves of every channel at ``lam`` [m]. A single-colour primitive's
-        channels differ only in amplitude: one propagation serves them all."""
+        """The waves of every channel at ``lam`` [m]. A single-colour primitive's channels
+        differ only in amplitude: one propagation serves them all."""
         chans = [c for c, other in enumerate(lambdas) if other == lam]
-        totals = np.zeros((len(chans),) + shape, np.complex128)
+        totals = np.zeros((len(chans),) + s.shape, np.complex128)
         for i, p in enumerate(prims):
             texs = intensities(i, p, lam, chans)
             flat = all(t.shape[:2] == (1, 1) for t in texs)
             for k, tex in enumerate([np.ones((1, 1))] if flat else texs):
                 wave = em.primitive_wave(replace(p, texture=tex[..., None]), wavelength=lam,
-                                         pitch=s.pitch, shape=shape, seed=seed + 7919 * (i + 1),
+                                         pitch=s.pitch, shape=s.shape, seed=seed + 7919 * (i + 1),
                                          sampled_for=shortest)
                 if flat:
                     totals += np.sqrt([t[0, 0] for t in texs])[:, None, None] * wave
@@ -318,15 +333,8 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
 
     done = {}
 
-    def triangle_waves(c, lam):
+    def wave(c, lam):
         if lam not in done:
             done[lam] = waves_at(lam)
         return done[lam].pop(c)
-
-    reference = Reference(angle=s.reference_angle)
-    return record_points(plate.to_plate(pos), np.concatenate(colours, 1), shape=shape,
-                         pitch=s.pitch, wavelengths=tuple(lambdas), seed=seed,
-                         reference=reference, plate=plate.matrix_world, method=method,
-                         band=s.band, channels=channels, point_density=density,
-                         extra_wave=triangle_waves if prims else None, progress=progress,
-                         bounds=np.array([local.min(0), local.max(0)]))
+    return wave

@@ -146,14 +146,14 @@ def propagate_to_plane(field, *, wavelength, pitch, rotation, position, padding=
     if p.shape != (3,) or not np.isfinite(p).all():
         raise ValueError(f"position must be 3 finite coordinates [m]; got {position!r}")
     x0, y0, z = m.T @ p
-    tilted = field
+    rt, tilted, from_host = as_device(field)  # both stages on the device, one upload
     if out_shape is not None or out_pitch is not None or not np.allclose(m, np.eye(3), atol=1e-12):
         # also without a tilt: the interpolated spectrum places a small field in a large grid
         # without the wrap-around of resampling on the small grid
-        tilted = tilt(field, wavelength=wavelength, pitch=pitch, rotation=m, padding=padding,
+        tilted = tilt(tilted, wavelength=wavelength, pitch=pitch, rotation=m, padding=padding,
                       out_shape=out_shape, out_pitch=out_pitch)
         pitch = out_pitch or pitch
-    if z == 0 and x0 == 0 and y0 == 0:
-        return tilted
-    return angular_spectrum(tilted, wavelength=wavelength, pitch=pitch, distance=z,
-                            offset=(x0, y0), padding=padding)
+    if z != 0 or x0 != 0 or y0 != 0:
+        tilted = angular_spectrum(tilted, wavelength=wavelength, pitch=pitch, distance=z,
+                                  offset=(x0, y0), padding=padding)
+    return like_input(tilted, from_host)
