@@ -1,55 +1,29 @@
 """Operators: record_hologram, render_pass, setup_compositing, render.
 
-In the interface the work runs on a worker thread that never touches bpy: it posts progress
-to a queue that a modal timer drains (progress bar, header text); Esc sets an event the
-worker's progress callback checks. ``execute()`` (``blender --background``, scripts) runs the
-same work synchronously. Errors reach the user through ``self.report``.
+The work runs in a worker process (:mod:`holo_core.worker`; no OpenCL in Blender's process). In
+the interface a modal timer drains its messages (progress bar, status text, warnings as they
+arise) while every other event passes through, so Blender stays usable; Esc kills the worker.
+``execute()`` (``blender --background``, scripts) waits for the same worker. Errors, a crashed
+or killed worker included, reach the user through ``self.report``.
 """
 
 from __future__ import annotations
 
 import logging
-import queue
-import threading
 
 import bpy
 
-from holo_core import jobs
 from holo_core.hologram_io import HologramFileError
+from holo_core.worker import WorkerError
 
 from . import compositing, pipeline
 from .scene_export import ExportError
 
-USER_ERRORS = (ExportError, HologramFileError, ValueError, OSError)
+USER_ERRORS = (ExportError, HologramFileError, ValueError, OSError, WorkerError)
 
 
-class _Collect(logging.Handler):
-    """Keeps holo_core's log records of one run, to report them to the user."""
-
-    def __init__(self):
-        super().__init__(logging.INFO)
-        self.records = []
-
-    def emit(self, record):
-        self.records.append(record)
-
-
-def _report_log(op, records):
-    for r in records:
-        op.report({"WARNING"} if r.levelno >= logging.WARNING else {"INFO"}, r.getMessage())
-
-
-def _run_logged(job, progress):
-    handler = _Collect()
-    core = logging.getLogger("holo_core")
-    core.addHandler(handler)
-    level = core.level
-    core.setLevel(min(level or logging.INFO, logging.INFO))
-    try:
-        return pipeline.run(job, progress), handler.records
-    finally:
-        core.removeHandler(handler)
-        core.setLevel(level)
+def _report_log(op, level, text):
+    op.report({"WARNING"} if level >= logging.WARNING else {"INFO"}, text)
 
 
 class _PipelineOperator:
@@ -58,6 +32,7 @@ class _PipelineOperator:
 
     render = True
     _timer = None
+    _worker = None
 
     @classmethod
     def poll(cls, context):
@@ -81,13 +56,13 @@ class _PipelineOperator:
         wm = context.window_manager
         wm.progress_begin(0, 1000)
         try:
-            outcome, records = _run_logged(job, lambda f: wm.progress_update(int(f * 1000)))
+            outcome = pipeline.run(job, lambda f: wm.progress_update(int(f * 1000)),
+                                   lambda level, text: _report_log(self, level, text))
         except USER_ERRORS as e:
             self.report({"ERROR"}, f"{self.bl_label} failed: {e}")
             return {"CANCELLED"}
         finally:
             wm.progress_end()
-        _report_log(self, records)
         return self._done(context, job, outcome)
 
     def invoke(self, context, event):
@@ -96,59 +71,54 @@ class _PipelineOperator:
         job = self._prepare(context)
         if job is None:
             return {"CANCELLED"}
-        self._queue, self._cancel = queue.SimpleQueue(), threading.Event()
+        try:
+            self._worker = pipeline.start(job)
+        except OSError as e:
+            self.report({"ERROR"}, f"{self.bl_label}: the worker process did not start: {e}")
+            return {"CANCELLED"}
         self._job = job
-
-        def progress(f):
-            if self._cancel.is_set():
-                raise jobs.Cancelled()
-            self._queue.put(("progress", f))
-
-        def work():
-            try:
-                self._queue.put(("done", _run_logged(job, progress)))
-            except jobs.Cancelled:
-                self._queue.put(("cancelled", None))
-            except Exception as e:  # reported on the main thread, never lost
-                self._queue.put(("error", e))
-
-        self._thread = threading.Thread(target=work, name="holo", daemon=True)
-        self._thread.start()
         wm = context.window_manager
-        self._timer = wm.event_timer_add(0.2, window=context.window)
+        self._timer = wm.event_timer_add(0.1, window=context.window)
         wm.progress_begin(0, 1000)
         wm.modal_handler_add(self)
+        context.workspace.status_text_set(f"Holo: {self.bl_label} (Esc to cancel)")
         return {"RUNNING_MODAL"}
 
     def modal(self, context, event):
-        if event.type == "ESC":
-            self._cancel.set()
-            context.workspace.status_text_set("Holo: cancelling…")
-        if event.type != "TIMER":
-            return {"RUNNING_MODAL"}
+        if event.type == "ESC" and event.value == "PRESS":
+            self.cancel(context)
+            self.report({"WARNING"}, f"{self.bl_label} cancelled; earlier results kept")
+            return {"CANCELLED"}
+        if event.type != "TIMER" or event.timer is not self._timer:
+            return {"PASS_THROUGH"}  # the interface stays usable while the worker runs
         wm = context.window_manager
-        while not self._queue.empty():
-            kind, value = self._queue.get()
+        for kind, value in self._worker.poll():
             if kind == "progress":
                 wm.progress_update(int(value * 1000))
                 context.workspace.status_text_set(f"Holo: {self.bl_label} {value:.0%} "
                                                   f"(Esc to cancel)")
-                continue
-            self._end(context)
-            if kind == "cancelled":
-                self.report({"WARNING"}, f"{self.bl_label} cancelled; earlier results kept")
-                return {"CANCELLED"}
-            if kind == "error":
+            elif kind == "log":
+                _report_log(self, *value)
+            elif kind == "failed":
+                self._end(context)
                 self.report({"ERROR"}, f"{self.bl_label} failed: {value}")
                 return {"CANCELLED"}
-            outcome, records = value
-            _report_log(self, records)
-            return self._done(context, self._job, outcome)
-        return {"RUNNING_MODAL"}
+            else:
+                self._end(context)
+                return self._done(context, self._job, pipeline.outcome(self._job, value))
+        return {"PASS_THROUGH"}
+
+    def cancel(self, context):
+        """Esc, or Blender ending the operator (a file loaded, the window closed)."""
+        if self._worker is not None:
+            self._worker.cancel()
+        if self._timer is not None:
+            self._end(context)
 
     def _end(self, context):
         wm = context.window_manager
         wm.event_timer_remove(self._timer)
+        self._timer = None
         wm.progress_end()
         context.workspace.status_text_set(None)
 

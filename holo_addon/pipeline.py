@@ -1,30 +1,29 @@
-"""The holographic pipeline for a scene: prepare on Blender's main thread, run anywhere.
+"""The holographic pipeline for a scene: prepare on Blender's main thread, compute in a worker.
 
-:func:`prepare` reads the scene into a :class:`Job` of plain data; :func:`run` records (unless
-the plate's hologram is current) and renders the holographic pass without touching bpy, so it
-can run on a worker thread; :func:`apply` stores the results in the scene. Nothing is written
-until every stage has finished, and each file is written atomically, so a failed or cancelled
-run leaves earlier holograms and passes as they were.
+:func:`prepare` reads the scene into a :class:`Job` of plain data; :func:`start` hands it to a
+worker process (:mod:`holo_core.worker`: no OpenCL driver is ever loaded into Blender) that
+records (unless the plate's hologram is current) and renders the holographic pass; :func:`run`
+waits for it; :func:`apply` stores the results in the scene. Nothing is written until every
+stage has finished, and each file is written atomically, so a failed, killed or cancelled run
+leaves earlier holograms and passes as they were.
 """
 
 from __future__ import annotations
 
 import logging
 import os
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import bpy
 
-import holo_core
-from holo_core import jobs
-from holo_core.hologram_io import read_hologram, write_hologram
-from holo_core.image_files import write_atomic
+from holo_core import jobs, worker
+from holo_core.hologram_io import read_hologram
 
 from .scene_export import ExportError, SceneData, export_scene, scale
 
 log = logging.getLogger(__name__)
-PASS_NAME = "holo_pass.exr"
+PASS_NAME = worker.PASS_NAME
 
 
 @dataclass(frozen=True)
@@ -64,6 +63,14 @@ class Job:
     current: bool                 # the plate's stored hologram matches the scene
     holograms: tuple              # paths of the iterations' hologram files
     render: bool = True           # also render the holographic pass
+
+    def payload(self) -> dict:
+        """The job as :func:`holo_core.worker.run_job` takes it."""
+        return {"points": self.scene.points, "triangles": self.scene.triangles,
+                "plate": self.scene.plate, "camera": self.scene.camera,
+                "settings": asdict(self.settings), "holograms": self.holograms,
+                "current": self.current, "render": self.render,
+                "output_dir": self.output_dir, "frame": self.frame}
 
 
 @dataclass
@@ -109,42 +116,22 @@ def prepare(scene, depsgraph, *, render=True) -> Job:
                fingerprint=fingerprint, current=current, holograms=paths, render=render)
 
 
-def run(job: Job, progress: jobs.Progress = None) -> Outcome:
-    """Record (when needed) and render the pass; no bpy. ``progress`` may raise
-    :class:`holo_core.jobs.Cancelled`."""
-    s, data = job.settings, job.scene
-    record_share = 0.0 if job.current else (0.85 if job.render else 1.0)
-    if job.current:
-        holos = [read_hologram(p) for p in job.holograms]
-    else:
-        holos = []
-        for i in range(s.iterations):
-            step = jobs.scaled(progress, record_share * i / s.iterations,
-                               record_share * (i + 1) / s.iterations)
-            holos.append(holo_core.record_hologram(
-                data.points, triangles=data.triangles, plate=data.plate, camera=data.camera,
-                max_resolution=s.max_resolution, wavelength=s.wavelength, seed=s.seed + i,
-                progress=step))
-    outcome = Outcome(holograms=job.holograms, fingerprint=job.fingerprint,
-                      recorded=not job.current)
-    view = None
-    if job.render:
-        view = holo_core.render_view(
-            holos, data.camera, supersample=s.supersample, composition=s.composition,
-            opacity_threshold=s.opacity_threshold,
-            progress=jobs.scaled(progress, record_share, 1.0))
-        view.rgb[...] *= s.exposure
-    # every stage has finished: only now are files replaced (each one atomically)
-    job.output_dir.mkdir(parents=True, exist_ok=True)
-    if not job.current:
-        for path, h in zip(job.holograms, holos):
-            write_hologram(path, h)
-    if view is not None:
-        frame_path = job.output_dir / f"holo_pass_{job.frame:04d}.exr"
-        holo_core.write_view(view, frame_path)
-        pass_path = write_atomic(job.output_dir / PASS_NAME, frame_path.read_bytes())
-        outcome.pass_path, outcome.frame_path, outcome.info = pass_path, frame_path, view.info
-    return outcome
+def start(job: Job) -> worker.Worker:
+    """The job running in a worker process (see :class:`holo_core.worker.Worker`)."""
+    return worker.Worker(job.payload())
+
+
+def outcome(job: Job, result: dict) -> Outcome:
+    return Outcome(holograms=job.holograms, fingerprint=job.fingerprint,
+                   recorded=result["recorded"], pass_path=result["pass_path"],
+                   frame_path=result["frame_path"], info=result["info"])
+
+
+def run(job: Job, progress: jobs.Progress = None, on_log=None) -> Outcome:
+    """Run the job in a worker process and wait for it. ``progress`` may raise
+    :class:`holo_core.jobs.Cancelled` (the worker is killed); a failed worker raises
+    :class:`holo_core.worker.WorkerError` with its reason."""
+    return outcome(job, start(job).wait(progress, on_log))
 
 
 def apply(scene, job: Job, outcome: Outcome) -> None:

@@ -8,14 +8,20 @@ import sys
 
 
 def devices(_args) -> int:
-    from .opencl import all_devices, choose_device
-    from .opencl.runtime import is_cpu
-    for p, d, dev in all_devices():
-        kind = "CPU" if is_cpu(dev) else "GPU/other"
-        print(f"  {p}:{d} {dev.name} [{kind}] on {dev.platform.name} "
-              f"({dev.max_compute_units} compute units)")
-    chosen = choose_device()
-    print(f"would use: {chosen.name} (set HOLO_DEVICE=gpu|cpu|P:D|name to choose)")
+    from .opencl import device_table
+    from .opencl.icd import packaged_drivers
+    rows = device_table()
+    for desc, status, chosen in rows:
+        print(f"  {desc}: {status}{'   <- would use' if chosen else ''}")
+    if not rows:
+        print("  no OpenCL device found")
+    drivers = packaged_drivers()
+    print("packaged drivers: " + (", ".join(f"{k} ({v})" for k, v in drivers.items())
+                                   or "none (pip install intel-opencl-rt for Intel's CPU runtime)"))
+    if not any(chosen for *_, chosen in rows):
+        print("would use: nothing usable (see the reasons above)")
+        return 1
+    print("choose with HOLO_DEVICE=gpu|cpu|P:D|part of a device or platform name")
     return 0
 
 

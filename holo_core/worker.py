@@ -1,0 +1,258 @@
+"""The pipeline in a process of its own: the Blender add-on's worker.
+
+Blender's process never loads an OpenCL driver: drivers bring native libraries that clash with
+Blender's (Intel's CPU runtime needs a newer TBB than Blender bundles, and PoCL's LLVM then
+meets Intel's), and a driver crash or an out-of-memory must not take unsaved work down with it.
+The parent hands a job of plain data (NumPy arrays and holo_core's value types, pickled into a
+folder of its own) to ``python -m holo_core.worker FOLDER``. The worker reports progress and
+log records as JSON lines on its stdout, writes its outputs atomically once every stage has
+finished, and leaves its result in the folder; the parent kills it to cancel, so a cancelled or
+failed run leaves earlier files as they were.
+
+:func:`run_job` is the work itself; :class:`Worker` is the parent's handle. This module imports
+nothing of OpenCL in the parent.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import pickle
+import queue
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+from pathlib import Path
+
+from . import jobs
+
+log = logging.getLogger(__name__)
+PASS_NAME = "holo_pass.exr"
+
+
+class WorkerError(RuntimeError):
+    """The worker failed: the message says how (its error, or how the process died)."""
+
+
+def run_job(job: dict, progress: jobs.Progress = None) -> dict:
+    """Record the holograms (unless ``job['current']``) and render the pass.
+
+    ``job``: ``points``, ``triangles`` (lists of :class:`holo_core.emitters.Mesh`, world metres),
+    ``plate``, ``camera``, ``settings`` (dict: max_resolution, wavelength [m] or None,
+    iterations, supersample, composition, exposure, opacity_threshold, seed), ``holograms``
+    (paths of the iterations' files), ``current``, ``render``, ``output_dir``, ``frame``.
+    Returns ``recorded``, ``pass_path``, ``frame_path`` and ``info``. Files are written only
+    after every stage has finished, each one atomically."""
+    from .hologram_io import read_hologram, write_hologram
+    from .image_files import write_atomic
+    from .record import record_hologram
+    from .render import render_view, write_view
+    s, current, n = job["settings"], job["current"], len(job["holograms"])
+    record_share = 0.0 if current else (0.85 if job["render"] else 1.0)
+    if current:
+        holos = [read_hologram(p) for p in job["holograms"]]
+    else:
+        holos = [record_hologram(
+            job["points"], triangles=job["triangles"], plate=job["plate"], camera=job["camera"],
+            max_resolution=s["max_resolution"], wavelength=s["wavelength"], seed=s["seed"] + i,
+            progress=jobs.scaled(progress, record_share * i / n, record_share * (i + 1) / n))
+            for i in range(n)]
+    view = None
+    if job["render"]:
+        view = render_view(holos, job["camera"], supersample=s["supersample"],
+                           composition=s["composition"], opacity_threshold=s["opacity_threshold"],
+                           progress=jobs.scaled(progress, record_share, 1.0))
+        view.rgb[...] *= s["exposure"]
+    # every stage has finished: only now are files replaced (each one atomically)
+    out = Path(job["output_dir"])
+    out.mkdir(parents=True, exist_ok=True)
+    if not current:
+        for path, h in zip(job["holograms"], holos):
+            write_hologram(path, h)
+    result = {"recorded": not current, "pass_path": None, "frame_path": None, "info": {}}
+    if view is not None:
+        frame_path = out / f"holo_pass_{job['frame']:04d}.exr"
+        write_view(view, frame_path)
+        result.update(pass_path=write_atomic(out / PASS_NAME, frame_path.read_bytes()),
+                      frame_path=frame_path, info=view.info)
+    return result
+
+
+# --- the worker process ---------------------------------------------------------------------
+
+class _Forward(logging.Handler):
+    def __init__(self, send):
+        super().__init__(logging.INFO)
+        self.send = send
+
+    def emit(self, record):
+        self.send({"log": [record.levelno, record.getMessage()]})
+
+
+def main(folder: str) -> int:
+    """The worker: run ``FOLDER/job.pickle``, write ``FOLDER/result.pickle``."""
+    channel = os.fdopen(os.dup(1), "w", buffering=1)
+    os.dup2(2, 1)  # anything else printed, by Python or a driver, goes to stderr
+    sys.stdout = sys.stderr
+
+    def send(message):
+        channel.write(json.dumps(message) + "\n")
+
+    core = logging.getLogger("holo_core")
+    core.addHandler(_Forward(send))
+    core.setLevel(logging.INFO)
+    folder = Path(folder)
+    try:
+        with open(folder / "job.pickle", "rb") as f:
+            job = pickle.load(f)
+        result = run_job(job, lambda f: send({"progress": round(f, 4)}))
+        tmp = folder / "result.pickle.tmp"
+        with open(tmp, "wb") as f:
+            pickle.dump(result, f)
+        os.replace(tmp, folder / "result.pickle")
+        send({"done": True})
+        return 0
+    except Exception as e:  # reported to the parent as one line, the traceback on stderr
+        import traceback
+        traceback.print_exc()
+        kind = "" if isinstance(e, (ValueError, OSError)) else f"{type(e).__name__}: "
+        send({"error": f"{kind}{e}"})
+        return 1
+
+
+# --- the parent's handle ----------------------------------------------------------------------
+
+def _environment() -> dict:
+    """The parent's environment, with its module search path: the worker imports holo_core
+    and its dependencies from wherever the parent found them (Blender's extension folder)."""
+    env = dict(os.environ)
+    paths = [p for p in sys.path if p and os.path.isdir(p)]
+    env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths))
+    env["PYTHONUNBUFFERED"] = "1"
+    return env
+
+
+def _death(code: int) -> str:
+    if code >= 0:
+        return f"exit code {code}"
+    try:
+        name = signal.Signals(-code).name
+    except ValueError:
+        name = str(-code)
+    why = {signal.SIGKILL: " (killed: out of memory?)",
+           signal.SIGSEGV: " (a crash in native code: the OpenCL driver?)",
+           signal.SIGABRT: " (aborted in native code: the OpenCL driver?)"}
+    return f"signal {name}{why.get(-code, '')}"
+
+
+class Worker:
+    """One job in a worker process.
+
+    ``poll()`` returns the messages that arrived, never blocking: ``("progress", fraction)``,
+    ``("log", (level, text))``, and last ``("done", result)`` or ``("failed", message)``.
+    ``wait()`` runs it to the end (``blender --background``); ``cancel()`` kills it.
+    """
+
+    def __init__(self, job: dict, *, python: str | None = None):
+        self.folder = Path(tempfile.mkdtemp(prefix="holo-worker-"))
+        with open(self.folder / "job.pickle", "wb") as f:
+            pickle.dump(job, f, protocol=pickle.HIGHEST_PROTOCOL)
+        self._stderr = open(self.folder / "stderr.txt", "w+b")
+        self.process = subprocess.Popen(
+            [python or sys.executable, "-m", "holo_core.worker", str(self.folder)],
+            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=self._stderr,
+            env=_environment(), cwd=self.folder)
+        self._messages: queue.SimpleQueue = queue.SimpleQueue()
+        self._error = None
+        self.finished = False
+        threading.Thread(target=self._read, daemon=True, name="holo-worker-reader").start()
+
+    def _read(self):
+        with self.process.stdout:
+            for line in self.process.stdout:
+                try:
+                    self._messages.put(json.loads(line))
+                except ValueError:
+                    pass
+        self._messages.put(None)  # end of output: the process has ended or is ending
+
+    def poll(self, timeout: float | None = None) -> list[tuple]:
+        """Messages that arrived (waiting up to ``timeout`` seconds for the first one)."""
+        out = []
+        while not self.finished:
+            try:
+                msg = self._messages.get(timeout=timeout) if timeout and not out else \
+                    self._messages.get_nowait()
+            except queue.Empty:
+                break
+            out.append(self._translate(msg))
+            if out[-1][0] in ("done", "failed"):
+                self.finished = True
+                self._cleanup()
+        return out
+
+    def _translate(self, msg):
+        if msg is None:
+            code = self.process.wait()
+            return ("failed", self._error or f"the worker process ended with {_death(code)}"
+                    f"{self._stderr_tail()}")
+        if "progress" in msg:
+            return ("progress", float(msg["progress"]))
+        if "log" in msg:
+            return ("log", tuple(msg["log"]))
+        if "error" in msg:
+            self._error = msg["error"]
+            return self._translate(None)
+        self.process.wait()
+        with open(self.folder / "result.pickle", "rb") as f:
+            return ("done", pickle.load(f))
+
+    def _stderr_tail(self) -> str:
+        self._stderr.flush()
+        self._stderr.seek(0)
+        lines = [ln for ln in self._stderr.read().decode(errors="replace").splitlines()
+                 if ln.strip()]
+        return f"; its last output: {lines[-1][-300:]}" if lines else ""
+
+    def wait(self, progress: jobs.Progress = None, on_log=None) -> dict:
+        """Run to the end; ``progress`` may raise :class:`holo_core.jobs.Cancelled`, which
+        kills the worker. Raises :class:`WorkerError` when the worker fails."""
+        while True:
+            for kind, value in self.poll(timeout=0.1):
+                try:
+                    if kind == "progress" and progress is not None:
+                        progress(value)
+                except BaseException:
+                    self.cancel()
+                    raise
+                if kind == "log" and on_log is not None:
+                    on_log(*value)
+                elif kind == "done":
+                    return value
+                elif kind == "failed":
+                    raise WorkerError(value)
+
+    def cancel(self) -> None:
+        """Kill the worker now (its partial work is never written)."""
+        if self.process.poll() is None:
+            self.process.kill()
+        self.process.wait()
+        self.finished = True
+        self._cleanup()
+
+    def _cleanup(self):
+        self._stderr.close()
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+
+def run(job: dict, progress: jobs.Progress = None, on_log=None) -> dict:
+    """:func:`run_job` in a worker process, waiting for it."""
+    return Worker(job).wait(progress, on_log)
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1]))
