@@ -5,7 +5,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo figures test bench devices extension check-lts clean
+.PHONY: demo figures test test-runtimes bench bench-runtimes devices extension check-lts clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -19,13 +19,24 @@ demo: $(STAMP)
 figures: $(STAMP)
 	$(PY) -m holo_core demo -o out
 
+# Two processes: Blender's native libraries (its TBB, its LLVM) must never meet an OpenCL
+# driver's, so the core's tests run where bpy is never imported (as the add-on's worker does).
 test: $(STAMP)
-	$(PY) -m pytest
+	$(PY) -m pytest tests/core tests/physics
+	$(PY) -m pytest tests/addon
+
+# The core's suite once per usable CPU OpenCL driver (python -m holo_core devices lists them).
+RUNTIMES ?= intel portable
+test-runtimes: $(STAMP)
+	set -e; for r in $(RUNTIMES); do 	  echo "== HOLO_DEVICE=$$r"; HOLO_DEVICE=$$r $(PY) -m pytest -q tests/core tests/physics; 	done
 
 bench: $(STAMP)
 	$(PY) bench/propagation.py
 	$(PY) bench/record.py
 	$(PY) bench/render.py
+
+bench-runtimes: $(STAMP)
+	$(PY) bench/runtimes.py
 
 devices: $(STAMP)
 	$(PY) -m holo_core devices

@@ -2,14 +2,15 @@
 depth with the rasterized scene.
 
 Files: ``properties`` (Object.holo, Scene.holo), ``scene_export`` (scene → metres),
-``pipeline`` (record and render off the main thread), ``operators``, ``compositing``
+``pipeline`` (record and render in a worker process), ``preferences`` (device, CPU runtime),
+``operators``, ``compositing``
 (Depth Combine and the per-frame pass), ``compat`` (Blender 4.x/5.x), ``ui`` (panels),
 ``demo`` (the built-in scene).
 """
 
-from . import compositing, operators, properties, ui
+from . import compositing, operators, preferences, properties, ui
 
-MODULES = (properties, operators, ui, compositing)
+MODULES = (properties, preferences, operators, ui, compositing)
 
 
 def register():

@@ -34,6 +34,10 @@ PLATFORMS = {
 }
 PYTHONS = ("3.11", "3.13")        # Blender 4.2-5.0 and 5.1+
 PROVIDED = {"numpy"}              # Blender bundles these
+# Intel's CPU OpenCL runtime is 276 MB of wheels (intel-opencl-rt 225 MB, intel-cmplr-lib-rt
+# 41 MB, tbb 7 MB, tcmlib 3 MB): with the rest, a Linux zip of about 360 MB, over what
+# extensions.blender.org accepts. The add-on's preferences install it on demand instead.
+ON_DEMAND = {"intel-opencl-rt", "intel-cmplr-lib-rt"}
 
 
 def runtime_requirements() -> list[str]:
@@ -42,7 +46,8 @@ def runtime_requirements() -> list[str]:
     is left out there and reported)."""
     deps = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["dependencies"]
     reqs = [d.split(";")[0].strip() for d in deps]
-    return [r for r in reqs if re.split(r"[<>=!~ \[]", r)[0].lower() not in PROVIDED]
+    return [r for r in reqs
+            if re.split(r"[<>=!~ \[]", r)[0].lower() not in PROVIDED | ON_DEMAND]
 
 
 def _pip(*args) -> subprocess.CompletedProcess:

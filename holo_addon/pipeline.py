@@ -118,7 +118,8 @@ def prepare(scene, depsgraph, *, render=True) -> Job:
 
 def start(job: Job) -> worker.Worker:
     """The job running in a worker process (see :class:`holo_core.worker.Worker`)."""
-    return worker.Worker(job.payload())
+    from .preferences import worker_options
+    return worker.Worker(job.payload(), **worker_options())
 
 
 def outcome(job: Job, result: dict) -> Outcome:

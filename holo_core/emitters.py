@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from . import validate
+from .propagation import propagate_to_plane
 
 MAX_SLANT = 30.0  # visibility: a surface's depth slope (tan of its incidence) is capped here (88°)
 MIN_SEEN = 0.3  # a primitive is recorded when the camera sees this share of its samples
@@ -237,7 +238,6 @@ def primitive_wave(prim: Primitive, *, wavelength, pitch, shape, channel=0, seed
     offset propagation (Sect. IV-D). ``sampled_for``: the shortest wavelength [m] of a set
     recorded together, so that all share one surface grid and so one diffuse phase pattern
     (the depth pair needs it)."""
-    from .propagation import propagate_to_plane  # OpenCL: Mesh and Primitive stay light
     m, centre = prim.frame()
     q = surface_pitch(prim, wavelength=min(wavelength, sampled_for or wavelength), pitch=pitch)
     field, mid = surface_field(prim, pitch=q, channel=channel, seed=seed, diffuse=diffuse)

@@ -33,7 +33,7 @@ CONE_FILL = 0.8      # a point's cone ends at this fraction of the Nyquist angle
 CONE_RIM = 0.5     # ... and its outer fraction (of the radius) is a soft rim
 WRP_WIDEN, WRP_RIM = 1.5, 0.17  # on a recording plane the cone reaches 1.5x the band (past
                                  # Nyquist for the full band: aliases land beyond the cone)
-CPU_LANES = 16       # rows per work item on CPU devices (two AVX2 or one AVX-512 register)
+CPU_LANES = 16       # rows per work item on CPU devices, as a cost-model figure (Runtime.lanes)
 PAIRS_PER_LAUNCH = 2e9  # point-pixel pairs per kernel launch, between progress reports
 MIN_CONE_PIXELS = 32  # a recording plane keeps this many pixels of cone radius to its points
 DIRECT_RATE = 3.3e9  # pairs/s of the direct kernel at 32-column segments (the cost model of
@@ -216,7 +216,7 @@ def _sum(rt, out, pos, amp, g: Grid, obliquity, *, binned, progress=None):
 
 
 def _launch(rt, out, pos, amp, g: Grid, obliquity, seg, *, first=0, last=None, bins=None):
-    lanes = CPU_LANES if rt.is_cpu else 1
+    lanes = rt.lanes
     channels = amp.shape[1]
     options = (f"-DVEC={lanes}", f"-DSEG={seg}", f"-DCHANNELS={channels}",
                "-cl-fast-relaxed-math") + \
@@ -367,7 +367,7 @@ def _bins(rt, pos, g: Grid, seg):
     """The points binned by the kernel tile that holds them (clipped to the grid): their sort
     order, each bin's first point in it (one entry per tile, and the end), and how many tiles
     (cols, rows) the widest cone reaches beyond its own."""
-    lanes = CPU_LANES if rt.is_cpu else 1
+    lanes = rt.lanes
     h, w = g.shape
     ty_n, tx_n = -(-h // lanes), -(-w // seg)
     tx = np.clip(np.floor((pos[:, 0] / g.pitch + (w - 1) / 2) / seg), 0, tx_n - 1)

@@ -14,6 +14,7 @@ import numpy as np
 
 from . import jobs, validate
 from .hologram_io import Hologram
+from .point_sources import cone_filter, point_wave
 from .propagation import grid
 
 DEFAULT_WAVELENGTHS = (633e-9, 532e-9, 473e-9)  # HeNe red, Nd:YAG green, DPSS blue [m]
@@ -145,7 +146,6 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     for lam in lambdas:
         reference.check(lam, pitch)
     amplitude = np.sqrt(cols) * np.exp(1j * phases)[:, None]
-    from .point_sources import point_wave  # OpenCL: not loaded by the light value types here
     groups = {lam: [c for c, other in enumerate(lambdas) if other == lam] for lam in lambdas}
     objects = {}
     for g, (lam, chans) in enumerate(groups.items()):  # equal wavelengths share one pass
@@ -328,7 +328,6 @@ def _triangle_waves(prims, s, lambdas, channels, view, seed):
                 else:
                     totals[k] += wave
         # the points' cone, in angle: the band the off-axis reference leaves free
-        from .point_sources import cone_filter
         return {c: cone_filter(t, wavelength=lam, pitch=s.pitch, band=s.band)
                 for c, t in zip(chans, totals)}
 

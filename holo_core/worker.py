@@ -126,13 +126,17 @@ def main(folder: str) -> int:
 
 # --- the parent's handle ----------------------------------------------------------------------
 
-def _environment() -> dict:
-    """The parent's environment, with its module search path: the worker imports holo_core
-    and its dependencies from wherever the parent found them (Blender's extension folder)."""
+def environment(paths=(), device: str | None = None) -> dict:
+    """The parent's environment for a child Python: its module search path (the worker imports
+    holo_core and its dependencies from wherever the parent found them, Blender's extension
+    folder), ``paths`` before it (packages installed on demand), and ``HOLO_DEVICE`` when
+    ``device`` is given."""
     env = dict(os.environ)
-    paths = [p for p in sys.path if p and os.path.isdir(p)]
-    env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths))
+    found = [str(p) for p in (*paths, *sys.path) if p and os.path.isdir(p)]
+    env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(found))
     env["PYTHONUNBUFFERED"] = "1"
+    if device:
+        env["HOLO_DEVICE"] = device
     return env
 
 
@@ -157,15 +161,15 @@ class Worker:
     ``wait()`` runs it to the end (``blender --background``); ``cancel()`` kills it.
     """
 
-    def __init__(self, job: dict, *, python: str | None = None):
+    def __init__(self, job: dict, *, paths=(), device: str | None = None):
+        data = pickle.dumps(job, protocol=pickle.HIGHEST_PROTOCOL)  # plain data only
         self.folder = Path(tempfile.mkdtemp(prefix="holo-worker-"))
-        with open(self.folder / "job.pickle", "wb") as f:
-            pickle.dump(job, f, protocol=pickle.HIGHEST_PROTOCOL)
+        (self.folder / "job.pickle").write_bytes(data)
         self._stderr = open(self.folder / "stderr.txt", "w+b")
         self.process = subprocess.Popen(
-            [python or sys.executable, "-m", "holo_core.worker", str(self.folder)],
+            [sys.executable, "-m", "holo_core.worker", str(self.folder)],
             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=self._stderr,
-            env=_environment(), cwd=self.folder)
+            env=environment(paths, device), cwd=self.folder)
         self._messages: queue.SimpleQueue = queue.SimpleQueue()
         self._error = None
         self.finished = False
@@ -249,9 +253,9 @@ class Worker:
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
-def run(job: dict, progress: jobs.Progress = None, on_log=None) -> dict:
-    """:func:`run_job` in a worker process, waiting for it."""
-    return Worker(job).wait(progress, on_log)
+def run(job: dict, progress: jobs.Progress = None, on_log=None, **options) -> dict:
+    """:func:`run_job` in a worker process (``options``: :class:`Worker`'s), waiting for it."""
+    return Worker(job, **options).wait(progress, on_log)
 
 
 if __name__ == "__main__":

@@ -43,6 +43,10 @@ _TYPES = {"gpu": cl.device_type.GPU, "cpu": cl.device_type.CPU,
           "accelerator": cl.device_type.ACCELERATOR}
 # CPU drivers in order of preference, by platform name (see the module docstring)
 _CPU_DRIVERS = ("intel", "portable computing language")
+# LLVM CPU names with AVX-512, for PoCL, which compiles for the target its version string names
+AVX512_TARGETS = {"skylake-avx512", "cascadelake", "cooperlake", "cannonlake", "icelake-client",
+                  "icelake-server", "tigerlake", "rocketlake", "sapphirerapids", "graniterapids",
+                  "emeraldrapids", "znver4", "znver5", "knl", "knm"}
 
 
 def all_devices() -> list[tuple[int, int, cl.Device]]:
@@ -195,6 +199,19 @@ class Runtime:
     @cached_property  # device queries cost ~0.3 ms each, asked on every transform
     def is_cpu(self) -> bool:
         return is_cpu(self.device)
+
+    @cached_property
+    def lanes(self) -> int:
+        """Rows per work item of the vectorised CPU kernels (float16 rows), 1 on GPUs. PoCL
+        compiles for the LLVM target named in its version string: on a target without AVX-512
+        (AMD Zen 4 is "znver3" to LLVM 14) float16 arguments break the ABI and the kernel is
+        lost (INVALID_KERNEL_NAME), so it gets float8 rows there."""
+        if not self.is_cpu:
+            return 1
+        version = self.device.version.strip()
+        if "HSTR:" in version and not any(version.endswith("-" + t) for t in AVX512_TARGETS):
+            return 8
+        return 16
 
     @cached_property
     def has_fp64(self) -> bool:

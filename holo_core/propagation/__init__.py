@@ -6,16 +6,12 @@ rayleigh_sommerfeld.py: direct integration of Eq. 7 · tilt.py: spectrum rotatio
 placed planes · resample.py: the four cases of Fig. 4 · fresnel.py: Fresnel and Fraunhofer.
 """
 
-_API = {"alias_free_distance": ".angular_spectrum", "angular_spectrum": ".angular_spectrum",
-        "transfer_function": ".angular_spectrum", "fraunhofer": ".fresnel",
-        "fresnel": ".fresnel", "rayleigh_sommerfeld": ".rayleigh_sommerfeld",
-        "interpolation_matrix": ".resample", "resample": ".resample",
-        "propagate_to_plane": ".tilt", "tilt": ".tilt"}
-__all__ = sorted(_API)
+from .angular_spectrum import alias_free_distance, angular_spectrum, transfer_function
+from .fresnel import fraunhofer, fresnel
+from .rayleigh_sommerfeld import rayleigh_sommerfeld
+from .resample import interpolation_matrix, resample
+from .tilt import propagate_to_plane, tilt
 
-
-def __getattr__(name):  # imported on first use: grid.py alone stays free of OpenCL
-    if name not in _API:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    from importlib import import_module
-    return getattr(import_module(_API[name], __name__), name)
+__all__ = ["alias_free_distance", "angular_spectrum", "fraunhofer", "fresnel",
+           "interpolation_matrix", "propagate_to_plane", "rayleigh_sommerfeld", "resample",
+           "tilt", "transfer_function"]

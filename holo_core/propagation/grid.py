@@ -23,6 +23,11 @@ def freqs(n: int, pitch: float) -> np.ndarray:
     return np.fft.fftfreq(n, pitch)
 
 
+def signed_indices(n: int) -> np.ndarray:
+    """The signed index of each position of an FFT-ordered axis of ``n``: 0, 1, …, −1."""
+    return np.fft.fftfreq(n, 1 / n)
+
+
 def next_fast_len(n: int) -> int:
     """The smallest 2^a 3^b 5^c 7^d >= n (fast sizes for FFTW and VkFFT)."""
     best = 1 << max(0, math.ceil(math.log2(max(n, 1))))

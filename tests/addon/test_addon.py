@@ -283,19 +283,24 @@ def _camera_columns(scene, cam, points):
     return cols[:, 0]
 
 
-def test_cancelled_run_keeps_earlier_outputs(empty_scene):
+def _earlier_outputs(scene, *, size=(32, 24), iterations=1, max_resolution=256):
+    """A small scene's job, with random bytes standing for its earlier hologram and pass."""
     from holo_addon import pipeline
-    scene = empty_scene
     _plate_camera_cube(scene)
-    scene.render.resolution_x, scene.render.resolution_y = 32, 24
-    scene.holo.iterations = 1
-    scene.holo.max_resolution = 256
+    scene.render.resolution_x, scene.render.resolution_y = size
+    scene.holo.iterations = iterations
+    scene.holo.max_resolution = max_resolution
     job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
-    out = job.output_dir
-    out.mkdir(parents=True)
-    earlier = {p: os.urandom(64) for p in (job.holograms[0], out / pipeline.PASS_NAME)}
+    job.output_dir.mkdir(parents=True)
+    earlier = {p: os.urandom(64) for p in (job.holograms[0], job.output_dir / pipeline.PASS_NAME)}
     for p, data in earlier.items():
         p.write_bytes(data)
+    return job, earlier
+
+
+def test_cancelled_run_keeps_earlier_outputs(empty_scene):
+    from holo_addon import pipeline
+    job, earlier = _earlier_outputs(empty_scene)
     calls = []
 
     def cancel(f):
@@ -308,7 +313,7 @@ def test_cancelled_run_keeps_earlier_outputs(empty_scene):
     assert len(calls) == 2, f"the run must stop at the cancel, not later: {len(calls)} calls"
     for p, data in earlier.items():
         assert p.read_bytes() == data, f"{p.name} changed by a cancelled run"
-    assert sorted(x.name for x in out.iterdir()) == sorted(p.name for p in earlier)
+    assert sorted(x.name for x in job.output_dir.iterdir()) == sorted(p.name for p in earlier)
 
 
 def test_missing_or_corrupt_hologram_is_reported(empty_scene):
@@ -363,3 +368,49 @@ def test_built_zip_installs_and_registers(tmp_path):
                         str(zip_path)], env=env, capture_output=True, text=True, cwd=tmp_path)
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     assert "registered from" in r.stdout and str(tmp_path / "user") in r.stdout, r.stdout
+
+
+def test_blender_process_loads_no_opencl_driver(empty_scene, monkeypatch):
+    """Recording and the pass run in the worker process: with OpenCL made unusable in
+    Blender's own process, both still finish, and the preferences' device check (a child
+    process too) names the device the worker would use."""
+    from holo_core.opencl import runtime
+
+    def refuse(*_, **__):
+        raise AssertionError("Blender's process must not touch OpenCL")
+
+    monkeypatch.setattr(runtime, "choose_device", refuse)
+    monkeypatch.setattr(runtime, "get_runtime", refuse)
+    scene = empty_scene
+    _plate_camera_cube(scene)
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    scene.holo.iterations = 1
+    scene.holo.max_resolution = 256
+    assert bpy.ops.holo.record_hologram() == {"FINISHED"}
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert bpy.ops.holo.check_devices() == {"FINISHED"}
+    from holo_addon import preferences
+    assert any("<- would use" in line for line in preferences._listing), preferences._listing
+
+
+def test_a_killed_worker_is_reported_and_earlier_files_stay(empty_scene, monkeypatch):
+    """A worker killed mid-run (what the out-of-memory killer does) is an error report from
+    the operator, not a dead Blender, and the earlier hologram and pass are untouched."""
+    import signal
+    import threading
+    from holo_addon import pipeline
+    _, earlier = _earlier_outputs(empty_scene, size=(160, 120), iterations=8,
+                                  max_resolution=2048)
+    start = pipeline.start
+
+    def start_then_kill(job):
+        w = start(job)
+        threading.Timer(2.0, os.kill, (w.process.pid, signal.SIGKILL)).start()
+        return w
+
+    monkeypatch.setattr(pipeline, "start", start_then_kill)
+    with pytest.raises(RuntimeError, match=r"Render Holographic Pass failed: the worker process "
+                                           r"ended with signal SIGKILL \(killed: out of memory"):
+        bpy.ops.holo.render_pass()
+    for p, data in earlier.items():
+        assert p.read_bytes() == data, f"{p.name} changed by a killed run"

@@ -1,0 +1,132 @@
+"""Add-on preferences: the OpenCL device the worker uses, what each device can do, and Intel's
+CPU runtime installed on demand.
+
+Blender's own process never loads an OpenCL driver: the device listing comes from a child
+Python (``python -m holo_core devices``) with the worker's environment. Intel's CPU runtime
+(276 MB of wheels, too large to ship inside the extension) is what makes CPUs newer than PoCL's
+LLVM work (AMD Zen 5); *Install CPU Runtime* installs it with pip into the extension's own user
+folder, never system-wide, and only with Blender's online access allowed.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import bpy
+from bpy.props import StringProperty
+
+from holo_core.worker import environment
+
+# The add-on's module name: "bl_ext.<repository>.holo" when installed as an extension
+ADDON = __package__.rpartition(".")[0] or __package__
+CPU_RUNTIME = ("intel-opencl-rt", "intel-cmplr-lib-rt")
+_listing: list[str] = []  # the last device listing, shown in the preferences
+
+
+def runtime_prefix() -> Path:
+    """The folder packages installed on demand go to (pip's ``--prefix``)."""
+    try:
+        return Path(bpy.utils.extension_path_user(ADDON, path="runtime", create=True))
+    except (ValueError, AttributeError):  # not installed as an extension (source tree, tests)
+        return Path(bpy.utils.user_resource("SCRIPTS", path="holo_runtime", create=True))
+
+
+def runtime_paths() -> list[str]:
+    """site-packages folders under :func:`runtime_prefix` (the worker's extra search path)."""
+    return [str(p) for p in sorted(runtime_prefix().glob("lib/python*/site-packages"))]
+
+
+def _preferences():
+    addon = bpy.context.preferences.addons.get(ADDON)
+    return addon.preferences if addon is not None else None
+
+
+def device() -> str:
+    """The device the user chose ("" for automatic)."""
+    prefs = _preferences()
+    return prefs.device.strip() if prefs is not None else ""
+
+
+def worker_options() -> dict:
+    """What :class:`holo_core.worker.Worker` takes from the preferences."""
+    return {"paths": runtime_paths(), "device": device() or None}
+
+
+def list_devices() -> list[str]:
+    """``python -m holo_core devices`` in a child process, as the worker would see them."""
+    r = subprocess.run([sys.executable, "-m", "holo_core", "devices"], capture_output=True,
+                       text=True, env=environment(runtime_paths(), device() or None),
+                       timeout=120)
+    lines = (r.stdout + (r.stderr if r.returncode else "")).strip().splitlines()
+    return lines or [f"the device listing failed (exit code {r.returncode})"]
+
+
+class HOLO_OT_check_devices(bpy.types.Operator):
+    """List the OpenCL devices the worker process finds, whether each works, and which one it
+    would use"""
+
+    bl_idname = "holo.check_devices"
+    bl_label = "Check Devices"
+
+    def execute(self, context):
+        _listing[:] = list_devices()
+        for line in _listing:
+            self.report({"INFO"}, line)
+        return {"FINISHED"}
+
+
+class HOLO_OT_install_cpu_runtime(bpy.types.Operator):
+    """Install Intel's CPU OpenCL runtime (about 280 MB from the Python Package Index) into
+    this add-on's own folder: it runs on every current x86-64 CPU, AMD Zen 5 included"""
+
+    bl_idname = "holo.install_cpu_runtime"
+    bl_label = "Install CPU Runtime"
+
+    @classmethod
+    def poll(cls, context):
+        if not bpy.app.online_access:
+            cls.poll_message_set("Allow Online Access in Preferences > System > Network")
+            return False
+        if sys.platform != "linux":
+            cls.poll_message_set("Intel's CPU runtime from PyPI is used on Linux only")
+            return False
+        return True
+
+    def execute(self, context):
+        cmd = [sys.executable, "-m", "pip", "install", "--prefix", str(runtime_prefix()),
+               "--no-warn-script-location", "--disable-pip-version-check", *CPU_RUNTIME]
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        if r.returncode:
+            tail = (r.stderr or r.stdout).strip().splitlines()[-1:] or ["no output"]
+            self.report({"ERROR"}, f"installing {' '.join(CPU_RUNTIME)} failed: {tail[0]}")
+            return {"CANCELLED"}
+        _listing[:] = list_devices()
+        self.report({"INFO"}, f"installed into {runtime_prefix()}")
+        return {"FINISHED"}
+
+
+class HoloPreferences(bpy.types.AddonPreferences):
+    bl_idname = ADDON
+
+    device: StringProperty(
+        name="Device", default="",
+        description="The OpenCL device for recording and rendering. Empty: the best that "
+                    "works (a GPU, else a CPU). Or 'gpu', 'cpu', a number pair such as 1:0, "
+                    "or part of a device name, as Check Devices lists them")
+
+    def draw(self, context):
+        layout = self.layout
+        layout.prop(self, "device")
+        row = layout.row()
+        row.operator(HOLO_OT_check_devices.bl_idname, icon="VIEWZOOM")
+        row.operator(HOLO_OT_install_cpu_runtime.bl_idname, icon="IMPORT")
+        box = layout.box()
+        for line in _listing or ["Check Devices lists what the worker process finds."]:
+            box.label(text=line.strip())
+
+
+CLASSES = (HOLO_OT_check_devices, HOLO_OT_install_cpu_runtime, HoloPreferences)
+
+register, unregister = bpy.utils.register_classes_factory(CLASSES)

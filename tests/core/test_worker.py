@@ -1,0 +1,146 @@
+"""The worker process (the add-on's compute path): the same pass as in-process, clear reports
+when it fails or dies, cancellation within a second, and earlier files left intact."""
+
+import os
+import pickle
+import signal
+import time
+
+import numpy as np
+import pytest
+
+from holo_core import jobs, worker
+from holo_core.camera import Camera, look_at
+from holo_core.emitters import Mesh
+from holo_core.record import Plate
+
+
+def cube(size=0.4):
+    c = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * size / 2
+    faces = [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+             [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]]
+    return Mesh(vertices=c, triangles=np.array(faces), colours=np.full((8, 3), 0.8))
+
+
+def job(tmp_path, *, resolution=(32, 24), max_resolution=256, iterations=1):
+    plate = Plate(matrix_world=look_at((0, -1.5, 0), (0, 0, 0), up=(0, 0, 1)),
+                  width=0.6, height=0.6)
+    cam = Camera(matrix_world=look_at((0, -3.0, 0), (0, 0, 0), up=(0, 0, 1)),
+                 resolution=resolution)
+    out = tmp_path / "holo"
+    return {"points": [cube()], "triangles": [], "plate": plate, "camera": cam,
+            "settings": dict(max_resolution=max_resolution, wavelength=None,
+                             iterations=iterations, supersample=1, composition="mean",
+                             exposure=1.0, opacity_threshold=0.5, seed=0),
+            "holograms": tuple(out / f"h{i}.exr" for i in range(iterations)),
+            "current": False, "render": True, "output_dir": out, "frame": 1}
+
+
+def _pass(path):
+    import OpenEXR
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        return {k: v.pixels.copy() for k, v in f.channels().items()}
+
+
+def test_worker_renders_what_the_process_itself_renders(tmp_path):
+    """The same job in a worker process and in this one: the same pass, bit for bit (same
+    device choice, same seeds), and the progress reaches 1."""
+    seen, logs = [], []
+    there = worker.run(job(tmp_path / "a"), seen.append, lambda *r: logs.append(r))
+    here = worker.run_job(job(tmp_path / "b"))
+    a, b = _pass(there["frame_path"]), _pass(here["frame_path"])
+    assert a.keys() == b.keys()
+    for k in a:
+        assert np.array_equal(a[k], b[k]), k
+    assert np.asarray(a["ViewLayer.Combined.A"]).max() == 1.0, "the cube is missing"
+    assert seen and seen[-1] == pytest.approx(1.0) and seen == sorted(seen)
+    assert any("sampling" in text for _, text in logs), logs
+
+
+def _earlier(j):
+    out = j["output_dir"]
+    out.mkdir(parents=True)
+    files = {p: os.urandom(64) for p in (j["holograms"][0], out / worker.PASS_NAME)}
+    for p, data in files.items():
+        p.write_bytes(data)
+    return files
+
+
+def _unchanged(files, out):
+    for p, data in files.items():
+        assert p.read_bytes() == data, f"{p.name} changed by a run that did not finish"
+    assert sorted(x.name for x in out.iterdir()) == sorted(p.name for p in files)
+
+
+def test_cancel_kills_the_worker_within_a_second_and_keeps_earlier_files(tmp_path):
+    j = job(tmp_path, resolution=(320, 240), max_resolution=1024, iterations=3)
+    files = _earlier(j)
+    w = worker.Worker(j)
+    while not any(kind == "progress" for kind, _ in w.poll(timeout=0.1)):
+        assert not w.finished, "the worker ended before its first progress report"
+    t = time.perf_counter()
+    w.cancel()
+    elapsed = time.perf_counter() - t
+    assert w.process.returncode == -signal.SIGKILL and elapsed < 1.0, elapsed
+    assert not w.folder.exists()
+    _unchanged(files, j["output_dir"])
+
+
+def test_cancel_from_the_progress_callback(tmp_path):
+    j = job(tmp_path)
+    files = _earlier(j)
+    calls = []
+
+    def progress(f):
+        calls.append(f)
+        if len(calls) > 1:
+            raise jobs.Cancelled()
+
+    with pytest.raises(jobs.Cancelled):
+        worker.run(j, progress)
+    assert len(calls) == 2
+    _unchanged(files, j["output_dir"])
+
+
+def test_a_killed_worker_is_a_clear_report(tmp_path):
+    """SIGKILL is what the kernel's out-of-memory killer sends."""
+    j = job(tmp_path, resolution=(320, 240), max_resolution=1024, iterations=3)
+    files = _earlier(j)
+    w = worker.Worker(j)
+    while not any(kind == "progress" for kind, _ in w.poll(timeout=0.1)):
+        pass
+    os.kill(w.process.pid, signal.SIGKILL)
+    with pytest.raises(worker.WorkerError, match=r"ended with signal SIGKILL \(killed: out of "
+                                                 r"memory\?\)"):
+        w.wait()
+    _unchanged(files, j["output_dir"])
+
+
+class _Segfault:
+    """Unpickled in the worker, reads address 0: a genuine crash in native code."""
+
+    def __reduce__(self):
+        import ctypes
+        return ctypes.string_at, (0,)
+
+
+def test_a_crashed_worker_is_a_clear_report(tmp_path):
+    """A segmentation fault (as in a broken OpenCL driver) ends the worker, not the parent."""
+    j = job(tmp_path)
+    files = _earlier(j)
+    j["crash"] = _Segfault()
+    with pytest.raises(worker.WorkerError, match=r"signal SIGSEGV \(a crash in native code"):
+        worker.run(j)
+    _unchanged(files, j["output_dir"])
+
+
+def test_a_raising_worker_reports_its_error_and_writes_nothing(tmp_path):
+    j = job(tmp_path)
+    files = _earlier(j)
+    j["current"] = True  # the 'current' hologram is the random bytes above: not an EXR
+    with pytest.raises(worker.WorkerError, match=r"h0.exr: not an OpenEXR file"):
+        worker.run(j)
+    _unchanged(files, j["output_dir"])
+    j["settings"]["composition"] = lambda: "mean"  # cannot even be handed over
+    with pytest.raises((pickle.PicklingError, TypeError, AttributeError)):
+        worker.Worker(j)
