@@ -215,6 +215,8 @@ class RenderResult:
     alpha: np.ndarray
     depth: np.ndarray
     info: dict = field(default_factory=dict)
+    coverage: np.ndarray | None = None  # the surfaces' share of each pixel (camera holograms)
+    radiance: np.ndarray | None = None  # (H, W, 3) before the division by coverage (idem)
 
 
 def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, apodize=True,
