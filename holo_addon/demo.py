@@ -2,12 +2,13 @@
 among rasterized ones, recorded, rendered, composited in depth.
 
 The scene: a vertex-coloured holographic sphere (point emitters) on a floor, a rasterized red
-cube behind it, a blue pillar in front of it and a green cone beside it; a camera with depth of
-field focused on the sphere; the plate between them. Writes ``out/demo.png`` (the composite),
-``out/demo.exr`` (the composite, float RGBA), ``out/holo/`` (hologram and holographic pass)
-and prints where they are.
+cube behind it, a blue pillar in front of it and a green cone beside it; a 40 mm camera at
+f/2.8 focused on the sphere, 1280×720. The sphere is rendered through its camera hologram
+(the default mode; the plate between them serves ``--mode PLATE``). Writes ``out/demo.png``
+(the composite), ``out/demo.exr`` (the composite, float RGBA), ``out/holo/`` (the holographic
+pass) and prints where they are.
 
-    python -m holo_addon.demo [-o out] [--resolution W H] [--iterations N]
+    python -m holo_addon.demo [-o out] [--resolution W H] [--samples N] [--mode CAMERA|PLATE]
 """
 
 from __future__ import annotations
@@ -55,7 +56,7 @@ def point_at(obj, target):
     obj.rotation_euler = d.to_track_quat("-Z", "Y").to_euler()
 
 
-def build_scene(bpy, *, resolution=(192, 144)):
+def build_scene(bpy, *, resolution=(1280, 720), fstop=2.8):
     """The demo scene in the current (empty) file; returns the scene."""
     scene = bpy.context.scene
     scene.render.engine = "CYCLES"
@@ -89,7 +90,7 @@ def build_scene(bpy, *, resolution=(192, 144)):
     camera.data.lens = 40
     camera.data.dof.use_dof = True
     camera.data.dof.focus_object = sphere
-    camera.data.dof.aperture_fstop = 0.5
+    camera.data.dof.aperture_fstop = fstop
 
     # the plate: between camera and sphere, facing the camera (+Z towards the viewer)
     bpy.ops.mesh.primitive_plane_add(size=1.0, location=(0.5, -1.75, 0.85))
@@ -121,9 +122,12 @@ def main(argv=None):
     p = argparse.ArgumentParser(prog="python -m holo_addon.demo", description=__doc__.split(
         "\n\n")[0])
     p.add_argument("-o", "--output", type=Path, default=Path("out"))
-    p.add_argument("--resolution", type=int, nargs=2, default=(160, 120), metavar=("W", "H"))
-    p.add_argument("--iterations", type=int, default=2)
-    p.add_argument("--max-resolution", type=int, default=768)
+    p.add_argument("--resolution", type=int, nargs=2, default=(1280, 720), metavar=("W", "H"))
+    p.add_argument("--fstop", type=float, default=2.8)
+    p.add_argument("--samples", type=int, default=16)
+    p.add_argument("--mode", choices=("CAMERA", "PLATE"), default="CAMERA")
+    p.add_argument("--iterations", type=int, default=2, help="plate mode: recordings")
+    p.add_argument("--max-resolution", type=int, default=768, help="plate mode: hologram size")
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(name)s: %(message)s")
     import bpy
@@ -134,8 +138,10 @@ def main(argv=None):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     register()
     t0 = time.perf_counter()
-    scene = build_scene(bpy, resolution=tuple(args.resolution))
+    scene = build_scene(bpy, resolution=tuple(args.resolution), fstop=args.fstop)
     scene.holo.output_dir = str(out / "holo") + os.sep
+    scene.holo.mode = args.mode
+    scene.holo.samples = args.samples
     scene.holo.iterations = args.iterations
     scene.holo.max_resolution = args.max_resolution
     for op in (bpy.ops.holo.render_pass, bpy.ops.holo.setup_compositing):
@@ -144,9 +150,9 @@ def main(argv=None):
     png, exr = render_still(bpy, scene, out)
     bpy.ops.wm.save_as_mainfile(filepath=str(out / "demo.blend"))
     plate = scene.objects["Hologram Plate"]
-    print(f"demo rendered in {time.perf_counter() - t0:.0f} s:\n  {png}\n  {exr}\n"
-          f"  hologram: {plate.holo.hologram}\n  holographic pass: {out / 'holo' / 'holo_pass.exr'}"
-          f"\n  scene: {out / 'demo.blend'}")
+    hologram = f"\n  hologram: {plate.holo.hologram}" if args.mode == "PLATE" else ""
+    print(f"demo rendered in {time.perf_counter() - t0:.0f} s:\n  {png}\n  {exr}{hologram}\n"
+          f"  holographic pass: {out / 'holo' / 'holo_pass.exr'}\n  scene: {out / 'demo.blend'}")
 
 
 if __name__ == "__main__":

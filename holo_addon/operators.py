@@ -124,10 +124,15 @@ class _PipelineOperator:
 
     def _done(self, context, job, outcome):
         pipeline.apply(context.scene, job, outcome)
-        what = "recorded" if outcome.recorded else "up to date"
-        msg = f"hologram {what}: {outcome.holograms[0]}"
+        msg = "camera hologram"
+        if outcome.holograms:
+            what = "recorded" if outcome.recorded else "up to date"
+            msg = f"hologram {what}: {outcome.holograms[0]}"
         if outcome.pass_path is not None:
             msg += f"; holographic pass: {outcome.pass_path}"
+            if "speckle_contrast" in outcome.info:
+                msg += (f" ({outcome.info['samples']} samples, speckle contrast "
+                        f"{outcome.info['speckle_contrast']:.3f})")
         self.report({"INFO"}, msg)
         return self.finish(context)
 
@@ -143,6 +148,13 @@ class HOLO_OT_record_hologram(_PipelineOperator, bpy.types.Operator):
     bl_label = "Record Hologram"
     bl_options = {"REGISTER"}
     render = False
+
+    @classmethod
+    def poll(cls, context):
+        if context.scene is not None and context.scene.holo.mode == "CAMERA":
+            cls.poll_message_set("Camera holograms are recorded with each render of the pass")
+            return False
+        return super().poll(context)
 
 
 class HOLO_OT_render_pass(_PipelineOperator, bpy.types.Operator):

@@ -30,6 +30,8 @@ PASS_NAME = worker.PASS_NAME
 class Settings:
     """``Scene.holo`` as plain values (lengths in metres)."""
 
+    mode: str                     # 'CAMERA' (camera hologram) or 'PLATE'
+    samples: int
     max_resolution: int
     wavelength: float | None
     iterations: int
@@ -42,7 +44,7 @@ class Settings:
     @classmethod
     def from_scene(cls, scene, unit: float) -> "Settings":
         h = scene.holo
-        return cls(max_resolution=h.max_resolution,
+        return cls(mode=h.mode, samples=h.samples, max_resolution=h.max_resolution,
                    wavelength=h.wavelength * unit if h.wavelength > 0 else None,
                    iterations=h.iterations, supersample=h.supersample,
                    composition=h.composition, exposure=h.exposure,
@@ -103,10 +105,15 @@ def hologram_paths(out: Path, plate_name: str, n: int) -> tuple:
 def prepare(scene, depsgraph, *, render=True) -> Job:
     """Read the scene (main thread). Raises :class:`scene_export.ExportError` for a scene that
     cannot be recorded."""
-    data = export_scene(scene, depsgraph)
     settings = Settings.from_scene(scene, scale(scene))
-    fingerprint = data.fingerprint(*settings.recording())
     out = output_dir(scene)
+    if settings.mode == "CAMERA":  # recorded for this view at every render: no plate file
+        data = export_scene(scene, depsgraph, plate=False)
+        return Job(scene=data, settings=settings, output_dir=out, frame=scene.frame_current,
+                   fingerprint=data.fingerprint(settings.mode, settings.samples), current=False,
+                   holograms=(), render=render)
+    data = export_scene(scene, depsgraph)
+    fingerprint = data.fingerprint(*settings.recording())
     paths = hologram_paths(out, data.plate_name, settings.iterations)
     plate = scene.objects[data.plate_name].holo
     current = (plate.fingerprint == fingerprint and
@@ -138,7 +145,7 @@ def run(job: Job, progress: jobs.Progress = None, on_log=None) -> Outcome:
 def apply(scene, job: Job, outcome: Outcome) -> None:
     """Store the outcome in the scene (main thread): the plate references its hologram, and
     images showing the pass are reloaded."""
-    plate = scene.objects.get(job.scene.plate_name)
+    plate = scene.objects.get(job.scene.plate_name) if job.scene.plate_name else None
     if plate is not None:
         plate.holo.hologram = str(outcome.holograms[0])
         plate.holo.fingerprint = outcome.fingerprint

@@ -38,6 +38,18 @@ class HoloObjectSettings(bpy.types.PropertyGroup):
 
 
 class HoloSceneSettings(bpy.types.PropertyGroup):
+    mode: EnumProperty(
+        name="Hologram", default="CAMERA",
+        items=[("CAMERA", "Camera", "Record the hologram for the render camera, on a virtual "
+                                    "plate at its lens: sharp at the render's resolution, with "
+                                    "its depth of field (no plate needed)"),
+               ("PLATE", "Plate", "Record the plate's hologram once and view it from the "
+                                  "camera, as a holographic display would show it: its "
+                                  "sharpness is limited by the plate's size and resolution")],
+        description="Where the hologram is recorded")
+    samples: IntProperty(name="Samples", default=16, min=1, max=4096,
+                         description="Renders with independent random phases, averaged: more "
+                                     "samples, less speckle")
     output_dir: StringProperty(name="Output Folder", subtype="DIR_PATH", default="//holo/",
                                description="Where holograms and holographic passes are written "
                                            "(// is the .blend's folder)")

@@ -31,8 +31,8 @@ class SceneData:
 
     points: list
     triangles: list
-    plate: Plate
-    plate_name: str
+    plate: Plate | None
+    plate_name: str | None
     camera: Camera
 
     def fingerprint(self, *settings) -> str:
@@ -43,8 +43,9 @@ class SceneData:
                 if a is not None:
                     h.update(np.ascontiguousarray(a, np.float64).tobytes())
             h.update(b"|")
-        for a in (self.plate.matrix_world, (self.plate.width, self.plate.height),
-                  self.camera.matrix_world):
+        plate = () if self.plate is None else (self.plate.matrix_world,
+                                                 (self.plate.width, self.plate.height))
+        for a in (*plate, self.camera.matrix_world):
             h.update(np.asarray(a, np.float64).tobytes())
         h.update(repr((self.camera.lens, self.camera.sensor_width, self.camera.sensor_height,
                        self.camera.sensor_fit, self.camera.shift_x, self.camera.shift_y,
@@ -189,13 +190,14 @@ def camera_from_object(scene, obj, unit: float) -> Camera:
                   focus_distance=focus, fstop=fstop)
 
 
-def export_scene(scene, depsgraph) -> SceneData:
-    """The scene's emitters, plate and camera; a clear :class:`ExportError` when one is
-    missing or ill-placed."""
+def export_scene(scene, depsgraph, *, plate=True) -> SceneData:
+    """The scene's emitters, plate (when ``plate``) and camera; a clear :class:`ExportError`
+    when one is missing or ill-placed."""
     unit = scale(scene)
     plates = [o for o in scene.objects if o.holo.is_plate]
-    if not plates:
-        raise ExportError("no hologram plate: mark a plane with Object ▸ Holo ▸ Plate")
+    if plate and not plates:
+        raise ExportError("no hologram plate: mark a plane with Object ▸ Holo ▸ Plate, or "
+                          "record for the camera (Holo ▸ Hologram: Camera)")
     if len(plates) > 1:
         raise ExportError(f"one plate per scene; found {', '.join(o.name for o in plates)}")
     if scene.camera is None:
@@ -208,8 +210,11 @@ def export_scene(scene, depsgraph) -> SceneData:
               if o.holo.emitter == "POINTS"]
     triangles = [mesh_from_object(o, depsgraph, unit) for o in emitters
                  if o.holo.emitter == "TRIANGLES"]
-    plate = plate_from_object(plates[0], unit)
     camera = camera_from_object(scene, scene.camera, unit)
+    if not plate:
+        return SceneData(points=points, triangles=triangles, plate=None, plate_name=None,
+                         camera=camera)
+    plate = plate_from_object(plates[0], unit)
     if plate.to_plate(camera.position[None])[0, 2] <= 0:
         raise ExportError(f"the camera is behind plate '{plates[0].name}': viewers must be on "
                           f"its +Z side (rotate the plate 180°)")

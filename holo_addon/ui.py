@@ -16,16 +16,21 @@ class HOLO_PT_scene(bpy.types.Panel):
         layout = self.layout
         layout.use_property_split = True
         layout.prop(h, "output_dir")
+        layout.prop(h, "mode")
         col = layout.column(heading="Recording")
-        col.prop(h, "max_resolution")
-        col.prop(h, "wavelength")
-        col.prop(h, "iterations")
+        if h.mode == "CAMERA":
+            col.prop(h, "samples")
+        else:
+            col.prop(h, "max_resolution")
+            col.prop(h, "wavelength")
+            col.prop(h, "iterations")
         col.prop(h, "seed")
         col = layout.column(heading="Image")
         col.prop(h, "supersample")
-        col.prop(h, "composition")
         col.prop(h, "exposure")
-        col.prop(h, "opacity_threshold")
+        if h.mode == "PLATE":
+            col.prop(h, "composition")
+            col.prop(h, "opacity_threshold")
         layout.prop(h, "pass_on_render")
         col = layout.column(align=True)
         col.operator("holo.record_hologram", icon="REC")

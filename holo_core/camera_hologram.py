@@ -560,12 +560,15 @@ class _Accumulator:
 
     def result(self):
         from .render import BACKGROUND_DEPTH, RenderResult
-        from .speckle import downsample
+        from .speckle import box_mean, downsample
         o, n, s = self.optics, self.n, self.optics.supersample
         radiance = downsample(self.rgb / n, s)
         coverage = downsample(self.coverage / n, s)
         lo, hi = COVERAGE_EDGE
-        alpha = np.clip((coverage - lo) / (hi - lo), 0, 1).astype(np.float32)
+        # a pixel's coverage, or its 3×3 neighbourhood's where higher: a speckle minimum
+        # inside a surface leaves no hole, while a straight edge keeps its half-way crossing
+        solid = np.maximum(coverage, box_mean(coverage, 1))
+        alpha = np.clip((solid - lo) / (hi - lo), 0, 1).astype(np.float32)
         # the surfaces' own colour: radiance over coverage (what the pass stores premultiplied
         # by alpha); the colour and the partner share their speckle, which this divides out
         colour = radiance / np.maximum(coverage, COVERAGE_FLOOR)[..., None] * self.exposure

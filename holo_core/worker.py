@@ -42,16 +42,24 @@ def run_job(job: dict, progress: jobs.Progress = None) -> dict:
     """Record the holograms (unless ``job['current']``) and render the pass.
 
     ``job``: ``points``, ``triangles`` (lists of :class:`holo_core.emitters.Mesh`, world metres),
-    ``plate``, ``camera``, ``settings`` (dict: max_resolution, wavelength [m] or None,
-    iterations, supersample, composition, exposure, opacity_threshold, seed), ``holograms``
-    (paths of the iterations' files), ``current``, ``render``, ``output_dir``, ``frame``.
-    Returns ``recorded``, ``pass_path``, ``frame_path`` and ``info``. Files are written only
-    after every stage has finished, each one atomically."""
+    ``plate``, ``camera``, ``settings`` (dict: mode 'CAMERA' or 'PLATE', samples,
+    max_resolution, wavelength [m] or None, iterations, supersample, composition, exposure,
+    opacity_threshold, seed), ``holograms`` (paths of the iterations' files), ``current``,
+    ``render``, ``output_dir``, ``frame``. 'CAMERA' renders the camera hologram
+    (:mod:`holo_core.camera_hologram`; no plate, no hologram file); 'PLATE' records the
+    plate's holograms (unless ``current``) and views them. Returns ``recorded``,
+    ``pass_path``, ``frame_path`` and ``info``. Files are written only after every stage has
+    finished, each one atomically."""
     from .hologram_io import read_hologram, write_hologram
-    from .image_files import write_atomic
     from .record import record_hologram
-    from .render import render_view, write_view
+    from .render import render_view
     s, current, n = job["settings"], job["current"], len(job["holograms"])
+    if s.get("mode", "PLATE") == "CAMERA":
+        from .camera_hologram import render_camera
+        view = render_camera(job["points"] + job["triangles"], job["camera"],
+                             samples=s["samples"], supersample=s["supersample"],
+                             exposure=s["exposure"], seed=s["seed"], progress=progress)
+        return _write_pass(job, view, {"recorded": False})
     record_share = 0.0 if current else (0.85 if job["render"] else 1.0)
     if current:
         holos = [read_hologram(p) for p in job["holograms"]]
@@ -68,13 +76,21 @@ def run_job(job: dict, progress: jobs.Progress = None) -> dict:
                            progress=jobs.scaled(progress, record_share, 1.0))
         view.rgb[...] *= s["exposure"]
     # every stage has finished: only now are files replaced (each one atomically)
-    out = Path(job["output_dir"])
-    out.mkdir(parents=True, exist_ok=True)
+    Path(job["output_dir"]).mkdir(parents=True, exist_ok=True)
     if not current:
         for path, h in zip(job["holograms"], holos):
             write_hologram(path, h)
-    result = {"recorded": not current, "pass_path": None, "frame_path": None, "info": {}}
+    return _write_pass(job, view, {"recorded": not current})
+
+
+def _write_pass(job, view, result) -> dict:
+    """The pass of frame N (``holo_pass_NNNN.exr`` and the latest ``holo_pass.exr``)."""
+    from .image_files import write_atomic
+    from .render import write_view
+    result.update(pass_path=None, frame_path=None, info={})
     if view is not None:
+        out = Path(job["output_dir"])
+        out.mkdir(parents=True, exist_ok=True)
         frame_path = out / f"holo_pass_{job['frame']:04d}.exr"
         write_view(view, frame_path)
         result.update(pass_path=write_atomic(out / PASS_NAME, frame_path.read_bytes()),
