@@ -18,7 +18,8 @@ A camera uses only the light that reaches its pupil, so the samples go there:
 - Object wave (:func:`object_wave`). By depth layers: O = Σ_l exp(ik(√(ρ²+z_l²) − z_l))·
   F⁻¹[S_l], where S_l holds the layer's emitters as amp·exp(i(kR + φ)) at their bins. Each
   plane wave is exact; each layer's curvature is that of its distance (the Fresnel
-  approximation per layer, spaced so that the error stays below π/4 at the pupil's rim).
+  approximation per layer, spaced so that the error stays within a quarter wave at the pupil's
+  rim: Rayleigh's depth of focus).
 - Image (:func:`render_camera`). The pupil cut by the iris (a raised-cosine rim against
   ringing, Fig. 9), the thin lens of Eq. 24, and the angular spectrum read at each pixel's
   direction cosines (Eq. 22) by the ES kernel of a non-uniform FFT: no interpolation blur.
@@ -48,7 +49,8 @@ from .propagation import grid
 
 log = logging.getLogger(__name__)
 SUPERSAMPLE = 2        # fine pixels per pixel (per axis): the pupil resolves one fine pixel
-LAYER_PHASE = math.pi / 4  # the largest curvature error of a layer at the pupil's rim [rad]
+LAYER_PHASE = math.pi / 2  # a layer's largest curvature error at the pupil's rim [rad]: a
+                           # quarter wave, Rayleigh's depth of focus
 MAX_LAYERS = 512
 IRIS_TAPER = 0.1       # the iris's raised-cosine rim, a fraction of its radius
 DEPTH_MARGIN = 1.25    # the depth pair's unambiguous range over the scene's depth extent

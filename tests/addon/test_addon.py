@@ -12,7 +12,6 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from holo_core import jobs  # noqa: E402
 from holo_core.render import RenderResult, write_view  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -306,24 +305,6 @@ def _earlier_outputs(scene, *, size=(32, 24), iterations=1, max_resolution=256):
     for p, data in earlier.items():
         p.write_bytes(data)
     return job, earlier
-
-
-def test_cancelled_run_keeps_earlier_outputs(empty_scene):
-    from holo_addon import pipeline
-    job, earlier = _earlier_outputs(empty_scene)
-    calls = []
-
-    def cancel(f):
-        calls.append(f)
-        if len(calls) > 1:
-            raise jobs.Cancelled()
-
-    with pytest.raises(jobs.Cancelled):
-        pipeline.run(job, cancel)
-    assert len(calls) == 2, f"the run must stop at the cancel, not later: {len(calls)} calls"
-    for p, data in earlier.items():
-        assert p.read_bytes() == data, f"{p.name} changed by a cancelled run"
-    assert sorted(x.name for x in job.output_dir.iterdir()) == sorted(p.name for p in earlier)
 
 
 def test_missing_or_corrupt_hologram_is_reported(empty_scene):
