@@ -2,7 +2,8 @@
 
 The work runs in a worker process (:mod:`holo_core.worker`; no OpenCL in Blender's process). In
 the interface a modal timer drains its messages (progress bar, status text, warnings as they
-arise) while every other event passes through, so Blender stays usable; Esc kills the worker.
+arise) while every other event passes through, so Blender stays usable; Esc kills the worker,
+Enter stops a camera hologram's samples early and keeps the pass so far.
 ``execute()`` (``blender --background``, scripts) waits for the same worker. Errors, a crashed
 or killed worker included, reach the user through ``self.report``.
 """
@@ -14,6 +15,7 @@ import logging
 import bpy
 
 from holo_core.hologram_io import HologramFileError
+from holo_core.image_files import write_atomic
 from holo_core.worker import WorkerError
 
 from . import compositing, pipeline
@@ -89,6 +91,9 @@ class _PipelineOperator:
             self.cancel(context)
             self.report({"WARNING"}, f"{self.bl_label} cancelled; earlier results kept")
             return {"CANCELLED"}
+        if event.type in {"RET", "NUMPAD_ENTER"} and event.value == "PRESS" and \
+                self._worker.partial:
+            return self._keep(context)
         if event.type != "TIMER" or event.timer is not self._timer:
             return {"PASS_THROUGH"}  # the interface stays usable while the worker runs
         wm = context.window_manager
@@ -99,6 +104,10 @@ class _PipelineOperator:
                                                   f"(Esc to cancel)")
             elif kind == "log":
                 _report_log(self, *value)
+            elif kind == "partial":
+                context.workspace.status_text_set(
+                    f"Holo: {self.bl_label}: {value} samples so far (Enter keeps them, Esc "
+                    f"cancels)")
             elif kind == "failed":
                 self._end(context)
                 self.report({"ERROR"}, f"{self.bl_label} failed: {value}")
@@ -107,6 +116,23 @@ class _PipelineOperator:
                 self._end(context)
                 return self._done(context, self._job, pipeline.outcome(self._job, value))
         return {"PASS_THROUGH"}
+
+    def _keep(self, context):
+        """Stop the samples here: the latest running pass becomes the frame's pass."""
+        job = self._job
+        frame = job.output_dir / f"holo_pass_{job.frame:04d}.exr"
+        job.output_dir.mkdir(parents=True, exist_ok=True)
+        samples = self._worker.stop_and_keep(frame)
+        self._end(context)
+        if not samples:
+            self.report({"WARNING"}, f"{self.bl_label} stopped before its first sample; "
+                                     f"earlier results kept")
+            return {"CANCELLED"}
+        latest = write_atomic(job.output_dir / pipeline.PASS_NAME, frame.read_bytes())
+        self.report({"INFO"}, f"stopped at {samples} samples; that pass is kept")
+        return self._done(context, job, pipeline.outcome(job, {
+            "recorded": False, "pass_path": latest, "frame_path": frame,
+            "info": {"samples": samples}}))
 
     def cancel(self, context):
         """Esc, or Blender ending the operator (a file loaded, the window closed)."""

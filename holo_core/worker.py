@@ -38,7 +38,7 @@ class WorkerError(RuntimeError):
     """The worker failed: the message says how (its error, or how the process died)."""
 
 
-def run_job(job: dict, progress: jobs.Progress = None) -> dict:
+def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
     """Record the holograms (unless ``job['current']``) and render the pass.
 
     ``job``: ``points``, ``triangles`` (lists of :class:`holo_core.emitters.Mesh`, world metres),
@@ -49,16 +49,22 @@ def run_job(job: dict, progress: jobs.Progress = None) -> dict:
     (:mod:`holo_core.camera_hologram`; no plate, no hologram file); 'PLATE' records the
     plate's holograms (unless ``current``) and views them. Returns ``recorded``,
     ``pass_path``, ``frame_path`` and ``info``. Files are written only after every stage has
-    finished, each one atomically."""
+    finished, each one atomically; ``on_partial(view, n)`` gets a camera hologram's running
+    result after 1, 2, 4, 8 … samples (the user may stop there and keep it)."""
     from .hologram_io import read_hologram, write_hologram
     from .record import record_hologram
     from .render import render_view
     s, current, n = job["settings"], job["current"], len(job["holograms"])
     if s.get("mode", "PLATE") == "CAMERA":
         from .camera_hologram import render_camera
+        def sample(view, n):
+            if on_partial is not None and n < s["samples"] and not n & (n - 1):
+                on_partial(view, n)
+
         view = render_camera(job["points"] + job["triangles"], job["camera"],
                              samples=s["samples"], supersample=s["supersample"],
-                             exposure=s["exposure"], seed=s["seed"], progress=progress)
+                             exposure=s["exposure"], seed=s["seed"], progress=progress,
+                             on_sample=sample)
         return _write_pass(job, view, {"recorded": False})
     record_share = 0.0 if current else (0.85 if job["render"] else 1.0)
     if current:
@@ -125,7 +131,12 @@ def main(folder: str) -> int:
     try:
         with open(folder / "job.pickle", "rb") as f:
             job = pickle.load(f)
-        result = run_job(job, lambda f: send({"progress": round(f, 4)}))
+        def partial(view, n):  # a complete pass of fewer samples, kept only if the user asks
+            from .render import write_view
+            write_view(view, folder / "partial.exr")
+            send({"partial": n})
+
+        result = run_job(job, lambda f: send({"progress": round(f, 4)}), partial)
         tmp = folder / "result.pickle.tmp"
         with open(tmp, "wb") as f:
             pickle.dump(result, f)
@@ -173,8 +184,10 @@ class Worker:
     """One job in a worker process.
 
     ``poll()`` returns the messages that arrived, never blocking: ``("progress", fraction)``,
-    ``("log", (level, text))``, and last ``("done", result)`` or ``("failed", message)``.
-    ``wait()`` runs it to the end (``blender --background``); ``cancel()`` kills it.
+    ``("log", (level, text))``, ``("partial", samples)`` (a running camera-hologram pass), and
+    last ``("done", result)`` or ``("failed", message)``. ``wait()`` runs it to the end
+    (``blender --background``); ``cancel()`` kills it; ``stop_and_keep()`` kills it and hands
+    over its latest running pass.
     """
 
     def __init__(self, job: dict, *, paths=(), device: str | None = None):
@@ -189,6 +202,7 @@ class Worker:
         self._messages: queue.SimpleQueue = queue.SimpleQueue()
         self._error = None
         self.finished = False
+        self.partial = 0  # samples of the latest running pass in the folder
         threading.Thread(target=self._read, daemon=True, name="holo-worker-reader").start()
 
     def _read(self):
@@ -224,6 +238,9 @@ class Worker:
             return ("progress", float(msg["progress"]))
         if "log" in msg:
             return ("log", tuple(msg["log"]))
+        if "partial" in msg:
+            self.partial = int(msg["partial"])
+            return ("partial", self.partial)
         if "error" in msg:
             self._error = msg["error"]
             return self._translate(None)
@@ -263,6 +280,24 @@ class Worker:
         self.process.wait()
         self.finished = True
         self._cleanup()
+
+    def stop_and_keep(self, path) -> int:
+        """Kill the worker and write its latest running pass to ``path`` (atomically, with its
+        PNG): returns its samples, or 0 when there was none yet (nothing is written)."""
+        from .image_files import write_atomic
+        self.poll()  # the newest partial message
+        if self.process.poll() is None:
+            self.process.kill()
+        self.process.wait()
+        src = self.folder / "partial.exr"
+        kept = self.partial if self.partial and src.is_file() else 0
+        if kept:
+            path = Path(path)
+            write_atomic(path.with_suffix(".png"), src.with_suffix(".png").read_bytes())
+            write_atomic(path, src.read_bytes())
+        self.finished = True
+        self._cleanup()
+        return kept
 
     def _cleanup(self):
         self._stderr.close()

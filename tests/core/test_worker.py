@@ -144,3 +144,18 @@ def test_a_raising_worker_reports_its_error_and_writes_nothing(tmp_path):
     j["settings"]["composition"] = lambda: "mean"  # cannot even be handed over
     with pytest.raises((pickle.PicklingError, TypeError, AttributeError)):
         worker.Worker(j)
+
+
+def test_stop_and_keep_hands_over_a_complete_running_pass(tmp_path):
+    """A camera hologram stopped after its first running passes: the pass kept is a whole
+    file of that many samples (not the cancelled run's nothing)."""
+    j = job(tmp_path, resolution=(160, 120))
+    j["settings"].update(mode="CAMERA", samples=64)
+    w = worker.Worker(j)
+    while not any(kind == "partial" and n >= 2 for kind, n in w.poll(timeout=0.1)):
+        assert not w.finished, "the worker ended before its second running pass"
+    kept = w.stop_and_keep(tmp_path / "kept.exr")
+    assert kept >= 2 and w.process.returncode == -signal.SIGKILL
+    p = _pass(tmp_path / "kept.exr")
+    assert np.asarray(p["ViewLayer.Combined.A"]).max() == 1.0, "the cube is missing"
+    assert (tmp_path / "kept.png").is_file() and not w.folder.exists()
