@@ -110,8 +110,11 @@ def choose(plate_size, points, *, camera=None, resolution=None,
                  spacing=max(lam / (2 * band) / math.sqrt(2), footprint / 2))
     log.info("sampling: %s", s.describe())
     if lam_image is not None and lam > 1.5 * lam_image:
-        log.warning("sampling: the image needs λ <= %.3g m for two-pixel sharpness; the "
-                    "hologram of %d samples allows %.3g m, so the view is %.1f× softer "
-                    "(raise the resolution)", lam_image, resolution, lam,
-                    math.sqrt(lam / lam_image))
+        # the spot grows as √λ at the pinhole's best (λ = 4Δ²r gives two pixels), and the
+        # sharp λ needs the hologram's side to grow as 1/λ
+        log.warning("sampling: this plate's view resolves about %.1f px (2 px at best): the "
+                    "image needs λ <= %.3g m, a hologram of %d samples allows %.3g m; %d "
+                    "samples (Max Hologram Size) or the camera mode would make it sharp",
+                    2 * math.sqrt(lam / lam_image), lam_image, resolution, lam,
+                    math.ceil(resolution * lam / lam_image))
     return s
