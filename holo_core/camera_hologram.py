@@ -45,7 +45,12 @@ from . import jobs, validate
 from .camera import Camera
 from .depth import from_cross_spectrum, partner_wavelength
 from .emitters import Mesh, _colour
+from .opencl import get_runtime
+from .opencl.arrays import empty
 from .propagation import grid
+from .propagation.tilt import _cached, _es_table, es_transform
+from .render import BACKGROUND_DEPTH, RenderResult
+from .speckle import box_mean, downsample
 
 log = logging.getLogger(__name__)
 SUPERSAMPLE = 2        # fine pixels per pixel (per axis): the pupil resolves one fine pixel
@@ -341,8 +346,6 @@ class _Fields:
     """Device state of one render: the emitters' bins, amplitudes and phases, work arrays."""
 
     def __init__(self, rt, em: Emitters, optics: PupilOptics, camera_fine: Camera):
-        from .opencl.arrays import cached, empty
-        from .propagation.tilt import _es_table, es_transform
         self.rt, self.em, self.optics = rt, em, optics
         h, w = optics.shape
         self.index = rt.to_device(em.index.astype(np.int32))
@@ -355,12 +358,13 @@ class _Fields:
         self.padded = empty(rt, (2 * h, 2 * w))
         self.apod = [rt.to_device(1 / es_transform(grid.signed_indices(n) / (2 * n)), np.float32)
                      for n in (h, w)]
-        self.es = cached(rt, ("es-table",), lambda: (_es_table(), None))[0]
+        self.es = _cached(rt, "es-table", _es_table)  # the table tilt.py reads too
         alpha, beta, _ = camera_fine.direction_cosines()
         self.u = rt.to_device(2 * alpha / optics.bin, np.float32)
         self.v = rt.to_device(2 * beta / optics.bin, np.float32)
         self.pixels = empty(rt, alpha.shape)
-        self.window = _iris(optics, h, w)
+        # |A|² / (N·Σw²) is the emitters' intensity (Parseval), w the iris on the samples
+        self.scale = 1 / math.sqrt(h * w * float(np.sum(_iris(optics, h, w) ** 2)))
         self.options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
 
     def kernel(self, name):
@@ -402,10 +406,9 @@ class _Fields:
             np.float32(IRIS_TAPER), np.float32(2 * np.pi / lam), np.float32(optics.focus or 0),
             self.apod[0].data, self.apod[1].data)
         rt.fft.forward(self.padded)
-        scale = 1 / math.sqrt(h * w * float(np.sum(self.window ** 2)))
         self.kernel("read_pixels")(rt.queue, (self.pixels.size,), None, self.pixels.data,
                                    self.padded.data, np.int32(2 * h), np.int32(2 * w),
-                                   self.u.data, self.v.data, np.float32(scale), self.es.data)
+                                   self.u.data, self.v.data, np.float32(self.scale), self.es.data)
         return self.pixels.get()
 
 
@@ -424,7 +427,6 @@ def object_wave(em: Emitters, optics: PupilOptics, camera: Camera, *, field=0,
     """The camera hologram: the object wave of colour channel ``field`` (0-2) or the depth
     partner (3) on the pupil (h, w) [field units], centred (row, col of the optical axis at
     (h//2, w//2)), pitch ``optics.pitch(λ)``, emitter phases drawn from ``seed``."""
-    from .opencl import get_runtime
     rt = get_runtime()
     fields = _Fields(rt, em, optics, replace(camera, resolution=(1, 1)))
     phases = rt.to_device(_phases(len(em.index), seed), np.float32)
@@ -437,8 +439,9 @@ def _phases(n, seed) -> np.ndarray:
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class HologramRecording:
-    """An intensity hologram of a pupil's object wave: ``intensity`` (h, 4w) float32, the
-    reference's carrier ``carrier`` [cycles per sample of the fine grid] and ``amplitude``."""
+    """An intensity hologram of a pupil's object wave: ``intensity`` (h, 4w) float32 [field
+    units²], the reference's ``carrier`` [cycles per sample of the fine grid] and its
+    ``amplitude`` [field units]."""
 
     intensity: np.ndarray
     carrier: float
@@ -456,17 +459,22 @@ def intensity_hologram(o: np.ndarray, *, beam_ratio=4.0) -> HologramRecording:
     fine = np.fft.fftshift(np.fft.ifft2(np.fft.ifftshift(big))) * 4
     amplitude = math.sqrt(beam_ratio * float(np.mean(np.abs(o) ** 2)))
     carrier = 1.5 * w / (4 * w)
-    ref = amplitude * np.exp(2j * np.pi * carrier * np.arange(4 * w))[None, :]
+    ref = _reference(amplitude, carrier, 4 * w)
     return HologramRecording(intensity=np.abs(fine + ref).astype(np.float32) ** 2,
                              carrier=carrier, amplitude=amplitude)
+
+
+def _reference(amplitude, carrier, n) -> np.ndarray:
+    """The plane reference wave R along a row of ``n`` samples (Eq. 4)."""
+    return amplitude * np.exp(2j * np.pi * carrier * np.arange(n))[None, :]
 
 
 def reconstruct_object_wave(rec: HologramRecording) -> np.ndarray:
     """R'·H with the DC term suppressed (its mean removed) and the twin and |O|² terms filtered
     off (Sect. VI): the centred pupil wave (h, w) again."""
-    hh, ww = rec.intensity.shape
+    ww = rec.intensity.shape[1]
     w = ww // 4
-    ref = rec.amplitude * np.exp(2j * np.pi * rec.carrier * np.arange(ww))[None, :]
+    ref = _reference(rec.amplitude, rec.carrier, ww)
     u = (rec.intensity - rec.intensity.mean()) * ref / rec.amplitude**2  # O·R*·R = O|R|²
     spec = np.fft.fftshift(np.fft.fft2(np.fft.ifftshift(u)))
     o = spec[:, 3 * w // 2: 3 * w // 2 + w]
@@ -491,8 +499,6 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     via : 'object_wave' (the ideal reconstruction) or 'hologram' (each look's object wave
         recorded as an intensity hologram with an off-axis reference and reconstructed).
     """
-    from .opencl import get_runtime
-    from .render import RenderResult  # noqa: F401  (the result type)
     if camera is None:
         raise ValueError("render_camera needs a camera")
     if via not in ("object_wave", "hologram"):
@@ -555,14 +561,11 @@ class _Accumulator:
         self.coverage = self.coverage + cov
         self.cross = self.cross + (images[0] + images[1] + images[2]) * np.conj(images[3])
         # the colour this look alone would give, for the spread between looks
-        from .speckle import downsample
         look = downsample(rgb.mean(-1), s) / np.maximum(downsample(cov, s), COVERAGE_FLOOR)
         self.lum, self.lum2 = self.lum + look, self.lum2 + look * look
         self.n += 1
 
-    def result(self):
-        from .render import BACKGROUND_DEPTH, RenderResult
-        from .speckle import box_mean, downsample
+    def result(self) -> RenderResult:
         o, n, s = self.optics, self.n, self.optics.supersample
         radiance = downsample(self.rgb / n, s)
         coverage = downsample(self.coverage / n, s)

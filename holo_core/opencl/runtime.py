@@ -93,7 +93,8 @@ def _probe(device: cl.Device) -> str:
         cl.Kernel(prg, "probe")(queue, x.shape, None, xd.data, yd.data)
         got = yd.get()
     except Exception as e:  # any driver failure makes the device unusable, nothing more
-        return f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else e!r}"
+        first_line = (str(e).strip().splitlines() or [repr(e)])[0]
+        return f"{type(e).__name__}: {first_line}"
     err = float(np.max(np.abs(got - want)) / np.max(np.abs(want)))
     return "" if err < 1e-5 else f"wrong probe result (relative error {err:.1e})"
 

@@ -3,7 +3,6 @@ sum: where points land, the thin lens's circle of confusion, exposure across f-s
 object wave on the pupil, the intensity-hologram route, silhouettes and depth of meshes."""
 
 import math
-from dataclasses import replace
 
 import numpy as np
 import pytest
