@@ -36,6 +36,7 @@ def record(args) -> int:
     import dataclasses
 
     import numpy as np
+
     from .emitters import default_spacing, read_mesh, sample_points
     from .hologram_io import write_hologram
     from .record import Reference, record_points
@@ -64,6 +65,7 @@ def record(args) -> int:
 
 def info(args) -> int:
     import json
+
     from .hologram_io import metadata, read_hologram
     print(json.dumps(metadata(read_hologram(args.hologram)), indent=2))
     return 0
@@ -71,6 +73,7 @@ def info(args) -> int:
 
 def render(args) -> int:
     import numpy as np
+
     from .camera import Camera, look_at
     from .hologram_io import read_hologram
     from .render import render_view, write_view

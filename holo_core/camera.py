@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import validate
+from .validate import InputError
 
 SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
 
@@ -50,12 +51,16 @@ class Camera:
     def __post_init__(self):
         m = np.asarray(self.matrix_world, np.float64)
         if m.shape != (4, 4) or not np.isfinite(m).all():
-            raise ValueError(f"matrix_world must be a finite 4x4 matrix; got shape {m.shape}")
+            raise InputError(f"matrix_world must be a finite 4x4 matrix; got shape {m.shape}")
+        if np.linalg.cond(m[:3, :3]) > 1e12 or not np.array_equal(m[3], [0, 0, 0, 1]):
+            raise InputError("matrix_world must be an invertible pose (rotation, positive "
+                             "scale, translation; bottom row 0 0 0 1); its 3x3 part is singular "
+                             "or its bottom row is not 0 0 0 1")
         object.__setattr__(self, "matrix_world", m)
         for name in ("lens", "sensor_width", "sensor_height"):
             validate.positive(name, getattr(self, name), "mm")
         if self.sensor_fit not in SENSOR_FITS:
-            raise ValueError(f"sensor_fit must be one of {SENSOR_FITS}; got {self.sensor_fit!r}")
+            raise InputError(f"sensor_fit must be one of {SENSOR_FITS}; got {self.sensor_fit!r}")
         validate.finite("shift_x", self.shift_x)
         validate.finite("shift_y", self.shift_y)
         w, h = validate.shape2d("resolution", self.resolution)
@@ -66,7 +71,7 @@ class Camera:
             validate.positive("fstop", self.fstop)
             validate.positive("focus_distance", self.focus_distance, "m")
         elif self.focus_distance is not None:
-            raise ValueError("focus_distance needs an fstop (None is a pinhole, focused "
+            raise InputError("focus_distance needs an fstop (None is a pinhole, focused "
                              "everywhere)")
 
     # -- pose ---------------------------------------------------------------------------------
@@ -151,7 +156,7 @@ def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
     eye, target = np.asarray(eye, np.float64), np.asarray(target, np.float64)
     back = eye - target
     if not np.linalg.norm(back) > 0:
-        raise ValueError("look_at needs target != eye")
+        raise InputError("look_at needs target != eye")
     z = back / np.linalg.norm(back)
     x = np.cross(up, z)
     if np.linalg.norm(x) < 1e-12:

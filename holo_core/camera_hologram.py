@@ -51,6 +51,7 @@ from .propagation import grid
 from .propagation.tilt import _cached, _es_table, es_transform
 from .render import BACKGROUND_DEPTH, RenderResult
 from .speckle import box_mean, downsample
+from .validate import InputError
 
 log = logging.getLogger(__name__)
 SUPERSAMPLE = 2        # fine pixels per pixel (per axis): the pupil resolves one fine pixel
@@ -336,7 +337,7 @@ def depth_range(meshes, camera: Camera, points=None) -> tuple[float, float]:
     z = np.concatenate(zs) if zs else np.zeros(0)
     z = z[z > 0]
     if not len(z):
-        raise ValueError("no emitter lies in front of the camera")
+        raise InputError("no emitter lies in front of the camera")
     return float(z.min()), float(z.max())
 
 
@@ -500,9 +501,9 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
         recorded as an intensity hologram with an off-axis reference and reconstructed).
     """
     if camera is None:
-        raise ValueError("render_camera needs a camera")
+        raise InputError("render_camera needs a camera")
     if via not in ("object_wave", "hologram"):
-        raise ValueError(f"via must be 'object_wave' or 'hologram'; got {via!r}")
+        raise InputError(f"via must be 'object_wave' or 'hologram'; got {via!r}")
     samples = int(validate.at_least("samples", samples, 1))
     meshes = [meshes] if isinstance(meshes, Mesh) else list(meshes)
     pos = None if points is None else np.asarray(points[0], np.float64).reshape(-1, 3)
@@ -512,7 +513,7 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     if pos is not None:
         em = _merged(em, point_emitters(pos, points[1], camera, optics), optics)
     if em is None or not len(em.index):
-        raise ValueError("no emitter is visible to the camera")
+        raise InputError("no emitter is visible to the camera")
     fine = replace(camera, resolution=tuple(r * supersample for r in camera.resolution))
     rt = get_runtime()
     fields = _Fields(rt, em, optics, fine)

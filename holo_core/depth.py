@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import validate
+from .validate import InputError
 
 
 def partner_wavelength(wavelength, half_range) -> float:
@@ -37,7 +38,7 @@ def from_cross_spectrum(cross, *, wavelengths, centre, focus=None) -> np.ndarray
     dark speckles, whose phase is noise, barely move."""
     lam1, lam2 = (validate.positive("wavelengths", w, "m") for w in wavelengths)
     if lam1 == lam2:
-        raise ValueError("the depth pair needs two different wavelengths")
+        raise InputError("the depth pair needs two different wavelengths")
     dk = 2 * np.pi * (1 / lam1 - 1 / lam2)
     f = 0.0 if focus is None else focus
     x_c = centre - f

@@ -25,6 +25,7 @@ from .opencl import get_runtime
 from .opencl.arrays import cached, empty, window
 from .propagation import grid
 from .propagation.convolution import convolve
+from .validate import InputError
 
 SEGMENTS = (32, 16, 8, 4)  # columns per recurrence segment, longest first (error ~ SEG³)
 PHASE_TOLERANCE = 5e-5  # rad, the recurrence's largest phase error (see ``segment``) ...
@@ -97,8 +98,9 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
     """
     g = _grid(validate.shape2d("shape", shape), wavelength, pitch, band)
     pos, amp = _points(positions, amplitudes)
+    check_distance(pos, g)
     if method not in ("auto", "direct", "wrp"):
-        raise ValueError(f"method must be 'auto', 'direct' or 'wrp'; got {method!r}")
+        raise InputError(f"method must be 'auto', 'direct' or 'wrp'; got {method!r}")
     if method == "auto":
         method = "wrp" if wrp_seconds(pos, g) < direct_seconds(pos, g) else "direct"
     rt = get_runtime()
@@ -121,7 +123,7 @@ def _grid(shape, wavelength, pitch, band) -> Grid:
         return g
     most = CONE_FILL * g.wavelength / (2 * g.pitch)
     if not 0 < band <= most * (1 + 1e-9):
-        raise ValueError(f"band must be in (0, {most:.4g}] (sin θ the pitch samples); "
+        raise InputError(f"band must be in (0, {most:.4g}] (sin θ the pitch samples); "
                          f"got {band!r}")
     return g._replace(fill=band * 2 * g.pitch / g.wavelength)
 
@@ -130,17 +132,40 @@ def _points(positions, amplitudes):
     pos = np.asarray(positions, np.float64)
     amp = np.asarray(amplitudes, np.complex128)
     if pos.ndim != 2 or pos.shape[1] != 3:
-        raise ValueError(f"positions must be an (N, 3) array [m]; got shape {pos.shape}")
+        raise InputError(f"positions must be an (N, 3) array [m]; got shape {pos.shape}")
     if amp.ndim not in (1, 2) or len(amp) != len(pos) or (amp.ndim == 2 and not amp.shape[1]):
-        raise ValueError(f"amplitudes must be (N,) or (N, C) with N = {len(pos)} points; "
+        raise InputError(f"amplitudes must be (N,) or (N, C) with N = {len(pos)} points; "
                          f"got shape {amp.shape}")
     amp = amp[:, None] if amp.ndim == 1 else amp
     if not (np.isfinite(pos).all() and np.isfinite(amp).all()):
-        raise ValueError("positions and amplitudes must be finite")
+        raise InputError("positions and amplitudes must be finite")
     if len(pos) and pos[:, 2].max() >= 0:
-        raise ValueError(f"positions: every z must be < 0 m (in front of the hologram, light "
+        raise InputError(f"positions: every z must be < 0 m (in front of the hologram, light "
                          f"travelling +z); the largest is {pos[:, 2].max():.4g} m")
     return pos, amp
+
+
+MIN_CONE_PITCHES = 2  # a point's cone must reach this many samples across on the plate
+
+
+def safe_distance(g: Grid) -> float:
+    """The least distance [m] from the plate at which a point's cone (tan θ = ``g.cone``) still
+    spans ``MIN_CONE_PITCHES`` samples: nearer, the plate cannot sample its wave (its spot is
+    smaller than a sample and 1/r grows without bound), so the recording would be wrong."""
+    return max(g.pitch, MIN_CONE_PITCHES * g.pitch / g.cone)
+
+
+def check_distance(pos, g: Grid) -> None:
+    """:class:`InputError` naming the safe distance when a point is nearer to the plate."""
+    if not len(pos):
+        return
+    safe, nearest = safe_distance(g), float(np.abs(pos[:, 2]).min())
+    if nearest < safe:
+        count = int((np.abs(pos[:, 2]) < safe).sum())
+        raise InputError(f"positions: {count} point(s) lie closer to the plate than it can "
+                         f"record ({nearest:.3g} m, the nearest); at pitch {g.pitch:.3g} m and "
+                         f"λ = {g.wavelength:.3g} m points need |z| >= {safe:.3g} m (move the "
+                         f"objects back or use a finer pitch)")
 
 
 def _pixels_reached(pos, g: Grid, z) -> np.ndarray:

@@ -13,6 +13,7 @@ import numpy as np
 
 from .hologram_io import Hologram
 from .record import Reference, reference_wave
+from .validate import InputError
 
 
 def reconstruct(hologram: Hologram, colour: int = 0, *, dc_suppression=True) -> np.ndarray:
@@ -23,7 +24,7 @@ def reconstruct(hologram: Hologram, colour: int = 0, *, dc_suppression=True) -> 
     """
     n = len(hologram.wavelengths)
     if not 0 <= colour < n:
-        raise ValueError(f"colour must be in [0, {n - 1}]; got {colour!r}")
+        raise InputError(f"colour must be in [0, {n - 1}]; got {colour!r}")
     h = hologram.intensity[colour].astype(np.float64)
     if dc_suppression:
         h = h - h.mean()

@@ -16,6 +16,7 @@ from . import jobs, validate
 from .hologram_io import Hologram
 from .point_sources import cone_filter, point_wave
 from .propagation import grid
+from .validate import InputError
 
 DEFAULT_WAVELENGTHS = (633e-9, 532e-9, 473e-9)  # HeNe red, Nd:YAG green, DPSS blue [m]
 MIN_OBLIQUITY = 0.1  # a primitive seen more edge-on than this (cos) gets no brighter
@@ -47,7 +48,7 @@ class Reference:
     def __post_init__(self):
         a = validate.finite("reference angle", self.angle, "rad")
         if not 0 <= a < math.pi / 2:
-            raise ValueError(f"reference angle must be in [0, π/2) rad; got {self.angle!r}")
+            raise InputError(f"reference angle must be in [0, π/2) rad; got {self.angle!r}")
         validate.finite("reference azimuth", self.azimuth, "rad")
         validate.positive("reference beam_ratio", self.beam_ratio)
 
@@ -68,7 +69,7 @@ class Reference:
                        f"at λ = {wavelength:.4g} m (Eq. 19); with pitch {pitch:.4g} m the "
                        f"largest safe angle is {safe:.4g} rad")
             if not self.allow_aliasing:
-                raise ValueError(message)
+                raise InputError(message)
             validate.warn_sampling(message)
 
 
@@ -129,15 +130,17 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
         The objects' bounding box [m] in the hologram frame; default: the points'.
     """
     pos = np.asarray(positions, np.float64)
+    if not pos.size and extra_wave is None:
+        raise InputError("positions holds no points: there is nothing to record")
     lambdas = tuple(validate.positive("wavelengths", w, "m") for w in np.atleast_1d(wavelengths))
     if not lambdas:
-        raise ValueError("wavelengths must hold at least one wavelength [m]")
+        raise InputError("wavelengths must hold at least one wavelength [m]")
     cols = np.asarray(colours, np.float64).reshape(len(pos), -1 if len(pos) else len(lambdas))
     if cols.shape[1] != len(lambdas):
-        raise ValueError(f"colours must have one column per wavelength ({len(lambdas)}); "
+        raise InputError(f"colours must have one column per wavelength ({len(lambdas)}); "
                          f"got {cols.shape[1]}")
     if not np.isfinite(cols).all() or (cols < 0).any():
-        raise ValueError("colours must be finite intensities >= 0")
+        raise InputError("colours must be finite intensities >= 0")
     if phases is None:
         phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, len(pos))
     phases = np.asarray(phases, np.float64).reshape(len(pos))
@@ -158,6 +161,9 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
         o = objects[c]
         if extra_wave is not None:
             o = o + extra_wave(c, lam)
+        if not np.isfinite(o).all():  # never a hologram of NaN: it would be written as one
+            raise RuntimeError(f"the object wave at λ = {lam:.4g} m holds non-finite samples "
+                               f"(the OpenCL device's arithmetic failed); nothing was recorded")
         a_r = math.sqrt(reference.beam_ratio * max(float(np.mean(np.abs(o) ** 2)), 1e-30))
         intensity.append(interfere(o, reference_wave(shape, wavelength=lam, pitch=pitch,
                                                      reference=reference, amplitude=a_r)))
@@ -185,10 +191,7 @@ class Plate:
     height: float
 
     def __post_init__(self):
-        m = np.asarray(self.matrix_world, np.float64)
-        if m.shape != (4, 4) or not np.isfinite(m).all():
-            raise ValueError(f"plate matrix_world must be a finite 4x4 matrix; got {m.shape}")
-        validate.rotation("plate rotation", m[:3, :3])
+        m = validate.rigid_pose("plate matrix_world", self.matrix_world)
         object.__setattr__(self, "matrix_world", m)
         validate.positive("plate width", self.width, "m")
         validate.positive("plate height", self.height, "m")
@@ -236,7 +239,7 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
     probe = [m.vertices for m in meshes + triangles] if meshes is not None else \
         [np.asarray(emitters[0], np.float64)] + [m.vertices for m in triangles]
     if not sum(len(p) for p in probe):
-        raise ValueError("record_hologram needs emitters or triangles")
+        raise InputError("record_hologram needs emitters or triangles")
     view = None
     if camera is not None:
         view = (plate.to_plate(camera.position[None])[0], camera.pixel_angle())

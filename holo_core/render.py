@@ -14,22 +14,24 @@ from __future__ import annotations
 import json
 import logging
 import math
+import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from . import depth as depth_mod
-from . import jobs, speckle, validate
+from . import jobs, memory, speckle, validate
 from .camera import Camera
 from .hologram_io import Hologram
-from .image_files import srgb, write_exr, write_png
+from .image_files import atomic_paths, exr_to, png_bytes, srgb
 from .opencl import get_runtime
 from .opencl.arrays import cached, embed, empty
 from .propagation import grid
 from .propagation.convolution import convolve
 from .propagation.tilt import propagate_to_plane
 from .reconstruct import reconstruct
+from .validate import InputError
 
 log = logging.getLogger(__name__)
 SPECTRUM_OVERSAMPLING = 4   # spectrum samples per λ/D (the aperture's resolution), at least
@@ -86,10 +88,10 @@ def camera_in_plate(hologram: Hologram, camera: Camera) -> tuple[np.ndarray, np.
     rotation = u @ vt
     position = axes.T @ (camera.position - plate[:3, 3])
     if position[2] <= 0:
-        raise ValueError(f"the camera must be in front of the hologram (z > 0 in the plate's "
+        raise InputError(f"the camera must be in front of the hologram (z > 0 in the plate's "
                          f"frame); it is at z = {position[2]:.4g} m")
     if rotation[2, 2] <= 0:
-        raise ValueError("the camera must look towards the hologram (its view axis has to "
+        raise InputError("the camera must look towards the hologram (its view axis has to "
                          "point to −z of the plate)")
     return rotation, position
 
@@ -101,10 +103,10 @@ def plate_wave(hologram: Hologram, channel: int, *, source="hologram"):
     stored object wave (``source='object_wave'``, the ideal reconstruction)."""
     if source == "object_wave":
         if hologram.object_wave is None:
-            raise ValueError("source 'object_wave' needs a hologram that stores the object wave")
+            raise InputError("source 'object_wave' needs a hologram that stores the object wave")
         return hologram.object_wave[channel]
     if source != "hologram":
-        raise ValueError(f"source must be 'hologram' or 'object_wave'; got {source!r}")
+        raise InputError(f"source must be 'hologram' or 'object_wave'; got {source!r}")
     u = reconstruct(hologram, channel)
     if not hologram.band:
         return u
@@ -261,16 +263,21 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
     """
     holos = [holograms] if isinstance(holograms, Hologram) else list(holograms)
     if not holos:
-        raise ValueError("holograms must hold at least one hologram")
+        raise InputError("holograms must hold at least one hologram")
     first = holos[0]
     if composition not in ("mean", "max"):
-        raise ValueError(f"composition must be 'mean' or 'max'; got {composition!r}")
+        raise InputError(f"composition must be 'mean' or 'max'; got {composition!r}")
     if depth_estimate not in ("consensus", "brightest"):
-        raise ValueError(f"depth_estimate must be 'consensus' or 'brightest'; "
+        raise InputError(f"depth_estimate must be 'consensus' or 'brightest'; "
                          f"got {depth_estimate!r}")
     supersample = int(validate.at_least("supersample", supersample, 1))
+    _check_settings(holos, camera, supersample, exposure, opacity_threshold)
     fine = _supersampled(camera, supersample)
     colours, z_ch = first.colour_channels(), first.depth_channel()
+    if z_ch is None:
+        warnings.warn("the hologram has no depth channel (record it with depth=True): the "
+                      f"view's depth is the background ({BACKGROUND_DEPTH:g} m) everywhere, so a "
+                      "Z-combine puts it behind every surface", NoDepthWarning, stacklevel=2)
     lam0 = first.wavelengths[colours[0]]
     centre = _centre_distance(first, camera)
     pupil = aperture or camera_aperture(fine, lam0, centre, apodize=apodize)
@@ -320,6 +327,39 @@ def render_view(holograms, camera: Camera, *, aperture: Aperture | None = None, 
         coverage = None
     return _finish(radiance, ray, coverage, first, camera, pupil, exposure, opacity_threshold,
                    lam0)
+
+
+class NoDepthWarning(UserWarning):
+    """A view of a hologram without the depth partner: its depth pass is the background."""
+
+
+PIXEL_BYTES = 96  # host bytes per fine pixel and iteration while rendering (fields, images)
+
+
+def _check_settings(holos, camera: Camera, supersample, exposure, threshold) -> None:
+    """:class:`InputError` for settings out of range, holograms that are not of one scene, or
+    a view too large for the memory."""
+    if not all(isinstance(h, Hologram) for h in holos):
+        raise InputError("holograms must be Hologram objects (read_hologram, record_points)")
+    if exposure is not None:
+        validate.positive("exposure", exposure)
+    threshold = validate.finite("opacity_threshold", threshold)
+    if not 0 <= threshold <= 1:
+        raise InputError(f"opacity_threshold must be in [0, 1]; got {threshold!r}")
+    first = holos[0]
+    for i, h in enumerate(holos[1:], 1):
+        for name in ("wavelengths", "pitch", "shape", "channels"):
+            if getattr(h, name) != getattr(first, name):
+                raise InputError(f"holograms[{i}] has {name} {getattr(h, name)!r}, holograms[0] "
+                                 f"{getattr(first, name)!r}: iterations must be of one recording")
+        if not np.allclose(h.plate, first.plate, rtol=0, atol=1e-9):
+            raise InputError(f"holograms[{i}] lies on another plate pose than holograms[0]: "
+                             f"iterations must be of one recording")
+    w, h = camera.resolution
+    memory.check_host(f"a {w}x{h} view at supersample {supersample}",
+                      PIXEL_BYTES * w * h * supersample**2 * (len(first.wavelengths) + 1))
+    memory.check_host(f"the hologram's {first.shape[1]}x{first.shape[0]} fields",
+                      48.0 * np.prod(first.shape) * 2)
 
 
 def _depth(crosses, brightness, *, estimate, wavelengths, centre, focus, camera: Camera,
@@ -381,12 +421,21 @@ def _finish(radiance, ray, coverage, h: Hologram, camera, pupil, exposure, thres
 
 def write_view(result: RenderResult, path, *, layer="ViewLayer") -> tuple[Path, Path]:
     """Write ``path`` (.exr, multilayer: ``<layer>.Combined.R/G/B/A`` premultiplied float32 and
-    ``<layer>.Depth.Z``, as Blender's Image node reads them) and a PNG preview beside it."""
+    ``<layer>.Depth.Z``, as Blender's Image node reads them) and a PNG preview beside it, as
+    one unit: both are renamed into place together, or neither is. A view with NaN or
+    infinite values, or no pixels, is refused."""
     path = Path(path).with_suffix(".exr")
+    planes = {"rgb": result.rgb, "alpha": result.alpha, "depth": result.depth}
+    for name, a in planes.items():
+        if not np.size(a) or not np.isfinite(a).all():
+            raise InputError(f"{path}: the view's {name} is empty or not finite; nothing is "
+                             f"written")
     rgb = result.rgb * result.alpha[..., None]  # premultiplied (emission: dark where clear)
     channels = {f"{layer}.Combined.{c}": rgb[..., i] for i, c in enumerate("RGB")}
     channels[f"{layer}.Combined.A"] = result.alpha
     channels[f"{layer}.Depth.Z"] = result.depth
-    write_exr(path, channels, holo=json.dumps(result.info, default=float))
-    png = write_png(path.with_suffix(".png"), srgb(result.rgb))
+    png = path.with_suffix(".png")
+    with atomic_paths(path, png) as (exr_tmp, png_tmp):
+        exr_to(exr_tmp, channels, holo=json.dumps(result.info, default=float))
+        Path(png_tmp).write_bytes(png_bytes(srgb(result.rgb)))
     return path, png

@@ -27,6 +27,7 @@ import numpy as np
 from . import validate
 from .depth import partner_wavelength
 from .point_sources import CONE_RIM
+from .validate import InputError
 
 log = logging.getLogger(__name__)
 DEFAULT_BAND = 0.25      # sin θ of the viewing zone without a camera
@@ -81,7 +82,7 @@ def choose(plate_size, points, *, camera=None, resolution=None,
     validate.positive("plate height", height, "m")
     pts = np.asarray(points, np.float64).reshape(-1, 3)
     if not len(pts) or (pts[:, 2] >= 0).any():
-        raise ValueError("points must be behind the plate (z < 0 in its frame)")
+        raise InputError("points must be behind the plate (z < 0 in its frame)")
     side = max(width, height)
     band = DEFAULT_BAND
     lam_image, footprint = None, 0.0

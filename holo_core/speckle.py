@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .validate import InputError
+
 
 def compose(intensities, how="mean") -> np.ndarray:
     """Combine N intensity images of the same view: 'mean' (speckle contrast falls as 1/√N
@@ -14,7 +16,7 @@ def compose(intensities, how="mean") -> np.ndarray:
         return stack.mean(0)
     if how == "max":
         return stack.max(0)
-    raise ValueError(f"composition must be 'mean' or 'max'; got {how!r}")
+    raise InputError(f"composition must be 'mean' or 'max'; got {how!r}")
 
 
 def downsample(image, factor: int) -> np.ndarray:

@@ -1,4 +1,5 @@
-"""Checks at the API boundary: bad input raises ``ValueError`` naming the field and its range."""
+"""Checks at the API boundary: bad input raises :class:`InputError` naming the field (or
+file), the problem and the allowed range."""
 
 from __future__ import annotations
 
@@ -6,6 +7,12 @@ import math
 import warnings
 
 import numpy as np
+
+
+class InputError(ValueError):
+    """Bad input: a setting, an argument or a file the project cannot use. The message names
+    the argument or the file, the problem and what is allowed; the command line prints it as
+    one line and exits with status 2."""
 
 
 class SamplingWarning(UserWarning):
@@ -20,14 +27,14 @@ def positive(name: str, value, unit: str = "") -> float:
     """``value`` as a float, or ``ValueError`` unless it is finite and > 0."""
     v = _finite(name, value, unit)
     if v <= 0:
-        raise ValueError(f"{name} must be > 0{_unit(unit)}; got {value!r}")
+        raise InputError(f"{name} must be > 0{_unit(unit)}; got {value!r}")
     return v
 
 
 def at_least(name: str, value, minimum: float, unit: str = "") -> float:
     v = _finite(name, value, unit)
     if v < minimum:
-        raise ValueError(f"{name} must be >= {minimum}{_unit(unit)}; got {value!r}")
+        raise InputError(f"{name} must be >= {minimum}{_unit(unit)}; got {value!r}")
     return v
 
 
@@ -40,7 +47,7 @@ def pair(name: str, value, unit: str = "") -> tuple[float, float]:
     try:
         x, y = value
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a pair (x, y){_unit(unit)}; got {value!r}") from None
+        raise InputError(f"{name} must be a pair (x, y){_unit(unit)}; got {value!r}") from None
     return _finite(name, x, unit), _finite(name, y, unit)
 
 
@@ -52,7 +59,7 @@ def shape2d(name: str, value) -> tuple[int, int]:
     except (TypeError, ValueError):
         ok = False
     if not ok or h < 1 or w < 1:
-        raise ValueError(f"{name} must be a pair of integers >= 1 (rows, cols); got {value!r}")
+        raise InputError(f"{name} must be a pair of integers >= 1 (rows, cols); got {value!r}")
     return h, w
 
 
@@ -60,9 +67,21 @@ def rotation(name: str, value) -> np.ndarray:
     """A proper 3x3 rotation matrix (orthonormal, determinant +1) as float64."""
     m = np.asarray(value, dtype=np.float64)
     if m.shape != (3, 3) or not np.isfinite(m).all():
-        raise ValueError(f"{name} must be a finite 3x3 matrix; got shape {m.shape}")
+        raise InputError(f"{name} must be a finite 3x3 matrix; got shape {m.shape}")
     if not np.allclose(m.T @ m, np.eye(3), atol=1e-9) or np.linalg.det(m) < 0:
-        raise ValueError(f"{name} must be a rotation (orthonormal, det +1)")
+        raise InputError(f"{name} must be a rotation (orthonormal, det +1)")
+    return m
+
+
+def rigid_pose(name: str, value) -> np.ndarray:
+    """A finite 4x4 pose of a rotation and a translation [m] (bottom row 0 0 0 1) as float64."""
+    m = np.asarray(value, dtype=np.float64)
+    if m.shape != (4, 4) or not np.isfinite(m).all():
+        raise InputError(f"{name} must be a finite 4x4 matrix; got shape {m.shape}")
+    rotation(f"{name} rotation", m[:3, :3])
+    if not np.array_equal(m[3], [0, 0, 0, 1]):
+        raise InputError(f"{name} must have the bottom row 0 0 0 1 (a rigid pose); "
+                         f"got {m[3].tolist()}")
     return m
 
 
@@ -70,11 +89,11 @@ def host_field(name: str, field: np.ndarray) -> np.ndarray:
     """A 2-D finite complex NumPy array."""
     a = np.asarray(field)
     if a.ndim != 2:
-        raise ValueError(f"{name} must be a 2-D array [rows=y, cols=x]; got {a.ndim}-D")
+        raise InputError(f"{name} must be a 2-D array [rows=y, cols=x]; got {a.ndim}-D")
     if not np.issubdtype(a.dtype, np.number):
-        raise ValueError(f"{name} must be numeric; got dtype {a.dtype}")
+        raise InputError(f"{name} must be numeric; got dtype {a.dtype}")
     if not np.isfinite(a).all():
-        raise ValueError(f"{name} must be finite; it holds NaN or infinite values")
+        raise InputError(f"{name} must be finite; it holds NaN or infinite values")
     return a
 
 
@@ -82,9 +101,9 @@ def _finite(name: str, value, unit: str) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number{_unit(unit)}; got {value!r}") from None
+        raise InputError(f"{name} must be a number{_unit(unit)}; got {value!r}") from None
     if not math.isfinite(v):
-        raise ValueError(f"{name} must be finite{_unit(unit)}; got {value!r}")
+        raise InputError(f"{name} must be finite{_unit(unit)}; got {value!r}")
     return v
 
 

@@ -11,7 +11,7 @@ import pyopencl as cl
 import pyopencl.array as cla
 from pyopencl.reduction import ReductionKernel
 
-from ..validate import host_field
+from ..validate import InputError, host_field
 from .runtime import Runtime, get_runtime
 
 
@@ -30,15 +30,15 @@ def as_device(field, name: str = "field", runtime: Runtime | None = None, check:
     if not is_device_array(field):
         return rt, rt.to_device(host_field(name, field), np.complex64), True
     if field.ndim != 2:
-        raise ValueError(f"{name} must be a 2-D array [rows=y, cols=x]; got {field.ndim}-D")
+        raise InputError(f"{name} must be a 2-D array [rows=y, cols=x]; got {field.ndim}-D")
     if field.context != rt.context:
-        raise ValueError(f"{name} lives in another OpenCL context than the runtime's")
+        raise InputError(f"{name} lives in another OpenCL context than the runtime's")
     if not field.flags.c_contiguous:
-        raise ValueError(f"{name} must be a C-contiguous device array")
+        raise InputError(f"{name} must be a C-contiguous device array")
     if field.dtype != np.complex64:
         field = field.astype(np.complex64)
     if check and nonfinite_count(rt, field):
-        raise ValueError(f"{name} must be finite; it holds NaN or infinite values")
+        raise InputError(f"{name} must be finite; it holds NaN or infinite values")
     return rt, field, False
 
 
@@ -103,7 +103,7 @@ def _rows(a: cla.Array):
     (a plane of a stack, ``stack[c]``), read in place: no sub-buffer, no copy."""
     row = a.shape[-1] * a.dtype.itemsize
     if a.offset % row:
-        raise ValueError("a view must start on a row of its buffer")
+        raise InputError("a view must start on a row of its buffer")
     return a.base_data, a.offset // row
 
 

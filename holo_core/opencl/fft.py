@@ -23,13 +23,15 @@ import platform
 import numpy as np
 import pyopencl as cl
 
+from ..validate import InputError
+
 log = logging.getLogger(__name__)
 
 
 def backend_for(runtime):
     choice = os.environ.get("HOLO_FFT", "").strip().lower()
     if choice not in ("", "fftw", "vkfft", "numpy"):
-        raise ValueError(f"HOLO_FFT={choice!r}; allowed: 'fftw', 'vkfft', 'numpy' or unset")
+        raise InputError(f"HOLO_FFT={choice!r}; allowed: 'fftw', 'vkfft', 'numpy' or unset")
     if choice == "vkfft" or (not choice and not runtime.is_cpu):
         try:
             return VkFFT(runtime)
@@ -81,7 +83,7 @@ class FFTW:
             else (os.cpu_count() or 1)
         effort = os.environ.get("HOLO_FFTW_PLANNER", "measure").strip().upper()
         if effort not in ("ESTIMATE", "MEASURE", "PATIENT"):
-            raise ValueError(f"HOLO_FFTW_PLANNER={effort!r}; allowed: estimate, measure, patient")
+            raise InputError(f"HOLO_FFTW_PLANNER={effort!r}; allowed: estimate, measure, patient")
         self.flags = (f"FFTW_{effort}",)
         self.plans = {}
         self._load_wisdom()

@@ -30,9 +30,10 @@ from functools import cached_property
 from pathlib import Path
 
 import numpy as np
-
 import pyopencl as cl
 import pyopencl.array as cla
+
+from ..validate import InputError
 
 log = logging.getLogger(__name__)
 # drivers that print build logs make pyopencl warn for its own generated kernels
@@ -152,7 +153,7 @@ def choose_device(spec: str | None = None) -> cl.Device:
         raise RuntimeError("no usable OpenCL device" + (f" ({'; '.join(tried)})" if tried else
                            "; install pocl-binary-distribution or intel-opencl-rt (pip) for a "
                            "CPU device, or a GPU vendor's OpenCL driver"))
-    raise ValueError(f"HOLO_DEVICE={spec!r} names no usable device"
+    raise InputError(f"HOLO_DEVICE={spec!r} names no usable device"
                      + (f" ({'; '.join(tried)})" if tried else "")
                      + "; allowed: 'gpu', 'cpu', 'accelerator', 'P:D' or part of a device or "
                      f"platform name. Usable: {'; '.join(usable) or 'none'}")

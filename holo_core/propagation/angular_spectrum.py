@@ -18,8 +18,8 @@ import numpy as np
 
 from .. import validate
 from ..opencl import like_input
-from . import grid
 from ..opencl.arrays import cached
+from . import grid
 from .convolution import convolution_setup, convolve
 
 BAND_EDGE = 0.2  # fraction of the band-limited ray range given to the cosine roll-off

@@ -13,6 +13,7 @@ import numpy as np
 from .. import validate
 from ..opencl import as_device
 from ..opencl.arrays import embed, read_first, window
+from ..validate import InputError
 from . import grid
 
 
@@ -55,7 +56,7 @@ def convolve(rt, field, transfer, chirp=None):
     cols = (c0, c0 + w)
     rt.fft.forward(work, cols)
     if not np.isfinite(read_first(rt, work)).all():
-        raise ValueError("field must be finite; it holds NaN or infinite values")
+        raise InputError("field must be finite; it holds NaN or infinite values")
     if chirp is None:
         rt.kernel("spectral", "multiply")(rt.queue, (H * W,), None, work.data, transfer.data)
     else:

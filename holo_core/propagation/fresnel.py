@@ -13,8 +13,8 @@ import numpy as np
 
 from .. import validate
 from ..opencl import as_device, is_device_array, like_input
-from . import grid
 from ..opencl.arrays import cached, copy
+from . import grid
 from .convolution import convolution_setup, convolve
 
 

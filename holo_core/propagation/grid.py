@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from .. import validate
+from ..validate import InputError
 
 
 def coords(n: int, pitch: float) -> np.ndarray:
@@ -69,5 +70,5 @@ def wave(wavelength, pitch) -> tuple[float, float]:
 def padding_factor(padding) -> float:
     p = validate.at_least("padding", padding, 1.0)
     if p > 16:
-        raise ValueError(f"padding must be in [1, 16]; got {padding!r}")
+        raise InputError(f"padding must be in [1, 16]; got {padding!r}")
     return p

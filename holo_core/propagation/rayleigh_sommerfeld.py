@@ -13,8 +13,9 @@ import math
 import numpy as np
 
 from .. import validate
-from ..opencl.arrays import empty
 from ..opencl import as_device, is_device_array, like_input
+from ..opencl.arrays import empty
+from ..validate import InputError
 from . import grid
 
 
@@ -47,7 +48,7 @@ def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0)
     wavelength, pitch = grid.wave(wavelength, pitch)
     z = validate.finite("distance", distance, "m")
     if z == 0:
-        raise ValueError("distance must be non-zero for rayleigh_sommerfeld (the integral is "
+        raise InputError("distance must be non-zero for rayleigh_sommerfeld (the integral is "
                          "singular on the source plane)")
     x0, y0 = validate.pair("offset", offset, "m")
     out_pitch = pitch if out_pitch is None else validate.positive("out_pitch", out_pitch, "m")

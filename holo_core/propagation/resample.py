@@ -16,8 +16,8 @@ import math
 import numpy as np
 
 from .. import validate
-from ..opencl.arrays import empty
 from ..opencl import as_device, like_input
+from ..opencl.arrays import empty
 from . import grid
 
 

@@ -17,9 +17,10 @@ import numpy as np
 
 from .. import validate
 from ..opencl import as_device, like_input
+from ..opencl.arrays import cached, embed, empty, window
+from ..validate import InputError
 from . import grid
 from .angular_spectrum import angular_spectrum
-from ..opencl.arrays import cached, embed, empty, window
 
 TAPS = 6                # spectrum interpolation taps per axis (error ~10^-(TAPS-1) at padding 2)
 ES_BETA = 2.30 * TAPS   # the kernel's shape for 2x oversampling (Barnett et al. 2019)
@@ -144,7 +145,7 @@ def propagate_to_plane(field, *, wavelength, pitch, rotation, position, padding=
     m = validate.rotation("rotation", rotation)
     p = np.asarray(position, dtype=np.float64)
     if p.shape != (3,) or not np.isfinite(p).all():
-        raise ValueError(f"position must be 3 finite coordinates [m]; got {position!r}")
+        raise InputError(f"position must be 3 finite coordinates [m]; got {position!r}")
     x0, y0, z = m.T @ p
     rt, tilted, from_host = as_device(field)  # both stages on the device, one upload
     if out_shape is not None or out_pitch is not None or not np.allclose(m, np.eye(3), atol=1e-12):

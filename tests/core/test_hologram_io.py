@@ -18,7 +18,15 @@ def hologram(rng):
                     reference_amplitudes=(1.0, 2.0, 3.0),
                     object_wave=(rng.standard_normal(shape) + 1j * rng.standard_normal(shape)
                                  ).astype(np.complex64),
-                    plate=np.arange(16.0).reshape(4, 4), bounds=np.array([[-1, -2, -3], [1, 2, -1.0]]))
+                    plate=_pose(0.5, [1.0, -2.0, 3.0]), bounds=np.array([[-1, -2, -3], [1, 2, -1.0]]))
+
+
+def _pose(angle, shift):
+    c, s = np.cos(angle), np.sin(angle)
+    m = np.eye(4)
+    m[:2, :2] = [[c, -s], [s, c]]
+    m[:3, 3] = shift
+    return m
 
 
 def test_round_trip_is_bit_exact(tmp_path, hologram):

@@ -1,0 +1,69 @@
+"""Memory budgets: a large allocation is checked before it is made, and refused with the size
+it needs and the size there is, rather than ending in the allocator's or the driver's error.
+
+``HOLO_MEMORY_LIMIT`` (bytes, or with a K/M/G suffix) caps the host budget below what the
+system reports available, for render farms that share a machine.
+"""
+
+from __future__ import annotations
+
+import os
+
+from .validate import InputError
+
+HOST_SHARE = 0.8  # of the available memory one step may take (the rest: Python, the OS)
+
+
+def gib(nbytes: float) -> str:
+    return f"{nbytes / 2**30:.3g} GiB"
+
+
+def host_available() -> int:
+    """Bytes the host can give now: MemAvailable, capped by ``HOLO_MEMORY_LIMIT``."""
+    available = None
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    available = int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    if available is None:
+        available = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    limit = limit_from_env()
+    return min(available, limit) if limit else available
+
+
+def limit_from_env() -> int | None:
+    text = os.environ.get("HOLO_MEMORY_LIMIT", "").strip().upper()
+    if not text:
+        return None
+    scale = {"K": 2**10, "M": 2**20, "G": 2**30}.get(text[-1], 1)
+    try:
+        value = float(text.rstrip("KMG")) * scale
+    except ValueError:
+        raise InputError(f"HOLO_MEMORY_LIMIT must be a size in bytes, e.g. 8G; "
+                         f"got {text!r}") from None
+    if not value > 0:
+        raise InputError(f"HOLO_MEMORY_LIMIT must be > 0; got {text!r}")
+    return int(value)
+
+
+def check_host(what: str, nbytes: float) -> None:
+    """Refuse ``what`` when it needs more than the host's share of available memory."""
+    budget = HOST_SHARE * host_available()
+    if nbytes > budget:
+        raise InputError(f"{what} needs {gib(nbytes)} of memory; {gib(budget)} is available "
+                         f"(lower the resolution, or raise HOLO_MEMORY_LIMIT where more is free)")
+
+
+def check_device(rt, what: str, nbytes: float, largest: float) -> None:
+    """Refuse ``what`` on the OpenCL device ``rt`` when its buffers (``nbytes`` in all, the
+    ``largest`` one buffer) exceed the device's memory or its largest allocation."""
+    dev = rt.device
+    if largest > dev.max_mem_alloc_size:
+        raise InputError(f"{what} needs a {gib(largest)} buffer; {dev.name.strip()} allocates "
+                         f"at most {gib(dev.max_mem_alloc_size)}")
+    if nbytes > HOST_SHARE * dev.global_mem_size:
+        raise InputError(f"{what} needs {gib(nbytes)} of device memory; {dev.name.strip()} has "
+                         f"{gib(dev.global_mem_size)}")
