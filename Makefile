@@ -5,7 +5,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo figures test test-runtimes bench bench-runtimes bench-quality devices extension check-lts clean
+.PHONY: demo figures test fuzz test-runtimes bench bench-runtimes bench-quality devices extension check-lts clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -24,6 +24,11 @@ figures: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest tests/core tests/physics
 	$(PY) -m pytest tests/addon
+
+# The readers' fuzz suite at 5000 cases each (make test runs 300; about 4 minutes).
+FUZZ_CASES ?= 5000
+fuzz: $(STAMP)
+	HOLO_FUZZ_CASES=$(FUZZ_CASES) $(PY) -m pytest -s tests/core/test_fuzz.py
 
 # The core's suite once per usable CPU OpenCL driver (python -m holo_core devices lists them).
 RUNTIMES ?= intel portable

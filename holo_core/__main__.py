@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import sys
+import warnings
+from pathlib import Path
 
 
 def devices(_args) -> int:
@@ -59,7 +62,7 @@ def record(args) -> int:
                          reference=Reference(angle=args.reference_angle), method=args.method,
                          progress=_progress_bar())
     print()
-    print(write_hologram(args.output, holo))
+    print(write_hologram(_file_in(args.output, args.mesh, ""), holo))
     return 0
 
 
@@ -91,9 +94,44 @@ def render(args) -> int:
     view = render_view(h, cam, supersample=args.supersample, composition=args.composition,
                        source=args.source, progress=_progress_bar())
     print()
-    for path in write_view(view, args.output):
+    for path in write_view(view, _file_in(args.output, args.hologram, "_view")):
         print(path)
     return 0
+
+
+def _file_in(output, source, tag) -> Path:
+    """``output``, or where it names a folder, ``<folder>/<source's stem><tag>.exr``."""
+    out = Path(output)
+    if out.is_dir() or str(output).endswith(("/", "\\")):
+        return out / f"{Path(source).stem}{tag}.exr"
+    return out
+
+
+def _number(kind, test, allowed):
+    """An argparse type: ``kind`` of the text, finite and passing ``test``, else an error
+    naming ``allowed``."""
+    def parse(text):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number ({allowed})") from None
+        if not math.isfinite(value) or not test(value):
+            raise argparse.ArgumentTypeError(f"{text!r} is out of range ({allowed})")
+        return value
+    return parse
+
+
+POSITIVE = _number(float, lambda v: v > 0, "a number > 0")
+FINITE = _number(float, lambda v: True, "a finite number")
+COUNT = _number(int, lambda v: v >= 1, "an integer >= 1")
+PIXELS = _number(int, lambda v: 1 <= v <= 65536, "an integer from 1 to 65536")
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser, its errors on one line (exit status 2)."""
+
+    def error(self, message):
+        self.exit(2, f"error: {self.prog}: {message} (--help lists the options)\n")
 
 
 def _progress_bar(width=40):
@@ -104,56 +142,76 @@ def _progress_bar(width=40):
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m holo_core", description=__doc__)
+    parser = _Parser(prog="python -m holo_core", description=__doc__)
     parser.add_argument("-v", "--verbose", action="store_true")
-    sub = parser.add_subparsers(dest="command", required=True)
+    parser.add_argument("--debug", action="store_true",
+                        help="print the traceback of a failure (default: one line)")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     sub.add_parser("devices", help="list OpenCL devices and the one Holo would use")
     p = sub.add_parser("demo", help="render the built-in demo to image files")
     p.add_argument("-o", "--output", default="out", help="output folder (default: out)")
     p = sub.add_parser("record", help="record a hologram of a PLY or OBJ mesh")
     p.add_argument("mesh", help="mesh file (.ply or .obj), units taken as metres")
-    p.add_argument("-o", "--output", required=True, help="hologram file to write (.exr)")
-    p.add_argument("--resolution", type=int, nargs=2, default=(1024, 1024),
+    p.add_argument("-o", "--output", required=True,
+                   help="hologram file to write (.exr), or a folder for <mesh>.exr")
+    p.add_argument("--resolution", type=PIXELS, nargs=2, default=(1024, 1024),
                    metavar=("W", "H"), help="hologram size in pixels (default 1024 1024)")
-    p.add_argument("--pitch", type=float, default=8e-6, help="sample spacing [m] (8e-6)")
-    p.add_argument("--wavelengths", type=float, nargs="+", default=[633, 532, 473],
+    p.add_argument("--pitch", type=POSITIVE, default=8e-6, help="sample spacing [m] (8e-6)")
+    p.add_argument("--wavelengths", type=POSITIVE, nargs="+", default=[633, 532, 473],
                    help="wavelengths [nm] (633 532 473)")
-    p.add_argument("--reference-angle", type=float, default=0.0, help="ϑ [rad] (0)")
-    p.add_argument("--distance", type=float, default=None,
+    p.add_argument("--reference-angle", type=FINITE, default=0.0, help="ϑ [rad] (0)")
+    p.add_argument("--distance", type=POSITIVE, default=None,
                    help="move the mesh so its nearest point is this far in front [m]")
-    p.add_argument("--spacing", type=float, default=None,
+    p.add_argument("--spacing", type=POSITIVE, default=None,
                    help="point spacing on the surface [m] (default: the hologram's resolution)")
-    p.add_argument("--max-points", type=int, default=200_000)
+    p.add_argument("--max-points", type=COUNT, default=200_000,
+                   help="the most point emitters sampled on the mesh (200000)")
     p.add_argument("--method", choices=["auto", "direct", "wrp"], default="auto",
                    help="point emitter sum (default: the faster)")
     p = sub.add_parser("info", help="print a hologram file's metadata")
     p.add_argument("hologram")
     p = sub.add_parser("render", help="render a view of a hologram to EXR (+ PNG preview)")
     p.add_argument("hologram")
-    p.add_argument("-o", "--output", required=True, help="view file to write (.exr)")
-    p.add_argument("--camera", type=float, nargs=3, metavar=("X", "Y", "Z"),
+    p.add_argument("-o", "--output", required=True,
+                   help="view file to write (.exr), or a folder for <hologram>_view.exr")
+    p.add_argument("--camera", type=FINITE, nargs=3, metavar=("X", "Y", "Z"),
                    help="camera position [m], world (default: 3 plate sizes in front)")
-    p.add_argument("--look-at", type=float, nargs=3, metavar=("X", "Y", "Z"),
+    p.add_argument("--look-at", type=FINITE, nargs=3, metavar=("X", "Y", "Z"),
                    help="point the camera looks at [m] (default: the objects' centre)")
-    p.add_argument("--lens", type=float, default=50.0, help="focal length [mm] (50)")
-    p.add_argument("--sensor-width", type=float, default=36.0, help="[mm] (36)")
-    p.add_argument("--resolution", type=int, nargs=2, default=(256, 256), metavar=("W", "H"))
-    p.add_argument("--fstop", type=float, default=None, help="f-number (default: pinhole)")
-    p.add_argument("--focus-distance", type=float, default=None,
+    p.add_argument("--lens", type=POSITIVE, default=50.0, help="focal length [mm] (50)")
+    p.add_argument("--sensor-width", type=POSITIVE, default=36.0, help="[mm] (36)")
+    p.add_argument("--resolution", type=PIXELS, nargs=2, default=(256, 256), metavar=("W", "H"))
+    p.add_argument("--fstop", type=POSITIVE, default=None, help="f-number (default: pinhole)")
+    p.add_argument("--focus-distance", type=POSITIVE, default=None,
                    help="[m] (default with --fstop: the objects' centre)")
-    p.add_argument("--supersample", type=int, default=1, help="speckle low-pass factor (1)")
+    p.add_argument("--supersample", type=COUNT, default=1, help="speckle low-pass factor (1)")
     p.add_argument("--composition", choices=["mean", "max"], default="mean")
     p.add_argument("--source", choices=["hologram", "object_wave"], default="hologram")
     args = parser.parse_args(argv)
+    warnings.formatwarning = lambda message, category, *_: \
+        f"warning: {message} ({category.__name__})\n"
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
+    command = {"devices": devices, "demo": demo, "record": record, "info": info,
+               "render": render}[args.command]
     try:
-        return {"devices": devices, "demo": demo, "record": record, "info": info,
-                "render": render}[
-            args.command](args)
-    except ValueError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
+        return command(args)
+    except ValueError as e:  # InputError and the like: the user can act on the message
+        return _fail(args, f"error: {e}", 2)
+    except KeyboardInterrupt:
+        return _fail(args, "\ninterrupted", 130)
+    except Exception as e:  # noqa: BLE001 -- one line for any other failure; --debug for more
+        first = (str(e).strip().splitlines() or [""])[0]
+        return _fail(args, f"error: {type(e).__name__}: {first} (--debug shows the traceback)",
+                     1)
+
+
+def _fail(args, line, status) -> int:
+    if args.debug:
+        import traceback
+        traceback.print_exc()
+    print(line, file=sys.stderr)
+    return status
 
 
 if __name__ == "__main__":

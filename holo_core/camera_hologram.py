@@ -41,7 +41,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import jobs, validate
+from . import jobs, memory, validate
 from .camera import Camera
 from .depth import from_cross_spectrum, partner_wavelength
 from .emitters import Mesh, _colour
@@ -484,6 +484,10 @@ def reconstruct_object_wave(rec: HologramRecording) -> np.ndarray:
 
 # --- rendering -------------------------------------------------------------------------------
 
+FINE_PIXEL_BYTES = 64  # per fine pixel: the four looks' images, coverage, depth, accumulators
+DEVICE_FIELDS = 6      # complex pupil-sized buffers on the device: the layers' sum, FFTs, iris
+
+
 def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
                   supersample=SUPERSAMPLE, aperture=None, exposure=1.0, seed=0,
                   via="object_wave", progress: jobs.Progress = None, on_sample=None):
@@ -505,6 +509,10 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     if via not in ("object_wave", "hologram"):
         raise InputError(f"via must be 'object_wave' or 'hologram'; got {via!r}")
     samples = int(validate.at_least("samples", samples, 1))
+    supersample = int(validate.at_least("supersample", supersample, 1))
+    w, h = camera.resolution
+    memory.check_host(f"a {w}x{h} camera view at supersample {supersample}",
+                      FINE_PIXEL_BYTES * w * h * supersample**2)
     meshes = [meshes] if isinstance(meshes, Mesh) else list(meshes)
     pos = None if points is None else np.asarray(points[0], np.float64).reshape(-1, 3)
     optics = choose_optics(camera, depth_range(meshes, camera, pos), supersample=supersample,
@@ -516,6 +524,9 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
         raise InputError("no emitter is visible to the camera")
     fine = replace(camera, resolution=tuple(r * supersample for r in camera.resolution))
     rt = get_runtime()
+    pupil = 8.0 * math.prod(optics.shape)
+    memory.check_device(rt, f"the {optics.shape[1]}x{optics.shape[0]} pupil's fields",
+                        DEVICE_FIELDS * pupil + FINE_PIXEL_BYTES * w * h * supersample**2, pupil)
     fields = _Fields(rt, em, optics, fine)
     acc = _Accumulator(camera, optics, exposure)
     rng = np.random.default_rng(seed)

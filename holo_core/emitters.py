@@ -350,7 +350,11 @@ def _triangles(faces) -> tuple[np.ndarray, int]:
         return np.concatenate([f[:, [0, i, i + 1]] for i in range(1, f.shape[1] - 1)]), 0
     kept = [list(map(int, f)) for f in faces if len(f) >= 3]
     fans = [(f[0], f[i], f[i + 1]) for f in kept for i in range(1, len(f) - 1)]
-    return np.array(fans, np.int64).reshape(-1, 3), len(faces) - len(kept)
+    try:
+        tris = np.array(fans, np.int64).reshape(-1, 3)
+    except OverflowError:  # an index beyond int64 is out of range whatever the mesh
+        tris = np.full((1, 3), -1, np.int64)
+    return tris, len(faces) - len(kept)
 
 
 def _read_obj(path: Path, data: bytes):
@@ -449,6 +453,10 @@ def _ply_header(path: Path, data: bytes):
                                 f"<int type> <int type> <name>)")
     if fmt == "missing":
         raise MeshFileError(f"{path}: the PLY header has no valid format line")
+    for name, _, props in elements:
+        names = [q[-1] for q in props]
+        if len(set(names)) < len(names) or any(n.endswith("#n") for n in names):
+            raise MeshFileError(f"{path}: element {name} names a property twice")
     room = len(body)
     for name, count, props in elements:
         if count and not props:

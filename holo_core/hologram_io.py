@@ -173,10 +173,10 @@ def read_hologram(path) -> Hologram:
     return h
 
 
-def _read(path: Path):
+def _read(path: Path, what="hologram"):
     from .image_files import read_exr
     try:
-        return read_exr(path, what="hologram")
+        return read_exr(path, what=what)
     except HologramFileError:
         raise
     except ValueError as e:
@@ -203,23 +203,25 @@ def _meta(path: Path, header) -> dict:
                                 f"version {FORMAT_VERSION})")
     meta = {"band_sin": 0.0, "channels": [], "point_density_per_m2": 0.0, **meta}
     schema = _Schema(path, meta)
-    lambdas = schema.numbers("wavelengths_m", "> 0", lambda v: v > 0, count=None)
+    lambdas = schema.numbers("wavelengths_m", "> 0", lambda v: v > 0, shape="any")
     if not 1 <= len(lambdas) <= MAX_CHANNELS:
         schema.fail("wavelengths_m", f"1 to {MAX_CHANNELS} wavelengths [m]")
     schema.numbers("pitch_m", "> 0 [m]", lambda v: v > 0)
     rows, cols = schema.numbers("size_px", "two integers >= 1",
-                                lambda v: v >= 1 and v == int(v), count=2)
+                                lambda v: v >= 1 and v == int(v), shape=2)
     meta["size_px"] = [int(rows), int(cols)]
-    schema.numbers("plate_to_world", "16 finite numbers (a rigid pose)", count=16)
+    schema.numbers("plate_to_world", "16 finite numbers (a rigid pose)", shape=16)
     ref = meta.get("reference")
     if not isinstance(ref, dict):
         schema.fail("reference", "an object with angle_rad, azimuth_rad and amplitudes")
     sub = _Schema(path, ref, "reference.")
     sub.numbers("angle_rad", "in [0, π/2)", lambda v: 0 <= v < math.pi / 2)
     sub.numbers("azimuth_rad", "finite")
-    sub.numbers("amplitudes", f"{len(lambdas)} numbers >= 0", lambda v: v >= 0,
-                count=len(lambdas))
-    bounds = np.reshape(schema.numbers("bounds_m", "two corners (x, y, z) [m]", count=(2, 3)),
+    amplitudes = sub.numbers("amplitudes", f"{len(lambdas)} numbers >= 0 (or none)",
+                             lambda v: v >= 0, shape="any")
+    if len(amplitudes) not in (0, len(lambdas)):
+        sub.fail("amplitudes", f"{len(lambdas)} numbers >= 0 (or none)")
+    bounds = np.reshape(schema.numbers("bounds_m", "two corners (x, y, z) [m]", shape=(2, 3)),
                         (2, 3))
     if (bounds[0] > bounds[1]).any():
         schema.fail("bounds_m", "a min corner <= the max corner")
@@ -249,22 +251,22 @@ class _Schema:
         raise HologramFileError(f"{self.path}: metadata {self.prefix}{key} must be {allowed}; "
                                 f"got {value}")
 
-    def numbers(self, key, allowed, ok=lambda v: True, count=1):
-        """The field as a float, or a flat list of ``count`` floats (``count`` may be a shape,
-        or None for any length); each finite, a number (not a bool) and ``ok``."""
+    def numbers(self, key, allowed, ok=lambda v: True, shape=None):
+        """The field as a number, or with a ``shape`` (a length, a tuple of them, or "any"
+        length) as a flat list of numbers; each finite, not a bool, and ``ok``."""
         value = self.obj.get(key)
-        flat = [value] if count == 1 else _flatten(value, count)
+        flat = [value] if shape is None else _flatten(value, shape)
         if flat is None or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
                                    and math.isfinite(v) and ok(v) for v in flat):
             self.fail(key, allowed)
-        return flat[0] if count == 1 else flat
+        return flat[0] if shape is None else flat
 
 
 def _flatten(value, shape):
-    """``value`` (nested lists) flattened when it has ``shape`` (an int, a tuple, or None for a
-    list of any length), else None."""
-    dims = (shape,) if isinstance(shape, int) or shape is None else shape
-    if not isinstance(value, list) or (dims[0] is not None and len(value) != dims[0]):
+    """``value`` (nested lists) flattened when it has ``shape`` (an int, a tuple, or "any"
+    for a list of any length), else None."""
+    dims = shape if isinstance(shape, tuple) else (shape,)
+    if not isinstance(value, list) or (dims[0] != "any" and len(value) != dims[0]):
         return None
     if len(dims) == 1:
         return value
@@ -301,7 +303,7 @@ def import_acquired(path, *, pitch, wavelength, reference_angle=0.0, reference_a
 
 
 def _exr_grey(path: Path) -> np.ndarray:
-    _, chans = _read(path)
+    _, chans = _read(path, "scan")
     if "Y" in chans:
         return chans["Y"].astype(np.float64)
     rgb = [chans[n] for n in ("R", "G", "B") if n in chans]
@@ -337,10 +339,7 @@ def _image_grey(path: Path) -> np.ndarray:
                                 f"{e})") from None
     if mode in ("LA", "RGBA"):
         a = a[..., :-1]
-    if a.ndim == 3:
-        a = a.astype(np.float64).mean(axis=2) if a.dtype.kind == "f" else a.mean(axis=2)
-    if a.dtype == bool:
-        return a.astype(np.float64)
+    scale = 1.0
     if a.dtype.kind in "iu":
         if a.size and a.min() < 0:
             raise HologramFileError(f"{path}: a scan of signed integers holds negative values; "
@@ -348,5 +347,5 @@ def _image_grey(path: Path) -> np.ndarray:
         top = int(a.max()) if a.size else 0
         scale = 255 if a.dtype.itemsize == 1 else 65535 if a.dtype.itemsize == 2 else \
             next(s for s in (255, 65535, 2**32 - 1) if top <= s)
-        return a.astype(np.float64) / scale
-    return a.astype(np.float64)
+    a = a.astype(np.float64) / scale
+    return a.mean(axis=2) if a.ndim == 3 else a

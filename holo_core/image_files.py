@@ -45,6 +45,8 @@ def atomic_paths(*paths):
              for t in targets]
     try:
         with _terminate_raises():
+            for tmp, path in zip(temps, paths):
+                _create(tmp, path)
             yield [str(t) for t in temps]
             modes = [_mode(t) for t in targets]
             for tmp, mode in zip(temps, modes):
@@ -106,6 +108,13 @@ def _target(path) -> Path:
         raise InputError(f"{path}: its folder {target.parent} is not writable")
     remove_stale_temps(target.parent)
     return target
+
+
+def _create(tmp: Path, path) -> None:
+    try:
+        os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+    except OSError as e:
+        raise InputError(f"{path}: cannot write a file there ({e.strerror})") from None
 
 
 def _mode(target: Path) -> int:
@@ -192,6 +201,7 @@ def write_png(path, image: np.ndarray) -> Path:
 def write_exr(path, channels: dict, **header) -> Path:
     """Float32 OpenEXR (ZIP) of named (H, W) ``channels``, row 0 at the top, with extra
     ``header`` attributes, written atomically."""
+    import OpenEXR  # noqa: F401 -- before the write opens: a SIGTERM inside an import is lost
     with atomic_path(path) as tmp:
         exr_to(tmp, channels, **header)
     return Path(path)

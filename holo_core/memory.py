@@ -54,7 +54,7 @@ def check_host(what: str, nbytes: float) -> None:
     budget = HOST_SHARE * host_available()
     if nbytes > budget:
         raise InputError(f"{what} needs {gib(nbytes)} of memory; {gib(budget)} is available "
-                         f"(lower the resolution, or raise HOLO_MEMORY_LIMIT where more is free)")
+                         f"(lower the resolution or the size, or free memory)")
 
 
 def check_device(rt, what: str, nbytes: float, largest: float) -> None:

@@ -20,7 +20,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import jobs, validate
+from . import jobs, memory, validate
 from .opencl import get_runtime
 from .opencl.arrays import cached, empty, window
 from .propagation import grid
@@ -104,6 +104,8 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
     if method == "auto":
         method = "wrp" if wrp_seconds(pos, g) < direct_seconds(pos, g) else "direct"
     rt = get_runtime()
+    nbytes = 8.0 * amp.shape[1] * math.prod(g.shape)
+    memory.check_device(rt, f"the {g.shape[1]}x{g.shape[0]} object wave", nbytes, nbytes)
     out = empty(rt, (amp.shape[1],) + g.shape)
     out.fill(0)
     if len(pos):

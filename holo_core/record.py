@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import jobs, validate
+from . import jobs, memory, validate
 from .hologram_io import Hologram
 from .point_sources import cone_filter, point_wave
 from .propagation import grid
@@ -23,6 +23,7 @@ MIN_OBLIQUITY = 0.1  # a primitive seen more edge-on than this (cos) gets no bri
 ROTATION_SECONDS = 2e-7  # a primitive's rotation and propagation per padded hologram sample
                          # and wavelength (2-core CPU: 0.4-0.9 s at 1024²) ...
 SLOW_TRIANGLES = 60.0    # ... and the estimate [s] above which the user is warned
+HOST_BYTES = 40  # per sample and wavelength: object and reference waves, H, the stored copy
 log = logging.getLogger(__name__)
 
 
@@ -146,6 +147,8 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     phases = np.asarray(phases, np.float64).reshape(len(pos))
     shape = validate.shape2d("shape", shape)
     pitch = validate.positive("pitch", pitch, "m")
+    memory.check_host(f"a {shape[1]}x{shape[0]} hologram of {len(lambdas)} wavelengths",
+                      HOST_BYTES * len(lambdas) * math.prod(shape))
     for lam in lambdas:
         reference.check(lam, pitch)
     amplitude = np.sqrt(cols) * np.exp(1j * phases)[:, None]

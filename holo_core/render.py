@@ -178,6 +178,10 @@ def _pupil(field, wavelength, pitch, aperture: Aperture):
     radius = aperture.diameter / 2
     w = np.where(rho <= radius, np.cos(np.pi * rho / aperture.diameter)
                  if aperture.apodize else 1.0, 0.0)
+    if not w.any():
+        raise InputError(f"the camera's aperture ({aperture.diameter:.3g} m) falls between the "
+                         f"field's samples ({pitch:.3g} m apart): this view cannot be formed; "
+                         f"give the camera more pixels or an f-stop, or record a finer pitch")
     if aperture.focus is not None:
         k = 2 * np.pi / (aperture.lens_wavelength or wavelength)
         f = aperture.focus
@@ -435,6 +439,7 @@ def write_view(result: RenderResult, path, *, layer="ViewLayer") -> tuple[Path, 
     channels[f"{layer}.Combined.A"] = result.alpha
     channels[f"{layer}.Depth.Z"] = result.depth
     png = path.with_suffix(".png")
+    import OpenEXR  # noqa: F401 -- before the write opens: a SIGTERM inside an import is lost
     with atomic_paths(path, png) as (exr_tmp, png_tmp):
         exr_to(exr_tmp, channels, holo=json.dumps(result.info, default=float))
         Path(png_tmp).write_bytes(png_bytes(srgb(result.rgb)))
