@@ -9,7 +9,8 @@ __version__ = "0.1.0"
 
 _API = {"record_hologram": ".record", "Plate": ".record", "render_view": ".render",
         "write_view": ".render", "Camera": ".camera", "look_at": ".camera",
-        "read_hologram": ".hologram_io", "write_hologram": ".hologram_io"}
+        "read_hologram": ".hologram_io", "write_hologram": ".hologram_io",
+        "InputError": ".validate"}
 
 
 def __getattr__(name):  # the top-level API, imported on first use (keeps `import` light)
