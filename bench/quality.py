@@ -199,7 +199,8 @@ def main():
                 if not ok:
                     print(f"{size} f/{fstop} {mode}: the pass failed")
                     continue
-                holo = read_exr(pipeline.output_dir(scene) / pipeline.PASS_NAME)
+                holo = read_exr(pipeline.pass_file(pipeline.output_dir(scene),
+                                                   scene.frame_current))
                 alpha = holo["ViewLayer.Combined.A"]
                 rgb = np.stack([holo[f"ViewLayer.Combined.{c}"] for c in "RGB"], -1)
                 rgb = rgb / np.maximum(alpha, 1e-6)[..., None]

@@ -8,6 +8,7 @@ blends the holographic image over by its alpha.
 from __future__ import annotations
 
 import logging
+import threading
 from pathlib import Path
 
 import bpy
@@ -34,34 +35,51 @@ def _output(node, *names):
     raise ValueError(f"node '{node.name}' has no output {' or '.join(names)}")
 
 
-def setup(scene, pass_path: Path):
-    """Build (or rebuild) the Depth Combine of the holographic pass at ``pass_path`` with the
-    render; enables the view layer's Depth pass. The pass must exist (its sockets come from
+def setup(scene, folder: Path):
+    """Add the Depth Combine of the holographic pass (the frame's ``holo_pass_NNNN.exr`` in
+    ``folder``, read as an image sequence so that every frame composites its own pass) to the
+    scene's compositor; enables the view layer's Depth pass. The user's own nodes and links
+    stay: whatever fed the compositor's output now feeds the Depth Combine, whose result goes
+    to the output. The add-on's nodes sit in a frame named "Holo: holographic pass"; running
+    this again rebuilds only them. The current frame's pass must exist (its sockets come from
     the file)."""
-    if not Path(pass_path).is_file():
-        raise FileNotFoundError(f"no holographic pass at {pass_path}: render the pass first")
+    first = pipeline.pass_file(folder, scene.frame_current)
+    if not first.is_file():
+        raise FileNotFoundError(f"no holographic pass at {first}: render the pass first")
     for layer in scene.view_layers:
         layer.use_pass_z = True
     tree = compat.compositor_tree(scene)
+    group = _node(tree, "NodeFrame", NODE_PREFIX + "Frame")
+    group.label = "Holo: holographic pass"
+    out_socket = compat.output_socket(tree)
+    old = tree.nodes.get(NODE_PREFIX + "Depth Combine")
+    feed = old.inputs[2] if old is not None else out_socket
+    source = feed.links[0].from_socket if feed.is_linked else None
+    if old is not None:
+        tree.nodes.remove(old)
     layers = _node(tree, "CompositorNodeRLayers", NODE_PREFIX + "Render Layers")
     layers.scene = scene
-    layers.location = (-400, 200)
-    image = bpy.data.images.load(str(pass_path), check_existing=True)
+    image = bpy.data.images.load(str(first), check_existing=True)
+    image.source = "SEQUENCE"
     image.reload()
     holo = _node(tree, "CompositorNodeImage", NODE_PREFIX + "Pass")
     holo.image = image
-    holo.location = (-400, -200)
-    old = tree.nodes.get(NODE_PREFIX + "Depth Combine")
-    if old is not None:
-        tree.nodes.remove(old)
+    holo.frame_start, holo.frame_offset = 1, 0
+    holo.frame_duration = MAX_FRAME  # file number = the frame being rendered
+    holo.use_auto_refresh = True
     combine = compat.depth_combine(tree)
     combine.name = combine.label = NODE_PREFIX + "Depth Combine"
+    for node, at in ((layers, (-400, 200)), (holo, (-400, -200)), (combine, (-100, 0))):
+        node.parent, node.location = group, at
     tree.links.new(_output(holo, "Combined", "Image"), combine.inputs[0])
     tree.links.new(_output(holo, "Depth", "Z"), combine.inputs[1])
-    tree.links.new(_output(layers, "Image"), combine.inputs[2])
+    tree.links.new(source or _output(layers, "Image"), combine.inputs[2])
     tree.links.new(_output(layers, "Depth", "Z"), combine.inputs[3])
-    tree.links.new(combine.outputs[0], compat.output_socket(tree))
+    tree.links.new(combine.outputs[0], out_socket)
     return combine
+
+
+MAX_FRAME = 1048574  # Blender's last frame
 
 
 def uses_pass(scene) -> bool:
@@ -79,11 +97,21 @@ def render_pre(scene, *_):
     if scene.holo.get("skip_pass_once"):
         del scene.holo["skip_pass_once"]
         return
-    depsgraph = bpy.context.evaluated_depsgraph_get()
-    job = pipeline.prepare(scene, depsgraph)
+    job = pipeline.prepare(scene, _depsgraph_at_frame(scene))
     outcome = pipeline.run(job)
     pipeline.apply(scene, job, outcome)
     log.info("holographic pass for frame %d: %s", job.frame, outcome.frame_path)
+
+
+def _depsgraph_at_frame(scene):
+    """The view layer's depsgraph evaluated at the frame being rendered. A render evaluates
+    its own depsgraph, not this one: a farm chunk (``-s 2 -e 3 -a``) or ``-f N`` starting
+    away from the frame the file was saved on would read that frame's geometry. Re-setting
+    the frame is only safe on the main thread (background renders; F12 renders the timeline's
+    frame, which is already evaluated)."""
+    if threading.current_thread() is threading.main_thread():
+        scene.frame_set(scene.frame_current, subframe=scene.frame_subframe)
+    return bpy.context.evaluated_depsgraph_get()
 
 
 def register():

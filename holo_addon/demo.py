@@ -132,7 +132,7 @@ def main(argv=None):
     logging.basicConfig(level=logging.INFO, format="%(name)s: %(message)s")
     import bpy
 
-    from . import register
+    from . import pipeline, register
     out = args.output.resolve()
     out.mkdir(parents=True, exist_ok=True)
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -152,7 +152,8 @@ def main(argv=None):
     plate = scene.objects["Hologram Plate"]
     hologram = f"\n  hologram: {plate.holo.hologram}" if args.mode == "PLATE" else ""
     print(f"demo rendered in {time.perf_counter() - t0:.0f} s:\n  {png}\n  {exr}{hologram}\n"
-          f"  holographic pass: {out / 'holo' / 'holo_pass.exr'}\n  scene: {out / 'demo.blend'}")
+          f"  holographic pass: {pipeline.pass_file(out / 'holo', scene.frame_current)}\n"
+          f"  scene: {out / 'demo.blend'}")
 
 
 if __name__ == "__main__":

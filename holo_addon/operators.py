@@ -15,7 +15,6 @@ import logging
 import bpy
 
 from holo_core.hologram_io import HologramFileError
-from holo_core.image_files import write_atomic
 from holo_core.worker import WorkerError
 
 from . import compositing, pipeline
@@ -120,7 +119,7 @@ class _PipelineOperator:
     def _keep(self, context):
         """Stop the samples here: the latest running pass becomes the frame's pass."""
         job = self._job
-        frame = job.output_dir / f"holo_pass_{job.frame:04d}.exr"
+        frame = pipeline.pass_file(job.output_dir, job.frame)
         job.output_dir.mkdir(parents=True, exist_ok=True)
         samples = self._worker.stop_and_keep(frame)
         self._end(context)
@@ -128,10 +127,9 @@ class _PipelineOperator:
             self.report({"WARNING"}, f"{self.bl_label} stopped before its first sample; "
                                      f"earlier results kept")
             return {"CANCELLED"}
-        latest = write_atomic(job.output_dir / pipeline.PASS_NAME, frame.read_bytes())
         self.report({"INFO"}, f"stopped at {samples} samples; that pass is kept")
         return self._done(context, job, pipeline.outcome(job, {
-            "recorded": False, "pass_path": latest, "frame_path": frame,
+            "recorded": False, "pass_path": frame, "frame_path": frame,
             "info": {"samples": samples}}))
 
     def cancel(self, context):
@@ -202,8 +200,7 @@ class HOLO_OT_setup_compositing(bpy.types.Operator):
 
     def execute(self, context):
         try:
-            compositing.setup(context.scene, pipeline.output_dir(context.scene)
-                              / pipeline.PASS_NAME)
+            compositing.setup(context.scene, pipeline.output_dir(context.scene))
         except USER_ERRORS as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}

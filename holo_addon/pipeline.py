@@ -23,7 +23,7 @@ from holo_core.hologram_io import read_hologram
 from .scene_export import ExportError, SceneData, export_scene, scale
 
 log = logging.getLogger(__name__)
-PASS_NAME = worker.PASS_NAME
+pass_file = worker.pass_file
 
 
 @dataclass(frozen=True)
@@ -144,14 +144,18 @@ def run(job: Job, progress: jobs.Progress = None, on_log=None) -> Outcome:
 
 def apply(scene, job: Job, outcome: Outcome) -> None:
     """Store the outcome in the scene (main thread): the plate references its hologram, and
-    images showing the pass are reloaded."""
+    the image sequences of holographic passes read this frame's file from the output folder
+    (which may have changed since compositing was set up)."""
     plate = scene.objects.get(job.scene.plate_name) if job.scene.plate_name else None
     if plate is not None:
         plate.holo.hologram = str(outcome.holograms[0])
         plate.holo.fingerprint = outcome.fingerprint
     if outcome.pass_path is not None:
         for image in bpy.data.images:
-            if image.filepath and Path(bpy.path.abspath(image.filepath)) == outcome.pass_path:
+            name = Path(image.filepath).name if image.filepath else ""
+            if image.source == "SEQUENCE" and name.startswith("holo_pass_"):
+                if Path(bpy.path.abspath(image.filepath)).parent != outcome.pass_path.parent:
+                    image.filepath = str(outcome.pass_path)
                 image.reload()
 
 

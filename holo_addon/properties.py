@@ -3,8 +3,14 @@
 from __future__ import annotations
 
 import bpy
-from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty,
-                       StringProperty)
+from bpy.props import (
+    BoolProperty,
+    EnumProperty,
+    FloatProperty,
+    IntProperty,
+    PointerProperty,
+    StringProperty,
+)
 
 EMITTERS = [("NONE", "None", "An ordinary object, rasterized by Blender"),
             ("POINTS", "Points", "Area-uniform point emitters on the surface (spherical waves)"),

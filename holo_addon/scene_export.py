@@ -13,8 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from holo_core import __version__
 from holo_core.camera import Camera
 from holo_core.emitters import Mesh
+from holo_core.hologram_io import FORMAT_VERSION
 from holo_core.record import Plate
 
 from . import compat
@@ -36,20 +38,26 @@ class SceneData:
     camera: Camera
 
     def fingerprint(self, *settings) -> str:
-        """A digest of everything the hologram depends on (the camera sizes its optics)."""
-        h = hashlib.sha256()
-        for mesh in self.points + self.triangles:
-            for a in (mesh.vertices, mesh.colours, mesh.uvs, mesh.texture):
-                if a is not None:
-                    h.update(np.ascontiguousarray(a, np.float64).tobytes())
-            h.update(b"|")
+        """A digest of everything the hologram depends on: each emitter's kind, evaluated
+        geometry and colours (vertex colours, texture and UVs, material colours), the plate,
+        the camera (it sizes the optics; its lens and focus), ``settings`` and the core's
+        version and file format."""
+        h = hashlib.sha256(f"holo {__version__} format {FORMAT_VERSION}".encode())
+        for kind, meshes in (("points", self.points), ("triangles", self.triangles)):
+            for mesh in meshes:
+                h.update(kind.encode())
+                for a in (mesh.vertices, mesh.colours, mesh.uvs, mesh.texture):
+                    h.update(b"-" if a is None else
+                             np.ascontiguousarray(a, np.float64).tobytes() + repr(a.shape).encode())
+                h.update(b"|")
         plate = () if self.plate is None else (self.plate.matrix_world,
                                                  (self.plate.width, self.plate.height))
         for a in (*plate, self.camera.matrix_world):
             h.update(np.asarray(a, np.float64).tobytes())
         h.update(repr((self.camera.lens, self.camera.sensor_width, self.camera.sensor_height,
                        self.camera.sensor_fit, self.camera.shift_x, self.camera.shift_y,
-                       self.camera.resolution, self.camera.pixel_aspect) + settings).encode())
+                       self.camera.resolution, self.camera.pixel_aspect, self.camera.fstop,
+                       self.camera.focus_distance) + settings).encode())
         return h.hexdigest()[:16]
 
 

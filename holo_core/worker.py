@@ -31,7 +31,10 @@ from pathlib import Path
 from . import jobs
 
 log = logging.getLogger(__name__)
-PASS_NAME = "holo_pass.exr"
+def pass_file(folder, frame: int) -> Path:
+    """Frame ``frame``'s holographic pass in ``folder``: ``holo_pass_NNNN.exr``, one file per
+    frame and nothing shared between frames (farm workers never write the same file)."""
+    return Path(folder) / f"holo_pass_{frame:04d}.exr"
 
 
 class WorkerError(RuntimeError):
@@ -90,17 +93,13 @@ def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
 
 
 def _write_pass(job, view, result) -> dict:
-    """The pass of frame N (``holo_pass_NNNN.exr`` and the latest ``holo_pass.exr``)."""
-    from .image_files import write_atomic
+    """The pass of frame N (:func:`pass_file`)."""
     from .render import write_view
     result.update(pass_path=None, frame_path=None, info={})
     if view is not None:
-        out = Path(job["output_dir"])
-        out.mkdir(parents=True, exist_ok=True)
-        frame_path = out / f"holo_pass_{job['frame']:04d}.exr"
+        frame_path = pass_file(job["output_dir"], job["frame"])
         write_view(view, frame_path)
-        result.update(pass_path=write_atomic(out / PASS_NAME, frame_path.read_bytes()),
-                      frame_path=frame_path, info=view.info)
+        result.update(pass_path=frame_path, frame_path=frame_path, info=view.info)
     return result
 
 

@@ -143,7 +143,7 @@ def test_compositing_keeps_the_nearer_surface(empty_scene, tmp_path):
     depth[square] = 2.0
     out = pipeline.output_dir(scene)
     out.mkdir(parents=True)
-    write_view(RenderResult(rgb=rgb, alpha=alpha, depth=depth), out / pipeline.PASS_NAME)
+    write_view(RenderResult(rgb=rgb, alpha=alpha, depth=depth), pipeline.pass_file(out, scene.frame_current))
     assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
     compat.set_exr_output(scene, multilayer=False)
     scene.render.filepath = str(tmp_path / "composite.exr")
@@ -220,7 +220,7 @@ def test_silhouette_and_depth_match_blenders_raster(empty_scene, tmp_path, mode,
     scene.holo.supersample = 2
     bpy.context.view_layer.update()
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
-    holo = _read_exr(pipeline.output_dir(scene) / pipeline.PASS_NAME)
+    holo = _read_exr(pipeline.pass_file(pipeline.output_dir(scene), scene.frame_current))
     obj.hide_render = False
     alpha, depth = _raster_alpha_and_depth(scene, tmp_path)
     mine, theirs = holo["ViewLayer.Combined.A"] > 0.5, alpha > 0.5
@@ -301,7 +301,8 @@ def _earlier_outputs(scene, *, size=(32, 24), iterations=1, max_resolution=256):
     scene.holo.max_resolution = max_resolution
     job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
     job.output_dir.mkdir(parents=True)
-    earlier = {p: os.urandom(64) for p in (job.holograms[0], job.output_dir / pipeline.PASS_NAME)}
+    earlier = {p: os.urandom(64) for p in (job.holograms[0],
+                                                  pipeline.pass_file(job.output_dir, job.frame))}
     for p, data in earlier.items():
         p.write_bytes(data)
     return job, earlier

@@ -60,7 +60,7 @@ def test_worker_renders_what_the_process_itself_renders(tmp_path):
 def _earlier(j):
     out = j["output_dir"]
     out.mkdir(parents=True)
-    files = {p: os.urandom(64) for p in (j["holograms"][0], out / worker.PASS_NAME)}
+    files = {p: os.urandom(64) for p in (j["holograms"][0], worker.pass_file(out, j["frame"]))}
     for p, data in files.items():
         p.write_bytes(data)
     return files

@@ -1,0 +1,150 @@
+"""Reproducers of the Blender integration issue's findings (bpy in-process)."""
+
+import numpy as np
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+from test_addon import _camera_columns, _plate_camera_cube, _read_exr  # noqa: E402
+
+
+def _fingerprint(scene):
+    from holo_addon import pipeline
+    return pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get()).fingerprint
+
+
+def test_the_fingerprint_covers_emitter_kind_material_and_lens(empty_scene):
+    scene = empty_scene
+    cube, cam, _ = _plate_camera_cube(scene)
+    scene.holo.mode = "PLATE"
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    seen = [_fingerprint(scene)]
+    cube.holo.emitter = "TRIANGLES"
+    seen.append(_fingerprint(scene))
+    material = bpy.data.materials.new("red")
+    material.diffuse_color = (1, 0, 0, 1)
+    cube.data.materials.append(material)
+    seen.append(_fingerprint(scene))
+    cam.data.dof.use_dof = True
+    cam.data.dof.focus_distance = 3.0
+    seen.append(_fingerprint(scene))
+    assert len(set(seen)) == len(seen), seen
+
+
+def _moving_cube(scene, tmp_path):
+    cube, cam, _ = _plate_camera_cube(scene, cube_size=0.4)
+    scene.render.resolution_x, scene.render.resolution_y = 48, 36
+    scene.render.resolution_percentage = 100
+    scene.render.engine = "BLENDER_WORKBENCH"
+    scene.holo.mode = "PLATE"
+    scene.holo.iterations = 1
+    scene.holo.max_resolution = 512
+    for frame, x in ((1, -0.15), (2, 0.15), (3, -0.05)):
+        cube.location.x = x
+        cube.keyframe_insert("location", frame=frame)
+    return cube, cam
+
+
+def _middle(path):
+    alpha = _read_exr(path)["ViewLayer.Combined.A"]
+    cols = np.nonzero(alpha > 0.5)[1]
+    return (cols.min() + cols.max() + 1) / 2
+
+
+def test_an_animation_started_away_from_the_timeline_frame_uses_each_frames_geometry(
+        empty_scene, tmp_path):
+    """The timeline rests on frame 1; frames 2-3 are rendered (a farm chunk): each pass shows
+    its own frame's cube, where the camera projects it (within a pixel)."""
+    from holo_addon import compat, pipeline
+    scene = empty_scene
+    cube, cam = _moving_cube(scene, tmp_path)
+    scene.frame_set(1)
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    compat.set_png_output(scene)
+    scene.render.filepath = str(tmp_path / "frame_")
+    scene.frame_start, scene.frame_end = 2, 3
+    bpy.ops.render.render(animation=True)
+    out = pipeline.output_dir(scene)
+    corners = np.array([(x, y, z) for x in (-0.2, 0.2) for y in (-0.2, 0.2) for z in (-0.2, 0.2)])
+    for frame, x in ((2, 0.15), (3, -0.05)):
+        got = _middle(out / f"holo_pass_{frame:04d}.exr")
+        cols = _camera_columns(scene, cam, corners + (x, 0, 0))
+        want = (min(cols) + max(cols)) / 2
+        print(f"frame {frame}: silhouette middle {got} px, projected {want:.2f} px")
+        assert abs(got - want) <= 1.0, (frame, got, want)
+
+
+def _render_range(scene, start, end, folder, tmp_path):
+    from holo_addon import compat
+    scene.holo.output_dir = str(folder) + "/"
+    compat.set_exr_output(scene, multilayer=False)
+    scene.render.filepath = str(tmp_path / folder.name / "frame_")
+    scene.frame_start, scene.frame_end = start, end
+    bpy.ops.render.render(animation=True)
+
+
+def test_three_frames_as_one_animation_or_separate_frames_give_identical_passes(
+        empty_scene, tmp_path):
+    """A cube and the camera both move; ``-a`` over frames 1-3 and three single-frame runs
+    (as a farm splits them) give bit-identical passes, each where the camera projects that
+    frame's cube (within a pixel), and each frame's composite shows its own pass."""
+    from holo_addon import pipeline
+    scene = empty_scene
+    cube, cam = _moving_cube(scene, tmp_path)
+    for frame, dx in ((1, 0.0), (2, 0.05), (3, 0.1)):
+        cam.location.x = dx
+        cam.keyframe_insert("location", frame=frame)
+    scene.frame_set(1)
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    _render_range(scene, 1, 3, tmp_path / "all", tmp_path)
+    for frame in (3, 1, 2):  # separate runs, in any order, from wherever the timeline rests
+        _render_range(scene, frame, frame, tmp_path / "single", tmp_path)
+    corners = np.array([(x, y, z) for x in (-0.2, 0.2) for y in (-0.2, 0.2) for z in (-0.2, 0.2)])
+    for frame, x in ((1, -0.15), (2, 0.15), (3, -0.05)):
+        a, b = (_read_exr(pipeline.pass_file(tmp_path / run, frame)) for run in ("all", "single"))
+        assert all(np.array_equal(a[k], b[k]) for k in a), f"frame {frame}: passes differ"
+        scene.frame_set(frame)
+        cols = _camera_columns(scene, cam, corners + (x, 0, 0))
+        want, got = (min(cols) + max(cols)) / 2, _middle(pipeline.pass_file(tmp_path / "all",
+                                                                             frame))
+        image = _read_exr(tmp_path / "all" / f"frame_{frame:04d}.exr")
+        rgb = np.stack([image[c] for c in "RGB"], -1)
+        shown = np.nonzero((np.abs(rgb - rgb[0, 0]).max(-1) > 0.05).any(0))[0]
+        composite = (shown.min() + shown.max() + 1) / 2
+        print(f"frame {frame}: pass middle {got}, composite {composite}, projected {want:.2f} px")
+        assert abs(got - want) <= 1.0 and abs(composite - got) <= 1.0
+
+
+def test_compositing_keeps_the_users_nodes_and_links(empty_scene, tmp_path):
+    """A user's Render Layers → Glare → output chain (and a Viewer) survives the setup: every
+    node and link stays, the chain's result feeds the Depth Combine, whose result goes out."""
+    from holo_addon import compat, compositing, pipeline
+    from holo_core.render import RenderResult, write_view
+    scene = empty_scene
+    _plate_camera_cube(scene)
+    tree = compat.compositor_tree(scene)
+    rl = tree.nodes.new("CompositorNodeRLayers")
+    glare = tree.nodes.new("CompositorNodeGlare")
+    viewer = tree.nodes.new("CompositorNodeViewer")
+    tree.links.new(rl.outputs["Image"], glare.inputs[0])
+    tree.links.new(glare.outputs[0], compat.output_socket(tree))
+    tree.links.new(rl.outputs["Image"], viewer.inputs[0])
+
+    def links():
+        return {(l.from_node.name, l.from_socket.identifier, l.to_node.name,
+                 l.to_socket.identifier) for l in tree.links}
+    before, nodes = links(), {n.name for n in tree.nodes}
+    out = pipeline.output_dir(scene)
+    write_view(RenderResult(rgb=np.ones((24, 32, 3)), alpha=np.ones((24, 32)),
+                            depth=np.ones((24, 32))), pipeline.pass_file(out, scene.frame_current))
+    for _ in range(2):  # again: only the add-on's nodes are rebuilt
+        compositing.setup(scene, out)
+    combine = tree.nodes[compositing.NODE_PREFIX + "Depth Combine"]
+    output_link = next(l for l in before if l[0] == glare.name)
+    assert before - links() == {output_link}, "only the link into the output is re-routed"
+    assert nodes <= {n.name for n in tree.nodes}
+    assert combine.inputs[2].links[0].from_node == glare
+    assert compat.output_socket(tree).links[0].from_node == combine
+    assert sum(n.name.startswith(compositing.NODE_PREFIX + "Depth") for n in tree.nodes) == 1
