@@ -8,6 +8,8 @@ blends the holographic image over by its alpha.
 from __future__ import annotations
 
 import logging
+import os
+import sys
 import threading
 from pathlib import Path
 
@@ -82,25 +84,66 @@ def setup(scene, folder: Path):
 MAX_FRAME = 1048574  # Blender's last frame
 
 
+def _tree(scene):
+    return scene.compositing_node_group if compat.compositor_is_group(scene) else scene.node_tree
+
+
 def uses_pass(scene) -> bool:
-    tree = (scene.compositing_node_group if compat.compositor_is_group(scene)
-            else scene.node_tree)
+    tree = _tree(scene)
     return tree is not None and tree.nodes.get(NODE_PREFIX + "Pass") is not None
 
 
 @persistent
 def render_pre(scene, *_):
     """Before Blender renders a frame (F12, ``-f``, ``-a``): the holographic pass of that
-    frame, recording again only when the scene changed."""
+    frame, recording again only when the scene changed. A failed pass never leaves a stale
+    pass in the composite (see :func:`failed`)."""
     if not (scene.holo.pass_on_render and uses_pass(scene)):
         return
     if scene.holo.get("skip_pass_once"):
         del scene.holo["skip_pass_once"]
         return
-    job = pipeline.prepare(scene, _depsgraph_at_frame(scene))
-    outcome = pipeline.run(job)
-    pipeline.apply(scene, job, outcome)
+    try:
+        job = pipeline.prepare(scene, _depsgraph_at_frame(scene))
+        outcome = pipeline.run(job)
+        pipeline.apply(scene, job, outcome)
+    except Exception as e:  # noqa: BLE001 -- any failure must stop the frame, not pass by
+        failed(scene, f"Holo: the holographic pass of frame {scene.frame_current} failed: {e}")
+        return
+    show_pass(scene, True)
     log.info("holographic pass for frame %d: %s", job.frame, outcome.frame_path)
+
+
+EXIT_ON_FAILURE = None  # None: in background renders (blender -b ... -a), as farms need
+
+
+def failed(scene, message: str) -> None:
+    """A failed pass. In a background render the process exits with status 1 before the frame
+    is rendered, so ``blender -b ... -a`` fails and no frame with a stale pass is written. In
+    the interface (a handler cannot cancel Blender's render) the pass is muted in the
+    composite, which then shows the raster alone, and the error is shown in a popup."""
+    log.error(message)
+    exit_now = bpy.app.background if EXIT_ON_FAILURE is None else EXIT_ON_FAILURE
+    if exit_now:
+        sys.stderr.write(message + "\n")
+        sys.stderr.flush()
+        os._exit(1)
+    show_pass(scene, False)
+    if not bpy.app.background:
+        bpy.app.timers.register(lambda: _popup(message), first_interval=0.0)
+
+
+def show_pass(scene, visible: bool) -> None:
+    tree = _tree(scene)
+    node = tree.nodes.get(NODE_PREFIX + "Pass") if tree is not None else None
+    if node is not None:
+        node.mute = not visible
+
+
+def _popup(message):
+    def draw(menu, _context):
+        menu.layout.label(text=message)
+    bpy.context.window_manager.popup_menu(draw, title="Holo", icon="ERROR")
 
 
 def _depsgraph_at_frame(scene):

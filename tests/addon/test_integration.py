@@ -148,3 +148,77 @@ def test_compositing_keeps_the_users_nodes_and_links(empty_scene, tmp_path):
     assert combine.inputs[2].links[0].from_node == glare
     assert compat.output_socket(tree).links[0].from_node == combine
     assert sum(n.name.startswith(compositing.NODE_PREFIX + "Depth") for n in tree.nodes) == 1
+
+
+def _scene_with_pass(scene, tmp_path):
+    from holo_addon import compat
+    _moving_cube(scene, tmp_path)
+    scene.frame_set(1)
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    compat.set_exr_output(scene, multilayer=False)
+
+
+def _shown_columns(path):
+    image = _read_exr(path)
+    rgb = np.stack([image[c] for c in "RGB"], -1)
+    return np.nonzero((np.abs(rgb - rgb[0, 0]).max(-1) > 0.05).any(0))[0]
+
+
+def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monkeypatch):
+    """In the interface a handler cannot cancel the render: the failed frame shows the raster
+    alone (the stale pass muted), and the next good pass shows again."""
+    from holo_addon import compositing, pipeline
+    from holo_core.worker import WorkerError
+    scene = empty_scene
+    _scene_with_pass(scene, tmp_path)
+    monkeypatch.setattr(compositing, "EXIT_ON_FAILURE", False)
+    original = pipeline.run
+
+    def broken(job, progress=None):
+        raise WorkerError("a crash in native code")
+    monkeypatch.setattr(pipeline, "run", broken)
+    assert pipeline.pass_file(pipeline.output_dir(scene), 1).is_file()  # the stale pass
+    scene.render.filepath = str(tmp_path / "failed.exr")
+    bpy.ops.render.render(write_still=True)
+    assert _shown_columns(tmp_path / "failed.exr").size == 0, "a stale pass was composited"
+    monkeypatch.setattr(pipeline, "run", original)
+    scene.render.filepath = str(tmp_path / "good.exr")
+    bpy.ops.render.render(write_still=True)
+    assert _shown_columns(tmp_path / "good.exr").size > 0
+
+
+FAILING_FARM_RENDER = """
+import sys
+sys.path[:0] = [sys.argv[1], sys.argv[2]]
+import bpy
+bpy.ops.wm.read_factory_settings(use_empty=True)
+import holo_addon
+holo_addon.register()
+import test_integration
+scene = bpy.context.scene
+scene.holo.output_dir = sys.argv[3] + "/holo/"
+test_integration._scene_with_pass(scene, None)
+from holo_addon import pipeline
+def broken(job, progress=None):
+    raise RuntimeError("the worker failed")
+pipeline.run = broken
+scene.render.filepath = sys.argv[3] + "/frame_"
+bpy.ops.render.render(animation=True)
+print("rendered")
+"""
+
+
+def test_a_failed_pass_fails_a_background_animation(tmp_path):
+    """``blender -b ... -a``: the process ends with status 1 and the error, before writing the
+    frame."""
+    import subprocess
+    import sys
+    from pathlib import Path
+    here = Path(__file__).resolve()
+    run = subprocess.run([sys.executable, "-c", FAILING_FARM_RENDER, str(here.parents[2]),
+                          str(here.parent), str(tmp_path)], capture_output=True, text=True,
+                         timeout=600)
+    assert run.returncode == 1, run.stdout[-2000:] + run.stderr[-2000:]
+    assert "the holographic pass of frame 1 failed: the worker failed" in run.stderr
+    assert "rendered" not in run.stdout and not list(tmp_path.glob("frame_*"))
