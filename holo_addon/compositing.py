@@ -105,6 +105,8 @@ def render_pre(scene, *_):
         return
     try:
         job = pipeline.prepare(scene, _depsgraph_at_frame(scene))
+        for warning in job.scene.warnings:
+            log.warning(warning)
         outcome = pipeline.run(job)
         pipeline.apply(scene, job, outcome)
     except Exception as e:  # noqa: BLE001 -- any failure must stop the frame, not pass by

@@ -44,11 +44,14 @@ class _PipelineOperator:
 
     def _prepare(self, context):
         try:
-            return pipeline.prepare(context.scene, context.evaluated_depsgraph_get(),
-                                    render=self.render)
+            job = pipeline.prepare(context.scene, context.evaluated_depsgraph_get(),
+                                   render=self.render)
         except USER_ERRORS as e:
             self.report({"ERROR"}, str(e))
             return None
+        for warning in job.scene.warnings:
+            self.report({"WARNING"}, warning)
+        return job
 
     def execute(self, context):
         job = self._prepare(context)
@@ -165,8 +168,7 @@ class _PipelineOperator:
 
 
 class HOLO_OT_record_hologram(_PipelineOperator, bpy.types.Operator):
-    """Record the plate's hologram from the holographic emitters (again only when the scene or
-    the settings changed)"""
+    """Record the plate's hologram of the holographic objects (again only after a change)"""
 
     bl_idname = "holo.record_hologram"
     bl_label = "Record Hologram"
@@ -182,8 +184,7 @@ class HOLO_OT_record_hologram(_PipelineOperator, bpy.types.Operator):
 
 
 class HOLO_OT_render_pass(_PipelineOperator, bpy.types.Operator):
-    """Render the holographic pass from the scene camera: a multilayer EXR with Combined and
-    Depth (recording the hologram first when it is out of date)"""
+    """Render this frame's holographic pass from the scene camera (image and depth)"""
 
     bl_idname = "holo.render_pass"
     bl_label = "Render Holographic Pass"
@@ -191,8 +192,7 @@ class HOLO_OT_render_pass(_PipelineOperator, bpy.types.Operator):
 
 
 class HOLO_OT_setup_compositing(bpy.types.Operator):
-    """Depth-combine the holographic pass with Blender's rendered image and depth in the
-    compositor"""
+    """Add the holographic pass to the compositor, depth-combined with Blender's render"""
 
     bl_idname = "holo.setup_compositing"
     bl_label = "Set Up Compositing"
@@ -209,8 +209,7 @@ class HOLO_OT_setup_compositing(bpy.types.Operator):
 
 
 class HOLO_OT_render(_PipelineOperator, bpy.types.Operator):
-    """Record (when needed), render the holographic pass, set up compositing, then render the
-    image with Blender and write it to the output path"""
+    """Render the holographic pass, composite it and render the image to the output path"""
 
     bl_idname = "holo.render"
     bl_label = "Render with Hologram"

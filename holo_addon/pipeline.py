@@ -11,7 +11,6 @@ leaves earlier holograms and passes as they were.
 from __future__ import annotations
 
 import logging
-import os
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -37,7 +36,7 @@ class Settings:
     iterations: int
     supersample: int
     composition: str
-    exposure: float
+    exposure: float               # linear factor (the scene stores stops)
     opacity_threshold: float
     seed: int
 
@@ -47,7 +46,7 @@ class Settings:
         return cls(mode=h.mode, samples=h.samples, max_resolution=h.max_resolution,
                    wavelength=h.wavelength * unit if h.wavelength > 0 else None,
                    iterations=h.iterations, supersample=h.supersample,
-                   composition=h.composition, exposure=h.exposure,
+                   composition=h.composition, exposure=2.0 ** h.exposure,
                    opacity_threshold=h.opacity_threshold, seed=h.seed)
 
     def recording(self) -> tuple:
@@ -90,9 +89,8 @@ def output_dir(scene) -> Path:
     saved yet, to the render output's folder."""
     raw = scene.holo.output_dir or "//holo/"
     if raw.startswith("//") and not bpy.data.filepath:
-        base = Path(bpy.path.abspath(scene.render.filepath) or ".")
-        base = base if scene.render.filepath.endswith(("/", os.sep)) else base.parent
-        return (base / raw[2:]).resolve()
+        raise ExportError("save the .blend first, or set an absolute Output Folder in Render "
+                          "Properties > Holo (the folder is relative to the .blend)")
     return Path(bpy.path.abspath(raw)).resolve()
 
 

@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 import bpy
-from bpy.props import StringProperty
+from bpy.props import FloatProperty, StringProperty
 
 from holo_core.worker import environment
 
@@ -51,7 +51,10 @@ def device() -> str:
 
 def worker_options() -> dict:
     """What :class:`holo_core.worker.Worker` takes from the preferences."""
-    return {"paths": runtime_paths(), "device": device() or None}
+    prefs = _preferences()
+    limit = prefs.memory_limit if prefs is not None else 0.0
+    return {"paths": runtime_paths(), "device": device() or None,
+            "memory_limit": f"{limit}G" if limit > 0 else None}
 
 
 def list_devices() -> list[str]:
@@ -64,8 +67,7 @@ def list_devices() -> list[str]:
 
 
 class HOLO_OT_check_devices(bpy.types.Operator):
-    """List the OpenCL devices the worker process finds, whether each works, and which one it
-    would use"""
+    """List the OpenCL devices Holo finds, whether each works, and which one it would use"""
 
     bl_idname = "holo.check_devices"
     bl_label = "Check Devices"
@@ -78,8 +80,7 @@ class HOLO_OT_check_devices(bpy.types.Operator):
 
 
 class HOLO_OT_install_cpu_runtime(bpy.types.Operator):
-    """Install Intel's CPU OpenCL runtime (about 280 MB from the Python Package Index) into
-    this add-on's own folder: it runs on every current x86-64 CPU, AMD Zen 5 included"""
+    """Download Intel's CPU runtime (about 280 MB) into this add-on's folder; it runs on every current x86-64 CPU"""  # noqa: E501 -- one line: Blender shows it as the tooltip
 
     bl_idname = "holo.install_cpu_runtime"
     bl_label = "Install CPU Runtime"
@@ -115,10 +116,15 @@ class HoloPreferences(bpy.types.AddonPreferences):
         description="The OpenCL device for recording and rendering. Empty: the best that "
                     "works (a GPU, else a CPU). Or 'gpu', 'cpu', a number pair such as 1:0, "
                     "or part of a device name, as Check Devices lists them")
+    memory_limit: FloatProperty(
+        name="Memory Limit", default=0.0, min=0.0, soft_max=256.0, precision=1,
+        description="The most memory (GiB) Holo may use; a larger pass is refused with the "
+                    "size it needs. 0: what the system has free (set it on shared farm nodes)")
 
     def draw(self, context):
         layout = self.layout
         layout.prop(self, "device")
+        layout.prop(self, "memory_limit")
         row = layout.row()
         row.operator(HOLO_OT_check_devices.bl_idname, icon="VIEWZOOM")
         row.operator(HOLO_OT_install_cpu_runtime.bl_idname, icon="IMPORT")

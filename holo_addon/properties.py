@@ -37,8 +37,9 @@ class HoloObjectSettings(bpy.types.PropertyGroup):
     is_plate: BoolProperty(name="Hologram Plate", default=False, update=_plate_changed,
                            description="This plane is the holographic plate: its local z = 0 "
                                        "plane, viewed from its +Z side")
-    hologram: StringProperty(name="Hologram", subtype="FILE_PATH", default="",
-                             description="The recorded hologram file (first iteration)")
+    hologram: StringProperty(name="Hologram", default="", options={"HIDDEN"},
+                             description="The recorded hologram file (first iteration), "
+                                         "written by Record Hologram")
     fingerprint: StringProperty(name="Fingerprint", default="", options={"HIDDEN"},
                                 description="Digest of what the hologram was recorded from")
 
@@ -57,8 +58,8 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                          description="Renders with independent random phases, averaged: more "
                                      "samples, less speckle")
     output_dir: StringProperty(name="Output Folder", subtype="DIR_PATH", default="//holo/",
-                               description="Where holograms and holographic passes are written "
-                                           "(// is the .blend's folder)")
+                               description="Where holograms and the holographic pass of each "
+                                           "frame are written (// is the .blend's folder)")
     max_resolution: IntProperty(name="Max Hologram Size", default=1024, min=64, max=8192,
                                 description="Largest hologram side in samples; the optics are "
                                             "chosen automatically up to this size")
@@ -74,9 +75,12 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                                          "low-pass and downsample")
     composition: EnumProperty(name="Composition", default="mean",
                               items=[("mean", "Mean", "Average the iterations' intensities"),
-                                     ("max", "Maximum", "Brightest iteration per pixel")])
-    exposure: FloatProperty(name="Exposure", default=1.0, min=0.0, soft_max=16.0,
-                            description="Multiplier on the holographic pass's radiance")
+                                     ("max", "Maximum", "Brightest iteration per pixel")],
+                              description="How the recordings combine into the image: the mean "
+                                          "is smoother, the maximum brighter")
+    exposure: FloatProperty(name="Exposure", default=0.0, soft_min=-10.0, soft_max=10.0,
+                            description="Brightness of the holographic objects in stops, as "
+                                        "Blender's Film Exposure: +1 doubles it")
     opacity_threshold: FloatProperty(name="Opacity Threshold", default=0.5, min=0.0, max=1.0,
                                      description="Alpha is 1 where the holographic surfaces "
                                                  "cover more than this fraction of a pixel "

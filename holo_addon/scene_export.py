@@ -9,13 +9,14 @@ Color (per triangle, by material slot), else white; all linear.
 from __future__ import annotations
 
 import hashlib
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from holo_core import __version__
 from holo_core.camera import Camera
-from holo_core.emitters import Mesh
+from holo_core.emitters import Mesh, sample_points
 from holo_core.hologram_io import FORMAT_VERSION
 from holo_core.record import Plate
 
@@ -36,6 +37,7 @@ class SceneData:
     plate: Plate | None
     plate_name: str | None
     camera: Camera
+    warnings: tuple = ()
 
     def fingerprint(self, *settings) -> str:
         """A digest of everything the hologram depends on: each emitter's kind, evaluated
@@ -226,5 +228,42 @@ def export_scene(scene, depsgraph, *, plate=True) -> SceneData:
     if plate.to_plate(camera.position[None])[0, 2] <= 0:
         raise ExportError(f"the camera is behind plate '{plates[0].name}': viewers must be on "
                           f"its +Z side (rotate the plate 180°)")
+    warning = plate_coverage(plate, plates[0].name, camera, points + triangles)
     return SceneData(points=points, triangles=triangles, plate=plate, plate_name=plates[0].name,
-                     camera=camera)
+                     camera=camera, warnings=(warning,) if warning else ())
+
+
+def _surface_samples(mesh: Mesh, count=4000) -> np.ndarray:
+    """About ``count`` points spread over ``mesh``'s surface [m] (and its vertices)."""
+    area = float(mesh.areas().sum())
+    if area <= 0:
+        return mesh.vertices
+    points, _ = sample_points(mesh, math.sqrt(area / count), max_points=count)
+    return np.concatenate([points, mesh.vertices])
+
+
+def plate_coverage(plate: Plate, name: str, camera: Camera, meshes) -> str | None:
+    """A warning when the plate covers only part of what the camera sees of the emitters (the
+    rest would be cut from the pass), an :class:`ExportError` when it covers none of it (the
+    pass would be empty); None when it covers all."""
+    world = np.concatenate([_surface_samples(m) for m in meshes])
+    xy, depth = camera.project(world)
+    w, h = camera.resolution
+    seen = (depth > 0) & (xy[:, 0] >= 0) & (xy[:, 0] < w) & (xy[:, 1] >= 0) & (xy[:, 1] < h)
+    if not seen.any():
+        raise ExportError("no holographic object is in the camera's view")
+    eye, local = plate.to_plate(camera.position[None])[0], plate.to_plate(world[seen])
+    behind = local[:, 2] < 0
+    t = eye[2] / (eye[2] - local[behind, 2])  # where the lines of sight cross the plate
+    hits = eye[:2] + t[:, None] * (local[behind, :2] - eye[:2])
+    inside = (np.abs(hits) <= (plate.width / 2, plate.height / 2)).all(1)
+    share = inside.sum() / len(local)
+    if share == 0:
+        raise ExportError(f"plate '{name}' is not between the camera and the holographic "
+                          f"objects: the pass would be empty (move it onto the line of sight)")
+    if share < 1:
+        need = 2 * np.abs(hits).max(0) if len(hits) else (plate.width, plate.height)
+        return (f"plate '{name}' covers {share:.0%} of the holographic objects the camera "
+                f"sees; the rest is cut from the pass (it needs about {need[0]:.3g} x "
+                f"{need[1]:.3g} m where it stands)")
+    return None

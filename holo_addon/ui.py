@@ -1,4 +1,4 @@
-"""Panels in the Properties editor: Scene ▸ Holo (settings and actions), Object ▸ Holo."""
+"""Panels in the Properties editor: Render ▸ Holo (settings and actions), Object ▸ Holo."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ class HOLO_PT_scene(bpy.types.Panel):
     bl_label = "Holo"
     bl_space_type = "PROPERTIES"
     bl_region_type = "WINDOW"
-    bl_context = "scene"
+    bl_context = "render"
 
     def draw(self, context):
         h = context.scene.holo
@@ -55,7 +55,7 @@ class HOLO_PT_object(bpy.types.Panel):
         layout.use_property_split = True
         layout.prop(h, "is_plate")
         if h.is_plate:
-            layout.prop(h, "hologram")
+            layout.label(text=f"Hologram: {h.hologram or 'not recorded yet'}")
         else:
             layout.prop(h, "emitter")
 

@@ -67,7 +67,7 @@ def tilted_beam(n=256, pitch=0.5e-6, w0=20e-6, degrees=20.0):
     return np.concatenate([phase_before, _tone(np.abs(out) ** 2)], axis=1)
 
 
-def _octahedron(centre, radius, colours=None) -> "Mesh":
+def _octahedron(centre, radius, colours=None):
     from .emitters import Mesh
     v = np.asarray(centre) + radius * np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0],
                                                 [0, 0, 1], [0, 0, -1.0]])

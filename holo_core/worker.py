@@ -152,17 +152,19 @@ def main(folder: str) -> int:
 
 # --- the parent's handle ----------------------------------------------------------------------
 
-def environment(paths=(), device: str | None = None) -> dict:
+def environment(paths=(), device: str | None = None, memory_limit: str | None = None) -> dict:
     """The parent's environment for a child Python: its module search path (the worker imports
     holo_core and its dependencies from wherever the parent found them, Blender's extension
-    folder), ``paths`` before it (packages installed on demand), and ``HOLO_DEVICE`` when
-    ``device`` is given."""
+    folder), ``paths`` before it (packages installed on demand), ``HOLO_DEVICE`` when
+    ``device`` is given and ``HOLO_MEMORY_LIMIT`` when ``memory_limit`` is (e.g. "8G")."""
     env = dict(os.environ)
     found = [str(p) for p in (*paths, *sys.path) if p and os.path.isdir(p)]
     env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(found))
     env["PYTHONUNBUFFERED"] = "1"
     if device:
         env["HOLO_DEVICE"] = device
+    if memory_limit:
+        env["HOLO_MEMORY_LIMIT"] = memory_limit
     return env
 
 
@@ -189,7 +191,8 @@ class Worker:
     over its latest running pass.
     """
 
-    def __init__(self, job: dict, *, paths=(), device: str | None = None):
+    def __init__(self, job: dict, *, paths=(), device: str | None = None,
+                 memory_limit: str | None = None):
         data = pickle.dumps(job, protocol=pickle.HIGHEST_PROTOCOL)  # plain data only
         self.folder = Path(tempfile.mkdtemp(prefix="holo-worker-"))
         (self.folder / "job.pickle").write_bytes(data)
@@ -197,7 +200,7 @@ class Worker:
         self.process = subprocess.Popen(
             [sys.executable, "-m", "holo_core.worker", str(self.folder)],
             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=self._stderr,
-            env=environment(paths, device), cwd=self.folder)
+            env=environment(paths, device, memory_limit), cwd=self.folder)
         self._messages: queue.SimpleQueue = queue.SimpleQueue()
         self._error = None
         self.finished = False

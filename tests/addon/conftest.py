@@ -16,7 +16,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 @pytest.fixture(scope="session")
 def addon():
     import holo_addon
+    from holo_addon import compositing
     holo_addon.register()
+    # a failed pass in a render ends a background Blender (os._exit): not pytest's process
+    compositing.EXIT_ON_FAILURE = False
     yield holo_addon
     holo_addon.unregister()
 

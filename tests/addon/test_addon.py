@@ -51,7 +51,7 @@ def test_export_known_mesh_in_metres(empty_scene):
     cam.data.dof.focus_object = cube
     cam.data.dof.aperture_fstop = 2.0
     plate.location = (0, -150, 0)
-    plate.scale = (2, 2, 2)
+    plate.scale = (150, 150, 150)  # 0.9 m: it covers the cube as the camera sees it
     bpy.context.view_layer.update()
     data = export_scene(scene, bpy.context.evaluated_depsgraph_get())
     (mesh,) = data.points
@@ -60,7 +60,7 @@ def test_export_known_mesh_in_metres(empty_scene):
     got = {tuple(np.round(v, 6) + 0.0) for v in mesh.vertices}  # float32 in Blender
     assert got == expected, got
     np.testing.assert_allclose(mesh.colours, [[0.2, 0.4, 0.6]] * 36, atol=1e-6)
-    assert data.plate.width == pytest.approx(0.012) and data.plate.height == pytest.approx(0.012)
+    assert data.plate.width == pytest.approx(0.9) and data.plate.height == pytest.approx(0.9)
     np.testing.assert_allclose(data.plate.matrix_world[:3, 3], (0, -1.5, 0), atol=1e-7)
     np.testing.assert_allclose(data.camera.position, (0, -3, 0), atol=1e-7)
     assert data.camera.fstop == 2.0
@@ -145,6 +145,7 @@ def test_compositing_keeps_the_nearer_surface(empty_scene, tmp_path):
     out.mkdir(parents=True)
     write_view(RenderResult(rgb=rgb, alpha=alpha, depth=depth), pipeline.pass_file(out, scene.frame_current))
     assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    scene.holo.pass_on_render = False  # the pass above stands for the holographic objects
     compat.set_exr_output(scene, multilayer=False)
     scene.render.filepath = str(tmp_path / "composite.exr")
     bpy.ops.render.render(write_still=True)

@@ -222,3 +222,49 @@ def test_a_failed_pass_fails_a_background_animation(tmp_path):
     assert run.returncode == 1, run.stdout[-2000:] + run.stderr[-2000:]
     assert "the holographic pass of frame 1 failed: the worker failed" in run.stderr
     assert "rendered" not in run.stdout and not list(tmp_path.glob("frame_*"))
+
+
+def _prepare(scene):
+    from holo_addon import pipeline
+    return pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
+
+
+def test_a_plate_too_small_warns_and_one_off_the_view_is_refused(empty_scene):
+    from holo_addon.scene_export import ExportError
+    scene = empty_scene
+    _, _, plate = _plate_camera_cube(scene)
+    scene.holo.mode = "PLATE"
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    assert _prepare(scene).scene.warnings == ()
+    plate.scale = (0.3, 0.3, 1)               # 0.18 m: the cube's outline is cut
+    bpy.context.view_layer.update()
+    (warning,) = _prepare(scene).scene.warnings
+    assert "covers" in warning and "cut from the pass" in warning, warning
+    plate.scale = (1, 1, 1)
+    plate.location.x = 2.0                    # beside the line of sight
+    bpy.context.view_layer.update()
+    with pytest.raises(ExportError, match="not between the camera and the holographic objects"):
+        _prepare(scene)
+
+
+def test_exposure_is_in_stops_and_unsaved_files_need_a_folder(empty_scene):
+    from holo_addon import pipeline
+    from holo_addon.scene_export import ExportError
+    scene = empty_scene
+    _plate_camera_cube(scene)
+    scene.holo.exposure = 1.0
+    assert pipeline.Settings.from_scene(scene, 1.0).exposure == 2.0
+    scene.holo.exposure = -2.0
+    assert pipeline.Settings.from_scene(scene, 1.0).exposure == 0.25
+    scene.holo.output_dir = "//holo/"
+    assert not bpy.data.filepath
+    with pytest.raises(ExportError, match="save the .blend first"):
+        pipeline.output_dir(scene)
+
+
+def test_the_memory_limit_preference_reaches_the_worker():
+    from holo_core.worker import environment
+    assert environment((), None, "6.0G")["HOLO_MEMORY_LIMIT"] == "6.0G"
+    assert "HOLO_MEMORY_LIMIT" not in environment((), None, None) or \
+        environment((), None, None)["HOLO_MEMORY_LIMIT"] == __import__("os").environ.get(
+            "HOLO_MEMORY_LIMIT")
