@@ -104,9 +104,11 @@ def build(bpy, size, fstop):
 def cycles(bpy, scene, out):
     """Cycles' image (linear RGB), alpha and planar Depth of the holographic objects."""
     from holo_addon import compat
+    from holo_addon.properties import RAY_VISIBILITY
     for obj in scene.objects:
         if obj.type == "MESH" and not obj.holo.is_plate:
-            obj.hide_render = False
+            for name in RAY_VISIBILITY:
+                setattr(obj, name, True)
     scene.render.engine = "CYCLES"
     scene.cycles.samples = 32
     scene.cycles.max_bounces = 0  # the emission alone: no light bounced between the surfaces

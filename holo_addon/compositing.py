@@ -10,7 +10,6 @@ from __future__ import annotations
 import logging
 import os
 import sys
-import threading
 from pathlib import Path
 
 import bpy
@@ -94,17 +93,21 @@ def uses_pass(scene) -> bool:
 
 
 @persistent
-def render_pre(scene, *_):
-    """Before Blender renders a frame (F12, ``-f``, ``-a``): the holographic pass of that
-    frame, recording again only when the scene changed. A failed pass never leaves a stale
-    pass in the composite (see :func:`failed`)."""
+def render_frame(scene, depsgraph=None):
+    """``frame_change_post``: when Blender has evaluated a frame for rendering (F12, ``-f``,
+    ``-a``; its depsgraph is then the render's, in RENDER mode), the holographic pass of that
+    frame from that depsgraph: the frame being rendered whatever the timeline shows, render
+    modifier levels and render visibility. The hologram is recorded again only when the scene
+    changed. A failed pass never leaves a stale pass in the composite (see :func:`failed`)."""
+    if depsgraph is None or depsgraph.mode != "RENDER":
+        return
     if not (scene.holo.pass_on_render and uses_pass(scene)):
         return
     if scene.holo.get("skip_pass_once"):
         del scene.holo["skip_pass_once"]
         return
     try:
-        job = pipeline.prepare(scene, _depsgraph_at_frame(scene))
+        job = pipeline.prepare(scene, depsgraph)
         for warning in job.scene.warnings:
             log.warning(warning)
         outcome = pipeline.run(job)
@@ -112,7 +115,6 @@ def render_pre(scene, *_):
     except Exception as e:  # noqa: BLE001 -- any failure must stop the frame, not pass by
         failed(scene, f"Holo: the holographic pass of frame {scene.frame_current} failed: {e}")
         return
-    show_pass(scene, True)
     log.info("holographic pass for frame %d: %s", job.frame, outcome.frame_path)
 
 
@@ -122,24 +124,24 @@ EXIT_ON_FAILURE = None  # None: in background renders (blender -b ... -a), as fa
 def failed(scene, message: str) -> None:
     """A failed pass. In a background render the process exits with status 1 before the frame
     is rendered, so ``blender -b ... -a`` fails and no frame with a stale pass is written. In
-    the interface (a handler cannot cancel Blender's render) the pass is muted in the
-    composite, which then shows the raster alone, and the error is shown in a popup."""
+    the interface (a handler cannot cancel Blender's render) the frame's earlier pass, now
+    stale, is set aside as ``holo_pass_NNNN.stale.exr`` (kept, but out of the image sequence),
+    so the composite shows the raster alone, and the error is shown in a popup. (Muting the
+    node would not do: the render has already evaluated its copy of the compositor.)"""
     log.error(message)
     exit_now = bpy.app.background if EXIT_ON_FAILURE is None else EXIT_ON_FAILURE
     if exit_now:
         sys.stderr.write(message + "\n")
         sys.stderr.flush()
         os._exit(1)
-    show_pass(scene, False)
+    try:
+        stale = pipeline.pass_file(pipeline.output_dir(scene), scene.frame_current)
+        if stale.is_file():
+            os.replace(stale, stale.with_suffix(".stale.exr"))
+    except (OSError, ValueError) as e:
+        log.error("the stale pass could not be set aside: %s", e)
     if not bpy.app.background:
         bpy.app.timers.register(lambda: _popup(message), first_interval=0.0)
-
-
-def show_pass(scene, visible: bool) -> None:
-    tree = _tree(scene)
-    node = tree.nodes.get(NODE_PREFIX + "Pass") if tree is not None else None
-    if node is not None:
-        node.mute = not visible
 
 
 def _popup(message):
@@ -148,21 +150,10 @@ def _popup(message):
     bpy.context.window_manager.popup_menu(draw, title="Holo", icon="ERROR")
 
 
-def _depsgraph_at_frame(scene):
-    """The view layer's depsgraph evaluated at the frame being rendered. A render evaluates
-    its own depsgraph, not this one: a farm chunk (``-s 2 -e 3 -a``) or ``-f N`` starting
-    away from the frame the file was saved on would read that frame's geometry. Re-setting
-    the frame is only safe on the main thread (background renders; F12 renders the timeline's
-    frame, which is already evaluated)."""
-    if threading.current_thread() is threading.main_thread():
-        scene.frame_set(scene.frame_current, subframe=scene.frame_subframe)
-    return bpy.context.evaluated_depsgraph_get()
-
-
 def register():
-    bpy.app.handlers.render_pre.append(render_pre)
+    bpy.app.handlers.frame_change_post.append(render_frame)
 
 
 def unregister():
-    if render_pre in bpy.app.handlers.render_pre:
-        bpy.app.handlers.render_pre.remove(render_pre)
+    if render_frame in bpy.app.handlers.frame_change_post:
+        bpy.app.handlers.frame_change_post.remove(render_frame)

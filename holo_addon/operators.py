@@ -18,7 +18,7 @@ from holo_core.hologram_io import HologramFileError
 from holo_core.worker import WorkerError
 
 from . import compositing, pipeline
-from .scene_export import ExportError
+from .scene_export import ExportError, viewport_matches_render
 
 USER_ERRORS = (ExportError, HologramFileError, ValueError, OSError, WorkerError)
 
@@ -51,6 +51,10 @@ class _PipelineOperator:
             return None
         for warning in job.scene.warnings:
             self.report({"WARNING"}, warning)
+        if not viewport_matches_render(context.scene):
+            self.report({"WARNING"}, "an emitter's modifiers differ between viewport and render: "
+                                     "this pass uses the viewport's; F12 and animation renders "
+                                     "make theirs at render settings")
         return job
 
     def execute(self, context):
@@ -219,7 +223,8 @@ class HOLO_OT_render(_PipelineOperator, bpy.types.Operator):
         if bpy.ops.holo.setup_compositing() != {"FINISHED"}:
             return {"CANCELLED"}
         scene = context.scene
-        scene.holo["skip_pass_once"] = True  # the pass is fresh: the render handler skips it
+        if viewport_matches_render(scene):  # the pass is fresh: the render handler skips it
+            scene.holo["skip_pass_once"] = True
         try:
             if bpy.app.background:
                 bpy.ops.render.render(write_still=True)

@@ -18,14 +18,28 @@ EMITTERS = [("NONE", "None", "An ordinary object, rasterized by Blender"),
                                        "propagation")]
 
 
+RAY_VISIBILITY = ("visible_camera", "visible_diffuse", "visible_glossy", "visible_transmission",
+                  "visible_volume_scatter", "visible_shadow")
+
+
+def raster_visibility(obj) -> None:
+    """A holographic emitter or the plate appears only through the holographic pass: it stays
+    in the render (so the render's depsgraph evaluates it at render settings) but is hidden
+    from the camera and every ray (Object ▸ Visibility ▸ Ray Visibility; Cycles and EEVEE honour
+    it, Workbench draws every object). *Disable in Renders* stays the user's: it leaves the
+    object out of the hologram too."""
+    shown = obj.holo.emitter == "NONE" and not obj.holo.is_plate
+    for name in RAY_VISIBILITY:
+        setattr(obj, name, shown)
+
+
 def _emitter_changed(self, context):
-    # A holographic emitter appears only through the holographic pass.
-    self.id_data.hide_render = self.emitter != "NONE" or self.is_plate
+    raster_visibility(self.id_data)
 
 
 def _plate_changed(self, context):
     obj = self.id_data
-    obj.hide_render = self.is_plate or self.emitter != "NONE"
+    raster_visibility(obj)
     if self.is_plate:
         obj.display_type = "WIRE"
 

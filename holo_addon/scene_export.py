@@ -79,9 +79,11 @@ def _matrix(m, unit: float, *, normalise: bool) -> np.ndarray:
     return a
 
 
-def mesh_from_object(obj, depsgraph, unit: float) -> Mesh:
-    """The evaluated mesh of ``obj`` (modifiers applied) as world-space triangles [m]."""
-    ev = obj.evaluated_get(depsgraph)
+def mesh_from_object(obj, depsgraph, unit: float, matrix=None, notes=None) -> Mesh:
+    """The evaluated mesh of ``obj`` (modifiers applied at the depsgraph's settings) as
+    world-space triangles [m]; ``matrix``: an instance's world matrix instead of the object's.
+    Material features the export cannot honour are added to ``notes``."""
+    ev = obj if obj.is_evaluated else obj.evaluated_get(depsgraph)
     me = ev.to_mesh()
     try:
         me.calc_loop_triangles()
@@ -94,20 +96,23 @@ def mesh_from_object(obj, depsgraph, unit: float) -> Mesh:
         me.loop_triangles.foreach_get("loops", loops)
         lv = np.empty(len(me.loops), np.int64)
         me.loops.foreach_get("vertex_index", lv)
-        m = np.array(ev.matrix_world, np.float64)
+        m = np.array(ev.matrix_world if matrix is None else matrix, np.float64)
         world = co.reshape(-1, 3) @ m[:3, :3].T + m[:3, 3]
         vertices = world[lv[loops]] * unit
         mat_index = np.empty(nt, np.int64)
         me.loop_triangles.foreach_get("material_index", mat_index)
-        colours, uvs, texture = _colours(obj, me, loops, lv, mat_index)
+        colours, uvs, texture = _colours(ev, me, loops, lv, mat_index, notes)
     finally:
         ev.to_mesh_clear()
     return Mesh(vertices=vertices, triangles=np.arange(nt * 3).reshape(nt, 3),
                 colours=colours, uvs=uvs, texture=texture)
 
 
-def _colours(obj, me, loops, loop_vertex, mat_index):
-    """(per-corner colours or None, per-corner UVs or None, texture or None)."""
+def _colours(obj, me, loops, loop_vertex, mat_index, notes=None):
+    """(per-corner colours or None, per-corner UVs or None, texture or None). Honoured: the
+    active colour attribute, else an Image Texture on the Principled BSDF's Base Color through
+    the active UV map, else the Base Color (per material slot); anything else feeding the Base
+    Color (procedural textures, mixes) is noted in ``notes`` and its default colour used."""
     attr = me.color_attributes.active_color
     if attr is not None and len(attr.data):
         data = np.empty(len(attr.data) * 4, np.float64)
@@ -120,6 +125,14 @@ def _colours(obj, me, loops, loop_vertex, mat_index):
         uv = np.empty(len(me.loops) * 2)
         me.uv_layers.active.uv.foreach_get("vector", uv)
         return None, uv.reshape(-1, 2)[loops], _pixels(image)
+    for slot in obj.material_slots:
+        node = _principled(slot.material)
+        if node is not None and node.inputs["Base Color"].is_linked and notes is not None:
+            src = node.inputs["Base Color"].links[0].from_node
+            notes.append(f"material '{slot.material.name}': its Base Color comes from a "
+                         f"{src.bl_label} node, which Holo does not evaluate; the holographic "
+                         f"object uses the Base Color value instead (bake it to an image "
+                         f"texture or a colour attribute)")
     base = np.array([_base_colour(slot.material) for slot in obj.material_slots] or
                     [(1.0, 1.0, 1.0)], np.float64)
     return np.repeat(base[np.clip(mat_index, 0, len(base) - 1)], 3, axis=0), None, None
@@ -174,9 +187,9 @@ def plate_from_object(obj, unit: float) -> Plate:
     return Plate(matrix_world=_matrix(obj.matrix_world, unit, normalise=True), width=w, height=h)
 
 
-def camera_from_object(scene, obj, unit: float) -> Camera:
+def camera_from_object(scene, obj, unit: float, depsgraph=None) -> Camera:
     """Blender's camera (lens, sensor, fit, shift, render size, pixel aspect, depth of field)
-    as :class:`holo_core.camera.Camera`."""
+    as :class:`holo_core.camera.Camera`; a focus object as ``depsgraph`` places it."""
     cam, r = obj.data, scene.render
     if cam.type != "PERSP":
         raise ExportError(f"camera '{obj.name}' must be perspective (it is {cam.type})")
@@ -187,7 +200,10 @@ def camera_from_object(scene, obj, unit: float) -> Camera:
     if cam.dof.use_dof:
         fstop = cam.dof.aperture_fstop
         if cam.dof.focus_object is not None:
-            target = np.array(cam.dof.focus_object.matrix_world.translation) * unit
+            focus_object = cam.dof.focus_object
+            if depsgraph is not None:
+                focus_object = _evaluated(focus_object.original, depsgraph)
+            target = np.array(focus_object.matrix_world.translation) * unit
             focus = float(-(target - m[:3, 3]) @ m[:3, 2])  # along the view axis
         else:
             focus = cam.dof.focus_distance * unit
@@ -201,8 +217,9 @@ def camera_from_object(scene, obj, unit: float) -> Camera:
 
 
 def export_scene(scene, depsgraph, *, plate=True) -> SceneData:
-    """The scene's emitters, plate (when ``plate``) and camera; a clear :class:`ExportError`
-    when one is missing or ill-placed."""
+    """The scene's emitters, plate (when ``plate``) and camera as ``depsgraph`` evaluates them
+    (a render's depsgraph: the frame rendered, render modifier levels and visibility); a clear
+    :class:`ExportError` when one is missing or ill-placed."""
     unit = scale(scene)
     plates = [o for o in scene.objects if o.holo.is_plate]
     if plate and not plates:
@@ -212,25 +229,86 @@ def export_scene(scene, depsgraph, *, plate=True) -> SceneData:
         raise ExportError(f"one plate per scene; found {', '.join(o.name for o in plates)}")
     if scene.camera is None:
         raise ExportError("the scene has no camera")
-    emitters = [o for o in scene.objects if o.type == "MESH" and o.holo.emitter != "NONE"
-                and not o.holo.is_plate]
-    if not emitters:
-        raise ExportError("no holographic emitters: set Object ▸ Holo ▸ Emitter on a mesh")
-    points = [mesh_from_object(o, depsgraph, unit) for o in emitters
-              if o.holo.emitter == "POINTS"]
-    triangles = [mesh_from_object(o, depsgraph, unit) for o in emitters
-                 if o.holo.emitter == "TRIANGLES"]
-    camera = camera_from_object(scene, scene.camera, unit)
+    notes = []
+    kinds = emitters(depsgraph, unit, notes)
+    if not kinds["POINTS"] + kinds["TRIANGLES"]:
+        raise ExportError("no holographic emitters in the render: set Object ▸ Holo ▸ Emitter "
+                          "on a mesh that renders (not disabled in renders, in a collection "
+                          "the view layer includes)")
+    camera = camera_from_object(scene, _evaluated(scene.camera, depsgraph), unit, depsgraph)
+    warnings = tuple(dict.fromkeys(notes))
     if not plate:
-        return SceneData(points=points, triangles=triangles, plate=None, plate_name=None,
-                         camera=camera)
-    plate = plate_from_object(plates[0], unit)
+        return SceneData(points=kinds["POINTS"], triangles=kinds["TRIANGLES"], plate=None,
+                         plate_name=None, camera=camera, warnings=warnings)
+    plate = plate_from_object(_evaluated(plates[0], depsgraph), unit)
     if plate.to_plate(camera.position[None])[0, 2] <= 0:
         raise ExportError(f"the camera is behind plate '{plates[0].name}': viewers must be on "
                           f"its +Z side (rotate the plate 180°)")
-    warning = plate_coverage(plate, plates[0].name, camera, points + triangles)
-    return SceneData(points=points, triangles=triangles, plate=plate, plate_name=plates[0].name,
-                     camera=camera, warnings=(warning,) if warning else ())
+    coverage = plate_coverage(plate, plates[0].name, camera,
+                              kinds["POINTS"] + kinds["TRIANGLES"])
+    return SceneData(points=kinds["POINTS"], triangles=kinds["TRIANGLES"], plate=plate,
+                     plate_name=plates[0].name, camera=camera,
+                     warnings=warnings + ((coverage,) if coverage else ()))
+
+
+def emitters(depsgraph, unit: float, notes: list) -> dict:
+    """{'POINTS': [Mesh], 'TRIANGLES': [Mesh]}: every holographic emitter the render draws, as
+    Blender decides it: instances (collection instances, instancing) included; objects
+    disabled in renders or in collections the view layer excludes or does not render, left
+    out."""
+    shown = _rendered_collections(depsgraph.view_layer)
+    found = {"POINTS": [], "TRIANGLES": []}
+    for inst in depsgraph.object_instances:
+        ev = inst.object
+        holo = ev.original.holo
+        if ev.type != "MESH" or holo.emitter == "NONE" or holo.is_plate:
+            continue
+        owner = inst.parent.original if inst.is_instance else ev.original
+        if not _renders(owner, shown):
+            continue
+        found[holo.emitter].append(mesh_from_object(ev, depsgraph, unit,
+                                                    np.array(inst.matrix_world), notes))
+    return found
+
+
+def viewport_matches_render(scene) -> bool:
+    """Whether the viewport evaluates every emitter as a render does (no modifier enabled in
+    one and not the other, no subdivision or multiresolution level differing), so that a pass
+    made from the viewport stands for the render's."""
+    for obj in scene.objects:
+        if obj.type != "MESH" or obj.holo.emitter == "NONE":
+            continue
+        for mod in obj.modifiers:
+            if mod.show_viewport != mod.show_render:
+                return False
+            levels = getattr(mod, "levels", None), getattr(mod, "render_levels", None)
+            if levels[1] is not None and levels[0] != levels[1]:
+                return False
+    return True
+
+
+def _rendered_collections(view_layer) -> set:
+    """Pointers of the collections the view layer renders: not excluded, not disabled in
+    renders, and neither is any collection above them."""
+    shown = set()
+
+    def walk(lc, ok):
+        ok = ok and not lc.exclude and not lc.collection.hide_render
+        if ok:
+            shown.add(lc.collection.as_pointer())
+            for child in lc.children:
+                walk(child, ok)
+    walk(view_layer.layer_collection, True)
+    return shown
+
+
+def _renders(obj, shown: set) -> bool:
+    return not obj.hide_render and any(c.as_pointer() in shown for c in obj.users_collection)
+
+
+def _evaluated(obj, depsgraph):
+    ev = obj.evaluated_get(depsgraph)
+    return ev if ev is not None else obj
 
 
 def _surface_samples(mesh: Mesh, count=4000) -> np.ndarray:

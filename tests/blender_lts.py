@@ -38,7 +38,8 @@ def scene(work: Path):
     bpy.ops.mesh.primitive_plane_add(size=0.8, location=(0, -1.5, 0), rotation=(1.5708, 0, 0))
     bpy.context.object.holo.is_plate = True  # its +Z faces the camera
     s.render.resolution_x, s.render.resolution_y, s.render.resolution_percentage = 48, 36, 100
-    s.render.engine = "BLENDER_WORKBENCH"
+    s.render.engine = "CYCLES"  # Workbench draws every object: the emitter too
+    s.cycles.samples = 4
     s.holo.iterations, s.holo.max_resolution = 1, 512
     s.holo.output_dir = str(work / "holo") + os.sep
     s.render.filepath = str(work / "frame.png")

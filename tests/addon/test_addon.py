@@ -66,7 +66,10 @@ def test_export_known_mesh_in_metres(empty_scene):
     assert data.camera.fstop == 2.0
     # the focus object's distance along the view axis, in metres
     assert data.camera.focus_distance == pytest.approx(3.0 + 0.2, abs=1e-6)
-    assert cube.hide_render and plate.hide_render, "emitters and plate stay out of the raster"
+    hidden = ("visible_camera", "visible_shadow", "visible_glossy")
+    assert not any(getattr(o, n) for o in (cube, plate) for n in hidden), \
+        "emitters and plate stay out of the raster"
+    assert not cube.hide_render and not plate.hide_render, "Disable in Renders is the user's"
 
 
 @pytest.mark.parametrize("fit, shift, aspect, size", [
@@ -163,6 +166,12 @@ def test_compositing_keeps_the_nearer_surface(empty_scene, tmp_path):
     assert (dominant[~in_square & red_side] == 0).mean() > 0.99
 
 
+def show_in_raster(obj):
+    from holo_addon.properties import RAY_VISIBILITY
+    for name in RAY_VISIBILITY:
+        setattr(obj, name, True)
+
+
 def _raster_alpha_and_depth(scene, tmp_path):
     """Blender's own render of the scene (Cycles, box filter): alpha (16 samples) and the
     planar Depth pass (through the compositor: multilayer stills keep only Combined)."""
@@ -222,7 +231,7 @@ def test_silhouette_and_depth_match_blenders_raster(empty_scene, tmp_path, mode,
     bpy.context.view_layer.update()
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
     holo = _read_exr(pipeline.pass_file(pipeline.output_dir(scene), scene.frame_current))
-    obj.hide_render = False
+    show_in_raster(obj)
     alpha, depth = _raster_alpha_and_depth(scene, tmp_path)
     mine, theirs = holo["ViewLayer.Combined.A"] > 0.5, alpha > 0.5
     iou = (mine & theirs).sum() / (mine | theirs).sum()

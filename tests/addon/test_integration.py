@@ -35,7 +35,9 @@ def _moving_cube(scene, tmp_path):
     cube, cam, _ = _plate_camera_cube(scene, cube_size=0.4)
     scene.render.resolution_x, scene.render.resolution_y = 48, 36
     scene.render.resolution_percentage = 100
-    scene.render.engine = "BLENDER_WORKBENCH"
+    scene.render.engine = "CYCLES"  # Workbench draws every object: emitters too
+    scene.cycles.samples = 4
+    scene.render.film_transparent = False
     scene.holo.mode = "PLATE"
     scene.holo.iterations = 1
     scene.holo.max_resolution = 512
@@ -167,7 +169,7 @@ def _shown_columns(path):
 
 def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monkeypatch):
     """In the interface a handler cannot cancel the render: the failed frame shows the raster
-    alone (the stale pass muted), and the next good pass shows again."""
+    alone (the stale pass set aside, kept), and the next good pass shows again."""
     from holo_addon import compositing, pipeline
     from holo_core.worker import WorkerError
     scene = empty_scene
@@ -182,6 +184,7 @@ def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monke
     scene.render.filepath = str(tmp_path / "failed.exr")
     bpy.ops.render.render(write_still=True)
     assert _shown_columns(tmp_path / "failed.exr").size == 0, "a stale pass was composited"
+    assert (pipeline.output_dir(scene) / "holo_pass_0001.stale.exr").is_file()
     monkeypatch.setattr(pipeline, "run", original)
     scene.render.filepath = str(tmp_path / "good.exr")
     bpy.ops.render.render(write_still=True)
@@ -268,3 +271,97 @@ def test_the_memory_limit_preference_reaches_the_worker():
     assert "HOLO_MEMORY_LIMIT" not in environment((), None, None) or \
         environment((), None, None)["HOLO_MEMORY_LIMIT"] == __import__("os").environ.get(
             "HOLO_MEMORY_LIMIT")
+
+
+def _emitter_meshes(scene):
+    from holo_addon.scene_export import export_scene
+    data = export_scene(scene, bpy.context.evaluated_depsgraph_get(), plate=False)
+    return data.points + data.triangles
+
+
+def _cube_in(collection_name, scene, location=(0, 0, 0)):
+    bpy.ops.mesh.primitive_cube_add(size=0.3, location=location)
+    cube = bpy.context.object
+    cube.holo.emitter = "POINTS"
+    coll = bpy.data.collections.new(collection_name)
+    scene.collection.children.link(coll)
+    for c in list(cube.users_collection):
+        c.objects.unlink(cube)
+    coll.objects.link(cube)
+    return cube, coll
+
+
+def test_blenders_render_visibility_decides_what_is_recorded(empty_scene):
+    """Excluded and render-disabled collections and Disable in Renders leave an emitter out;
+    the add-on never writes Disable in Renders itself."""
+    from holo_addon.scene_export import ExportError
+    scene = empty_scene
+    cube, _, _ = _plate_camera_cube(scene)
+    assert not cube.hide_render
+    other, coll = _cube_in("Extra", scene, (0.2, 0, 0))
+    assert len(_emitter_meshes(scene)) == 2
+    bpy.context.view_layer.layer_collection.children["Extra"].exclude = True
+    assert len(_emitter_meshes(scene)) == 1
+    bpy.context.view_layer.layer_collection.children["Extra"].exclude = False
+    coll.hide_render = True
+    assert len(_emitter_meshes(scene)) == 1
+    cube.hide_render = True                      # the user's own Disable in Renders
+    cube.holo.emitter = "TRIANGLES"              # changing the kind leaves it alone
+    assert cube.hide_render
+    with pytest.raises(ExportError, match="no holographic emitters in the render"):
+        _emitter_meshes(scene)
+
+
+def test_collection_instances_of_an_emitter_are_recorded_where_they_stand(empty_scene):
+    scene = empty_scene
+    _, _, _ = _plate_camera_cube(scene)
+    scene.objects[0].holo.emitter = "NONE"       # the plain cube of the helper
+    cube, coll = _cube_in("Source", scene)
+    bpy.context.view_layer.layer_collection.children["Source"].exclude = True
+    for x in (-0.3, 0.3):
+        empty = bpy.data.objects.new(f"instance {x}", None)
+        empty.instance_type = "COLLECTION"
+        empty.instance_collection = coll
+        empty.location = (x, 0, 0.1)
+        scene.collection.objects.link(empty)
+    bpy.context.view_layer.update()
+    centres = sorted(np.round(m.vertices.mean(0), 6).tolist() for m in _emitter_meshes(scene))
+    assert centres == [[-0.3, 0.0, 0.1], [0.3, 0.0, 0.1]], centres
+
+
+def test_renders_use_render_modifier_levels(empty_scene, tmp_path, monkeypatch):
+    """Subdivision at level 0 in the viewport and 2 in renders: the pass of an F12 render is
+    made from level 2 (a cube's 12 triangles become 192)."""
+    from holo_addon import pipeline
+    scene = empty_scene
+    _scene_with_pass(scene, tmp_path)
+    cube = next(o for o in scene.objects if o.holo.emitter == "POINTS")
+    sub = cube.modifiers.new("subdivision", "SUBSURF")
+    sub.levels, sub.render_levels = 0, 2
+    seen = []
+    original = pipeline.run
+
+    def run(job, progress=None):
+        seen.append(sum(len(m.triangles) for m in job.scene.points))
+        return original(job, progress)
+    monkeypatch.setattr(pipeline, "run", run)
+    scene.render.filepath = str(tmp_path / "f12.exr")
+    bpy.ops.render.render(write_still=True)
+    assert seen == [192], seen
+    assert len(_emitter_meshes(scene)[0].triangles) == 12  # the viewport's level
+
+
+def test_procedural_base_colours_are_reported(empty_scene):
+    from holo_addon import compat
+    scene = empty_scene
+    cube, _, _ = _plate_camera_cube(scene)
+    material = bpy.data.materials.new("marble")
+    compat.enable_nodes(material)
+    bsdf = next(n for n in material.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
+    noise = material.node_tree.nodes.new("ShaderNodeTexNoise")
+    material.node_tree.links.new(noise.outputs["Color"], bsdf.inputs["Base Color"])
+    cube.data.materials.append(material)
+    scene.holo.mode = "PLATE"
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    (warning,) = _prepare(scene).scene.warnings
+    assert "'marble'" in warning and "Noise Texture" in warning, warning
