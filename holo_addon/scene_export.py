@@ -209,11 +209,17 @@ def camera_from_object(scene, obj, unit: float, depsgraph=None) -> Camera:
             focus = cam.dof.focus_distance * unit
         if focus <= 0:
             raise ExportError("the camera's focus must lie in front of it (focus distance > 0)")
-    return Camera(matrix_world=m, lens=cam.lens, sensor_width=cam.sensor_width,
-                  sensor_height=cam.sensor_height, sensor_fit=cam.sensor_fit,
-                  shift_x=cam.shift_x, shift_y=cam.shift_y, resolution=res,
-                  pixel_aspect=(r.pixel_aspect_x, r.pixel_aspect_y),
-                  focus_distance=focus, fstop=fstop)
+    camera = Camera(matrix_world=m, lens=cam.lens, sensor_width=cam.sensor_width,
+                    sensor_height=cam.sensor_height, sensor_fit=cam.sensor_fit,
+                    shift_x=cam.shift_x, shift_y=cam.shift_y, resolution=res,
+                    pixel_aspect=(r.pixel_aspect_x, r.pixel_aspect_y),
+                    focus_distance=focus, fstop=fstop)
+    if r.use_border and r.use_crop_to_border:  # the render is the border's region alone
+        x0, x1 = int(r.border_min_x * res[0]), int(r.border_max_x * res[0])
+        y0, y1 = int(r.border_min_y * res[1]), int(r.border_max_y * res[1])  # from the bottom
+        if x1 > x0 and y1 > y0:
+            camera = camera.cropped(x0, res[1] - y1, x1 - x0, y1 - y0)
+    return camera
 
 
 def export_scene(scene, depsgraph, *, plate=True) -> SceneData:

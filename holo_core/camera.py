@@ -11,7 +11,7 @@ has its centre at (j + 0.5, i + 0.5) pixels from the top-left corner.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -103,6 +103,21 @@ class Camera:
         sensor = self.sensor_height if self.sensor_fit == "VERTICAL" else self.sensor_width
         viewfac = w if fit == "HORIZONTAL" else ycor * h
         return self.lens / sensor * viewfac, self.shift_x * viewfac, self.shift_y * viewfac, ycor
+
+    def cropped(self, left: int, top: int, width: int, height: int) -> Camera:
+        """The camera of a region of this one's image, ``width`` x ``height`` pixels from
+        (``left``, ``top``) [px, from the top-left corner]: each pixel keeps its ray (a
+        render cropped to its border)."""
+        w, h = self.resolution
+        if not (0 <= left < left + width <= w and 0 <= top < top + height <= h):
+            raise InputError(f"crop ({left}, {top}, {width}, {height}) must lie inside the "
+                             f"{w}x{h} image")
+        s, dx, dy, ycor = self._plane()
+        dx += left + width / 2 - w / 2
+        dy += ycor * (h / 2 - top - height / 2)
+        return replace(self, resolution=(width, height), sensor_fit="HORIZONTAL",
+                       sensor_width=self.lens * width / s, shift_x=dx / width,
+                       shift_y=dy / width)
 
     def pixel_tangents(self, rows=None, cols=None) -> tuple[np.ndarray, np.ndarray]:
         """View tangents (t_x, t_y) of the pixel centres, each (H, W); or of given continuous

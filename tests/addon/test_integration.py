@@ -365,3 +365,28 @@ def test_procedural_base_colours_are_reported(empty_scene):
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
     (warning,) = _prepare(scene).scene.warnings
     assert "'marble'" in warning and "Noise Texture" in warning, warning
+
+
+def test_a_render_cropped_to_an_off_centre_border_gets_the_border_of_the_pass(
+        empty_scene, tmp_path):
+    """Crop to Render Region: the pass has the cropped render's size and shows the cube where
+    the full frame's pass has it, shifted by the region's corner (within a pixel)."""
+    from holo_addon import pipeline
+    scene = empty_scene
+    _scene_with_pass(scene, tmp_path)
+    full = pipeline.pass_file(pipeline.output_dir(scene), 1)
+    full_alpha = _read_exr(full)["ViewLayer.Combined.A"]
+    full_mid = _middle(full)
+    scene.render.use_border = scene.render.use_crop_to_border = True
+    scene.render.border_min_x, scene.render.border_max_x = 0.25, 0.9
+    scene.render.border_min_y, scene.render.border_max_y = 0.1, 0.8
+    scene.render.filepath = str(tmp_path / "crop.exr")
+    bpy.ops.render.render(write_still=True)
+    crop = _read_exr(full)
+    rendered = _read_exr(tmp_path / "crop.exr")["R"]
+    assert crop["ViewLayer.Combined.A"].shape == rendered.shape, (rendered.shape, full_alpha.shape)
+    x0 = int(0.25 * 48)
+    got = _middle(full) + x0
+    print(f"crop: pass {rendered.shape[::-1]} px, cube middle {got} vs full frame {full_mid}")
+    assert abs(got - full_mid) <= 1.0
+    assert _shown_columns(tmp_path / "crop.exr").size, "the cropped composite shows the cube"
