@@ -79,6 +79,9 @@ class _PipelineOperator:
         job = self._prepare(context)
         if job is None:
             return {"CANCELLED"}
+        cached = pipeline.cached_pass(job)
+        if cached is not None:
+            return self._done(context, job, cached)
         try:
             self._worker = pipeline.start(job)
         except OSError as e:
@@ -156,7 +159,9 @@ class _PipelineOperator:
     def _done(self, context, job, outcome):
         pipeline.apply(context.scene, job, outcome)
         msg = "camera hologram"
-        if outcome.holograms:
+        if outcome.info.get("cached"):
+            msg = "up to date"
+        elif outcome.holograms:
             what = "recorded" if outcome.recorded else "up to date"
             msg = f"hologram {what}: {outcome.holograms[0]}"
         if outcome.pass_path is not None:

@@ -10,14 +10,16 @@ leaves earlier holograms and passes as they were.
 
 from __future__ import annotations
 
+import json
 import logging
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, astuple, dataclass, field
 from pathlib import Path
 
 import bpy
 
 from holo_core import jobs, worker
 from holo_core.hologram_io import read_hologram
+from holo_core.image_files import exr_attribute
 
 from .scene_export import ExportError, SceneData, export_scene, scale
 
@@ -64,6 +66,7 @@ class Job:
     current: bool                 # the plate's stored hologram matches the scene
     holograms: tuple              # paths of the iterations' hologram files
     render: bool = True           # also render the holographic pass
+    pass_key: str = ""            # a digest of everything the frame's pass depends on
 
     def payload(self) -> dict:
         """The job as :func:`holo_core.worker.run_job` takes it."""
@@ -71,7 +74,7 @@ class Job:
                 "plate": self.scene.plate, "camera": self.scene.camera,
                 "settings": asdict(self.settings), "holograms": self.holograms,
                 "current": self.current, "render": self.render,
-                "output_dir": self.output_dir, "frame": self.frame}
+                "output_dir": self.output_dir, "frame": self.frame, "pass_key": self.pass_key}
 
 
 @dataclass
@@ -109,7 +112,8 @@ def prepare(scene, depsgraph, *, render=True) -> Job:
         data = export_scene(scene, depsgraph, plate=False)
         return Job(scene=data, settings=settings, output_dir=out, frame=scene.frame_current,
                    fingerprint=data.fingerprint(settings.mode, settings.samples), current=False,
-                   holograms=(), render=render)
+                   holograms=(), render=render,
+                   pass_key=data.fingerprint(*astuple(settings), scene.frame_current))
     data = export_scene(scene, depsgraph)
     fingerprint = data.fingerprint(*settings.recording())
     paths = hologram_paths(out, data.plate_name, settings.iterations)
@@ -118,7 +122,8 @@ def prepare(scene, depsgraph, *, render=True) -> Job:
                Path(bpy.path.abspath(plate.hologram)) == paths[0] and
                all(p.is_file() for p in paths))
     return Job(scene=data, settings=settings, output_dir=out, frame=scene.frame_current,
-               fingerprint=fingerprint, current=current, holograms=paths, render=render)
+               fingerprint=fingerprint, current=current, holograms=paths, render=render,
+               pass_key=data.fingerprint(*astuple(settings), scene.frame_current))
 
 
 def start(job: Job) -> worker.Worker:
@@ -137,7 +142,28 @@ def run(job: Job, progress: jobs.Progress = None, on_log=None) -> Outcome:
     """Run the job in a worker process and wait for it. ``progress`` may raise
     :class:`holo_core.jobs.Cancelled` (the worker is killed); a failed worker raises
     :class:`holo_core.worker.WorkerError` with its reason."""
+    cached = cached_pass(job)
+    if cached is not None:
+        return cached
     return outcome(job, start(job).wait(progress, on_log))
+
+
+def cached_pass(job: Job) -> Outcome | None:
+    """The frame's pass when it is on disk and was made from exactly this scene, these
+    settings and this core (its ``pass_key``), and the hologram needs no recording."""
+    path = pass_file(job.output_dir, job.frame)
+    if not job.render or (job.holograms and not job.current):
+        return None
+    info = exr_attribute(path, "holo")
+    try:
+        stored = json.loads(info).get("pass_key") if info else None
+    except (ValueError, AttributeError):
+        stored = None
+    if stored != job.pass_key:
+        return None
+    log.info("holographic pass of frame %d is up to date: %s", job.frame, path)
+    return Outcome(holograms=job.holograms, fingerprint=job.fingerprint, recorded=False,
+                   pass_path=path, frame_path=path, info={"cached": True})
 
 
 def apply(scene, job: Job, outcome: Outcome) -> None:

@@ -251,6 +251,33 @@ def read_exr(path, *, what="image") -> tuple[dict, dict]:
     return header, pixels
 
 
+def exr_attribute(path, name: str) -> bytes | None:
+    """The raw value of the header attribute ``name`` of the EXR ``path`` (None when the file
+    or the attribute is missing or the header is damaged), read without the EXR library (the
+    add-on calls it in Blender's own process)."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(1 << 20)
+    except OSError:
+        return None
+    if head[:4] != EXR_MAGIC:
+        return None
+    at = 8
+    while at < len(head) and head[at] != 0:
+        key_end = head.find(b"\0", at)
+        kind_end = head.find(b"\0", key_end + 1)
+        if key_end < 0 or kind_end < 0 or kind_end + 5 > len(head):
+            return None
+        (size,) = struct.unpack_from("<i", head, kind_end + 1)
+        value = kind_end + 5
+        if size < 0 or value + size > len(head):
+            return None
+        if head[at:key_end] == name.encode():
+            return head[value:value + size]
+        at = value + size
+    return None
+
+
 def png_bytes(image: np.ndarray) -> bytes:
     """The 8-bit PNG file of ``image`` in [0, 1] (see :func:`write_png`)."""
     a = np.clip(np.nan_to_num(np.asarray(image, np.float64)), 0, 1)

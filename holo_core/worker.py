@@ -98,6 +98,8 @@ def _write_pass(job, view, result) -> dict:
     result.update(pass_path=None, frame_path=None, info={})
     if view is not None:
         frame_path = pass_file(job["output_dir"], job["frame"])
+        if job.get("pass_key"):
+            view.info["pass_key"] = job["pass_key"]
         write_view(view, frame_path)
         result.update(pass_path=frame_path, frame_path=frame_path, info=view.info)
     return result

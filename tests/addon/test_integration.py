@@ -390,3 +390,26 @@ def test_a_render_cropped_to_an_off_centre_border_gets_the_border_of_the_pass(
     print(f"crop: pass {rendered.shape[::-1]} px, cube middle {got} vs full frame {full_mid}")
     assert abs(got - full_mid) <= 1.0
     assert _shown_columns(tmp_path / "crop.exr").size, "the cropped composite shows the cube"
+
+
+def test_an_up_to_date_pass_is_not_rendered_again(empty_scene, monkeypatch):
+    """The frame's pass carries a digest of what it was made from: the same scene renders
+    nothing again; any change (here the exposure) renders anew."""
+    from holo_addon import pipeline
+    from holo_core import worker
+    scene = empty_scene
+    _plate_camera_cube(scene)
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    scene.holo.samples = 2
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    started = []
+    original = worker.Worker.__init__
+
+    def counting(self, *args, **kwargs):
+        started.append(1)
+        original(self, *args, **kwargs)
+    monkeypatch.setattr(worker.Worker, "__init__", counting)
+    assert bpy.ops.holo.render_pass() == {"FINISHED"} and started == []
+    scene.holo.exposure = 1.0
+    assert bpy.ops.holo.render_pass() == {"FINISHED"} and started == [1]
+    assert pipeline.cached_pass(pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get()))
