@@ -12,6 +12,10 @@ from bpy.props import (
     StringProperty,
 )
 
+# 4.5+ ask a path property to declare that it takes "//" (relative to the .blend); 4.2 has no
+# such option and takes it anyway
+BLEND_RELATIVE = {"PATH_SUPPORTS_BLEND_RELATIVE"} if bpy.app.version >= (4, 5, 0) else set()
+
 EMITTERS = [("NONE", "None", "An ordinary object, rasterized by Blender"),
             ("POINTS", "Points", "Area-uniform point emitters on the surface (spherical waves)"),
             ("TRIANGLES", "Triangles", "Textured planar triangles carried by tilted-plane "
@@ -72,6 +76,7 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                          description="Renders with independent random phases, averaged: more "
                                      "samples, less speckle")
     output_dir: StringProperty(name="Output Folder", subtype="DIR_PATH", default="//holo/",
+                               options=BLEND_RELATIVE,
                                description="Where holograms and the holographic pass of each "
                                            "frame are written (// is the .blend's folder)")
     max_resolution: IntProperty(name="Max Hologram Size", default=1024, min=64, max=8192,
