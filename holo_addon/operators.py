@@ -45,7 +45,7 @@ class _PipelineOperator:
     def _prepare(self, context):
         try:
             job = pipeline.prepare(context.scene, context.evaluated_depsgraph_get(),
-                                   render=self.render)
+                                   render=self.render, bake=True)
         except USER_ERRORS as e:
             self.report({"ERROR"}, str(e))
             return None

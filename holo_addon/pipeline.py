@@ -103,9 +103,12 @@ def hologram_paths(out: Path, plate_name: str, n: int) -> tuple:
                  for i in range(n))
 
 
-def prepare(scene, depsgraph, *, render=True) -> Job:
-    """Read the scene (main thread). Raises :class:`scene_export.ExportError` for a scene that
-    cannot be recorded."""
+def prepare(scene, depsgraph, *, render=True, bake=False) -> Job:
+    """Read the scene (main thread). With ``bake``, emitters whose Base Color needs it are
+    baked first (:mod:`holo_addon.bake`; never inside a render). Raises
+    :class:`scene_export.ExportError` for a scene that cannot be recorded."""
+    if bake:
+        depsgraph = bake_emitters(scene) or depsgraph
     settings = Settings.from_scene(scene, scale(scene))
     out = output_dir(scene)
     if settings.mode == "CAMERA":  # recorded for this view at every render: no plate file
@@ -124,6 +127,18 @@ def prepare(scene, depsgraph, *, render=True) -> Job:
     return Job(scene=data, settings=settings, output_dir=out, frame=scene.frame_current,
                fingerprint=fingerprint, current=current, holograms=paths, render=render,
                pass_key=data.fingerprint(*astuple(settings), scene.frame_current))
+
+
+def bake_emitters(scene):
+    """Bake every emitter whose procedural Base Color has no current bake; returns the
+    depsgraph evaluated afterwards, or None when nothing was baked."""
+    from . import bake
+    todo = [o for o in scene.objects if o.type == "MESH" and o.holo.emitter != "NONE"
+            and bake.needs_bake(o) and bake.current(o) is None]
+    for obj in todo:
+        bake.bake(obj, scene)
+        log.info("baked the Base Color of '%s' into image '%s'", obj.name, bake.image_name(obj))
+    return bpy.context.evaluated_depsgraph_get() if todo else None
 
 
 def start(job: Job) -> worker.Worker:

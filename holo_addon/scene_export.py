@@ -110,9 +110,10 @@ def mesh_from_object(obj, depsgraph, unit: float, matrix=None, notes=None) -> Me
 
 def _colours(obj, me, loops, loop_vertex, mat_index, notes=None):
     """(per-corner colours or None, per-corner UVs or None, texture or None). Honoured: the
-    active colour attribute, else an Image Texture on the Principled BSDF's Base Color through
-    the active UV map, else the Base Color (per material slot); anything else feeding the Base
-    Color (procedural textures, mixes) is noted in ``notes`` and its default colour used."""
+    active colour attribute, else a Base Color from other nodes (procedural textures, mixes)
+    as baked by :mod:`holo_addon.bake`, else an Image Texture on the Principled BSDF's Base
+    Color through the active UV map, else the Base Color (per material slot); a Base Color
+    from nodes with no current bake is noted in ``notes`` and its default colour used."""
     attr = me.color_attributes.active_color
     if attr is not None and len(attr.data):
         data = np.empty(len(attr.data) * 4, np.float64)
@@ -120,6 +121,14 @@ def _colours(obj, me, loops, loop_vertex, mat_index, notes=None):
         data = data.reshape(-1, 4)[:, :3]
         per = data[loop_vertex[loops]] if attr.domain == "POINT" else data[loops]
         return per, None, None
+    from . import bake
+    if bake.needs_bake(obj.original):
+        baked = bake.current(obj.original)
+        layer = me.uv_layers.get(bake.UV_NAME)
+        if baked is not None and layer is not None:
+            uv = np.empty(len(me.loops) * 2)
+            layer.uv.foreach_get("vector", uv)
+            return None, uv.reshape(-1, 2)[loops], _pixels(baked)
     image = _base_texture(obj)
     if image is not None and me.uv_layers.active is not None:
         uv = np.empty(len(me.loops) * 2)
@@ -130,9 +139,8 @@ def _colours(obj, me, loops, loop_vertex, mat_index, notes=None):
         if node is not None and node.inputs["Base Color"].is_linked and notes is not None:
             src = node.inputs["Base Color"].links[0].from_node
             notes.append(f"material '{slot.material.name}': its Base Color comes from a "
-                         f"{src.bl_label} node, which Holo does not evaluate; the holographic "
-                         f"object uses the Base Color value instead (bake it to an image "
-                         f"texture or a colour attribute)")
+                         f"{src.bl_label} node and is not baked yet (Render Pass bakes it; a "
+                         f"render cannot): the holographic object uses the Base Color value")
     base = np.array([_base_colour(slot.material) for slot in obj.material_slots] or
                     [(1.0, 1.0, 1.0)], np.float64)
     return np.repeat(base[np.clip(mat_index, 0, len(base) - 1)], 3, axis=0), None, None

@@ -413,3 +413,35 @@ def test_an_up_to_date_pass_is_not_rendered_again(empty_scene, monkeypatch):
     scene.holo.exposure = 1.0
     assert bpy.ops.holo.render_pass() == {"FINISHED"} and started == [1]
     assert pipeline.cached_pass(pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get()))
+
+
+def test_a_procedural_base_colour_is_baked_and_recorded(empty_scene):
+    """Base Color = the object-space position (Texture Coordinate ▸ Object, a node the export
+    cannot read): Render Pass bakes it with Cycles, and the emitter's samples carry
+    max(position, 0) within 0.01 (the atlas' texel is 1.7 mm on a 0.5 m cube)."""
+    from holo_addon import bake, compat, pipeline
+    from holo_core.emitters import sample_points
+    scene = empty_scene
+    cube, _, _ = _plate_camera_cube(scene)
+    material = bpy.data.materials.new("position")
+    compat.enable_nodes(material)
+    tree = material.node_tree
+    bsdf = next(n for n in tree.nodes if n.type == "BSDF_PRINCIPLED")
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    tree.links.new(coords.outputs["Object"], bsdf.inputs["Base Color"])
+    cube.data.materials.append(material)
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    scene.holo.samples = 1
+    assert bake.current(cube) is None
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert bake.current(cube) is not None and bpy.data.images[bake.image_name(cube)].packed_file
+    job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
+    assert job.scene.warnings == ()
+    (mesh,) = job.scene.points
+    pos, colours = sample_points(mesh, 0.01)
+    want = np.clip(pos - np.array(cube.location), 0, 1)
+    error = np.abs(colours - want)
+    print(f"baked colours: error median {np.median(error):.4f}, 99% {np.percentile(error, 99):.4f}")
+    assert np.percentile(error, 99) <= 0.01
+    bsdf.inputs["Roughness"].default_value = 0.2      # the material changed: baked again
+    assert bake.current(cube) is None
