@@ -97,10 +97,13 @@ def output_dir(scene) -> Path:
     return Path(bpy.path.abspath(raw)).resolve()
 
 
-def hologram_paths(out: Path, plate_name: str, n: int) -> tuple:
-    stem = bpy.path.clean_name(plate_name)
-    return tuple(out / (f"{stem}_hologram.exr" if i == 0 else f"{stem}_hologram.{i}.exr")
-                 for i in range(n))
+def hologram_paths(out: Path, plate_name: str, n: int, fingerprint: str) -> tuple:
+    """The iterations' hologram files of the plate for the scene digest ``fingerprint``: one
+    set per recorded state, never rewritten with another state's hologram (farm workers on
+    different frames never share one), and a state seen before (a resolution switched back,
+    a camera returned) is not recorded again."""
+    stem = f"{bpy.path.clean_name(plate_name)}_hologram_{fingerprint}"
+    return tuple(out / (f"{stem}.exr" if i == 0 else f"{stem}.{i}.exr") for i in range(n))
 
 
 def prepare(scene, depsgraph, *, render=True, bake=False) -> Job:
@@ -119,11 +122,8 @@ def prepare(scene, depsgraph, *, render=True, bake=False) -> Job:
                    pass_key=data.fingerprint(*astuple(settings), scene.frame_current))
     data = export_scene(scene, depsgraph)
     fingerprint = data.fingerprint(*settings.recording())
-    paths = hologram_paths(out, data.plate_name, settings.iterations)
-    plate = scene.objects[data.plate_name].holo
-    current = (plate.fingerprint == fingerprint and
-               Path(bpy.path.abspath(plate.hologram)) == paths[0] and
-               all(p.is_file() for p in paths))
+    paths = hologram_paths(out, data.plate_name, settings.iterations, fingerprint)
+    current = all(p.is_file() for p in paths)
     return Job(scene=data, settings=settings, output_dir=out, frame=scene.frame_current,
                fingerprint=fingerprint, current=current, holograms=paths, render=render,
                pass_key=data.fingerprint(*astuple(settings), scene.frame_current))

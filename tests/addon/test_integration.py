@@ -445,3 +445,29 @@ def test_a_procedural_base_colour_is_baked_and_recorded(empty_scene):
     assert np.percentile(error, 99) <= 0.01
     bsdf.inputs["Roughness"].default_value = 0.2      # the material changed: baked again
     assert bake.current(cube) is None
+
+
+def test_a_state_recorded_before_is_not_recorded_again(empty_scene, monkeypatch):
+    """Resolution 100% → 50% → 100%: two recordings, not three; each state has its own files
+    (farm workers on different frames never share a hologram file)."""
+    from holo_addon import pipeline
+    scene = empty_scene
+    _plate_camera_cube(scene)
+    scene.holo.mode = "PLATE"
+    scene.holo.iterations = 1
+    scene.holo.max_resolution = 256
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    recorded = []
+    original = pipeline.run
+
+    def run(job, progress=None, on_log=None):
+        recorded.append(not job.current)
+        return original(job, progress, on_log)
+    monkeypatch.setattr(pipeline, "run", run)
+    paths = []
+    for percentage in (100, 50, 100):
+        scene.render.resolution_percentage = percentage
+        assert bpy.ops.holo.record_hologram() == {"FINISHED"}
+        paths.append(_prepare(scene).holograms[0])
+    assert recorded == [True, True, False], recorded
+    assert paths[0] == paths[2] != paths[1] and all(p.is_file() for p in paths)
