@@ -67,6 +67,7 @@ class Job:
     holograms: tuple              # paths of the iterations' hologram files
     render: bool = True           # also render the holographic pass
     pass_key: str = ""            # a digest of everything the frame's pass depends on
+    border: tuple | None = None   # the render region (left, top, right, bottom) [px], uncropped
 
     def payload(self) -> dict:
         """The job as :func:`holo_core.worker.run_job` takes it."""
@@ -74,7 +75,8 @@ class Job:
                 "plate": self.scene.plate, "camera": self.scene.camera,
                 "settings": asdict(self.settings), "holograms": self.holograms,
                 "current": self.current, "render": self.render,
-                "output_dir": self.output_dir, "frame": self.frame, "pass_key": self.pass_key}
+                "output_dir": self.output_dir, "frame": self.frame, "pass_key": self.pass_key,
+                "border": self.border}
 
 
 @dataclass
@@ -118,15 +120,30 @@ def prepare(scene, depsgraph, *, render=True, bake=False) -> Job:
         data = export_scene(scene, depsgraph, plate=False)
         return Job(scene=data, settings=settings, output_dir=out, frame=scene.frame_current,
                    fingerprint=data.fingerprint(settings.mode, settings.samples), current=False,
-                   holograms=(), render=render,
-                   pass_key=data.fingerprint(*astuple(settings), scene.frame_current))
+                   holograms=(), render=render, border=render_region(scene),
+                   pass_key=data.fingerprint(*astuple(settings), scene.frame_current,
+                                             render_region(scene)))
     data = export_scene(scene, depsgraph)
     fingerprint = data.fingerprint(*settings.recording())
     paths = hologram_paths(out, data.plate_name, settings.iterations, fingerprint)
     current = all(p.is_file() for p in paths)
     return Job(scene=data, settings=settings, output_dir=out, frame=scene.frame_current,
                fingerprint=fingerprint, current=current, holograms=paths, render=render,
-               pass_key=data.fingerprint(*astuple(settings), scene.frame_current))
+               border=render_region(scene),
+               pass_key=data.fingerprint(*astuple(settings), scene.frame_current,
+                                         render_region(scene)))
+
+
+def render_region(scene) -> tuple | None:
+    """A render region that is not cropped (left, top, right, bottom) [px from the top-left]:
+    Blender renders only inside it, so the pass is cleared outside; None without one."""
+    r = scene.render
+    if not r.use_border or r.use_crop_to_border:
+        return None
+    pct = r.resolution_percentage / 100
+    w, h = max(1, int(r.resolution_x * pct)), max(1, int(r.resolution_y * pct))
+    return (int(r.border_min_x * w), h - int(r.border_max_y * h), int(r.border_max_x * w),
+            h - int(r.border_min_y * h))
 
 
 def bake_emitters(scene):

@@ -53,8 +53,9 @@ def worker_options() -> dict:
     """What :class:`holo_core.worker.Worker` takes from the preferences."""
     prefs = _preferences()
     limit = prefs.memory_limit if prefs is not None else 0.0
+    cache = bpy.path.abspath(prefs.cache_dir) if prefs is not None and prefs.cache_dir else None
     return {"paths": runtime_paths(), "device": device() or None,
-            "memory_limit": f"{limit}G" if limit > 0 else None}
+            "memory_limit": f"{limit}G" if limit > 0 else None, "cache_dir": cache}
 
 
 def list_devices() -> list[str]:
@@ -121,10 +122,16 @@ class HoloPreferences(bpy.types.AddonPreferences):
         description="The most memory (GiB) Holo may use; a larger pass is refused with the "
                     "size it needs. 0: what the system has free (set it on shared farm nodes)")
 
+    cache_dir: StringProperty(
+        name="Cache Folder", subtype="DIR_PATH", default="",
+        description="Where compiled OpenCL kernels and FFT plans are kept between runs. Empty: "
+                    "the system's user cache folder")
+
     def draw(self, context):
         layout = self.layout
         layout.prop(self, "device")
         layout.prop(self, "memory_limit")
+        layout.prop(self, "cache_dir")
         row = layout.row()
         row.operator(HOLO_OT_check_devices.bl_idname, icon="VIEWZOOM")
         row.operator(HOLO_OT_install_cpu_runtime.bl_idname, icon="IMPORT")

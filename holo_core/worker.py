@@ -28,6 +28,8 @@ import tempfile
 import threading
 from pathlib import Path
 
+import numpy as np
+
 from . import jobs
 
 log = logging.getLogger(__name__)
@@ -97,12 +99,26 @@ def _write_pass(job, view, result) -> dict:
     from .render import write_view
     result.update(pass_path=None, frame_path=None, info={})
     if view is not None:
+        if job.get("border"):
+            _outside_border(view, job["border"])
         frame_path = pass_file(job["output_dir"], job["frame"])
         if job.get("pass_key"):
             view.info["pass_key"] = job["pass_key"]
         write_view(view, frame_path)
         result.update(pass_path=frame_path, frame_path=frame_path, info=view.info)
     return result
+
+
+def _outside_border(view, border) -> None:
+    """Clear the pass outside Blender's render region (``border``: left, top, right, bottom
+    pixels from the top-left corner), which the render leaves empty."""
+    from .render import BACKGROUND_DEPTH
+    left, top, right, bottom = border
+    keep = np.zeros(view.alpha.shape, bool)
+    keep[top:bottom, left:right] = True
+    view.rgb[~keep] = 0
+    view.alpha[~keep] = 0
+    view.depth[~keep] = BACKGROUND_DEPTH
 
 
 # --- the worker process ---------------------------------------------------------------------
@@ -154,11 +170,14 @@ def main(folder: str) -> int:
 
 # --- the parent's handle ----------------------------------------------------------------------
 
-def environment(paths=(), device: str | None = None, memory_limit: str | None = None) -> dict:
+def environment(paths=(), device: str | None = None, memory_limit: str | None = None,
+                cache_dir: str | None = None) -> dict:
     """The parent's environment for a child Python: its module search path (the worker imports
     holo_core and its dependencies from wherever the parent found them, Blender's extension
     folder), ``paths`` before it (packages installed on demand), ``HOLO_DEVICE`` when
-    ``device`` is given and ``HOLO_MEMORY_LIMIT`` when ``memory_limit`` is (e.g. "8G")."""
+    ``device`` is given, ``HOLO_MEMORY_LIMIT`` when ``memory_limit`` is (e.g. "8G") and
+    ``XDG_CACHE_HOME`` when ``cache_dir`` is (the folder of the OpenCL kernel cache and the
+    FFTW wisdom)."""
     env = dict(os.environ)
     found = [str(p) for p in (*paths, *sys.path) if p and os.path.isdir(p)]
     env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(found))
@@ -167,6 +186,8 @@ def environment(paths=(), device: str | None = None, memory_limit: str | None = 
         env["HOLO_DEVICE"] = device
     if memory_limit:
         env["HOLO_MEMORY_LIMIT"] = memory_limit
+    if cache_dir:
+        env["XDG_CACHE_HOME"] = str(cache_dir)
     return env
 
 
@@ -194,7 +215,7 @@ class Worker:
     """
 
     def __init__(self, job: dict, *, paths=(), device: str | None = None,
-                 memory_limit: str | None = None):
+                 memory_limit: str | None = None, cache_dir: str | None = None):
         data = pickle.dumps(job, protocol=pickle.HIGHEST_PROTOCOL)  # plain data only
         self.folder = Path(tempfile.mkdtemp(prefix="holo-worker-"))
         (self.folder / "job.pickle").write_bytes(data)
@@ -202,7 +223,7 @@ class Worker:
         self.process = subprocess.Popen(
             [sys.executable, "-m", "holo_core.worker", str(self.folder)],
             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=self._stderr,
-            env=environment(paths, device, memory_limit), cwd=self.folder)
+            env=environment(paths, device, memory_limit, cache_dir), cwd=self.folder)
         self._messages: queue.SimpleQueue = queue.SimpleQueue()
         self._error = None
         self.finished = False

@@ -471,3 +471,21 @@ def test_a_state_recorded_before_is_not_recorded_again(empty_scene, monkeypatch)
         paths.append(_prepare(scene).holograms[0])
     assert recorded == [True, True, False], recorded
     assert paths[0] == paths[2] != paths[1] and all(p.is_file() for p in paths)
+
+
+def test_a_render_region_without_crop_clears_the_pass_outside_it(empty_scene, tmp_path):
+    """Blender renders only inside the region: the pass matches the full frame's inside and
+    is clear outside, so no holographic object floats over the unrendered part."""
+    from holo_addon import pipeline
+    scene = empty_scene
+    _scene_with_pass(scene, tmp_path)
+    path = pipeline.pass_file(pipeline.output_dir(scene), 1)
+    full = _read_exr(path)["ViewLayer.Combined.A"]
+    scene.render.use_border, scene.render.use_crop_to_border = True, False
+    scene.render.border_min_x, scene.render.border_max_x = 0.0, 0.5
+    scene.render.border_min_y, scene.render.border_max_y = 0.0, 1.0
+    scene.render.filepath = str(tmp_path / "region.exr")
+    bpy.ops.render.render(write_still=True)
+    region = _read_exr(path)["ViewLayer.Combined.A"]
+    assert region.shape == full.shape and full[:, 24:].any()
+    assert np.array_equal(region[:, :24], full[:, :24]) and not region[:, 24:].any()

@@ -159,3 +159,13 @@ def test_stop_and_keep_hands_over_a_complete_running_pass(tmp_path):
     p = _pass(tmp_path / "kept.exr")
     assert np.asarray(p["ViewLayer.Combined.A"]).max() == 1.0, "the cube is missing"
     assert (tmp_path / "kept.png").is_file() and not w.folder.exists()
+
+
+def test_the_cache_folder_reaches_the_worker(tmp_path):
+    """The add-on's Cache Folder: the worker keeps its OpenCL kernel cache (and, on CPU
+    devices, its FFTW wisdom) under it."""
+    cache = tmp_path / "cache"
+    assert worker.environment((), None, None, str(cache))["XDG_CACHE_HOME"] == str(cache)
+    worker.Worker(job(tmp_path), cache_dir=str(cache)).wait()
+    assert any((cache / name).is_dir() for name in ("pyopencl", "holo")), \
+        list(cache.iterdir()) if cache.exists() else "no cache folder"
