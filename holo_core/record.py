@@ -279,20 +279,22 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
         channels.append("Z")
         colours.append(cover[:, None])
     reference = Reference(angle=s.reference_angle)
+    split = 0.1 if prims else 1.0  # the triangles' propagations dominate where there are any
     return record_points(plate.to_plate(pos), np.concatenate(colours, 1), shape=s.shape,
                          pitch=s.pitch, wavelengths=tuple(lambdas), seed=seed,
                          reference=reference, plate=plate.matrix_world, method=method,
                          band=s.band, channels=channels, point_density=density,
-                         extra_wave=_triangle_waves(prims, s, lambdas, channels, view, seed)
-                         if prims else None, progress=progress,
+                         extra_wave=_triangle_waves(prims, s, lambdas, channels, view, seed,
+                                                    jobs.scaled(progress, split, 1.0))
+                         if prims else None, progress=jobs.scaled(progress, 0.0, split),
                          bounds=np.array([local.min(0), local.max(0)]))
 
 
-def _triangle_waves(prims, s, lambdas, channels, view, seed):
+def _triangle_waves(prims, s, lambdas, channels, view, seed, progress: jobs.Progress = None):
     """``record_points``' ``extra_wave`` for textured primitives (in the plate's frame) recorded
     with the sampling ``s``: per channel (``channels``, at ``lambdas`` [m]) their summed wave;
     ``view`` = (camera position [m], pixel angle [rad]) or None. One pass per wavelength serves
-    all its channels."""
+    all its channels; ``progress`` hears of every primitive."""
     from . import emitters as em
     shortest = min(lambdas)
     seconds = len(prims) * len(set(lambdas)) * math.prod(grid.padded_shape(s.shape, 2)) \
@@ -322,7 +324,9 @@ def _triangle_waves(prims, s, lambdas, channels, view, seed):
         differ only in amplitude: one propagation serves them all."""
         chans = [c for c, other in enumerate(lambdas) if other == lam]
         totals = np.zeros((len(chans),) + s.shape, np.complex128)
+        passes = sorted(set(lambdas))
         for i, p in enumerate(prims):
+            jobs.report(progress, passes.index(lam) * len(prims) + i, len(passes) * len(prims))
             texs = intensities(i, p, lam, chans)
             flat = all(t.shape[:2] == (1, 1) for t in texs)
             for k, tex in enumerate([np.ones((1, 1))] if flat else texs):

@@ -246,3 +246,14 @@ def test_triangles_radiate_as_the_points_of_the_same_surface(tilt_deg):
     ratio = np.mean(np.abs(triangles.object_wave[0]) ** 2) / \
         np.mean(np.abs(points.object_wave[0]) ** 2)
     assert 0.8 <= ratio <= 1.25, f"triangles' mean power over the points': {ratio:.3f}"
+
+
+def test_triangle_recording_reports_progress_per_primitive():
+    """Textured triangles (a rotation and a propagation each) report progress as they go: a
+    fraction per primitive and wavelength, rising, where they once reported none."""
+    plate = Plate(matrix_world=np.eye(4), width=0.1, height=0.1)
+    seen = []
+    record_hologram((), triangles=[square(0.04, -0.3)], plate=plate, resolution=128,
+                    depth=False, progress=seen.append)
+    assert len(seen) >= 2 and seen == sorted(seen) and 0.1 <= seen[-1] <= 1.0, seen
+    assert sum(0.1 <= f < 1.0 for f in seen) >= 2, "no report while the triangles ran"
