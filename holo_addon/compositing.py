@@ -15,6 +15,8 @@ from pathlib import Path
 import bpy
 from bpy.app.handlers import persistent
 
+from holo_core import jobs
+
 from . import compat, pipeline
 
 log = logging.getLogger(__name__)
@@ -106,16 +108,57 @@ def render_frame(scene, depsgraph=None):
     if scene.holo.get("skip_pass_once"):
         del scene.holo["skip_pass_once"]
         return
+    RUNNING.update(frame=scene.frame_current, fraction=0.0, cancel=False)
     try:
         job = pipeline.prepare(scene, depsgraph)
         for warning in job.scene.warnings:
             log.warning(warning)
-        outcome = pipeline.run(job)
+        outcome = pipeline.run(job, _progress)
         pipeline.apply(scene, job, outcome)
+    except jobs.Cancelled:
+        failed(scene, f"Holo: the holographic pass of frame {scene.frame_current} was "
+                      f"cancelled")
+        return
     except Exception as e:  # noqa: BLE001 -- any failure must stop the frame, not pass by
         failed(scene, f"Holo: the holographic pass of frame {scene.frame_current} failed: {e}")
         return
+    finally:
+        RUNNING["frame"] = None
     log.info("holographic pass for frame %d: %s", job.frame, outcome.frame_path)
+
+
+# The pass a render is making (it runs in the render's thread): its progress for the status
+# bar and the panel, and the Cancel Pass button's request.
+RUNNING = {"frame": None, "fraction": 0.0, "cancel": False}
+
+
+def _progress(fraction):
+    RUNNING["fraction"] = fraction
+    if RUNNING["cancel"]:
+        raise jobs.Cancelled()
+
+
+_shown = [None]
+
+
+def _show_progress():
+    """A timer on the interface's thread: the render's pass progress in the status bar."""
+    frame = RUNNING["frame"]
+    text = None if frame is None else (f"Holo: holographic pass of frame {frame}: "
+                                       f"{RUNNING['fraction']:.0%} (Render Properties ▸ Holo "
+                                       f"▸ Cancel Pass)")
+    if text != _shown[0]:
+        _shown[0] = text
+        for window in bpy.context.window_manager.windows:
+            try:
+                with bpy.context.temp_override(window=window):
+                    window.workspace.status_text_set(text)
+                for area in window.screen.areas:
+                    if area.type == "PROPERTIES":
+                        area.tag_redraw()
+            except Exception as e:  # noqa: BLE001 -- a timer that raises is unregistered
+                log.debug("status text: %s", e)
+    return 0.25
 
 
 EXIT_ON_FAILURE = None  # None: in background renders (blender -b ... -a), as farms need
@@ -152,8 +195,12 @@ def _popup(message):
 
 def register():
     bpy.app.handlers.frame_change_post.append(render_frame)
+    if not bpy.app.background:
+        bpy.app.timers.register(_show_progress, persistent=True)
 
 
 def unregister():
     if render_frame in bpy.app.handlers.frame_change_post:
         bpy.app.handlers.frame_change_post.remove(render_frame)
+    if bpy.app.timers.is_registered(_show_progress):
+        bpy.app.timers.unregister(_show_progress)

@@ -241,7 +241,24 @@ class HOLO_OT_render(_PipelineOperator, bpy.types.Operator):
         return {"FINISHED"}
 
 
+class HOLO_OT_cancel_pass(bpy.types.Operator):
+    """Stop the holographic pass the render is making; the frame shows the raster alone"""
+
+    bl_idname = "holo.cancel_pass"
+    bl_label = "Cancel Pass"
+
+    @classmethod
+    def poll(cls, context):
+        return compositing.RUNNING["frame"] is not None
+
+    def execute(self, context):
+        compositing.RUNNING["cancel"] = True
+        self.report({"INFO"}, f"cancelling the holographic pass of frame "
+                              f"{compositing.RUNNING['frame']}")
+        return {"FINISHED"}
+
+
 CLASSES = (HOLO_OT_record_hologram, HOLO_OT_render_pass, HOLO_OT_setup_compositing,
-           HOLO_OT_render)
+           HOLO_OT_render, HOLO_OT_cancel_pass)
 
 register, unregister = bpy.utils.register_classes_factory(CLASSES)

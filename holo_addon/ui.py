@@ -32,6 +32,12 @@ class HOLO_PT_scene(bpy.types.Panel):
             col.prop(h, "composition")
             col.prop(h, "opacity_threshold")
         layout.prop(h, "pass_on_render")
+        from .compositing import RUNNING
+        if RUNNING["frame"] is not None:  # a render is making its pass
+            box = layout.box()
+            box.label(text=f"Pass of frame {RUNNING['frame']}: {RUNNING['fraction']:.0%}",
+                      icon="TIME")
+            box.operator("holo.cancel_pass", icon="CANCEL")
         col = layout.column(align=True)
         col.operator("holo.record_hologram", icon="REC")
         col.operator("holo.render_pass", icon="RENDER_STILL")

@@ -489,3 +489,27 @@ def test_a_render_region_without_crop_clears_the_pass_outside_it(empty_scene, tm
     region = _read_exr(path)["ViewLayer.Combined.A"]
     assert region.shape == full.shape and full[:, 24:].any()
     assert np.array_equal(region[:, :24], full[:, :24]) and not region[:, 24:].any()
+
+
+def test_the_pass_of_a_render_can_be_cancelled(empty_scene, tmp_path, monkeypatch):
+    """Cancel Pass while a render makes its pass: the worker stops, the frame shows the raster
+    alone (the stale pass set aside) and the panel's state is cleared."""
+    from holo_addon import compositing, pipeline
+    scene = empty_scene
+    _scene_with_pass(scene, tmp_path)
+    scene.holo.exposure = 1.0                      # the pass is out of date: the worker runs
+    original, clicked = pipeline.run, []
+
+    def run(job, progress=None, on_log=None):
+        def user(fraction):
+            if not clicked:                        # the user clicks while it runs
+                clicked.append(bpy.ops.holo.cancel_pass())
+            progress(fraction)
+        return original(job, user, on_log)
+    monkeypatch.setattr(pipeline, "run", run)
+    scene.render.filepath = str(tmp_path / "cancelled.exr")
+    bpy.ops.render.render(write_still=True)
+    assert clicked == [{"FINISHED"}]
+    assert _shown_columns(tmp_path / "cancelled.exr").size == 0
+    assert (pipeline.output_dir(scene) / "holo_pass_0001.stale.exr").is_file()
+    assert compositing.RUNNING["frame"] is None and not bpy.ops.holo.cancel_pass.poll()
