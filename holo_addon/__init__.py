@@ -1,11 +1,11 @@
 """Holo for Blender: holographic objects recorded, rendered by wave optics and composited in
 depth with the rasterized scene.
 
-Files: ``properties`` (Object.holo, Scene.holo), ``scene_export`` (scene → metres),
-``pipeline`` (record and render in a worker process), ``preferences`` (device, CPU runtime),
-``operators``, ``compositing``
-(Depth Combine and the per-frame pass), ``compat`` (Blender 4.x/5.x), ``ui`` (panels),
-``demo`` (the built-in scene).
+Files: ``properties`` (Object.holo, Scene.holo), ``scene_export`` (scene → metres, as the
+render sees it), ``bake`` (procedural Base Colours baked by Cycles), ``pipeline`` (record and
+render in a worker process), ``preferences`` (device, memory, cache, CPU runtime),
+``operators``, ``compositing`` (Depth Combine and the per-frame pass), ``compat`` (Blender
+4.x/5.x), ``ui`` (panels), ``demo`` (the built-in scene).
 """
 
 from . import compositing, operators, preferences, properties, ui

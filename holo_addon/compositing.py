@@ -1,8 +1,10 @@
-"""The holographic pass in Blender's compositor, and the pass rendered before each frame.
+"""The holographic pass in Blender's compositor, and the pass each rendered frame makes.
 
-The tree: Render Layers (Image, Depth) and an Image node showing the holographic pass
-(Combined, Depth) meet in a Depth Combine that keeps, per pixel, the nearer of the two and
-blends the holographic image over by its alpha.
+The tree: the user's composite (or Render Layers' Image) and an Image node reading the
+frame's holographic pass (Combined, Depth) meet in a Depth Combine that keeps, per pixel, the
+nearer of the two and blends the holographic image over by its alpha. A render makes its
+frame's pass from its own depsgraph (:func:`render_frame`); a failure never leaves a stale
+pass in the frame (:func:`failed`).
 """
 
 from __future__ import annotations
