@@ -116,22 +116,18 @@ def prepare(scene, depsgraph, *, render=True, bake=False) -> Job:
         depsgraph = bake_emitters(scene) or depsgraph
     settings = Settings.from_scene(scene, scale(scene))
     out = output_dir(scene)
+    region, frame = render_region(scene), scene.frame_current
     if settings.mode == "CAMERA":  # recorded for this view at every render: no plate file
         data = export_scene(scene, depsgraph, plate=False)
-        return Job(scene=data, settings=settings, output_dir=out, frame=scene.frame_current,
-                   fingerprint=data.fingerprint(settings.mode, settings.samples), current=False,
-                   holograms=(), render=render, border=render_region(scene),
-                   pass_key=data.fingerprint(*astuple(settings), scene.frame_current,
-                                             render_region(scene)))
-    data = export_scene(scene, depsgraph)
-    fingerprint = data.fingerprint(*settings.recording())
-    paths = hologram_paths(out, data.plate_name, settings.iterations, fingerprint)
-    current = all(p.is_file() for p in paths)
-    return Job(scene=data, settings=settings, output_dir=out, frame=scene.frame_current,
-               fingerprint=fingerprint, current=current, holograms=paths, render=render,
-               border=render_region(scene),
-               pass_key=data.fingerprint(*astuple(settings), scene.frame_current,
-                                         render_region(scene)))
+        fingerprint, paths = data.fingerprint(settings.mode, settings.samples), ()
+    else:
+        data = export_scene(scene, depsgraph)
+        fingerprint = data.fingerprint(*settings.recording())
+        paths = hologram_paths(out, data.plate_name, settings.iterations, fingerprint)
+    return Job(scene=data, settings=settings, output_dir=out, frame=frame,
+               fingerprint=fingerprint, current=bool(paths) and all(p.is_file() for p in paths),
+               holograms=paths, render=render, border=region,
+               pass_key=data.fingerprint(*astuple(settings), frame, region))
 
 
 def render_region(scene) -> tuple | None:

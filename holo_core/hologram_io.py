@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -22,7 +23,7 @@ FORMAT = "holo-hologram"
 FORMAT_VERSION = 2  # 2: the depth partner 'Z' records every emitter at unit intensity
 
 
-class HologramFileError(validate.InputError):
+class HologramFileError(InputError):
     """A hologram file that cannot be read; the message names the file and the problem."""
 
 
@@ -110,7 +111,7 @@ def metadata(h: Hologram) -> dict:
 def write_hologram(path, h: Hologram) -> Path:
     """Write ``h`` to ``path`` (.exr) through a temporary file and a rename; an empty or
     non-finite hologram is refused, never written."""
-    check_pixels("hologram", h)
+    check_pixels(str(path), h)
     channels = {}
     for c in range(len(h.wavelengths)):
         channels[f"c{c}.H"] = h.intensity[c]
@@ -289,7 +290,7 @@ def import_acquired(path, *, pitch, wavelength, reference_angle=0.0, reference_a
     wavelength = validate.positive("wavelength", wavelength, "m")
     angle = validate.finite("reference_angle", reference_angle, "rad")
     if not 0 <= angle < math.pi / 2:
-        raise validate.InputError(f"reference_angle must be in [0, π/2) rad; got {angle!r}")
+        raise InputError(f"reference_angle must be in [0, π/2) rad; got {angle!r}")
     azimuth = validate.finite("reference_azimuth", reference_azimuth, "rad")
     path = Path(path)
     if not path.is_file():
@@ -324,15 +325,17 @@ def _image_grey(path: Path) -> np.ndarray:
 
     from .memory import check_host
     try:
-        with Image.open(path) as im:
+        with warnings.catch_warnings():  # the memory check below is the limit, not PIL's guess
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            im = Image.open(path)
+        with im:
             w, h = im.size
             check_host(f"{path} (scan, {w}x{h} pixels)", 8.0 * 4 * w * h)
-            Image.MAX_IMAGE_PIXELS = None  # the memory check above is the limit
             im.load()
             if im.mode in _AS_RGB:
                 im = im.convert(_AS_RGB[im.mode])
             mode, a = im.mode, np.asarray(im)
-    except validate.InputError:
+    except InputError:
         raise
     except Exception as e:  # noqa: BLE001 -- PIL's errors for damaged files vary by format
         raise HologramFileError(f"{path}: not a readable PNG/TIFF image ({type(e).__name__}: "

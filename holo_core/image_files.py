@@ -198,17 +198,20 @@ def write_png(path, image: np.ndarray) -> Path:
     return write_atomic(path, png_bytes(image))
 
 
-def write_exr(path, channels: dict, **header) -> Path:
+def write_exr(path, channels: dict, *, preview=None, **header) -> Path:
     """Float32 OpenEXR (ZIP) of named (H, W) ``channels``, row 0 at the top, with extra
-    ``header`` attributes, written atomically."""
+    ``header`` attributes, written atomically; with a ``preview`` image in [0, 1] also a PNG
+    beside it, the two renamed into place as one unit."""
     import OpenEXR  # noqa: F401 -- before the write opens: a SIGTERM inside an import is lost
-    with atomic_path(path) as tmp:
-        exr_to(tmp, channels, **header)
+    paths = [path] + ([Path(path).with_suffix(".png")] if preview is not None else [])
+    with atomic_paths(*paths) as temps:
+        _exr_to(temps[0], channels, **header)
+        if preview is not None:
+            Path(temps[1]).write_bytes(png_bytes(preview))
     return Path(path)
 
 
-def exr_to(filename, channels: dict, **header) -> None:
-    """Write the EXR of :func:`write_exr` to ``filename`` as it stands (no atomic rename)."""
+def _exr_to(filename, channels: dict, **header) -> None:
     import OpenEXR
     data = {n: np.ascontiguousarray(a, np.float32) for n, a in channels.items()}
     head = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage, **header}

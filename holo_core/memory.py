@@ -11,7 +11,8 @@ import os
 
 from .validate import InputError
 
-HOST_SHARE = 0.8  # of the available memory one step may take (the rest: Python, the OS)
+SHARE = 0.8  # of the available host or device memory one step may take (the rest: the
+             # interpreter, the OS, the driver)
 
 
 def gib(nbytes: float) -> str:
@@ -51,7 +52,7 @@ def limit_from_env() -> int | None:
 
 def check_host(what: str, nbytes: float) -> None:
     """Refuse ``what`` when it needs more than the host's share of available memory."""
-    budget = HOST_SHARE * host_available()
+    budget = SHARE * host_available()
     if nbytes > budget:
         raise InputError(f"{what} needs {gib(nbytes)} of memory; {gib(budget)} is available "
                          f"(lower the resolution or the size, or free memory)")
@@ -64,6 +65,6 @@ def check_device(rt, what: str, nbytes: float, largest: float) -> None:
     if largest > dev.max_mem_alloc_size:
         raise InputError(f"{what} needs a {gib(largest)} buffer; {dev.name.strip()} allocates "
                          f"at most {gib(dev.max_mem_alloc_size)}")
-    if nbytes > HOST_SHARE * dev.global_mem_size:
+    if nbytes > SHARE * dev.global_mem_size:
         raise InputError(f"{what} needs {gib(nbytes)} of device memory; {dev.name.strip()} has "
                          f"{gib(dev.global_mem_size)}")

@@ -324,7 +324,6 @@ def _triangle_waves(prims, s, lambdas, channels, view, seed, progress: jobs.Prog
         differ only in amplitude: one propagation serves them all."""
         chans = [c for c, other in enumerate(lambdas) if other == lam]
         totals = np.zeros((len(chans),) + s.shape, np.complex128)
-        passes = sorted(set(lambdas))
         for i, p in enumerate(prims):
             jobs.report(progress, passes.index(lam) * len(prims) + i, len(passes) * len(prims))
             texs = intensities(i, p, lam, chans)
@@ -341,7 +340,7 @@ def _triangle_waves(prims, s, lambdas, channels, view, seed, progress: jobs.Prog
         return {c: cone_filter(t, wavelength=lam, pitch=s.pitch, band=s.band)
                 for c, t in zip(chans, totals)}
 
-    done = {}
+    done, passes = {}, list(dict.fromkeys(lambdas))  # the order record_points asks for them
 
     def wave(c, lam):
         if lam not in done:

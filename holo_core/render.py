@@ -24,7 +24,7 @@ from . import depth as depth_mod
 from . import jobs, memory, speckle, validate
 from .camera import Camera
 from .hologram_io import Hologram
-from .image_files import atomic_paths, exr_to, png_bytes, srgb
+from .image_files import srgb, write_exr
 from .opencl import get_runtime
 from .opencl.arrays import cached, embed, empty
 from .propagation import grid
@@ -338,6 +338,7 @@ class NoDepthWarning(UserWarning):
 
 
 PIXEL_BYTES = 96  # host bytes per fine pixel and iteration while rendering (fields, images)
+HOLOGRAM_SAMPLE_BYTES = 96  # per hologram sample: its reconstructed and carried complex fields
 
 
 def _check_settings(holos, camera: Camera, supersample, exposure, threshold) -> None:
@@ -363,7 +364,7 @@ def _check_settings(holos, camera: Camera, supersample, exposure, threshold) -> 
     memory.check_host(f"a {w}x{h} view at supersample {supersample}",
                       PIXEL_BYTES * w * h * supersample**2 * (len(first.wavelengths) + 1))
     memory.check_host(f"the hologram's {first.shape[1]}x{first.shape[0]} fields",
-                      48.0 * np.prod(first.shape) * 2)
+                      HOLOGRAM_SAMPLE_BYTES * np.prod(first.shape))
 
 
 def _depth(crosses, brightness, *, estimate, wavelengths, centre, focus, camera: Camera,
@@ -438,9 +439,6 @@ def write_view(result: RenderResult, path, *, layer="ViewLayer") -> tuple[Path, 
     channels = {f"{layer}.Combined.{c}": rgb[..., i] for i, c in enumerate("RGB")}
     channels[f"{layer}.Combined.A"] = result.alpha
     channels[f"{layer}.Depth.Z"] = result.depth
-    png = path.with_suffix(".png")
-    import OpenEXR  # noqa: F401 -- before the write opens: a SIGTERM inside an import is lost
-    with atomic_paths(path, png) as (exr_tmp, png_tmp):
-        exr_to(exr_tmp, channels, holo=json.dumps(result.info, default=float))
-        Path(png_tmp).write_bytes(png_bytes(srgb(result.rgb)))
-    return path, png
+    write_exr(path, channels, preview=srgb(result.rgb),
+              holo=json.dumps(result.info, default=float))
+    return path, path.with_suffix(".png")

@@ -121,7 +121,7 @@ def test_a_view_is_written_as_one_unit(tmp_path, monkeypatch):
 
     def broken(_image):
         raise RuntimeError("PNG encoder failed")
-    monkeypatch.setattr("holo_core.render.png_bytes", broken)
+    monkeypatch.setattr("holo_core.image_files.png_bytes", broken)
     with pytest.raises(RuntimeError):
         write_view(view(0.75), tmp_path / "v.exr")
     assert (exr.read_bytes(), png.read_bytes()) == before and temps(tmp_path) == []

@@ -14,7 +14,7 @@ import pytest
 from PIL import Image
 
 from holo_core.camera import Camera, look_at
-from holo_core.emitters import MeshFileError, read_mesh, sample_points
+from holo_core.emitters import MeshFileError, read_mesh
 from holo_core.hologram_io import (Hologram, HologramFileError, import_acquired, read_hologram,
                                    write_hologram)
 from holo_core.image_files import write_exr
