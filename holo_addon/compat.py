@@ -7,6 +7,8 @@ media type; 4.2-4.5 call EEVEE ``BLENDER_EEVEE_NEXT``.
 
 from __future__ import annotations
 
+import os
+
 import bpy
 
 TREE_NAME = "Holo Compositing"
@@ -52,6 +54,32 @@ def depth_combine(tree):
     else:
         node.use_alpha = True
         node.use_antialias_z = False
+    return node
+
+
+def multilayer_output(tree, name: str, path: str, layers):
+    """A File Output node named ``name`` writing ``layers`` ((layer name, "RGBA" or "FLOAT"),
+    ...; inputs in that order) as one 32-bit multilayer EXR per frame at ``path``, a folder
+    and a file-name prefix to which Blender adds the frame number."""
+    old = tree.nodes.get(name)
+    if old is not None:
+        tree.nodes.remove(old)
+    node = tree.nodes.new("CompositorNodeOutputFile")
+    node.name = node.label = name
+    if hasattr(node, "file_output_items"):
+        node.format.media_type = "MULTI_LAYER_IMAGE"
+        folder, node.file_name = os.path.split(path)
+        node.directory = folder + os.sep
+        node.file_output_items.clear()
+        for layer, kind in layers:
+            node.file_output_items.new(kind, layer)
+    else:
+        node.format.file_format = "OPEN_EXR_MULTILAYER"
+        node.base_path = path
+        node.layer_slots.clear()
+        for layer, _ in layers:
+            node.layer_slots.new(layer)
+    node.format.color_depth = "32"
     return node
 
 

@@ -2,7 +2,9 @@
 
 The tree: the user's composite (or Render Layers' Image) and an Image node reading the
 frame's holographic pass (Combined, Depth) meet in a Depth Combine that keeps, per pixel, the
-nearer of the two and blends the holographic image over by its alpha. A render makes its
+nearer of the two and blends the holographic image over by its alpha; a File Output node
+writes the composite, the pass and both depths as a multilayer EXR beside each rendered frame
+(:func:`beside_render`). A render makes its
 frame's pass from its own depsgraph (:func:`render_frame`); a failure never leaves a stale
 pass in the frame (:func:`failed`).
 """
@@ -45,7 +47,7 @@ def setup(scene, folder: Path):
     ``folder``, read as an image sequence so that every frame composites its own pass) to the
     scene's compositor; enables the view layer's Depth pass. The user's own nodes and links
     stay: whatever fed the compositor's output now feeds the Depth Combine, whose result goes
-    to the output. The add-on's nodes sit in a frame named "Holo: holographic pass"; running
+    to the output, and to the multilayer EXR beside the render. The add-on's nodes sit in a frame named "Holo: holographic pass"; running
     this again rebuilds only them. The current frame's pass must exist (its sockets come from
     the file)."""
     first = pipeline.pass_file(folder, scene.frame_current)
@@ -81,7 +83,29 @@ def setup(scene, folder: Path):
     tree.links.new(source or _output(layers, "Image"), combine.inputs[2])
     tree.links.new(_output(layers, "Depth", "Z"), combine.inputs[3])
     tree.links.new(combine.outputs[0], out_socket)
+    files = compat.multilayer_output(tree, NODE_PREFIX + "File Output", beside_render(scene),
+                                     LAYERS)
+    files.parent, files.location = group, (200, -250)
+    for socket, layer in zip((combine.outputs[0], _output(holo, "Combined", "Image"),
+                              _output(holo, "Depth", "Z"), combine.outputs[1]), files.inputs):
+        tree.links.new(socket, layer)
     return combine
+
+
+# The layers of the multilayer EXR written beside each rendered frame: the composite, the
+# holographic pass alone and its depth, and the composite's depth (the nearer of the two).
+LAYERS = (("Composite", "RGBA"), ("Holo", "RGBA"), ("HoloDepth", "FLOAT"), ("Depth", "FLOAT"))
+
+
+def beside_render(scene) -> str:
+    """Where the frame's holographic layers go: the render output's folder, under the output's
+    file name prefixed by ``holo_`` (its ``#`` frame digits and image extension dropped:
+    Blender adds the frame), e.g. ``//out/shot_####`` → ``//out/holo_shot_0001.exr``."""
+    folder, name = os.path.split(scene.render.filepath)
+    stem, ext = os.path.splitext(name)
+    if ext.lower() in bpy.path.extensions_image:
+        name = stem
+    return os.path.join(folder or "//", "holo_" + name.replace("#", ""))
 
 
 MAX_FRAME = 1048574  # Blender's last frame

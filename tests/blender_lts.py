@@ -49,8 +49,9 @@ def scene(work: Path):
 def main(zip_path: str, work: str) -> None:
     work = Path(work)
     install(zip_path)
-    import holo_core
     import pyopencl
+
+    import holo_core
     s = scene(work)
     for op in (bpy.ops.holo.render_pass, bpy.ops.holo.setup_compositing):
         if op() != {"FINISHED"}:
@@ -62,9 +63,13 @@ def main(zip_path: str, work: str) -> None:
     centre, corner = ((h // 2 * w + w // 2) * 4, 0)
     if not sum(px[centre:centre + 3]) > sum(px[corner:corner + 3]) + 0.1:
         sys.exit("the holographic sphere is missing from the composited frame")
+    layers = sorted(work.glob("holo_frame*.exr"))
+    if not layers or not layers[0].stat().st_size:
+        sys.exit(f"no holographic layers beside the render in {work}")
     print(f"Blender {bpy.app.version_string}: installed, registered (core at "
           f"{holo_core.__file__}, {len(pyopencl.get_platforms())} OpenCL platform), recorded, "
-          f"pass rendered and composited: OK")
+          f"pass rendered and composited, layers "
+          f"written beside the frame ({layers[0].name}): OK")
 
 
 if __name__ == "__main__":

@@ -84,6 +84,7 @@ def test_camera_projects_as_blender_does(empty_scene, rng, fit, shift, aspect, s
     computes in float32)."""
     from bpy_extras.object_utils import world_to_camera_view
     from mathutils import Vector
+
     from holo_addon.scene_export import camera_from_object
     scene = empty_scene
     bpy.ops.object.camera_add(location=(0.4, -2.5, 0.7), rotation=(1.2, 0.1, 0.3))
@@ -403,6 +404,7 @@ def test_a_killed_worker_is_reported_and_earlier_files_stay(empty_scene, monkeyp
     the operator, not a dead Blender, and the earlier hologram and pass are untouched."""
     import signal
     import threading
+
     from holo_addon import pipeline
     _, earlier = _earlier_outputs(empty_scene, size=(160, 120), iterations=8,
                                   max_resolution=2048)

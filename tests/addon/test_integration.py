@@ -167,6 +167,38 @@ def _shown_columns(path):
     return np.nonzero((np.abs(rgb - rgb[0, 0]).max(-1) > 0.05).any(0))[0]
 
 
+def _read_parts(path):
+    """Every channel of every part (Blender 5 writes a multilayer EXR as one part per layer)."""
+    import OpenEXR
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        return {k: v.pixels.copy() for part in f.parts for k, v in part.channels.items()}
+
+
+def test_each_rendered_frame_gets_its_holographic_layers_beside_it(empty_scene, tmp_path):
+    """Beside the frame ``shot_0001.exr`` a multilayer ``holo_shot_0001.exr``: the composite
+    (equal to the frame), the pass alone (equal to the pass file), its depth, and the
+    composite's depth (the nearer of the pass's and the raster's)."""
+    from holo_addon import pipeline
+    scene = empty_scene
+    _scene_with_pass(scene, tmp_path)
+    scene.render.filepath = str(tmp_path / "out" / "shot_####")
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    scene.frame_start = scene.frame_end = 1
+    bpy.ops.render.render(animation=True)
+    layers = _read_parts(tmp_path / "out" / "holo_shot_0001.exr")
+    frame = _read_exr(tmp_path / "out" / "shot_0001.exr")
+    holo = _read_exr(pipeline.pass_file(pipeline.output_dir(scene), 1))
+    for c in "RGBA":
+        np.testing.assert_allclose(layers[f"Composite.{c}"], frame[c], atol=1e-6)
+        np.testing.assert_allclose(layers[f"Holo.{c}"], holo[f"ViewLayer.Combined.{c}"],
+                                   atol=1e-6)
+    np.testing.assert_allclose(layers["HoloDepth.V"], holo["ViewLayer.Depth.Z"], rtol=1e-6)
+    shown = holo["ViewLayer.Combined.A"] > 0.5
+    assert shown.any() and (layers["Depth.V"] <= layers["HoloDepth.V"]).all()
+    np.testing.assert_allclose(layers["Depth.V"][shown], layers["HoloDepth.V"][shown],
+                               rtol=1e-6)
+
+
 def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monkeypatch):
     """In the interface a handler cannot cancel the render: the failed frame shows the raster
     alone (the stale pass set aside, kept), and the next good pass shows again."""
