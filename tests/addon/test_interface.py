@@ -1,0 +1,233 @@
+"""The interface paths a headless Blender never takes: the operators' modal run (events pass
+through, progress and messages as they arrive, Esc, Enter) driven event by event, and the
+panels' draw code against the real properties and operators.
+
+``bpy`` in background mode has no window, so the window manager, workspace and events are
+stand-ins that record what the operator asks of them; the worker, the scene and the files are
+real."""
+
+import time
+from types import SimpleNamespace
+
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+from test_addon import _plate_camera_cube  # noqa: E402
+
+
+class _WindowManager:
+    def __init__(self):
+        self.timers, self.progress, self.handler = [], [], None
+
+    def event_timer_add(self, step, window=None):
+        self.timers.append(object())
+        return self.timers[-1]
+
+    def event_timer_remove(self, timer):
+        self.timers.remove(timer)
+
+    def progress_begin(self, low, high):
+        pass
+
+    def progress_update(self, value):
+        self.progress.append(value)
+
+    def progress_end(self):
+        pass
+
+    def modal_handler_add(self, op):
+        self.handler = op
+
+
+class _Workspace:
+    def __init__(self):
+        self.status = []
+
+    def status_text_set(self, text):
+        self.status.append(text)
+
+
+def _event(kind, value="PRESS", timer=None):
+    return SimpleNamespace(type=kind, value=value, timer=timer)
+
+
+@pytest.fixture
+def interface(monkeypatch):
+    """(operator, context) as Blender's interface would drive them: not in background."""
+    from holo_addon import operators
+    monkeypatch.setattr(operators, "bpy", SimpleNamespace(app=SimpleNamespace(background=False)))
+
+    class RenderPass(operators._PipelineOperator):
+        bl_label = operators.HOLO_OT_render_pass.bl_label
+
+        def __init__(self):
+            self.reports = []
+
+        def report(self, kind, text):
+            self.reports.append((next(iter(kind)), text, time.monotonic()))
+
+    context = SimpleNamespace(scene=bpy.context.scene, window=None,
+                              window_manager=_WindowManager(), workspace=_Workspace(),
+                              evaluated_depsgraph_get=bpy.context.evaluated_depsgraph_get)
+    return RenderPass(), context
+
+
+def _camera_scene(scene, samples):
+    _plate_camera_cube(scene)
+    scene.holo.mode = "CAMERA"
+    scene.holo.samples = samples
+    scene.render.resolution_x, scene.render.resolution_y = 64, 48
+
+
+def _tick(op, context, until, limit=300.0):
+    """Timer events every 0.1 s, as Blender sends them, until ``until()`` or the operator
+    ends; the operator's last answer."""
+    end = time.monotonic() + limit
+    while time.monotonic() < end:
+        answer = op.modal(context, _event("TIMER", "NOTHING", context.window_manager.timers[0]))
+        if answer != {"PASS_THROUGH"} or until():
+            return answer
+        time.sleep(0.1)
+    raise AssertionError("the worker gave no sign in time")
+
+
+def test_the_interface_stays_usable_and_esc_cancels_within_a_second(empty_scene, interface):
+    """While the worker runs, every other event passes through to Blender; Esc kills the
+    worker within a second, ends the operator's timer, progress and status text, and the
+    earlier pass is kept."""
+    from holo_addon import pipeline
+    op, context = interface
+    _camera_scene(empty_scene, samples=256)
+    earlier = pipeline.pass_file(pipeline.output_dir(empty_scene), empty_scene.frame_current)
+    earlier.parent.mkdir(parents=True)
+    earlier.write_bytes(b"the earlier pass")
+    assert op.invoke(context, _event("LEFTMOUSE")) == {"RUNNING_MODAL"}
+    assert context.window_manager.handler is op and "Esc to cancel" in context.workspace.status[-1]
+    for kind in ("MOUSEMOVE", "LEFTMOUSE", "A", "WHEELUPMOUSE"):
+        assert op.modal(context, _event(kind)) == {"PASS_THROUGH"}
+    other_timer = _event("TIMER", "NOTHING", object())  # another operator's timer
+    assert op.modal(context, other_timer) == {"PASS_THROUGH"}
+    _tick(op, context, lambda: op._worker.partial > 0)  # mid-run: samples are being made
+    process = op._worker.process
+    assert process.poll() is None, "the worker ended before Esc"
+    start = time.monotonic()
+    assert op.modal(context, _event("ESC")) == {"CANCELLED"}
+    while process.poll() is None and time.monotonic() - start < 5:
+        time.sleep(0.01)
+    took = time.monotonic() - start
+    print(f"Esc to the worker's end: {took * 1000:.0f} ms")
+    assert process.poll() is not None and took < 1.0
+    assert context.window_manager.timers == [] and context.workspace.status[-1] is None
+    assert any("cancelled; earlier results kept" in text for _, text, _ in op.reports)
+    assert earlier.read_bytes() == b"the earlier pass"
+
+
+def test_progress_and_messages_arrive_while_the_worker_runs(empty_scene, interface):
+    """Progress reaches the progress bar and the status text as it is made, the worker's
+    messages become reports before the run ends, and the run ends with the pass written."""
+    from holo_addon import pipeline
+    op, context = interface
+    _camera_scene(empty_scene, samples=8)
+    assert op.invoke(context, _event("LEFTMOUSE")) == {"RUNNING_MODAL"}
+    answer = _tick(op, context, lambda: False)
+    ended = time.monotonic()
+    assert answer == {"FINISHED"}
+    progress = context.window_manager.progress
+    assert len(set(progress)) >= 3 and progress == sorted(progress), progress
+    assert any(text and text.endswith("% (Esc to cancel)") for text in context.workspace.status)
+    early = [text for kind, text, at in op.reports if at < ended - 0.05]
+    assert early, "no message arrived before the end"
+    frame = pipeline.pass_file(pipeline.output_dir(empty_scene), empty_scene.frame_current)
+    assert frame.is_file() and "holographic pass" in op.reports[-1][1]
+
+
+def test_enter_keeps_the_samples_made_so_far(empty_scene, interface):
+    """Enter during a camera hologram's samples ends the run with the samples so far as the
+    frame's pass."""
+    from holo_addon import pipeline
+    from holo_core.image_files import exr_attribute
+    op, context = interface
+    _camera_scene(empty_scene, samples=256)
+    assert op.invoke(context, _event("LEFTMOUSE")) == {"RUNNING_MODAL"}
+    _tick(op, context, lambda: op._worker.partial >= 2)
+    assert op.modal(context, _event("RET")) == {"FINISHED"}
+    frame = pipeline.pass_file(pipeline.output_dir(empty_scene), empty_scene.frame_current)
+    assert frame.is_file() and exr_attribute(frame, "holo")
+    assert any("stopped at" in text for _, text, _ in op.reports)
+    assert context.window_manager.timers == []
+
+
+class _Layout:
+    """Records what a panel draws, checking each property and operator it names exists."""
+
+    def __init__(self, drawn):
+        self.drawn = drawn
+
+    def prop(self, data, name, **_):
+        assert name in data.bl_rna.properties, f"no property {name}"
+        self.drawn.append(("prop", name))
+
+    def operator(self, idname, **_):
+        group, name = idname.split(".")
+        assert getattr(getattr(bpy.ops, group), name).idname(), idname
+        self.drawn.append(("operator", idname))
+
+    def label(self, text="", **_):
+        self.drawn.append(("label", text))
+
+    def column(self, **_):
+        return self
+
+    box = row = column
+
+
+def _draw(panel, context):
+    drawn = []
+    panel.draw(SimpleNamespace(layout=_Layout(drawn)), context)
+    return drawn
+
+
+def test_the_panels_draw_every_state(empty_scene):
+    """Render ▸ Holo in both modes and while a render makes its pass (progress and Cancel
+    Pass), Object ▸ Holo for an emitter and a plate: every property and operator they show
+    exists."""
+    from holo_addon import compositing, ui
+    cube, _, plate = _plate_camera_cube(empty_scene)
+    context = SimpleNamespace(scene=empty_scene, object=cube)
+    for mode in ("CAMERA", "PLATE"):
+        empty_scene.holo.mode = mode
+        drawn = _draw(ui.HOLO_PT_scene, context)
+        assert ("prop", "samples" if mode == "CAMERA" else "iterations") in drawn
+    compositing.RUNNING.update(frame=7, fraction=0.42)
+    try:
+        drawn = _draw(ui.HOLO_PT_scene, context)
+    finally:
+        compositing.RUNNING["frame"] = None
+    assert ("label", "Pass of frame 7: 42%") in drawn and ("operator", "holo.cancel_pass") in drawn
+    assert ("prop", "emitter") in _draw(ui.HOLO_PT_object, context)
+    context.object = plate
+    assert ("label", "Hologram: not recorded yet") in _draw(ui.HOLO_PT_object, context)
+
+
+def test_a_renders_pass_shows_its_progress_in_the_status_bar(monkeypatch):
+    """The interface timer puts the pass's progress in every window's status bar, redraws
+    the Properties editors (the panel's progress and Cancel Pass), and clears both after."""
+    from contextlib import nullcontext
+
+    from holo_addon import compositing
+    redrawn = []
+    area = SimpleNamespace(type="PROPERTIES", tag_redraw=lambda: redrawn.append(1))
+    window = SimpleNamespace(workspace=_Workspace(),
+                             screen=SimpleNamespace(areas=[area, SimpleNamespace(type="VIEW_3D")]))
+    context = SimpleNamespace(window_manager=SimpleNamespace(windows=[window]),
+                              temp_override=lambda **_: nullcontext())
+    monkeypatch.setattr(compositing, "bpy", SimpleNamespace(context=context))
+    monkeypatch.setattr(compositing, "_shown", [None])
+    for frame, fraction in ((12, 0.0), (12, 0.25), (12, 0.25), (None, 0.25)):
+        compositing.RUNNING.update(frame=frame, fraction=fraction)
+        assert compositing._show_progress() == 0.25  # the timer runs again in 0.25 s
+    status = window.workspace.status
+    assert status[:2] == [f"Holo: holographic pass of frame 12: {p} (Render Properties ▸ Holo "
+                          f"▸ Cancel Pass)" for p in ("0%", "25%")]
+    assert status[2:] == [None] and len(redrawn) == 3  # unchanged text: not set again
