@@ -62,6 +62,11 @@ class HoloObjectSettings(bpy.types.PropertyGroup):
                                 description="Digest of what the hologram was recorded from")
 
 
+def _show_coverage(_settings, context):
+    from . import overlay
+    overlay.refresh(context)
+
+
 class HoloSceneSettings(bpy.types.PropertyGroup):
     mode: EnumProperty(
         name="Hologram", default="CAMERA",
@@ -105,6 +110,11 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                                                  "cover more than this fraction of a pixel "
                                                  "(0.5: at the geometric silhouette)")
     seed: IntProperty(name="Seed", default=0, min=0, description="Random phases and sampling")
+    show_coverage: BoolProperty(name="Plate Coverage", default=True, update=_show_coverage,
+                                description="Draw in the viewport the lines of sight the "
+                                            "plate covers from the camera: green when they "
+                                            "take in every holographic object, orange when "
+                                            "part, red when none")
     pass_on_render: BoolProperty(name="Pass on Every Render", default=True,
                                  description="Render the holographic pass before each Blender "
                                              "render or animation frame (recording again only "

@@ -334,6 +334,19 @@ def _surface_samples(mesh: Mesh, count=4000) -> np.ndarray:
     return np.concatenate([points, mesh.vertices])
 
 
+def through_plate(plate: Plate, eye, world) -> tuple:
+    """(whether the line of sight from ``eye`` to each of ``world`` (N, 3) crosses the plate
+    with the point behind it, where the lines of sight of the points behind cross its plane
+    (M, 2) in plate coordinates); lengths in any one unit."""
+    eye, local = plate.to_plate(np.asarray(eye, np.float64)[None])[0], plate.to_plate(world)
+    behind = local[:, 2] < 0
+    t = eye[2] / (eye[2] - local[behind, 2])
+    hits = eye[:2] + t[:, None] * (local[behind, :2] - eye[:2])
+    inside = np.zeros(len(local), bool)
+    inside[behind] = (np.abs(hits) <= (plate.width / 2, plate.height / 2)).all(1)
+    return inside, hits
+
+
 def plate_coverage(plate: Plate, name: str, camera: Camera, meshes) -> str | None:
     """A warning when the plate covers only part of what the camera sees of the emitters (the
     rest would be cut from the pass), an :class:`ExportError` when it covers none of it (the
@@ -344,12 +357,8 @@ def plate_coverage(plate: Plate, name: str, camera: Camera, meshes) -> str | Non
     seen = (depth > 0) & (xy[:, 0] >= 0) & (xy[:, 0] < w) & (xy[:, 1] >= 0) & (xy[:, 1] < h)
     if not seen.any():
         raise ExportError("no holographic object is in the camera's view")
-    eye, local = plate.to_plate(camera.position[None])[0], plate.to_plate(world[seen])
-    behind = local[:, 2] < 0
-    t = eye[2] / (eye[2] - local[behind, 2])  # where the lines of sight cross the plate
-    hits = eye[:2] + t[:, None] * (local[behind, :2] - eye[:2])
-    inside = (np.abs(hits) <= (plate.width / 2, plate.height / 2)).all(1)
-    share = inside.sum() / len(local)
+    inside, hits = through_plate(plate, camera.position, world[seen])
+    share = inside.mean()
     if share == 0:
         raise ExportError(f"plate '{name}' is not between the camera and the holographic "
                           f"objects: the pass would be empty (move it onto the line of sight)")

@@ -31,6 +31,7 @@ class HOLO_PT_scene(bpy.types.Panel):
         if h.mode == "PLATE":
             col.prop(h, "composition")
             col.prop(h, "opacity_threshold")
+            layout.prop(h, "show_coverage")
         layout.prop(h, "pass_on_render")
         from .compositing import RUNNING
         if RUNNING["frame"] is not None:  # a render is making its pass

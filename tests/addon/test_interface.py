@@ -9,6 +9,7 @@ real."""
 import time
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 bpy = pytest.importorskip("bpy")
@@ -231,3 +232,30 @@ def test_a_renders_pass_shows_its_progress_in_the_status_bar(monkeypatch):
     assert status[:2] == [f"Holo: holographic pass of frame 12: {p} (Render Properties ▸ Holo "
                           f"▸ Cancel Pass)" for p in ("0%", "25%")]
     assert status[2:] == [None] and len(redrawn) == 3  # unchanged text: not set again
+
+
+def test_the_plate_coverage_overlay_follows_the_lines_of_sight(empty_scene):
+    """Camera at y = -3, a 0.6 plate at y = -1.5 facing it, a 0.5 cube: the overlay's lines
+    of sight pass through the plate's corners and end at the cube's far side (y = 0.25); the
+    cube in the middle is covered (green), half out is partly (orange), far out not (red)."""
+    from holo_addon import overlay
+    scene = empty_scene
+    scene.holo.mode = "PLATE"
+    cube, cam, plate = _plate_camera_cube(scene)
+    found = overlay.coverage(scene, bpy.context.evaluated_depsgraph_get())
+    assert found.state == "ALL"
+    outline, sight, end = found.lines[:8], found.lines[8:16], found.lines[16:]
+    corners = np.array([(x, -1.5, z) for x, z in ((-0.3, -0.3), (0.3, -0.3), (0.3, 0.3),
+                                                  (-0.3, 0.3))])
+    np.testing.assert_allclose(np.sort(outline[::2], 0), np.sort(corners, 0), atol=1e-6)
+    eye, far = sight[::2], sight[1::2]
+    np.testing.assert_allclose(eye, [(0, -3, 0)] * 4, atol=1e-6)
+    np.testing.assert_allclose(far[:, 1], 0.25, atol=1e-6)       # the cube's far side
+    np.testing.assert_allclose(np.abs(far[:, [0, 2]]), 0.3 * 3.25 / 1.5, atol=1e-6)
+    np.testing.assert_allclose(np.sort(end[::2], 0), np.sort(far, 0), atol=1e-6)
+    for x, state in ((0.5, "PART"), (3.0, "NONE")):
+        cube.location.x = x
+        bpy.context.view_layer.update()
+        assert overlay.coverage(scene, bpy.context.evaluated_depsgraph_get()).state == state
+    scene.holo.mode = "CAMERA"
+    assert overlay.coverage(scene, bpy.context.evaluated_depsgraph_get()) is None
