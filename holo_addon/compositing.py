@@ -135,11 +135,12 @@ def render_frame(scene, depsgraph=None):
         del scene.holo["skip_pass_once"]
         return
     RUNNING.update(frame=scene.frame_current, fraction=0.0, cancel=False)
+    WARNINGS.update(frame=scene.frame_current, texts=[])
     try:
         job = pipeline.prepare(scene, depsgraph)
         for warning in job.scene.warnings:
-            log.warning(warning)
-        outcome = pipeline.run(job, _progress)
+            _log(logging.WARNING, warning)
+        outcome = pipeline.run(job, _progress, _log)
         pipeline.apply(scene, job, outcome)
     except jobs.Cancelled:
         failed(scene, f"Holo: the holographic pass of frame {scene.frame_current} was "
@@ -156,6 +157,17 @@ def render_frame(scene, depsgraph=None):
 # The pass a render is making (it runs in the render's thread): its progress for the status
 # bar and the panel, and the Cancel Pass button's request.
 RUNNING = {"frame": None, "fraction": 0.0, "cancel": False}
+
+
+# The warnings of the latest pass a render made (the scene's and the worker's, as they
+# arise): in the log, which a farm's output shows, and in Render ▸ Holo.
+WARNINGS = {"frame": None, "texts": []}
+
+
+def _log(level, text):
+    log.log(level, text)
+    if level >= logging.WARNING:
+        WARNINGS["texts"].append(text)
 
 
 def _progress(fraction):
@@ -219,14 +231,22 @@ def _popup(message):
     bpy.context.window_manager.popup_menu(draw, title="Holo", icon="ERROR")
 
 
+@persistent
+def _new_file(*_):
+    WARNINGS.update(frame=None, texts=[])
+
+
 def register():
     bpy.app.handlers.frame_change_post.append(render_frame)
+    bpy.app.handlers.load_post.append(_new_file)
     if not bpy.app.background:
         bpy.app.timers.register(_show_progress, persistent=True)
 
 
 def unregister():
-    if render_frame in bpy.app.handlers.frame_change_post:
-        bpy.app.handlers.frame_change_post.remove(render_frame)
+    for handlers, fn in ((bpy.app.handlers.frame_change_post, render_frame),
+                         (bpy.app.handlers.load_post, _new_file)):
+        if fn in handlers:
+            handlers.remove(fn)
     if bpy.app.timers.is_registered(_show_progress):
         bpy.app.timers.unregister(_show_progress)

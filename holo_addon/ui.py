@@ -33,12 +33,17 @@ class HOLO_PT_scene(bpy.types.Panel):
             col.prop(h, "opacity_threshold")
             layout.prop(h, "show_coverage")
         layout.prop(h, "pass_on_render")
-        from .compositing import RUNNING
+        from .compositing import RUNNING, WARNINGS
         if RUNNING["frame"] is not None:  # a render is making its pass
             box = layout.box()
             box.label(text=f"Pass of frame {RUNNING['frame']}: {RUNNING['fraction']:.0%}",
                       icon="TIME")
             box.operator("holo.cancel_pass", icon="CANCEL")
+        if WARNINGS["texts"]:  # of the latest pass a render made
+            box = layout.box()
+            box.label(text=f"Pass of frame {WARNINGS['frame']}:", icon="ERROR")
+            for text in WARNINGS["texts"][-3:]:
+                box.label(text=text)
         col = layout.column(align=True)
         col.operator("holo.record_hologram", icon="REC")
         col.operator("holo.render_pass", icon="RENDER_STILL")

@@ -259,3 +259,24 @@ def test_the_plate_coverage_overlay_follows_the_lines_of_sight(empty_scene):
         assert overlay.coverage(scene, bpy.context.evaluated_depsgraph_get()).state == state
     scene.holo.mode = "CAMERA"
     assert overlay.coverage(scene, bpy.context.evaluated_depsgraph_get()) is None
+
+
+def test_a_renders_warnings_reach_the_panel(empty_scene, tmp_path):
+    """A render whose plate cuts the object: the warning is in Render ▸ Holo after the frame
+    (a render's pass has no operator to report through)."""
+    from test_integration import _scene_with_pass
+
+    from holo_addon import compositing, ui
+    scene = empty_scene
+    _scene_with_pass(scene, tmp_path)
+    plate = next(o for o in scene.objects if o.holo.is_plate)
+    plate.scale = (0.3, 0.3, 1)
+    scene.render.filepath = str(tmp_path / "cut.exr")
+    bpy.ops.render.render(write_still=True)
+    assert compositing.WARNINGS["frame"] == 1
+    drawn = _draw(ui.HOLO_PT_scene, SimpleNamespace(scene=scene))
+    (warning,) = [text for kind, text in drawn if kind == "label" and "cut from the pass" in text]
+    assert "covers" in warning
+    bpy.ops.wm.read_factory_settings(use_empty=True)  # another file: its own warnings only
+    assert not any("cut from the pass" in text for _, text in
+                   _draw(ui.HOLO_PT_scene, SimpleNamespace(scene=bpy.context.scene)))
