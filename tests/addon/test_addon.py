@@ -271,9 +271,9 @@ def test_animation_renders_a_pass_per_frame(empty_scene, tmp_path):
     scene.render.filepath = str(tmp_path / "frame_")
     recorded = []
     original = pipeline.run
-    def run(job, progress=None):
+    def run(job, progress=None, on_log=None):
         recorded.append(not job.current)
-        return original(job, progress)
+        return original(job, progress, on_log)
     pipeline.run = run
     try:
         bpy.ops.render.render(animation=True)

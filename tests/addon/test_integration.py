@@ -209,7 +209,7 @@ def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monke
     monkeypatch.setattr(compositing, "EXIT_ON_FAILURE", False)
     original = pipeline.run
 
-    def broken(job, progress=None):
+    def broken(job, progress=None, on_log=None):
         raise WorkerError("a crash in native code")
     monkeypatch.setattr(pipeline, "run", broken)
     assert pipeline.pass_file(pipeline.output_dir(scene), 1).is_file()  # the stale pass
@@ -235,7 +235,7 @@ scene = bpy.context.scene
 scene.holo.output_dir = sys.argv[3] + "/holo/"
 test_integration._scene_with_pass(scene, None)
 from holo_addon import pipeline
-def broken(job, progress=None):
+def broken(job, progress=None, on_log=None):
     raise RuntimeError("the worker failed")
 pipeline.run = broken
 scene.render.filepath = sys.argv[3] + "/frame_"
@@ -372,9 +372,9 @@ def test_renders_use_render_modifier_levels(empty_scene, tmp_path, monkeypatch):
     seen = []
     original = pipeline.run
 
-    def run(job, progress=None):
+    def run(job, progress=None, on_log=None):
         seen.append(sum(len(m.triangles) for m in job.scene.points))
-        return original(job, progress)
+        return original(job, progress, on_log)
     monkeypatch.setattr(pipeline, "run", run)
     scene.render.filepath = str(tmp_path / "f12.exr")
     bpy.ops.render.render(write_still=True)
