@@ -80,6 +80,7 @@ def multilayer_output(tree, name: str, path: str, layers):
         for layer, _ in layers:
             node.layer_slots.new(layer)
     node.format.color_depth = "32"
+    node.format.exr_codec = "ZIP"  # lossless; 5.0's default is uncompressed
     return node
 
 

@@ -6,7 +6,7 @@ cube behind it, a blue pillar in front of it and a green cone beside it; a 40 mm
 f/2.8 focused on the sphere, 1280×720. The sphere is rendered through its camera hologram
 (the default mode; the plate between them serves ``--mode PLATE``). Writes ``out/demo.png``
 (the composite), ``out/demo.exr`` (the composite, float RGBA), ``out/holo/`` (the holographic
-pass) and prints where they are.
+pass), ``out/holo_demo.exr`` (its layers beside the render) and prints where they are.
 
     python -m holo_addon.demo [-o out] [--resolution W H] [--samples N] [--mode CAMERA|PLATE]
 """
@@ -144,15 +144,18 @@ def main(argv=None):
     scene.holo.samples = args.samples
     scene.holo.iterations = args.iterations
     scene.holo.max_resolution = args.max_resolution
+    scene.render.filepath = str(out / "demo")  # the holographic layers go beside it
     for op in (bpy.ops.holo.render_pass, bpy.ops.holo.setup_compositing):
         if op() != {"FINISHED"}:
             sys.exit(f"demo: {op.idname_py()} failed")
     png, exr = render_still(bpy, scene, out)
+    scene.render.filepath = str(out / "demo")
     bpy.ops.wm.save_as_mainfile(filepath=str(out / "demo.blend"))
     plate = scene.objects["Hologram Plate"]
     hologram = f"\n  hologram: {plate.holo.hologram}" if args.mode == "PLATE" else ""
     print(f"demo rendered in {time.perf_counter() - t0:.0f} s:\n  {png}\n  {exr}{hologram}\n"
           f"  holographic pass: {pipeline.pass_file(out / 'holo', scene.frame_current)}\n"
+          f"  its layers beside the render: {out / 'holo_demo.exr'}\n"
           f"  scene: {out / 'demo.blend'}")
 
 
