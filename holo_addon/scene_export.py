@@ -102,6 +102,8 @@ def mesh_from_object(obj, depsgraph, unit: float, matrix=None, notes=None) -> Me
         mat_index = np.empty(nt, np.int64)
         me.loop_triangles.foreach_get("material_index", mat_index)
         colours, uvs, texture = _colours(ev, me, loops, lv, mat_index, notes)
+        if notes is not None:
+            notes.extend(filter(None, (_unhonoured(slot.material) for slot in ev.material_slots)))
     finally:
         ev.to_mesh_clear()
     return Mesh(vertices=vertices, triangles=np.arange(nt * 3).reshape(nt, 3),
@@ -144,6 +146,30 @@ def _colours(obj, me, loops, loop_vertex, mat_index, notes=None):
     base = np.array([_base_colour(slot.material) for slot in obj.material_slots] or
                     [(1.0, 1.0, 1.0)], np.float64)
     return np.repeat(base[np.clip(mat_index, 0, len(base) - 1)], 3, axis=0), None, None
+
+
+# Principled BSDF inputs that change a surface's look beyond its colour, and the value at
+# which they do nothing. Emitters are diffuse: none of them enters the hologram.
+UNHONOURED = (("Metallic", 0.0), ("Alpha", 1.0), ("Transmission Weight", 0.0),
+              ("Emission Strength", 0.0), ("Coat Weight", 0.0), ("Sheen Weight", 0.0),
+              ("Subsurface Weight", 0.0), ("Normal", None))
+
+
+def _unhonoured(material) -> str | None:
+    """A note naming what of ``material`` the holographic object does not show, or None."""
+    if material is None:
+        return None
+    node = _principled(material)
+    if node is None:
+        return (f"material '{material.name}' has no Principled BSDF: the holographic object "
+                f"uses its viewport colour")
+    found = [name for name, off in UNHONOURED if name in node.inputs and (
+        node.inputs[name].is_linked or
+        off is not None and node.inputs[name].default_value != off)]
+    if not found:
+        return None
+    return (f"material '{material.name}': {', '.join(found)} not shown by the holographic "
+            f"object (its emitters are diffuse: Base Color only)")
 
 
 def _principled(material):

@@ -398,6 +398,40 @@ def test_procedural_base_colours_are_reported(empty_scene):
     assert "'marble'" in warning and "Noise Texture" in warning, warning
 
 
+def test_material_features_the_hologram_does_not_show_are_reported(empty_scene):
+    """A default Principled material: no note. Metallic, alpha and emission set, a normal map
+    linked: one note naming them. An Emission shader alone: a note that the viewport colour
+    is used."""
+    from holo_addon import compat
+    scene = empty_scene
+    cube, _, _ = _plate_camera_cube(scene)
+    scene.holo.mode = "PLATE"
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    shiny = bpy.data.materials.new("shiny")
+    compat.enable_nodes(shiny)
+    cube.data.materials.append(shiny)
+    assert _prepare(scene).scene.warnings == ()
+    bsdf = next(n for n in shiny.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
+    bsdf.inputs["Metallic"].default_value = 1.0
+    bsdf.inputs["Alpha"].default_value = 0.5
+    bsdf.inputs["Emission Strength"].default_value = 2.0
+    bump = shiny.node_tree.nodes.new("ShaderNodeBump")
+    shiny.node_tree.links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+    (warning,) = _prepare(scene).scene.warnings
+    assert warning.startswith("material 'shiny': Metallic, Alpha, Emission Strength, Normal "
+                              "not shown"), warning
+    glow = bpy.data.materials.new("glow")
+    compat.enable_nodes(glow)
+    tree = glow.node_tree
+    tree.nodes.remove(next(n for n in tree.nodes if n.type == "BSDF_PRINCIPLED"))
+    emission = tree.nodes.new("ShaderNodeEmission")
+    output = next(n for n in tree.nodes if n.type == "OUTPUT_MATERIAL")
+    tree.links.new(emission.outputs[0], output.inputs["Surface"])
+    cube.data.materials[0] = glow
+    (warning,) = _prepare(scene).scene.warnings
+    assert "'glow' has no Principled BSDF" in warning, warning
+
+
 def test_a_render_cropped_to_an_off_centre_border_gets_the_border_of_the_pass(
         empty_scene, tmp_path):
     """Crop to Render Region: the pass has the cropped render's size and shows the cube where
