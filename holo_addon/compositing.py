@@ -222,10 +222,17 @@ def failed(scene, message: str) -> None:
     except (OSError, ValueError) as e:
         log.error("the stale pass could not be set aside: %s", e)
     if not bpy.app.background:
-        bpy.app.timers.register(lambda: _popup(message), first_interval=0.0)
+        bpy.app.timers.register(lambda: _show_error(message), first_interval=0.0)
 
 
-def _popup(message):
+def _show_error(message):
+    """On the interface's thread: the error in Blender's reports (status bar, Info log) and a
+    popup."""
+    try:
+        bpy.ops.holo.report(message=message)
+    except RuntimeError:  # what Python sees of an error report, once it is reported
+        pass
+
     def draw(menu, _context):
         menu.layout.label(text=message)
     bpy.context.window_manager.popup_menu(draw, title="Holo", icon="ERROR")

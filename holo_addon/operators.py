@@ -258,7 +258,22 @@ class HOLO_OT_cancel_pass(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class HOLO_OT_report(bpy.types.Operator):
+    """Put a message in Blender's reports (for what runs outside an operator)"""
+
+    bl_idname = "holo.report"
+    bl_label = "Holo Report"
+    bl_options = {"INTERNAL"}
+
+    message: bpy.props.StringProperty()
+    level: bpy.props.EnumProperty(items=[(k, k, "") for k in ("ERROR", "WARNING", "INFO")])
+
+    def execute(self, context):
+        self.report({self.level}, self.message)
+        return {"FINISHED"}
+
+
 CLASSES = (HOLO_OT_record_hologram, HOLO_OT_render_pass, HOLO_OT_setup_compositing,
-           HOLO_OT_render, HOLO_OT_cancel_pass)
+           HOLO_OT_render, HOLO_OT_cancel_pass, HOLO_OT_report)
 
 register, unregister = bpy.utils.register_classes_factory(CLASSES)

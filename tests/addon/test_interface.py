@@ -280,3 +280,16 @@ def test_a_renders_warnings_reach_the_panel(empty_scene, tmp_path):
     bpy.ops.wm.read_factory_settings(use_empty=True)  # another file: its own warnings only
     assert not any("cut from the pass" in text for _, text in
                    _draw(ui.HOLO_PT_scene, SimpleNamespace(scene=bpy.context.scene)))
+
+
+def test_a_failed_render_pass_reaches_blenders_reports(addon, monkeypatch):
+    """In the interface a failed render pass is put in Blender's reports (status bar, Info
+    log) by the holo.report operator, and shown in a popup."""
+    from holo_addon import compositing
+    with pytest.raises(RuntimeError, match="Error: Holo: the pass of frame 3 failed"):
+        bpy.ops.holo.report(message="Holo: the pass of frame 3 failed")
+    shown = []
+    monkeypatch.setattr(bpy.types.WindowManager, "popup_menu",
+                        lambda self, draw, title, icon: shown.append((title, icon)), raising=False)
+    compositing._show_error("Holo: the pass of frame 3 failed")
+    assert shown == [("Holo", "ERROR")]
