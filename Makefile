@@ -54,16 +54,21 @@ extension: $(STAMP)
 	$(PY) -m holo_addon.build -o dist
 
 # The built extension in Blender's LTS releases (bpy modules for Python 3.11, 370 MB each):
-# installed, registered, recorded, rendered and composited (tests/blender_lts.py).
+# installed, registered, recorded, rendered and composited (tests/blender_lts.py), then the
+# add-on's tests on that release (the installed extension's packages on the path).
 LTS ?= 4.2.0 4.5.15
 check-lts: $(STAMP)
 	rm -rf build/lts && $(PY) -m holo_addon.build --platform linux-x64 --python 3.11 -o build/lts
 	set -e; for v in $(LTS); do \
 	  test -x .venv-bpy$$v/bin/python || \
 	    { $(PYTHON) -m venv .venv-bpy$$v && .venv-bpy$$v/bin/pip install "bpy==$$v" "numpy<2"; }; \
+	  .venv-bpy$$v/bin/python -m pytest --version >/dev/null 2>&1 || \
+	    .venv-bpy$$v/bin/pip install pytest; \
 	  mkdir -p build/lts/$$v; \
 	  BLENDER_USER_RESOURCES=$$PWD/build/lts/$$v/user PYTHONNOUSERSITE=1 \
 	    .venv-bpy$$v/bin/python tests/blender_lts.py build/lts/holo-*.zip build/lts/$$v; \
+	  PYTHONPATH=$$PWD/build/lts/$$v/user/extensions/.local/lib/python3.11/site-packages \
+	    PYTHONNOUSERSITE=1 .venv-bpy$$v/bin/python -m pytest -q -p no:cacheprovider tests/addon; \
 	done
 
 clean:
