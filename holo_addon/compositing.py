@@ -4,9 +4,8 @@ The tree: the user's composite (or Render Layers' Image) and an Image node readi
 frame's holographic pass (Combined, Depth) meet in a Depth Combine that keeps, per pixel, the
 nearer of the two and blends the holographic image over by its alpha; a File Output node
 writes the composite, the pass and both depths as a multilayer EXR beside each rendered frame
-(:func:`beside_render`). A render makes its
-frame's pass from its own depsgraph (:func:`render_frame`); a failure never leaves a stale
-pass in the frame (:func:`failed`).
+(:func:`beside_render`). A render makes its frame's pass from its own depsgraph
+(:func:`render_frame`); a failure never leaves a stale pass in the frame (:func:`failed`).
 """
 
 from __future__ import annotations
@@ -47,9 +46,9 @@ def setup(scene, folder: Path):
     ``folder``, read as an image sequence so that every frame composites its own pass) to the
     scene's compositor; enables the view layer's Depth pass. The user's own nodes and links
     stay: whatever fed the compositor's output now feeds the Depth Combine, whose result goes
-    to the output, and to the multilayer EXR beside the render. The add-on's nodes sit in a frame named "Holo: holographic pass"; running
-    this again rebuilds only them. The current frame's pass must exist (its sockets come from
-    the file)."""
+    to the output and to the multilayer EXR beside the render. The add-on's nodes sit in a
+    frame named "Holo: holographic pass"; running this again rebuilds only them. The current
+    frame's pass must exist (its sockets come from the file)."""
     first = pipeline.pass_file(folder, scene.frame_current)
     if not first.is_file():
         raise FileNotFoundError(f"no holographic pass at {first}: render the pass first")
@@ -207,8 +206,9 @@ def failed(scene, message: str) -> None:
     is rendered, so ``blender -b ... -a`` fails and no frame with a stale pass is written. In
     the interface (a handler cannot cancel Blender's render) the frame's earlier pass, now
     stale, is set aside as ``holo_pass_NNNN.stale.exr`` (kept, but out of the image sequence),
-    so the composite shows the raster alone, and the error is shown in a popup. (Muting the
-    node would not do: the render has already evaluated its copy of the compositor.)"""
+    so the composite shows the raster alone, and the error goes to Blender's reports and a
+    popup. (Muting the node would not do: the render has already evaluated its copy of the
+    compositor.)"""
     log.error(message)
     exit_now = bpy.app.background if EXIT_ON_FAILURE is None else EXIT_ON_FAILURE
     if exit_now:

@@ -259,17 +259,16 @@ class HOLO_OT_cancel_pass(bpy.types.Operator):
 
 
 class HOLO_OT_report(bpy.types.Operator):
-    """Put a message in Blender's reports (for what runs outside an operator)"""
+    """Put an error in Blender's reports (for what fails outside an operator)"""
 
     bl_idname = "holo.report"
     bl_label = "Holo Report"
     bl_options = {"INTERNAL"}
 
     message: bpy.props.StringProperty()
-    level: bpy.props.EnumProperty(items=[(k, k, "") for k in ("ERROR", "WARNING", "INFO")])
 
     def execute(self, context):
-        self.report({self.level}, self.message)
+        self.report({"ERROR"}, self.message)
         return {"FINISHED"}
 
 

@@ -17,7 +17,7 @@ import bpy
 import numpy as np
 from bpy.app.handlers import persistent
 
-from .scene_export import ExportError, plate_from_object, through_plate
+from .scene_export import ExportError, emitter_instances, plate_from_object, through_plate
 
 COLOURS = {"ALL": (0.3, 0.9, 0.4, 0.9), "PART": (1.0, 0.6, 0.1, 0.9),
            "NONE": (1.0, 0.25, 0.2, 0.9)}
@@ -62,13 +62,12 @@ def coverage(scene, depsgraph) -> Coverage | None:
 
 
 def _emitter_boxes(depsgraph) -> np.ndarray:
-    """The bounding-box corners (N, 3) of every holographic emitter instance, world units."""
+    """The bounding-box corners (N, 3) of every holographic emitter the render draws, world
+    units."""
     boxes = []
-    for inst in depsgraph.object_instances:
-        holo = inst.object.original.holo
-        if inst.object.type == "MESH" and holo.emitter != "NONE" and not holo.is_plate:
-            m = np.array(inst.matrix_world)
-            boxes.append(np.array(inst.object.bound_box) @ m[:3, :3].T + m[:3, 3])
+    for inst, _ in emitter_instances(depsgraph):
+        m = np.array(inst.matrix_world)
+        boxes.append(np.array(inst.object.bound_box) @ m[:3, :3].T + m[:3, 3])
     return np.concatenate(boxes) if boxes else np.empty((0, 3))
 
 

@@ -21,7 +21,7 @@ from holo_core import jobs, worker
 from holo_core.hologram_io import read_hologram
 from holo_core.image_files import exr_attribute
 
-from .scene_export import ExportError, SceneData, export_scene, scale
+from .scene_export import ExportError, SceneData, border_pixels, export_scene, scale
 
 log = logging.getLogger(__name__)
 pass_file = worker.pass_file
@@ -134,12 +134,7 @@ def render_region(scene) -> tuple | None:
     """A render region that is not cropped (left, top, right, bottom) [px from the top-left]:
     Blender renders only inside it, so the pass is cleared outside; None without one."""
     r = scene.render
-    if not r.use_border or r.use_crop_to_border:
-        return None
-    pct = r.resolution_percentage / 100
-    w, h = max(1, int(r.resolution_x * pct)), max(1, int(r.resolution_y * pct))
-    return (int(r.border_min_x * w), h - int(r.border_max_y * h), int(r.border_max_x * w),
-            h - int(r.border_min_y * h))
+    return border_pixels(r) if r.use_border and not r.use_crop_to_border else None
 
 
 def bake_emitters(scene):

@@ -227,8 +227,7 @@ def camera_from_object(scene, obj, unit: float, depsgraph=None) -> Camera:
     cam, r = obj.data, scene.render
     if cam.type != "PERSP":
         raise ExportError(f"camera '{obj.name}' must be perspective (it is {cam.type})")
-    pct = r.resolution_percentage / 100
-    res = (max(1, int(r.resolution_x * pct)), max(1, int(r.resolution_y * pct)))
+    res = render_size(r)
     m = _matrix(obj.matrix_world, unit, normalise=True)
     fstop = focus = None
     if cam.dof.use_dof:
@@ -249,11 +248,24 @@ def camera_from_object(scene, obj, unit: float, depsgraph=None) -> Camera:
                     pixel_aspect=(r.pixel_aspect_x, r.pixel_aspect_y),
                     focus_distance=focus, fstop=fstop)
     if r.use_border and r.use_crop_to_border:  # the render is the border's region alone
-        x0, x1 = int(r.border_min_x * res[0]), int(r.border_max_x * res[0])
-        y0, y1 = int(r.border_min_y * res[1]), int(r.border_max_y * res[1])  # from the bottom
-        if x1 > x0 and y1 > y0:
-            camera = camera.cropped(x0, res[1] - y1, x1 - x0, y1 - y0)
+        left, top, right, bottom = border_pixels(r)
+        if right > left and bottom > top:
+            camera = camera.cropped(left, top, right - left, bottom - top)
     return camera
+
+
+def render_size(render) -> tuple[int, int]:
+    """The rendered image's (width, height) [px]: the resolution at its percentage."""
+    pct = render.resolution_percentage / 100
+    return max(1, int(render.resolution_x * pct)), max(1, int(render.resolution_y * pct))
+
+
+def border_pixels(render) -> tuple[int, int, int, int]:
+    """The render region (left, top, right, bottom) [px from the top-left corner]; Blender
+    measures it from the bottom."""
+    w, h = render_size(render)
+    return (int(render.border_min_x * w), h - int(render.border_max_y * h),
+            int(render.border_max_x * w), h - int(render.border_min_y * h))
 
 
 def export_scene(scene, depsgraph, *, plate=True) -> SceneData:
@@ -292,23 +304,28 @@ def export_scene(scene, depsgraph, *, plate=True) -> SceneData:
 
 
 def emitters(depsgraph, unit: float, notes: list) -> dict:
-    """{'POINTS': [Mesh], 'TRIANGLES': [Mesh]}: every holographic emitter the render draws, as
+    """{'POINTS': [Mesh], 'TRIANGLES': [Mesh]}: every holographic emitter the render draws
+    (see :func:`emitter_instances`)."""
+    found = {"POINTS": [], "TRIANGLES": []}
+    for inst, kind in emitter_instances(depsgraph):
+        found[kind].append(mesh_from_object(inst.object, depsgraph, unit,
+                                            np.array(inst.matrix_world), notes))
+    return found
+
+
+def emitter_instances(depsgraph):
+    """(instance, 'POINTS' or 'TRIANGLES') of every holographic emitter the render draws, as
     Blender decides it: instances (collection instances, instancing) included; objects
     disabled in renders or in collections the view layer excludes or does not render, left
     out."""
     shown = _rendered_collections(depsgraph.view_layer)
-    found = {"POINTS": [], "TRIANGLES": []}
     for inst in depsgraph.object_instances:
         ev = inst.object
         holo = ev.original.holo
         if ev.type != "MESH" or holo.emitter == "NONE" or holo.is_plate:
             continue
-        owner = inst.parent.original if inst.is_instance else ev.original
-        if not _renders(owner, shown):
-            continue
-        found[holo.emitter].append(mesh_from_object(ev, depsgraph, unit,
-                                                    np.array(inst.matrix_world), notes))
-    return found
+        if _renders(inst.parent.original if inst.is_instance else ev.original, shown):
+            yield inst, holo.emitter
 
 
 def viewport_matches_render(scene) -> bool:

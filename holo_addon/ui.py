@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import bpy
 
+from .compositing import RUNNING, WARNINGS
+
 
 class HOLO_PT_scene(bpy.types.Panel):
     bl_label = "Holo"
@@ -33,7 +35,6 @@ class HOLO_PT_scene(bpy.types.Panel):
             col.prop(h, "opacity_threshold")
             layout.prop(h, "show_coverage")
         layout.prop(h, "pass_on_render")
-        from .compositing import RUNNING, WARNINGS
         if RUNNING["frame"] is not None:  # a render is making its pass
             box = layout.box()
             box.label(text=f"Pass of frame {RUNNING['frame']}: {RUNNING['fraction']:.0%}",

@@ -504,11 +504,8 @@ class _PlyBinary:
         at, lengths = self.at, {}
         for p in props:
             if p[0] == "list":
-                (n,) = self._take(name, self.dtype(p[1]), 1)
-                if n < 0:
-                    raise MeshFileError(f"{self.path}: element {name}: a list of length {n}")
-                lengths[p[-1]] = int(n)
-                self.at += int(n) * self.dtype(p[2]).itemsize
+                lengths[p[-1]] = n = self._length(name, p[1])
+                self.at += n * self.dtype(p[2]).itemsize
             else:
                 self.at += self.dtype(p[0]).itemsize
         self.at = at
@@ -519,13 +516,18 @@ class _PlyBinary:
         for _ in range(count):
             for p in props:
                 if p[0] == "list":
-                    (n,) = self._take(name, self.dtype(p[1]), 1)
-                    if n < 0:
-                        raise MeshFileError(f"{self.path}: element {name}: a list of length {n}")
-                    out[p[-1]].append(self._take(name, self.dtype(p[2]), int(n)))
+                    out[p[-1]].append(self._take(name, self.dtype(p[2]),
+                                                 self._length(name, p[1])))
                 else:
                     out[p[-1]].append(self._take(name, self.dtype(p[0]), 1)[0])
         return out
+
+    def _length(self, name, kind) -> int:
+        """A list's length, read at the cursor."""
+        (n,) = self._take(name, self.dtype(kind), 1)
+        if n < 0:
+            raise MeshFileError(f"{self.path}: element {name}: a list of length {n}")
+        return int(n)
 
     def _take(self, name, dtype, count):
         if self.at + dtype.itemsize * count > len(self.body):

@@ -91,7 +91,7 @@ def remove_stale_temps(folder) -> list[Path]:
     return removed
 
 
-_HOST = socket.gethostname().split(".")[0].replace(".", "_") or "host"
+_HOST = socket.gethostname().split(".")[0] or "host"
 
 
 def _target(path) -> Path:

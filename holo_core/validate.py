@@ -24,7 +24,7 @@ def warn_sampling(message: str) -> None:
 
 
 def positive(name: str, value, unit: str = "") -> float:
-    """``value`` as a float, or ``ValueError`` unless it is finite and > 0."""
+    """``value`` as a float, or :class:`InputError` unless it is finite and > 0."""
     v = _finite(name, value, unit)
     if v <= 0:
         raise InputError(f"{name} must be > 0{_unit(unit)}; got {value!r}")

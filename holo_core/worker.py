@@ -33,6 +33,8 @@ import numpy as np
 from . import jobs
 
 log = logging.getLogger(__name__)
+
+
 def pass_file(folder, frame: int) -> Path:
     """Frame ``frame``'s holographic pass in ``folder``: ``holo_pass_NNNN.exr``, one file per
     frame and nothing shared between frames (farm workers never write the same file)."""
@@ -307,9 +309,10 @@ class Worker:
         self._cleanup()
 
     def stop_and_keep(self, path) -> int:
-        """Kill the worker and write its latest running pass to ``path`` (atomically, with its
-        PNG): returns its samples, or 0 when there was none yet (nothing is written)."""
-        from .image_files import write_atomic
+        """Kill the worker and write its latest running pass to ``path`` with its PNG (as one
+        unit, as :func:`holo_core.render.write_view` writes them): returns its samples, or 0
+        when there was none yet (nothing is written)."""
+        from .image_files import atomic_paths
         self.poll()  # the newest partial message
         if self.process.poll() is None:
             self.process.kill()
@@ -318,8 +321,9 @@ class Worker:
         kept = self.partial if self.partial and src.is_file() else 0
         if kept:
             path = Path(path)
-            write_atomic(path.with_suffix(".png"), src.with_suffix(".png").read_bytes())
-            write_atomic(path, src.read_bytes())
+            with atomic_paths(path, path.with_suffix(".png")) as (exr, png):
+                shutil.copyfile(src, exr)
+                shutil.copyfile(src.with_suffix(".png"), png)
         self.finished = True
         self._cleanup()
         return kept

@@ -12,13 +12,13 @@ os.environ.setdefault("PYOPENCL_CACHE_FAILURE_FATAL", "")
 
 from .arrays import as_device, is_device_array, like_input  # noqa: E402
 from .runtime import (  # noqa: E402
-                      Runtime,
-                      all_devices,
-                      choose_device,
-                      device_problem,
-                      device_table,
-                      get_runtime,
-                      set_device,
+    Runtime,
+    all_devices,
+    choose_device,
+    device_problem,
+    device_table,
+    get_runtime,
+    set_device,
 )
 
 __all__ = ["Runtime", "all_devices", "as_device", "choose_device", "device_problem",
