@@ -4,7 +4,11 @@ Callers fold the 1/N of the inverse into something they multiply anyway (a trans
 The backend depends on the device (``HOLO_FFT`` overrides: ``fftw``, ``vkfft``, ``numpy``):
 
 * CPU devices keep buffers in host memory: FFTW (pyfftw) transforms the mapped buffer in place,
-  with no copy. Plans are cached and FFTW wisdom is kept in the user's cache directory.
+  with no copy. Plans are cached per process. By default they are FFTW_ESTIMATE plans, which
+  depend on the sizes alone, so a frame is bit-identical across runs, processes and machines
+  of one kind, with or without a cache. ``HOLO_FFTW_PLANNER=measure`` (or ``patient``) times
+  the candidates instead and keeps FFTW wisdom in the user's cache directory: sometimes faster,
+  but its choice follows the machine's load, so results may differ in the last bits.
 * GPU devices: pyvkfft when it is importable; otherwise a host FFT through copies (logged).
 
 ``cols=(c0, c1)`` tells a transform that only those columns matter: for ``forward`` the others
@@ -81,12 +85,14 @@ class FFTW:
         self.runtime = runtime
         self.threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
             else (os.cpu_count() or 1)
-        effort = os.environ.get("HOLO_FFTW_PLANNER", "measure").strip().upper()
+        effort = os.environ.get("HOLO_FFTW_PLANNER", "estimate").strip().upper()
         if effort not in ("ESTIMATE", "MEASURE", "PATIENT"):
             raise InputError(f"HOLO_FFTW_PLANNER={effort!r}; allowed: estimate, measure, patient")
         self.flags = (f"FFTW_{effort}",)
         self.plans = {}
-        self._load_wisdom()
+        self.wisdom = effort != "ESTIMATE"  # wisdom would let measured plans into estimates
+        if self.wisdom:
+            self._load_wisdom()
 
     def forward(self, arr, cols=None):
         self._run(arr, cols, "FFTW_FORWARD")
@@ -122,7 +128,8 @@ class FFTW:
             self.plans[key] = pyfftw.FFTW(view, view, axes=axes, direction=direction,
                                           flags=self.flags, threads=self.threads,
                                           planning_timelimit=10.0)
-            self._save_wisdom()
+            if self.wisdom:
+                self._save_wisdom()
         return self.plans[key]
 
     @staticmethod
