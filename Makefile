@@ -22,18 +22,18 @@ figures: $(STAMP)
 # Two processes: Blender's native libraries (its TBB, its LLVM) must never meet an OpenCL
 # driver's, so the core's tests run where bpy is never imported (as the add-on's worker does).
 test: $(STAMP)
-	$(PY) -m pytest tests/core tests/physics
+	$(PY) -m pytest tests/core
 	$(PY) -m pytest tests/addon
 
 # The readers' fuzz suite at 5000 cases each (make test runs 300; about 4 minutes).
 FUZZ_CASES ?= 5000
 fuzz: $(STAMP)
-	HOLO_FUZZ_CASES=$(FUZZ_CASES) $(PY) -m pytest -s tests/core/test_fuzz.py
+	HOLO_FUZZ_CASES=$(FUZZ_CASES) $(PY) -m pytest -s tests/core/io/test_fuzz.py
 
 # The core's suite once per usable CPU OpenCL driver (python -m holo_core devices lists them).
 RUNTIMES ?= intel portable
 test-runtimes: $(STAMP)
-	set -e; for r in $(RUNTIMES); do 	  echo "== HOLO_DEVICE=$$r"; HOLO_DEVICE=$$r $(PY) -m pytest -q tests/core tests/physics; 	done
+	set -e; for r in $(RUNTIMES); do 	  echo "== HOLO_DEVICE=$$r"; HOLO_DEVICE=$$r $(PY) -m pytest -q tests/core; 	done
 
 bench: $(STAMP)
 	$(PY) bench/propagation.py
@@ -54,7 +54,7 @@ extension: $(STAMP)
 	$(PY) -m holo_addon.build -o dist
 
 # The built extension in Blender's LTS releases (bpy modules for Python 3.11, 370 MB each):
-# installed, registered, recorded, rendered and composited (tests/blender_lts.py), then the
+# installed, registered, recorded, rendered and composited (tools/blender_lts.py), then the
 # add-on's tests on that release (the installed extension's packages on the path).
 LTS ?= 4.2.0 4.5.15
 check-lts: $(STAMP)
@@ -66,7 +66,7 @@ check-lts: $(STAMP)
 	    .venv-bpy$$v/bin/pip install pytest; \
 	  mkdir -p build/lts/$$v; \
 	  BLENDER_USER_RESOURCES=$$PWD/build/lts/$$v/user PYTHONNOUSERSITE=1 \
-	    .venv-bpy$$v/bin/python tests/blender_lts.py build/lts/holo-*.zip build/lts/$$v; \
+	    .venv-bpy$$v/bin/python tools/blender_lts.py build/lts/holo-*.zip build/lts/$$v; \
 	  PYTHONPATH=$$PWD/build/lts/$$v/user/extensions/.local/lib/python3.11/site-packages \
 	    PYTHONNOUSERSITE=1 .venv-bpy$$v/bin/python -m pytest -q -p no:cacheprovider tests/addon; \
 	done

@@ -1,17 +1,21 @@
 """Holo for Blender: holographic objects recorded, rendered by wave optics and composited in
-depth with the rasterized scene.
+depth with the rasterized scene. Shaped as the glTF add-on, each folder importing only those
+below it (ui → compositor → render → export → blender):
 
-Files: ``properties`` (Object.holo, Scene.holo), ``scene_export`` (scene → metres, as the
-render sees it), ``bake`` (procedural Base Colours baked by Cycles), ``pipeline`` (record and
-render in a worker process), ``preferences`` (device, memory, cache, CPU runtime),
-``operators``, ``compositing`` (Depth Combine and the per-frame pass), ``overlay`` (the
-plate's coverage in the viewport), ``compat`` (Blender 4.x/5.x), ``ui`` (panels), ``demo``
-(the built-in scene).
+- ``blender/``: Blender helpers shared by the rest (4.x/5.x ``compat``, ``materials``, ``objects``)
+- ``export/``: the scene as the render sees it → holo_core's plain data in metres (``scene``),
+  and procedural Base Colours baked by Cycles (``bake``)
+- ``render/``: the job, run in a worker process (``pipeline``), with the preferences' ``options``
+- ``compositor/``: the pass in the compositor: Depth Combine, per-frame passes, frame handlers
+- ``ui/``: ``properties`` (Object.holo, Scene.holo), ``preferences``, ``operators``, ``panels``,
+  and the plate's coverage ``overlay`` in the viewport
+- ``demo`` (the built-in scene) and ``build`` (the extension's zip), run as modules
 """
 
-from . import compositing, operators, overlay, preferences, properties, ui
+from .compositor import passes
+from .ui import operators, overlay, panels, preferences, properties
 
-MODULES = (properties, preferences, operators, ui, compositing, overlay)
+MODULES = (properties, preferences, operators, panels, passes, overlay)
 
 
 def register():

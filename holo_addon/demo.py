@@ -41,7 +41,7 @@ def _colour_sphere(bpy, name, location, radius):
 def _material(bpy, obj, rgb):
     mat = bpy.data.materials.new(obj.name)
     mat.diffuse_color = (*rgb, 1.0)
-    from . import compat
+    from .blender import compat
     compat.enable_nodes(mat)
     if mat.node_tree is not None:
         bsdf = next(n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
@@ -104,9 +104,9 @@ def build_scene(bpy, *, resolution=(1280, 720), fstop=2.8):
 
 def render_still(bpy, scene, out: Path) -> tuple[Path, Path]:
     """Blender's render of the composited frame: ``demo.png`` and float ``demo.exr``."""
-    from holo_core.image_files import atomic_path
+    from holo_core.io.image import atomic_path
 
-    from . import compat
+    from .blender import compat
     png, exr = out / "demo.png", out / "demo.exr"
     for path, setter in ((exr, lambda: compat.set_exr_output(scene, multilayer=False)),
                          (png, lambda: compat.set_png_output(scene))):
@@ -132,7 +132,8 @@ def main(argv=None):
     logging.basicConfig(level=logging.INFO, format="%(name)s: %(message)s")
     import bpy
 
-    from . import pipeline, register
+    from . import register
+    from .render import pipeline
     out = args.output.resolve()
     out.mkdir(parents=True, exist_ok=True)
     bpy.ops.wm.read_factory_settings(use_empty=True)

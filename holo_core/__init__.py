@@ -7,10 +7,12 @@ towards +z; fields are exp(+ikr) waves (time dependence exp(-iωt)); arrays are 
 
 __version__ = "0.1.0"
 
-_API = {"record_hologram": ".record", "Plate": ".record", "render_view": ".render",
-        "write_view": ".render", "Camera": ".camera", "look_at": ".camera",
-        "read_hologram": ".hologram_io", "write_hologram": ".hologram_io",
-        "InputError": ".validate"}
+_API = {"Camera": ".scene", "look_at": ".scene", "Plate": ".scene", "Hologram": ".scene",
+        "Mesh": ".scene", "Pupil": ".optics", "record_hologram": ".plate",
+        "record_points": ".plate", "reconstruct": ".plate", "render_view": ".plate",
+        "render_camera": ".camera", "RenderResult": ".view", "write_view": ".io.view",
+        "read_hologram": ".io.hologram", "write_hologram": ".io.hologram",
+        "read_mesh": ".io.mesh", "InputError": ".validate"}
 
 
 def __getattr__(name):  # the top-level API, imported on first use (keeps `import` light)
@@ -18,3 +20,7 @@ def __getattr__(name):  # the top-level API, imported on first use (keeps `impor
         raise AttributeError(f"module 'holo_core' has no attribute {name!r}")
     from importlib import import_module
     return getattr(import_module(_API[name], __name__), name)
+
+
+def __dir__():
+    return sorted([*globals(), *_API])

@@ -40,9 +40,10 @@ def record(args) -> int:
 
     import numpy as np
 
-    from .emitters import default_spacing, read_mesh, sample_points
-    from .hologram_io import write_hologram
-    from .record import Reference, record_points
+    from .io.hologram import write_hologram
+    from .io.mesh import read_mesh
+    from .plate.record import Reference, record_points
+    from .scene.mesh import default_spacing, sample_points
     mesh = read_mesh(args.mesh)
     shape = (args.resolution[1], args.resolution[0])
     wavelengths = tuple(w * 1e-9 for w in args.wavelengths)
@@ -69,7 +70,7 @@ def record(args) -> int:
 def info(args) -> int:
     import json
 
-    from .hologram_io import metadata, read_hologram
+    from .io.hologram import metadata, read_hologram
     print(json.dumps(metadata(read_hologram(args.hologram)), indent=2))
     return 0
 
@@ -77,9 +78,10 @@ def info(args) -> int:
 def render(args) -> int:
     import numpy as np
 
-    from .camera import Camera, look_at
-    from .hologram_io import read_hologram
-    from .render import render_view, write_view
+    from .io.hologram import read_hologram
+    from .io.view import write_view
+    from .plate.view import render_view
+    from .scene.camera import Camera, look_at
     h = read_hologram(args.hologram)
     plate = np.asarray(h.plate)
     centre = (plate @ np.append(np.asarray(h.bounds).mean(0), 1.0))[:3]

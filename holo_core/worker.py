@@ -48,22 +48,22 @@ class WorkerError(RuntimeError):
 def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
     """Record the holograms (unless ``job['current']``) and render the pass.
 
-    ``job``: ``points``, ``triangles`` (lists of :class:`holo_core.emitters.Mesh`, world metres),
+    ``job``: ``points``, ``triangles`` (lists of :class:`holo_core.scene.mesh.Mesh`, world metres),
     ``plate``, ``camera``, ``settings`` (dict: mode 'CAMERA' or 'PLATE', samples,
     max_resolution, wavelength [m] or None, iterations, supersample, composition, exposure,
     opacity_threshold, seed), ``holograms`` (paths of the iterations' files), ``current``,
     ``render``, ``output_dir``, ``frame``. 'CAMERA' renders the camera hologram
-    (:mod:`holo_core.camera_hologram`; no plate, no hologram file); 'PLATE' records the
+    (:mod:`holo_core.camera`; no plate, no hologram file); 'PLATE' records the
     plate's holograms (unless ``current``) and views them. Returns ``recorded``,
     ``pass_path``, ``frame_path`` and ``info``. Files are written only after every stage has
     finished, each one atomically; ``on_partial(view, n)`` gets a camera hologram's running
     result after 1, 2, 4, 8 … samples (the user may stop there and keep it)."""
-    from .hologram_io import read_hologram, write_hologram
-    from .record import record_hologram
-    from .render import render_view
+    from .io.hologram import read_hologram, write_hologram
+    from .plate.record import record_hologram
+    from .plate.view import render_view
     s, current, n = job["settings"], job["current"], len(job["holograms"])
     if s.get("mode", "PLATE") == "CAMERA":
-        from .camera_hologram import render_camera
+        from .camera.render import render_camera
         def sample(view, n):
             if on_partial is not None and n < s["samples"] and not n & (n - 1):
                 on_partial(view, n)
@@ -98,7 +98,7 @@ def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
 
 def _write_pass(job, view, result) -> dict:
     """The pass of frame N (:func:`pass_file`)."""
-    from .render import write_view
+    from .io.view import write_view
     result.update(pass_path=None, frame_path=None, info={})
     if view is not None:
         if job.get("border"):
@@ -114,7 +114,7 @@ def _write_pass(job, view, result) -> dict:
 def _outside_border(view, border) -> None:
     """Clear the pass outside Blender's render region (``border``: left, top, right, bottom
     pixels from the top-left corner), which the render leaves empty."""
-    from .render import BACKGROUND_DEPTH
+    from .view import BACKGROUND_DEPTH
     left, top, right, bottom = border
     keep = np.zeros(view.alpha.shape, bool)
     keep[top:bottom, left:right] = True
@@ -151,7 +151,7 @@ def main(folder: str) -> int:
         with open(folder / "job.pickle", "rb") as f:
             job = pickle.load(f)
         def partial(view, n):  # a complete pass of fewer samples, kept only if the user asks
-            from .render import write_view
+            from .io.view import write_view
             write_view(view, folder / "partial.exr")
             send({"partial": n})
 
@@ -310,9 +310,9 @@ class Worker:
 
     def stop_and_keep(self, path) -> int:
         """Kill the worker and write its latest running pass to ``path`` with its PNG (as one
-        unit, as :func:`holo_core.render.write_view` writes them): returns its samples, or 0
+        unit, as :func:`holo_core.io.view.write_view` writes them): returns its samples, or 0
         when there was none yet (nothing is written)."""
-        from .image_files import atomic_paths
+        from .io.image import atomic_paths
         self.poll()  # the newest partial message
         if self.process.poll() is None:
             self.process.kill()

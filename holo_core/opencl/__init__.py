@@ -10,15 +10,15 @@ register_vendors()  # before pyopencl's ICD loader first looks for platforms
 # pyopencl 2026.1 reads this unguarded when a program-cache write fails (KeyError otherwise)
 os.environ.setdefault("PYOPENCL_CACHE_FAILURE_FATAL", "")
 
-from .arrays import as_device, is_device_array, like_input  # noqa: E402
-from .runtime import (  # noqa: E402
-    Runtime,
-    all_devices,
-    choose_device,
-    device_problem,
-    device_table,
-    get_runtime,
-    set_device,
+from .arrays import as_device, is_device_array, like_input
+from .runtime import (
+                      Runtime,
+                      all_devices,
+                      choose_device,
+                      device_problem,
+                      device_table,
+                      get_runtime,
+                      set_device,
 )
 
 __all__ = ["Runtime", "all_devices", "as_device", "choose_device", "device_problem",

@@ -67,10 +67,10 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     centre = ((r0 + (src.shape[0] - 1) / 2) / hs, (c0 + (src.shape[1] - 1) / 2) / ws)
     multiply = rt.kernel("spectral", "multiply")
     multiply(rt.queue, (hs * ws,), None, spectrum.data,
-             _cached(rt, "deapodize", _deapodization, (hs, ws), centre).data)
+             cached_array(rt, "deapodize", _deapodization, (hs, ws), centre).data)
     rt.fft.forward(spectrum)
     multiply(rt.queue, (hs * ws,), None, spectrum.data,
-             _cached(rt, "centring", _centring, (hs, ws), centre).data)
+             cached_array(rt, "centring", _centring, (hs, ws), centre).data)
     target = empty(rt, (ht, wt))
     freq = [1 / (ht * out_pitch), 1 / (wt * out_pitch), 1 / (hs * pitch), 1 / (ws * pitch),
             1 / wavelength**2, *m.ravel(),
@@ -79,7 +79,7 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
     rt.kernel("spectral", "rotate_spectrum", options)(
         rt.queue, (ht, wt), None, target.data, spectrum.data, np.int32(hs), np.int32(ws),
-        *(rt.real(f) for f in freq), scale, _cached(rt, "es-table", _es_table).data)
+        *(rt.real(f) for f in freq), scale, cached_array(rt, "es-table", es_table).data)
     rt.fft.backward(target)
     return like_input(window(rt, target, out_shape, t0, u0), from_host)
 
@@ -97,11 +97,12 @@ def es_transform(xi) -> np.ndarray:
     return (es_kernel(t) * np.cos(2 * np.pi * np.multiply.outer(xi, t))).sum(-1) * dt
 
 
-def _cached(rt, name, make, *args):
+def cached_array(rt, name, make, *args):
+    """``make(*args)`` as a device array, made once per runtime and cached under ``name``."""
     return cached(rt, (name, *args), lambda: (make(*args), None))[0]
 
 
-def _es_table():
+def es_table():
     """(value, slope) per table interval, packed as complex: what ``es_weight`` reads."""
     phi = es_kernel(np.linspace(-TAPS / 2, TAPS / 2, ES_TABLE + 1))
     return phi[:-1] + 1j * np.diff(phi)

@@ -2,21 +2,18 @@
 the source tree. Skips cleanly where the bpy module is not installed."""
 
 import os
-import sys
 import tempfile
-from pathlib import Path
 
 import pytest
 
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="holo-blender-"))
 bpy = pytest.importorskip("bpy")
-sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
 
 @pytest.fixture(scope="session")
 def addon():
     import holo_addon
-    from holo_addon import compositing
+    from holo_addon.compositor import passes as compositing
     holo_addon.register()
     # a failed pass in a render ends a background Blender (os._exit): not pytest's process
     compositing.EXIT_ON_FAILURE = False

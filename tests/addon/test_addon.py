@@ -12,7 +12,8 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from holo_core.render import RenderResult, write_view  # noqa: E402
+from holo_core.io.view import write_view
+from holo_core.view import RenderResult
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -35,13 +36,13 @@ def _plate_camera_cube(scene, *, cube_size=0.5):
 
 
 def test_export_known_mesh_in_metres(empty_scene):
-    from holo_addon.scene_export import export_scene
+    from holo_addon.export.scene import export_scene
     scene = empty_scene
     scene.unit_settings.scale_length = 0.01          # 1 Blender unit = 1 cm
     cube, cam, plate = _plate_camera_cube(scene, cube_size=50)  # 50 units = 0.5 m
     cube.location = (10, 20, 30)
     mat = bpy.data.materials.new("c")
-    from holo_addon import compat
+    from holo_addon.blender import compat
     compat.enable_nodes(mat)
     bsdf = next(n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
     bsdf.inputs["Base Color"].default_value = (0.2, 0.4, 0.6, 1)
@@ -85,7 +86,7 @@ def test_camera_projects_as_blender_does(empty_scene, rng, fit, shift, aspect, s
     from bpy_extras.object_utils import world_to_camera_view
     from mathutils import Vector
 
-    from holo_addon.scene_export import camera_from_object
+    from holo_addon.export.scene import camera_from_object
     scene = empty_scene
     bpy.ops.object.camera_add(location=(0.4, -2.5, 0.7), rotation=(1.2, 0.1, 0.3))
     cam = bpy.context.object
@@ -123,8 +124,9 @@ def _flat_plane(name, size, location, rgb):
 def test_compositing_keeps_the_nearer_surface(empty_scene, tmp_path):
     """A holographic pass (green square at 2 m) against rasterized planes: red at 1.5 m over
     the left half, blue at 3 m behind everything. Each pixel must show the nearer one."""
-    from holo_addon import compat, pipeline
+    from holo_addon.blender import compat
     from holo_addon.demo import point_at
+    from holo_addon.render import pipeline
     scene = empty_scene
     scene.render.engine = "BLENDER_WORKBENCH"
     scene.display.shading.light = "FLAT"
@@ -168,7 +170,7 @@ def test_compositing_keeps_the_nearer_surface(empty_scene, tmp_path):
 
 
 def show_in_raster(obj):
-    from holo_addon.properties import RAY_VISIBILITY
+    from holo_addon.blender.objects import RAY_VISIBILITY
     for name in RAY_VISIBILITY:
         setattr(obj, name, True)
 
@@ -176,7 +178,7 @@ def show_in_raster(obj):
 def _raster_alpha_and_depth(scene, tmp_path):
     """Blender's own render of the scene (Cycles, box filter): alpha (16 samples) and the
     planar Depth pass (through the compositor: multilayer stills keep only Combined)."""
-    from holo_addon import compat
+    from holo_addon.blender import compat
     scene.render.engine = "CYCLES"
     scene.cycles.samples = 16
     scene.cycles.pixel_filter_type = "BOX"
@@ -206,8 +208,8 @@ def test_silhouette_and_depth_match_blenders_raster(empty_scene, tmp_path, mode,
     holograms, 0.9 for the plate's, which its size limits), and the median depth error over
     pixels both cover <= 1 % (plate) or 0.5 % (camera) of the object's depth extent in
     Blender's Depth pass."""
-    from holo_addon import pipeline
     from holo_addon.demo import point_at
+    from holo_addon.render import pipeline
     scene = empty_scene
     scene.render.resolution_x, scene.render.resolution_y = 96, 72
     scene.render.resolution_percentage = 100
@@ -251,7 +253,8 @@ def test_animation_renders_a_pass_per_frame(empty_scene, tmp_path):
     own holographic pass: a cube keyframed to move 0.3 m right between frames 1 and 2 moves
     in the passes as its projected corners do (within a pixel: two edges, each ±0.5 px); the
     hologram is recorded again only for the frame whose scene changed."""
-    from holo_addon import compat, pipeline
+    from holo_addon.blender import compat
+    from holo_addon.render import pipeline
     scene = empty_scene
     cube, cam, plate = _plate_camera_cube(scene, cube_size=0.4)
     scene.render.resolution_x, scene.render.resolution_y = 48, 36
@@ -297,14 +300,14 @@ def test_animation_renders_a_pass_per_frame(empty_scene, tmp_path):
 
 
 def _camera_columns(scene, cam, points):
-    from holo_addon.scene_export import camera_from_object
+    from holo_addon.export.scene import camera_from_object
     cols, _ = camera_from_object(scene, cam, 1.0).project(np.asarray(points, float))
     return cols[:, 0]
 
 
 def _earlier_outputs(scene, *, size=(32, 24), iterations=1, max_resolution=256):
     """A small scene's job, with random bytes standing for its earlier hologram and pass."""
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     _plate_camera_cube(scene)
     scene.holo.mode = "PLATE"
     scene.render.resolution_x, scene.render.resolution_y = size
@@ -320,7 +323,7 @@ def _earlier_outputs(scene, *, size=(32, 24), iterations=1, max_resolution=256):
 
 
 def test_missing_or_corrupt_hologram_is_reported(empty_scene):
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     scene = empty_scene
     _, _, plate = _plate_camera_cube(scene)
     scene.holo.mode = "PLATE"
@@ -395,7 +398,7 @@ def test_blender_process_loads_no_opencl_driver(empty_scene, monkeypatch):
     scene.holo.mode = "CAMERA"
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
     assert bpy.ops.holo.check_devices() == {"FINISHED"}
-    from holo_addon import preferences
+    from holo_addon.ui import preferences
     assert any("<- would use" in line for line in preferences._listing), preferences._listing
 
 
@@ -405,7 +408,7 @@ def test_a_killed_worker_is_reported_and_earlier_files_stay(empty_scene, monkeyp
     import signal
     import threading
 
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     _, earlier = _earlier_outputs(empty_scene, size=(160, 120), iterations=8,
                                   max_resolution=2048)
     start = pipeline.start

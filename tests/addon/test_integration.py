@@ -9,7 +9,7 @@ from test_addon import _camera_columns, _plate_camera_cube, _read_exr  # noqa: E
 
 
 def _fingerprint(scene):
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     return pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get()).fingerprint
 
 
@@ -57,7 +57,8 @@ def test_an_animation_started_away_from_the_timeline_frame_uses_each_frames_geom
         empty_scene, tmp_path):
     """The timeline rests on frame 1; frames 2-3 are rendered (a farm chunk): each pass shows
     its own frame's cube, where the camera projects it (within half a pixel)."""
-    from holo_addon import compat, pipeline
+    from holo_addon.blender import compat
+    from holo_addon.render import pipeline
     scene = empty_scene
     cube, cam = _moving_cube(scene, tmp_path)
     scene.frame_set(1)
@@ -78,7 +79,7 @@ def test_an_animation_started_away_from_the_timeline_frame_uses_each_frames_geom
 
 
 def _render_range(scene, start, end, folder, tmp_path):
-    from holo_addon import compat
+    from holo_addon.blender import compat
     scene.holo.output_dir = str(folder) + "/"
     compat.set_exr_output(scene, multilayer=False)
     scene.render.filepath = str(tmp_path / folder.name / "frame_")
@@ -91,7 +92,7 @@ def test_three_frames_as_one_animation_or_separate_frames_give_identical_passes(
     """A cube and the camera both move; ``-a`` over frames 1-3 and three single-frame runs
     (as a farm splits them) give bit-identical passes, each where the camera projects that
     frame's cube (within half a pixel), and each frame's composite shows its own pass."""
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     scene = empty_scene
     cube, cam = _moving_cube(scene, tmp_path)
     for frame, dx in ((1, 0.0), (2, 0.05), (3, 0.1)):
@@ -122,8 +123,11 @@ def test_three_frames_as_one_animation_or_separate_frames_give_identical_passes(
 def test_compositing_keeps_the_users_nodes_and_links(empty_scene, tmp_path):
     """A user's Render Layers → Glare → output chain (and a Viewer) survives the setup: every
     node and link stays, the chain's result feeds the Depth Combine, whose result goes out."""
-    from holo_addon import compat, compositing, pipeline
-    from holo_core.render import RenderResult, write_view
+    from holo_addon.blender import compat
+    from holo_addon.compositor import passes as compositing
+    from holo_addon.render import pipeline
+    from holo_core.io.view import write_view
+    from holo_core.view import RenderResult
     scene = empty_scene
     _plate_camera_cube(scene)
     tree = compat.compositor_tree(scene)
@@ -153,7 +157,7 @@ def test_compositing_keeps_the_users_nodes_and_links(empty_scene, tmp_path):
 
 
 def _scene_with_pass(scene, tmp_path):
-    from holo_addon import compat
+    from holo_addon.blender import compat
     _moving_cube(scene, tmp_path)
     scene.frame_set(1)
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
@@ -178,7 +182,7 @@ def test_each_rendered_frame_gets_its_holographic_layers_beside_it(empty_scene, 
     """Beside the frame ``shot_0001.exr`` a multilayer ``holo_shot_0001.exr``: the composite
     (equal to the frame), the pass alone (equal to the pass file), its depth, and the
     composite's depth (the nearer of the pass's and the raster's)."""
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
     scene.render.filepath = str(tmp_path / "out" / "shot_####")
@@ -202,7 +206,8 @@ def test_each_rendered_frame_gets_its_holographic_layers_beside_it(empty_scene, 
 def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monkeypatch):
     """In the interface a handler cannot cancel the render: the failed frame shows the raster
     alone (the stale pass set aside, kept), and the next good pass shows again."""
-    from holo_addon import compositing, pipeline
+    from holo_addon.compositor import passes as compositing
+    from holo_addon.render import pipeline
     from holo_core.worker import WorkerError
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
@@ -234,7 +239,7 @@ import test_integration
 scene = bpy.context.scene
 scene.holo.output_dir = sys.argv[3] + "/holo/"
 test_integration._scene_with_pass(scene, None)
-from holo_addon import pipeline
+from holo_addon.render import pipeline
 def broken(job, progress=None, on_log=None):
     raise RuntimeError("the worker failed")
 pipeline.run = broken
@@ -260,12 +265,12 @@ def test_a_failed_pass_fails_a_background_animation(tmp_path):
 
 
 def _prepare(scene):
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     return pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
 
 
 def test_a_plate_too_small_warns_and_one_off_the_view_is_refused(empty_scene):
-    from holo_addon.scene_export import ExportError
+    from holo_addon.export.scene import ExportError
     scene = empty_scene
     _, _, plate = _plate_camera_cube(scene)
     scene.holo.mode = "PLATE"
@@ -283,8 +288,8 @@ def test_a_plate_too_small_warns_and_one_off_the_view_is_refused(empty_scene):
 
 
 def test_exposure_is_in_stops_and_unsaved_files_need_a_folder(empty_scene):
-    from holo_addon import pipeline
-    from holo_addon.scene_export import ExportError
+    from holo_addon.export.scene import ExportError
+    from holo_addon.render import pipeline
     scene = empty_scene
     _plate_camera_cube(scene)
     scene.holo.exposure = 1.0
@@ -305,7 +310,7 @@ def test_the_memory_limit_preference_reaches_the_worker():
 
 
 def _emitter_meshes(scene):
-    from holo_addon.scene_export import export_scene
+    from holo_addon.export.scene import export_scene
     data = export_scene(scene, bpy.context.evaluated_depsgraph_get(), plate=False)
     return data.points + data.triangles
 
@@ -325,7 +330,7 @@ def _cube_in(collection_name, scene, location=(0, 0, 0)):
 def test_blenders_render_visibility_decides_what_is_recorded(empty_scene):
     """Excluded and render-disabled collections and Disable in Renders leave an emitter out;
     the add-on never writes Disable in Renders itself."""
-    from holo_addon.scene_export import ExportError
+    from holo_addon.export.scene import ExportError
     scene = empty_scene
     cube, _, _ = _plate_camera_cube(scene)
     assert not cube.hide_render
@@ -363,7 +368,7 @@ def test_collection_instances_of_an_emitter_are_recorded_where_they_stand(empty_
 def test_renders_use_render_modifier_levels(empty_scene, tmp_path, monkeypatch):
     """Subdivision at level 0 in the viewport and 2 in renders: the pass of an F12 render is
     made from level 2 (a cube's 12 triangles become 192)."""
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
     cube = next(o for o in scene.objects if o.holo.emitter == "POINTS")
@@ -383,7 +388,7 @@ def test_renders_use_render_modifier_levels(empty_scene, tmp_path, monkeypatch):
 
 
 def test_procedural_base_colours_are_reported(empty_scene):
-    from holo_addon import compat
+    from holo_addon.blender import compat
     scene = empty_scene
     cube, _, _ = _plate_camera_cube(scene)
     material = bpy.data.materials.new("marble")
@@ -402,7 +407,7 @@ def test_material_features_the_hologram_does_not_show_are_reported(empty_scene):
     """A default Principled material: no note. Metallic, alpha and emission set, a normal map
     linked: one note naming them. An Emission shader alone: a note that the viewport colour
     is used."""
-    from holo_addon import compat
+    from holo_addon.blender import compat
     scene = empty_scene
     cube, _, _ = _plate_camera_cube(scene)
     scene.holo.mode = "PLATE"
@@ -436,7 +441,7 @@ def test_a_render_cropped_to_an_off_centre_border_gets_the_border_of_the_pass(
         empty_scene, tmp_path):
     """Crop to Render Region: the pass has the cropped render's size and shows the cube where
     the full frame's pass has it, shifted by the region's corner (within a pixel)."""
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
     full = pipeline.pass_file(pipeline.output_dir(scene), 1)
@@ -460,7 +465,7 @@ def test_a_render_cropped_to_an_off_centre_border_gets_the_border_of_the_pass(
 def test_an_up_to_date_pass_is_not_rendered_again(empty_scene, monkeypatch):
     """The frame's pass carries a digest of what it was made from: the same scene renders
     nothing again; any change (here the exposure) renders anew."""
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     from holo_core import worker
     scene = empty_scene
     _plate_camera_cube(scene)
@@ -484,8 +489,10 @@ def test_a_procedural_base_colour_is_baked_and_recorded(empty_scene):
     """Base Color = the object-space position (Texture Coordinate ▸ Object, a node the export
     cannot read): Render Pass bakes it with Cycles, and the emitter's samples carry
     max(position, 0) within 0.01 (the atlas' texel is 1.7 mm on a 0.5 m cube)."""
-    from holo_addon import bake, compat, pipeline
-    from holo_core.emitters import sample_points
+    from holo_addon.blender import compat
+    from holo_addon.export import bake
+    from holo_addon.render import pipeline
+    from holo_core.scene.mesh import sample_points
     scene = empty_scene
     cube, _, _ = _plate_camera_cube(scene)
     material = bpy.data.materials.new("position")
@@ -515,7 +522,7 @@ def test_a_procedural_base_colour_is_baked_and_recorded(empty_scene):
 def test_a_state_recorded_before_is_not_recorded_again(empty_scene, monkeypatch):
     """Resolution 100% → 50% → 100%: two recordings, not three; each state has its own files
     (farm workers on different frames never share a hologram file)."""
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     scene = empty_scene
     _plate_camera_cube(scene)
     scene.holo.mode = "PLATE"
@@ -541,7 +548,7 @@ def test_a_state_recorded_before_is_not_recorded_again(empty_scene, monkeypatch)
 def test_a_render_region_without_crop_clears_the_pass_outside_it(empty_scene, tmp_path):
     """Blender renders only inside the region: the pass matches the full frame's inside and
     is clear outside, so no holographic object floats over the unrendered part."""
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
     path = pipeline.pass_file(pipeline.output_dir(scene), 1)
@@ -559,7 +566,8 @@ def test_a_render_region_without_crop_clears_the_pass_outside_it(empty_scene, tm
 def test_the_pass_of_a_render_can_be_cancelled(empty_scene, tmp_path, monkeypatch):
     """Cancel Pass while a render makes its pass: the worker stops, the frame shows the raster
     alone (the stale pass set aside) and the panel's state is cleared."""
-    from holo_addon import compositing, pipeline
+    from holo_addon.compositor import passes as compositing
+    from holo_addon.render import pipeline
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
     scene.holo.exposure = 1.0                      # the pass is out of date: the worker runs

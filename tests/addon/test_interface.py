@@ -56,7 +56,7 @@ def _event(kind, value="PRESS", timer=None):
 @pytest.fixture
 def interface(monkeypatch):
     """(operator, context) as Blender's interface would drive them: not in background."""
-    from holo_addon import operators
+    from holo_addon.ui import operators
     monkeypatch.setattr(operators, "bpy", SimpleNamespace(app=SimpleNamespace(background=False)))
 
     class RenderPass(operators._PipelineOperator):
@@ -97,7 +97,7 @@ def test_the_interface_stays_usable_and_esc_cancels_within_a_second(empty_scene,
     """While the worker runs, every other event passes through to Blender; Esc kills the
     worker within a second, ends the operator's timer, progress and status text, and the
     earlier pass is kept."""
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     op, context = interface
     _camera_scene(empty_scene, samples=256)
     earlier = pipeline.pass_file(pipeline.output_dir(empty_scene), empty_scene.frame_current)
@@ -127,7 +127,7 @@ def test_the_interface_stays_usable_and_esc_cancels_within_a_second(empty_scene,
 def test_progress_and_messages_arrive_while_the_worker_runs(empty_scene, interface):
     """Progress reaches the progress bar and the status text as it is made, the worker's
     messages become reports before the run ends, and the run ends with the pass written."""
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     op, context = interface
     _camera_scene(empty_scene, samples=8)
     assert op.invoke(context, _event("LEFTMOUSE")) == {"RUNNING_MODAL"}
@@ -146,8 +146,8 @@ def test_progress_and_messages_arrive_while_the_worker_runs(empty_scene, interfa
 def test_enter_keeps_the_samples_made_so_far(empty_scene, interface):
     """Enter during a camera hologram's samples ends the run with the samples so far as the
     frame's pass."""
-    from holo_addon import pipeline
-    from holo_core.image_files import exr_attribute
+    from holo_addon.render import pipeline
+    from holo_core.io.image import exr_attribute
     op, context = interface
     _camera_scene(empty_scene, samples=256)
     assert op.invoke(context, _event("LEFTMOUSE")) == {"RUNNING_MODAL"}
@@ -193,7 +193,8 @@ def test_the_panels_draw_every_state(empty_scene):
     """Render ▸ Holo in both modes and while a render makes its pass (progress and Cancel
     Pass), Object ▸ Holo for an emitter and a plate: every property and operator they show
     exists."""
-    from holo_addon import compositing, ui
+    from holo_addon.compositor import passes as compositing
+    from holo_addon.ui import panels as ui
     cube, _, plate = _plate_camera_cube(empty_scene)
     context = SimpleNamespace(scene=empty_scene, object=cube)
     for mode in ("CAMERA", "PLATE"):
@@ -216,7 +217,7 @@ def test_a_renders_pass_shows_its_progress_in_the_status_bar(monkeypatch):
     the Properties editors (the panel's progress and Cancel Pass), and clears both after."""
     from contextlib import nullcontext
 
-    from holo_addon import compositing
+    from holo_addon.compositor import passes as compositing
     redrawn = []
     area = SimpleNamespace(type="PROPERTIES", tag_redraw=lambda: redrawn.append(1))
     window = SimpleNamespace(workspace=_Workspace(),
@@ -238,7 +239,7 @@ def test_the_plate_coverage_overlay_follows_the_lines_of_sight(empty_scene):
     """Camera at y = -3, a 0.6 plate at y = -1.5 facing it, a 0.5 cube: the overlay's lines
     of sight pass through the plate's corners and end at the cube's far side (y = 0.25); the
     cube in the middle is covered (green), half out is partly (orange), far out not (red)."""
-    from holo_addon import overlay
+    from holo_addon.ui import overlay
     scene = empty_scene
     scene.holo.mode = "PLATE"
     cube, cam, plate = _plate_camera_cube(scene)
@@ -266,7 +267,8 @@ def test_a_renders_warnings_reach_the_panel(empty_scene, tmp_path):
     (a render's pass has no operator to report through)."""
     from test_integration import _scene_with_pass
 
-    from holo_addon import compositing, ui
+    from holo_addon.compositor import passes as compositing
+    from holo_addon.ui import panels as ui
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
     plate = next(o for o in scene.objects if o.holo.is_plate)
@@ -285,7 +287,7 @@ def test_a_renders_warnings_reach_the_panel(empty_scene, tmp_path):
 def test_a_failed_render_pass_reaches_blenders_reports(addon, monkeypatch):
     """In the interface a failed render pass is put in Blender's reports (status bar, Info
     log) by the holo.report operator, and shown in a popup."""
-    from holo_addon import compositing
+    from holo_addon.compositor import passes as compositing
     with pytest.raises(RuntimeError, match="Error: Holo: the pass of frame 3 failed"):
         bpy.ops.holo.report(message="Holo: the pass of frame 3 failed")
     shown = []

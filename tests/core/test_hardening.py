@@ -13,14 +13,16 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from holo_core.camera import Camera, look_at
-from holo_core.emitters import MeshFileError, read_mesh
-from holo_core.hologram_io import (Hologram, HologramFileError, import_acquired, read_hologram,
-                                   write_hologram)
-from holo_core.image_files import write_exr
-from holo_core.record import record_points
-from holo_core.render import NoDepthWarning, RenderResult, render_view, write_view
+from holo_core.io.hologram import HologramFileError, import_acquired, read_hologram, write_hologram
+from holo_core.io.image import write_exr
+from holo_core.io.mesh import MeshFileError, read_mesh
+from holo_core.io.view import write_view
+from holo_core.plate.record import record_points
+from holo_core.plate.view import NoDepthWarning, render_view
+from holo_core.scene.camera import Camera, look_at
+from holo_core.scene.hologram import Hologram
 from holo_core.validate import InputError
+from holo_core.view import RenderResult
 
 CUBE_OBJ = ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n")
 
@@ -308,7 +310,7 @@ def test_cli_unexpected_failure_is_one_line_and_debug_shows_the_traceback(tmp_pa
 
 def test_math_of_the_safe_distance():
     """2 samples across the cone: |z| = 2p/tan θ, θ the cone's edge (CONE_FILL of Nyquist)."""
-    from holo_core.point_sources import CONE_FILL, Grid, safe_distance
+    from holo_core.plate.point_sources import CONE_FILL, Grid, safe_distance
     p, lam = 8e-6, 633e-9
     s = CONE_FILL * lam / (2 * p)
     assert math.isclose(safe_distance(Grid((8, 8), p, lam)), 2 * p * math.sqrt(1 - s * s) / s)

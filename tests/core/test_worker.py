@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from holo_core import jobs, worker
-from holo_core.camera import Camera, look_at
-from holo_core.emitters import Mesh
-from holo_core.record import Plate
+from holo_core.scene.camera import Camera, look_at
+from holo_core.scene.mesh import Mesh
+from holo_core.scene.plate import Plate
 
 
 def cube(size=0.4):

@@ -1,0 +1,1 @@
+"""The holographic pass in Blender's compositor, and the frame handlers that make it."""

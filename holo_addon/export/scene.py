@@ -1,0 +1,374 @@
+"""Blender scene → plain data in metres for holo_core (runs on Blender's main thread).
+
+Lengths are Blender units × ``unit_settings.scale_length``. Meshes are exported unindexed
+(three vertices per triangle) so that per-corner colours and UVs survive. Colour comes from
+the active colour attribute, else the material's image texture on Base Color, else its Base
+Color (per triangle, by material slot), else white; all linear.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from holo_core import __version__
+from holo_core.io.hologram import FORMAT_VERSION
+from holo_core.scene.camera import Camera
+from holo_core.scene.mesh import Mesh, sample_points
+from holo_core.scene.plate import Plate
+
+from ..blender.materials import base_colour, principled, unhonoured
+from . import bake
+
+
+class ExportError(ValueError):
+    """The scene cannot be recorded as it is; the message says what to change."""
+
+
+@dataclass(frozen=True, eq=False)
+class SceneData:
+    """What the pipeline needs, with no reference to Blender: emitter meshes in world metres
+    (``points`` and ``triangles`` kinds), the plate, the camera and a fingerprint of them."""
+
+    points: list
+    triangles: list
+    plate: Plate | None
+    plate_name: str | None
+    camera: Camera
+    warnings: tuple = ()
+
+    def fingerprint(self, *settings) -> str:
+        """A digest of everything the hologram depends on: each emitter's kind, evaluated
+        geometry and colours (vertex colours, texture and UVs, material colours), the plate,
+        the camera (it sizes the optics; its lens and focus), ``settings`` and the core's
+        version and file format."""
+        h = hashlib.sha256(f"holo {__version__} format {FORMAT_VERSION}".encode())
+        for kind, meshes in (("points", self.points), ("triangles", self.triangles)):
+            for mesh in meshes:
+                h.update(kind.encode())
+                for a in (mesh.vertices, mesh.colours, mesh.uvs, mesh.texture):
+                    h.update(b"-" if a is None else
+                             np.ascontiguousarray(a, np.float64).tobytes() + repr(a.shape).encode())
+                h.update(b"|")
+        plate = () if self.plate is None else (self.plate.matrix_world,
+                                                 (self.plate.width, self.plate.height))
+        for a in (*plate, self.camera.matrix_world):
+            h.update(np.asarray(a, np.float64).tobytes())
+        h.update(repr((self.camera.lens, self.camera.sensor_width, self.camera.sensor_height,
+                       self.camera.sensor_fit, self.camera.shift_x, self.camera.shift_y,
+                       self.camera.resolution, self.camera.pixel_aspect, self.camera.fstop,
+                       self.camera.focus_distance) + settings).encode())
+        return h.hexdigest()[:16]
+
+
+def scale(scene) -> float:
+    """Metres per Blender unit."""
+    return float(scene.unit_settings.scale_length) or 1.0
+
+
+def _matrix(m, unit: float, *, normalise: bool) -> np.ndarray:
+    a = np.array(m, np.float64).reshape(4, 4)
+    a[:3, 3] *= unit
+    if normalise:  # the nearest rotation (polar decomposition): no scale, float32 noise gone
+        u, _, vt = np.linalg.svd(a[:3, :3])
+        a[:3, :3] = u @ vt
+        if np.linalg.det(a[:3, :3]) < 0:
+            raise ExportError("a mirrored (negative-scale) camera or plate cannot be used")
+    return a
+
+
+def mesh_from_object(obj, depsgraph, unit: float, matrix=None, notes=None) -> Mesh:
+    """The evaluated mesh of ``obj`` (modifiers applied at the depsgraph's settings) as
+    world-space triangles [m]; ``matrix``: an instance's world matrix instead of the object's.
+    Material features the export cannot honour are added to ``notes``."""
+    ev = obj if obj.is_evaluated else obj.evaluated_get(depsgraph)
+    me = ev.to_mesh()
+    try:
+        me.calc_loop_triangles()
+        nt = len(me.loop_triangles)
+        if nt == 0:
+            raise ExportError(f"object '{obj.name}' has no faces to emit from")
+        co = np.empty(len(me.vertices) * 3)
+        me.vertices.foreach_get("co", co)
+        loops = np.empty(nt * 3, np.int64)
+        me.loop_triangles.foreach_get("loops", loops)
+        lv = np.empty(len(me.loops), np.int64)
+        me.loops.foreach_get("vertex_index", lv)
+        m = np.array(ev.matrix_world if matrix is None else matrix, np.float64)
+        world = co.reshape(-1, 3) @ m[:3, :3].T + m[:3, 3]
+        vertices = world[lv[loops]] * unit
+        mat_index = np.empty(nt, np.int64)
+        me.loop_triangles.foreach_get("material_index", mat_index)
+        colours, uvs, texture = _colours(ev, me, loops, lv, mat_index, notes)
+        if notes is not None:
+            notes.extend(filter(None, (unhonoured(slot.material) for slot in ev.material_slots)))
+    finally:
+        ev.to_mesh_clear()
+    return Mesh(vertices=vertices, triangles=np.arange(nt * 3).reshape(nt, 3),
+                colours=colours, uvs=uvs, texture=texture)
+
+
+def _colours(obj, me, loops, loop_vertex, mat_index, notes=None):
+    """(per-corner colours or None, per-corner UVs or None, texture or None). Honoured: the
+    active colour attribute, else a Base Color from other nodes (procedural textures, mixes)
+    as baked by :mod:`holo_addon.export.bake`, else an Image Texture on the Principled BSDF's Base
+    Color through the active UV map, else the Base Color (per material slot); a Base Color
+    from nodes with no current bake is noted in ``notes`` and its default colour used."""
+    attr = me.color_attributes.active_color
+    if attr is not None and len(attr.data):
+        data = np.empty(len(attr.data) * 4, np.float64)
+        attr.data.foreach_get("color", data)  # linear
+        data = data.reshape(-1, 4)[:, :3]
+        per = data[loop_vertex[loops]] if attr.domain == "POINT" else data[loops]
+        return per, None, None
+    if bake.needs_bake(obj.original):
+        baked = bake.current(obj.original)
+        layer = me.uv_layers.get(bake.UV_NAME)
+        if baked is not None and layer is not None:
+            uv = np.empty(len(me.loops) * 2)
+            layer.uv.foreach_get("vector", uv)
+            return None, uv.reshape(-1, 2)[loops], _pixels(baked)
+    image = _base_texture(obj)
+    if image is not None and me.uv_layers.active is not None:
+        uv = np.empty(len(me.loops) * 2)
+        me.uv_layers.active.uv.foreach_get("vector", uv)
+        return None, uv.reshape(-1, 2)[loops], _pixels(image)
+    for slot in obj.material_slots:
+        node = principled(slot.material)
+        if node is not None and node.inputs["Base Color"].is_linked and notes is not None:
+            src = node.inputs["Base Color"].links[0].from_node
+            notes.append(f"material '{slot.material.name}': its Base Color comes from a "
+                         f"{src.bl_label} node and is not baked yet (Render Pass bakes it; a "
+                         f"render cannot): the holographic object uses the Base Color value")
+    base = np.array([base_colour(slot.material) for slot in obj.material_slots] or
+                    [(1.0, 1.0, 1.0)], np.float64)
+    return np.repeat(base[np.clip(mat_index, 0, len(base) - 1)], 3, axis=0), None, None
+
+
+def _base_texture(obj):
+    for slot in obj.material_slots:
+        node = principled(slot.material)
+        if node is None or not node.inputs["Base Color"].is_linked:
+            continue
+        src = node.inputs["Base Color"].links[0].from_node
+        if src.type == "TEX_IMAGE" and src.image is not None:
+            return src.image
+    return None
+
+
+def plate_from_object(obj, unit: float) -> Plate:
+    """The plate: the object's pose (scale removed) and its width and height [m] from its
+    dimensions; the hologram is its local z = 0 plane and viewers are on its +Z side."""
+    w, h = obj.dimensions.x * unit, obj.dimensions.y * unit
+    if w <= 0 or h <= 0:
+        raise ExportError(f"plate '{obj.name}' must have a width and height (a plane)")
+    return Plate(matrix_world=_matrix(obj.matrix_world, unit, normalise=True), width=w, height=h)
+
+
+def camera_from_object(scene, obj, unit: float, depsgraph=None) -> Camera:
+    """Blender's camera (lens, sensor, fit, shift, render size, pixel aspect, depth of field)
+    as :class:`holo_core.scene.camera.Camera`; a focus object as ``depsgraph`` places it."""
+    cam, r = obj.data, scene.render
+    if cam.type != "PERSP":
+        raise ExportError(f"camera '{obj.name}' must be perspective (it is {cam.type})")
+    res = render_size(r)
+    m = _matrix(obj.matrix_world, unit, normalise=True)
+    fstop = focus = None
+    if cam.dof.use_dof:
+        fstop = cam.dof.aperture_fstop
+        if cam.dof.focus_object is not None:
+            focus_object = cam.dof.focus_object
+            if depsgraph is not None:
+                focus_object = _evaluated(focus_object.original, depsgraph)
+            target = np.array(focus_object.matrix_world.translation) * unit
+            focus = float(-(target - m[:3, 3]) @ m[:3, 2])  # along the view axis
+        else:
+            focus = cam.dof.focus_distance * unit
+        if focus <= 0:
+            raise ExportError("the camera's focus must lie in front of it (focus distance > 0)")
+    camera = Camera(matrix_world=m, lens=cam.lens, sensor_width=cam.sensor_width,
+                    sensor_height=cam.sensor_height, sensor_fit=cam.sensor_fit,
+                    shift_x=cam.shift_x, shift_y=cam.shift_y, resolution=res,
+                    pixel_aspect=(r.pixel_aspect_x, r.pixel_aspect_y),
+                    focus_distance=focus, fstop=fstop)
+    if r.use_border and r.use_crop_to_border:  # the render is the border's region alone
+        left, top, right, bottom = border_pixels(r)
+        if right > left and bottom > top:
+            camera = camera.cropped(left, top, right - left, bottom - top)
+    return camera
+
+
+def render_size(render) -> tuple[int, int]:
+    """The rendered image's (width, height) [px]: the resolution at its percentage."""
+    pct = render.resolution_percentage / 100
+    return max(1, int(render.resolution_x * pct)), max(1, int(render.resolution_y * pct))
+
+
+def border_pixels(render) -> tuple[int, int, int, int]:
+    """The render region (left, top, right, bottom) [px from the top-left corner]; Blender
+    measures it from the bottom."""
+    w, h = render_size(render)
+    return (int(render.border_min_x * w), h - int(render.border_max_y * h),
+            int(render.border_max_x * w), h - int(render.border_min_y * h))
+
+
+def export_scene(scene, depsgraph, *, plate=True) -> SceneData:
+    """The scene's emitters, plate (when ``plate``) and camera as ``depsgraph`` evaluates them
+    (a render's depsgraph: the frame rendered, render modifier levels and visibility); a clear
+    :class:`ExportError` when one is missing or ill-placed."""
+    unit = scale(scene)
+    plates = [o for o in scene.objects if o.holo.is_plate]
+    if plate and not plates:
+        raise ExportError("no hologram plate: mark a plane with Object ▸ Holo ▸ Plate, or "
+                          "record for the camera (Holo ▸ Hologram: Camera)")
+    if len(plates) > 1:
+        raise ExportError(f"one plate per scene; found {', '.join(o.name for o in plates)}")
+    if scene.camera is None:
+        raise ExportError("the scene has no camera")
+    notes = []
+    kinds = emitters(depsgraph, unit, notes)
+    if not kinds["POINTS"] + kinds["TRIANGLES"]:
+        raise ExportError("no holographic emitters in the render: set Object ▸ Holo ▸ Emitter "
+                          "on a mesh that renders (not disabled in renders, in a collection "
+                          "the view layer includes)")
+    camera = camera_from_object(scene, _evaluated(scene.camera, depsgraph), unit, depsgraph)
+    warnings = tuple(dict.fromkeys(notes))
+    if not plate:
+        return SceneData(points=kinds["POINTS"], triangles=kinds["TRIANGLES"], plate=None,
+                         plate_name=None, camera=camera, warnings=warnings)
+    plate = plate_from_object(_evaluated(plates[0], depsgraph), unit)
+    if plate.to_plate(camera.position[None])[0, 2] <= 0:
+        raise ExportError(f"the camera is behind plate '{plates[0].name}': viewers must be on "
+                          f"its +Z side (rotate the plate 180°)")
+    coverage = plate_coverage(plate, plates[0].name, camera,
+                              kinds["POINTS"] + kinds["TRIANGLES"])
+    return SceneData(points=kinds["POINTS"], triangles=kinds["TRIANGLES"], plate=plate,
+                     plate_name=plates[0].name, camera=camera,
+                     warnings=warnings + ((coverage,) if coverage else ()))
+
+
+def emitters(depsgraph, unit: float, notes: list) -> dict:
+    """{'POINTS': [Mesh], 'TRIANGLES': [Mesh]}: every holographic emitter the render draws
+    (see :func:`emitter_instances`)."""
+    found = {"POINTS": [], "TRIANGLES": []}
+    for inst, kind in emitter_instances(depsgraph):
+        found[kind].append(mesh_from_object(inst.object, depsgraph, unit,
+                                            np.array(inst.matrix_world), notes))
+    return found
+
+
+def emitter_instances(depsgraph):
+    """(instance, 'POINTS' or 'TRIANGLES') of every holographic emitter the render draws, as
+    Blender decides it: instances (collection instances, instancing) included; objects
+    disabled in renders or in collections the view layer excludes or does not render, left
+    out."""
+    shown = _rendered_collections(depsgraph.view_layer)
+    for inst in depsgraph.object_instances:
+        ev = inst.object
+        holo = ev.original.holo
+        if ev.type != "MESH" or holo.emitter == "NONE" or holo.is_plate:
+            continue
+        if _renders(inst.parent.original if inst.is_instance else ev.original, shown):
+            yield inst, holo.emitter
+
+
+def viewport_matches_render(scene) -> bool:
+    """Whether the viewport evaluates every emitter as a render does (no modifier enabled in
+    one and not the other, no subdivision or multiresolution level differing), so that a pass
+    made from the viewport stands for the render's."""
+    for obj in scene.objects:
+        if obj.type != "MESH" or obj.holo.emitter == "NONE":
+            continue
+        for mod in obj.modifiers:
+            if mod.show_viewport != mod.show_render:
+                return False
+            levels = getattr(mod, "levels", None), getattr(mod, "render_levels", None)
+            if levels[1] is not None and levels[0] != levels[1]:
+                return False
+    return True
+
+
+def _rendered_collections(view_layer) -> set:
+    """Pointers of the collections the view layer renders: not excluded, not disabled in
+    renders, and neither is any collection above them."""
+    shown = set()
+
+    def walk(lc, ok):
+        ok = ok and not lc.exclude and not lc.collection.hide_render
+        if ok:
+            shown.add(lc.collection.as_pointer())
+            for child in lc.children:
+                walk(child, ok)
+    walk(view_layer.layer_collection, True)
+    return shown
+
+
+def _renders(obj, shown: set) -> bool:
+    return not obj.hide_render and any(c.as_pointer() in shown for c in obj.users_collection)
+
+
+def _evaluated(obj, depsgraph):
+    ev = obj.evaluated_get(depsgraph)
+    return ev if ev is not None else obj
+
+
+def _surface_samples(mesh: Mesh, count=4000) -> np.ndarray:
+    """About ``count`` points spread over ``mesh``'s surface [m] (and its vertices)."""
+    area = float(mesh.areas().sum())
+    if area <= 0:
+        return mesh.vertices
+    points, _ = sample_points(mesh, math.sqrt(area / count), max_points=count)
+    return np.concatenate([points, mesh.vertices])
+
+
+def through_plate(plate: Plate, eye, world) -> tuple:
+    """(whether the line of sight from ``eye`` to each of ``world`` (N, 3) crosses the plate
+    with the point behind it, where the lines of sight of the points behind cross its plane
+    (M, 2) in plate coordinates); lengths in any one unit."""
+    eye, local = plate.to_plate(np.asarray(eye, np.float64)[None])[0], plate.to_plate(world)
+    behind = local[:, 2] < 0
+    t = eye[2] / (eye[2] - local[behind, 2])
+    hits = eye[:2] + t[:, None] * (local[behind, :2] - eye[:2])
+    inside = np.zeros(len(local), bool)
+    inside[behind] = (np.abs(hits) <= (plate.width / 2, plate.height / 2)).all(1)
+    return inside, hits
+
+
+def plate_coverage(plate: Plate, name: str, camera: Camera, meshes) -> str | None:
+    """A warning when the plate covers only part of what the camera sees of the emitters (the
+    rest would be cut from the pass), an :class:`ExportError` when it covers none of it (the
+    pass would be empty); None when it covers all."""
+    world = np.concatenate([_surface_samples(m) for m in meshes])
+    xy, depth = camera.project(world)
+    w, h = camera.resolution
+    seen = (depth > 0) & (xy[:, 0] >= 0) & (xy[:, 0] < w) & (xy[:, 1] >= 0) & (xy[:, 1] < h)
+    if not seen.any():
+        raise ExportError("no holographic object is in the camera's view")
+    inside, hits = through_plate(plate, camera.position, world[seen])
+    share = inside.mean()
+    if share == 0:
+        raise ExportError(f"plate '{name}' is not between the camera and the holographic "
+                          f"objects: the pass would be empty (move it onto the line of sight)")
+    if share < 1:
+        need = 2 * np.abs(hits).max(0) if len(hits) else (plate.width, plate.height)
+        return (f"plate '{name}' covers {share:.0%} of the holographic objects the camera "
+                f"sees; the rest is cut from the pass (it needs about {need[0]:.3g} x "
+                f"{need[1]:.3g} m where it stands)")
+    return None
+
+
+def _pixels(image) -> np.ndarray:
+    """Image pixels (h, w, 3), row 0 at the top as :func:`holo_core.scene.mesh.texture_lookup`
+    expects. Blender stores rows bottom-up; byte images are sRGB, float images linear."""
+    w, h = image.size
+    if not w or not h:
+        raise ExportError(f"image '{image.name}' has no pixels (is the file missing?)")
+    px = np.empty(w * h * image.channels, np.float32)
+    image.pixels.foreach_get(px)
+    px = px.reshape(h, w, image.channels)[::-1, :, :3].astype(np.float64)
+    if not image.is_float and image.colorspace_settings.name == "sRGB":
+        px = np.where(px <= 0.04045, px / 12.92, ((px + 0.055) / 1.055) ** 2.4)
+    return px

@@ -1,0 +1,1 @@
+"""What the user touches: properties, preferences, operators, panels and the viewport overlay."""

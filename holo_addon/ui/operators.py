@@ -1,0 +1,279 @@
+"""Operators: record_hologram, render_pass, setup_compositing, render.
+
+The work runs in a worker process (:mod:`holo_core.worker`; no OpenCL in Blender's process). In
+the interface a modal timer drains its messages (progress bar, status text, warnings as they
+arise) while every other event passes through, so Blender stays usable; Esc kills the worker,
+Enter stops a camera hologram's samples early and keeps the pass so far.
+``execute()`` (``blender --background``, scripts) waits for the same worker. Errors, a crashed
+or killed worker included, reach the user through ``self.report``.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import bpy
+
+from holo_core.io.hologram import HologramFileError
+from holo_core.worker import WorkerError
+
+from ..compositor import passes
+from ..export.scene import ExportError, viewport_matches_render
+from ..render import pipeline
+
+USER_ERRORS = (ExportError, HologramFileError, ValueError, OSError, WorkerError)
+
+
+def _report_log(op, level, text):
+    op.report({"WARNING"} if level >= logging.WARNING else {"INFO"}, text)
+
+
+class _PipelineOperator:
+    """Shared by the operators that run the pipeline; subclasses set ``render`` and may
+    override :meth:`finish`."""
+
+    render = True
+    _timer = None
+    _worker = None
+
+    @classmethod
+    def poll(cls, context):
+        if context.scene is None or context.scene.camera is None:
+            cls.poll_message_set("The scene needs a camera")
+            return False
+        return True
+
+    def _prepare(self, context):
+        try:
+            job = pipeline.prepare(context.scene, context.evaluated_depsgraph_get(),
+                                   render=self.render, bake=True)
+        except USER_ERRORS as e:
+            self.report({"ERROR"}, str(e))
+            return None
+        for warning in job.scene.warnings:
+            self.report({"WARNING"}, warning)
+        if not viewport_matches_render(context.scene):
+            self.report({"WARNING"}, "an emitter's modifiers differ between viewport and render: "
+                                     "this pass uses the viewport's; F12 and animation renders "
+                                     "make theirs at render settings")
+        return job
+
+    def execute(self, context):
+        job = self._prepare(context)
+        if job is None:
+            return {"CANCELLED"}
+        wm = context.window_manager
+        wm.progress_begin(0, 1000)
+        try:
+            outcome = pipeline.run(job, lambda f: wm.progress_update(int(f * 1000)),
+                                   lambda level, text: _report_log(self, level, text))
+        except USER_ERRORS as e:
+            self.report({"ERROR"}, f"{self.bl_label} failed: {e}")
+            return {"CANCELLED"}
+        finally:
+            wm.progress_end()
+        return self._done(context, job, outcome)
+
+    def invoke(self, context, event):
+        if bpy.app.background:
+            return self.execute(context)
+        job = self._prepare(context)
+        if job is None:
+            return {"CANCELLED"}
+        cached = pipeline.cached_pass(job)
+        if cached is not None:
+            return self._done(context, job, cached)
+        try:
+            self._worker = pipeline.start(job)
+        except OSError as e:
+            self.report({"ERROR"}, f"{self.bl_label}: the worker process did not start: {e}")
+            return {"CANCELLED"}
+        self._job = job
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.1, window=context.window)
+        wm.progress_begin(0, 1000)
+        wm.modal_handler_add(self)
+        context.workspace.status_text_set(f"Holo: {self.bl_label} (Esc to cancel)")
+        return {"RUNNING_MODAL"}
+
+    def modal(self, context, event):
+        if event.type == "ESC" and event.value == "PRESS":
+            self.cancel(context)
+            self.report({"WARNING"}, f"{self.bl_label} cancelled; earlier results kept")
+            return {"CANCELLED"}
+        if event.type in {"RET", "NUMPAD_ENTER"} and event.value == "PRESS" and \
+                self._worker.partial:
+            return self._keep(context)
+        if event.type != "TIMER" or event.timer is not self._timer:
+            return {"PASS_THROUGH"}  # the interface stays usable while the worker runs
+        wm = context.window_manager
+        for kind, value in self._worker.poll():
+            if kind == "progress":
+                wm.progress_update(int(value * 1000))
+                context.workspace.status_text_set(f"Holo: {self.bl_label} {value:.0%} "
+                                                  f"(Esc to cancel)")
+            elif kind == "log":
+                _report_log(self, *value)
+            elif kind == "partial":
+                context.workspace.status_text_set(
+                    f"Holo: {self.bl_label}: {value} samples so far (Enter keeps them, Esc "
+                    f"cancels)")
+            elif kind == "failed":
+                self._end(context)
+                self.report({"ERROR"}, f"{self.bl_label} failed: {value}")
+                return {"CANCELLED"}
+            else:
+                self._end(context)
+                return self._done(context, self._job, pipeline.outcome(self._job, value))
+        return {"PASS_THROUGH"}
+
+    def _keep(self, context):
+        """Stop the samples here: the latest running pass becomes the frame's pass."""
+        job = self._job
+        frame = pipeline.pass_file(job.output_dir, job.frame)
+        job.output_dir.mkdir(parents=True, exist_ok=True)
+        samples = self._worker.stop_and_keep(frame)
+        self._end(context)
+        if not samples:
+            self.report({"WARNING"}, f"{self.bl_label} stopped before its first sample; "
+                                     f"earlier results kept")
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"stopped at {samples} samples; that pass is kept")
+        return self._done(context, job, pipeline.outcome(job, {
+            "recorded": False, "pass_path": frame, "frame_path": frame,
+            "info": {"samples": samples}}))
+
+    def cancel(self, context):
+        """Esc, or Blender ending the operator (a file loaded, the window closed)."""
+        if self._worker is not None:
+            self._worker.cancel()
+        if self._timer is not None:
+            self._end(context)
+
+    def _end(self, context):
+        wm = context.window_manager
+        wm.event_timer_remove(self._timer)
+        self._timer = None
+        wm.progress_end()
+        context.workspace.status_text_set(None)
+
+    def _done(self, context, job, outcome):
+        pipeline.apply(context.scene, job, outcome)
+        msg = "camera hologram"
+        if outcome.info.get("cached"):
+            msg = "up to date"
+        elif outcome.holograms:
+            what = "recorded" if outcome.recorded else "up to date"
+            msg = f"hologram {what}: {outcome.holograms[0]}"
+        if outcome.pass_path is not None:
+            msg += f"; holographic pass: {outcome.pass_path}"
+            if "speckle_contrast" in outcome.info:
+                msg += (f" ({outcome.info['samples']} samples, speckle contrast "
+                        f"{outcome.info['speckle_contrast']:.3f})")
+        self.report({"INFO"}, msg)
+        return self.finish(context)
+
+    def finish(self, context):
+        return {"FINISHED"}
+
+
+class HOLO_OT_record_hologram(_PipelineOperator, bpy.types.Operator):
+    """Record the plate's hologram of the holographic objects (again only after a change)"""
+
+    bl_idname = "holo.record_hologram"
+    bl_label = "Record Hologram"
+    bl_options = {"REGISTER"}
+    render = False
+
+    @classmethod
+    def poll(cls, context):
+        if context.scene is not None and context.scene.holo.mode == "CAMERA":
+            cls.poll_message_set("Camera holograms are recorded with each render of the pass")
+            return False
+        return super().poll(context)
+
+
+class HOLO_OT_render_pass(_PipelineOperator, bpy.types.Operator):
+    """Render this frame's holographic pass from the scene camera (image and depth)"""
+
+    bl_idname = "holo.render_pass"
+    bl_label = "Render Holographic Pass"
+    bl_options = {"REGISTER"}
+
+
+class HOLO_OT_setup_compositing(bpy.types.Operator):
+    """Add the holographic pass to the compositor, depth-combined with Blender's render"""
+
+    bl_idname = "holo.setup_compositing"
+    bl_label = "Set Up Compositing"
+    bl_options = {"REGISTER", "UNDO"}
+
+    def execute(self, context):
+        try:
+            passes.setup(context.scene, pipeline.output_dir(context.scene))
+        except USER_ERRORS as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        self.report({"INFO"}, "compositor: holographic pass depth-combined with the render")
+        return {"FINISHED"}
+
+
+class HOLO_OT_render(_PipelineOperator, bpy.types.Operator):
+    """Render the holographic pass, composite it and render the image to the output path"""
+
+    bl_idname = "holo.render"
+    bl_label = "Render with Hologram"
+    bl_options = {"REGISTER"}
+
+    def finish(self, context):
+        if bpy.ops.holo.setup_compositing() != {"FINISHED"}:
+            return {"CANCELLED"}
+        scene = context.scene
+        if viewport_matches_render(scene):  # the pass is fresh: the render handler skips it
+            scene.holo["skip_pass_once"] = True
+        try:
+            if bpy.app.background:
+                bpy.ops.render.render(write_still=True)
+            else:
+                bpy.ops.render.render("INVOKE_DEFAULT", write_still=True)
+        finally:
+            if bpy.app.background:
+                scene.holo.pop("skip_pass_once", None)
+        return {"FINISHED"}
+
+
+class HOLO_OT_cancel_pass(bpy.types.Operator):
+    """Stop the holographic pass the render is making; the frame shows the raster alone"""
+
+    bl_idname = "holo.cancel_pass"
+    bl_label = "Cancel Pass"
+
+    @classmethod
+    def poll(cls, context):
+        return passes.RUNNING["frame"] is not None
+
+    def execute(self, context):
+        passes.RUNNING["cancel"] = True
+        self.report({"INFO"}, f"cancelling the holographic pass of frame "
+                              f"{passes.RUNNING['frame']}")
+        return {"FINISHED"}
+
+
+class HOLO_OT_report(bpy.types.Operator):
+    """Put an error in Blender's reports (for what fails outside an operator)"""
+
+    bl_idname = "holo.report"
+    bl_label = "Holo Report"
+    bl_options = {"INTERNAL"}
+
+    message: bpy.props.StringProperty()
+
+    def execute(self, context):
+        self.report({"ERROR"}, self.message)
+        return {"FINISHED"}
+
+
+CLASSES = (HOLO_OT_record_hologram, HOLO_OT_render_pass, HOLO_OT_setup_compositing,
+           HOLO_OT_render, HOLO_OT_cancel_pass, HOLO_OT_report)
+
+register, unregister = bpy.utils.register_classes_factory(CLASSES)

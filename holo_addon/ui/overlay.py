@@ -1,0 +1,140 @@
+"""The viewport overlay of the plate's coverage (Plate mode): the lines of sight from the
+scene camera through the plate's four corners, out to the farthest holographic object, and
+the plate's outline; green when the plate covers every holographic object the camera looks at
+through it, orange when it covers part (the rest is cut from the pass), red when none.
+
+The objects are judged by their bounding boxes' corners, so the overlay is quick to update on
+every change; recording checks the surfaces themselves (:func:`scene_export.plate_coverage`).
+Lines are computed when the scene changes (a depsgraph update, a frame change) and drawn from
+that cache, in Blender units in world space.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import bpy
+import numpy as np
+from bpy.app.handlers import persistent
+
+from ..export.scene import ExportError, emitter_instances, plate_from_object, through_plate
+
+COLOURS = {"ALL": (0.3, 0.9, 0.4, 0.9), "PART": (1.0, 0.6, 0.1, 0.9),
+           "NONE": (1.0, 0.25, 0.2, 0.9)}
+CORNERS = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1)]) / 2  # around the plate, in its sizes
+
+
+@dataclass(frozen=True)
+class Coverage:
+    """``lines`` (2K, 3) the segments' end points in world Blender units; ``state`` "ALL",
+    "PART" or "NONE" (of the emitters' bounding-box corners in view behind the plate)."""
+
+    lines: np.ndarray
+    state: str
+
+
+def coverage(scene, depsgraph) -> Coverage | None:
+    """What the overlay draws for ``scene`` as ``depsgraph`` evaluates it; None outside Plate
+    mode, or without one plate and a camera."""
+    plates = [o for o in scene.objects if o.holo.is_plate]
+    if scene.holo.mode != "PLATE" or len(plates) != 1 or scene.camera is None:
+        return None
+    try:
+        plate = plate_from_object(plates[0].evaluated_get(depsgraph), 1.0)  # Blender units
+    except ExportError:
+        return None
+    eye = np.array(scene.camera.evaluated_get(depsgraph).matrix_world.translation)
+    m = plate.matrix_world
+    corners = (CORNERS * (plate.width, plate.height)) @ m[:3, :2].T + m[:3, 3]
+    outline = np.stack([corners, np.roll(corners, -1, 0)], 1).reshape(-1, 3)
+    eye_z = plate.to_plate(eye[None])[0, 2]
+    boxes = _emitter_boxes(depsgraph)
+    if eye_z <= 0 or not len(boxes):  # a camera behind the plate sees nothing through it
+        return Coverage(outline, "NONE" if eye_z <= 0 else "ALL")
+    inside, _ = through_plate(plate, eye, boxes)
+    state = "ALL" if inside.all() else "PART" if inside.any() else "NONE"
+    depth = plate.to_plate(boxes)[:, 2]
+    reach = (eye_z - min(depth.min(), -eye_z)) / eye_z  # to the farthest object, or as far again
+    far = eye + reach * (corners - eye)
+    sight = np.stack([np.broadcast_to(eye, far.shape), far], 1).reshape(-1, 3)
+    end = np.stack([far, np.roll(far, -1, 0)], 1).reshape(-1, 3)
+    return Coverage(np.concatenate([outline, sight, end]), state)
+
+
+def _emitter_boxes(depsgraph) -> np.ndarray:
+    """The bounding-box corners (N, 3) of every holographic emitter the render draws, world
+    units."""
+    boxes = []
+    for inst, _ in emitter_instances(depsgraph):
+        m = np.array(inst.matrix_world)
+        boxes.append(np.array(inst.object.bound_box) @ m[:3, :3].T + m[:3, 3])
+    return np.concatenate(boxes) if boxes else np.empty((0, 3))
+
+
+_cache: dict = {}  # scene name → Coverage or None
+
+
+@persistent
+def _update(scene, depsgraph=None):
+    if depsgraph is not None and depsgraph.mode == "VIEWPORT":
+        _cache[scene.name] = coverage(scene, depsgraph) if scene.holo.show_coverage else None
+
+
+def refresh(context) -> None:
+    """The overlay turned on or off (Scene.holo.show_coverage)."""
+    if _handle:
+        _update(context.scene, context.evaluated_depsgraph_get())
+
+
+@persistent
+def _forget(*_):
+    _cache.clear()
+
+
+def _draw():
+    context = bpy.context
+    found = _cache.get(context.scene.name)
+    if found is None or not (context.scene.holo.show_coverage and
+                             context.space_data.overlay.show_overlays):
+        return
+    import gpu
+    from gpu_extras.batch import batch_for_shader
+    shader = gpu.shader.from_builtin("POLYLINE_UNIFORM_COLOR")
+    batch = batch_for_shader(shader, "LINES", {"pos": found.lines.tolist()})
+    shader.uniform_float("viewportSize", [float(n) for n in gpu.state.viewport_get()[2:]])
+    shader.uniform_float("lineWidth", 2.0)
+    shader.uniform_float("color", COLOURS[found.state])
+    gpu.state.blend_set("ALPHA")
+    batch.draw(shader)
+    gpu.state.blend_set("NONE")
+
+
+def _toggle(panel, context):
+    """In the viewport's Overlays popover, under Guides."""
+    panel.layout.prop(context.scene.holo, "show_coverage", text="Holo Plate Coverage")
+
+
+HANDLERS = (("depsgraph_update_post", _update), ("frame_change_post", _update),
+            ("load_post", _forget))
+_handle = []
+
+
+def register():
+    if bpy.app.background:  # nothing to draw
+        return
+    for name, fn in HANDLERS:
+        getattr(bpy.app.handlers, name).append(fn)
+    _handle.append(bpy.types.SpaceView3D.draw_handler_add(_draw, (), "WINDOW", "POST_VIEW"))
+    bpy.types.VIEW3D_PT_overlay_guides.append(_toggle)
+
+
+def unregister():
+    if not _handle:
+        return
+    bpy.types.VIEW3D_PT_overlay_guides.remove(_toggle)
+    bpy.types.SpaceView3D.draw_handler_remove(_handle.pop(), "WINDOW")
+    for name, fn in HANDLERS:
+        handlers = getattr(bpy.app.handlers, name)
+        if fn in handlers:
+            handlers.remove(fn)
+    _cache.clear()

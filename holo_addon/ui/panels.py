@@ -1,0 +1,78 @@
+"""Panels in the Properties editor: Render ▸ Holo (settings and actions), Object ▸ Holo."""
+
+from __future__ import annotations
+
+import bpy
+
+from ..compositor.passes import RUNNING, WARNINGS
+
+
+class HOLO_PT_scene(bpy.types.Panel):
+    bl_label = "Holo"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "render"
+
+    def draw(self, context):
+        h = context.scene.holo
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(h, "output_dir")
+        layout.prop(h, "mode")
+        col = layout.column(heading="Recording")
+        if h.mode == "CAMERA":
+            col.prop(h, "samples")
+        else:
+            col.prop(h, "max_resolution")
+            col.prop(h, "wavelength")
+            col.prop(h, "iterations")
+        col.prop(h, "seed")
+        col = layout.column(heading="Image")
+        col.prop(h, "supersample")
+        col.prop(h, "exposure")
+        if h.mode == "PLATE":
+            col.prop(h, "composition")
+            col.prop(h, "opacity_threshold")
+            layout.prop(h, "show_coverage")
+        layout.prop(h, "pass_on_render")
+        if RUNNING["frame"] is not None:  # a render is making its pass
+            box = layout.box()
+            box.label(text=f"Pass of frame {RUNNING['frame']}: {RUNNING['fraction']:.0%}",
+                      icon="TIME")
+            box.operator("holo.cancel_pass", icon="CANCEL")
+        if WARNINGS["texts"]:  # of the latest pass a render made
+            box = layout.box()
+            box.label(text=f"Pass of frame {WARNINGS['frame']}:", icon="ERROR")
+            for text in WARNINGS["texts"][-3:]:
+                box.label(text=text)
+        col = layout.column(align=True)
+        col.operator("holo.record_hologram", icon="REC")
+        col.operator("holo.render_pass", icon="RENDER_STILL")
+        col.operator("holo.setup_compositing", icon="NODE_COMPOSITING")
+        col.operator("holo.render", icon="RENDER_RESULT")
+
+
+class HOLO_PT_object(bpy.types.Panel):
+    bl_label = "Holo"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "object"
+
+    @classmethod
+    def poll(cls, context):
+        return context.object is not None and context.object.type == "MESH"
+
+    def draw(self, context):
+        h = context.object.holo
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(h, "is_plate")
+        if h.is_plate:
+            layout.label(text=f"Hologram: {h.hologram or 'not recorded yet'}")
+        else:
+            layout.prop(h, "emitter")
+
+
+CLASSES = (HOLO_PT_scene, HOLO_PT_object)
+
+register, unregister = bpy.utils.register_classes_factory(CLASSES)

@@ -1,0 +1,126 @@
+"""Holo settings stored in the .blend: ``Object.holo`` and ``Scene.holo``."""
+
+from __future__ import annotations
+
+import bpy
+from bpy.props import (
+    BoolProperty,
+    EnumProperty,
+    FloatProperty,
+    IntProperty,
+    PointerProperty,
+    StringProperty,
+)
+
+from ..blender.objects import raster_visibility
+from . import overlay
+
+# 4.5+ ask a path property to declare that it takes "//" (relative to the .blend); 4.2 has no
+# such option and takes it anyway
+BLEND_RELATIVE = {"PATH_SUPPORTS_BLEND_RELATIVE"} if bpy.app.version >= (4, 5, 0) else set()
+
+EMITTERS = [("NONE", "None", "An ordinary object, rasterized by Blender"),
+            ("POINTS", "Points", "Area-uniform point emitters on the surface (spherical waves)"),
+            ("TRIANGLES", "Triangles", "Textured planar triangles carried by tilted-plane "
+                                       "propagation")]
+
+
+def _emitter_changed(self, context):
+    raster_visibility(self.id_data)
+
+
+def _plate_changed(self, context):
+    obj = self.id_data
+    raster_visibility(obj)
+    if self.is_plate:
+        obj.display_type = "WIRE"
+
+
+class HoloObjectSettings(bpy.types.PropertyGroup):
+    emitter: EnumProperty(name="Emitter", items=EMITTERS, default="NONE",
+                          update=_emitter_changed,
+                          description="How this mesh is recorded into the hologram")
+    is_plate: BoolProperty(name="Hologram Plate", default=False, update=_plate_changed,
+                           description="This plane is the holographic plate: its local z = 0 "
+                                       "plane, viewed from its +Z side")
+    hologram: StringProperty(name="Hologram", default="", options={"HIDDEN"},
+                             description="The recorded hologram file (first iteration), "
+                                         "written by Record Hologram")
+    fingerprint: StringProperty(name="Fingerprint", default="", options={"HIDDEN"},
+                                description="Digest of what the hologram was recorded from")
+
+
+def _show_coverage(_settings, context):
+    overlay.refresh(context)
+
+
+class HoloSceneSettings(bpy.types.PropertyGroup):
+    mode: EnumProperty(
+        name="Hologram", default="CAMERA",
+        items=[("CAMERA", "Camera", "Record the hologram for the render camera, on a virtual "
+                                    "plate at its lens: sharp at the render's resolution, with "
+                                    "its depth of field (no plate needed)"),
+               ("PLATE", "Plate", "Record the plate's hologram once and view it from the "
+                                  "camera, as a holographic display would show it: its "
+                                  "sharpness is limited by the plate's size and resolution")],
+        description="Where the hologram is recorded")
+    samples: IntProperty(name="Samples", default=16, min=1, max=4096,
+                         description="Renders with independent random phases, averaged: more "
+                                     "samples, less speckle")
+    output_dir: StringProperty(name="Output Folder", subtype="DIR_PATH", default="//holo/",
+                               options=BLEND_RELATIVE,
+                               description="Where holograms and the holographic pass of each "
+                                           "frame are written (// is the .blend's folder)")
+    max_resolution: IntProperty(name="Max Hologram Size", default=1024, min=64, max=8192,
+                                description="Largest hologram side in samples; the optics are "
+                                            "chosen automatically up to this size")
+    wavelength: FloatProperty(name="Wavelength", default=0.0, min=0.0, max=1.0, precision=6,
+                              subtype="DISTANCE", unit="LENGTH",
+                              description="Recording wavelength (0: chosen for the image's "
+                                          "resolution)")
+    iterations: IntProperty(name="Iterations", default=4, min=1, max=64,
+                            description="Recordings with independent random phases, averaged "
+                                        "(speckle, Sect. VII-E) and used for depth")
+    supersample: IntProperty(name="Supersample", default=2, min=1, max=4,
+                             description="Render at this multiple of the resolution, then "
+                                         "low-pass and downsample")
+    composition: EnumProperty(name="Composition", default="mean",
+                              items=[("mean", "Mean", "Average the iterations' intensities"),
+                                     ("max", "Maximum", "Brightest iteration per pixel")],
+                              description="How the recordings combine into the image: the mean "
+                                          "is smoother, the maximum brighter")
+    exposure: FloatProperty(name="Exposure", default=0.0, soft_min=-10.0, soft_max=10.0,
+                            description="Brightness of the holographic objects in stops, as "
+                                        "Blender's Film Exposure: +1 doubles it")
+    opacity_threshold: FloatProperty(name="Opacity Threshold", default=0.5, min=0.0, max=1.0,
+                                     description="Alpha is 1 where the holographic surfaces "
+                                                 "cover more than this fraction of a pixel "
+                                                 "(0.5: at the geometric silhouette)")
+    seed: IntProperty(name="Seed", default=0, min=0, description="Random phases and sampling")
+    show_coverage: BoolProperty(name="Plate Coverage", default=True, update=_show_coverage,
+                                description="Draw in the viewport the lines of sight the "
+                                            "plate covers from the camera: green when they "
+                                            "take in every holographic object, orange when "
+                                            "part, red when none")
+    pass_on_render: BoolProperty(name="Pass on Every Render", default=True,
+                                 description="Render the holographic pass before each Blender "
+                                             "render or animation frame (recording again only "
+                                             "when the scene changed)")
+
+
+CLASSES = (HoloObjectSettings, HoloSceneSettings)
+
+
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(CLASSES)
+
+
+def register():
+    _register_classes()
+    bpy.types.Object.holo = PointerProperty(type=HoloObjectSettings)
+    bpy.types.Scene.holo = PointerProperty(type=HoloSceneSettings)
+
+
+def unregister():
+    del bpy.types.Scene.holo
+    del bpy.types.Object.holo
+    _unregister_classes()

@@ -1,0 +1,163 @@
+"""Camera holograms: the object wave recorded on a virtual plate at the camera's entrance pupil,
+and the image the camera forms from it (Sect. VII: any wave field can be evaluated on the
+aperture of an arbitrarily placed camera).
+
+A camera uses only the light that reaches its pupil, so the samples go there:
+
+- Optics (:func:`choose_optics`). A pupil of diameter D resolves λ/D; λ = D·Δ/s makes that
+  one *fine pixel* (Δ the pixel angle, s the supersampling). A lens keeps its real aperture
+  (lens/f-stop) and focus, so the defocus is the camera's. Without one, the pupil is the
+  largest whose defocus over the emitters' depth range stays within a fine pixel.
+- Bins. The pupil fills its FFT window (h·dy = w·dx = D): its spectrum's bins lie b = Δ/s
+  apart in direction cosine, each bin one direction of arrival, covering the field of view
+  and a margin for blur.
+- Emitters (:func:`rasterize`). The surfaces the camera sees, one emitter per bin: each bin's
+  ray meets the nearest triangle (a depth buffer, perspective-correct attributes), which
+  emits its colour from the hit point, at distance R, with a random phase per look (speckle
+  is averaged over looks, Sect. VII-E). Bare points go to their nearest bin.
+- Object wave (:func:`object_wave`). By depth layers: O = Σ_l exp(ik(√(ρ²+z_l²) − z_l))·
+  F⁻¹[S_l], where S_l holds the layer's emitters as amp·exp(i(kR + φ)) at their bins. Each
+  plane wave is exact; each layer's curvature is that of its distance (the Fresnel
+  approximation per layer, spaced so that the error stays within a quarter wave at the pupil's
+  rim: Rayleigh's depth of focus).
+- Image (:func:`render_camera`). The pupil cut by the iris (a raised-cosine rim against
+  ringing, Fig. 9), the thin lens of Eq. 24, and the angular spectrum read at each pixel's
+  direction cosines (Eq. 22) by the ES kernel of a non-uniform FFT: no interpolation blur.
+  Radiance |A|² / (N·Σw²) shows a surface's own colour whatever the aperture or the
+  resolution. Depth: the two-wavelength phase difference (Eq. 26–30) of the colour image and
+  the depth partner's (λ2 = ε·λ1, unit emitters), whose intensity is also each pixel's
+  coverage (alpha).
+- The paper's route (:func:`intensity_hologram`, :func:`reconstruct_object_wave`): the object
+  wave is recorded as H = |O + R|² with an off-axis plane reference on a grid 4× finer in x,
+  and reconstructed as R'·H with the DC and twin terms filtered off (Sect. V–VI). Rendering
+  the object wave directly is that reconstruction's ideal filter.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .. import validate
+from ..optics.depth import partner_wavelength
+from ..optics.pupil import Pupil, defocus_limited_diameter
+from ..propagation import grid
+from ..scene.camera import Camera
+
+log = logging.getLogger(__name__)
+SUPERSAMPLE = 2        # fine pixels per pixel (per axis): the pupil resolves one fine pixel
+LAYER_PHASE = math.pi / 2  # a layer's largest curvature error at the pupil's rim [rad]: a
+                           # quarter wave, Rayleigh's depth of focus
+MAX_LAYERS = 512
+IRIS_TAPER = 0.1       # the iris's raised-cosine rim, a fraction of its radius
+DEPTH_MARGIN = 1.25    # the depth pair's unambiguous range over the scene's depth extent
+TAPS, ES_TABLE = 6, 4096
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PupilOptics:
+    """The camera hologram's optics.
+
+    wavelength, depth_wavelength : λ1 of the colour channels and λ2 = ε·λ1 of the depth partner [m]
+    pupil : the entrance pupil: its diameter D [m] and the planar distance in focus [m] (a thin
+        lens, Eq. 24): the camera's, or for a camera without depth of field the middle of the
+        emitters' depth range in 1/z
+    supersample : s, fine pixels per pixel per axis
+    bin : direction-cosine spacing of the spectrum's bins (b = Δ/s)
+    shape : (h, w) pupil samples = spectrum bins
+    layers : planar distances z_l [m] of the depth layers, nearest first
+    depth_range : (near, far) planar depths [m] of the emitters
+    centre : the ray distance [m] the depth pair's phase is unwrapped around (Eq. 30)
+    """
+
+    wavelength: float
+    depth_wavelength: float
+    pupil: Pupil
+    supersample: int
+    bin: float
+    shape: tuple
+    layers: tuple
+    depth_range: tuple
+    centre: float
+
+    @property
+    def diameter(self) -> float:
+        """The pupil's diameter D [m]."""
+        return self.pupil.diameter
+
+    @property
+    def focus(self) -> float | None:
+        """The planar distance in focus [m]."""
+        return self.pupil.focus
+
+    def pitch(self, wavelength=None) -> tuple[float, float]:
+        """(dy, dx) [m] of the pupil's samples at ``wavelength`` (default λ1): the bins stay
+        in the same directions, so the pupil scales with λ."""
+        lam = wavelength or self.wavelength
+        h, w = self.shape
+        return lam / (h * self.bin), lam / (w * self.bin)
+
+    def layer_of(self, depth) -> np.ndarray:
+        """Index of the layer each planar ``depth`` [m] belongs to (nearest in 1/z)."""
+        inv = 1 / np.asarray(self.layers)
+        return np.argmin(np.abs(1 / np.asarray(depth)[:, None] - inv[None, :]), axis=1)
+
+    def describe(self) -> str:
+        h, w = self.shape
+        lens = f"focus {self.focus:.4g} m" if self.focus else "no lens"
+        return (f"camera hologram {w}x{h} on a {self.diameter * 1e3:.3g} mm pupil ({lens}), "
+                f"λ = {self.wavelength:.4g} m (depth λ2 = {self.depth_wavelength:.6g} m), "
+                f"{len(self.layers)} depth layers, {self.supersample}x supersampling")
+
+
+def choose_optics(camera: Camera, depth_range, *, supersample=SUPERSAMPLE,
+                  pupil_diameter: float | None = None) -> PupilOptics:
+    """Optics for ``camera`` and emitters at planar depths ``depth_range`` (near, far) [m]
+    (module docstring). ``pupil_diameter`` [m] overrides the pupil's diameter."""
+    s = int(validate.at_least("supersample", supersample, 1))
+    near, far = (validate.positive("depth_range", d, "m") for d in depth_range)
+    near, far = min(near, far), max(near, far)
+    b = camera.pixel_angle() / s
+    if camera.fstop is not None:
+        focus, diameter = camera.focus_distance, camera.aperture_diameter
+    else:  # a pinhole: the largest pupil defocused by one fine pixel, at most f/1
+        diameter, focus = defocus_limited_diameter(b, near, far)
+        diameter = min(diameter, camera.lens * 1e-3)
+    if pupil_diameter is not None:
+        diameter = validate.positive("pupil_diameter", pupil_diameter, "m")
+    lam = diameter * b
+    blur = diameter * max(abs(1 / near - 1 / focus), abs(1 / far - 1 / focus))
+    margin = math.ceil(blur / b) + TAPS + 2
+    alpha, beta, gamma = replace(camera, resolution=tuple(r * s for r in camera.resolution)
+                                 ).direction_cosines()
+    shape = tuple(grid.next_fast_len(2 * (math.ceil(np.abs(a).max() / b) + margin))
+                  for a in (beta, alpha))
+    step = 16 * LAYER_PHASE * lam / (2 * math.pi * diameter**2)  # layer spacing in 1/z
+    n = max(1, math.ceil((1 / near - 1 / far) / step))
+    if n > MAX_LAYERS:
+        validate.warn_sampling(f"the emitters' depth range needs {n} layers at this aperture; "
+                               f"using {MAX_LAYERS} (defocus phase error up to "
+                               f"{LAYER_PHASE * n / MAX_LAYERS:.2g} rad)")
+        n = MAX_LAYERS
+    inv = 1 / far + (np.arange(n) + 0.5) * (1 / near - 1 / far) / n
+    farthest = far / float(gamma.min())  # the longest ray to the far depth
+    depth_half = DEPTH_MARGIN * max(farthest - near, lam) / 2
+    optics = PupilOptics(wavelength=lam, depth_wavelength=partner_wavelength(lam, depth_half),
+                         pupil=Pupil(diameter=diameter, focus=focus),
+                         supersample=s, bin=b, shape=shape, layers=tuple(sorted(1 / inv)),
+                         depth_range=(near, far), centre=(near + farthest) / 2)
+    log.info("optics: %s", optics.describe())
+    return optics
+
+
+def iris(optics: PupilOptics, h, w) -> np.ndarray:
+    """The iris's transmission on the pupil's samples (what pupil_window applies)."""
+    dy, dx = optics.pitch()
+    y, x = grid.signed_indices(h)[:, None] * dy, grid.signed_indices(w)[None, :] * dx
+    rho, radius = np.hypot(x, y), optics.diameter / 2
+    inner = (1 - IRIS_TAPER) * radius
+    edge = 0.5 * (1 + np.cos(np.pi * np.clip(rho - inner, 0, None) / (radius - inner)))
+    return np.where(rho >= radius, 0.0, np.where(rho > inner, edge, 1.0))

@@ -1,0 +1,287 @@
+"""The hologram and its file: OpenEXR, float32 channels per wavelength, metadata as JSON.
+
+Channels, for colour c = 0, 1, ...: ``c<c>.H`` the intensity hologram, and optionally
+``c<c>.O.re`` / ``c<c>.O.im`` the complex object wave. The header attribute ``holo`` holds
+the metadata (see :func:`metadata`); files are written atomically and read back bit-exactly.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__, validate
+from ..scene.hologram import Hologram
+from ..validate import InputError
+from .image import write_exr
+
+FORMAT = "holo-hologram"
+FORMAT_VERSION = 2  # 2: the depth partner 'Z' records every emitter at unit intensity
+
+
+class HologramFileError(InputError):
+    """A hologram file that cannot be read; the message names the file and the problem."""
+
+
+def metadata(h: Hologram) -> dict:
+    return {
+        "format": FORMAT, "format_version": FORMAT_VERSION, "software": f"holo {__version__}",
+        "wavelengths_m": list(map(float, h.wavelengths)), "pitch_m": float(h.pitch),
+        "size_px": list(h.shape), "plate_to_world": np.asarray(h.plate).ravel().tolist(),
+        "reference": {"angle_rad": float(h.reference_angle),
+                      "azimuth_rad": float(h.reference_azimuth),
+                      "amplitudes": list(map(float, h.reference_amplitudes))},
+        "bounds_m": np.asarray(h.bounds).tolist(), "object_wave": h.object_wave is not None,
+        "band_sin": float(h.band), "channels": list(h.channels),
+        "point_density_per_m2": float(h.point_density),
+    }
+
+
+def write_hologram(path, h: Hologram) -> Path:
+    """Write ``h`` to ``path`` (.exr) through a temporary file and a rename; an empty or
+    non-finite hologram is refused, never written."""
+    check_pixels(str(path), h)
+    channels = {}
+    for c in range(len(h.wavelengths)):
+        channels[f"c{c}.H"] = h.intensity[c]
+        if h.object_wave is not None:
+            channels[f"c{c}.O.re"] = h.object_wave[c].real
+            channels[f"c{c}.O.im"] = h.object_wave[c].imag
+    write_exr(path, channels, holo=json.dumps(metadata(h)))
+    return path
+
+
+def check_pixels(name: str, h: Hologram) -> None:
+    """:class:`HologramFileError` naming ``name`` unless the intensity holds samples, all
+    finite and >= 0, and the object wave (if any) is finite."""
+    if h.intensity.size == 0:
+        raise HologramFileError(f"{name}: the hologram holds no samples")
+    if not np.isfinite(h.intensity).all() or (h.intensity < 0).any():
+        raise HologramFileError(f"{name}: the intensity holds NaN, infinite or negative values "
+                                f"(it must be finite and >= 0)")
+    if h.object_wave is not None and not np.isfinite(h.object_wave).all():
+        raise HologramFileError(f"{name}: the object wave holds NaN or infinite values")
+
+
+def read_hologram(path) -> Hologram:
+    """Read a hologram written by :func:`write_hologram`; :class:`HologramFileError` naming the
+    file and the problem if it is missing, not an EXR, damaged, too large for the memory, of
+    an unknown format version, lacks a channel, or its metadata or pixels are out of range
+    (every metadata field is checked, see :func:`_meta`)."""
+    path = Path(path)
+    header, names = _read(path)
+    meta = _meta(path, header)
+    colours = range(len(meta["wavelengths_m"]))
+    wanted = [f"c{c}.H" for c in colours]
+    if meta["object_wave"]:
+        wanted += [f"c{c}.O.{p}" for c in colours for p in ("re", "im")]
+    missing = [n for n in wanted if n not in names]
+    if missing:
+        raise HologramFileError(f"{path}: missing channel(s) {', '.join(missing)}")
+    shape = tuple(meta["size_px"])
+    for n in wanted:
+        if names[n].shape != shape:
+            raise HologramFileError(f"{path}: channel {n} is {names[n].shape}, metadata says "
+                                    f"{shape}")
+    wave = None
+    if meta["object_wave"]:
+        wave = np.stack([names[f"c{c}.O.re"] + 1j * names[f"c{c}.O.im"] for c in colours])
+        wave = wave.astype(np.complex64)
+    ref = meta["reference"]
+    try:
+        h = Hologram(intensity=np.stack([names[f"c{c}.H"] for c in colours]),
+                     wavelengths=tuple(meta["wavelengths_m"]), pitch=meta["pitch_m"],
+                     reference_angle=ref["angle_rad"], reference_azimuth=ref["azimuth_rad"],
+                     reference_amplitudes=tuple(ref["amplitudes"]), object_wave=wave,
+                     plate=np.array(meta["plate_to_world"], np.float64).reshape(4, 4),
+                     bounds=np.array(meta["bounds_m"], np.float64), band=meta["band_sin"],
+                     channels=tuple(meta["channels"]),
+                     point_density=meta["point_density_per_m2"])
+    except ValueError as e:
+        raise HologramFileError(f"{path}: {e}") from None
+    check_pixels(str(path), h)
+    return h
+
+
+def _read(path: Path, what="hologram"):
+    from .image import read_exr
+    try:
+        return read_exr(path, what=what)
+    except HologramFileError:
+        raise
+    except ValueError as e:
+        raise HologramFileError(str(e)) from None
+
+
+def _meta(path: Path, header) -> dict:
+    """The ``holo`` metadata, every field checked against its type and range."""
+    if "holo" not in header:
+        raise HologramFileError(f"{path}: an EXR image without hologram metadata; "
+                                f"import it with import_acquired(pitch=, wavelength=, ...)")
+    try:
+        meta = json.loads(header["holo"])
+    except (TypeError, ValueError, RecursionError) as e:
+        raise HologramFileError(f"{path}: damaged hologram metadata ({e})") from None
+    if not isinstance(meta, dict):
+        raise HologramFileError(f"{path}: hologram metadata must be a JSON object")
+    if meta.get("format") != FORMAT:
+        raise HologramFileError(f"{path}: metadata format {meta.get('format')!r}, "
+                                f"expected {FORMAT!r}")
+    if meta.get("format_version") != FORMAT_VERSION:
+        raise HologramFileError(f"{path}: format version {meta.get('format_version')!r} is "
+                                f"not supported (this is holo {__version__}, which reads "
+                                f"version {FORMAT_VERSION})")
+    meta = {"band_sin": 0.0, "channels": [], "point_density_per_m2": 0.0, **meta}
+    schema = _Schema(path, meta)
+    lambdas = schema.numbers("wavelengths_m", "> 0", lambda v: v > 0, shape="any")
+    if not 1 <= len(lambdas) <= MAX_CHANNELS:
+        schema.fail("wavelengths_m", f"1 to {MAX_CHANNELS} wavelengths [m]")
+    schema.numbers("pitch_m", "> 0 [m]", lambda v: v > 0)
+    rows, cols = schema.numbers("size_px", "two integers >= 1",
+                                lambda v: v >= 1 and v == int(v), shape=2)
+    meta["size_px"] = [int(rows), int(cols)]
+    schema.numbers("plate_to_world", "16 finite numbers (a rigid pose)", shape=16)
+    ref = meta.get("reference")
+    if not isinstance(ref, dict):
+        schema.fail("reference", "an object with angle_rad, azimuth_rad and amplitudes")
+    sub = _Schema(path, ref, "reference.")
+    sub.numbers("angle_rad", "in [0, π/2)", lambda v: 0 <= v < math.pi / 2)
+    sub.numbers("azimuth_rad", "finite")
+    amplitudes = sub.numbers("amplitudes", f"{len(lambdas)} numbers >= 0 (or none)",
+                             lambda v: v >= 0, shape="any")
+    if len(amplitudes) not in (0, len(lambdas)):
+        sub.fail("amplitudes", f"{len(lambdas)} numbers >= 0 (or none)")
+    bounds = np.reshape(schema.numbers("bounds_m", "two corners (x, y, z) [m]", shape=(2, 3)),
+                        (2, 3))
+    if (bounds[0] > bounds[1]).any():
+        schema.fail("bounds_m", "a min corner <= the max corner")
+    if not isinstance(meta.get("object_wave"), bool):
+        schema.fail("object_wave", "true or false")
+    schema.numbers("band_sin", "in [0, 1)", lambda v: 0 <= v < 1)
+    schema.numbers("point_density_per_m2", ">= 0 [1/m²]", lambda v: v >= 0)
+    names = meta["channels"]
+    if not isinstance(names, list) or (names and (
+            len(names) != len(lambdas) or not all(n in CHANNEL_ROLES for n in names))):
+        schema.fail("channels", f"one of {'/'.join(CHANNEL_ROLES)} per wavelength")
+    return meta
+
+
+MAX_CHANNELS = 16
+CHANNEL_ROLES = ("R", "G", "B", "Y", "Z")
+
+
+class _Schema:
+    """Checks the fields of one JSON object of a hologram file's metadata."""
+
+    def __init__(self, path, obj, prefix=""):
+        self.path, self.obj, self.prefix = path, obj, prefix
+
+    def fail(self, key, allowed):
+        value = repr(self.obj.get(key, "missing"))[:80]
+        raise HologramFileError(f"{self.path}: metadata {self.prefix}{key} must be {allowed}; "
+                                f"got {value}")
+
+    def numbers(self, key, allowed, ok=lambda v: True, shape=None):
+        """The field as a number, or with a ``shape`` (a length, a tuple of them, or "any"
+        length) as a flat list of numbers; each finite, not a bool, and ``ok``."""
+        value = self.obj.get(key)
+        flat = [value] if shape is None else _flatten(value, shape)
+        if flat is None or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                   and math.isfinite(v) and ok(v) for v in flat):
+            self.fail(key, allowed)
+        return flat[0] if shape is None else flat
+
+
+def _flatten(value, shape):
+    """``value`` (nested lists) flattened when it has ``shape`` (an int, a tuple, or "any"
+    for a list of any length), else None."""
+    dims = shape if isinstance(shape, tuple) else (shape,)
+    if not isinstance(value, list) or (dims[0] != "any" and len(value) != dims[0]):
+        return None
+    if len(dims) == 1:
+        return value
+    parts = [_flatten(v, dims[1:]) for v in value]
+    return None if any(p is None for p in parts) else [x for p in parts for x in p]
+
+
+def import_acquired(path, *, pitch, wavelength, reference_angle=0.0, reference_azimuth=0.0):
+    """An acquired (real) hologram from a grayscale PNG, TIFF or EXR image.
+
+    ``pitch`` and ``wavelength`` [m], ``reference_angle`` ϑ in [0, π/2) and
+    ``reference_azimuth`` φ [rad] describe the recording. Each image mode is read as the
+    intensity it records: colour (RGB, a palette's colours, CMYK, YCbCr) is averaged to grey,
+    alpha is dropped; integers scale to [0, 1] by their bit depth (8, 16; a 32-bit integer
+    image by the smallest of 2⁸−1, 2¹⁶−1, 2³²−1 that holds its values, as 16-bit scans are
+    often stored in int32 TIFFs); an EXR gives its Y channel, else the mean of R, G, B, else
+    its only channel. The size is checked against the memory budget before pixels are read.
+    """
+    pitch = validate.positive("pitch", pitch, "m")
+    wavelength = validate.positive("wavelength", wavelength, "m")
+    angle = validate.finite("reference_angle", reference_angle, "rad")
+    if not 0 <= angle < math.pi / 2:
+        raise InputError(f"reference_angle must be in [0, π/2) rad; got {angle!r}")
+    azimuth = validate.finite("reference_azimuth", reference_azimuth, "rad")
+    path = Path(path)
+    if not path.is_file():
+        raise HologramFileError(f"{path}: no such file")
+    image = _exr_grey(path) if path.suffix.lower() == ".exr" else _image_grey(path)
+    h = Hologram(intensity=image[None].astype(np.float32), wavelengths=(wavelength,),
+                 pitch=pitch, reference_angle=angle, reference_azimuth=azimuth,
+                 reference_amplitudes=(1.0,))
+    check_pixels(str(path), h)
+    return h
+
+
+def _exr_grey(path: Path) -> np.ndarray:
+    _, chans = _read(path, "scan")
+    if "Y" in chans:
+        return chans["Y"].astype(np.float64)
+    rgb = [chans[n] for n in ("R", "G", "B") if n in chans]
+    if rgb:
+        return np.mean(rgb, axis=0, dtype=np.float64)
+    if len(chans) == 1:
+        return next(iter(chans.values())).astype(np.float64)
+    raise HologramFileError(f"{path}: an EXR scan needs a Y channel, R/G/B channels or a "
+                            f"single channel; it has {', '.join(sorted(chans))[:200]}")
+
+
+_AS_RGB = {"P": "RGBA", "PA": "RGBA", "CMYK": "RGB", "YCbCr": "RGB", "LAB": "RGB",
+           "HSV": "RGB", "RGBX": "RGB", "RGBa": "RGBA", "La": "LA"}
+
+
+def _image_grey(path: Path) -> np.ndarray:
+    from PIL import Image
+
+    from ..memory import check_host
+    try:
+        with warnings.catch_warnings():  # the memory check below is the limit, not PIL's guess
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            im = Image.open(path)
+        with im:
+            w, h = im.size
+            check_host(f"{path} (scan, {w}x{h} pixels)", 8.0 * 4 * w * h)
+            im.load()
+            if im.mode in _AS_RGB:
+                im = im.convert(_AS_RGB[im.mode])
+            mode, a = im.mode, np.asarray(im)
+    except InputError:
+        raise
+    except Exception as e:  # noqa: BLE001 -- PIL's errors for damaged files vary by format
+        raise HologramFileError(f"{path}: not a readable PNG/TIFF image ({type(e).__name__}: "
+                                f"{e})") from None
+    if mode in ("LA", "RGBA"):
+        a = a[..., :-1]
+    scale = 1.0
+    if a.dtype.kind in "iu":
+        if a.size and a.min() < 0:
+            raise HologramFileError(f"{path}: a scan of signed integers holds negative values; "
+                                    f"intensities must be >= 0")
+        top = int(a.max()) if a.size else 0
+        scale = 255 if a.dtype.itemsize == 1 else 65535 if a.dtype.itemsize == 2 else \
+            next(s for s in (255, 65535, 2**32 - 1) if top <= s)
+    a = a.astype(np.float64) / scale
+    return a.mean(axis=2) if a.ndim == 3 else a

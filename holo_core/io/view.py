@@ -1,0 +1,41 @@
+"""Image generation: a camera anywhere in front of the hologram (Sect. VII).
+
+Per wavelength: the reconstructed wave (Sect. VI) is carried to the camera's aperture plane by
+tilt plus offset propagation (Sect. IV-D); the aperture is cut out as a disc, apodized by the
+cosine window of Fig. 9 and, for a thin lens, multiplied by Eq. 24's phase; its angular
+spectrum is then read at each pixel's direction cosines (Eq. 22) by bilinear weighting. The
+image holds the complex amplitude A(α/λ, β/λ) [field·m²] of the plane wave from each pixel's
+direction; the radiance is |A|² / (λ²·∫w²) (power per aperture area and projected solid
+angle), so a surface of point emitters of intensity I and density σ shows radiance σ·I.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..validate import InputError
+from ..view import RenderResult
+from .image import srgb, write_exr
+
+
+def write_view(result: RenderResult, path, *, layer="ViewLayer") -> tuple[Path, Path]:
+    """Write ``path`` (.exr, multilayer: ``<layer>.Combined.R/G/B/A`` premultiplied float32 and
+    ``<layer>.Depth.Z``, as Blender's Image node reads them) and a PNG preview beside it, as
+    one unit: both are renamed into place together, or neither is. A view with NaN or
+    infinite values, or no pixels, is refused."""
+    path = Path(path).with_suffix(".exr")
+    planes = {"rgb": result.rgb, "alpha": result.alpha, "depth": result.depth}
+    for name, a in planes.items():
+        if not np.size(a) or not np.isfinite(a).all():
+            raise InputError(f"{path}: the view's {name} is empty or not finite; nothing is "
+                             f"written")
+    rgb = result.rgb * result.alpha[..., None]  # premultiplied (emission: dark where clear)
+    channels = {f"{layer}.Combined.{c}": rgb[..., i] for i, c in enumerate("RGB")}
+    channels[f"{layer}.Combined.A"] = result.alpha
+    channels[f"{layer}.Depth.Z"] = result.depth
+    write_exr(path, channels, preview=srgb(result.rgb),
+              holo=json.dumps(result.info, default=float))
+    return path, path.with_suffix(".png")

@@ -1,0 +1,74 @@
+"""The camera's entrance pupil, and the pinhole rules of both renderers side by side.
+
+A pupil of diameter D resolves the angle λ/D (Sect. VII-A); a thin lens (Eq. 24) focuses it
+on one distance, and defocus then blurs by D·|1/z − 1/focus| (the camera's depth of field).
+Without a lens a pinhole also blurs geometrically by D/r at distance r, so each renderer picks
+the pinhole that balances the two for its own sampling:
+
+- :func:`camera_pupil` (plate views): λ/D spans ``PINHOLE_SAMPLES`` pixels, D ≤ √(λ·r);
+- :func:`pinhole_wavelength` (plate sampling): the λ at which both blurs reach two pixels,
+  λ = 4Δ²r;
+- :func:`defocus_limited_diameter` (camera holograms): the widest pupil, focused in the middle
+  of the depth range in 1/z, that blurs no more than one angle ``b``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .. import validate
+from ..scene.camera import Camera
+
+PINHOLE_SAMPLES = 2         # a pinhole's resolution λ/D spans this many pixels (alias-free |A|²)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Pupil:
+    """The camera's entrance pupil.
+
+    diameter : [m]
+    focus : distance [m] of the plane in focus (thin lens, Eq. 24), or None for a pinhole
+    apodize : the cosine window of Fig. 9 (1 at the centre, 0 at the rim) instead of a hard edge
+    lens_wavelength : λ [m] the lens is designed for; other wavelengths focus at
+        focus·λ_lens/λ (chromatic aberration, Sect. VII-B). None: no aberration.
+    """
+
+    diameter: float
+    focus: float | None = None
+    apodize: bool = True
+    lens_wavelength: float | None = None
+
+    def __post_init__(self):
+        validate.positive("aperture diameter", self.diameter, "m")
+        if self.focus is not None:
+            validate.positive("focus distance", self.focus, "m")
+        if self.lens_wavelength is not None:
+            validate.positive("lens_wavelength", self.lens_wavelength, "m")
+
+
+def camera_pupil(camera: Camera, wavelength: float, distance: float, *,
+                    apodize=True) -> Pupil:
+    """The camera's own lens (diameter lens/N, its focus), or a pinhole at ``wavelength`` [m]
+    for objects ``distance`` [m] away: as wide as the alias-free size λ/D = PINHOLE_SAMPLES
+    pixels (Sect. VII-A, VII-D) allows, but no wider than √(λ·distance), beyond which its own
+    geometric blur D/distance outgrows its diffraction λ/D."""
+    if camera.fstop is not None:
+        return Pupil(diameter=camera.aperture_diameter, focus=camera.focus_distance,
+                    apodize=apodize)
+    alias_free = wavelength / (PINHOLE_SAMPLES * camera.pixel_angle())
+    return Pupil(diameter=min(alias_free, math.sqrt(wavelength * distance)), apodize=apodize)
+
+
+def pinhole_wavelength(pixel_angle: float, distance: float) -> float:
+    """λ [m] at which a pinhole's diffraction λ/D and its geometric blur D/r both span two
+    pixels of ``pixel_angle`` [rad] for objects ``distance`` [m] away: λ = 4Δ²r."""
+    return 4 * pixel_angle * pixel_angle * distance
+
+
+def defocus_limited_diameter(bin_angle: float, near: float, far: float) -> tuple[float, float]:
+    """(diameter [m], focus [m]) of the widest pupil whose defocus over planar depths
+    ``near`` … ``far`` [m] stays within ``bin_angle`` [rad], focused on their middle in 1/z."""
+    focus = 2 / (1 / near + 1 / far)
+    defocus = max(1 / near - 1 / focus, 1 / focus - 1 / far, 1e-12)
+    return bin_angle / defocus, focus

@@ -1,0 +1,36 @@
+"""Reconstruction: U = R'·H with DC-term suppression (Sect. VI, Eq. 17-21).
+
+With the reconstruction wave R' equal to the reference R, U holds the reference term
+R(|O|² + |R|²), the virtual image O|R|² and the real image Ō R² (Eq. 18). Subtracting the mean
+intensity (H' = H - mean H, Eq. 21) removes most of the reference term; an off-axis reference
+moves the real image's spectrum away from the virtual image's. The result is divided by |R|²
+so that it estimates the object wave O leaving the hologram towards +z.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..scene.hologram import Hologram
+from ..validate import InputError
+from .record import Reference, reference_wave
+
+
+def reconstruct(hologram: Hologram, colour: int = 0, *, dc_suppression=True) -> np.ndarray:
+    """The virtual image's wave on z = 0 for one colour, complex64 (H, W) (Eq. 18).
+
+    ``colour`` indexes ``hologram.wavelengths``; ``dc_suppression`` subtracts the mean
+    intensity first (Eq. 20-21).
+    """
+    n = len(hologram.wavelengths)
+    if not 0 <= colour < n:
+        raise InputError(f"colour must be in [0, {n - 1}]; got {colour!r}")
+    h = hologram.intensity[colour].astype(np.float64)
+    if dc_suppression:
+        h = h - h.mean()
+    amplitude = hologram.reference_amplitudes[colour] if hologram.reference_amplitudes else 1.0
+    ref = Reference(angle=hologram.reference_angle, azimuth=hologram.reference_azimuth,
+                    allow_aliasing=True)
+    r = reference_wave(hologram.shape, wavelength=hologram.wavelengths[colour],
+                       pitch=hologram.pitch, reference=ref, amplitude=amplitude)
+    return (r * h / amplitude**2).astype(np.complex64)

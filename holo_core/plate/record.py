@@ -1,0 +1,328 @@
+"""Recording: object wave, reference wave and the intensity hologram H = |O + R|² (Sect. V-B).
+
+The hologram lies in the plane z = 0 of its own frame, objects at z < 0, light travelling +z.
+One hologram is recorded per wavelength of the same scene (Sect. VII-B).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .. import jobs, memory, validate
+from ..propagation import grid
+from ..scene.hologram import Hologram
+from ..scene.mesh import Mesh, facing, sample_points, visible_from
+from ..scene.plate import Plate
+from ..validate import InputError
+from .point_sources import cone_filter, point_wave
+from .triangles import depth_texture, mesh_primitives, primitive_wave, surface_pitch
+
+DEFAULT_WAVELENGTHS = (633e-9, 532e-9, 473e-9)  # HeNe red, Nd:YAG green, DPSS blue [m]
+MIN_OBLIQUITY = 0.1  # a primitive seen more edge-on than this (cos) gets no brighter
+ROTATION_SECONDS = 2e-7  # a primitive's rotation and propagation per padded hologram sample
+                         # and wavelength (2-core CPU: 0.4-0.9 s at 1024²) ...
+SLOW_TRIANGLES = 60.0    # ... and the estimate [s] above which the user is warned
+HOST_BYTES = 40  # per sample and wavelength: object and reference waves, H, the stored copy
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Reference:
+    """The plane reference wave of Eq. 4 on z = 0.
+
+    angle : float
+        ϑ [rad], between the reference's direction and the hologram normal (+z), in [0, π/2).
+    azimuth : float
+        φ [rad], direction of the tilt in the hologram plane, from +x towards +y.
+    beam_ratio : float
+        |R|² / mean |O|², > 0: the reference's intensity against the object wave's.
+    allow_aliasing : bool
+        Record even when the pitch violates Eq. 19 (the message names the largest safe angle).
+    """
+
+    angle: float = 0.0
+    azimuth: float = 0.0
+    beam_ratio: float = 4.0
+    allow_aliasing: bool = False
+
+    def __post_init__(self):
+        a = validate.finite("reference angle", self.angle, "rad")
+        if not 0 <= a < math.pi / 2:
+            raise InputError(f"reference angle must be in [0, π/2) rad; got {self.angle!r}")
+        validate.finite("reference azimuth", self.azimuth, "rad")
+        validate.positive("reference beam_ratio", self.beam_ratio)
+
+    def direction(self) -> np.ndarray:
+        """Unit propagation direction (α, β, γ) (direction cosines of Eq. 4)."""
+        s = math.sin(self.angle)
+        return np.array([s * math.cos(self.azimuth), s * math.sin(self.azimuth),
+                         math.cos(self.angle)])
+
+    def check(self, wavelength: float, pitch: float) -> None:
+        """Eq. 19: the carrier fringes need pitch <= λ / (2 sin ϑ)."""
+        if self.angle == 0:
+            return
+        limit = wavelength / (2 * math.sin(self.angle))
+        if pitch > limit:
+            safe = math.asin(min(1.0, wavelength / (2 * pitch)))
+            message = (f"reference angle {self.angle:.4g} rad needs a pitch <= {limit:.4g} m "
+                       f"at λ = {wavelength:.4g} m (Eq. 19); with pitch {pitch:.4g} m the "
+                       f"largest safe angle is {safe:.4g} rad")
+            if not self.allow_aliasing:
+                raise InputError(message)
+            validate.warn_sampling(message)
+
+
+def reference_wave(shape, *, wavelength, pitch, reference: Reference, amplitude=1.0):
+    """R = A·exp(ik(α·x + β·y)) on the hologram's pixel centres (Eq. 4 on z = 0), complex64.
+
+    ``shape`` (rows, cols); ``wavelength``, ``pitch`` [m]; ``amplitude`` A [field units].
+    The phase is formed in float64 and reduced before the cast.
+    """
+    h, w = validate.shape2d("shape", shape)
+    wavelength, pitch = grid.wave(wavelength, pitch)
+    alpha, beta, _ = reference.direction()
+    k = 2 * np.pi / wavelength
+    px = np.remainder(k * alpha * grid.coords(w, pitch), 2 * np.pi)
+    py = np.remainder(k * beta * grid.coords(h, pitch), 2 * np.pi)
+    return (amplitude * np.exp(1j * py)[:, None] * np.exp(1j * px)[None, :]).astype(np.complex64)
+
+
+def interfere(object_wave, reference_wave) -> np.ndarray:
+    """H = |O + R|² (Eq. 16), float32."""
+    u = np.asarray(object_wave, np.complex64) + np.asarray(reference_wave, np.complex64)
+    return (u.real * u.real + u.imag * u.imag).astype(np.float32)
+
+
+def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVELENGTHS,
+                  phases=None, seed=0, reference=Reference(), obliquity=False,
+                  keep_object_wave=True, plate=None, method="auto", band=None,
+                  channels=(), point_density=0.0, extra_wave=None, bounds=None,
+                  progress: jobs.Progress = None) -> Hologram:
+    """Holograms of point emitters, one per wavelength.
+
+    Parameters
+    ----------
+    positions : (N, 3) float array
+        Points [m] in the hologram's frame (z < 0).
+    colours : (N, C) float array
+        Intensity I >= 0 per point and wavelength; the amplitude is A0 = √I (Sect. VII-B).
+    shape : (int, int)
+        Hologram (rows, cols).
+    pitch : float
+        Hologram sample spacing [m].
+    wavelengths : sequence of float
+        One λ [m] per colour channel; equal values are allowed.
+    phases : (N,) float array, optional
+        Initial phases φ0 [rad]; default uniformly random (a diffuse surface), from ``seed``.
+    reference : Reference
+        The reference wave; its amplitude follows from ``beam_ratio`` per colour.
+    plate : (4, 4) array, optional
+        The hologram frame's pose in the world (hologram-to-world), stored with it.
+    method, obliquity, band
+        As for :func:`holo_core.plate.point_sources.point_wave`; ``band`` is stored for the
+        reconstruction's filter.
+    channels, point_density
+        Stored with the hologram (see :class:`holo_core.scene.hologram.Hologram`).
+    extra_wave : callable (channel, wavelength [m]) -> complex (H, W) array, optional
+        Further object wave on the hologram from other emitters (textured primitives).
+    bounds : (2, 3) array, optional
+        The objects' bounding box [m] in the hologram frame; default: the points'.
+    """
+    pos = np.asarray(positions, np.float64)
+    if not pos.size and extra_wave is None:
+        raise InputError("positions holds no points: there is nothing to record")
+    lambdas = tuple(validate.positive("wavelengths", w, "m") for w in np.atleast_1d(wavelengths))
+    if not lambdas:
+        raise InputError("wavelengths must hold at least one wavelength [m]")
+    cols = np.asarray(colours, np.float64).reshape(len(pos), -1 if len(pos) else len(lambdas))
+    if cols.shape[1] != len(lambdas):
+        raise InputError(f"colours must have one column per wavelength ({len(lambdas)}); "
+                         f"got {cols.shape[1]}")
+    if not np.isfinite(cols).all() or (cols < 0).any():
+        raise InputError("colours must be finite intensities >= 0")
+    if phases is None:
+        phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, len(pos))
+    phases = np.asarray(phases, np.float64).reshape(len(pos))
+    shape = validate.shape2d("shape", shape)
+    pitch = validate.positive("pitch", pitch, "m")
+    memory.check_host(f"a {shape[1]}x{shape[0]} hologram of {len(lambdas)} wavelengths",
+                      HOST_BYTES * len(lambdas) * math.prod(shape))
+    for lam in lambdas:
+        reference.check(lam, pitch)
+    amplitude = np.sqrt(cols) * np.exp(1j * phases)[:, None]
+    groups = {lam: [c for c, other in enumerate(lambdas) if other == lam] for lam in lambdas}
+    objects = {}
+    for g, (lam, chans) in enumerate(groups.items()):  # equal wavelengths share one pass
+        objects.update(zip(chans, point_wave(
+            pos, amplitude[:, chans], wavelength=lam, pitch=pitch, shape=shape,
+            obliquity=obliquity, method=method, band=band,
+            progress=jobs.scaled(progress, g / len(groups), (g + 1) / len(groups)))))
+    intensity, waves, amplitudes = [], [], []
+    for c, lam in enumerate(lambdas):
+        o = objects[c]
+        if extra_wave is not None:
+            o = o + extra_wave(c, lam)
+        if not np.isfinite(o).all():  # never a hologram of NaN: it would be written as one
+            raise RuntimeError(f"the object wave at λ = {lam:.4g} m holds non-finite samples "
+                               f"(the OpenCL device's arithmetic failed); nothing was recorded")
+        a_r = math.sqrt(reference.beam_ratio * max(float(np.mean(np.abs(o) ** 2)), 1e-30))
+        intensity.append(interfere(o, reference_wave(shape, wavelength=lam, pitch=pitch,
+                                                     reference=reference, amplitude=a_r)))
+        waves.append(o)
+        amplitudes.append(a_r)
+    if bounds is None:
+        bounds = np.array([pos.min(0), pos.max(0)]) if len(pos) else np.zeros((2, 3))
+    return Hologram(intensity=np.stack(intensity), wavelengths=lambdas, pitch=pitch,
+                    reference_angle=reference.angle, reference_azimuth=reference.azimuth,
+                    reference_amplitudes=tuple(amplitudes),
+                    object_wave=np.stack(waves) if keep_object_wave else None,
+                    plate=np.eye(4) if plate is None else np.asarray(plate, np.float64),
+                    bounds=bounds, band=band or 0.0, channels=tuple(channels),
+                    point_density=point_density)
+
+
+def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, resolution=None,
+                    max_resolution=2048, wavelength=None, depth=True, seed=0, method="auto",
+                    cull=True, progress: jobs.Progress = None) -> Hologram:
+    """Record a scene in world metres onto ``plate``, choosing the optics automatically
+    (:mod:`holo_core.plate.sampling`; the choice is logged and stored in the hologram).
+
+    Parameters
+    ----------
+    emitters : Mesh, sequence of Mesh, or (positions (N, 3) [m], colours (N, 3))
+        World-space point emitters; meshes become points at the chosen spacing. Colours are
+        linear RGB intensities.
+    plate : Plate
+    triangles : sequence of Mesh
+        World-space meshes recorded as textured triangles (their texture, else the mean of
+        their corners' colours), each carried to the plate by tilted-plane propagation.
+    camera : holo_core.scene.camera.Camera, optional
+        Sizes the cone and the wavelength to this view.
+    resolution, max_resolution, wavelength
+        As for :func:`holo_core.plate.sampling.choose`.
+    depth : bool
+        Also record the depth partner λ2 (Sect. VII-C).
+    seed : int
+        Seeds the emitters' random phases (and the mesh sampling).
+    cull : bool
+        With a camera, keep only the points and triangles it sees
+        (:func:`holo_core.scene.mesh.visible_from`): a hologram shows surfaces hidden from its
+        recording viewpoint through the ones in front, as light does not occlude itself.
+    """
+    from .sampling import choose
+    meshes = [emitters] if isinstance(emitters, Mesh) else None
+    if meshes is None and all(isinstance(e, Mesh) for e in emitters):
+        meshes = list(emitters)
+    triangles = list(triangles)
+    probe = [m.vertices for m in meshes + triangles] if meshes is not None else \
+        [np.asarray(emitters[0], np.float64)] + [m.vertices for m in triangles]
+    if not sum(len(p) for p in probe):
+        raise InputError("record_hologram needs emitters or triangles")
+    view = None
+    if camera is not None:
+        view = (plate.to_plate(camera.position[None])[0], camera.pixel_angle())
+    local = plate.to_plate(np.concatenate(probe))
+    s = choose((plate.width, plate.height), local, camera=view,
+               resolution=resolution, max_resolution=max_resolution, wavelength=wavelength)
+    if meshes is not None:
+        parts = [sample_points(m, s.spacing, channels=3, seed=seed + i, normals=True)
+                 for i, m in enumerate(meshes)]
+        pos = np.concatenate([p for p, _, _ in parts] or [np.zeros((0, 3))])
+        rgb = np.concatenate([np.broadcast_to(c, (len(c), 3)) for _, c, _ in parts]
+                             or [np.zeros((0, 3))])
+        density = 1 / s.spacing**2
+        normals = np.concatenate([n for _, _, n in parts] or [np.zeros((0, 3))])
+        if cull and camera is not None and len(pos):
+            seen = visible_from(camera, pos, s.spacing, normals)
+            pos, rgb, normals = pos[seen], rgb[seen], normals[seen]
+    else:
+        pos, rgb = np.asarray(emitters[0], np.float64), np.asarray(emitters[1], np.float64)
+        density, normals = 0.0, None
+    # the depth partner's emitters: unit intensity, times the cosine towards the camera, so
+    # that its image is the projected area covered (a tilted surface holds more emitters)
+    cover = np.ones(len(pos)) if normals is None or camera is None else \
+        facing(camera.position, pos, normals)
+    prims = [replace(p, corners=plate.to_plate(p.corners)) for m in triangles
+             for p in mesh_primitives(m, visible_to=camera if cull else None,
+                                         spacing=s.spacing)]  # in the plate's frame
+    if prims:
+        density = 1 / s.spacing**2
+    rgb = np.asarray(rgb, np.float64).reshape(len(pos), 3)
+    lambdas, channels, colours = [s.wavelength] * 3, ["R", "G", "B"], [rgb]
+    if depth:
+        lambdas.append(s.depth_wavelength)
+        channels.append("Z")
+        colours.append(cover[:, None])
+    reference = Reference(angle=s.reference_angle)
+    split = 0.1 if prims else 1.0  # the triangles' propagations dominate where there are any
+    return record_points(plate.to_plate(pos), np.concatenate(colours, 1), shape=s.shape,
+                         pitch=s.pitch, wavelengths=tuple(lambdas), seed=seed,
+                         reference=reference, plate=plate.matrix_world, method=method,
+                         band=s.band, channels=channels, point_density=density,
+                         extra_wave=_triangle_waves(prims, s, lambdas, channels, view, seed,
+                                                    jobs.scaled(progress, split, 1.0))
+                         if prims else None, progress=jobs.scaled(progress, 0.0, split),
+                         bounds=np.array([local.min(0), local.max(0)]))
+
+
+def _triangle_waves(prims, s, lambdas, channels, view, seed, progress: jobs.Progress = None):
+    """``record_points``' ``extra_wave`` for textured primitives (in the plate's frame) recorded
+    with the sampling ``s``: per channel (``channels``, at ``lambdas`` [m]) their summed wave;
+    ``view`` = (camera position [m], pixel angle [rad]) or None. One pass per wavelength serves
+    all its channels; ``progress`` hears of every primitive."""
+    shortest = min(lambdas)
+    seconds = len(prims) * len(set(lambdas)) * math.prod(grid.padded_shape(s.shape, 2)) \
+        * ROTATION_SECONDS
+    (log.warning if seconds > SLOW_TRIANGLES else log.info)(
+        "triangles: %d primitives, about %.0f s to record on a 2-core CPU (a rotation and a "
+        "propagation per primitive and wavelength); points record tessellated meshes much "
+        "faster", len(prims), seconds)
+    # a surface field u radiates like points of density ρ and amplitude A when u = A·√ρ·λ/q
+    # (q² per sample, the 1/λ of Eq. 7) over the obliquity cos α of Eq. 7 towards the viewer
+    # (the camera, else the plate's normal), which isotropic points do not have
+    frames = [p.frame() for p in prims]
+    pitches = [surface_pitch(p, wavelength=shortest, pitch=s.pitch) for p in prims]
+    toward = [abs(m[2, 2]) if view is None else
+              float(facing(view[0], centre[None], m[:, 2][None])[0]) for m, centre in frames]
+
+    def intensities(i, p, lam, chans):
+        """Per channel in ``chans`` (all at ``lam`` [m]): the primitive's texture as surface
+        intensity (the depth partner: unit intensity times its coverage seen by the camera)."""
+        gain = (lam / (pitches[i] * s.spacing * max(toward[i], MIN_OBLIQUITY))) ** 2
+        cover = 1.0 if view is None else toward[i]
+        return [depth_texture(p.texture)[..., 0] * gain * cover
+                if channels[c] == "Z" else p.texture[..., c] * gain for c in chans]
+
+    def waves_at(lam):
+        """The waves of every channel at ``lam`` [m]. A single-colour primitive's channels
+        differ only in amplitude: one propagation serves them all."""
+        chans = [c for c, other in enumerate(lambdas) if other == lam]
+        totals = np.zeros((len(chans),) + s.shape, np.complex128)
+        for i, p in enumerate(prims):
+            jobs.report(progress, passes.index(lam) * len(prims) + i, len(passes) * len(prims))
+            texs = intensities(i, p, lam, chans)
+            flat = all(t.shape[:2] == (1, 1) for t in texs)
+            for k, tex in enumerate([np.ones((1, 1))] if flat else texs):
+                wave = primitive_wave(replace(p, texture=tex[..., None]), wavelength=lam,
+                                         pitch=s.pitch, shape=s.shape, seed=seed + 7919 * (i + 1),
+                                         sampled_for=shortest)
+                if flat:
+                    totals += np.sqrt([t[0, 0] for t in texs])[:, None, None] * wave
+                else:
+                    totals[k] += wave
+        # the points' cone, in angle: the band the off-axis reference leaves free
+        return {c: cone_filter(t, wavelength=lam, pitch=s.pitch, band=s.band)
+                for c, t in zip(chans, totals)}
+
+    done, passes = {}, list(dict.fromkeys(lambdas))  # the order record_points asks for them
+
+    def wave(c, lam):
+        if lam not in done:
+            done[lam] = waves_at(lam)
+        return done[lam].pop(c)
+    return wave

@@ -1,0 +1,14 @@
+"""The nouns every stage passes around, in world metres and radians.
+
+- ``camera.py``: :class:`Camera`, a camera's pose, lens and pixels (their direction cosines, Eq. 22)
+- ``plate.py``: :class:`Plate`, the holographic plate's pose and size
+- ``hologram.py``: :class:`Hologram`, the recorded holograms of one scene, one per wavelength
+- ``mesh.py``: :class:`Mesh`, triangles with colours or a texture, and their point emitters
+"""
+
+from .camera import Camera, look_at
+from .hologram import Hologram
+from .mesh import Mesh, sample_points
+from .plate import Plate
+
+__all__ = ["Camera", "Hologram", "Mesh", "Plate", "look_at", "sample_points"]

@@ -1,0 +1,182 @@
+"""Blender's camera model, and the pinhole mapping of directions to pixels (Sect. VII-A, Eq. 22).
+
+The camera looks down its local −Z with +Y up (Blender). A camera-space point (x, y, z), z < 0,
+has the view tangents t = (x/−z, y/−z); the light reaching the camera from it travels along
+−(t_x, t_y, −1)/|…|, whose direction cosines are Eq. 22's α = −t_x/√(t²+1), β = −t_y/√(t²+1).
+Pixels follow Blender's view plane (``BKE_camera_params_compute_viewplane``): sensor fit, shift
+in units of the fitted dimension, pixel aspect. Image row 0 is the top; pixel (row i, col j)
+has its centre at (j + 0.5, i + 0.5) pixels from the top-left corner.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .. import validate
+from ..validate import InputError
+
+SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
+
+
+@dataclass(frozen=True, slots=True, kw_only=True, eq=False)
+class Camera:
+    """A Blender camera.
+
+    matrix_world : (4, 4) camera-to-world [m] (looks down local −Z, +Y up)
+    lens : focal length [mm]
+    sensor_width, sensor_height : [mm]
+    sensor_fit : 'AUTO' (sensor_width spans the larger image side), 'HORIZONTAL', 'VERTICAL'
+    shift_x, shift_y : lens shift, in units of the fitted image side
+    resolution : (W, H) [px]
+    pixel_aspect : (x, y) Blender's pixel aspect ratio
+    focus_distance : [m] the plane in focus (a thin lens, Eq. 24); needs ``fstop``
+    fstop : f-number N; the aperture diameter is lens/N. None is a pinhole.
+    """
+
+    matrix_world: np.ndarray = field(default_factory=lambda: np.eye(4))
+    lens: float = 50.0
+    sensor_width: float = 36.0
+    sensor_height: float = 24.0
+    sensor_fit: str = "AUTO"
+    shift_x: float = 0.0
+    shift_y: float = 0.0
+    resolution: tuple = (640, 480)
+    pixel_aspect: tuple = (1.0, 1.0)
+    focus_distance: float | None = None
+    fstop: float | None = None
+
+    def __post_init__(self):
+        m = np.asarray(self.matrix_world, np.float64)
+        if m.shape != (4, 4) or not np.isfinite(m).all():
+            raise InputError(f"matrix_world must be a finite 4x4 matrix; got shape {m.shape}")
+        if np.linalg.cond(m[:3, :3]) > 1e12 or not np.array_equal(m[3], [0, 0, 0, 1]):
+            raise InputError("matrix_world must be an invertible pose (rotation, positive "
+                             "scale, translation; bottom row 0 0 0 1); its 3x3 part is singular "
+                             "or its bottom row is not 0 0 0 1")
+        object.__setattr__(self, "matrix_world", m)
+        for name in ("lens", "sensor_width", "sensor_height"):
+            validate.positive(name, getattr(self, name), "mm")
+        if self.sensor_fit not in SENSOR_FITS:
+            raise InputError(f"sensor_fit must be one of {SENSOR_FITS}; got {self.sensor_fit!r}")
+        validate.finite("shift_x", self.shift_x)
+        validate.finite("shift_y", self.shift_y)
+        w, h = validate.shape2d("resolution", self.resolution)
+        object.__setattr__(self, "resolution", (w, h))
+        for a in validate.pair("pixel_aspect", self.pixel_aspect):
+            validate.positive("pixel_aspect", a)
+        if self.fstop is not None:
+            validate.positive("fstop", self.fstop)
+            validate.positive("focus_distance", self.focus_distance, "m")
+        elif self.focus_distance is not None:
+            raise InputError("focus_distance needs an fstop (None is a pinhole, focused "
+                             "everywhere)")
+
+    # -- pose ---------------------------------------------------------------------------------
+    @property
+    def position(self) -> np.ndarray:
+        """The aperture's centre in the world [m]."""
+        return self.matrix_world[:3, 3].copy()
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """Camera axes (X right, Y up, Z back) in world coordinates as columns, scale removed."""
+        m = self.matrix_world[:3, :3]
+        return m / np.linalg.norm(m, axis=0)
+
+    @property
+    def aperture_diameter(self) -> float | None:
+        """lens / N [m] (Cycles' aperture), None for a pinhole."""
+        return None if self.fstop is None else self.lens * 1e-3 / self.fstop
+
+    # -- view plane ---------------------------------------------------------------------------
+    def _plane(self):
+        """(pixels per unit tangent, x shift [px], y shift [px], ycor) as Blender computes them."""
+        w, h = self.resolution
+        ax, ay = self.pixel_aspect
+        ycor = ay / ax
+        fit = self.sensor_fit
+        if fit == "AUTO":
+            fit = "HORIZONTAL" if ax * w >= ay * h else "VERTICAL"
+        sensor = self.sensor_height if self.sensor_fit == "VERTICAL" else self.sensor_width
+        viewfac = w if fit == "HORIZONTAL" else ycor * h
+        return self.lens / sensor * viewfac, self.shift_x * viewfac, self.shift_y * viewfac, ycor
+
+    def cropped(self, left: int, top: int, width: int, height: int) -> Camera:
+        """The camera of a region of this one's image, ``width`` x ``height`` pixels from
+        (``left``, ``top``) [px, from the top-left corner]: each pixel keeps its ray (a
+        render cropped to its border)."""
+        w, h = self.resolution
+        if not (0 <= left < left + width <= w and 0 <= top < top + height <= h):
+            raise InputError(f"crop ({left}, {top}, {width}, {height}) must lie inside the "
+                             f"{w}x{h} image")
+        s, dx, dy, ycor = self._plane()
+        dx += left + width / 2 - w / 2
+        dy += ycor * (h / 2 - top - height / 2)
+        return replace(self, resolution=(width, height), sensor_fit="HORIZONTAL",
+                       sensor_width=self.lens * width / s, shift_x=dx / width,
+                       shift_y=dy / width)
+
+    def pixel_tangents(self, rows=None, cols=None) -> tuple[np.ndarray, np.ndarray]:
+        """View tangents (t_x, t_y) of the pixel centres, each (H, W); or of given continuous
+        (rows, cols) positions measured from the top-left corner in pixels."""
+        w, h = self.resolution
+        if rows is None:
+            rows, cols = np.meshgrid(np.arange(h) + 0.5, np.arange(w) + 0.5, indexing="ij")
+        s, dx, dy, ycor = self._plane()
+        tx = (np.asarray(cols) - w / 2 + dx) / s
+        v = h - np.asarray(rows)  # from the bottom edge
+        ty = (v * ycor - 0.5 * ycor * h + dy) / s
+        return tx, ty
+
+    def project(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """World points (N, 3) [m] → ((N, 2) pixel positions (col, row) from the top-left
+        corner, (N,) planar depth along the view axis [m]); points behind give NaN."""
+        p = np.atleast_2d(np.asarray(points, np.float64))
+        local = (p - self.position) @ self.rotation
+        depth = -local[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tx, ty = local[:, 0] / depth, local[:, 1] / depth
+        w, h = self.resolution
+        s, dx, dy, ycor = self._plane()
+        col = tx * s + w / 2 - dx
+        row = h - (ty * s + 0.5 * ycor * h - dy) / ycor
+        xy = np.stack([col, row], -1)
+        xy[depth <= 0] = np.nan
+        return xy, depth
+
+    def direction_cosines(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Eq. 22: (α, β, γ) per pixel (H, W) of the light arriving along each pixel's ray,
+        in camera axes."""
+        tx, ty = self.pixel_tangents()
+        n = np.sqrt(tx * tx + ty * ty + 1)
+        return -tx / n, -ty / n, 1 / n
+
+    def pixel_angle(self) -> float:
+        """The angle one pixel spans at the image centre [rad] (the smaller of x and y)."""
+        s, _, _, ycor = self._plane()
+        return min(1.0, ycor) / s
+
+    def field_of_view(self) -> tuple[float, float]:
+        """Full (horizontal, vertical) angles of view through the image centre [rad]."""
+        w, h = self.resolution
+        s, _, _, ycor = self._plane()
+        return 2 * math.atan(w / (2 * s)), 2 * math.atan(ycor * h / (2 * s))
+
+
+def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
+    """A camera-to-world matrix at ``eye`` [m] looking at ``target`` [m], ``up`` kept up."""
+    eye, target = np.asarray(eye, np.float64), np.asarray(target, np.float64)
+    back = eye - target
+    if not np.linalg.norm(back) > 0:
+        raise InputError("look_at needs target != eye")
+    z = back / np.linalg.norm(back)
+    x = np.cross(up, z)
+    if np.linalg.norm(x) < 1e-12:
+        x = np.cross((0.0, 1.0, 0.0) if abs(z[1]) < 0.9 else (1.0, 0.0, 0.0), z)
+    x /= np.linalg.norm(x)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, np.cross(z, x), z, eye
+    return m

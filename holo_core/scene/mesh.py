@@ -1,0 +1,172 @@
+"""Emitters: point sources and textured planar primitives, from meshes or directly (Sect. V-B).
+
+Positions are metres in the hologram's frame (hologram plane z = 0, objects at z < 0). Colours
+are linear intensities I per wavelength; a point's amplitude is A0 = √I (Sect. VII-B). Diffuse
+surfaces get uniformly random phases from a seeded generator.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import validate
+from ..validate import InputError
+
+MAX_SLANT = 30.0  # visibility: a surface's depth slope (tan of its incidence) is capped here (88°)
+SAMPLING_STREAM = 0x5A4D  # seeds mesh sampling apart from the phases (see surface_samples)
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class Mesh:
+    """A triangle mesh: ``vertices`` (V, 3) [m], ``triangles`` (T, 3) int, optional
+    ``colours`` (V, C) linear intensities, ``uvs`` (V, 2) and ``texture`` (h, w, C)."""
+
+    vertices: np.ndarray
+    triangles: np.ndarray
+    colours: np.ndarray | None = None
+    uvs: np.ndarray | None = None
+    texture: np.ndarray | None = None
+
+    def __post_init__(self):
+        v, t = np.asarray(self.vertices), np.asarray(self.triangles)
+        if v.ndim != 2 or v.shape[1] != 3 or not np.isfinite(v).all():
+            raise InputError(f"vertices must be a finite (V, 3) array [m]; got {v.shape}")
+        if t.ndim != 2 or t.shape[1] != 3 or (t.size and (t.min() < 0 or t.max() >= len(v))):
+            raise InputError(f"triangles must be (T, 3) indices in [0, {len(v) - 1}]")
+
+    def areas(self) -> np.ndarray:
+        a, b, c = (self.vertices[self.triangles[:, i]] for i in range(3))
+        return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+
+    def normals(self) -> np.ndarray:
+        """Unit face normals (T, 3) (zero for degenerate triangles)."""
+        a, b, c = (self.vertices[self.triangles[:, i]] for i in range(3))
+        n = np.cross(b - a, c - a)
+        length = np.linalg.norm(n, axis=1, keepdims=True)
+        return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
+def sample_points(mesh: Mesh, spacing: float, *, channels=3, seed=0, max_points=2_000_000,
+                  normals=False):
+    """Area-uniform random points on ``mesh``, one per ``spacing``² [m] of surface on average.
+
+    Returns (positions (N, 3) [m], colours (N, C)) with colours interpolated from the vertex
+    colours, looked up in the texture through the UVs, or white; with ``normals``, also each
+    point's unit surface normal (N, 3).
+    """
+    tri, bary, pos = surface_samples(mesh, spacing, seed, max_points)
+    colours = surface_colour(mesh, mesh.triangles[tri], bary, channels)
+    return (pos, colours, mesh.normals()[tri]) if normals else (pos, colours)
+
+
+def surface_samples(mesh: Mesh, spacing, seed, max_points):
+    """(triangle index (N,), barycentric weights (N, 3), positions (N, 3) [m]) of area-uniform
+    random points ``spacing`` [m] apart on average."""
+    spacing = validate.positive("spacing", spacing, "m")
+    max_points = int(validate.at_least("max_points", max_points, 1))
+    areas = mesh.areas()
+    if not areas.sum() > 0:
+        raise InputError("the mesh has no surface area (every triangle is degenerate)")
+    n = int(min(max_points, max(1, round(areas.sum() / spacing**2))))
+    # a stream of its own: record_points draws the phases from default_rng(seed), and phases
+    # that follow the sampling's numbers would make each triangle's points coherent
+    rng = np.random.default_rng([SAMPLING_STREAM, seed])
+    tri = rng.choice(len(areas), size=n, p=areas / areas.sum())
+    r1, r2 = rng.random(n), rng.random(n)
+    s = np.sqrt(r1)
+    bary = np.stack([1 - s, s * (1 - r2), s * r2], axis=1)  # uniform in each triangle
+    return tri, bary, np.einsum("nk,nkd->nd", bary, mesh.vertices[mesh.triangles[tri]])
+
+
+def visible_from(camera, positions, spacing: float, normals=None) -> np.ndarray:
+    """Mask of the points (N, 3) [m] that ``camera`` sees: its own surface is the nearest within
+    a few samples (``spacing`` [m] apart) along the pixel's line of sight.
+
+    A hologram recorded for one viewpoint holds only the surfaces seen from there, as a raster
+    renderer would draw them (surfaces are two-sided). The points themselves form the depth
+    buffer: each cell of the camera's grid holds its nearest point, and a point is seen when it
+    lies no deeper than what the nearest surface in its 3×3 neighbourhood can reach there, so a
+    cell the random sampling left empty does not let a hidden surface through. That reach is
+    the depth the nearest surface spans across three cells: one cell per cell (45°) without
+    ``normals``; with the points' unit normals (N, 3), tan(incidence) cells, so the rim of a
+    sphere, seen at a grazing angle, stays. Points outside the frame are kept.
+    """
+    xy, depth = camera.project(positions)
+    w, h = camera.resolution
+    footprint = camera.pixel_angle() * np.nanmin(np.where(depth > 0, depth, np.nan))
+    cell = max(1.0, 2 * spacing / footprint)         # a few points per cell
+    cols, rows = math.ceil(w / cell), math.ceil(h / cell)
+    inside = (depth > 0) & (xy[:, 0] >= 0) & (xy[:, 0] < w) & (xy[:, 1] >= 0) & (xy[:, 1] < h)
+    keep = np.ones(len(depth), bool)
+    if not inside.any():
+        return keep
+    c = (xy[inside, 0] / cell).astype(int) + 1
+    r = (xy[inside, 1] / cell).astype(int) + 1
+    d = depth[inside]
+    slope = np.ones(len(d))
+    if normals is not None:
+        cos = facing(camera.position, positions[inside], normals[inside])
+        tan = np.sqrt(1 - np.minimum(cos, 1) ** 2) / np.maximum(cos, 1 / MAX_SLANT)
+        slope = np.maximum(1.0, tan)
+    # per cell, the nearest point and the deepest its surface reaches three cells away
+    cell_id = r * (cols + 2) + c
+    order = np.lexsort((d, cell_id))
+    first = order[np.unique(cell_id[order], return_index=True)[1]]
+    reach = np.full((rows + 2, cols + 2), np.inf)
+    reach[r[first], c[first]] = d[first] * (1 + 3 * cell * camera.pixel_angle() * slope[first])
+    bound = reach.copy()
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            bound[1:-1, 1:-1] = np.minimum(bound[1:-1, 1:-1],
+                                           reach[1 + dr:rows + 1 + dr, 1 + dc:cols + 1 + dc])
+    keep[inside] = d <= bound[r, c] + 2 * spacing
+    return keep
+
+
+def facing(eye, positions, normals) -> np.ndarray:
+    """|cos| of the angle between each surface normal (N, 3) and the line from its point
+    (N, 3) [m] to ``eye`` [m]: the projected area per unit of surface seen from there."""
+    ray = np.asarray(eye, np.float64) - positions
+    return np.abs(np.einsum("nd,nd->n", normals, ray)) / np.linalg.norm(ray, axis=1)
+
+
+def surface_colour(mesh: Mesh, corners, bary, channels):
+    if mesh.texture is not None and mesh.uvs is not None:
+        uv = np.einsum("nk,nkd->nd", bary, mesh.uvs[corners])
+        return texture_lookup(mesh.texture, uv)
+    if mesh.colours is not None:
+        return np.einsum("nk,nkc->nc", bary, np.asarray(mesh.colours, np.float64)[corners])
+    return np.ones((len(bary), channels))
+
+
+def texture_lookup(texture, uv) -> np.ndarray:
+    """Nearest texel of ``texture`` (h, w, C), row 0 at the top (v = 1), at ``uv`` (N, 2)."""
+    tex = np.asarray(texture, np.float64)
+    tex = tex[..., None] if tex.ndim == 2 else tex
+    h, w = tex.shape[:2]
+    col = np.clip((np.mod(uv[:, 0], 1) * w).astype(int), 0, w - 1)
+    row = np.clip(((1 - np.mod(uv[:, 1], 1)) * h).astype(int), 0, h - 1)
+    return tex[row, col]
+
+
+def point_spacing(wavelength, pitch, shape, distance) -> float:
+    """The hologram's resolution at ``distance`` [m]: λ|z| / (aperture) [m], the spacing below
+    which further points are not resolved (Sect. VI-A), for ``wavelength``, ``pitch`` [m]."""
+    aperture = min(shape) * pitch
+    return wavelength * abs(distance) / aperture
+
+
+# --- textured planar primitives ----------------------------------------------------------------
+
+
+# --- mesh files ----------------------------------------------------------------------------------
+
+
+def default_spacing(wavelength, pitch, shape, positions) -> float:
+    """:func:`point_spacing` at the nearest depth of ``positions`` [m], at least one ``pitch``
+    [m], over √2: two samples per resolved spot along the diagonal (``wavelength`` [m])."""
+    z = np.abs(np.asarray(positions)[:, 2]).min()
+    return max(point_spacing(wavelength, pitch, shape, z), pitch) / math.sqrt(2)

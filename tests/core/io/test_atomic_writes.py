@@ -1,0 +1,132 @@
+"""Writes: atomic, the target's permissions kept, links written through, temporary files
+removed on SIGTERM and, after SIGKILL, by the next write; a view's EXR and PNG as one unit."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from holo_core.io import image as image_files
+from holo_core.io.hologram import read_hologram, write_hologram
+from holo_core.io.image import TEMP_TAG, remove_stale_temps, write_atomic
+from holo_core.io.view import write_view
+from holo_core.scene.hologram import Hologram
+from holo_core.view import RenderResult
+
+KILLS = 20
+
+# A writer that rewrites one hologram forever, version i carrying i in its first sample.
+WRITER = """
+import sys
+import numpy as np
+from holo_core.io.hologram import write_hologram
+from holo_core.scene.hologram import Hologram
+noise = np.random.default_rng(1).random((2, 512, 512), np.float32)
+print("ready", flush=True)
+for i in range(1, 10**6):
+    noise[0, 0, 0] = i
+    write_hologram(sys.argv[1], Hologram(intensity=noise, wavelengths=(633e-9, 532e-9),
+                                         pitch=8e-6))
+"""
+
+
+def temps(folder):
+    return sorted(p.name for p in folder.iterdir() if TEMP_TAG in p.name)
+
+
+def version(path):
+    return int(read_hologram(path).intensity[0, 0, 0])
+
+
+def test_permissions_are_kept_and_new_files_follow_the_umask(tmp_path):
+    path = tmp_path / "f.bin"
+    old = os.umask(0o027)
+    try:
+        write_atomic(path, b"new")
+        assert path.stat().st_mode & 0o777 == 0o640
+    finally:
+        os.umask(old)
+    for mode in (0o644, 0o600, 0o664):
+        path.chmod(mode)
+        write_atomic(path, b"again")
+        assert path.stat().st_mode & 0o777 == mode and path.read_bytes() == b"again"
+
+
+def test_a_symbolic_link_is_written_through(tmp_path):
+    (tmp_path / "real").mkdir()
+    target = tmp_path / "real" / "h.bin"
+    target.write_bytes(b"old")
+    link = tmp_path / "link.bin"
+    link.symlink_to(target)
+    write_atomic(link, b"new")
+    assert link.is_symlink() and target.read_bytes() == b"new"
+
+
+def test_sigterm_during_a_write_removes_the_temporary_file(tmp_path):
+    target = tmp_path / "h.exr"
+    write_hologram(target, Hologram(intensity=np.zeros((1, 4, 4), np.float32),
+                                    wavelengths=(633e-9,), pitch=8e-6))
+    with subprocess.Popen([sys.executable, "-c", WRITER, str(target)], stdout=subprocess.PIPE,
+                          text=True) as proc:
+        assert proc.stdout.readline().strip() == "ready"
+        deadline = time.time() + 30
+        while not temps(tmp_path) and time.time() < deadline:  # wait until a write is open
+            time.sleep(0.005)
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=30) == 128 + signal.SIGTERM
+    assert temps(tmp_path) == [] and read_hologram(target).intensity.shape[0] in (1, 2)
+
+
+def test_kill_9_leaves_the_old_or_the_new_file_and_the_next_write_cleans_up(tmp_path):
+    target = tmp_path / "h.exr"
+    write_hologram(target, Hologram(intensity=np.zeros((1, 4, 4), np.float32),
+                                    wavelengths=(633e-9,), pitch=8e-6))
+    rng = np.random.default_rng(7)
+    seen, mid_write = [], 0
+    for n in range(KILLS + 20):  # past KILLS only until a kill lands mid-write, for the cleanup
+        if n >= KILLS and temps(tmp_path):
+            break
+        with subprocess.Popen([sys.executable, "-c", WRITER, str(target)],
+                              stdout=subprocess.PIPE, text=True) as proc:
+            assert proc.stdout.readline().strip() == "ready"
+            time.sleep(rng.uniform(0.0, 0.6))
+            proc.kill()
+        mid_write += bool(temps(tmp_path))
+        seen.append(version(target))  # a complete hologram: version 0 or one fully written
+    print(f"{len(seen)} kills: {mid_write} during a write, versions seen {seen}")
+    assert mid_write >= KILLS // 4, "the kills never landed during a write: the test is idle"
+    assert temps(tmp_path), "temporary files of the killed writers"
+    write_atomic(tmp_path / "other.bin", b"next run")
+    assert temps(tmp_path) == []
+
+
+def test_only_dead_writers_temporary_files_are_removed(tmp_path):
+    host = image_files._HOST
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True).stdout.strip()
+    stale = tmp_path / f".h{TEMP_TAG}{host}.{dead}.0.exr"
+    live = tmp_path / f".h{TEMP_TAG}{host}.{os.getppid()}.0.exr"
+    other = tmp_path / f".h{TEMP_TAG}otherhost.{dead}.0.exr"
+    for p in (stale, live, other):
+        p.write_bytes(b"x")
+    assert remove_stale_temps(tmp_path) == [stale]
+    assert live.exists() and other.exists()
+
+
+def test_a_view_is_written_as_one_unit(tmp_path, monkeypatch):
+    def view(value):
+        return RenderResult(rgb=np.full((4, 4, 3), value, np.float32), alpha=np.ones((4, 4)),
+                            depth=np.ones((4, 4)))
+    exr, png = write_view(view(0.25), tmp_path / "v.exr")
+    before = exr.read_bytes(), png.read_bytes()
+
+    def broken(_image):
+        raise RuntimeError("PNG encoder failed")
+    monkeypatch.setattr("holo_core.io.image.png_bytes", broken)
+    with pytest.raises(RuntimeError):
+        write_view(view(0.75), tmp_path / "v.exr")
+    assert (exr.read_bytes(), png.read_bytes()) == before and temps(tmp_path) == []

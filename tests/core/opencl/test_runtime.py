@@ -1,0 +1,126 @@
+"""Device choice (probed devices only), the CLI listing, packaged drivers, kernels built once,
+and the house rules on imports."""
+
+import os
+import pathlib
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from holo_core.opencl import all_devices, choose_device, device_table, runtime
+from holo_core.opencl.icd import packaged_drivers
+
+ROOT = pathlib.Path(__file__).resolve().parents[3]
+
+
+def test_device_choice_by_type_index_and_name():
+    devices = all_devices()
+    assert devices, "OpenCL sees no device (PoCL should provide one)"
+    p, d, first = devices[0]
+    assert choose_device(f"{p}:{d}").int_ptr == first.int_ptr
+    assert choose_device(first.name[:6]).name == first.name
+    cpu = [dev for _, _, dev in devices if "CPU" in str(dev.type) or dev.type & 2]
+    if cpu:
+        assert choose_device("cpu").type & 2
+
+
+def test_default_prefers_a_gpu_else_a_cpu(monkeypatch):
+    monkeypatch.delenv("HOLO_DEVICE", raising=False)
+    dev = choose_device()
+    has_gpu = any(d.type & 4 for _, _, d in all_devices())
+    assert bool(dev.type & 4) == has_gpu
+
+
+def test_unknown_device_names_the_variable_and_the_choices(monkeypatch):
+    monkeypatch.setenv("HOLO_DEVICE", "no-such-device")
+    with pytest.raises(ValueError, match=r"HOLO_DEVICE='no-such-device' names no usable device; "
+                                         r"allowed: 'gpu', 'cpu'.*Usable: \d+:\d+ "):
+        choose_device()
+
+
+def test_devices_command_lists_each_status_and_what_it_would_use():
+    out = subprocess.run([sys.executable, "-m", "holo_core", "devices"], capture_output=True,
+                         text=True, check=True, cwd=ROOT).stdout
+    assert re.search(r"^\s*\d+:\d+ .*: usable\s+<- would use$", out, re.M), out
+    assert len(re.findall(r"^\s*\d+:\d+ ", out, re.M)) == len(all_devices()), out
+
+
+def _broken(monkeypatch, source):
+    """Every probe runs ``source`` instead of the real probe (results not cached)."""
+    monkeypatch.setattr(runtime, "_PROBE", source)
+    monkeypatch.setattr(runtime, "_probed", {})
+
+
+def test_a_device_whose_probe_fails_is_skipped_with_its_reason(monkeypatch, caplog):
+    monkeypatch.delenv("HOLO_DEVICE", raising=False)
+    _broken(monkeypatch, "__kernel void probe(__global float *x) { this is not C; }")
+    with pytest.raises(RuntimeError, match=r"no usable OpenCL device \(\d+:\d+ .*: "
+                                           r"(BuildProgramFailure|RuntimeError|LogicError)"):
+        choose_device()
+    assert "skipped" in caplog.text
+    assert all(status != "usable" and not chosen for _, status, chosen in device_table())
+
+
+def test_a_device_with_a_wrong_probe_result_is_skipped(monkeypatch):
+    _broken(monkeypatch, runtime._PROBE.replace("cmul(cexpi(x[i])", "cmul(cexpi(1.1f * x[i])"))
+    rows = device_table()
+    assert rows and all(s.startswith("wrong probe result") for _, s, _ in rows), rows
+
+
+def test_a_failed_device_gives_way_to_the_next_and_a_choice_of_it_lists_what_works(
+        monkeypatch):
+    monkeypatch.delenv("HOLO_DEVICE", raising=False)
+    devices = sorted(all_devices(), key=lambda t: runtime._rank(t[2]))
+    first = devices[0][2]
+    monkeypatch.setattr(runtime, "_probed", {first.int_ptr: "broken on purpose"})
+    if len(devices) > 1:
+        assert choose_device().int_ptr != first.int_ptr
+    spec = f"{devices[0][0]}:{devices[0][1]}"
+    with pytest.raises(ValueError, match=rf"HOLO_DEVICE='{spec}' names no usable device "
+                                         rf"\({spec} .*: broken on purpose\).*Usable: "):
+        choose_device(spec)
+
+
+def test_packaged_intel_runtime_is_found_and_registered():
+    """Where intel-opencl-rt is installed (Linux x86-64), its library is named in the vendor
+    folder the loader reads, and OpenCL lists its platform."""
+    drivers = packaged_drivers()
+    if "intel-cpu.icd" not in drivers:
+        pytest.skip("intel-opencl-rt is not installed for this platform")
+    folder = pathlib.Path(os.environ["OCL_ICD_VENDORS"])
+    assert (folder / "intel-cpu.icd").read_text().strip() == drivers["intel-cpu.icd"]
+    assert any("intel" in dev.platform.name.lower() for _, _, dev in all_devices())
+
+
+def test_core_and_physics_tests_never_load_blender(tmp_path):
+    """pytest imports the repository root (the extension's entry point) for every test: that
+    must not import bpy, so the core's tests run where Blender cannot."""
+    (tmp_path / "spy.py").write_text(
+        "import sys\n"
+        "def pytest_sessionfinish(session):\n"
+        f"    with open({str(tmp_path / 'bpy.txt')!r}, 'w') as f:\n"
+        "        f.write(str('bpy' in sys.modules))\n")
+    r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+                        "-p", "spy", "tests/core/test_validation.py"],
+                       cwd=ROOT, capture_output=True, text=True,
+                       env={**os.environ, "PYTHONPATH": str(tmp_path)})
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    assert (tmp_path / "bpy.txt").read_text() == "False"
+
+
+def test_programs_and_kernels_are_built_once(rt):
+    k1 = rt.kernel("spectral", "multiply")
+    assert rt.kernel("spectral", "multiply") is k1
+    assert rt.program("spectral") is rt.program("spectral")
+
+
+def test_fft_backend_round_trip(rt, rng):
+    a = (rng.normal(size=(48, 40)) + 1j * rng.normal(size=(48, 40))).astype(np.complex64)
+    dev = rt.to_device(a)
+    rt.fft.forward(dev)
+    assert np.allclose(dev.get(), np.fft.fft2(a), atol=1e-3)
+    rt.fft.backward(dev)
+    assert np.allclose(dev.get() / a.size, a, atol=1e-5)
