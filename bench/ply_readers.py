@@ -1,4 +1,4 @@
-"""PLY readers: holo's own (holo_core.emitters.read_mesh) against plyfile, the well-kept
+"""PLY readers: holo's own (holo_core.io.mesh.read_mesh) against plyfile, the well-kept
 library for the format, on speed and on the fuzz suite's mutated files, in one run.
 
     python bench/ply_readers.py      (needs: pip install plyfile; not a dependency of holo)
@@ -20,7 +20,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 import fuzz  # noqa: E402
 
-from holo_core.emitters import read_mesh  # noqa: E402
+from holo_core.io.mesh import read_mesh
 from holo_core.validate import InputError  # noqa: E402
 
 FACES = 1_000_000

@@ -44,7 +44,7 @@ def checker_image(bpy, name, n, a, b, size=256):
 def emissive(bpy, obj, rgb=None, image=None):
     """A material the add-on reads (Base Color, or an image on it) that Cycles renders as
     the same colour: emission of that colour, strength 1, over a black world."""
-    from holo_addon import compat
+    from holo_addon.blender import compat
     mat = bpy.data.materials.new(obj.name)
     compat.enable_nodes(mat)
     nodes, links = mat.node_tree.nodes, mat.node_tree.links
@@ -103,8 +103,8 @@ def build(bpy, size, fstop):
 
 def cycles(bpy, scene, out):
     """Cycles' image (linear RGB), alpha and planar Depth of the holographic objects."""
-    from holo_addon import compat
-    from holo_addon.properties import RAY_VISIBILITY
+    from holo_addon.blender import compat
+    from holo_addon.blender.objects import RAY_VISIBILITY
     for obj in scene.objects:
         if obj.type == "MESH" and not obj.holo.is_plate:
             for name in RAY_VISIBILITY:
@@ -178,7 +178,7 @@ def main():
     import bpy
     sys.path.insert(0, str(ROOT))
     import holo_addon
-    from holo_addon import pipeline
+    from holo_addon.render import pipeline
     holo_addon.register()
     rows = []
     for size in args.sizes:
@@ -208,7 +208,7 @@ def main():
                 rgb = rgb / np.maximum(alpha, 1e-6)[..., None]
                 ref_rgb, ref_alpha, ref_depth = cycles(bpy, scene, out)
                 ref_rgb = ref_rgb / np.maximum(ref_alpha, 1e-6)[..., None]
-                from holo_core.image_files import srgb, write_png
+                from holo_core.io.image import srgb, write_png
                 write_png(ROOT / "out" / f"quality_{size}_{fstop}_{mode}.png",
                           srgb(np.concatenate([rgb * alpha[..., None],
                                                ref_rgb * ref_alpha[..., None]], 1)))

@@ -10,7 +10,7 @@ import warnings
 import numpy as np
 
 from holo_core.opencl import get_runtime
-from holo_core.point_sources import Grid, cone_weight, point_wave
+from holo_core.plate.point_sources import Grid, cone_weight, point_wave
 from holo_core.propagation import grid
 
 LAM, PITCH, SHAPE = 633e-9, 8e-6, (1024, 1024)

@@ -11,10 +11,11 @@ import time
 
 import numpy as np
 
-from holo_core.camera import Camera, look_at
-from holo_core.emitters import Mesh, sample_points
-from holo_core.record import Plate, record_hologram
-from holo_core.render import render_view
+from holo_core.plate.record import record_hologram
+from holo_core.plate.view import render_view
+from holo_core.scene.camera import Camera, look_at
+from holo_core.scene.mesh import Mesh, sample_points
+from holo_core.scene.plate import Plate
 
 PAPER_SECONDS, TARGET_SECONDS, PRIMITIVES = 185.0, 10.0, 100_000
 
