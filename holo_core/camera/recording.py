@@ -56,9 +56,9 @@ class PupilFields:
         self.rt, self.em, self.optics = rt, em, optics
         h, w = optics.shape
         self.index = rt.to_device(em.index.astype(np.int32))
-        self.lambdas = (optics.wavelength, optics.depth_wavelength)
+        self.wavelengths = (optics.wavelength, optics.depth_wavelength)
         self.phase0 = [rt.to_device(np.remainder(2 * np.pi / lam * em.distance, 2 * np.pi),
-                                    np.float32) for lam in self.lambdas]
+                                    np.float32) for lam in self.wavelengths]
         self.amps = [rt.to_device(np.sqrt(em.colour[:, c]), np.float32) for c in range(3)]
         self.amps.append(rt.to_device(np.sqrt(em.coverage), np.float32))
         self.spectrum, self.pupil = empty(rt, (h, w)), empty(rt, (h, w))
@@ -81,7 +81,7 @@ class PupilFields:
         """The pupil's object wave (device, (h, w) FFT order) of colour channel ``field``
         (0-2) or the depth partner (3), emitter phases ``phases`` (device float32)."""
         rt, em, optics = self.rt, self.em, self.optics
-        lam = self.lambdas[field == 3]
+        lam = self.wavelengths[field == 3]
         dy, dx = optics.pitch(lam)
         h, w = optics.shape
         self.pupil.fill(0)
@@ -103,7 +103,7 @@ class PupilFields:
         """The image of the pupil's current wave (fine pixels, complex), normalised so that
         E|A|² is the emitters' intensity."""
         rt, optics = self.rt, self.optics
-        lam = self.lambdas[field == 3]
+        lam = self.wavelengths[field == 3]
         dy, dx = optics.pitch(lam)
         h, w = optics.shape
         self.padded.fill(0)

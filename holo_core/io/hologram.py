@@ -137,8 +137,8 @@ def _meta(path: Path, header) -> dict:
                                 f"version {FORMAT_VERSION})")
     meta = {"band_sin": 0.0, "channels": [], "point_density_per_m2": 0.0, **meta}
     schema = _Schema(path, meta)
-    lambdas = schema.numbers("wavelengths_m", "> 0", lambda v: v > 0, shape="any")
-    if not 1 <= len(lambdas) <= MAX_CHANNELS:
+    wavelengths = schema.numbers("wavelengths_m", "> 0", lambda v: v > 0, shape="any")
+    if not 1 <= len(wavelengths) <= MAX_CHANNELS:
         schema.fail("wavelengths_m", f"1 to {MAX_CHANNELS} wavelengths [m]")
     schema.numbers("pitch_m", "> 0 [m]", lambda v: v > 0)
     rows, cols = schema.numbers("size_px", "two integers >= 1",
@@ -151,10 +151,10 @@ def _meta(path: Path, header) -> dict:
     sub = _Schema(path, ref, "reference.")
     sub.numbers("angle_rad", "in [0, π/2)", lambda v: 0 <= v < math.pi / 2)
     sub.numbers("azimuth_rad", "finite")
-    amplitudes = sub.numbers("amplitudes", f"{len(lambdas)} numbers >= 0 (or none)",
+    amplitudes = sub.numbers("amplitudes", f"{len(wavelengths)} numbers >= 0 (or none)",
                              lambda v: v >= 0, shape="any")
-    if len(amplitudes) not in (0, len(lambdas)):
-        sub.fail("amplitudes", f"{len(lambdas)} numbers >= 0 (or none)")
+    if len(amplitudes) not in (0, len(wavelengths)):
+        sub.fail("amplitudes", f"{len(wavelengths)} numbers >= 0 (or none)")
     bounds = np.reshape(schema.numbers("bounds_m", "two corners (x, y, z) [m]", shape=(2, 3)),
                         (2, 3))
     if (bounds[0] > bounds[1]).any():
@@ -165,7 +165,7 @@ def _meta(path: Path, header) -> dict:
     schema.numbers("point_density_per_m2", ">= 0 [1/m²]", lambda v: v >= 0)
     names = meta["channels"]
     if not isinstance(names, list) or (names and (
-            len(names) != len(lambdas) or not all(n in CHANNEL_ROLES for n in names))):
+            len(names) != len(wavelengths) or not all(n in CHANNEL_ROLES for n in names))):
         schema.fail("channels", f"one of {'/'.join(CHANNEL_ROLES)} per wavelength")
     return meta
 

@@ -136,12 +136,12 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     pos = np.asarray(positions, np.float64)
     if not pos.size and extra_wave is None:
         raise InputError("positions holds no points: there is nothing to record")
-    lambdas = tuple(validate.positive("wavelengths", w, "m") for w in np.atleast_1d(wavelengths))
-    if not lambdas:
+    wavelengths = tuple(validate.positive("wavelengths", w, "m") for w in np.atleast_1d(wavelengths))
+    if not wavelengths:
         raise InputError("wavelengths must hold at least one wavelength [m]")
-    cols = np.asarray(colours, np.float64).reshape(len(pos), -1 if len(pos) else len(lambdas))
-    if cols.shape[1] != len(lambdas):
-        raise InputError(f"colours must have one column per wavelength ({len(lambdas)}); "
+    cols = np.asarray(colours, np.float64).reshape(len(pos), -1 if len(pos) else len(wavelengths))
+    if cols.shape[1] != len(wavelengths):
+        raise InputError(f"colours must have one column per wavelength ({len(wavelengths)}); "
                          f"got {cols.shape[1]}")
     if not np.isfinite(cols).all() or (cols < 0).any():
         raise InputError("colours must be finite intensities >= 0")
@@ -150,12 +150,12 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     phases = np.asarray(phases, np.float64).reshape(len(pos))
     shape = validate.shape2d("shape", shape)
     pitch = validate.positive("pitch", pitch, "m")
-    memory.check_host(f"a {shape[1]}x{shape[0]} hologram of {len(lambdas)} wavelengths",
-                      HOST_BYTES * len(lambdas) * math.prod(shape))
-    for lam in lambdas:
+    memory.check_host(f"a {shape[1]}x{shape[0]} hologram of {len(wavelengths)} wavelengths",
+                      HOST_BYTES * len(wavelengths) * math.prod(shape))
+    for lam in wavelengths:
         reference.check(lam, pitch)
     amplitude = np.sqrt(cols) * np.exp(1j * phases)[:, None]
-    groups = {lam: [c for c, other in enumerate(lambdas) if other == lam] for lam in lambdas}
+    groups = {lam: [c for c, other in enumerate(wavelengths) if other == lam] for lam in wavelengths}
     objects = {}
     for g, (lam, chans) in enumerate(groups.items()):  # equal wavelengths share one pass
         objects.update(zip(chans, point_wave(
@@ -163,7 +163,7 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
             obliquity=obliquity, method=method, band=band,
             progress=jobs.scaled(progress, g / len(groups), (g + 1) / len(groups)))))
     intensity, waves, amplitudes = [], [], []
-    for c, lam in enumerate(lambdas):
+    for c, lam in enumerate(wavelengths):
         o = objects[c]
         if extra_wave is not None:
             o = o + extra_wave(c, lam)
@@ -177,7 +177,7 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
         amplitudes.append(a_r)
     if bounds is None:
         bounds = np.array([pos.min(0), pos.max(0)]) if len(pos) else np.zeros((2, 3))
-    return Hologram(intensity=np.stack(intensity), wavelengths=lambdas, pitch=pitch,
+    return Hologram(intensity=np.stack(intensity), wavelengths=wavelengths, pitch=pitch,
                     reference_angle=reference.angle, reference_azimuth=reference.azimuth,
                     reference_amplitudes=tuple(amplitudes),
                     object_wave=np.stack(waves) if keep_object_wave else None,
@@ -253,30 +253,30 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
     if prims:
         density = 1 / s.spacing**2
     rgb = np.asarray(rgb, np.float64).reshape(len(pos), 3)
-    lambdas, channels, colours = [s.wavelength] * 3, ["R", "G", "B"], [rgb]
+    wavelengths, channels, colours = [s.wavelength] * 3, ["R", "G", "B"], [rgb]
     if depth:
-        lambdas.append(s.depth_wavelength)
+        wavelengths.append(s.depth_wavelength)
         channels.append("Z")
         colours.append(cover[:, None])
     reference = Reference(angle=s.reference_angle)
     split = 0.1 if prims else 1.0  # the triangles' propagations dominate where there are any
     return record_points(plate.to_plate(pos), np.concatenate(colours, 1), shape=s.shape,
-                         pitch=s.pitch, wavelengths=tuple(lambdas), seed=seed,
+                         pitch=s.pitch, wavelengths=tuple(wavelengths), seed=seed,
                          reference=reference, plate=plate.matrix_world, method=method,
                          band=s.band, channels=channels, point_density=density,
-                         extra_wave=_triangle_waves(prims, s, lambdas, channels, view, seed,
+                         extra_wave=_triangle_waves(prims, s, wavelengths, channels, view, seed,
                                                     jobs.scaled(progress, split, 1.0))
                          if prims else None, progress=jobs.scaled(progress, 0.0, split),
                          bounds=np.array([local.min(0), local.max(0)]))
 
 
-def _triangle_waves(prims, s, lambdas, channels, view, seed, progress: jobs.Progress = None):
+def _triangle_waves(prims, s, wavelengths, channels, view, seed, progress: jobs.Progress = None):
     """``record_points``' ``extra_wave`` for textured primitives (in the plate's frame) recorded
-    with the sampling ``s``: per channel (``channels``, at ``lambdas`` [m]) their summed wave;
+    with the sampling ``s``: per channel (``channels``, at ``wavelengths`` [m]) their summed wave;
     ``view`` = (camera position [m], pixel angle [rad]) or None. One pass per wavelength serves
     all its channels; ``progress`` hears of every primitive."""
-    shortest = min(lambdas)
-    seconds = len(prims) * len(set(lambdas)) * math.prod(grid.padded_shape(s.shape, 2)) \
+    shortest = min(wavelengths)
+    seconds = len(prims) * len(set(wavelengths)) * math.prod(grid.padded_shape(s.shape, 2)) \
         * ROTATION_SECONDS
     (log.warning if seconds > SLOW_TRIANGLES else log.info)(
         "triangles: %d primitives, about %.0f s to record on a 2-core CPU (a rotation and a "
@@ -301,7 +301,7 @@ def _triangle_waves(prims, s, lambdas, channels, view, seed, progress: jobs.Prog
     def waves_at(lam):
         """The waves of every channel at ``lam`` [m]. A single-colour primitive's channels
         differ only in amplitude: one propagation serves them all."""
-        chans = [c for c, other in enumerate(lambdas) if other == lam]
+        chans = [c for c, other in enumerate(wavelengths) if other == lam]
         totals = np.zeros((len(chans),) + s.shape, np.complex128)
         for i, p in enumerate(prims):
             jobs.report(progress, passes.index(lam) * len(prims) + i, len(passes) * len(prims))
@@ -319,7 +319,7 @@ def _triangle_waves(prims, s, lambdas, channels, view, seed, progress: jobs.Prog
         return {c: cone_filter(t, wavelength=lam, pitch=s.pitch, band=s.band)
                 for c, t in zip(chans, totals)}
 
-    done, passes = {}, list(dict.fromkeys(lambdas))  # the order record_points asks for them
+    done, passes = {}, list(dict.fromkeys(wavelengths))  # the order record_points asks for them
 
     def wave(c, lam):
         if lam not in done:

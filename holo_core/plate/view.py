@@ -236,7 +236,7 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     depth_pupil = None
     if z_ch is not None:
         depth_pupil = depth_aperture(fine, first, first.wavelengths[z_ch], centre)
-        lam_pair = (lam0, first.wavelengths[z_ch])
+        pair_wavelengths = (lam0, first.wavelengths[z_ch])
         depth_sources = [c for c in colours if first.wavelengths[c] == lam0] + [z_ch]
     channels = colours + ([z_ch] if z_ch is not None else [])
     intensities, crosses, brightness, coverage = [], [], [], []
@@ -257,17 +257,17 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
             jobs.report(done, n + 1, len(channels))
         intensities.append(np.stack(planes, -1))
         if depth_pupil is not None:
-            (u1, _), (u2, area) = (pupil_image(depth_fields[p], wavelength=lam_pair[p],
+            (u1, _), (u2, area) = (pupil_image(depth_fields[p], wavelength=pair_wavelengths[p],
                                                pitch=h.pitch, camera=fine, aperture=depth_pupil)
                                    for p in (0, 1))
             crosses.append(u1 * np.conj(u2))
             brightness.append(np.abs(u1))
             # the depth partner's emitters have unit intensity: radiance = density × coverage
-            coverage.append(np.abs(u2) ** 2 / (lam_pair[1] ** 2 * area))
+            coverage.append(np.abs(u2) ** 2 / (pair_wavelengths[1] ** 2 * area))
     radiance = speckle.compose(intensities, composition)
     ray = None
     if crosses:
-        ray = _depth(crosses, brightness, estimate=depth_estimate, wavelengths=lam_pair,
+        ray = _depth(crosses, brightness, estimate=depth_estimate, wavelengths=pair_wavelengths,
                      centre=centre, focus=depth_pupil.focus, camera=camera, supersample=supersample)
     radiance = speckle.downsample(radiance, supersample)
     if coverage and first.point_density:
