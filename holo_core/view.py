@@ -1,13 +1,4 @@
-"""Image generation: a camera anywhere in front of the hologram (Sect. VII).
-
-Per wavelength: the reconstructed wave (Sect. VI) is carried to the camera's aperture plane by
-tilt plus offset propagation (Sect. IV-D); the aperture is cut out as a disc, apodized by the
-cosine window of Fig. 9 and, for a thin lens, multiplied by Eq. 24's phase; its angular
-spectrum is then read at each pixel's direction cosines (Eq. 22) by bilinear weighting. The
-image holds the complex amplitude A(α/λ, β/λ) [field·m²] of the plane wave from each pixel's
-direction; the radiance is |A|² / (λ²·∫w²) (power per aperture area and projected solid
-angle), so a surface of point emitters of intensity I and density σ shows radiance σ·I.
-"""
+"""The result both renderers return: a view's radiance, opacity and planar depth."""
 
 from __future__ import annotations
 

@@ -1,25 +1,5 @@
-"""Camera holograms: the object wave recorded on a virtual plate at the camera's entrance pupil,
-and the image the camera forms from it (Sect. VII: any wave field can be evaluated on the
-aperture of an arbitrarily placed camera).
+"""The camera hologram's image: colour, coverage (alpha) and depth.
 
-A camera uses only the light that reaches its pupil, so the samples go there:
-
-- Optics (:func:`choose_optics`). A pupil of diameter D resolves λ/D; λ = D·Δ/s makes that
-  one *fine pixel* (Δ the pixel angle, s the supersampling). A lens keeps its real aperture
-  (lens/f-stop) and focus, so the defocus is the camera's. Without one, the pupil is the
-  largest whose defocus over the emitters' depth range stays within a fine pixel.
-- Bins. The pupil fills its FFT window (h·dy = w·dx = D): its spectrum's bins lie b = Δ/s
-  apart in direction cosine, each bin one direction of arrival, covering the field of view
-  and a margin for blur.
-- Emitters (:func:`rasterize`). The surfaces the camera sees, one emitter per bin: each bin's
-  ray meets the nearest triangle (a depth buffer, perspective-correct attributes), which
-  emits its colour from the hit point, at distance R, with a random phase per look (speckle
-  is averaged over looks, Sect. VII-E). Bare points go to their nearest bin.
-- Object wave (:func:`object_wave`). By depth layers: O = Σ_l exp(ik(√(ρ²+z_l²) − z_l))·
-  F⁻¹[S_l], where S_l holds the layer's emitters as amp·exp(i(kR + φ)) at their bins. Each
-  plane wave is exact; each layer's curvature is that of its distance (the Fresnel
-  approximation per layer, spaced so that the error stays within a quarter wave at the pupil's
-  rim: Rayleigh's depth of focus).
 - Image (:func:`render_camera`). The pupil cut by the iris (a raised-cosine rim against
   ringing, Fig. 9), the thin lens of Eq. 24, and the angular spectrum read at each pixel's
   direction cosines (Eq. 22) by the ES kernel of a non-uniform FFT: no interpolation blur.
@@ -27,10 +7,6 @@ A camera uses only the light that reaches its pupil, so the samples go there:
   resolution. Depth: the two-wavelength phase difference (Eq. 26–30) of the colour image and
   the depth partner's (λ2 = ε·λ1, unit emitters), whose intensity is also each pixel's
   coverage (alpha).
-- The paper's route (:func:`intensity_hologram`, :func:`reconstruct_object_wave`): the object
-  wave is recorded as H = |O + R|² with an off-axis plane reference on a grid 4× finer in x,
-  and reconstructed as R'·H with the DC and twin terms filtered off (Sect. V–VI). Rendering
-  the object wave directly is that reconstruction's ideal filter.
 """
 
 from __future__ import annotations

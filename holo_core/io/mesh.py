@@ -1,8 +1,4 @@
-"""Emitters: point sources and textured planar primitives, from meshes or directly (Sect. V-B).
-
-Positions are metres in the hologram's frame (hologram plane z = 0, objects at z < 0). Colours
-are linear intensities I per wavelength; a point's amplitude is A0 = √I (Sect. VII-B). Diffuse
-surfaces get uniformly random phases from a seeded generator.
+"""Mesh files: OBJ and PLY (ASCII and binary) read into a :class:`~holo_core.scene.Mesh`.
 """
 
 from __future__ import annotations

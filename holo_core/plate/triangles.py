@@ -1,8 +1,6 @@
-"""Emitters: point sources and textured planar primitives, from meshes or directly (Sect. V-B).
-
-Positions are metres in the hologram's frame (hologram plane z = 0, objects at z < 0). Colours
-are linear intensities I per wavelength; a point's amplitude is A0 = √I (Sect. VII-B). Diffuse
-surfaces get uniformly random phases from a seeded generator.
+"""Textured triangle emitters: each triangle's surface field on its own plane, carried to the
+plate by spectrum rotation and offset propagation (Sect. IV-C, V-B). Diffuse surfaces get
+uniformly random phases from a seeded generator.
 """
 
 from __future__ import annotations

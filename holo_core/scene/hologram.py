@@ -1,8 +1,4 @@
-"""The hologram and its file: OpenEXR, float32 channels per wavelength, metadata as JSON.
-
-Channels, for colour c = 0, 1, ...: ``c<c>.H`` the intensity hologram, and optionally
-``c<c>.O.re`` / ``c<c>.O.im`` the complex object wave. The header attribute ``holo`` holds
-the metadata (see :func:`metadata`); files are written atomically and read back bit-exactly.
+"""The hologram: recorded holograms of one scene, one per wavelength, with their optics.
 """
 
 from __future__ import annotations

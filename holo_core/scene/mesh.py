@@ -1,8 +1,7 @@
-"""Emitters: point sources and textured planar primitives, from meshes or directly (Sect. V-B).
+"""Meshes and their point emitters (Sect. V-B).
 
-Positions are metres in the hologram's frame (hologram plane z = 0, objects at z < 0). Colours
-are linear intensities I per wavelength; a point's amplitude is A0 = √I (Sect. VII-B). Diffuse
-surfaces get uniformly random phases from a seeded generator.
+Positions are metres; colours are linear intensities I per wavelength, and a point's amplitude
+is A0 = √I (Sect. VII-B). Surfaces are sampled area-uniformly by a seeded generator.
 """
 
 from __future__ import annotations

@@ -1,7 +1,5 @@
-"""Recording: object wave, reference wave and the intensity hologram H = |O + R|² (Sect. V-B).
-
-The hologram lies in the plane z = 0 of its own frame, objects at z < 0, light travelling +z.
-One hologram is recorded per wavelength of the same scene (Sect. VII-B).
+"""The holographic plate: its pose and size in the world. The hologram is its z = 0 plane,
+viewers at z > 0.
 """
 
 from __future__ import annotations
