@@ -30,7 +30,8 @@ LAYER_PHASE = math.pi / 2  # a layer's largest curvature error at the pupil's ri
 MAX_LAYERS = 512
 IRIS_TAPER = 0.1       # the iris's raised-cosine rim, a fraction of its radius
 DEPTH_MARGIN = 1.25    # the depth pair's unambiguous range over the scene's depth extent
-TAPS, ES_TABLE = 6, 4096
+TAPS, ES_TABLE = 4, 4096  # the image read: 4 taps at 2x padding agree with 6 to 100 dB PSNR
+EDGE_BINS = 8  # bins beyond the field of view and its blur: the read's taps and a guard
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -106,7 +107,7 @@ def choose_optics(camera: Camera, depth_range, *, supersample=SUPERSAMPLE,
         diameter = validate.positive("pupil_diameter", pupil_diameter, "m")
     lam = diameter * b
     blur = diameter * max(abs(1 / near - 1 / focus), abs(1 / far - 1 / focus))
-    margin = math.ceil(blur / b) + TAPS + 2
+    margin = math.ceil(blur / b) + EDGE_BINS
     alpha, beta, gamma = replace(camera, resolution=tuple(r * s for r in camera.resolution)
                                  ).direction_cosines()
     shape = tuple(grid.next_fast_len(2 * (math.ceil(np.abs(a).max() / b) + margin))

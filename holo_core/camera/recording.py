@@ -41,9 +41,10 @@ class PupilFields:
         self.amps.append(rt.to_device(np.sqrt(em.coverage), np.float32))
         self.spectrum, self.pupil = empty(rt, (h, w)), empty(rt, (h, w))
         self.padded = empty(rt, (2 * h, 2 * w))
-        self.apod = [rt.to_device(1 / es_transform(grid.signed_indices(n) / (2 * n)), np.float32)
+        self.apod = [rt.to_device(1 / es_transform(grid.signed_indices(n) / (2 * n), TAPS),
+                                   np.float32)
                      for n in (h, w)]
-        self.es = cached_array(rt, "es-table", es_table)  # the table tilt.py reads too
+        self.es = cached_array(rt, "es-table", es_table, TAPS)
         alpha, beta, _ = camera_fine.direction_cosines()
         self.u = rt.to_device(2 * alpha / optics.bin, np.float32)
         self.v = rt.to_device(2 * beta / optics.bin, np.float32)

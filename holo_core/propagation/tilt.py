@@ -23,7 +23,7 @@ from . import grid
 from .angular_spectrum import angular_spectrum
 
 TAPS = 6                # spectrum interpolation taps per axis (error ~10^-(TAPS-1) at padding 2)
-ES_BETA = 2.30 * TAPS   # the kernel's shape for 2x oversampling (Barnett et al. 2019)
+ES_BETA = 2.30          # the kernel's shape per tap for 2x oversampling (Barnett et al. 2019)
 ES_TABLE = 4096         # kernel samples, linearly interpolated (error ~1e-6)
 
 
@@ -84,17 +84,18 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     return like_input(window(rt, target, out_shape, t0, u0), from_host)
 
 
-def es_kernel(t) -> np.ndarray:
-    """The spectrum's interpolation kernel at ``t`` [bins]: exp(β(√(1 - (2t/TAPS)²) - 1))."""
-    s = 1 - (2 * np.asarray(t, np.float64) / TAPS) ** 2
-    return np.where(s > 0, np.exp(ES_BETA * (np.sqrt(np.clip(s, 0, None)) - 1)), 0.0)
+def es_kernel(t, taps=TAPS) -> np.ndarray:
+    """The spectrum's interpolation kernel at ``t`` [bins]: exp(β(√(1 - (2t/taps)²) - 1)),
+    β = ES_BETA·taps."""
+    s = 1 - (2 * np.asarray(t, np.float64) / taps) ** 2
+    return np.where(s > 0, np.exp(ES_BETA * taps * (np.sqrt(np.clip(s, 0, None)) - 1)), 0.0)
 
 
-def es_transform(xi) -> np.ndarray:
+def es_transform(xi, taps=TAPS) -> np.ndarray:
     """The kernel's Fourier transform at ``xi`` = position over the padded size: the factor
     interpolation lays on the field."""
-    t, dt = np.linspace(-TAPS / 2, TAPS / 2, 64 * TAPS + 1, retstep=True)
-    return (es_kernel(t) * np.cos(2 * np.pi * np.multiply.outer(xi, t))).sum(-1) * dt
+    t, dt = np.linspace(-taps / 2, taps / 2, 64 * taps + 1, retstep=True)
+    return (es_kernel(t, taps) * np.cos(2 * np.pi * np.multiply.outer(xi, t))).sum(-1) * dt
 
 
 def cached_array(rt, name, make, *args):
@@ -102,9 +103,9 @@ def cached_array(rt, name, make, *args):
     return cached(rt, (name, *args), lambda: (make(*args), None))[0]
 
 
-def es_table():
+def es_table(taps=TAPS):
     """(value, slope) per table interval, packed as complex: what ``es_weight`` reads."""
-    phi = es_kernel(np.linspace(-TAPS / 2, TAPS / 2, ES_TABLE + 1))
+    phi = es_kernel(np.linspace(-taps / 2, taps / 2, ES_TABLE + 1), taps)
     return phi[:-1] + 1j * np.diff(phi)
 
 
