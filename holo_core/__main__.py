@@ -9,6 +9,8 @@ import sys
 import warnings
 from pathlib import Path
 
+from .validate import MAX_LENGTH, MIN_LENGTH
+
 
 def devices(_args) -> int:
     from .opencl import device_table
@@ -44,6 +46,7 @@ def record(args) -> int:
     from .io.mesh import read_mesh
     from .plate.record import Reference, record_points
     from .scene.mesh import default_spacing, sample_points
+    out = _output(args.output, args.mesh, "")  # before the work, not after it
     mesh = read_mesh(args.mesh)
     shape = (args.resolution[1], args.resolution[0])
     wavelengths = tuple(w * 1e-9 for w in args.wavelengths)
@@ -63,7 +66,7 @@ def record(args) -> int:
                          reference=Reference(angle=args.reference_angle), method=args.method,
                          progress=_progress_bar())
     print()
-    print(write_hologram(_file_in(args.output, args.mesh, ""), holo))
+    print(write_hologram(out, holo))
     return 0
 
 
@@ -82,6 +85,7 @@ def render(args) -> int:
     from .io.view import write_view
     from .plate.view import render_view
     from .scene.camera import Camera, look_at
+    out = _output(args.output, args.hologram, "_view", preview=True)
     h = read_hologram(args.hologram)
     plate = np.asarray(h.plate)
     centre = (plate @ np.append(np.asarray(h.bounds).mean(0), 1.0))[:3]
@@ -96,7 +100,7 @@ def render(args) -> int:
     view = render_view(h, cam, supersample=args.supersample, composition=args.composition,
                        source=args.source, progress=_progress_bar())
     print()
-    for path in write_view(view, _file_in(args.output, args.hologram, "_view")):
+    for path in write_view(view, out):
         print(path)
     return 0
 
@@ -109,6 +113,17 @@ def _file_in(output, source, tag) -> Path:
     return out
 
 
+def _output(output, source, tag, preview=False) -> Path:
+    """The file to write (:func:`_file_in`), checked before the work: it ends in .exr and
+    its folder takes new files (and, with ``preview``, the PNG beside it too)."""
+    from .io.image import check_writable
+    out = _file_in(output, source, tag)
+    check_writable(out, ".exr")
+    if preview:
+        check_writable(out.with_suffix(".png"))
+    return out
+
+
 def _number(kind, test, allowed):
     """An argparse type: ``kind`` of the text, finite and passing ``test``, else an error
     naming ``allowed``."""
@@ -116,7 +131,8 @@ def _number(kind, test, allowed):
         try:
             value = kind(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number ({allowed})") from None
+            what = "an integer" if kind is int else "a number"
+            raise argparse.ArgumentTypeError(f"{text!r} is not {what} ({allowed})") from None
         if not math.isfinite(value) or not test(value):
             raise argparse.ArgumentTypeError(f"{text!r} is out of range ({allowed})")
         return value
@@ -124,6 +140,12 @@ def _number(kind, test, allowed):
 
 
 POSITIVE = _number(float, lambda v: v > 0, "a number > 0")
+METRES = _number(float, lambda v: MIN_LENGTH <= v <= MAX_LENGTH,
+                 f"metres, from {MIN_LENGTH:g} to {MAX_LENGTH:g}")
+NANOMETRES = _number(float, lambda v: 1 <= v <= MAX_LENGTH * 1e9,
+                     f"nm, from 1 to {MAX_LENGTH * 1e9:g}: 633 is red light; 633e-9 would be "
+                     f"metres, which this option does not take")
+SUPERSAMPLE = _number(int, lambda v: 1 <= v <= 16, "an integer from 1 to 16")
 FINITE = _number(float, lambda v: True, "a finite number")
 COUNT = _number(int, lambda v: v >= 1, "an integer >= 1")
 PIXELS = _number(int, lambda v: 1 <= v <= 65536, "an integer from 1 to 65536")
@@ -158,9 +180,9 @@ def main(argv=None) -> int:
                    help="hologram file to write (.exr), or a folder for <mesh>.exr")
     p.add_argument("--resolution", type=PIXELS, nargs=2, default=(1024, 1024),
                    metavar=("W", "H"), help="hologram size in pixels (default 1024 1024)")
-    p.add_argument("--pitch", type=POSITIVE, default=8e-6, help="sample spacing [m] (8e-6)")
-    p.add_argument("--wavelengths", type=POSITIVE, nargs="+", default=[633, 532, 473],
-                   help="wavelengths [nm] (633 532 473)")
+    p.add_argument("--pitch", type=METRES, default=8e-6, help="sample spacing [m] (8e-6)")
+    p.add_argument("--wavelengths", type=NANOMETRES, nargs="+", default=[633, 532, 473],
+                   help="wavelengths [nm, not m like the other lengths] (633 532 473)")
     p.add_argument("--reference-angle", type=FINITE, default=0.0, help="ϑ [rad] (0)")
     p.add_argument("--distance", type=POSITIVE, default=None,
                    help="move the mesh so its nearest point is this far in front [m]")
@@ -186,7 +208,8 @@ def main(argv=None) -> int:
     p.add_argument("--fstop", type=POSITIVE, default=None, help="f-number (default: pinhole)")
     p.add_argument("--focus-distance", type=POSITIVE, default=None,
                    help="[m] (default with --fstop: the objects' centre)")
-    p.add_argument("--supersample", type=COUNT, default=1, help="speckle low-pass factor (1)")
+    p.add_argument("--supersample", type=SUPERSAMPLE, default=1,
+                   help="speckle low-pass factor (1)")
     p.add_argument("--composition", choices=["mean", "max"], default="mean")
     p.add_argument("--source", choices=["hologram", "object_wave"], default="hologram")
     args = parser.parse_args(argv)

@@ -8,6 +8,10 @@ import warnings
 
 import numpy as np
 
+# Lengths a hologram's pitch and wavelengths may take [m]: 1 pm to 1 km, scale-free within
+# (Sect. VII-B), and far enough from float underflow that squares and ratios stay normal
+MIN_LENGTH, MAX_LENGTH = 1e-12, 1e3
+
 
 class InputError(ValueError):
     """Bad input: a setting, an argument or a file the project cannot use. The message names
@@ -42,6 +46,51 @@ def finite(name: str, value, unit: str = "") -> float:
     return _finite(name, value, unit)
 
 
+def length(name: str, value, unit: str = "m") -> float:
+    """A pitch or a wavelength [m]: finite, in [MIN_LENGTH, MAX_LENGTH]."""
+    v = _finite(name, value, unit)
+    if not MIN_LENGTH <= v <= MAX_LENGTH:
+        raise InputError(f"{name} must be in [{MIN_LENGTH:g}, {MAX_LENGTH:g}]{_unit(unit)}; "
+                         f"got {value!r}")
+    return v
+
+
+def integer(name: str, value, minimum: int | None = None, maximum: int | None = None) -> int:
+    """``value`` as an int: a whole number (not a bool), in [minimum, maximum] when given."""
+    allowed = "an integer" + (f" >= {minimum}" if maximum is None and minimum is not None
+                              else f" in [{minimum}, {maximum}]" if maximum is not None else "")
+    ok = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+    if isinstance(value, (float, np.floating)) and math.isfinite(value) and value == int(value):
+        ok = True  # 2.0 is the integer 2
+    if not ok:
+        raise InputError(f"{name} must be {allowed}; got {value!r}")
+    v = int(value)
+    if (minimum is not None and v < minimum) or (maximum is not None and v > maximum):
+        raise InputError(f"{name} must be {allowed}; got {value!r}")
+    return v
+
+
+def seed(value, name: str = "seed") -> int:
+    """A random generator's seed: an integer >= 0."""
+    return integer(name, value, 0)
+
+
+def index(name: str, value, count: int) -> int:
+    """An index into ``count`` items: an integer in [0, count - 1]."""
+    return integer(name, value, 0, count - 1)
+
+
+def vector(name: str, value, size: int = 3, unit: str = "") -> np.ndarray:
+    """``size`` finite numbers as a float64 array."""
+    try:
+        v = np.asarray(value, np.float64)
+    except (TypeError, ValueError):
+        v = None
+    if v is None or v.shape != (size,) or not np.isfinite(v).all():
+        raise InputError(f"{name} must be {size} finite numbers{_unit(unit)}; got {value!r}")
+    return v
+
+
 def pair(name: str, value, unit: str = "") -> tuple[float, float]:
     """A finite (x, y) pair."""
     try:
@@ -65,7 +114,7 @@ def shape2d(name: str, value) -> tuple[int, int]:
 
 def rotation(name: str, value) -> np.ndarray:
     """A proper 3x3 rotation matrix (orthonormal, determinant +1) as float64."""
-    m = np.asarray(value, dtype=np.float64)
+    m = _matrix(value)
     if m.shape != (3, 3) or not np.isfinite(m).all():
         raise InputError(f"{name} must be a finite 3x3 matrix; got shape {m.shape}")
     if not np.allclose(m.T @ m, np.eye(3), atol=1e-9) or np.linalg.det(m) < 0:
@@ -75,7 +124,7 @@ def rotation(name: str, value) -> np.ndarray:
 
 def rigid_pose(name: str, value) -> np.ndarray:
     """A finite 4x4 pose of a rotation and a translation [m] (bottom row 0 0 0 1) as float64."""
-    m = np.asarray(value, dtype=np.float64)
+    m = _matrix(value)
     if m.shape != (4, 4) or not np.isfinite(m).all():
         raise InputError(f"{name} must be a finite 4x4 matrix; got shape {m.shape}")
     rotation(f"{name} rotation", m[:3, :3])
@@ -92,9 +141,19 @@ def host_field(name: str, field: np.ndarray) -> np.ndarray:
         raise InputError(f"{name} must be a 2-D array [rows=y, cols=x]; got {a.ndim}-D")
     if not np.issubdtype(a.dtype, np.number):
         raise InputError(f"{name} must be numeric; got dtype {a.dtype}")
+    if not a.size:
+        raise InputError(f"{name} must hold at least 1x1 samples; got {a.shape[0]}x{a.shape[1]}")
     if not np.isfinite(a).all():
         raise InputError(f"{name} must be finite; it holds NaN or infinite values")
     return a
+
+
+def _matrix(value) -> np.ndarray:
+    """``value`` as a float64 array, or an empty one where it holds no numbers."""
+    try:
+        return np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        return np.zeros(0)
 
 
 def _finite(name: str, value, unit: str) -> float:

@@ -94,7 +94,7 @@ def choose_optics(camera: Camera, depth_range, *, supersample=SUPERSAMPLE,
                   pupil_diameter: float | None = None) -> PupilOptics:
     """Optics for ``camera`` and emitters at planar depths ``depth_range`` (near, far) [m]
     (module docstring). ``pupil_diameter`` [m] overrides the pupil's diameter."""
-    s = int(validate.at_least("supersample", supersample, 1))
+    s = validate.integer("supersample", supersample, 1)
     near, far = (validate.positive("depth_range", d, "m") for d in depth_range)
     near, far = min(near, far), max(near, far)
     b = camera.pixel_angle() / s

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__, validate
-from ..scene.hologram import Hologram
+from ..scene.hologram import CHANNEL_ROLES, MAX_CHANNELS, Hologram
 from ..validate import InputError
 from .image import write_exr
 
@@ -42,16 +42,19 @@ def metadata(h: Hologram) -> dict:
 
 
 def write_hologram(path, h: Hologram) -> Path:
-    """Write ``h`` to ``path`` (.exr) through a temporary file and a rename; an empty or
-    non-finite hologram is refused, never written."""
+    """Write ``h`` to ``path`` (.exr) through a temporary file and a rename. What the reader
+    would refuse is refused here, never written: an empty or non-finite hologram, or
+    metadata outside the reader's schema (:func:`_meta`)."""
     check_pixels(str(path), h)
+    header = json.dumps(metadata(h))
+    _meta(path, {"holo": header})  # the reader's schema, on the very text written
     channels = {}
     for c in range(len(h.wavelengths)):
         channels[f"c{c}.H"] = h.intensity[c]
         if h.object_wave is not None:
             channels[f"c{c}.O.re"] = h.object_wave[c].real
             channels[f"c{c}.O.im"] = h.object_wave[c].imag
-    write_exr(path, channels, holo=json.dumps(metadata(h)))
+    write_exr(path, channels, holo=header)
     return path
 
 
@@ -137,10 +140,11 @@ def _meta(path: Path, header) -> dict:
                                 f"version {FORMAT_VERSION})")
     meta = {"band_sin": 0.0, "channels": [], "point_density_per_m2": 0.0, **meta}
     schema = _Schema(path, meta)
-    wavelengths = schema.numbers("wavelengths_m", "> 0", lambda v: v > 0, shape="any")
+    lengths = f"in [{validate.MIN_LENGTH:g}, {validate.MAX_LENGTH:g}] [m]"
+    wavelengths = schema.numbers("wavelengths_m", lengths, _length, shape="any")
     if not 1 <= len(wavelengths) <= MAX_CHANNELS:
         schema.fail("wavelengths_m", f"1 to {MAX_CHANNELS} wavelengths [m]")
-    schema.numbers("pitch_m", "> 0 [m]", lambda v: v > 0)
+    schema.numbers("pitch_m", lengths, _length)
     rows, cols = schema.numbers("size_px", "two integers >= 1",
                                 lambda v: v >= 1 and v == int(v), shape=2)
     meta["size_px"] = [int(rows), int(cols)]
@@ -151,10 +155,10 @@ def _meta(path: Path, header) -> dict:
     sub = _Schema(path, ref, "reference.")
     sub.numbers("angle_rad", "in [0, π/2)", lambda v: 0 <= v < math.pi / 2)
     sub.numbers("azimuth_rad", "finite")
-    amplitudes = sub.numbers("amplitudes", f"{len(wavelengths)} numbers >= 0 (or none)",
-                             lambda v: v >= 0, shape="any")
+    amplitudes = sub.numbers("amplitudes", f"{len(wavelengths)} numbers > 0 (or none)",
+                             lambda v: v > 0, shape="any")
     if len(amplitudes) not in (0, len(wavelengths)):
-        sub.fail("amplitudes", f"{len(wavelengths)} numbers >= 0 (or none)")
+        sub.fail("amplitudes", f"{len(wavelengths)} numbers > 0 (or none)")
     bounds = np.reshape(schema.numbers("bounds_m", "two corners (x, y, z) [m]", shape=(2, 3)),
                         (2, 3))
     if (bounds[0] > bounds[1]).any():
@@ -170,8 +174,8 @@ def _meta(path: Path, header) -> dict:
     return meta
 
 
-MAX_CHANNELS = 16
-CHANNEL_ROLES = ("R", "G", "B", "Y", "Z")
+def _length(v) -> bool:
+    return validate.MIN_LENGTH <= v <= validate.MAX_LENGTH
 
 
 class _Schema:
@@ -219,8 +223,8 @@ def import_acquired(path, *, pitch, wavelength, reference_angle=0.0, reference_a
     often stored in int32 TIFFs); an EXR gives its Y channel, else the mean of R, G, B, else
     its only channel. The size is checked against the memory budget before pixels are read.
     """
-    pitch = validate.positive("pitch", pitch, "m")
-    wavelength = validate.positive("wavelength", wavelength, "m")
+    pitch = validate.length("pitch", pitch)
+    wavelength = validate.length("wavelength", wavelength)
     angle = validate.finite("reference_angle", reference_angle, "rad")
     if not 0 <= angle < math.pi / 2:
         raise InputError(f"reference_angle must be in [0, π/2) rad; got {angle!r}")

@@ -3,9 +3,11 @@ checked before their pixels are.
 
 A write goes to a temporary file beside the target (``.<name>.holo-tmp.<host>.<pid>.<n><suffix>``),
 is flushed to disk, takes the target's permissions (a new file: 0666 less the umask, as
-``open`` would) and is renamed onto the target; a symbolic link is written through, not
-replaced. A failure, SIGINT or SIGTERM removes the temporary file; one left by a writer that was
-killed outright is removed by the next write to that folder.
+``open`` would) and is renamed onto the target. A target that is a symbolic link is replaced
+by the new file, never written through: the file it points to stays as it was (in a shared
+folder a planted link must not redirect a write). A failure, SIGINT or SIGTERM removes the
+temporary file; one left by a writer that was killed outright is removed by the next write to
+that folder.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import itertools
 import os
 import signal
 import socket
+import stat
 import struct
 import threading
 import zlib
@@ -94,18 +97,50 @@ def remove_stale_temps(folder) -> list[Path]:
 _HOST = socket.gethostname().split(".")[0] or "host"
 
 
-def _target(path) -> Path:
-    """The file to write: through symbolic links, in an existing or new folder, not a
-    folder itself."""
-    target = Path(os.path.realpath(path))
-    if target.is_dir():
+def check_writable(path, suffix: str | None = None) -> Path:
+    """:class:`InputError` unless a file can be written at ``path`` (ending in ``suffix``
+    when given): it is not a folder, and its folder, or the nearest existing one above it,
+    is a folder that takes a new file (tried with an empty temporary file, removed at once:
+    permissions, read-only mounts and quotas answer alike). Call it before a long job, so
+    that a bad output is found before the work, not after it."""
+    path = Path(path)
+    if suffix is not None and path.suffix.lower() != suffix:
+        raise InputError(f"{path}: the file is written as {_FORMATS.get(suffix, suffix)}; "
+                         f"name it *{suffix}")
+    if path.is_dir():
         raise InputError(f"{path}: is a folder; name the file to write")
+    folder = _folder(path)
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise InputError(f"{path}: cannot create its folder ({existing} is not a folder)")
+    probe = existing / f".{path.stem}{TEMP_TAG}{_HOST}.{os.getpid()}.{next(_count)}.probe"
+    try:
+        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+    except OSError as e:
+        raise InputError(f"{path}: its folder {existing} is not writable ({e.strerror})") \
+            from None
+    probe.unlink(missing_ok=True)
+    return folder / path.name
+
+
+_FORMATS = {".exr": "OpenEXR", ".png": "PNG"}
+
+
+def _folder(path: Path) -> Path:
+    """The folder ``path`` is in, its symbolic links resolved (the file's own name is not)."""
+    return Path(os.path.realpath(path.parent if str(path.parent) else "."))
+
+
+def _target(path) -> Path:
+    """The file to write, in an existing or new folder, not a folder itself. Its folder's
+    links are resolved, a link at the name itself is not: the rename replaces the link."""
+    target = check_writable(path)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise InputError(f"{path}: cannot create its folder ({e.strerror})") from None
-    if not os.access(target.parent, os.W_OK):
-        raise InputError(f"{path}: its folder {target.parent} is not writable")
     remove_stale_temps(target.parent)
     return target
 
@@ -118,10 +153,15 @@ def _create(tmp: Path, path) -> None:
 
 
 def _mode(target: Path) -> int:
+    """The target's permissions; a new file's (or one replacing a link, whose target's
+    permissions are not ours to copy) 0666 less the umask."""
     try:
-        return target.stat().st_mode & 0o7777
+        st = os.lstat(target)
     except FileNotFoundError:
+        st = None
+    if st is None or stat.S_ISLNK(st.st_mode):
         return 0o666 & ~_umask()
+    return st.st_mode & 0o7777
 
 
 def _umask() -> int:
@@ -195,6 +235,7 @@ def _sigterm_handler():
 
 def write_png(path, image: np.ndarray) -> Path:
     """8-bit PNG of ``image`` in [0, 1]: (H, W) grey or (H, W, 3) RGB, row 0 at the top."""
+    check_writable(path, ".png")
     return write_atomic(path, png_bytes(image))
 
 
@@ -203,6 +244,7 @@ def write_exr(path, channels: dict, *, preview=None, **header) -> Path:
     ``header`` attributes, written atomically; with a ``preview`` image in [0, 1] also a PNG
     beside it, the two renamed into place as one unit."""
     import OpenEXR  # noqa: F401 -- before the write opens: a SIGTERM inside an import is lost
+    check_writable(path, ".exr")
     paths = [path] + ([Path(path).with_suffix(".png")] if preview is not None else [])
     with atomic_paths(*paths) as temps:
         _exr_to(temps[0], channels, **header)

@@ -34,17 +34,19 @@ def read_mesh(path) -> Mesh:
         raise MeshFileError(f"{path}: mesh files must be .obj or .ply")
     data = path.read_bytes()
     verts, faces, colours = (_read_obj if kind == ".obj" else _read_ply)(path, data)
-    return _mesh(path, verts, faces, colours)
+    return _mesh(path, verts, faces, colours, first=1 if kind == ".obj" else 0)
 
 
-def _mesh(path, verts, faces, colours) -> Mesh:
-    """The mesh of ``faces`` (lists of vertex indices, 0-based) fanned into triangles."""
+def _mesh(path, verts, faces, colours, first=0) -> Mesh:
+    """The mesh of ``faces`` (lists of vertex indices, 0-based) fanned into triangles;
+    ``first``: the file's number of the first vertex, for messages."""
     verts = np.asarray(verts, np.float64).reshape(-1, 3)
     if not len(verts):
         raise MeshFileError(f"{path}: no vertices")
     if not np.isfinite(verts).all():
         raise MeshFileError(f"{path}: vertex coordinates must be finite (NaN or infinity "
                             f"found)")
+    _check_indices(path, faces, len(verts), first)
     tris, skipped = _triangles(faces)
     if skipped:
         warnings.warn(f"{path}: {skipped} face(s) of fewer than 3 vertices skipped",
@@ -52,10 +54,6 @@ def _mesh(path, verts, faces, colours) -> Mesh:
     if not len(tris):
         raise MeshFileError(f"{path}: no faces of 3 or more vertices (read_mesh needs a "
                             f"surface, not a point cloud)")
-    bad = (tris < 0) | (tris >= len(verts))
-    if bad.any():
-        raise MeshFileError(f"{path}: face vertex index {int(tris[bad][0])} is out of range "
-                            f"(the file has {len(verts)} vertices)")
     if colours is not None:
         colours = np.asarray(colours, np.float64).reshape(len(verts), -1)
         if not np.isfinite(colours).all() or (colours < 0).any():
@@ -73,11 +71,21 @@ def _triangles(faces) -> tuple[np.ndarray, int]:
         return np.concatenate([f[:, [0, i, i + 1]] for i in range(1, f.shape[1] - 1)]), 0
     kept = [list(map(int, f)) for f in faces if len(f) >= 3]
     fans = [(f[0], f[i], f[i + 1]) for f in kept for i in range(1, len(f) - 1)]
-    try:
-        tris = np.array(fans, np.int64).reshape(-1, 3)
-    except OverflowError:  # an index beyond int64 is out of range whatever the mesh
-        tris = np.full((1, 3), -1, np.int64)
-    return tris, len(faces) - len(kept)
+    return np.array(fans, np.int64).reshape(-1, 3), len(faces) - len(kept)
+
+
+def _check_indices(path, faces, count, first) -> None:
+    """:class:`MeshFileError` naming the first face vertex index outside the ``count``
+    vertices, as the file numbers it (from ``first``), however large (before any cast)."""
+    if isinstance(faces, np.ndarray):
+        bad = faces[(faces < 0) | (faces >= count)] if faces.size else faces
+        offender = int(bad.flat[0]) if bad.size else None
+    else:
+        offender = next((int(i) for f in faces if len(f) and not (
+            0 <= min(f) and max(f) < count) for i in f if not 0 <= i < count), None)
+    if offender is not None:
+        raise MeshFileError(f"{path}: face vertex index {offender + first} is out of range "
+                            f"(the file has {count} vertices, numbered from {first})")
 
 
 def _read_obj(path: Path, data: bytes):
@@ -103,6 +111,9 @@ def _read_obj(path: Path, data: bytes):
                 idx = [int(p.split("/")[0]) for p in parts[1:]]
                 if 0 in idx:
                     raise ValueError("OBJ indices start at 1 (0 is not an index)")
+                if idx and min(idx) < -len(verts):
+                    raise ValueError(f"relative index {min(idx)} reaches before the first "
+                                     f"vertex ({len(verts)} so far)")
                 faces.append([i - 1 if i > 0 else len(verts) + i for i in idx])
         except ValueError as e:
             raise MeshFileError(f"{path}, line {number}: {e}") from None
@@ -131,7 +142,12 @@ def _read_ply(path: Path, data: bytes):
         raise MeshFileError(f"{path}: PLY needs a vertex element with x, y, z properties")
     verts = np.stack([np.asarray(vertex[k], np.float64) for k in "xyz"], 1)
     face = values.get("face", {})
-    faces = face.get("vertex_indices", face.get("vertex_index", []))
+    name = "vertex_indices" if "vertex_indices" in face else "vertex_index"
+    faces = face.get(name, [])
+    if any(p[-1] == name and p[0] != "list" for e, _, props in elements if e == "face"
+           for p in props):
+        raise MeshFileError(f"{path}: face property {name} must be a list (property list "
+                            f"<count type> <index type> {name}); it is a single number")
     colours = None
     rgb = ("red", "green", "blue")
     if all(k in vertex for k in rgb):  # integers scale by their type's full range

@@ -16,8 +16,8 @@ def write_view(result: RenderResult, path, *, layer="ViewLayer") -> tuple[Path, 
     """Write ``path`` (.exr, multilayer: ``<layer>.Combined.R/G/B/A`` premultiplied float32 and
     ``<layer>.Depth.Z``, as Blender's Image node reads them) and a PNG preview beside it, as
     one unit: both are renamed into place together, or neither is. A view with NaN or
-    infinite values, or no pixels, is refused."""
-    path = Path(path).with_suffix(".exr")
+    infinite values, or no pixels, or a ``path`` not ending in .exr, is refused."""
+    path = Path(path)
     planes = {"rgb": result.rgb, "alpha": result.alpha, "depth": result.depth}
     for name, a in planes.items():
         if not np.size(a) or not np.isfinite(a).all():

@@ -31,6 +31,9 @@ def as_device(field, name: str = "field", runtime: Runtime | None = None, check:
         return rt, rt.to_device(host_field(name, field), np.complex64), True
     if field.ndim != 2:
         raise InputError(f"{name} must be a 2-D array [rows=y, cols=x]; got {field.ndim}-D")
+    if not field.size:
+        raise InputError(f"{name} must hold at least 1x1 samples; got {field.shape[0]}x"
+                         f"{field.shape[1]}")
     if field.context != rt.context:
         raise InputError(f"{name} lives in another OpenCL context than the runtime's")
     if not field.flags.c_contiguous:

@@ -124,8 +124,10 @@ def _grid(shape, wavelength, pitch, band) -> Grid:
     if band is None:
         return g
     most = CONE_FILL * g.wavelength / (2 * g.pitch)
-    if not 0 < band <= most * (1 + 1e-9):
-        raise InputError(f"band must be in (0, {most:.4g}] (sin θ the pitch samples); "
+    band = validate.finite("band", band)
+    if not 0 < band <= most * (1 + 1e-9) or band >= 1:  # sin θ: no direction lies past 90°
+        limit = f"(0, {most:.4g}]" if most < 1 else "(0, 1)"
+        raise InputError(f"band must be in {limit} (sin θ of the cone the pitch samples); "
                          f"got {band!r}")
     return g._replace(fill=band * 2 * g.pitch / g.wavelength)
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import validate
 from ..scene.hologram import Hologram
 from ..validate import InputError
 from .record import Reference, reference_wave
@@ -22,9 +23,9 @@ def reconstruct(hologram: Hologram, colour: int = 0, *, dc_suppression=True) -> 
     ``colour`` indexes ``hologram.wavelengths``; ``dc_suppression`` subtracts the mean
     intensity first (Eq. 20-21).
     """
-    n = len(hologram.wavelengths)
-    if not 0 <= colour < n:
-        raise InputError(f"colour must be in [0, {n - 1}]; got {colour!r}")
+    if not isinstance(hologram, Hologram):
+        raise InputError(f"hologram must be a Hologram; got {type(hologram).__name__}")
+    colour = validate.index("colour", colour, len(hologram.wavelengths))
     h = hologram.intensity[colour].astype(np.float64)
     if dc_suppression:
         h = h - h.mean()

@@ -133,23 +133,35 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     bounds : (2, 3) array, optional
         The objects' bounding box [m] in the hologram frame; default: the points'.
     """
-    pos = np.asarray(positions, np.float64)
+    pos = _array("positions", positions, "an (N, 3) array of finite coordinates [m]", (-1, 3))
     if not pos.size and extra_wave is None:
         raise InputError("positions holds no points: there is nothing to record")
-    wavelengths = tuple(validate.positive("wavelengths", w, "m") for w in np.atleast_1d(wavelengths))
-    if not wavelengths:
-        raise InputError("wavelengths must hold at least one wavelength [m]")
-    cols = np.asarray(colours, np.float64).reshape(len(pos), -1 if len(pos) else len(wavelengths))
-    if cols.shape[1] != len(wavelengths):
-        raise InputError(f"colours must have one column per wavelength ({len(wavelengths)}); "
-                         f"got {cols.shape[1]}")
+    wavelengths = np.atleast_1d(_array("wavelengths", wavelengths, "wavelengths [m]", None))
+    if wavelengths.ndim != 1 or not len(wavelengths):
+        raise InputError(f"wavelengths must hold at least one wavelength [m]; got "
+                         f"{wavelengths.tolist()!r}")
+    wavelengths = tuple(validate.length("wavelengths", w) for w in wavelengths)
+    cols = _array("colours", colours, f"an (N, {len(wavelengths)}) array of intensities, one "
+                  f"column per wavelength, N = {len(pos)} points", (len(pos), len(wavelengths)))
     if not np.isfinite(cols).all() or (cols < 0).any():
         raise InputError("colours must be finite intensities >= 0")
     if phases is None:
-        phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, len(pos))
-    phases = np.asarray(phases, np.float64).reshape(len(pos))
+        phases = np.random.default_rng(validate.seed(seed)).uniform(0, 2 * np.pi, len(pos))
+    phases = _array("phases", phases, f"{len(pos)} finite phases [rad]", (len(pos),))
+    if not np.isfinite(phases).all():
+        raise InputError("phases must be finite [rad]; they hold NaN or infinite values")
     shape = validate.shape2d("shape", shape)
-    pitch = validate.positive("pitch", pitch, "m")
+    pitch = validate.length("pitch", pitch)
+    if not isinstance(reference, Reference):
+        raise InputError(f"reference must be a Reference; got {type(reference).__name__}")
+    if bounds is None:
+        bounds = np.array([pos.min(0), pos.max(0)]) if len(pos) else np.zeros((2, 3))
+    # what the hologram will hold, checked now: a bad field is found before the recording
+    stored = {"wavelengths": wavelengths, "pitch": pitch, "reference_angle": reference.angle,
+              "reference_azimuth": reference.azimuth, "bounds": bounds, "band": band or 0.0,
+              "plate": np.eye(4) if plate is None else plate, "channels": channels,
+              "point_density": point_density}
+    Hologram(intensity=np.zeros((len(wavelengths), 1, 1), np.float32), **stored)
     memory.check_host(f"a {shape[1]}x{shape[0]} hologram of {len(wavelengths)} wavelengths",
                       HOST_BYTES * len(wavelengths) * math.prod(shape))
     for lam in wavelengths:
@@ -175,15 +187,18 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
                                                      reference=reference, amplitude=a_r)))
         waves.append(o)
         amplitudes.append(a_r)
-    if bounds is None:
-        bounds = np.array([pos.min(0), pos.max(0)]) if len(pos) else np.zeros((2, 3))
-    return Hologram(intensity=np.stack(intensity), wavelengths=wavelengths, pitch=pitch,
-                    reference_angle=reference.angle, reference_azimuth=reference.azimuth,
-                    reference_amplitudes=tuple(amplitudes),
-                    object_wave=np.stack(waves) if keep_object_wave else None,
-                    plate=np.eye(4) if plate is None else np.asarray(plate, np.float64),
-                    bounds=bounds, band=band or 0.0, channels=tuple(channels),
-                    point_density=point_density)
+    return Hologram(intensity=np.stack(intensity), reference_amplitudes=tuple(amplitudes),
+                    object_wave=np.stack(waves) if keep_object_wave else None, **stored)
+
+
+def _array(name, value, allowed, shape) -> np.ndarray:
+    """``value`` as float64, reshaped to ``shape`` (None: as it is), or :class:`InputError`
+    naming ``name`` and what is ``allowed``."""
+    try:
+        a = np.asarray(value, np.float64)
+        return a if shape is None else a.reshape(shape)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be {allowed}; got shape {np.shape(value)}") from None
 
 
 def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, resolution=None,
@@ -215,6 +230,9 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
         recording viewpoint through the ones in front, as light does not occlude itself.
     """
     from .sampling import choose
+    seed = validate.seed(seed)
+    if not isinstance(plate, Plate):
+        raise InputError(f"plate must be a Plate; got {type(plate).__name__}")
     meshes = [emitters] if isinstance(emitters, Mesh) else None
     if meshes is None and all(isinstance(e, Mesh) for e in emitters):
         meshes = list(emitters)

@@ -32,6 +32,7 @@ from .point_sources import CONE_RIM
 
 log = logging.getLogger(__name__)
 DEFAULT_BAND = 0.25      # sin θ of the viewing zone without a camera
+MAX_BAND = 0.9           # the widest cone chosen, sin θ (64°), with a camera or without
 MARGIN = 0.95            # the cone stays this fraction inside the off-axis sampling limit
 DEPTH_MARGIN = 1.25      # the depth pair's unambiguous range over the scene's extent
 MIN_RESOLUTION, DEFAULT_RESOLUTION = 256, 1024
@@ -81,16 +82,23 @@ def choose(plate_size, points, *, camera=None, resolution=None,
     width, height = validate.pair("plate_size", plate_size, "m")
     validate.positive("plate width", width, "m")
     validate.positive("plate height", height, "m")
-    pts = np.asarray(points, np.float64).reshape(-1, 3)
-    if not len(pts) or (pts[:, 2] >= 0).any():
-        raise InputError("points must be behind the plate (z < 0 in its frame)")
+    try:
+        pts = np.asarray(points, np.float64).reshape(-1, 3)
+    except (TypeError, ValueError):
+        pts = np.zeros((0, 3))
+    if not len(pts) or not np.isfinite(pts).all() or (pts[:, 2] >= 0).any():
+        raise InputError("points must be finite (x, y, z) [m] behind the plate (z < 0 in its "
+                         "frame)")
+    max_resolution = validate.integer("max_resolution", max_resolution, 16)
+    if wavelength is not None:
+        wavelength = validate.length("wavelength", wavelength)
     side = max(width, height)
     band = DEFAULT_BAND
     lam_image, footprint = None, 0.0
     if camera is not None:
         position, pixel = camera
         # the camera inside every point's cone where it is flat, clear of its soft rim
-        band = min(0.9, 1.1 * band_towards(pts, position) / (1 - CONE_RIM))
+        band = min(MAX_BAND, 1.1 * band_towards(pts, position) / (1 - CONE_RIM))
         r = float(np.min(np.linalg.norm(pts - position, axis=1)))
         lam_image = pinhole_wavelength(pixel, r)
         footprint = pixel * r
@@ -100,12 +108,14 @@ def choose(plate_size, points, *, camera=None, resolution=None,
             resolution = int(np.clip(resolution, MIN_RESOLUTION, max_resolution))
         else:
             resolution = DEFAULT_RESOLUTION
-    resolution = int(validate.at_least("resolution", resolution, 16))
+    resolution = validate.integer("resolution", resolution, 16)
     pitch = side / resolution
     lam = wavelength or 8 * pitch * band / MARGIN
     extent = float(np.linalg.norm(pts.max(0) - pts.min(0)))
     lam2 = partner_wavelength(lam, DEPTH_MARGIN * max(extent, lam) / 2)
-    band = MARGIN * lam2 / (8 * pitch)  # λ2 < λ1 is the tighter one
+    # λ2 < λ1 is the tighter one; a wavelength long against the pitch samples every
+    # direction, but a cone ends at 90° (sin θ < 1, what a hologram file holds)
+    band = min(MARGIN * lam2 / (8 * pitch), MAX_BAND)
     s = Sampling(shape=(max(1, round(height / pitch)), max(1, round(width / pitch))),
                  pitch=pitch, wavelength=lam, depth_wavelength=lam2, band=band,
                  reference_angle=math.asin(min(0.99, 3 * lam2 / (8 * pitch))),

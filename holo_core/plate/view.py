@@ -26,7 +26,7 @@ from ..optics import speckle
 from ..optics.pupil import PINHOLE_SAMPLES, Pupil, camera_pupil
 from ..propagation import grid
 from ..propagation.convolution import convolve
-from ..propagation.tilt import propagate_to_plane
+from ..propagation.tilt import propagate_to_plane, tilt_reach
 from ..scene.camera import Camera
 from ..scene.hologram import Hologram
 from ..validate import InputError
@@ -211,16 +211,24 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
         intensity-weighted consensus), or per pixel from the brightest iteration (Fig. 11c).
         Either way the depth pair is imaged through :func:`depth_aperture`.
     """
-    holos = [holograms] if isinstance(holograms, Hologram) else list(holograms)
+    try:
+        holos = [holograms] if isinstance(holograms, Hologram) else list(holograms)
+    except TypeError:
+        holos = []
     if not holos:
-        raise InputError("holograms must hold at least one hologram")
+        raise InputError(f"holograms must be a Hologram or a non-empty list of them; got "
+                         f"{type(holograms).__name__}")
+    if not isinstance(camera, Camera):
+        raise InputError(f"camera must be a Camera; got {type(camera).__name__}")
+    if aperture is not None and not isinstance(aperture, Pupil):
+        raise InputError(f"aperture must be a Pupil or None; got {type(aperture).__name__}")
     first = holos[0]
     if composition not in ("mean", "max"):
         raise InputError(f"composition must be 'mean' or 'max'; got {composition!r}")
     if depth_estimate not in ("consensus", "brightest"):
         raise InputError(f"depth_estimate must be 'consensus' or 'brightest'; "
                          f"got {depth_estimate!r}")
-    supersample = int(validate.at_least("supersample", supersample, 1))
+    supersample = validate.integer("supersample", supersample, 1, MAX_SUPERSAMPLE)
     _check_settings(holos, camera, supersample, exposure, opacity_threshold)
     fine = _supersampled(camera, supersample)
     colours, z_ch = first.colour_channels(), first.depth_channel()
@@ -233,6 +241,11 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     pupil = aperture or camera_pupil(fine, lam0, centre, apodize=apodize)
     chromatic_pupil = replace(pupil, lens_wavelength=lam0) if chromatic and pupil.focus else pupil
     rotation, position = camera_in_plate(first, camera)
+    unseen = _unseen(first, rotation, position)
+    if unseen:  # a black view, said aloud (an animation's camera may pass out of the zone)
+        warnings.warn(f"the view is black: {unseen}", EmptyViewWarning, stacklevel=2)
+        return _finish(np.zeros(camera.resolution[::-1] + (len(colours),)), None, None, first,
+                       camera, pupil, exposure, opacity_threshold, lam0)
     depth_pupil = None
     if z_ch is not None:
         depth_pupil = depth_aperture(fine, first, first.wavelengths[z_ch], centre)
@@ -281,6 +294,37 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
 
 class NoDepthWarning(UserWarning):
     """A view of a hologram without the depth partner: its depth pass is the background."""
+
+
+class EmptyViewWarning(UserWarning):
+    """No light of the hologram reaches the camera: the view is black (the message says why)."""
+
+
+MAX_SUPERSAMPLE = 16  # render_view's largest supersampling factor per axis
+
+
+def _unseen(h: Hologram, rotation, position) -> str | None:
+    """Why no light of ``h`` can reach a camera at ``position`` [m] with axes ``rotation``
+    (both in the plate's frame, :func:`camera_in_plate`), or None. The light leaves every
+    plate point within the object wave's cone (sin θ = band, else the pitch's Nyquist
+    angle), and the spectrum rotation to the camera's plane bridges a limited tilt."""
+    wavelength = max(h.wavelengths)
+    nyquist = min(1.0, wavelength / (2 * h.pitch))
+    zone = math.asin(min(h.band, nyquist) if h.band else nyquist)
+    width, height = h.size
+    lateral = np.maximum(np.abs(position[:2]) - [width / 2, height / 2], 0)
+    angle = math.atan2(float(np.hypot(*lateral)), position[2])  # from the nearest plate point
+    if angle > zone:
+        return (f"the camera is {math.degrees(angle):.1f}° off the plate's normal, seen from "
+                f"the plate's nearest point; the hologram's light leaves within "
+                f"{math.degrees(zone):.1f}° of it")
+    tilt = math.acos(float(np.clip(rotation[2, 2], -1, 1)))
+    reach = tilt_reach(wavelength, h.pitch, h.pitch)
+    if tilt >= reach:
+        return (f"the camera's view axis is {math.degrees(tilt):.1f}° off the plate's normal; "
+                f"its sampling (pitch {h.pitch:.3g} m, λ = {wavelength:.3g} m) carries light "
+                f"to planes tilted by less than {math.degrees(reach):.1f}°")
+    return None
 
 
 PIXEL_BYTES = 96  # host bytes per fine pixel and iteration while rendering (fields, images)

@@ -63,8 +63,8 @@ def support(field: np.ndarray):
 
 def wave(wavelength, pitch) -> tuple[float, float]:
     """Checked (wavelength [m], pitch [m])."""
-    return (validate.positive("wavelength", wavelength, "m"),
-            validate.positive("pitch", pitch, "m"))
+    return (validate.length("wavelength", wavelength),
+            validate.length("pitch", pitch))
 
 
 def padding_factor(padding) -> float:

@@ -51,11 +51,13 @@ def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0)
         raise InputError("distance must be non-zero for rayleigh_sommerfeld (the integral is "
                          "singular on the source plane)")
     x0, y0 = validate.pair("offset", offset, "m")
-    out_pitch = pitch if out_pitch is None else validate.positive("out_pitch", out_pitch, "m")
+    out_pitch = pitch if out_pitch is None else validate.length("out_pitch", out_pitch)
+    if not is_device_array(field):
+        field = validate.host_field("field", field)
     out_shape = validate.shape2d("out_shape", field.shape if out_shape is None else out_shape)
     src_x0, src_y0 = -(field.shape[1] - 1) / 2 * pitch, -(field.shape[0] - 1) / 2 * pitch
     if not is_device_array(field):
-        field, (r0, c0) = grid.support(validate.host_field("field", field))
+        field, (r0, c0) = grid.support(field)
         src_x0, src_y0 = src_x0 + c0 * pitch, src_y0 + r0 * pitch
     rt, src, from_host = as_device(field)
     out_x0 = x0 - (out_shape[1] - 1) / 2 * out_pitch

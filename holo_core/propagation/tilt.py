@@ -13,6 +13,8 @@ period, attenuated only by sinc².
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .. import validate
@@ -58,7 +60,13 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     padding = grid.padding_factor(padding)
     rt, src, from_host = as_device(field)
     out_shape = validate.shape2d("out_shape", src.shape if out_shape is None else out_shape)
-    out_pitch = pitch if out_pitch is None else validate.positive("out_pitch", out_pitch, "m")
+    out_pitch = pitch if out_pitch is None else validate.length("out_pitch", out_pitch)
+    angle, reach = math.acos(np.clip(m[2, 2], -1, 1)), tilt_reach(wavelength, pitch, out_pitch)
+    if angle >= reach:  # the result would be zero whatever the field: say so instead
+        raise InputError(f"rotation tilts the target plane by {math.degrees(angle):.1f}°; "
+                         f"light sampled at pitch {pitch:.3g} m and out_pitch {out_pitch:.3g} m "
+                         f"(λ = {wavelength:.3g} m) reaches planes tilted by less than "
+                         f"{math.degrees(reach):.1f}°")
     hs, ws = grid.padded_shape(src.shape, padding)
     ht, wt = grid.padded_shape(out_shape, padding)
     spectrum = rt.scratch("tilt-source", (hs, ws))
@@ -84,18 +92,25 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     return like_input(window(rt, target, out_shape, t0, u0), from_host)
 
 
-def es_kernel(t, taps=TAPS) -> np.ndarray:
+def tilt_reach(wavelength, pitch, out_pitch) -> float:
+    """The largest tilt [rad] that light can bridge between a grid at ``pitch`` and one at
+    ``out_pitch`` (``wavelength`` [m]): each holds the directions within asin(λ/2p) of its
+    normal, and the two cones must overlap."""
+    return sum(math.asin(min(1.0, wavelength / (2 * q))) for q in (pitch, out_pitch))
+
+
+def es_kernel(t, taps=TAPS, beta=ES_BETA) -> np.ndarray:
     """The spectrum's interpolation kernel at ``t`` [bins]: exp(β(√(1 - (2t/taps)²) - 1)),
-    β = ES_BETA·taps."""
+    β = ``beta``·taps (2.30 for 2x oversampling, 2.03 for 1.5x)."""
     s = 1 - (2 * np.asarray(t, np.float64) / taps) ** 2
-    return np.where(s > 0, np.exp(ES_BETA * taps * (np.sqrt(np.clip(s, 0, None)) - 1)), 0.0)
+    return np.where(s > 0, np.exp(beta * taps * (np.sqrt(np.clip(s, 0, None)) - 1)), 0.0)
 
 
-def es_transform(xi, taps=TAPS) -> np.ndarray:
+def es_transform(xi, taps=TAPS, beta=ES_BETA) -> np.ndarray:
     """The kernel's Fourier transform at ``xi`` = position over the padded size: the factor
     interpolation lays on the field."""
     t, dt = np.linspace(-taps / 2, taps / 2, 64 * taps + 1, retstep=True)
-    return (es_kernel(t, taps) * np.cos(2 * np.pi * np.multiply.outer(xi, t))).sum(-1) * dt
+    return (es_kernel(t, taps, beta) * np.cos(2 * np.pi * np.multiply.outer(xi, t))).sum(-1) * dt
 
 
 def cached_array(rt, name, make, *args):
@@ -103,9 +118,9 @@ def cached_array(rt, name, make, *args):
     return cached(rt, (name, *args), lambda: (make(*args), None))[0]
 
 
-def es_table(taps=TAPS):
+def es_table(taps=TAPS, beta=ES_BETA):
     """(value, slope) per table interval, packed as complex: what ``es_weight`` reads."""
-    phi = es_kernel(np.linspace(-taps / 2, taps / 2, ES_TABLE + 1), taps)
+    phi = es_kernel(np.linspace(-taps / 2, taps / 2, ES_TABLE + 1), taps, beta)
     return phi[:-1] + 1j * np.diff(phi)
 
 
@@ -145,9 +160,7 @@ def propagate_to_plane(field, *, wavelength, pitch, rotation, position, padding=
     Complex64 field on the target grid, like the input.
     """
     m = validate.rotation("rotation", rotation)
-    p = np.asarray(position, dtype=np.float64)
-    if p.shape != (3,) or not np.isfinite(p).all():
-        raise InputError(f"position must be 3 finite coordinates [m]; got {position!r}")
+    p = validate.vector("position", position, 3, "m")
     x0, y0, z = m.T @ p
     rt, tilted, from_host = as_device(field)  # both stages on the device, one upload
     if out_shape is not None or out_pitch is not None or not np.allclose(m, np.eye(3), atol=1e-12):

@@ -168,10 +168,13 @@ class Camera:
 
 def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
     """A camera-to-world matrix at ``eye`` [m] looking at ``target`` [m], ``up`` kept up."""
-    eye, target = np.asarray(eye, np.float64), np.asarray(target, np.float64)
+    eye, target = validate.vector("eye", eye, 3, "m"), validate.vector("target", target, 3, "m")
+    up = validate.vector("up", up, 3)
+    if not np.linalg.norm(up) > 0:
+        raise InputError(f"up must be a non-zero direction; got {up.tolist()}")
     back = eye - target
     if not np.linalg.norm(back) > 0:
-        raise InputError("look_at needs target != eye")
+        raise InputError(f"look_at needs target != eye; both are {eye.tolist()} m")
     z = back / np.linalg.norm(back)
     x = np.cross(up, z)
     if np.linalg.norm(x) < 1e-12:

@@ -3,12 +3,16 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .. import validate
 from ..validate import InputError
+
+CHANNEL_ROLES = ("R", "G", "B", "Y", "Z")
+MAX_CHANNELS = 16
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -45,21 +49,66 @@ class Hologram:
     point_density: float = 0.0
 
     def __post_init__(self):
+        """Every field checked against what its file may hold (the reader's schema), so that
+        a hologram that exists can be written and read back."""
+        wavelengths = self.wavelengths
+        if np.ndim(wavelengths) != 1 or not 1 <= len(wavelengths) <= MAX_CHANNELS:
+            raise InputError(f"wavelengths must be 1 to {MAX_CHANNELS} wavelengths [m]; "
+                             f"got {wavelengths!r}")
+        wavelengths = tuple(validate.length("wavelengths", w) for w in wavelengths)
+        object.__setattr__(self, "wavelengths", wavelengths)
+        object.__setattr__(self, "pitch", validate.length("pitch", self.pitch))
+        try:
+            object.__setattr__(self, "channels", tuple(self.channels or ()))
+        except TypeError:
+            raise InputError(f"channels must be a sequence of {'/'.join(CHANNEL_ROLES)}; got "
+                             f"{self.channels!r}") from None
         if not self.channels:
-            names = ("R", "G", "B") if len(self.wavelengths) == 3 else ("Y",) * 99
-            object.__setattr__(self, "channels", names[:len(self.wavelengths)])
-        if len(self.channels) != len(self.wavelengths):
-            raise InputError(f"channels must name each of the {len(self.wavelengths)} "
-                             f"wavelengths; got {self.channels!r}")
+            names = ("R", "G", "B") if len(wavelengths) == 3 else ("Y",) * MAX_CHANNELS
+            object.__setattr__(self, "channels", names[:len(wavelengths)])
+        if len(self.channels) != len(wavelengths) or \
+                not all(c in CHANNEL_ROLES for c in self.channels):
+            raise InputError(f"channels must name each of the {len(wavelengths)} wavelengths "
+                             f"by one of {'/'.join(CHANNEL_ROLES)}; got {self.channels!r}")
         if "Z" in self.channels[:1]:
             raise InputError("channel 0 must be a colour channel (the depth pair's λ1)")
         object.__setattr__(self, "plate", validate.rigid_pose("plate", self.plate))
-        validate.positive("pitch", self.pitch, "m")
-        for lam in self.wavelengths:
-            validate.positive("wavelengths", lam, "m")
-        if np.ndim(self.intensity) != 3 or len(self.intensity) != len(self.wavelengths):
-            raise InputError(f"intensity must be (C, H, W) with C = {len(self.wavelengths)} "
+        if np.ndim(self.intensity) != 3 or len(self.intensity) != len(wavelengths):
+            raise InputError(f"intensity must be (C, H, W) with C = {len(wavelengths)} "
                              f"wavelengths; got shape {np.shape(self.intensity)}")
+        if self.object_wave is not None and np.shape(self.object_wave) != np.shape(
+                self.intensity):
+            raise InputError(f"object_wave must be shaped as the intensity "
+                             f"{np.shape(self.intensity)}; got {np.shape(self.object_wave)}")
+        self._check_optics()
+
+    def _check_optics(self):
+        angle = validate.finite("reference_angle", self.reference_angle, "rad")
+        if not 0 <= angle < math.pi / 2:
+            raise InputError(f"reference_angle must be in [0, π/2) rad; got "
+                             f"{self.reference_angle!r}")
+        validate.finite("reference_azimuth", self.reference_azimuth, "rad")
+        amplitudes = self.reference_amplitudes
+        if np.ndim(amplitudes) != 1 or len(amplitudes) not in (0, len(self.wavelengths)):
+            raise InputError(f"reference_amplitudes must be {len(self.wavelengths)} numbers "
+                             f"> 0 (|R| per wavelength) or empty; got {amplitudes!r}")
+        for a in amplitudes:  # R'·H / |R|² divides by them (Eq. 18)
+            validate.positive("reference_amplitudes", a)
+        band = validate.finite("band", self.band)
+        if not 0 <= band < 1:
+            raise InputError(f"band must be in [0, 1) (sin θ of the object wave's cone; 0: "
+                             f"all); got {self.band!r}")
+        try:
+            bounds = np.asarray(self.bounds, np.float64)
+        except (TypeError, ValueError):
+            bounds = np.zeros(0)
+        if bounds.shape != (2, 3) or not np.isfinite(bounds).all() or \
+                (bounds[0] > bounds[1]).any():
+            raise InputError(f"bounds must be two finite corners (min, max) of (x, y, z) [m], "
+                             f"min <= max; got {self.bounds!r}")
+        density = validate.finite("point_density", self.point_density, "1/m²")
+        if density < 0:
+            raise InputError(f"point_density must be >= 0 [1/m²]; got {self.point_density!r}")
 
     def colour_channels(self) -> list[int]:
         return [i for i, c in enumerate(self.channels) if c != "Z"]

@@ -30,11 +30,39 @@ class Mesh:
     texture: np.ndarray | None = None
 
     def __post_init__(self):
-        v, t = np.asarray(self.vertices), np.asarray(self.triangles)
+        v = _numbers("vertices", self.vertices, "a finite (V, 3) array [m]")
         if v.ndim != 2 or v.shape[1] != 3 or not np.isfinite(v).all():
-            raise InputError(f"vertices must be a finite (V, 3) array [m]; got {v.shape}")
-        if t.ndim != 2 or t.shape[1] != 3 or (t.size and (t.min() < 0 or t.max() >= len(v))):
-            raise InputError(f"triangles must be (T, 3) indices in [0, {len(v) - 1}]")
+            raise InputError(f"vertices must be a finite (V, 3) array [m]; got shape {v.shape}")
+        t = np.asarray(self.triangles)
+        if t.ndim != 2 or t.shape[1] != 3 or (t.size and t.dtype.kind not in "iu"):
+            raise InputError(f"triangles must be a (T, 3) array of integer vertex indices; got "
+                             f"shape {t.shape}, dtype {t.dtype}")
+        if t.size and (t.min() < 0 or t.max() >= len(v)):
+            bad = t[(t < 0) | (t >= len(v))][0]
+            raise InputError(f"triangles must index vertices in [0, {len(v) - 1}]; got {bad}")
+        object.__setattr__(self, "vertices", v.astype(np.float64, copy=False))
+        object.__setattr__(self, "triangles", t.astype(np.int64, copy=False))
+        self._check_appearance(len(v))
+
+    def _check_appearance(self, count):
+        """Colours (V, C) and a texture (h, w[, C]) of finite intensities >= 0; UVs (V, 2)."""
+        for name, shape in (("colours", "(V, C)"), ("uvs", "(V, 2)"), ("texture", "(h, w, C)")):
+            value = getattr(self, name)
+            if value is None:
+                continue
+            a = _numbers(name, value, f"a finite {shape} array")
+            ok = a.ndim == 2 and len(a) == count and a.shape[1] >= 1 if name != "texture" \
+                else a.ndim in (2, 3) and min(a.shape) >= 1
+            if name == "uvs":
+                ok = ok and a.shape[1] == 2
+            if not ok:
+                raise InputError(f"{name} must be a {shape} array (V = {count} vertices); got "
+                                 f"shape {a.shape}")
+            if not np.isfinite(a).all() or (name != "uvs" and (a < 0).any()):
+                kind = "finite" if name == "uvs" else "finite intensities >= 0"
+                raise InputError(f"{name} must be {kind}; they hold NaN, infinite or "
+                                 f"negative values")
+            object.__setattr__(self, name, a)
 
     def areas(self) -> np.ndarray:
         a, b, c = (self.vertices[self.triangles[:, i]] for i in range(3))
@@ -46,6 +74,18 @@ class Mesh:
         n = np.cross(b - a, c - a)
         length = np.linalg.norm(n, axis=1, keepdims=True)
         return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
+def _numbers(name, value, allowed) -> np.ndarray:
+    """``value`` as an array of numbers (its own dtype: a large texture is not copied)."""
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError):
+        a = None
+    if a is None or a.dtype.kind not in "iuf":
+        raise InputError(f"{name} must be {allowed}; got {type(value).__name__}"
+                         f"{'' if a is None else f' of dtype {a.dtype}'}")
+    return a
 
 
 def sample_points(mesh: Mesh, spacing: float, *, channels=3, seed=0, max_points=2_000_000,
@@ -65,7 +105,8 @@ def surface_samples(mesh: Mesh, spacing, seed, max_points):
     """(triangle index (N,), barycentric weights (N, 3), positions (N, 3) [m]) of area-uniform
     random points ``spacing`` [m] apart on average."""
     spacing = validate.positive("spacing", spacing, "m")
-    max_points = int(validate.at_least("max_points", max_points, 1))
+    max_points = validate.integer("max_points", max_points, 1)
+    seed = validate.seed(seed)
     areas = mesh.areas()
     if not areas.sum() > 0:
         raise InputError("the mesh has no surface area (every triangle is degenerate)")

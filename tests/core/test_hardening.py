@@ -5,6 +5,7 @@ import io
 import json
 import math
 import os
+import re
 import struct
 import subprocess
 import sys
@@ -169,7 +170,7 @@ def _with_meta(path, edit):
 
 
 @pytest.mark.parametrize("edit, problem", [
-    (lambda m, c: m.pop("pitch_m"), "pitch_m must be > 0"),
+    (lambda m, c: m.pop("pitch_m"), r"pitch_m must be in \[1e-12, 1000\] \[m\]; got 'missing'"),
     (lambda m, c: m.update(pitch_m=0), "pitch_m"),
     (lambda m, c: m.update(pitch_m=-8e-6), "pitch_m"),
     (lambda m, c: m.update(pitch_m=float("nan")), "pitch_m"),
@@ -253,7 +254,7 @@ def test_a_non_finite_view_is_not_written(tmp_path):
 
 def test_cli_bad_arguments_name_the_argument_and_its_range(tmp_path):
     (tmp_path / "q.obj").write_text(CUBE_OBJ)
-    for args, problem in [(["--pitch", "0"], "--pitch: '0' is out of range (a number > 0)"),
+    for args, problem in [(["--pitch", "0"], "--pitch: '0' is out of range (metres, from 1e-12"),
                           (["--resolution", "0", "0"], "--resolution: '0' is out of range"),
                           (["--wavelengths", "nan"], "--wavelengths: 'nan' is out of range")]:
         run = cli("record", tmp_path / "q.obj", "-o", tmp_path / "h.exr", *args)
@@ -325,3 +326,162 @@ def test_a_cropped_camera_keeps_every_pixels_ray():
                                                                         atol=1e-12)
     with pytest.raises(InputError, match="inside the 64x48 image"):
         cam.cropped(50, 0, 30, 10)
+
+
+# --- the reliability audit (issue 26): one reproducer per finding ----------------------------
+# Finding 1 (writes follow links) is in io/test_atomic_writes.py; the API tables of findings
+# 6-10 are in test_validation.py; the fuzz suite (tools/fuzz.py) enumerates files and calls.
+
+def _cli_main(capsys, *args):
+    """The CLI in this process: (exit status, stdout, stderr)."""
+    from holo_core.__main__ import main
+    try:
+        status = main([str(a) for a in args])
+    except SystemExit as e:  # argparse's errors
+        status = e.code
+    out = capsys.readouterr()
+    return status, out.out, out.err
+
+
+def test_a_long_wavelength_hologram_is_written_and_read_back(tmp_path):
+    """Finding 2: λ long against the pitch chose a cone of sin θ >= 1, which the reader refuses."""
+    from holo_core.plate.record import record_hologram
+    from holo_core.scene.plate import Plate
+    plate = Plate(matrix_world=np.eye(4), width=0.01, height=0.01)
+    h = record_hologram(([[0.0, 0.0, -0.05]], [[1.0, 1.0, 1.0]]), plate=plate, resolution=64,
+                        wavelength=5e-3)
+    assert 0 < h.band < 1, f"band sin θ = {h.band}"
+    back = read_hologram(write_hologram(tmp_path / "h.exr", h))
+    assert back.band == h.band and back.wavelengths == h.wavelengths
+
+
+def test_the_writer_refuses_what_the_reader_would(tmp_path, hologram):
+    """Finding 2: the writer applies the reader's schema; a field bent after construction
+    is refused with the file and the field named, and nothing is written."""
+    import dataclasses
+    for field, value, problem in [("band", 1.5, r"band_sin must be in \[0, 1\)"),
+                                  ("pitch", 1e-300, r"pitch_m must be in \[1e-12, 1000\]"),
+                                  ("reference_amplitudes", (0.0,), "amplitudes.*> 0")]:
+        bent = dataclasses.replace(hologram)
+        object.__setattr__(bent, field, value)
+        with pytest.raises(HologramFileError, match=f"h.exr: metadata .*{problem}"):
+            write_hologram(tmp_path / "h.exr", bent)
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("edit, problem", [
+    (lambda m: m.update(pitch_m=1e-300), r"pitch_m must be in \[1e-12, 1000\] \[m\]"),
+    (lambda m: m.update(wavelengths_m=[1e300]), "wavelengths_m must be in"),
+    (lambda m: m["reference"].update(amplitudes=[0.0]), "reference.amplitudes must be 1 numb"),
+])
+def test_a_file_of_absurd_optics_is_refused_by_the_reader_and_the_cli(tmp_path, hologram, capsys,
+                                                                      edit, problem):
+    """Findings 3 and 4: pitch 1e-300 passed the schema and rendered NaN (the CLI died with
+    ZeroDivisionError); a zero reference amplitude was accepted and failed later, unnamed."""
+    path = write_hologram(tmp_path / "h.exr", hologram)
+    _with_meta(path, lambda m, c: edit(m))
+    with pytest.raises(HologramFileError, match=f"{path}: metadata {problem}"):
+        read_hologram(path)
+    status, _, err = _cli_main(capsys, "render", path, "-o", tmp_path / "v.exr", *CAMERA_ARGS)
+    assert status == 2 and err.count("\n") == 1 and str(path) in err, err
+    assert not (tmp_path / "v.exr").exists()
+
+
+def test_holograms_in_memory_are_held_to_the_file_schema():
+    """Findings 3 and 4 at the API: the same fields are refused when a Hologram is made."""
+    good = {"intensity": np.ones((1, 4, 4), np.float32), "wavelengths": (633e-9,),
+            "pitch": 8e-6}
+    for change, field in [({"pitch": 1e-300}, "pitch"), ({"wavelengths": (1e9,)}, "wavelengths"),
+                          ({"reference_amplitudes": (0.0,)}, "reference_amplitudes"),
+                          ({"band": 1.0}, "band"), ({"point_density": -1.0}, "point_density"),
+                          ({"bounds": [[0, 0, 0], [-1, 0, 0]]}, "bounds"),
+                          ({"channels": ("Q",)}, "channels"), ({"reference_angle": 2.0},
+                                                                "reference_angle")]:
+        with pytest.raises(InputError, match=field):
+            Hologram(**{**good, **change})
+
+
+def test_a_ply_with_a_scalar_face_property_names_it(tmp_path):
+    """Finding 5: a scalar vertex_indices raised TypeError."""
+    ply = ("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+           "property float z\nelement face 1\nproperty int vertex_indices\nend_header\n"
+           "0 0 0\n1 0 0\n0 1 0\n0\n")
+    (tmp_path / "m.ply").write_text(ply)
+    with pytest.raises(MeshFileError, match="face property vertex_indices must be a list"):
+        read_mesh(tmp_path / "m.ply")
+
+
+@pytest.mark.parametrize("text, index", [
+    ("f 1 2 99999999999999999999999\n", "99999999999999999999999"),  # beyond int64: was -1
+    ("f 1 2 9\n", "9"),                                                # OBJ's own numbering
+])
+def test_an_obj_index_out_of_range_is_reported_as_the_file_has_it(tmp_path, text, index):
+    """Finding 10: a huge OBJ index was reported as "-1", others one less than in the file."""
+    (tmp_path / "m.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n" + text)
+    with pytest.raises(MeshFileError, match=f"index {index} is out of range .*3 vertices, "
+                                            f"numbered from 1"):
+        read_mesh(tmp_path / "m.obj")
+
+
+def test_a_camera_outside_the_viewing_zone_warns_that_the_view_is_black(hologram):
+    """Finding 9: a camera far off the plate's axis rendered black without a word. The light
+    of this hologram (pitch 1 µm, λ 633 nm) leaves within asin(λ/2p) = 18.5° of the normal."""
+    from holo_core.plate.view import EmptyViewWarning
+    for degrees in (30, 60, 89):
+        a = math.radians(degrees)
+        eye = 8e-3 * np.array([math.sin(a), 0, math.cos(a)])
+        cam = Camera(matrix_world=look_at(eye, (0, 0, -3e-3)), lens=50, resolution=(16, 16),
+                     sensor_width=50 * 16 * 4e-3)
+        with pytest.warns(EmptyViewWarning, match=r"the view is black: the camera is "
+                                                  r"\d+\.\d° off the plate's normal.*"
+                                                  r"within 18.5°"):
+            view = render_view(hologram, cam)
+        assert not view.rgb.any() and not view.alpha.any()
+
+
+def test_cli_wavelengths_below_1_are_refused_as_nanometres(tmp_path, capsys):
+    """The CLI's --wavelengths is the one length in nm: 633e-9 (metres) is refused."""
+    (tmp_path / "q.obj").write_text(CUBE_OBJ)
+    status, _, err = _cli_main(capsys, "record", tmp_path / "q.obj", "-o", tmp_path / "h.exr",
+                               "--wavelengths", "633e-9")
+    assert status == 2 and "--wavelengths: '633e-9' is out of range (nm, from 1" in err, err
+    assert "633 is red light" in err and not list(tmp_path.glob("*.exr"))
+
+
+@pytest.mark.parametrize("output, problem", [
+    ("/sys/holo.exr", "its folder /sys is not writable"),  # read-only, even for root
+    ("{tmp}/a_file/h.exr", "is not a folder"),
+    ("{tmp}/r.png", r"r.png: the file is written as OpenEXR; name it \*\.exr"),
+])
+@pytest.mark.parametrize("command", ["record", "render"])
+def test_cli_output_is_checked_before_the_work(tmp_path, hologram, capsys, monkeypatch, output,
+                                              problem, command):
+    """Findings 11 and 12: a read-only folder was found only after the whole recording, and
+    -o r.png wrote EXR bytes under a .png name."""
+    import holo_core.plate.record
+    import holo_core.plate.view
+
+    def never(*_, **__):
+        raise AssertionError("the work started before the output was checked")
+    monkeypatch.setattr(holo_core.plate.record, "record_points", never)
+    monkeypatch.setattr(holo_core.plate.view, "render_view", never)
+    (tmp_path / "q.obj").write_text(CUBE_OBJ)
+    (tmp_path / "a_file").write_text("a file")
+    source = tmp_path / "q.obj" if command == "record" else \
+        write_hologram(tmp_path / "h.exr", hologram)
+    before = sorted(tmp_path.iterdir())
+    status, out, err = _cli_main(capsys, command, source, "-o", output.format(tmp=tmp_path),
+                                 "--resolution", 16, 16)
+    assert status == 2 and re.search(problem, err) and err.count("\n") == 1, err
+    assert out == "" and sorted(tmp_path.iterdir()) == before
+
+
+def test_write_hologram_and_write_view_refuse_other_suffixes(tmp_path, hologram):
+    """Finding 12 at the API: the EXR writers name the suffix instead of writing EXR bytes
+    under another name (or silently under another one)."""
+    with pytest.raises(InputError, match=r"r.png: the file is written as OpenEXR"):
+        write_hologram(tmp_path / "r.png", hologram)
+    view = RenderResult(rgb=np.ones((2, 2, 3)), alpha=np.ones((2, 2)), depth=np.ones((2, 2)))
+    with pytest.raises(InputError, match=r"v.png: the file is written as OpenEXR"):
+        write_view(view, tmp_path / "v.png")
+    assert not list(tmp_path.iterdir())

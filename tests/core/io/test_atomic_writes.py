@@ -1,4 +1,5 @@
-"""Writes: atomic, the target's permissions kept, links written through, temporary files
+"""Writes: atomic, the target's permissions kept, links replaced (never written through),
+outputs checked before the work, temporary files
 removed on SIGTERM and, after SIGKILL, by the next write; a view's EXR and PNG as one unit."""
 
 import os
@@ -12,9 +13,10 @@ import pytest
 
 from holo_core.io import image as image_files
 from holo_core.io.hologram import read_hologram, write_hologram
-from holo_core.io.image import TEMP_TAG, remove_stale_temps, write_atomic
+from holo_core.io.image import TEMP_TAG, check_writable, remove_stale_temps, write_atomic, write_png
 from holo_core.io.view import write_view
 from holo_core.scene.hologram import Hologram
+from holo_core.validate import InputError
 from holo_core.view import RenderResult
 
 KILLS = 20
@@ -56,14 +58,63 @@ def test_permissions_are_kept_and_new_files_follow_the_umask(tmp_path):
         assert path.stat().st_mode & 0o777 == mode and path.read_bytes() == b"again"
 
 
-def test_a_symbolic_link_is_written_through(tmp_path):
-    (tmp_path / "real").mkdir()
-    target = tmp_path / "real" / "h.bin"
-    target.write_bytes(b"old")
-    link = tmp_path / "link.bin"
-    link.symlink_to(target)
-    write_atomic(link, b"new")
-    assert link.is_symlink() and target.read_bytes() == b"new"
+def _write_hologram(path):
+    write_hologram(path, Hologram(intensity=np.ones((1, 4, 4), np.float32),
+                                  wavelengths=(633e-9,), pitch=8e-6))
+
+
+def _write_view(path):
+    write_view(RenderResult(rgb=np.full((4, 4, 3), 0.5, np.float32), alpha=np.ones((4, 4)),
+                            depth=np.ones((4, 4))), path)
+
+
+WRITERS = {"write_atomic": lambda p: write_atomic(p, b"new"),
+           "write_png": lambda p: write_png(p, np.full((4, 4), 0.5)),
+           "write_hologram": _write_hologram, "write_view": _write_view}
+
+
+@pytest.mark.parametrize("writer", WRITERS)
+@pytest.mark.parametrize("dangling", [False, True])
+def test_a_symbolic_link_is_replaced_never_written_through(tmp_path, writer, dangling):
+    """A link planted at the output name (a shared folder) must not redirect the write: the
+    link is replaced by the new file, and the file it pointed to keeps its bytes and mode."""
+    (tmp_path / "victim").mkdir()
+    outputs = [tmp_path / ("v.png" if writer == "write_png" else "v.exr")]
+    if writer == "write_view":
+        outputs.append(outputs[0].with_suffix(".png"))  # the preview is a link too
+    victims = []
+    for i, out in enumerate(outputs):
+        victim = tmp_path / "victim" / f"secret{i}"
+        if not dangling:
+            victim.write_bytes(b"do not touch")
+            victim.chmod(0o600)
+        out.symlink_to(victim)
+        victims.append(victim)
+    WRITERS[writer](outputs[0])
+    for out, victim in zip(outputs, victims):
+        assert not out.is_symlink() and out.is_file(), f"{out} is still a link"
+        if dangling:
+            assert not victim.exists(), "the write created the link's target"
+        else:
+            assert victim.read_bytes() == b"do not touch"
+            assert victim.stat().st_mode & 0o777 == 0o600
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["victim"] + [
+        o.name for o in outputs]), "files other than those asked for"
+
+
+def test_an_output_is_checked_before_the_work_and_nothing_is_created(tmp_path):
+    (tmp_path / "file").write_text("a file")
+    (tmp_path / "sub.exr").mkdir()
+    for path, problem in [(tmp_path / "file" / "h.exr", "not a folder"),
+                          (tmp_path / "sub.exr", "is a folder"),
+                          ("/sys/holo_test.exr", "not writable"),  # read-only even for root
+                          (tmp_path / "new" / "r.png", r"as OpenEXR; name it \*\.exr")]:
+        with pytest.raises(InputError, match=problem):
+            check_writable(path, ".exr")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file", "sub.exr"]
+    assert check_writable(tmp_path / "new" / "deeper" / "h.exr", ".exr") == \
+        tmp_path.resolve() / "new" / "deeper" / "h.exr"
+    assert not (tmp_path / "new").exists() and temps(tmp_path) == []
 
 
 def test_sigterm_during_a_write_removes_the_temporary_file(tmp_path):
