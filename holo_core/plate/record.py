@@ -26,6 +26,7 @@ MIN_OBLIQUITY = 0.1  # a primitive seen more edge-on than this (cos) gets no bri
 ROTATION_SECONDS = 2e-7  # a primitive's rotation and propagation per padded hologram sample
                          # and wavelength (2-core CPU: 0.4-0.9 s at 1024²) ...
 SLOW_TRIANGLES = 60.0    # ... and the estimate [s] above which the user is warned
+MAX_INTENSITY = 1e12  # a point's colour, at most: the float32 hologram holds sums of millions
 HOST_BYTES = 40  # per sample and wavelength: object and reference waves, H, the stored copy
 log = logging.getLogger(__name__)
 
@@ -143,8 +144,9 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     wavelengths = tuple(validate.length("wavelengths", w) for w in wavelengths)
     cols = _array("colours", colours, f"an (N, {len(wavelengths)}) array of intensities, one "
                   f"column per wavelength, N = {len(pos)} points", (len(pos), len(wavelengths)))
-    if not np.isfinite(cols).all() or (cols < 0).any():
-        raise InputError("colours must be finite intensities >= 0")
+    if not np.isfinite(cols).all() or (cols < 0).any() or (cols > MAX_INTENSITY).any():
+        raise InputError(f"colours must be finite intensities in [0, {MAX_INTENSITY:g}]; got "
+                         f"values from {cols.min():.3g} to {cols.max():.3g}")
     if phases is None:
         phases = np.random.default_rng(validate.seed(seed)).uniform(0, 2 * np.pi, len(pos))
     phases = _array("phases", phases, f"{len(pos)} finite phases [rad]", (len(pos),))
