@@ -1,0 +1,248 @@
+"""The holographic pass of one saved job, timed per FFT backend: cold and warm seconds.
+
+A job is the dict the add-on hands its worker (``holo_addon.render.pipeline.Job.payload``),
+pickled. Each FFT backend (``HOLO_FFT``) runs in a fresh process of its own, as the add-on's
+worker does: the first :func:`holo_core.worker.run_job` call includes the OpenCL device probe,
+the program builds and the FFT plans (with empty kernel caches unless ``--keep-caches``), the
+later ones run warm. With ``--processes 2`` a second process per backend starts on the caches
+the first one filled (a render in Blender is such a process). A last call, every device stage
+synchronised, breaks the pass into stages (with one run, it stands for the warm pass). Prints the
+seconds per backend, the ratio of the warm passes against the first backend, and how far the
+backends' pictures differ.
+
+    python bench/gpu_pass.py JOB.pickle [--backends vkfft numpy] [--runs 2] [--device gpu]
+
+On a machine with an NVIDIA GPU: pyopencl, NVIDIA's OpenCL driver (a vendor file in
+/etc/OpenCL/vendors naming libnvidia-opencl.so.1) and pyvkfft built with
+``VKFFT_BACKEND=opencl``. The demo's job at 1920×1080 f/2.8 comes from (bpy needed; Blender's
+native libraries never meet an OpenCL driver, so this runs in a process of its own):
+
+    python bench/gpu_pass.py --make-job out/job_1080p.pickle [--resolution 1920 1080] [--fstop 2.8]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import pickle
+import subprocess
+import sys
+import tempfile
+import time
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+# --- the job ----------------------------------------------------------------------------------
+
+def make_job(path: Path, resolution, fstop, samples) -> None:
+    """The demo scene (holo_addon.demo) read into the worker's job and pickled to ``path``."""
+    import bpy
+
+    sys.path.insert(0, str(ROOT))
+    from holo_addon import register
+    from holo_addon.demo import build_scene
+    from holo_addon.render import pipeline
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    register()
+    scene = build_scene(bpy, resolution=tuple(resolution), fstop=fstop)
+    scene.holo.output_dir = str(path.resolve().parent / "holo") + os.sep
+    scene.holo.mode = "CAMERA"  # the demo's settings
+    scene.holo.samples = samples
+    job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "wb") as f:
+        pickle.dump(job.payload(), f, protocol=pickle.HIGHEST_PROTOCOL)
+    print(f"{path}: {resolution[0]}x{resolution[1]}, f/{fstop}, {samples} samples")
+
+
+# --- one backend in this process ---------------------------------------------------------------
+
+class Stages:
+    """Exclusive seconds per stage: a stage's time less that of the stages inside it."""
+
+    def __init__(self):
+        self.seconds = defaultdict(float)
+        self.stack = []
+        self.on = False
+        self.sync = None
+
+    def wrap(self, owner, attr, name, sync=False):
+        fn = getattr(owner, attr, None)
+        if fn is None:  # a stage this version of the core does not have: its time is 'other'
+            return
+
+        def timed(*args, **kwargs):
+            if not self.on:
+                return fn(*args, **kwargs)
+            if sync and self.sync:
+                self.sync()
+            self.stack.append(0.0)
+            t0 = time.perf_counter()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                if sync and self.sync:
+                    self.sync()
+                spent = time.perf_counter() - t0
+                inner = self.stack.pop()
+                self.seconds[name] += spent - inner
+                if self.stack:
+                    self.stack[-1] += spent
+
+        setattr(owner, attr, timed)
+
+
+def child(job_path: Path, backend: str, runs: int, result_path: Path) -> None:
+    logging.basicConfig(level=logging.INFO, format="  %(name)s: %(message)s", stream=sys.stderr)
+    t0 = time.perf_counter()
+    from holo_core import worker
+    from holo_core.camera import recording
+    from holo_core.camera import render as camera_render
+    from holo_core.opencl import get_runtime
+    imported = time.perf_counter() - t0
+    with open(job_path, "rb") as f:
+        job = pickle.load(f)
+    job["output_dir"] = Path(tempfile.mkdtemp(prefix="holo-gpu-pass-"))
+
+    stages = Stages()
+    for name in ("choose_optics", "rasterize", "point_emitters", "merged"):
+        stages.wrap(camera_render, name, "emitters (host)")
+    stages.wrap(recording.PupilFields, "__init__", "device setup and uploads", sync=True)
+    stages.wrap(recording.PupilFields, "object_wave", "object wave kernels", sync=True)
+    stages.wrap(recording.PupilFields, "image", "image kernels and readback", sync=True)
+    stages.wrap(camera_render._Accumulator, "add", "accumulate looks (host)")
+    stages.wrap(camera_render._Accumulator, "result", "result: colour, depth (host)")
+    views = []
+    write_pass = worker._write_pass
+
+    def keep_view(job, view, result):
+        views.append(view)
+        return write_pass(job, view, result)
+
+    worker._write_pass = keep_view
+    stages.wrap(worker, "_write_pass", "write EXR and PNG")
+
+    timings = []
+    for _ in range(runs):
+        t = time.perf_counter()
+        worker.run_job(job)
+        timings.append(time.perf_counter() - t)
+        print(f"  {backend}: run_job {timings[-1]:.3f} s", file=sys.stderr, flush=True)
+    rt = get_runtime()
+    stages.sync = rt.queue.finish
+    stages.wrap(rt.fft, "forward", "FFT forward (padded pupil)", sync=True)
+    stages.wrap(rt.fft, "backward", "FFT backward (layers)", sync=True)
+    stages.on = True
+    t = time.perf_counter()
+    worker.run_job(job)
+    profiled = time.perf_counter() - t
+    stages.on = False
+    view = views[-1]
+    np.save(result_path.with_suffix(".npy"), view.rgb * view.alpha[..., None])
+    result_path.write_text(json.dumps({
+        "backend": rt.fft.name, "device": rt.device.name.strip(),
+        "platform": rt.device.platform.name.strip(), "driver": rt.device.driver_version,
+        "import_s": imported, "runs_s": timings, "profiled_s": profiled,
+        "stages": dict(stages.seconds), "info": {k: v for k, v in view.info.items()
+                                                 if k != "pass_key"}}))
+
+
+# --- the parent ---------------------------------------------------------------------------------
+
+def run_backend(args, backend, cache, index, out: Path) -> dict | None:
+    env = dict(os.environ, HOLO_FFT=backend, PYTHONUNBUFFERED="1", XDG_CACHE_HOME=str(cache))
+    if args.device:
+        env["HOLO_DEVICE"] = args.device
+    if index == 0 and not args.keep_caches:
+        env["CUDA_CACHE_DISABLE"] = "1"  # NVIDIA's driver-side kernel cache
+    result = out / f"{backend}-{index}.json"
+    cmd = [sys.executable, str(Path(__file__).resolve()), str(args.job), "--child", backend,
+           "--runs", str(args.runs), "--result", str(result)]
+    print(f"== HOLO_FFT={backend}, process {index + 1}"
+          f"{' (empty caches)' if index == 0 and not args.keep_caches else ''}", flush=True)
+    t = time.perf_counter()
+    if subprocess.run(cmd, check=False, env=env).returncode != 0 or not result.is_file():
+        print(f"   {backend}: the process failed")
+        return None
+    r = json.loads(result.read_text())
+    r["process_s"] = time.perf_counter() - t
+    r["picture"] = result.with_suffix(".npy")
+    return r
+
+
+def report(results: dict) -> None:
+    first = next(iter(results.values()))[0]
+    print(f"\ndevice: {first['device']} ({first['platform']}, driver {first['driver']})")
+    info = first["info"]
+    print(f"pass: {info.get('pupil_samples')} pupil samples, {info.get('samples')} looks, "
+          f"{info.get('layers')} depth layer(s)")
+    print(f"{'backend':<8} {'process':>7} {'import':>7} {'first':>8} {'warm':>8} "
+          f"{'profiled':>8}  stages of the profiled call (exclusive)")
+    for procs in results.values():
+        for i, r in enumerate(procs):
+            warm = f"{min(r['runs_s'][1:]):.2f}s" if len(r["runs_s"]) > 1 else "-"
+            print(f"{r['backend']:<8} {i + 1:>7} {r['import_s']:>6.2f}s {r['runs_s'][0]:>7.2f}s "
+                  f"{warm:>8} {r['profiled_s']:>7.2f}s")
+        r = procs[0]
+        total = r["profiled_s"]
+        for name, s in sorted(r["stages"].items(), key=lambda kv: -kv[1]):
+            print(f"{'':>46} {name:<32} {s:7.3f} s ({s / total:5.1%})")
+        print(f"{'':>46} {'other':<32} {total - sum(r['stages'].values()):7.3f} s")
+    names = list(results)
+    base = results[names[0]][0]
+    base_warm = min(base["runs_s"][1:] or [base["profiled_s"]])
+    ref = np.load(base["picture"])
+    for other in names[1:]:
+        r = results[other][0]
+        warm = min(r["runs_s"][1:] or [r["profiled_s"]])
+        diff = np.abs(np.load(r["picture"]) - ref).max() / max(float(np.abs(ref).max()), 1e-30)
+        print(f"warm {names[0]} / {other}: {base_warm / warm:.3f} "
+              f"({base_warm:.2f} s / {warm:.2f} s); pictures differ by {diff:.1e} of the peak")
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("job", type=Path)
+    p.add_argument("--backends", nargs="+", default=["vkfft", "numpy"],
+                   help="HOLO_FFT values, the first is the reference of the ratios")
+    p.add_argument("--runs", type=int, default=2,
+                   help="timed run_job calls per process, before the profiled one (with one, "
+                        "the profiled call stands for the warm pass)")
+    p.add_argument("--processes", type=int, default=1, help="processes per backend")
+    p.add_argument("--device", default="gpu", help="HOLO_DEVICE ('' for the default)")
+    p.add_argument("--keep-caches", action="store_true",
+                   help="let the first process use the user's kernel caches")
+    p.add_argument("--make-job", action="store_true", help="write the demo's job to JOB")
+    p.add_argument("--resolution", type=int, nargs=2, default=(1920, 1080))
+    p.add_argument("--fstop", type=float, default=2.8)
+    p.add_argument("--samples", type=int, default=16)
+    p.add_argument("--child", help=argparse.SUPPRESS)
+    p.add_argument("--result", type=Path, help=argparse.SUPPRESS)
+    args = p.parse_args()
+    if args.make_job:
+        return make_job(args.job, args.resolution, args.fstop, args.samples)
+    if args.child:
+        return child(args.job, args.child, max(args.runs, 1), args.result)
+    out = Path(tempfile.mkdtemp(prefix="holo-gpu-pass-"))
+    results = {}
+    for backend in args.backends:
+        cache = Path(tempfile.mkdtemp(prefix=f"holo-cache-{backend}-"))
+        for i in range(args.processes):
+            r = run_backend(args, backend, cache, i, out)
+            if r is None:
+                break
+            results.setdefault(backend, []).append(r)
+    if results:
+        report(results)
+    return 0 if len(results) == len(args.backends) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
