@@ -25,6 +25,7 @@ from ..scene.camera import Camera
 from ..scene.mesh import Mesh
 from ..validate import InputError
 from ..view import BACKGROUND_DEPTH, RenderResult
+from .incoherent import IncoherentImages, grid_bytes
 from .optics import SUPERSAMPLE, PupilOptics, choose_optics
 from .raster import depth_range, merged, point_emitters, rasterize
 from .recording import PupilFields, intensity_hologram, reconstruct_object_wave
@@ -53,19 +54,23 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     ``camera`` sees them through its camera hologram (module docstring).
 
     samples : looks with independent random emitter phases, averaged progressively
-        (speckle); ``on_sample(result, n)`` gets the running result after each.
+        (speckle; the 'object_wave' and 'hologram' routes); ``on_sample(result, n)`` gets the
+        running result after 1, 2, 4, 8 … looks (once, n = 1, for 'incoherent').
     supersample : fine pixels per pixel per axis (the pupil resolves one fine pixel).
     pupil_diameter : [m], default the camera's (lens/f-stop) or, without a lens, the
         widest whose defocus stays within a fine pixel.
     exposure : radiance to pixel value (1: a surface shows its own colour, as an emission
         shader of strength 1 in Cycles).
-    via : 'object_wave' (the ideal reconstruction) or 'hologram' (each look's object wave
-        recorded as an intensity hologram with an off-axis reference and reconstructed).
+    via : 'object_wave' (looks of the object wave with random phases, the ideal
+        reconstruction), 'incoherent' (what those looks converge to, computed exactly by each
+        layer's intensity PSF, :mod:`.incoherent`: no speckle, one pass) or 'hologram' (each
+        look's object wave recorded as an intensity hologram with an off-axis reference and
+        reconstructed).
     """
     if camera is None:
         raise InputError("render_camera needs a camera")
-    if via not in ("object_wave", "hologram"):
-        raise InputError(f"via must be 'object_wave' or 'hologram'; got {via!r}")
+    if via not in ("incoherent", "object_wave", "hologram"):
+        raise InputError(f"via must be 'incoherent', 'object_wave' or 'hologram'; got {via!r}")
     samples = int(validate.at_least("samples", samples, 1))
     supersample = int(validate.at_least("supersample", supersample, 1))
     w, h = camera.resolution
@@ -82,6 +87,8 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
         raise InputError("no emitter is visible to the camera")
     fine = replace(camera, resolution=tuple(r * supersample for r in camera.resolution))
     rt = get_runtime()
+    if via == "incoherent":
+        return _incoherent(rt, em, optics, camera, fine, exposure, progress, on_sample)
     pupil = 8.0 * math.prod(optics.shape)
     memory.check_device(rt, f"the {optics.shape[1]}x{optics.shape[0]} pupil's fields",
                         DEVICE_FIELDS * pupil + FINE_PIXEL_BYTES * w * h * supersample**2, pupil)
@@ -99,11 +106,26 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
             images.append(fields.image(f))
             jobs.report(progress, (n - 1) * 4 + f + 1, samples * 4)
         acc.add(images)
-        if on_sample is not None:
+        if on_sample is not None and not n & (n - 1):  # the result costs a few looks' time
             on_sample(acc.result(), n)
     result = acc.result()
     log.info("camera hologram: %d samples, speckle contrast %.3f", samples,
              result.info["speckle_contrast"])
+    return result
+
+
+def _incoherent(rt, em, optics: PupilOptics, camera: Camera, fine: Camera, exposure, progress,
+                on_sample) -> RenderResult:
+    w, h = fine.resolution
+    memory.check_device(rt, f"the {optics.shape[1]}x{optics.shape[0]} pupil's padded images",
+                        grid_bytes(optics) + FINE_PIXEL_BYTES * w * h, 32.0 * math.prod(
+                            optics.shape))
+    acc = _Accumulator(camera, optics, exposure)
+    acc.add_expected(*IncoherentImages(rt, em, optics, fine).images(progress))
+    result = acc.result()
+    if on_sample is not None:
+        on_sample(result, 1)
+    log.info("camera hologram: the looks' limit (incoherent emitters)")
     return result
 
 
@@ -114,6 +136,7 @@ class _Accumulator:
         self.camera, self.optics, self.exposure, self.n = camera, optics, exposure, 0
         self.rgb = self.cross = self.coverage = 0
         self.lum = self.lum2 = 0
+        self.exact = False
 
     def add(self, images):
         s = self.optics.supersample
@@ -126,6 +149,12 @@ class _Accumulator:
         look = downsample(rgb.mean(-1), s) / np.maximum(downsample(cov, s), COVERAGE_FLOOR)
         self.lum, self.lum2 = self.lum + look, self.lum2 + look * look
         self.n += 1
+
+    def add_expected(self, rg, bz, cross):
+        """The looks' expectation (:mod:`.incoherent`): no spread between looks is left."""
+        self.rgb = np.maximum(np.stack([rg.real, rg.imag, bz.real], -1), 0)
+        self.coverage = np.maximum(bz.imag, 0)
+        self.cross, self.n, self.exact = cross, 1, True
 
     def result(self) -> RenderResult:
         o, n, s = self.optics, self.n, self.optics.supersample
@@ -147,8 +176,9 @@ class _Accumulator:
         mean = self.lum / n
         spread = np.sqrt(np.maximum(self.lum2 / n - mean**2, 0) / max(n - 1, 1))
         solid = alpha >= 1
-        contrast = float(np.median(spread[solid] / np.maximum(mean[solid], 1e-30))) \
-            if solid.any() and n > 1 else float("nan")
+        contrast = 0.0 if self.exact else float(np.median(
+            spread[solid] / np.maximum(mean[solid], 1e-30))) if solid.any() and n > 1 \
+            else float("nan")
         info = {"samples": n, "speckle_contrast": contrast, "aperture_m": o.diameter,
                 "focus_m": o.focus, "wavelengths_m": [o.wavelength, o.depth_wavelength],
                 "layers": len(o.layers), "pupil_samples": list(o.shape),

@@ -145,6 +145,42 @@ def test_object_wave_on_the_pupil_equals_the_spherical_waves():
     assert err < 1e-3, err
 
 
+@pytest.mark.parametrize("fstop", [None, 2.8])
+def test_incoherent_route_is_one_look_of_a_single_emitter(fstop):
+    """One emitter has no cross terms: its image through the intensity PSF (the incoherent
+    route) is exactly one look's |A|², read by another non-uniform FFT (the intensity's
+    spectrum padded 1.5x, against the coherent spectrum's 2x)."""
+    camera = cam((96, 72), fstop=fstop, focus_distance=1.5 if fstop else None)  # 1.3 px blur
+    p = on_ray(camera, 30.3, 21.7, 3.4)
+    pts = (p[None], np.array([[0.9, 0.5, 0.2]]))
+    a = render_camera(camera=camera, points=pts, via="incoherent")
+    b = render_camera(camera=camera, points=pts, samples=1)
+    err = np.abs(a.radiance - b.radiance).max() / b.radiance.max()
+    cover = np.abs(a.coverage - b.coverage).max() / b.coverage.max()
+    print(f"f/{fstop}: radiance {err:.2e}, coverage {cover:.2e} of the peak apart")
+    assert err < 1e-3, err
+    assert cover < 1e-3, cover
+
+
+def test_looks_converge_on_the_incoherent_route():
+    """Many emitters: the looks' mean approaches the incoherent route as 1/√N (its error
+    halves from 4 to 16 looks) and is within 28 dB PSNR of it inside a textured wall."""
+    camera = cam((64, 48), fstop=2.8, focus_distance=3.5)
+    wall = plane([[-0.5, 0, -0.4], [0.5, 0, -0.4], [0.5, 0.3, 0.4], [-0.5, 0.3, 0.4]],
+                 texture=np.random.default_rng(1).uniform(0.2, 1, (6, 6, 3)))
+    exact = render_camera(wall, camera, via="incoherent")
+    looks = {}
+    render_camera(wall, camera, samples=64,
+                  on_sample=lambda r, n: looks.__setitem__(n, r.radiance))
+    inside = exact.alpha >= 1
+    rms = {n: np.sqrt(np.mean((looks[n] - exact.radiance)[inside] ** 2)) for n in (4, 16, 64)}
+    psnr = 20 * np.log10(exact.radiance[inside].max() / rms[64])
+    print(f"rms against the incoherent route: {rms}; 64 looks at {psnr:.1f} dB")
+    assert rms[4] / rms[16] > 1.5, rms
+    assert psnr >= 28, psnr
+    assert exact.info["speckle_contrast"] == 0.0
+
+
 def test_intensity_hologram_route_gives_the_object_wave_back():
     """H = |O + R|² recorded off axis, then R'·H with DC suppression and the band filter:
     the object wave again (float32 intensities), and the same render either way."""
