@@ -4,8 +4,10 @@ below it (ui → compositor → render → export → blender):
 
 - ``blender/``: Blender helpers shared by the rest (4.x/5.x ``compat``, ``materials``, ``objects``)
 - ``export/``: the scene as the render sees it → holo_core's plain data in metres (``scene``),
-  and procedural Base Colours baked by Cycles (``bake``)
-- ``render/``: the job, run in a worker process (``pipeline``), with the preferences' ``options``
+  what Cycles needs to render the emitters' lit radiance and its digest (``radiance``), and
+  procedural Base Colours baked by Cycles (``bake``, Lighting: Albedo)
+- ``render/``: the job, run in a worker process (``pipeline``), with the preferences'
+  ``options``; the Cycles script that renders the emitters' radiance (``cycles_radiance``)
 - ``compositor/``: the pass in the compositor: Depth Combine, per-frame passes, frame handlers
 - ``ui/``: ``properties`` (Object.holo, Scene.holo), ``preferences``, ``operators``, ``panels``,
   and the plate's coverage ``overlay`` in the viewport

@@ -52,7 +52,9 @@ def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
     ``plate``, ``camera``, ``settings`` (dict: mode 'CAMERA' or 'PLATE', samples,
     max_resolution, wavelength [m] or None, iterations, supersample, composition, exposure,
     opacity_threshold, seed), ``holograms`` (paths of the iterations' files), ``current``,
-    ``render``, ``output_dir``, ``frame``. 'CAMERA' renders the camera hologram
+    ``render``, ``output_dir``, ``frame``; optional ``radiance`` (the emitters' colours from a
+    renderer, :func:`lit_emitters`), ``depth_unit`` (metres per unit of the pass's depth),
+    ``border``, ``pass_key``. 'CAMERA' renders the camera hologram
     (:mod:`holo_core.camera`; no plate, no hologram file); 'PLATE' records the
     plate's holograms (unless ``current``) and views them. Returns ``recorded``,
     ``pass_path``, ``frame_path`` and ``info``. Files are written only after every stage has
@@ -62,6 +64,10 @@ def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
     from .plate.record import record_hologram
     from .plate.view import render_view
     s, current, n = job["settings"], job["current"], len(job["holograms"])
+    if job.get("radiance") and not current:
+        share = RADIANCE_SHARE
+        job = {**job, **lit_emitters(job, jobs.scaled(progress, 0.0, share))}
+        progress = jobs.scaled(progress, share, 1.0)
     if s.get("mode", "PLATE") == "CAMERA":
         from .camera.render import render_camera
         def sample(view, n):
@@ -96,11 +102,57 @@ def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
     return _write_pass(job, view, {"recorded": not current})
 
 
+RADIANCE_SHARE = 0.2  # of the progress bar: the renderer's radiance before the hologram
+
+
+def lit_emitters(job: dict, progress: jobs.Progress = None) -> dict:
+    """``points`` and ``triangles`` textured with the radiance a renderer saw from a camera
+    (:func:`holo_core.scene.radiance.projected`). ``job['radiance']``: ``command`` (the
+    renderer's command line, which writes ``image``: an RGBA OpenEXR of the emitters alone,
+    premultiplied, as ``camera`` sees them, and may print ``HOLO_PROGRESS <fraction>`` lines),
+    ``image``, ``camera``, and ``folder`` (its scratch folder, removed afterwards). The
+    renderer runs in this process's group, so killing the worker's group ends it too."""
+    from .io.image import read_exr
+    from .scene.radiance import projected
+    r = job["radiance"]
+    try:
+        tail = []
+        with subprocess.Popen(r["command"], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, cwd=r["folder"], text=True,
+                              errors="replace") as child:
+            try:
+                for line in child.stdout:
+                    if line.startswith("HOLO_PROGRESS "):
+                        jobs.report(progress, float(line.split()[1]), 1.0)
+                    elif line.strip():
+                        tail = (tail + [line.rstrip()])[-20:]
+                        log.debug("renderer: %s", line.rstrip())
+            except BaseException:
+                child.kill()
+                raise
+        if child.returncode != 0 or not Path(r["image"]).is_file():
+            raise RuntimeError(f"the radiance render failed (exit code {child.returncode}): "
+                               + " | ".join(tail[-3:]))
+        _, channels = read_exr(r["image"], what="radiance")
+    finally:
+        shutil.rmtree(r["folder"], ignore_errors=True)
+    rgb = np.stack([channels[c] for c in "RGB"], -1)
+    alpha = channels.get("A", np.ones(rgb.shape[:2], np.float32))
+    return {kind: projected(job[kind], r["camera"], rgb, alpha)
+            for kind in ("points", "triangles")}
+
+
 def _write_pass(job, view, result) -> dict:
-    """The pass of frame N (:func:`pass_file`)."""
+    """The pass of frame N (:func:`pass_file`); its depth in ``job['depth_unit']`` metres
+    per unit (Blender's scene units: ``unit_settings.scale_length``), 1 when absent."""
     from .io.view import write_view
+    from .view import BACKGROUND_DEPTH
     result.update(pass_path=None, frame_path=None, info={})
     if view is not None:
+        unit = float(job.get("depth_unit") or 1.0)
+        if unit != 1.0:
+            near = view.depth < BACKGROUND_DEPTH
+            view.depth[near] /= unit
         if job.get("border"):
             _outside_border(view, job["border"])
         frame_path = pass_file(job["output_dir"], job["frame"])
@@ -222,10 +274,12 @@ class Worker:
         self.folder = Path(tempfile.mkdtemp(prefix="holo-worker-"))
         (self.folder / "job.pickle").write_bytes(data)
         self._stderr = open(self.folder / "stderr.txt", "w+b")
+        self._scratch = (job.get("radiance") or {}).get("folder")
         self.process = subprocess.Popen(
             [sys.executable, "-m", "holo_core.worker", str(self.folder)],
             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=self._stderr,
-            env=environment(paths, device, memory_limit, cache_dir), cwd=self.folder)
+            env=environment(paths, device, memory_limit, cache_dir), cwd=self.folder,
+            start_new_session=os.name == "posix")  # its group: the renderer it runs dies too
         self._messages: queue.SimpleQueue = queue.SimpleQueue()
         self._error = None
         self.finished = False
@@ -300,11 +354,21 @@ class Worker:
                 elif kind == "failed":
                     raise WorkerError(value)
 
+    def _kill(self) -> None:
+        """Kill the worker and whatever it started (a renderer: its process group)."""
+        if self.process.poll() is None:
+            if os.name == "posix":
+                try:
+                    os.killpg(self.process.pid, signal.SIGKILL)
+                except OSError:
+                    self.process.kill()
+            else:
+                self.process.kill()
+        self.process.wait()
+
     def cancel(self) -> None:
         """Kill the worker now (its partial work is never written)."""
-        if self.process.poll() is None:
-            self.process.kill()
-        self.process.wait()
+        self._kill()
         self.finished = True
         self._cleanup()
 
@@ -314,9 +378,7 @@ class Worker:
         when there was none yet (nothing is written)."""
         from .io.image import atomic_paths
         self.poll()  # the newest partial message
-        if self.process.poll() is None:
-            self.process.kill()
-        self.process.wait()
+        self._kill()
         src = self.folder / "partial.exr"
         kept = self.partial if self.partial and src.is_file() else 0
         if kept:
@@ -331,6 +393,8 @@ class Worker:
     def _cleanup(self):
         self._stderr.close()
         shutil.rmtree(self.folder, ignore_errors=True)
+        if self._scratch:
+            shutil.rmtree(self._scratch, ignore_errors=True)
 
 
 def run(job: dict, progress: jobs.Progress = None, on_log=None, **options) -> dict:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -31,7 +31,9 @@ class ExportError(ValueError):
 @dataclass(frozen=True, eq=False)
 class SceneData:
     """What the pipeline needs, with no reference to Blender: emitter meshes in world metres
-    (``points`` and ``triangles`` kinds), the plate, the camera and a fingerprint of them."""
+    (``points`` and ``triangles`` kinds), the plate, the camera and a fingerprint of them;
+    ``names``: the emitters' objects; ``view``: the render's whole frame as a pinhole (the
+    camera of the emitters' radiance, before any crop)."""
 
     points: list
     triangles: list
@@ -39,6 +41,8 @@ class SceneData:
     plate_name: str | None
     camera: Camera
     warnings: tuple = ()
+    names: tuple = ()
+    view: Camera | None = None
 
     def fingerprint(self, *settings) -> str:
         """A digest of everything the hologram depends on: each emitter's kind, evaluated
@@ -80,10 +84,12 @@ def _matrix(m, unit: float, *, normalise: bool) -> np.ndarray:
     return a
 
 
-def mesh_from_object(obj, depsgraph, unit: float, matrix=None, notes=None) -> Mesh:
+def mesh_from_object(obj, depsgraph, unit: float, matrix=None, notes=None, *,
+                     lit=False) -> Mesh:
     """The evaluated mesh of ``obj`` (modifiers applied at the depsgraph's settings) as
     world-space triangles [m]; ``matrix``: an instance's world matrix instead of the object's.
-    Material features the export cannot honour are added to ``notes``."""
+    Material features the export cannot honour are added to ``notes`` (``lit``: the colours
+    come from Cycles' radiance, which shows all but transparency)."""
     ev = obj if obj.is_evaluated else obj.evaluated_get(depsgraph)
     me = ev.to_mesh()
     try:
@@ -102,9 +108,11 @@ def mesh_from_object(obj, depsgraph, unit: float, matrix=None, notes=None) -> Me
         vertices = world[lv[loops]] * unit
         mat_index = np.empty(nt, np.int64)
         me.loop_triangles.foreach_get("material_index", mat_index)
-        colours, uvs, texture = _colours(ev, me, loops, lv, mat_index, notes)
+        colours, uvs, texture = _colours(ev, me, loops, lv, mat_index,
+                                         None if lit else notes)
         if notes is not None:
-            notes.extend(filter(None, (unhonoured(slot.material) for slot in ev.material_slots)))
+            notes.extend(filter(None, (unhonoured(slot.material, lit=lit)
+                                       for slot in ev.material_slots)))
     finally:
         ev.to_mesh_clear()
     return Mesh(vertices=vertices, triangles=np.arange(nt * 3).reshape(nt, 3),
@@ -168,9 +176,10 @@ def plate_from_object(obj, unit: float) -> Plate:
     return Plate(matrix_world=_matrix(obj.matrix_world, unit, normalise=True), width=w, height=h)
 
 
-def camera_from_object(scene, obj, unit: float, depsgraph=None) -> Camera:
+def camera_from_object(scene, obj, unit: float, depsgraph=None, *, crop=True) -> Camera:
     """Blender's camera (lens, sensor, fit, shift, render size, pixel aspect, depth of field)
-    as :class:`holo_core.scene.camera.Camera`; a focus object as ``depsgraph`` places it."""
+    as :class:`holo_core.scene.camera.Camera`; a focus object as ``depsgraph`` places it.
+    With ``crop``, a render cropped to its region gets the region's camera."""
     cam, r = obj.data, scene.render
     if cam.type != "PERSP":
         raise ExportError(f"camera '{obj.name}' must be perspective (it is {cam.type})")
@@ -194,7 +203,7 @@ def camera_from_object(scene, obj, unit: float, depsgraph=None) -> Camera:
                     shift_x=cam.shift_x, shift_y=cam.shift_y, resolution=res,
                     pixel_aspect=(r.pixel_aspect_x, r.pixel_aspect_y),
                     focus_distance=focus, fstop=fstop)
-    if r.use_border and r.use_crop_to_border:  # the render is the border's region alone
+    if crop and r.use_border and r.use_crop_to_border:  # the render is the region alone
         left, top, right, bottom = border_pixels(r)
         if right > left and bottom > top:
             camera = camera.cropped(left, top, right - left, bottom - top)
@@ -215,10 +224,12 @@ def border_pixels(render) -> tuple[int, int, int, int]:
             int(render.border_max_x * w), h - int(render.border_min_y * h))
 
 
-def export_scene(scene, depsgraph, *, plate=True) -> SceneData:
+def export_scene(scene, depsgraph, *, plate=True, lit=False) -> SceneData:
     """The scene's emitters, plate (when ``plate``) and camera as ``depsgraph`` evaluates them
     (a render's depsgraph: the frame rendered, render modifier levels and visibility); a clear
-    :class:`ExportError` when one is missing or ill-placed."""
+    :class:`ExportError` when one is missing or ill-placed. ``lit``: the colours will come
+    from Cycles' radiance (:mod:`holo_addon.export.radiance`), so only what that cannot show
+    is noted."""
     unit = scale(scene)
     plates = [o for o in scene.objects if o.holo.is_plate]
     if plate and not plates:
@@ -229,16 +240,20 @@ def export_scene(scene, depsgraph, *, plate=True) -> SceneData:
     if scene.camera is None:
         raise ExportError("the scene has no camera")
     notes = []
-    kinds = emitters(depsgraph, unit, notes)
+    kinds, names = emitters(depsgraph, unit, notes, lit=lit)
     if not kinds["POINTS"] + kinds["TRIANGLES"]:
         raise ExportError("no holographic emitters in the render: set Object ▸ Holo ▸ Emitter "
                           "on a mesh that renders (not disabled in renders, in a collection "
                           "the view layer includes)")
-    camera = camera_from_object(scene, _evaluated(scene.camera, depsgraph), unit, depsgraph)
+    camera_object = _evaluated(scene.camera, depsgraph)
+    camera = camera_from_object(scene, camera_object, unit, depsgraph)
+    view = replace(camera_from_object(scene, camera_object, unit, depsgraph, crop=False),
+                   fstop=None, focus_distance=None)
     warnings = tuple(dict.fromkeys(notes))
+    found = {"names": tuple(names), "view": view}
     if not plate:
         return SceneData(points=kinds["POINTS"], triangles=kinds["TRIANGLES"], plate=None,
-                         plate_name=None, camera=camera, warnings=warnings)
+                         plate_name=None, camera=camera, warnings=warnings, **found)
     plate = plate_from_object(_evaluated(plates[0], depsgraph), unit)
     if plate.to_plate(camera.position[None])[0, 2] <= 0:
         raise ExportError(f"the camera is behind plate '{plates[0].name}': viewers must be on "
@@ -247,17 +262,18 @@ def export_scene(scene, depsgraph, *, plate=True) -> SceneData:
                               kinds["POINTS"] + kinds["TRIANGLES"])
     return SceneData(points=kinds["POINTS"], triangles=kinds["TRIANGLES"], plate=plate,
                      plate_name=plates[0].name, camera=camera,
-                     warnings=warnings + ((coverage,) if coverage else ()))
+                     warnings=warnings + ((coverage,) if coverage else ()), **found)
 
 
-def emitters(depsgraph, unit: float, notes: list) -> dict:
-    """{'POINTS': [Mesh], 'TRIANGLES': [Mesh]}: every holographic emitter the render draws
-    (see :func:`emitter_instances`)."""
-    found = {"POINTS": [], "TRIANGLES": []}
+def emitters(depsgraph, unit: float, notes: list, *, lit=False) -> tuple[dict, list]:
+    """({'POINTS': [Mesh], 'TRIANGLES': [Mesh]}, the emitters' object names): every
+    holographic emitter the render draws (see :func:`emitter_instances`)."""
+    found, names = {"POINTS": [], "TRIANGLES": []}, []
     for inst, kind in emitter_instances(depsgraph):
         found[kind].append(mesh_from_object(inst.object, depsgraph, unit,
-                                            np.array(inst.matrix_world), notes))
-    return found
+                                            np.array(inst.matrix_world), notes, lit=lit))
+        names.append(inst.object.original.name)
+    return found, names
 
 
 def emitter_instances(depsgraph):

@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import json
 import logging
+from collections.abc import Callable
 from dataclasses import asdict, astuple, dataclass, field
+from functools import partial
 from pathlib import Path
 
 import bpy
@@ -21,7 +23,7 @@ from holo_core import jobs, worker
 from holo_core.io.hologram import read_hologram
 from holo_core.io.image import exr_attribute
 
-from ..export import bake
+from ..export import bake, radiance
 from ..export.scene import ExportError, SceneData, border_pixels, export_scene, scale
 from .options import worker_options
 
@@ -43,6 +45,7 @@ class Settings:
     exposure: float               # linear factor (the scene stores stops)
     opacity_threshold: float
     seed: int
+    lighting: str = "SCENE"       # 'SCENE' (Cycles' radiance) or 'ALBEDO' (the colour alone)
 
     @classmethod
     def from_scene(cls, scene, unit: float) -> "Settings":
@@ -51,11 +54,12 @@ class Settings:
                    wavelength=h.wavelength * unit if h.wavelength > 0 else None,
                    iterations=h.iterations, supersample=h.supersample,
                    composition=h.composition, exposure=2.0 ** h.exposure,
-                   opacity_threshold=h.opacity_threshold, seed=h.seed)
+                   opacity_threshold=h.opacity_threshold, seed=h.seed, lighting=h.lighting)
 
     def recording(self) -> tuple:
         """The settings a hologram depends on."""
-        return (self.max_resolution, self.wavelength, self.iterations, self.seed)
+        return (self.max_resolution, self.wavelength, self.iterations, self.seed,
+                self.lighting)
 
 
 @dataclass(frozen=True)
@@ -70,15 +74,20 @@ class Job:
     render: bool = True           # also render the holographic pass
     pass_key: str = ""            # a digest of everything the frame's pass depends on
     border: tuple | None = None   # the render region (left, top, right, bottom) [px], uncropped
+    depth_unit: float = 1.0       # metres per Blender unit: the pass's depth is in scene units
+    # () -> the worker's ``radiance`` job (the scene written for Cycles), or None: Lighting:
+    # Scene; called only when the worker runs
+    radiance: Callable[[], dict | None] | None = field(default=None, repr=False)
 
     def payload(self) -> dict:
-        """The job as :func:`holo_core.worker.run_job` takes it."""
+        """The job as :func:`holo_core.worker.run_job` takes it (without the radiance, which
+        :func:`start` adds)."""
         return {"points": self.scene.points, "triangles": self.scene.triangles,
                 "plate": self.scene.plate, "camera": self.scene.camera,
                 "settings": asdict(self.settings), "holograms": self.holograms,
                 "current": self.current, "render": self.render,
                 "output_dir": self.output_dir, "frame": self.frame, "pass_key": self.pass_key,
-                "border": self.border}
+                "border": self.border, "depth_unit": self.depth_unit}
 
 
 @dataclass
@@ -111,25 +120,32 @@ def hologram_paths(out: Path, plate_name: str, n: int, fingerprint: str) -> tupl
 
 
 def prepare(scene, depsgraph, *, render=True, bake=False) -> Job:
-    """Read the scene (main thread). With ``bake``, emitters whose Base Color needs it are
-    baked first (:mod:`holo_addon.export.bake`; never inside a render). Raises
-    :class:`scene_export.ExportError` for a scene that cannot be recorded."""
-    if bake:
+    """Read the scene (main thread, or a render's). With ``bake``, emitters whose Base Color
+    needs it are baked first (:mod:`holo_addon.export.bake`; never inside a render; Lighting:
+    Albedo only). Raises :class:`scene_export.ExportError` for a scene that cannot be
+    recorded. With Lighting: Scene, what the emitters' radiance depends on (lights, world,
+    every object the render draws, Cycles' settings) enters the hologram's and the pass's
+    digests, so a changed light renders again and an unchanged scene is reused."""
+    unit = scale(scene)
+    settings = Settings.from_scene(scene, unit)
+    lit = settings.lighting == "SCENE"
+    if bake and not lit:
         depsgraph = bake_emitters(scene) or depsgraph
-    settings = Settings.from_scene(scene, scale(scene))
     out = output_dir(scene)
     region, frame = render_region(scene), scene.frame_current
+    data = export_scene(scene, depsgraph, plate=settings.mode != "CAMERA", lit=lit)
+    lighting = radiance.digest(scene, depsgraph) if lit else ""
     if settings.mode == "CAMERA":  # recorded for this view at every render: no plate file
-        data = export_scene(scene, depsgraph, plate=False)
-        fingerprint, paths = data.fingerprint(settings.mode, settings.samples), ()
+        fingerprint, paths = data.fingerprint(settings.mode, settings.samples, lighting), ()
     else:
-        data = export_scene(scene, depsgraph)
-        fingerprint = data.fingerprint(*settings.recording())
+        fingerprint = data.fingerprint(*settings.recording(), lighting)
         paths = hologram_paths(out, data.plate_name, settings.iterations, fingerprint)
+    light = partial(radiance.request, scene, depsgraph.view_layer.name, data.view,
+                    data.points + data.triangles, data.names) if lit else None
     return Job(scene=data, settings=settings, output_dir=out, frame=frame,
                fingerprint=fingerprint, current=bool(paths) and all(p.is_file() for p in paths),
-               holograms=paths, render=render, border=region,
-               pass_key=data.fingerprint(*astuple(settings), frame, region))
+               holograms=paths, render=render, border=region, depth_unit=unit, radiance=light,
+               pass_key=data.fingerprint(*astuple(settings), frame, region, unit, lighting))
 
 
 def render_region(scene) -> tuple | None:
@@ -151,8 +167,13 @@ def bake_emitters(scene):
 
 
 def start(job: Job) -> worker.Worker:
-    """The job running in a worker process (see :class:`holo_core.worker.Worker`)."""
-    return worker.Worker(job.payload(), **worker_options())
+    """The job running in a worker process (see :class:`holo_core.worker.Worker`); with
+    Lighting: Scene (and a hologram to record), the scene is written for Cycles first and the
+    worker has Cycles render the emitters' radiance before it records."""
+    payload = job.payload()
+    if job.radiance is not None and not job.current:
+        payload["radiance"] = job.radiance()
+    return worker.Worker(payload, **worker_options())
 
 
 def outcome(job: Job, result: dict) -> Outcome:

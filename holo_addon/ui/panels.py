@@ -19,6 +19,7 @@ class HOLO_PT_scene(bpy.types.Panel):
         layout.use_property_split = True
         layout.prop(h, "output_dir")
         layout.prop(h, "mode")
+        layout.prop(h, "lighting")
         col = layout.column(heading="Recording")
         if h.mode == "CAMERA":
             col.prop(h, "samples")

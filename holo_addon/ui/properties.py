@@ -64,6 +64,15 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                                   "camera, as a holographic display would show it: its "
                                   "sharpness is limited by the plate's size and resolution")],
         description="Where the hologram is recorded")
+    lighting: EnumProperty(
+        name="Lighting", default="SCENE",
+        items=[("SCENE", "Scene", ("The holographic objects' colours are Cycles' render of "
+                                   "them from the camera, lit by the scene: direct and "
+                                   "indirect light, shadows, textures, normal maps, specular "
+                                   "highlights (Render ▸ Sampling sets its samples)")),
+               ("ALBEDO", "Albedo", ("The holographic objects show their Base Color alone, "
+                                     "unlit (the colour attribute, texture or bake)"))],
+        description="Where the holographic objects' colours come from")
     samples: IntProperty(name="Samples", default=16, min=1, max=4096,
                          description="Renders with independent random phases, averaged: more "
                                      "samples, less speckle")

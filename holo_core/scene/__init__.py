@@ -4,6 +4,7 @@
 - ``plate.py``: :class:`Plate`, the holographic plate's pose and size
 - ``hologram.py``: :class:`Hologram`, the recorded holograms of one scene, one per wavelength
 - ``mesh.py``: :class:`Mesh`, triangles with colours or a texture, and their point emitters
+- ``radiance.py``: a renderer's radiance seen from a camera, projected onto the meshes
 """
 
 from .camera import Camera, look_at

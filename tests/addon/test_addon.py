@@ -67,9 +67,10 @@ def test_export_known_mesh_in_metres(empty_scene):
     assert data.camera.fstop == 2.0
     # the focus object's distance along the view axis, in metres
     assert data.camera.focus_distance == pytest.approx(3.0 + 0.2, abs=1e-6)
-    hidden = ("visible_camera", "visible_shadow", "visible_glossy")
-    assert not any(getattr(o, n) for o in (cube, plate) for n in hidden), \
-        "emitters and plate stay out of the raster"
+    from holo_addon.blender.objects import RAY_VISIBILITY
+    assert not cube.visible_camera and cube.visible_shadow and cube.visible_glossy, \
+        "an emitter is out of the camera's view of the raster, in its shadows and reflections"
+    assert not any(getattr(plate, n) for n in RAY_VISIBILITY), "the plate is out of the raster"
     assert not cube.hide_render and not plate.hide_render, "Disable in Renders is the user's"
 
 

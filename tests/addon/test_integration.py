@@ -33,6 +33,8 @@ def test_the_fingerprint_covers_emitter_kind_material_and_lens(empty_scene):
 
 def _moving_cube(scene, tmp_path):
     cube, cam, _ = _plate_camera_cube(scene, cube_size=0.4)
+    bpy.ops.object.light_add(type="SUN", rotation=(np.radians(60), 0, 0))  # lights its front
+    bpy.context.object.data.energy = 3.0
     scene.render.resolution_x, scene.render.resolution_y = 48, 36
     scene.render.resolution_percentage = 100
     scene.render.engine = "CYCLES"  # Workbench draws every object: emitters too
@@ -399,14 +401,17 @@ def test_procedural_base_colours_are_reported(empty_scene):
     cube.data.materials.append(material)
     scene.holo.mode = "PLATE"
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    assert _prepare(scene).scene.warnings == ()  # lit by the scene: Cycles renders it
+    scene.holo.lighting = "ALBEDO"
     (warning,) = _prepare(scene).scene.warnings
     assert "'marble'" in warning and "Noise Texture" in warning, warning
 
 
 def test_material_features_the_hologram_does_not_show_are_reported(empty_scene):
     """A default Principled material: no note. Metallic, alpha and emission set, a normal map
-    linked: one note naming them. An Emission shader alone: a note that the viewport colour
-    is used."""
+    linked: lit by the scene, a note naming alpha alone (Cycles' radiance shows the rest);
+    with the albedo, one naming them all. An Emission shader alone: lit by the scene no note,
+    with the albedo a note that the viewport colour is used."""
     from holo_addon.blender import compat
     scene = empty_scene
     cube, _, _ = _plate_camera_cube(scene)
@@ -423,6 +428,9 @@ def test_material_features_the_hologram_does_not_show_are_reported(empty_scene):
     bump = shiny.node_tree.nodes.new("ShaderNodeBump")
     shiny.node_tree.links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
     (warning,) = _prepare(scene).scene.warnings
+    assert warning.startswith("material 'shiny': Alpha not shown"), warning
+    scene.holo.lighting = "ALBEDO"
+    (warning,) = _prepare(scene).scene.warnings
     assert warning.startswith("material 'shiny': Metallic, Alpha, Emission Strength, Normal "
                               "not shown"), warning
     glow = bpy.data.materials.new("glow")
@@ -435,6 +443,8 @@ def test_material_features_the_hologram_does_not_show_are_reported(empty_scene):
     cube.data.materials[0] = glow
     (warning,) = _prepare(scene).scene.warnings
     assert "'glow' has no Principled BSDF" in warning, warning
+    scene.holo.lighting = "SCENE"
+    assert _prepare(scene).scene.warnings == ()
 
 
 def test_a_render_cropped_to_an_off_centre_border_gets_the_border_of_the_pass(
@@ -504,6 +514,7 @@ def test_a_procedural_base_colour_is_baked_and_recorded(empty_scene):
     cube.data.materials.append(material)
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
     scene.holo.samples = 1
+    scene.holo.lighting = "ALBEDO"  # lit by the scene, Cycles renders it: no bake
     assert bake.current(cube) is None
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
     assert bake.current(cube) is not None and bpy.data.images[bake.image_name(cube)].packed_file

@@ -1,0 +1,77 @@
+"""Cycles' radiance of the holographic emitters as the camera sees them: a script that Blender
+runs in a process of its own (``blender -b --factory-startup scene.blend --python
+cycles_radiance.py -- JSON``, or a Python with the bpy module: ``python cycles_radiance.py --
+JSON``), started by the worker (:func:`holo_core.worker.lit_emitters`).
+
+The scene is the user's, written by :func:`holo_addon.export.radiance.write_scene`, at the
+frame being rendered, with the scene's own Cycles settings (samples, denoising, light paths).
+Only this changes: the emitters are seen by the camera and every ray; every other object is
+hidden from the camera alone, so it still casts its shadows on the emitters, lights them
+indirectly and shows in their reflections; the film is transparent; depth of field and motion
+blur are off (the hologram makes its own); the render is cropped to the emitters' region; the
+compositor and sequencer are off. The result is a float RGBA OpenEXR (premultiplied).
+
+JSON: ``blend``, ``scene``, ``view_layer``, ``frame``, ``emitters`` (object names),
+``border`` (min x, max x, min y, max y as Blender's render region), ``image`` (the output
+path), ``compat`` (the path of :mod:`holo_addon.blender.compat`, loaded on its own).
+It imports nothing of the add-on's package, which the process does not have.
+"""
+
+import importlib.util
+import json
+import sys
+
+import bpy
+
+RAYS = ("visible_camera", "visible_diffuse", "visible_glossy", "visible_transmission",
+        "visible_volume_scatter", "visible_shadow")
+
+
+def main(args: dict) -> None:
+    if bpy.data.filepath != args["blend"]:  # the bpy module: the file is opened here
+        bpy.ops.wm.open_mainfile(filepath=args["blend"], load_ui=False)
+    spec = importlib.util.spec_from_file_location("holo_compat", args["compat"])
+    compat = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(compat)
+    handlers = bpy.app.handlers
+    for kind in ("frame_change_pre", "frame_change_post", "render_init", "render_pre",
+                 "render_post", "render_write", "render_complete", "render_stats"):
+        getattr(handlers, kind).clear()  # no add-on makes a pass of this render
+    scene = bpy.data.scenes[args["scene"]]
+    scene.frame_set(args["frame"])
+    emitters = set(args["emitters"])
+    for obj in bpy.data.objects:
+        if obj.name in emitters:
+            for name in RAYS:
+                setattr(obj, name, True)
+        else:
+            obj.visible_camera = False
+    r = scene.render
+    r.engine = "CYCLES"
+    r.film_transparent = True
+    r.use_motion_blur = False
+    if scene.camera is not None and scene.camera.type == "CAMERA":
+        scene.camera.data.dof.use_dof = False
+    r.use_border = r.use_crop_to_border = True
+    r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = args["border"]
+    r.use_compositing = False
+    r.use_sequencer = False
+    scene.cycles.pixel_filter_type = "BOX"  # the texels are pixels: the hologram blurs them
+    compat.set_exr_output(scene, multilayer=False)
+    r.image_settings.color_mode = "RGBA"
+    r.filepath = args["image"]
+    r.use_file_extension = False
+
+    def stats(text):
+        if "Sample " in text:
+            try:
+                done, total = text.rsplit("Sample ", 1)[1].split()[0].split("/")
+                print(f"HOLO_PROGRESS {int(done) / int(total):.3f}", flush=True)
+            except ValueError:
+                pass
+    handlers.render_stats.append(lambda *a: stats(str(a[-1])))
+    bpy.ops.render.render(write_still=True, scene=scene.name, layer=args["view_layer"])
+
+
+if __name__ == "__main__":
+    main(json.loads(sys.argv[sys.argv.index("--") + 1]))

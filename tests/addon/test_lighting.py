@@ -1,0 +1,167 @@
+"""A holographic object lit by the scene, against Cycles' render of the same object as an
+ordinary one: its shading, its highlight, the shadow it casts on the raster floor, and when a
+pass is made again (bpy in-process; the radiance from a Blender process of its own)."""
+
+import numpy as np
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+from test_addon import _read_exr
+
+SIZE = (128, 96)
+
+
+def _lit_scene(scene):
+    """A smooth glossy grey sphere on a grey floor under a low sun (its shadow falls on the
+    floor in view) and a dim grey world; a 50 mm pinhole camera; Cycles at 32 samples."""
+    from holo_addon.blender import compat
+    from holo_addon.demo import point_at
+    scene.render.engine = "CYCLES"
+    scene.cycles.samples = 32
+    scene.cycles.use_denoising = False
+    scene.cycles.pixel_filter_type = "BOX"
+    scene.render.resolution_x, scene.render.resolution_y = SIZE
+    scene.render.resolution_percentage = 100
+    scene.view_settings.view_transform = "Standard"
+    compat.set_exr_output(scene, multilayer=False)
+    world = bpy.data.worlds.new("dim")
+    world.color = (0.05, 0.05, 0.05)
+    scene.world = world
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=48, ring_count=24, radius=0.3,
+                                         location=(0, 0, 0.3))
+    sphere = bpy.context.object
+    bpy.ops.object.shade_smooth()
+    grey = bpy.data.materials.new("glossy grey")
+    compat.enable_nodes(grey)
+    bsdf = next(n for n in grey.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
+    bsdf.inputs["Base Color"].default_value = (0.6, 0.6, 0.6, 1)
+    bsdf.inputs["Roughness"].default_value = 0.3
+    sphere.data.materials.append(grey)
+    bpy.ops.mesh.primitive_plane_add(size=8, location=(0, 0, 0))
+    floor = bpy.data.materials.new("floor")
+    compat.enable_nodes(floor)
+    next(n for n in floor.node_tree.nodes if n.type == "BSDF_PRINCIPLED").inputs[
+        "Base Color"].default_value = (0.5, 0.5, 0.5, 1)
+    bpy.context.object.data.materials.append(floor)
+    bpy.ops.object.light_add(type="SUN", rotation=(np.radians(65), 0, np.radians(-70)))
+    sun = bpy.context.object
+    sun.data.energy = 3.0
+    bpy.ops.object.camera_add(location=(0.4, -3.4, 1.5))
+    cam = bpy.context.object
+    point_at(cam, (0.6, 0.0, 0.2))
+    cam.data.lens = 50
+    scene.camera = cam
+    scene.holo.samples = 4
+    bpy.context.view_layer.update()
+    return sphere, sun
+
+
+def _render(scene, path):
+    scene.render.filepath = str(path)
+    bpy.ops.render.render(write_still=True)
+    image = _read_exr(path)
+    return np.stack([image[c] for c in "RGB"], -1)
+
+
+def _luminance(rgb):
+    return rgb @ np.array([0.2126, 0.7152, 0.0722])
+
+
+def _grow(mask, steps):
+    out = mask.copy()
+    for _ in range(steps):
+        grown = out.copy()
+        grown[1:] |= out[:-1]
+        grown[:-1] |= out[1:]
+        grown[:, 1:] |= out[:, :-1]
+        grown[:, :-1] |= out[:, 1:]
+        out = grown
+    return out
+
+
+def test_a_lit_holographic_sphere_shades_and_casts_its_shadow_as_cycles_does(
+        empty_scene, tmp_path):
+    """Cycles renders the sphere as an ordinary object, then as a POINTS emitter through its
+    camera hologram, composited: inside the object (the pass's alpha, one pixel in from the
+    rim) the luminance correlates >= 0.9 with Cycles' and its mean is within 15 %, the
+    specular highlight is where Cycles has it (within 2 px), and the floor in the sphere's
+    shadow is no more than 1.15 times as bright as in Cycles."""
+    from holo_addon.render import pipeline
+    scene = empty_scene
+    sphere, _ = _lit_scene(scene)
+    reference = _render(scene, tmp_path / "cycles.exr")
+    sphere.hide_render = True
+    unshadowed = _render(scene, tmp_path / "no_sphere.exr")
+    sphere.hide_render = False
+    sphere.holo.emitter = "POINTS"
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    composite = _render(scene, tmp_path / "holo.exr")
+    alpha = _read_exr(pipeline.pass_file(pipeline.output_dir(scene), 1))["ViewLayer.Combined.A"]
+    inside = ~_grow(alpha <= 0.5, 1)
+    mine, theirs = _luminance(composite), _luminance(reference)
+    corr = np.corrcoef(mine[inside], theirs[inside])[0, 1]
+    ratio = mine[inside].mean() / theirs[inside].mean()
+    peak = [np.unravel_index(np.argmax(np.where(inside, lum, -1)), lum.shape)
+            for lum in (mine, theirs)]
+    shift = float(np.hypot(*np.subtract(*peak)))
+    shadow = (_luminance(reference) < 0.5 * _luminance(unshadowed)) & ~_grow(alpha > 0.5, 2)
+    shade = mine[shadow].mean() / theirs[shadow].mean()
+    print(f"lit sphere: {inside.sum()} px inside, luminance correlation {corr:.3f}, mean "
+          f"ratio {ratio:.3f}, highlight {peak[0]} vs Cycles' {peak[1]} ({shift:.1f} px); "
+          f"shadow {shadow.sum()} px, {shade:.3f} x Cycles'")
+    assert inside.sum() > 300 and shadow.sum() > 100, (inside.sum(), shadow.sum())
+    assert corr >= 0.9, f"luminance correlation inside the object {corr:.3f}"
+    assert abs(ratio - 1) <= 0.15, f"mean luminance {ratio:.3f} x Cycles'"
+    assert shift <= 2.0, f"highlight at {peak[0]}, Cycles' at {peak[1]}"
+    assert shade <= 1.15, f"the floor in the shadow is {shade:.3f} x as bright as Cycles'"
+
+
+def test_a_changed_light_renders_the_pass_again_and_nothing_changed_reuses_it(
+        empty_scene, monkeypatch):
+    """Render Pass twice: one worker. The sun's strength doubled: the pass is made again and
+    the cube's radiance doubles (no other light: within 5 %); the floor's colour changed
+    (light it bounces): made again; nothing changed: reused."""
+    from test_addon import _plate_camera_cube
+
+    from holo_addon.blender import compat
+    from holo_addon.render import pipeline
+    from holo_core import worker
+    scene = empty_scene
+    scene.cycles.samples = 8
+    _plate_camera_cube(scene)
+    bpy.ops.object.light_add(type="SUN", rotation=(np.radians(60), 0, 0))
+    sun = bpy.context.object
+    sun.data.energy = 2.0
+    bpy.ops.mesh.primitive_plane_add(size=4, location=(0, 0, -0.25))
+    floor = bpy.data.materials.new("floor")
+    compat.enable_nodes(floor)
+    bpy.context.object.data.materials.append(floor)
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    scene.holo.samples = 2
+    path = pipeline.pass_file(pipeline.output_dir(scene), scene.frame_current)
+
+    def radiance():
+        image = _read_exr(path)
+        shown = image["ViewLayer.Combined.A"] > 0.5
+        return sum(image[f"ViewLayer.Combined.{c}"][shown].sum() for c in "RGB")
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    before = radiance()
+    started = []
+    original = worker.Worker.__init__
+
+    def counting(self, *args, **kwargs):
+        started.append(1)
+        original(self, *args, **kwargs)
+    monkeypatch.setattr(worker.Worker, "__init__", counting)
+    assert bpy.ops.holo.render_pass() == {"FINISHED"} and started == []
+    sun.data.energy = 4.0
+    assert bpy.ops.holo.render_pass() == {"FINISHED"} and started == [1]
+    ratio = radiance() / before
+    print(f"sun 2 -> 4: the pass's radiance x {ratio:.3f}")
+    assert abs(ratio - 2) <= 0.1, f"the pass's radiance x {ratio:.3f} for the sun's x 2"
+    assert bpy.ops.holo.render_pass() == {"FINISHED"} and started == [1]
+    bsdf = next(n for n in floor.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
+    bsdf.inputs["Base Color"].default_value = (0.2, 0.9, 0.2, 1)
+    assert bpy.ops.holo.render_pass() == {"FINISHED"} and started == [1, 1]
