@@ -28,6 +28,11 @@ class ExportError(ValueError):
     """The scene cannot be recorded as it is; the message says what to change."""
 
 
+class NoEmitters(ExportError):
+    """No holographic emitter is left in the render (none marked, or none renders): a render
+    then shows the raster alone."""
+
+
 @dataclass(frozen=True, eq=False)
 class SceneData:
     """What the pipeline needs, with no reference to Blender: emitter meshes in world metres
@@ -242,9 +247,10 @@ def export_scene(scene, depsgraph, *, plate=True, lit=False) -> SceneData:
     notes = []
     kinds, names = emitters(depsgraph, unit, notes, lit=lit)
     if not kinds["POINTS"] + kinds["TRIANGLES"]:
-        raise ExportError("no holographic emitters in the render: set Object ▸ Holo ▸ Emitter "
-                          "on a mesh that renders (not disabled in renders, in a collection "
-                          "the view layer includes)")
+        left_out = "; ".join(n for n in notes if "left out" in n)
+        raise NoEmitters("no holographic emitters in the render: set Object ▸ Holo ▸ Emitter "
+                         "on a mesh that renders (not disabled in renders, in a collection "
+                         "the view layer includes)" + (f" ({left_out})" if left_out else ""))
     camera_object = _evaluated(scene.camera, depsgraph)
     camera = camera_from_object(scene, camera_object, unit, depsgraph)
     view = replace(camera_from_object(scene, camera_object, unit, depsgraph, crop=False),
@@ -267,12 +273,20 @@ def export_scene(scene, depsgraph, *, plate=True, lit=False) -> SceneData:
 
 def emitters(depsgraph, unit: float, notes: list, *, lit=False) -> tuple[dict, list]:
     """({'POINTS': [Mesh], 'TRIANGLES': [Mesh]}, the emitters' object names): every
-    holographic emitter the render draws (see :func:`emitter_instances`)."""
+    holographic emitter the render draws (see :func:`emitter_instances`).
+    An emitter that cannot be exported (no faces, a missing image...) is left out with a note
+    naming it, and the rest is recorded."""
     found, names = {"POINTS": [], "TRIANGLES": []}, []
     for inst, kind in emitter_instances(depsgraph):
-        found[kind].append(mesh_from_object(inst.object, depsgraph, unit,
-                                            np.array(inst.matrix_world), notes, lit=lit))
-        names.append(inst.object.original.name)
+        name = inst.object.original.name
+        try:
+            mesh = mesh_from_object(inst.object, depsgraph, unit, np.array(inst.matrix_world),
+                                    notes, lit=lit)
+        except ValueError as e:  # ExportError, and holo_core's InputError on its data
+            notes.append(f"emitter '{name}' is left out of the hologram: {e}")
+            continue
+        found[kind].append(mesh)
+        names.append(name)
     return found, names
 
 

@@ -35,3 +35,34 @@ def test_the_pass_depth_is_in_scene_units(empty_scene, tmp_path):
     print(f"scale_length 0.01: median depth error {err:.2%} of {extent:.1f} units "
           f"({both.sum()} px)")
     assert both.sum() > 100 and err <= 0.005, f"median depth error {err:.2%} of {extent:.1f}"
+
+
+def _faceless(scene, name="Wire"):
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata([(0, 0, 0), (0.2, 0, 0), (0.2, 0.2, 0)], [(0, 1), (1, 2)], [])
+    obj = bpy.data.objects.new(name, mesh)
+    scene.collection.objects.link(obj)
+    obj.holo.emitter = "POINTS"
+    return obj
+
+
+def test_a_failing_emitter_is_a_warning_naming_it_while_the_rest_renders(empty_scene):
+    """A second emitter without faces: the pass is made of the cube, with a warning naming
+    the wire; alone, the wire gives the no-emitter error, which names it too."""
+    from holo_addon.export.scene import NoEmitters
+    from holo_addon.render import pipeline
+    scene = empty_scene
+    cube, _, _ = _plate_camera_cube(scene)
+    _faceless(scene)
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    scene.holo.samples = 2
+    job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
+    assert len(job.scene.points) == 1
+    (warning,) = [w for w in job.scene.warnings if "Wire" in w]
+    assert "emitter 'Wire' is left out" in warning and "no faces" in warning, warning
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    alpha = _read_exr(pipeline.pass_file(pipeline.output_dir(scene), 1))["ViewLayer.Combined.A"]
+    assert (alpha > 0.5).sum() > 20, "the cube is in the pass"
+    cube.holo.emitter = "NONE"
+    with pytest.raises(NoEmitters, match="emitter 'Wire' is left out"):
+        pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
