@@ -70,6 +70,14 @@ def integer(name: str, value, minimum: int | None = None, maximum: int | None = 
     return v
 
 
+def choice(name: str, value, options: tuple) -> str:
+    """One of the strings ``options``."""
+    if not isinstance(value, str) or value not in options:
+        raise InputError(f"{name} must be one of {', '.join(map(repr, options))}; got "
+                         f"{value!r}"[:300])
+    return value
+
+
 def seed(value, name: str = "seed") -> int:
     """A random generator's seed: an integer >= 0."""
     return integer(name, value, 0)
@@ -91,13 +99,32 @@ def vector(name: str, value, size: int = 3, unit: str = "") -> np.ndarray:
     return v
 
 
-def pair(name: str, value, unit: str = "") -> tuple[float, float]:
-    """A finite (x, y) pair."""
+def pair(name: str, value, unit: str = "", limit: float | None = None) -> tuple[float, float]:
+    """A finite (x, y) pair, each within ±``limit`` when given."""
     try:
         x, y = value
     except (TypeError, ValueError):
         raise InputError(f"{name} must be a pair (x, y){_unit(unit)}; got {value!r}") from None
-    return _finite(name, x, unit), _finite(name, y, unit)
+    if limit is None:
+        return _finite(name, x, unit), _finite(name, y, unit)
+    return within(name, x, limit, unit), within(name, y, limit, unit)
+
+
+def within(name: str, value, limit: float, unit: str = "m") -> float:
+    """A finite number in [-limit, limit] (a distance or an offset: MAX_LENGTH keeps a
+    wave's phase k·z meaningful in float64)."""
+    v = _finite(name, value, unit)
+    if abs(v) > limit:
+        raise InputError(f"{name} must be in [-{limit:g}, {limit:g}]{_unit(unit)}; got {value!r}")
+    return v
+
+
+def array(name: str, value, allowed: str) -> np.ndarray:
+    """``value`` as a float64 array, or :class:`InputError` saying what is ``allowed``."""
+    a = _matrix(value)
+    if not a.size and np.size(value):
+        raise InputError(f"{name} must be {allowed}; got {type(value).__name__}")
+    return a
 
 
 def shape2d(name: str, value) -> tuple[int, int]:

@@ -1,9 +1,13 @@
-"""Seeded fuzzing of the readers: valid files made here, mutated, each read once.
+"""Seeded fuzzing of the readers, the hologram writer and the API.
 
-Every case must end in a result (checked for sanity) or the project's InputError, within
-``CASE_SECONDS`` and under an address-space limit; anything else is a finding. Run as
-``python tools/fuzz.py READER CASES SEED`` (READER: hologram, ply, obj, scan); it prints one
-JSON line: the outcome counts and up to 10 examples of each failure kind.
+Readers: valid files made here, mutated, each read once. ``write``: holograms of hostile field
+values, each refused or written and read back unchanged (the writer holds the reader's schema).
+``api``: public calls with one or two hostile arguments. Every case must end in a result
+(checked for sanity: finite, and a hologram that reconstructs and renders finite) or the
+project's InputError, whose message names the file for a reader, within ``CASE_SECONDS`` and
+under an address-space limit; anything else is a finding. Run as ``python tools/fuzz.py TARGET
+CASES SEED`` (TARGET: hologram, ply, obj, scan, write, api); it prints one JSON line: the
+outcome counts and up to 10 examples of each failure kind.
 """
 
 from __future__ import annotations
@@ -123,6 +127,17 @@ TOKENS = [b"0", b"-1", b"nan", b"inf", b"-inf", b"1e308", b"4294967295", b"10000
           b"999999999999999999999", b"x", b"", b"3.5", b"list", b"float", b"ply", b"\xff\xfe"]
 
 
+PLY_FACE_LINES = [b"property int vertex_indices", b"property list uchar float vertex_indices",
+                  b"property list uchar int vertex_index", b"property uchar vertex_indices"]
+
+
+def ply_face_property(data, rng):
+    """The face list declared otherwise: a scalar (the audit's TypeError), float indices, the
+    other common name."""
+    line = b"property list uchar int vertex_indices"
+    return data.replace(line, PLY_FACE_LINES[int(rng.integers(len(PLY_FACE_LINES)))])
+
+
 def token_edit(data, rng):
     """One whitespace-separated token of the text (or header) replaced by a hostile one."""
     parts = data.split(b" ")
@@ -181,7 +196,10 @@ def metadata_edit(data, rng):
             meta = json.loads(header["holo"])
         except Exception:  # noqa: BLE001
             return data
-        for _ in range(int(rng.integers(1, 4))):
+        audit = isinstance(meta, dict) and rng.random() < 0.3
+        if audit:
+            meta = _audit_edit(meta, rng)
+        for _ in range(int(rng.integers(0 if audit else 1, 4))):
             meta = _edit(meta, rng)
             if rng.random() < 0.2:  # NaN or huge pixels
                 name = sorted(chans)[int(rng.integers(len(chans)))]
@@ -194,7 +212,22 @@ def metadata_edit(data, rng):
 
 
 VALUES = [None, True, "text", [], {}, [1, 2], 0, -1, 1e300, float("nan"), float("inf"), -0.0,
-          0.5, 2.0, 3, [[0, 0, 0], [1, 1, 1]], list(range(16)), [1e-9, -1e-9]]
+          0.5, 2.0, 3, [[0, 0, 0], [1, 1, 1]], list(range(16)), [1e-9, -1e-9], 1e-300, 1.0,
+          [0.0, 0.0], [633e-9, 1e-300]]
+
+# the audit's findings: optics a file may hold in JSON but nothing can render
+AUDIT_EDITS = [("pitch_m", 1e-300), ("pitch_m", 1e300), ("band_sin", 1.0), ("band_sin", 1.5),
+               ("wavelengths_m", [1e-300, 633e-9]), ("wavelengths_m", [1e300, 633e-9]),
+               ("amplitudes", [0.0, 1.0]), ("amplitudes", [0.0, 0.0])]
+
+
+def _audit_edit(meta, rng):
+    key, value = AUDIT_EDITS[int(rng.integers(len(AUDIT_EDITS)))]
+    if key == "amplitudes":
+        reference = meta.get("reference")
+        return {**meta, "reference": {**(reference if isinstance(reference, dict) else {}),
+                                      key: value}}
+    return {**meta, key: value}
 
 
 def _edit(obj, rng):
@@ -217,7 +250,7 @@ def _edit(obj, rng):
 
 MUTATIONS = {
     "hologram": [bit_flips, truncate, splice, huge_dimensions, metadata_edit, metadata_edit],
-    "ply": [bit_flips, truncate, splice, token_edit, token_edit, line_edit],
+    "ply": [bit_flips, truncate, splice, token_edit, token_edit, line_edit, ply_face_property],
     "obj": [bit_flips, truncate, splice, token_edit, line_edit, bom_or_encoding],
     "scan": [bit_flips, truncate, splice, huge_dimensions],
 }
@@ -228,19 +261,206 @@ MUTATIONS = {
 def read_case(reader, path):
     if reader == "hologram":
         from holo_core.io.hologram import read_hologram
-        h = read_hologram(path)
+        h = named(path, read_hologram)
         assert np.isfinite(h.intensity).all() and h.intensity.size
+        usable(h)
     elif reader in ("ply", "obj"):
         from holo_core.io.mesh import read_mesh
-        m = read_mesh(path)
+        m = named(path, read_mesh)
         assert np.isfinite(m.vertices).all() and len(m.triangles)
         assert m.triangles.min() >= 0 and m.triangles.max() < len(m.vertices)
     else:
         from holo_core.io.hologram import import_acquired
-        h = import_acquired(path, pitch=5e-6, wavelength=532e-9)
+        h = named(path, import_acquired, pitch=5e-6, wavelength=532e-9)
         assert h.intensity.ndim == 3 and len(h.intensity) == 1
         assert np.isfinite(h.intensity).all() and (h.intensity >= 0).all()
 
+
+class Unnamed(Exception):
+    """A reader's InputError that does not name the file."""
+
+
+def named(path, reader, **kwargs):
+    """``reader(path)``; its InputError must name the file."""
+    from holo_core.validate import InputError
+    try:
+        return reader(path, **kwargs)
+    except InputError as e:
+        if str(path) not in str(e):
+            raise Unnamed(str(e)) from None
+        raise
+
+
+def usable(h) -> None:
+    """A hologram that reads must reconstruct and render finite: pitch 1e-300 passed the
+    schema and rendered NaN, a zero reference amplitude reconstructed NaN."""
+    from holo_core.optics.pupil import Pupil
+    from holo_core.plate.reconstruct import reconstruct
+    from holo_core.plate.view import render_view
+    from holo_core.scene.camera import Camera, look_at
+    for c in range(len(h.wavelengths)):
+        assert np.isfinite(reconstruct(h, c)).all(), f"channel {c} reconstructs to NaN"
+    plate = np.asarray(h.plate)  # the command line's default camera: 3 plate sizes in front
+    centre = (plate @ np.append(np.asarray(h.bounds).mean(0), 1.0))[:3]
+    eye = plate[:3, 3] + plate[:3, 2] * 3 * max(h.size)
+    # pixels of λ/(plate size): the depth pair's pupil, and ours, span half the plate
+    pixel = max(h.wavelengths) / min(h.size)
+    cam = Camera(matrix_world=look_at(eye, centre, up=plate[:3, 1]), resolution=(4, 4),
+                 lens=50, sensor_width=50 * 4 * pixel)
+    view = render_view(h, cam, aperture=Pupil(diameter=min(h.size) / 2))
+    assert all(np.isfinite(a).all() for a in (view.rgb, view.alpha, view.depth)), "NaN view"
+
+
+# --- the writer: holograms of hostile fields are refused, or written and read back ------------
+
+HOLOGRAM_VALUES = {
+    "wavelengths": [(1e-300, 532e-9), (1e300, 532e-9), (633e-9,), (), (633e-9,) * 17, 633e-9,
+                    (3e-3, 3e-3), (633e-9, float("nan"))],
+    "pitch": [1e-300, 1e300, 1e-12, 1e3, 1.1e-12, 8e-6],
+    "reference_angle": [np.pi / 2, 1.5707, -0.1, 0.2],
+    "reference_azimuth": [1e300, -7.0],
+    "reference_amplitudes": [(0.0, 1.0), (1.0,), (1e-30, 1e30), (-1.0, 1.0)],
+    "band": [0.999999, 1.0, 1.5, 0.3, -0.0],
+    "bounds": [[[0, 0, 0], [-1, 0, 0]], [[0, 0, 0], [1, 1, 1]], np.full((2, 3), np.nan)],
+    "channels": [("Z", "Y"), ("Y", "Z"), ("Q", "Y"), "YZ", ("R", "G", "B")],
+    "point_density": [-1.0, 1e30, 0.0],
+    "plate": [2 * np.eye(4), np.diag([1.0, 1.0, -1.0, 1.0]), np.eye(3)],
+    "object_wave": [None, np.ones((2, 3, 3), np.complex64), np.full((2, 6, 8), np.nan + 0j)],
+    "intensity": [np.zeros((2, 0, 4), np.float32), np.full((2, 6, 8), -1.0, np.float32),
+                  np.ones((6, 8), np.float32)],
+}
+
+
+def hostile_hologram(rng, hostile=True) -> dict:
+    """A valid hologram's fields with one to three replaced by hostile values."""
+    shape = (2, 6, 8)
+    fields = {"intensity": rng.random(shape, np.float32), "wavelengths": (633e-9, 632e-9),
+              "pitch": 8e-6, "reference_angle": 0.02, "reference_amplitudes": (1.0, 1.0),
+              "object_wave": (rng.normal(size=shape) + 1j).astype(np.complex64),
+              "bounds": np.array([[-1, -1, -2], [1, 1, -1.0]]), "channels": ("Y", "Z")}
+    for _ in range(int(rng.integers(1, 4)) if hostile else 0):
+        key = sorted(HOLOGRAM_VALUES)[int(rng.integers(len(HOLOGRAM_VALUES)))]
+        pool = HOLOGRAM_VALUES[key] + VALUES
+        fields[key] = pool[int(rng.integers(len(pool)))]
+    return fields
+
+
+def write_case(fields, path) -> None:
+    from holo_core.io.hologram import metadata, read_hologram, write_hologram
+    from holo_core.scene.hologram import Hologram
+    h = Hologram(**fields)
+    write_hologram(path, h)
+    try:
+        back = read_hologram(path)
+    except Exception as e:  # noqa: BLE001 -- any failure here is the finding
+        raise AssertionError(f"written but unreadable: {e}") from None
+    assert metadata(back) == metadata(h), "read back other than written"
+    path.unlink()
+
+
+# --- the API: public calls with hostile arguments ---------------------------------------------
+
+API_VALUES = [1e-300, 1e300, -1e-9, 1.5, 0, (0, 0), (0.0, 0.0, 0.0), np.zeros((0, 0)),
+              np.full((4, 4), np.nan), np.eye(3), np.eye(4), "x", [1.0, 2.0]]
+
+
+def api_calls():
+    """(name, function, valid keyword arguments) of cheap public calls."""
+    from holo_core import propagation as prop
+    from holo_core.camera import render_camera
+    from holo_core.plate import reconstruct, record_points, render_view
+    from holo_core.plate.sampling import choose
+    from holo_core.scene import Camera, Hologram, Mesh, look_at, sample_points
+    field = np.ones((16, 16), np.complex64)
+    wave = {"wavelength": 633e-9, "pitch": 1e-6}
+    h = _fixture_hologram()
+    cam = Camera(matrix_world=look_at((0, 0, 4e-3), (0, 0, -3e-3)), sensor_width=3.2,
+                 resolution=(4, 4))
+    tri = {"vertices": np.array([[0, 0, -1], [0.1, 0, -1], [0, 0.1, -1.0]]),
+           "triangles": np.array([[0, 1, 2]]), "colours": np.ones((3, 3))}
+    return [
+        ("angular_spectrum", prop.angular_spectrum, {"field": field, **wave, "distance": 1e-4,
+                                                     "offset": (0.0, 0.0), "padding": 2}),
+        ("rayleigh_sommerfeld", prop.rayleigh_sommerfeld, {"field": field[:8, :8], **wave,
+                                                           "distance": 1e-4}),
+        ("fresnel", prop.fresnel, {"field": field, **wave, "distance": 1e-4}),
+        ("resample", prop.resample, {"field": field, "pitch": 1e-6, "out_shape": (8, 8),
+                                     "out_pitch": 2e-6}),
+        ("tilt", prop.tilt, {"field": field, **wave, "rotation": np.eye(3), "padding": 2}),
+        ("propagate_to_plane", prop.propagate_to_plane, {"field": field, **wave,
+                                                         "rotation": np.eye(3),
+                                                         "position": (0, 0, 1e-4)}),
+        ("record_points", record_points, {"positions": [[0, 0, -3e-3]], "colours": [[1.0]],
+                                          "shape": (16, 16), "pitch": 1e-6,
+                                          "wavelengths": (633e-9,), "seed": 0, "band": None}),
+        ("reconstruct", reconstruct, {"hologram": h, "colour": 0}),
+        ("render_view", render_view, {"holograms": h, "camera": cam, "supersample": 1,
+                                      "exposure": None, "opacity_threshold": 0.5}),
+        ("choose", choose, {"plate_size": (0.01, 0.01), "points": [[0, 0, -0.05]],
+                            "resolution": 64, "max_resolution": 64, "wavelength": None}),
+        ("render_camera", render_camera, {"meshes": Mesh(**tri), "camera": Camera(
+            matrix_world=look_at((0, 0, 0.5), (0, 0, -1)), resolution=(8, 8)), "samples": 1,
+            "supersample": 1, "seed": 0, "exposure": 1.0, "via": "object_wave"}),
+        ("Mesh", Mesh, tri),
+        ("sample_points", sample_points, {"mesh": Mesh(**tri), "spacing": 0.01, "seed": 0,
+                                          "max_points": 100}),
+        ("look_at", look_at, {"eye": (0, 0, 1), "target": (0, 0, 0), "up": (0, 1, 0)}),
+        ("Camera", Camera, {"matrix_world": np.eye(4), "lens": 50, "resolution": (8, 8),
+                            "shift_x": 0.0, "pixel_aspect": (1, 1)}),
+        ("Hologram", Hologram, {"intensity": np.ones((1, 4, 4), np.float32),
+                                "wavelengths": (633e-9,), "pitch": 8e-6, "band": 0.0}),
+    ]
+
+
+_CACHE = {}
+
+
+def _fixture_hologram():
+    if "h" not in _CACHE:
+        from holo_core.plate import record_points
+        _CACHE["h"] = record_points([[0, 0, -3e-3]], [[1.0]], shape=(32, 32), pitch=1e-6,
+                                    wavelengths=(633e-9,))
+    return _CACHE["h"]
+
+
+def api_case(rng, hostile=True):
+    """A call of :func:`api_calls` with one or two arguments hostile, and its result checked."""
+    if "calls" not in _CACHE:
+        _CACHE["calls"] = api_calls()
+    name, function, good = _CACHE["calls"][int(rng.integers(len(_CACHE["calls"])))]
+    kwargs, changed = dict(good), {}
+    for _ in range(int(rng.integers(1, 3)) if hostile else 0):
+        key = sorted(kwargs)[int(rng.integers(len(kwargs)))]
+        pool = API_VALUES + VALUES
+        kwargs[key] = changed[key] = pool[int(rng.integers(len(pool)))]
+    def call():
+        sane(function(**kwargs))
+    call.label = f"{name}({', '.join(f'{k}={_short(v)}' for k, v in changed.items())})"
+    return call
+
+
+def _short(value) -> str:
+    if isinstance(value, np.ndarray):
+        return f"array{value.shape}"
+    return repr(value)[:40]
+
+
+def sane(result) -> None:
+    """Every number a result holds is finite (a NaN result is a silent failure)."""
+    from holo_core.scene.hologram import Hologram
+    from holo_core.view import RenderResult
+    if isinstance(result, RenderResult):
+        result = (result.rgb, result.alpha, result.depth)
+    if isinstance(result, Hologram):
+        result = result.intensity
+    if isinstance(result, (tuple, list)):
+        for r in result:
+            sane(r)
+    elif isinstance(result, np.ndarray) and result.dtype.kind in "fc":
+        assert np.isfinite(result).all(), "a result holds NaN or infinity"
+
+
+# --- running --------------------------------------------------------------------------------
 
 def make(reader, rng):
     if reader == "scan":
@@ -249,25 +469,36 @@ def make(reader, rng):
         {"hologram": ".exr", "ply": ".ply", "obj": ".obj"}[reader]
 
 
+def next_case(target, case, rng, folder):
+    """The case to run; one in ten is the valid file or call itself."""
+    if target == "write":
+        fields = hostile_hologram(rng, case % 10)
+        return lambda: write_case(fields, folder / "h.exr")
+    if target == "api":
+        return api_case(rng, case % 10)
+    data, suffix = make(target, rng)
+    if case % 10:
+        for _ in range(int(rng.integers(1, 3))):
+            data = MUTATIONS[target][int(rng.integers(len(MUTATIONS[target])))](
+                data, rng) or data
+    path = folder / f"case{suffix}"
+    path.write_bytes(data)
+    return lambda: read_case(target, path)
+
+
 def run(reader: str, cases: int, seed: int) -> dict:
     from holo_core.validate import InputError
     rng = np.random.default_rng([seed, sum(map(ord, reader))])
     counts, examples, slowest = Counter(), {}, 0.0
     with tempfile.TemporaryDirectory() as d:
         for case in range(cases):
-            data, suffix = make(reader, rng)
-            if case % 10:  # one case in ten is the valid file itself
-                for _ in range(int(rng.integers(1, 3))):
-                    data = MUTATIONS[reader][int(rng.integers(len(MUTATIONS[reader])))](
-                        data, rng) or data
-            path = Path(d) / f"case{suffix}"
-            path.write_bytes(data)
+            call = next_case(reader, case, rng, Path(d))
             start = time.perf_counter()
             signal.alarm(CASE_SECONDS)
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
-                    read_case(reader, path)
+                    call()
                 outcome = "ok"
             except InputError:
                 outcome = "InputError"
@@ -275,7 +506,8 @@ def run(reader: str, cases: int, seed: int) -> dict:
                 outcome = "hang"
             except BaseException as e:  # noqa: BLE001 -- every other ending is a finding
                 outcome = f"other: {type(e).__name__}"
-                examples.setdefault(outcome, []).append(f"case {case}: {str(e)[:200]}")
+                label = getattr(call, "label", "")
+                examples.setdefault(outcome, []).append(f"case {case}: {label} {str(e)[:200]}")
             finally:
                 signal.alarm(0)
             slowest = max(slowest, time.perf_counter() - start)

@@ -67,22 +67,25 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
         look's object wave recorded as an intensity hologram with an off-axis reference and
         reconstructed).
     """
-    if camera is None:
-        raise InputError("render_camera needs a camera")
-    if via not in ("incoherent", "object_wave", "hologram"):
-        raise InputError(f"via must be 'incoherent', 'object_wave' or 'hologram'; got {via!r}")
-    samples = int(validate.at_least("samples", samples, 1))
-    supersample = int(validate.at_least("supersample", supersample, 1))
+    if not isinstance(camera, Camera):
+        raise InputError(f"camera must be a Camera (render_camera needs one); got "
+                         f"{type(camera).__name__}")
+    validate.choice("via", via, ("incoherent", "object_wave", "hologram"))
+    samples = validate.integer("samples", samples, 1, MAX_SAMPLES)
+    supersample = validate.integer("supersample", supersample, 1, MAX_SUPERSAMPLE)
+    seed = validate.seed(seed)
+    if not 0 < validate.finite("exposure", exposure) <= MAX_EXPOSURE:
+        raise InputError(f"exposure must be in (0, {MAX_EXPOSURE:g}]; got {exposure!r}")
     w, h = camera.resolution
     memory.check_host(f"a {w}x{h} camera view at supersample {supersample}",
                       FINE_PIXEL_BYTES * w * h * supersample**2)
-    meshes = [meshes] if isinstance(meshes, Mesh) else list(meshes)
-    pos = None if points is None else np.asarray(points[0], np.float64).reshape(-1, 3)
+    meshes = _meshes(meshes)
+    pos, colours = (None, None) if points is None else _points(points)
     optics = choose_optics(camera, depth_range(meshes, camera, pos), supersample=supersample,
                            pupil_diameter=pupil_diameter)
     em = rasterize(meshes, camera, optics) if meshes else None
     if pos is not None:
-        em = merged(em, point_emitters(pos, points[1], camera, optics), optics)
+        em = merged(em, point_emitters(pos, colours, camera, optics), optics)
     if em is None or not len(em.index):
         raise InputError("no emitter is visible to the camera")
     fine = replace(camera, resolution=tuple(r * supersample for r in camera.resolution))
@@ -127,6 +130,37 @@ def _incoherent(rt, em, optics: PupilOptics, camera: Camera, fine: Camera, expos
         on_sample(result, 1)
     log.info("camera hologram: the looks' limit (incoherent emitters)")
     return result
+
+
+MAX_SUPERSAMPLE = 16  # fine pixels per pixel per axis, at most
+MAX_SAMPLES = 1 << 16  # looks, at most
+MAX_EXPOSURE = 1e20    # with colours up to 1e12 the float32 view stays finite
+
+
+def _meshes(meshes) -> list:
+    """``meshes`` (a Mesh or a sequence of them) as a list, else :class:`InputError`."""
+    try:
+        out = [meshes] if isinstance(meshes, Mesh) else list(meshes)
+    except TypeError:
+        out = [meshes]
+    if not all(isinstance(m, Mesh) for m in out):
+        raise InputError(f"meshes must be a Mesh or a sequence of Mesh; got "
+                         f"{type(meshes).__name__}")
+    return out
+
+
+def _points(points):
+    """(positions (N, 3) [m], colours (N, 3)) of ``points``, finite, colours >= 0."""
+    allowed = "(positions (N, 3) [m], colours (N, 3)), finite, colours >= 0"
+    try:
+        positions, colours = points
+        pos = np.asarray(positions, np.float64).reshape(-1, 3)
+        col = np.asarray(colours, np.float64).reshape(len(pos), 3)
+    except (TypeError, ValueError):
+        raise InputError(f"points must be {allowed}") from None
+    if not (np.isfinite(pos).all() and np.isfinite(col).all()) or (col < 0).any():
+        raise InputError(f"points must be {allowed}; they hold NaN, infinite or negative values")
+    return pos, col
 
 
 class _Accumulator:

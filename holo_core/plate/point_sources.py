@@ -99,8 +99,7 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
     g = _grid(validate.shape2d("shape", shape), wavelength, pitch, band)
     pos, amp = _points(positions, amplitudes)
     check_distance(pos, g)
-    if method not in ("auto", "direct", "wrp"):
-        raise InputError(f"method must be 'auto', 'direct' or 'wrp'; got {method!r}")
+    validate.choice("method", method, ("auto", "direct", "wrp"))
     if method == "auto":
         method = "wrp" if wrp_seconds(pos, g) < direct_seconds(pos, g) else "direct"
     rt = get_runtime()

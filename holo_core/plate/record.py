@@ -154,6 +154,7 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
         raise InputError("phases must be finite [rad]; they hold NaN or infinite values")
     shape = validate.shape2d("shape", shape)
     pitch = validate.length("pitch", pitch)
+    band = None if band is None else validate.finite("band", band)
     if not isinstance(reference, Reference):
         raise InputError(f"reference must be a Reference; got {type(reference).__name__}")
     if bounds is None:

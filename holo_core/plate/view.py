@@ -61,12 +61,10 @@ def plate_wave(hologram: Hologram, channel: int, *, source="hologram"):
     device array that the propagation takes without a host round trip): R'·H' with the
     DC term suppressed and the band outside the recorded cone removed (Sect. VI), or the
     stored object wave (``source='object_wave'``, the ideal reconstruction)."""
-    if source == "object_wave":
+    if validate.choice("source", source, ("hologram", "object_wave")) == "object_wave":
         if hologram.object_wave is None:
             raise InputError("source 'object_wave' needs a hologram that stores the object wave")
         return hologram.object_wave[channel]
-    if source != "hologram":
-        raise InputError(f"source must be 'hologram' or 'object_wave'; got {source!r}")
     u = reconstruct(hologram, channel)
     if not hologram.band:
         return u
@@ -223,11 +221,9 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     if aperture is not None and not isinstance(aperture, Pupil):
         raise InputError(f"aperture must be a Pupil or None; got {type(aperture).__name__}")
     first = holos[0]
-    if composition not in ("mean", "max"):
-        raise InputError(f"composition must be 'mean' or 'max'; got {composition!r}")
-    if depth_estimate not in ("consensus", "brightest"):
-        raise InputError(f"depth_estimate must be 'consensus' or 'brightest'; "
-                         f"got {depth_estimate!r}")
+    validate.choice("composition", composition, ("mean", "max"))
+    validate.choice("depth_estimate", depth_estimate, ("consensus", "brightest"))
+    validate.choice("source", source, ("hologram", "object_wave"))
     supersample = validate.integer("supersample", supersample, 1, MAX_SUPERSAMPLE)
     _check_settings(holos, camera, supersample, exposure, opacity_threshold)
     fine = _supersampled(camera, supersample)
@@ -397,6 +393,10 @@ def _finish(radiance, ray, coverage, h: Hologram, camera, pupil, exposure, thres
     rgb = radiance * exposure
     if rgb.shape[-1] == 1:
         rgb = np.repeat(rgb, 3, -1)
+    if np.abs(rgb).max(initial=0) > np.finfo(np.float32).max:  # a view of inf pixels
+        raise InputError(f"exposure must keep the view's pixels within float32: at most "
+                         f"{np.finfo(np.float32).max / np.abs(radiance).max():.3g} for this "
+                         f"view; got {exposure!r}")
     if coverage is not None:  # geometric: half covered at a silhouette edge, whatever the colour
         alpha = (coverage > threshold).astype(np.float32)
     else:  # unknown emitter density: relative to the brightest pixels

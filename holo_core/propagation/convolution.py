@@ -33,8 +33,8 @@ def convolution_setup(field, wavelength, pitch, distance, offset, padding) -> Se
     """Checked settings (λ, pitch, distance, offset in metres), the field on the device and
     the padded grid: what every transfer-function propagation starts from."""
     wavelength, pitch = grid.wave(wavelength, pitch)
-    z = validate.finite("distance", distance, "m")
-    offset = validate.pair("offset", offset, "m")
+    z = validate.within("distance", distance, validate.MAX_LENGTH)
+    offset = validate.pair("offset", offset, "m", validate.MAX_LENGTH)
     padding = grid.padding_factor(padding)
     rt, dev, from_host = as_device(field, check=False)  # convolve checks the DC term
     return Setup(wavelength, pitch, z, offset, padding, rt, dev, from_host,

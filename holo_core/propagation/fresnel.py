@@ -55,7 +55,8 @@ def fraunhofer(field, *, wavelength, pitch, distance):
     (field, (row pitch, column pitch)): complex64 like the input, pitches in metres.
     """
     wavelength, pitch = grid.wave(wavelength, pitch)
-    z = validate.positive("distance", distance, "m")
+    z = validate.positive("distance", validate.within("distance", distance, validate.MAX_LENGTH),
+                          "m")
     if not is_device_array(field):
         support = grid.support(validate.host_field("field", field))[0].shape
         extent = math.hypot(*support) * pitch

@@ -46,11 +46,12 @@ def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0)
     samples are skipped, and NumPy input is first cropped to its non-zero bounding box.
     """
     wavelength, pitch = grid.wave(wavelength, pitch)
-    z = validate.finite("distance", distance, "m")
-    if z == 0:
-        raise InputError("distance must be non-zero for rayleigh_sommerfeld (the integral is "
-                         "singular on the source plane)")
-    x0, y0 = validate.pair("offset", offset, "m")
+    z = validate.within("distance", distance, validate.MAX_LENGTH)
+    if abs(z) < validate.MIN_LENGTH:
+        raise InputError(f"distance must be non-zero for rayleigh_sommerfeld, |distance| >= "
+                         f"{validate.MIN_LENGTH:g} m (the integral is singular on the source "
+                         f"plane); got {distance!r}")
+    x0, y0 = validate.pair("offset", offset, "m", validate.MAX_LENGTH)
     out_pitch = pitch if out_pitch is None else validate.length("out_pitch", out_pitch)
     if not is_device_array(field):
         field = validate.host_field("field", field)

@@ -49,7 +49,7 @@ class Camera:
     fstop: float | None = None
 
     def __post_init__(self):
-        m = np.asarray(self.matrix_world, np.float64)
+        m = validate.array("matrix_world", self.matrix_world, "a finite 4x4 matrix")
         if m.shape != (4, 4) or not np.isfinite(m).all():
             raise InputError(f"matrix_world must be a finite 4x4 matrix; got shape {m.shape}")
         if np.linalg.cond(m[:3, :3]) > 1e12 or not np.array_equal(m[3], [0, 0, 0, 1]):

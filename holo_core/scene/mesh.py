@@ -104,7 +104,9 @@ def sample_points(mesh: Mesh, spacing: float, *, channels=3, seed=0, max_points=
 def surface_samples(mesh: Mesh, spacing, seed, max_points):
     """(triangle index (N,), barycentric weights (N, 3), positions (N, 3) [m]) of area-uniform
     random points ``spacing`` [m] apart on average."""
-    spacing = validate.positive("spacing", spacing, "m")
+    if not isinstance(mesh, Mesh):
+        raise InputError(f"mesh must be a Mesh; got {type(mesh).__name__}")
+    spacing = validate.length("spacing", spacing)
     max_points = validate.integer("max_points", max_points, 1)
     seed = validate.seed(seed)
     areas = mesh.areas()

@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 
+from holo_core.camera import render_camera
 from holo_core.io.hologram import import_acquired
 from holo_core.optics.pupil import Pupil
 from holo_core.plate import Reference, reconstruct, record_hologram, record_points, render_view
@@ -34,6 +35,7 @@ NAN, INF = float("nan"), float("inf")
 TRIANGLE = Mesh(vertices=np.array([[0, 0, -1], [0.1, 0, -1], [0, 0.1, -1.0]]),
                 triangles=np.array([[0, 1, 2]]))
 PLATE = Plate(matrix_world=np.eye(4), width=0.01, height=0.01)
+FAR = Camera(matrix_world=look_at((0, 0, 0.5), (0, 0, -1)), resolution=(8, 8))  # sees TRIANGLE
 
 
 @pytest.fixture(scope="module")
@@ -154,6 +156,16 @@ BAD_CALLS = {
     "render_view holograms []": (lambda h: render_view([], camera()), "holograms"),
     "render_view aperture 'x'": (lambda h: render_view(h, camera(), aperture="x"), "aperture"),
     "render_view exposure nan": (lambda h: render_view(h, camera(), exposure=NAN), "exposure"),
+    "render_camera supersample 1.5 (was run as 1)": (
+        lambda h: render_camera(TRIANGLE, FAR, supersample=1.5), "supersample"),
+    "render_camera seed nan (was TypeError)": (lambda h: render_camera(TRIANGLE, FAR, seed=NAN),
+                                               "seed"),
+    "render_camera samples 2.5": (lambda h: render_camera(TRIANGLE, FAR, samples=2.5), "samples"),
+    "render_camera camera None": (lambda h: render_camera(TRIANGLE, None), "camera"),
+    "render_camera meshes 1.0 (was TypeError)": (lambda h: render_camera(1.0, FAR), "meshes"),
+    "render_camera points 'x'": (lambda h: render_camera(points="x", camera=FAR), "points"),
+    "render_camera exposure -1": (lambda h: render_camera(TRIANGLE, FAR, exposure=-1.0),
+                                  "exposure"),
     "import_acquired wavelength 1e-300": (
         lambda h: import_acquired("missing.png", pitch=5e-6, wavelength=1e-300), "wavelength"),
     # scene nouns

@@ -1,6 +1,8 @@
-"""Fuzzing the readers (tools/fuzz.py): each mutated file ends in a result or InputError.
+"""Fuzzing (tools/fuzz.py): each mutated file, hostile hologram or hostile API call ends in
+a sane result (finite; a hologram that reads also reconstructs and renders finite) or
+InputError (a reader's naming its file).
 
-``make test`` runs HOLO_FUZZ_CASES (300) cases per reader; ``make fuzz`` runs 5000.
+``make test`` runs HOLO_FUZZ_CASES (300) cases per target; ``make fuzz`` runs 5000.
 """
 
 import json
@@ -15,7 +17,7 @@ FUZZ = Path(__file__).resolve().parents[3] / "tools" / "fuzz.py"
 CASES = int(os.environ.get("HOLO_FUZZ_CASES", "300"))
 
 
-@pytest.mark.parametrize("reader", ["hologram", "ply", "obj", "scan"])
+@pytest.mark.parametrize("reader", ["hologram", "ply", "obj", "scan", "write", "api"])
 def test_every_mutated_file_ends_in_a_result_or_the_clear_error(reader):
     run = subprocess.run([sys.executable, str(FUZZ), reader, str(CASES), "20261122"],
                          capture_output=True, text=True, timeout=60 + CASES)
@@ -25,5 +27,5 @@ def test_every_mutated_file_ends_in_a_result_or_the_clear_error(reader):
     outcomes = report["outcomes"]
     assert sum(outcomes.values()) == CASES
     assert set(outcomes) <= {"ok", "InputError"}, report["examples"]
-    # the suite is not idle: the valid files load and most mutations are refused
+    # the suite is not idle: the valid files (and calls) pass and most mutations are refused
     assert outcomes.get("ok", 0) >= CASES // 10 and outcomes.get("InputError", 0) >= CASES // 3
