@@ -216,17 +216,23 @@ def camera_from_object(scene, obj, unit: float, depsgraph=None, *, crop=True) ->
 
 
 def render_size(render) -> tuple[int, int]:
-    """The rendered image's (width, height) [px]: the resolution at its percentage."""
-    pct = render.resolution_percentage / 100
-    return max(1, int(render.resolution_x * pct)), max(1, int(render.resolution_y * pct))
+    """The rendered image's (width, height) [px]: the resolution at its percentage, in
+    Blender's integer arithmetic (29 % of 100 px is 29 px, not int(100 * 0.29) = 28)."""
+    pct = render.resolution_percentage
+    return (max(1, render.resolution_x * pct // 100), max(1, render.resolution_y * pct // 100))
 
 
 def border_pixels(render) -> tuple[int, int, int, int]:
-    """The render region (left, top, right, bottom) [px from the top-left corner]; Blender
-    measures it from the bottom."""
+    """The render region (left, top, right, bottom) [px from the top-left corner], as Blender
+    computes it: each edge is border × size in single precision, truncated, measured from the
+    bottom (in double precision, a region set to exact pixels came out a pixel off: a
+    128×108 crop gave a 129×107 pass)."""
     w, h = render_size(render)
-    return (int(render.border_min_x * w), h - int(render.border_max_y * h),
-            int(render.border_max_x * w), h - int(render.border_min_y * h))
+
+    def edge(fraction, size):
+        return int(np.float32(fraction) * np.float32(size))
+    return (edge(render.border_min_x, w), h - edge(render.border_max_y, h),
+            edge(render.border_max_x, w), h - edge(render.border_min_y, h))
 
 
 def export_scene(scene, depsgraph, *, plate=True, lit=False) -> SceneData:

@@ -66,3 +66,45 @@ def test_a_failing_emitter_is_a_warning_naming_it_while_the_rest_renders(empty_s
     cube.holo.emitter = "NONE"
     with pytest.raises(NoEmitters, match="emitter 'Wire' is left out"):
         pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
+
+
+def _composited_cube(scene, size=(48, 36)):
+    """The helper cube under a sun, its pass made and composited; Cycles at 4 samples."""
+    from holo_addon.blender import compat
+    cube, cam, plate = _plate_camera_cube(scene, cube_size=0.4)
+    bpy.ops.object.light_add(type="SUN", rotation=(np.radians(60), 0, 0))
+    scene.render.resolution_x, scene.render.resolution_y = size
+    scene.render.resolution_percentage = 100
+    scene.render.engine = "CYCLES"
+    scene.cycles.samples = 4
+    scene.holo.samples = 2
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    compat.set_exr_output(scene, multilayer=False)
+    return cube, cam, plate
+
+
+def test_a_crop_gives_a_pass_of_exactly_the_crops_size(empty_scene, tmp_path):
+    """160x120 cropped to (7/160 .. 135/160, 5/120 .. 113/120): Blender renders 128x108 (each
+    edge is border x size in single precision, truncated); the pass is 128x108 too (it was
+    129x107) and shows the cube where the full frame has it, shifted by the crop's corner."""
+    from holo_addon.render import pipeline
+    scene = empty_scene
+    _composited_cube(scene, size=(160, 120))
+    path = pipeline.pass_file(pipeline.output_dir(scene), 1)
+    full = _read_exr(path)["ViewLayer.Combined.A"] > 0.5
+    r = scene.render
+    r.use_border = r.use_crop_to_border = True
+    r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = 7 / 160, 135 / 160, \
+        5 / 120, 113 / 120
+    r.filepath = str(tmp_path / "crop.exr")
+    bpy.ops.render.render(write_still=True)
+    rendered = _read_exr(tmp_path / "crop.exr")["R"].shape
+    crop = _read_exr(path)["ViewLayer.Combined.A"] > 0.5
+    print(f"crop: Blender {rendered[::-1]}, pass {crop.shape[::-1]}")
+    assert rendered == crop.shape == (108, 128), (rendered, crop.shape)
+    top = 120 - int(np.float32(r.border_max_y) * np.float32(120))
+    rows, cols = np.nonzero(full)
+    crows, ccols = np.nonzero(crop)
+    shift = (crows.mean() + top - rows.mean(), ccols.mean() + 7 - cols.mean())
+    assert np.abs(shift).max() <= 1.0, f"the cube is {shift} px off in the cropped pass"
