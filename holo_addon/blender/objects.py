@@ -4,6 +4,10 @@ in reflections, and keeps the plate out of it altogether."""
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+
+import bpy
+
 RAY_VISIBILITY = ("visible_camera", "visible_diffuse", "visible_glossy", "visible_transmission",
                   "visible_volume_scatter", "visible_shadow")
 KEPT = "holo_ray_visibility"  # the user's own ray visibility, while the add-on sets it
@@ -29,3 +33,53 @@ def raster_visibility(obj) -> None:
         obj[KEPT] = {name: bool(getattr(obj, name)) for name in RAY_VISIBILITY}
     for name in RAY_VISIBILITY:
         setattr(obj, name, not plate and name != "visible_camera")
+
+
+@contextmanager
+def shown_as_rendered(scene, view_layer=None):
+    """Emitters that the render draws but the viewport hides (H, Disable in Viewports, or a
+    collection hidden in the viewport) shown while the viewport's depsgraph is evaluated, as
+    Blender's render draws them; restored afterwards. Yields whether anything was shown."""
+    view_layer = view_layer or bpy.context.view_layer
+    objects, collections = [], []
+    for obj in scene.objects:
+        if obj.type != "MESH" or obj.holo.emitter == "NONE" or obj.holo.is_plate or \
+                obj.hide_render:
+            continue
+        try:
+            hidden = obj.hide_get(view_layer=view_layer)
+        except RuntimeError:  # not in this view layer (an excluded collection): not rendered
+            continue
+        if hidden or obj.hide_viewport:
+            objects.append((obj, hidden, obj.hide_viewport))
+        for lc in _layer_collections(view_layer.layer_collection, obj.users_collection):
+            if lc.hide_viewport or lc.collection.hide_viewport:
+                collections.append((lc, lc.hide_viewport, lc.collection.hide_viewport))
+    for lc, _, _ in collections:
+        lc.hide_viewport = lc.collection.hide_viewport = False
+    for obj, _, _ in objects:
+        obj.hide_viewport = False
+        obj.hide_set(False, view_layer=view_layer)
+    try:
+        yield bool(objects or collections)
+    finally:
+        for obj, hidden, viewport in objects:
+            obj.hide_viewport = viewport
+            obj.hide_set(hidden, view_layer=view_layer)
+        for lc, hidden, viewport in reversed(collections):
+            lc.hide_viewport, lc.collection.hide_viewport = hidden, viewport
+
+
+def _layer_collections(root, collections):
+    """The layer collections on the way from ``root`` to each of ``collections``."""
+    wanted = {c.as_pointer() for c in collections}
+    found = []
+
+    def walk(lc, path):
+        path = path + [lc]
+        if lc.collection.as_pointer() in wanted:
+            found.extend(p for p in path if p not in found)
+        for child in lc.children:
+            walk(child, path)
+    walk(root, [])
+    return found

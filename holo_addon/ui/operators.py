@@ -17,6 +17,7 @@ import bpy
 from holo_core.io.hologram import HologramFileError
 from holo_core.worker import WorkerError
 
+from ..blender.objects import shown_as_rendered
 from ..compositor import passes
 from ..export.scene import ExportError, viewport_matches_render
 from ..render import pipeline
@@ -44,9 +45,10 @@ class _PipelineOperator:
         return True
 
     def _prepare(self, context):
-        try:
-            job = pipeline.prepare(context.scene, context.evaluated_depsgraph_get(),
-                                   render=self.render, bake=True)
+        try:  # what the render draws, emitters hidden in the viewport only included
+            with shown_as_rendered(context.scene, getattr(context, "view_layer", None)):
+                job = pipeline.prepare(context.scene, context.evaluated_depsgraph_get(),
+                                       render=self.render, bake=True)
         except USER_ERRORS as e:
             self.report({"ERROR"}, str(e))
             return None

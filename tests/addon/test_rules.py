@@ -108,3 +108,34 @@ def test_a_crop_gives_a_pass_of_exactly_the_crops_size(empty_scene, tmp_path):
     crows, ccols = np.nonzero(crop)
     shift = (crows.mean() + top - rows.mean(), ccols.mean() + 7 - cols.mean())
     assert np.abs(shift).max() <= 1.0, f"the cube is {shift} px off in the cropped pass"
+
+
+def test_emitters_hidden_in_the_viewport_are_recorded_as_the_render_draws_them(empty_scene):
+    """Hidden with H, disabled in viewports, or in a collection hidden in the viewport, an
+    emitter still renders, so Render Pass records it (and leaves it hidden); disabled in
+    renders, it is left out and the refusal says so."""
+    from holo_addon.render import pipeline
+    scene = empty_scene
+    cube, _, _ = _plate_camera_cube(scene)
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    scene.holo.samples = 2
+    path = pipeline.pass_file(pipeline.output_dir(scene), 1)
+    collection = bpy.data.collections.new("Hidden")
+    scene.collection.children.link(collection)
+    collection.objects.link(cube)
+    layer = bpy.context.view_layer.layer_collection.children["Hidden"]
+    for hide, show, hidden in (
+            (lambda: cube.hide_set(True), lambda: cube.hide_set(False), cube.hide_get),
+            (lambda: setattr(cube, "hide_viewport", True),
+             lambda: setattr(cube, "hide_viewport", False), lambda: cube.hide_viewport),
+            (lambda: setattr(layer, "hide_viewport", True),
+             lambda: setattr(layer, "hide_viewport", False), lambda: layer.hide_viewport)):
+        hide()
+        path.unlink(missing_ok=True)
+        assert bpy.ops.holo.render_pass() == {"FINISHED"}
+        assert (_read_exr(path)["ViewLayer.Combined.A"] > 0.5).sum() > 20
+        assert hidden(), "left hidden as the user had it"
+        show()
+    cube.hide_render = True
+    with pytest.raises(RuntimeError, match="no holographic emitters in the render"):
+        bpy.ops.holo.render_pass()
