@@ -3,8 +3,10 @@ file), the problem and the allowed range."""
 
 from __future__ import annotations
 
+import contextvars
 import math
 import warnings
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -53,6 +55,59 @@ def length(name: str, value, unit: str = "m") -> float:
         raise InputError(f"{name} must be in [{MIN_LENGTH:g}, {MAX_LENGTH:g}]{_unit(unit)}; "
                          f"got {value!r}")
     return v
+
+
+# What optics means by a wavelength and a sample pitch [m]: soft X-ray to far infrared, a
+# wafer-stepper's 10 nm to a coarse 1 cm sampling. Outside these, a number is far more likely a
+# value in the wrong unit (633 for 633 nm) than a real setup, and is refused with that hint.
+WAVELENGTH_RANGE = (1e-9, 1e-3)
+PITCH_RANGE = (1e-8, 1e-2)
+_UNITS = (("nanometres", 1e-9), ("micrometres", 1e-6), ("millimetres", 1e-3))
+_TYPICAL = {"wavelength": 550e-9, "pitch": 5e-6}  # the likely unit is the one that lands nearest
+
+
+_SCALE_FREE = contextvars.ContextVar("holo_scale_free", default=False)
+
+
+@contextmanager
+def scale_free():
+    """Within this block (or a function it decorates) wavelengths and pitches are any lengths
+    in [MIN_LENGTH, MAX_LENGTH]: the plate renderer chooses its own wavelength for the image
+    (Sect. VII-B, scale-free: 2 mm for a 40-pixel view of a 30 cm plate), and a hologram it
+    made carries it. Numbers a person types reach the checks outside such a block."""
+    token = _SCALE_FREE.set(True)
+    try:
+        yield
+    finally:
+        _SCALE_FREE.reset(token)
+
+
+def wavelength(name: str, value) -> float:
+    """A wavelength [m] in :data:`WAVELENGTH_RANGE`; a value outside it is refused with the
+    unit it most likely is in ("633 looks like nanometres: pass 633e-9")."""
+    return _optical(name, value, WAVELENGTH_RANGE, "wavelength")
+
+
+def pitch(name: str, value) -> float:
+    """A sample pitch [m] in :data:`PITCH_RANGE`, refused like :func:`wavelength` outside."""
+    return _optical(name, value, PITCH_RANGE, "pitch")
+
+
+def _optical(name: str, value, limits: tuple[float, float], kind: str) -> float:
+    if _SCALE_FREE.get():
+        return length(name, value)
+    v = _finite(name, value, "m")
+    lo, hi = limits
+    if lo <= v <= hi:
+        return v
+    hint = ""
+    fits = [(abs(math.log10(v * f / _TYPICAL[kind])), unit, f) for unit, f in _UNITS
+            if lo <= v * f <= hi]
+    if fits and v >= 0.1:  # a number of a smaller unit (below 0.1 m, a real but odd length)
+        _, unit, f = min(fits)
+        metres = f"{v * f:g}" if "e" in f"{v:g}" else f"{v:g}e{round(math.log10(f))}"
+        hint = f" ({v:g} looks like {unit}: pass {metres})"
+    raise InputError(f"{name} must be in [{lo:g}, {hi:g}] [m]; got {value!r}{hint}")
 
 
 def integer(name: str, value, minimum: int | None = None, maximum: int | None = None) -> int:

@@ -70,6 +70,7 @@ def check_pixels(name: str, h: Hologram) -> None:
         raise HologramFileError(f"{name}: the object wave holds NaN or infinite values")
 
 
+@validate.scale_free()  # a file holds what the renderer made, at the wavelength it chose
 def read_hologram(path) -> Hologram:
     """Read a hologram written by :func:`write_hologram`; :class:`HologramFileError` naming the
     file and the problem if it is missing, not an EXR, damaged, too large for the memory, of
@@ -223,8 +224,8 @@ def import_acquired(path, *, pitch, wavelength, reference_angle=0.0, reference_a
     often stored in int32 TIFFs); an EXR gives its Y channel, else the mean of R, G, B, else
     its only channel. The size is checked against the memory budget before pixels are read.
     """
-    pitch = validate.length("pitch", pitch)
-    wavelength = validate.length("wavelength", wavelength)
+    pitch = validate.pitch("pitch", pitch)
+    wavelength = validate.wavelength("wavelength", wavelength)
     angle = validate.finite("reference_angle", reference_angle, "rad")
     if not 0 <= angle < math.pi / 2:
         raise InputError(f"reference_angle must be in [0, π/2) rad; got {angle!r}")

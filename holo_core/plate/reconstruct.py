@@ -17,6 +17,7 @@ from ..validate import InputError
 from .record import Reference, reference_wave
 
 
+@validate.scale_free()
 def reconstruct(hologram: Hologram, colour: int = 0, *, dc_suppression=True) -> np.ndarray:
     """The virtual image's wave on z = 0 for one colour, complex64 (H, W) (Eq. 18).
 

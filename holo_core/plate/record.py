@@ -141,7 +141,7 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     if wavelengths.ndim != 1 or not len(wavelengths):
         raise InputError(f"wavelengths must hold at least one wavelength [m]; got "
                          f"{wavelengths.tolist()!r}")
-    wavelengths = tuple(validate.length("wavelengths", w) for w in wavelengths)
+    wavelengths = tuple(validate.wavelength("wavelengths", w) for w in wavelengths)
     cols = _array("colours", colours, f"an (N, {len(wavelengths)}) array of intensities, one "
                   f"column per wavelength, N = {len(pos)} points", (len(pos), len(wavelengths)))
     if not np.isfinite(cols).all() or (cols < 0).any() or (cols > MAX_INTENSITY).any():
@@ -153,7 +153,7 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     if not np.isfinite(phases).all():
         raise InputError("phases must be finite [rad]; they hold NaN or infinite values")
     shape = validate.shape2d("shape", shape)
-    pitch = validate.length("pitch", pitch)
+    pitch = validate.pitch("pitch", pitch)
     band = None if band is None else validate.finite("band", band)
     if not isinstance(reference, Reference):
         raise InputError(f"reference must be a Reference; got {type(reference).__name__}")
@@ -204,6 +204,7 @@ def _array(name, value, allowed, shape) -> np.ndarray:
         raise InputError(f"{name} must be {allowed}; got shape {np.shape(value)}") from None
 
 
+@validate.scale_free()
 def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, resolution=None,
                     max_resolution=2048, wavelength=None, depth=True, seed=0, method="auto",
                     cull=True, progress: jobs.Progress = None) -> Hologram:

@@ -91,7 +91,7 @@ def choose(plate_size, points, *, camera=None, resolution=None,
                          "frame)")
     max_resolution = validate.integer("max_resolution", max_resolution, 16)
     if wavelength is not None:
-        wavelength = validate.length("wavelength", wavelength)
+        wavelength = validate.wavelength("wavelength", wavelength)
     side = max(width, height)
     band = DEFAULT_BAND
     lam_image, footprint = None, 0.0

@@ -56,6 +56,7 @@ def camera_in_plate(hologram: Hologram, camera: Camera) -> tuple[np.ndarray, np.
     return rotation, position
 
 
+@validate.scale_free()
 def plate_wave(hologram: Hologram, channel: int, *, source="hologram"):
     """The object wave leaving the hologram for one channel, complex64 (H, W) (NumPy, or a
     device array that the propagation takes without a host round trip): R'·H' with the
@@ -169,6 +170,7 @@ def _spectrum_at_pixels(pupil, wavelength, pitch, camera: Camera, aperture: Pupi
     return out.get()
 
 
+@validate.scale_free()
 def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apodize=True,
                 chromatic=True, composition="mean", supersample=1, exposure=None,
                 opacity_threshold=0.5, source="hologram", depth_estimate="consensus",

@@ -63,8 +63,8 @@ def support(field: np.ndarray):
 
 def wave(wavelength, pitch) -> tuple[float, float]:
     """Checked (wavelength [m], pitch [m])."""
-    return (validate.length("wavelength", wavelength),
-            validate.length("pitch", pitch))
+    return (validate.wavelength("wavelength", wavelength),
+            validate.pitch("pitch", pitch))
 
 
 def padding_factor(padding) -> float:

@@ -52,7 +52,7 @@ def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0)
                          f"{validate.MIN_LENGTH:g} m (the integral is singular on the source "
                          f"plane); got {distance!r}")
     x0, y0 = validate.pair("offset", offset, "m", validate.MAX_LENGTH)
-    out_pitch = pitch if out_pitch is None else validate.length("out_pitch", out_pitch)
+    out_pitch = pitch if out_pitch is None else validate.pitch("out_pitch", out_pitch)
     if not is_device_array(field):
         field = validate.host_field("field", field)
     out_shape = validate.shape2d("out_shape", field.shape if out_shape is None else out_shape)

@@ -40,8 +40,8 @@ def resample(field, *, pitch, out_shape, out_pitch):
     -------
     Complex64 array of ``out_shape``, like the input.
     """
-    pitch = validate.length("pitch", pitch)
-    out_pitch = validate.length("out_pitch", out_pitch)
+    pitch = validate.pitch("pitch", pitch)
+    out_pitch = validate.pitch("out_pitch", out_pitch)
     out_shape = validate.shape2d("out_shape", out_shape)
     rt, src, from_host = as_device(field)
     (h, w), (oh, ow) = src.shape, out_shape

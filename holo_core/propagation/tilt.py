@@ -60,7 +60,7 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     padding = grid.padding_factor(padding)
     rt, src, from_host = as_device(field)
     out_shape = validate.shape2d("out_shape", src.shape if out_shape is None else out_shape)
-    out_pitch = pitch if out_pitch is None else validate.length("out_pitch", out_pitch)
+    out_pitch = pitch if out_pitch is None else validate.pitch("out_pitch", out_pitch)
     angle, reach = math.acos(np.clip(m[2, 2], -1, 1)), tilt_reach(wavelength, pitch, out_pitch)
     if angle >= reach:  # the result would be zero whatever the field: say so instead
         raise InputError(f"rotation tilts the target plane by {math.degrees(angle):.1f}°; "

@@ -55,9 +55,9 @@ class Hologram:
         if np.ndim(wavelengths) != 1 or not 1 <= len(wavelengths) <= MAX_CHANNELS:
             raise InputError(f"wavelengths must be 1 to {MAX_CHANNELS} wavelengths [m]; "
                              f"got {wavelengths!r}")
-        wavelengths = tuple(validate.length("wavelengths", w) for w in wavelengths)
+        wavelengths = tuple(validate.wavelength("wavelengths", w) for w in wavelengths)
         object.__setattr__(self, "wavelengths", wavelengths)
-        object.__setattr__(self, "pitch", validate.length("pitch", self.pitch))
+        object.__setattr__(self, "pitch", validate.pitch("pitch", self.pitch))
         try:
             object.__setattr__(self, "channels", tuple(self.channels or ()))
         except TypeError:

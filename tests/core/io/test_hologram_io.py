@@ -92,5 +92,5 @@ def test_import_acquired_png(tmp_path, rng):
     assert h.shape == (20, 30) and h.wavelengths == (532e-9,) and h.pitch == 5e-6
     err = np.abs(h.intensity[0] - grey).max()
     assert err <= 0.5 / 255 + 1e-7, f"8-bit grey image read back off by {err:.2e}"
-    with pytest.raises(ValueError, match=r"pitch must be in \[1e-12, 1000\] \[m\]; got 0"):
+    with pytest.raises(ValueError, match=r"pitch must be in \[1e-08, 0.01\] \[m\]; got 0"):
         import_acquired(tmp_path / "scan.png", pitch=0, wavelength=532e-9)

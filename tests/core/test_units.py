@@ -1,0 +1,127 @@
+"""Units guarded (issue 28, item 3): a wavelength outside [1e-9, 1e-3] m or a pitch outside
+[1e-8, 1e-2] m is refused at every public entry, with the unit the number most likely is in."""
+
+import numpy as np
+import pytest
+
+from holo_core import validate
+from holo_core.io.hologram import import_acquired
+from holo_core.plate import Reference, record_points
+from holo_core.plate.point_sources import point_wave
+from holo_core.plate.record import reference_wave
+from holo_core.plate.sampling import choose
+from holo_core.propagation import (
+    angular_spectrum,
+    fraunhofer,
+    fresnel,
+    propagate_to_plane,
+    rayleigh_sommerfeld,
+    resample,
+    tilt,
+)
+from holo_core.scene import Hologram
+from holo_core.validate import InputError
+
+FIELD = np.ones((16, 16), np.complex64)
+NM = r"633 looks like nanometres: pass 633e-9"
+UM = r"8 looks like micrometres: pass 8e-6"
+
+
+def wave(**changes):
+    return {"wavelength": 633e-9, "pitch": 1e-6, **changes}
+
+
+CALLS = {
+    "angular_spectrum": lambda w: angular_spectrum(FIELD, **w, distance=1e-3),
+    "fresnel": lambda w: fresnel(FIELD, **w, distance=1e-3),
+    "fraunhofer": lambda w: fraunhofer(FIELD, **w, distance=1.0),
+    "rayleigh_sommerfeld": lambda w: rayleigh_sommerfeld(FIELD, **w, distance=1e-3),
+    "tilt": lambda w: tilt(FIELD, **w, rotation=np.eye(3)),
+    "propagate_to_plane": lambda w: propagate_to_plane(FIELD, **w, rotation=np.eye(3),
+                                                       position=(0, 0, 1e-3)),
+    "point_wave": lambda w: point_wave([[0, 0, -1e-3]], [1.0], **w, shape=(8, 8)),
+    "reference_wave": lambda w: reference_wave((8, 8), **w, reference=Reference()),
+    "record_points": lambda w: record_points([[0, 0, -3e-3]], [[1.0]], shape=(8, 8),
+                                             pitch=w["pitch"], wavelengths=(w["wavelength"],)),
+    "Hologram": lambda w: Hologram(intensity=np.ones((1, 4, 4), np.float32),
+                                   wavelengths=(w["wavelength"],), pitch=w["pitch"]),
+    "import_acquired": lambda w: import_acquired("missing.png", **w),
+}
+
+
+@pytest.mark.parametrize("name", CALLS)
+def test_a_wavelength_in_nanometres_is_refused_with_the_unit(name):
+    with pytest.raises(InputError, match=r"wavelengths? must be in \[1e-09, 0.001\] \[m\]; got "
+                                         r"633(\.0)? \(" + NM):
+        CALLS[name](wave(wavelength=633))
+
+
+@pytest.mark.parametrize("name", CALLS)
+def test_a_pitch_in_micrometres_is_refused_with_the_unit(name):
+    with pytest.raises(InputError, match=r"pitch must be in \[1e-08, 0.01\] \[m\]; got 8(\.0)? "
+                                         r"\(" + UM):
+        CALLS[name](wave(pitch=8))
+
+
+def test_the_other_checks_refuse_with_the_unit():
+    with pytest.raises(InputError, match=r"wavelength .* \(0.633 looks like micrometres: pass "
+                                         r"0.633e-6\)"):
+        choose((0.01, 0.01), [[0, 0, -0.05]], wavelength=0.633)
+    with pytest.raises(InputError, match=r"out_pitch .* \(8 looks like micrometres"):
+        resample(FIELD, pitch=1e-6, out_shape=(4, 4), out_pitch=8)
+    with pytest.raises(InputError, match=r"out_pitch .* \(8 looks like micrometres"):
+        rayleigh_sommerfeld(FIELD, **wave(), distance=1e-3, out_pitch=8)
+
+
+@pytest.mark.parametrize("value, hint", [
+    (633, "633 looks like nanometres: pass 633e-9"),
+    (532.0, "532 looks like nanometres: pass 532e-9"),
+    (0.633, "0.633 looks like micrometres: pass 0.633e-6"),
+    (10.6, "10.6 looks like micrometres: pass 10.6e-6"),   # CO2 laser, µm
+    (1.55, "1.55 looks like micrometres: pass 1.55e-6"),   # telecom, µm
+    (1e6, "1e+06 looks like nanometres: pass 0.001"),
+])
+def test_the_likely_unit_of_a_wavelength(value, hint):
+    with pytest.raises(InputError) as e:
+        validate.wavelength("wavelength", value)
+    assert hint in str(e.value), str(e.value)
+
+
+@pytest.mark.parametrize("value, hint", [
+    (8, "8 looks like micrometres: pass 8e-6"),
+    (3.74, "3.74 looks like micrometres: pass 3.74e-6"),   # an SLM's pixel
+    (0.5, "0.5 looks like micrometres: pass 0.5e-6"),
+])
+def test_the_likely_unit_of_a_pitch(value, hint):
+    with pytest.raises(InputError) as e:
+        validate.pitch("pitch", value)
+    assert hint in str(e.value), str(e.value)
+
+
+@pytest.mark.parametrize("value", [0.0, -633e-9, 1e-300, 2e-3, 0.05])
+def test_lengths_that_name_no_unit_get_no_hint(value):
+    """Zero, negative, tiny, or a small number of metres (2 mm: a real, if odd, length): the
+    range alone, no guessed unit."""
+    with pytest.raises(InputError) as e:
+        validate.wavelength("wavelength", value)
+    assert "looks like" not in str(e.value), str(e.value)
+
+
+def test_the_range_ends_are_accepted():
+    lo, hi = validate.WAVELENGTH_RANGE
+    assert (validate.wavelength("w", lo), validate.wavelength("w", hi)) == (1e-9, 1e-3)
+    lo, hi = validate.PITCH_RANGE
+    assert (validate.pitch("p", lo), validate.pitch("p", hi)) == (1e-8, 1e-2)
+
+
+def test_the_plate_renderer_keeps_its_scale_free_wavelengths():
+    """The plate renderer chooses its own wavelength for the image (Sect. VII-B): inside
+    ``scale_free`` (record_hologram, render_view, reconstruct, read_hologram) any length in
+    [1e-12, 1e3] m passes; the same number typed by a person outside it is refused."""
+    with validate.scale_free():
+        assert validate.wavelength("wavelength", 2e-3) == 2e-3
+        assert validate.pitch("pitch", 0.05) == 0.05
+    with pytest.raises(InputError, match="wavelength must be in"):
+        validate.wavelength("wavelength", 2e-3)
+    with pytest.raises(InputError, match="pitch must be in"):
+        Hologram(intensity=np.ones((1, 4, 4), np.float32), wavelengths=(633e-9,), pitch=0.05)
