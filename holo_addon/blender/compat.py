@@ -68,20 +68,57 @@ def multilayer_output(tree, name: str, path: str, layers):
     node.name = node.label = name
     if hasattr(node, "file_output_items"):
         node.format.media_type = "MULTI_LAYER_IMAGE"
-        folder, node.file_name = os.path.split(path)
-        node.directory = folder + os.sep
         node.file_output_items.clear()
         for layer, kind in layers:
             node.file_output_items.new(kind, layer)
     else:
         node.format.file_format = "OPEN_EXR_MULTILAYER"
-        node.base_path = path
         node.layer_slots.clear()
         for layer, _ in layers:
             node.layer_slots.new(layer)
+    set_output_path(node, path)
     node.format.color_depth = "32"
     node.format.exr_codec = "ZIP"  # lossless; 5.0's default is uncompressed
     return node
+
+
+def set_output_path(node, path: str) -> None:
+    """A File Output node's folder and file-name prefix (``path``; Blender adds the frame)."""
+    if hasattr(node, "file_output_items"):
+        folder, node.file_name = os.path.split(path)
+        node.directory = folder + os.sep
+    else:
+        node.base_path = path
+
+
+def existing_compositor_tree(scene):
+    """The scene's compositing node tree when it has one in use, else None (nothing made)."""
+    if compositor_is_group(scene):
+        return scene.compositing_node_group
+    return scene.node_tree if scene.use_nodes else None
+
+
+def compositor_state(scene) -> dict:
+    """What :func:`restore_compositor` puts back: whether the scene had a compositing tree
+    (5.x: a node group of the user's) or used its nodes (4.x)."""
+    if compositor_is_group(scene):
+        tree = scene.compositing_node_group
+        return {"tree": tree.name if tree is not None else ""}
+    return {"use_nodes": int(bool(scene.use_nodes))}
+
+
+def restore_compositor(scene, state) -> None:
+    """The scene's compositing as :func:`compositor_state` found it: a tree the add-on made
+    is taken off the scene (and removed when nothing else uses it); 4.x nodes off again if
+    they were."""
+    if compositor_is_group(scene):
+        tree = scene.compositing_node_group
+        if not state.get("tree") and tree is not None:
+            scene.compositing_node_group = None
+            if tree.users == 0:
+                bpy.data.node_groups.remove(tree)
+    else:
+        scene.use_nodes = bool(state.get("use_nodes", 1))
 
 
 def set_exr_output(scene, *, multilayer: bool):

@@ -18,13 +18,23 @@ from functools import partial
 from pathlib import Path
 
 import bpy
+import numpy as np
 
 from holo_core import jobs, worker
 from holo_core.io.hologram import read_hologram
 from holo_core.io.image import exr_attribute
+from holo_core.io.view import write_view
+from holo_core.view import BACKGROUND_DEPTH, RenderResult
 
 from ..export import bake, radiance
-from ..export.scene import ExportError, SceneData, border_pixels, export_scene, scale
+from ..export.scene import (
+    ExportError,
+    SceneData,
+    border_pixels,
+    export_scene,
+    render_size,
+    scale,
+)
 from .options import worker_options
 
 log = logging.getLogger(__name__)
@@ -198,16 +208,48 @@ def cached_pass(job: Job) -> Outcome | None:
     path = pass_file(job.output_dir, job.frame)
     if not job.render or (job.holograms and not job.current):
         return None
-    info = exr_attribute(path, "holo")
-    try:
-        stored = json.loads(info).get("pass_key") if info else None
-    except (ValueError, AttributeError):
-        stored = None
-    if stored != job.pass_key:
+    if stored_key(path) != job.pass_key:
         return None
     log.info("holographic pass of frame %d is up to date: %s", job.frame, path)
     return Outcome(holograms=job.holograms, fingerprint=job.fingerprint, recorded=False,
                    pass_path=path, frame_path=path, info={"cached": True})
+
+
+def stored_key(path) -> str | None:
+    """The ``pass_key`` a pass file was made with (None: no file, or none recorded)."""
+    info = exr_attribute(path, "holo")
+    try:
+        return json.loads(info).get("pass_key") if info else None
+    except (ValueError, AttributeError):
+        return None
+
+
+def clear_pass(scene, frame: int) -> Path:
+    """Frame ``frame``'s pass with nothing in it (no emitter is left in the render): clear,
+    at the background's depth, the render's size (its crop's, when cropped), so the frame
+    composites the raster alone."""
+    r = scene.render
+    w, h = render_size(r)
+    if r.use_border and r.use_crop_to_border:
+        left, top, right, bottom = border_pixels(r)
+        w, h = max(1, right - left), max(1, bottom - top)
+    view = RenderResult(rgb=np.zeros((h, w, 3), np.float32), alpha=np.zeros((h, w), np.float32),
+                        depth=np.full((h, w), BACKGROUND_DEPTH, np.float32),
+                        info={"emitters": 0})
+    path = pass_file(output_dir(scene), frame)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_view(view, path)
+    return path
+
+
+def reload_passes(path: Path) -> None:
+    """The compositor's image sequences of holographic passes read ``path``'s folder again."""
+    for image in bpy.data.images:
+        name = Path(image.filepath).name if image.filepath else ""
+        if image.source == "SEQUENCE" and name.startswith("holo_pass_"):
+            if Path(bpy.path.abspath(image.filepath)).parent != path.parent:
+                image.filepath = str(path)
+            image.reload()
 
 
 def apply(scene, job: Job, outcome: Outcome) -> None:
@@ -219,12 +261,7 @@ def apply(scene, job: Job, outcome: Outcome) -> None:
         plate.holo.hologram = str(outcome.holograms[0])
         plate.holo.fingerprint = outcome.fingerprint
     if outcome.pass_path is not None:
-        for image in bpy.data.images:
-            name = Path(image.filepath).name if image.filepath else ""
-            if image.source == "SEQUENCE" and name.startswith("holo_pass_"):
-                if Path(bpy.path.abspath(image.filepath)).parent != outcome.pass_path.parent:
-                    image.filepath = str(outcome.pass_path)
-                image.reload()
+        reload_passes(outcome.pass_path)
 
 
 def check_hologram(scene) -> Path:

@@ -262,20 +262,38 @@ class HOLO_OT_cancel_pass(bpy.types.Operator):
 
 
 class HOLO_OT_report(bpy.types.Operator):
-    """Put an error in Blender's reports (for what fails outside an operator)"""
+    """Put an error or a warning in Blender's reports (for what happens outside an operator)"""
 
     bl_idname = "holo.report"
     bl_label = "Holo Report"
     bl_options = {"INTERNAL"}
 
     message: bpy.props.StringProperty()
+    level: bpy.props.EnumProperty(items=[("ERROR", "Error", ""), ("WARNING", "Warning", "")],
+                                  default="ERROR")
 
     def execute(self, context):
-        self.report({"ERROR"}, self.message)
+        self.report({self.level}, self.message)
+        return {"FINISHED"}
+
+
+class HOLO_OT_remove_compositing(bpy.types.Operator):
+    """Take the holographic pass out of the compositor and put back the user's own nodes"""
+
+    bl_idname = "holo.remove_compositing"
+    bl_label = "Remove Holo Compositing"
+    bl_options = {"REGISTER", "UNDO"}
+
+    def execute(self, context):
+        if not passes.remove(context.scene):
+            self.report({"INFO"}, "the compositor has no holographic pass")
+            return {"CANCELLED"}
+        self.report({"INFO"}, "compositor: the holographic pass removed, the user's nodes "
+                              "restored")
         return {"FINISHED"}
 
 
 CLASSES = (HOLO_OT_record_hologram, HOLO_OT_render_pass, HOLO_OT_setup_compositing,
-           HOLO_OT_render, HOLO_OT_cancel_pass, HOLO_OT_report)
+           HOLO_OT_render, HOLO_OT_cancel_pass, HOLO_OT_report, HOLO_OT_remove_compositing)
 
 register, unregister = bpy.utils.register_classes_factory(CLASSES)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import bpy
 
-from ..compositor.passes import RUNNING, WARNINGS
+from ..compositor.passes import RUNNING, WARNINGS, uses_pass
 
 
 class HOLO_PT_scene(bpy.types.Panel):
@@ -50,6 +50,8 @@ class HOLO_PT_scene(bpy.types.Panel):
         col.operator("holo.record_hologram", icon="REC")
         col.operator("holo.render_pass", icon="RENDER_STILL")
         col.operator("holo.setup_compositing", icon="NODE_COMPOSITING")
+        if uses_pass(context.scene):
+            col.operator("holo.remove_compositing", icon="X")
         col.operator("holo.render", icon="RENDER_RESULT")
 
 

@@ -183,7 +183,8 @@ def _read_parts(path):
 def test_each_rendered_frame_gets_its_holographic_layers_beside_it(empty_scene, tmp_path):
     """Beside the frame ``shot_0001.exr`` a multilayer ``holo_shot_0001.exr``: the composite
     (equal to the frame), the pass alone (equal to the pass file), its depth, and the
-    composite's depth (the nearer of the pass's and the raster's)."""
+    composite's depth (the nearer of the pass's and the raster's), depths in ``.Z`` channels
+    as Blender's own passes (Blender's File Output names them ``.V``)."""
     from holo_addon.render import pipeline
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
@@ -198,10 +199,11 @@ def test_each_rendered_frame_gets_its_holographic_layers_beside_it(empty_scene, 
         np.testing.assert_allclose(layers[f"Composite.{c}"], frame[c], atol=1e-6)
         np.testing.assert_allclose(layers[f"Holo.{c}"], holo[f"ViewLayer.Combined.{c}"],
                                    atol=1e-6)
-    np.testing.assert_allclose(layers["HoloDepth.V"], holo["ViewLayer.Depth.Z"], rtol=1e-6)
+    assert not [k for k in layers if k.endswith(".V")], "depth channels are named .Z"
+    np.testing.assert_allclose(layers["HoloDepth.Z"], holo["ViewLayer.Depth.Z"], rtol=1e-6)
     shown = holo["ViewLayer.Combined.A"] > 0.5
-    assert shown.any() and (layers["Depth.V"] <= layers["HoloDepth.V"]).all()
-    np.testing.assert_allclose(layers["Depth.V"][shown], layers["HoloDepth.V"][shown],
+    assert shown.any() and (layers["Depth.Z"] <= layers["HoloDepth.Z"]).all()
+    np.testing.assert_allclose(layers["Depth.Z"][shown], layers["HoloDepth.Z"][shown],
                                rtol=1e-6)
 
 

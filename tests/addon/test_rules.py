@@ -139,3 +139,176 @@ def test_emitters_hidden_in_the_viewport_are_recorded_as_the_render_draws_them(e
     cube.hide_render = True
     with pytest.raises(RuntimeError, match="no holographic emitters in the render"):
         bpy.ops.holo.render_pass()
+
+
+def _warnings(caplog):
+    return [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
+
+
+def test_f12_without_compositing_warns_in_blenders_report(empty_scene, tmp_path, caplog):
+    """An emitter and no Set Up Compositing: F12 warns (the log, Render ▸ Holo, and Blender's
+    reports in the interface) naming the object and the fix, instead of a silent vanish."""
+    from holo_addon.compositor import passes
+    scene = empty_scene
+    _plate_camera_cube(scene)
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    scene.render.filepath = str(tmp_path / "f12.png")
+    bpy.ops.render.render(write_still=True)
+    (warning,) = [w for w in _warnings(caplog) if "not in this render" in w]
+    assert "'Cube'" in warning and "Set Up Compositing" in warning, warning
+    assert warning in passes.WARNINGS["texts"]
+    assert bpy.ops.holo.report(message=warning, level="WARNING") == {"FINISHED"}
+
+
+def test_layers_follow_the_output_path_at_render_time(empty_scene, tmp_path):
+    """Compositing set up with the output //out/shot_####, then the output changed (as a
+    farm's -o does): the holographic layers go beside the new output, not the old one."""
+    scene = empty_scene
+    _composited_cube(scene)
+    scene.render.filepath = str(tmp_path / "farm" / "take_")
+    scene.frame_start = scene.frame_end = 1
+    bpy.ops.render.render(animation=True)
+    written = sorted(p.name for p in tmp_path.rglob("holo_*.exr")
+                     if not p.name.startswith("holo_pass_"))
+    assert written == ["holo_take_0001.exr"], written
+    assert (tmp_path / "farm" / "holo_take_0001.exr").is_file()
+
+
+def test_motion_blur_warns_once_and_makes_one_pass_per_frame(empty_scene, tmp_path, caplog,
+                                                           monkeypatch):
+    """Motion blur on, -a over frames 1-3 of a moving cube: Blender evaluates each frame at
+    its shutter's steps (sub-frames), but one pass per frame is made (3 workers, was 11),
+    each of its own frame's geometry (its silhouette within half a pixel of the frame's
+    projection: no in-between geometry left in the files), and one warning says the
+    holographic object is not blurred."""
+    from test_addon import _camera_columns
+    from test_integration import _middle, _moving_cube
+
+    from holo_addon.render import pipeline
+    from holo_core import worker
+    scene = empty_scene
+    _, cam = _moving_cube(scene, tmp_path)
+    scene.holo.mode = "CAMERA"
+    scene.holo.samples = 2
+    scene.frame_set(1)
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    pipeline.pass_file(pipeline.output_dir(scene), 1).unlink()
+    scene.render.use_motion_blur = True
+    started = []
+    original = worker.Worker.__init__
+
+    def counting(self, job, *args, **kwargs):
+        started.append(job["frame"])
+        original(self, job, *args, **kwargs)
+    monkeypatch.setattr(worker.Worker, "__init__", counting)
+    scene.render.filepath = str(tmp_path / "frame_")
+    scene.frame_start, scene.frame_end = 1, 3
+    bpy.ops.render.render(animation=True)
+    assert started == [1, 2, 3], started
+    blur = [w for w in _warnings(caplog) if "motion blur" in w]
+    assert len(blur) == 1, blur
+    corners = np.array([(x, y, z) for x in (-0.2, 0.2) for y in (-0.2, 0.2) for z in (-0.2, 0.2)])
+    for frame, x in ((1, -0.15), (2, 0.15), (3, -0.05)):
+        cols = _camera_columns(scene, cam, corners + (x, 0, 0))
+        got = _middle(pipeline.pass_file(pipeline.output_dir(scene), frame))
+        print(f"frame {frame}: pass middle {got}, projected {(min(cols) + max(cols)) / 2:.2f}")
+        assert abs(got - (min(cols) + max(cols)) / 2) <= 0.5, frame
+
+
+def test_a_stale_pass_warns_with_its_age(empty_scene, tmp_path, caplog):
+    """Pass on Every Render off and the cube moved since its pass was made: the frame
+    composites that pass and warns that it is stale, with its age; with the pass gone, that
+    the holographic objects are missing."""
+    import os
+    import time
+
+    from holo_addon.render import pipeline
+    scene = empty_scene
+    cube, _, _ = _composited_cube(scene)
+    path = pipeline.pass_file(pipeline.output_dir(scene), 1)
+    an_hour_ago = time.time() - 3600
+    os.utime(path, (an_hour_ago, an_hour_ago))
+    scene.holo.pass_on_render = False
+    scene.render.filepath = str(tmp_path / "same.exr")
+    bpy.ops.render.render(write_still=True)
+    assert not [w for w in _warnings(caplog) if "stale" in w], "an up-to-date pass is quiet"
+    cube.location.x = 0.3
+    scene.render.filepath = str(tmp_path / "moved.exr")
+    bpy.ops.render.render(write_still=True)
+    (warning,) = [w for w in _warnings(caplog) if "stale" in w]
+    assert "frame 1" in warning and "made 1 h ago" in warning, warning
+    path.unlink()
+    scene.render.filepath = str(tmp_path / "gone.exr")
+    bpy.ops.render.render(write_still=True)
+    assert [w for w in _warnings(caplog) if "no holographic pass" in w]
+
+
+NO_EMITTER_LEFT = """
+import sys
+sys.path[:0] = [sys.argv[1], sys.argv[2]]
+import bpy
+bpy.ops.wm.read_factory_settings(use_empty=True)
+import holo_addon
+holo_addon.register()
+import test_integration
+scene = bpy.context.scene
+scene.holo.output_dir = sys.argv[3] + "/holo/"
+test_integration._scene_with_pass(scene, None)
+for obj in scene.objects:
+    obj.holo.emitter = "NONE"
+scene.render.filepath = sys.argv[3] + "/frame_"
+scene.frame_start, scene.frame_end = 1, 2
+bpy.ops.render.render(animation=True)
+print("rendered")
+"""
+
+
+def test_with_no_emitter_left_frames_render_the_raster_alone_with_exit_0(tmp_path):
+    """``blender -b ... -a`` on a file whose last emitter was un-marked: the frames render
+    (the raster alone: the cube, a raster object again, and clear passes) and the process
+    ends with status 0 (it ended with 1)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+    here = Path(__file__).resolve()
+    run = subprocess.run([sys.executable, "-c", NO_EMITTER_LEFT, str(here.parents[2]),
+                          str(here.parent), str(tmp_path)], capture_output=True, text=True,
+                         timeout=600, check=False)
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
+    assert "rendered" in run.stdout
+    frames = sorted(p.name for p in tmp_path.glob("frame_*"))
+    assert frames == ["frame_0001.exr", "frame_0002.exr"], frames
+    for frame in (1, 2):
+        alpha = _read_exr(tmp_path / "holo" / f"holo_pass_{frame:04d}.exr")
+        assert not alpha["ViewLayer.Combined.A"].any(), f"frame {frame}'s pass is clear"
+
+
+def _links(tree):
+    return {(l.from_node.name, l.from_socket.identifier, l.to_node.name,
+             l.to_socket.identifier) for l in tree.links}
+
+
+def test_remove_holo_compositing_restores_the_users_own_tree(empty_scene, tmp_path):
+    """A user's Render Layers → Glare → output chain: set up, then removed, every node and
+    link is as it was and the Depth pass is off again; a scene without a compositor gets
+    none back."""
+    from holo_addon.blender import compat
+    from holo_addon.compositor import passes
+    scene = empty_scene
+    _composited_cube(scene)
+    assert bpy.ops.holo.remove_compositing() == {"FINISHED"}
+    assert compat.existing_compositor_tree(scene) is None, "the add-on's own tree is gone"
+    assert not scene.view_layers[0].use_pass_z and not passes.uses_pass(scene)
+    tree = compat.compositor_tree(scene)
+    rl = tree.nodes.new("CompositorNodeRLayers")
+    glare = tree.nodes.new("CompositorNodeGlare")
+    tree.links.new(rl.outputs["Image"], glare.inputs[0])
+    tree.links.new(glare.outputs[0], compat.output_socket(tree))
+    before, nodes = _links(tree), {n.name for n in tree.nodes}
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    assert passes.uses_pass(scene) and _links(tree) != before
+    assert bpy.ops.holo.remove_compositing() == {"FINISHED"}
+    assert compat.existing_compositor_tree(scene) == tree
+    assert _links(tree) == before and {n.name for n in tree.nodes} == nodes
+    assert bpy.ops.holo.remove_compositing() == {"CANCELLED"}
