@@ -47,7 +47,8 @@ class HOLO_PT_scene(bpy.types.Panel):
             for text in WARNINGS["texts"][-3:]:
                 box.label(text=text)
         col = layout.column(align=True)
-        col.operator("holo.record_hologram", icon="REC")
+        if h.mode == "PLATE":  # camera holograms are recorded with each pass
+            col.operator("holo.record_hologram", icon="REC")
         col.operator("holo.render_pass", icon="RENDER_STILL")
         col.operator("holo.setup_compositing", icon="NODE_COMPOSITING")
         if uses_pass(context.scene):
@@ -66,14 +67,20 @@ class HOLO_PT_object(bpy.types.Panel):
         return context.object is not None and context.object.type == "MESH"
 
     def draw(self, context):
+        """The emitter; the plate's controls in Plate mode only (a plate marked in Plate mode
+        says, in Camera mode, that it waits for Plate mode)."""
         h = context.object.holo
         layout = self.layout
         layout.use_property_split = True
-        layout.prop(h, "is_plate")
-        if h.is_plate:
-            layout.label(text=f"Hologram: {h.hologram or 'not recorded yet'}")
-        else:
-            layout.prop(h, "emitter")
+        if context.scene.holo.mode == "PLATE":
+            layout.prop(h, "is_plate")
+            if h.is_plate:
+                layout.label(text=f"Hologram: {h.hologram or 'not recorded yet'}")
+                return
+        elif h.is_plate:
+            layout.label(text="Hologram plate (used in Plate mode)")
+            return
+        layout.prop(h, "emitter")
 
 
 CLASSES = (HOLO_PT_scene, HOLO_PT_object)

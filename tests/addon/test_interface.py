@@ -212,6 +212,27 @@ def test_the_panels_draw_every_state(empty_scene):
     assert ("label", "Hologram: not recorded yet") in _draw(ui.HOLO_PT_object, context)
 
 
+def test_controls_show_only_where_they_apply(empty_scene):
+    """Camera mode: no plate control (Max Hologram Size, Wavelength, Iterations, Composition,
+    Opacity Threshold, Plate Coverage, Record Hologram, the object's Hologram Plate); Plate
+    mode: no Samples; both: Lighting. Remove Holo Compositing only once it is set up."""
+    from holo_addon.ui import panels as ui
+    cube, _, plate = _plate_camera_cube(empty_scene)
+    context = SimpleNamespace(scene=empty_scene, object=cube)
+    plate_only = {("prop", n) for n in ("max_resolution", "wavelength", "iterations",
+                                        "composition", "opacity_threshold", "show_coverage")}
+    plate_only |= {("operator", "holo.record_hologram")}
+    for mode, hidden in (("CAMERA", plate_only), ("PLATE", {("prop", "samples")})):
+        empty_scene.holo.mode = mode
+        drawn = set(_draw(ui.HOLO_PT_scene, context))
+        assert ("prop", "lighting") in drawn and not drawn & hidden, (mode, drawn & hidden)
+        assert ("operator", "holo.remove_compositing") not in drawn
+        assert (("prop", "is_plate") in _draw(ui.HOLO_PT_object, context)) == (mode == "PLATE")
+    empty_scene.holo.mode = "CAMERA"
+    context.object = plate
+    assert _draw(ui.HOLO_PT_object, context) == [("label", "Hologram plate (used in Plate mode)")]
+
+
 def test_a_renders_pass_shows_its_progress_in_the_status_bar(monkeypatch):
     """The interface timer puts the pass's progress in every window's status bar, redraws
     the Properties editors (the panel's progress and Cancel Pass), and clears both after."""
