@@ -171,6 +171,7 @@ def _spectrum_at_pixels(pupil, wavelength, pitch, camera: Camera, aperture: Pupi
 
 
 @validate.scale_free()
+@np.errstate(over="ignore", invalid="ignore")  # an overflow is refused at the end (_finish)
 def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apodize=True,
                 chromatic=True, composition="mean", supersample=1, exposure=None,
                 opacity_threshold=0.5, source="hologram", depth_estimate="consensus",
@@ -388,6 +389,13 @@ def _centre_distance(h: Hologram, camera: Camera) -> float:
 
 
 def _finish(radiance, ray, coverage, h: Hologram, camera, pupil, exposure, threshold, lam0):
+    if not np.isfinite(radiance).all() or (ray is not None and not np.isfinite(ray).all()):
+        peak = float(h.intensity.max())  # never a NaN view: say which numbers overflowed
+        scale = min(h.reference_amplitudes, default=1.0) ** 2
+        raise InputError(f"intensity must stay within float32 arithmetic through the view: "
+                         f"this hologram's reaches {peak:.3g}, {peak / scale:.3g} times its "
+                         f"reference intensity |R|² (a recording holds far less than 1e12 "
+                         f"times), and the view overflowed")
     lum = radiance.mean(-1)
     ref = float(np.percentile(lum, 99.5))
     if exposure is None:

@@ -486,3 +486,13 @@ def test_write_hologram_and_write_view_refuse_other_suffixes(tmp_path, hologram)
     with pytest.raises(InputError, match=r"v.png: the file is written as OpenEXR"):
         write_view(view, tmp_path / "v.png")
     assert not list(tmp_path.iterdir())
+
+
+def test_a_view_that_overflows_is_refused_not_nan(hologram):
+    """Found by the fuzz suite: one pixel at 3e38 (finite, so the file reads) overflowed the
+    view's float32 arithmetic and rendered NaN."""
+    import dataclasses
+    hot = hologram.intensity.copy()
+    hot[0, 5, 7] = 3e38
+    with pytest.raises(InputError, match=r"intensity must stay within float32 .* reaches 3e\+38"):
+        render_view(dataclasses.replace(hologram, intensity=hot), camera())
