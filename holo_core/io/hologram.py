@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import math
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -213,80 +212,9 @@ def _flatten(value, shape):
     return None if any(p is None for p in parts) else [x for p in parts for x in p]
 
 
-def import_acquired(path, *, pitch, wavelength, reference_angle=0.0, reference_azimuth=0.0):
-    """An acquired (real) hologram from a grayscale PNG, TIFF or EXR image.
 
-    ``pitch`` and ``wavelength`` [m], ``reference_angle`` ϑ in [0, π/2) and
-    ``reference_azimuth`` φ [rad] describe the recording. Each image mode is read as the
-    intensity it records: colour (RGB, a palette's colours, CMYK, YCbCr) is averaged to grey,
-    alpha is dropped; integers scale to [0, 1] by their bit depth (8, 16; a 32-bit integer
-    image by the smallest of 2⁸−1, 2¹⁶−1, 2³²−1 that holds its values, as 16-bit scans are
-    often stored in int32 TIFFs); an EXR gives its Y channel, else the mean of R, G, B, else
-    its only channel. The size is checked against the memory budget before pixels are read.
-    """
-    pitch = validate.pitch("pitch", pitch)
-    wavelength = validate.wavelength("wavelength", wavelength)
-    angle = validate.finite("reference_angle", reference_angle, "rad")
-    if not 0 <= angle < math.pi / 2:
-        raise InputError(f"reference_angle must be in [0, π/2) rad; got {angle!r}")
-    azimuth = validate.finite("reference_azimuth", reference_azimuth, "rad")
-    path = Path(path)
-    if not path.is_file():
-        raise HologramFileError(f"{path}: no such file")
-    image = _exr_grey(path) if path.suffix.lower() == ".exr" else _image_grey(path)
-    h = Hologram(intensity=image[None].astype(np.float32), wavelengths=(wavelength,),
-                 pitch=pitch, reference_angle=angle, reference_azimuth=azimuth,
-                 reference_amplitudes=(1.0,))
-    check_pixels(str(path), h)
-    return h
-
-
-def _exr_grey(path: Path) -> np.ndarray:
-    _, chans = _read(path, "scan")
-    if "Y" in chans:
-        return chans["Y"].astype(np.float64)
-    rgb = [chans[n] for n in ("R", "G", "B") if n in chans]
-    if rgb:
-        return np.mean(rgb, axis=0, dtype=np.float64)
-    if len(chans) == 1:
-        return next(iter(chans.values())).astype(np.float64)
-    raise HologramFileError(f"{path}: an EXR scan needs a Y channel, R/G/B channels or a "
-                            f"single channel; it has {', '.join(sorted(chans))[:200]}")
-
-
-_AS_RGB = {"P": "RGBA", "PA": "RGBA", "CMYK": "RGB", "YCbCr": "RGB", "LAB": "RGB",
-           "HSV": "RGB", "RGBX": "RGB", "RGBa": "RGBA", "La": "LA"}
-
-
-def _image_grey(path: Path) -> np.ndarray:
-    from PIL import Image
-
-    from ..memory import check_host
-    try:
-        with warnings.catch_warnings():  # the memory check below is the limit, not PIL's guess
-            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
-            im = Image.open(path)
-        with im:
-            w, h = im.size
-            check_host(f"{path} (scan, {w}x{h} pixels)", 8.0 * 4 * w * h)
-            im.load()
-            if im.mode in _AS_RGB:
-                im = im.convert(_AS_RGB[im.mode])
-            mode, a = im.mode, np.asarray(im)
-    except InputError:
-        raise
-    except Exception as e:  # noqa: BLE001 -- PIL's errors for damaged files vary by format
-        raise HologramFileError(f"{path}: not a readable PNG/TIFF image ({type(e).__name__}: "
-                                f"{e})") from None
-    if mode in ("LA", "RGBA"):
-        a = a[..., :-1]
-    scale = 1.0
-    if a.dtype.kind in "iu":
-        if a.size and a.min() < 0:
-            raise HologramFileError(f"{path}: a scan of signed integers holds negative values; "
-                                    f"intensities must be >= 0")
-        top = int(a.max()) if a.size else 0
-        scale = 255 if a.dtype.itemsize == 1 else 65535 if a.dtype.itemsize == 2 else \
-            next(s for s in (255, 65535, 2**32 - 1) if top <= s)
-    a = a.astype(np.float64) / scale
-    return a.mean(axis=2) if a.ndim == 3 else a
+def __getattr__(name):  # acquired scans and lab arrays live in .acquired; the reader's old home
+    if name == "import_acquired":
+        from .acquired import import_acquired
+        return import_acquired
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
