@@ -10,17 +10,35 @@ __version__ = "0.1.0"
 _API = {"Camera": ".scene", "look_at": ".scene", "Plate": ".scene", "Hologram": ".scene",
         "Mesh": ".scene", "Pupil": ".optics", "record_hologram": ".plate",
         "record_points": ".plate", "reconstruct": ".plate", "render_view": ".plate",
+        "sideband": ".plate", "find_carrier": ".plate",
         "render_camera": ".camera", "RenderResult": ".view", "write_view": ".io.view",
         "read_hologram": ".io.hologram", "write_hologram": ".io.hologram",
-        "read_mesh": ".io.mesh", "InputError": ".validate"}
+        "import_acquired": ".io.acquired", "write_acquired": ".io.acquired",
+        "read_mesh": ".io.mesh", "InputError": ".validate",
+        "angular_spectrum": ".propagation", "fresnel": ".propagation",
+        "fraunhofer": ".propagation", "rayleigh_sommerfeld": ".propagation",
+        "tilt": ".propagation", "propagate_to_plane": ".propagation",
+        "resample": ".propagation", "to_device": ".opencl"}
+# the packages, imported on first use too (plot needs matplotlib: pip install 'holo[plot]')
+_PACKAGES = ("camera", "io", "opencl", "optics", "plate", "plot", "propagation", "scene",
+             "validate")
+# the names `from holo_core import *` gives (every _API name; test_notebook holds them equal)
+__all__ = ["Camera", "Hologram", "InputError", "Mesh", "Plate", "Pupil", "RenderResult",
+           "angular_spectrum", "find_carrier", "fraunhofer", "fresnel", "import_acquired",
+           "look_at", "propagate_to_plane", "rayleigh_sommerfeld", "read_hologram", "read_mesh",
+           "reconstruct", "record_hologram", "record_points", "render_camera", "render_view",
+           "resample", "sideband", "tilt", "to_device", "write_acquired", "write_hologram",
+           "write_view"]
 
 
 def __getattr__(name):  # the top-level API, imported on first use (keeps `import` light)
+    from importlib import import_module
+    if name in _PACKAGES:
+        return import_module(f".{name}", __name__)
     if name not in _API:
         raise AttributeError(f"module 'holo_core' has no attribute {name!r}")
-    from importlib import import_module
     return getattr(import_module(_API[name], __name__), name)
 
 
 def __dir__():
-    return sorted([*globals(), *_API])
+    return sorted({*globals(), *_API, *_PACKAGES})

@@ -45,6 +45,26 @@ def as_device(field, name: str = "field", runtime: Runtime | None = None, check:
     return rt, field, False
 
 
+def to_device(array, runtime: Runtime | None = None) -> cla.Array:
+    """``array`` on the OpenCL device: a finite (H, W) field, or a stack (N, H, W), as a
+    C-contiguous complex64 device array of the runtime's context (default: the process's).
+
+    Every propagation takes it and returns one with no copy to the host; ``.get()`` brings a
+    result back to NumPy. A device array passed in is returned as it is (complex64)."""
+    rt = runtime or get_runtime()
+    if is_device_array(array):
+        if array.ndim not in (2, 3):
+            raise InputError(f"array must be (H, W) or (N, H, W); got {array.ndim}-D")
+        return array if array.dtype == np.complex64 else array.astype(np.complex64)
+    a = np.asarray(array)
+    if a.ndim == 3:
+        for i, plane in enumerate(a):
+            host_field(f"array[{i}]", plane)
+    else:
+        host_field("array", a)
+    return rt.to_device(a, np.complex64)
+
+
 def empty(rt: Runtime, shape, dtype=np.complex64) -> cla.Array:
     return cla.empty(rt.queue, tuple(shape), dtype)
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import validate
+from .. import preview, validate
 from ..validate import InputError
 
 CHANNEL_ROLES = ("R", "G", "B", "Y", "Z")
@@ -125,3 +125,32 @@ class Hologram:
     def size(self) -> tuple[float, float]:
         """Physical (width, height) [m]."""
         return self.shape[1] * self.pitch, self.shape[0] * self.pitch
+
+    def __repr__(self) -> str:
+        """One line: samples, channels and wavelengths, pitch, encoding, reference; no data."""
+        h, w = self.shape
+        encoding = getattr(self, "encoding", "intensity")
+        count = len(self.wavelengths)
+        channels = (f"{count} channel{'s' * (count > 1)} {'/'.join(self.channels)} at "
+                    f"{preview.lengths(self.wavelengths)}")
+        parts = [f"{h}x{w}", channels, f"pitch {preview.length(self.pitch)}", encoding]
+        if self.reference_angle:
+            parts.append(f"reference {self.reference_angle:.4g} rad at azimuth "
+                         f"{self.reference_azimuth:.4g} rad")
+        if self.object_wave is not None and encoding == "intensity":
+            parts.append("object wave kept")
+        if self.band:
+            parts.append(f"band sin θ {self.band:.3g}")
+        return f"Hologram({', '.join(parts)}, on the host)"
+
+    def _repr_png_(self) -> bytes:
+        """A notebook's picture: the intensity (|O|² of a complex hologram) of the R, G, B
+        channels as colour, else of channel 0, normalised, at most 512 pixels a side."""
+        held = self.intensity if getattr(self, "encoding", "intensity") == "intensity" \
+            else np.abs(self.object_wave) ** 2
+        rgb = [self.channels.index(c) for c in "RGB" if c in self.channels]
+        if len(rgb) == 3:
+            image = np.stack([preview.thumbnail(held[c]) for c in rgb], -1)
+        else:
+            image = preview.thumbnail(held[0])
+        return preview.png(preview.normalised(image))

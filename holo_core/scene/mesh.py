@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import validate
+from .. import preview, validate
 from ..validate import InputError
 
 MAX_SLANT = 30.0  # visibility: a surface's depth slope (tan of its incidence) is capped here (88°)
@@ -63,6 +63,17 @@ class Mesh:
                 raise InputError(f"{name} must be {kind}; they hold NaN, infinite or "
                                  f"negative values")
             object.__setattr__(self, name, a)
+
+    def __repr__(self) -> str:
+        """One line: counts, extent and appearance; no arrays."""
+        lo, hi = (self.vertices.min(0), self.vertices.max(0)) if len(self.vertices) else \
+            (np.zeros(3), np.zeros(3))
+        look = ("texture {}x{}".format(*self.texture.shape[:2]) if self.texture is not None
+                else f"{self.colours.shape[1]} colour channels" if self.colours is not None
+                else "no colours")
+        t, v = len(self.triangles), len(self.vertices)
+        return (f"Mesh({t} triangle{'s' * (t != 1)}, {v} vert{'ices' if v != 1 else 'ex'}, extent "
+                f"{' x '.join(preview.length(e) for e in hi - lo)}, {look})")
 
     def areas(self) -> np.ndarray:
         a, b, c = (self.vertices[self.triangles[:, i]] for i in range(3))
