@@ -49,9 +49,10 @@ def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
     """Record the holograms (unless ``job['current']``) and render the pass.
 
     ``job``: ``points``, ``triangles`` (lists of :class:`holo_core.scene.mesh.Mesh`, world metres),
-    ``plate``, ``camera``, ``settings`` (dict: mode 'CAMERA' or 'PLATE', samples,
-    max_resolution, wavelength [m] or None, iterations, supersample, composition, exposure,
-    opacity_threshold, seed), ``holograms`` (paths of the iterations' files), ``current``,
+    ``plate``, ``camera``, ``settings`` (dict: mode 'CAMERA' or 'PLATE', speckle 'EXACT' or
+    'LOOKS' (:data:`CAMERA_ROUTES`), samples, max_resolution, wavelength [m] or None,
+    iterations, supersample, composition, exposure, opacity_threshold, seed), ``holograms``
+    (paths of the iterations' files), ``current``,
     ``render``, ``output_dir``, ``frame``; optional ``radiance`` (the emitters' colours from a
     renderer, :func:`lit_emitters`), ``depth_unit`` (metres per unit of the pass's depth),
     ``border``, ``pass_key``. 'CAMERA' renders the camera hologram
@@ -77,7 +78,7 @@ def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
         view = render_camera(job["points"] + job["triangles"], job["camera"],
                              samples=s["samples"], supersample=s["supersample"],
                              exposure=s["exposure"], seed=s["seed"], progress=progress,
-                             on_sample=sample)
+                             via=CAMERA_ROUTES[s.get("speckle", "EXACT")], on_sample=sample)
         return _write_pass(job, view, {"recorded": False})
     record_share = 0.0 if current else (0.85 if job["render"] else 1.0)
     if current:
@@ -102,6 +103,8 @@ def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
     return _write_pass(job, view, {"recorded": not current})
 
 
+# the camera hologram's route per setting: the looks' limit in one pass, or progressive looks
+CAMERA_ROUTES = {"EXACT": "incoherent", "LOOKS": "object_wave"}
 RADIANCE_SHARE = 0.2  # of the progress bar: the renderer's radiance before the hologram
 
 

@@ -56,6 +56,7 @@ class Settings:
     opacity_threshold: float
     seed: int
     lighting: str = "SCENE"       # 'SCENE' (Cycles' radiance) or 'ALBEDO' (the colour alone)
+    speckle: str = "EXACT"        # camera holograms: 'EXACT' (the looks' limit) or 'LOOKS'
 
     @classmethod
     def from_scene(cls, scene, unit: float) -> "Settings":
@@ -64,7 +65,8 @@ class Settings:
                    wavelength=h.wavelength * unit if h.wavelength > 0 else None,
                    iterations=h.iterations, supersample=h.supersample,
                    composition=h.composition, exposure=2.0 ** h.exposure,
-                   opacity_threshold=h.opacity_threshold, seed=h.seed, lighting=h.lighting)
+                   opacity_threshold=h.opacity_threshold, seed=h.seed, lighting=h.lighting,
+                   speckle=h.speckle)
 
     def recording(self) -> tuple:
         """The settings a hologram depends on."""
@@ -146,7 +148,8 @@ def prepare(scene, depsgraph, *, render=True, bake=False) -> Job:
     data = export_scene(scene, depsgraph, plate=settings.mode != "CAMERA", lit=lit)
     lighting = radiance.digest(scene, depsgraph) if lit else ""
     if settings.mode == "CAMERA":  # recorded for this view at every render: no plate file
-        fingerprint, paths = data.fingerprint(settings.mode, settings.samples, lighting), ()
+        fingerprint, paths = data.fingerprint(settings.mode, settings.speckle, settings.samples,
+                                       lighting), ()
     else:
         fingerprint = data.fingerprint(*settings.recording(), lighting)
         paths = hologram_paths(out, data.plate_name, settings.iterations, fingerprint)

@@ -22,7 +22,9 @@ class HOLO_PT_scene(bpy.types.Panel):
         layout.prop(h, "lighting")
         col = layout.column(heading="Recording")
         if h.mode == "CAMERA":
-            col.prop(h, "samples")
+            col.prop(h, "speckle")
+            if h.speckle == "LOOKS":
+                col.prop(h, "samples")
         else:
             col.prop(h, "max_resolution")
             col.prop(h, "wavelength")

@@ -73,8 +73,15 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                ("ALBEDO", "Albedo", ("The holographic objects show their Base Color alone, "
                                      "unlit (the colour attribute, texture or bake)"))],
         description="Where the holographic objects' colours come from")
+    speckle: EnumProperty(
+        name="Speckle",
+        items=[("EXACT", "Exact", ("The random-phase looks' limit in one pass: the emitters as "
+                                   "mutually incoherent sources, no speckle")),
+               ("LOOKS", "Looks", ("Looks with independent random phases, averaged "
+                                   "progressively (Samples); a running pass can be kept"))],
+        description="How the camera hologram averages the emitters' random phases")
     samples: IntProperty(name="Samples", default=16, min=1, max=4096,
-                         description="Renders with independent random phases, averaged: more "
+                         description="Looks with independent random phases, averaged: more "
                                      "samples, less speckle")
     output_dir: StringProperty(name="Output Folder", subtype="DIR_PATH", default="//holo/",
                                options=BLEND_RELATIVE,

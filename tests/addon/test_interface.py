@@ -77,6 +77,7 @@ def interface(monkeypatch):
 def _camera_scene(scene, samples):
     _plate_camera_cube(scene)
     scene.holo.mode = "CAMERA"
+    scene.holo.speckle = "LOOKS"  # progressive looks, which a running pass can keep
     scene.holo.samples = samples
     scene.render.resolution_x, scene.render.resolution_y = 64, 48
 
@@ -200,7 +201,7 @@ def test_the_panels_draw_every_state(empty_scene):
     for mode in ("CAMERA", "PLATE"):
         empty_scene.holo.mode = mode
         drawn = _draw(ui.HOLO_PT_scene, context)
-        assert ("prop", "samples" if mode == "CAMERA" else "iterations") in drawn
+        assert ("prop", "speckle" if mode == "CAMERA" else "iterations") in drawn
     compositing.RUNNING.update(frame=7, fraction=0.42)
     try:
         drawn = _draw(ui.HOLO_PT_scene, context)

@@ -150,7 +150,7 @@ def test_stop_and_keep_hands_over_a_complete_running_pass(tmp_path):
     """A camera hologram stopped after its first running passes: the pass kept is a whole
     file of that many samples (not the cancelled run's nothing)."""
     j = job(tmp_path, resolution=(160, 120))
-    j["settings"].update(mode="CAMERA", samples=64)
+    j["settings"].update(mode="CAMERA", speckle="LOOKS", samples=64)
     w = worker.Worker(j)
     while not any(kind == "partial" and n >= 2 for kind, n in w.poll(timeout=0.1)):
         assert not w.finished, "the worker ended before its second running pass"
