@@ -41,6 +41,17 @@ def pass_file(folder, frame: int) -> Path:
     return Path(folder) / f"holo_pass_{frame:04d}.exr"
 
 
+def _check_outputs(job: dict) -> None:
+    """:class:`InputError` for a hologram or pass file that cannot be written, before any work
+    (a read-only output folder is found at once, not after the recording)."""
+    from .io.image import check_writable
+    outputs = [] if job["current"] else list(job["holograms"])
+    if job["render"]:
+        outputs.append(pass_file(job["output_dir"], job["frame"]))
+    for path in outputs:
+        check_writable(path, ".exr")
+
+
 class WorkerError(RuntimeError):
     """The worker failed: the message says how (its error, or how the process died)."""
 
@@ -65,6 +76,7 @@ def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
     from .plate.record import record_hologram
     from .plate.view import render_view
     s, current, n = job["settings"], job["current"], len(job["holograms"])
+    _check_outputs(job)
     if job.get("radiance") and not current:
         share = RADIANCE_SHARE
         job = {**job, **lit_emitters(job, jobs.scaled(progress, 0.0, share))}

@@ -5,6 +5,7 @@ import os
 import pickle
 import signal
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -169,3 +170,18 @@ def test_the_cache_folder_reaches_the_worker(tmp_path):
     worker.Worker(job(tmp_path), cache_dir=str(cache)).wait()
     assert any((cache / name).is_dir() for name in ("pyopencl", "holo")), \
         list(cache.iterdir()) if cache.exists() else "no cache folder"
+
+
+def test_an_unwritable_output_folder_is_refused_before_the_recording(tmp_path, monkeypatch):
+    """The audit's finding 11 for the add-on's worker: a pass or hologram that cannot be
+    written is an InputError before anything is recorded (/sys is read-only even for root)."""
+    from holo_core.validate import InputError
+    recorded = []
+    monkeypatch.setattr("holo_core.plate.record.record_hologram",
+                        lambda *a, **k: recorded.append(1))
+    j = job(tmp_path)
+    j["output_dir"] = Path("/sys/holo")
+    j["holograms"] = (Path("/sys/holo/h0.exr"),)
+    with pytest.raises(InputError, match="/sys"):
+        worker.run_job(j)
+    assert recorded == [], "the recording ran before the output was checked"
