@@ -1,10 +1,12 @@
 """The built-in demo (``make demo``): headless through the bpy module, a holographic object
 among rasterized ones, recorded, rendered, composited in depth.
 
-The scene: a vertex-coloured holographic sphere (point emitters) on a floor, a rasterized red
-cube behind it, a blue pillar in front of it and a green cone beside it; a 40 mm camera at
-f/2.8 focused on the sphere, 1280×720. The sphere is rendered through its camera hologram
-(the default mode; the plate between them serves ``--mode PLATE``). Writes ``out/demo.png``
+The scene: a glossy, vertex-coloured holographic sphere (point emitters) on a floor, a
+rasterized red cube behind it, a blue pillar in front of it and a green cone beside it, under a
+low sun; a 40 mm camera at f/2.8 focused on the sphere, 1280×720. The sphere is rendered
+through its camera hologram (the default mode; the plate between them serves ``--mode
+PLATE``), lit by the scene (its colours are Cycles' radiance of it), and casts its shadow on
+the floor and the cone. Writes ``out/demo.png``
 (the composite), ``out/demo.exr`` (the composite, float RGBA), ``out/holo/`` (the holographic
 pass), ``out/holo_demo.exr`` (its layers beside the render) and prints where they are.
 
@@ -24,7 +26,7 @@ import numpy as np
 
 
 def _colour_sphere(bpy, name, location, radius):
-    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=3, radius=radius, location=location)
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=4, radius=radius, location=location)
     obj = bpy.context.object
     obj.name = name
     me = obj.data
@@ -35,6 +37,18 @@ def _colour_sphere(bpy, name, location, radius):
     rgb = np.clip(0.55 + 0.45 * co[:, [0, 1, 2]] * [1, -1, 1], 0.05, 1)   # a hue per octant
     attr.data.foreach_set("color", np.c_[rgb, np.ones(len(rgb))].ravel())
     me.color_attributes.active_color = attr
+    bpy.ops.object.shade_smooth()
+    # a glossy material whose Base Color is the colour attribute: Cycles lights it
+    from .blender import compat
+    mat = bpy.data.materials.new(name)
+    compat.enable_nodes(mat)
+    tree = mat.node_tree
+    bsdf = next(n for n in tree.nodes if n.type == "BSDF_PRINCIPLED")
+    colour = tree.nodes.new("ShaderNodeVertexColor")
+    colour.layer_name = "Col"
+    tree.links.new(colour.outputs["Color"], bsdf.inputs["Base Color"])
+    bsdf.inputs["Roughness"].default_value = 0.35
+    me.materials.append(mat)
     return obj
 
 
@@ -81,7 +95,7 @@ def build_scene(bpy, *, resolution=(1280, 720), fstop=2.8):
     _material(bpy, bpy.context.object, (0.1, 0.7, 0.15))
     bpy.ops.object.light_add(type="SUN", location=(2, -2, 4))
     bpy.context.object.data.energy = 3.0
-    bpy.context.object.rotation_euler = (0.6, 0.2, 0.5)
+    bpy.context.object.rotation_euler = (1.0, 0.0, -0.9)  # low: a long shadow in view
 
     bpy.ops.object.camera_add(location=(0.9, -3.2, 1.3))
     camera = bpy.context.object
@@ -108,13 +122,14 @@ def render_still(bpy, scene, out: Path) -> tuple[Path, Path]:
 
     from .blender import compat
     png, exr = out / "demo.png", out / "demo.exr"
+    scene.render.filepath = str(out / "demo")  # the holographic layers go beside it
     for path, setter in ((exr, lambda: compat.set_exr_output(scene, multilayer=False)),
                          (png, lambda: compat.set_png_output(scene))):
         setter()
+        scene.holo["skip_pass_once"] = True  # the pass was just rendered
+        bpy.ops.render.render()
         with atomic_path(path) as tmp:  # a failed run keeps the last demo
-            scene.render.filepath = tmp
-            scene.holo["skip_pass_once"] = True  # the pass was just rendered
-            bpy.ops.render.render(write_still=True)
+            bpy.data.images["Render Result"].save_render(tmp)
     return png, exr
 
 

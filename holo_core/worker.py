@@ -26,6 +26,7 @@ import subprocess
 import sys
 import tempfile
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -77,10 +78,13 @@ def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
     from .plate.view import render_view
     s, current, n = job["settings"], job["current"], len(job["holograms"])
     _check_outputs(job)
+    lit_seconds = None
     if job.get("radiance") and not current:
-        share = RADIANCE_SHARE
+        share, start = RADIANCE_SHARE, time.perf_counter()
         job = {**job, **lit_emitters(job, jobs.scaled(progress, 0.0, share))}
         progress = jobs.scaled(progress, share, 1.0)
+        lit_seconds = time.perf_counter() - start
+    job = {**job, "radiance_seconds": lit_seconds}
     if s.get("mode", "PLATE") == "CAMERA":
         from .camera.render import render_camera
         def sample(view, n):
@@ -164,6 +168,8 @@ def _write_pass(job, view, result) -> dict:
     from .view import BACKGROUND_DEPTH
     result.update(pass_path=None, frame_path=None, info={})
     if view is not None:
+        if job.get("radiance_seconds") is not None:  # the lit radiance's share of the time
+            view.info["radiance_seconds"] = round(job["radiance_seconds"], 3)
         unit = float(job.get("depth_unit") or 1.0)
         if unit != 1.0:
             near = view.depth < BACKGROUND_DEPTH
