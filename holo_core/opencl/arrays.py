@@ -5,6 +5,7 @@ copies: PoCL turns them into memset/memcpy, 6x faster than a kernel."""
 from __future__ import annotations
 
 from collections import OrderedDict
+from dataclasses import replace
 
 import numpy as np
 import pyopencl as cl
@@ -45,24 +46,36 @@ def as_device(field, name: str = "field", runtime: Runtime | None = None, check:
     return rt, field, False
 
 
-def to_device(array, runtime: Runtime | None = None) -> cla.Array:
-    """``array`` on the OpenCL device: a finite (H, W) field, or a stack (N, H, W), as a
-    C-contiguous complex64 device array of the runtime's context (default: the process's).
+def to_device(array, runtime: Runtime | None = None):
+    """``array`` on the OpenCL device: a finite (H, W) field, or a batch (..., H, W), as a
+    C-contiguous complex64 device array of the runtime's context (default: the process's); a
+    :class:`~holo_core.scene.field.Field` comes back as a Field whose samples are there.
 
-    Every propagation takes it and returns one with no copy to the host; ``.get()`` brings a
-    result back to NumPy. A device array passed in is returned as it is (complex64)."""
+    Every propagation takes it and returns one with no copy to the host; ``.get()`` (a Field's
+    ``to_numpy()``) brings a result back to NumPy. What is on the device already stays."""
     rt = runtime or get_runtime()
+    if hasattr(array, "samples") and hasattr(array, "pose"):  # a Field (scene/field.py)
+        return replace(array, samples=to_device(array.samples, rt))
     if is_device_array(array):
-        if array.ndim not in (2, 3):
-            raise InputError(f"array must be (H, W) or (N, H, W); got {array.ndim}-D")
+        if array.ndim < 2:
+            raise InputError(f"array must be (H, W) or (..., H, W); got {array.ndim}-D")
         return array if array.dtype == np.complex64 else array.astype(np.complex64)
     a = np.asarray(array)
-    if a.ndim == 3:
-        for i, plane in enumerate(a):
-            host_field(f"array[{i}]", plane)
+    if a.ndim > 2:
+        for i, plane in enumerate(a.reshape(-1, *a.shape[-2:])):
+            host_field(f"array plane {i}", plane)
     else:
         host_field("array", a)
     return rt.to_device(a, np.complex64)
+
+
+def put_plane(rt: Runtime, stack: cla.Array, index: int, plane: cla.Array) -> None:
+    """Copy the C-contiguous ``plane`` into plane ``index`` of the contiguous ``stack``
+    (..., H, W), device to device."""
+    if plane.nbytes * (index + 1) > stack.nbytes or plane.dtype != stack.dtype:
+        raise InputError(f"plane {index} of {plane.shape} does not fit the stack {stack.shape}")
+    cl.enqueue_copy(rt.queue, stack.base_data, plane.base_data, byte_count=plane.nbytes,
+                    src_offset=plane.offset, dst_offset=stack.offset + index * plane.nbytes)
 
 
 def empty(rt: Runtime, shape, dtype=np.complex64) -> cla.Array:

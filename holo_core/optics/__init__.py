@@ -4,8 +4,10 @@
   the pinhole rules side by side
 - ``depth.py``: depth from the two-wavelength phase difference (Eq. 26–30)
 - ``speckle.py``: averaging, downsampling and the speckle contrast (Sect. VII-E)
+- ``lens.py``: a thin lens's phase on a field or a Field (:func:`thin_lens`)
 """
 
+from .lens import thin_lens
 from .pupil import Pupil
 
-__all__ = ["Pupil"]
+__all__ = ["Pupil", "thin_lens"]

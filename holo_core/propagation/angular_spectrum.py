@@ -35,8 +35,8 @@ def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), p
         Field on the source plane, [row, col] = [y, x], pixel centres as in :mod:`.grid`.
     wavelength : float
         Wavelength λ [m].
-    pitch : float
-        Sample spacing of input and output [m].
+    pitch : float or (float, float)
+        Sample spacing of input and output [m], or (x, y) spacings.
     distance : float
         Signed distance z to the target plane [m]; negative propagates backwards.
     offset : (float, float)
@@ -72,11 +72,12 @@ def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), p
 def transfer_function(shape, *, wavelength, pitch, distance, offset=(0.0, 0.0), band_limit=True):
     """The transfer function exp(i2πz·fz)·exp(i2π(fx·x0 + fy·y0)) (Eq. 12-13), complex128.
 
-    ``shape`` is the (padded) grid in FFT order, ``wavelength``, ``pitch`` [m], ``distance``
-    [m], ``offset`` (x0, y0) [m]. The phase is formed as k·z (reduced mod 2π) plus
+    ``shape`` is the (padded) grid in FFT order, ``wavelength`` [m], ``pitch`` [m] (or (x, y)),
+    ``distance`` [m], ``offset`` (x0, y0) [m]. The phase is formed as k·z (reduced mod 2π) plus
     -2πz·f²/(1/λ + fz), which keeps float64 precision for large k·z.
     """
-    fy, fx = grid.freqs(shape[0], pitch)[:, None], grid.freqs(shape[1], pitch)[None, :]
+    px, py = grid.pitch_pair(pitch)
+    fy, fx = grid.freqs(shape[0], py)[:, None], grid.freqs(shape[1], px)[None, :]
     x0, y0 = offset
     f2 = fx * fx + fy * fy
     fz2 = 1.0 / wavelength**2 - f2
@@ -94,8 +95,9 @@ def band_mask(shape, pitch, distance, offset, fx, fy, fz) -> np.ndarray:
     """Weights in [0, 1]: 1 where the ray x0 - z·fx/fz lands well within half the padded
     window, rolling off to 0 at its edge (per axis, multiplied)."""
     weight = 1.0
-    for n, o, f in ((shape[1], offset[0], fx), (shape[0], offset[1], fy)):
-        u = np.abs(o - distance * f / fz) / (n * pitch / 2)  # 1 at the edge of the band
+    px, py = grid.pitch_pair(pitch)
+    for n, p, o, f in ((shape[1], px, offset[0], fx), (shape[0], py, offset[1], fy)):
+        u = np.abs(o - distance * f / fz) / (n * p / 2)  # 1 at the edge of the band
         t = np.clip((u - (1 - BAND_EDGE)) / BAND_EDGE, 0, 1)
         weight = weight * np.where(u <= 1, np.cos(np.pi / 2 * t) ** 2, 0)
     return weight
@@ -108,19 +110,22 @@ def alias_free_distance(shape, pitch, wavelength, offset=(0.0, 0.0)) -> float:
     band limit removes frequencies the grid holds (without it, they alias). Zero when the grid
     reaches the evanescent cut-off.
     """
-    fmax = [np.abs(grid.freqs(n, pitch)).max() for n in shape]  # (fy, fx)
+    px, py = grid.pitch_pair(pitch)
+    fmax = [np.abs(grid.freqs(n, p)).max() for n, p in zip(shape, (py, px))]  # (fy, fx)
     fz2 = 1.0 / wavelength**2 - fmax[0] ** 2 - fmax[1] ** 2
     if fz2 <= 0:
         return 0.0
-    limits = [(n * pitch / 2 - abs(o)) * math.sqrt(fz2) / f
-              for n, o, f in ((shape[1], offset[0], fmax[1]), (shape[0], offset[1], fmax[0]))]
+    limits = [(n * p / 2 - abs(o)) * math.sqrt(fz2) / f for n, p, o, f in
+              ((shape[1], px, offset[0], fmax[1]), (shape[0], py, offset[1], fmax[0]))]
     return max(0.0, min(limits))
 
 
 def sampling_notes(shape, padded, wavelength, pitch, z, offset, padding, band_limit, tf):
     """Why the grid cannot carry the field to ``z`` alias-free, as messages (empty if it can)."""
     safe = alias_free_distance(padded, pitch, wavelength, offset)
-    where = f"{shape[0]}x{shape[1]} at {pitch:.4g} m pitch, padding {padding:g}"
+    px, py = grid.pitch_pair(pitch)
+    spacing = f"{px:.4g} m" if px == py else f"{px:.4g} x {py:.4g} m"
+    where = f"{shape[0]}x{shape[1]} at {spacing} pitch, padding {padding:g}"
     notes = []
     if abs(z) > safe and not band_limit:
         notes.append(f"angular_spectrum: |distance| = {abs(z):.4g} m exceeds the alias-free "

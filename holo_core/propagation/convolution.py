@@ -19,7 +19,7 @@ from . import grid
 
 class Setup(NamedTuple):
     wavelength: float
-    pitch: float
+    pitch: tuple[float, float]  # (x, y)
     z: float
     offset: tuple[float, float]
     padding: float
@@ -30,9 +30,9 @@ class Setup(NamedTuple):
 
 
 def convolution_setup(field, wavelength, pitch, distance, offset, padding) -> Setup:
-    """Checked settings (λ, pitch, distance, offset in metres), the field on the device and
-    the padded grid: what every transfer-function propagation starts from."""
-    wavelength, pitch = grid.wave(wavelength, pitch)
+    """Checked settings (λ, pitch (x, y), distance, offset in metres), the field on the device
+    and the padded grid: what every transfer-function propagation starts from."""
+    wavelength, pitch = grid.wave_pair(wavelength, pitch)
     z = validate.within("distance", distance, validate.MAX_LENGTH)
     offset = validate.pair("offset", offset, "m", validate.MAX_LENGTH)
     padding = grid.padding_factor(padding)

@@ -22,20 +22,22 @@ def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2)
     """The paraxial (Fresnel) field on the parallel plane at ``distance``.
 
     Same parameters and result as :func:`~holo_core.propagation.angular_spectrum` (``wavelength``,
-    ``pitch``, ``distance``, ``offset`` in metres); accurate only where the paraxial
-    approximation holds.
+    ``pitch`` (a number or (x, y)), ``distance``, ``offset`` in metres); accurate only where the
+    paraxial approximation holds.
     """
     s = convolution_setup(field, wavelength, pitch, distance, offset, padding)
     wavelength, pitch, z, (x0, y0), padding = s.wavelength, s.pitch, s.z, s.offset, s.padding
     rt, dev, from_host, shape = s.rt, s.dev, s.from_host, s.shape
 
+    px, py = pitch
+
     def make():
-        fy, fx = grid.freqs(shape[0], pitch)[:, None], grid.freqs(shape[1], pitch)[None, :]
+        fy, fx = grid.freqs(shape[0], py)[:, None], grid.freqs(shape[1], px)[None, :]
         carrier = math.remainder(2 * math.pi * z / wavelength, 2 * math.pi)
         phase = carrier - np.pi * wavelength * z * (fx**2 + fy**2) + 2 * np.pi * (fx * x0 + fy * y0)
         # the ray of frequency f lands at x0 - λz·f: keep those inside half the padded window
-        keep = (np.abs(x0 - wavelength * z * fx) <= shape[1] * pitch / 2) \
-            & (np.abs(y0 - wavelength * z * fy) <= shape[0] * pitch / 2)
+        keep = (np.abs(x0 - wavelength * z * fx) <= shape[1] * px / 2) \
+            & (np.abs(y0 - wavelength * z * fy) <= shape[0] * py / 2)
         return np.where(keep, np.exp(1j * phase), 0) / (shape[0] * shape[1]), []
 
     tf, _ = cached(rt, ("fresnel", dev.shape, shape, wavelength, pitch, z, x0, y0), make)

@@ -67,6 +67,21 @@ def wave(wavelength, pitch) -> tuple[float, float]:
             validate.pitch("pitch", pitch))
 
 
+def wave_pair(wavelength, pitch) -> tuple[float, tuple[float, float]]:
+    """Checked (wavelength [m], (pitch x, pitch y) [m]): a pitch is a number or a pair."""
+    return validate.wavelength("wavelength", wavelength), pitch_pair(pitch)
+
+
+def pitch_pair(pitch, name: str = "pitch") -> tuple[float, float]:
+    """A checked pitch [m] as (x, y): a number for both axes, or a pair (x, y)."""
+    if np.ndim(pitch) == 0:
+        p = validate.pitch(name, pitch)
+        return p, p
+    if np.shape(pitch) != (2,):
+        raise InputError(f"{name} must be a number or a pair (x, y) [m]; got {pitch!r}"[:300])
+    return validate.pitch(name, pitch[0]), validate.pitch(name, pitch[1])
+
+
 def padding_factor(padding) -> float:
     p = validate.at_least("padding", padding, 1.0)
     if p > 16:

@@ -253,7 +253,7 @@ def test_a_view_is_never_silently_black(h, degrees):
 @pytest.mark.parametrize("field, changes, message", [
     (np.full((8, 8), np.nan), {}, "field must be finite"),
     (np.ones((8, 8)) * np.inf, {}, "field must be finite"),
-    (np.ones((4, 4, 4)), {}, "field must be a 2-D array"),
+    (np.ones(4), {}, "field must be a 2-D array"),  # (..., H, W) is a batch
     (FIELD, {"wavelength": 0.0}, r"wavelength must be in \[1e-09, 0.001\] \[m\]; got 0.0"),
     (FIELD, {"wavelength": -5e-7}, r"wavelength must be in \[1e-09, 0.001\] \[m\]"),
     (FIELD, {"pitch": 0}, r"pitch must be in \[1e-08, 0.01\] \[m\]; got 0"),

@@ -1,0 +1,53 @@
+"""A thin lens's phase on a sampled field (the aberration-free lens of Eq. 24).
+
+t(x, y) = exp(−i·k·(√(ρ² + f²) − f)), ρ the distance from the lens's centre: a plane wave of
+wavelength λ = 2π/k leaves it as a spherical wave converging to the point at f on the axis
+(f < 0: a diverging lens). The phase is formed in float64 and reduced mod 2π before the
+complex64 multiply, on the host or on the device where the field is.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import validate
+from ..opencl import as_device, like_input
+from ..opencl.arrays import cached
+from ..propagation import grid
+from ..propagation.batch import batched
+
+
+def _thin_lens(field, *, wavelength, pitch, focal_length, centre=(0.0, 0.0)):
+    """One plane: see :func:`thin_lens`."""
+    wavelength, (px, py) = grid.wave_pair(wavelength, pitch)
+    f = validate.within("focal_length", focal_length, validate.MAX_LENGTH)
+    if abs(f) < validate.MIN_LENGTH:
+        raise validate.InputError(f"focal_length must be non-zero [m]; got {focal_length!r}")
+    cx, cy = validate.pair("centre", centre, "m", validate.MAX_LENGTH)
+    rt, dev, from_host = as_device(field)
+    h, w = dev.shape
+
+    def make():
+        x = grid.coords(w, px)[None, :] - cx
+        y = grid.coords(h, py)[:, None] - cy
+        rho2 = x * x + y * y
+        # √(ρ² + f²) − f without the cancellation: ρ²/(√(ρ² + f²) + |f|), signed by f
+        sag = rho2 / (np.sqrt(rho2 + f * f) + abs(f)) * math.copysign(1.0, f)
+        phase = np.remainder(-2 * np.pi / wavelength * sag, 2 * np.pi)
+        return np.exp(1j * phase), []
+
+    screen, _ = cached(rt, ("thin-lens", (h, w), wavelength, px, py, f, cx, cy), make)
+    out = dev.copy()
+    rt.kernel("spectral", "multiply")(rt.queue, (h * w,), None, out.data, screen.data)
+    return like_input(out, from_host)
+
+
+thin_lens = batched(_thin_lens)
+thin_lens.__doc__ = """The field just behind a thin lens of focal length ``focal_length`` [m]
+(f < 0 diverges) centred at ``centre`` (x, y) [m]: U·exp(−ik(√(ρ² + f²) − f)).
+
+``field`` is an (H, W) or (..., H, W) array (NumPy or device) with ``wavelength`` [m] and
+``pitch`` [m] (or (x, y)), or a :class:`~holo_core.scene.field.Field`, which brings its own and
+gets a Field back on the same plane. Complex64, like the input."""
