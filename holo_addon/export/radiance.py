@@ -149,12 +149,14 @@ def border(box, size) -> tuple[float, float, float, float]:
             min((h - bottom + 0.5) / h, 1.0), min((h - top + 0.5) / h, 1.0))
 
 
-def request(scene, view_layer: str, camera: Camera, meshes, emitter_names) -> dict | None:
+def request(scene, view_layer: str, camera: Camera, meshes, emitter_names, *,
+            samples: int = 8) -> dict | None:
     """The worker's ``radiance`` job (see :func:`holo_core.worker.lit_emitters`): the scene
     written to a scratch folder as it is now (unsaved changes included), the command that
     renders its view layer ``view_layer`` with Cycles, and the camera of the cropped image.
     ``camera``: the render's camera uncropped, as a pinhole; ``meshes``: the emitters (world
-    metres), ``emitter_names`` their objects. None when no emitter is in view."""
+    metres), ``emitter_names`` their objects; ``samples``: Cycles' samples (denoised). None
+    when no emitter is in view."""
     box = region(camera, meshes)
     if box is None:
         return None
@@ -164,7 +166,7 @@ def request(scene, view_layer: str, camera: Camera, meshes, emitter_names) -> di
     image = folder / "radiance.exr"
     args = {"blend": str(blend), "scene": scene.name, "view_layer": view_layer,
             "frame": scene.frame_current, "emitters": sorted(set(emitter_names)),
-            "border": border(box, camera.resolution), "image": str(image),
+            "border": border(box, camera.resolution), "image": str(image), "samples": samples,
             "compat": compat.__file__}
     script = str(Path(__file__).resolve().parents[1] / "render" / "cycles_radiance.py")
     if bpy.app.binary_path:  # Blender: a background Blender without the user's add-ons

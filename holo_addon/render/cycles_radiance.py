@@ -4,16 +4,18 @@ cycles_radiance.py -- JSON``, or a Python with the bpy module: ``python cycles_r
 JSON``), started by the worker (:func:`holo_core.worker.lit_emitters`).
 
 The scene is the user's, written by :func:`holo_addon.export.radiance.write_scene`, at the
-frame being rendered, with the scene's own Cycles settings (samples, denoising, light paths).
-Only this changes: the emitters are seen by the camera and every ray; every other object is
-hidden from the camera alone, so it still casts its shadows on the emitters, lights them
-indirectly and shows in their reflections; the film is transparent; depth of field and motion
-blur are off (the hologram makes its own); the render is cropped to the emitters' region; the
-compositor and sequencer are off. The result is a float RGBA OpenEXR (premultiplied).
+frame being rendered, with the scene's own Cycles settings (light paths, clamping, world,
+seed) but samples of its own (``samples``), denoised by OpenImageDenoise. Also: the emitters
+are seen by the camera and every ray; every other object is hidden from the camera alone, so
+it still casts its shadows on the emitters, lights them indirectly and shows in their
+reflections; the film is transparent; depth of field and motion blur are off (the hologram
+makes its own); the render is cropped to the emitters' region; the compositor and sequencer
+are off. The result is a float RGBA OpenEXR (premultiplied).
 
 JSON: ``blend``, ``scene``, ``view_layer``, ``frame``, ``emitters`` (object names),
 ``border`` (min x, max x, min y, max y as Blender's render region), ``image`` (the output
-path), ``compat`` (the path of :mod:`holo_addon.blender.compat`, loaded on its own).
+path), ``samples``, ``compat`` (the path of :mod:`holo_addon.blender.compat`, loaded on its
+own).
 It imports nothing of the add-on's package, which the process does not have.
 """
 
@@ -57,6 +59,10 @@ def main(args: dict) -> None:
     r.use_compositing = False
     r.use_sequencer = False
     scene.cycles.pixel_filter_type = "BOX"  # the texels are pixels: the hologram blurs them
+    scene.cycles.samples = args["samples"]  # few, denoised: the radiance costs little
+    scene.cycles.use_denoising = True
+    scene.cycles.denoiser = "OPENIMAGEDENOISE"
+    scene.cycles.denoising_prefilter = "FAST"
     compat.set_exr_output(scene, multilayer=False)
     r.image_settings.color_mode = "RGBA"
     r.filepath = args["image"]

@@ -56,6 +56,7 @@ class Settings:
     opacity_threshold: float
     seed: int
     lighting: str = "SCENE"       # 'SCENE' (Cycles' radiance) or 'ALBEDO' (the colour alone)
+    lighting_samples: int = 8     # Cycles samples of the radiance (denoised)
     speckle: str = "EXACT"        # camera holograms: 'EXACT' (the looks' limit) or 'LOOKS'
 
     @classmethod
@@ -66,6 +67,7 @@ class Settings:
                    iterations=h.iterations, supersample=h.supersample,
                    composition=h.composition, exposure=2.0 ** h.exposure,
                    opacity_threshold=h.opacity_threshold, seed=h.seed, lighting=h.lighting,
+                   lighting_samples=h.lighting_samples,
                    speckle=h.speckle)
 
     def recording(self) -> tuple:
@@ -154,7 +156,8 @@ def prepare(scene, depsgraph, *, render=True, bake=False) -> Job:
         fingerprint = data.fingerprint(*settings.recording(), lighting)
         paths = hologram_paths(out, data.plate_name, settings.iterations, fingerprint)
     light = partial(radiance.request, scene, depsgraph.view_layer.name, data.view,
-                    data.points + data.triangles, data.names) if lit else None
+                    data.points + data.triangles, data.names,
+                    samples=settings.lighting_samples) if lit else None
     return Job(scene=data, settings=settings, output_dir=out, frame=frame,
                fingerprint=fingerprint, current=bool(paths) and all(p.is_file() for p in paths),
                holograms=paths, render=render, border=region, depth_unit=unit, radiance=light,

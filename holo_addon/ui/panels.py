@@ -20,6 +20,8 @@ class HOLO_PT_scene(bpy.types.Panel):
         layout.prop(h, "output_dir")
         layout.prop(h, "mode")
         layout.prop(h, "lighting")
+        if h.lighting == "SCENE":
+            layout.prop(h, "lighting_samples")
         col = layout.column(heading="Recording")
         if h.mode == "CAMERA":
             col.prop(h, "speckle")

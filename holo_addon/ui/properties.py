@@ -69,10 +69,14 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
         items=[("SCENE", "Scene", ("The holographic objects' colours are Cycles' render of "
                                    "them from the camera, lit by the scene: direct and "
                                    "indirect light, shadows, textures, normal maps, specular "
-                                   "highlights (Render ▸ Sampling sets its samples)")),
+                                   "highlights (Lighting Samples sets its samples)")),
                ("ALBEDO", "Albedo", ("The holographic objects show their Base Color alone, "
                                      "unlit (the colour attribute, texture or bake)"))],
         description="Where the holographic objects' colours come from")
+    lighting_samples: IntProperty(
+        name="Lighting Samples", default=8, min=1, max=4096,
+        description="Cycles samples of the holographic objects' radiance (Lighting: Scene), "
+                    "denoised; the scene's other Cycles settings (light paths, clamping) apply")
     speckle: EnumProperty(
         name="Speckle",
         items=[("EXACT", "Exact", ("The random-phase looks' limit in one pass: the emitters as "
