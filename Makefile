@@ -39,6 +39,7 @@ bench: $(STAMP)
 	$(PY) bench/propagation.py
 	$(PY) bench/record.py
 	$(PY) bench/render.py
+	$(PY) bench/sweep.py
 
 bench-runtimes: $(STAMP)
 	$(PY) bench/runtimes.py

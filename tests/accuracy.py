@@ -36,6 +36,10 @@ DEPTH_SINGLE_POINT = 5e-3   # two-wavelength depth vs the true planar depth (mea
 ALIAS_ENERGY = 1e-2         # energy above the new Nyquist, against a point-sampled raster's
 SPECKLE_SQRT_N = 0.3        # contrast ratio of 1 vs N renders against √N (finite-N scatter)
 
+# a transfer function made on the device (float64, or float32 with the split product) vs the
+# float64 host one: complex64 rounding and cexpi's 1e-7 (measured 3e-7 in float64; the split
+# route 5.4e-7 rad of phase at k·z = 7.9e6 rad, 1.1e-6 in the band's float32 roll-off weight)
+TRANSFER_ON_DEVICE = 2e-6
 # the sideband filter of an off-axis hologram vs the known object wave inside its band (the
 # issue's bound; measured 3e-8 to 1e-6 with the carrier known)
 SIDEBAND = 1e-2

@@ -107,6 +107,16 @@ def nonfinite_count(rt: Runtime, a: cla.Array) -> int:
     return int(rt.cache[key](a.view(np.float32).reshape(-1)).get())
 
 
+def nonzero_count(rt: Runtime, a: cla.Array) -> int:
+    """How many complex samples of ``a`` are not zero (a reduction on the device)."""
+    key = "nonzero"
+    if key not in rt.cache:
+        rt.cache[key] = ReductionKernel(rt.context, np.int32, neutral="0", reduce_expr="a+b",
+                                        map_expr="(x[i].x != 0.0f || x[i].y != 0.0f) ? 1 : 0",
+                                        arguments="__global const float2 *x")
+    return int(rt.cache[key](a.reshape(-1)).get())
+
+
 _ZERO = np.zeros(1, np.complex64)
 CACHE_BYTES = 512 * 2**20  # device memory kept for host-made arrays, least recently used out
 
@@ -144,13 +154,14 @@ def _rows(a: cla.Array):
 
 
 def cached(rt, key, make):
-    """``(device array, notes)`` for ``make() -> (host array, notes)``, made once per runtime."""
+    """``(device array, notes)`` for ``make() -> (host or device array, notes)``, made once
+    per runtime and ``key``; the least recently used go beyond ``CACHE_BYTES``."""
     lru = rt.cache.setdefault("spectral-lru", OrderedDict())
     if key in lru:
         lru.move_to_end(key)
         return lru[key]
-    host, notes = make()
-    lru[key] = rt.to_device(host, np.complex64), notes
+    made, notes = make()  # a host array (uploaded as complex64) or a device array
+    lru[key] = (made if is_device_array(made) else rt.to_device(made, np.complex64)), notes
     while sum(v[0].nbytes for v in lru.values()) > CACHE_BYTES and len(lru) > 1:
         lru.popitem(last=False)
     return lru[key]

@@ -18,9 +18,10 @@ import numpy as np
 
 from .. import validate
 from ..opencl import like_input
-from ..opencl.arrays import cached
+from ..opencl.arrays import cached, nonzero_count
 from . import grid
 from .convolution import convolution_setup, convolve
+from .transfer import asm_transfer
 
 BAND_EDGE = 0.2  # fraction of the band-limited ray range given to the cosine roll-off
 
@@ -55,12 +56,12 @@ def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), p
     wavelength, pitch, z, (x0, y0), padding = s.wavelength, s.pitch, s.z, s.offset, s.padding
     rt, dev, from_host, shape = s.rt, s.dev, s.from_host, s.shape
 
-    def make():
-        tf = transfer_function(shape, wavelength=wavelength, pitch=pitch, distance=z,
-                               offset=(x0, y0), band_limit=band_limit)
+    def make():  # on the device (transfer.py); the float64 reference is transfer_function
+        tf = asm_transfer(rt, shape, wavelength=wavelength, pitch=pitch, distance=z,
+                          offset=(x0, y0), band_limit=band_limit, edge=BAND_EDGE)
         notes = sampling_notes(dev.shape, shape, wavelength, pitch, z, (x0, y0), padding,
-                               band_limit, tf)
-        return tf / (shape[0] * shape[1]), notes
+                               band_limit, nonzero_count(rt, tf) > 0)
+        return tf, notes
 
     key = ("asm", dev.shape, shape, wavelength, pitch, z, x0, y0, bool(band_limit))
     tf, notes = cached(rt, key, make)
@@ -120,8 +121,9 @@ def alias_free_distance(shape, pitch, wavelength, offset=(0.0, 0.0)) -> float:
     return max(0.0, min(limits))
 
 
-def sampling_notes(shape, padded, wavelength, pitch, z, offset, padding, band_limit, tf):
-    """Why the grid cannot carry the field to ``z`` alias-free, as messages (empty if it can)."""
+def sampling_notes(shape, padded, wavelength, pitch, z, offset, padding, band_limit, reaches):
+    """Why the grid cannot carry the field to ``z`` alias-free, as messages (empty if it can);
+    ``reaches``: the transfer function is not all zero."""
     safe = alias_free_distance(padded, pitch, wavelength, offset)
     px, py = grid.pitch_pair(pitch)
     spacing = f"{px:.4g} m" if px == py else f"{px:.4g} x {py:.4g} m"
@@ -134,7 +136,7 @@ def sampling_notes(shape, padded, wavelength, pitch, z, offset, padding, band_li
     elif abs(z) > safe and padding < 2:
         notes.append(f"angular_spectrum: with padding {padding:g} < 2 the band-limited "
                      f"convolution wraps around beyond |distance| = {safe:.4g} m; use padding >= 2")
-    if not tf.any():
+    if not reaches:
         notes.append(f"angular_spectrum: no direction this grid ({where}) samples reaches the "
                      f"target at offset {offset} m, distance {z:.4g} m: the result is zero")
     return notes

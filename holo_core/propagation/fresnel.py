@@ -16,6 +16,7 @@ from ..opencl import as_device, is_device_array, like_input
 from ..opencl.arrays import cached, copy
 from . import grid
 from .convolution import convolution_setup, convolve
+from .transfer import fresnel_transfer
 
 
 def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2):
@@ -40,7 +41,12 @@ def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2)
             & (np.abs(y0 - wavelength * z * fy) <= shape[0] * py / 2)
         return np.where(keep, np.exp(1j * phase), 0) / (shape[0] * shape[1]), []
 
-    tf, _ = cached(rt, ("fresnel", dev.shape, shape, wavelength, pitch, z, x0, y0), make)
+    def made():  # on the device where it has float64 (transfer.py), else on the host
+        tf = fresnel_transfer(rt, shape, wavelength=wavelength, pitch=pitch, distance=z,
+                              offset=(x0, y0))
+        return make() if tf is None else (tf, [])
+
+    tf, _ = cached(rt, ("fresnel", dev.shape, shape, wavelength, pitch, z, x0, y0), made)
     return like_input(convolve(rt, dev, tf), from_host)
 
 

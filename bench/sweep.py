@@ -1,0 +1,105 @@
+"""A focus sweep: 100 distances of a 1024² field (2x padding), each a new transfer function,
+against the same propagation repeated at one distance (its transfer function cached) and
+against plain NumPy rebuilding its float64 kernel per step, all in this run.
+
+Prints per-step times (median of the sweep's steps), the ratio of a new distance to a
+repeated one (issue 28's bound: <= 2), the ratio against NumPy, and the sweep's error
+against float64 NumPy at three of its distances. Run: make bench, or python bench/sweep.py
+[--steps N] [--size N].
+"""
+
+import argparse
+import platform
+import statistics
+import subprocess
+import time
+
+import numpy as np
+
+from holo_core.opencl import get_runtime, to_device
+from holo_core.propagation import angular_spectrum, transfer_function
+from holo_core.propagation.grid import padded_shape
+
+PITCH, LAM = 2e-6, 633e-9
+
+
+def numpy_step(field, shape, z):
+    """Plain NumPy of the same method, its float64 kernel rebuilt for the new distance."""
+    tf = transfer_function(shape, wavelength=LAM, pitch=PITCH, distance=z).astype(np.complex64)
+    h, w = field.shape
+    big = np.zeros(shape, np.complex64)
+    r0, c0 = (shape[0] - h) // 2, (shape[1] - w) // 2
+    big[r0:r0 + h, c0:c0 + w] = field
+    return np.fft.ifft2(np.fft.fft2(big) * tf)[r0:r0 + h, c0:c0 + w]
+
+
+def cpu_name() -> str:
+    try:
+        out = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
+        return next(line.split(":", 1)[1].strip() for line in out.splitlines()
+                    if line.startswith("Model name"))
+    except (OSError, StopIteration):
+        return platform.processor() or "unknown CPU"
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--steps", type=int, default=100)
+    ap.add_argument("--size", type=int, default=1024)
+    ap.add_argument("--numpy-steps", type=int, default=5)
+    args = ap.parse_args()
+    rt = get_runtime()
+    n = args.size
+    rng = np.random.default_rng(1)
+    field = (rng.normal(size=(n, n)) + 1j * rng.normal(size=(n, n))).astype(np.complex64)
+    shape = padded_shape(field.shape, 2)
+    distances = np.linspace(4e-3, 6e-3, args.steps)
+    dev = to_device(field)
+
+    def step(z):
+        out = angular_spectrum(dev, wavelength=LAM, pitch=PITCH, distance=float(z))
+        rt.queue.finish()
+        return out
+
+    step(5e-3)  # programs built, FFT planned, the repeated distance's transfer cached
+    repeated = []
+    for _ in range(10):
+        t = time.perf_counter()
+        step(5e-3)
+        repeated.append(time.perf_counter() - t)
+    sweep = []
+    for z in distances:
+        t = time.perf_counter()
+        step(z)
+        sweep.append(time.perf_counter() - t)
+    t = time.perf_counter()
+    stack = angular_spectrum(dev, wavelength=LAM, pitch=PITCH, distance=distances)
+    rt.queue.finish()
+    batch = (time.perf_counter() - t) / len(distances)
+    plain = []
+    for z in distances[:args.numpy_steps]:
+        t = time.perf_counter()
+        numpy_step(field, shape, z)
+        plain.append(time.perf_counter() - t)
+    errors = []
+    for i in (0, len(distances) // 2, len(distances) - 1):
+        ref = numpy_step(field.astype(np.complex128), shape, distances[i])
+        got = stack[i].get()
+        errors.append(float(np.linalg.norm(got - ref) / np.linalg.norm(ref)))
+    rep, new, np_med = (statistics.median(v) for v in (repeated, sweep, plain))
+    print(f"CPU: {cpu_name()}; device: {rt.device.name.strip()} "
+          f"({rt.device.platform.name.strip()}), FFT {rt.fft.name}, float64 "
+          f"{'yes' if rt.has_fp64 else 'no (split float32 route)'}")
+    print(f"field {n}x{n}, padding 2 -> {shape[0]}x{shape[1]}, {len(distances)} distances "
+          f"{distances[0]:g} to {distances[-1]:g} m")
+    print(f"repeated distance (cached transfer): {rep * 1e3:7.1f} ms per step (median)")
+    print(f"sweep, new distance each step      : {new * 1e3:7.1f} ms per step (median), "
+          f"{new / rep:.2f}x a repeated step (bound 2)")
+    print(f"sweep as one batched call          : {batch * 1e3:7.1f} ms per step")
+    print(f"plain NumPy, kernel rebuilt per step: {np_med * 1e3:7.1f} ms per step "
+          f"({len(plain)} steps): holo is {np_med / new:.1f}x faster")
+    print(f"error vs float64 NumPy at 3 distances: {', '.join(f'{e:.1e}' for e in errors)}")
+
+
+if __name__ == "__main__":
+    main()
