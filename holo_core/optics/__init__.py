@@ -5,9 +5,11 @@
 - ``depth.py``: depth from the two-wavelength phase difference (Eq. 26–30)
 - ``speckle.py``: averaging, downsampling and the speckle contrast (Sect. VII-E)
 - ``lens.py``: a thin lens's phase on a field or a Field (:func:`thin_lens`)
+- ``metrics.py``: image quality against a reference, :func:`psnr` and :func:`ssim`
 """
 
 from .lens import thin_lens
+from .metrics import psnr, ssim
 from .pupil import Pupil
 
-__all__ = ["Pupil", "thin_lens"]
+__all__ = ["Pupil", "psnr", "ssim", "thin_lens"]
