@@ -19,14 +19,17 @@ _API = {"Camera": ".scene", "look_at": ".scene", "Plate": ".scene", "Hologram": 
         "fraunhofer": ".propagation", "rayleigh_sommerfeld": ".propagation",
         "tilt": ".propagation", "propagate_to_plane": ".propagation",
         "resample": ".propagation", "to_device": ".opencl", "Field": ".scene",
-        "thin_lens": ".optics", "psnr": ".optics", "ssim": ".optics"}
+        "thin_lens": ".optics", "psnr": ".optics", "ssim": ".optics",
+        "adjoint": ".propagation.adjoint", "gerchberg_saxton": ".phase",
+        "optimise_phase": ".phase", "double_phase": ".phase"}
 # the packages, imported on first use too (plot needs matplotlib: pip install 'holo[plot]')
-_PACKAGES = ("camera", "io", "opencl", "optics", "plate", "plot", "propagation", "scene",
-             "validate")
+_PACKAGES = ("camera", "io", "opencl", "optics", "phase", "plate", "plot", "propagation",
+             "scene", "validate")
 # the names `from holo_core import *` gives (every _API name; test_notebook holds them equal)
 __all__ = ["Camera", "Field", "Hologram", "InputError", "Mesh", "Plate", "Pupil", "RenderResult",
-           "angular_spectrum", "find_carrier", "fraunhofer", "fresnel", "import_acquired",
-           "look_at", "propagate_to_plane", "psnr", "rayleigh_sommerfeld", "read_hologram", "read_mesh",
+           "adjoint", "angular_spectrum", "double_phase", "find_carrier", "fraunhofer", "fresnel",
+           "gerchberg_saxton", "import_acquired", "look_at", "optimise_phase",
+           "propagate_to_plane", "psnr", "rayleigh_sommerfeld", "read_hologram", "read_mesh",
            "reconstruct", "record_hologram", "record_points", "render_camera", "render_view",
            "resample", "sideband", "ssim", "thin_lens", "tilt", "to_device", "write_acquired",
            "write_hologram", "write_view"]

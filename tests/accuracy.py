@@ -40,6 +40,12 @@ SPECKLE_SQRT_N = 0.3        # contrast ratio of 1 vs N renders against √N (fin
 # float64 host one: complex64 rounding and cexpi's 1e-7 (measured 3e-7 in float64; the split
 # route 5.4e-7 rad of phase at k·z = 7.9e6 rad, 1.1e-6 in the band's float32 roll-off weight)
 TRANSFER_ON_DEVICE = 2e-6
+# the dot-product test of a propagation and its adjoint, complex64 on 48 x 64 (float32 sums
+# of a few FFTs; measured below 1e-7)
+ADJOINT = 1e-6
+# the dot-product test of a propagation and its adjoint, complex64 on 48 x 64 (float32 sums
+# of a few FFTs; measured 1.5e-9 to 5.2e-9 relative to |A·x|·|y|)
+ADJOINT = 1e-6
 # the sideband filter of an off-axis hologram vs the known object wave inside its band (the
 # issue's bound; measured 3e-8 to 1e-6 with the carrier known)
 SIDEBAND = 1e-2

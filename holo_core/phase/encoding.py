@@ -1,0 +1,38 @@
+"""Phase-only encodings of a complex field for a phase-only SLM (facts §7).
+
+Double-phase (Hsueh & Sawchuk 1978; checkerboarded as Maimone, Georgiou & Kollin 2017): a
+sample c = A·exp(iφ) with A <= 1 is the mean of two unit phasors, exp(i(φ + α)) and
+exp(i(φ − α)) with α = arccos A. Laid out on a checkerboard, the pattern is c plus
+(−1)^(i+j)·i·sin α·exp(iφ): the second term sits around the Nyquist corner (1/2p, 1/2p), so a
+low-pass (the display's 4f filter, or a band-limited propagation) leaves c where c and
+sin α·exp(iφ) are band-limited to under half the Nyquist frequency.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import validate
+from ..validate import InputError
+
+
+def double_phase(field, *, max_amplitude=None) -> np.ndarray:
+    """The checkerboarded double-phase pattern of ``field`` (H, W) complex, as phases [rad] in
+    (−π, π], float64: φ + α where row + column is even, φ − α where odd, α = arccos(|c|/m).
+
+    ``max_amplitude`` m (field units) normalises the amplitudes (default: the largest |c|); a
+    sample above it is refused, so the encoding never clips silently. Device arrays are read
+    back; the result is on the host (an SLM's image)."""
+    c = field.get() if hasattr(field, "get") and hasattr(field, "queue") else field
+    c = validate.host_field("field", c).astype(np.complex128)
+    top = float(np.abs(c).max())
+    m = top if max_amplitude is None else validate.positive("max_amplitude", max_amplitude)
+    if m == 0:
+        raise InputError("field must not be all zero (no amplitude to encode)")
+    if top > m * (1 + 1e-12):
+        raise InputError(f"field's largest amplitude {top:.6g} exceeds max_amplitude {m!r}; "
+                         f"the encoding would clip it")
+    alpha = np.arccos(np.clip(np.abs(c) / m, 0, 1))
+    rows, cols = np.indices(c.shape)
+    sign = np.where((rows + cols) % 2 == 0, 1.0, -1.0)
+    return np.angle(np.exp(1j * (np.angle(c) + sign * alpha)))
