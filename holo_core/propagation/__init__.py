@@ -30,9 +30,18 @@ def _out_grid(kw, shape, pitch):
         if kw.get("out_pitch") is not None else pitch
 
 
+def _scaled_grid(kw, shape, pitch):  # scaled.py's defaults: the input's window at out_pitch
+    out = grid.pitch_pair(kw["out_pitch"], "out_pitch") if kw.get("out_pitch") is not None \
+        else pitch
+    if kw.get("out_shape") is not None:
+        return validate.shape2d("out_shape", kw["out_shape"]), out
+    return (max(1, round(shape[0] * pitch[1] / out[1])),
+            max(1, round(shape[1] * pitch[0] / out[0]))), out
+
+
 # the public names: plane functions that also take Fields and batches (batch.py)
-angular_spectrum = batched(_asm_module.angular_spectrum, moves=_shifted)
-fresnel = batched(_fresnel_module.fresnel, moves=_shifted)
+angular_spectrum = batched(_asm_module.angular_spectrum, moves=_shifted, grid_of=_scaled_grid)
+fresnel = batched(_fresnel_module.fresnel, moves=_shifted, grid_of=_scaled_grid)
 fraunhofer = batched(_fresnel_module.fraunhofer, returns_pitch=True,
                      moves=lambda kw: translation(0.0, 0.0, kw["distance"]))
 rayleigh_sommerfeld = batched(_rs_module.rayleigh_sommerfeld, moves=_shifted,

@@ -21,13 +21,14 @@ from ..opencl import like_input
 from ..opencl.arrays import cached, nonzero_count
 from . import grid
 from .convolution import convolution_setup, convolve
+from .scaled import scaled
 from .transfer import asm_transfer
 
 BAND_EDGE = 0.2  # fraction of the band-limited ray range given to the cosine roll-off
 
 
 def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
-                     band_limit=True):
+                     band_limit=True, out_pitch=None, out_shape=None):
     """The field on the parallel plane at ``distance``, its centre shifted by ``offset``.
 
     Parameters
@@ -47,11 +48,22 @@ def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), p
     band_limit : bool
         Apply the (shifted) band limit; without it, distances beyond the grid's alias-free
         limit give a :class:`~holo_core.validate.SamplingWarning`.
+    out_pitch : float or (float, float), optional
+        Output sample spacing [m]: the propagation is evaluated on that grid by a chirp-z
+        transform (:mod:`.scaled`); coarser than ``pitch`` drops what it cannot hold.
+    out_shape : (int, int), optional
+        Output (rows, cols), centred at ``offset``; default the input's window at
+        ``out_pitch``.
 
     Returns
     -------
-    Complex64 array of the input's shape and pitch, NumPy or device array like the input.
+    Complex64 array of the input's shape and pitch (or ``out_shape`` and ``out_pitch``),
+    NumPy or device array like the input.
     """
+    if out_pitch is not None or out_shape is not None:
+        return scaled("asm", field, wavelength=wavelength, pitch=pitch, distance=distance,
+                      offset=offset, padding=padding, out_pitch=out_pitch,
+                      out_shape=out_shape, band_limit=band_limit)
     s = convolution_setup(field, wavelength, pitch, distance, offset, padding)
     wavelength, pitch, z, (x0, y0), padding = s.wavelength, s.pitch, s.z, s.offset, s.padding
     rt, dev, from_host, shape = s.rt, s.dev, s.from_host, s.shape

@@ -16,30 +16,28 @@ from ..opencl import as_device, is_device_array, like_input
 from ..opencl.arrays import cached, copy
 from . import grid
 from .convolution import convolution_setup, convolve
+from .scaled import scaled
 from .transfer import fresnel_transfer
 
 
-def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2):
+def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
+            out_pitch=None, out_shape=None):
     """The paraxial (Fresnel) field on the parallel plane at ``distance``.
 
     Same parameters and result as :func:`~holo_core.propagation.angular_spectrum` (``wavelength``,
-    ``pitch`` (a number or (x, y)), ``distance``, ``offset`` in metres); accurate only where the
-    paraxial approximation holds.
+    ``pitch`` (a number or (x, y)), ``distance``, ``offset``, ``out_pitch`` in metres,
+    ``out_shape``); accurate only where the paraxial approximation holds.
     """
+    if out_pitch is not None or out_shape is not None:
+        return scaled("fresnel", field, wavelength=wavelength, pitch=pitch, distance=distance,
+                      offset=offset, padding=padding, out_pitch=out_pitch, out_shape=out_shape)
     s = convolution_setup(field, wavelength, pitch, distance, offset, padding)
     wavelength, pitch, z, (x0, y0), padding = s.wavelength, s.pitch, s.z, s.offset, s.padding
     rt, dev, from_host, shape = s.rt, s.dev, s.from_host, s.shape
 
-    px, py = pitch
-
     def make():
-        fy, fx = grid.freqs(shape[0], py)[:, None], grid.freqs(shape[1], px)[None, :]
-        carrier = math.remainder(2 * math.pi * z / wavelength, 2 * math.pi)
-        phase = carrier - np.pi * wavelength * z * (fx**2 + fy**2) + 2 * np.pi * (fx * x0 + fy * y0)
-        # the ray of frequency f lands at x0 - λz·f: keep those inside half the padded window
-        keep = (np.abs(x0 - wavelength * z * fx) <= shape[1] * px / 2) \
-            & (np.abs(y0 - wavelength * z * fy) <= shape[0] * py / 2)
-        return np.where(keep, np.exp(1j * phase), 0) / (shape[0] * shape[1]), []
+        tf = fresnel_transfer_host(shape, wavelength, pitch, z, (x0, y0))
+        return tf / (shape[0] * shape[1]), []
 
     def made():  # on the device where it has float64 (transfer.py), else on the host
         tf = fresnel_transfer(rt, shape, wavelength=wavelength, pitch=pitch, distance=z,
@@ -48,6 +46,19 @@ def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2)
 
     tf, _ = cached(rt, ("fresnel", dev.shape, shape, wavelength, pitch, z, x0, y0), made)
     return like_input(convolve(rt, dev, tf), from_host)
+
+
+def fresnel_transfer_host(shape, wavelength, pitch, distance, offset) -> np.ndarray:
+    """The Fresnel transfer function exp(ikz)·exp(-iπλz(fx² + fy²))·exp(i2π(fx·x0 + fy·y0)) on
+    the padded ``shape`` (FFT order), complex128, made in float64: the rays x0 - λz·f kept
+    inside half the window. ``pitch`` (x, y), ``wavelength``, ``distance``, ``offset`` [m]."""
+    (px, py), (x0, y0), z = pitch, offset, distance
+    fy, fx = grid.freqs(shape[0], py)[:, None], grid.freqs(shape[1], px)[None, :]
+    carrier = math.remainder(2 * math.pi * z / wavelength, 2 * math.pi)
+    phase = carrier - np.pi * wavelength * z * (fx**2 + fy**2) + 2 * np.pi * (fx * x0 + fy * y0)
+    keep = (np.abs(x0 - wavelength * z * fx) <= shape[1] * px / 2) \
+        & (np.abs(y0 - wavelength * z * fy) <= shape[0] * py / 2)
+    return np.where(keep, np.exp(1j * phase), 0)
 
 
 def fraunhofer(field, *, wavelength, pitch, distance):
