@@ -4,7 +4,9 @@ Prints both times (min and median of repeated runs, device arrays in and out for
 ratio, and each result's error against a float64 NumPy reference. Run: make bench
 """
 
+import os
 import statistics
+import sys
 import time
 
 import numpy as np
@@ -12,6 +14,9 @@ import numpy as np
 from holo_core.opencl import get_runtime
 from holo_core.propagation import angular_spectrum, transfer_function
 from holo_core.propagation.grid import padded_shape
+
+sys.path.insert(0, os.path.dirname(__file__))
+from sweep import cpu_name  # the bench folder's own helper
 
 N, PITCH, LAM, Z, REPEATS = 1024, 2e-6, 633e-9, 5e-3, 15
 
@@ -52,8 +57,10 @@ def main():
 
     t_holo, m_holo = timed(holo)
     t_np, m_np = timed(lambda: numpy_asm(field, tf32, np.complex64))
-    err = lambda a: np.linalg.norm(a - reference) / np.linalg.norm(reference)  # noqa: E731
-    print(f"device: {rt.device.name}, FFT backend: {rt.fft.name}")
+    err = lambda a: np.linalg.norm(a - reference) / np.linalg.norm(reference)
+    print(f"CPU: {cpu_name()}, load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} "
+          f"cores; device: {rt.device.name} ({rt.device.platform.name.strip()}), FFT backend: "
+          f"{rt.fft.name}")
     print(f"field {N}x{N}, padding 2 -> {shape[0]}x{shape[1]}, distance {Z} m")
     print(f"holo angular_spectrum : {t_holo * 1e3:7.1f} ms (median {m_holo * 1e3:.1f}), "
           f"error vs float64 {err(holo().get()):.2e}")

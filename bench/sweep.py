@@ -9,6 +9,7 @@ against float64 NumPy at three of its distances. Run: make bench, or python benc
 """
 
 import argparse
+import os
 import platform
 import statistics
 import subprocess
@@ -35,7 +36,7 @@ def numpy_step(field, shape, z):
 
 def cpu_name() -> str:
     try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
+        out = subprocess.run(["lscpu"], check=False, capture_output=True, text=True).stdout
         return next(line.split(":", 1)[1].strip() for line in out.splitlines()
                     if line.startswith("Model name"))
     except (OSError, StopIteration):
@@ -87,7 +88,8 @@ def main():
         got = stack[i].get()
         errors.append(float(np.linalg.norm(got - ref) / np.linalg.norm(ref)))
     rep, new, np_med = (statistics.median(v) for v in (repeated, sweep, plain))
-    print(f"CPU: {cpu_name()}; device: {rt.device.name.strip()} "
+    print(f"CPU: {cpu_name()}, load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} "
+          f"cores; device: {rt.device.name.strip()} "
           f"({rt.device.platform.name.strip()}), FFT {rt.fft.name}, float64 "
           f"{'yes' if rt.has_fp64 else 'no (split float32 route)'}")
     print(f"field {n}x{n}, padding 2 -> {shape[0]}x{shape[1]}, {len(distances)} distances "
