@@ -368,7 +368,9 @@ def api_calls():
     """(name, function, valid keyword arguments) of cheap public calls."""
     from holo_core import propagation as prop
     from holo_core.camera import render_camera
-    from holo_core.plate import reconstruct, record_points, render_view
+    from holo_core.plate.reconstruct import reconstruct
+    from holo_core.plate.record import record_points
+    from holo_core.plate.view import render_view
     from holo_core.plate.sampling import choose
     from holo_core.scene import Camera, Hologram, Mesh, look_at, sample_points
     field = np.ones((16, 16), np.complex64)
