@@ -80,29 +80,24 @@ def plan(args) -> int:
     from .plate.sampling import plan_view
     from .scene.camera import Camera, look_at
     from .scene.plate import ViewingZone
-    if args.bounds is not None:  # where they are: no move
-        bounds = np.reshape(args.bounds, (2, 3))
+    if args.mesh is not None:
+        from .io.mesh import read_mesh
+        v = read_mesh(args.mesh).vertices
+        lo, hi = v.min(0), v.max(0)
+    elif args.box is not None:
+        hi = np.array(args.box) / 2
+        lo = -hi
     else:
-        if args.mesh is not None:
-            from .io.mesh import read_mesh
-            v = read_mesh(args.mesh).vertices
-            lo, hi = v.min(0), v.max(0)
-        elif args.box is not None:
-            hi = np.array(args.box) / 2
-            lo = -hi
-        else:
-            raise ValueError("plan needs the objects: a mesh file, --box W H D or --bounds [m]")
-        shift = np.array([-(lo[0] + hi[0]) / 2, -(lo[1] + hi[1]) / 2, -hi[2] - args.distance])
-        bounds = np.array([lo + shift, hi + shift])
+        raise ValueError("plan needs the objects: a mesh file or --box W H D [m]")
+    shift = np.array([-(lo[0] + hi[0]) / 2, -(lo[1] + hi[1]) / 2, -hi[2] - args.distance])
+    bounds = np.array([lo + shift, hi + shift])
     eye = np.array(args.camera if args.camera else (0.0, 0.0, args.distance))
     target = np.array(args.look_at) if args.look_at else bounds.mean(0)
     focus = args.focus_distance or float(np.linalg.norm(eye - target))
     cam = Camera(matrix_world=look_at(eye, target, up=(0, 1, 0)), lens=args.lens,
                  sensor_width=args.sensor_width, resolution=tuple(args.resolution),
                  fstop=args.fstop, focus_distance=focus if args.fstop else None)
-    zone = ViewingZone.around(eye, cam.aperture_diameter or 0.0, args.zone_margin) \
-        if args.zone is None else ViewingZone(centre=args.zone[:3], half_extents=args.zone[3:],
-                                              pupil=cam.aperture_diameter or 0.0)
+    zone = ViewingZone.around(eye, cam.aperture_diameter or 0.0, args.zone_margin)
     p = plan_plate(tuple(args.plate_size), bounds, zone=zone, resolution=args.samples,
                    encoding=args.encoding, camera=(eye, cam.pixel_angle(),
                                                    cam.aperture_diameter),
@@ -263,11 +258,6 @@ def main(argv=None) -> int:
     p.add_argument("mesh", nargs="?", help="the objects (.ply or .obj, metres), or --box")
     p.add_argument("--box", type=POSITIVE, nargs=3, metavar=("W", "H", "D"),
                    help="the objects' box [m] instead of a mesh")
-    p.add_argument("--bounds", type=FINITE, nargs=6, metavar=("X0", "Y0", "Z0", "X1", "Y1", "Z1"),
-                   help="the objects' box [m] in the plate's frame, where it is (no --distance)")
-    p.add_argument("--zone", type=FINITE, nargs=6, metavar=("X", "Y", "Z", "HX", "HY", "HZ"),
-                   help="the viewing zone's centre and half widths [m] in the plate's frame "
-                        "(default: --zone-margin around the camera's pupil)")
     p.add_argument("--distance", type=POSITIVE, default=0.3,
                    help="the objects' nearest point behind the plate [m] (0.3)")
     p.add_argument("--plate-size", type=POSITIVE, nargs=2, default=(0.1, 0.1),
