@@ -9,15 +9,16 @@ below it (ui → compositor → render → export → blender):
 - ``render/``: the job, run in a worker process (``pipeline``), with the preferences'
   ``options``; the Cycles script that renders the emitters' radiance (``cycles_radiance``)
 - ``compositor/``: the pass in the compositor: Depth Combine, per-frame passes, frame handlers
-- ``ui/``: ``properties`` (Object.holo, Scene.holo), ``preferences``, ``operators``, ``panels``,
-  and the plate's coverage ``overlay`` in the viewport
+- ``ui/``: ``properties`` (Object.holo, Scene.holo), ``preferences``, ``operators``, ``plates``
+  (the viewing zone, the planner, File ▸ Import ▸ Hologram), ``panels``, and the plate's
+  coverage and viewing zone ``overlay`` in the viewport
 - ``demo`` (the built-in scene) and ``build`` (the extension's zip), run as modules
 """
 
 from .compositor import passes
-from .ui import operators, overlay, panels, preferences, properties
+from .ui import operators, overlay, panels, plates, preferences, properties
 
-MODULES = (properties, preferences, operators, panels, passes, overlay)
+MODULES = (properties, preferences, operators, plates, panels, passes, overlay)
 
 
 def register():

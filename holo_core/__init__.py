@@ -7,7 +7,8 @@ towards +z; fields are exp(+ikr) waves (time dependence exp(-iωt)); arrays are 
 
 __version__ = "0.1.0"
 
-_API = {"Camera": ".scene", "look_at": ".scene", "Plate": ".scene", "Hologram": ".scene",
+_API = {"Camera": ".scene", "look_at": ".scene", "Plate": ".scene", "ViewingZone": ".scene",
+        "Hologram": ".scene",
         "Mesh": ".scene", "Pupil": ".optics", "record_hologram": ".plate",
         "record_points": ".plate", "reconstruct": ".plate", "render_view": ".plate",
         "sideband": ".plate", "find_carrier": ".plate",
@@ -27,12 +28,12 @@ _PACKAGES = ("camera", "io", "opencl", "optics", "phase", "plate", "plot", "prop
              "scene", "validate")
 # the names `from holo_core import *` gives (every _API name; test_notebook holds them equal)
 __all__ = ["Camera", "Field", "Hologram", "InputError", "Mesh", "Plate", "Pupil", "RenderResult",
-           "adjoint", "angular_spectrum", "double_phase", "find_carrier", "fraunhofer", "fresnel",
-           "gerchberg_saxton", "import_acquired", "look_at", "optimise_phase",
-           "propagate_to_plane", "psnr", "rayleigh_sommerfeld", "read_hologram", "read_mesh",
-           "reconstruct", "record_hologram", "record_points", "render_camera", "render_view",
-           "resample", "sideband", "ssim", "thin_lens", "tilt", "to_device", "write_acquired",
-           "write_hologram", "write_view"]
+           "ViewingZone", "adjoint", "angular_spectrum", "double_phase", "find_carrier",
+           "fraunhofer", "fresnel", "gerchberg_saxton", "import_acquired", "look_at",
+           "optimise_phase", "propagate_to_plane", "psnr", "rayleigh_sommerfeld", "read_hologram",
+           "read_mesh", "reconstruct", "record_hologram", "record_points", "render_camera",
+           "render_view", "resample", "sideband", "ssim", "thin_lens", "tilt", "to_device",
+           "write_acquired", "write_hologram", "write_view"]
 
 
 def __getattr__(name):  # the top-level API, imported on first use (keeps `import` light)

@@ -1,4 +1,4 @@
-"""Command line: ``python -m holo_core devices | demo | record | info | render``."""
+"""Command line: ``python -m holo_core devices | demo | plan | record | info | render``."""
 
 from __future__ import annotations
 
@@ -67,6 +67,72 @@ def record(args) -> int:
                          progress=_progress_bar())
     print()
     print(write_hologram(out, holo))
+    return 0
+
+
+def plan(args) -> int:
+    """What a plate will take and give, before any recording (the plate's frame: the plate is
+    z = 0, the objects behind it, the camera in front)."""
+    import numpy as np
+
+    from . import memory
+    from .plate.sampling import plan as plan_plate
+    from .plate.sampling import plan_view
+    from .scene.camera import Camera, look_at
+    from .scene.plate import ViewingZone
+    if args.bounds is not None:  # where they are: no move
+        bounds = np.reshape(args.bounds, (2, 3))
+    else:
+        if args.mesh is not None:
+            from .io.mesh import read_mesh
+            v = read_mesh(args.mesh).vertices
+            lo, hi = v.min(0), v.max(0)
+        elif args.box is not None:
+            hi = np.array(args.box) / 2
+            lo = -hi
+        else:
+            raise ValueError("plan needs the objects: a mesh file, --box W H D or --bounds [m]")
+        shift = np.array([-(lo[0] + hi[0]) / 2, -(lo[1] + hi[1]) / 2, -hi[2] - args.distance])
+        bounds = np.array([lo + shift, hi + shift])
+    eye = np.array(args.camera if args.camera else (0.0, 0.0, args.distance))
+    target = np.array(args.look_at) if args.look_at else bounds.mean(0)
+    focus = args.focus_distance or float(np.linalg.norm(eye - target))
+    cam = Camera(matrix_world=look_at(eye, target, up=(0, 1, 0)), lens=args.lens,
+                 sensor_width=args.sensor_width, resolution=tuple(args.resolution),
+                 fstop=args.fstop, focus_distance=focus if args.fstop else None)
+    zone = ViewingZone.around(eye, cam.aperture_diameter or 0.0, args.zone_margin) \
+        if args.zone is None else ViewingZone(centre=args.zone[:3], half_extents=args.zone[3:],
+                                              pupil=cam.aperture_diameter or 0.0)
+    p = plan_plate(tuple(args.plate_size), bounds, zone=zone, resolution=args.samples,
+                   encoding=args.encoding, camera=(eye, cam.pixel_angle(),
+                                                   cam.aperture_diameter),
+                   max_resolution=args.max_samples)
+    v = plan_view(p, position=eye, pixel_angle=cam.pixel_angle(), pupil=cam.aperture_diameter,
+                  resolution=cam.resolution, distance=float(np.linalg.norm(eye - target)))
+    rows, cols = p.shape
+    um = 1e6
+    print(f"plate       {args.plate_size[0]:g} x {args.plate_size[1]:g} m, {cols} x {rows} "
+          f"samples at pitch {p.pitch * um:.3g} µm, {p.encoding} "
+          f"({'the object wave' if p.encoding == 'complex' else '|O + R|², off axis'})")
+    print(f"zone        {zone.describe()}")
+    print(f"band        sin θ = {p.band:.3g}: the widest line from an object point to the zone")
+    print(f"wavelength  λ = {p.wavelength * um:.4g} µm from the pitch and the band (depth "
+          f"partner {p.depth_wavelength * um:.6g} µm)")
+    print(f"emitters    one per {p.step:.3g} rad seen from the zone's centre; occlusion on "
+          f"{p.slabs()} slabs of {p.slab * 1e3:.3g} mm")
+    print(f"memory      {memory.gib(p.memory_bytes())} while recording "
+          f"({memory.gib(8 * 4 * rows * cols)} the plate)")
+    print(f"recording   about {p.record_seconds():.0f} s on a 2-core CPU")
+    lens = f"{cam.lens:g} mm f/{cam.fstop:g}" if cam.fstop else f"{cam.lens:g} mm pinhole"
+    print(f"view        {cam.resolution[0]} x {cam.resolution[1]} px, {lens}, from "
+          f"({eye[0]:g}, {eye[1]:g}, {eye[2]:g}) m: resolves {v.spot_px:.2f} px (λ/D), "
+          + ("sharp" if v.sharp else f"blurred to about {v.blur_px:.2f} px"))
+    print(f"sharp view  needs {v.sharp_samples} samples along the plate's longer side "
+          f"(a fine pixel, {0.5:g} px" + (", at a pinhole's best: use a lens)" if not cam.fstop
+                                           else ")"))
+    if v.outside_zone > 0:
+        print(f"warning     the camera's pupil reaches {v.outside_zone:.3g} m beyond the zone")
+    print(f"per view    about {v.seconds:.1f} s")
     return 0
 
 
@@ -192,6 +258,41 @@ def main(argv=None) -> int:
                    help="the most point emitters sampled on the mesh (200000)")
     p.add_argument("--method", choices=["auto", "direct", "wrp"], default="auto",
                    help="point emitter sum (default: the faster)")
+    p = sub.add_parser("plan", help="a plate's samples, wavelength, memory and time, and what "
+                                    "a camera's view of it resolves, before any recording")
+    p.add_argument("mesh", nargs="?", help="the objects (.ply or .obj, metres), or --box")
+    p.add_argument("--box", type=POSITIVE, nargs=3, metavar=("W", "H", "D"),
+                   help="the objects' box [m] instead of a mesh")
+    p.add_argument("--bounds", type=FINITE, nargs=6, metavar=("X0", "Y0", "Z0", "X1", "Y1", "Z1"),
+                   help="the objects' box [m] in the plate's frame, where it is (no --distance)")
+    p.add_argument("--zone", type=FINITE, nargs=6, metavar=("X", "Y", "Z", "HX", "HY", "HZ"),
+                   help="the viewing zone's centre and half widths [m] in the plate's frame "
+                        "(default: --zone-margin around the camera's pupil)")
+    p.add_argument("--distance", type=POSITIVE, default=0.3,
+                   help="the objects' nearest point behind the plate [m] (0.3)")
+    p.add_argument("--plate-size", type=POSITIVE, nargs=2, default=(0.1, 0.1),
+                   metavar=("W", "H"), help="[m] (0.1 0.1)")
+    p.add_argument("--samples", type=PIXELS, default=None,
+                   help="samples along the plate's longer side (default: a sharp view's)")
+    p.add_argument("--max-samples", type=PIXELS, default=65536,
+                   help="the most samples the default may choose (65536)")
+    p.add_argument("--encoding", choices=["complex", "intensity"], default="complex")
+    p.add_argument("--zone-margin", type=_number(float, lambda v: 0 <= v <= MAX_LENGTH,
+                                                 "metres >= 0"), default=0.03,
+                   help="the viewing zone reaches this far beyond the camera's pupil [m] (0.03)")
+    p.add_argument("--camera", type=FINITE, nargs=3, metavar=("X", "Y", "Z"),
+                   help="camera position [m] in the plate's frame (default: on the axis, "
+                        "--distance in front)")
+    p.add_argument("--look-at", type=FINITE, nargs=3, metavar=("X", "Y", "Z"),
+                   help="[m] (default: the objects' centre)")
+    p.add_argument("--lens", type=POSITIVE, default=50.0, help="focal length [mm] (50)")
+    p.add_argument("--sensor-width", type=POSITIVE, default=36.0, help="[mm] (36)")
+    p.add_argument("--resolution", type=PIXELS, nargs=2, default=(640, 360), metavar=("W", "H"))
+    p.add_argument("--fstop", type=POSITIVE, default=2.8, help="f-number (2.8); 0 is refused")
+    p.add_argument("--pinhole", dest="fstop", action="store_const", const=None,
+                   help="a camera without a lens")
+    p.add_argument("--focus-distance", type=POSITIVE, default=None,
+                   help="[m] (default: the objects' centre)")
     p = sub.add_parser("info", help="print a hologram file's metadata")
     p.add_argument("hologram")
     p = sub.add_parser("render", help="render a view of a hologram to EXR (+ PNG preview)")
@@ -217,7 +318,7 @@ def main(argv=None) -> int:
         f"warning: {message} ({category.__name__})\n"
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
-    command = {"devices": devices, "demo": demo, "record": record, "info": info,
+    command = {"devices": devices, "demo": demo, "plan": plan, "record": record, "info": info,
                "render": render}[args.command]
     try:
         return command(args)

@@ -100,8 +100,13 @@ def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
     if current:
         holos = [read_hologram(p) for p in job["holograms"]]
     else:
+        # a plate with its viewing zone is a scene asset: the camera sizes nothing of it (its
+        # samples are Max Hologram Size), so moving or refocusing it never records again
+        asset = job["plate"].zone is not None
         holos = [record_hologram(
-            job["points"], triangles=job["triangles"], plate=job["plate"], camera=job["camera"],
+            job["points"], triangles=job["triangles"], plate=job["plate"],
+            camera=None if asset else job["camera"],
+            resolution=s["max_resolution"] if asset else None,
             max_resolution=s["max_resolution"], wavelength=s["wavelength"], seed=s["seed"] + i,
             progress=jobs.scaled(progress, record_share * i / n, record_share * (i + 1) / n))
             for i in range(n)]

@@ -52,6 +52,8 @@ def digest(scene, depsgraph) -> str:
     seen = set()
     for inst in depsgraph.object_instances:
         obj = inst.object
+        if obj.type == "CAMERA":  # the view enters the pass's key (a plate's: its zone's)
+            continue
         h.update(f"{obj.name}|{obj.type}|".encode())
         h.update(np.array(inst.matrix_world, np.float64).tobytes())
         h.update(repr([getattr(obj.original, n, None) for n in RAYS]).encode())

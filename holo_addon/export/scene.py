@@ -18,7 +18,8 @@ from holo_core import __version__
 from holo_core.io.hologram import FORMAT_VERSION
 from holo_core.scene.camera import Camera
 from holo_core.scene.mesh import Mesh, sample_points
-from holo_core.scene.plate import Plate
+from holo_core.scene.plate import Plate, ViewingZone
+from holo_core.validate import InputError
 
 from ..blender.materials import base_colour, principled, unhonoured
 from . import bake
@@ -49,11 +50,12 @@ class SceneData:
     names: tuple = ()
     view: Camera | None = None
 
-    def fingerprint(self, *settings) -> str:
+    def fingerprint(self, *settings, camera=True) -> str:
         """A digest of everything the hologram depends on: each emitter's kind, evaluated
-        geometry and colours (vertex colours, texture and UVs, material colours), the plate,
-        the camera (it sizes the optics; its lens and focus), ``settings`` and the core's
-        version and file format."""
+        geometry and colours (vertex colours, texture and UVs, material colours), the plate
+        and its viewing zone, the camera (its pose, lens and focus; ``camera=False`` leaves
+        it out, for a plate recorded for its zone), ``settings`` and the core's version and
+        file format."""
         h = hashlib.sha256(f"holo {__version__} format {FORMAT_VERSION}".encode())
         for kind, meshes in (("points", self.points), ("triangles", self.triangles)):
             for mesh in meshes:
@@ -64,12 +66,16 @@ class SceneData:
                 h.update(b"|")
         plate = () if self.plate is None else (self.plate.matrix_world,
                                                  (self.plate.width, self.plate.height))
-        for a in (*plate, self.camera.matrix_world):
+        zone = self.plate.zone if self.plate is not None else None
+        if zone is not None:
+            plate += (zone.centre, zone.half_extents, zone.pupil)
+        for a in (*plate, *((self.camera.matrix_world,) if camera else ())):
             h.update(np.asarray(a, np.float64).tobytes())
-        h.update(repr((self.camera.lens, self.camera.sensor_width, self.camera.sensor_height,
-                       self.camera.sensor_fit, self.camera.shift_x, self.camera.shift_y,
-                       self.camera.resolution, self.camera.pixel_aspect, self.camera.fstop,
-                       self.camera.focus_distance) + settings).encode())
+        lens = (self.camera.lens, self.camera.sensor_width, self.camera.sensor_height,
+                self.camera.sensor_fit, self.camera.shift_x, self.camera.shift_y,
+                self.camera.resolution, self.camera.pixel_aspect, self.camera.fstop,
+                self.camera.focus_distance) if camera else ("no camera",)
+        h.update(repr(lens + settings).encode())
         return h.hexdigest()[:16]
 
 
@@ -178,7 +184,43 @@ def plate_from_object(obj, unit: float) -> Plate:
     w, h = obj.dimensions.x * unit, obj.dimensions.y * unit
     if w <= 0 or h <= 0:
         raise ExportError(f"plate '{obj.name}' must have a width and height (a plane)")
-    return Plate(matrix_world=_matrix(obj.matrix_world, unit, normalise=True), width=w, height=h)
+    return Plate(matrix_world=_matrix(obj.matrix_world, unit, normalise=True), width=w, height=h,
+                 zone=plate_zone(obj))
+
+
+def plate_zone(obj) -> ViewingZone | None:
+    """The plate's viewing zone [m, the plate's frame] as its settings hold it, or None while
+    none is set (it is set around the camera when the plate is recorded). Read from the
+    original object: an evaluated copy holds the settings of the last evaluation."""
+    holo = (obj.original if obj.is_evaluated else obj).holo
+    if not holo.zone_set:
+        return None
+    try:
+        return ViewingZone(centre=tuple(holo.zone_centre), half_extents=tuple(holo.zone_half),
+                           pupil=holo.zone_pupil)
+    except InputError as e:
+        raise ExportError(f"plate '{obj.name}': its viewing zone: {e}") from None
+
+
+def zone_around(plate: Plate, camera: Camera, margin: float) -> ViewingZone:
+    """The viewing zone covering ``camera``'s pupil with ``margin`` [m] around it."""
+    try:
+        return plate.zone_for(camera, margin)
+    except InputError as e:
+        raise ExportError(str(e)) from None
+
+
+def outside_zone(plate: Plate, name: str, camera: Camera) -> str | None:
+    """A warning naming the zone when the camera's pupil reaches beyond it, else None."""
+    if plate.zone is None:
+        return None
+    position = plate.to_plate(camera.position[None])[0]
+    beyond = plate.zone.distance_outside(position, (camera.aperture_diameter or 0.0) / 2)
+    if beyond <= 1e-9:
+        return None
+    return (f"the camera's pupil reaches {beyond:.3g} m beyond plate '{name}''s viewing zone "
+            f"({plate.zone.describe()}): its view may be cut off or soft; use Fit Zone to "
+            f"Camera (Object ▸ Holo) to record the plate for where the camera is now")
 
 
 def camera_from_object(scene, obj, unit: float, depsgraph=None, *, crop=True) -> Camera:
@@ -270,11 +312,32 @@ def export_scene(scene, depsgraph, *, plate=True, lit=False) -> SceneData:
     if plate.to_plate(camera.position[None])[0, 2] <= 0:
         raise ExportError(f"the camera is behind plate '{plates[0].name}': viewers must be on "
                           f"its +Z side (rotate the plate 180°)")
+    outside = outside_zone(plate, plates[0].name, camera)
+    if outside:
+        warnings += (outside,)
     coverage = plate_coverage(plate, plates[0].name, camera,
                               kinds["POINTS"] + kinds["TRIANGLES"])
     return SceneData(points=kinds["POINTS"], triangles=kinds["TRIANGLES"], plate=plate,
                      plate_name=plates[0].name, camera=camera,
                      warnings=warnings + ((coverage,) if coverage else ()), **found)
+
+
+def export_imported(scene, depsgraph, plate_object) -> SceneData:
+    """The scene's imported plate (File ▸ Import ▸ Hologram) and camera: a hologram viewed as
+    it is needs no emitters."""
+    if scene.camera is None:
+        raise ExportError("the scene has no camera")
+    unit = scale(scene)
+    camera_object = _evaluated(scene.camera, depsgraph)
+    camera = camera_from_object(scene, camera_object, unit, depsgraph)
+    plate = plate_from_object(_evaluated(plate_object, depsgraph), unit)
+    if plate.to_plate(camera.position[None])[0, 2] <= 0:
+        raise ExportError(f"the camera is behind plate '{plate_object.name}': viewers must be "
+                          f"on its +Z side (rotate the plate 180°)")
+    outside = outside_zone(plate, plate_object.name, camera)
+    return SceneData(points=[], triangles=[], plate=plate, plate_name=plate_object.name,
+                     camera=camera, warnings=(outside,) if outside else (),
+                     view=replace(camera, fstop=None, focus_distance=None))
 
 
 def emitters(depsgraph, unit: float, notes: list, *, lit=False) -> tuple[dict, list]:

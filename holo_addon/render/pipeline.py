@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import logging
 from collections.abc import Callable
-from dataclasses import asdict, astuple, dataclass, field
+from dataclasses import asdict, astuple, dataclass, field, replace
 from functools import partial
 from pathlib import Path
 
@@ -24,6 +24,7 @@ from holo_core import jobs, worker
 from holo_core.io.hologram import read_hologram
 from holo_core.io.image import exr_attribute
 from holo_core.io.view import write_view
+from holo_core.scene.camera import Camera, look_at
 from holo_core.view import BACKGROUND_DEPTH, RenderResult
 
 from ..export import bake, radiance
@@ -31,9 +32,12 @@ from ..export.scene import (
     ExportError,
     SceneData,
     border_pixels,
+    export_imported,
     export_scene,
+    plate_zone,
     render_size,
     scale,
+    zone_around,
 )
 from .options import worker_options
 
@@ -60,7 +64,7 @@ class Settings:
     speckle: str = "EXACT"        # camera holograms: 'EXACT' (the looks' limit) or 'LOOKS'
 
     @classmethod
-    def from_scene(cls, scene, unit: float) -> "Settings":
+    def from_scene(cls, scene, unit: float) -> Settings:
         h = scene.holo
         return cls(mode=h.mode, samples=h.samples, max_resolution=h.max_resolution,
                    wavelength=h.wavelength * unit if h.wavelength > 0 else None,
@@ -147,21 +151,68 @@ def prepare(scene, depsgraph, *, render=True, bake=False) -> Job:
         depsgraph = bake_emitters(scene) or depsgraph
     out = output_dir(scene)
     region, frame = render_region(scene), scene.frame_current
-    data = export_scene(scene, depsgraph, plate=settings.mode != "CAMERA", lit=lit)
+    imported = settings.mode == "PLATE" and imported_plate(scene)
+    if imported:  # viewed as it is, never recorded: no emitters needed
+        data = export_imported(scene, depsgraph, imported)
+        lit = False
+    else:
+        data = export_scene(scene, depsgraph, plate=settings.mode != "CAMERA", lit=lit)
     lighting = radiance.digest(scene, depsgraph) if lit else ""
+    view = data.view
     if settings.mode == "CAMERA":  # recorded for this view at every render: no plate file
         fingerprint, paths = data.fingerprint(settings.mode, settings.speckle, settings.samples,
                                        lighting), ()
+    elif imported:
+        paths = (Path(bpy.path.abspath(imported.holo.hologram)),)
+        fingerprint = imported.holo.fingerprint or paths[0].name
     else:
-        fingerprint = data.fingerprint(*settings.recording(), lighting)
+        data = with_zone(data, scene.objects[data.plate_name], unit)
+        view = zone_view(data)  # the radiance as the zone's centre sees it, not the camera
+        # a plate is a scene asset: its digest leaves the camera out (its zone is in it)
+        fingerprint = data.fingerprint(*settings.recording(), lighting, camera=False)
         paths = hologram_paths(out, data.plate_name, settings.iterations, fingerprint)
-    light = partial(radiance.request, scene, depsgraph.view_layer.name, data.view,
+    light = partial(radiance.request, scene, depsgraph.view_layer.name, view,
                     data.points + data.triangles, data.names,
                     samples=settings.lighting_samples) if lit else None
     return Job(scene=data, settings=settings, output_dir=out, frame=frame,
                fingerprint=fingerprint, current=bool(paths) and all(p.is_file() for p in paths),
                holograms=paths, render=render, border=region, depth_unit=unit, radiance=light,
                pass_key=data.fingerprint(*astuple(settings), frame, region, unit, lighting))
+
+
+def imported_plate(scene):
+    """The scene's plate when it holds an imported hologram (File ▸ Import ▸ Hologram), else
+    None."""
+    plates = [o for o in scene.objects if o.holo.is_plate]
+    return plates[0] if len(plates) == 1 and plates[0].holo.imported else None
+
+
+def with_zone(data: SceneData, plate_object, unit: float) -> SceneData:
+    """``data`` whose plate has its viewing zone: the plate's own, else (set now, and kept on
+    the plate) the camera's pupil with the plate's Zone Margin around it."""
+    if data.plate.zone is not None:
+        return data
+    zone = zone_around(data.plate, data.camera, plate_object.holo.zone_margin * unit)
+    try:  # kept, so that the camera may move inside it without a new recording
+        plate_object.holo.zone_centre = zone.centre
+        plate_object.holo.zone_half = zone.half_extents
+        plate_object.holo.zone_pupil = zone.pupil
+        plate_object.holo.zone_set = True
+        zone = plate_zone(plate_object)  # as kept (single precision): the next key's too
+    except AttributeError:  # a context that may not write ID data (inside a render)
+        log.warning("plate '%s': its viewing zone is used for this frame but not kept (Fit "
+                    "Zone to Camera keeps it)", data.plate_name)
+    return replace(data, plate=replace(data.plate, zone=zone))
+
+
+def zone_view(data: SceneData) -> Camera:
+    """A pinhole at the zone's centre looking at the emitters' centre, with the render
+    camera's lens and frame: what a plate's radiance is rendered from."""
+    plate = data.plate
+    eye = plate.matrix_world[:3, :3] @ np.asarray(plate.zone.centre) + plate.matrix_world[:3, 3]
+    every = np.concatenate([m.vertices for m in data.points + data.triangles])
+    centre = (every.min(0) + every.max(0)) / 2
+    return replace(data.view, matrix_world=look_at(eye, centre, up=plate.matrix_world[:3, 1]))
 
 
 def render_region(scene) -> tuple | None:

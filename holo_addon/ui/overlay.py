@@ -1,7 +1,8 @@
 """The viewport overlay of the plate's coverage (Plate mode): the lines of sight from the
 scene camera through the plate's four corners, out to the farthest holographic object, and
 the plate's outline; green when the plate covers every holographic object the camera looks at
-through it, orange when it covers part (the rest is cut from the pass), red when none.
+through it, orange when it covers part (the rest is cut from the pass), red when none. The
+plate's viewing zone is drawn as its box, in blue.
 
 The objects are judged by their bounding boxes' corners, so the overlay is quick to update on
 every change; recording checks the surfaces themselves (:func:`scene_export.plate_coverage`).
@@ -21,6 +22,7 @@ from ..export.scene import ExportError, emitter_instances, plate_from_object, th
 
 COLOURS = {"ALL": (0.3, 0.9, 0.4, 0.9), "PART": (1.0, 0.6, 0.1, 0.9),
            "NONE": (1.0, 0.25, 0.2, 0.9)}
+ZONE_COLOUR = (0.3, 0.75, 1.0, 0.9)
 CORNERS = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1)]) / 2  # around the plate, in its sizes
 
 
@@ -31,6 +33,7 @@ class Coverage:
 
     lines: np.ndarray
     state: str
+    zone: np.ndarray | None = None  # the viewing zone's box edges (24, 3), world units
 
 
 def coverage(scene, depsgraph) -> Coverage | None:
@@ -49,8 +52,9 @@ def coverage(scene, depsgraph) -> Coverage | None:
     outline = np.stack([corners, np.roll(corners, -1, 0)], 1).reshape(-1, 3)
     eye_z = plate.to_plate(eye[None])[0, 2]
     boxes = _emitter_boxes(depsgraph)
+    zone = zone_edges(plate, scene.unit_settings.scale_length or 1.0)
     if eye_z <= 0 or not len(boxes):  # a camera behind the plate sees nothing through it
-        return Coverage(outline, "NONE" if eye_z <= 0 else "ALL")
+        return Coverage(outline, "NONE" if eye_z <= 0 else "ALL", zone)
     inside, _ = through_plate(plate, eye, boxes)
     state = "ALL" if inside.all() else "PART" if inside.any() else "NONE"
     depth = plate.to_plate(boxes)[:, 2]
@@ -58,7 +62,19 @@ def coverage(scene, depsgraph) -> Coverage | None:
     far = eye + reach * (corners - eye)
     sight = np.stack([np.broadcast_to(eye, far.shape), far], 1).reshape(-1, 3)
     end = np.stack([far, np.roll(far, -1, 0)], 1).reshape(-1, 3)
-    return Coverage(np.concatenate([outline, sight, end]), state)
+    return Coverage(np.concatenate([outline, sight, end]), state, zone)
+
+
+def zone_edges(plate, unit: float) -> np.ndarray | None:
+    """The plate's viewing zone (metres, the plate's frame) as the 12 edges of its box, in
+    world Blender units (``plate`` in Blender units; ``unit`` metres per Blender unit)."""
+    if plate.zone is None:
+        return None
+    corners = plate.zone.corners() / unit  # x, y, z each over (-1, 1): index 4x + 2y + z
+    edges = [(a, b) for a in range(8) for b in range(a + 1, 8) if (a ^ b).bit_count() == 1]
+    m = plate.matrix_world
+    world = corners @ m[:3, :3].T + m[:3, 3]
+    return world[np.array(edges).ravel()]
 
 
 def _emitter_boxes(depsgraph) -> np.ndarray:
@@ -106,6 +122,9 @@ def _draw():
     shader.uniform_float("color", COLOURS[found.state])
     gpu.state.blend_set("ALPHA")
     batch.draw(shader)
+    if found.zone is not None:
+        shader.uniform_float("color", ZONE_COLOUR)
+        batch_for_shader(shader, "LINES", {"pos": found.zone.tolist()}).draw(shader)
     gpu.state.blend_set("NONE")
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import bpy
 
 from ..compositor.passes import RUNNING, WARNINGS, uses_pass
+from . import plates
 
 
 class HOLO_PT_scene(bpy.types.Panel):
@@ -79,12 +80,34 @@ class HOLO_PT_object(bpy.types.Panel):
         if context.scene.holo.mode == "PLATE":
             layout.prop(h, "is_plate")
             if h.is_plate:
-                layout.label(text=f"Hologram: {h.hologram or 'not recorded yet'}")
+                draw_plate(layout, context, h)
                 return
         elif h.is_plate:
             layout.label(text="Hologram plate (used in Plate mode)")
             return
         layout.prop(h, "emitter")
+
+
+
+def draw_plate(layout, context, h) -> None:
+    """The plate's hologram, its viewing zone and the planner's lines."""
+    imported = " (imported: viewed as it is)" if h.imported else ""
+    layout.label(text=f"Hologram: {h.hologram or 'not recorded yet'}{imported}")
+    if h.imported:
+        return
+    layout.prop(h, "zone_margin")
+    if h.zone_set:
+        (x, y, z), (hx, hy, hz) = h.zone_centre, h.zone_half
+        layout.label(text=f"Viewing zone: ({x:.3g}, {y:.3g}, {z:.3g}) m "
+                          f"±({hx:.3g}, {hy:.3g}, {hz:.3g}) m, plate's frame")
+    else:
+        layout.label(text="Viewing zone: set around the camera when recorded")
+    row = layout.row(align=True)
+    row.operator("holo.fit_zone", icon="CAMERA_DATA")
+    row.operator("holo.plan_plate", icon="INFO")
+    col = layout.column(align=True)
+    for line in plates.plan_lines(context.object):
+        col.label(text=line)
 
 
 CLASSES = (HOLO_PT_scene, HOLO_PT_object)

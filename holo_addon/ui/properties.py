@@ -7,6 +7,7 @@ from bpy.props import (
     BoolProperty,
     EnumProperty,
     FloatProperty,
+    FloatVectorProperty,
     IntProperty,
     PointerProperty,
     StringProperty,
@@ -29,6 +30,11 @@ def _emitter_changed(self, context):
     raster_visibility(self.id_data)
 
 
+def _zone_changed(self, context):
+    self.zone_set = False  # set again around the camera, with the new margin, when recorded
+    overlay.refresh(context)
+
+
 def _plate_changed(self, context):
     obj = self.id_data
     raster_visibility(obj)
@@ -43,11 +49,33 @@ class HoloObjectSettings(bpy.types.PropertyGroup):
     is_plate: BoolProperty(name="Hologram Plate", default=False, update=_plate_changed,
                            description="This plane is the holographic plate: its local z = 0 "
                                        "plane, viewed from its +Z side")
-    hologram: StringProperty(name="Hologram", default="", options={"HIDDEN"},
-                             description="The recorded hologram file (first iteration), "
-                                         "written by Record Hologram")
+    hologram: StringProperty(name="Hologram", default="", subtype="FILE_PATH",
+                             options={"HIDDEN"} | BLEND_RELATIVE,
+                             description="The plate's hologram file (first iteration), "
+                                         "written by Record Hologram or imported")
     fingerprint: StringProperty(name="Fingerprint", default="", options={"HIDDEN"},
                                 description="Digest of what the hologram was recorded from")
+    imported: BoolProperty(name="Imported", default=False, options={"HIDDEN"},
+                           description="The hologram was imported (File > Import > Hologram): "
+                                       "it is viewed as it is, never recorded")
+    zone_margin: FloatProperty(name="Zone Margin", default=0.05, min=0.0, soft_max=1.0,
+                               subtype="DISTANCE", update=_zone_changed,
+                               description="How far the viewing zone reaches beyond the "
+                                           "camera's pupil: cameras inside it see the plate "
+                                           "sharp and complete, and never record it again")
+    zone_set: BoolProperty(name="Zone Set", default=False, options={"HIDDEN"},
+                           description="The viewing zone below is the plate's (else it is "
+                                       "set around the scene camera when the plate is "
+                                       "recorded)")
+    zone_centre: FloatVectorProperty(name="Zone Centre", size=3, options={"HIDDEN"},
+                                     description="The viewing zone's centre [m] in the "
+                                                 "plate's frame")
+    zone_half: FloatVectorProperty(name="Zone Half Extents", size=3, min=0.0,
+                                   options={"HIDDEN"},
+                                   description="The viewing zone's half widths [m] along "
+                                               "the plate's axes")
+    zone_pupil: FloatProperty(name="Zone Pupil", default=0.0, min=0.0, options={"HIDDEN"},
+                              description="The entrance pupil [m] the zone is made for")
 
 
 def _show_coverage(_settings, context):

@@ -28,10 +28,11 @@ import numpy as np
 
 from .. import jobs
 from ..opencl.arrays import empty
+from ..optics.imaging import ES_TABLE, IRIS_TAPER
 from ..propagation.grid import next_fast_len
 from ..propagation.tilt import cached_array, es_table, es_transform
 from ..scene.camera import Camera
-from .optics import ES_TABLE, IRIS_TAPER, PupilOptics, iris
+from .optics import PupilOptics, iris
 from .raster import Emitters
 
 BUFFERS = 6  # complex buffers of the padded grid on the device: 3 accumulators, 2 PSFs, a map

@@ -19,6 +19,7 @@ import numpy as np
 
 from .. import validate
 from ..optics.depth import partner_wavelength
+from ..optics.imaging import iris_weights
 from ..optics.pupil import Pupil, defocus_limited_diameter
 from ..propagation import grid
 from ..scene.camera import Camera
@@ -28,9 +29,7 @@ SUPERSAMPLE = 2        # fine pixels per pixel (per axis): the pupil resolves on
 LAYER_PHASE = math.pi / 2  # a layer's largest curvature error at the pupil's rim [rad]: a
                            # quarter wave, Rayleigh's depth of focus
 MAX_LAYERS = 512
-IRIS_TAPER = 0.1       # the iris's raised-cosine rim, a fraction of its radius
 DEPTH_MARGIN = 1.25    # the depth pair's unambiguous range over the scene's depth extent
-TAPS, ES_TABLE = 4, 4096  # the image read: 4 taps at 2x padding agree with 6 to 100 dB PSNR
 EDGE_BINS = 8  # bins beyond the field of view and its blur: the read's taps and a guard
 
 
@@ -132,9 +131,4 @@ def choose_optics(camera: Camera, depth_range, *, supersample=SUPERSAMPLE,
 
 def iris(optics: PupilOptics, h, w) -> np.ndarray:
     """The iris's transmission on the pupil's samples (what pupil_window applies)."""
-    dy, dx = optics.pitch()
-    y, x = grid.signed_indices(h)[:, None] * dy, grid.signed_indices(w)[None, :] * dx
-    rho, radius = np.hypot(x, y), optics.diameter / 2
-    inner = (1 - IRIS_TAPER) * radius
-    edge = 0.5 * (1 + np.cos(np.pi * np.clip(rho - inner, 0, None) / (radius - inner)))
-    return np.where(rho >= radius, 0.0, np.where(rho > inner, edge, 1.0))
+    return iris_weights((h, w), optics.pitch(), optics.diameter)

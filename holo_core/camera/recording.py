@@ -20,10 +20,9 @@ import numpy as np
 
 from ..opencl import get_runtime
 from ..opencl.arrays import empty
-from ..propagation import grid
-from ..propagation.tilt import cached_array, es_table, es_transform
+from ..optics.imaging import ES_TABLE, TAPS, PupilImage
 from ..scene.camera import Camera
-from .optics import ES_TABLE, IRIS_TAPER, TAPS, PupilOptics, iris
+from .optics import PupilOptics, iris
 from .raster import Emitters
 
 
@@ -40,15 +39,7 @@ class PupilFields:
         self.amps = [rt.to_device(np.sqrt(em.colour[:, c]), np.float32) for c in range(3)]
         self.amps.append(rt.to_device(np.sqrt(em.coverage), np.float32))
         self.spectrum, self.pupil = empty(rt, (h, w)), empty(rt, (h, w))
-        self.padded = empty(rt, (2 * h, 2 * w))
-        self.apod = [rt.to_device(1 / es_transform(grid.signed_indices(n) / (2 * n), TAPS),
-                                   np.float32)
-                     for n in (h, w)]
-        self.es = cached_array(rt, "es-table", es_table, TAPS)
-        alpha, beta, _ = camera_fine.direction_cosines()
-        self.u = rt.to_device(2 * alpha / optics.bin, np.float32)
-        self.v = rt.to_device(2 * beta / optics.bin, np.float32)
-        self.pixels = empty(rt, alpha.shape)
+        self.imager = PupilImage(rt, (h, w), bin=optics.bin, camera=camera_fine)
         # |A|² / (N·Σw²) is the emitters' intensity (Parseval), w the iris on the samples
         self.scale = 1 / math.sqrt(h * w * float(np.sum(iris(optics, h, w) ** 2)))
         self.options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
@@ -81,21 +72,11 @@ class PupilFields:
     def image(self, field: int) -> np.ndarray:
         """The image of the pupil's current wave (fine pixels, complex), normalised so that
         E|A|² is the emitters' intensity."""
-        rt, optics = self.rt, self.optics
+        optics = self.optics
         lam = self.wavelengths[field == 3]
-        dy, dx = optics.pitch(lam)
-        h, w = optics.shape
-        self.padded.fill(0)
-        self.kernel("pupil_window")(
-            rt.queue, (h, w), None, self.padded.data, self.pupil.data, np.float32(dy),
-            np.float32(dx), np.float32(optics.diameter / 2 * lam / optics.wavelength),
-            np.float32(IRIS_TAPER), np.float32(2 * np.pi / lam), np.float32(optics.focus or 0),
-            self.apod[0].data, self.apod[1].data)
-        rt.fft.forward(self.padded)
-        self.kernel("read_pixels")(rt.queue, (self.pixels.size,), None, self.pixels.data,
-                                   self.padded.data, np.int32(2 * h), np.int32(2 * w),
-                                   self.u.data, self.v.data, np.float32(self.scale), self.es.data)
-        return self.pixels.get()
+        return self.imager.image(self.pupil, pitch=optics.pitch(lam),
+                                 diameter=optics.diameter * lam / optics.wavelength,
+                                 focus=optics.focus, lens_k=2 * np.pi / lam, scale=self.scale)
 
 
 def object_wave(em: Emitters, optics: PupilOptics, camera: Camera, *, field=0,

@@ -19,20 +19,18 @@ import numpy as np
 
 from .. import jobs, memory, validate
 from ..opencl import get_runtime
-from ..optics.depth import from_cross_spectrum
-from ..optics.speckle import box_mean, downsample
+from ..optics.imaging import COVERAGE_FLOOR, assemble
+from ..optics.speckle import downsample
 from ..scene.camera import Camera
 from ..scene.mesh import Mesh
 from ..validate import InputError
-from ..view import BACKGROUND_DEPTH, RenderResult
+from ..view import RenderResult
 from .incoherent import IncoherentImages, grid_bytes
 from .optics import SUPERSAMPLE, PupilOptics, choose_optics
 from .raster import depth_range, merged, point_emitters, rasterize
 from .recording import PupilFields, intensity_hologram, reconstruct_object_wave
 
 log = logging.getLogger(__name__)
-COVERAGE_EDGE = (0.25, 0.75)  # coverage mapped to alpha 0 … 1 (0.5: the geometric edge)
-COVERAGE_FLOOR = 0.05  # the colour is radiance / coverage where coverage exceeds this
 
 
 # --- emitters ---------------------------------------------------------------------------------
@@ -192,21 +190,10 @@ class _Accumulator:
 
     def result(self) -> RenderResult:
         o, n, s = self.optics, self.n, self.optics.supersample
-        radiance = downsample(self.rgb / n, s)
-        coverage = downsample(self.coverage / n, s)
-        lo, hi = COVERAGE_EDGE
-        # a pixel's coverage, or its 3×3 neighbourhood's where higher: a speckle minimum
-        # inside a surface leaves no hole, while a straight edge keeps its half-way crossing
-        solid = np.maximum(coverage, box_mean(coverage, 1))
-        alpha = np.clip((solid - lo) / (hi - lo), 0, 1).astype(np.float32)
-        # the surfaces' own colour: radiance over coverage (what the pass stores premultiplied
-        # by alpha); the colour and the partner share their speckle, which this divides out
-        colour = radiance / np.maximum(coverage, COVERAGE_FLOOR)[..., None] * self.exposure
-        ray = from_cross_spectrum(downsample(self.cross, s), wavelengths=(
-            o.wavelength, o.depth_wavelength), centre=o.centre)
-        tx, ty = self.camera.pixel_tangents()
-        planar = ray / np.sqrt(1 + tx * tx + ty * ty)
-        depth = np.where(alpha > 0, planar, BACKGROUND_DEPTH).astype(np.float32)
+        colour, alpha, depth, radiance, coverage = assemble(
+            self.rgb / n, self.coverage / n, self.cross, camera=self.camera, supersample=s,
+            wavelengths=(o.wavelength, o.depth_wavelength), centre=o.centre,
+            exposure=self.exposure)
         mean = self.lum / n
         spread = np.sqrt(np.maximum(self.lum2 / n - mean**2, 0) / max(n - 1, 1))
         solid = alpha >= 1
@@ -217,6 +204,5 @@ class _Accumulator:
                 "focus_m": o.focus, "wavelengths_m": [o.wavelength, o.depth_wavelength],
                 "layers": len(o.layers), "pupil_samples": list(o.shape),
                 "resolution_limit_px": 1 / s, "exposure": self.exposure}
-        return RenderResult(rgb=colour.astype(np.float32), alpha=alpha, depth=depth, info=info,
-                            coverage=coverage.astype(np.float32),
-                            radiance=(radiance * self.exposure).astype(np.float32))
+        return RenderResult(rgb=colour, alpha=alpha, depth=depth, info=info, coverage=coverage,
+                            radiance=radiance)

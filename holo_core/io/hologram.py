@@ -1,8 +1,11 @@
 """The hologram and its file: OpenEXR, float32 channels per wavelength, metadata as JSON.
 
-Channels, for colour c = 0, 1, ...: ``c<c>.H`` the intensity hologram, and optionally
-``c<c>.O.re`` / ``c<c>.O.im`` the complex object wave. The header attribute ``holo`` holds
-the metadata (see :func:`metadata`); files are written atomically and read back bit-exactly.
+Channels, for colour c = 0, 1, ...: ``c<c>.H`` the intensity hologram (an intensity
+hologram's), and ``c<c>.O.re`` / ``c<c>.O.im`` the complex object wave (a complex hologram's,
+optional beside an intensity). The header attribute ``holo`` holds the metadata (see
+:func:`metadata`: the encoding, the optics, the plate's pose and its viewing zone); files are
+written atomically and read back bit-exactly. Version 2 files (intensity holograms without a
+viewing zone) are read as well.
 """
 
 from __future__ import annotations
@@ -14,12 +17,14 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__, validate
-from ..scene.hologram import CHANNEL_ROLES, MAX_CHANNELS, Hologram
+from ..scene.hologram import CHANNEL_ROLES, ENCODINGS, MAX_CHANNELS, Hologram
+from ..scene.plate import ViewingZone
 from ..validate import InputError
 from .image import write_exr
 
 FORMAT = "holo-hologram"
-FORMAT_VERSION = 2  # 2: the depth partner 'Z' records every emitter at unit intensity
+FORMAT_VERSION = 3  # 3: the encoding (complex or intensity) and the plate's viewing zone
+READS = (2, 3)      # 2: the depth partner 'Z' records every emitter at unit intensity
 
 
 class HologramFileError(InputError):
@@ -36,7 +41,10 @@ def metadata(h: Hologram) -> dict:
                       "amplitudes": list(map(float, h.reference_amplitudes))},
         "bounds_m": np.asarray(h.bounds).tolist(), "object_wave": h.object_wave is not None,
         "band_sin": float(h.band), "channels": list(h.channels),
-        "point_density_per_m2": float(h.point_density),
+        "point_density_per_m2": float(h.point_density), "encoding": h.encoding,
+        "viewing_zone": None if h.zone is None else {
+            "centre_m": list(h.zone.centre), "half_extents_m": list(h.zone.half_extents),
+            "pupil_m": h.zone.pupil},
     }
 
 
@@ -49,7 +57,8 @@ def write_hologram(path, h: Hologram) -> Path:
     _meta(path, {"holo": header})  # the reader's schema, on the very text written
     channels = {}
     for c in range(len(h.wavelengths)):
-        channels[f"c{c}.H"] = h.intensity[c]
+        if h.intensity is not None:
+            channels[f"c{c}.H"] = h.intensity[c]
         if h.object_wave is not None:
             channels[f"c{c}.O.re"] = h.object_wave[c].real
             channels[f"c{c}.O.im"] = h.object_wave[c].imag
@@ -58,11 +67,12 @@ def write_hologram(path, h: Hologram) -> Path:
 
 
 def check_pixels(name: str, h: Hologram) -> None:
-    """:class:`HologramFileError` naming ``name`` unless the intensity holds samples, all
-    finite and >= 0, and the object wave (if any) is finite."""
-    if h.intensity.size == 0:
+    """:class:`HologramFileError` naming ``name`` unless the hologram holds samples, its
+    intensity (if any) all finite and >= 0, and its object wave (if any) finite."""
+    if 0 in h.shape:
         raise HologramFileError(f"{name}: the hologram holds no samples")
-    if not np.isfinite(h.intensity).all() or (h.intensity < 0).any():
+    if h.intensity is not None and (not np.isfinite(h.intensity).all() or
+                                    (h.intensity < 0).any()):
         raise HologramFileError(f"{name}: the intensity holds NaN, infinite or negative values "
                                 f"(it must be finite and >= 0)")
     if h.object_wave is not None and not np.isfinite(h.object_wave).all():
@@ -79,7 +89,8 @@ def read_hologram(path) -> Hologram:
     header, names = _read(path)
     meta = _meta(path, header)
     colours = range(len(meta["wavelengths_m"]))
-    wanted = [f"c{c}.H" for c in colours]
+    intensity = meta["encoding"] == "intensity"
+    wanted = [f"c{c}.H" for c in colours] if intensity else []
     if meta["object_wave"]:
         wanted += [f"c{c}.O.{p}" for c in colours for p in ("re", "im")]
     missing = [n for n in wanted if n not in names]
@@ -94,9 +105,13 @@ def read_hologram(path) -> Hologram:
     if meta["object_wave"]:
         wave = np.stack([names[f"c{c}.O.re"] + 1j * names[f"c{c}.O.im"] for c in colours])
         wave = wave.astype(np.complex64)
-    ref = meta["reference"]
+    ref, zone = meta["reference"], meta["viewing_zone"]
     try:
-        h = Hologram(intensity=np.stack([names[f"c{c}.H"] for c in colours]),
+        if zone is not None:
+            zone = ViewingZone(centre=zone["centre_m"], half_extents=zone["half_extents_m"],
+                               pupil=zone.get("pupil_m", 0.0))
+        h = Hologram(intensity=np.stack([names[f"c{c}.H"] for c in colours]) if intensity
+                     else None, encoding=meta["encoding"], zone=zone,
                      wavelengths=tuple(meta["wavelengths_m"]), pitch=meta["pitch_m"],
                      reference_angle=ref["angle_rad"], reference_azimuth=ref["azimuth_rad"],
                      reference_amplitudes=tuple(ref["amplitudes"]), object_wave=wave,
@@ -134,11 +149,13 @@ def _meta(path: Path, header) -> dict:
     if meta.get("format") != FORMAT:
         raise HologramFileError(f"{path}: metadata format {meta.get('format')!r}, "
                                 f"expected {FORMAT!r}")
-    if meta.get("format_version") != FORMAT_VERSION:
-        raise HologramFileError(f"{path}: format version {meta.get('format_version')!r} is "
-                                f"not supported (this is holo {__version__}, which reads "
-                                f"version {FORMAT_VERSION})")
-    meta = {"band_sin": 0.0, "channels": [], "point_density_per_m2": 0.0, **meta}
+    version = meta.get("format_version")
+    if isinstance(version, bool) or version not in READS:
+        raise HologramFileError(f"{path}: format version {version!r} is not supported (this "
+                                f"is holo {__version__}, which reads versions "
+                                f"{', '.join(map(str, READS))})"[:400])
+    meta = {"band_sin": 0.0, "channels": [], "point_density_per_m2": 0.0,
+            "encoding": "intensity", "viewing_zone": None, **meta}
     schema = _Schema(path, meta)
     lengths = f"in [{validate.MIN_LENGTH:g}, {validate.MAX_LENGTH:g}] [m]"
     wavelengths = schema.numbers("wavelengths_m", lengths, _length, shape="any")
@@ -171,6 +188,21 @@ def _meta(path: Path, header) -> dict:
     if not isinstance(names, list) or (names and (
             len(names) != len(wavelengths) or not all(n in CHANNEL_ROLES for n in names))):
         schema.fail("channels", f"one of {'/'.join(CHANNEL_ROLES)} per wavelength")
+    if not isinstance(meta["encoding"], str) or meta["encoding"] not in ENCODINGS:
+        schema.fail("encoding", " or ".join(map(repr, ENCODINGS)))
+    if meta["encoding"] == "complex" and meta["object_wave"] is not True:
+        schema.fail("object_wave", "true for a complex hologram (its samples are the object "
+                    "wave)")
+    zone = meta["viewing_zone"]
+    if zone is not None:
+        if not isinstance(zone, dict):
+            schema.fail("viewing_zone", "null or an object with centre_m, half_extents_m and "
+                        "pupil_m")
+        sub = _Schema(path, zone, "viewing_zone.")
+        sub.numbers("centre_m", "three coordinates [m], z > 0", shape=3)
+        sub.numbers("half_extents_m", "three half widths >= 0 [m]", lambda v: v >= 0, shape=3)
+        zone.setdefault("pupil_m", 0.0)
+        sub.numbers("pupil_m", ">= 0 [m]", lambda v: v >= 0)
     return meta
 
 

@@ -4,6 +4,8 @@
   the pinhole rules side by side
 - ``depth.py``: depth from the two-wavelength phase difference (Eq. 26–30)
 - ``speckle.py``: averaging, downsampling and the speckle contrast (Sect. VII-E)
+- ``imaging.py``: the pupil → image stage both renderers share (iris, thin lens, the spectrum
+  read at the pixels), and a view assembled from colour, coverage and the depth pair
 - ``lens.py``: a thin lens's phase on a field or a Field (:func:`thin_lens`)
 - ``metrics.py``: image quality against a reference, :func:`psnr` and :func:`ssim`
 """

@@ -14,9 +14,9 @@ import numpy as np
 
 from .. import jobs, memory, validate
 from ..propagation import grid
-from ..scene.hologram import Hologram
+from ..scene.hologram import ENCODINGS, Hologram
 from ..scene.mesh import Mesh, facing, sample_points, visible_from
-from ..scene.plate import Plate
+from ..scene.plate import DEFAULT_ZONE_MARGIN, Plate, ViewingZone
 from ..validate import InputError
 from .point_sources import cone_filter, point_wave
 from .triangles import depth_texture, mesh_primitives, primitive_wave, surface_pitch
@@ -205,31 +205,41 @@ def _array(name, value, allowed, shape) -> np.ndarray:
 
 
 @validate.scale_free()
-def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, resolution=None,
-                    max_resolution=2048, wavelength=None, depth=True, seed=0, method="auto",
-                    cull=True, progress: jobs.Progress = None) -> Hologram:
+def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, zone=None,
+                    zone_margin=DEFAULT_ZONE_MARGIN, resolution=None, max_resolution=2048,
+                    wavelength=None, encoding="complex", depth=True, seed=0, method="slabs",
+                    cull=True, code=None, progress: jobs.Progress = None) -> Hologram:
     """Record a scene in world metres onto ``plate``, choosing the optics automatically
     (:mod:`holo_core.plate.sampling`; the choice is logged and stored in the hologram).
 
     Parameters
     ----------
     emitters : Mesh, sequence of Mesh, or (positions (N, 3) [m], colours (N, 3))
-        World-space point emitters; meshes become points at the chosen spacing. Colours are
-        linear RGB intensities.
+        World-space surfaces, or bare point emitters. Colours are linear RGB intensities.
     plate : Plate
     triangles : sequence of Mesh
         World-space meshes recorded as textured triangles (their texture, else the mean of
-        their corners' colours), each carried to the plate by tilted-plane propagation.
+        their corners' colours): with ``method='slabs'`` as the other meshes; with a point
+        sum, each carried to the plate by tilted-plane propagation.
     camera : holo_core.scene.camera.Camera, optional
-        Sizes the cone and the wavelength to this view.
+        With ``method='slabs'``, only where neither ``zone`` nor ``plate.zone`` is given:
+        the viewing zone covers its pupil (:func:`record_plate`). With a point sum, it sizes
+        the cone and the wavelength to this view (:func:`holo_core.plate.sampling.choose`).
+    zone, zone_margin, encoding, code
+        As for :func:`record_plate` ('complex', the object wave, by default; 'intensity' is
+        |O + R|²).
     resolution, max_resolution, wavelength
-        As for :func:`holo_core.plate.sampling.choose`.
+        As for :func:`holo_core.plate.sampling.plan` (slabs) or ``choose`` (point sums).
     depth : bool
         Also record the depth partner λ2 (Sect. VII-C).
     seed : int
         Seeds the emitters' random phases (and the mesh sampling).
+    method : {'slabs', 'auto', 'direct', 'wrp'}
+        'slabs' (the default for meshes): the plate as a scene asset, independent of any
+        camera, with occlusion (:func:`record_plate`). Bare points and the others: the point
+        sums of :func:`holo_core.plate.point_sources.point_wave`, without occlusion.
     cull : bool
-        With a camera, keep only the points and triangles it sees
+        For a point sum with a camera, keep only the points and triangles it sees
         (:func:`holo_core.scene.mesh.visible_from`): a hologram shows surfaces hidden from its
         recording viewpoint through the ones in front, as light does not occlude itself.
     """
@@ -237,10 +247,20 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
     seed = validate.seed(seed)
     if not isinstance(plate, Plate):
         raise InputError(f"plate must be a Plate; got {type(plate).__name__}")
+    validate.choice("method", method, PLATE_METHODS)
+    validate.choice("encoding", encoding, ENCODINGS)
     meshes = [emitters] if isinstance(emitters, Mesh) else None
     if meshes is None and all(isinstance(e, Mesh) for e in emitters):
         meshes = list(emitters)
     triangles = list(triangles)
+    if method == "slabs" and meshes is not None:
+        return record_plate(meshes + triangles, plate=plate, camera=camera, zone=zone,
+                            zone_margin=zone_margin, resolution=resolution,
+                            max_resolution=max_resolution, wavelength=wavelength,
+                            encoding=encoding, depth=depth, seed=seed, code=code,
+                            progress=progress)
+    if method == "slabs":
+        method = "auto"  # bare points: no surface to mask with
     probe = [m.vertices for m in meshes + triangles] if meshes is not None else \
         [np.asarray(emitters[0], np.float64)] + [m.vertices for m in triangles]
     if not sum(len(p) for p in probe):
@@ -282,7 +302,7 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
         colours.append(cover[:, None])
     reference = Reference(angle=s.reference_angle)
     split = 0.1 if prims else 1.0  # the triangles' propagations dominate where there are any
-    return record_points(plate.to_plate(pos), np.concatenate(colours, 1), shape=s.shape,
+    recorded = record_points(plate.to_plate(pos), np.concatenate(colours, 1), shape=s.shape,
                          pitch=s.pitch, wavelengths=tuple(wavelengths), seed=seed,
                          reference=reference, plate=plate.matrix_world, method=method,
                          band=s.band, channels=channels, point_density=density,
@@ -290,6 +310,12 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, res
                                                     jobs.scaled(progress, split, 1.0))
                          if prims else None, progress=jobs.scaled(progress, 0.0, split),
                          bounds=np.array([local.min(0), local.max(0)]))
+    if zone is None and camera is not None:
+        zone = plate.zone or plate.zone_for(camera, zone_margin)
+    if encoding == "complex":
+        return replace(recorded, intensity=None, encoding="complex", reference_amplitudes=(),
+                       reference_angle=0.0, zone=zone or plate.zone)
+    return replace(recorded, zone=zone or plate.zone)
 
 
 def _triangle_waves(prims, s, wavelengths, channels, view, seed, progress: jobs.Progress = None):
@@ -348,3 +374,138 @@ def _triangle_waves(prims, s, wavelengths, channels, view, seed, progress: jobs.
             done[lam] = waves_at(lam)
         return done[lam].pop(c)
     return wave
+
+
+# --- plates as scene assets ------------------------------------------------------------------
+
+PLATE_METHODS = ("slabs", "auto", "direct", "wrp")
+
+
+def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
+                 zone_margin=DEFAULT_ZONE_MARGIN, resolution=None, max_resolution=8192,
+                 wavelength=None, encoding="complex", depth=True, seed=0, code=None,
+                 keep_object_wave=False, progress: jobs.Progress = None) -> Hologram:
+    """A plate hologram of ``meshes`` (world metres), independent of any camera: what it
+    records depends on the meshes, the plate's placement, size and sampling, the wavelengths
+    and the viewing zone (:mod:`holo_core.plate.slabs`: emitters on depth slabs, occlusion by
+    silhouette masks, so objects hide each other from every point of the zone).
+
+    Parameters
+    ----------
+    meshes : Mesh or sequence of Mesh
+        World-space surfaces; colours are linear RGB intensities.
+    plate : Plate
+    camera : Camera, optional
+        Only where no zone is given: the zone covers its pupil with ``zone_margin`` [m]
+        around it, and ``resolution`` defaults to what its sharp view needs.
+    zone : ViewingZone, optional
+        The region [m, the plate's frame] the plate will be looked at from; default
+        ``plate.zone``, else from ``camera``, else the plate's own size mirrored at the
+        objects' distance in front of it.
+    resolution, max_resolution, wavelength, encoding
+        As for :func:`holo_core.plate.sampling.plan` (encoding 'complex': the object wave,
+        the default; 'intensity': |O + R|² for a display or a print).
+    depth : bool
+        Also record the depth partner λ2 (Sect. VII-C).
+    seed : int
+        Seeds the emitters' random phases.
+    code : (k, m), optional
+        Look k of m² with the emitters' phases shifted by 2π·(k1·i + k2·j)/m on the lattice
+        cells (i, j) they lie in (k = k1·m + k2): the mean intensity of the m² looks has no
+        cross terms between emitters of neighbouring cells (the looks' speckle cancels
+        where random looks would only average it down).
+    keep_object_wave : bool
+        An intensity plate also stores the object wave it recorded.
+    """
+    from .sampling import plan, plan_view
+    from .slabs import record_slabs
+    if not isinstance(plate, Plate):
+        raise InputError(f"plate must be a Plate; got {type(plate).__name__}")
+    meshes = [meshes] if isinstance(meshes, Mesh) else list(meshes)
+    if not meshes or not all(isinstance(m, Mesh) for m in meshes):
+        raise InputError("meshes must be a Mesh or a non-empty sequence of Mesh")
+    seed = validate.seed(seed)
+    local = [replace(m, vertices=plate.to_plate(m.vertices)) for m in meshes]
+    every = np.concatenate([m.vertices for m in local])
+    bounds = np.array([every.min(0), every.max(0)])
+    if bounds[1, 2] >= 0:
+        raise InputError(f"the objects must lie behind the plate (z < 0 in its frame); they "
+                         f"reach z = {bounds[1, 2]:.4g} m")
+    zone = resolve_zone(plate, zone, camera, zone_margin, bounds)
+    view = None
+    if camera is not None:
+        view = (plate.to_plate(camera.position[None])[0], camera.pixel_angle(),
+                camera.aperture_diameter)
+    p = plan((plate.width, plate.height), bounds, zone=zone, resolution=resolution,
+             encoding=encoding, wavelength=wavelength, camera=view,
+             max_resolution=max_resolution)
+    log.info("sampling: %s", p.describe())
+    if view is not None:
+        v = plan_view(p, position=view[0], pixel_angle=view[1], pupil=view[2],
+                      resolution=camera.resolution)
+        if not v.sharp:
+            log.warning("plate: its views from this camera resolve %.2f px (a sharp view needs "
+                        "%d samples along the plate's longer side; it has %d)", v.blur_px,
+                        v.sharp_samples, max(p.shape))
+    channels = ["R", "G", "B"] + (["Z"] if depth else [])
+    wavelengths = [p.wavelength] * 3 + ([p.depth_wavelength] if depth else [])
+    memory.check_host(f"a {p.shape[1]}x{p.shape[0]} plate of {len(channels)} channels",
+                      p.memory_bytes(len(channels)))
+    waves, density = record_slabs(local, plan=p, wavelengths=list(zip(wavelengths, channels)),
+                                  seed=seed, code=code, progress=progress)
+    return encode(waves, wavelengths=tuple(wavelengths), pitch=p.pitch, band=p.band,
+                  encoding=encoding, reference_angle=p.reference_angle,
+                  plate=plate.matrix_world, bounds=bounds, channels=tuple(channels),
+                  point_density=density, zone=zone, keep_object_wave=keep_object_wave)
+
+
+def resolve_zone(plate: Plate, zone, camera, margin, bounds) -> ViewingZone:
+    """The viewing zone of a recording: ``zone``, else the plate's own, else one around
+    ``camera``'s pupil (``margin`` [m]), else the plate's extent mirrored at the objects'
+    distance in front of it (``bounds`` (2, 3) [m], the plate's frame)."""
+    if zone is not None:
+        if not isinstance(zone, ViewingZone):
+            raise InputError(f"zone must be a ViewingZone or None; got {type(zone).__name__}")
+        return zone
+    if plate.zone is not None:
+        return plate.zone
+    if camera is not None:
+        return plate.zone_for(camera, margin)
+    distance = -float(bounds[1, 2])
+    zone = ViewingZone(centre=(0.0, 0.0, distance),
+                       half_extents=(plate.width / 2, plate.height / 2, distance / 4))
+    log.info("plate: no camera and no viewing zone given: %s", zone.describe())
+    return zone
+
+
+def encode(waves, *, wavelengths, pitch, band, encoding, reference_angle=0.0, plate=None,
+           bounds=None, channels=(), point_density=0.0, zone=None, beam_ratio=4.0,
+           keep_object_wave=False) -> Hologram:
+    """The hologram of object waves ``waves`` (C, H, W) on the plate: 'complex' keeps them;
+    'intensity' records H = |O + R|² (Eq. 19) with the plane reference at ``reference_angle``
+    [rad], |R|² = ``beam_ratio``·mean|O|², each wave limited to its cone sin θ <= ``band``
+    first (so that the carrier separates it from the twin and |O|² terms)."""
+    common = {"wavelengths": wavelengths, "pitch": pitch, "band": band, "channels": channels,
+              "point_density": point_density, "zone": zone, "bounds": bounds,
+              "plate": np.eye(4) if plate is None else plate}
+    waves = np.asarray(waves)
+    if not np.isfinite(waves).all():  # never a hologram of NaN: it would be written as one
+        raise RuntimeError("the object wave holds non-finite samples (the OpenCL device's "
+                           "arithmetic failed); nothing was recorded")
+    if encoding == "complex":
+        return Hologram(object_wave=waves.astype(np.complex64), encoding="complex", **common)
+    reference = Reference(angle=reference_angle)
+    shape = waves.shape[1:]
+    intensity, kept, amplitudes = [], [], []
+    for o, lam in zip(waves, wavelengths):
+        reference.check(lam, pitch)
+        o = cone_filter(o, wavelength=lam, pitch=pitch, band=band)
+        a_r = math.sqrt(beam_ratio * max(float(np.mean(np.abs(o) ** 2)), 1e-30))
+        intensity.append(interfere(o, reference_wave(shape, wavelength=lam, pitch=pitch,
+                                                     reference=reference, amplitude=a_r)))
+        kept.append(o)
+        amplitudes.append(a_r)
+    return Hologram(intensity=np.stack(intensity), encoding="intensity",
+                    object_wave=np.stack(kept) if keep_object_wave else None,
+                    reference_angle=reference.angle, reference_amplitudes=tuple(amplitudes),
+                    **common)

@@ -27,6 +27,8 @@ import numpy as np
 from .. import validate
 from ..optics.depth import partner_wavelength
 from ..optics.pupil import pinhole_wavelength
+from ..scene.hologram import ENCODINGS
+from ..scene.plate import ViewingZone
 from ..validate import InputError
 from .point_sources import CONE_RIM
 
@@ -130,3 +132,252 @@ def choose(plate_size, points, *, camera=None, resolution=None,
                     2 * math.sqrt(lam / lam_image), lam_image, resolution, lam,
                     math.ceil(resolution * lam / lam_image))
     return s
+
+
+# --- plates as scene assets: sampling planned from the viewing zone and the optics -------------
+
+SPOT_SPACING = 1.0   # emitters lie this many resolved spots apart, seen from the zone
+SLAB_SPOT = 2.0      # a slab's depth seen at the zone's widest angle from its centre spans
+                     # this many spots: an occluding edge moves by at most half of it
+SHARP_SPOT = 0.5     # a view is sharp when λ/D spans at most this many pixels (a fine pixel,
+                     # what the camera hologram resolves)
+CHANNELS = 4         # R, G, B at λ1 and the depth partner λ2
+FFT_SECONDS = 1.6e-10  # per complex sample and log2(samples) of an FFT (2-core CPU, FFTW)
+VIEW_SECONDS = 0.3   # a view's fixed cost [s] (programs, pixel tables, the pass's assembly)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PlatePlan:
+    """A plate's sampling, planned from its viewing zone and the objects before recording.
+
+    shape : (rows, cols) samples; pitch [m]
+    wavelength, depth_wavelength : λ1 of the colours and the depth partner λ2 = ε·λ1 [m]
+    band : sin θ the plate carries, the widest angle between its normal and a line from an
+        object point to a point of the zone
+    needed_band : sin θ the zone needs (the band is smaller only for a given wavelength)
+    encoding : 'complex' (the object wave: λ = 2·pitch·sin θ) or 'intensity' (|O + R|², whose
+        carrier, twin and |O|² terms take 4x the band per side: λ = 8·pitch·sin θ)
+    reference_angle : ϑ [rad] of an intensity plate's reference (sin ϑ = 3·sin θ), else 0
+    step : the angle [rad] between neighbouring emitters seen from the zone's centre (about a
+        resolved spot λ/D of the zone's pupil: one emitter per spot, as the camera hologram
+        has one per bin)
+    distance : the distance [m] from the zone's centre to the objects' centre (the emitters'
+        density is 1/(step·distance)² per m² there)
+    slab : depth [m] of the slabs the occlusion masks are applied at
+    zone : the :class:`ViewingZone`; bounds : (2, 3) the objects' box [m] in the plate's frame
+    """
+
+    shape: tuple
+    pitch: float
+    wavelength: float
+    depth_wavelength: float
+    band: float
+    needed_band: float
+    encoding: str
+    reference_angle: float
+    step: float
+    distance: float
+    slab: float
+    zone: ViewingZone
+    bounds: np.ndarray
+
+    def describe(self) -> str:
+        return (f"{self.encoding} plate {self.shape[1]}x{self.shape[0]} at pitch "
+                f"{self.pitch:.4g} m, λ = {self.wavelength:.4g} m (depth λ2 = "
+                f"{self.depth_wavelength:.6g} m), band sin θ = {self.band:.3g} for the zone "
+                f"{self.zone.describe()}; emitters {self.step:.3g} rad apart seen from its "
+                f"centre, slabs {self.slab:.3g} m deep")
+
+    @property
+    def size(self) -> tuple[float, float]:
+        """(width, height) [m] of the sampled plate."""
+        return self.shape[1] * self.pitch, self.shape[0] * self.pitch
+
+    def slab_grid(self) -> tuple[int, int]:
+        """(rows, cols) of the grid the slabs are propagated on: the objects' box widened by
+        the light's spread over their depth (the band's angle), at the plate's pitch."""
+        lo, hi = np.asarray(self.bounds)
+        spread = (hi[2] - lo[2]) * self.band / math.sqrt(1 - self.band**2) + 8 * self.pitch
+        return tuple(math.ceil((hi[i] - lo[i] + 2 * spread) / self.pitch) + 1
+                     for i in (1, 0))
+
+    def slabs(self) -> int:
+        lo, hi = np.asarray(self.bounds)
+        return max(1, math.ceil((hi[2] - lo[2]) / self.slab))
+
+    def memory_bytes(self, channels=CHANNELS) -> float:
+        """Host bytes of a recording: the plate's complex channels, and the 2× padded grids
+        that carry the last slab's fields to it."""
+        n = math.prod(self.shape)
+        stored = (8 if self.encoding == "complex" else 12) * channels * n
+        return stored + 2 * 8 * 4 * n + 8 * 4 * channels * math.prod(self.slab_grid())
+
+    def record_seconds(self, channels=CHANNELS) -> float:
+        """Estimated recording time [s] on a 2-core CPU: per slab and channel a propagation
+        (two FFTs of the 2× padded slab grid), per channel one onto the plate."""
+        return channels * (self.slabs() * _propagation_seconds(self.slab_grid())
+                           + _propagation_seconds(self.shape))
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ViewPlan:
+    """What a camera's view of a plate will be (:func:`plan_view`).
+
+    spot_px : the view's resolution λ/D in pixels (a lens of diameter D; a pinhole's D is
+        chosen as in :func:`holo_core.optics.pupil.camera_pupil`)
+    sharp : whether spot_px <= SHARP_SPOT (a fine pixel, the camera hologram's resolution)
+    sharp_samples : samples along the plate's longer side that make this view sharp
+    blur_px : the blur beyond sharp, in pixels (0 when sharp)
+    outside_zone : how far [m] the camera's pupil reaches beyond the zone (0: inside)
+    seconds : the estimated time of one view [s]
+    """
+
+    spot_px: float
+    sharp: bool
+    sharp_samples: int
+    blur_px: float
+    outside_zone: float
+    seconds: float
+
+
+def band_towards_zone(bounds, zone: ViewingZone) -> float:
+    """sin θ of the widest angle between the plate's normal and a line from a point of the box
+    ``bounds`` (2, 3) [m] to a point of ``zone`` (both in the plate's frame). The widest lies
+    between corners: the lateral distance is largest, the depth smallest, at corners of both
+    boxes."""
+    lo, hi = np.asarray(bounds, np.float64)
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                        for z in (lo[2], hi[2])])
+    v = zone.corners()[:, None, :] - corners[None, :, :]
+    return float(np.max(np.hypot(v[..., 0], v[..., 1]) / np.linalg.norm(v, axis=-1)))
+
+
+def plan(plate_size, bounds, *, zone: ViewingZone, resolution=None, encoding="complex",
+         wavelength=None, camera=None, max_resolution=8192) -> PlatePlan:
+    """The sampling of a plate of ``plate_size`` (width, height) [m] for objects in the box
+    ``bounds`` (2, 3) [m] (the plate's frame, z < 0) seen from ``zone``.
+
+    The band covers every object point's wave towards the whole zone; the wavelength follows
+    from the pitch and that band (λ = 2·pitch·sin θ for a complex plate, 8· for an intensity
+    one), not from a pinhole rule: a lens focused on the objects resolves λ/D.
+
+    resolution : int, optional
+        Samples along the plate's longer side; default: what ``camera`` needs for a sharp
+        view (:func:`plan_view`), at most ``max_resolution``, else ``DEFAULT_RESOLUTION``.
+    wavelength : float, optional
+        λ1 [m] instead of the chosen one; the band is then what the pitch carries at it (a
+        warning names the zone's need when that is less).
+    camera : (position (3,) [m] in the plate's frame, pixel angle [rad], pupil diameter [m]
+        or None for a pinhole), optional
+    """
+    width, height = validate.pair("plate_size", plate_size, "m")
+    validate.positive("plate width", width, "m")
+    validate.positive("plate height", height, "m")
+    if encoding not in ENCODINGS:
+        raise InputError(f"encoding must be one of {', '.join(map(repr, ENCODINGS))}; got "
+                         f"{encoding!r}"[:300])
+    if not isinstance(zone, ViewingZone):
+        raise InputError(f"zone must be a ViewingZone; got {type(zone).__name__}")
+    try:
+        box = np.asarray(bounds, np.float64).reshape(2, 3)
+    except (TypeError, ValueError):
+        box = np.full((2, 3), np.nan)
+    if not np.isfinite(box).all() or (box[0] > box[1]).any() or box[1, 2] >= 0:
+        raise InputError(f"bounds must be the objects' box (min, max corners [m]) behind the "
+                         f"plate (z < 0 in its frame); got {np.asarray(bounds).tolist()!r}"[:300])
+    max_resolution = validate.integer("max_resolution", max_resolution, 16)
+    needed = min(MAX_BAND, band_towards_zone(box, zone))
+    side = max(width, height)
+    per_band = 2.0 if encoding == "complex" else 8.0  # λ / (pitch · sin θ)
+    if resolution is None:
+        resolution = DEFAULT_RESOLUTION
+        if camera is not None:
+            need = _sharp_samples(side, needed, per_band, camera, box)
+            resolution = int(np.clip(need, MIN_RESOLUTION, max_resolution))
+    resolution = validate.integer("resolution", resolution, 16)
+    pitch = side / resolution
+    half_depth = DEPTH_MARGIN * max(float(np.linalg.norm(box[1] - box[0])), 1e-9) / 2
+    if wavelength is None:  # λ2 = ε·λ1 < λ1 is the tighter: it sets the band
+        lam2 = per_band * pitch * needed / MARGIN
+        lam = lam2 / (1 - lam2 / (2 * half_depth))
+        band = needed
+    else:
+        lam = validate.length("wavelength", wavelength)
+        band = min(MARGIN * partner_wavelength(lam, half_depth) / (per_band * pitch), MAX_BAND)
+        if band < needed:
+            validate.warn_sampling(
+                f"a plate of pitch {pitch:.4g} m carries sin θ = {band:.3g} at λ = {lam:.4g} m; "
+                f"its viewing zone needs {needed:.3g}: cameras near the zone's edge see the "
+                f"objects cut off")
+    lam2 = partner_wavelength(lam, half_depth)
+    far = float(np.linalg.norm(box.mean(0) - np.asarray(zone.centre)))
+    # a pinhole's zone (no pupil): the pinhole at its best, D = √(λ·r) (facts §6)
+    aperture = zone.pupil if zone.pupil > 0 else math.sqrt(lam * far)
+    step = SPOT_SPACING * lam / aperture
+    # a slab seen from the zone's edge shifts its silhouette by (slab/2)·(zone's half width)/r
+    half = max(max(zone.half_extents[:2]), 1e-3 * far)
+    slab = max(SLAB_SPOT * step * far * far / half, pitch)
+    reference = math.asin(min(0.99, 3 * band)) if encoding == "intensity" else 0.0
+    return PlatePlan(shape=(max(1, round(height / pitch)), max(1, round(width / pitch))),
+                     pitch=pitch, wavelength=lam, depth_wavelength=lam2, band=band,
+                     needed_band=needed, encoding=encoding, reference_angle=reference,
+                     step=step, distance=far, slab=slab, zone=zone, bounds=box)
+
+
+def plan_view(p: PlatePlan, *, position, pixel_angle, pupil=None, resolution=(640, 480),
+              distance=None) -> ViewPlan:
+    """What a camera at ``position`` (3,) [m] in the plate's frame, with pixels of
+    ``pixel_angle`` [rad] and an entrance pupil of diameter ``pupil`` [m] (None: a pinhole
+    for objects ``distance`` [m] away) sees of the plate planned as ``p``."""
+    position = validate.vector("position", position, 3, "m")
+    pixel = validate.positive("pixel_angle", pixel_angle, "rad")
+    w, h = validate.shape2d("resolution", resolution)
+    far = float(np.linalg.norm(np.asarray(p.bounds).mean(0) - position)) \
+        if distance is None else validate.positive("distance", distance, "m")
+    if pupil is None:  # the plate's pinhole rule: λ/D of two pixels, D <= √(λ·r)
+        d = min(p.wavelength / (2 * pixel), math.sqrt(p.wavelength * far))
+    else:
+        d = validate.positive("pupil", pupil, "m")
+    spot = p.wavelength / (d * pixel)
+    side = max(p.size)
+    per_band = 2.0 if p.encoding == "complex" else 8.0
+    sharp = _sharp_samples(side, p.needed_band, per_band, (position, pixel, pupil), p.bounds,
+                           far)
+    grid_n = math.ceil(d / (p.wavelength / (2 * min(1.0, p.band + 0.2))))
+    seconds = VIEW_SECONDS + CHANNELS * (_propagation_seconds((grid_n * 2, grid_n * 2))
+                                         + _fft_seconds((2 * grid_n, 2 * grid_n)))
+    seconds += 4e-8 * w * h * 4 * CHANNELS  # the pixels' reads
+    return ViewPlan(spot_px=spot, sharp=spot <= SHARP_SPOT, sharp_samples=sharp,
+                    blur_px=0.0 if spot <= SHARP_SPOT else spot,
+                    outside_zone=p.zone.distance_outside(position, (d or 0) / 2),
+                    seconds=seconds)
+
+
+def _sharp_samples(side, band, per_band, camera, box, distance=None) -> int:
+    """Samples along the longer side ``side`` [m] that make a view of ``camera`` (position,
+    pixel angle [rad], pupil [m] or None) resolve SHARP_SPOT pixels; a pinhole's spot is at
+    least two pixels whatever the plate (λ = 4Δ²r, :func:`pinhole_wavelength`), so it gets
+    the samples of that."""
+    position, pixel, pupil = camera
+    if pupil is None:
+        r = distance or float(np.linalg.norm(np.asarray(box).mean(0) - position))
+        lam = pinhole_wavelength(pixel, r)
+    else:
+        lam = SHARP_SPOT * pupil * pixel
+    return math.ceil(side * per_band * band / (MARGIN * lam))
+
+
+def _corners(box) -> np.ndarray:
+    lo, hi = np.asarray(box)
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                     for z in (lo[2], hi[2])])
+
+
+def _fft_seconds(shape) -> float:
+    n = math.prod(shape)
+    return FFT_SECONDS * n * math.log2(max(n, 2))
+
+
+def _propagation_seconds(shape) -> float:
+    """An angular-spectrum step of a field of ``shape`` zero-padded 2×: two FFTs."""
+    return 2 * _fft_seconds(tuple(2 * s for s in shape))

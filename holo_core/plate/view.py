@@ -1,12 +1,17 @@
-"""Image generation: a camera anywhere in front of the hologram (Sect. VII).
+"""Image generation: a camera anywhere in the plate's viewing zone (Sect. VII).
 
-Per wavelength: the reconstructed wave (Sect. VI) is carried to the camera's aperture plane by
-tilt plus offset propagation (Sect. IV-D); the aperture is cut out as a disc, apodized by the
-cosine window of Fig. 9 and, for a thin lens, multiplied by Eq. 24's phase; its angular
-spectrum is then read at each pixel's direction cosines (Eq. 22) by bilinear weighting. The
-image holds the complex amplitude A(α/λ, β/λ) [field·m²] of the plane wave from each pixel's
-direction; the radiance is |A|² / (λ²·∫w²) (power per aperture area and projected solid
-angle), so a surface of point emitters of intensity I and density σ shows radiance σ·I.
+A plate's view is the camera hologram's image of the plate's field at the camera's pupil:
+per channel, the part of the plate inside the cone from the pupil to the objects is carried to
+the pupil's plane and rotated onto it (:mod:`holo_core.plate.to_pupil`), and the camera
+hologram's own stage (:mod:`holo_core.optics.imaging`) forms the image: the iris, the thin lens
+of Eq. 24, the angular spectrum read at each pixel's direction cosines (Eq. 22) by the ES
+kernel of a non-uniform FFT. Radiance is |A|² / (σ·b²), b = λ/L the direction cosines a bin of
+the pupil's spectrum spans and σ the emitters per m² of surface, so a surface of emitters of
+intensity I shows I. The depth partner (unit emitters) gives each pixel's coverage, hence
+alpha and the colour as radiance over coverage, and the depth from the two-wavelength phase
+(Eq. 26–30), as the camera hologram does. An intensity hologram is reconstructed first (R'·H,
+the DC term suppressed, the twin and |O|² terms filtered off with the band outside the
+recorded cone, Sect. VI).
 """
 
 from __future__ import annotations
@@ -20,22 +25,22 @@ import numpy as np
 
 from .. import jobs, memory, validate
 from ..opencl import get_runtime
-from ..opencl.arrays import cached, embed, empty
+from ..opencl.arrays import cached
 from ..optics import depth as depth_mod
 from ..optics import speckle
-from ..optics.pupil import PINHOLE_SAMPLES, Pupil, camera_pupil
+from ..optics.imaging import IRIS_TAPER, PupilImage, assemble, iris_weights
+from ..optics.pupil import Pupil, camera_pupil
 from ..propagation import grid
 from ..propagation.convolution import convolve
-from ..propagation.tilt import propagate_to_plane, tilt_reach
+from ..propagation.tilt import tilt_reach
 from ..scene.camera import Camera
 from ..scene.hologram import Hologram
 from ..validate import InputError
 from ..view import BACKGROUND_DEPTH, RenderResult
 from .reconstruct import reconstruct
+from .to_pupil import field_at_pupil, overlaps, plate_window, pupil_grid, window_of
 
 log = logging.getLogger(__name__)
-SPECTRUM_OVERSAMPLING = 4   # spectrum samples per λ/D (the aperture's resolution), at least
-MAX_SPECTRUM = 4096         # largest FFT of the aperture per axis
 COVERAGE_RADIUS = 1  # the coverage's speckle is averaged over (2r+1)² pixels before alpha
 
 
@@ -61,8 +66,10 @@ def plate_wave(hologram: Hologram, channel: int, *, source="hologram"):
     """The object wave leaving the hologram for one channel, complex64 (H, W) (NumPy, or a
     device array that the propagation takes without a host round trip): R'·H' with the
     DC term suppressed and the band outside the recorded cone removed (Sect. VI), or the
-    stored object wave (``source='object_wave'``, the ideal reconstruction)."""
-    if validate.choice("source", source, ("hologram", "object_wave")) == "object_wave":
+    stored object wave (``source='object_wave'``, the ideal reconstruction). A complex
+    hologram's samples are the object wave."""
+    if validate.choice("source", source, ("hologram", "object_wave")) == "object_wave" or \
+            hologram.encoding == "complex":
         if hologram.object_wave is None:
             raise InputError("source 'object_wave' needs a hologram that stores the object wave")
         return hologram.object_wave[channel]
@@ -79,95 +86,6 @@ def plate_wave(hologram: Hologram, channel: int, *, source="hologram"):
 
     mask, _ = cached(rt, ("band", shape, hologram.pitch, lam, hologram.band), make)
     return convolve(rt, rt.to_device(u), mask)
-
-
-def image_wave(wave, *, wavelength, pitch, rotation, position, camera: Camera,
-               aperture: Pupil) -> tuple[np.ndarray, float]:
-    """Complex image (H, W) [field·m²] of a plate wave seen by ``camera``, and the aperture's
-    ∫w² [m²] (for radiance).
-
-    ``wave`` is the field on the plate (z = 0) at ``pitch`` [m], ``wavelength`` [m];
-    ``rotation``, ``position``: the camera in the plate's frame (see :func:`camera_in_plate`).
-    """
-    at_camera = camera_field(wave, wavelength=wavelength, pitch=pitch, rotation=rotation,
-                             position=position)
-    return pupil_image(at_camera, wavelength=wavelength, pitch=pitch, camera=camera,
-                       aperture=aperture)
-
-
-def camera_field(wave, *, wavelength, pitch, rotation, position) -> np.ndarray:
-    """The plate wave carried to the camera's aperture plane (tilt plus offset propagation),
-    on the host, centred on the aperture."""
-    at_camera = propagate_to_plane(wave, wavelength=wavelength, pitch=pitch, rotation=rotation,
-                                   position=position)
-    return at_camera if isinstance(at_camera, np.ndarray) else at_camera.get()
-
-
-def pupil_image(at_camera, *, wavelength, pitch, camera: Camera,
-                aperture: Pupil) -> tuple[np.ndarray, float]:
-    """The image of the field at the camera (:func:`camera_field`) through ``aperture``: its
-    angular spectrum read at the pixels' direction cosines (Eq. 22), and ∫w² [m²]."""
-    pupil, weight = _pupil(at_camera, wavelength, pitch, aperture)
-    return _spectrum_at_pixels(pupil, wavelength, pitch, camera, aperture), weight
-
-
-def depth_aperture(camera: Camera, hologram: Hologram, wavelength: float,
-                   centre: float) -> Pupil:
-    """The pupil the depth pair (λ2 = ``wavelength`` [m]) is imaged through: a lens focused on
-    the objects' centre ``centre`` [m] away, as
-    wide as alias-free sampling of the pixels allows (at most half the plate). Like a
-    renderer's Depth pass it ignores the camera's depth of field, and its small spot keeps few
-    surface points in each pixel's phase average (Sect. VII-C)."""
-    alias_free = wavelength / (PINHOLE_SAMPLES * camera.pixel_angle())
-    return Pupil(diameter=min(alias_free, min(hologram.size) / 2), focus=centre)
-
-
-def _pupil(field, wavelength, pitch, aperture: Pupil):
-    """The aperture disc cut from the field at the camera, windowed and lensed (Eq. 24)."""
-    n_full = field.shape[0]
-    n = min(n_full, math.ceil(aperture.diameter / pitch) + 1)
-    n += (n_full - n) % 2  # keep the crop centred on the camera exactly
-    if n == n_full and aperture.diameter > n_full * pitch:
-        validate.warn_sampling(f"the aperture ({aperture.diameter:.4g} m) is wider than the "
-                               f"propagated field ({n_full * pitch:.4g} m); it is cut there")
-    r0, c0 = (field.shape[0] - n) // 2, (field.shape[1] - n) // 2
-    crop = field[r0:r0 + n, c0:c0 + n].astype(np.complex128)
-    x = grid.coords(n, pitch)
-    rho = np.hypot(x[None, :], x[:, None])
-    radius = aperture.diameter / 2
-    w = np.where(rho <= radius, np.cos(np.pi * rho / aperture.diameter)
-                 if aperture.apodize else 1.0, 0.0)
-    if not w.any():
-        raise InputError(f"the camera's aperture ({aperture.diameter:.3g} m) falls between the "
-                         f"field's samples ({pitch:.3g} m apart): this view cannot be formed; "
-                         f"give the camera more pixels or an f-stop, or record a finer pitch")
-    if aperture.focus is not None:
-        k = 2 * np.pi / (aperture.lens_wavelength or wavelength)
-        f = aperture.focus
-        w = w * np.exp(-1j * np.remainder(k * np.sqrt(rho * rho + f * f), 2 * np.pi))
-    return crop * w, float(np.sum(np.abs(w) ** 2) * pitch * pitch)
-
-
-def _spectrum_at_pixels(pupil, wavelength, pitch, camera: Camera, aperture: Pupil):
-    """The pupil's continuous Fourier transform at each pixel's frequency (α/λ, β/λ): an FFT
-    zero-padded to n×n, fine enough for bilinear reading, read on the device."""
-    n_a = pupil.shape[0]
-    need = max(SPECTRUM_OVERSAMPLING * aperture.diameter / pitch,
-               2 * wavelength / (pitch * camera.pixel_angle()), 2 * n_a)
-    n = grid.next_fast_len(min(MAX_SPECTRUM, math.ceil(need)))
-    n = max(n, n_a + (n - n_a) % 2)
-    c0 = (n - n_a) // 2
-    rt = get_runtime()
-    work = rt.scratch("image-spectrum", (n, n))
-    embed(rt, work, rt.to_device(pupil, np.complex64), c0, c0)
-    rt.fft.forward(work, (c0, c0 + n_a))
-    alpha, beta, _ = camera.direction_cosines()
-    bins = [rt.to_device(a * (n * pitch / wavelength), np.float32) for a in (alpha, beta)]
-    out = empty(rt, alpha.shape)
-    rt.kernel("spectral", "read_spectrum", rt.real_options)(
-        rt.queue, (alpha.size,), None, out.data, work.data, np.int32(n), *(b.data for b in bins),
-        rt.real((c0 + (n_a - 1) / 2) / n), np.float32(pitch * pitch))
-    return out.get()
 
 
 @validate.scale_free()
@@ -238,57 +156,128 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     lam0 = first.wavelengths[colours[0]]
     centre = _centre_distance(first, camera)
     pupil = aperture or camera_pupil(fine, lam0, centre, apodize=apodize)
-    chromatic_pupil = replace(pupil, lens_wavelength=lam0) if chromatic and pupil.focus else pupil
     rotation, position = camera_in_plate(first, camera)
-    unseen = _unseen(first, rotation, position)
+    _check_zone(first, camera, position, pupil.diameter)
+    window = plate_window(first, position, rotation, pupil.diameter)
+    unseen = _unseen(first, rotation, position) or (None if overlaps(first, window) else (
+        "the camera sees the objects beside the plate, not through it"))
     if unseen:  # a black view, said aloud (an animation's camera may pass out of the zone)
         warnings.warn(f"the view is black: {unseen}", EmptyViewWarning, stacklevel=2)
         return _finish(np.zeros(camera.resolution[::-1] + (len(colours),)), None, None, first,
                        camera, pupil, exposure, opacity_threshold, lam0)
-    depth_pupil = None
-    if z_ch is not None:
-        depth_pupil = depth_aperture(fine, first, first.wavelengths[z_ch], centre)
-        pair_wavelengths = (lam0, first.wavelengths[z_ch])
-        depth_sources = [c for c in colours if first.wavelengths[c] == lam0] + [z_ch]
     channels = colours + ([z_ch] if z_ch is not None else [])
-    intensities, crosses, brightness, coverage = [], [], [], []
+    n, d = pupil_grid(first, rotation, pupil.diameter, pupil.focus,
+                      min(first.wavelengths[c] for c in channels))
+    rt = get_runtime()
+    memory.check_device(rt, f"the {n}x{n} pupil's spectrum", 40.0 * n * n, 32.0 * n * n)
+    taper = IRIS_TAPER if pupil.apodize else 0.0
+    scale = 1 / math.sqrt(n * n * float(np.sum(iris_weights((n, n), (d, d), pupil.diameter,
+                                                            taper) ** 2)))
+    imagers = {lam: PupilImage(rt, (n, n), bin=lam / (n * d), camera=fine)
+               for lam in {first.wavelengths[c] for c in channels}}
+    # radiance |A|² / (σ·b²): a surface of emitters of intensity I, σ per m², shows I
+    density = first.point_density or 1.0
+    looks = []
     for i, h in enumerate(holos):
         done = jobs.scaled(progress, i / len(holos), (i + 1) / len(holos))
-        planes, depth_fields = [], {}
-        for n, c in enumerate(channels):
+        images = {}
+        for m, c in enumerate(channels):
             lam = h.wavelengths[c]
-            at = camera_field(plate_wave(h, c, source=source), wavelength=lam, pitch=h.pitch,
-                              rotation=rotation, position=position)
-            if c != z_ch:
-                u, area = pupil_image(at, wavelength=lam, pitch=h.pitch, camera=fine,
-                                      aperture=chromatic_pupil)
-                planes.append(np.abs(u) ** 2 / (lam * lam * area))
-            if depth_pupil is not None and c in depth_sources:  # imaging is linear: sum first
-                pair = int(c == z_ch)
-                depth_fields[pair] = depth_fields.get(pair, 0) + at
-            jobs.report(done, n + 1, len(channels))
-        intensities.append(np.stack(planes, -1))
-        if depth_pupil is not None:
-            (u1, _), (u2, area) = (pupil_image(depth_fields[p], wavelength=pair_wavelengths[p],
-                                               pitch=h.pitch, camera=fine, aperture=depth_pupil)
-                                   for p in (0, 1))
-            crosses.append(u1 * np.conj(u2))
-            brightness.append(np.abs(u1))
-            # the depth partner's emitters have unit intensity: radiance = density × coverage
-            coverage.append(np.abs(u2) ** 2 / (pair_wavelengths[1] ** 2 * area))
-    radiance = speckle.compose(intensities, composition)
-    ray = None
-    if crosses:
-        ray = _depth(crosses, brightness, estimate=depth_estimate, wavelengths=pair_wavelengths,
-                     centre=centre, focus=depth_pupil.focus, camera=camera, supersample=supersample)
-    radiance = speckle.downsample(radiance, supersample)
-    if coverage and first.point_density:
-        coverage = speckle.downsample(np.mean(coverage, 0)[..., None], supersample)[..., 0]
-        coverage = speckle.box_mean(coverage, COVERAGE_RADIUS) / first.point_density
-    else:
-        coverage = None
-    return _finish(radiance, ray, coverage, first, camera, pupil, exposure, opacity_threshold,
-                   lam0)
+            wave = plate_wave(h, c, source=source)
+            u = window_of(wave if isinstance(wave, np.ndarray) else wave.get(), window)
+            at = field_at_pupil(u, window, h, wavelength=lam, position=position,
+                                rotation=rotation, n=n, pitch=d)
+            lens = lam0 if chromatic else lam
+            a = imagers[lam].image(rt.to_device(at, np.complex64), pitch=(d, d),
+                                   diameter=pupil.diameter, focus=pupil.focus, taper=taper,
+                                   lens_k=2 * np.pi / lens, scale=scale)
+            images[c] = a * (n * d / (lam * math.sqrt(density)))
+            jobs.report(done, m + 1, len(channels))
+        looks.append(images)
+    return _compose(looks, colours, z_ch, first, camera, fine, pupil, supersample=supersample,
+                    composition=composition, depth_estimate=depth_estimate, centre=centre,
+                    exposure=exposure, threshold=opacity_threshold, n=n)
+
+
+def _compose(looks, colours, z_ch, first: Hologram, camera, fine, pupil, *, supersample,
+             composition, depth_estimate, centre, exposure, threshold, n) -> RenderResult:
+    """The view from each iteration's images at the fine pixels (``looks``: channel → complex
+    image, radiance |A|² calibrated): with the depth partner and a known emitter density, as
+    the camera hologram assembles it (:func:`holo_core.optics.imaging.assemble`)."""
+    lam0 = first.wavelengths[colours[0]]
+    radiance = speckle.compose([np.stack([np.abs(im[c]) ** 2 for c in colours], -1)
+                                for im in looks], composition)
+    if z_ch is None:
+        return _finish(speckle.downsample(radiance, supersample), None, None, first, camera,
+                       pupil, exposure, threshold, lam0)
+    pair = (lam0, first.wavelengths[z_ch])
+    same = [c for c in colours if first.wavelengths[c] == lam0]
+    crosses = [sum(im[c] for c in same) * np.conj(im[z_ch]) for im in looks]
+    brightness = [np.abs(sum(im[c] for c in same)) for im in looks]
+    coverage = np.mean([np.abs(im[z_ch]) ** 2 for im in looks], 0)
+    if not first.point_density:  # bare points: no coverage to calibrate; alpha from luminance
+        ray = _depth(crosses, brightness, estimate=depth_estimate, wavelengths=pair,
+                     centre=centre, focus=None, camera=camera, supersample=supersample)
+        return _finish(speckle.downsample(radiance, supersample), ray, None, first, camera,
+                       pupil, exposure, threshold, lam0)
+    exposure = 1.0 if exposure is None else exposure
+    colour, alpha, depth, shown, cover = assemble(
+        radiance, coverage, sum(crosses), camera=camera, supersample=supersample,
+        wavelengths=pair, centre=centre, exposure=exposure)
+    if depth_estimate == "brightest":
+        ray = _depth(crosses, brightness, estimate=depth_estimate, wavelengths=pair,
+                     centre=centre, focus=None, camera=camera, supersample=supersample)
+        depth = np.where(alpha > 0, ray, BACKGROUND_DEPTH).astype(np.float32)
+    if not np.isfinite(colour).all() or np.abs(colour).max(initial=0) > np.finfo(np.float32).max:
+        raise InputError(f"exposure must keep the view's pixels within float32 (finite); got "
+                         f"{exposure!r}")
+    limit = lam0 / pupil.diameter
+    info = {"aperture_m": pupil.diameter, "focus_m": pupil.focus,
+            "resolution_limit_rad": limit, "pixel_angle_rad": camera.pixel_angle(),
+            "resolution_limit_px": limit / camera.pixel_angle(),
+            "wavelengths_m": list(first.wavelengths), "exposure": exposure,
+            "pupil_samples": [n, n], "iterations": len(looks), "samples": len(looks),
+            "speckle_contrast": _spread(looks, colours, z_ch, supersample)}
+    log.info("render: aperture %.4g m, resolution limit λ/D = %.3g rad = %.2f px",
+             pupil.diameter, limit, info["resolution_limit_px"])
+    return RenderResult(rgb=colour, alpha=alpha, depth=depth, info=info, coverage=cover,
+                        radiance=shown)
+
+
+def _spread(looks, colours, z_ch, supersample) -> float:
+    """The speckle contrast of the mean colour over the iterations: the spread of each
+    iteration's colour (radiance over coverage) over √n, median over covered pixels; NaN for
+    a single iteration."""
+    if len(looks) < 2:
+        return float("nan")
+    s = supersample
+    lum = [speckle.downsample(np.mean([np.abs(im[c]) ** 2 for c in colours], 0), s)
+           / np.maximum(speckle.downsample(np.abs(im[z_ch]) ** 2, s), 0.05) for im in looks]
+    cover = speckle.downsample(np.mean([np.abs(im[z_ch]) ** 2 for im in looks], 0), s)
+    mean, spread = np.mean(lum, 0), np.std(lum, 0) / math.sqrt(len(looks))
+    solid = cover >= 0.75
+    return float(np.median(spread[solid] / np.maximum(mean[solid], 1e-30))) if solid.any() \
+        else float("nan")
+
+
+class OutsideZoneWarning(UserWarning):
+    """A camera outside the plate's viewing zone: its view may be cut off or soft (the
+    message names the zone)."""
+
+
+def _check_zone(h: Hologram, camera: Camera, position, diameter) -> None:
+    """Warn (:class:`OutsideZoneWarning`) when the pupil (``position`` [m] in the plate's
+    frame, ``diameter`` [m]) reaches beyond the hologram's viewing zone, naming the zone."""
+    if h.zone is None:
+        return
+    beyond = h.zone.distance_outside(position, diameter / 2)
+    if beyond > 1e-9:
+        world = (np.asarray(h.plate) @ np.append(h.zone.centre, 1.0))[:3]
+        warnings.warn(f"the camera's pupil reaches {beyond:.3g} m beyond the plate's viewing "
+                      f"zone, {h.zone.describe()} (centred at ({world[0]:.4g}, {world[1]:.4g}, "
+                      f"{world[2]:.4g}) m in the world): the plate was recorded for views from "
+                      f"there, and this one may be cut off or soft; record the plate for a zone "
+                      f"that holds the camera", OutsideZoneWarning, stacklevel=3)
 
 
 class NoDepthWarning(UserWarning):
@@ -390,7 +379,8 @@ def _centre_distance(h: Hologram, camera: Camera) -> float:
 
 def _finish(radiance, ray, coverage, h: Hologram, camera, pupil, exposure, threshold, lam0):
     if not np.isfinite(radiance).all() or (ray is not None and not np.isfinite(ray).all()):
-        peak = float(h.intensity.max())  # never a NaN view: say which numbers overflowed
+        peak = float(h.intensity.max() if h.intensity is not None else  # never a NaN view:
+                     np.abs(h.object_wave).max() ** 2)  # say which numbers overflowed
         scale = min(h.reference_amplitudes, default=1.0) ** 2
         raise InputError(f"intensity must stay within float32 arithmetic through the view: "
                          f"this hologram's reaches {peak:.3g}, {peak / scale:.3g} times its "

@@ -10,8 +10,10 @@ import numpy as np
 
 from .. import preview, validate
 from ..validate import InputError
+from .plate import ViewingZone
 
 CHANNEL_ROLES = ("R", "G", "B", "Y", "Z")
+ENCODINGS = ("complex", "intensity")
 MAX_CHANNELS = 16
 
 
@@ -19,23 +21,34 @@ MAX_CHANNELS = 16
 class Hologram:
     """Recorded holograms of one scene, one per wavelength.
 
-    intensity : (C, H, W) float32, H = |O + R|² per colour, [row, col] = [y, x]
+    encoding : 'complex' (the default for plates: the object wave O itself, ``object_wave``,
+        with no reference and no carrier) or 'intensity' (H = |O + R|², Eq. 19: what a
+        display or a print shows; its reconstruction suppresses the DC and twin terms)
+    intensity : (C, H, W) float32, H = |O + R|² per colour, [row, col] = [y, x]; None for a
+        complex hologram
     wavelengths : C wavelengths [m]
     pitch : sample spacing [m]
     reference_angle, reference_azimuth : the reference wave's ϑ and φ [rad] (Eq. 4)
     reference_amplitudes : |R| per colour [field units]
-    object_wave : (C, H, W) complex64 or None
+    object_wave : (C, H, W) complex64, the object wave O on the plate; None for an intensity
+        hologram that does not keep it
     plate : (4, 4) hologram-to-world pose (the hologram plane is z = 0 of its frame) [m]
     bounds : (2, 3) the objects' min and max corners in the hologram frame [m]
     band : sin θ of the object wave's cone, the band its reconstruction keeps (0: all)
     channels : one role per wavelength: 'R', 'G', 'B' (or 'Y') colour, 'Z' the depth partner
         λ2 of the colour channels at channel 0's wavelength λ1 (Sect. VII-C), every emitter
-        at unit intensity times its surface's cosine towards the camera (its image is the
-        surfaces' coverage of each pixel)
+        at unit intensity (for holograms recorded for one camera, times its surface's cosine
+        towards it): its image is the surfaces' coverage of each pixel
     point_density : emitters per m² of surface, which calibrates radiance (0: unknown)
+    zone : the :class:`~holo_core.scene.plate.ViewingZone` it was recorded for (the plate's
+        frame), or None (unknown: an acquired or earlier hologram)
+
+    The samples are arrays indexed [channel, row, col]; nothing here assumes they are held in
+    memory at once (a view reads the window of rows and columns it needs, so chunked arrays of
+    a tiled store serve as well).
     """
 
-    intensity: np.ndarray
+    intensity: np.ndarray | None = None
     wavelengths: tuple
     pitch: float
     reference_angle: float = 0.0
@@ -47,6 +60,8 @@ class Hologram:
     band: float = 0.0
     channels: tuple = ()
     point_density: float = 0.0
+    encoding: str = "intensity"
+    zone: ViewingZone | None = None
 
     def __post_init__(self):
         """Every field checked against what its file may hold (the reader's schema), so that
@@ -73,14 +88,27 @@ class Hologram:
         if "Z" in self.channels[:1]:
             raise InputError("channel 0 must be a colour channel (the depth pair's λ1)")
         object.__setattr__(self, "plate", validate.rigid_pose("plate", self.plate))
-        if np.ndim(self.intensity) != 3 or len(self.intensity) != len(wavelengths):
-            raise InputError(f"intensity must be (C, H, W) with C = {len(wavelengths)} "
-                             f"wavelengths; got shape {np.shape(self.intensity)}")
-        if self.object_wave is not None and np.shape(self.object_wave) != np.shape(
-                self.intensity):
-            raise InputError(f"object_wave must be shaped as the intensity "
-                             f"{np.shape(self.intensity)}; got {np.shape(self.object_wave)}")
+        self._check_samples(len(wavelengths))
         self._check_optics()
+        if self.zone is not None and not isinstance(self.zone, ViewingZone):
+            raise InputError(f"zone must be a ViewingZone or None; got {type(self.zone).__name__}")
+
+    def _check_samples(self, count):
+        """The encoding's arrays: the intensity (C, H, W) of an intensity hologram, the object
+        wave of a complex one; both, when present, of one shape."""
+        if self.encoding not in ENCODINGS:
+            raise InputError(f"encoding must be one of {', '.join(map(repr, ENCODINGS))}; got "
+                             f"{self.encoding!r}"[:300])
+        held = self.intensity if self.encoding == "intensity" else self.object_wave
+        name = "intensity" if self.encoding == "intensity" else "object_wave"
+        if np.ndim(held) != 3 or len(held) != count:
+            raise InputError(f"{name} must be (C, H, W) with C = {count} wavelengths for an "
+                             f"{self.encoding} hologram; got shape {np.shape(held)}")
+        for other, other_name in ((self.intensity, "intensity"), (self.object_wave,
+                                                                 "object_wave")):
+            if other is not None and np.shape(other) != np.shape(held):
+                raise InputError(f"{other_name} must be shaped as the {name} "
+                                 f"{np.shape(held)}; got {np.shape(other)}")
 
     def _check_optics(self):
         angle = validate.finite("reference_angle", self.reference_angle, "rad")
@@ -119,7 +147,9 @@ class Hologram:
 
     @property
     def shape(self) -> tuple[int, int]:
-        return tuple(self.intensity.shape[1:])
+        """(rows, cols) of samples."""
+        held = self.intensity if self.encoding == "intensity" else self.object_wave
+        return tuple(held.shape[1:])
 
     @property
     def size(self) -> tuple[float, float]:

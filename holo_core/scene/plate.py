@@ -1,33 +1,121 @@
-"""The holographic plate: its pose and size in the world. The hologram is its z = 0 plane,
-viewers at z > 0.
+"""The holographic plate: its pose and size in the world, and the viewing zone it is recorded
+for. The hologram is its z = 0 plane, viewers at z > 0.
+
+A plate is a scene asset, independent of any camera: what it records depends on the scene, its
+placement, size and sampling, its wavelengths, and its viewing zone, the region from which it
+will be looked at (:class:`ViewingZone`, a box in the plate's frame). A camera whose pupil lies
+inside the zone sees the plate sharp and complete; moving, aiming or refocusing it there never
+calls for a new recording.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from .. import validate
+from ..validate import InputError
+
+DEFAULT_ZONE_MARGIN = 0.05  # [m] the default zone reaches this far beyond the camera's pupil
+
+
+@dataclass(frozen=True, slots=True, kw_only=True, eq=False)
+class ViewingZone:
+    """The region a plate is looked at from: an axis-aligned box in the plate's frame.
+
+    centre : (3,) [m] the box's centre in the plate's frame (z > 0: in front of the plate)
+    half_extents : (3,) [m] its half widths along the plate's x, y and z axes, each >= 0
+    pupil : [m] the entrance pupil the zone is made for (the camera's aperture diameter; it
+        sets how far apart the plate's emitters may lie, one resolved spot seen from there);
+        0 when unknown
+    """
+
+    centre: tuple
+    half_extents: tuple
+    pupil: float = 0.0
+
+    def __post_init__(self):
+        c = validate.vector("zone centre", self.centre, 3, "m")
+        e = validate.vector("zone half_extents", self.half_extents, 3, "m")
+        if (np.abs(c) > validate.MAX_LENGTH).any() or (e > validate.MAX_LENGTH).any():
+            raise InputError(f"the viewing zone must lie within {validate.MAX_LENGTH:g} m; got "
+                             f"centre {c.tolist()}, half_extents {e.tolist()}")
+        if (e < 0).any():
+            raise InputError(f"zone half_extents must be >= 0 [m]; got {e.tolist()}")
+        if c[2] - e[2] <= 0:
+            raise InputError(f"the viewing zone must lie in front of the plate (z > 0 in its "
+                             f"frame); it reaches z = {c[2] - e[2]:.4g} m")
+        pupil = validate.finite("zone pupil", self.pupil, "m")
+        if not 0 <= pupil <= validate.MAX_LENGTH:
+            raise InputError(f"zone pupil must be in [0, {validate.MAX_LENGTH:g}] [m]; got "
+                             f"{self.pupil!r}")
+        object.__setattr__(self, "centre", tuple(map(float, c)))
+        object.__setattr__(self, "half_extents", tuple(map(float, e)))
+        object.__setattr__(self, "pupil", pupil)
+
+    @classmethod
+    def around(cls, position, pupil: float = 0.0, margin: float = DEFAULT_ZONE_MARGIN):
+        """The zone covering a pupil of diameter ``pupil`` [m] centred at ``position`` (3,) [m]
+        (the plate's frame), ``margin`` [m] beyond it in every direction (in depth too)."""
+        margin = validate.finite("zone margin", margin, "m")
+        if margin < 0:
+            raise InputError(f"zone margin must be >= 0 [m]; got {margin!r}")
+        pupil = validate.finite("pupil", pupil, "m")
+        p = validate.vector("position", position, 3, "m")
+        half = pupil / 2 + margin
+        depth = min(margin, 0.5 * float(p[2]))  # never reaching the plate
+        return cls(centre=tuple(p), half_extents=(half, half, depth), pupil=pupil)
+
+    def corners(self) -> np.ndarray:
+        """The box's eight corners (8, 3) [m] in the plate's frame."""
+        signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+        return np.asarray(self.centre) + signs * np.asarray(self.half_extents)
+
+    def distance_outside(self, point, radius: float = 0.0) -> float:
+        """How far [m] a ball of ``radius`` [m] at ``point`` (3,) [m] (the plate's frame)
+        reaches beyond the zone: 0 when it lies inside."""
+        d = np.abs(np.asarray(point, np.float64) - self.centre) - self.half_extents
+        lateral = np.maximum(d[:2] + radius, 0)
+        return float(math.hypot(*lateral) + max(d[2], 0.0))
+
+    def describe(self) -> str:
+        (x, y, z), (hx, hy, hz) = self.centre, self.half_extents
+        return (f"the box centred at ({x:.4g}, {y:.4g}, {z:.4g}) m in the plate's frame, "
+                f"±({hx:.4g}, {hy:.4g}, {hz:.4g}) m")
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
 class Plate:
     """The holographic plate in the world: ``matrix_world`` (4, 4) plate-to-world pose [m]
-    (rotation and translation; the hologram is its z = 0 plane, viewers at z > 0) and its
-    physical ``width``, ``height`` [m]."""
+    (rotation and translation; the hologram is its z = 0 plane, viewers at z > 0), its
+    physical ``width``, ``height`` [m], and the ``zone`` it is recorded for
+    (:class:`ViewingZone`, or None: chosen when recording, from a camera if one is given)."""
 
     matrix_world: np.ndarray
     width: float
     height: float
+    zone: ViewingZone | None = None
 
     def __post_init__(self):
         m = validate.rigid_pose("plate matrix_world", self.matrix_world)
         object.__setattr__(self, "matrix_world", m)
         validate.positive("plate width", self.width, "m")
         validate.positive("plate height", self.height, "m")
+        if self.zone is not None and not isinstance(self.zone, ViewingZone):
+            raise InputError(f"zone must be a ViewingZone or None; got {type(self.zone).__name__}")
 
     def to_plate(self, points) -> np.ndarray:
         """World points (N, 3) [m] in the plate's frame."""
         m = self.matrix_world
         return (np.asarray(points, np.float64) - m[:3, 3]) @ m[:3, :3]
+
+    def zone_for(self, camera, margin: float = DEFAULT_ZONE_MARGIN) -> ViewingZone:
+        """The zone covering ``camera``'s pupil (its aperture, lens/f-stop; a pinhole's is
+        taken as a point) with ``margin`` [m] around it."""
+        position = self.to_plate(camera.position[None])[0]
+        if position[2] <= 0:
+            raise InputError(f"the camera must be in front of the plate (z > 0 in its frame) to "
+                             f"define its viewing zone; it is at z = {position[2]:.4g} m")
+        return ViewingZone.around(position, camera.aperture_diameter or 0.0, margin)

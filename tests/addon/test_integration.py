@@ -25,14 +25,20 @@ def test_the_fingerprint_covers_emitter_kind_material_and_lens(empty_scene):
     material.diffuse_color = (1, 0, 0, 1)
     cube.data.materials.append(material)
     seen.append(_fingerprint(scene))
+    assert len(set(seen)) == len(seen), seen
+    # a plate is recorded for its viewing zone: the camera's lens and focus leave it as it is
     cam.data.dof.use_dof = True
     cam.data.dof.focus_distance = 3.0
-    seen.append(_fingerprint(scene))
-    assert len(set(seen)) == len(seen), seen
+    assert _fingerprint(scene) == seen[-1]
+    scene.holo.mode = "CAMERA"  # a camera hologram is recorded for its lens
+    lens = _fingerprint(scene)
+    cam.data.dof.focus_distance = 2.0
+    assert _fingerprint(scene) != lens
 
 
 def _moving_cube(scene, tmp_path):
-    cube, cam, _ = _plate_camera_cube(scene, cube_size=0.4)
+    cube, cam, plate = _plate_camera_cube(scene, cube_size=0.4)
+    plate.holo.zone_margin = 0.01  # a zone close around the camera: a sharper plate
     bpy.ops.object.light_add(type="SUN", rotation=(np.radians(60), 0, 0))  # lights its front
     bpy.context.object.data.energy = 3.0
     scene.render.resolution_x, scene.render.resolution_y = 48, 36
@@ -533,8 +539,9 @@ def test_a_procedural_base_colour_is_baked_and_recorded(empty_scene):
 
 
 def test_a_state_recorded_before_is_not_recorded_again(empty_scene, monkeypatch):
-    """Resolution 100% → 50% → 100%: two recordings, not three; each state has its own files
-    (farm workers on different frames never share a hologram file)."""
+    """Max Hologram Size 256 → 128 → 256: two recordings, not three; each state has its own
+    files (farm workers on different frames never share a hologram file). The render's size,
+    which a plate does not depend on, records nothing."""
     from holo_addon.render import pipeline
     scene = empty_scene
     _plate_camera_cube(scene)
@@ -550,12 +557,15 @@ def test_a_state_recorded_before_is_not_recorded_again(empty_scene, monkeypatch)
         return original(job, progress, on_log)
     monkeypatch.setattr(pipeline, "run", run)
     paths = []
-    for percentage in (100, 50, 100):
-        scene.render.resolution_percentage = percentage
+    for samples in (256, 128, 256):
+        scene.holo.max_resolution = samples
         assert bpy.ops.holo.record_hologram() == {"FINISHED"}
         paths.append(_prepare(scene).holograms[0])
     assert recorded == [True, True, False], recorded
     assert paths[0] == paths[2] != paths[1] and all(p.is_file() for p in paths)
+    scene.render.resolution_percentage = 50
+    assert bpy.ops.holo.record_hologram() == {"FINISHED"}
+    assert recorded[-1] is False, recorded
 
 
 def test_a_render_region_without_crop_clears_the_pass_outside_it(empty_scene, tmp_path):

@@ -241,12 +241,14 @@ def test_lower_resolution_is_served_by_the_wavelength():
 
 def test_temporal_composition_lowers_speckle_as_one_over_sqrt_n(rng):
     """N renders of a diffuse patch (dense points, independent random phases per render),
-    averaged: the speckle contrast falls as 1/√N (Sect. VII-E)."""
+    averaged: the speckle contrast falls as 1/√N (Sect. VII-E). The lens (0.3 mm) resolves
+    spots holding some 5 points each, so that the points' placement, the same in every
+    render, adds little contrast of its own (measured 1/N^0.41 against 1/√N: 17 %)."""
     n_pts, half = 3000, 0.15e-3
     p = np.column_stack([rng.uniform(-half, half, (n_pts, 2)), np.full(n_pts, -3e-3)])
     holos = point_hologram(p, n=1024, seeds=range(8))
     f = float(np.linalg.norm(EYE - [0, 0, -3e-3]))
-    cam = camera(5e-4, 100, fstop=50e-3 / 0.6e-3, focus_distance=f)
+    cam = camera(5e-4, 100, fstop=50e-3 / 0.3e-3, focus_distance=f)
     corners = cam.project([[-half, -half, -3e-3], [half, half, -3e-3]])[0]
     (c0, r1), (c1, r0) = corners + [[4, -4], [-4, 4]]
     inner = np.zeros((100, 100), bool)

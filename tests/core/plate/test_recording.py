@@ -222,7 +222,8 @@ def test_mesh_points_radiate_as_independent_emitters():
     is Σ I·w²/r² over the points (w their cone weight), within the speckle's scatter. (Phases
     drawn from the sampling's own random numbers once made each triangle coherent: 2.8x.)"""
     plate = Plate(matrix_world=np.eye(4), width=0.1, height=0.1)
-    holo = record_hologram(square(0.08, -0.3), plate=plate, resolution=128, depth=False)
+    holo = record_hologram(square(0.08, -0.3), plate=plate, resolution=128, depth=False,
+                           method="auto")
     spacing = choose((0.1, 0.1), square(0.08, -0.3).vertices, resolution=128).spacing
     pos = sample_points(square(0.08, -0.3), spacing)[0]  # as record_hologram samples it
     g = Grid(holo.shape, holo.pitch, holo.wavelengths[0])._replace(
@@ -242,8 +243,9 @@ def test_triangles_radiate_as_the_points_of_the_same_surface(tilt_deg):
     object-wave power, within the speckle's scatter (measured 0.98 and 1.12)."""
     plate = Plate(matrix_world=np.eye(4), width=0.1, height=0.1)
     mesh = square(0.04, -0.3, tilt_deg)
-    points = record_hologram(mesh, plate=plate, resolution=256, depth=False)
-    triangles = record_hologram((), triangles=[mesh], plate=plate, resolution=256, depth=False)
+    points = record_hologram(mesh, plate=plate, resolution=256, depth=False, method="auto")
+    triangles = record_hologram((), triangles=[mesh], plate=plate, resolution=256, depth=False,
+                                method="auto")
     ratio = np.mean(np.abs(triangles.object_wave[0]) ** 2) / \
         np.mean(np.abs(points.object_wave[0]) ** 2)
     assert 0.8 <= ratio <= 1.25, f"triangles' mean power over the points': {ratio:.3f}"
@@ -255,6 +257,6 @@ def test_triangle_recording_reports_progress_per_primitive():
     plate = Plate(matrix_world=np.eye(4), width=0.1, height=0.1)
     seen = []
     record_hologram((), triangles=[square(0.04, -0.3)], plate=plate, resolution=128,
-                    depth=False, progress=seen.append)
+                    depth=False, method="auto", progress=seen.append)
     assert len(seen) >= 2 and seen == sorted(seen) and 0.1 <= seen[-1] <= 1.0, seen
     assert sum(0.1 <= f < 1.0 for f in seen) >= 2, "no report while the triangles ran"

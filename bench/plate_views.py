@@ -1,0 +1,144 @@
+"""A plate recorded once, viewed from three cameras, against each camera's own camera hologram,
+on the same scene and in the same run (the issue's test scene at full size, and its cost).
+
+The scene (``tests/plate_scene.py``): a textured cube partly hiding a textured sphere, a 10 cm
+plate halfway between them and the cameras, 640×360 at 50 mm f/2.8, cameras 2 cm apart inside
+the viewing zone (3 cm around the centre camera's pupil). The plate is recorded once (``--looks``
+m² looks whose phase codes cancel the speckle's cross terms between neighbouring emitters; 1:
+a single plate), then viewed from each camera; the reference is the camera hologram's pass of
+that camera: its looks' limit ('incoherent'), and the default pass (16 looks) whose time the
+views are compared with. Prints per camera PSNR inside the objects, silhouette IoU, the
+speckle contrast on the cube's squares and the occlusion (the cube and the sphere's visible part
+against the camera holograms, and how the hidden part changes between the left and right
+views), then the times: the
+recording, a view, a camera-hologram pass, and the number of views from which the plate costs
+less than the camera holograms (the crossover).
+
+    python bench/plate_views.py [--samples 4096] [--scale 1.0] [--looks 1] [--out DIR]
+"""
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+
+from plate_scene import EYES, PLATE, camera, meshes
+
+from holo_core.camera.render import render_camera
+from holo_core.io.image import write_png
+from holo_core.plate.record import record_plate
+from holo_core.plate.view import render_view
+
+
+def psnr(view, reference, inside) -> float:
+    err = view.rgb[inside] - reference.rgb[inside]
+    return float(20 * np.log10(reference.rgb[inside].max() / np.sqrt(np.mean(err**2))))
+
+
+def iou(a, b) -> float:
+    return float((a & b).sum() / (a | b).sum())
+
+
+def flat_contrast(view, reference) -> tuple[float, int]:
+    """The colour's contrast against the reference on the cube's faces where the reference is
+    flat over 3×3 pixels (inside a checker square)."""
+    solid = (view.alpha >= 1) & (reference.alpha >= 1) & (view.depth < NEAR)
+    ref = reference.rgb.mean(-1)
+    pad = np.pad(ref, 1, mode="edge")
+    h, w = ref.shape
+    spread = np.max([np.abs(pad[1 + dy:1 + dy + h, 1 + dx:1 + dx + w] - ref)
+                     for dy in (-1, 0, 1) for dx in (-1, 0, 1)], 0)
+    flat = solid & (spread < 0.02 * ref.max())
+    return float(np.std(view.rgb.mean(-1)[flat] / ref[flat])), int(flat.sum())
+
+
+NEAR = 0.625  # [m] from the cameras: the cube lies nearer, the visible sphere farther
+
+
+def regions(view):
+    """(the cube's pixels, the visible sphere's pixels) by depth."""
+    solid = view.alpha >= 0.5
+    return solid & (view.depth < NEAR), solid & (view.depth >= NEAR)
+
+
+def timed(f, *args, **kw):
+    t = time.perf_counter()
+    out = f(*args, **kw)
+    return out, time.perf_counter() - t
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--samples", type=int, default=4096, help="plate samples per side (4096)")
+    p.add_argument("--scale", type=float, default=1.0, help="image size, of 640x360 (1)")
+    p.add_argument("--looks", type=int, default=1, help="m: m² coded plates (1)")
+    p.add_argument("--margin", type=float, default=0.03, help="zone margin [m] (0.03)")
+    p.add_argument("--out", type=Path, default=None, help="a folder for the views' PNGs")
+    args = p.parse_args()
+    centre = camera("centre", args.scale)
+    m = args.looks
+    # warm: programs built, FFT plans made, on a small plate and view
+    small = record_plate(meshes(), plate=PLATE, camera=camera("centre", 0.1), resolution=128,
+                         zone_margin=args.margin)
+    render_view(small, camera("centre", 0.1), supersample=2)
+    render_camera(meshes(), camera("centre", 0.1), via="incoherent")
+    render_camera(meshes(), camera("centre", 0.1), samples=1)
+    plates, record_s = timed(lambda: [record_plate(
+        meshes(), plate=PLATE, camera=centre, zone_margin=args.margin, resolution=args.samples,
+        code=(k, m) if m > 1 else None) for k in range(m * m)])
+    h = plates[0]
+    print(f"plate: {h.shape[1]}x{h.shape[0]} complex, λ = {h.wavelengths[0]:.4g} m, band "
+          f"{h.band:.3g}, {len(plates)} look(s); recorded in {record_s:.1f} s", flush=True)
+    rows, offsets = [], {}
+    for eye in EYES:
+        cam = camera(eye, args.scale)
+        view, view_s = timed(render_view, plates, cam, supersample=2)
+        exact, exact_s = timed(render_camera, meshes(), cam, via="incoherent")
+        looks, looks_s = timed(render_camera, meshes(), cam, samples=16)
+        inside = (exact.alpha >= 1) & (view.alpha >= 1)
+        contrast, n_flat = flat_contrast(view, exact)
+        (cube_v, sphere_v), (cube_e, sphere_e) = regions(view), regions(exact)
+        offsets[eye] = int(sphere_v.sum()), int(sphere_e.sum()), iou(cube_v, cube_e), \
+            iou(sphere_v, sphere_e)
+        rows.append((eye, psnr(view, exact, inside), iou(view.alpha > 0.5, exact.alpha > 0.5),
+                     contrast, psnr(looks, exact, (exact.alpha >= 1) & (looks.alpha >= 1)),
+                     view_s, exact_s, looks_s))
+        print(f"{eye}: PSNR {rows[-1][1]:.2f} dB, IoU {rows[-1][2]:.4f}, speckle {contrast:.3f} "
+              f"({n_flat} px); view {view_s:.1f} s, camera hologram {looks_s:.1f} s (16 looks), "
+              f"{exact_s:.1f} s (incoherent)", flush=True)
+        if args.out is not None:
+            args.out.mkdir(parents=True, exist_ok=True)
+            for name, v in (("plate", view), ("camera", exact)):
+                write_png(args.out / f"{eye}_{name}.png",
+                          np.clip(v.rgb * v.alpha[..., None], 0, 1) ** (1 / 2.2))
+    print("\ncamera  PSNR [dB]  IoU     speckle  (16 looks vs limit [dB])  view [s]  "
+          "incoherent [s]  16 looks [s]")
+    for eye, ps, j, c, lp, vs, es, ls in rows:
+        print(f"{eye:7s} {ps:9.2f}  {j:.4f}  {c:7.3f}  {lp:24.2f}  {vs:8.1f}  {es:14.1f}  "
+              f"{ls:12.1f}")
+    change = [offsets["right"][i] - offsets["left"][i] for i in (0, 1)]
+    print(f"occlusion: the sphere's visible pixels, right view minus left: plate {change[0]}, "
+          f"camera holograms {change[1]}; IoU of the cube and of the visible sphere against "
+          f"the camera holograms: " + ", ".join(f"{eye} {o[2]:.3f} / {o[3]:.3f}"
+                                                for eye, o in offsets.items()))
+    view_s = np.mean([r[5] for r in rows])
+    for name, cost in (("16 looks", np.mean([r[7] for r in rows])),
+                       ("incoherent", np.mean([r[6] for r in rows]))):
+        if cost > view_s:
+            n = math.ceil(record_s / (cost - view_s))
+            print(f"crossover against the camera hologram ({name}, {cost:.1f} s a view): the "
+                  f"plate ({record_s:.0f} s once + {view_s:.1f} s a view) costs less from {n} "
+                  f"views on")
+        else:
+            print(f"against the camera hologram ({name}, {cost:.1f} s a view) a plate view "
+                  f"({view_s:.1f} s) costs more: no crossover")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,131 @@
+"""A plate's field at a camera's entrance pupil: what the camera hologram's pupil → image stage
+(:mod:`holo_core.optics.imaging`) turns into the view, so that a plate's view is the camera
+hologram of the same camera within the plate's physical limits (its window, its band, its
+emitters).
+
+1. The window (:func:`plate_window`): only the part of the plate inside the cone from the
+   pupil to the objects is read, rows and columns of its samples with a margin; beyond the
+   plate's edge the field is zero (the plate's own aperture). A tiled plate is read tile by
+   tile.
+2. To the pupil's plane (:func:`field_at_pupil`): the window's field is carried by the angular
+   spectrum with an offset to the plane parallel to the plate through the pupil's centre,
+   centred there (Sect. IV-D), then its spectrum is rotated onto the camera's own plane
+   (Sect. IV-C.1) and sampled finely enough for the directions it carries: the plate's band
+   tilted by the camera's tilt, widened by the lens's own spread (D/2f).
+3. The pupil's grid (:func:`pupil_grid`): n×n samples, n odd (the centre sample lies on the
+   axis, so the field is in FFT order by a shift), spanning the pupil's diameter and a few
+   samples more.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..propagation import angular_spectrum, tilt
+from ..scene.hologram import Hologram
+
+WINDOW_MARGIN = 0.1   # the window reaches this fraction of its size beyond the cone ...
+WINDOW_SAMPLES = 8    # ... and at least this many samples
+PUPIL_GUARD = 0.05    # direction cosines carried beyond the band, the tilt and the lens spread
+PUPIL_EDGE = 4        # pupil samples beyond the iris on each side
+
+
+def odd_fast_len(n: int) -> int:
+    """The smallest odd 3^a·5^b·7^c >= n (a fast FFT size whose centre is a sample)."""
+    best, p7 = 3 ** max(1, math.ceil(math.log(max(n, 1), 3))), 1
+    while p7 < best:
+        p5 = p7
+        while p5 < best:
+            m = p5
+            while m < n:
+                m *= 3
+            best = min(best, m)
+            p5 *= 5
+        p7 *= 7
+    return best
+
+
+def plate_window(h: Hologram, position, rotation, diameter) -> tuple[int, int, int, int]:
+    """(row0, row1, col0, col1) of the plate's samples the camera's pupil (centre ``position``
+    (3,) [m], axes ``rotation`` (3, 3), both in the plate's frame, diameter ``diameter`` [m])
+    sees the objects through: the cone from the pupil to the objects' box, a margin around it,
+    and at least the pupil's own width around its foot. May reach beyond the plate."""
+    lo, hi = np.asarray(h.bounds, np.float64)
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                        for z in (lo[2], hi[2])])
+    r = diameter / 2
+    rim = np.array([position + s * r * rotation[:, a] for a in (0, 1) for s in (-1, 1)]
+                   + [position])
+    t = rim[:, None, 2:3] / (rim[:, None, 2:3] - np.minimum(corners[None, :, 2:3], -1e-12))
+    hits = (rim[:, None, :2] + t * (corners[None, :, :2] - rim[:, None, :2])).reshape(-1, 2)
+    cone_lo, cone_hi = hits.min(0), hits.max(0)
+    size = cone_hi - cone_lo
+    margin = np.maximum(WINDOW_MARGIN * size, WINDOW_SAMPLES * h.pitch)
+    cone_lo, cone_hi = cone_lo - margin, cone_hi + margin
+    # the parallel plane's window, of the same size, must hold the (tilted) pupil
+    need = r / max(float(rotation[2, 2]), 1e-3) + WINDOW_SAMPLES * h.pitch
+    half = np.maximum((cone_hi - cone_lo) / 2, need)
+    mid = (cone_lo + cone_hi) / 2
+    rows, cols = h.shape
+    c0 = math.floor((mid[0] - half[0]) / h.pitch + (cols - 1) / 2)
+    c1 = math.ceil((mid[0] + half[0]) / h.pitch + (cols - 1) / 2) + 1
+    r0 = math.floor((mid[1] - half[1]) / h.pitch + (rows - 1) / 2)
+    r1 = math.ceil((mid[1] + half[1]) / h.pitch + (rows - 1) / 2) + 1
+    return r0, r1, c0, c1
+
+
+def overlaps(h: Hologram, window) -> bool:
+    r0, r1, c0, c1 = window
+    rows, cols = h.shape
+    return r0 < rows and r1 > 0 and c0 < cols and c1 > 0
+
+
+def window_of(plane: np.ndarray, window) -> np.ndarray:
+    """``plane`` (H, W)'s samples in ``window`` (row0, row1, col0, col1), zero beyond its
+    edges: complex64."""
+    r0, r1, c0, c1 = window
+    rows, cols = plane.shape
+    out = np.zeros((r1 - r0, c1 - c0), np.complex64)
+    a, b, c, d = max(r0, 0), min(r1, rows), max(c0, 0), min(c1, cols)
+    if a < b and c < d:
+        out[a - r0:b - r0, c - c0:d - c0] = plane[a:b, c:d]
+    return out
+
+
+def pupil_grid(h: Hologram, rotation, diameter, focus, wavelength) -> tuple[int, float]:
+    """(n, pitch [m]) of the pupil's n×n grid in the camera's plane for the shortest
+    ``wavelength`` [m] of a view: its samples carry the plate's band tilted by the camera's
+    tilt and widened by a lens focused at ``focus`` [m] (None: none)."""
+    nyquist = min(1.0, wavelength / (2 * h.pitch))
+    band = min(h.band, nyquist) if h.band else nyquist
+    tilted = math.asin(min(1.0, band)) + math.acos(float(np.clip(rotation[2, 2], -1, 1)))
+    spread = math.sin(min(tilted, math.pi / 2)) + (diameter / (2 * focus) if focus else 0.0)
+    pitch = wavelength / (2 * min(1.0, spread + PUPIL_GUARD))
+    n = odd_fast_len(math.ceil(diameter / pitch) + 2 * PUPIL_EDGE)
+    return n, pitch
+
+
+def field_at_pupil(u, window, h: Hologram, *, wavelength, position, rotation, n, pitch):
+    """The window's field ``u`` (:func:`window_of`) carried to the camera's pupil: n×n
+    samples ``pitch`` [m] apart in the camera's plane, centred on ``position`` (3,) [m], axes
+    ``rotation`` (both in the plate's frame); a complex64 NumPy array in FFT order."""
+    r0, r1, c0, c1 = window
+    rows, cols = h.shape
+    x_mid = ((c0 + c1 - 1) / 2 - (cols - 1) / 2) * h.pitch
+    y_mid = ((r0 + r1 - 1) / 2 - (rows - 1) / 2) * h.pitch
+    parallel = angular_spectrum(u, wavelength=wavelength, pitch=h.pitch,
+                                distance=float(position[2]),
+                                offset=(float(position[0] - x_mid), float(position[1] - y_mid)))
+    # only the pupil's neighbourhood is rotated: the target's window seen on this plane
+    reach = n * pitch / max(float(rotation[2, 2]), 1e-3) / h.pitch + 2 * PUPIL_EDGE
+    crop = []
+    for size in parallel.shape:
+        m = min(size, math.ceil(reach))
+        m += (size - m) % 2  # the same centre: the pupil's
+        crop.append(slice((size - m) // 2, (size - m) // 2 + m))
+    at = tilt(np.ascontiguousarray(parallel[tuple(crop)]), wavelength=wavelength,
+              pitch=h.pitch, rotation=rotation, out_shape=(n, n), out_pitch=pitch)
+    return np.ascontiguousarray(np.fft.ifftshift(at))
+

@@ -1,0 +1,129 @@
+"""Plates as scene assets in Blender: the viewing zone (set around the camera's pupil at the
+first recording, drawn in the viewport), a cache key without the camera (moving, aiming or
+refocusing it, its f-stop or the render's size never record again inside the zone; outside,
+a warning names the zone), the planner in the panel, and File ▸ Import ▸ Hologram."""
+
+import numpy as np
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+from test_addon import _plate_camera_cube  # noqa: E402
+
+from holo_core.io.hologram import read_hologram, write_hologram  # noqa: E402
+from holo_core.scene.hologram import Hologram  # noqa: E402
+from holo_core.scene.plate import ViewingZone  # noqa: E402
+
+
+def _plate_scene(scene):
+    cube, cam, plate = _plate_camera_cube(scene, cube_size=0.4)
+    cam.data.dof.use_dof = True
+    cam.data.dof.aperture_fstop = 2.8
+    cam.data.dof.focus_distance = 3.0
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    scene.holo.mode = "PLATE"
+    scene.holo.iterations = 1
+    scene.holo.max_resolution = 256
+    plate.holo.zone_margin = 0.2
+    return cube, cam, plate
+
+
+def test_camera_moves_inside_the_zone_never_record_again(empty_scene):
+    """Recorded once: the zone is set around the camera's pupil and kept on the plate. Then
+    the camera moves 10 cm and turns, refocuses, changes its f-stop, and the render changes
+    size: the hologram is current for each. A camera beyond the zone is warned, the zone
+    named, and a changed margin sets a new zone (a new recording)."""
+    from holo_addon.render import pipeline
+    scene = empty_scene
+    _, cam, plate = _plate_scene(scene)
+    assert bpy.ops.holo.record_hologram() == {"FINISHED"}
+    assert plate.holo.zone_set
+    zone = ViewingZone(centre=tuple(plate.holo.zone_centre),
+                       half_extents=tuple(plate.holo.zone_half))
+    assert zone.half_extents[0] == pytest.approx(0.05 / 2.8 / 2 + 0.2, rel=1e-6)
+    assert read_hologram(plate.holo.hologram).zone is not None
+
+    def job():
+        return pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
+
+    first = job()
+    assert first.current and not first.scene.warnings, first.scene.warnings
+    cam.location.x += 0.1
+    cam.rotation_euler.z += 0.02
+    cam.data.dof.focus_distance = 2.5
+    cam.data.dof.aperture_fstop = 4.0
+    scene.render.resolution_x = 48
+    bpy.context.view_layer.update()
+    moved = job()
+    assert moved.current and moved.fingerprint == first.fingerprint
+    cam.location.x += 0.5
+    bpy.context.view_layer.update()
+    outside = job()
+    said = [w for w in outside.scene.warnings if "viewing zone" in w]
+    assert said and "beyond plate 'Plane''s viewing zone (the box centred at" in said[0], \
+        outside.scene.warnings
+    plate.holo.zone_margin = 0.3
+    assert not plate.holo.zone_set
+    assert job().fingerprint != first.fingerprint
+
+
+def test_the_zone_is_drawn_as_its_box(empty_scene):
+    """The overlay's zone: the box's 12 edges, at its centre and half widths in the world."""
+    from holo_addon.export.scene import plate_from_object
+    from holo_addon.ui.overlay import zone_edges
+    scene = empty_scene
+    _, _, plate = _plate_scene(scene)
+    plate.holo.zone_centre, plate.holo.zone_half = (0.0, 0.0, 1.5), (0.3, 0.2, 0.1)
+    plate.holo.zone_set = True
+    edges = zone_edges(plate_from_object(plate, 1.0), 1.0)
+    assert edges.shape == (24, 3)
+    local = (edges - np.array(plate.matrix_world.translation)) @ \
+        np.array(plate.matrix_world.to_3x3().normalized())
+    assert np.allclose(np.abs(local - (0, 0, 1.5)).max(0), (0.3, 0.2, 0.1), atol=1e-6)
+
+
+def test_planner_in_the_panel(empty_scene):
+    """Plan Plate states, before recording, the plate's samples, wavelength, memory, time and
+    what the camera's view of it resolves (the core's planner, in a child process)."""
+    from holo_addon.ui import plates
+    scene = empty_scene
+    _, _, plate = _plate_scene(scene)
+    bpy.context.view_layer.objects.active = plate
+    assert bpy.ops.holo.plan_plate() == {"FINISHED"}
+    lines = plates.plan_lines(plate)
+    print("\n".join(lines))
+    text = "\n".join(lines)
+    for word in ("256 x 256 samples", "λ =", "memory", "recording", "sharp view  needs"):
+        assert word in text, word
+
+
+def test_import_a_hologram_and_keep_its_link(empty_scene, tmp_path, rng):
+    """File ▸ Import ▸ Hologram: a plate hologram file becomes a plate object of its size where
+    its metadata puts it, linked to its file; the link survives saving and reopening the
+    .blend; the pass is rendered from it without recording (no emitter in the scene)."""
+    scene = empty_scene
+    bpy.ops.object.camera_add(location=(0.2, -0.1, 1.0), rotation=(0, 0, 0))
+    scene.camera = bpy.context.object
+    scene.render.resolution_x, scene.render.resolution_y = 24, 16
+    pose = np.eye(4)
+    pose[:3, 3] = (0.2, -0.1, 0.5)
+    wave = (rng.standard_normal((1, 64, 96)) + 1j * rng.standard_normal((1, 64, 96)))
+    h = Hologram(object_wave=wave.astype(np.complex64), encoding="complex",
+                 wavelengths=(2e-5,), pitch=5e-4, plate=pose,
+                 bounds=[[-0.02, -0.02, -0.3], [0.02, 0.02, -0.29]],
+                 zone=ViewingZone(centre=(0, 0, 0.5), half_extents=(0.1, 0.1, 0.1)))
+    path = write_hologram(tmp_path / "acquired.exr", h)
+    blend = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    assert bpy.ops.holo.import_hologram(filepath=str(path)) == {"FINISHED"}
+    obj = next(o for o in bpy.context.scene.objects if o.holo.is_plate)
+    assert obj.holo.imported and obj.holo.hologram == "//acquired.exr"
+    assert np.allclose(obj.matrix_world.translation, (0.2, -0.1, 0.5))
+    assert np.allclose(obj.dimensions[:2], (96 * 5e-4, 64 * 5e-4))
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    bpy.ops.wm.open_mainfile(filepath=str(blend))
+    obj = next(o for o in bpy.context.scene.objects if o.holo.is_plate)
+    assert bpy.path.abspath(obj.holo.hologram) == str(path)
+    bpy.context.scene.holo.output_dir = str(tmp_path / "holo") + "/"
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert (tmp_path / "holo" / "holo_pass_0001.exr").is_file()
