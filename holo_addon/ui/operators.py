@@ -170,7 +170,8 @@ class _PipelineOperator:
         if outcome.pass_path is not None:
             msg += f"; holographic pass: {outcome.pass_path}"
             if "speckle_contrast" in outcome.info:
-                msg += (f" ({outcome.info['samples']} samples, speckle contrast "
+                looks = outcome.info.get("samples")  # a plate's view has no looks
+                msg += (f" ({f'{looks} samples, ' if looks else ''}speckle contrast "
                         f"{outcome.info['speckle_contrast']:.3f})")
         self.report({"INFO"}, msg)
         return self.finish(context)

@@ -117,11 +117,14 @@ def check_writable(path, suffix: str | None = None) -> Path:
         raise InputError(f"{path}: cannot create its folder ({existing} is not a folder)")
     probe = existing / f".{path.stem}{TEMP_TAG}{_HOST}.{os.getpid()}.{next(_count)}.probe"
     try:
-        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+        with _terminate_raises():  # a SIGTERM now removes the probe too
+            try:
+                os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+            finally:
+                probe.unlink(missing_ok=True)
     except OSError as e:
         raise InputError(f"{path}: its folder {existing} is not writable ({e.strerror})") \
             from None
-    probe.unlink(missing_ok=True)
     return folder / path.name
 
 
