@@ -105,24 +105,36 @@ def read_hologram(path) -> Hologram:
     if meta["object_wave"]:
         wave = np.stack([names[f"c{c}.O.re"] + 1j * names[f"c{c}.O.im"] for c in colours])
         wave = wave.astype(np.complex64)
+    h = hologram_from(path, meta, np.stack([names[f"c{c}.H"] for c in colours]) if intensity
+                      else None, wave)
+    check_pixels(str(path), h)
+    return h
+
+
+def hologram_from(path, meta: dict, intensity, object_wave) -> Hologram:
+    """The :class:`Hologram` of checked metadata ``meta`` (:func:`meta_of`) and its samples
+    (arrays indexed [channel, row, col], in memory or in chunks)."""
     ref, zone = meta["reference"], meta["viewing_zone"]
     try:
         if zone is not None:
             zone = ViewingZone(centre=zone["centre_m"], half_extents=zone["half_extents_m"],
                                pupil=zone.get("pupil_m", 0.0))
-        h = Hologram(intensity=np.stack([names[f"c{c}.H"] for c in colours]) if intensity
-                     else None, encoding=meta["encoding"], zone=zone,
-                     wavelengths=tuple(meta["wavelengths_m"]), pitch=meta["pitch_m"],
-                     reference_angle=ref["angle_rad"], reference_azimuth=ref["azimuth_rad"],
-                     reference_amplitudes=tuple(ref["amplitudes"]), object_wave=wave,
-                     plate=np.array(meta["plate_to_world"], np.float64).reshape(4, 4),
-                     bounds=np.array(meta["bounds_m"], np.float64), band=meta["band_sin"],
-                     channels=tuple(meta["channels"]),
-                     point_density=meta["point_density_per_m2"])
+        return Hologram(intensity=intensity, encoding=meta["encoding"], zone=zone,
+                        wavelengths=tuple(meta["wavelengths_m"]), pitch=meta["pitch_m"],
+                        reference_angle=ref["angle_rad"], reference_azimuth=ref["azimuth_rad"],
+                        reference_amplitudes=tuple(ref["amplitudes"]), object_wave=object_wave,
+                        plate=np.array(meta["plate_to_world"], np.float64).reshape(4, 4),
+                        bounds=np.array(meta["bounds_m"], np.float64), band=meta["band_sin"],
+                        channels=tuple(meta["channels"]),
+                        point_density=meta["point_density_per_m2"])
     except ValueError as e:
         raise HologramFileError(f"{path}: {e}") from None
-    check_pixels(str(path), h)
-    return h
+
+
+def meta_of(path, text: str) -> dict:
+    """The metadata of the file at ``path`` from the JSON ``text`` of its ``holo`` header,
+    every field checked (:class:`HologramFileError` naming the file and the field)."""
+    return _meta(Path(str(path)), {"holo": text})
 
 
 def _read(path: Path, what="hologram"):

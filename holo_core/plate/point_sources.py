@@ -96,7 +96,7 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
     -------
     Complex64 (rows, cols) field, or (C, rows, cols) for (N, C) amplitudes.
     """
-    g = _grid(validate.shape2d("shape", shape), wavelength, pitch, band)
+    g = sampling_grid(validate.shape2d("shape", shape), wavelength, pitch, band)
     pos, amp = _points(positions, amplitudes)
     check_distance(pos, g)
     validate.choice("method", method, ("auto", "direct", "wrp"))
@@ -117,7 +117,7 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
     return out if as_device else out.get()
 
 
-def _grid(shape, wavelength, pitch, band) -> Grid:
+def sampling_grid(shape, wavelength, pitch, band) -> Grid:
     """The hologram's Grid, its cone narrowed to sin θ = ``band`` when given (checked)."""
     g = Grid(shape, *reversed(grid.wave(wavelength, pitch)))
     if band is None:
@@ -385,7 +385,7 @@ def cone_filter(field, *, wavelength, pitch, band=None):
     Returns a complex64 NumPy array."""
     rt = get_runtime()
     dev = rt.to_device(np.asarray(field), np.complex64)
-    g = _grid(dev.shape, wavelength, pitch, band)
+    g = sampling_grid(dev.shape, wavelength, pitch, band)
     padded = grid.padded_shape(dev.shape, 2)
     w, _ = cached(rt, ("cone-filter", padded, g), lambda: (_cone_in_angle(padded, g)[0], ()))
     return convolve(rt, dev, w).get()

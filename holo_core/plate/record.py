@@ -134,24 +134,8 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     bounds : (2, 3) array, optional
         The objects' bounding box [m] in the hologram frame; default: the points'.
     """
-    pos = _array("positions", positions, "an (N, 3) array of finite coordinates [m]", (-1, 3))
-    if not pos.size and extra_wave is None:
-        raise InputError("positions holds no points: there is nothing to record")
-    wavelengths = np.atleast_1d(_array("wavelengths", wavelengths, "wavelengths [m]", None))
-    if wavelengths.ndim != 1 or not len(wavelengths):
-        raise InputError(f"wavelengths must hold at least one wavelength [m]; got "
-                         f"{wavelengths.tolist()!r}")
-    wavelengths = tuple(validate.wavelength("wavelengths", w) for w in wavelengths)
-    cols = _array("colours", colours, f"an (N, {len(wavelengths)}) array of intensities, one "
-                  f"column per wavelength, N = {len(pos)} points", (len(pos), len(wavelengths)))
-    if not np.isfinite(cols).all() or (cols < 0).any() or (cols > MAX_INTENSITY).any():
-        raise InputError(f"colours must be finite intensities in [0, {MAX_INTENSITY:g}]; got "
-                         f"values from {cols.min():.3g} to {cols.max():.3g}")
-    if phases is None:
-        phases = np.random.default_rng(validate.seed(seed)).uniform(0, 2 * np.pi, len(pos))
-    phases = _array("phases", phases, f"{len(pos)} finite phases [rad]", (len(pos),))
-    if not np.isfinite(phases).all():
-        raise InputError("phases must be finite [rad]; they hold NaN or infinite values")
+    pos, wavelengths, amplitude = point_amplitudes(positions, colours, wavelengths, phases,
+                                                   seed, empty_ok=extra_wave is not None)
     shape = validate.shape2d("shape", shape)
     pitch = validate.pitch("pitch", pitch)
     band = None if band is None else validate.finite("band", band)
@@ -169,7 +153,6 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
                       HOST_BYTES * len(wavelengths) * math.prod(shape))
     for lam in wavelengths:
         reference.check(lam, pitch)
-    amplitude = np.sqrt(cols) * np.exp(1j * phases)[:, None]
     groups = {lam: [c for c, other in enumerate(wavelengths) if other == lam] for lam in wavelengths}
     objects = {}
     for g, (lam, chans) in enumerate(groups.items()):  # equal wavelengths share one pass
@@ -192,6 +175,31 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
         amplitudes.append(a_r)
     return Hologram(intensity=np.stack(intensity), reference_amplitudes=tuple(amplitudes),
                     object_wave=np.stack(waves) if keep_object_wave else None, **stored)
+
+
+def point_amplitudes(positions, colours, wavelengths, phases=None, seed=0, *, empty_ok=False):
+    """(positions (N, 3) [m], wavelengths [m], complex amplitudes √I·e^{iφ0} (N, C)) of point
+    emitters, every argument checked (as :func:`record_points` takes them); the random phases
+    drawn from ``seed`` are the same wherever the points are recorded (whole or by tiles)."""
+    pos = _array("positions", positions, "an (N, 3) array of finite coordinates [m]", (-1, 3))
+    if not pos.size and not empty_ok:
+        raise InputError("positions holds no points: there is nothing to record")
+    wavelengths = np.atleast_1d(_array("wavelengths", wavelengths, "wavelengths [m]", None))
+    if wavelengths.ndim != 1 or not len(wavelengths):
+        raise InputError(f"wavelengths must hold at least one wavelength [m]; got "
+                         f"{wavelengths.tolist()!r}")
+    wavelengths = tuple(validate.wavelength("wavelengths", w) for w in wavelengths)
+    cols = _array("colours", colours, f"an (N, {len(wavelengths)}) array of intensities, one "
+                  f"column per wavelength, N = {len(pos)} points", (len(pos), len(wavelengths)))
+    if not np.isfinite(cols).all() or (cols < 0).any() or (cols > MAX_INTENSITY).any():
+        raise InputError(f"colours must be finite intensities in [0, {MAX_INTENSITY:g}]; got "
+                         f"values from {cols.min():.3g} to {cols.max():.3g}")
+    if phases is None:
+        phases = np.random.default_rng(validate.seed(seed)).uniform(0, 2 * np.pi, len(pos))
+    phases = _array("phases", phases, f"{len(pos)} finite phases [rad]", (len(pos),))
+    if not np.isfinite(phases).all():
+        raise InputError("phases must be finite [rad]; they hold NaN or infinite values")
+    return pos, wavelengths, np.sqrt(cols) * np.exp(1j * phases)[:, None]
 
 
 def _array(name, value, allowed, shape) -> np.ndarray:

@@ -82,15 +82,18 @@ def overlaps(h: Hologram, window) -> bool:
     return r0 < rows and r1 > 0 and c0 < cols and c1 > 0
 
 
-def window_of(plane: np.ndarray, window) -> np.ndarray:
+def window_of(plane, window, channel=None) -> np.ndarray:
     """``plane`` (H, W)'s samples in ``window`` (row0, row1, col0, col1), zero beyond its
-    edges: complex64."""
+    edges: complex64. With ``channel``, ``plane`` is (C, H, W) and only that channel's window
+    is read: of a tiled plate, only the tiles the window overlaps."""
     r0, r1, c0, c1 = window
-    rows, cols = plane.shape
+    rows, cols = plane.shape[-2:]
     out = np.zeros((r1 - r0, c1 - c0), np.complex64)
     a, b, c, d = max(r0, 0), min(r1, rows), max(c0, 0), min(c1, cols)
     if a < b and c < d:
-        out[a - r0:b - r0, c - c0:d - c0] = plane[a:b, c:d]
+        at = (slice(a, b), slice(c, d)) if channel is None else (channel, slice(a, b),
+                                                                 slice(c, d))
+        out[a - r0:b - r0, c - c0:d - c0] = plane[at]
     return out
 
 

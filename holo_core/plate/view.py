@@ -183,8 +183,11 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
         images = {}
         for m, c in enumerate(channels):
             lam = h.wavelengths[c]
-            wave = plate_wave(h, c, source=source)
-            u = window_of(wave if isinstance(wave, np.ndarray) else wave.get(), window)
+            if h.encoding == "complex":  # the samples are the wave: read the window only
+                u = window_of(h.object_wave, window, c)
+            else:
+                wave = plate_wave(h, c, source=source)
+                u = window_of(wave if isinstance(wave, np.ndarray) else wave.get(), window)
             at = field_at_pupil(u, window, h, wavelength=lam, position=position,
                                 rotation=rotation, n=n, pitch=d)
             lens = lam0 if chromatic else lam
@@ -391,12 +394,12 @@ def _finish(radiance, ray, coverage, h: Hologram, camera, pupil, exposure, thres
     if exposure is None:
         exposure = 1 / h.point_density if h.point_density else (1 / ref if ref > 0 else 1.0)
     rgb = radiance * exposure
-    if rgb.shape[-1] == 1:
-        rgb = np.repeat(rgb, 3, -1)
     if np.abs(rgb).max(initial=0) > np.finfo(np.float32).max:  # a view of inf pixels
         raise InputError(f"exposure must keep the view's pixels within float32: at most "
                          f"{np.finfo(np.float32).max / np.abs(radiance).max():.3g} for this "
                          f"view; got {exposure!r}")
+    if rgb.shape[-1] == 1:
+        rgb = np.repeat(rgb, 3, -1)
     if coverage is not None:  # geometric: half covered at a silhouette edge, whatever the colour
         alpha = (coverage > threshold).astype(np.float32)
     else:  # unknown emitter density: relative to the brightest pixels

@@ -101,7 +101,7 @@ class Hologram:
                              f"{self.encoding!r}"[:300])
         held = self.intensity if self.encoding == "intensity" else self.object_wave
         name = "intensity" if self.encoding == "intensity" else "object_wave"
-        if np.ndim(held) != 3 or len(held) != count:
+        if np.ndim(held) != 3 or np.shape(held)[0] != count:
             raise InputError(f"{name} must be (C, H, W) with C = {count} wavelengths for an "
                              f"{self.encoding} hologram; got shape {np.shape(held)}")
         for other, other_name in ((self.intensity, "intensity"), (self.object_wave,
@@ -171,7 +171,9 @@ class Hologram:
             parts.append("object wave kept")
         if self.band:
             parts.append(f"band sin θ {self.band:.3g}")
-        return f"Hologram({', '.join(parts)}, on the host)"
+        held = self.intensity if encoding == "intensity" else self.object_wave
+        where = "on the host" if isinstance(held, np.ndarray) else f"in {type(held).__name__}"
+        return f"Hologram({', '.join(parts)}, {where})"
 
     def _repr_png_(self) -> bytes:
         """A notebook's picture: the intensity (|O|² of a complex hologram) of the R, G, B

@@ -1,0 +1,155 @@
+"""Gigapixel plates, small: a plate of 4×4 tiles of 256² recorded as Dask tasks into a Zarr
+store equals the plate recorded in memory; a cancelled or killed recording resumes; a view
+reads only the tiles its window overlaps and equals the view of the plate in memory."""
+
+import json
+import time
+
+import numpy as np
+import pytest
+
+distributed = pytest.importorskip("distributed")
+zarr = pytest.importorskip("zarr")
+
+from holo_core import jobs  # noqa: E402
+from holo_core.io import tiles as store  # noqa: E402
+from holo_core.io.hologram import HologramFileError, metadata  # noqa: E402
+from holo_core.plate.record import record_points  # noqa: E402
+from holo_core.plate.tiles import record_tiled  # noqa: E402
+from holo_core.plate.to_pupil import window_of  # noqa: E402
+from holo_core.validate import InputError  # noqa: E402
+
+SHAPE, PITCH, TILE, WAVELENGTHS = (1024, 1024), 8e-6, 256, (633e-9, 532e-9)
+
+
+@pytest.fixture(scope="module")
+def scheduler():
+    """One local cluster for the module, reached by its address as a remote one would be."""
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=":0") as cluster:
+        yield cluster.scheduler_address
+
+
+@pytest.fixture(scope="module")
+def scene():
+    rng = np.random.default_rng(3)
+    n = 300
+    positions = np.c_[rng.uniform(-4e-3, 4e-3, (n, 2)), rng.uniform(-0.03, -0.02, n)]
+    return positions, rng.uniform(0.2, 1, (n, len(WAVELENGTHS)))
+
+
+@pytest.fixture(scope="module")
+def in_memory(scene):
+    return record_points(*scene, shape=SHAPE, pitch=PITCH, wavelengths=WAVELENGTHS,
+                         method="direct")
+
+
+def _record(scene, url, scheduler, **kw):
+    return record_tiled(*scene, url=url, shape=SHAPE, pitch=PITCH, wavelengths=WAVELENGTHS,
+                        tile=TILE, scheduler=scheduler, **kw)
+
+
+def test_a_tiled_plate_equals_the_plate_recorded_in_memory(scene, in_memory, scheduler,
+                                                           tmp_path):
+    """Every tile is the whole plate's sum cut to its samples: equal to float32 rounding
+    (measured: bit-equal), its metadata the EXR's schema, chunked by tile and channel."""
+    h = _record(scene, tmp_path / "p.zarr", scheduler)
+    ref = in_memory.object_wave
+    err = np.abs(h.object_wave[...] - ref).max() / np.abs(ref).max()
+    assert err <= 1e-6, err
+    group = zarr.open_group(str(tmp_path / "p.zarr"), mode="r")
+    assert group["object_wave"].chunks == (1, TILE, TILE)
+    assert store.tiles_done(tmp_path / "p.zarr").all()
+    meta = dict(group.attrs["holo"])
+    assert meta["encoding"] == "complex" and meta["size_px"] == list(SHAPE)
+    assert set(meta) == set(metadata(in_memory)), "one schema for both stores"
+    assert np.allclose(meta["bounds_m"], in_memory.bounds)
+
+
+def test_dask_and_other_tools_open_the_store_as_it_is(scene, scheduler, tmp_path):
+    da = pytest.importorskip("dask.array")
+    h = _record(scene, tmp_path / "p.zarr", scheduler)
+    lazy = da.from_zarr(str(tmp_path / "p.zarr"), component="object_wave")
+    assert lazy.chunksize == (1, TILE, TILE)
+    assert np.array_equal(lazy[1, 300:700, 100:400].compute(), h.object_wave[1, 300:700, 100:400])
+
+
+def test_a_cancelled_recording_resumes_and_a_half_written_tile_is_written_again(
+        scene, in_memory, scheduler, tmp_path):
+    url = tmp_path / "p.zarr"
+    calls = []
+
+    def cancel_after_four(fraction):
+        calls.append(fraction)
+        if len(calls) == 4:
+            raise jobs.Cancelled()
+
+    with pytest.raises(jobs.Cancelled):
+        _record(scene, url, scheduler, progress=cancel_after_four)
+    done = _settled(url)  # the tiles already running when cancelled end their write
+    assert 4 <= done.sum() < done.size, done.sum()
+    with pytest.raises(HologramFileError, match=r"tiles are not written yet; resume"):
+        store.open_plate(url)
+    # a tile killed mid-write: samples partly there, its flag unset
+    i, j = map(int, np.argwhere(~done)[0])
+    r0, r1, c0, c1 = store.tile_window(SHAPE, TILE, i, j)
+    zarr.open_group(str(url), mode="r+")["object_wave"][:, r0:r0 + 10, c0:c1] = 7 + 7j
+    h = _record(scene, url, scheduler)
+    assert np.abs(h.object_wave[...] - in_memory.object_wave).max() <= \
+        1e-6 * np.abs(in_memory.object_wave).max()
+
+
+def _settled(url):
+    done, before = store.tiles_done(url), None
+    while before is None or not np.array_equal(done, before):
+        time.sleep(1.0)
+        before, done = done, store.tiles_done(url)
+    return done
+
+
+def test_the_scheduler_comes_from_the_environment(scene, in_memory, scheduler, tmp_path,
+                                                   monkeypatch):
+    monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", scheduler)
+    h = _record(scene, tmp_path / "p.zarr", None)
+    assert np.abs(h.object_wave[...] - in_memory.object_wave).max() <= \
+        1e-6 * np.abs(in_memory.object_wave).max()
+
+
+class _Counting:
+    """A chunked array's reads, counted by the tiles they touch."""
+
+    def __init__(self, array):
+        self.array, self.shape, self.ndim, self.tiles = array, array.shape, array.ndim, set()
+
+    def __getitem__(self, key):
+        _, rows, cols = key
+        self.tiles |= {(i, j) for i in range(rows.start // TILE, (rows.stop - 1) // TILE + 1)
+                       for j in range(cols.start // TILE, (cols.stop - 1) // TILE + 1)}
+        return self.array[key]
+
+
+def test_a_window_reads_only_the_tiles_it_overlaps(scene, in_memory, scheduler, tmp_path):
+    h = _record(scene, tmp_path / "p.zarr", scheduler)
+    counted = _Counting(h.object_wave)
+    window = (300, 520, -40, 200)  # beyond the plate's left edge too
+    u = window_of(counted, window, 1)
+    assert np.array_equal(u, window_of(in_memory.object_wave[1], window))
+    assert counted.tiles == {(1, 0), (2, 0)}
+
+
+def test_another_plate_in_the_store_is_refused_and_bad_tiles_are_named(scene, scheduler,
+                                                                      tmp_path):
+    url = tmp_path / "p.zarr"
+    _record(scene, url, scheduler)
+    with pytest.raises(HologramFileError, match="holds another plate"):
+        record_tiled(*scene, url=url, shape=SHAPE, pitch=2 * PITCH, wavelengths=WAVELENGTHS,
+                     tile=TILE, scheduler=scheduler)
+    with pytest.raises(InputError, match=r"tile must be a multiple of 64"):
+        record_tiled(*scene, url=tmp_path / "q.zarr", shape=SHAPE, pitch=PITCH,
+                     wavelengths=WAVELENGTHS, tile=300)
+    assert not (tmp_path / "q.zarr").exists(), "a refused recording creates nothing"
+    zarr.open_group(str(url), mode="r+").attrs["holo"] = {
+        **json.loads(json.dumps(dict(zarr.open_group(str(url), mode="r").attrs["holo"]))),
+        "pitch_m": -1}
+    with pytest.raises(HologramFileError, match="pitch_m"):
+        store.open_plate(url)
