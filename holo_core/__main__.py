@@ -46,7 +46,8 @@ def record(args) -> int:
     from .io.mesh import read_mesh
     from .plate.record import Reference, record_points
     from .scene.mesh import default_spacing, sample_points
-    out = _output(args.output, args.mesh, "")  # before the work, not after it
+    tiled = _is_store(args.output)
+    out = args.output if tiled else _output(args.output, args.mesh, "")  # before the work
     mesh = read_mesh(args.mesh)
     shape = (args.resolution[1], args.resolution[0])
     wavelengths = tuple(w * 1e-9 for w in args.wavelengths)
@@ -62,12 +63,33 @@ def record(args) -> int:
         np.repeat(colours.mean(1, keepdims=True), len(wavelengths), 1)
     print(f"{len(pos)} point emitters ({spacing:.3g} m apart) -> {shape[1]}x{shape[0]} "
           f"hologram, pitch {args.pitch:.3g} m, wavelengths {args.wavelengths} nm")
+    if tiled:  # a complex plate in tiles, on Dask (the object wave: no reference)
+        from .plate.tiles import record_tiled
+        method = "direct" if args.method == "auto" else args.method
+        record_tiled(pos, colours, url=out, shape=shape, pitch=args.pitch,
+                     wavelengths=wavelengths, tile=args.tile, method=method,
+                     scheduler=args.scheduler, progress=_progress_bar())
+        print(f"\n{out}")
+        return 0
     holo = record_points(pos, colours, shape=shape, pitch=args.pitch, wavelengths=wavelengths,
                          reference=Reference(angle=args.reference_angle), method=args.method,
                          progress=_progress_bar())
     print()
     print(write_hologram(out, holo))
     return 0
+
+
+def _is_store(path) -> bool:
+    """A tiled plate's store (a Zarr folder or an fsspec URL), not an EXR file."""
+    return str(path).rstrip("/").endswith(".zarr") or "://" in str(path)
+
+
+def _read(path):
+    from .io.hologram import read_hologram
+    if _is_store(path):
+        from .io.tiles import open_plate
+        return open_plate(path)
+    return read_hologram(path)
 
 
 def plan(args) -> int:
@@ -139,20 +161,19 @@ def plan(args) -> int:
 def info(args) -> int:
     import json
 
-    from .io.hologram import metadata, read_hologram
-    print(json.dumps(metadata(read_hologram(args.hologram)), indent=2))
+    from .io.hologram import metadata
+    print(json.dumps(metadata(_read(args.hologram)), indent=2))
     return 0
 
 
 def render(args) -> int:
     import numpy as np
 
-    from .io.hologram import read_hologram
     from .io.view import write_view
     from .plate.view import render_view
     from .scene.camera import Camera, look_at
     out = _output(args.output, args.hologram, "_view", preview=True)
-    h = read_hologram(args.hologram)
+    h = _read(args.hologram)
     plate = np.asarray(h.plate)
     centre = (plate @ np.append(np.asarray(h.bounds).mean(0), 1.0))[:3]
     eye = args.camera if args.camera else plate[:3, 3] + plate[:3, 2] * 3 * max(h.size)
@@ -243,7 +264,8 @@ def main(argv=None) -> int:
     p = sub.add_parser("record", help="record a hologram of a PLY or OBJ mesh")
     p.add_argument("mesh", help="mesh file (.ply or .obj), units taken as metres")
     p.add_argument("-o", "--output", required=True,
-                   help="hologram file to write (.exr), or a folder for <mesh>.exr")
+                   help="hologram file to write (.exr), or a folder for <mesh>.exr, or a "
+                        "tiled plate NAME.zarr (a folder or an fsspec URL; recorded on Dask)")
     p.add_argument("--resolution", type=PIXELS, nargs=2, default=(1024, 1024),
                    metavar=("W", "H"), help="hologram size in pixels (default 1024 1024)")
     p.add_argument("--pitch", type=METRES, default=8e-6, help="sample spacing [m] (8e-6)")
@@ -258,6 +280,12 @@ def main(argv=None) -> int:
                    help="the most point emitters sampled on the mesh (200000)")
     p.add_argument("--method", choices=["auto", "direct", "wrp"], default="auto",
                    help="point emitter sum (default: the faster)")
+    p.add_argument("--tile", type=PIXELS, default=2048,
+                   help="with an output NAME.zarr or URL: samples per tile side (2048)")
+    p.add_argument("--scheduler", default=None,
+                   help="with an output NAME.zarr or URL: a Dask scheduler's address "
+                        "(tcp://host:8786; default DASK_SCHEDULER_ADDRESS, else a local "
+                        "cluster)")
     p = sub.add_parser("plan", help="a plate's samples, wavelength, memory and time, and what "
                                     "a camera's view of it resolves, before any recording")
     p.add_argument("mesh", nargs="?", help="the objects (.ply or .obj, metres), or --box")

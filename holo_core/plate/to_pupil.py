@@ -47,11 +47,15 @@ def odd_fast_len(n: int) -> int:
     return best
 
 
-def plate_window(h: Hologram, position, rotation, diameter) -> tuple[int, int, int, int]:
+def plate_window(h: Hologram, position, rotation, diameter, view=None
+                 ) -> tuple[int, int, int, int]:
     """(row0, row1, col0, col1) of the plate's samples the camera's pupil (centre ``position``
     (3,) [m], axes ``rotation`` (3, 3), both in the plate's frame, diameter ``diameter`` [m])
-    sees the objects through: the cone from the pupil to the objects' box, a margin around it,
-    and at least the pupil's own width around its foot. May reach beyond the plate."""
+    sees the objects through: the cone from the pupil to the objects' box, cut to the
+    camera's field of view (``view``: the directions (N, 3) of the image's corners in the
+    plate's frame, when given; a camera that sees a part of a large plate reads that part),
+    a margin around it, and at least the pupil's own width around its foot. May reach beyond
+    the plate."""
     lo, hi = np.asarray(h.bounds, np.float64)
     corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
                         for z in (lo[2], hi[2])])
@@ -61,6 +65,12 @@ def plate_window(h: Hologram, position, rotation, diameter) -> tuple[int, int, i
     t = rim[:, None, 2:3] / (rim[:, None, 2:3] - np.minimum(corners[None, :, 2:3], -1e-12))
     hits = (rim[:, None, :2] + t * (corners[None, :, :2] - rim[:, None, :2])).reshape(-1, 2)
     cone_lo, cone_hi = hits.min(0), hits.max(0)
+    if view is not None:
+        d = np.asarray(view, np.float64)
+        t = -rim[:, None, 2:3] / np.minimum(d[None, :, 2:3], -1e-12)
+        seen = (rim[:, None, :2] + t * d[None, :, :2]).reshape(-1, 2)
+        cone_lo, cone_hi = np.maximum(cone_lo, seen.min(0)), np.minimum(cone_hi, seen.max(0))
+        cone_hi = np.maximum(cone_hi, cone_lo)  # nothing in view: the pupil's foot alone
     size = cone_hi - cone_lo
     margin = np.maximum(WINDOW_MARGIN * size, WINDOW_SAMPLES * h.pitch)
     cone_lo, cone_hi = cone_lo - margin, cone_hi + margin

@@ -42,6 +42,7 @@ from .to_pupil import field_at_pupil, overlaps, plate_window, pupil_grid, window
 
 log = logging.getLogger(__name__)
 COVERAGE_RADIUS = 1  # the coverage's speckle is averaged over (2r+1)² pixels before alpha
+VIEW_MARGIN = 0.1  # the window reaches this fraction of the image beyond its corners
 
 
 def camera_in_plate(hologram: Hologram, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
@@ -158,13 +159,16 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     pupil = aperture or camera_pupil(fine, lam0, centre, apodize=apodize)
     rotation, position = camera_in_plate(first, camera)
     _check_zone(first, camera, position, pupil.diameter)
-    window = plate_window(first, position, rotation, pupil.diameter)
+    window = plate_window(first, position, rotation, pupil.diameter, _corners(camera, rotation))
     unseen = _unseen(first, rotation, position) or (None if overlaps(first, window) else (
         "the camera sees the objects beside the plate, not through it"))
     if unseen:  # a black view, said aloud (an animation's camera may pass out of the zone)
         warnings.warn(f"the view is black: {unseen}", EmptyViewWarning, stacklevel=2)
         return _finish(np.zeros(camera.resolution[::-1] + (len(colours),)), None, None, first,
                        camera, pupil, exposure, opacity_threshold, lam0)
+    r0, r1, c0, c1 = window
+    memory.check_host(f"the plate's {c1 - c0}x{r1 - r0} window", HOLOGRAM_SAMPLE_BYTES *
+                      (r1 - r0) * (c1 - c0))
     channels = colours + ([z_ch] if z_ch is not None else [])
     n, d = pupil_grid(first, rotation, pupil.diameter, pupil.focus,
                       min(first.wavelengths[c] for c in channels))
@@ -344,8 +348,9 @@ def _check_settings(holos, camera: Camera, supersample, exposure, threshold) -> 
     w, h = camera.resolution
     memory.check_host(f"a {w}x{h} view at supersample {supersample}",
                       PIXEL_BYTES * w * h * supersample**2 * (len(first.wavelengths) + 1))
-    memory.check_host(f"the hologram's {first.shape[1]}x{first.shape[0]} fields",
-                      HOLOGRAM_SAMPLE_BYTES * np.prod(first.shape))
+    if first.encoding != "complex":  # reconstructed whole; a complex plate's window: below
+        memory.check_host(f"the hologram's {first.shape[1]}x{first.shape[0]} fields",
+                          HOLOGRAM_SAMPLE_BYTES * np.prod(first.shape))
 
 
 def _depth(crosses, brightness, *, estimate, wavelengths, centre, focus, camera: Camera,
@@ -371,6 +376,16 @@ def _supersampled(camera: Camera, s: int) -> Camera:
         return camera
     w, h = camera.resolution
     return replace(camera, resolution=(w * s, h * s))
+
+
+def _corners(camera: Camera, rotation, margin=VIEW_MARGIN) -> np.ndarray:
+    """The directions (4, 3) [plate frame] of the image's corners, ``margin`` of its size
+    beyond them (a defocused pixel gathers light from around its ray)."""
+    w, h = camera.resolution
+    rows, cols = np.array([-1, -1, 1, 1]) * margin * h, np.array([-1, 1, -1, 1]) * margin * w
+    tx, ty = camera.pixel_tangents(rows=rows + np.array([0, 0, h, h]),
+                                   cols=cols + np.array([0, w, 0, w]))
+    return np.stack([tx, ty, -np.ones(4)], -1) @ np.asarray(rotation).T
 
 
 def _centre_distance(h: Hologram, camera: Camera) -> float:

@@ -153,3 +153,23 @@ def test_another_plate_in_the_store_is_refused_and_bad_tiles_are_named(scene, sc
         "pitch_m": -1}
     with pytest.raises(HologramFileError, match="pitch_m"):
         store.open_plate(url)
+
+
+def test_the_command_line_records_a_tiled_plate_on_the_scheduler_and_reads_it(
+        scheduler, tmp_path, capsys):
+    """``record MESH -o NAME.zarr --tile --scheduler``, then ``info`` and ``render`` of the
+    store: the same commands as for an EXR file."""
+    from holo_core.__main__ import main
+    (tmp_path / "tri.obj").write_text("v -0.002 -0.002 0\nv 0.002 -0.002 0\nv 0 0.002 0\n"
+                                      "f 1 2 3\n")
+    url = tmp_path / "tri.zarr"
+    assert main(["record", str(tmp_path / "tri.obj"), "-o", str(url), "--resolution", "512",
+                 "512", "--wavelengths", "633", "--distance", "0.02", "--tile", "256",
+                 "--scheduler", scheduler, "--max-points", "2000"]) == 0
+    assert store.tiles_done(url).shape == (2, 2) and store.tiles_done(url).all()
+    capsys.readouterr()
+    assert main(["info", str(url)]) == 0
+    assert json.loads(capsys.readouterr().out)["encoding"] == "complex"
+    assert main(["render", str(url), "-o", str(tmp_path / "view.exr"), "--resolution", "64",
+                 "64"]) == 0
+    assert (tmp_path / "view.exr").stat().st_size > 0
