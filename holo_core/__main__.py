@@ -68,7 +68,8 @@ def record(args) -> int:
         method = "direct" if args.method == "auto" else args.method
         record_tiled(pos, colours, url=out, shape=shape, pitch=args.pitch,
                      wavelengths=wavelengths, tile=args.tile, method=method,
-                     scheduler=args.scheduler, progress=_progress_bar())
+                     scheduler=args.scheduler, progress=_progress_bar(),
+                     dashboard=lambda link: print(f"Dask dashboard: {link}"))
         print(f"\n{out}")
         return 0
     holo = record_points(pos, colours, shape=shape, pitch=args.pitch, wavelengths=wavelengths,

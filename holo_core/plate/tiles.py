@@ -38,7 +38,7 @@ TILE_STEP = 64  # tiles are multiples of this: the kernel's column segments (<= 
 def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_WAVELENGTHS,
                  tile=DEFAULT_TILE, phases=None, seed=0, band=None, plate=None, bounds=None,
                  channels=(), zone=None, method="direct", scheduler=None,
-                 progress: jobs.Progress = None) -> Hologram:
+                 progress: jobs.Progress = None, dashboard=None) -> Hologram:
     """Record the complex plate of point emitters into the tiled store at ``url`` and return
     it opened (:func:`holo_core.io.tiles.open_plate`).
 
@@ -60,6 +60,8 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
     progress : callable, optional
         Called with the fraction of tiles done; raising :class:`holo_core.jobs.Cancelled`
         cancels the tasks not yet finished (the tiles written stay, for a resume).
+    dashboard : callable, optional
+        Called with the address of the cluster's dashboard (its task stream and progress).
     """
     pos, wavelengths, amp = point_amplitudes(positions, colours, wavelengths, phases, seed)
     shape = validate.shape2d("shape", shape)
@@ -84,6 +86,8 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
         spec = {"url": str(url), "shape": shape, "pitch": pitch, "tile": tile, "band": band,
                 "wavelengths": wavelengths, "method": method}
         with client_for(scheduler) as client:
+            if dashboard is not None:
+                dashboard(client.dashboard_link)
             points = client.scatter((pos, amp), broadcast=True)
             futures = [client.submit(record_tile, points, spec, int(i), int(j), pure=False)
                        for i, j in todo]

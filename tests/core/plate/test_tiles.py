@@ -167,7 +167,7 @@ def test_the_command_line_records_a_tiled_plate_on_the_scheduler_and_reads_it(
                  "512", "--wavelengths", "633", "--distance", "0.02", "--tile", "256",
                  "--scheduler", scheduler, "--max-points", "2000"]) == 0
     assert store.tiles_done(url).shape == (2, 2) and store.tiles_done(url).all()
-    capsys.readouterr()
+    assert "Dask dashboard: http" in capsys.readouterr().out
     assert main(["info", str(url)]) == 0
     assert json.loads(capsys.readouterr().out)["encoding"] == "complex"
     assert main(["render", str(url), "-o", str(tmp_path / "view.exr"), "--resolution", "64",
