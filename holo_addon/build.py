@@ -4,8 +4,11 @@ The repository root is the extension root. This stages ``__init__.py``, ``holo_a
 the manifest into ``build/extension/``, adds wheels — the core as the ``holo`` wheel, and the
 runtime dependencies from ``pyproject.toml`` downloaded from the package index for each
 platform and Python that Blender 4.2 … 5.x uses (numpy comes with Blender) — lists them in the
-staged manifest, and runs ``blender_ext.py build --split-platforms`` from the bpy wheel.
-Wheels are fetched at build time and never committed.
+staged manifest, and runs ``blender_ext.py build --split-platforms`` from the bpy wheel, once per
+Python: each zip holds one Python's wheels and names the Blender releases that run that Python
+(``BLENDERS``), because Blender 4.2.0's installer installs every wheel of a zip whatever its
+Python tag (4.2.23 and 4.5 skip the others). Wheels are fetched at build time and never
+committed.
 
     python -m holo_addon.build [--platform linux-x64 ...] [--python 3.11 ...] [-o dist]
 """
@@ -33,6 +36,9 @@ PLATFORMS = {
     "macos-x64": ["macosx_10_9_x86_64", "macosx_10_15_x86_64", "macosx_11_0_x86_64"],
 }
 PYTHONS = ("3.11", "3.13")        # Blender 4.2-5.0 and 5.1+
+# Per Python, the Blender releases that run it: blender_version_min and blender_version_max (the
+# first release that does not) of its zips.
+BLENDERS = {"3.11": ("4.2.0", "5.1.0"), "3.13": ("5.1.0", None)}
 PROVIDED = {"numpy"}              # Blender bundles these
 # Intel's CPU OpenCL runtime is 276 MB of wheels (intel-opencl-rt 225 MB, intel-cmplr-lib-rt
 # 41 MB, tbb 7 MB, tcmlib 3 MB): with the rest, a Linux zip of about 360 MB, over what
@@ -81,8 +87,9 @@ def blender_builder() -> Path:
     return found[-1]
 
 
-def stage(dest: Path, platforms, pythons) -> Path:
-    """The extension source tree with its wheels and a manifest listing them."""
+def stage(dest: Path, platforms, python: str) -> Path:
+    """The extension source tree with one Python's wheels and a manifest listing them, bounded
+    to the Blender releases that run that Python."""
     if dest.exists():
         shutil.rmtree(dest)
     wheels = dest / "wheels"
@@ -95,14 +102,18 @@ def stage(dest: Path, platforms, pythons) -> Path:
     if result.returncode != 0:
         raise SystemExit(f"building the holo wheel failed:\n{result.stderr}")
     for platform in platforms:
-        for python in pythons:
-            missing = download_wheels(wheels, platform, python)
-            if missing:
-                log.warning("%s, Python %s: no wheel for %s", platform, python,
-                            ", ".join(missing))
+        missing = download_wheels(wheels, platform, python)
+        if missing:
+            log.warning("%s, Python %s: no wheel for %s", platform, python, ", ".join(missing))
     manifest = (ROOT / "blender_manifest.toml").read_text()
+    first, last = BLENDERS[python]
+    manifest, found = re.subn(r'(?m)^blender_version_min = ".*"$',
+                              f'blender_version_min = "{first}"', manifest)
+    if found != 1:
+        raise SystemExit("blender_manifest.toml has no blender_version_min")
     names = sorted(f"./wheels/{w.name}" for w in wheels.glob("*.whl"))
     keys = ("platforms = [" + ", ".join(f'"{p}"' for p in platforms) + "]\n" +
+            (f'blender_version_max = "{last}"  # Python {python}\n' if last else "") +
             "wheels = [\n" + "".join(f'  "{n}",\n' for n in names) + "]\n\n")
     first_table = manifest.index("\n[") + 1  # top-level keys go before the first table
     (dest / "blender_manifest.toml").write_text(manifest[:first_table] + keys +
@@ -111,22 +122,31 @@ def stage(dest: Path, platforms, pythons) -> Path:
 
 
 def build(out: Path, platforms=tuple(PLATFORMS), pythons=PYTHONS) -> list[Path]:
-    """Build one zip per platform into ``out``; returns their paths."""
-    src = stage(ROOT / "build" / "extension", platforms, pythons)
+    """Build one zip per platform and Python into ``out``, named
+    ``holo-<version>[-<platform>]-py<3xx>.zip``; returns their paths."""
     out.mkdir(parents=True, exist_ok=True)
-    before = set(out.glob("*.zip"))
-    cmd = [sys.executable, str(blender_builder()), "build", "--source-dir", str(src),
-           "--output-dir", str(out)]
-    if len(platforms) > 1:
-        cmd.append("--split-platforms")
-    result = subprocess.run(cmd, capture_output=True, text=True)
-    if result.returncode != 0:
-        raise SystemExit(f"Blender's builder failed:\n{result.stdout}\n{result.stderr}")
-    check = subprocess.run([sys.executable, str(blender_builder()), "validate", str(src)],
-                           capture_output=True, text=True)
-    if check.returncode != 0:
-        raise SystemExit(f"the extension does not validate:\n{check.stdout}{check.stderr}")
-    return sorted(set(out.glob("*.zip")) - before) or sorted(out.glob("*.zip"))
+    built = []
+    for python in pythons:
+        src = stage(ROOT / "build" / "extension", platforms, python)
+        tmp = ROOT / "build" / "extension-zips"
+        shutil.rmtree(tmp, ignore_errors=True)
+        tmp.mkdir(parents=True)
+        cmd = [sys.executable, str(blender_builder()), "build", "--source-dir", str(src),
+               "--output-dir", str(tmp)]
+        if len(platforms) > 1:
+            cmd.append("--split-platforms")
+        result = subprocess.run(cmd, capture_output=True, text=True)
+        if result.returncode != 0:
+            raise SystemExit(f"Blender's builder failed:\n{result.stdout}\n{result.stderr}")
+        check = subprocess.run([sys.executable, str(blender_builder()), "validate", str(src)],
+                               capture_output=True, text=True)
+        if check.returncode != 0:
+            raise SystemExit(f"the extension does not validate:\n{check.stdout}{check.stderr}")
+        for z in sorted(tmp.glob("*.zip")):
+            built.append(out / f"{z.stem}-py{python.replace('.', '')}.zip")
+            shutil.move(z, built[-1])
+        shutil.rmtree(tmp)
+    return built
 
 
 def main(argv=None):

@@ -100,10 +100,12 @@ def _material(h, material, seen: set) -> None:
 def _tree(h, tree, seen: set) -> None:
     """A node tree's nodes (their settings and input values), links, node groups and
     images."""
-    if tree.name_full in seen:
+    # by address: the trees of materials, lights and the world are embedded and share one name
+    # ("Shader Nodetree"), and in 5.2 every light has one (5.0.1's have none)
+    if tree.as_pointer() in seen:
         h.update(f"tree {tree.name_full}".encode())
         return
-    seen.add(tree.name_full)
+    seen.add(tree.as_pointer())
     for node in sorted(tree.nodes, key=lambda n: n.name):
         h.update(f"{node.bl_idname} {node.name} {node.mute}".encode())
         _rna(h, node)

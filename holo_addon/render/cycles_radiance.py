@@ -21,6 +21,7 @@ It imports nothing of the add-on's package, which the process does not have.
 
 import importlib.util
 import json
+import os
 import sys
 
 import bpy
@@ -81,3 +82,8 @@ def main(args: dict) -> None:
 
 if __name__ == "__main__":
     main(json.loads(sys.argv[sys.argv.index("--") + 1]))
+    # The image is written: the process ends here. After this render the bpy module's own exit
+    # crashes in 4.2.0 (SIGSEGV) and never returns in 4.5.15, which the worker would take for
+    # a failed or endless render.
+    sys.stdout.flush()
+    os._exit(0)

@@ -82,16 +82,22 @@ def plan_command(context) -> list[str]:
     look = plate.to_plate((camera.position - camera.rotation[:, 2])[None])[0]
     zone = plate.zone or zone_around(plate, camera, obj.holo.zone_margin * unit)
     command = [sys.executable, "-m", "holo_core", "plan",
-               "--bounds", *map(repr, local.min(0)), *map(repr, local.max(0)),
-               "--plate-size", repr(plate.width), repr(plate.height),
+               "--bounds", *map(_number, local.min(0)), *map(_number, local.max(0)),
+               "--plate-size", _number(plate.width), _number(plate.height),
                "--samples", str(scene.holo.max_resolution),
-               "--camera", *map(repr, eye), "--look-at", *map(repr, look),
-               "--lens", repr(camera.lens), "--sensor-width", repr(camera.sensor_width),
+               "--camera", *map(_number, eye), "--look-at", *map(_number, look),
+               "--lens", _number(camera.lens), "--sensor-width", _number(camera.sensor_width),
                "--resolution", *map(str, camera.resolution),
-               "--zone", *map(repr, zone.centre), *map(repr, zone.half_extents)]
-    command += ["--fstop", repr(camera.fstop), "--focus-distance",
-                repr(camera.focus_distance)] if camera.fstop else ["--pinhole"]
+               "--zone", *map(_number, zone.centre), *map(_number, zone.half_extents)]
+    command += ["--fstop", _number(camera.fstop), "--focus-distance",
+                _number(camera.focus_distance)] if camera.fstop else ["--pinhole"]
     return command
+
+
+def _number(value) -> str:
+    """A number as the command line reads it, exactly (NumPy 2's repr of its scalars is
+    ``np.float64(...)``)."""
+    return repr(float(value))
 
 
 class HOLO_OT_plan_plate(bpy.types.Operator):

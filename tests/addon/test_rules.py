@@ -260,7 +260,12 @@ for obj in scene.objects:
 scene.render.filepath = sys.argv[3] + "/frame_"
 scene.frame_start, scene.frame_end = 1, 2
 bpy.ops.render.render(animation=True)
-print("rendered")
+holo_addon.unregister()
+print("rendered", flush=True)
+# bpy 4.2.0's own teardown after a render crashes (SIGSEGV) and 4.5.15's never returns, with or
+# without the add-on: the status is this script's
+import os
+os._exit(0)
 """
 
 
