@@ -30,7 +30,7 @@ from ..io.image import check_writable
 from ..propagation import grid, resample
 from ..scene.hologram import Hologram
 from ..validate import InputError
-from .encoding import double_phase
+from .encoding import double_phase, normalised
 
 log = logging.getLogger(__name__)
 
@@ -116,7 +116,7 @@ def error_diffusion(field, *, max_amplitude=None) -> np.ndarray:
     errors and the next row's share are NumPy): measured 6.8 s for 3840×2160 (0.8 µs a
     sample) on one core of a shared 2-core x86-64 machine.
     """
-    c = _normalised(field, max_amplitude)
+    c = normalised(field, max_amplitude)
     h, w = c.shape
     phases = np.empty((h, w))
     carried = np.zeros(w, np.complex128)  # error sent down from the row above
@@ -155,20 +155,6 @@ def _down(errors: np.ndarray) -> np.ndarray:
     return out
 
 
-def _normalised(field, max_amplitude) -> np.ndarray:
-    """``field`` as complex128 divided by m (its largest |c| or ``max_amplitude``), refused
-    when all zero or above m (as :func:`.encoding.double_phase`)."""
-    c = validate.host_field("field", field).astype(np.complex128)
-    top = float(np.abs(c).max())
-    m = top if max_amplitude is None else validate.positive("max_amplitude", max_amplitude)
-    if m == 0:
-        raise InputError("field must not be all zero (no amplitude to encode)")
-    if top > m * (1 + 1e-12):
-        raise InputError(f"field's largest amplitude {top:.6g} exceeds max_amplitude {m!r}; "
-                         f"the encoding would clip it")
-    return c / m
-
-
 def amplitude_pattern(field, *, pitch, wavelength, angle=None, azimuth=0.0, method="bias",
                       max_amplitude=None) -> np.ndarray:
     """A transmittance in [0, 1] (float64, the shape of ``field``) encoding ``field`` on an
@@ -197,7 +183,7 @@ def amplitude_pattern(field, *, pitch, wavelength, angle=None, azimuth=0.0, meth
     method = validate.choice("method", method, METHODS["amplitude"])
     pitch = validate.pitch("pitch", pitch)
     wavelength = validate.wavelength("wavelength", wavelength)
-    c = _normalised(field, max_amplitude)
+    c = normalised(field, max_amplitude)
     r = _carrier(c.shape, pitch, wavelength, _sin_angle(angle, pitch, wavelength),
                  validate.finite("azimuth", azimuth, "rad"))
     if method == "bias":

@@ -23,6 +23,17 @@ def double_phase(field, *, max_amplitude=None) -> np.ndarray:
     ``max_amplitude`` m (field units) normalises the amplitudes (default: the largest |c|); a
     sample above it is refused, so the encoding never clips silently. Device arrays are read
     back; the result is on the host (an SLM's image)."""
+    c = normalised(field, max_amplitude)
+    alpha = np.arccos(np.clip(np.abs(c), 0, 1))
+    rows, cols = np.indices(c.shape)
+    sign = np.where((rows + cols) % 2 == 0, 1.0, -1.0)
+    return np.angle(np.exp(1j * (np.angle(c) + sign * alpha)))
+
+
+def normalised(field, max_amplitude=None) -> np.ndarray:
+    """``field`` (a device array is read back) as complex128 divided by m, its largest |c| or
+    ``max_amplitude`` (field units); refused when all zero or above m: an encoding never clips
+    silently."""
     c = field.get() if hasattr(field, "get") and hasattr(field, "queue") else field
     c = validate.host_field("field", c).astype(np.complex128)
     top = float(np.abs(c).max())
@@ -32,7 +43,4 @@ def double_phase(field, *, max_amplitude=None) -> np.ndarray:
     if top > m * (1 + 1e-12):
         raise InputError(f"field's largest amplitude {top:.6g} exceeds max_amplitude {m!r}; "
                          f"the encoding would clip it")
-    alpha = np.arccos(np.clip(np.abs(c) / m, 0, 1))
-    rows, cols = np.indices(c.shape)
-    sign = np.where((rows + cols) % 2 == 0, 1.0, -1.0)
-    return np.angle(np.exp(1j * (np.angle(c) + sign * alpha)))
+    return c / m
