@@ -99,22 +99,24 @@ def like_input(result: cla.Array, from_host: bool):
 
 
 def nonfinite_count(rt: Runtime, a: cla.Array) -> int:
-    key = "nonfinite"
-    if key not in rt.cache:
-        rt.cache[key] = ReductionKernel(rt.context, np.int32, neutral="0", reduce_expr="a+b",
-                                        map_expr="isfinite(x[i]) ? 0 : 1",
-                                        arguments="__global const float *x")
-    return int(rt.cache[key](a.view(np.float32).reshape(-1)).get())
+    """How many float components of ``a`` are not finite (a reduction on the device)."""
+    return _count(rt, "nonfinite", "isfinite(x[i]) ? 0 : 1", "float",
+                  a.view(np.float32).reshape(-1))
 
 
 def nonzero_count(rt: Runtime, a: cla.Array) -> int:
     """How many complex samples of ``a`` are not zero (a reduction on the device)."""
-    key = "nonzero"
+    return _count(rt, "nonzero", "(x[i].x != 0.0f || x[i].y != 0.0f) ? 1 : 0", "float2",
+                  a.reshape(-1))
+
+
+def _count(rt: Runtime, key: str, test: str, ctype: str, flat: cla.Array) -> int:
+    """The sum of ``test`` (1 or 0) over ``flat``'s elements of C type ``ctype``; its
+    reduction kernel built once per runtime."""
     if key not in rt.cache:
         rt.cache[key] = ReductionKernel(rt.context, np.int32, neutral="0", reduce_expr="a+b",
-                                        map_expr="(x[i].x != 0.0f || x[i].y != 0.0f) ? 1 : 0",
-                                        arguments="__global const float2 *x")
-    return int(rt.cache[key](a.reshape(-1)).get())
+                                        map_expr=test, arguments=f"__global const {ctype} *x")
+    return int(rt.cache[key](flat).get())
 
 
 _ZERO = np.zeros(1, np.complex64)

@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from ..propagation import angular_spectrum, tilt
+from ..propagation import angular_spectrum, grid, tilt
 from ..scene.hologram import Hologram
 
 WINDOW_MARGIN = 0.1   # the window reaches this fraction of its size beyond the cone ...
@@ -34,17 +34,7 @@ PUPIL_EDGE = 4        # pupil samples beyond the iris on each side
 
 def odd_fast_len(n: int) -> int:
     """The smallest odd 3^a·5^b·7^c >= n (a fast FFT size whose centre is a sample)."""
-    best, p7 = 3 ** max(1, math.ceil(math.log(max(n, 1), 3))), 1
-    while p7 < best:
-        p5 = p7
-        while p5 < best:
-            m = p5
-            while m < n:
-                m *= 3
-            best = min(best, m)
-            p5 *= 5
-        p7 *= 7
-    return best
+    return grid.smooth_len(n, (3, 5, 7))
 
 
 def plate_window(h: Hologram, position, rotation, diameter, view=None

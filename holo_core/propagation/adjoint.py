@@ -26,6 +26,7 @@ from ..opencl.arrays import cached, copy
 from ..scene.field import Field
 from . import grid
 from .batch import batched
+from .fresnel import centred_ramp, far_factor
 
 
 def adjoint(propagation):
@@ -60,22 +61,10 @@ def _fraunhofer_adjoint(field, *, wavelength, pitch, distance):
                                                       validate.MAX_LENGTH), "m")
     rt, dev, from_host = as_device(field)
     h, w = dev.shape
-    out_pitch = (wavelength * z / (h * pitch), wavelength * z / (w * pitch))
-
-    def pre():
-        ry, rx = [np.exp(-1j * np.pi * (n - 1) * np.arange(n) / n) for n in (h, w)]
-        return ry[:, None] * rx[None, :], []
-
-    def post():
-        yo, xo = grid.coords(h, out_pitch[0])[:, None], grid.coords(w, out_pitch[1])[None, :]
-        k = 2 * np.pi / wavelength
-        phase = math.remainder(k * z, 2 * math.pi) + k * (xo**2 + yo**2) / (2 * z) \
-            - np.pi * ((h - 1) ** 2 / (2 * h) + (w - 1) ** 2 / (2 * w))
-        ramp = pre()[0].conj()
-        return np.conj(ramp * np.exp(1j * phase) * pitch**2 / (1j * wavelength * z)), []
-
-    conj_pre, _ = cached(rt, ("centred-dft-adjoint", (h, w)), pre)
-    conj_post, _ = cached(rt, ("fraunhofer-adjoint", (h, w), wavelength, pitch, z), post)
+    conj_pre, _ = cached(rt, ("centred-dft-adjoint", (h, w)),
+                         lambda: (centred_ramp((h, w)).conj(), []))
+    conj_post, _ = cached(rt, ("fraunhofer-adjoint", (h, w), wavelength, pitch, z),
+                          lambda: (far_factor((h, w), wavelength, pitch, z).conj(), []))
     out = copy(dev)
     multiply = rt.kernel("spectral", "multiply")
     multiply(rt.queue, (h * w,), None, out.data, conj_post.data)

@@ -61,6 +61,26 @@ def fresnel_transfer_host(shape, wavelength, pitch, distance, offset) -> np.ndar
     return np.where(keep, np.exp(1j * phase), 0)
 
 
+def centred_ramp(shape) -> np.ndarray:
+    """The centred DFT's ramp: exp(-i2π(j-c)(n-c)/N) = ramp(n)·ramp(j)·exp(-i2πc²/N) with
+    c = (N-1)/2, ramp(n) = exp(iπ(N-1)n/N), as the outer product over ``shape`` (rows, cols)."""
+    ry, rx = [np.exp(1j * np.pi * (n - 1) * np.arange(n) / n) for n in shape]
+    return ry[:, None] * rx[None, :]
+
+
+def far_factor(shape, wavelength, pitch, z) -> np.ndarray:
+    """What multiplies the centred DFT of a ``shape`` field of ``pitch`` [m] to give its far
+    field at distance ``z`` [m] for ``wavelength`` [m]: the output ramp, the quadratic phase on
+    the output grid (pitch λz/(N·pitch)) and the scale pitch²/(iλz)."""
+    h, w = shape
+    yo = grid.coords(h, wavelength * z / (h * pitch))[:, None]
+    xo = grid.coords(w, wavelength * z / (w * pitch))[None, :]
+    k = 2 * np.pi / wavelength
+    phase = math.remainder(k * z, 2 * math.pi) + k * (xo**2 + yo**2) / (2 * z) \
+        - np.pi * ((h - 1) ** 2 / (2 * h) + (w - 1) ** 2 / (2 * w))
+    return centred_ramp(shape) * np.exp(1j * phase) * pitch**2 / (1j * wavelength * z)
+
+
 def fraunhofer(field, *, wavelength, pitch, distance):
     """The far field at ``distance`` > 0 and the pitch of its grid.
 
@@ -87,20 +107,9 @@ def fraunhofer(field, *, wavelength, pitch, distance):
     h, w = dev.shape
     out_pitch = (wavelength * z / (h * pitch), wavelength * z / (w * pitch))
 
-    # centred DFT: exp(-i2π(j-c)(n-c)/N) = ramp(n)·ramp(j)·exp(-i2πc²/N), c = (N-1)/2
-    def ramp():
-        ry, rx = [np.exp(1j * np.pi * (n - 1) * np.arange(n) / n) for n in (h, w)]
-        return ry[:, None] * rx[None, :]
-
-    def far_phase():
-        yo, xo = grid.coords(h, out_pitch[0])[:, None], grid.coords(w, out_pitch[1])[None, :]
-        k = 2 * np.pi / wavelength
-        phase = math.remainder(k * z, 2 * math.pi) + k * (xo**2 + yo**2) / (2 * z) \
-            - np.pi * ((h - 1) ** 2 / (2 * h) + (w - 1) ** 2 / (2 * w))
-        return ramp() * np.exp(1j * phase) * pitch**2 / (1j * wavelength * z), []
-
-    pre, _ = cached(rt, ("centred-dft", (h, w)), lambda: (ramp(), []))
-    post, _ = cached(rt, ("fraunhofer", (h, w), wavelength, pitch, z), far_phase)
+    pre, _ = cached(rt, ("centred-dft", (h, w)), lambda: (centred_ramp((h, w)), []))
+    post, _ = cached(rt, ("fraunhofer", (h, w), wavelength, pitch, z),
+                     lambda: (far_factor((h, w), wavelength, pitch, z), []))
     out = copy(dev)
     multiply = rt.kernel("spectral", "multiply")
     multiply(rt.queue, (h * w,), None, out.data, pre.data)

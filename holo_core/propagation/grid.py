@@ -31,20 +31,22 @@ def signed_indices(n: int) -> np.ndarray:
 
 def next_fast_len(n: int) -> int:
     """The smallest 2^a 3^b 5^c 7^d >= n (fast sizes for FFTW and VkFFT)."""
-    best = 1 << max(0, math.ceil(math.log2(max(n, 1))))
-    p7 = 1
-    while p7 < best:
-        p5 = p7
-        while p5 < best:
-            p3 = p5
-            while p3 < best:
-                m = p3
-                while m < n:
-                    m *= 2
-                best = min(best, m)
-                p3 *= 3
-            p5 *= 5
-        p7 *= 7
+    return smooth_len(n, (2, 3, 5, 7))
+
+
+def smooth_len(n: int, primes) -> int:
+    """The smallest product of powers of ``primes`` that is >= n (the first prime fills up
+    each product of the others)."""
+    base, others = primes[0], primes[1:]
+    best = base ** max(0, math.ceil(math.log(max(n, 1), base)))
+    products = [1]  # every product of the other primes below best
+    for q in others:
+        products = [m * q**e for m in products for e in range(int(math.log(best, q)) + 2)
+                    if m * q**e < best]
+    for m in products:
+        while m < n:
+            m *= base
+        best = min(best, m)
     return best
 
 
