@@ -3,18 +3,19 @@ on the same scene and in the same run (the issue's test scene at full size, and 
 
 The scene (``tests/plate_scene.py``): a textured cube partly hiding a textured sphere, a 10 cm
 plate halfway between them and the cameras, 640×360 at 50 mm f/2.8, cameras 2 cm apart inside
-the viewing zone (3 cm around the centre camera's pupil). The plate is recorded once (``--looks``
-m² looks whose phase codes cancel the speckle's cross terms between neighbouring emitters; 1:
-a single plate), then viewed from each camera; the reference is the camera hologram's pass of
-that camera: its looks' limit ('incoherent'), and the default pass (16 looks) whose time the
-views are compared with. Prints per camera PSNR inside the objects, silhouette IoU, the
-speckle contrast on the cube's squares and the occlusion (the cube and the sphere's visible part
-against the camera holograms, and how the hidden part changes between the left and right
-views), then the times: the
-recording, a view, a camera-hologram pass, and the number of views from which the plate costs
-less than the camera holograms (the crossover).
+the viewing zone (3 cm around the centre camera's pupil). The plate is recorded once as
+``--looks`` m² coded looks of one seed (``look_code``: phase codes that cancel the speckle's
+cross terms between neighbouring emitters), each look timed; then each camera views one look
+(look 0), two (the checkerboard pair, looks 0 and 3) and all m² of them. The reference is the
+camera hologram's pass of that camera: its looks' limit ('incoherent'), and the default pass
+(16 looks) whose time the views are compared with. Prints per camera and number of looks the
+PSNR inside the objects, silhouette IoU and the speckle contrast on the cube's squares, the
+occlusion (the cube and the sphere's visible part against the camera holograms, and how the
+hidden part changes between the left and right views), then per number of looks the times:
+the recording, a view, a camera-hologram pass, and the number of views from which the plate
+costs less than the camera holograms (the crossover).
 
-    python bench/plate_views.py [--samples 4096] [--scale 1.0] [--looks 1] [--out DIR]
+    python bench/plate_views.py [--samples 4096] [--scale 1.0] [--looks 2] [--out DIR]
 """
 
 import argparse
@@ -32,7 +33,7 @@ from plate_scene import EYES, PLATE, camera, meshes
 
 from holo_core.camera.render import render_camera
 from holo_core.io.image import write_png
-from holo_core.plate.record import record_plate
+from holo_core.plate.record import look_code, record_plate
 from holo_core.plate.view import render_view
 
 
@@ -77,67 +78,81 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--samples", type=int, default=4096, help="plate samples per side (4096)")
     p.add_argument("--scale", type=float, default=1.0, help="image size, of 640x360 (1)")
-    p.add_argument("--looks", type=int, default=1, help="m: m² coded plates (1)")
+    p.add_argument("--looks", type=int, default=2, help="m: m² coded looks recorded (2)")
     p.add_argument("--margin", type=float, default=0.03, help="zone margin [m] (0.03)")
     p.add_argument("--out", type=Path, default=None, help="a folder for the views' PNGs")
     args = p.parse_args()
     centre = camera("centre", args.scale)
-    m = args.looks
+    n = args.looks ** 2
     # warm: programs built, FFT plans made, on a small plate and view
     small = record_plate(meshes(), plate=PLATE, camera=camera("centre", 0.1), resolution=128,
                          zone_margin=args.margin)
-    render_view(small, camera("centre", 0.1), supersample=2)
+    render_view(small, camera("centre", 0.1))
     render_camera(meshes(), camera("centre", 0.1), via="incoherent")
     render_camera(meshes(), camera("centre", 0.1), samples=1)
-    plates, record_s = timed(lambda: [record_plate(
-        meshes(), plate=PLATE, camera=centre, zone_margin=args.margin, resolution=args.samples,
-        code=(k, m) if m > 1 else None) for k in range(m * m)])
+    plates, record_s = [], []
+    for k in range(n):
+        h, t = timed(record_plate, meshes(), plate=PLATE, camera=centre,
+                     zone_margin=args.margin, resolution=args.samples, code=look_code(k, n))
+        plates.append(h)
+        record_s.append(t)
     h = plates[0]
     print(f"plate: {h.shape[1]}x{h.shape[0]} complex, λ = {h.wavelengths[0]:.4g} m, band "
-          f"{h.band:.3g}, {len(plates)} look(s); recorded in {record_s:.1f} s", flush=True)
-    rows, offsets = [], {}
+          f"{h.band:.3g}, {n} coded look(s) recorded in {sum(record_s):.1f} s "
+          f"({np.mean(record_s):.1f} s each)", flush=True)
+    sets = {1: [0]} | ({2: [0, 3]} if n >= 4 else {}) | {n: list(range(n))}
+    rows, offsets, costs = [], {}, {}
     for eye in EYES:
         cam = camera(eye, args.scale)
-        view, view_s = timed(render_view, plates, cam, supersample=2)
         exact, exact_s = timed(render_camera, meshes(), cam, via="incoherent")
         looks, looks_s = timed(render_camera, meshes(), cam, samples=16)
-        inside = (exact.alpha >= 1) & (view.alpha >= 1)
-        contrast, n_flat = flat_contrast(view, exact)
-        (cube_v, sphere_v), (cube_e, sphere_e) = regions(view), regions(exact)
-        offsets[eye] = int(sphere_v.sum()), int(sphere_e.sum()), iou(cube_v, cube_e), \
-            iou(sphere_v, sphere_e)
-        rows.append((eye, psnr(view, exact, inside), iou(view.alpha > 0.5, exact.alpha > 0.5),
-                     contrast, psnr(looks, exact, (exact.alpha >= 1) & (looks.alpha >= 1)),
-                     view_s, exact_s, looks_s))
-        print(f"{eye}: PSNR {rows[-1][1]:.2f} dB, IoU {rows[-1][2]:.4f}, speckle {contrast:.3f} "
-              f"({n_flat} px); view {view_s:.1f} s, camera hologram {looks_s:.1f} s (16 looks), "
-              f"{exact_s:.1f} s (incoherent)", flush=True)
+        costs.setdefault("16 looks", []).append(looks_s)
+        costs.setdefault("incoherent", []).append(exact_s)
+        lp = psnr(looks, exact, (exact.alpha >= 1) & (looks.alpha >= 1))
+        for count, chosen in sets.items():
+            view, view_s = timed(render_view, [plates[i] for i in chosen], cam)
+            costs.setdefault(count, []).append(view_s)
+            inside = (exact.alpha >= 1) & (view.alpha >= 1)
+            contrast, n_flat = flat_contrast(view, exact)
+            (cube_v, sphere_v), (cube_e, sphere_e) = regions(view), regions(exact)
+            offsets[eye, count] = int(sphere_v.sum()), int(sphere_e.sum()), \
+                iou(cube_v, cube_e), iou(sphere_v, sphere_e)
+            rows.append((eye, count, psnr(view, exact, inside),
+                         iou(view.alpha > 0.5, exact.alpha > 0.5), contrast, lp, view_s,
+                         exact_s, looks_s))
+            print(f"{eye}, {count} look(s): PSNR {rows[-1][2]:.2f} dB, IoU {rows[-1][3]:.4f}, "
+                  f"speckle {contrast:.3f} ({n_flat} px); view {view_s:.1f} s, camera hologram "
+                  f"{looks_s:.1f} s (16 looks), {exact_s:.1f} s (incoherent)", flush=True)
+            if args.out is not None:
+                args.out.mkdir(parents=True, exist_ok=True)
+                write_png(args.out / f"{eye}_plate_{count}.png",
+                          np.clip(view.rgb * view.alpha[..., None], 0, 1) ** (1 / 2.2))
         if args.out is not None:
-            args.out.mkdir(parents=True, exist_ok=True)
-            for name, v in (("plate", view), ("camera", exact)):
-                write_png(args.out / f"{eye}_{name}.png",
-                          np.clip(v.rgb * v.alpha[..., None], 0, 1) ** (1 / 2.2))
-    print("\ncamera  PSNR [dB]  IoU     speckle  (16 looks vs limit [dB])  view [s]  "
+            write_png(args.out / f"{eye}_camera.png",
+                      np.clip(exact.rgb * exact.alpha[..., None], 0, 1) ** (1 / 2.2))
+    print("\ncamera  looks  PSNR [dB]  IoU     speckle  (16 looks vs limit [dB])  view [s]  "
           "incoherent [s]  16 looks [s]")
-    for eye, ps, j, c, lp, vs, es, ls in rows:
-        print(f"{eye:7s} {ps:9.2f}  {j:.4f}  {c:7.3f}  {lp:24.2f}  {vs:8.1f}  {es:14.1f}  "
-              f"{ls:12.1f}")
-    change = [offsets["right"][i] - offsets["left"][i] for i in (0, 1)]
-    print(f"occlusion: the sphere's visible pixels, right view minus left: plate {change[0]}, "
-          f"camera holograms {change[1]}; IoU of the cube and of the visible sphere against "
-          f"the camera holograms: " + ", ".join(f"{eye} {o[2]:.3f} / {o[3]:.3f}"
-                                                for eye, o in offsets.items()))
-    view_s = np.mean([r[5] for r in rows])
-    for name, cost in (("16 looks", np.mean([r[7] for r in rows])),
-                       ("incoherent", np.mean([r[6] for r in rows]))):
-        if cost > view_s:
-            n = math.ceil(record_s / (cost - view_s))
-            print(f"crossover against the camera hologram ({name}, {cost:.1f} s a view): the "
-                  f"plate ({record_s:.0f} s once + {view_s:.1f} s a view) costs less from {n} "
-                  f"views on")
-        else:
-            print(f"against the camera hologram ({name}, {cost:.1f} s a view) a plate view "
-                  f"({view_s:.1f} s) costs more: no crossover")
+    for eye, count, ps, j, c, lp, vs, es, ls in rows:
+        print(f"{eye:7s} {count:5d} {ps:9.2f}  {j:.4f}  {c:7.3f}  {lp:24.2f}  {vs:8.1f}  "
+              f"{es:14.1f}  {ls:12.1f}")
+    for count in sets:
+        change = [offsets["right", count][i] - offsets["left", count][i] for i in (0, 1)]
+        print(f"occlusion, {count} look(s): the sphere's visible pixels, right view minus left: "
+              f"plate {change[0]}, camera holograms {change[1]}; IoU of the cube and of the "
+              f"visible sphere against the camera holograms: " + ", ".join(
+                  f"{eye} {offsets[eye, count][2]:.3f} / {offsets[eye, count][3]:.3f}"
+                  for eye in EYES))
+    for count in sets:
+        view_s, rec_s = float(np.mean(costs[count])), float(np.mean(record_s)) * count
+        for name in ("16 looks", "incoherent"):
+            cost = float(np.mean(costs[name]))
+            if cost > view_s:
+                print(f"{count} look(s) against the camera hologram ({name}, {cost:.1f} s a "
+                      f"view): the plate ({rec_s:.0f} s once + {view_s:.1f} s a view) costs "
+                      f"less from {math.ceil(rec_s / (cost - view_s))} views on")
+            else:
+                print(f"{count} look(s) against the camera hologram ({name}, {cost:.1f} s a "
+                      f"view): a plate view ({view_s:.1f} s) costs more: no crossover")
 
 
 if __name__ == "__main__":

@@ -155,7 +155,7 @@ def plan(args) -> int:
                                            else ")"))
     if v.outside_zone > 0:
         print(f"warning     the camera's pupil reaches {v.outside_zone:.3g} m beyond the zone")
-    print(f"per view    about {v.seconds:.1f} s")
+    print(f"per view    about {v.seconds:.1f} s a look (a view of n looks: n times that)")
     return 0
 
 
@@ -185,7 +185,7 @@ def render(args) -> int:
     cam = Camera(matrix_world=look_at(eye, target, up=plate[:3, 1]), lens=args.lens,
                  sensor_width=args.sensor_width, resolution=tuple(args.resolution),
                  fstop=args.fstop, focus_distance=focus if args.fstop else None)
-    view = render_view(h, cam, supersample=args.supersample, composition=args.composition,
+    view = render_view(h, cam, supersample=args.supersample or "auto", composition=args.composition,
                        source=args.source, progress=_progress_bar())
     print()
     for path in write_view(view, out):
@@ -338,8 +338,8 @@ def main(argv=None) -> int:
     p.add_argument("--fstop", type=POSITIVE, default=None, help="f-number (default: pinhole)")
     p.add_argument("--focus-distance", type=POSITIVE, default=None,
                    help="[m] (default with --fstop: the objects' centre)")
-    p.add_argument("--supersample", type=SUPERSAMPLE, default=1,
-                   help="speckle low-pass factor (1)")
+    p.add_argument("--supersample", type=SUPERSAMPLE, default=None,
+                   help="speckle low-pass factor (default: the intensity's Nyquist rate)")
     p.add_argument("--composition", choices=["mean", "max"], default="mean")
     p.add_argument("--source", choices=["hologram", "object_wave"], default="hologram")
     args = parser.parse_args(argv)

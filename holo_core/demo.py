@@ -114,7 +114,7 @@ def holographic_scene(out: Path, resolution=1024, iterations=4) -> list[Path]:
             cam = Camera(matrix_world=look_at(eye, (0, 0, -0.09), up=(0, 1, 0)), lens=50,
                          sensor_width=24, resolution=(256, 256), fstop=0.5,
                          focus_distance=focus)
-            view = render_view(holos, cam, supersample=2)
+            view = render_view(holos, cam)
             written += write_view(view, out / f"scene_{side}_{name}_focus.exr")
             z = np.where(view.alpha > 0, view.depth, np.nan)
             lo, hi = np.nanmin(z), np.nanmax(z)

@@ -74,8 +74,8 @@ def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
     finished, each one atomically; ``on_partial(view, n)`` gets a camera hologram's running
     result after 1, 2, 4, 8 … samples (the user may stop there and keep it)."""
     from .io.hologram import read_hologram, write_hologram
-    from .plate.record import record_hologram
-    from .plate.view import render_view
+    from .plate.record import look_code, record_hologram
+    from .plate.view import nyquist_supersample, render_view
     s, current, n = job["settings"], job["current"], len(job["holograms"])
     _check_outputs(job)
     lit_seconds = None
@@ -103,16 +103,21 @@ def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
         # a plate with its viewing zone is a scene asset: the camera sizes nothing of it (its
         # samples are Max Hologram Size), so moving or refocusing it never records again
         asset = job["plate"].zone is not None
+        # the iterations are coded looks of one seed where n allows (look_code), else seeds
+        codes = [look_code(i, n) for i in range(n)]
         holos = [record_hologram(
             job["points"], triangles=job["triangles"], plate=job["plate"],
             camera=None if asset else job["camera"],
             resolution=s["max_resolution"] if asset else None,
-            max_resolution=s["max_resolution"], wavelength=s["wavelength"], seed=s["seed"] + i,
+            max_resolution=s["max_resolution"], wavelength=s["wavelength"],
+            seed=s["seed"] + (0 if code else i), code=code,
             progress=jobs.scaled(progress, record_share * i / n, record_share * (i + 1) / n))
-            for i in range(n)]
+            for i, code in enumerate(codes)]
     view = None
     if job["render"]:
-        view = render_view(holos, job["camera"], supersample=s["supersample"],
+        # the panel's Supersample, or the intensity's Nyquist rate where that is finer
+        fine = max(s["supersample"], nyquist_supersample(holos[0], job["camera"]))
+        view = render_view(holos, job["camera"], supersample=fine,
                            composition=s["composition"], opacity_threshold=s["opacity_threshold"],
                            progress=jobs.scaled(progress, record_share, 1.0))
         view.rgb[...] *= s["exposure"]

@@ -127,8 +127,10 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                               description="Recording wavelength (0: chosen for the image's "
                                           "resolution)")
     iterations: IntProperty(name="Iterations", default=4, min=1, max=64,
-                            description="Recordings with independent random phases, averaged "
-                                        "(speckle, Sect. VII-E) and used for depth")
+                            description="Looks of the plate, averaged against speckle "
+                                        "(Sect. VII-E): 2 or a square number are coded looks "
+                                        "whose neighbouring emitters' cross terms cancel; "
+                                        "others use independent random phases")
     supersample: IntProperty(name="Supersample", default=2, min=1, max=4,
                              description="Render at this multiple of the resolution, then "
                                          "low-pass and downsample")

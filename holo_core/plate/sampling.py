@@ -137,13 +137,20 @@ def choose(plate_size, points, *, camera=None, resolution=None,
 # --- plates as scene assets: sampling planned from the viewing zone and the optics -------------
 
 SPOT_SPACING = 1.0   # emitters lie this many resolved spots apart, seen from the zone
-SLAB_SPOT = 2.0      # a slab's depth seen at the zone's widest angle from its centre spans
-                     # this many spots: an occluding edge moves by at most half of it
+SLAB_SPOT = 1.5      # a slab's depth seen at the zone's widest angle from its centre spans
+                     # this many spots: an occluding edge, and an emitter moved onto its
+                     # slab's plane, move by at most half of it (2: views 2 cm off-centre
+                     # 0.6-0.8 dB lower on the plate scene; 1: the recording 1.7x as long)
 SHARP_SPOT = 0.5     # a view is sharp when λ/D spans at most this many pixels (a fine pixel,
                      # what the camera hologram resolves)
 CHANNELS = 4         # R, G, B at λ1 and the depth partner λ2
-FFT_SECONDS = 1.6e-10  # per complex sample and log2(samples) of an FFT (2-core CPU, FFTW)
-VIEW_SECONDS = 0.3   # a view's fixed cost [s] (programs, pixel tables, the pass's assembly)
+FFT_SECONDS = 1.0e-9  # per complex sample and log2(samples) of an FFT (2-core Zen 3, FFTW:
+                      # 0.7-1.4e-9 from 1024² to 4096²)
+MASK_SECONDS = 1.8e-7  # per slab-grid sample and slab: silhouettes and emitters (the plate
+                       # scene: 114 s measured, 68 s of it transforms)
+PIXEL_SECONDS = 3e-7  # per fine pixel and look of a view: the reads, the images' transfer and
+                      # the pass's assembly
+VIEW_SECONDS = 0.3   # a view's fixed cost [s] (programs, pixel tables)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -213,10 +220,15 @@ class PlatePlan:
         return stored + 2 * 8 * 4 * n + 8 * 4 * channels * math.prod(self.slab_grid())
 
     def record_seconds(self, channels=CHANNELS) -> float:
-        """Estimated recording time [s] on a 2-core CPU: per slab and channel a propagation
-        (two FFTs of the 2× padded slab grid), per channel one onto the plate."""
-        return channels * (self.slabs() * _propagation_seconds(self.slab_grid())
-                           + _propagation_seconds(self.shape))
+        """Estimated recording time [s] on a 2-core CPU: per slab and channel a step (two
+        FFTs of the slab grid, padded by the step's spread only), per slab its silhouettes
+        and emitters, per channel one propagation onto the plate (two FFTs of the 2× padded
+        grid that holds the slab grid and the plate)."""
+        slab = self.slab_grid()
+        union = tuple(max(a, b) for a, b in zip(slab, self.shape))
+        return channels * (self.slabs() * 2 * _fft_seconds(slab)
+                           + _propagation_seconds(union)) \
+            + self.slabs() * MASK_SECONDS * math.prod(slab)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -343,14 +355,34 @@ def plan_view(p: PlatePlan, *, position, pixel_angle, pupil=None, resolution=(64
     per_band = 2.0 if p.encoding == "complex" else 8.0
     sharp = _sharp_samples(side, p.needed_band, per_band, (position, pixel, pupil), p.bounds,
                            far)
-    grid_n = math.ceil(d / (p.wavelength / (2 * min(1.0, p.band + 0.2))))
-    seconds = VIEW_SECONDS + CHANNELS * (_propagation_seconds((grid_n * 2, grid_n * 2))
-                                         + _fft_seconds((2 * grid_n, 2 * grid_n)))
-    seconds += 4e-8 * w * h * 4 * CHANNELS  # the pixels' reads
+    seconds = _view_seconds(p, position, d, pixel, w * h)
     return ViewPlan(spot_px=spot, sharp=spot <= SHARP_SPOT, sharp_samples=sharp,
                     blur_px=0.0 if spot <= SHARP_SPOT else spot,
                     outside_zone=p.zone.distance_outside(position, (d or 0) / 2),
                     seconds=seconds)
+
+
+def _view_seconds(p: PlatePlan, position, pupil, pixel, pixels) -> float:
+    """Estimated time [s] of one look of a view on a 2-core CPU (:mod:`.to_pupil`), per
+    channel: the window (the cone from the pupil's rim to the objects' box on the plate, and
+    its margins) carried to the pupil's neighbourhood (two FFTs of the window and that
+    neighbourhood, with the band limit's roll-off), the rotation onto the pupil's grid (two
+    FFTs), the image (one FFT of the 2× padded pupil); per fine pixel (the intensity's Nyquist
+    rate) the reads and the assembly."""
+    corners = _corners(p.bounds)
+    rim = np.asarray(position) + np.array([[sx, sy, 0] for sx in (-1, 1) for sy in (-1, 1)]
+                                          ) * pupil / 2
+    t = rim[:, None, 2] / (rim[:, None, 2] - np.minimum(corners[None, :, 2], -1e-12))
+    hits = rim[:, None, :2] + t[..., None] * (corners[None, :, :2] - rim[:, None, :2])
+    extent = np.ptp(hits.reshape(-1, 2), axis=0) * 1.2 / p.pitch  # (x, y) with margins
+    window = np.minimum(extent[::-1], p.shape) + 1
+    grid_n = math.ceil(pupil / (p.wavelength / (2 * min(1.0, p.band + 0.1)))) + 8
+    near = pupil / p.pitch + 8
+    carried = tuple(int((n + near) / 0.8) for n in window)
+    per_channel = (2 * _fft_seconds(carried) + _fft_seconds((2 * int(near),) * 2)
+                   + _fft_seconds((int(1.25 * grid_n),) * 2) + _fft_seconds((2 * grid_n,) * 2))
+    fine = min(4, max(1, math.ceil(2 * pupil * pixel / p.wavelength / 1.05)))
+    return VIEW_SECONDS + CHANNELS * per_channel + PIXEL_SECONDS * pixels * fine * fine
 
 
 def _sharp_samples(side, band, per_band, camera, box, distance=None) -> int:

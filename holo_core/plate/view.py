@@ -92,7 +92,7 @@ def plate_wave(hologram: Hologram, channel: int, *, source="hologram"):
 @validate.scale_free()
 @np.errstate(over="ignore", invalid="ignore")  # an overflow is refused at the end (_finish)
 def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apodize=True,
-                chromatic=True, composition="mean", supersample=1, exposure=None,
+                chromatic=True, composition="mean", supersample="auto", exposure=None,
                 opacity_threshold=0.5, source="hologram", depth_estimate="consensus",
                 progress: jobs.Progress = None) -> RenderResult:
     """Render a view of one hologram, or several of the same scene recorded with independent
@@ -113,9 +113,10 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
         (Sect. VII-B); False makes it perfect for every wavelength.
     composition : {'mean', 'max'}
         How the iterations' intensities combine (Sect. VII-E).
-    supersample : int
+    supersample : int or 'auto'
         Render at this many times the resolution, then average blocks (speckle reduction by
-        spatial low-pass and downsampling, Sect. VII-E).
+        spatial low-pass and downsampling, Sect. VII-E). 'auto' (:func:`nyquist_supersample`):
+        the fine pixels sample the image's intensity at its Nyquist rate.
     exposure : float, optional
         Radiance to pixel value [m²: 1/(emitters per m²)]; default 1/point density (a surface shows its emitters'
         colour), or when that is unknown, the 99.5th percentile maps to 1.
@@ -146,6 +147,8 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     validate.choice("composition", composition, ("mean", "max"))
     validate.choice("depth_estimate", depth_estimate, ("consensus", "brightest"))
     validate.choice("source", source, ("hologram", "object_wave"))
+    if isinstance(supersample, str) and supersample == "auto":
+        supersample = nyquist_supersample(first, camera)
     supersample = validate.integer("supersample", supersample, 1, MAX_SUPERSAMPLE)
     _check_settings(holos, camera, supersample, exposure, opacity_threshold)
     fine = _supersampled(camera, supersample)
@@ -204,6 +207,24 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     return _compose(looks, colours, z_ch, first, camera, fine, pupil, supersample=supersample,
                     composition=composition, depth_estimate=depth_estimate, centre=centre,
                     exposure=exposure, threshold=opacity_threshold, n=n)
+
+
+def nyquist_supersample(h: Hologram, camera: Camera) -> int:
+    """The supersampling at which a view of ``h`` through ``camera``'s lens samples its
+    intensity at the Nyquist rate. |A|² carries twice the amplitude's band (directions up to
+    D/λ apart), so a fine pixel spans at most λ/(2D); coarser, the speckle's grains alias into
+    the pixels instead of averaging in them (measured on the plate scene: 2 → 4 raises the
+    PSNR by 1.6 dB at one look, 0.8 dB at four). A pinhole's pupil is sized to that already
+    (λ/D is two fine pixels): 1."""
+    if camera.fstop is None:
+        return 1
+    lam = min(h.wavelengths)
+    need = 2 * camera.aperture_diameter * camera.pixel_angle() / lam
+    return int(min(AUTO_SUPERSAMPLE, max(1, math.ceil(need / NYQUIST_SLACK))))
+
+
+NYQUIST_SLACK = 1.05  # a fine pixel may exceed λ/(2D) by this factor (λ/D = 0.49 px: 4, not 5)
+AUTO_SUPERSAMPLE = 4  # at most: finer lenses put 16 and more independent grains in a pixel
 
 
 def _compose(looks, colours, z_ch, first: Hologram, camera, fine, pupil, *, supersample,

@@ -28,7 +28,7 @@ BAND_EDGE = 0.2  # fraction of the band-limited ray range given to the cosine ro
 
 
 def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
-                     band_limit=True, out_pitch=None, out_shape=None):
+                     band_limit=True, out_pitch=None, out_shape=None, read=None):
     """The field on the parallel plane at ``distance``, its centre shifted by ``offset``.
 
     Parameters
@@ -54,6 +54,9 @@ def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), p
     out_shape : (int, int), optional
         Output (rows, cols), centred at ``offset``; default the input's window at
         ``out_pitch``.
+    read : (int, int), optional
+        Only (rows, cols) samples around the output's centre will be read: a padded grid that
+        spans the input and those (padding < 2) wraps nothing onto them, and is not reported.
 
     Returns
     -------
@@ -71,11 +74,13 @@ def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), p
     def make():  # on the device (transfer.py); the float64 reference is transfer_function
         tf = asm_transfer(rt, shape, wavelength=wavelength, pitch=pitch, distance=z,
                           offset=(x0, y0), band_limit=band_limit, edge=BAND_EDGE)
-        notes = sampling_notes(dev.shape, shape, wavelength, pitch, z, (x0, y0), padding,
-                               band_limit, nonzero_count(rt, tf) > 0)
+        spans = read is not None and all(p >= n + r for p, n, r in zip(shape, dev.shape, read))
+        notes = sampling_notes(dev.shape, shape, wavelength, pitch, z, (x0, y0),
+                               2.0 if spans else padding, band_limit, nonzero_count(rt, tf) > 0)
         return tf, notes
 
-    key = ("asm", dev.shape, shape, wavelength, pitch, z, x0, y0, bool(band_limit))
+    key = ("asm", dev.shape, shape, wavelength, pitch, z, x0, y0, bool(band_limit),
+           None if read is None else tuple(read))
     tf, notes = cached(rt, key, make)
     for note in notes:
         validate.warn_sampling(note)

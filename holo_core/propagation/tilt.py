@@ -29,7 +29,8 @@ ES_BETA = 2.30          # the kernel's shape per tap for 2x oversampling (Barnet
 ES_TABLE = 4096         # kernel samples, linearly interpolated (error ~1e-6)
 
 
-def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_pitch=None):
+def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_pitch=None,
+         out_padding=None):
     """The field on the plane through the source centre with orientation ``rotation``.
 
     Parameters
@@ -49,6 +50,10 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
         Target grid (rows, cols); default the source shape.
     out_pitch : float, optional
         Target sample spacing [m]; default ``pitch``.
+    out_padding : float, optional
+        Zero-padding factor of the target grid alone, default ``padding``: the rotated field
+        wraps around the padded target, so it must hold the target and the field's reach
+        beyond it (the interpolation's accuracy rests on the source's padding only).
 
     Returns
     -------
@@ -68,7 +73,8 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
                          f"(λ = {wavelength:.3g} m) reaches planes tilted by less than "
                          f"{math.degrees(reach):.1f}°")
     hs, ws = grid.padded_shape(src.shape, padding)
-    ht, wt = grid.padded_shape(out_shape, padding)
+    ht, wt = grid.padded_shape(out_shape, padding if out_padding is None else
+                               grid.padding_factor(out_padding))
     spectrum = rt.scratch("tilt-source", (hs, ws))
     (r0, c0), (t0, u0) = _corner(src.shape, (hs, ws)), _corner(out_shape, (ht, wt))
     embed(rt, spectrum, src, r0, c0)
