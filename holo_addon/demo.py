@@ -161,13 +161,16 @@ def main(argv=None):
     scene.holo.iterations = args.iterations
     scene.holo.max_resolution = args.max_resolution
     scene.render.filepath = str(out / "demo")  # the holographic layers go beside it
+    plate = scene.objects["Hologram Plate"]
+    if args.mode == "PLATE":  # say before recording what this plate's views will resolve
+        bpy.context.view_layer.objects.active = plate
+        bpy.ops.holo.plan_plate()
     for op in (bpy.ops.holo.render_pass, bpy.ops.holo.setup_compositing):
         if op() != {"FINISHED"}:
             sys.exit(f"demo: {op.idname_py()} failed")
     png, exr = render_still(bpy, scene, out)
     scene.render.filepath = str(out / "demo")
     bpy.ops.wm.save_as_mainfile(filepath=str(out / "demo.blend"))
-    plate = scene.objects["Hologram Plate"]
     hologram = f"\n  hologram: {plate.holo.hologram}" if args.mode == "PLATE" else ""
     print(f"demo rendered in {time.perf_counter() - t0:.0f} s:\n  {png}\n  {exr}{hologram}\n"
           f"  holographic pass: {pipeline.pass_file(out / 'holo', scene.frame_current)}\n"

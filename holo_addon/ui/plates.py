@@ -95,9 +95,10 @@ def plan_command(context) -> list[str]:
 
 
 def _number(value) -> str:
-    """A number as the command line reads it, exactly (NumPy 2's repr of its scalars is
-    ``np.float64(...)``)."""
-    return repr(float(value))
+    """A number as the command line reads it, exactly, in positional notation: argparse takes
+    '-1.9e-08' for an option, never for a negative number (and NumPy 2's repr of its scalars
+    is ``np.float64(...)``)."""
+    return np.format_float_positional(float(value), unique=True, trim="-")
 
 
 class HOLO_OT_plan_plate(bpy.types.Operator):

@@ -97,6 +97,22 @@ def test_planner_in_the_panel(empty_scene):
         assert word in text, word
 
 
+def test_the_planners_numbers_reach_its_command_line_exactly():
+    """A camera on the plate's axis sits at coordinates like -1.9e-08 m, which argparse takes
+    for an option in exponent notation: the panel passes every number positionally, and each
+    one parses back to the same float (the demo's plate mode failed here)."""
+    import argparse
+
+    from holo_addon.ui import plates
+    values = [-1.92585e-08, -3.0, 0.1, 1e-30, 2.5e12, -7.16867e-08]
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--camera", type=float, nargs=3)
+    parser.add_argument("--look-at", type=float, nargs=3)
+    args = parser.parse_args(["--camera", *map(plates._number, values[:3]),
+                              "--look-at", *map(plates._number, values[3:])])
+    assert args.camera + args.look_at == values
+
+
 def test_import_a_hologram_and_keep_its_link(empty_scene, tmp_path, rng):
     """File ▸ Import ▸ Hologram: a plate hologram file becomes a plate object of its size where
     its metadata puts it, linked to its file; the link survives saving and reopening the
