@@ -315,11 +315,11 @@ def record_slabs(meshes, *, plan, wavelengths, seed=0, code=None,
             if masks[s] is not None and started:
                 for f in range(len(chans)):
                     fields[f].ravel()[masks[s]] = 0
-            if here.any():
+            if here.any():  # summed per node over the slab's emitters only, not the grid
+                nodes, at = np.unique(node[here], return_inverse=True)
                 for f, a in enumerate(amps):
-                    flat = fields[f].ravel()
-                    flat += (np.bincount(node[here], a[here].real, flat.size)
-                             + 1j * np.bincount(node[here], a[here].imag, flat.size))
+                    fields[f].ravel()[nodes] += (np.bincount(at, a[here].real, len(nodes))
+                                                 + 1j * np.bincount(at, a[here].imag, len(nodes)))
                 started = True
             jobs.report(progress, step := step + 1, total)
         for f, (c, _) in enumerate(chans):
