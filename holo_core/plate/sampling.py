@@ -146,8 +146,8 @@ SHARP_SPOT = 0.5     # a view is sharp when λ/D spans at most this many pixels 
 CHANNELS = 4         # R, G, B at λ1 and the depth partner λ2
 FFT_SECONDS = 1.0e-9  # per complex sample and log2(samples) of an FFT (2-core Zen 3, FFTW:
                       # 0.7-1.4e-9 from 1024² to 4096²)
-MASK_SECONDS = 1.8e-7  # per slab-grid sample and slab: silhouettes and emitters (the plate
-                       # scene: 114 s measured, 68 s of it transforms)
+MASK_SECONDS = 1.1e-7  # per slab-grid sample and slab: silhouettes and emitters (the plate
+                       # scene: 97 s measured, 68 s of it transforms)
 PIXEL_SECONDS = 3e-7  # per fine pixel and look of a view: the reads, the images' transfer and
                       # the pass's assembly
 VIEW_SECONDS = 0.3   # a view's fixed cost [s] (programs, pixel tables)
