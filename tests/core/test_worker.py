@@ -13,6 +13,7 @@ import pytest
 from holo_core import jobs, worker
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.mesh import Mesh
+from holo_core.validate import InputError
 from holo_core.scene.plate import Plate
 
 
@@ -185,3 +186,22 @@ def test_an_unwritable_output_folder_is_refused_before_the_recording(tmp_path, m
     with pytest.raises(InputError, match="/sys"):
         worker.run_job(j)
     assert recorded == [], "the recording ran before the output was checked"
+
+
+def test_a_plates_iterations_are_coded_looks_of_one_seed(tmp_path):
+    """Two iterations of a plate are the checkerboard pair of one seed (look_code): the first
+    is the seed's plain recording, the second its coded partner, bit for bit; bare points
+    refuse a code (their looks take independent seeds)."""
+    from holo_core.io.hologram import read_hologram
+    from holo_core.plate.record import record_hologram
+    j = job(tmp_path, iterations=2)
+    worker.run_job({**j, "render": False})
+    a, b = (read_hologram(p) for p in j["holograms"])
+    assert not np.array_equal(a.object_wave, b.object_wave), "the looks are one recording"
+    same = dict(plate=j["plate"], camera=j["camera"], max_resolution=256, seed=0)
+    for code, look in ((None, a), ((3, 2), b)):
+        h = record_hologram(j["points"], code=code, **same)
+        assert np.array_equal(h.object_wave, look.object_wave), code
+    with pytest.raises(InputError, match="code applies to plates of meshes"):
+        record_hologram((np.array([[0.0, 0.0, -1.0]]), np.ones((1, 3))), plate=j["plate"],
+                        resolution=64, code=(1, 2))
