@@ -90,17 +90,19 @@ def main():
     render_view(small, camera("centre", 0.1))
     render_camera(meshes(), camera("centre", 0.1), via="incoherent")
     render_camera(meshes(), camera("centre", 0.1), samples=1)
-    plates, record_s = [], []
-    for k in range(n):
+    plates, record_s, codes = [], [], [look_code(k, n) for k in range(n)]
+    for code in codes:
         h, t = timed(record_plate, meshes(), plate=PLATE, camera=centre,
-                     zone_margin=args.margin, resolution=args.samples, code=look_code(k, n))
+                     zone_margin=args.margin, resolution=args.samples, code=code)
         plates.append(h)
         record_s.append(t)
     h = plates[0]
     print(f"plate: {h.shape[1]}x{h.shape[0]} complex, λ = {h.wavelengths[0]:.4g} m, band "
           f"{h.band:.3g}, {n} coded look(s) recorded in {sum(record_s):.1f} s "
           f"({np.mean(record_s):.1f} s each)", flush=True)
-    sets = {1: [0]} | ({2: [0, 3]} if n >= 4 else {}) | {n: list(range(n))}
+    pair = [look_code(j, 2) for j in (0, 1)]  # the checkerboard pair, where it was recorded
+    sets = {1: [0]} | ({2: [codes.index(c) for c in pair]} if set(pair) <= set(codes) else {}) \
+        | {n: list(range(n))}
     rows, offsets, costs = [], {}, {}
     for eye in EYES:
         cam = camera(eye, args.scale)

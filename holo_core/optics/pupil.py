@@ -72,3 +72,17 @@ def defocus_limited_diameter(bin_angle: float, near: float, far: float) -> tuple
     focus = 2 / (1 / near + 1 / far)
     defocus = max(1 / near - 1 / focus, 1 / focus - 1 / far, 1e-12)
     return bin_angle / defocus, focus
+
+
+def intensity_supersample(diameter: float, pixel_angle: float, wavelength: float) -> int:
+    """Fine pixels per pixel (per axis) at which an image through a pupil of ``diameter`` [m]
+    at ``wavelength`` [m], pixels of ``pixel_angle`` [rad], samples its intensity at the
+    Nyquist rate: |A|² carries twice the amplitude's band (directions up to D/λ apart), so a
+    fine pixel spans at most λ/(2D); coarser, the speckle's grains alias into the pixels
+    instead of averaging in them. At most ``AUTO_SUPERSAMPLE``."""
+    need = 2 * diameter * pixel_angle / wavelength
+    return int(min(AUTO_SUPERSAMPLE, max(1, math.ceil(need / NYQUIST_SLACK))))
+
+
+NYQUIST_SLACK = 1.05  # a fine pixel may exceed λ/(2D) by this factor (λ/D = 0.49 px: 4, not 5)
+AUTO_SUPERSAMPLE = 4  # at most: finer lenses put 16 and more independent grains in a pixel

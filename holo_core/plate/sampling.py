@@ -26,9 +26,9 @@ import numpy as np
 
 from .. import validate
 from ..optics.depth import partner_wavelength
-from ..optics.pupil import pinhole_wavelength
+from ..optics.pupil import intensity_supersample, pinhole_wavelength
 from ..scene.hologram import ENCODINGS
-from ..scene.plate import ViewingZone
+from ..scene.plate import ViewingZone, box_corners
 from ..validate import InputError
 from .point_sources import CONE_RIM
 
@@ -257,10 +257,7 @@ def band_towards_zone(bounds, zone: ViewingZone) -> float:
     ``bounds`` (2, 3) [m] to a point of ``zone`` (both in the plate's frame). The widest lies
     between corners: the lateral distance is largest, the depth smallest, at corners of both
     boxes."""
-    lo, hi = np.asarray(bounds, np.float64)
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                        for z in (lo[2], hi[2])])
-    v = zone.corners()[:, None, :] - corners[None, :, :]
+    v = zone.corners()[:, None, :] - box_corners(bounds)[None, :, :]
     return float(np.max(np.hypot(v[..., 0], v[..., 1]) / np.linalg.norm(v, axis=-1)))
 
 
@@ -363,25 +360,28 @@ def plan_view(p: PlatePlan, *, position, pixel_angle, pupil=None, resolution=(64
 
 
 def _view_seconds(p: PlatePlan, position, pupil, pixel, pixels) -> float:
-    """Estimated time [s] of one look of a view on a 2-core CPU (:mod:`.to_pupil`), per
-    channel: the window (the cone from the pupil's rim to the objects' box on the plate, and
-    its margins) carried to the pupil's neighbourhood (two FFTs of the window and that
-    neighbourhood, with the band limit's roll-off), the rotation onto the pupil's grid (two
-    FFTs), the image (one FFT of the 2× padded pupil); per fine pixel (the intensity's Nyquist
-    rate) the reads and the assembly."""
-    corners = _corners(p.bounds)
+    """Estimated time [s] of one look of a view on a 2-core CPU, for a camera at ``position``
+    (3,) [m, the plate's frame] looking along the plate's normal, pupil ``pupil`` [m], pixels
+    of ``pixel`` [rad], ``pixels`` of them (:mod:`.to_pupil`, its own sizes): per channel the
+    window (the cone from the pupil's rim to the objects' box, and its margins) carried to the
+    pupil's neighbourhood (two FFTs), the rotation onto the pupil's grid (two), the image (one,
+    of the 2× padded pupil); per fine pixel (the intensity's Nyquist rate) the reads and the
+    assembly."""
+    from .to_pupil import (PUPIL_PADDING, WINDOW_MARGIN, cone_on_plate, neighbourhood,
+                           output_padding, pupil_grid)
+    axes = np.eye(3)
     rim = np.asarray(position) + np.array([[sx, sy, 0] for sx in (-1, 1) for sy in (-1, 1)]
                                           ) * pupil / 2
-    t = rim[:, None, 2] / (rim[:, None, 2] - np.minimum(corners[None, :, 2], -1e-12))
-    hits = rim[:, None, :2] + t[..., None] * (corners[None, :, :2] - rim[:, None, :2])
-    extent = np.ptp(hits.reshape(-1, 2), axis=0) * 1.2 / p.pitch  # (x, y) with margins
-    window = np.minimum(extent[::-1], p.shape) + 1
-    grid_n = math.ceil(pupil / (p.wavelength / (2 * min(1.0, p.band + 0.1)))) + 8
-    near = pupil / p.pitch + 8
-    carried = tuple(int((n + near) / 0.8) for n in window)
-    per_channel = (2 * _fft_seconds(carried) + _fft_seconds((2 * int(near),) * 2)
-                   + _fft_seconds((int(1.25 * grid_n),) * 2) + _fft_seconds((2 * grid_n,) * 2))
-    fine = min(4, max(1, math.ceil(2 * pupil * pixel / p.wavelength / 1.05)))
+    lo, hi = cone_on_plate(p.bounds, rim)
+    window = [int(min(n, e)) + 1 for n, e in
+              zip(p.shape, (hi - lo)[::-1] * (1 + 2 * WINDOW_MARGIN) / p.pitch)]
+    shortest = min(p.wavelength, p.depth_wavelength)
+    n, pitch = pupil_grid(p, axes, pupil, None, shortest)
+    near = neighbourhood(n, pitch, axes, p.pitch)
+    carried = tuple(int(output_padding(window, near) * m) for m in window)
+    per_channel = (2 * _fft_seconds(carried) + _fft_seconds((2 * near,) * 2)
+                   + _fft_seconds((int(PUPIL_PADDING * n),) * 2) + _fft_seconds((2 * n,) * 2))
+    fine = intensity_supersample(pupil, pixel, shortest)
     return VIEW_SECONDS + CHANNELS * per_channel + PIXEL_SECONDS * pixels * fine * fine
 
 
@@ -397,12 +397,6 @@ def _sharp_samples(side, band, per_band, camera, box, distance=None) -> int:
     else:
         lam = SHARP_SPOT * pupil * pixel
     return math.ceil(side * per_band * band / (MARGIN * lam))
-
-
-def _corners(box) -> np.ndarray:
-    lo, hi = np.asarray(box)
-    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                     for z in (lo[2], hi[2])])
 
 
 def _fft_seconds(shape) -> float:

@@ -318,8 +318,9 @@ def record_slabs(meshes, *, plan, wavelengths, seed=0, code=None,
             if here.any():  # summed per node over the slab's emitters only, not the grid
                 nodes, at = np.unique(node[here], return_inverse=True)
                 for f, a in enumerate(amps):
-                    fields[f].ravel()[nodes] += (np.bincount(at, a[here].real, len(nodes))
-                                                 + 1j * np.bincount(at, a[here].imag, len(nodes)))
+                    v = a[here]
+                    fields[f].ravel()[nodes] += (np.bincount(at, v.real, len(nodes))
+                                                 + 1j * np.bincount(at, v.imag, len(nodes)))
                 started = True
             jobs.report(progress, step := step + 1, total)
         for f, (c, _) in enumerate(chans):

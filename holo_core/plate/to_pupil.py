@@ -26,6 +26,7 @@ import numpy as np
 from ..propagation import angular_spectrum, grid, tilt
 from ..propagation.angular_spectrum import BAND_EDGE
 from ..scene.hologram import Hologram
+from ..scene.plate import box_corners
 
 WINDOW_MARGIN = 0.1   # the window reaches this fraction of its size beyond the cone ...
 WINDOW_SAMPLES = 8    # ... and at least this many samples
@@ -49,15 +50,10 @@ def plate_window(h: Hologram, position, rotation, diameter, view=None
     plate's frame, when given; a camera that sees a part of a large plate reads that part),
     a margin around it, and at least the pupil's own width around its foot. May reach beyond
     the plate."""
-    lo, hi = np.asarray(h.bounds, np.float64)
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                        for z in (lo[2], hi[2])])
     r = diameter / 2
     rim = np.array([position + s * r * rotation[:, a] for a in (0, 1) for s in (-1, 1)]
                    + [position])
-    t = rim[:, None, 2:3] / (rim[:, None, 2:3] - np.minimum(corners[None, :, 2:3], -1e-12))
-    hits = (rim[:, None, :2] + t * (corners[None, :, :2] - rim[:, None, :2])).reshape(-1, 2)
-    cone_lo, cone_hi = hits.min(0), hits.max(0)
+    cone_lo, cone_hi = cone_on_plate(h.bounds, rim)
     if view is not None:
         d = np.asarray(view, np.float64)
         t = -rim[:, None, 2:3] / np.minimum(d[None, :, 2:3], -1e-12)
@@ -77,6 +73,17 @@ def plate_window(h: Hologram, position, rotation, diameter, view=None
     r0 = math.floor((mid[1] - half[1]) / h.pitch + (rows - 1) / 2)
     r1 = math.ceil((mid[1] + half[1]) / h.pitch + (rows - 1) / 2) + 1
     return r0, r1, c0, c1
+
+
+def cone_on_plate(bounds, rim) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) (x, y) [m] on the plate (z = 0) of the lines from the points ``rim`` (N, 3)
+    [m, z > 0] to the corners of the objects' box ``bounds`` (2, 3) [m], all in the plate's
+    frame."""
+    corners = box_corners(bounds)
+    rim = np.asarray(rim, np.float64)
+    t = rim[:, None, 2:3] / (rim[:, None, 2:3] - np.minimum(corners[None, :, 2:3], -1e-12))
+    hits = (rim[:, None, :2] + t * (corners[None, :, :2] - rim[:, None, :2])).reshape(-1, 2)
+    return hits.min(0), hits.max(0)
 
 
 def overlaps(h: Hologram, window) -> bool:
@@ -103,7 +110,8 @@ def window_of(plane, window, channel=None) -> np.ndarray:
 def pupil_grid(h: Hologram, rotation, diameter, focus, wavelength) -> tuple[int, float]:
     """(n, pitch [m]) of the pupil's n×n grid in the camera's plane for the shortest
     ``wavelength`` [m] of a view: its samples carry the plate's band tilted by the camera's
-    tilt and widened by a lens focused at ``focus`` [m] (None: none)."""
+    tilt and widened by a lens focused at ``focus`` [m] (None: none). ``h``: the hologram, or
+    the plan it will be recorded by (their ``pitch`` and ``band``)."""
     nyquist = min(1.0, wavelength / (2 * h.pitch))
     band = min(h.band, nyquist) if h.band else nyquist
     tilted = math.asin(min(1.0, band)) + math.acos(float(np.clip(rotation[2, 2], -1, 1)))
@@ -111,6 +119,14 @@ def pupil_grid(h: Hologram, rotation, diameter, focus, wavelength) -> tuple[int,
     pitch = wavelength / (2 * min(1.0, spread + PUPIL_GUARD))
     n = odd_fast_len(math.ceil(diameter / pitch) + 2 * PUPIL_EDGE)
     return n, pitch
+
+
+def neighbourhood(n: int, pitch: float, rotation, plate_pitch: float) -> int:
+    """Samples (per side, of ``plate_pitch`` [m]) of the parallel plane around the pupil's foot
+    that a view reads and rotates: the n×n pupil grid of ``pitch`` [m], tilted by
+    ``rotation``, seen on that plane, and a few samples more."""
+    return math.ceil(n * pitch / max(float(rotation[2, 2]), 1e-3) / plate_pitch) \
+        + 2 * PUPIL_EDGE
 
 
 def output_padding(shape, near: int) -> float:
@@ -131,8 +147,7 @@ def field_at_pupil(u, window, h: Hologram, *, wavelength, position, rotation, n,
     rows, cols = h.shape
     x_mid = ((c0 + c1 - 1) / 2 - (cols - 1) / 2) * h.pitch
     y_mid = ((r0 + r1 - 1) / 2 - (rows - 1) / 2) * h.pitch
-    # only the pupil's neighbourhood is read and rotated: the target's window on this plane
-    near = math.ceil(n * pitch / max(float(rotation[2, 2]), 1e-3) / h.pitch) + 2 * PUPIL_EDGE
+    near = neighbourhood(n, pitch, rotation, h.pitch)
     parallel = angular_spectrum(u, wavelength=wavelength, pitch=h.pitch,
                                 distance=float(position[2]),
                                 offset=(float(position[0] - x_mid), float(position[1] - y_mid)),

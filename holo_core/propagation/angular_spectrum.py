@@ -74,9 +74,8 @@ def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), p
     def make():  # on the device (transfer.py); the float64 reference is transfer_function
         tf = asm_transfer(rt, shape, wavelength=wavelength, pitch=pitch, distance=z,
                           offset=(x0, y0), band_limit=band_limit, edge=BAND_EDGE)
-        spans = read is not None and all(p >= n + r for p, n, r in zip(shape, dev.shape, read))
-        notes = sampling_notes(dev.shape, shape, wavelength, pitch, z, (x0, y0),
-                               2.0 if spans else padding, band_limit, nonzero_count(rt, tf) > 0)
+        notes = sampling_notes(dev.shape, shape, wavelength, pitch, z, (x0, y0), padding,
+                               band_limit, nonzero_count(rt, tf) > 0, read)
         return tf, notes
 
     key = ("asm", dev.shape, shape, wavelength, pitch, z, x0, y0, bool(band_limit),
@@ -138,9 +137,12 @@ def alias_free_distance(shape, pitch, wavelength, offset=(0.0, 0.0)) -> float:
     return max(0.0, min(limits))
 
 
-def sampling_notes(shape, padded, wavelength, pitch, z, offset, padding, band_limit, reaches):
+def sampling_notes(shape, padded, wavelength, pitch, z, offset, padding, band_limit, reaches,
+                   read=None):
     """Why the grid cannot carry the field to ``z`` alias-free, as messages (empty if it can);
-    ``reaches``: the transfer function is not all zero."""
+    ``reaches``: the transfer function is not all zero; ``read``: the (rows, cols) around the
+    output's centre that will be read (a padded grid spanning the input and those wraps
+    nothing onto them)."""
     safe = alias_free_distance(padded, pitch, wavelength, offset)
     px, py = grid.pitch_pair(pitch)
     spacing = f"{px:.4g} m" if px == py else f"{px:.4g} x {py:.4g} m"
@@ -150,7 +152,8 @@ def sampling_notes(shape, padded, wavelength, pitch, z, offset, padding, band_li
         notes.append(f"angular_spectrum: |distance| = {abs(z):.4g} m exceeds the alias-free "
                      f"limit {safe:.4g} m of this grid ({where}); use band_limit=True or more "
                      f"padding")
-    elif abs(z) > safe and padding < 2:
+    elif abs(z) > safe and padding < 2 and (read is None or any(
+            p < n + r for p, n, r in zip(padded, shape, read))):
         notes.append(f"angular_spectrum: with padding {padding:g} < 2 the band-limited "
                      f"convolution wraps around beyond |distance| = {safe:.4g} m; use padding >= 2")
     if not reaches:

@@ -70,8 +70,8 @@ class ViewingZone:
 
     def corners(self) -> np.ndarray:
         """The box's eight corners (8, 3) [m] in the plate's frame."""
-        signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
-        return np.asarray(self.centre) + signs * np.asarray(self.half_extents)
+        c, half = np.asarray(self.centre, np.float64), np.asarray(self.half_extents)
+        return box_corners((c - half, c + half))
 
     def distance_outside(self, point, radius: float = 0.0) -> float:
         """How far [m] a ball of ``radius`` [m] at ``point`` (3,) [m] (the plate's frame)
@@ -119,3 +119,10 @@ class Plate:
             raise InputError(f"the camera must be in front of the plate (z > 0 in its frame) to "
                              f"define its viewing zone; it is at z = {position[2]:.4g} m")
         return ViewingZone.around(position, camera.aperture_diameter or 0.0, margin)
+
+
+def box_corners(bounds) -> np.ndarray:
+    """The eight corners (8, 3) [m] of the box ``bounds`` (min, max corners (2, 3) [m])."""
+    lo, hi = np.asarray(bounds, np.float64)
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                     for z in (lo[2], hi[2])])
