@@ -64,19 +64,27 @@ def test_a_device_whose_probe_fails_is_skipped_with_its_reason(monkeypatch, capl
     assert all(status != "usable" and not chosen for _, status, chosen in device_table())
 
 
+def _usable():
+    """The names of the devices whose real probe passes (a driver that cannot build any
+    program on this CPU, as PoCL's LLVM 14 on Zen 5, never reaches the probe's result)."""
+    return {name for name, status, _ in device_table() if status == "usable"}
+
+
 def test_a_device_with_a_wrong_probe_result_is_skipped(monkeypatch):
+    usable = _usable()
     _broken(monkeypatch, runtime._PROBE.replace("cmul(cexpi(x[i])", "cmul(cexpi(1.1f * x[i])"))
-    rows = device_table()
-    assert rows and all(s.startswith("wrong probe result") for _, s, _ in rows), rows
+    rows = [(name, status) for name, status, _ in device_table() if name in usable]
+    assert rows and all(s.startswith("wrong probe result") for _, s in rows), rows
 
 
 def test_a_failed_device_gives_way_to_the_next_and_a_choice_of_it_lists_what_works(
         monkeypatch):
     monkeypatch.delenv("HOLO_DEVICE", raising=False)
+    usable = len(_usable())
     devices = sorted(all_devices(), key=lambda t: runtime._rank(t[2]))
     first = devices[0][2]
     monkeypatch.setattr(runtime, "_probed", {first.int_ptr: "broken on purpose"})
-    if len(devices) > 1:
+    if usable > 1:
         assert choose_device().int_ptr != first.int_ptr
     spec = f"{devices[0][0]}:{devices[0][1]}"
     with pytest.raises(ValueError, match=rf"HOLO_DEVICE='{spec}' names no usable device "
