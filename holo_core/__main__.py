@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 import math
+import re
 import sys
 import warnings
 from pathlib import Path
@@ -100,7 +101,7 @@ def plan(args) -> int:
 
     from . import memory
     from .plate.sampling import plan as plan_plate
-    from .plate.sampling import plan_view
+    from .plate.sampling import check_in_front, plan_view
     from .scene.camera import Camera, look_at
     from .scene.plate import ViewingZone
     if args.bounds is not None:  # where they are: no move
@@ -118,6 +119,7 @@ def plan(args) -> int:
         shift = np.array([-(lo[0] + hi[0]) / 2, -(lo[1] + hi[1]) / 2, -hi[2] - args.distance])
         bounds = np.array([lo + shift, hi + shift])
     eye = np.array(args.camera if args.camera else (0.0, 0.0, args.distance))
+    check_in_front("--camera", eye)  # before the zone around it, in the option's name
     target = np.array(args.look_at) if args.look_at else bounds.mean(0)
     focus = args.focus_distance or float(np.linalg.norm(eye - target))
     cam = Camera(matrix_world=look_at(eye, target, up=(0, 1, 0)), lens=args.lens,
@@ -240,10 +242,21 @@ PIXELS = _number(int, lambda v: 1 <= v <= 65536, "an integer from 1 to 65536")
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse's parser, its errors on one line (exit status 2)."""
+    """argparse's parser, its errors on one line (exit status 2), and negative numbers in any
+    notation taken as values: argparse's own pattern (Python < 3.13) knows -1 and -.5 but
+    not -1e-3, which it took for an option (``--camera 0.01 -1e-3 0.3``: "expected 3
+    arguments")."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_NUMBER
+
 
     def error(self, message):
         self.exit(2, f"error: {self.prog}: {message} (--help lists the options)\n")
+
+
+NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 
 
 def _progress_bar(width=40):

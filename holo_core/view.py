@@ -11,6 +11,30 @@ from . import preview
 BACKGROUND_DEPTH = 1e10     # depth of empty pixels [m], as Blender's Cycles and Workbench
 
 
+def channel_colours(count: int) -> np.ndarray:
+    """How ``count`` colour channels of a hologram (in the order recorded) show in a view's
+    R, G, B: a (count, 3) matrix. One channel is grey (R = G = B). Otherwise channel k gets
+    the fully saturated hue 360°·k/count (0° red, 120° green, 240° blue: three channels are
+    R, G, B as recorded, two are red and cyan, four red, chartreuse, cyan and violet), and
+    each of R, G, B is the weighted mean of the channels that feed it, so that equal radiance
+    in every channel shows white of that radiance."""
+    if count == 1:
+        return np.ones((1, 3))
+    hue = 6.0 * np.arange(count)[:, None] / count  # in sextants
+    k = (np.array([5.0, 3.0, 1.0])[None, :] + hue) % 6  # HSV at S = V = 1
+    weights = 1 - np.clip(np.minimum(k, 4 - k), 0, 1)
+    return weights / weights.sum(0)
+
+
+def as_rgb(radiance: np.ndarray) -> np.ndarray:
+    """``radiance`` (..., C) of C colour channels as (..., 3) R, G, B
+    (:func:`channel_colours`)."""
+    count = radiance.shape[-1]
+    if count == 3:  # the identity, exactly
+        return radiance
+    return radiance @ channel_colours(count).astype(radiance.dtype)
+
+
 @dataclass(frozen=True, eq=False)
 class RenderResult:
     """A rendered view: ``rgb`` (H, W, 3) radiance, ``alpha`` (H, W) opacity, ``depth``

@@ -35,6 +35,7 @@ CODE_BITS = 16
 FULL = (1 << CODE_BITS) - 1   # 65535
 DEFAULT_TILE = (2048, 2048)   # rows, cols: 8 MiB of 16-bit codes, a size every viewer opens
 MAX_TILES = 4096              # a layout that lists more is refused before a file is read
+MAX_LAYOUT_BYTES = 4 * 2**20  # ~1 KiB per tile entry and the header, far above what is written
 
 
 def to_codes(values, quantity: str, bits: int = CODE_BITS) -> np.ndarray:
@@ -182,19 +183,22 @@ def read_tiles(path) -> tuple[np.ndarray, dict]:
     rows, cols = layout["shape"]
     memory.check_host(f"{path} (display pattern, {cols}x{rows} samples)", 10.0 * rows * cols)
     codes = np.zeros((rows, cols), np.uint16)
-    count = np.zeros((rows, cols), np.uint8)
+    covered = np.zeros((rows, cols), bool)  # a flag, not a count: a count of 256 wraps to 0
     for t in layout["tiles"]:
+        window = (slice(t["row"], t["row"] + t["rows"]), slice(t["col"], t["col"] + t["cols"]))
+        if covered[window].any():  # before its file is read
+            raise InputError(f"{path}: the tiles do not cover the {cols}x{rows} grid exactly "
+                             f"once: tile {t['file']} (row {t['row']}, col {t['col']}) covers "
+                             f"samples an earlier tile covers")
         a = read_tile(path.parent / t["file"])
         if a.shape != (t["rows"], t["cols"]):
             raise InputError(f"{path}: tile {t['file']} is {a.shape[1]}x{a.shape[0]} samples; "
                              f"the layout says {t['cols']}x{t['rows']}")
-        window = (slice(t["row"], t["row"] + t["rows"]), slice(t["col"], t["col"] + t["cols"]))
         codes[window] = a
-        count[window] += 1
-    if (count != 1).any():
-        raise InputError(f"{path}: the tiles do not cover the {cols}x{rows} grid exactly once "
-                         f"({int((count == 0).sum())} samples missing, "
-                         f"{int((count > 1).sum())} covered twice)")
+        covered[window] = True
+    if not covered.all():
+        raise InputError(f"{path}: the tiles do not cover the {cols}x{rows} grid exactly "
+                         f"once: {int((~covered).sum())} samples missing")
     return from_codes(codes, layout["kind"]), layout
 
 
@@ -231,10 +235,14 @@ def _read_layout(path: Path) -> dict:
     """The layout's fields, each checked as :func:`write_tiles` writes it."""
     if not path.is_file():
         raise InputError(f"{path}: no such layout file")
+    if path.stat().st_size > MAX_LAYOUT_BYTES:
+        raise InputError(f"{path}: {path.stat().st_size} bytes; a layout of {MAX_TILES} tiles "
+                         f"takes less than {MAX_LAYOUT_BYTES}")
     try:
         layout = json.loads(path.read_text())
-    except (UnicodeDecodeError, json.JSONDecodeError) as e:
-        raise InputError(f"{path}: not a JSON layout ({e})") from None
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as e:
+        raise InputError(f"{path}: not a JSON layout ({type(e).__name__}: {e})"[:400]) \
+            from None
     if not isinstance(layout, dict) or layout.get("format") != FORMAT:
         raise InputError(f"{path}: not a display layout (format {FORMAT!r})")
     if layout.get("version") != VERSION:

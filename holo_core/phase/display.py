@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import validate
+from .. import memory, validate
 from ..io import display as display_io
 from ..io.image import check_writable
 from ..propagation import grid, resample
@@ -219,10 +219,25 @@ def display_field(hologram: Hologram, display: Display, *, channel=0) -> np.ndar
     wave, channel = _object_wave(hologram, channel)
     window = tuple(_window(n, hologram.pitch, n_out, display.pitch)
                    for n, n_out in zip(hologram.shape, display.shape))
+    _check_memory(display, [w.stop - w.start for w in window])
     _check_band(hologram, channel, display)
     # indexing first: a chunked store reads only the window, not the gigapixel plate
     u = np.asarray(wave[channel, window[0], window[1]], np.complex64)
     return resample(u, pitch=hologram.pitch, out_shape=display.shape, out_pitch=display.pitch)
+
+
+PATTERN_SAMPLE_BYTES = 96  # host bytes per display sample while encoding (measured: 88 for
+                           # double-phase, 64 for the amplitude patterns)
+
+
+def _check_memory(display: Display, window) -> None:
+    """Refuse a pattern the host cannot hold, before the plate is read: the encoding's arrays
+    per display sample, the plate's window and the resampling's two matrices (float64 made,
+    float32 kept) and its intermediate rows."""
+    (rows, cols), (h, w) = display.shape, window
+    need = (PATTERN_SAMPLE_BYTES * rows * cols + 8.0 * h * w + 8.0 * rows * w
+            + 12.0 * (rows * h + cols * w))
+    memory.check_host(f"a {cols}x{rows} pattern for the display {display.name!r}", need)
 
 
 def _object_wave(hologram, channel):

@@ -295,6 +295,8 @@ def plan(plate_size, bounds, *, zone: ViewingZone, resolution=None, encoding="co
         raise InputError(f"bounds must be the objects' box (min, max corners [m]) behind the "
                          f"plate (z < 0 in its frame); got {np.asarray(bounds).tolist()!r}"[:300])
     max_resolution = validate.integer("max_resolution", max_resolution, 16)
+    if camera is not None:
+        check_in_front("camera position", camera[0])
     needed = min(MAX_BAND, band_towards_zone(box, zone))
     side = max(width, height)
     per_band = 2.0 if encoding == "complex" else 8.0  # λ / (pitch · sin θ)
@@ -305,13 +307,15 @@ def plan(plate_size, bounds, *, zone: ViewingZone, resolution=None, encoding="co
             resolution = int(np.clip(need, MIN_RESOLUTION, max_resolution))
     resolution = validate.integer("resolution", resolution, 16)
     pitch = side / resolution
-    half_depth = DEPTH_MARGIN * max(float(np.linalg.norm(box[1] - box[0])), 1e-9) / 2
+    half_depth = DEPTH_MARGIN * float(np.linalg.norm(box[1] - box[0])) / 2
     if wavelength is None:  # λ2 = ε·λ1 < λ1 is the tighter: it sets the band
         lam2 = per_band * pitch * needed / MARGIN
+        _check_sizes(width, height, resolution, pitch, lam2, box, half_depth)
         lam = lam2 / (1 - lam2 / (2 * half_depth))
         band = needed
     else:
         lam = validate.length("wavelength", wavelength)
+        _check_sizes(width, height, resolution, pitch, lam, box, half_depth)
         band = min(MARGIN * partner_wavelength(lam, half_depth) / (per_band * pitch), MAX_BAND)
         if band < needed:
             validate.warn_sampling(
@@ -331,6 +335,38 @@ def plan(plate_size, bounds, *, zone: ViewingZone, resolution=None, encoding="co
                      pitch=pitch, wavelength=lam, depth_wavelength=lam2, band=band,
                      needed_band=needed, encoding=encoding, reference_angle=reference,
                      step=step, distance=far, slab=slab, zone=zone, bounds=box)
+
+
+def check_in_front(name: str, position) -> None:
+    """:class:`InputError` unless ``position`` (3,) [m] lies in front of the plate."""
+    p = validate.vector(name, position, 3, "m")
+    if p[2] <= 0:
+        raise InputError(f"{name} must be in front of the plate (z > 0 in its frame: the plate "
+                         f"is z = 0, the objects behind it); got ({p[0]:g}, {p[1]:g}, "
+                         f"{p[2]:g}) m, {'on' if p[2] == 0 else 'behind'} the plate")
+
+
+def _check_sizes(width, height, resolution, pitch, wavelength, box, half_depth) -> None:
+    """:class:`InputError`, in the user's terms, for a plate whose sampling no hologram holds
+    (its pitch or wavelength outside [MIN_LENGTH, MAX_LENGTH]) and for objects too small for
+    the depth pair to tell their depths apart (the partner λ2 = ε·λ1 exists only while λ is
+    below the depth range, Eq. 30)."""
+    lo, hi = validate.MIN_LENGTH, validate.MAX_LENGTH
+    if not (lo <= pitch <= hi and lo <= wavelength <= hi):
+        raise InputError(f"plate_size {width:g} x {height:g} m cannot be sampled by "
+                         f"{resolution} samples along its longer side: the pitch would be "
+                         f"{pitch:.3g} m and the wavelength {wavelength:.3g} m, and a hologram "
+                         f"holds lengths in [{lo:g}, {hi:g}] m")
+    size = " x ".join(f"{d:.3g}" for d in box[1] - box[0])
+    if half_depth == 0:
+        raise InputError(f"bounds: the objects' box ({size} m) has no size; give the box the "
+                         f"objects fill")
+    if wavelength >= 2 * half_depth:
+        raise InputError(f"bounds: the objects' box ({size} m) is smaller than the wavelength "
+                         f"a plate of {width:g} x {height:g} m at {resolution} samples needs "
+                         f"(λ = {wavelength:.3g} m), and the depth pair tells depths apart only "
+                         f"within a range above it; give the objects' real size or more "
+                         f"samples")
 
 
 def plan_view(p: PlatePlan, *, position, pixel_angle, pupil=None, resolution=(640, 480),

@@ -36,7 +36,7 @@ from ..propagation.tilt import tilt_reach
 from ..scene.camera import Camera
 from ..scene.hologram import Hologram
 from ..validate import InputError
-from ..view import BACKGROUND_DEPTH, RenderResult
+from ..view import BACKGROUND_DEPTH, RenderResult, as_rgb
 from .reconstruct import reconstruct
 from .to_pupil import field_at_pupil, overlaps, plate_window, pupil_grid, window_of
 
@@ -243,7 +243,7 @@ def _compose(looks, colours, z_ch, first: Hologram, camera, fine, pupil, *, supe
                        pupil, exposure, threshold, lam0)
     exposure = 1.0 if exposure is None else exposure
     colour, alpha, depth, shown, cover = assemble(
-        radiance, coverage, sum(crosses), camera=camera, supersample=supersample,
+        as_rgb(radiance), coverage, sum(crosses), camera=camera, supersample=supersample,
         wavelengths=pair, centre=centre, exposure=exposure)
     if depth_estimate == "brightest":
         ray = _depth(crosses, brightness, estimate=depth_estimate, wavelengths=pair,
@@ -427,8 +427,7 @@ def _finish(radiance, ray, coverage, h: Hologram, camera, pupil, exposure, thres
         raise InputError(f"exposure must keep the view's pixels within float32: at most "
                          f"{np.finfo(np.float32).max / np.abs(radiance).max():.3g} for this "
                          f"view; got {exposure!r}")
-    if rgb.shape[-1] == 1:
-        rgb = np.repeat(rgb, 3, -1)
+    rgb = as_rgb(rgb)  # one, two, four or more channels: the stated colours
     if coverage is not None:  # geometric: half covered at a silhouette edge, whatever the colour
         alpha = (coverage > threshold).astype(np.float32)
     else:  # unknown emitter density: relative to the brightest pixels

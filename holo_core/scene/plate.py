@@ -64,6 +64,9 @@ class ViewingZone:
             raise InputError(f"zone margin must be >= 0 [m]; got {margin!r}")
         pupil = validate.finite("pupil", pupil, "m")
         p = validate.vector("position", position, 3, "m")
+        if p[2] <= 0:  # a zone behind the plate sees none of its light
+            raise InputError(f"position must be in front of the plate (z > 0 in its frame); "
+                             f"got ({p[0]:g}, {p[1]:g}, {p[2]:g}) m")
         half = pupil / 2 + margin
         depth = min(margin, 0.5 * float(p[2]))  # never reaching the plate
         return cls(centre=tuple(p), half_extents=(half, half, depth), pupil=pupil)

@@ -12,6 +12,7 @@ import sys
 
 import numpy as np
 import pytest
+from cli import run_cli as _cli_main
 from PIL import Image
 
 from holo_core.io.hologram import HologramFileError, import_acquired, read_hologram, write_hologram
@@ -331,17 +332,6 @@ def test_a_cropped_camera_keeps_every_pixels_ray():
 # --- the reliability audit (issue 26): one reproducer per finding ----------------------------
 # Finding 1 (writes follow links) is in io/test_atomic_writes.py; the API tables of findings
 # 6-10 are in test_validation.py; the fuzz suite (tools/fuzz.py) enumerates files and calls.
-
-def _cli_main(capsys, *args):
-    """The CLI in this process: (exit status, stdout, stderr)."""
-    from holo_core.__main__ import main
-    try:
-        status = main([str(a) for a in args])
-    except SystemExit as e:  # argparse's errors
-        status = e.code
-    out = capsys.readouterr()
-    return status, out.out, out.err
-
 
 def test_a_long_wavelength_hologram_is_written_and_read_back(tmp_path):
     """Finding 2: λ long against the pitch chose a cone of sin θ >= 1, which the reader refuses

@@ -143,3 +143,26 @@ def test_damaged_sets_are_refused_naming_the_file(tmp_path, rng):
     path.write_text(json.dumps(layout))
     with pytest.raises(InputError, match="p_r0_c0.png: not a readable"):
         tiles_io.read_tiles(path)
+
+
+def test_a_tile_listed_257_times_is_refused_not_counted_round(tmp_path, rng):
+    """A uint8 coverage count wrapped at 256: one tile listed 257 times counted once and the
+    layout passed. Each sample now belongs to one tile: the second listing is refused, before
+    its file is read."""
+    path = tiles_io.write_tiles(tmp_path / "p.json", values(rng, "phase", (8, 8)),
+                                quantity="phase", **SETTINGS)
+    layout = json.loads(path.read_text())
+    path.write_text(json.dumps(dict(layout, tiles=layout["tiles"] * 257)))
+    with pytest.raises(InputError, match=r"p.json: the tiles do not cover the 8x8 grid exactly "
+                                         r"once: tile p_r0_c0.png \(row 0, col 0\) covers"):
+        tiles_io.read_tiles(path)
+
+
+def test_a_deeply_nested_layout_is_the_projects_error(tmp_path):
+    path = tmp_path / "p.json"
+    path.write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(InputError, match=r"p.json: not a JSON layout \(RecursionError"):
+        tiles_io.read_tiles(path)
+    path.write_text(" " * (tiles_io.MAX_LAYOUT_BYTES + 1))
+    with pytest.raises(InputError, match=r"p.json: \d+ bytes; a layout of 4096 tiles"):
+        tiles_io.read_tiles(path)

@@ -204,3 +204,21 @@ def test_bad_fields_are_refused_naming_the_field(tmp_path):
                                 distance=DEPTH, encoding="bias")
     with pytest.raises(InputError, match="not phases"):
         slm.read_phase_hologram(path)
+
+
+@pytest.mark.parametrize("method", ["double-phase", "bias"])
+def test_a_20000_squared_export_is_refused_with_its_size_before_the_plate_is_read(
+        tmp_path, rng, monkeypatch, method):
+    """A 20000² pattern passed 10 GB before it failed; its arrays (measured 88 bytes per
+    display sample for double-phase) are now counted first: 35.8 GiB against an 8 GiB budget
+    is refused, nothing read, nothing written."""
+    monkeypatch.setenv("HOLO_MEMORY_LIMIT", "8G")
+    kind = "phase" if method == "double-phase" else "amplitude"
+    big = slm.Display(name="wall", resolution=(20000, 20000), pitch=4e-6, kind=kind)
+    h = plate(rng, (64, 64))
+    read = []
+    monkeypatch.setattr(slm, "resample", lambda *a, **k: read.append(1))
+    with pytest.raises(InputError, match=r"a 20000x20000 pattern for the display 'wall' needs "
+                                         r"3\d\.\d GiB of memory; \S+ GiB is available"):
+        slm.export(h, big, tmp_path / "wall.json", distance=DEPTH, method=method)
+    assert not read and not list(tmp_path.iterdir())
