@@ -27,7 +27,7 @@ from ..validate import InputError
 from ..view import RenderResult
 from .incoherent import IncoherentImages, grid_bytes
 from .optics import SUPERSAMPLE, PupilOptics, choose_optics
-from .raster import depth_range, merged, point_emitters, rasterize
+from .raster import depth_range, merged, point_emitters, raster_bytes, rasterize
 from .recording import PupilFields, intensity_hologram, reconstruct_object_wave
 
 log = logging.getLogger(__name__)
@@ -78,6 +78,9 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     memory.check_host(f"a {w}x{h} camera view at supersample {supersample}",
                       FINE_PIXEL_BYTES * w * h * supersample**2)
     meshes = _meshes(meshes)
+    if meshes:  # before the meshes are projected: a 10^7-vertex mesh took 8 GB and more
+        memory.check_host(f"rasterizing {sum(len(m.triangles) for m in meshes)} triangles",
+                          raster_bytes(meshes))
     pos, colours = (None, None) if points is None else _points(points)
     optics = choose_optics(camera, depth_range(meshes, camera, pos), supersample=supersample,
                            pupil_diameter=pupil_diameter)

@@ -60,6 +60,17 @@ class Grid(NamedTuple):
         return math.inf if s >= 1 else s / math.sqrt(1 - s * s)
 
 
+POINT_BYTES = 200         # host bytes per point emitter while recording, plus ...
+POINT_CHANNEL_BYTES = 96  # ... per point and channel (measured with the recording planes:
+                          # 201 B at one channel, 367 at four, and the amplitudes before)
+
+
+def point_bytes(points: int, channels: int) -> float:
+    """Host bytes the point sum of ``points`` emitters of ``channels`` channels takes beyond
+    its grid: the points' amplitudes, carriers, segments and planes."""
+    return (POINT_BYTES + POINT_CHANNEL_BYTES * channels) * points
+
+
 def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=False, band=None,
                method="auto", progress: jobs.Progress = None, as_device=False):
     """The object wave O on the plane z = 0 from point emitters (Eq. 3).
@@ -102,6 +113,8 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
     validate.choice("method", method, ("auto", "direct", "wrp"))
     if method == "auto":
         method = "wrp" if wrp_seconds(pos, g) < direct_seconds(pos, g) else "direct"
+    memory.check_host(f"{len(pos)} point emitters of {amp.shape[1]} channels",
+                      point_bytes(len(pos), amp.shape[1]))
     rt = get_runtime()
     nbytes = 8.0 * amp.shape[1] * math.prod(g.shape)
     memory.check_device(rt, f"the {g.shape[1]}x{g.shape[0]} object wave", nbytes, nbytes)

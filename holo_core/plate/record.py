@@ -18,7 +18,7 @@ from ..scene.hologram import ENCODINGS, Hologram
 from ..scene.mesh import Mesh, facing, sample_points, visible_from
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Plate, ViewingZone
 from ..validate import InputError
-from .point_sources import cone_filter, point_wave
+from .point_sources import cone_filter, point_bytes, point_wave
 from .triangles import depth_texture, mesh_primitives, primitive_wave, surface_pitch
 
 DEFAULT_WAVELENGTHS = (633e-9, 532e-9, 473e-9)  # HeNe red, Nd:YAG green, DPSS blue [m]
@@ -189,6 +189,8 @@ def point_amplitudes(positions, colours, wavelengths, phases=None, seed=0, *, em
         raise InputError(f"wavelengths must hold at least one wavelength [m]; got "
                          f"{wavelengths.tolist()!r}")
     wavelengths = tuple(validate.wavelength("wavelengths", w) for w in wavelengths)
+    memory.check_host(f"{len(pos)} point emitters of {len(wavelengths)} wavelengths",
+                      point_bytes(len(pos), len(wavelengths)))
     cols = _array("colours", colours, f"an (N, {len(wavelengths)}) array of intensities, one "
                   f"column per wavelength, N = {len(pos)} points", (len(pos), len(wavelengths)))
     if not np.isfinite(cols).all() or (cols < 0).any() or (cols > MAX_INTENSITY).any():
@@ -429,13 +431,16 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
         An intensity plate also stores the object wave it recorded.
     """
     from .sampling import plan, plan_view
-    from .slabs import record_slabs
+    from .slabs import mesh_bytes, record_slabs
     if not isinstance(plate, Plate):
         raise InputError(f"plate must be a Plate; got {type(plate).__name__}")
     meshes = [meshes] if isinstance(meshes, Mesh) else list(meshes)
     if not meshes or not all(isinstance(m, Mesh) for m in meshes):
         raise InputError("meshes must be a Mesh or a non-empty sequence of Mesh")
     seed = validate.seed(seed)
+    # before the meshes are moved into the plate's frame: 10^7 triangles took 8 GB and more
+    memory.check_host(f"the slabs' silhouettes and emitters of "
+                      f"{sum(len(m.triangles) for m in meshes)} triangles", mesh_bytes(meshes))
     local = [replace(m, vertices=plate.to_plate(m.vertices)) for m in meshes]
     every = np.concatenate([m.vertices for m in local])
     bounds = np.array([every.min(0), every.max(0)])

@@ -237,6 +237,19 @@ def _facing_zone(mesh: Mesh, pos, colour, cells, tri, zone):
     return pos[keep], colour[keep], cells[keep]
 
 
+TRIANGLE_BYTES = 320  # host bytes per triangle of the meshes while recording in slabs
+                      # (rasters along the zone's rays, the closed-surface test's edges,
+                      # normals: measured 300-360)
+VERTEX_BYTES = 96     # per vertex: the plate-frame copy, the welded positions
+
+
+def mesh_bytes(meshes) -> float:
+    """Host bytes a slab recording of ``meshes`` takes for their triangles and vertices
+    (the plate's own fields are :meth:`~.sampling.PlatePlan.memory_bytes`)."""
+    return sum(TRIANGLE_BYTES * len(m.triangles) + VERTEX_BYTES * len(m.vertices)
+               for m in meshes)
+
+
 def record_slabs(meshes, *, plan, wavelengths, seed=0, code=None,
                  progress: jobs.Progress = None):
     """The object waves (C, H, W) complex64 on the plate of ``meshes`` (each in the plate's

@@ -107,6 +107,25 @@ def window_of(plane, window, channel=None) -> np.ndarray:
     return out
 
 
+def lit_diameter(h: Hologram, position, rotation, diameter) -> float:
+    """The diameter [m] of the part of a pupil of ``diameter`` [m] (centre ``position`` (3,)
+    [m], axes ``rotation``, the plate's frame) that the plate's light can reach: a pupil
+    larger than the plate's light (a 10 m lens before a 6 cm plate) is read only where light
+    arrives, since beyond it the field is zero (its iris still counts whole in the view's
+    calibration). The light leaves every plate point within the object wave's cone (sin θ =
+    band, else the pitch's Nyquist angle at the longest wavelength), so on the pupil's plane
+    it lies within the plate widened by z·tan θ; seen on a tilted pupil, 1/cos(tilt) wider."""
+    nyquist = min(1.0, max(h.wavelengths) / (2 * h.pitch))
+    band = min(h.band, nyquist) if h.band else nyquist
+    if band >= 1:
+        return diameter
+    spread = float(position[2]) * band / math.sqrt(1 - band * band)
+    width, height = h.size
+    reach = max(abs(float(position[0])) + width / 2, abs(float(position[1])) + height / 2) \
+        + spread + WINDOW_SAMPLES * h.pitch
+    return min(diameter, 2 * reach / max(float(rotation[2, 2]), 1e-3))
+
+
 def pupil_grid(h: Hologram, rotation, diameter, focus, wavelength) -> tuple[int, float]:
     """(n, pitch [m]) of the pupil's n×n grid in the camera's plane for the shortest
     ``wavelength`` [m] of a view: its samples carry the plate's band tilted by the camera's

@@ -38,7 +38,8 @@ from ..scene.hologram import Hologram
 from ..validate import InputError
 from ..view import BACKGROUND_DEPTH, RenderResult, as_rgb
 from .reconstruct import reconstruct
-from .to_pupil import field_at_pupil, overlaps, plate_window, pupil_grid, window_of
+from .to_pupil import (field_at_pupil, lit_diameter, overlaps, plate_window, pupil_grid,
+                       window_of)
 
 log = logging.getLogger(__name__)
 COVERAGE_RADIUS = 1  # the coverage's speckle is averaged over (2r+1)² pixels before alpha
@@ -162,7 +163,8 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     pupil = aperture or camera_pupil(fine, lam0, centre, apodize=apodize)
     rotation, position = camera_in_plate(first, camera)
     _check_zone(first, camera, position, pupil.diameter)
-    window = plate_window(first, position, rotation, pupil.diameter, _corners(camera, rotation))
+    lit = lit_diameter(first, position, rotation, pupil.diameter)  # the pupil's part in light
+    window = plate_window(first, position, rotation, lit, _corners(camera, rotation))
     unseen = _unseen(first, rotation, position) or (None if overlaps(first, window) else (
         "the camera sees the objects beside the plate, not through it"))
     if unseen:  # a black view, said aloud (an animation's camera may pass out of the zone)
@@ -173,13 +175,12 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     memory.check_host(f"the plate's {c1 - c0}x{r1 - r0} window", HOLOGRAM_SAMPLE_BYTES *
                       (r1 - r0) * (c1 - c0))
     channels = colours + ([z_ch] if z_ch is not None else [])
-    n, d = pupil_grid(first, rotation, pupil.diameter, pupil.focus,
+    n, d = pupil_grid(first, rotation, lit, pupil.focus,
                       min(first.wavelengths[c] for c in channels))
     rt = get_runtime()
     memory.check_device(rt, f"the {n}x{n} pupil's spectrum", 40.0 * n * n, 32.0 * n * n)
     taper = IRIS_TAPER if pupil.apodize else 0.0
-    scale = 1 / math.sqrt(n * n * float(np.sum(iris_weights((n, n), (d, d), pupil.diameter,
-                                                            taper) ** 2)))
+    scale = 1 / math.sqrt(n * n * _iris_sum(n, d, pupil.diameter, taper, lit))
     imagers = {lam: PupilImage(rt, (n, n), bin=lam / (n * d), camera=fine)
                for lam in {first.wavelengths[c] for c in channels}}
     # radiance |A|² / (σ·b²): a surface of emitters of intensity I, σ per m², shows I
@@ -207,6 +208,21 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     return _compose(looks, colours, z_ch, first, camera, fine, pupil, supersample=supersample,
                     composition=composition, depth_estimate=depth_estimate, centre=centre,
                     exposure=exposure, threshold=opacity_threshold, n=n)
+
+
+def _iris_sum(n, d, diameter, taper, lit) -> float:
+    """Σ w² of the iris over the pupil's grid (n×n, ``d`` [m] apart), which calibrates the
+    view's radiance. A grid cut to the lit part of a larger iris (``lit`` < ``diameter``
+    [m]) counts the whole iris, its area over d² (the rim's raised cosine integrated
+    radially), so that the part beyond the light dims the view as it would the camera's."""
+    if lit >= diameter:
+        return float(np.sum(iris_weights((n, n), (d, d), diameter, taper) ** 2))
+    radius = diameter / 2
+    inner = (1 - taper) * radius
+    rho = np.linspace(inner, radius, 4097)
+    rim = (0.5 * (1 + np.cos(np.pi * (rho - inner) / max(radius - inner, 1e-300)))) ** 2
+    area = math.pi * inner**2 + float(np.trapz(rim * 2 * math.pi * rho, rho))
+    return area / (d * d)
 
 
 def nyquist_supersample(h: Hologram, camera: Camera) -> int:

@@ -10,6 +10,7 @@ from holo_core.io.image import read_exr
 from holo_core.plate.record import record_points
 from holo_core.plate.view import render_view
 from holo_core.scene.camera import Camera, look_at
+from holo_core.validate import InputError
 from holo_core.view import as_rgb, channel_colours
 
 TRIANGLE_OBJ = "v -0.002 -0.002 0\nv 0.002 -0.002 0\nv 0 0.002 0\nf 1 2 3\n"
@@ -91,3 +92,106 @@ def test_the_command_line_takes_negative_numbers_in_any_notation(capsys, y):
     status, out, err = cli(capsys, "plan", "--box", 0.01, 0.01, 0.01, "--camera", 0.01, y, 0.3)
     assert status == 0, err
     assert "from (0.01, -0.001, 0.3) m" in out, out
+
+
+# --- memory refused up front, with the size ---------------------------------------------------
+
+def _huge_mesh(vertices):
+    """A mesh of ``vertices`` vertices and twice as many triangles that holds no memory of its
+    own (broadcast views): what a refusal must see before any array of that size is made."""
+    from holo_core.scene.mesh import Mesh
+    return Mesh(vertices=np.broadcast_to(np.array([0.0, 0.0, -1.0]), (vertices, 3)),
+                triangles=np.broadcast_to(np.array([0, 1, 2]), (2 * vertices, 3)))
+
+
+def _never(*_, **__):
+    raise AssertionError("the work started before its memory was counted")
+
+
+def test_a_ten_million_vertex_mesh_is_refused_by_render_camera(monkeypatch):
+    """It passed 8 GB in 16 s; rasterizing takes about 1000 bytes per triangle (measured 920
+    at 10^6): 18.6 GiB for 2·10^7 triangles against an 8 GiB budget."""
+    import holo_core.camera.render as render
+    monkeypatch.setenv("HOLO_MEMORY_LIMIT", "8G")
+    monkeypatch.setattr(render, "rasterize", _never)
+    cam = Camera(matrix_world=look_at((0, 0, 0.5), (0, 0, -1)), resolution=(64, 64))
+    with pytest.raises(InputError, match=r"rasterizing 20000000 triangles needs 1\d\.\d GiB of "
+                                         r"memory; 6.4 GiB is available"):
+        render.render_camera(_huge_mesh(10**7), cam, via="incoherent", supersample=1)
+
+
+def test_ten_million_triangles_are_refused_by_the_slab_recording(monkeypatch):
+    import holo_core.plate.slabs as slabs
+    from holo_core.plate.record import record_plate
+    from holo_core.scene.plate import Plate
+    monkeypatch.setenv("HOLO_MEMORY_LIMIT", "2G")
+    monkeypatch.setattr(slabs, "record_slabs", _never)
+    with pytest.raises(InputError, match=r"the slabs' silhouettes and emitters of 10000000 "
+                                         r"triangles needs \d\.\d+ GiB"):
+        record_plate(_huge_mesh(5 * 10**6), plate=Plate(matrix_world=np.eye(4), width=0.05,
+                                                          height=0.05))
+
+
+def test_a_hundred_million_point_sum_is_refused_before_its_amplitudes(monkeypatch):
+    """10^8 points of three colours: (200 + 3·96) bytes each, 45.4 GiB, counted before their
+    amplitudes and random phases are drawn."""
+    import holo_core.plate.record as record
+    monkeypatch.setenv("HOLO_MEMORY_LIMIT", "8G")
+    monkeypatch.setattr(record, "point_wave", _never)
+    n = 10**8
+    with pytest.raises(InputError, match=r"100000000 point emitters of 3 wavelengths needs "
+                                         r"45.4 GiB of memory"):
+        record_points(np.broadcast_to(np.array([0.0, 0.0, -0.01]), (n, 3)),
+                      np.broadcast_to(np.ones(3), (n, 3)), shape=(64, 64), pitch=8e-6,
+                      wavelengths=(633e-9, 532e-9, 473e-9))
+
+
+@pytest.fixture(scope="module")
+def small_plate():
+    """A point 3 cm behind a 0.5 mm plate of 64² at 8 µm, seen from 2 cm: the plate's light
+    reaches 2.2 mm across on the pupil's plane."""
+    return record_points([[0, 0, -0.03]], [[1.0]], shape=(64, 64), pitch=8e-6,
+                         wavelengths=(633e-9,))
+
+
+def _pupil_view(h, diameter, monkeypatch, *, crop=True):
+    """(rgb at exposure 1, the pupil grid's samples per side) of a pinhole-less view through
+    a pupil of ``diameter`` [m]."""
+    from holo_core.optics.pupil import Pupil
+    from holo_core.plate import view
+    grids = []
+    real = view.pupil_grid
+    monkeypatch.setattr(view, "pupil_grid", lambda *a: grids.append(real(*a)) or grids[-1])
+    if not crop:
+        monkeypatch.setattr(view, "lit_diameter", lambda h, p, r, d: d)
+    cam = Camera(matrix_world=look_at((0, 0, 0.02), (0, 0, -0.03)), lens=50, sensor_width=2,
+                 resolution=(16, 16))
+    with pytest.warns(UserWarning, match="no depth channel"):
+        rgb = render_view(h, cam, aperture=Pupil(diameter=diameter), supersample=1,
+                          exposure=1.0).rgb
+    monkeypatch.undo()
+    return rgb, grids[-1][0]
+
+
+def test_a_pupil_larger_than_the_plates_light_is_read_where_light_arrives(small_plate,
+                                                                         monkeypatch):
+    """A 4 mm pupil before the plate's 2.2 mm of light: its grid cut to the light (675
+    samples a side instead of 1215) gives the same view (measured 1.8e-3 of the peak: the
+    spectrum read on another bin spacing)."""
+    cut, n_cut = _pupil_view(small_plate, 4e-3, monkeypatch)
+    whole, n_whole = _pupil_view(small_plate, 4e-3, monkeypatch, crop=False)
+    assert n_cut < 0.6 * n_whole, (n_cut, n_whole)
+    err = np.abs(cut - whole).max() / whole.max()
+    assert err <= 5e-3, err
+
+
+def test_a_10_m_aperture_reads_only_the_light_and_dims_by_its_area(small_plate, monkeypatch):
+    """render_view with a 10 m aperture took over 150 s and 5 GB: its pupil grid and window
+    spanned 10 m. They now span the plate's light (the same 675 samples as a 4 mm pupil), and
+    the view is the 4 mm one dimmed by the ratio of the irises' areas, (4 mm / 10 m)², the
+    light the larger lens spreads over its whole iris."""
+    small, n_small = _pupil_view(small_plate, 4e-3, monkeypatch)
+    large, n_large = _pupil_view(small_plate, 10.0, monkeypatch)
+    assert n_large == n_small, (n_large, n_small)
+    err = np.abs(large * (10.0 / 4e-3) ** 2 - small).max() / small.max()
+    assert err <= 1e-4, err
