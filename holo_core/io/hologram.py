@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__, validate
-from ..scene.hologram import CHANNEL_ROLES, ENCODINGS, MAX_CHANNELS, Hologram
+from ..scene.hologram import Hologram, HologramInfo
 from ..scene.plate import ViewingZone
 from ..validate import InputError
 from .image import write_exr
@@ -31,30 +31,41 @@ class HologramFileError(InputError):
     """A hologram file that cannot be read; the message names the file and the problem."""
 
 
-def metadata(h: Hologram) -> dict:
+# the file's name of each field of a hologram's description (HologramInfo)
+FILE_KEYS = {"wavelengths": "wavelengths_m", "pitch": "pitch_m", "shape": "size_px",
+             "plate": "plate_to_world", "reference_angle": "reference.angle_rad",
+             "reference_azimuth": "reference.azimuth_rad",
+             "reference_amplitudes": "reference.amplitudes", "bounds": "bounds_m",
+             "band": "band_sin", "point_density": "point_density_per_m2",
+             "zone": "viewing_zone", "keeps_object_wave": "object_wave"}
+
+
+def metadata(h: Hologram | HologramInfo) -> dict:
+    """The file's metadata of a hologram or of its description (:class:`HologramInfo`)."""
+    info = h.info if isinstance(h, Hologram) else h
     return {
         "format": FORMAT, "format_version": FORMAT_VERSION, "software": f"holo {__version__}",
-        "wavelengths_m": list(map(float, h.wavelengths)), "pitch_m": float(h.pitch),
-        "size_px": list(h.shape), "plate_to_world": np.asarray(h.plate).ravel().tolist(),
-        "reference": {"angle_rad": float(h.reference_angle),
-                      "azimuth_rad": float(h.reference_azimuth),
-                      "amplitudes": list(map(float, h.reference_amplitudes))},
-        "bounds_m": np.asarray(h.bounds).tolist(), "object_wave": h.object_wave is not None,
-        "band_sin": float(h.band), "channels": list(h.channels),
-        "point_density_per_m2": float(h.point_density), "encoding": h.encoding,
-        "viewing_zone": None if h.zone is None else {
-            "centre_m": list(h.zone.centre), "half_extents_m": list(h.zone.half_extents),
-            "pupil_m": h.zone.pupil},
+        "wavelengths_m": list(map(float, info.wavelengths)), "pitch_m": float(info.pitch),
+        "size_px": list(info.shape), "plate_to_world": np.asarray(info.plate).ravel().tolist(),
+        "reference": {"angle_rad": float(info.reference_angle),
+                      "azimuth_rad": float(info.reference_azimuth),
+                      "amplitudes": list(map(float, info.reference_amplitudes))},
+        "bounds_m": np.asarray(info.bounds).tolist(), "object_wave": info.keeps_object_wave,
+        "band_sin": float(info.band), "channels": list(info.channels),
+        "point_density_per_m2": float(info.point_density), "encoding": info.encoding,
+        "viewing_zone": None if info.zone is None else {
+            "centre_m": list(info.zone.centre), "half_extents_m": list(info.zone.half_extents),
+            "pupil_m": info.zone.pupil},
     }
 
 
 def write_hologram(path, h: Hologram) -> Path:
     """Write ``h`` to ``path`` (.exr) through a temporary file and a rename. What the reader
     would refuse is refused here, never written: an empty or non-finite hologram, or
-    metadata outside the reader's schema (:func:`_meta`)."""
+    metadata outside the reader's schema (:func:`_described`)."""
     check_pixels(str(path), h)
     header = json.dumps(metadata(h))
-    _meta(path, {"holo": header})  # the reader's schema, on the very text written
+    _described(path, {"holo": header})  # the reader's schema, on the very text written
     channels = {}
     for c in range(len(h.wavelengths)):
         if h.intensity is not None:
@@ -87,54 +98,33 @@ def read_hologram(path) -> Hologram:
     (every metadata field is checked, see :func:`_meta`)."""
     path = Path(path)
     header, names = _read(path)
-    meta = _meta(path, header)
-    colours = range(len(meta["wavelengths_m"]))
-    intensity = meta["encoding"] == "intensity"
+    info = _described(path, header)
+    colours = range(len(info.wavelengths))
+    intensity = info.encoding == "intensity"
     wanted = [f"c{c}.H" for c in colours] if intensity else []
-    if meta["object_wave"]:
+    if info.keeps_object_wave:
         wanted += [f"c{c}.O.{p}" for c in colours for p in ("re", "im")]
     missing = [n for n in wanted if n not in names]
     if missing:
         raise HologramFileError(f"{path}: missing channel(s) {', '.join(missing)}")
-    shape = tuple(meta["size_px"])
     for n in wanted:
-        if names[n].shape != shape:
+        if names[n].shape != info.shape:
             raise HologramFileError(f"{path}: channel {n} is {names[n].shape}, metadata says "
-                                    f"{shape}")
+                                    f"{info.shape}")
     wave = None
-    if meta["object_wave"]:
+    if info.keeps_object_wave:
         wave = np.stack([names[f"c{c}.O.re"] + 1j * names[f"c{c}.O.im"] for c in colours])
         wave = wave.astype(np.complex64)
-    h = hologram_from(path, meta, np.stack([names[f"c{c}.H"] for c in colours]) if intensity
-                      else None, wave)
+    h = Hologram(info=info, intensity=np.stack([names[f"c{c}.H"] for c in colours])
+                 if intensity else None, object_wave=wave)
     check_pixels(str(path), h)
     return h
 
 
-def hologram_from(path, meta: dict, intensity, object_wave) -> Hologram:
-    """The :class:`Hologram` of checked metadata ``meta`` (:func:`meta_of`) and its samples
-    (arrays indexed [channel, row, col], in memory or in chunks)."""
-    ref, zone = meta["reference"], meta["viewing_zone"]
-    try:
-        if zone is not None:
-            zone = ViewingZone(centre=zone["centre_m"], half_extents=zone["half_extents_m"],
-                               pupil=zone.get("pupil_m", 0.0))
-        return Hologram(intensity=intensity, encoding=meta["encoding"], zone=zone,
-                        wavelengths=tuple(meta["wavelengths_m"]), pitch=meta["pitch_m"],
-                        reference_angle=ref["angle_rad"], reference_azimuth=ref["azimuth_rad"],
-                        reference_amplitudes=tuple(ref["amplitudes"]), object_wave=object_wave,
-                        plate=np.array(meta["plate_to_world"], np.float64).reshape(4, 4),
-                        bounds=np.array(meta["bounds_m"], np.float64), band=meta["band_sin"],
-                        channels=tuple(meta["channels"]),
-                        point_density=meta["point_density_per_m2"])
-    except ValueError as e:
-        raise HologramFileError(f"{path}: {e}") from None
-
-
-def meta_of(path, text: str) -> dict:
-    """The metadata of the file at ``path`` from the JSON ``text`` of its ``holo`` header,
-    every field checked (:class:`HologramFileError` naming the file and the field)."""
-    return _meta(Path(str(path)), {"holo": text})
+def info_of(path, text: str) -> HologramInfo:
+    """The description of the hologram at ``path`` from the JSON ``text`` of its ``holo``
+    metadata, checked (:class:`HologramFileError` naming the file and the field)."""
+    return _described(Path(str(path)), {"holo": text})
 
 
 def _read(path: Path, what="hologram"):
@@ -147,8 +137,11 @@ def _read(path: Path, what="hologram"):
         raise HologramFileError(str(e)) from None
 
 
-def _meta(path: Path, header) -> dict:
-    """The ``holo`` metadata, every field checked against its type and range."""
+@validate.scale_free()  # a file holds what the renderer made, at the wavelength it chose
+def _described(path: Path, header) -> HologramInfo:
+    """The ``holo`` metadata as a :class:`HologramInfo`: the JSON's structure checked here (a
+    format and version this reads, each field of its type), every value by the description
+    itself, its complaint naming the file and the field as the file names it."""
     if "holo" not in header:
         raise HologramFileError(f"{path}: an EXR image without hologram metadata; "
                                 f"import it with import_acquired(pitch=, wavelength=, ...)")
@@ -169,57 +162,52 @@ def _meta(path: Path, header) -> dict:
     meta = {"band_sin": 0.0, "channels": [], "point_density_per_m2": 0.0,
             "encoding": "intensity", "viewing_zone": None, **meta}
     schema = _Schema(path, meta)
-    lengths = f"in [{validate.MIN_LENGTH:g}, {validate.MAX_LENGTH:g}] [m]"
-    wavelengths = schema.numbers("wavelengths_m", lengths, _length, shape="any")
-    if not 1 <= len(wavelengths) <= MAX_CHANNELS:
-        schema.fail("wavelengths_m", f"1 to {MAX_CHANNELS} wavelengths [m]")
-    schema.numbers("pitch_m", lengths, _length)
-    rows, cols = schema.numbers("size_px", "two integers >= 1",
-                                lambda v: v >= 1 and v == int(v), shape=2)
-    meta["size_px"] = [int(rows), int(cols)]
-    schema.numbers("plate_to_world", "16 finite numbers (a rigid pose)", shape=16)
     ref = meta.get("reference")
     if not isinstance(ref, dict):
         schema.fail("reference", "an object with angle_rad, azimuth_rad and amplitudes")
     sub = _Schema(path, ref, "reference.")
-    sub.numbers("angle_rad", "in [0, π/2)", lambda v: 0 <= v < math.pi / 2)
-    sub.numbers("azimuth_rad", "finite")
-    amplitudes = sub.numbers("amplitudes", f"{len(wavelengths)} numbers > 0 (or none)",
-                             lambda v: v > 0, shape="any")
-    if len(amplitudes) not in (0, len(wavelengths)):
-        sub.fail("amplitudes", f"{len(wavelengths)} numbers > 0 (or none)")
-    bounds = np.reshape(schema.numbers("bounds_m", "two corners (x, y, z) [m]", shape=(2, 3)),
-                        (2, 3))
-    if (bounds[0] > bounds[1]).any():
-        schema.fail("bounds_m", "a min corner <= the max corner")
-    if not isinstance(meta.get("object_wave"), bool):
-        schema.fail("object_wave", "true or false")
-    schema.numbers("band_sin", "in [0, 1)", lambda v: 0 <= v < 1)
-    schema.numbers("point_density_per_m2", ">= 0 [1/m²]", lambda v: v >= 0)
-    names = meta["channels"]
-    if not isinstance(names, list) or (names and (
-            len(names) != len(wavelengths) or not all(n in CHANNEL_ROLES for n in names))):
-        schema.fail("channels", f"one of {'/'.join(CHANNEL_ROLES)} per wavelength")
-    if not isinstance(meta["encoding"], str) or meta["encoding"] not in ENCODINGS:
-        schema.fail("encoding", " or ".join(map(repr, ENCODINGS)))
-    if meta["encoding"] == "complex" and meta["object_wave"] is not True:
-        schema.fail("object_wave", "true for a complex hologram (its samples are the object "
-                    "wave)")
-    zone = meta["viewing_zone"]
-    if zone is not None:
-        if not isinstance(zone, dict):
-            schema.fail("viewing_zone", "null or an object with centre_m, half_extents_m and "
-                        "pupil_m")
-        sub = _Schema(path, zone, "viewing_zone.")
-        sub.numbers("centre_m", "three coordinates [m], z > 0", shape=3)
-        sub.numbers("half_extents_m", "three half widths >= 0 [m]", lambda v: v >= 0, shape=3)
-        zone.setdefault("pupil_m", 0.0)
-        sub.numbers("pupil_m", ">= 0 [m]", lambda v: v >= 0)
-    return meta
+    fields = {
+        "wavelengths": schema.numbers("wavelengths_m", "a list of wavelengths [m]", shape="any"),
+        "pitch": schema.numbers("pitch_m", "a number [m]"),
+        "shape": schema.numbers("size_px", "two integers >= 1",
+                                lambda v: v >= 1 and v == int(v), shape=2),
+        "plate": np.reshape(schema.numbers("plate_to_world", "16 finite numbers (a rigid pose)",
+                                           shape=16), (4, 4)),
+        "reference_angle": sub.numbers("angle_rad", "a number [rad]"),
+        "reference_azimuth": sub.numbers("azimuth_rad", "a number [rad]"),
+        "reference_amplitudes": sub.numbers("amplitudes", "a list of numbers", shape="any"),
+        "bounds": np.reshape(schema.numbers("bounds_m", "two corners (x, y, z) [m]",
+                                            shape=(2, 3)), (2, 3)),
+        "band": schema.numbers("band_sin", "a number"),
+        "point_density": schema.numbers("point_density_per_m2", "a number [1/m²]"),
+        "channels": schema.kind("channels", list, "a list of channel roles"),
+        "encoding": schema.kind("encoding", str, "a string"),
+        "keeps_object_wave": schema.kind("object_wave", bool, "true or false"),
+        "zone": _zone(path, meta["viewing_zone"]),
+    }
+    fields["shape"] = tuple(int(n) for n in fields["shape"])
+    try:
+        return HologramInfo(**fields)
+    except InputError as e:  # named as the file names the field
+        field, _, rest = str(e).partition(" ")
+        raise HologramFileError(f"{path}: metadata {FILE_KEYS.get(field, field)} "
+                                f"{rest}") from None
 
 
-def _length(v) -> bool:
-    return validate.MIN_LENGTH <= v <= validate.MAX_LENGTH
+def _zone(path, zone) -> ViewingZone | None:
+    if zone is None:
+        return None
+    if not isinstance(zone, dict):
+        _Schema(path, {"viewing_zone": zone}).fail(
+            "viewing_zone", "null or an object with centre_m, half_extents_m and pupil_m")
+    sub = _Schema(path, {"pupil_m": 0.0, **zone}, "viewing_zone.")
+    try:
+        return ViewingZone(centre=sub.numbers("centre_m", "three coordinates [m]", shape=3),
+                           half_extents=sub.numbers("half_extents_m", "three half widths [m]",
+                                                    shape=3),
+                           pupil=sub.numbers("pupil_m", "a number [m]"))
+    except InputError as e:
+        raise HologramFileError(f"{path}: metadata viewing_zone: {e}") from None
 
 
 class _Schema:
@@ -232,6 +220,13 @@ class _Schema:
         value = repr(self.obj.get(key, "missing"))[:80]
         raise HologramFileError(f"{self.path}: metadata {self.prefix}{key} must be {allowed}; "
                                 f"got {value}")
+
+    def kind(self, key, kind, allowed):
+        """The field, when it is of the JSON type ``kind``."""
+        value = self.obj.get(key)
+        if not isinstance(value, kind):
+            self.fail(key, allowed)
+        return value
 
     def numbers(self, key, allowed, ok=lambda v: True, shape=None):
         """The field as a number, or with a ``shape`` (a length, a tuple of them, or "any"

@@ -24,8 +24,8 @@ import math
 
 import numpy as np
 
-from ..scene.hologram import Hologram
-from .hologram import HologramFileError, hologram_from, metadata, meta_of
+from ..scene.hologram import Hologram, HologramInfo
+from .hologram import HologramFileError, info_of, metadata
 
 WAVE, DONE = "object_wave", "tiles_done"
 MIN_TILE, MAX_TILE = 64, 16384
@@ -50,15 +50,15 @@ def _zarr():
     return zarr
 
 
-def create_plate(url, template: Hologram, tile: int):
+def create_plate(url, info: HologramInfo, tile: int):
     """A new tiled store at ``url`` (a folder path or an fsspec URL) for the complex plate
-    ``template`` describes (its metadata; its samples are not read), or the existing one
-    there when it was made for the same plate (a recording resumes into it). Returns the
-    zarr group. :class:`HologramFileError` when ``url`` holds another plate."""
+    ``info`` describes, or the existing one there when it was made for the same plate (a
+    recording resumes into it). Returns the zarr group. :class:`HologramFileError` when
+    ``url`` holds another plate."""
     zarr = _zarr()
-    shape = template.shape
-    count = len(template.wavelengths)
-    meta = metadata(template)
+    shape = info.shape
+    count = len(info.wavelengths)
+    meta = metadata(info)
     group = zarr.open_group(store=str(url), mode="a")
     if "holo" in group.attrs:
         if json.loads(json.dumps(meta)) != dict(group.attrs["holo"]) or \
@@ -102,15 +102,14 @@ def open_plate(url, *, complete=True) -> Hologram:
         raise HologramFileError(f"{url}: not a tiled plate ({e})") from None
     if "holo" not in group.attrs or WAVE not in group or DONE not in group:
         raise HologramFileError(f"{url}: not a tiled plate (no hologram metadata or samples)")
-    meta = meta_of(url, json.dumps(group.attrs["holo"]))
+    info = info_of(url, json.dumps(group.attrs["holo"]))
     wave = group[WAVE]
-    if meta["encoding"] != "complex" or tuple(wave.shape) != (len(meta["wavelengths_m"]),
-                                                              *meta["size_px"]):
+    if info.encoding != "complex" or tuple(wave.shape) != (len(info.wavelengths), *info.shape):
         raise HologramFileError(f"{url}: a tiled plate holds a complex object wave of "
-                                f"{meta['size_px']} samples per wavelength; it holds "
-                                f"{wave.shape}, encoding {meta['encoding']!r}")
+                                f"{list(info.shape)} samples per wavelength; it holds "
+                                f"{wave.shape}, encoding {info.encoding!r}")
     missing = int((~np.asarray(group[DONE][...])).sum())
     if complete and missing:
         raise HologramFileError(f"{url}: {missing} of {group[DONE].size} tiles are not written "
                                 f"yet; resume the recording (the same call again)")
-    return hologram_from(url, meta, intensity=None, object_wave=wave)
+    return Hologram(info=info, object_wave=wave)

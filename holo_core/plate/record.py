@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import jobs, memory, validate
 from ..propagation import grid
-from ..scene.hologram import ENCODINGS, Hologram
+from ..scene.hologram import ENCODINGS, Hologram, HologramInfo
 from ..scene.mesh import Mesh, facing, sample_points, visible_from
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Plate, ViewingZone
 from ..validate import InputError
@@ -144,11 +144,11 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     if bounds is None:
         bounds = np.array([pos.min(0), pos.max(0)]) if len(pos) else np.zeros((2, 3))
     # what the hologram will hold, checked now: a bad field is found before the recording
-    stored = {"wavelengths": wavelengths, "pitch": pitch, "reference_angle": reference.angle,
-              "reference_azimuth": reference.azimuth, "bounds": bounds, "band": band or 0.0,
-              "plate": np.eye(4) if plate is None else plate, "channels": channels,
-              "point_density": point_density}
-    Hologram(intensity=np.zeros((len(wavelengths), 1, 1), np.float32), **stored)
+    info = HologramInfo(wavelengths=wavelengths, pitch=pitch, shape=shape,
+                        reference_angle=reference.angle, reference_azimuth=reference.azimuth,
+                        bounds=bounds, band=band or 0.0, channels=channels,
+                        plate=np.eye(4) if plate is None else plate, point_density=point_density,
+                        keeps_object_wave=bool(keep_object_wave))
     memory.check_host(f"a {shape[1]}x{shape[0]} hologram of {len(wavelengths)} wavelengths",
                       HOST_BYTES * len(wavelengths) * math.prod(shape))
     for lam in wavelengths:
@@ -173,8 +173,9 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
                                                      reference=reference, amplitude=a_r)))
         waves.append(o)
         amplitudes.append(a_r)
-    return Hologram(intensity=np.stack(intensity), reference_amplitudes=tuple(amplitudes),
-                    object_wave=np.stack(waves) if keep_object_wave else None, **stored)
+    return Hologram(info=info, intensity=np.stack(intensity),
+                    object_wave=np.stack(waves) if keep_object_wave else None,
+                    reference_amplitudes=tuple(amplitudes))
 
 
 def point_amplitudes(positions, colours, wavelengths, phases=None, seed=0, *, empty_ok=False):

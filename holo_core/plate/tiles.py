@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import jobs, validate
 from ..io import tiles as store
-from ..scene.hologram import Hologram
+from ..scene.hologram import Hologram, HologramInfo
 from ..validate import InputError
 from .point_sources import check_distance, point_wave, sampling_grid
 from .record import DEFAULT_WAVELENGTHS, point_amplitudes
@@ -73,12 +73,11 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
     validate.choice("method", method, ("direct", "wrp"))
     for lam in set(wavelengths):
         check_distance(pos, sampling_grid(shape, lam, pitch, band))
-    template = Hologram(object_wave=_Shape((len(wavelengths), *shape)), encoding="complex",
-                        wavelengths=wavelengths, pitch=pitch, band=band or 0.0,
-                        plate=np.eye(4) if plate is None else plate, channels=channels,
-                        bounds=np.array([pos.min(0), pos.max(0)]) if bounds is None else bounds,
-                        zone=zone)
-    store.create_plate(url, template, tile)
+    info = HologramInfo(shape=shape, encoding="complex", wavelengths=wavelengths, pitch=pitch,
+                        band=band or 0.0, plate=np.eye(4) if plate is None else plate,
+                        channels=channels, zone=zone,
+                        bounds=np.array([pos.min(0), pos.max(0)]) if bounds is None else bounds)
+    store.create_plate(url, info, tile)
     todo = [(i, j) for i, j in zip(*np.nonzero(~store.tiles_done(url)))]
     log.info("%s: %d of %d tiles to record", url, len(todo), math.prod(store.tile_grid(shape,
                                                                                      tile)))
@@ -93,13 +92,6 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
                        for i, j in todo]
             _wait(client, futures, progress)
     return store.open_plate(url)
-
-
-class _Shape:
-    """The shape of samples not yet recorded: what the metadata needs of them."""
-
-    def __init__(self, shape):
-        self.shape, self.ndim = shape, len(shape)
 
 
 def record_tile(points, spec: dict, i: int, j: int) -> tuple[int, int]:
