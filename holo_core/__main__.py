@@ -48,7 +48,11 @@ def record(args) -> int:
     from .plate.record import Reference, record_points
     from .scene.mesh import default_spacing, sample_points
     tiled = _is_store(args.output)
-    out = args.output if tiled else _output(args.output, args.mesh, "")  # before the work
+    if tiled:  # before the work: the store's path or URL, made absolute for the workers
+        from .io.tiles import check_output
+        out = check_output(args.output).url
+    else:
+        out = _output(args.output, args.mesh, "")
     mesh = read_mesh(args.mesh)
     shape = (args.resolution[1], args.resolution[0])
     wavelengths = tuple(w * 1e-9 for w in args.wavelengths)
@@ -69,7 +73,8 @@ def record(args) -> int:
         method = "direct" if args.method == "auto" else args.method
         record_tiled(pos, colours, url=out, shape=shape, pitch=args.pitch,
                      wavelengths=wavelengths, tile=args.tile, method=method,
-                     scheduler=args.scheduler, progress=_progress_bar(),
+                     scheduler=args.scheduler, overwrite=args.overwrite,
+                     progress=_progress_bar(),
                      dashboard=lambda link: print(f"Dask dashboard: {link}"))
         print(f"\n{out}")
         return 0
@@ -299,7 +304,10 @@ def main(argv=None) -> int:
     p.add_argument("--scheduler", default=None,
                    help="with an output NAME.zarr or URL: a Dask scheduler's address "
                         "(tcp://host:8786; default DASK_SCHEDULER_ADDRESS, else a local "
-                        "cluster)")
+                        "cluster); one not reached within 10 s is an error")
+    p.add_argument("--overwrite", action="store_true",
+                   help="with an output NAME.zarr or URL: replace a store of another "
+                        "recording there (default: refused; the same recording resumes)")
     p = sub.add_parser("plan", help="a plate's samples, wavelength, memory and time, and what "
                                     "a camera's view of it resolves, before any recording")
     p.add_argument("mesh", nargs="?", help="the objects (.ply or .obj, metres), or --box")

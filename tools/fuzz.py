@@ -6,8 +6,11 @@ values, each refused or written and read back unchanged (the writer holds the re
 (checked for sanity: finite, and a hologram that reconstructs and renders finite) or the
 project's InputError, whose message names the file for a reader, within ``CASE_SECONDS`` and
 under an address-space limit; anything else is a finding. Run as ``python tools/fuzz.py TARGET
-CASES SEED`` (TARGET: hologram, ply, obj, scan, write, api); it prints one JSON line: the
-outcome counts and up to 10 examples of each failure kind.
+CASES SEED`` (TARGET: hologram, ply, obj, scan, write, api, store, layout); it prints one JSON
+line: the outcome counts and up to 10 examples of each failure kind. ``store``: a valid tiled
+plate's files damaged one or two at a time (bytes, JSON, links to /dev/zero or outside, FIFOs,
+folders, missing files, another chunk's bytes), read back exactly as recorded or refused;
+``layout``: a display's layout and tiles damaged (a tile listed up to 300 times too).
 """
 
 from __future__ import annotations
@@ -256,6 +259,143 @@ MUTATIONS = {
 }
 
 
+# --- tiled stores and display layouts: folders of files, damaged file by file ----------------
+
+def _pristine_store(folder):
+    """A valid tiled store of 2 x 3 tiles of 64² (two channels, the last column of tiles cut
+    short) written through the store's own functions, and the samples it holds."""
+    if "store" not in _CACHE:
+        from holo_core.io import tiles as store
+        from holo_core.plate.record import record_points
+        from holo_core.plate.tiles import _recording
+        from holo_core.scene.hologram import HologramInfo
+        shape, tile, lams = (96, 160), 64, (633e-9, 532e-9)
+        pos = np.array([[1e-4, -2e-4, -0.02], [-3e-4, 1e-4, -0.025]])
+        cols = np.array([[1.0, 0.5], [0.3, 1.0]])
+        h = record_points(pos, cols, shape=shape, pitch=8e-6, wavelengths=lams,
+                          method="direct")
+        url = folder / "pristine.zarr"
+        info = HologramInfo(shape=shape, encoding="complex", wavelengths=lams, pitch=8e-6,
+                            bounds=h.bounds)
+        recording = _recording(pos, cols, None, 0, method="direct", shape=shape, pitch=8e-6,
+                               band=None, wavelengths=lams, tile=tile)
+        with store.recording_into(store.Files(url), info, tile, recording) as plate:
+            for i, j in np.ndindex(*store.tile_grid(shape, tile)):
+                r0, r1, c0, c1 = store.tile_window(shape, tile, i, j)
+                plate.write_tile(i, j, h.object_wave[:, r0:r1, c0:c1])
+        _CACHE["store"] = url, np.asarray(h.object_wave)
+    return _CACHE["store"]
+
+
+def _bytes_of(mutate):
+    def damage(path, rng):
+        data = path.read_bytes()
+        if data:  # an earlier damage may have emptied it
+            path.write_bytes(mutate(data, rng) or b"")
+    return damage
+
+
+def _json_of(path):
+    try:
+        return json.loads(path.read_text())
+    except (UnicodeDecodeError, ValueError, RecursionError):  # damaged already
+        return None
+
+
+def _json_edit(path, rng):
+    doc = _json_of(path)
+    if doc is not None:
+        path.write_text(json.dumps(_edit(doc, rng)))
+
+
+def _deep_json(path, rng):
+    depth = int(rng.choice([100, 10_000, 1_000_000]))
+    path.write_bytes(b"{\"a\": " + b"[" * depth + b"]" * depth + b"}")
+
+
+def _replaced(kind):
+    def damage(path, rng):
+        path.unlink()
+        if kind == "fifo":
+            os.mkfifo(path)
+        elif kind == "folder":
+            path.mkdir()
+        elif kind == "zero":
+            os.symlink("/dev/zero", path)
+        elif kind == "outside":
+            os.symlink(path.parents[len(path.parents) - 2] / "etc" / "hostname", path)
+    return damage
+
+
+def _swap(path, rng):
+    """The bytes of another file of the store of the same kind (a chunk for a chunk)."""
+    others = [p for p in path.parent.parent.rglob("*") if p.is_file() and not p.is_symlink()
+              and p != path and p.stat().st_size == path.stat().st_size]
+    if others:
+        path.write_bytes(others[int(rng.integers(len(others)))].read_bytes())
+
+
+STORE_MUTATIONS = [_bytes_of(bit_flips), _bytes_of(truncate), _bytes_of(splice), _json_edit,
+                   _json_edit, _deep_json, _replaced("fifo"), _replaced("folder"),
+                   _replaced("zero"), _replaced("outside"), _replaced("missing"), _swap]
+
+
+def store_case(rng, case, folder, hostile=True):
+    """A copy of a valid store with one or two of its files damaged: reading it back gives
+    exactly the samples recorded, or InputError naming the store."""
+    import shutil
+    pristine, wave = _pristine_store(folder)
+    url = folder / "case.zarr"
+    shutil.rmtree(url, ignore_errors=True)
+    shutil.copytree(pristine, url, symlinks=True)
+    for _ in range(int(rng.integers(1, 3)) if hostile else 0):
+        files = sorted(p for p in url.rglob("*") if p.is_file() and not p.is_symlink())
+        if files:
+            target = files[int(rng.integers(len(files)))]
+            STORE_MUTATIONS[int(rng.integers(len(STORE_MUTATIONS)))](target, rng)
+
+    def call():
+        from holo_core.io.tiles import open_plate
+        back = named(url, lambda u: open_plate(u).object_wave[...])
+        assert np.array_equal(back, wave), "a damaged store read back other samples"
+    call.label = f"case {case}"
+    return call
+
+
+def layout_case(rng, case, folder, hostile=True):
+    """A display's layout and tiles with the layout's JSON or a tile damaged (a tile listed
+    many times among the edits): read back as finite values of the layout's shape, or
+    InputError naming the file."""
+    from holo_core.io.display import write_tiles
+    path = folder / f"layout{case}" / "p.json"
+    write_tiles(path, rng.uniform(0, 2 * np.pi, (40, 50)), quantity="phase", pitch=4e-6,
+                wavelength=633e-9, distance=-0.02, encoding="double-phase", tile=(16, 20))
+    for _ in range(int(rng.integers(1, 3)) if hostile else 0):
+        choice = rng.integers(6)
+        if choice == 0:  # a tile listed again, up to 300 times
+            layout = _json_of(path)
+            tiles = layout["tiles"] if isinstance(layout, dict) and \
+                isinstance(layout.get("tiles"), list) and layout["tiles"] else None
+            if tiles:
+                tiles += [tiles[int(rng.integers(len(tiles)))]] * int(rng.integers(1, 300))
+                path.write_text(json.dumps(layout))
+        elif choice == 1:
+            _json_edit(path, rng)
+        elif choice == 2:
+            _deep_json(path, rng)
+        else:
+            target = sorted(path.parent.iterdir())[int(rng.integers(len(list(
+                path.parent.iterdir()))))]
+            _bytes_of([bit_flips, truncate, splice][int(rng.integers(3))])(target, rng)
+
+    def call():
+        from holo_core.io.display import read_tiles
+        values, layout = named(path, read_tiles)
+        assert values.shape == tuple(layout["shape"]) and np.isfinite(values).all()
+    call.label = f"case {case}"
+    return call
+
+
 # --- the readers and what a good result is -----------------------------------------------------
 
 def read_case(reader, path):
@@ -371,8 +511,9 @@ def api_calls():
     from holo_core.plate.reconstruct import reconstruct
     from holo_core.plate.record import record_points
     from holo_core.plate.view import render_view
-    from holo_core.plate.sampling import choose
+    from holo_core.plate.sampling import choose, plan
     from holo_core.scene import Camera, Hologram, Mesh, look_at, sample_points
+    from holo_core.scene.plate import ViewingZone
     field = np.ones((16, 16), np.complex64)
     wave = {"wavelength": 633e-9, "pitch": 1e-6}
     h = _fixture_hologram()
@@ -400,6 +541,11 @@ def api_calls():
                                       "exposure": None, "opacity_threshold": 0.5}),
         ("choose", choose, {"plate_size": (0.01, 0.01), "points": [[0, 0, -0.05]],
                             "resolution": 64, "max_resolution": 64, "wavelength": None}),
+        ("plan", plan, {"plate_size": (0.05, 0.05), "bounds": [[-0.01, -0.01, -0.31],
+                                                                [0.01, 0.01, -0.29]],
+                        "zone": ViewingZone.around((0, 0, 0.3), 0.01, 0.01), "resolution": 256,
+                        "encoding": "complex", "wavelength": None,
+                        "camera": ((0, 0, 0.3), 5e-4, 0.01)}),
         ("render_camera", render_camera, {"meshes": Mesh(**tri), "camera": Camera(
             matrix_world=look_at((0, 0, 0.5), (0, 0, -1)), resolution=(8, 8)), "samples": 1,
             "supersample": 1, "seed": 0, "exposure": 1.0, "via": "object_wave"}),
@@ -455,6 +601,10 @@ def sane(result) -> None:
         result = (result.rgb, result.alpha, result.depth)
     if isinstance(result, Hologram):
         result = result.intensity
+    if hasattr(result, "memory_bytes"):  # a plate's plan: every figure it states finite
+        result = np.array([result.pitch, result.wavelength, result.depth_wavelength,
+                           result.band, result.slab, result.memory_bytes(),
+                           result.record_seconds()])
     if isinstance(result, (tuple, list)):
         for r in result:
             sane(r)
@@ -473,6 +623,10 @@ def make(reader, rng):
 
 def next_case(target, case, rng, folder):
     """The case to run; one in ten is the valid file or call itself."""
+    if target == "store":
+        return store_case(rng, case, folder, case % 10)
+    if target == "layout":
+        return layout_case(rng, case, folder, case % 10)
     if target == "write":
         fields = hostile_hologram(rng, case % 10)
         return lambda: write_case(fields, folder / "h.exr")

@@ -190,7 +190,10 @@ def read_tiles(path) -> tuple[np.ndarray, dict]:
             raise InputError(f"{path}: the tiles do not cover the {cols}x{rows} grid exactly "
                              f"once: tile {t['file']} (row {t['row']}, col {t['col']}) covers "
                              f"samples an earlier tile covers")
-        a = read_tile(path.parent / t["file"])
+        try:
+            a = read_tile(path.parent / t["file"])
+        except InputError as e:  # the layout that lists it, and the tile's own complaint
+            raise InputError(f"{path}: {e}") from None
         if a.shape != (t["rows"], t["cols"]):
             raise InputError(f"{path}: tile {t['file']} is {a.shape[1]}x{a.shape[0]} samples; "
                              f"the layout says {t['cols']}x{t['rows']}")
@@ -249,11 +252,11 @@ def _read_layout(path: Path) -> dict:
         raise InputError(f"{path}: layout version {layout.get('version')!r}; this reader "
                          f"reads version {VERSION}")
     try:
-        checked = _layout(layout["shape"], quantity=layout["kind"], pitch=layout["pitch"],
+        shape = validate.shape2d("shape", layout["shape"])  # first: _layout takes it as valid
+        checked = _layout(shape, quantity=layout["kind"], pitch=layout["pitch"],
                           wavelength=layout["wavelength"], distance=layout["distance"],
                           encoding=layout["encoding"], bit_depth=layout["bit_depth"],
                           display=layout.get("display", ""))
-        shape = validate.shape2d("shape", layout["shape"])
         tiles = [_tile_entry(t, shape) for t in _tile_list(layout["tiles"])]
     except KeyError as e:
         raise InputError(f"{path}: the layout lacks the field {e.args[0]!r}") from None

@@ -282,9 +282,7 @@ def plan(plate_size, bounds, *, zone: ViewingZone, resolution=None, encoding="co
     width, height = validate.pair("plate_size", plate_size, "m")
     validate.positive("plate width", width, "m")
     validate.positive("plate height", height, "m")
-    if encoding not in ENCODINGS:
-        raise InputError(f"encoding must be one of {', '.join(map(repr, ENCODINGS))}; got "
-                         f"{encoding!r}"[:300])
+    validate.choice("encoding", encoding, ENCODINGS)
     if not isinstance(zone, ViewingZone):
         raise InputError(f"zone must be a ViewingZone; got {type(zone).__name__}")
     try:
@@ -296,7 +294,7 @@ def plan(plate_size, bounds, *, zone: ViewingZone, resolution=None, encoding="co
                          f"plate (z < 0 in its frame); got {np.asarray(bounds).tolist()!r}"[:300])
     max_resolution = validate.integer("max_resolution", max_resolution, 16)
     if camera is not None:
-        check_in_front("camera position", camera[0])
+        camera = _camera(camera)
     needed = min(MAX_BAND, band_towards_zone(box, zone))
     side = max(width, height)
     per_band = 2.0 if encoding == "complex" else 8.0  # λ / (pitch · sin θ)
@@ -335,6 +333,20 @@ def plan(plate_size, bounds, *, zone: ViewingZone, resolution=None, encoding="co
                      pitch=pitch, wavelength=lam, depth_wavelength=lam2, band=band,
                      needed_band=needed, encoding=encoding, reference_angle=reference,
                      step=step, distance=far, slab=slab, zone=zone, bounds=box)
+
+
+def _camera(camera) -> tuple:
+    """``camera`` (position (3,) [m] in front of the plate, pixel angle [rad] > 0, pupil
+    diameter [m] > 0 or None) checked."""
+    try:
+        position, pixel, pupil = camera
+    except (TypeError, ValueError):
+        raise InputError(f"camera must be (position (3,) [m], pixel angle [rad], pupil "
+                         f"diameter [m] or None); got {camera!r}"[:300]) from None
+    check_in_front("camera position", position)
+    return (validate.vector("camera position", position, 3, "m"),
+            validate.positive("camera pixel angle", pixel, "rad"),
+            None if pupil is None else validate.positive("camera pupil", pupil, "m"))
 
 
 def check_in_front(name: str, position) -> None:

@@ -3,15 +3,18 @@
 The plate's object wave (Eq. 3) is written tile by tile into a tiled store
 (:mod:`holo_core.io.tiles`), so no process ever holds the whole plate: a task computes one
 tile from the emitters whose cone reaches it (``point_sources``: a point lights only the disc
-its pitch samples alias-free, ρ ≤ |z|·tan θ), writes it and sets its flag. Every tile is the
+its pitch samples alias-free, ρ ≤ |z|·tan θ), writes it and its record. Every tile is the
 whole plate's recording cut to its rows and columns (the same sum, the same sample positions,
 the same random phases), so a tiled plate equals the plate recorded in memory.
 
 The tasks run on Dask's distributed scheduler: by default a local cluster with one worker
 process per core (each its own OpenCL context), or the cluster at ``scheduler``
 (``tcp://host:8786``, or the environment's ``DASK_SCHEDULER_ADDRESS``) with no other change;
-the emitters are scattered to the workers once, not sent with every tile. Tiles already
-flagged in the store are skipped, so a killed recording resumes where it stopped.
+the emitters are scattered to the workers once, not sent with every tile. A store holds one
+recording (the digest of its emitters, colours, phases, method and sampling): the same call
+again resumes it, keeping the tiles that read back whole and writing again those missing or
+damaged; another recording is refused by name (or replaces it with ``overwrite``), and two
+recordings never write one store at once (its lock).
 """
 
 from __future__ import annotations
@@ -19,6 +22,8 @@ from __future__ import annotations
 import logging
 import math
 import os
+import socket
+import struct
 from contextlib import contextmanager
 
 import numpy as np
@@ -33,11 +38,13 @@ from .record import DEFAULT_WAVELENGTHS, point_amplitudes
 log = logging.getLogger(__name__)
 DEFAULT_TILE = 2048
 TILE_STEP = 64  # tiles are multiples of this: the kernel's column segments (<= 32) align
+CONNECT_TIMEOUT = 10.0  # [s] to reach a scheduler and hear its first message
+MAX_HANDSHAKE = 2**20   # bytes a Dask scheduler's first message may claim (a few hundred)
 
 
 def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_WAVELENGTHS,
                  tile=DEFAULT_TILE, phases=None, seed=0, band=None, plate=None, bounds=None,
-                 channels=(), zone=None, method="direct", scheduler=None,
+                 channels=(), zone=None, method="direct", scheduler=None, overwrite=False,
                  progress: jobs.Progress = None, dashboard=None) -> Hologram:
     """Record the complex plate of point emitters into the tiled store at ``url`` and return
     it opened (:func:`holo_core.io.tiles.open_plate`).
@@ -46,9 +53,12 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
         As for :func:`holo_core.plate.record.record_points` (positions [m] in the plate's
         frame, z < 0; colours: intensities, one column per wavelength [m]).
     url : str or path
-        The store: a folder, or any fsspec URL the workers can reach. An existing store of
-        the same plate is resumed (its written tiles are kept); one of another plate is
-        refused.
+        The store: a folder (made absolute before the workers see it), or an fsspec URL the
+        workers can reach (not ``memory://``). It is checked before the work: a file in the
+        way, a folder that takes no new file, a protocol whose package is missing, a folder
+        or Zarr group that is not a Holo store are refused. A store of the same recording is
+        resumed (its tiles that read back whole are kept); one of another recording is
+        refused, naming both.
     shape : (rows, cols) of the plate; pitch : sample spacing [m]
     tile : samples per tile side, a multiple of 64 (default 2048: 32 MiB per channel)
     plate, bounds, channels, zone
@@ -56,7 +66,11 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
         the points' box [m].
     scheduler : str, optional
         A Dask scheduler's address; default ``DASK_SCHEDULER_ADDRESS``, else a local cluster
-        of one single-threaded worker per core.
+        of one single-threaded worker per core. One that cannot be reached within
+        ``CONNECT_TIMEOUT`` seconds, refuses, or answers other than a scheduler is an
+        :class:`InputError` naming it, and leaves no store behind.
+    overwrite : bool
+        Replace a store of another recording at ``url`` (never data that is not a Holo store).
     progress : callable, optional
         Called with the fraction of tiles done; raising :class:`holo_core.jobs.Cancelled`
         cancels the tasks not yet finished (the tiles written stay, for a resume).
@@ -71,53 +85,96 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
         raise InputError(f"tile must be a multiple of {TILE_STEP} samples in "
                          f"[{store.MIN_TILE}, {store.MAX_TILE}]; got {tile}")
     validate.choice("method", method, ("direct", "wrp"))
+    if not isinstance(overwrite, bool):
+        raise InputError(f"overwrite must be True or False; got {overwrite!r}"[:200])
     for lam in set(wavelengths):
         check_distance(pos, sampling_grid(shape, lam, pitch, band))
     info = HologramInfo(shape=shape, encoding="complex", wavelengths=wavelengths, pitch=pitch,
                         band=band or 0.0, plate=np.eye(4) if plate is None else plate,
                         channels=channels, zone=zone,
                         bounds=np.array([pos.min(0), pos.max(0)]) if bounds is None else bounds)
-    store.create_plate(url, info, tile)
-    todo = [(i, j) for i, j in zip(*np.nonzero(~store.tiles_done(url)))]
-    log.info("%s: %d of %d tiles to record", url, len(todo), math.prod(store.tile_grid(shape,
-                                                                                     tile)))
-    if todo:
-        spec = {"url": str(url), "shape": shape, "pitch": pitch, "tile": tile, "band": band,
-                "wavelengths": wavelengths, "method": method}
-        with client_for(scheduler) as client:
-            if dashboard is not None:
-                dashboard(client.dashboard_link)
-            points = client.scatter((pos, amp), broadcast=True)
-            futures = [client.submit(record_tile, points, spec, int(i), int(j), pure=False)
-                       for i, j in todo]
-            _wait(client, futures, progress)
-    return store.open_plate(url)
+    files = store.check_output(url)  # before the work: the output's problems come first
+    address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
+    if address:
+        _probe(address)  # fails fast, before the store is touched
+    recording = _recording(pos, colours, phases, seed, method=method, shape=shape,
+                           pitch=pitch, band=band, wavelengths=wavelengths, tile=tile)
+    with store.recording_into(files, info, tile, recording, overwrite=overwrite) as plate:
+        todo = _to_record(plate)
+        log.info("%s: %d of %d tiles to record", files.name, len(todo), plate.written().size)
+        if todo:
+            spec = {"url": files.url, "recording": recording["digest"]}
+            with client_for(address) as client:
+                if dashboard is not None:
+                    dashboard(client.dashboard_link)
+                points = client.scatter((pos, amp), broadcast=True)
+                futures = [client.submit(record_tile, points, spec, int(i), int(j), pure=False)
+                           for i, j in todo]
+                _wait(client, futures, progress)
+    return store.open_plate(files.name)
+
+
+def _recording(pos, colours, phases, seed, **sampling) -> dict:
+    """What a store records, its digest and the parts a message names when two differ."""
+    cols = np.asarray(colours, np.float64).reshape(len(pos), -1)
+    parts = {"emitters": len(pos), "geometry": store.array_digest(pos),
+             "colours": store.array_digest(cols),
+             "phases": "from the seed" if phases is None
+             else store.array_digest(np.asarray(phases, np.float64)),
+             "seed": int(seed) if phases is None else None, "method": sampling.pop("method"),
+             "sampling": store.array_digest(np.array(
+                 [*sampling["shape"], sampling["pitch"], sampling["band"] or 0.0,
+                  sampling["tile"], *sampling["wavelengths"]], np.float64)),
+             "encoding": "complex"}
+    return {"digest": store.digest_of(parts), "parts": parts}
+
+
+def _to_record(plate) -> list[tuple[int, int]]:
+    """The tiles to write: those without this recording's record, and those whose samples do
+    not read back as recorded (damage found on resuming: named, then written again)."""
+    todo = []
+    for why in plate.bad.values():
+        log.warning("%s: %s; writing it again", plate.files.name, why)
+    for i, j in np.ndindex(*plate.written().shape):
+        if plate.written()[i, j]:
+            why = plate.damaged(i, j)
+            if why is None:
+                continue
+            log.warning("%s; writing it again", why)
+        todo.append((i, j))
+    return todo
 
 
 def record_tile(points, spec: dict, i: int, j: int) -> tuple[int, int]:
-    """One task: tile (i, j) of the plate ``spec`` describes, from the emitters ``points``
-    (positions, amplitudes) whose cones reach it, written to the store."""
+    """One task: tile (i, j) of the store ``spec`` names, from the emitters ``points``
+    (positions, amplitudes) whose cones reach it, written with its record. A store that now
+    holds another recording (replaced while this task waited) is left alone."""
     pos, amp = points
-    shape, pitch, tile = spec["shape"], spec["pitch"], spec["tile"]
+    plate = store.read_store(spec["url"], records=False)
+    if plate.recording["digest"] != spec["recording"]:
+        raise InputError(f"{spec['url']}: now holds another recording; tile ({i}, {j}) of "
+                         f"recording {spec['recording'][:12]} is not written")
+    info, tile = plate.info, plate.tile
+    shape, pitch, band = plate.shape, info.pitch, info.band or None
     r0, r1, c0, c1 = store.tile_window(shape, tile, i, j)
     # the tile's centre in the plate's frame: its samples lie where the whole plate's do
     centre = np.array([((c0 + c1 - 1) / 2 - (shape[1] - 1) / 2) * pitch,
                        ((r0 + r1 - 1) / 2 - (shape[0] - 1) / 2) * pitch, 0.0])
     half = np.array([(c1 - c0) / 2 * pitch, (r1 - r0) / 2 * pitch])
-    waves = np.zeros((len(spec["wavelengths"]), r1 - r0, c1 - c0), np.complex64)
+    waves = np.zeros((plate.count, r1 - r0, c1 - c0), np.complex64)
     groups = {}
-    for c, lam in enumerate(spec["wavelengths"]):
+    for c, lam in enumerate(info.wavelengths):
         groups.setdefault(lam, []).append(c)
     for lam, chans in groups.items():
-        cone = sampling_grid(shape, lam, pitch, spec["band"]).cone
+        cone = sampling_grid(shape, lam, pitch, band).cone
         reach = np.abs(pos[:, 2]) * cone + pitch
         gap = np.maximum(np.abs(pos[:, :2] - centre[:2]) - half, 0)
         near = (gap ** 2).sum(1) <= reach ** 2
         if near.any():
             waves[chans] = point_wave(pos[near] - centre, amp[near][:, chans], wavelength=lam,
-                                      pitch=pitch, shape=(r1 - r0, c1 - c0),
-                                      band=spec["band"], method=spec["method"])
-    store.write_tile(spec["url"], i, j, waves)
+                                      pitch=pitch, shape=(r1 - r0, c1 - c0), band=band,
+                                      method=plate.recording["parts"]["method"])
+    plate.write_tile(i, j, waves)
     return i, j
 
 
@@ -132,7 +189,7 @@ def client_for(scheduler=None):
         raise InputError("tiled plates need Dask: pip install 'holo[tiles]'") from None
     address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
     if address:
-        with Client(address) as client:
+        with _connected(Client, address) as client:
             log.info("Dask scheduler %s, dashboard %s", address, client.dashboard_link)
             yield client
         return
@@ -140,6 +197,69 @@ def client_for(scheduler=None):
                       dashboard_address=":0") as cluster, Client(cluster) as client:
         log.info("local Dask cluster, dashboard %s", client.dashboard_link)
         yield client
+
+
+@contextmanager
+def _connected(Client, address):
+    """A client of the scheduler at ``address``, or :class:`InputError` naming it within
+    ``CONNECT_TIMEOUT`` seconds: an address that is not one, an unknown host, a refused
+    connection, a port that never answers or answers other than a scheduler."""
+    _probe(address)
+    try:
+        client = Client(address, timeout=CONNECT_TIMEOUT)
+    except Exception as e:  # noqa: BLE001 -- Dask's failures to connect vary; all mean one thing
+        raise InputError(f"scheduler {address}: cannot connect ({type(e).__name__}: "
+                         f"{e})"[:400]) from None
+    with client:
+        yield client
+
+
+def _probe(address) -> None:
+    """Reach a TCP scheduler and read the length of its first message (a Dask scheduler
+    speaks first, a few hundred bytes) within ``CONNECT_TIMEOUT`` seconds, so that a wrong
+    endpoint fails fast and by name instead of hanging or allocating what garbage claims."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+    what = f"scheduler {address}"
+    try:
+        scheme, location = parse_address(address)
+        host, port = parse_host_port(location)
+    except (ValueError, TypeError) as e:
+        raise InputError(f"{what}: not a scheduler address (tcp://host:port; {e})"[:300]) \
+            from None
+    if scheme not in ("tcp", "tls"):
+        return  # another transport: Dask's own timeout applies
+    try:
+        with socket.create_connection((host, port), timeout=CONNECT_TIMEOUT) as s:
+            if scheme == "tls":
+                return  # its messages are encrypted: reaching it is what can be checked
+            header = _receive(s, 8)
+    except socket.gaierror as e:
+        raise InputError(f"{what}: unknown host {host!r} ({e.strerror})") from None
+    except ConnectionRefusedError:
+        raise InputError(f"{what}: refuses connections (is a scheduler running there?)") \
+            from None
+    except (socket.timeout, TimeoutError):
+        raise InputError(f"{what}: no answer within {CONNECT_TIMEOUT:g} s (is it a Dask "
+                         f"scheduler?)") from None
+    except OSError as e:
+        raise InputError(f"{what}: cannot connect ({e.strerror or e})") from None
+    if header is None:
+        raise InputError(f"{what}: closed the connection without a word; not a Dask "
+                         f"scheduler")
+    (claimed,) = struct.unpack("<Q", header)
+    if not 0 < claimed <= MAX_HANDSHAKE:
+        raise InputError(f"{what}: answers, but not as a Dask scheduler (its first message "
+                         f"claims {claimed} bytes)")
+
+
+def _receive(sock, n) -> bytes | None:
+    data = b""
+    while len(data) < n:
+        part = sock.recv(n - len(data))
+        if not part:
+            return None
+        data += part
+    return data
 
 
 def _wait(client, futures, progress) -> None:

@@ -1,6 +1,7 @@
-"""Fuzzing (tools/fuzz.py): each mutated file, hostile hologram or hostile API call ends in
-a sane result (finite; a hologram that reads also reconstructs and renders finite) or
-InputError (a reader's naming its file).
+"""Fuzzing (tools/fuzz.py): each mutated file, hostile hologram, hostile API call, damaged
+tiled store or display layout ends in a sane result (finite; a hologram that reads also
+reconstructs and renders finite; a store reads back exactly what was recorded) or InputError
+(a reader's naming its file or store).
 
 ``make test`` runs HOLO_FUZZ_CASES (300) cases per target; ``make fuzz`` runs 5000.
 """
@@ -17,7 +18,8 @@ FUZZ = Path(__file__).resolve().parents[3] / "tools" / "fuzz.py"
 CASES = int(os.environ.get("HOLO_FUZZ_CASES", "300"))
 
 
-@pytest.mark.parametrize("reader", ["hologram", "ply", "obj", "scan", "write", "api"])
+@pytest.mark.parametrize("reader", ["hologram", "ply", "obj", "scan", "write", "api", "store",
+                                    "layout"])
 def test_every_mutated_file_ends_in_a_result_or_the_clear_error(reader):
     run = subprocess.run([sys.executable, str(FUZZ), reader, str(CASES), "20261122"],
                          capture_output=True, text=True, timeout=60 + CASES)

@@ -1,8 +1,14 @@
 """Gigapixel plates, small: a plate of 4×4 tiles of 256² recorded as Dask tasks into a Zarr
-store equals the plate recorded in memory; a cancelled or killed recording resumes; a view
-reads only the tiles its window overlaps and equals the view of the plate in memory."""
+store equals the plate recorded in memory; a cancelled or killed recording resumes, and a
+damaged tile is written again; a view reads only the tiles its window overlaps and equals the
+view of the plate in memory; a scheduler that cannot serve fails fast, by name, leaving no
+store; the output is checked, and made absolute, before the work."""
 
 import json
+import os
+import re
+import socket
+import threading
 import time
 
 import numpy as np
@@ -88,7 +94,8 @@ def test_a_cancelled_recording_resumes_and_a_half_written_tile_is_written_again(
         _record(scene, url, scheduler, progress=cancel_after_four)
     done = _settled(url)  # the tiles already running when cancelled end their write
     assert 4 <= done.sum() < done.size, done.sum()
-    with pytest.raises(HologramFileError, match=r"tiles are not written yet; resume"):
+    with pytest.raises(HologramFileError, match=r"tiles are not written yet \(tile \(\d, \d\) "
+                                                r"first\); resume"):
         store.open_plate(url)
     # a tile killed mid-write: samples partly there, its flag unset
     i, j = map(int, np.argwhere(~done)[0])
@@ -141,7 +148,7 @@ def test_another_plate_in_the_store_is_refused_and_bad_tiles_are_named(scene, sc
                                                                       tmp_path):
     url = tmp_path / "p.zarr"
     _record(scene, url, scheduler)
-    with pytest.raises(HologramFileError, match="holds another plate"):
+    with pytest.raises(HologramFileError, match=r"holds another recording \(its sampling differ"):
         record_tiled(*scene, url=url, shape=SHAPE, pitch=2 * PITCH, wavelengths=WAVELENGTHS,
                      tile=TILE, scheduler=scheduler)
     with pytest.raises(InputError, match=r"tile must be a multiple of 64"):
@@ -173,3 +180,135 @@ def test_the_command_line_records_a_tiled_plate_on_the_scheduler_and_reads_it(
     assert main(["render", str(url), "-o", str(tmp_path / "view.exr"), "--resolution", "64",
                  "64"]) == 0
     assert (tmp_path / "view.exr").stat().st_size > 0
+
+
+def test_a_damaged_tile_is_written_again_when_the_recording_resumes(scene, in_memory,
+                                                                     scheduler, tmp_path):
+    url = tmp_path / "p.zarr"
+    _record(scene, url, scheduler)
+    chunk = url / "object_wave" / "c" / "1" / "2" / "3"
+    chunk.write_bytes(chunk.read_bytes()[:-8] + b"\0" * 8)
+    with pytest.raises(HologramFileError, match=r"tile \(2, 3\) channel 1: its samples do not "
+                                                r"match their checksum"):
+        store.open_plate(url).object_wave[...]
+    h = _record(scene, url, scheduler)  # the same call: resumes, writes tile (2, 3) again
+    assert np.array_equal(h.object_wave[...], store.open_plate(url).object_wave[...])
+    assert np.abs(h.object_wave[...] - in_memory.object_wave).max() <= \
+        1e-6 * np.abs(in_memory.object_wave).max()
+
+
+# --- the scheduler fails fast and by name; nothing is left behind ----------------------------
+
+@pytest.fixture
+def endpoint():
+    """A local TCP endpoint that misbehaves: ``endpoint("silent")`` accepts connections and
+    never answers, ``"closed"`` refuses them, ``"garbage"`` answers bytes no scheduler sends."""
+    sockets = []
+
+    def make(kind):
+        s = socket.socket()
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+        if kind == "closed":
+            s.close()
+            return f"tcp://127.0.0.1:{port}"
+        s.listen(4)
+        sockets.append(s)
+        if kind == "garbage":
+            def answer():
+                conn, _ = s.accept()
+                with conn:
+                    conn.sendall(b"\xff" * 64)
+            threading.Thread(target=answer, daemon=True).start()
+        return f"tcp://127.0.0.1:{port}"
+    yield make
+    for s in sockets:
+        s.close()
+
+
+@pytest.mark.parametrize("kind, problem", [
+    ("silent", r"no answer within 0.5 s \(is it a Dask scheduler\?\)"),
+    ("closed", r"refuses connections \(is a scheduler running there\?\)"),
+    ("garbage", r"answers, but not as a Dask scheduler \(its first message claims "
+                r"18446744073709551615 bytes\)"),
+    ("address", r"not a scheduler address"),
+])
+def test_a_scheduler_that_cannot_serve_fails_fast_by_name_and_leaves_no_store(
+        scene, tmp_path, endpoint, monkeypatch, kind, problem):
+    """A silent port hung (killed at 150 s), a refused one waited 30 s for an OSError, garbage
+    ended in MemoryError (3.07 EiB), each leaving a store behind. The timeout is 10 s
+    (CONNECT_TIMEOUT); 0.5 s here."""
+    from holo_core.plate import tiles
+    monkeypatch.setattr(tiles, "CONNECT_TIMEOUT", 0.5)
+    address = "tcp://127.0.0.1:not-a-port" if kind == "address" else endpoint(kind)
+    with pytest.raises(InputError, match=rf"scheduler {address}: {problem}"):
+        _record(scene, tmp_path / "p.zarr", address)
+    assert not list(tmp_path.iterdir()), "a recording that never started leaves nothing"
+
+
+def test_a_relative_store_is_written_where_the_user_is_not_where_the_workers_are(
+        scheduler, tmp_path, monkeypatch, capsys):
+    """``-o NAME.zarr --scheduler`` resolved NAME.zarr in the workers' folder (the tiles
+    landed in another store); the path is made absolute before it is sent."""
+    from holo_core.__main__ import main
+    (tmp_path / "tri.obj").write_text("v -0.002 -0.002 0\nv 0.002 -0.002 0\nv 0 0.002 0\n"
+                                      "f 1 2 3\n")
+    workers = os.getcwd()  # the cluster's processes started here
+    monkeypatch.chdir(tmp_path)
+    assert main(["record", "tri.obj", "-o", "rel.zarr", "--resolution", "256", "256",
+                 "--wavelengths", "633", "--distance", "0.02", "--tile", "128", "--scheduler",
+                 scheduler, "--max-points", "500"]) == 0, capsys.readouterr().err
+    assert store.tiles_done(tmp_path / "rel.zarr").all()
+    assert not os.path.exists(os.path.join(workers, "rel.zarr"))
+
+
+@pytest.mark.parametrize("output, problem", [
+    ("{tmp}/a_file", r"a_file: is a file, not a store folder"),
+    ("/sys/p.zarr", r"/sys/p.zarr: its folder /sys is not writable"),  # read-only, even for root
+    ("memory://p.zarr", r"memory://p.zarr: a memory:// store lives in one process"),
+    ("nosuchprotocol://bucket/p.zarr", r"nosuchprotocol://bucket/p.zarr: not a store address "
+                                       r"fsspec knows"),
+])
+def test_the_output_is_checked_before_the_work(scene, tmp_path, monkeypatch, output, problem):
+    """A regular file in the way, a read-only folder, memory:// and an unknown protocol ended
+    in five exception types after the cluster started; each is one InputError naming it."""
+    from holo_core.plate import tiles
+
+    def never(*_, **__):
+        raise AssertionError("the work started before the output was checked")
+    monkeypatch.setattr(tiles, "client_for", never)
+    (tmp_path / "a_file").write_text("mine")
+    with pytest.raises(InputError, match=problem):
+        _record(scene, output.format(tmp=tmp_path), None)
+    assert [p.name for p in tmp_path.iterdir()] == ["a_file"]
+    assert (tmp_path / "a_file").read_text() == "mine"
+
+
+def test_a_protocol_whose_package_is_missing_is_named(scene, tmp_path, monkeypatch):
+    import fsspec
+
+    def missing(url, **_):
+        raise ImportError("Install s3fs to access S3")
+    monkeypatch.setattr(fsspec.core, "url_to_fs", missing)
+    with pytest.raises(InputError, match=r"s3://bucket/p.zarr: its protocol needs a package "
+                                         r"that is not installed \(Install s3fs"):
+        _record(scene, "s3://bucket/p.zarr", None)
+
+
+@pytest.mark.parametrize("args, problem", [
+    (["-o", "{tmp}/p.zarr", "--scheduler", "closed"], r"scheduler tcp://127.0.0.1:\d+: refuses "
+                                                      r"connections"),
+    (["-o", "memory://p.zarr"], r"memory://p.zarr: a memory:// store lives in one process"),
+    (["-o", "{tmp}/a_file.zarr"], r"a_file.zarr: is a file, not a store folder"),
+])
+def test_the_command_line_says_each_in_one_line_before_the_work(tmp_path, endpoint, capsys,
+                                                                 args, problem):
+    from cli import run_cli
+    (tmp_path / "tri.obj").write_text("v -0.002 -0.002 0\nv 0.002 -0.002 0\nv 0 0.002 0\n"
+                                      "f 1 2 3\n")
+    (tmp_path / "a_file.zarr").write_text("mine")
+    args = [a.format(tmp=tmp_path) if a != "closed" else endpoint("closed") for a in args]
+    status, out, err = run_cli(capsys, "record", tmp_path / "tri.obj", *args, "--resolution",
+                               256, 256, "--wavelengths", 633, "--distance", 0.02)
+    assert status == 2 and err.count("\n") == 1 and re.search(problem, err), (status, err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file.zarr", "tri.obj"]
