@@ -1,8 +1,8 @@
 """The holographic pass of one saved job, timed per FFT backend: cold and warm seconds.
 
-A job is the dict the add-on hands its worker (``holo_addon.render.pipeline.Job.payload``),
+A job is the plain data the add-on hands its worker (:meth:`holo_core.job.Job.to_dict`),
 pickled. Each FFT backend (``HOLO_FFT``) runs in a fresh process of its own, as the add-on's
-worker does: the first :func:`holo_core.worker.run_job` call includes the OpenCL device probe,
+worker does: the first :func:`holo_core.runner.run` call includes the OpenCL device probe,
 the program builds and the FFT plans (with empty kernel caches unless ``--keep-caches``), the
 later ones run warm. With ``--processes 2`` a second process per backend starts on the caches
 the first one filled (a render in Blender is such a process). A last call, every device stage
@@ -32,6 +32,7 @@ import sys
 import tempfile
 import time
 from collections import defaultdict
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -55,10 +56,10 @@ def make_job(path: Path, resolution, fstop, samples) -> None:
     scene.holo.output_dir = str(path.resolve().parent / "holo") + os.sep
     scene.holo.mode = "CAMERA"  # the demo's settings
     scene.holo.samples = samples
-    job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
+    job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get()).job
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "wb") as f:
-        pickle.dump(job.payload(), f, protocol=pickle.HIGHEST_PROTOCOL)
+        pickle.dump(job.to_dict(), f, protocol=pickle.HIGHEST_PROTOCOL)
     print(f"{path}: {resolution[0]}x{resolution[1]}, f/{fstop}, {samples} samples")
 
 
@@ -102,14 +103,16 @@ class Stages:
 def child(job_path: Path, backend: str, runs: int, result_path: Path) -> None:
     logging.basicConfig(level=logging.INFO, format="  %(name)s: %(message)s", stream=sys.stderr)
     t0 = time.perf_counter()
-    from holo_core import worker
+    from holo_core import runner
     from holo_core.camera import recording
     from holo_core.camera import render as camera_render
+    from holo_core.job import Job
     from holo_core.opencl import get_runtime
     imported = time.perf_counter() - t0
     with open(job_path, "rb") as f:
-        job = pickle.load(f)
-    job["output_dir"] = Path(tempfile.mkdtemp(prefix="holo-gpu-pass-"))
+        job = Job.from_dict(pickle.load(f))
+    job = replace(job, output=replace(job.output, folder=Path(tempfile.mkdtemp(
+        prefix="holo-gpu-pass-"))))
 
     stages = Stages()
     for name in ("choose_optics", "rasterize", "point_emitters", "merged"):
@@ -119,32 +122,23 @@ def child(job_path: Path, backend: str, runs: int, result_path: Path) -> None:
     stages.wrap(recording.PupilFields, "image", "image kernels and readback", sync=True)
     stages.wrap(camera_render._Accumulator, "add", "accumulate looks (host)")
     stages.wrap(camera_render._Accumulator, "result", "result: colour, depth (host)")
-    views = []
-    write_pass = worker._write_pass
-
-    def keep_view(job, view, result):
-        views.append(view)
-        return write_pass(job, view, result)
-
-    worker._write_pass = keep_view
-    stages.wrap(worker, "_write_pass", "write EXR and PNG")
+    stages.wrap(runner, "_write_pass", "write EXR and PNG")
 
     timings = []
     for _ in range(runs):
         t = time.perf_counter()
-        worker.run_job(job)
+        runner.run(job)
         timings.append(time.perf_counter() - t)
-        print(f"  {backend}: run_job {timings[-1]:.3f} s", file=sys.stderr, flush=True)
+        print(f"  {backend}: run {timings[-1]:.3f} s", file=sys.stderr, flush=True)
     rt = get_runtime()
     stages.sync = rt.queue.finish
     stages.wrap(rt.fft, "forward", "FFT forward (padded pupil)", sync=True)
     stages.wrap(rt.fft, "backward", "FFT backward (layers)", sync=True)
     stages.on = True
     t = time.perf_counter()
-    worker.run_job(job)
+    view = runner.run(job).view
     profiled = time.perf_counter() - t
     stages.on = False
-    view = views[-1]
     np.save(result_path.with_suffix(".npy"), view.rgb * view.alpha[..., None])
     result_path.write_text(json.dumps({
         "backend": rt.fft.name, "device": rt.device.name.strip(),
@@ -213,7 +207,7 @@ def main():
     p.add_argument("--backends", nargs="+", default=["vkfft", "numpy"],
                    help="HOLO_FFT values, the first is the reference of the ratios")
     p.add_argument("--runs", type=int, default=2,
-                   help="timed run_job calls per process, before the profiled one (with one, "
+                   help="timed runs per process, before the profiled one (with one, "
                         "the profiled call stands for the warm pass)")
     p.add_argument("--processes", type=int, default=1, help="processes per backend")
     p.add_argument("--device", default="gpu", help="HOLO_DEVICE ('' for the default)")

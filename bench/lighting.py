@@ -35,9 +35,9 @@ def timed_pass(bpy, pipeline, scene, folder: Path) -> tuple[float, float]:
     scene.holo.output_dir = str(folder) + os.sep
     WRITE.clear()
     t = time.perf_counter()
-    outcome = pipeline.run(pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get()))
+    result = pipeline.run(pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get()))
     total = time.perf_counter() - t
-    return total, sum(WRITE) + outcome.info.get("radiance_seconds", 0.0)
+    return total, sum(WRITE) + (result.report.radiance_seconds or 0.0)
 
 
 def timing_requests(radiance):

@@ -1,22 +1,22 @@
-"""The pipeline in a process of its own: the Blender add-on's worker.
+"""The pipeline in a process of its own: the parent's handle on the Blender add-on's worker.
 
 Blender's process never loads an OpenCL driver: drivers bring native libraries that clash with
 Blender's (Intel's CPU runtime needs a newer TBB than Blender bundles, and PoCL's LLVM then
 meets Intel's), and a driver crash or an out-of-memory must not take unsaved work down with it.
-The parent hands a job of plain data (NumPy arrays and holo_core's value types, pickled into a
-folder of its own) to ``python -m holo_core.worker FOLDER``. The worker reports progress and
-log records as JSON lines on its stdout, writes its outputs atomically once every stage has
-finished, and leaves its result in the folder; the parent kills it to cancel, so a cancelled or
+The parent hands a :class:`~holo_core.job.Job` as plain data (its ``to_dict``, pickled into a
+folder of its own) to ``python -m holo_core.runner FOLDER``, which runs it
+(:func:`holo_core.runner.run`), reports progress and log records as JSON lines on its stdout,
+writes its outputs atomically once every stage has finished, and leaves its
+:class:`~holo_core.job.Result` in the folder; the parent kills it to cancel, so a cancelled or
 failed run leaves earlier files as they were.
 
-:func:`run_job` is the work itself; :class:`Worker` is the parent's handle. This module imports
-nothing of OpenCL in the parent.
+:class:`Worker` is the parent's handle, as Cycles' ``engine.py`` is Blender's on its renderer;
+this module and what it imports load nothing of OpenCL.
 """
 
 from __future__ import annotations
 
 import json
-import logging
 import os
 import pickle
 import queue
@@ -26,231 +26,15 @@ import subprocess
 import sys
 import tempfile
 import threading
-import time
 from pathlib import Path
 
-import numpy as np
-
 from . import jobs
-
-log = logging.getLogger(__name__)
-
-
-def pass_file(folder, frame: int) -> Path:
-    """Frame ``frame``'s holographic pass in ``folder``: ``holo_pass_NNNN.exr``, one file per
-    frame and nothing shared between frames (farm workers never write the same file)."""
-    return Path(folder) / f"holo_pass_{frame:04d}.exr"
-
-
-def _check_outputs(job: dict) -> None:
-    """:class:`InputError` for a hologram or pass file that cannot be written, before any work
-    (a read-only output folder is found at once, not after the recording)."""
-    from .io.image import check_writable
-    outputs = [] if job["current"] else list(job["holograms"])
-    if job["render"]:
-        outputs.append(pass_file(job["output_dir"], job["frame"]))
-    for path in outputs:
-        check_writable(path, ".exr")
+from .io.image import atomic_paths
+from .job import Job, Result
 
 
 class WorkerError(RuntimeError):
     """The worker failed: the message says how (its error, or how the process died)."""
-
-
-def run_job(job: dict, progress: jobs.Progress = None, on_partial=None) -> dict:
-    """Record the holograms (unless ``job['current']``) and render the pass.
-
-    ``job``: ``points``, ``triangles`` (lists of :class:`holo_core.scene.mesh.Mesh`, world metres),
-    ``plate``, ``camera``, ``settings`` (dict: mode 'CAMERA' or 'PLATE', speckle 'EXACT' or
-    'LOOKS' (:data:`CAMERA_ROUTES`), samples, max_resolution, wavelength [m] or None,
-    iterations, supersample, composition, exposure, opacity_threshold, seed), ``holograms``
-    (paths of the iterations' files), ``current``,
-    ``render``, ``output_dir``, ``frame``; optional ``radiance`` (the emitters' colours from a
-    renderer, :func:`lit_emitters`), ``depth_unit`` (metres per unit of the pass's depth),
-    ``border``, ``pass_key``. 'CAMERA' renders the camera hologram
-    (:mod:`holo_core.camera`; no plate, no hologram file); 'PLATE' records the
-    plate's holograms (unless ``current``) and views them. Returns ``recorded``,
-    ``pass_path``, ``frame_path`` and ``info``. Files are written only after every stage has
-    finished, each one atomically; ``on_partial(view, n)`` gets a camera hologram's running
-    result after 1, 2, 4, 8 … samples (the user may stop there and keep it)."""
-    from .io.hologram import read_hologram, write_hologram
-    from .plate.record import look_code, record_hologram
-    from .plate.view import nyquist_supersample, render_view
-    s, current, n = job["settings"], job["current"], len(job["holograms"])
-    _check_outputs(job)
-    lit_seconds = None
-    if job.get("radiance") and not current:
-        share, start = RADIANCE_SHARE, time.perf_counter()
-        job = {**job, **lit_emitters(job, jobs.scaled(progress, 0.0, share))}
-        progress = jobs.scaled(progress, share, 1.0)
-        lit_seconds = time.perf_counter() - start
-    job = {**job, "radiance_seconds": lit_seconds}
-    if s.get("mode", "PLATE") == "CAMERA":
-        from .camera.render import render_camera
-        def sample(view, n):
-            if on_partial is not None and n < s["samples"] and not n & (n - 1):
-                on_partial(view, n)
-
-        view = render_camera(job["points"] + job["triangles"], job["camera"],
-                             samples=s["samples"], supersample=s["supersample"],
-                             exposure=s["exposure"], seed=s["seed"], progress=progress,
-                             via=CAMERA_ROUTES[s.get("speckle", "EXACT")], on_sample=sample)
-        return _write_pass(job, view, {"recorded": False})
-    record_share = 0.0 if current else (0.85 if job["render"] else 1.0)
-    if current:
-        holos = [read_hologram(p) for p in job["holograms"]]
-    else:
-        # a plate with its viewing zone is a scene asset: the camera sizes nothing of it (its
-        # samples are Max Hologram Size), so moving or refocusing it never records again
-        asset = job["plate"].zone is not None
-        # the iterations are coded looks of one seed where n allows (look_code), else seeds
-        codes = [look_code(i, n) for i in range(n)]
-        holos = [record_hologram(
-            job["points"], triangles=job["triangles"], plate=job["plate"],
-            camera=None if asset else job["camera"],
-            resolution=s["max_resolution"] if asset else None,
-            max_resolution=s["max_resolution"], wavelength=s["wavelength"],
-            seed=s["seed"] + (0 if code else i), code=code,
-            progress=jobs.scaled(progress, record_share * i / n, record_share * (i + 1) / n))
-            for i, code in enumerate(codes)]
-    view = None
-    if job["render"]:
-        # the panel's Supersample, or the intensity's Nyquist rate where that is finer
-        fine = max(s["supersample"], nyquist_supersample(holos[0], job["camera"]))
-        view = render_view(holos, job["camera"], supersample=fine,
-                           composition=s["composition"], opacity_threshold=s["opacity_threshold"],
-                           progress=jobs.scaled(progress, record_share, 1.0))
-        view.rgb[...] *= s["exposure"]
-    # every stage has finished: only now are files replaced (each one atomically)
-    Path(job["output_dir"]).mkdir(parents=True, exist_ok=True)
-    if not current:
-        for path, h in zip(job["holograms"], holos):
-            write_hologram(path, h)
-    return _write_pass(job, view, {"recorded": not current})
-
-
-# the camera hologram's route per setting: the looks' limit in one pass, or progressive looks
-CAMERA_ROUTES = {"EXACT": "incoherent", "LOOKS": "object_wave"}
-RADIANCE_SHARE = 0.2  # of the progress bar: the renderer's radiance before the hologram
-
-
-def lit_emitters(job: dict, progress: jobs.Progress = None) -> dict:
-    """``points`` and ``triangles`` textured with the radiance a renderer saw from a camera
-    (:func:`holo_core.scene.radiance.projected`). ``job['radiance']``: ``command`` (the
-    renderer's command line, which writes ``image``: an RGBA OpenEXR of the emitters alone,
-    premultiplied, as ``camera`` sees them, and may print ``HOLO_PROGRESS <fraction>`` lines),
-    ``image``, ``camera``, and ``folder`` (its scratch folder, removed afterwards). The
-    renderer runs in this process's group, so killing the worker's group ends it too."""
-    from .io.image import read_exr
-    from .scene.radiance import projected
-    r = job["radiance"]
-    try:
-        tail = []
-        with subprocess.Popen(r["command"], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                              stderr=subprocess.STDOUT, cwd=r["folder"], text=True,
-                              errors="replace") as child:
-            try:
-                for line in child.stdout:
-                    if line.startswith("HOLO_PROGRESS "):
-                        jobs.report(progress, float(line.split()[1]), 1.0)
-                    elif line.strip():
-                        tail = (tail + [line.rstrip()])[-20:]
-                        log.debug("renderer: %s", line.rstrip())
-            except BaseException:
-                child.kill()
-                raise
-        if child.returncode != 0 or not Path(r["image"]).is_file():
-            raise RuntimeError(f"the radiance render failed (exit code {child.returncode}): "
-                               + " | ".join(tail[-3:]))
-        _, channels = read_exr(r["image"], what="radiance")
-    finally:
-        shutil.rmtree(r["folder"], ignore_errors=True)
-    rgb = np.stack([channels[c] for c in "RGB"], -1)
-    alpha = channels.get("A", np.ones(rgb.shape[:2], np.float32))
-    return {kind: projected(job[kind], r["camera"], rgb, alpha)
-            for kind in ("points", "triangles")}
-
-
-def _write_pass(job, view, result) -> dict:
-    """The pass of frame N (:func:`pass_file`); its depth in ``job['depth_unit']`` metres
-    per unit (Blender's scene units: ``unit_settings.scale_length``), 1 when absent."""
-    from .io.view import write_view
-    from .view import BACKGROUND_DEPTH
-    result.update(pass_path=None, frame_path=None, info={})
-    if view is not None:
-        if job.get("radiance_seconds") is not None:  # the lit radiance's share of the time
-            view.info["radiance_seconds"] = round(job["radiance_seconds"], 3)
-        unit = float(job.get("depth_unit") or 1.0)
-        if unit != 1.0:
-            near = view.depth < BACKGROUND_DEPTH
-            view.depth[near] /= unit
-        if job.get("border"):
-            _outside_border(view, job["border"])
-        frame_path = pass_file(job["output_dir"], job["frame"])
-        if job.get("pass_key"):
-            view.info["pass_key"] = job["pass_key"]
-        write_view(view, frame_path)
-        result.update(pass_path=frame_path, frame_path=frame_path, info=view.info)
-    return result
-
-
-def _outside_border(view, border) -> None:
-    """Clear the pass outside Blender's render region (``border``: left, top, right, bottom
-    pixels from the top-left corner), which the render leaves empty."""
-    from .view import BACKGROUND_DEPTH
-    left, top, right, bottom = border
-    keep = np.zeros(view.alpha.shape, bool)
-    keep[top:bottom, left:right] = True
-    view.rgb[~keep] = 0
-    view.alpha[~keep] = 0
-    view.depth[~keep] = BACKGROUND_DEPTH
-
-
-# --- the worker process ---------------------------------------------------------------------
-
-class _Forward(logging.Handler):
-    def __init__(self, send):
-        super().__init__(logging.INFO)
-        self.send = send
-
-    def emit(self, record):
-        self.send({"log": [record.levelno, record.getMessage()]})
-
-
-def main(folder: str) -> int:
-    """The worker: run ``FOLDER/job.pickle``, write ``FOLDER/result.pickle``."""
-    channel = os.fdopen(os.dup(1), "w", buffering=1)
-    os.dup2(2, 1)  # anything else printed, by Python or a driver, goes to stderr
-    sys.stdout = sys.stderr
-
-    def send(message):
-        channel.write(json.dumps(message) + "\n")
-
-    core = logging.getLogger("holo_core")
-    core.addHandler(_Forward(send))
-    core.setLevel(logging.INFO)
-    folder = Path(folder)
-    try:
-        with open(folder / "job.pickle", "rb") as f:
-            job = pickle.load(f)
-        def partial(view, n):  # a complete pass of fewer samples, kept only if the user asks
-            from .io.view import write_view
-            write_view(view, folder / "partial.exr")
-            send({"partial": n})
-
-        result = run_job(job, lambda f: send({"progress": round(f, 4)}), partial)
-        tmp = folder / "result.pickle.tmp"
-        with open(tmp, "wb") as f:
-            pickle.dump(result, f)
-        os.replace(tmp, folder / "result.pickle")
-        send({"done": True})
-        return 0
-    except Exception as e:  # reported to the parent as one line, the traceback on stderr
-        import traceback
-        traceback.print_exc()
-        kind = "" if isinstance(e, (ValueError, OSError)) else f"{type(e).__name__}: "
-        send({"error": f"{kind}{e}"})
-        return 1
 
 
 # --- the parent's handle ----------------------------------------------------------------------
@@ -299,15 +83,15 @@ class Worker:
     over its latest running pass.
     """
 
-    def __init__(self, job: dict, *, paths=(), device: str | None = None,
+    def __init__(self, job: Job, *, paths=(), device: str | None = None,
                  memory_limit: str | None = None, cache_dir: str | None = None):
-        data = pickle.dumps(job, protocol=pickle.HIGHEST_PROTOCOL)  # plain data only
+        data = pickle.dumps(job.to_dict(), protocol=pickle.HIGHEST_PROTOCOL)  # plain data
         self.folder = Path(tempfile.mkdtemp(prefix="holo-worker-"))
         (self.folder / "job.pickle").write_bytes(data)
         self._stderr = open(self.folder / "stderr.txt", "w+b")
-        self._scratch = (job.get("radiance") or {}).get("folder")
+        self._scratch = None if job.radiance is None else job.radiance.folder
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "holo_core.worker", str(self.folder)],
+            [sys.executable, "-m", "holo_core.runner", str(self.folder)],
             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=self._stderr,
             env=environment(paths, device, memory_limit, cache_dir), cwd=self.folder,
             start_new_session=os.name == "posix")  # its group: the renderer it runs dies too
@@ -358,7 +142,7 @@ class Worker:
             return self._translate(None)
         self.process.wait()
         with open(self.folder / "result.pickle", "rb") as f:
-            return ("done", pickle.load(f))
+            return ("done", Result.from_dict(pickle.load(f)))
 
     def _stderr_tail(self) -> str:
         self._stderr.flush()
@@ -367,7 +151,7 @@ class Worker:
                  if ln.strip()]
         return f"; its last output: {lines[-1][-300:]}" if lines else ""
 
-    def wait(self, progress: jobs.Progress = None, on_log=None) -> dict:
+    def wait(self, progress: jobs.Progress = None, on_log=None) -> Result:
         """Run to the end; ``progress`` may raise :class:`holo_core.jobs.Cancelled`, which
         kills the worker. Raises :class:`WorkerError` when the worker fails."""
         while True:
@@ -407,7 +191,6 @@ class Worker:
         """Kill the worker and write its latest running pass to ``path`` with its PNG (as one
         unit, as :func:`holo_core.io.view.write_view` writes them): returns its samples, or 0
         when there was none yet (nothing is written)."""
-        from .io.image import atomic_paths
         self.poll()  # the newest partial message
         self._kill()
         src = self.folder / "partial.exr"
@@ -428,10 +211,7 @@ class Worker:
             shutil.rmtree(self._scratch, ignore_errors=True)
 
 
-def run(job: dict, progress: jobs.Progress = None, on_log=None, **options) -> dict:
-    """:func:`run_job` in a worker process (``options``: :class:`Worker`'s), waiting for it."""
+def run(job: Job, progress: jobs.Progress = None, on_log=None, **options) -> Result:
+    """The job run in a worker process (:func:`holo_core.runner.run`; ``options``:
+    :class:`Worker`'s), waiting for it."""
     return Worker(job, **options).wait(progress, on_log)
-
-
-if __name__ == "__main__":
-    sys.exit(main(sys.argv[1]))

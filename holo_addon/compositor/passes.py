@@ -263,10 +263,10 @@ def render_frame(scene, depsgraph=None):
                      "alone (Render ▸ Holo ▸ Remove Holo Compositing takes the pass out)",
                      scene.frame_current)
             return
-        for warning in job.scene.warnings:
+        for warning in job.warnings:
             _log(logging.WARNING, warning)
-        outcome = pipeline.run(job, _progress, _log)
-        pipeline.apply(scene, job, outcome)
+        result = pipeline.run(job, _progress, _log)
+        pipeline.apply(scene, job, result)
     except jobs.Cancelled:
         failed(scene, f"Holo: the holographic pass of frame {scene.frame_current} was "
                       f"cancelled")
@@ -276,7 +276,7 @@ def render_frame(scene, depsgraph=None):
         return
     finally:
         RUNNING["frame"] = None
-    log.info("holographic pass for frame %d: %s", job.frame, outcome.frame_path)
+    log.info("holographic pass for frame %d: %s", job.job.output.frame, result.pass_path)
 
 
 def _listed(names, most=3) -> str:
@@ -322,7 +322,7 @@ def _check_stale(scene, depsgraph) -> None:
     try:
         path = pipeline.pass_file(pipeline.output_dir(scene), frame)
         try:
-            key = pipeline.prepare(scene, depsgraph).pass_key
+            key = pipeline.prepare(scene, depsgraph).job.output.pass_key
         except NoEmitters:
             key = None
     except Exception as e:  # noqa: BLE001 -- the scene cannot be read: say so, render on

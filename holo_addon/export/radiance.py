@@ -24,6 +24,7 @@ from pathlib import Path
 import bpy
 import numpy as np
 
+from holo_core.job import Radiance
 from holo_core.scene.camera import Camera
 
 from ..blender import compat
@@ -154,10 +155,11 @@ def border(box, size) -> tuple[float, float, float, float]:
 
 
 def request(scene, view_layer: str, camera: Camera, meshes, emitter_names, *,
-            samples: int = 8) -> dict | None:
-    """The worker's ``radiance`` job (see :func:`holo_core.worker.lit_emitters`): the scene
-    written to a scratch folder as it is now (unsaved changes included), the command that
-    renders its view layer ``view_layer`` with Cycles, and the camera of the cropped image.
+            samples: int = 8) -> Radiance | None:
+    """The job's :class:`holo_core.job.Radiance` (see :func:`holo_core.runner.lit_emitters`):
+    the scene written to a scratch folder as it is now (unsaved changes included), the
+    command that renders its view layer ``view_layer`` with Cycles, and the camera of the
+    cropped image.
     ``camera``: the render's camera uncropped, as a pinhole; ``meshes``: the emitters (world
     metres), ``emitter_names`` their objects; ``samples``: Cycles' samples (denoised). None
     when no emitter is in view."""
@@ -179,8 +181,8 @@ def request(scene, view_layer: str, camera: Camera, meshes, emitter_names, *,
     else:  # the bpy module: a Python that imports it
         command = [sys.executable, "-I", script, "--", json.dumps(args)]  # bpy's own path
     left, top, right, bottom = box
-    return {"command": command, "image": str(image), "folder": str(folder),
-            "camera": camera.cropped(left, top, right - left, bottom - top)}
+    return Radiance(command=tuple(command), image=image, folder=folder,
+                    camera=camera.cropped(left, top, right - left, bottom - top))
 
 
 def write_scene(scene, path: Path) -> None:

@@ -8,18 +8,13 @@ Color (per triangle, by material slot), else white; all linear.
 
 from __future__ import annotations
 
-import hashlib
-import math
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from holo_core import __version__
-from holo_core.io.hologram import FORMAT_VERSION
 from holo_core.scene.camera import Camera
-from holo_core.scene.mesh import Mesh, sample_points
-from holo_core.scene.plate import Plate, ViewingZone
-from holo_core.validate import InputError
+from holo_core.scene.mesh import Mesh
+from holo_core.scene.plate import Plate
 
 from ..blender.materials import base_colour, principled, unhonoured
 from . import bake
@@ -37,9 +32,11 @@ class NoEmitters(ExportError):
 @dataclass(frozen=True, eq=False)
 class SceneData:
     """What the pipeline needs, with no reference to Blender: emitter meshes in world metres
-    (``points`` and ``triangles`` kinds), the plate, the camera and a fingerprint of them;
-    ``names``: the emitters' objects; ``view``: the render's whole frame as a pinhole (the
-    camera of the emitters' radiance, before any crop)."""
+    (``points`` and ``triangles`` kinds), the plate, the camera; ``names``: the emitters'
+    objects; ``view``: the render's whole frame as a pinhole (the camera of the emitters'
+    radiance, before any crop); ``region``: the render region when it is not cropped (left,
+    top, right, bottom) [px from the top-left] (the pass is cleared outside it), else None;
+    ``unit``: metres per Blender unit."""
 
     points: list
     triangles: list
@@ -49,34 +46,8 @@ class SceneData:
     warnings: tuple = ()
     names: tuple = ()
     view: Camera | None = None
-
-    def fingerprint(self, *settings, camera=True) -> str:
-        """A digest of everything the hologram depends on: each emitter's kind, evaluated
-        geometry and colours (vertex colours, texture and UVs, material colours), the plate
-        and its viewing zone, the camera (its pose, lens and focus; ``camera=False`` leaves
-        it out, for a plate recorded for its zone), ``settings`` and the core's version and
-        file format."""
-        h = hashlib.sha256(f"holo {__version__} format {FORMAT_VERSION}".encode())
-        for kind, meshes in (("points", self.points), ("triangles", self.triangles)):
-            for mesh in meshes:
-                h.update(kind.encode())
-                for a in (mesh.vertices, mesh.colours, mesh.uvs, mesh.texture):
-                    h.update(b"-" if a is None else
-                             np.ascontiguousarray(a, np.float64).tobytes() + repr(a.shape).encode())
-                h.update(b"|")
-        plate = () if self.plate is None else (self.plate.matrix_world,
-                                                 (self.plate.width, self.plate.height))
-        zone = self.plate.zone if self.plate is not None else None
-        if zone is not None:
-            plate += (zone.centre, zone.half_extents, zone.pupil)
-        for a in (*plate, *((self.camera.matrix_world,) if camera else ())):
-            h.update(np.asarray(a, np.float64).tobytes())
-        lens = (self.camera.lens, self.camera.sensor_width, self.camera.sensor_height,
-                self.camera.sensor_fit, self.camera.shift_x, self.camera.shift_y,
-                self.camera.resolution, self.camera.pixel_aspect, self.camera.fstop,
-                self.camera.focus_distance) if camera else ("no camera",)
-        h.update(repr(lens + settings).encode())
-        return h.hexdigest()[:16]
+    region: tuple | None = None
+    unit: float = 1.0
 
 
 def scale(scene) -> float:
@@ -84,7 +55,7 @@ def scale(scene) -> float:
     return float(scene.unit_settings.scale_length) or 1.0
 
 
-def _matrix(m, unit: float, *, normalise: bool) -> np.ndarray:
+def world_matrix(m, unit: float, *, normalise: bool) -> np.ndarray:
     a = np.array(m, np.float64).reshape(4, 4)
     a[:3, 3] *= unit
     if normalise:  # the nearest rotation (polar decomposition): no scale, float32 noise gone
@@ -178,51 +149,6 @@ def _base_texture(obj):
     return None
 
 
-def plate_from_object(obj, unit: float) -> Plate:
-    """The plate: the object's pose (scale removed) and its width and height [m] from its
-    dimensions; the hologram is its local z = 0 plane and viewers are on its +Z side."""
-    w, h = obj.dimensions.x * unit, obj.dimensions.y * unit
-    if w <= 0 or h <= 0:
-        raise ExportError(f"plate '{obj.name}' must have a width and height (a plane)")
-    return Plate(matrix_world=_matrix(obj.matrix_world, unit, normalise=True), width=w, height=h,
-                 zone=plate_zone(obj))
-
-
-def plate_zone(obj) -> ViewingZone | None:
-    """The plate's viewing zone [m, the plate's frame] as its settings hold it, or None while
-    none is set (it is set around the camera when the plate is recorded). Read from the
-    original object: an evaluated copy holds the settings of the last evaluation."""
-    holo = (obj.original if obj.is_evaluated else obj).holo
-    if not holo.zone_set:
-        return None
-    try:
-        return ViewingZone(centre=tuple(holo.zone_centre), half_extents=tuple(holo.zone_half),
-                           pupil=holo.zone_pupil)
-    except InputError as e:
-        raise ExportError(f"plate '{obj.name}': its viewing zone: {e}") from None
-
-
-def zone_around(plate: Plate, camera: Camera, margin: float) -> ViewingZone:
-    """The viewing zone covering ``camera``'s pupil with ``margin`` [m] around it."""
-    try:
-        return plate.zone_for(camera, margin)
-    except InputError as e:
-        raise ExportError(str(e)) from None
-
-
-def outside_zone(plate: Plate, name: str, camera: Camera) -> str | None:
-    """A warning naming the zone when the camera's pupil reaches beyond it, else None."""
-    if plate.zone is None:
-        return None
-    position = plate.to_plate(camera.position[None])[0]
-    beyond = plate.zone.distance_outside(position, (camera.aperture_diameter or 0.0) / 2)
-    if beyond <= 1e-9:
-        return None
-    return (f"the camera's pupil reaches {beyond:.3g} m beyond plate '{name}''s viewing zone "
-            f"({plate.zone.describe()}): its view may be cut off or soft; use Fit Zone to "
-            f"Camera (Object ▸ Holo) to record the plate for where the camera is now")
-
-
 def camera_from_object(scene, obj, unit: float, depsgraph=None, *, crop=True) -> Camera:
     """Blender's camera (lens, sensor, fit, shift, render size, pixel aspect, depth of field)
     as :class:`holo_core.scene.camera.Camera`; a focus object as ``depsgraph`` places it.
@@ -231,14 +157,14 @@ def camera_from_object(scene, obj, unit: float, depsgraph=None, *, crop=True) ->
     if cam.type != "PERSP":
         raise ExportError(f"camera '{obj.name}' must be perspective (it is {cam.type})")
     res = render_size(r)
-    m = _matrix(obj.matrix_world, unit, normalise=True)
+    m = world_matrix(obj.matrix_world, unit, normalise=True)
     fstop = focus = None
     if cam.dof.use_dof:
         fstop = cam.dof.aperture_fstop
         if cam.dof.focus_object is not None:
             focus_object = cam.dof.focus_object
             if depsgraph is not None:
-                focus_object = _evaluated(focus_object.original, depsgraph)
+                focus_object = evaluated(focus_object.original, depsgraph)
             target = np.array(focus_object.matrix_world.translation) * unit
             focus = float(-(target - m[:3, 3]) @ m[:3, 2])  # along the view axis
         else:
@@ -264,6 +190,12 @@ def render_size(render) -> tuple[int, int]:
     return (max(1, render.resolution_x * pct // 100), max(1, render.resolution_y * pct // 100))
 
 
+def render_region(render) -> tuple | None:
+    """A render region that is not cropped (left, top, right, bottom) [px from the top-left]:
+    Blender renders only inside it, so the pass is cleared outside; None without one."""
+    return border_pixels(render) if render.use_border and not render.use_crop_to_border else None
+
+
 def border_pixels(render) -> tuple[int, int, int, int]:
     """The render region (left, top, right, bottom) [px from the top-left corner], as Blender
     computes it: each edge is border × size in single precision, truncated, measured from the
@@ -277,19 +209,13 @@ def border_pixels(render) -> tuple[int, int, int, int]:
             edge(render.border_max_x, w), h - edge(render.border_min_y, h))
 
 
-def export_scene(scene, depsgraph, *, plate=True, lit=False) -> SceneData:
-    """The scene's emitters, plate (when ``plate``) and camera as ``depsgraph`` evaluates them
-    (a render's depsgraph: the frame rendered, render modifier levels and visibility); a clear
-    :class:`ExportError` when one is missing or ill-placed. ``lit``: the colours will come
-    from Cycles' radiance (:mod:`holo_addon.export.radiance`), so only what that cannot show
-    is noted."""
+def export_scene(scene, depsgraph, *, lit=False) -> SceneData:
+    """The scene's emitters and camera as ``depsgraph`` evaluates them (a render's depsgraph:
+    the frame rendered, render modifier levels and visibility; the plate, where there is one:
+    :func:`holo_addon.export.plates.with_plate`); a clear :class:`ExportError` when one is
+    missing. ``lit``: the colours will come from Cycles' radiance
+    (:mod:`holo_addon.export.radiance`), so only what that cannot show is noted."""
     unit = scale(scene)
-    plates = [o for o in scene.objects if o.holo.is_plate]
-    if plate and not plates:
-        raise ExportError("no hologram plate: mark a plane with Object ▸ Holo ▸ Plate, or "
-                          "record for the camera (Holo ▸ Hologram: Camera)")
-    if len(plates) > 1:
-        raise ExportError(f"one plate per scene; found {', '.join(o.name for o in plates)}")
     if scene.camera is None:
         raise ExportError("the scene has no camera")
     notes = []
@@ -299,45 +225,14 @@ def export_scene(scene, depsgraph, *, plate=True, lit=False) -> SceneData:
         raise NoEmitters("no holographic emitters in the render: set Object ▸ Holo ▸ Emitter "
                          "on a mesh that renders (not disabled in renders, in a collection "
                          "the view layer includes)" + (f" ({left_out})" if left_out else ""))
-    camera_object = _evaluated(scene.camera, depsgraph)
+    camera_object = evaluated(scene.camera, depsgraph)
     camera = camera_from_object(scene, camera_object, unit, depsgraph)
     view = replace(camera_from_object(scene, camera_object, unit, depsgraph, crop=False),
                    fstop=None, focus_distance=None)
-    warnings = tuple(dict.fromkeys(notes))
-    found = {"names": tuple(names), "view": view}
-    if not plate:
-        return SceneData(points=kinds["POINTS"], triangles=kinds["TRIANGLES"], plate=None,
-                         plate_name=None, camera=camera, warnings=warnings, **found)
-    plate = plate_from_object(_evaluated(plates[0], depsgraph), unit)
-    if plate.to_plate(camera.position[None])[0, 2] <= 0:
-        raise ExportError(f"the camera is behind plate '{plates[0].name}': viewers must be on "
-                          f"its +Z side (rotate the plate 180°)")
-    outside = outside_zone(plate, plates[0].name, camera)
-    if outside:
-        warnings += (outside,)
-    coverage = plate_coverage(plate, plates[0].name, camera,
-                              kinds["POINTS"] + kinds["TRIANGLES"])
-    return SceneData(points=kinds["POINTS"], triangles=kinds["TRIANGLES"], plate=plate,
-                     plate_name=plates[0].name, camera=camera,
-                     warnings=warnings + ((coverage,) if coverage else ()), **found)
-
-
-def export_imported(scene, depsgraph, plate_object) -> SceneData:
-    """The scene's imported plate (File ▸ Import ▸ Hologram) and camera: a hologram viewed as
-    it is needs no emitters."""
-    if scene.camera is None:
-        raise ExportError("the scene has no camera")
-    unit = scale(scene)
-    camera_object = _evaluated(scene.camera, depsgraph)
-    camera = camera_from_object(scene, camera_object, unit, depsgraph)
-    plate = plate_from_object(_evaluated(plate_object, depsgraph), unit)
-    if plate.to_plate(camera.position[None])[0, 2] <= 0:
-        raise ExportError(f"the camera is behind plate '{plate_object.name}': viewers must be "
-                          f"on its +Z side (rotate the plate 180°)")
-    outside = outside_zone(plate, plate_object.name, camera)
-    return SceneData(points=[], triangles=[], plate=plate, plate_name=plate_object.name,
-                     camera=camera, warnings=(outside,) if outside else (),
-                     view=replace(camera, fstop=None, focus_distance=None))
+    return SceneData(points=kinds["POINTS"], triangles=kinds["TRIANGLES"], plate=None,
+                     plate_name=None, camera=camera, warnings=tuple(dict.fromkeys(notes)),
+                     names=tuple(names), view=view, region=render_region(scene.render),
+                     unit=unit)
 
 
 def emitters(depsgraph, unit: float, notes: list, *, lit=False) -> tuple[dict, list]:
@@ -409,54 +304,9 @@ def _renders(obj, shown: set) -> bool:
     return not obj.hide_render and any(c.as_pointer() in shown for c in obj.users_collection)
 
 
-def _evaluated(obj, depsgraph):
+def evaluated(obj, depsgraph):
     ev = obj.evaluated_get(depsgraph)
     return ev if ev is not None else obj
-
-
-def _surface_samples(mesh: Mesh, count=4000) -> np.ndarray:
-    """About ``count`` points spread over ``mesh``'s surface [m] (and its vertices)."""
-    area = float(mesh.areas().sum())
-    if area <= 0:
-        return mesh.vertices
-    points, _ = sample_points(mesh, math.sqrt(area / count), max_points=count)
-    return np.concatenate([points, mesh.vertices])
-
-
-def through_plate(plate: Plate, eye, world) -> tuple:
-    """(whether the line of sight from ``eye`` to each of ``world`` (N, 3) crosses the plate
-    with the point behind it, where the lines of sight of the points behind cross its plane
-    (M, 2) in plate coordinates); lengths in any one unit."""
-    eye, local = plate.to_plate(np.asarray(eye, np.float64)[None])[0], plate.to_plate(world)
-    behind = local[:, 2] < 0
-    t = eye[2] / (eye[2] - local[behind, 2])
-    hits = eye[:2] + t[:, None] * (local[behind, :2] - eye[:2])
-    inside = np.zeros(len(local), bool)
-    inside[behind] = (np.abs(hits) <= (plate.width / 2, plate.height / 2)).all(1)
-    return inside, hits
-
-
-def plate_coverage(plate: Plate, name: str, camera: Camera, meshes) -> str | None:
-    """A warning when the plate covers only part of what the camera sees of the emitters (the
-    rest would be cut from the pass), an :class:`ExportError` when it covers none of it (the
-    pass would be empty); None when it covers all."""
-    world = np.concatenate([_surface_samples(m) for m in meshes])
-    xy, depth = camera.project(world)
-    w, h = camera.resolution
-    seen = (depth > 0) & (xy[:, 0] >= 0) & (xy[:, 0] < w) & (xy[:, 1] >= 0) & (xy[:, 1] < h)
-    if not seen.any():
-        raise ExportError("no holographic object is in the camera's view")
-    inside, hits = through_plate(plate, camera.position, world[seen])
-    share = inside.mean()
-    if share == 0:
-        raise ExportError(f"plate '{name}' is not between the camera and the holographic "
-                          f"objects: the pass would be empty (move it onto the line of sight)")
-    if share < 1:
-        need = 2 * np.abs(hits).max(0) if len(hits) else (plate.width, plate.height)
-        return (f"plate '{name}' covers {share:.0%} of the holographic objects the camera "
-                f"sees; the rest is cut from the pass (it needs about {need[0]:.3g} x "
-                f"{need[1]:.3g} m where it stands)")
-    return None
 
 
 def _pixels(image) -> np.ndarray:

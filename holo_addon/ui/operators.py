@@ -15,6 +15,7 @@ import logging
 import bpy
 
 from holo_core.io.hologram import HologramFileError
+from holo_core.job import Report, Result
 from holo_core.worker import WorkerError
 
 from ..blender.objects import shown_as_rendered
@@ -52,7 +53,7 @@ class _PipelineOperator:
         except USER_ERRORS as e:
             self.report({"ERROR"}, str(e))
             return None
-        for warning in job.scene.warnings:
+        for warning in job.warnings:
             self.report({"WARNING"}, warning)
         if not viewport_matches_render(context.scene):
             self.report({"WARNING"}, "an emitter's modifiers differ between viewport and render: "
@@ -67,14 +68,14 @@ class _PipelineOperator:
         wm = context.window_manager
         wm.progress_begin(0, 1000)
         try:
-            outcome = pipeline.run(job, lambda f: wm.progress_update(int(f * 1000)),
-                                   lambda level, text: _report_log(self, level, text))
+            result = pipeline.run(job, lambda f: wm.progress_update(int(f * 1000)),
+                                  lambda level, text: _report_log(self, level, text))
         except USER_ERRORS as e:
             self.report({"ERROR"}, f"{self.bl_label} failed: {e}")
             return {"CANCELLED"}
         finally:
             wm.progress_end()
-        return self._done(context, job, outcome)
+        return self._done(context, job, result)
 
     def invoke(self, context, event):
         if bpy.app.background:
@@ -126,14 +127,14 @@ class _PipelineOperator:
                 return {"CANCELLED"}
             else:
                 self._end(context)
-                return self._done(context, self._job, pipeline.outcome(self._job, value))
+                return self._done(context, self._job, value)
         return {"PASS_THROUGH"}
 
     def _keep(self, context):
         """Stop the samples here: the latest running pass becomes the frame's pass."""
         job = self._job
-        frame = pipeline.pass_file(job.output_dir, job.frame)
-        job.output_dir.mkdir(parents=True, exist_ok=True)
+        frame = job.job.output.pass_path
+        frame.parent.mkdir(parents=True, exist_ok=True)
         samples = self._worker.stop_and_keep(frame)
         self._end(context)
         if not samples:
@@ -141,9 +142,7 @@ class _PipelineOperator:
                                      f"earlier results kept")
             return {"CANCELLED"}
         self.report({"INFO"}, f"stopped at {samples} samples; that pass is kept")
-        return self._done(context, job, pipeline.outcome(job, {
-            "recorded": False, "pass_path": frame, "frame_path": frame,
-            "info": {"samples": samples}}))
+        return self._done(context, job, Result(pass_path=frame, report=Report(looks=samples)))
 
     def cancel(self, context):
         """Esc, or Blender ending the operator (a file loaded, the window closed)."""
@@ -159,20 +158,22 @@ class _PipelineOperator:
         wm.progress_end()
         context.workspace.status_text_set(None)
 
-    def _done(self, context, job, outcome):
-        pipeline.apply(context.scene, job, outcome)
+    def _done(self, context, job, result):
+        pipeline.apply(context.scene, job, result)
         msg = "camera hologram"
-        if outcome.info.get("cached"):
+        if result.reused is not None and result.reused == result.pass_path:
             msg = "up to date"
-        elif outcome.holograms:
-            what = "recorded" if outcome.recorded else "up to date"
-            msg = f"hologram {what}: {outcome.holograms[0]}"
-        if outcome.pass_path is not None:
-            msg += f"; holographic pass: {outcome.pass_path}"
-            if "speckle_contrast" in outcome.info:
-                looks = outcome.info.get("samples")  # a plate's view has no looks
-                msg += (f" ({f'{looks} samples, ' if looks else ''}speckle contrast "
-                        f"{outcome.info['speckle_contrast']:.3f})")
+        elif result.reused is not None:
+            msg = f"a static shot: {result.reused.name} reused (only the frame changed)"
+        elif job.holograms:
+            what = "recorded" if result.recorded else "up to date"
+            msg = f"hologram {what}: {job.holograms[0]}"
+        if result.pass_path is not None:
+            msg += f"; holographic pass: {result.pass_path}"
+            report = result.report
+            if report.speckle_contrast is not None:
+                looks = f"{report.looks} samples, " if report.looks else ""
+                msg += f" ({looks}speckle contrast {report.speckle_contrast:.3f})"
         self.report({"INFO"}, msg)
         return self.finish(context)
 

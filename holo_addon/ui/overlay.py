@@ -5,7 +5,8 @@ through it, orange when it covers part (the rest is cut from the pass), red when
 plate's viewing zone is drawn as its box, in blue.
 
 The objects are judged by their bounding boxes' corners, so the overlay is quick to update on
-every change; recording checks the surfaces themselves (:func:`scene_export.plate_coverage`).
+every change; recording checks the surfaces themselves
+(:func:`holo_addon.export.plates.plate_coverage`).
 Lines are computed when the scene changes (a depsgraph update, a frame change) and drawn from
 that cache, in Blender units in world space.
 """
@@ -18,7 +19,8 @@ import bpy
 import numpy as np
 from bpy.app.handlers import persistent
 
-from ..export.scene import ExportError, emitter_instances, plate_from_object, through_plate
+from ..export.plates import plate_from_object, through_plate
+from ..export.scene import ExportError, emitter_instances
 
 COLOURS = {"ALL": (0.3, 0.9, 0.4, 0.9), "PART": (1.0, 0.6, 0.1, 0.9),
            "NONE": (1.0, 0.25, 0.2, 0.9)}

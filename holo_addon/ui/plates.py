@@ -24,7 +24,8 @@ from holo_core.io.image import read_exr
 from holo_core.scene.hologram import Hologram
 from holo_core.worker import environment
 
-from ..export.scene import ExportError, camera_from_object, plate_from_object, scale, zone_around
+from ..export.plates import plate_from_object, zone_around
+from ..export.scene import ExportError, camera_from_object, emitter_instances, scale
 from ..render.options import device, runtime_paths
 
 _plans: dict = {}  # plate object name → the planner's lines, shown in its panel
@@ -67,7 +68,6 @@ class HOLO_OT_fit_zone(bpy.types.Operator):
 def plan_command(context) -> list[str]:
     """``python -m holo_core plan`` for the selected plate, the holographic objects, the
     scene camera and Max Hologram Size, all in the plate's frame."""
-    from ..export.scene import emitter_instances
     scene, obj, unit = context.scene, plate_object(context), scale(context.scene)
     plate = plate_from_object(obj, unit)
     camera = camera_from_object(scene, scene.camera, unit)

@@ -244,15 +244,16 @@ def write_png(path, image: np.ndarray) -> Path:
 
 def write_exr(path, channels: dict, *, preview=None, **header) -> Path:
     """Float32 OpenEXR (ZIP) of named (H, W) ``channels``, row 0 at the top, with extra
-    ``header`` attributes, written atomically; with a ``preview`` image in [0, 1] also a PNG
-    beside it, the two renamed into place as one unit."""
+    ``header`` attributes, written atomically; with a ``preview`` image in [0, 1] (or the
+    bytes of a PNG file) also a PNG beside it, the two renamed into place as one unit."""
     import OpenEXR  # noqa: F401 -- before the write opens: a SIGTERM inside an import is lost
     check_writable(path, ".exr")
     paths = [path] + ([Path(path).with_suffix(".png")] if preview is not None else [])
     with atomic_paths(*paths) as temps:
         _exr_to(temps[0], channels, **header)
         if preview is not None:
-            Path(temps[1]).write_bytes(png_bytes(preview))
+            Path(temps[1]).write_bytes(preview if isinstance(preview, bytes)
+                                       else png_bytes(preview))
     return Path(path)
 
 

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..validate import InputError
 from ..view import RenderResult
-from .image import srgb, write_exr
+from .image import read_exr, srgb, write_exr
 
 
 def write_view(result: RenderResult, path, *, layer="ViewLayer") -> tuple[Path, Path]:
@@ -29,4 +29,20 @@ def write_view(result: RenderResult, path, *, layer="ViewLayer") -> tuple[Path, 
     channels[f"{layer}.Depth.Z"] = result.depth
     write_exr(path, channels, preview=srgb(result.rgb),
               holo=json.dumps(result.info, default=float))
+    return path, path.with_suffix(".png")
+
+
+def copy_view(source, path, **info) -> tuple[Path, Path]:
+    """The view file ``source`` and its PNG preview written as ``path`` (as one unit, as
+    :func:`write_view` writes them), its pixels as they are, the ``info`` of its header
+    updated with ``info``: a static shot's pass, the same for each of its frames."""
+    source, path = Path(source), Path(path)
+    header, channels = read_exr(source, what="view")
+    stored = header.get("holo") or "{}"
+    try:
+        meta = json.loads(stored.decode() if isinstance(stored, bytes) else stored)
+    except ValueError:
+        raise InputError(f"{source}: damaged view metadata") from None
+    write_exr(path, channels, preview=source.with_suffix(".png").read_bytes(),
+              holo=json.dumps({**meta, **info}, default=float))
     return path, path.with_suffix(".png")

@@ -36,6 +36,7 @@ def _plate_camera_cube(scene, *, cube_size=0.5):
 
 
 def test_export_known_mesh_in_metres(empty_scene):
+    from holo_addon.export.plates import with_plate
     from holo_addon.export.scene import export_scene
     scene = empty_scene
     scene.unit_settings.scale_length = 0.01          # 1 Blender unit = 1 cm
@@ -54,7 +55,8 @@ def test_export_known_mesh_in_metres(empty_scene):
     plate.location = (0, -150, 0)
     plate.scale = (150, 150, 150)  # 0.9 m: it covers the cube as the camera sees it
     bpy.context.view_layer.update()
-    data = export_scene(scene, bpy.context.evaluated_depsgraph_get())
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    data = with_plate(export_scene(scene, depsgraph), plate, depsgraph)
     (mesh,) = data.points
     assert len(mesh.triangles) == 12
     expected = {(x, y, z) for x in (-0.15, 0.35) for y in (-0.05, 0.45) for z in (0.05, 0.55)}
@@ -279,7 +281,7 @@ def test_animation_renders_a_pass_per_frame(empty_scene, tmp_path):
     recorded = []
     original = pipeline.run
     def run(job, progress=None, on_log=None):
-        recorded.append(not job.current)
+        recorded.append(job.records)
         return original(job, progress, on_log)
     pipeline.run = run
     try:
@@ -318,9 +320,9 @@ def _earlier_outputs(scene, *, size=(32, 24), iterations=1, max_resolution=256):
     scene.holo.iterations = iterations
     scene.holo.max_resolution = max_resolution
     job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
-    job.output_dir.mkdir(parents=True)
+    job.job.output.folder.mkdir(parents=True)
     earlier = {p: os.urandom(64) for p in (job.holograms[0],
-                                                  pipeline.pass_file(job.output_dir, job.frame))}
+                                                  job.job.output.pass_path)}
     for p, data in earlier.items():
         p.write_bytes(data)
     return job, earlier
@@ -340,7 +342,7 @@ def test_missing_or_corrupt_hologram_is_reported(empty_scene):
     # a corrupt file the plate believes current: the operator reports it, naming the file
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
     job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
-    job.output_dir.mkdir(parents=True)
+    job.job.output.folder.mkdir(parents=True)
     for p in job.holograms:
         p.write_bytes(b"not an exr")
     plate.holo.hologram = str(job.holograms[0])

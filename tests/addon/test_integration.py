@@ -26,6 +26,15 @@ def test_the_fingerprint_covers_emitter_kind_material_and_lens(empty_scene):
     cube.data.materials.append(material)
     seen.append(_fingerprint(scene))
     assert len(set(seen)) == len(seen), seen
+    # reading the scene writes nothing into it: the zone the job resolved is kept on the plate
+    # once it is recorded (here as a recording's result is applied)
+    from holo_addon.render import pipeline
+    from holo_core.job import Result
+    plate = next(o for o in scene.objects if o.holo.is_plate)
+    prepared = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
+    assert not plate.holo.zone_set and prepared.zone is not None
+    pipeline.apply(scene, prepared, Result())
+    assert plate.holo.zone_set and _fingerprint(scene) == seen[-1]
     # a plate is recorded for its viewing zone: the camera's lens and focus leave it as it is
     cam.data.dof.use_dof = True
     cam.data.dof.focus_distance = 3.0
@@ -285,10 +294,10 @@ def test_a_plate_too_small_warns_and_one_off_the_view_is_refused(empty_scene):
     _, _, plate = _plate_camera_cube(scene)
     scene.holo.mode = "PLATE"
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
-    assert _prepare(scene).scene.warnings == ()
+    assert _prepare(scene).warnings == ()
     plate.scale = (0.3, 0.3, 1)               # 0.18 m: the cube's outline is cut
     bpy.context.view_layer.update()
-    (warning,) = _prepare(scene).scene.warnings
+    (warning,) = _prepare(scene).warnings
     assert "covers" in warning and "cut from the pass" in warning, warning
     plate.scale = (1, 1, 1)
     plate.location.x = 2.0                    # beside the line of sight
@@ -298,14 +307,15 @@ def test_a_plate_too_small_warns_and_one_off_the_view_is_refused(empty_scene):
 
 
 def test_exposure_is_in_stops_and_unsaved_files_need_a_folder(empty_scene):
+    from holo_addon.export.job import Settings
     from holo_addon.export.scene import ExportError
     from holo_addon.render import pipeline
     scene = empty_scene
     _plate_camera_cube(scene)
     scene.holo.exposure = 1.0
-    assert pipeline.Settings.from_scene(scene, 1.0).exposure == 2.0
+    assert Settings.from_scene(scene, 1.0).exposure == 2.0
     scene.holo.exposure = -2.0
-    assert pipeline.Settings.from_scene(scene, 1.0).exposure == 0.25
+    assert Settings.from_scene(scene, 1.0).exposure == 0.25
     scene.holo.output_dir = "//holo/"
     assert not bpy.data.filepath
     with pytest.raises(ExportError, match="save the .blend first"):
@@ -321,7 +331,7 @@ def test_the_memory_limit_preference_reaches_the_worker():
 
 def _emitter_meshes(scene):
     from holo_addon.export.scene import export_scene
-    data = export_scene(scene, bpy.context.evaluated_depsgraph_get(), plate=False)
+    data = export_scene(scene, bpy.context.evaluated_depsgraph_get())
     return data.points + data.triangles
 
 
@@ -388,7 +398,7 @@ def test_renders_use_render_modifier_levels(empty_scene, tmp_path, monkeypatch):
     original = pipeline.run
 
     def run(job, progress=None, on_log=None):
-        seen.append(sum(len(m.triangles) for m in job.scene.points))
+        seen.append(sum(len(m.triangles) for m in job.job.points))
         return original(job, progress, on_log)
     monkeypatch.setattr(pipeline, "run", run)
     scene.render.filepath = str(tmp_path / "f12.exr")
@@ -409,9 +419,9 @@ def test_procedural_base_colours_are_reported(empty_scene):
     cube.data.materials.append(material)
     scene.holo.mode = "PLATE"
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
-    assert _prepare(scene).scene.warnings == ()  # lit by the scene: Cycles renders it
+    assert _prepare(scene).warnings == ()  # lit by the scene: Cycles renders it
     scene.holo.lighting = "ALBEDO"
-    (warning,) = _prepare(scene).scene.warnings
+    (warning,) = _prepare(scene).warnings
     assert "'marble'" in warning and "Noise Texture" in warning, warning
 
 
@@ -428,17 +438,17 @@ def test_material_features_the_hologram_does_not_show_are_reported(empty_scene):
     shiny = bpy.data.materials.new("shiny")
     compat.enable_nodes(shiny)
     cube.data.materials.append(shiny)
-    assert _prepare(scene).scene.warnings == ()
+    assert _prepare(scene).warnings == ()
     bsdf = next(n for n in shiny.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
     bsdf.inputs["Metallic"].default_value = 1.0
     bsdf.inputs["Alpha"].default_value = 0.5
     bsdf.inputs["Emission Strength"].default_value = 2.0
     bump = shiny.node_tree.nodes.new("ShaderNodeBump")
     shiny.node_tree.links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
-    (warning,) = _prepare(scene).scene.warnings
+    (warning,) = _prepare(scene).warnings
     assert warning.startswith("material 'shiny': Alpha not shown"), warning
     scene.holo.lighting = "ALBEDO"
-    (warning,) = _prepare(scene).scene.warnings
+    (warning,) = _prepare(scene).warnings
     assert warning.startswith("material 'shiny': Metallic, Alpha, Emission Strength, Normal "
                               "not shown"), warning
     glow = bpy.data.materials.new("glow")
@@ -449,10 +459,10 @@ def test_material_features_the_hologram_does_not_show_are_reported(empty_scene):
     output = next(n for n in tree.nodes if n.type == "OUTPUT_MATERIAL")
     tree.links.new(emission.outputs[0], output.inputs["Surface"])
     cube.data.materials[0] = glow
-    (warning,) = _prepare(scene).scene.warnings
+    (warning,) = _prepare(scene).warnings
     assert "'glow' has no Principled BSDF" in warning, warning
     scene.holo.lighting = "SCENE"
-    assert _prepare(scene).scene.warnings == ()
+    assert _prepare(scene).warnings == ()
 
 
 def test_a_render_cropped_to_an_off_centre_border_gets_the_border_of_the_pass(
@@ -527,8 +537,8 @@ def test_a_procedural_base_colour_is_baked_and_recorded(empty_scene):
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
     assert bake.current(cube) is not None and bpy.data.images[bake.image_name(cube)].packed_file
     job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
-    assert job.scene.warnings == ()
-    (mesh,) = job.scene.points
+    assert job.warnings == ()
+    (mesh,) = job.job.points
     pos, colours = sample_points(mesh, 0.01)
     want = np.clip(pos - np.array(cube.location), 0, 1)
     error = np.abs(colours - want)
@@ -553,7 +563,7 @@ def test_a_state_recorded_before_is_not_recorded_again(empty_scene, monkeypatch)
     original = pipeline.run
 
     def run(job, progress=None, on_log=None):
-        recorded.append(not job.current)
+        recorded.append(job.records)
         return original(job, progress, on_log)
     monkeypatch.setattr(pipeline, "run", run)
     paths = []
@@ -609,3 +619,47 @@ def test_the_pass_of_a_render_can_be_cancelled(empty_scene, tmp_path, monkeypatc
     assert _shown_columns(tmp_path / "cancelled.exr").size == 0
     assert (pipeline.output_dir(scene) / "holo_pass_0001.stale.exr").is_file()
     assert compositing.RUNNING["frame"] is None and not bpy.ops.holo.cancel_pass.poll()
+
+
+def test_a_static_shot_is_made_once_and_each_frame_stays_pure(empty_scene, tmp_path,
+                                                             monkeypatch):
+    """Frames 1-3 of a shot where nothing moves: one worker; frames 2 and 3 reuse frame 1's
+    pass pixel for pixel (their digests differ in the frame number alone), each file carrying
+    its own frame's digest. Frame 3 rendered alone, into an empty folder (a farm's node), gives
+    the same pixels. The cube moving at frame 4 makes frame 4 anew."""
+    from holo_addon.render import pipeline
+    from holo_core import worker
+    scene = empty_scene
+    cube, _, _ = _plate_camera_cube(scene)
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    scene.holo.samples, scene.holo.lighting = 2, "ALBEDO"
+    started = []
+    original = worker.Worker.__init__
+
+    def counting(self, *args, **kwargs):
+        started.append(scene.frame_current)
+        original(self, *args, **kwargs)
+    monkeypatch.setattr(worker.Worker, "__init__", counting)
+    for frame in (1, 2, 3):
+        scene.frame_set(frame)
+        assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert started == [1], started
+    out = pipeline.output_dir(scene)
+    first = _read_exr(pipeline.pass_file(out, 1))
+    for frame in (2, 3):
+        again = _read_exr(pipeline.pass_file(out, frame))
+        assert all(np.array_equal(first[k], again[k]) for k in first), f"frame {frame}"
+        scene.frame_set(frame)
+        key = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get()).job.output
+        assert pipeline.stored_key(pipeline.pass_file(out, frame)) == key.pass_key
+    scene.holo.output_dir = str(tmp_path / "alone") + "/"
+    scene.frame_set(3)
+    assert bpy.ops.holo.render_pass() == {"FINISHED"} and started == [1, 3]
+    alone = _read_exr(pipeline.pass_file(tmp_path / "alone", 3))
+    assert all(np.array_equal(first[k], alone[k]) for k in first), "frame 3 alone differs"
+    scene.holo.output_dir = str(out) + "/"
+    cube.keyframe_insert("location", frame=3)
+    cube.location.x += 0.1
+    cube.keyframe_insert("location", frame=4)
+    scene.frame_set(4)
+    assert bpy.ops.holo.render_pass() == {"FINISHED"} and started == [1, 3, 4]

@@ -47,7 +47,7 @@ def test_camera_moves_inside_the_zone_never_record_again(empty_scene):
         return pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
 
     first = job()
-    assert first.current and not first.scene.warnings, first.scene.warnings
+    assert not first.records and not first.warnings, first.warnings
     cam.location.x += 0.1
     cam.rotation_euler.z += 0.02
     cam.data.dof.focus_distance = 2.5
@@ -55,13 +55,13 @@ def test_camera_moves_inside_the_zone_never_record_again(empty_scene):
     scene.render.resolution_x = 48
     bpy.context.view_layer.update()
     moved = job()
-    assert moved.current and moved.fingerprint == first.fingerprint
+    assert not moved.records and moved.fingerprint == first.fingerprint
     cam.location.x += 0.5
     bpy.context.view_layer.update()
     outside = job()
-    said = [w for w in outside.scene.warnings if "viewing zone" in w]
+    said = [w for w in outside.warnings if "viewing zone" in w]
     assert said and "beyond plate 'Plane''s viewing zone (the box centred at" in said[0], \
-        outside.scene.warnings
+        outside.warnings
     plate.holo.zone_margin = 0.3
     assert not plate.holo.zone_set
     assert job().fingerprint != first.fingerprint
@@ -69,7 +69,7 @@ def test_camera_moves_inside_the_zone_never_record_again(empty_scene):
 
 def test_the_zone_is_drawn_as_its_box(empty_scene):
     """The overlay's zone: the box's 12 edges, at its centre and half widths in the world."""
-    from holo_addon.export.scene import plate_from_object
+    from holo_addon.export.plates import plate_from_object
     from holo_addon.ui.overlay import zone_edges
     scene = empty_scene
     _, _, plate = _plate_scene(scene)

@@ -57,8 +57,8 @@ def test_a_failing_emitter_is_a_warning_naming_it_while_the_rest_renders(empty_s
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
     scene.holo.samples = 2
     job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
-    assert len(job.scene.points) == 1
-    (warning,) = [w for w in job.scene.warnings if "Wire" in w]
+    assert len(job.job.points) == 1
+    (warning,) = [w for w in job.warnings if "Wire" in w]
     assert "emitter 'Wire' is left out" in warning and "no faces" in warning, warning
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
     alpha = _read_exr(pipeline.pass_file(pipeline.output_dir(scene), 1))["ViewLayer.Combined.A"]
@@ -199,7 +199,7 @@ def test_motion_blur_warns_once_and_makes_one_pass_per_frame(empty_scene, tmp_pa
     original = worker.Worker.__init__
 
     def counting(self, job, *args, **kwargs):
-        started.append(job["frame"])
+        started.append(job.output.frame)
         original(self, job, *args, **kwargs)
     monkeypatch.setattr(worker.Worker, "__init__", counting)
     scene.render.filepath = str(tmp_path / "frame_")

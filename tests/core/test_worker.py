@@ -1,8 +1,8 @@
 """The worker process (the add-on's compute path): the same pass as in-process, clear reports
 when it fails or dies, cancellation within a second, and earlier files left intact."""
 
+import dataclasses
 import os
-import pickle
 import signal
 import time
 from pathlib import Path
@@ -10,11 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from holo_core import jobs, worker
+from holo_core import jobs, runner, worker
+from holo_core.job import CameraRoute, Job, Output, PlateRoute
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.mesh import Mesh
-from holo_core.validate import InputError
 from holo_core.scene.plate import Plate
+from holo_core.validate import InputError
 
 
 def cube(size=0.4):
@@ -24,18 +25,18 @@ def cube(size=0.4):
     return Mesh(vertices=c, triangles=np.array(faces), colours=np.full((8, 3), 0.8))
 
 
-def job(tmp_path, *, resolution=(32, 24), max_resolution=256, iterations=1):
+def job(tmp_path, *, resolution=(32, 24), max_resolution=256, iterations=1, route=None,
+        **output):
+    """A plate of a cube and its view (or ``route``'s), frame 1 into ``tmp_path/holo``."""
     plate = Plate(matrix_world=look_at((0, -1.5, 0), (0, 0, 0), up=(0, 0, 1)),
                   width=0.6, height=0.6)
     cam = Camera(matrix_world=look_at((0, -3.0, 0), (0, 0, 0), up=(0, 0, 1)),
                  resolution=resolution)
     out = tmp_path / "holo"
-    return {"points": [cube()], "triangles": [], "plate": plate, "camera": cam,
-            "settings": dict(max_resolution=max_resolution, wavelength=None,
-                             iterations=iterations, supersample=1, composition="mean",
-                             exposure=1.0, opacity_threshold=0.5, seed=0),
-            "holograms": tuple(out / f"h{i}.exr" for i in range(iterations)),
-            "current": False, "render": True, "output_dir": out, "frame": 1}
+    route = route or PlateRoute(plate=plate, max_resolution=max_resolution, supersample=1,
+                                holograms=tuple(out / f"h{i}.exr" for i in range(iterations)))
+    return Job(points=(cube(),), camera=cam, route=route,
+               output=Output(folder=out, frame=1, **output))
 
 
 def _pass(path):
@@ -49,8 +50,10 @@ def test_worker_renders_what_the_process_itself_renders(tmp_path):
     device choice, same seeds), and the progress reaches 1."""
     seen, logs = [], []
     there = worker.run(job(tmp_path / "a"), seen.append, lambda *r: logs.append(r))
-    here = worker.run_job(job(tmp_path / "b"))
-    a, b = _pass(there["frame_path"]), _pass(here["frame_path"])
+    here = runner.run(job(tmp_path / "b"))
+    assert there.view is None and here.view is not None  # the pass file holds it
+    assert there.report.plan.aperture == here.report.plan.aperture > 0
+    a, b = _pass(there.pass_path), _pass(here.pass_path)
     assert a.keys() == b.keys()
     for k in a:
         assert np.array_equal(a[k], b[k]), k
@@ -60,9 +63,9 @@ def test_worker_renders_what_the_process_itself_renders(tmp_path):
 
 
 def _earlier(j):
-    out = j["output_dir"]
+    out = j.output.folder
     out.mkdir(parents=True)
-    files = {p: os.urandom(64) for p in (j["holograms"][0], worker.pass_file(out, j["frame"]))}
+    files = {p: os.urandom(64) for p in (j.route.holograms[0], j.output.pass_path)}
     for p, data in files.items():
         p.write_bytes(data)
     return files
@@ -85,7 +88,7 @@ def test_cancel_kills_the_worker_within_a_second_and_keeps_earlier_files(tmp_pat
     elapsed = time.perf_counter() - t
     assert w.process.returncode == -signal.SIGKILL and elapsed < 1.0, elapsed
     assert not w.folder.exists()
-    _unchanged(files, j["output_dir"])
+    _unchanged(files, j.output.folder)
 
 
 def test_cancel_from_the_progress_callback(tmp_path):
@@ -101,7 +104,7 @@ def test_cancel_from_the_progress_callback(tmp_path):
     with pytest.raises(jobs.Cancelled):
         worker.run(j, progress)
     assert len(calls) == 2
-    _unchanged(files, j["output_dir"])
+    _unchanged(files, j.output.folder)
 
 
 def test_a_killed_worker_is_a_clear_report(tmp_path):
@@ -115,7 +118,7 @@ def test_a_killed_worker_is_a_clear_report(tmp_path):
     with pytest.raises(worker.WorkerError, match=r"ended with signal SIGKILL \(killed: out of "
                                                  r"memory\?\)"):
         w.wait()
-    _unchanged(files, j["output_dir"])
+    _unchanged(files, j.output.folder)
 
 
 class _Segfault:
@@ -126,33 +129,32 @@ class _Segfault:
         return ctypes.string_at, (0,)
 
 
-def test_a_crashed_worker_is_a_clear_report(tmp_path):
+def test_a_crashed_worker_is_a_clear_report(tmp_path, monkeypatch):
     """A segmentation fault (as in a broken OpenCL driver) ends the worker, not the parent."""
     j = job(tmp_path)
     files = _earlier(j)
-    j["crash"] = _Segfault()
+    plain = Job.to_dict
+    monkeypatch.setattr(Job, "to_dict", lambda self: {**plain(self), "crash": _Segfault()})
     with pytest.raises(worker.WorkerError, match=r"signal SIGSEGV \(a crash in native code"):
         worker.run(j)
-    _unchanged(files, j["output_dir"])
+    _unchanged(files, j.output.folder)
 
 
 def test_a_raising_worker_reports_its_error_and_writes_nothing(tmp_path):
     j = job(tmp_path)
     files = _earlier(j)
-    j["current"] = True  # the 'current' hologram is the random bytes above: not an EXR
+    # the 'current' hologram is the random bytes above: not an EXR
+    j = dataclasses.replace(j, route=dataclasses.replace(j.route, record=False))
     with pytest.raises(worker.WorkerError, match=r"h0.exr: not an OpenEXR file"):
         worker.run(j)
-    _unchanged(files, j["output_dir"])
-    j["settings"]["composition"] = lambda: "mean"  # cannot even be handed over
-    with pytest.raises((pickle.PicklingError, TypeError, AttributeError)):
-        worker.Worker(j)
+    _unchanged(files, j.output.folder)
 
 
 def test_stop_and_keep_hands_over_a_complete_running_pass(tmp_path):
     """A camera hologram stopped after its first running passes: the pass kept is a whole
     file of that many samples (not the cancelled run's nothing)."""
-    j = job(tmp_path, resolution=(160, 120))
-    j["settings"].update(mode="CAMERA", speckle="LOOKS", samples=64)
+    j = job(tmp_path, resolution=(160, 120),
+            route=CameraRoute(speckle="LOOKS", samples=64, supersample=1))
     w = worker.Worker(j)
     while not any(kind == "partial" and n >= 2 for kind, n in w.poll(timeout=0.1)):
         assert not w.finished, "the worker ended before its second running pass"
@@ -176,15 +178,13 @@ def test_the_cache_folder_reaches_the_worker(tmp_path):
 def test_an_unwritable_output_folder_is_refused_before_the_recording(tmp_path, monkeypatch):
     """The audit's finding 11 for the add-on's worker: a pass or hologram that cannot be
     written is an InputError before anything is recorded (/sys is read-only even for root)."""
-    from holo_core.validate import InputError
     recorded = []
-    monkeypatch.setattr("holo_core.plate.record.record_hologram",
-                        lambda *a, **k: recorded.append(1))
+    monkeypatch.setattr(runner, "record_hologram", lambda *a, **k: recorded.append(1))
     j = job(tmp_path)
-    j["output_dir"] = Path("/sys/holo")
-    j["holograms"] = (Path("/sys/holo/h0.exr"),)
+    j = dataclasses.replace(j, output=Output(folder=Path("/sys/holo")), route=dataclasses.replace(
+        j.route, holograms=(Path("/sys/holo/h0.exr"),)))
     with pytest.raises(InputError, match="/sys"):
-        worker.run_job(j)
+        runner.run(j)
     assert recorded == [], "the recording ran before the output was checked"
 
 
@@ -194,14 +194,15 @@ def test_a_plates_iterations_are_coded_looks_of_one_seed(tmp_path):
     refuse a code (their looks take independent seeds)."""
     from holo_core.io.hologram import read_hologram
     from holo_core.plate.record import record_hologram
-    j = job(tmp_path, iterations=2)
-    worker.run_job({**j, "render": False})
-    a, b = (read_hologram(p) for p in j["holograms"])
+    j = job(tmp_path, iterations=2, render=False)
+    result = runner.run(j)
+    assert result.recorded == j.route.holograms and result.pass_path is None
+    a, b = (read_hologram(p) for p in j.route.holograms)
     assert not np.array_equal(a.object_wave, b.object_wave), "the looks are one recording"
-    same = dict(plate=j["plate"], camera=j["camera"], max_resolution=256, seed=0)
+    same = dict(plate=j.route.plate, camera=j.camera, max_resolution=256, seed=0)
     for code, look in ((None, a), ((3, 2), b)):
-        h = record_hologram(j["points"], code=code, **same)
+        h = record_hologram(list(j.points), code=code, **same)
         assert np.array_equal(h.object_wave, look.object_wave), code
     with pytest.raises(InputError, match="code applies to plates of meshes"):
-        record_hologram((np.array([[0.0, 0.0, -1.0]]), np.ones((1, 3))), plate=j["plate"],
+        record_hologram((np.array([[0.0, 0.0, -1.0]]), np.ones((1, 3))), plate=j.route.plate,
                         resolution=64, code=(1, 2))

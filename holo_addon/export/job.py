@@ -1,0 +1,233 @@
+"""Blender scene → :class:`holo_core.job.Job`, complete, in one visit (Blender's main thread,
+or a render's).
+
+:func:`read` reads the scene's settings, emitters, camera and plate (its viewing zone
+resolved: the plate's own, else the camera's pupil with the plate's Zone Margin) and the
+digests that name the hologram files and say whether a pass is up to date, and builds the
+core's typed job. Nothing is written into Blender's data while reading: a zone the job
+resolved is kept on the plate (:attr:`Prepared.zone`) once the job has succeeded.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+from collections.abc import Callable
+from dataclasses import astuple, dataclass, field, replace
+from functools import partial
+from pathlib import Path
+
+import bpy
+import numpy as np
+
+from holo_core import __version__
+from holo_core.io.hologram import FORMAT_VERSION
+from holo_core.job import CameraRoute, Job, Output, PlateRoute, Radiance
+from holo_core.scene.camera import Camera, look_at
+from holo_core.scene.plate import ViewingZone
+
+from . import radiance
+from .plates import export_imported, scene_plate, with_plate, zone_around
+from .scene import ExportError, SceneData, export_scene
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Settings:
+    """``Scene.holo`` as plain values (lengths in metres)."""
+
+    mode: str                     # 'CAMERA' (camera hologram) or 'PLATE'
+    samples: int
+    max_resolution: int
+    wavelength: float | None
+    iterations: int
+    supersample: int
+    composition: str
+    exposure: float               # linear factor (the scene stores stops)
+    opacity_threshold: float
+    seed: int
+    lighting: str = "SCENE"       # 'SCENE' (Cycles' radiance) or 'ALBEDO' (the colour alone)
+    lighting_samples: int = 8     # Cycles samples of the radiance (denoised)
+    speckle: str = "EXACT"        # camera holograms: 'EXACT' (the looks' limit) or 'LOOKS'
+
+    @classmethod
+    def from_scene(cls, scene, unit: float) -> Settings:
+        h = scene.holo
+        return cls(mode=h.mode, samples=h.samples, max_resolution=h.max_resolution,
+                   wavelength=h.wavelength * unit if h.wavelength > 0 else None,
+                   iterations=h.iterations, supersample=h.supersample,
+                   composition=h.composition, exposure=2.0 ** h.exposure,
+                   opacity_threshold=h.opacity_threshold, seed=h.seed, lighting=h.lighting,
+                   lighting_samples=h.lighting_samples, speckle=h.speckle)
+
+    def recording(self) -> tuple:
+        """The settings a hologram depends on."""
+        return (self.max_resolution, self.wavelength, self.iterations, self.seed,
+                self.lighting)
+
+    def camera_route(self) -> CameraRoute:
+        return CameraRoute(samples=self.samples, speckle=self.speckle,
+                           supersample=self.supersample, exposure=self.exposure,
+                           seed=self.seed)
+
+    def plate_route(self, plate, holograms, record: bool) -> PlateRoute:
+        return PlateRoute(plate=plate, holograms=holograms, record=record,
+                          max_resolution=self.max_resolution, wavelength=self.wavelength,
+                          supersample=self.supersample, composition=self.composition,
+                          exposure=self.exposure, opacity_threshold=self.opacity_threshold,
+                          seed=self.seed)
+
+
+@dataclass(frozen=True, eq=False)
+class Prepared:
+    """A scene read for the worker: the core's ``job`` and what the add-on keeps beside it:
+    the hologram's digest (``fingerprint``, its files' names), the plate's object name, the
+    scene's ``warnings``, the viewing ``zone`` to keep on the plate once the job succeeds
+    (None: nothing new), and with Lighting: Scene ``lighting``, which writes the scene for
+    Cycles and returns the job's :class:`holo_core.job.Radiance` (called only when the
+    worker runs, and only where something is recorded)."""
+
+    job: Job
+    fingerprint: str
+    plate_name: str | None = None
+    warnings: tuple = ()
+    zone: ViewingZone | None = None
+    lighting: Callable[[], Radiance | None] | None = field(default=None, repr=False)
+
+    @property
+    def records(self) -> bool:
+        """Whether the worker records (a camera hologram always does)."""
+        route = self.job.route
+        return isinstance(route, CameraRoute) or route.record
+
+    @property
+    def holograms(self) -> tuple:
+        """The plate's hologram files (none for a camera hologram)."""
+        route = self.job.route
+        return route.holograms if isinstance(route, PlateRoute) else ()
+
+    def lit(self) -> Job:
+        """The job with its radiance (the scene written for Cycles now), where it needs one."""
+        if self.lighting is None or not self.records:
+            return self.job
+        return replace(self.job, radiance=self.lighting())
+
+
+def read(scene, depsgraph, *, render=True) -> Prepared:
+    """The scene as ``depsgraph`` evaluates it, as one job (``render``: view it into the
+    frame's pass; else a plate's recording alone). Raises :class:`ExportError` for a scene
+    that cannot be recorded. With Lighting: Scene, what the emitters' radiance depends on
+    (lights, world, every object the render draws, Cycles' settings) enters the hologram's
+    and the pass's digests, so a changed light renders again and an unchanged scene is
+    reused."""
+    mode = scene.holo.mode
+    out = output_dir(scene)
+    plate = scene_plate(scene, required=mode == "PLATE")
+    imported = plate if mode == "PLATE" and plate.holo.imported else None
+    lit = scene.holo.lighting == "SCENE" and not imported
+    if imported:  # viewed as it is, never recorded: no emitters needed
+        data = export_imported(scene, depsgraph, imported)
+    else:
+        data = export_scene(scene, depsgraph, lit=lit)
+        if mode == "PLATE":
+            data = with_plate(data, plate, depsgraph)
+    lighting = radiance.digest(scene, depsgraph) if lit else ""
+    settings = Settings.from_scene(scene, data.unit)
+    view, zone = data.view, None
+    if mode == "CAMERA":  # recorded for this view at every render: no plate file
+        fingerprint = digest(data, mode, settings.speckle, settings.samples, lighting)
+        route = settings.camera_route()
+    elif imported:
+        paths = (Path(bpy.path.abspath(imported.holo.hologram)),)
+        fingerprint = imported.holo.fingerprint or paths[0].name
+        route = settings.plate_route(data.plate, paths, record=False)
+    else:
+        if data.plate.zone is None:  # the camera's pupil and the margin, kept once recorded
+            zone = kept(zone_around(data.plate, data.camera, plate.holo.zone_margin * data.unit))
+            data = replace(data, plate=replace(data.plate, zone=zone))
+        view = zone_view(data)  # the radiance as the zone's centre sees it, not the camera
+        # a plate is a scene asset: its digest leaves the camera out (its zone is in it)
+        fingerprint = digest(data, *settings.recording(), lighting, camera=False)
+        paths = hologram_paths(out, data.plate_name, settings.iterations, fingerprint)
+        route = settings.plate_route(data.plate, paths,
+                                     record=not all(p.is_file() for p in paths))
+    frame, region, unit = scene.frame_current, data.region, data.unit
+    animated = lit and getattr(scene.cycles, "use_animated_seed", False)
+    output = Output(folder=out, frame=frame, render=render, depth_unit=unit, border=region,
+                    pass_key=digest(data, *astuple(settings), frame, region, unit, lighting),
+                    shot_key=digest(data, *astuple(settings), region, unit, lighting, "shot",
+                                    frame if animated else None))
+    job = Job(camera=data.camera, points=tuple(data.points), triangles=tuple(data.triangles),
+              route=route, output=output)
+    light = partial(radiance.request, scene, depsgraph.view_layer.name, view,
+                    data.points + data.triangles, data.names,
+                    samples=settings.lighting_samples) if lit else None
+    return Prepared(job=job, fingerprint=fingerprint, plate_name=data.plate_name,
+                    warnings=data.warnings, zone=zone, lighting=light)
+
+
+def digest(data: SceneData, *settings, camera=True) -> str:
+    """A digest of everything the hologram depends on: each emitter's kind, evaluated
+    geometry and colours (vertex colours, texture and UVs, material colours), the plate
+    and its viewing zone, the camera (its pose, lens and focus; ``camera=False`` leaves
+    it out, for a plate recorded for its zone), ``settings`` and the core's version and
+    file format."""
+    h = hashlib.sha256(f"holo {__version__} format {FORMAT_VERSION}".encode())
+    for kind, meshes in (("points", data.points), ("triangles", data.triangles)):
+        for mesh in meshes:
+            h.update(kind.encode())
+            for a in (mesh.vertices, mesh.colours, mesh.uvs, mesh.texture):
+                h.update(b"-" if a is None else
+                         np.ascontiguousarray(a, np.float64).tobytes() + repr(a.shape).encode())
+            h.update(b"|")
+    plate = () if data.plate is None else (data.plate.matrix_world,
+                                             (data.plate.width, data.plate.height))
+    zone = data.plate.zone if data.plate is not None else None
+    if zone is not None:
+        plate += (zone.centre, zone.half_extents, zone.pupil)
+    for a in (*plate, *((data.camera.matrix_world,) if camera else ())):
+        h.update(np.asarray(a, np.float64).tobytes())
+    lens = (data.camera.lens, data.camera.sensor_width, data.camera.sensor_height,
+            data.camera.sensor_fit, data.camera.shift_x, data.camera.shift_y,
+            data.camera.resolution, data.camera.pixel_aspect, data.camera.fstop,
+            data.camera.focus_distance) if camera else ("no camera",)
+    h.update(repr(lens + settings).encode())
+    return h.hexdigest()[:16]
+
+
+def output_dir(scene) -> Path:
+    """``Scene.holo.output_dir`` made absolute: relative to the .blend, or when it is not
+    saved yet, to the render output's folder."""
+    raw = scene.holo.output_dir or "//holo/"
+    if raw.startswith("//") and not bpy.data.filepath:
+        raise ExportError("save the .blend first, or set an absolute Output Folder in Render "
+                          "Properties > Holo (the folder is relative to the .blend)")
+    return Path(bpy.path.abspath(raw)).resolve()
+
+
+def hologram_paths(out: Path, plate_name: str, n: int, fingerprint: str) -> tuple:
+    """The iterations' hologram files of the plate for the scene digest ``fingerprint``: one
+    set per recorded state, never rewritten with another state's hologram (farm workers on
+    different frames never share one), and a state seen before (a resolution switched back,
+    a camera returned) is not recorded again."""
+    stem = f"{bpy.path.clean_name(plate_name)}_hologram_{fingerprint}"
+    return tuple(out / (f"{stem}.exr" if i == 0 else f"{stem}.{i}.exr") for i in range(n))
+
+
+def kept(zone: ViewingZone) -> ViewingZone:
+    """``zone`` as the plate's settings keep it (single precision), so that the digest of a
+    job read after it is kept is the digest of this one."""
+    return ViewingZone(centre=tuple(map(float, np.float32(zone.centre))),
+                       half_extents=tuple(map(float, np.float32(zone.half_extents))),
+                       pupil=float(np.float32(zone.pupil)))
+
+
+def zone_view(data: SceneData) -> Camera:
+    """A pinhole at the zone's centre looking at the emitters' centre, with the render
+    camera's lens and frame: what a plate's radiance is rendered from."""
+    plate = data.plate
+    eye = plate.matrix_world[:3, :3] @ np.asarray(plate.zone.centre) + plate.matrix_world[:3, 3]
+    every = np.concatenate([m.vertices for m in data.points + data.triangles])
+    centre = (every.min(0) + every.max(0)) / 2
+    return replace(data.view, matrix_world=look_at(eye, centre, up=plate.matrix_world[:3, 1]))

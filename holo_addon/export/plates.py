@@ -1,0 +1,165 @@
+"""The plate (Blender → :class:`holo_core.scene.plate.Plate`), checked against what the
+camera sees of the holographic objects: the lines of sight through it, the share of the
+objects it covers, whether the camera's pupil stays inside its viewing zone; and a plate
+imported from a hologram file (File ▸ Import ▸ Hologram), viewed as it is.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from holo_core.scene.camera import Camera
+from holo_core.scene.mesh import Mesh, sample_points
+from holo_core.scene.plate import Plate, ViewingZone
+from holo_core.validate import InputError
+
+from .scene import (
+    ExportError,
+    SceneData,
+    camera_from_object,
+    evaluated,
+    render_region,
+    scale,
+    world_matrix,
+)
+
+
+def scene_plate(scene, *, required: bool):
+    """The scene's one plate object (None when there is none and none is ``required``)."""
+    plates = [o for o in scene.objects if o.holo.is_plate]
+    if required and not plates:
+        raise ExportError("no hologram plate: mark a plane with Object ▸ Holo ▸ Plate, or "
+                          "record for the camera (Holo ▸ Hologram: Camera)")
+    if len(plates) > 1:
+        raise ExportError(f"one plate per scene; found {', '.join(o.name for o in plates)}")
+    return plates[0] if plates else None
+
+
+def with_plate(data: SceneData, plate_object, depsgraph) -> SceneData:
+    """``data`` with the plate ``plate_object`` as ``depsgraph`` evaluates it, checked against
+    the camera: in front of it (an :class:`ExportError` otherwise), covering what the camera
+    sees of the emitters (a warning when it covers part, an error when none), the camera's
+    pupil inside its viewing zone (a warning naming it otherwise)."""
+    name = plate_object.name
+    plate = plate_from_object(evaluated(plate_object, depsgraph), data.unit)
+    _in_front(plate, name, data.camera)
+    warnings = data.warnings + tuple(filter(None, (
+        outside_zone(plate, name, data.camera),
+        plate_coverage(plate, name, data.camera, data.points + data.triangles))))
+    return replace(data, plate=plate, plate_name=name, warnings=warnings)
+
+
+def _in_front(plate: Plate, name: str, camera: Camera) -> None:
+    if plate.to_plate(camera.position[None])[0, 2] <= 0:
+        raise ExportError(f"the camera is behind plate '{name}': viewers must be on its +Z "
+                          f"side (rotate the plate 180°)")
+
+
+def plate_from_object(obj, unit: float) -> Plate:
+    """The plate: the object's pose (scale removed) and its width and height [m] from its
+    dimensions; the hologram is its local z = 0 plane and viewers are on its +Z side."""
+    w, h = obj.dimensions.x * unit, obj.dimensions.y * unit
+    if w <= 0 or h <= 0:
+        raise ExportError(f"plate '{obj.name}' must have a width and height (a plane)")
+    return Plate(matrix_world=world_matrix(obj.matrix_world, unit, normalise=True), width=w,
+                 height=h, zone=plate_zone(obj))
+
+
+def plate_zone(obj) -> ViewingZone | None:
+    """The plate's viewing zone [m, the plate's frame] as its settings hold it, or None while
+    none is set (it is set around the camera when the plate is recorded). Read from the
+    original object: an evaluated copy holds the settings of the last evaluation."""
+    holo = (obj.original if obj.is_evaluated else obj).holo
+    if not holo.zone_set:
+        return None
+    try:
+        return ViewingZone(centre=tuple(holo.zone_centre), half_extents=tuple(holo.zone_half),
+                           pupil=holo.zone_pupil)
+    except InputError as e:
+        raise ExportError(f"plate '{obj.name}': its viewing zone: {e}") from None
+
+
+def zone_around(plate: Plate, camera: Camera, margin: float) -> ViewingZone:
+    """The viewing zone covering ``camera``'s pupil with ``margin`` [m] around it."""
+    try:
+        return plate.zone_for(camera, margin)
+    except InputError as e:
+        raise ExportError(str(e)) from None
+
+
+def outside_zone(plate: Plate, name: str, camera: Camera) -> str | None:
+    """A warning naming the zone when the camera's pupil reaches beyond it, else None."""
+    if plate.zone is None:
+        return None
+    position = plate.to_plate(camera.position[None])[0]
+    beyond = plate.zone.distance_outside(position, (camera.aperture_diameter or 0.0) / 2)
+    if beyond <= 1e-9:
+        return None
+    return (f"the camera's pupil reaches {beyond:.3g} m beyond plate '{name}''s viewing zone "
+            f"({plate.zone.describe()}): its view may be cut off or soft; use Fit Zone to "
+            f"Camera (Object ▸ Holo) to record the plate for where the camera is now")
+
+
+def export_imported(scene, depsgraph, plate_object) -> SceneData:
+    """The scene's imported plate (File ▸ Import ▸ Hologram) and camera: a hologram viewed as
+    it is needs no emitters."""
+    if scene.camera is None:
+        raise ExportError("the scene has no camera")
+    unit = scale(scene)
+    camera_object = evaluated(scene.camera, depsgraph)
+    camera = camera_from_object(scene, camera_object, unit, depsgraph)
+    plate = plate_from_object(evaluated(plate_object, depsgraph), unit)
+    _in_front(plate, plate_object.name, camera)
+    outside = outside_zone(plate, plate_object.name, camera)
+    return SceneData(points=[], triangles=[], plate=plate, plate_name=plate_object.name,
+                     camera=camera, warnings=(outside,) if outside else (),
+                     view=replace(camera, fstop=None, focus_distance=None),
+                     region=render_region(scene.render), unit=unit)
+
+
+def _surface_samples(mesh: Mesh, count=4000) -> np.ndarray:
+    """About ``count`` points spread over ``mesh``'s surface [m] (and its vertices)."""
+    area = float(mesh.areas().sum())
+    if area <= 0:
+        return mesh.vertices
+    points, _ = sample_points(mesh, math.sqrt(area / count), max_points=count)
+    return np.concatenate([points, mesh.vertices])
+
+
+def through_plate(plate: Plate, eye, world) -> tuple:
+    """(whether the line of sight from ``eye`` to each of ``world`` (N, 3) crosses the plate
+    with the point behind it, where the lines of sight of the points behind cross its plane
+    (M, 2) in plate coordinates); lengths in any one unit."""
+    eye, local = plate.to_plate(np.asarray(eye, np.float64)[None])[0], plate.to_plate(world)
+    behind = local[:, 2] < 0
+    t = eye[2] / (eye[2] - local[behind, 2])
+    hits = eye[:2] + t[:, None] * (local[behind, :2] - eye[:2])
+    inside = np.zeros(len(local), bool)
+    inside[behind] = (np.abs(hits) <= (plate.width / 2, plate.height / 2)).all(1)
+    return inside, hits
+
+
+def plate_coverage(plate: Plate, name: str, camera: Camera, meshes) -> str | None:
+    """A warning when the plate covers only part of what the camera sees of the emitters (the
+    rest would be cut from the pass), an :class:`ExportError` when it covers none of it (the
+    pass would be empty); None when it covers all."""
+    world = np.concatenate([_surface_samples(m) for m in meshes])
+    xy, depth = camera.project(world)
+    w, h = camera.resolution
+    seen = (depth > 0) & (xy[:, 0] >= 0) & (xy[:, 0] < w) & (xy[:, 1] >= 0) & (xy[:, 1] < h)
+    if not seen.any():
+        raise ExportError("no holographic object is in the camera's view")
+    inside, hits = through_plate(plate, camera.position, world[seen])
+    share = inside.mean()
+    if share == 0:
+        raise ExportError(f"plate '{name}' is not between the camera and the holographic "
+                          f"objects: the pass would be empty (move it onto the line of sight)")
+    if share < 1:
+        need = 2 * np.abs(hits).max(0) if len(hits) else (plate.width, plate.height)
+        return (f"plate '{name}' covers {share:.0%} of the holographic objects the camera "
+                f"sees; the rest is cut from the pass (it needs about {need[0]:.3g} x "
+                f"{need[1]:.3g} m where it stands)")
+    return None

@@ -1,0 +1,494 @@
+"""The typed job both sides of the worker share, and its result.
+
+A :class:`Job` is what Blender's side (or a script, a bench, a test) asks of the pipeline: the
+scene's nouns (emitter meshes in world metres, the camera), a route with its settings
+(:class:`CameraRoute`: a camera hologram made for this view; :class:`PlateRoute`: the plate's
+holograms recorded, or read when current, and viewed), the :class:`Output` (the frame's pass)
+and, with Lighting: Scene, the renderer that colours the emitters (:class:`Radiance`). A
+:class:`Result` is what comes back: the view, the files written and a :class:`Report` of
+what the renderer said. Each is a frozen dataclass checked when it is made
+(:class:`~holo_core.validate.InputError` naming the field and what it may be);
+``to_dict``/``from_dict`` carry them across the process boundary as plain data (strings,
+numbers, lists, dicts and NumPy arrays), and ``from_dict`` refuses what it does not know.
+
+Importing this module loads no OpenCL driver: the parent's handle (:mod:`holo_core.worker`)
+builds and sends jobs, the child (:mod:`holo_core.runner`) runs them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import validate
+from .scene.camera import Camera
+from .scene.mesh import Mesh
+from .scene.plate import Plate, ViewingZone
+from .validate import InputError
+from .view import RenderResult
+
+MAX_SAMPLES = 1 << 16      # a camera hologram's looks, at most
+MAX_SUPERSAMPLE = 16       # fine pixels per pixel per axis, at most
+MAX_EXPOSURE = 1e20        # linear; with colours up to 1e12 the float32 view stays finite
+MAX_FRAME = 1048574        # Blender's last frame
+MAX_RESOLUTION = 65536     # a plate's samples per side, at most
+SPECKLE = {"EXACT": "incoherent", "LOOKS": "object_wave"}  # the camera hologram's way per setting
+
+
+def pass_file(folder, frame: int) -> Path:
+    """Frame ``frame``'s holographic pass in ``folder``: ``holo_pass_NNNN.exr``, one file per
+    frame and nothing shared between frames (farm workers never write the same file)."""
+    return Path(folder) / f"holo_pass_{frame:04d}.exr"
+
+
+# --- the route: how the pass is made ----------------------------------------------------------
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class _Route:
+    """What both routes take: ``supersample`` (fine pixels per pixel per axis), ``exposure``
+    (a linear factor on the radiance, > 0) and ``seed`` (the random phases)."""
+
+    supersample: int = 2
+    exposure: float = 1.0
+    seed: int = 0
+
+    def __post_init__(self):
+        _set(self, "supersample", validate.integer("supersample", self.supersample, 1,
+                                                   MAX_SUPERSAMPLE))
+        _set(self, "exposure", _exposure(self.exposure))
+        _set(self, "seed", validate.seed(self.seed))
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class CameraRoute(_Route):
+    """A camera hologram recorded for the job's camera (:mod:`holo_core.camera`): no plate and
+    no hologram file, made again for every pass.
+
+    samples : looks averaged against speckle (the progressive looks' count, 'LOOKS')
+    speckle : 'EXACT' (the looks' limit in one pass) or 'LOOKS' (random-phase looks)
+    supersample, exposure, seed : as every route (the seed: the looks' random phases)
+    """
+
+    samples: int = 16
+    speckle: str = "EXACT"
+
+    def __post_init__(self):
+        _Route.__post_init__(self)
+        _set(self, "samples", validate.integer("samples", self.samples, 1, MAX_SAMPLES))
+        validate.choice("speckle", self.speckle, tuple(SPECKLE))
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PlateRoute(_Route):
+    """The plate's holograms (one file per iteration), recorded unless they are current, and
+    the view of them from the job's camera (:func:`holo_core.plate.view.render_view`).
+
+    plate : the :class:`~holo_core.scene.plate.Plate`; with its viewing zone it is a scene
+        asset (recorded at ``max_resolution`` samples, the camera sizing nothing)
+    holograms : the iterations' files [paths]: coded looks of one seed where their count
+        allows, else seeds ``seed``, ``seed + 1``, ...
+    record : record them (False: they are current, and are read)
+    max_resolution : the plate's samples per side, at most
+    wavelength : the recording's wavelength [m], or None (chosen by the planner)
+    composition : 'mean' or 'max' of the iterations' views
+    opacity_threshold : the view's coverage taken as opaque, in [0, 1]
+    supersample, exposure, seed : as every route (the supersampling: the intensity's Nyquist
+        rate where that is finer; the seed: the recording's random phases)
+    """
+
+    plate: Plate
+    holograms: tuple
+    record: bool = True
+    max_resolution: int = 1024
+    wavelength: float | None = None
+    composition: str = "mean"
+    opacity_threshold: float = 0.5
+
+    def __post_init__(self):
+        _Route.__post_init__(self)
+        if not isinstance(self.plate, Plate):
+            raise InputError(f"plate must be a Plate; got {type(self.plate).__name__}")
+        _set(self, "holograms", _paths("holograms", self.holograms))
+        if not self.holograms:
+            raise InputError("holograms must name at least one file (one per iteration)")
+        _set(self, "record", _flag("record", self.record))
+        _set(self, "max_resolution", validate.integer("max_resolution", self.max_resolution,
+                                                      16, MAX_RESOLUTION))
+        if self.wavelength is not None:
+            _set(self, "wavelength", validate.length("wavelength",
+                                                     _real("wavelength", self.wavelength)))
+        validate.choice("composition", self.composition, ("mean", "max"))
+        threshold = validate.finite("opacity_threshold",
+                                    _real("opacity_threshold", self.opacity_threshold))
+        if not 0 <= threshold <= 1:
+            raise InputError(f"opacity_threshold must be in [0, 1]; got "
+                             f"{self.opacity_threshold!r}")
+        _set(self, "opacity_threshold", threshold)
+
+
+ROUTES = {"camera": CameraRoute, "plate": PlateRoute}
+
+
+# --- what is written, and who colours the emitters --------------------------------------------
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Output:
+    """Where the frame's pass goes.
+
+    folder : the output folder (the pass and, for a plate, nothing else is written there)
+    frame : the frame number, in [0, 1048574]: the pass is :func:`pass_file` (folder, frame)
+    render : make the pass (False: a plate's holograms are recorded, nothing is viewed)
+    depth_unit : metres per unit of the pass's depth (Blender's ``scale_length``), > 0
+    border : Blender's uncropped render region (left, top, right, bottom) [px from the
+        top-left corner]: the pass is cleared outside it; None without one
+    pass_key : a digest of everything the pass depends on, written into its header
+    shot_key : the same digest with the frame left out: the frames of a static shot share it
+    """
+
+    folder: Path
+    frame: int = 1
+    render: bool = True
+    depth_unit: float = 1.0
+    border: tuple | None = None
+    pass_key: str = ""
+    shot_key: str = ""
+
+    def __post_init__(self):
+        _set(self, "folder", _path("folder", self.folder))
+        _set(self, "frame", validate.integer("frame", self.frame, 0, MAX_FRAME))
+        _set(self, "render", _flag("render", self.render))
+        _set(self, "depth_unit", validate.length("depth_unit", _real("depth_unit", self.depth_unit),
+                                                 "m per unit"))
+        if self.border is not None:
+            try:
+                left, top, right, bottom = (validate.integer("border", v, 0)
+                                            for v in self.border)
+            except (TypeError, ValueError):
+                left = top = right = bottom = -1
+            if not (0 <= left <= right and 0 <= top <= bottom):
+                raise InputError(f"border must be four integers (left, top, right, bottom) [px], "
+                                 f"0 <= left <= right, 0 <= top <= bottom; got {self.border!r}"
+                                 [:300])
+            _set(self, "border", (left, top, right, bottom))
+        for name in ("pass_key", "shot_key"):
+            if not isinstance(getattr(self, name), str):
+                raise InputError(f"{name} must be a string; got {getattr(self, name)!r}"[:300])
+
+    @property
+    def pass_path(self) -> Path:
+        """The frame's pass: ``folder/holo_pass_NNNN.exr``."""
+        return pass_file(self.folder, self.frame)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Radiance:
+    """A renderer's radiance of the emitters (Lighting: Scene): ``command`` (its argument
+    list) writes ``image``, an RGBA OpenEXR of the emitters alone, premultiplied, as
+    ``camera`` sees them (and may print ``HOLO_PROGRESS <fraction>`` lines); it runs in
+    ``folder``, its scratch folder, removed afterwards."""
+
+    command: tuple
+    image: Path
+    folder: Path
+    camera: Camera
+
+    def __post_init__(self):
+        command = self.command
+        if isinstance(command, (str, bytes)) or not isinstance(command, (list, tuple)) or \
+                not command or not all(isinstance(a, str) for a in command):
+            raise InputError(f"radiance command must be a list of strings (a program and its "
+                             f"arguments); got {command!r}"[:300])
+        _set(self, "command", tuple(command))
+        _set(self, "image", _path("radiance image", self.image))
+        _set(self, "folder", _path("radiance folder", self.folder))
+        if not isinstance(self.camera, Camera):
+            raise InputError(f"radiance camera must be a Camera; got "
+                             f"{type(self.camera).__name__}")
+
+
+# --- the job ----------------------------------------------------------------------------------
+
+@dataclass(frozen=True, slots=True, kw_only=True, eq=False)
+class Job:
+    """One pass (or a plate's recording): the emitters ``points`` and ``triangles`` (meshes in
+    world metres, recorded as point emitters and as triangles), the ``camera``, the ``route``
+    (:class:`CameraRoute` or :class:`PlateRoute`), the ``output`` and, with Lighting: Scene,
+    the ``radiance`` that colours the emitters (only where something is recorded)."""
+
+    camera: Camera
+    route: CameraRoute | PlateRoute
+    output: Output
+    points: tuple = ()
+    triangles: tuple = ()
+    radiance: Radiance | None = None
+
+    def __post_init__(self):
+        if not isinstance(self.camera, Camera):
+            raise InputError(f"camera must be a Camera; got {type(self.camera).__name__}")
+        if not isinstance(self.route, tuple(ROUTES.values())):
+            raise InputError(f"route must be a CameraRoute or a PlateRoute; got "
+                             f"{type(self.route).__name__}")
+        if not isinstance(self.output, Output):
+            raise InputError(f"output must be an Output; got {type(self.output).__name__}")
+        for name in ("points", "triangles"):
+            meshes = getattr(self, name)
+            if isinstance(meshes, Mesh) or not isinstance(meshes, (list, tuple)) or \
+                    not all(isinstance(m, Mesh) for m in meshes):
+                raise InputError(f"{name} must be a list of Mesh; got {meshes!r}"[:300])
+            _set(self, name, tuple(meshes))
+        camera = isinstance(self.route, CameraRoute)
+        records = camera or self.route.record
+        if records and not self.points + self.triangles:
+            raise InputError("points and triangles hold no emitters: there is nothing to "
+                             "record")
+        if camera and not self.output.render:
+            raise InputError("output render must be true for a camera hologram (it is made "
+                             "for its pass)")
+        if self.radiance is not None and not isinstance(self.radiance, Radiance):
+            raise InputError(f"radiance must be a Radiance or None; got "
+                             f"{type(self.radiance).__name__}")
+        if self.radiance is not None and not records:
+            raise InputError("radiance colours emitters to record: a plate whose holograms "
+                             "are current takes none")
+        border = self.output.border
+        w, h = self.camera.resolution
+        if border is not None and (border[2] > w or border[3] > h):
+            raise InputError(f"border must lie within the camera's {w}x{h} pixels; got "
+                             f"{border}")
+
+    def to_dict(self) -> dict:
+        """The job as plain data (:meth:`from_dict` makes it again)."""
+        route = _plain(self.route)
+        return {"camera": _plain(self.camera), "route": {"kind": _kind(self.route), **route},
+                "output": _plain(self.output), "points": [_plain(m) for m in self.points],
+                "triangles": [_plain(m) for m in self.triangles],
+                "radiance": None if self.radiance is None else _plain(self.radiance)}
+
+    @classmethod
+    def from_dict(cls, data) -> Job:
+        """The job of :meth:`to_dict`'s plain data, every field checked
+        (:class:`~holo_core.validate.InputError` naming it)."""
+        d = _fields(cls, data, "job")
+        route = _fields(None, _needed(d, "route", "job"), "route")
+        kind = validate.choice("route kind", route.pop("kind", None), tuple(ROUTES))
+        if "plate" in route:
+            route["plate"] = _noun(Plate, route["plate"], "plate")
+        radiance = d.get("radiance")
+        if radiance is not None:
+            radiance = _noun(Radiance, radiance, "radiance")
+        return _made(cls, "job", camera=_noun(Camera, _needed(d, "camera", "job"), "camera"),
+                     route=_noun(ROUTES[kind], route, "route"),
+                     output=_noun(Output, _needed(d, "output", "job"), "output"),
+                     points=_meshes(d.get("points", ()), "points"),
+                     triangles=_meshes(d.get("triangles", ()), "triangles"),
+                     radiance=radiance)
+
+
+# --- the result -------------------------------------------------------------------------------
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Plan:
+    """The optics a view was made with: the pupil's ``aperture`` and ``focus`` [m] (None: a
+    pinhole), the ``wavelengths`` [m], the resolution limit λ/D in pixels
+    (``resolution_limit_px``), the pupil's samples (rows, cols) and, for a camera hologram,
+    its depth ``layers``."""
+
+    aperture: float
+    focus: float | None = None
+    wavelengths: tuple = ()
+    resolution_limit_px: float = 0.0
+    pupil_samples: tuple | None = None
+    layers: int | None = None
+
+    def __post_init__(self):
+        _set(self, "wavelengths", tuple(map(float, self.wavelengths)))
+        if self.pupil_samples is not None:
+            _set(self, "pupil_samples", tuple(map(int, self.pupil_samples)))
+
+    @classmethod
+    def of(cls, info: dict) -> Plan | None:
+        """The plan a view's ``info`` records, or None when it holds none."""
+        if "aperture_m" not in info:
+            return None
+        pupil = info.get("pupil_samples")
+        return cls(aperture=float(info["aperture_m"]), focus=_number(info.get("focus_m")),
+                   wavelengths=tuple(map(float, info.get("wavelengths_m", ()))),
+                   resolution_limit_px=float(info.get("resolution_limit_px", 0.0)),
+                   pupil_samples=None if pupil is None else tuple(map(int, pupil)),
+                   layers=None if info.get("layers") is None else int(info["layers"]))
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Report:
+    """What the renderer reported: its ``warnings`` (each once, in order), the ``seconds``
+    the run took in the worker and the renderer's radiance of them (``radiance_seconds``,
+    Lighting: Scene), the ``looks`` averaged and the running mean's ``speckle_contrast``, and
+    the view's :class:`Plan`."""
+
+    warnings: tuple = ()
+    seconds: float | None = None
+    radiance_seconds: float | None = None
+    looks: int | None = None
+    speckle_contrast: float | None = None
+    plan: Plan | None = None
+
+    def __post_init__(self):
+        _set(self, "warnings", tuple(map(str, self.warnings)))
+
+    @classmethod
+    def of(cls, view: RenderResult | None, **report) -> Report:
+        """The report of ``view`` (its ``info``), with ``report``'s fields."""
+        info = {} if view is None else view.info
+        looks = info.get("samples")
+        return cls(looks=None if looks is None else int(looks),
+                   speckle_contrast=_number(info.get("speckle_contrast")),
+                   plan=Plan.of(info), **report)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True, eq=False)
+class Result:
+    """What a job made: the ``view`` (in the process that rendered it; None across the
+    process boundary, where the pass file holds it, and for a recording alone), the hologram
+    files ``recorded`` (none where they were current), the frame's pass ``pass_path`` (None:
+    nothing viewed), ``reused``: the pass file that was reused instead of rendering (the
+    frame's own, up to date, or another frame's of the same static shot), and the
+    :class:`Report`."""
+
+    recorded: tuple = ()
+    pass_path: Path | None = None
+    reused: Path | None = None
+    report: Report = field(default_factory=Report)
+    view: RenderResult | None = None
+
+    def to_dict(self) -> dict:
+        """The result as plain data, the view left out (the pass file holds it)."""
+        return {"recorded": [str(p) for p in self.recorded],
+                "pass_path": None if self.pass_path is None else str(self.pass_path),
+                "reused": None if self.reused is None else str(self.reused),
+                "report": _plain(self.report)}
+
+    @classmethod
+    def from_dict(cls, data) -> Result:
+        d = _fields(cls, data, "result")
+        return cls(recorded=_paths("recorded", d.get("recorded", ())),
+                   pass_path=_path("pass_path", d.get("pass_path"), optional=True),
+                   reused=_path("reused", d.get("reused"), optional=True),
+                   report=_noun(Report, d.get("report", {}), "report"))
+
+
+# the nouns inside nouns that from_dict makes of their dicts: (owner, field) -> type
+NESTED = {(Plate, "zone"): ViewingZone, (Radiance, "camera"): Camera, (Report, "plan"): Plan}
+
+
+# --- plain data -------------------------------------------------------------------------------
+
+def _plain(obj):
+    """A dataclass as a dict of its fields, nested dataclasses too; paths as strings, tuples as
+    lists, arrays as they are."""
+    if dataclasses.is_dataclass(obj):
+        return {f.name: _plain(getattr(obj, f.name)) for f in dataclasses.fields(obj) if f.init
+                and (f.name != "view")}
+    if isinstance(obj, Path):
+        return str(obj)
+    if isinstance(obj, tuple):
+        return [_plain(v) for v in obj]
+    return obj
+
+
+def _kind(route) -> str:
+    return next(k for k, cls in ROUTES.items() if isinstance(route, cls))
+
+
+def _fields(cls, data, name: str) -> dict:
+    """``data`` as a dict whose keys are ``cls``'s fields (any keys when ``cls`` is None)."""
+    if not isinstance(data, dict):
+        raise InputError(f"{name} must be a dict of its fields; got {type(data).__name__}")
+    if cls is not None:
+        known = {f.name for f in dataclasses.fields(cls) if f.init}
+        unknown = sorted(map(str, set(data) - known))
+        if unknown:
+            raise InputError(f"{name} has no field {', '.join(map(repr, unknown))} (its "
+                             f"fields: {', '.join(sorted(known))})"[:300])
+    return dict(data)
+
+
+def _noun(cls, data, name: str):
+    """``cls`` made of the dict ``data`` (or ``data`` itself when it is one), its nested
+    nouns too (:data:`NESTED`)."""
+    if isinstance(data, cls):
+        return data
+    fields = _fields(cls, data, name)
+    for (owner, key), kind in NESTED.items():
+        if owner is cls and isinstance(fields.get(key), dict):
+            fields[key] = _noun(kind, fields[key], f"{name} {key}")
+    return _made(cls, name, **fields)
+
+
+def _needed(data: dict, key: str, name: str):
+    if key not in data:
+        raise InputError(f"{name} lacks '{key}'")
+    return data[key]
+
+
+def _made(cls, name: str, **fields):
+    """``cls(**fields)``; a field it needs and lacks is an InputError naming it."""
+    try:
+        return cls(**fields)
+    except TypeError as e:
+        text = str(e)
+        if "required" in text:  # missing 1 required keyword-only argument: 'plate'
+            raise InputError(f"{name} lacks {text.split(': ', 1)[-1]}"[:300]) from None
+        raise InputError(f"{name}: {text}"[:300]) from None
+
+
+def _meshes(data, name: str) -> tuple:
+    if not isinstance(data, (list, tuple)):
+        raise InputError(f"{name} must be a list of meshes; got {type(data).__name__}")
+    return tuple(_noun(Mesh, m, f"{name}[{i}]") for i, m in enumerate(data))
+
+
+def _set(obj, name: str, value) -> None:
+    object.__setattr__(obj, name, value)
+
+
+def _path(name: str, value, *, optional=False) -> Path | None:
+    if value is None and optional:
+        return None
+    if not isinstance(value, (str, Path)) or not str(value) or "\0" in str(value):
+        raise InputError(f"{name} must be a path; got {value!r}"[:300])
+    return Path(value)
+
+
+def _paths(name: str, values) -> tuple:
+    if isinstance(values, (str, Path)) or not isinstance(values, (list, tuple)):
+        raise InputError(f"{name} must be a list of paths; got {values!r}"[:300])
+    return tuple(_path(name, v) for v in values)
+
+
+def _flag(name: str, value) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise InputError(f"{name} must be true or false; got {value!r}"[:300])
+    return bool(value)
+
+
+def _real(name: str, value):
+    """``value`` when it is a number (a string or a flag is not, whatever it spells)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
+        raise InputError(f"{name} must be a number; got {value!r}"[:300])
+    return value
+
+
+def _exposure(value) -> float:
+    v = validate.finite("exposure", _real("exposure", value))
+    if not 0 < v <= MAX_EXPOSURE:
+        raise InputError(f"exposure must be in (0, {MAX_EXPOSURE:g}] (a linear factor); got "
+                         f"{value!r}")
+    return v
+
+
+def _number(value) -> float | None:
+    return None if value is None or not math.isfinite(float(value)) else float(value)

@@ -1,0 +1,254 @@
+"""The worker process's side: :func:`run` makes a :class:`~holo_core.job.Job`'s pass (and a
+plate's holograms), dispatching on its route, and :func:`main` is the process
+(``python -m holo_core.runner FOLDER``, started by :class:`holo_core.worker.Worker`).
+
+The process reads the job's plain data from ``FOLDER/job.pickle`` (checked again as it
+becomes a Job: the child trusts nothing it is handed), reports progress and log records as
+JSON lines on its stdout, writes its outputs atomically once every stage has finished, and
+leaves its :class:`~holo_core.job.Result` in ``FOLDER/result.pickle``. This module loads the
+OpenCL driver; the parent never imports it.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import pickle
+import shutil
+import subprocess
+import sys
+import time
+import traceback
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from . import jobs
+from .camera.render import render_camera
+from .io.hologram import read_hologram, write_hologram
+from .io.image import check_writable, read_exr
+from .io.view import write_view
+from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result
+from .plate.record import look_code, record_hologram
+from .plate.view import nyquist_supersample, render_view
+from .scene.radiance import projected
+from .view import BACKGROUND_DEPTH
+
+log = logging.getLogger(__name__)
+RADIANCE_SHARE = 0.2  # of the progress bar: the renderer's radiance before the hologram
+
+
+def run(job: Job, progress: jobs.Progress = None, on_partial=None) -> Result:
+    """Make the job: the emitters coloured by the renderer's radiance (when the job has
+    one), then its route's holograms and view, then its files, each written atomically only
+    after every stage has finished (a failed or cancelled run leaves earlier files as they
+    were). ``on_partial(view, n)`` gets a camera hologram's running result after 1, 2, 4, 8 …
+    samples (the user may stop there and keep it)."""
+    start = time.perf_counter()
+    _check_outputs(job)
+    with _Heard() as heard:
+        lit = None
+        if job.radiance is not None:
+            t = time.perf_counter()
+            job = lit_emitters(job, jobs.scaled(progress, 0.0, RADIANCE_SHARE))
+            progress = jobs.scaled(progress, RADIANCE_SHARE, 1.0)
+            lit = time.perf_counter() - t
+        route, recorded = job.route, ()
+        if isinstance(route, CameraRoute):  # made for this view: no plate, no hologram file
+
+            def sample(view, n):
+                if on_partial is not None and n < route.samples and not n & (n - 1):
+                    on_partial(view, n)
+
+            view = render_camera(job.points + job.triangles, job.camera, samples=route.samples,
+                                 supersample=route.supersample, exposure=route.exposure,
+                                 seed=route.seed, progress=progress,
+                                 via=SPECKLE[route.speckle], on_sample=sample)
+        else:
+            view, recorded = _plate(job, progress)
+        path = None if view is None else _write_pass(job, view, lit)
+    report = Report.of(view, warnings=tuple(dict.fromkeys(heard.texts)),
+                       seconds=time.perf_counter() - start, radiance_seconds=lit)
+    return Result(recorded=recorded, pass_path=path, report=report, view=view)
+
+
+def _plate(job: Job, progress):
+    """The plate's holograms, recorded (or read when current), and their view."""
+    route, n = job.route, len(job.route.holograms)
+    record_share = 0.0 if not route.record else (0.85 if job.output.render else 1.0)
+    if route.record:
+        # a plate with its viewing zone is a scene asset: the camera sizes nothing of it (its
+        # samples are Max Hologram Size), so moving or refocusing it never records again
+        asset = route.plate.zone is not None
+        # the iterations are coded looks of one seed where n allows (look_code), else seeds
+        codes = [look_code(i, n) for i in range(n)]
+        holos = [record_hologram(
+            list(job.points), triangles=list(job.triangles), plate=route.plate,
+            camera=None if asset else job.camera,
+            resolution=route.max_resolution if asset else None,
+            max_resolution=route.max_resolution, wavelength=route.wavelength,
+            seed=route.seed + (0 if code else i), code=code,
+            progress=jobs.scaled(progress, record_share * i / n, record_share * (i + 1) / n))
+            for i, code in enumerate(codes)]
+    else:
+        holos = [read_hologram(p) for p in route.holograms]
+    view = None
+    if job.output.render:
+        # the route's Supersample, or the intensity's Nyquist rate where that is finer
+        fine = max(route.supersample, nyquist_supersample(holos[0], job.camera))
+        view = render_view(holos, job.camera, supersample=fine, composition=route.composition,
+                           opacity_threshold=route.opacity_threshold,
+                           progress=jobs.scaled(progress, record_share, 1.0))
+        view.rgb[...] *= route.exposure
+    if not route.record:
+        return view, ()
+    # every stage has finished: only now are files replaced (each one atomically)
+    job.output.folder.mkdir(parents=True, exist_ok=True)
+    for path, h in zip(route.holograms, holos):
+        write_hologram(path, h)
+    return view, route.holograms
+
+
+def _check_outputs(job: Job) -> None:
+    """:class:`InputError` for a hologram or pass file that cannot be written, before any work
+    (a read-only output folder is found at once, not after the recording)."""
+    route = job.route
+    outputs = list(route.holograms) if isinstance(route, PlateRoute) and route.record else []
+    if job.output.render:
+        outputs.append(job.output.pass_path)
+    for path in outputs:
+        check_writable(path, ".exr")
+
+
+def lit_emitters(job: Job, progress: jobs.Progress = None) -> Job:
+    """The job whose ``points`` and ``triangles`` are textured with the radiance its renderer
+    saw (:func:`holo_core.scene.radiance.projected`; :class:`holo_core.job.Radiance`). The
+    renderer runs in this process's group, so killing the worker's group ends it too; its
+    scratch folder is removed afterwards."""
+    r = job.radiance
+    try:
+        tail = []
+        with subprocess.Popen(r.command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, cwd=r.folder, text=True,
+                              errors="replace") as child:
+            try:
+                for line in child.stdout:
+                    if line.startswith("HOLO_PROGRESS "):
+                        jobs.report(progress, float(line.split()[1]), 1.0)
+                    elif line.strip():
+                        tail = (tail + [line.rstrip()])[-20:]
+                        log.debug("renderer: %s", line.rstrip())
+            except BaseException:
+                child.kill()
+                raise
+        if child.returncode != 0 or not r.image.is_file():
+            raise RuntimeError(f"the radiance render failed (exit code {child.returncode}): "
+                               + " | ".join(tail[-3:]))
+        _, channels = read_exr(r.image, what="radiance")
+    finally:
+        shutil.rmtree(r.folder, ignore_errors=True)
+    rgb = np.stack([channels[c] for c in "RGB"], -1)
+    alpha = channels.get("A", np.ones(rgb.shape[:2], np.float32))
+    points, triangles = (tuple(projected(list(meshes), r.camera, rgb, alpha))
+                         for meshes in (job.points, job.triangles))
+    return replace(job, points=points, triangles=triangles, radiance=None)
+
+
+def _write_pass(job: Job, view, lit_seconds) -> Path:
+    """The pass of the job's frame (:func:`holo_core.job.pass_file`); its depth in the
+    output's ``depth_unit`` metres per unit (Blender's scene units), cleared outside its
+    border."""
+    out = job.output
+    if lit_seconds is not None:  # the lit radiance's share of the time
+        view.info["radiance_seconds"] = round(lit_seconds, 3)
+    if out.depth_unit != 1.0:
+        near = view.depth < BACKGROUND_DEPTH
+        view.depth[near] /= out.depth_unit
+    if out.border is not None:
+        _outside_border(view, out.border)
+    for key in ("pass_key", "shot_key"):
+        if getattr(out, key):
+            view.info[key] = getattr(out, key)
+    write_view(view, out.pass_path)
+    return out.pass_path
+
+
+def _outside_border(view, border) -> None:
+    """Clear the pass outside Blender's render region (``border``: left, top, right, bottom
+    pixels from the top-left corner), which the render leaves empty."""
+    left, top, right, bottom = border
+    keep = np.zeros(view.alpha.shape, bool)
+    keep[top:bottom, left:right] = True
+    view.rgb[~keep] = 0
+    view.alpha[~keep] = 0
+    view.depth[~keep] = BACKGROUND_DEPTH
+
+
+class _Heard(logging.Handler):
+    """The warnings the core logs while it is installed (the report's ``warnings``)."""
+
+    def __init__(self):
+        super().__init__(logging.WARNING)
+        self.texts = []
+
+    def emit(self, record):
+        self.texts.append(record.getMessage())
+
+    def __enter__(self):
+        logging.getLogger("holo_core").addHandler(self)
+        return self
+
+    def __exit__(self, *exc):
+        logging.getLogger("holo_core").removeHandler(self)
+
+
+# --- the process ------------------------------------------------------------------------------
+
+class _Forward(logging.Handler):
+    def __init__(self, send):
+        super().__init__(logging.INFO)
+        self.send = send
+
+    def emit(self, record):
+        self.send({"log": [record.levelno, record.getMessage()]})
+
+
+def main(folder: str) -> int:
+    """The worker: run ``FOLDER/job.pickle``, write ``FOLDER/result.pickle``."""
+    channel = os.fdopen(os.dup(1), "w", buffering=1)
+    os.dup2(2, 1)  # anything else printed, by Python or a driver, goes to stderr
+    sys.stdout = sys.stderr
+
+    def send(message):
+        channel.write(json.dumps(message) + "\n")
+
+    core = logging.getLogger("holo_core")
+    core.addHandler(_Forward(send))
+    core.setLevel(logging.INFO)
+    folder = Path(folder)
+    try:
+        with open(folder / "job.pickle", "rb") as f:
+            job = Job.from_dict(pickle.load(f))
+
+        def partial(view, n):  # a complete pass of fewer samples, kept only if the user asks
+            write_view(view, folder / "partial.exr")
+            send({"partial": n})
+
+        result = run(job, lambda f: send({"progress": round(f, 4)}), partial)
+        tmp = folder / "result.pickle.tmp"
+        with open(tmp, "wb") as f:
+            pickle.dump(result.to_dict(), f)
+        os.replace(tmp, folder / "result.pickle")
+        send({"done": True})
+        return 0
+    except Exception as e:  # reported to the parent as one line, the traceback on stderr
+        traceback.print_exc()
+        kind = "" if isinstance(e, (ValueError, OSError)) else f"{type(e).__name__}: "
+        send({"error": f"{kind}{e}"})
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1]))
