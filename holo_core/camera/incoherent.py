@@ -27,13 +27,18 @@ import math
 import numpy as np
 
 from .. import jobs
+from ..opencl import associated
 from ..opencl.arrays import empty
+from ..optics import imaging
 from ..optics.imaging import ES_TABLE, IRIS_TAPER
 from ..propagation.grid import next_fast_len
 from ..propagation.tilt import cached_array, es_table, es_transform
 from ..scene.camera import Camera
 from .optics import PupilOptics, iris
+from . import recording
 from .raster import Emitters
+
+PROGRAM = associated(__file__)
 
 BUFFERS = 6  # complex buffers of the padded grid on the device: 3 accumulators, 2 PSFs, a map
 READ_PADDING = 1.5  # the images' grid is padded by this much for the ES read ...
@@ -71,8 +76,8 @@ class IncoherentImages:
         # the unnormalised inverse FFT
         self.scale = 1 / (h * w * float(np.sum(iris(optics, h, w) ** 2)) * math.prod(self.shape))
 
-    def kernel(self, name):
-        return self.rt.kernel("pupil", name, self.options)
+    def kernel(self, name, program=PROGRAM):
+        return self.rt.kernel(program, name, self.options)
 
     def images(self, progress: jobs.Progress = None) -> list[np.ndarray]:
         """(R + iG, B + i·coverage, cross) at the fine pixels: complex64 (H, W) each."""
@@ -98,7 +103,7 @@ class IncoherentImages:
                                             *(np.int32(n) for n in self.read_shape), acc.data,
                                             *(d.data for d in self.deapodize))
             rt.fft.backward(self.read)
-            self.kernel("read_pixels")(rt.queue, (self.pixels.size,), None, self.pixels.data,
+            self.kernel("read_pixels", imaging.PROGRAM)(rt.queue, (self.pixels.size,), None, self.pixels.data,
                                        self.read.data, *(np.int32(n) for n in self.read_shape),
                                        self.u.data, self.v.data, np.float32(self.scale),
                                        self.es.data)
@@ -115,11 +120,11 @@ class IncoherentImages:
             dy, dx = o.pitch(lam)
             k = 2 * np.pi / lam
             self.pupil.fill(0)
-            self.kernel("add_layer")(rt.queue, (h, w), None, self.pupil.data, self.ones.data,
+            self.kernel("add_layer", recording.PROGRAM)(rt.queue, (h, w), None, self.pupil.data, self.ones.data,
                                      np.float32(dy), np.float32(dx), np.float32(k),
                                      np.float32(z))
             psf.fill(0)
-            self.kernel("pupil_window")(
+            self.kernel("pupil_window", imaging.PROGRAM)(
                 rt.queue, (h, w), None, psf.data, self.pupil.data, np.float32(dy),
                 np.float32(dx), np.float32(o.diameter / 2 * lam / o.wavelength),
                 np.float32(IRIS_TAPER), np.float32(k), np.float32(o.focus or 0),

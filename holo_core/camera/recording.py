@@ -18,12 +18,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..opencl import get_runtime
+from ..opencl import associated, get_runtime
 from ..opencl.arrays import empty
 from ..optics.imaging import ES_TABLE, TAPS, PupilImage
 from ..scene.camera import Camera
 from .optics import PupilOptics, iris
 from .raster import Emitters
+
+PROGRAM = associated(__file__)
 
 
 class PupilFields:
@@ -45,7 +47,7 @@ class PupilFields:
         self.options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
 
     def kernel(self, name):
-        return self.rt.kernel("pupil", name, self.options)
+        return self.rt.kernel(PROGRAM, name, self.options)
 
     def object_wave(self, field: int, phases):
         """The pupil's object wave (device, (h, w) FFT order) of colour channel ``field``

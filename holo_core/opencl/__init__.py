@@ -1,6 +1,7 @@
-"""OpenCL runtime: device choice and context (runtime.py), FFT backends (fft.py),
-device-array helpers (arrays.py), packaged drivers made visible to the ICD loader (icd.py),
-kernels/*.cl with the shared complex header."""
+"""OpenCL runtime: device choice, context and program cache (runtime.py), FFT backends
+(fft.py), device-array helpers (arrays.py), packaged drivers made visible to the ICD loader
+(icd.py), and the kernels' shared headers (holo_complex.h, fft_order.h, spectrum_read.h). Each
+kernel's .cl file lives beside the module that launches it (``runtime.associated``)."""
 
 import os
 
@@ -14,6 +15,7 @@ from .arrays import as_device, is_device_array, like_input, to_device
 from .runtime import (
                       Runtime,
                       all_devices,
+                      associated,
                       choose_device,
                       device_problem,
                       device_table,
@@ -21,6 +23,6 @@ from .runtime import (
                       set_device,
 )
 
-__all__ = ["Runtime", "all_devices", "as_device", "choose_device", "device_problem",
+__all__ = ["Runtime", "all_devices", "as_device", "associated", "choose_device", "device_problem",
            "device_table", "get_runtime",
            "is_device_array", "like_input", "set_device", "to_device"]

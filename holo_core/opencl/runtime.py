@@ -39,7 +39,7 @@ log = logging.getLogger(__name__)
 # drivers that print build logs make pyopencl warn for its own generated kernels
 warnings.filterwarnings("ignore", category=cl.CompilerWarning)
 
-KERNELS = Path(__file__).parent / "kernels"
+HEADERS = Path(__file__).parent  # the kernels' shared headers (holo_complex.h, …)
 _TYPES = {"gpu": cl.device_type.GPU, "cpu": cl.device_type.CPU,
           "accelerator": cl.device_type.ACCELERATOR}
 # CPU drivers in order of preference, by platform name (see the module docstring)
@@ -88,7 +88,7 @@ def _probe(device: cl.Device) -> str:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             prg = cl.Program(ctx, _PROBE).build(
-                options=[f"-I{KERNELS}", *(["-DHOLO_FP64"] if fp64 else [])])
+                options=[f"-I{HEADERS}", *(["-DHOLO_FP64"] if fp64 else [])])
         xd = cla.to_device(queue, x)
         yd = cla.empty(queue, x.shape, np.complex64)
         cl.Kernel(prg, "probe")(queue, x.shape, None, xd.data, yd.data)
@@ -229,18 +229,19 @@ class Runtime:
         """Build options that make the kernels' ``real`` match :attr:`real`."""
         return ("-DHOLO_FP64",) if self.has_fp64 else ()
 
-    def program(self, name: str, options: tuple[str, ...] = ()) -> cl.Program:
-        """``kernels/<name>.cl`` built for this context, once per option set."""
-        key = (name, options)
+    def program(self, source: Path, options: tuple[str, ...] = ()) -> cl.Program:
+        """The program in the file ``source`` (a module's :func:`associated` ``.cl`` file)
+        built for this context, once per option set."""
+        key = (source, options)
         if key not in self._programs:
-            source = (KERNELS / f"{name}.cl").read_text()
-            opts = [f"-I{KERNELS}", *options]
+            text = Path(source).read_text()
+            opts = [f"-I{HEADERS}", *options]
             with warnings.catch_warnings():  # PoCL's clang notes vector ABIs; not our concern
                 warnings.simplefilter("ignore", cl.CompilerWarning)
-                self._programs[key] = cl.Program(self.context, source).build(options=opts)
+                self._programs[key] = cl.Program(self.context, text).build(options=opts)
         return self._programs[key]
 
-    def kernel(self, program: str, name: str, options: tuple[str, ...] = ()) -> cl.Kernel:
+    def kernel(self, program: Path, name: str, options: tuple[str, ...] = ()) -> cl.Kernel:
         """A kernel object, created once (repeated retrieval from a program is slow)."""
         key = (program, name, options)
         if key not in self._kernels:
@@ -265,6 +266,12 @@ class Runtime:
     def to_device(self, host: np.ndarray, dtype=None) -> cla.Array:
         a = np.ascontiguousarray(host, dtype=dtype)
         return cla.to_device(self.queue, a)
+
+
+def associated(module_file: str) -> Path:
+    """The kernels' file beside a host module: ``camera/recording.py`` launches the kernels of
+    ``camera/recording.cl`` (call with the module's ``__file__``)."""
+    return Path(module_file).with_suffix(".cl")
 
 
 _default: Runtime | None = None

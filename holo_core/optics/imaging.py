@@ -18,6 +18,7 @@ import math
 
 import numpy as np
 
+from ..opencl import associated
 from ..opencl.arrays import empty
 from ..propagation import grid
 from ..propagation.tilt import cached_array, es_table, es_transform
@@ -26,6 +27,7 @@ from ..view import BACKGROUND_DEPTH
 from .depth import from_cross_spectrum
 from .speckle import box_mean, downsample
 
+PROGRAM = associated(__file__)
 TAPS, ES_TABLE = 4, 4096  # the image read: 4 taps at 2x padding agree with 6 to 100 dB PSNR
 IRIS_TAPER = 0.1       # the iris's raised-cosine rim, a fraction of its radius
 COVERAGE_EDGE = (0.25, 0.75)  # coverage mapped to alpha 0 … 1 (0.5: the geometric edge)
@@ -78,13 +80,13 @@ class PupilImage:
         h, w = self.shape
         dy, dx = pitch
         self.padded.fill(0)
-        rt.kernel("pupil", "pupil_window", self.options)(
+        rt.kernel(PROGRAM, "pupil_window", self.options)(
             rt.queue, (h, w), None, self.padded.data, pupil.data, np.float32(dy),
             np.float32(dx), np.float32(diameter / 2), np.float32(taper),
             np.float32(lens_k or 0.0), np.float32(focus or 0), self.apod[0].data,
             self.apod[1].data)
         rt.fft.forward(self.padded)
-        rt.kernel("pupil", "read_pixels", self.options)(
+        rt.kernel(PROGRAM, "read_pixels", self.options)(
             rt.queue, (self.pixels.size,), None, self.pixels.data, self.padded.data,
             np.int32(2 * h), np.int32(2 * w), self.u.data, self.v.data, np.float32(scale),
             self.es.data)

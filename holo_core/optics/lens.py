@@ -17,6 +17,7 @@ from ..opencl import as_device, like_input
 from ..opencl.arrays import cached
 from ..propagation import grid
 from ..propagation.batch import batched
+from ..propagation.convolution import multiply
 
 
 def _thin_lens(field, *, wavelength, pitch, focal_length, centre=(0.0, 0.0)):
@@ -40,7 +41,7 @@ def _thin_lens(field, *, wavelength, pitch, focal_length, centre=(0.0, 0.0)):
 
     screen, _ = cached(rt, ("thin-lens", (h, w), wavelength, px, py, f, cx, cy), make)
     out = dev.copy()
-    rt.kernel("spectral", "multiply")(rt.queue, (h * w,), None, out.data, screen.data)
+    multiply(rt, out, screen)
     return like_input(out, from_host)
 
 

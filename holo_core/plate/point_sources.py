@@ -3,7 +3,7 @@
 Two methods compute the same sum:
 
 ``direct``
-    every point–pixel pair, by the segment-recurrence kernel ``kernels/point_sources.cl``;
+    every point–pixel pair, by the segment-recurrence kernel ``point_sources.cl``;
 ``wrp``
     wavefront recording planes (Shimobaba et al. 2009): points are cut into depth slabs; each
     slab's points are summed directly onto a plane just in front of them, where their cones are
@@ -21,11 +21,13 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import jobs, memory, validate
-from ..opencl import get_runtime
+from ..opencl import associated, get_runtime
 from ..opencl.arrays import cached, empty, window
 from ..propagation import grid
 from ..propagation.convolution import convolve
 from ..validate import InputError
+
+PROGRAM = associated(__file__)
 
 SEGMENTS = (32, 16, 8, 4)  # columns per recurrence segment, longest first (error ~ SEG³)
 PHASE_TOLERANCE = 5e-5  # rad, the recurrence's largest phase error (see ``segment``) ...
@@ -269,7 +271,7 @@ def _launch(rt, out, pos, amp, g: Grid, obliquity, seg, *, first=0, last=None, b
     binned = bins is not None
     starts, (reach_x, reach_y) = bins if binned else (_dummy(rt), (0, 0))
     last = len(pos.x) if last is None else last
-    rt.kernel("point_sources", "point_wave", options)(
+    rt.kernel(PROGRAM, "point_wave", options)(
         rt.queue, (-(-h // lanes), -(-w // seg)), (1, 1), out.data, np.int32(h), np.int32(w),
         *(rt.real(v) for v in (g.pitch, x0, y0, k, cone2, (1 - g.rim) ** 2)),
         pos.x.data, pos.y.data, pos.z.data, amp.data,

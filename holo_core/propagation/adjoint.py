@@ -26,6 +26,7 @@ from ..opencl.arrays import cached, copy
 from ..scene.field import Field
 from . import grid
 from .batch import batched
+from .convolution import multiply
 from .fresnel import centred_ramp, far_factor
 
 
@@ -66,10 +67,9 @@ def _fraunhofer_adjoint(field, *, wavelength, pitch, distance):
     conj_post, _ = cached(rt, ("fraunhofer-adjoint", (h, w), wavelength, pitch, z),
                           lambda: (far_factor((h, w), wavelength, pitch, z).conj(), []))
     out = copy(dev)
-    multiply = rt.kernel("spectral", "multiply")
-    multiply(rt.queue, (h * w,), None, out.data, conj_post.data)
+    multiply(rt, out, conj_post)
     rt.fft.backward(out)
-    multiply(rt.queue, (h * w,), None, out.data, conj_pre.data)
+    multiply(rt, out, conj_pre)
     return like_input(out, from_host)
 
 

@@ -11,10 +11,12 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import validate
-from ..opencl import as_device
+from ..opencl import as_device, associated
 from ..opencl.arrays import embed, read_first, window
 from ..validate import InputError
 from . import grid
+
+PROGRAM = associated(__file__)
 
 
 class Setup(NamedTuple):
@@ -58,9 +60,14 @@ def convolve(rt, field, transfer, chirp=None):
     if not np.isfinite(read_first(rt, work)).all():
         raise InputError("field must be finite; it holds NaN or infinite values")
     if chirp is None:
-        rt.kernel("spectral", "multiply")(rt.queue, (H * W,), None, work.data, transfer.data)
+        multiply(rt, work, transfer)
     else:
-        rt.kernel("spectral", "multiply_chirp")(rt.queue, (H * W,), None, work.data,
-                                                transfer.data, *map(np.float32, chirp))
+        rt.kernel(PROGRAM, "multiply_chirp")(rt.queue, (H * W,), None, work.data,
+                                             transfer.data, *map(np.float32, chirp))
     rt.fft.backward(work, cols)
     return window(rt, work, (h, w), r0, c0)
+
+
+def multiply(rt, a, factor) -> None:
+    """``a`` *= ``factor``, element-wise, on the device (both complex64, the same size)."""
+    rt.kernel(PROGRAM, "multiply")(rt.queue, (a.size,), None, a.data, factor.data)

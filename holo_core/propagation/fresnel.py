@@ -15,7 +15,7 @@ from .. import validate
 from ..opencl import as_device, is_device_array, like_input
 from ..opencl.arrays import cached, copy
 from . import grid
-from .convolution import convolution_setup, convolve
+from .convolution import convolution_setup, convolve, multiply
 from .scaled import scaled
 from .transfer import fresnel_transfer
 
@@ -111,8 +111,7 @@ def fraunhofer(field, *, wavelength, pitch, distance):
     post, _ = cached(rt, ("fraunhofer", (h, w), wavelength, pitch, z),
                      lambda: (far_factor((h, w), wavelength, pitch, z), []))
     out = copy(dev)
-    multiply = rt.kernel("spectral", "multiply")
-    multiply(rt.queue, (h * w,), None, out.data, pre.data)
+    multiply(rt, out, pre)
     rt.fft.forward(out)
-    multiply(rt.queue, (h * w,), None, out.data, post.data)
+    multiply(rt, out, post)
     return like_input(out, from_host), out_pitch

@@ -13,10 +13,12 @@ import math
 import numpy as np
 
 from .. import validate
-from ..opencl import as_device, is_device_array, like_input
+from ..opencl import as_device, associated, is_device_array, like_input
 from ..opencl.arrays import empty
 from ..validate import InputError
 from . import grid
+
+PROGRAM = associated(__file__)
 
 
 def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0),
@@ -69,7 +71,7 @@ def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0)
     g = pitch**2 * np.exp(1j * math.remainder(sgn * k * abs(z), 2 * math.pi))
     out = empty(rt, out_shape)
     args = [pitch, src_x0, src_y0, out_pitch, out_x0, out_y0, abs(z), k, sgn, g.real, g.imag]
-    rt.kernel("rayleigh_sommerfeld", "rs_direct", rt.real_options)(
+    rt.kernel(PROGRAM, "rs_direct", rt.real_options)(
         rt.queue, out_shape, None, out.data, src.data, np.int32(src.shape[0]),
         np.int32(src.shape[1]), *(rt.real(a) for a in args))
     return like_input(out, from_host)

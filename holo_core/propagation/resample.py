@@ -16,9 +16,11 @@ import math
 import numpy as np
 
 from .. import validate
-from ..opencl import as_device, like_input
+from ..opencl import as_device, associated, like_input
 from ..opencl.arrays import empty
 from . import grid
+
+PROGRAM = associated(__file__)
 
 
 def resample(field, *, pitch, out_shape, out_pitch):
@@ -48,11 +50,11 @@ def resample(field, *, pitch, out_shape, out_pitch):
     ky = rt.to_device(interpolation_matrix(h, pitch, oh, out_pitch), np.float32)
     kx = rt.to_device(interpolation_matrix(w, pitch, ow, out_pitch), np.float32)
     rows = empty(rt, (oh, w))
-    rt.kernel("spectral", "apply_axis0")(rt.queue, (oh, w), None, rows.data, ky.data, src.data,
-                                         np.int32(h))
+    rt.kernel(PROGRAM, "apply_axis0")(rt.queue, (oh, w), None, rows.data, ky.data, src.data,
+                                      np.int32(h))
     out = empty(rt, (oh, ow))
-    rt.kernel("spectral", "apply_axis1")(rt.queue, (oh, ow), None, out.data, kx.data, rows.data,
-                                         np.int32(w))
+    rt.kernel(PROGRAM, "apply_axis1")(rt.queue, (oh, ow), None, out.data, kx.data, rows.data,
+                                      np.int32(w))
     return like_input(out, from_host)
 
 

@@ -18,11 +18,14 @@ import math
 import numpy as np
 
 from .. import validate
-from ..opencl import as_device, like_input
+from ..opencl import as_device, associated, like_input
 from ..opencl.arrays import cached, embed, empty, window
 from ..validate import InputError
 from . import grid
 from .angular_spectrum import angular_spectrum
+from .convolution import multiply
+
+PROGRAM = associated(__file__)
 
 TAPS = 6                # spectrum interpolation taps per axis (error ~10^-(TAPS-1) at padding 2)
 ES_BETA = 2.30          # the kernel's shape per tap for 2x oversampling (Barnett et al. 2019)
@@ -79,19 +82,16 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     (r0, c0), (t0, u0) = _corner(src.shape, (hs, ws)), _corner(out_shape, (ht, wt))
     embed(rt, spectrum, src, r0, c0)
     centre = ((r0 + (src.shape[0] - 1) / 2) / hs, (c0 + (src.shape[1] - 1) / 2) / ws)
-    multiply = rt.kernel("spectral", "multiply")
-    multiply(rt.queue, (hs * ws,), None, spectrum.data,
-             cached_array(rt, "deapodize", _deapodization, (hs, ws), centre).data)
+    multiply(rt, spectrum, cached_array(rt, "deapodize", _deapodization, (hs, ws), centre))
     rt.fft.forward(spectrum)
-    multiply(rt.queue, (hs * ws,), None, spectrum.data,
-             cached_array(rt, "centring", _centring, (hs, ws), centre).data)
+    multiply(rt, spectrum, cached_array(rt, "centring", _centring, (hs, ws), centre))
     target = empty(rt, (ht, wt))
     freq = [1 / (ht * out_pitch), 1 / (wt * out_pitch), 1 / (hs * pitch), 1 / (ws * pitch),
             1 / wavelength**2, *m.ravel(),
             (t0 + (out_shape[0] - 1) / 2) / ht, (u0 + (out_shape[1] - 1) / 2) / wt]
     scale = np.float32(pitch**2 / (out_pitch**2 * ht * wt))
     options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
-    rt.kernel("spectral", "rotate_spectrum", options)(
+    rt.kernel(PROGRAM, "rotate_spectrum", options)(
         rt.queue, (ht, wt), None, target.data, spectrum.data, np.int32(hs), np.int32(ws),
         *(rt.real(f) for f in freq), scale, cached_array(rt, "es-table", es_table).data)
     rt.fft.backward(target)

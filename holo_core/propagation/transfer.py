@@ -1,4 +1,4 @@
-"""Transfer functions made on the device (``kernels/transfer.cl``): a new distance costs one
+"""Transfer functions made on the device (``transfer.cl``): a new distance costs one
 kernel pass over the padded grid, not a float64 grid built on the host and uploaded.
 
 Where the device has float64 the phase is formed and reduced in double. Where it does not, the
@@ -15,10 +15,11 @@ import math
 
 import numpy as np
 
+from ..opencl import associated
 from ..opencl.arrays import cached, empty
 from . import grid
 
-PROGRAM = "transfer"
+PROGRAM = associated(__file__)
 
 
 def asm_transfer(rt, shape, *, wavelength, pitch, distance, offset, band_limit, edge,

@@ -10,6 +10,7 @@
 """
 
 import ast
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -95,3 +96,21 @@ def test_the_rules_see_real_imports():
     assert ("holo_core.plate.view", "holo_core.scene.camera") in edges
     assert ("holo_addon.ui.panels", "holo_addon.compositor.passes") in \
         {(a, b) for a, b, _ in _edges("holo_addon")}
+
+
+def test_each_kernel_file_lies_beside_its_module_and_ships():
+    """A ``.cl`` file lies beside the host module of the same name that launches it (only the
+    shared headers stay in opencl/), and the package data patterns ship every one of them."""
+    core = ROOT / "holo_core"
+    kernels = sorted(core.rglob("*.cl"))
+    assert kernels, "no kernel files found"
+    orphans = [str(k.relative_to(ROOT)) for k in kernels if not k.with_suffix(".py").is_file()]
+    assert orphans == [], f"kernel files without their host module: {orphans}"
+    in_opencl = [str(k.relative_to(ROOT)) for k in kernels if k.parent.name == "opencl"]
+    assert in_opencl == [], f"opencl/ keeps only the shared headers: {in_opencl}"
+    patterns = tomllib.loads((ROOT / "pyproject.toml").read_text())[
+        "tool"]["setuptools"]["package-data"]["holo_core"]
+    shipped = {p for pattern in patterns for p in core.glob(pattern)}
+    missing = [str(p.relative_to(ROOT)) for p in kernels + sorted(core.rglob("*.h"))
+               if p not in shipped]
+    assert missing == [], f"not in the package data: {missing}"

@@ -1,5 +1,5 @@
 /* Reading a spectrum between its bins: the kernels' `real`, turn(), a bilinear read and the
- * ES-kernel read of a non-uniform FFT. Shared by spectral.cl and pupil.cl. */
+ * ES-kernel read of a non-uniform FFT. Shared by propagation/tilt.cl and optics/imaging.cl. */
 #ifndef HOLO_SPECTRUM_READ_H
 #define HOLO_SPECTRUM_READ_H
 #include "holo_complex.h"

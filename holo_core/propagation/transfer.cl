@@ -13,12 +13,11 @@
  * by a three-part 2π: exact to float32 at any k·z. The offset enters as two vectors of
  * exp(i2π·f·x0) made in float64 on the host. */
 #include "holo_complex.h"
+#include "fft_order.h"
 
 #define TWO_PI_1 6.28318548202514648f      /* float(2π) */
 #define TWO_PI_2 -1.74845553146951715e-07f   /* float(2π - TWO_PI_1) */
 #define TWO_PI_3 -7.10542735760100186e-15f   /* float(the rest) */
-
-inline int signed_index(int i, int n) { return i < (n + 1) / 2 ? i : i - n; }
 
 /* cos² roll-off of a ray landing at u (1: the window's edge) */
 inline float roll_off(float u, float edge)
