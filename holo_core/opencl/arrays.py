@@ -69,6 +69,17 @@ def to_device(array, runtime: Runtime | None = None):
     return rt.to_device(a, np.complex64)
 
 
+LANES = 16  # a row's work items go in whole multiples of this: a CPU runtime vectorises only a
+            # work group of whole vector lanes (Intel's: 16 floats with AVX-512)
+
+
+def by_rows(shape) -> tuple[int, int]:
+    """The global size (columns rounded up to whole ``LANES``, rows) of a kernel over an
+    (h, w) array: consecutive work items along a row (CPU runtimes vectorise, GPUs coalesce
+    along the first dimension); the kernel returns at once for a column >= w."""
+    return -(-shape[1] // LANES) * LANES, shape[0]
+
+
 def put_plane(rt: Runtime, stack: cla.Array, index: int, plane: cla.Array) -> None:
     """Copy the C-contiguous ``plane`` into plane ``index`` of the contiguous ``stack``
     (..., H, W), device to device."""
@@ -93,9 +104,10 @@ def read_first(rt: Runtime, a: cla.Array) -> np.ndarray:
     return out
 
 
-def like_input(result: cla.Array, from_host: bool):
-    """Back to the caller's kind of array: NumPy if the input was NumPy."""
-    return result.get() if from_host else result
+def like_input(result, from_host: bool):
+    """Back to the caller's kind of array: NumPy if the input was NumPy (a NumPy result, from
+    a stage that ran on the host, stays as it is)."""
+    return result.get() if from_host and is_device_array(result) else result
 
 
 def nonfinite_count(rt: Runtime, a: cla.Array) -> int:

@@ -4,28 +4,28 @@ Callers fold the 1/N of the inverse into something they multiply anyway (a trans
 The backend depends on the device (``HOLO_FFT`` overrides: ``fftw``, ``vkfft``, ``numpy``):
 
 * CPU devices keep buffers in host memory: FFTW (pyfftw) transforms the mapped buffer in place,
-  with no copy. Plans are cached per process. By default they are FFTW_ESTIMATE plans, which
-  depend on the sizes alone, so a frame is bit-identical across runs, processes and machines
-  of one kind, with or without a cache. ``HOLO_FFTW_PLANNER=measure`` (or ``patient``) times
-  the candidates instead and keeps FFTW wisdom in the user's cache directory: sometimes faster,
-  but its choice follows the machine's load, so results may differ in the last bits.
+  with no copy, in fixed blocks of columns and rows over threads, its plans measured once per
+  machine and kept as wisdom (:mod:`.host_fft`: bit-identical across processes and thread
+  counts). It also does the padded convolution on the host (:meth:`FFTW.convolve`), with the
+  padding, the multiply and the crop inside its passes.
 * GPU devices: pyvkfft when it is importable; otherwise a host FFT through copies (logged).
 
-``cols=(c0, c1)`` tells a transform that only those columns matter: for ``forward`` the others
-are zero (zero padding), for ``backward`` only those columns of the result are read. The
-strided column pass, the slow one, then skips the rest (2048² with 2x padding: 9.4 ms instead
-of 13 ms for the full 2-D plan on the development machine).
+``nonzero=(row ranges, column ranges)`` tells a transform where its input is non-zero: the
+caller calls :meth:`clear` with the same ranges before it writes there, and then need not
+zero the rest (FFTW writes those zeros inside its passes, and skips the columns that hold
+none; the other backends fill the array in ``clear``). ``read`` (column ranges) tells an
+inverse transform which columns of its result will be read.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
-import pickle
-import platform
 
 import numpy as np
 import pyopencl as cl
+import pyopencl.array as cla
 
 from ..validate import InputError
 
@@ -57,107 +57,70 @@ def backend_for(runtime):
 class _Mapped:
     """The device array as a host array: a zero-copy map on CPU devices, a copy elsewhere."""
 
-    def __init__(self, runtime, arr):
-        self.q, self.arr, self.copy = runtime.queue, arr, not runtime.is_cpu
+    def __init__(self, runtime, arr, flags=cl.map_flags.READ | cl.map_flags.WRITE):
+        self.q, self.arr, self.copy, self.flags = runtime.queue, arr, not runtime.is_cpu, flags
 
     def __enter__(self) -> np.ndarray:
         if self.copy:
             self.host = self.arr.get()
         else:
-            flags = cl.map_flags.READ | cl.map_flags.WRITE
-            self.host, _ = cl.enqueue_map_buffer(self.q, self.arr.base_data, flags,
+            self.host, _ = cl.enqueue_map_buffer(self.q, self.arr.base_data, self.flags,
                                                  self.arr.offset, self.arr.shape, self.arr.dtype)
         return self.host
 
     def __exit__(self, *exc):
         if self.copy:
-            self.arr.set(self.host)
+            if self.flags != cl.map_flags.READ:
+                self.arr.set(self.host)
         else:
             self.host.base.release(self.q)
 
 
 class FFTW:
     name = "fftw"
+    convolves = True  # :meth:`convolve` on host arrays (propagation/convolution.py uses it)
 
     def __init__(self, runtime):
-        import pyfftw
-        self._pyfftw = pyfftw
+        from .host_fft import HostFFT
         self.runtime = runtime
-        self.threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
-            else (os.cpu_count() or 1)
-        effort = os.environ.get("HOLO_FFTW_PLANNER", "estimate").strip().upper()
-        if effort not in ("ESTIMATE", "MEASURE", "PATIENT"):
-            raise InputError(f"HOLO_FFTW_PLANNER={effort!r}; allowed: estimate, measure, patient")
-        self.flags = (f"FFTW_{effort}",)
-        self.plans = {}
-        self.wisdom = effort != "ESTIMATE"  # wisdom would let measured plans into estimates
-        if self.wisdom:
-            self._load_wisdom()
+        self.host = HostFFT()
 
-    def forward(self, arr, cols=None):
-        self._run(arr, cols, "FFTW_FORWARD")
+    def clear(self, arr, nonzero) -> None:
+        """Nothing: the passes zero what lies outside ``nonzero``."""
 
-    def backward(self, arr, cols=None):
-        self._run(arr, cols, "FFTW_BACKWARD")
-
-    def _run(self, arr, cols, direction):
+    def forward(self, arr, nonzero=None, read=None):
         with _Mapped(self.runtime, arr) as host:
-            for plan, view in self._passes(host, cols, direction):
-                plan.update_arrays(view, view)
-                plan.execute()
+            self.host.transform(host, "FFTW_FORWARD", nonzero, read)
 
-    def _passes(self, host, cols, direction):
-        if cols is None or tuple(cols) == (0, host.shape[1]):
-            return [(self._plan(host.shape, None, direction), host)]
-        c0, c1 = cols
-        col_pass = (self._plan(host.shape, (c0, c1), direction), host[:, c0:c1])
-        row_pass = (self._plan(host.shape, "rows", direction), host)
-        return [col_pass, row_pass] if direction == "FFTW_FORWARD" else [row_pass, col_pass]
+    def backward(self, arr, nonzero=None, read=None):
+        with _Mapped(self.runtime, arr) as host:
+            self.host.transform(host, "FFTW_BACKWARD", nonzero, read)
 
-    def _plan(self, shape, part, direction):
-        key = (shape, part, direction)
-        if key not in self.plans:
-            pyfftw = self._pyfftw
-            work = pyfftw.empty_aligned(shape, np.complex64)
-            if part is None:
-                view, axes = work, (0, 1)
-            elif part == "rows":
-                view, axes = work, (1,)
-            else:
-                view, axes = work[:, part[0]:part[1]], (0,)
-            self.plans[key] = pyfftw.FFTW(view, view, axes=axes, direction=direction,
-                                          flags=self.flags, threads=self.threads,
-                                          planning_timelimit=10.0)
-            if self.wisdom:
-                self._save_wisdom()
-        return self.plans[key]
-
-    @staticmethod
-    def _wisdom_path():
-        from platformdirs import user_cache_dir
-        return os.path.join(user_cache_dir("holo"), f"fftw-wisdom-{platform.node()}.pickle")
-
-    def _load_wisdom(self):
-        try:
-            with open(self._wisdom_path(), "rb") as f:
-                self._pyfftw.import_wisdom(pickle.load(f))
-        except (OSError, pickle.UnpicklingError, EOFError, TypeError, ValueError):
-            pass  # no or stale wisdom: plans are measured again
-
-    def _save_wisdom(self):
-        path = self._wisdom_path()
-        try:
-            os.makedirs(os.path.dirname(path), exist_ok=True)
-            tmp = f"{path}.{os.getpid()}.tmp"
-            with open(tmp, "wb") as f:
-                pickle.dump(self._pyfftw.export_wisdom(), f)
-            os.replace(tmp, path)
-        except OSError as e:  # a read-only home is no reason to fail a transform
-            log.debug("FFTW wisdom not saved: %s", e)
+    def convolve(self, field, transfer, padded=None):
+        """The padded convolution of ``field`` (h, w; NumPy or device) by ``transfer`` (H, W,
+        device, FFT order, with the inverse FFT's 1/(H·W); or its first quadrant, given the
+        grid's shape ``padded``: :meth:`.host_fft.HostFFT.convolve`), cropped to (h, w): a NumPy
+        array for a NumPy field, else a new device array. Raises ``InputError`` where the
+        field is not finite (its DC term)."""
+        rt = self.runtime
+        on_device = not isinstance(field, np.ndarray)
+        out = cla.empty(rt.queue, field.shape, np.complex64) if on_device \
+            else np.empty(field.shape, np.complex64)
+        with contextlib.ExitStack() as maps:
+            src = maps.enter_context(_Mapped(rt, field, cl.map_flags.READ)) if on_device \
+                else np.asarray(field, np.complex64)
+            dst = maps.enter_context(_Mapped(rt, out, cl.map_flags.WRITE_INVALIDATE_REGION)) \
+                if on_device else out
+            tf = maps.enter_context(_Mapped(rt, transfer, cl.map_flags.READ))
+            dc = self.host.convolve(src, tf, dst, padded)
+        if not np.isfinite(dc):
+            raise InputError("field must be finite; it holds NaN or infinite values")
+        return out
 
 
 class VkFFT:
     name = "vkfft"
+    convolves = False
 
     def __init__(self, runtime):
         from pyvkfft.opencl import VkFFTApp
@@ -171,23 +134,30 @@ class VkFFT:
                                          inplace=True, norm=0)
         return self.apps[shape]
 
-    def forward(self, arr, cols=None):
+    def clear(self, arr, nonzero) -> None:
+        arr.fill(0)
+
+    def forward(self, arr, nonzero=None, read=None):
         self._app(arr.shape).fft(arr, arr)
 
-    def backward(self, arr, cols=None):
+    def backward(self, arr, nonzero=None, read=None):
         self._app(arr.shape).ifft(arr, arr)
 
 
 class HostNumpy:
     name = "numpy"
+    convolves = False
 
     def __init__(self, runtime):
         self.runtime = runtime
 
-    def forward(self, arr, cols=None):
+    def clear(self, arr, nonzero) -> None:
+        arr.fill(0)
+
+    def forward(self, arr, nonzero=None, read=None):
         with _Mapped(self.runtime, arr) as host:
             host[...] = np.fft.fft2(host)
 
-    def backward(self, arr, cols=None):
+    def backward(self, arr, nonzero=None, read=None):
         with _Mapped(self.runtime, arr) as host:
             host[...] = np.fft.ifft2(host) * host.size

@@ -24,7 +24,7 @@ from .. import jobs, memory, validate
 from ..opencl import associated, get_runtime
 from ..opencl.arrays import cached, empty, window
 from ..propagation import grid
-from ..propagation.convolution import convolve
+from ..propagation.convolution import chirp_transfer, convolve
 from ..validate import InputError
 
 PROGRAM = associated(__file__)
@@ -371,7 +371,7 @@ def _slab(rt, out, pos, amp, plane, g: Grid, w_shape, obliquity):
     carrier = math.remainder(-2 * math.pi * plane / g.wavelength, 2 * math.pi)
     r0, c0 = (w_shape[0] - g.shape[0]) // 2, (w_shape[1] - g.shape[1]) // 2
     for c in range(len(out)):
-        at_hologram = convolve(rt, wrp[c], wg, chirp=(carrier, -plane))
+        at_hologram = convolve(rt, wrp[c], chirp_transfer(rt, wg, carrier, -plane))
         out[c] += window(rt, at_hologram, g.shape, r0, c0)
 
 

@@ -20,7 +20,7 @@ from .. import validate
 from ..opencl import like_input
 from ..opencl.arrays import cached, nonzero_count
 from . import grid
-from .convolution import convolution_setup, convolve
+from .convolution import convolution_setup, convolve, symmetric
 from .scaled import scaled
 from .transfer import asm_transfer
 
@@ -71,19 +71,24 @@ def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), p
     wavelength, pitch, z, (x0, y0), padding = s.wavelength, s.pitch, s.z, s.offset, s.padding
     rt, dev, from_host, shape = s.rt, s.dev, s.from_host, s.shape
 
+    quadrant = symmetric(rt, (x0, y0))
+
     def make():  # on the device (transfer.py); the float64 reference is transfer_function
         tf = asm_transfer(rt, shape, wavelength=wavelength, pitch=pitch, distance=z,
-                          offset=(x0, y0), band_limit=band_limit, edge=BAND_EDGE)
+                          offset=(x0, y0), band_limit=band_limit, edge=BAND_EDGE,
+                          quadrant=quadrant)
+        # with no offset the straight-through wave (f = 0) always passes
+        reaches = quadrant or (x0, y0) == (0.0, 0.0) or nonzero_count(rt, tf) > 0
         notes = sampling_notes(dev.shape, shape, wavelength, pitch, z, (x0, y0), padding,
-                               band_limit, nonzero_count(rt, tf) > 0, read)
+                               band_limit, reaches, read)
         return tf, notes
 
     key = ("asm", dev.shape, shape, wavelength, pitch, z, x0, y0, bool(band_limit),
-           None if read is None else tuple(read))
+           None if read is None else tuple(read), quadrant)
     tf, notes = cached(rt, key, make)
     for note in notes:
         validate.warn_sampling(note)
-    return like_input(convolve(rt, dev, tf), from_host)
+    return like_input(convolve(rt, dev, tf, shape if quadrant else None), from_host)
 
 
 def transfer_function(shape, *, wavelength, pitch, distance, offset=(0.0, 0.0), band_limit=True):

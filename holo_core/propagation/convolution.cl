@@ -8,11 +8,11 @@ __kernel void multiply(__global float2 *a, __global const float2 *t)
     a[i] = cmul(a[i], t[i]);
 }
 
-/* a *= w·exp(i(c - d·g)) with (w, g) packed in wg: a transfer function exp(i2πd·fz) whose
+/* t = w·exp(i(c - d·g)) with (w, g) packed in wg: a transfer function exp(i2πd·fz) whose
  * chirp g = 2πf²/(1/λ + fz) [rad/m] is shared by every distance d (wavefront recording planes) */
-__kernel void multiply_chirp(__global float2 *a, __global const float2 *wg, float c, float d)
+__kernel void chirp_transfer(__global float2 *t, __global const float2 *wg, float c, float d)
 {
     int i = get_global_id(0);
-    float2 t = wg[i];
-    a[i] = t.x * cmul(a[i], cexpi(c - d * t.y));
+    float2 v = wg[i];
+    t[i] = v.x * cexpi(c - d * v.y);
 }

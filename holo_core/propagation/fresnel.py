@@ -15,7 +15,7 @@ from .. import validate
 from ..opencl import as_device, is_device_array, like_input
 from ..opencl.arrays import cached, copy
 from . import grid
-from .convolution import convolution_setup, convolve, multiply
+from .convolution import convolution_setup, convolve, multiply, symmetric
 from .scaled import scaled
 from .transfer import fresnel_transfer
 
@@ -35,17 +35,19 @@ def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
     wavelength, pitch, z, (x0, y0), padding = s.wavelength, s.pitch, s.z, s.offset, s.padding
     rt, dev, from_host, shape = s.rt, s.dev, s.from_host, s.shape
 
+    quadrant = symmetric(rt, (x0, y0)) and rt.has_fp64
+
     def make():
         tf = fresnel_transfer_host(shape, wavelength, pitch, z, (x0, y0))
         return tf / (shape[0] * shape[1]), []
 
     def made():  # on the device where it has float64 (transfer.py), else on the host
         tf = fresnel_transfer(rt, shape, wavelength=wavelength, pitch=pitch, distance=z,
-                              offset=(x0, y0))
+                              offset=(x0, y0), quadrant=quadrant)
         return make() if tf is None else (tf, [])
 
-    tf, _ = cached(rt, ("fresnel", dev.shape, shape, wavelength, pitch, z, x0, y0), made)
-    return like_input(convolve(rt, dev, tf), from_host)
+    tf, _ = cached(rt, ("fresnel", shape, wavelength, pitch, z, x0, y0, quadrant), made)
+    return like_input(convolve(rt, dev, tf, shape if quadrant else None), from_host)
 
 
 def fresnel_transfer_host(shape, wavelength, pitch, distance, offset) -> np.ndarray:

@@ -1,98 +1,121 @@
 """Transfer functions made on the device (``transfer.cl``): a new distance costs one
 kernel pass over the padded grid, not a float64 grid built on the host and uploaded.
 
-Where the device has float64 the phase is formed and reduced in double. Where it does not, the
-chirp g = 2π·f²/(1/λ + fz) is made once per (grid, wavelength, pitch) in float64 on the host
-and kept as two floats (hi + lo), and each distance's z·g is formed exactly to float32 by an
-error-free product and a three-part 2π (``split``). Both agree with the float64
+The angular spectrum's chirp g = 2π·f²/(1/λ + fz) and 1/fz are made once per (grid,
+wavelength, pitch) in float64 on the host, for the grid's first quadrant only (both depend on
+fx² and fy²), g kept as two floats (hi + lo); each distance's z·g is then formed exactly to
+float32 by an error-free product and a three-part 2π, and the band's rays z·fx/fz by one
+multiply: a new distance costs one pass over the grid with no square root or division (a
+focus sweep's step, ``bench/sweep.py``). The direct route (``split=False``, float64 devices)
+forms and reduces the phase in double. Both agree with the float64
 :func:`~holo_core.propagation.angular_spectrum.transfer_function` to float32 precision
 (``tests/core/propagation/test_transfer.py``).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 
 from ..opencl import associated
-from ..opencl.arrays import cached, empty
+from ..opencl.arrays import by_rows, cached, empty
 from . import grid
 
 PROGRAM = associated(__file__)
 
 
+def quadrant_shape(shape) -> tuple[int, int]:
+    """The first quadrant of an FFT-order grid: the samples at signed indices >= 0."""
+    return shape[0] // 2 + 1, shape[1] // 2 + 1
+
+
 def asm_transfer(rt, shape, *, wavelength, pitch, distance, offset, band_limit, edge,
-                 split=None):
+                 split=None, quadrant=False):
     """The band-limited angular spectrum's transfer function on the padded ``shape`` (FFT
     order), times 1/(H·W), as a complex64 device array. ``pitch`` (x, y) [m], ``wavelength``,
-    ``distance``, ``offset`` [m]; ``edge`` the band's roll-off fraction; ``split`` forces the
-    float32 route (default: where the device lacks float64)."""
+    ``distance``, ``offset`` [m]; ``edge`` the band's roll-off fraction; ``split=False`` takes
+    the direct float64 route (float64 devices only), else the chirp table's; ``quadrant``
+    (offset (0, 0) only: the function is even in fx and fy) makes the first quadrant only
+    (:func:`quadrant_shape`)."""
     h, w = shape
     px, py = pitch
     x0, y0 = offset
     carrier = math.remainder(2 * math.pi * distance / wavelength, 2 * math.pi)
-    out = empty(rt, shape)
     half = (h * py / 2, w * px / 2)
-    if not (rt.has_fp64 if split is None else not split):
-        return _split(rt, out, shape, wavelength, pitch, distance, offset, band_limit, edge,
-                      carrier, half)
+    if split is not False:
+        return _from_chirp(rt, shape, wavelength, pitch, distance, offset, band_limit,
+                           edge, carrier, half, quadrant)
+    out = empty(rt, shape)
     rt.kernel(PROGRAM, "asm_transfer", rt.real_options)(
-        rt.queue, (h, w), None, out.data, np.float64(1 / (h * py)), np.float64(1 / (w * px)),
+        rt.queue, (w, h), None, out.data, np.float64(1 / (h * py)), np.float64(1 / (w * px)),
         np.float64(1 / wavelength), np.float64(distance), np.float64(carrier),
         np.float64(x0), np.float64(y0), np.float64(half[0]), np.float64(half[1]),
         np.int32(bool(band_limit)), np.float32(edge), np.float32(1 / (h * w)))
     return out
 
 
-def fresnel_transfer(rt, shape, *, wavelength, pitch, distance, offset):
+def fresnel_transfer(rt, shape, *, wavelength, pitch, distance, offset, quadrant=False):
     """The Fresnel transfer function (see :func:`~holo_core.propagation.fresnel.fresnel`) on
-    the device, times 1/(H·W); None where the device lacks float64 (the host makes it)."""
+    the device, times 1/(H·W) (its first quadrant only with ``quadrant``, offset (0, 0));
+    None where the device lacks float64 (the host makes it)."""
     if not rt.has_fp64:
         return None
     h, w = shape
     px, py = pitch
     carrier = math.remainder(2 * math.pi * distance / wavelength, 2 * math.pi)
-    out = empty(rt, shape)
+    made = quadrant_shape(shape) if quadrant else shape
+    out = empty(rt, made)
     rt.kernel(PROGRAM, "fresnel_transfer", rt.real_options)(
-        rt.queue, (h, w), None, out.data, np.float64(1 / (h * py)), np.float64(1 / (w * px)),
+        rt.queue, by_rows(made), None, out.data, np.int32(bool(quadrant)), np.int32(h),
+        np.int32(w), np.int32(made[1]), np.float64(1 / (h * py)), np.float64(1 / (w * px)),
         np.float64(wavelength), np.float64(distance), np.float64(carrier),
         np.float64(offset[0]), np.float64(offset[1]), np.float64(h * py / 2),
         np.float64(w * px / 2), np.float32(1 / (h * w)))
     return out
 
 
-def chirp_split(shape, wavelength, pitch) -> np.ndarray:
-    """g = 2π·f²/(1/λ + fz) [rad/m] per frequency as complex64 (hi + i·lo, hi + lo = g to
-    float64's precision); hi = -1 where the wave is evanescent."""
-    px, py = pitch
-    fy, fx = grid.freqs(shape[0], py)[:, None], grid.freqs(shape[1], px)[None, :]
+def chirp_table(shape, wavelength, pitch) -> tuple[np.ndarray, np.ndarray]:
+    """(g_hi + i·g_lo as complex64, 1/fz as float32), each (h//2 + 1, w//2 + 1), over the grid's
+    first quadrant (row, column: the |signed index|): g = 2π·f²/(1/λ + fz) [rad/m] = g_hi +
+    g_lo to float64's precision, 1/fz [m]; 1/fz = -1 where the wave is evanescent."""
+    (h, w), (px, py) = shape, pitch
+    fy = np.arange(h // 2 + 1)[:, None] * (1 / (h * py))
+    fx = np.arange(w // 2 + 1)[None, :] * (1 / (w * px))
     f2 = fx * fx + fy * fy
     fz2 = 1 / wavelength**2 - f2
     keep = fz2 > 0
-    g = 2 * np.pi * f2 / (1 / wavelength + np.sqrt(np.where(keep, fz2, 1.0)))
+    fz = np.sqrt(np.where(keep, fz2, 1.0))
+    g = 2 * np.pi * f2 / (1 / wavelength + fz)
     hi = g.astype(np.float32)
-    lo = (g - hi).astype(np.float32)
-    return np.where(keep, hi, -1) + 1j * np.where(keep, lo, 0)
+    return (hi + 1j * (g - hi)).astype(np.complex64), np.where(keep, 1 / fz, -1).astype(np.float32)
 
 
-def _split(rt, out, shape, wavelength, pitch, distance, offset, band_limit, edge, carrier,
-           half):
+_chirp_table = functools.lru_cache(maxsize=1)(chirp_table)  # its two parts are cached apart
+
+
+def _from_chirp(rt, shape, wavelength, pitch, distance, offset, band_limit, edge, carrier,
+                half, quadrant):
     h, w = shape
+    made = quadrant_shape(shape) if quadrant else shape
+    out = empty(rt, made)
     px, py = pitch
     x0, y0 = offset
-    ghl, _ = cached(rt, ("asm-chirp", shape, wavelength, pitch),
-                    lambda: (chirp_split(shape, wavelength, pitch), []))
+    table = [cached(rt, ("asm-chirp", part, shape, wavelength, pitch), lambda part=part: (
+        rt.to_device(_chirp_table(shape, wavelength, pitch)[part]), []))[0] for part in (0, 1)]
     ry, _ = cached(rt, ("ramp", h, py, y0), lambda: (_ramp(h, py, y0), []))
     rx, _ = cached(rt, ("ramp", w, px, x0), lambda: (_ramp(w, px, x0), []))
     z_hi = np.float32(distance)
     z_lo = np.float32(distance - float(z_hi))
-    rt.kernel(PROGRAM, "asm_transfer_split")(
-        rt.queue, (h, w), None, out.data, ghl.data, ry.data, rx.data, z_hi, z_lo,
-        np.float32(carrier), np.float32(1 / (h * py)), np.float32(1 / (w * px)),
-        np.float32(1 / wavelength), np.float32(x0), np.float32(y0), np.float32(half[0]),
-        np.float32(half[1]), np.int32(bool(band_limit)), np.float32(edge),
-        np.float32(1 / (h * w)))
+    rt.kernel(PROGRAM, "asm_transfer_chirp")(
+        rt.queue, by_rows(made), None, out.data, table[0].data, table[1].data,
+        np.int32(w // 2 + 1), ry.data,
+        rx.data, np.int32(x0 != 0 or y0 != 0), np.int32(bool(quadrant)), np.int32(h),
+        np.int32(w), np.int32(made[1]), z_hi, z_lo, np.float32(carrier),
+        np.float32(1 / (h * py)), np.float32(1 / (w * px)), np.float32(x0), np.float32(y0),
+        np.float32(half[0]), np.float32(half[1]), np.int32(bool(band_limit)),
+        np.float32(edge), np.float32(1 / (h * w)))
     return out
 
 
