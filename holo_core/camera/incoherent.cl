@@ -21,21 +21,31 @@ __kernel void psf_products(__global float2 *p1, __global float2 *p2)
     p1[i] = (float2)(a.x * a.x + a.y * a.y, 0.0f);
 }
 
-/* acc += m·k: a layer's emitter map times its PSF's transfer function. */
-__kernel void multiply_add(__global float2 *acc, __global const float2 *m,
-                           __global const float2 *k)
+/* acc = m'·k (``first``) or acc + m'·k on the (2h, 2w) grid: a layer's emitter map times its
+ * PSF's transfer function. The map holds emitters only at even bins of that grid, so its
+ * transform there is m (the transform of the (h, w) map) tiled 2 x 2: m' at (r, c) is m at
+ * (r mod h, c mod w). Global size: by_rows of (2h, 2w). */
+__kernel void multiply_tiled(__global float2 *acc, __global const float2 *m,
+                             __global const float2 *k, int h, int w, int first)
 {
-    int i = get_global_id(0);
-    acc[i] += cmul(m[i], k[i]);
+    int c = get_global_id(0), r = get_global_id(1), W = 2 * w;
+    if (c >= W)
+        return;
+    int i = r * W + c;
+    float2 v = cmul(m[(r < h ? r : r - h) * w + (c < w ? c : c - w)], k[i]);
+    acc[i] = first ? v : acc[i] + v;
 }
 
-/* Q (zeroed, FFT order) ← A·ay[r]·ax[c] at the same signed indices: the images' spectra
- * (h, w) padded into a larger grid and deapodized for the ES read that follows. Global size
- * (h, w) of A. */
+/* Q (FFT order) ← A·ay[r]·ax[c] at the same signed indices: the images' spectra (h, w) padded
+ * into a larger grid (H, W) and deapodized for the ES read that follows; the rest of Q is left
+ * as it is (the FFT takes it as zero). Global size: by_rows of (h, w). */
 __kernel void embed_deapodized(__global float2 *Q, int H, int W, __global const float2 *A,
-                               __global const float *ay, __global const float *ax)
+                               int h, int w, __global const float *ay,
+                               __global const float *ax)
 {
-    int r = get_global_id(0), c = get_global_id(1), h = get_global_size(0), w = get_global_size(1);
+    int c = get_global_id(0), r = get_global_id(1);
+    if (c >= w)
+        return;
     int sr = signed_index(r, h), sc = signed_index(c, w);
     Q[(sr < 0 ? sr + H : sr) * W + (sc < 0 ? sc + W : sc)] = (ay[r] * ax[c]) * A[r * w + c];
 }

@@ -13,10 +13,11 @@ PSF |p_l|² (Goodman's incoherent imaging), and the depth pair's cross image is 
 e^{i(k₁−k₂)R} convolved with the cross PSF p₁·p₂*. Both are cyclic convolutions on the pupil's
 2× padded spectrum grid, where the intensity (twice the coherent band) is sampled alias-free:
 per layer, two PSFs, their two transfer functions and three emitter maps are transformed (the
-colours packed as R + iG and B + i·coverage), summed in the frequency domain, and transformed
-back once: zero-padded 1.5x there and read at each fine pixel by the ES kernel (6 taps, its
-β for 1.5x oversampling: a type-2 non-uniform FFT, ~1e-4), as the intensity fills the 2x grid's
-band. The result is what infinitely many looks give: no speckle, no noise at the silhouettes,
+colours packed as R + iG and B + i·coverage; a map fills only the even bins of the 2x grid, so
+its transform there is that of the pupil-sized map, tiled), summed in the frequency domain,
+and transformed back once: zero-padded 1.5x there and read at each fine pixel by the ES
+kernel (6 taps, its β for 1.5x oversampling: a type-2 non-uniform FFT, ~1e-4), as the intensity
+fills the 2x grid's band. The result is what infinitely many looks give: no speckle, no noise at the silhouettes,
 and one pass.
 """
 
@@ -28,19 +29,20 @@ import numpy as np
 
 from .. import jobs
 from ..opencl import associated
-from ..opencl.arrays import empty
+from ..opencl.arrays import by_rows, empty
 from ..optics import imaging
 from ..optics.imaging import ES_TABLE, IRIS_TAPER
-from ..propagation.grid import next_fast_len
+from ..propagation.grid import embedded, next_fast_len
 from ..propagation.tilt import cached_array, es_table, es_transform
 from ..scene.camera import Camera
-from .optics import PupilOptics, iris
 from . import recording
+from .optics import PupilOptics, iris
 from .raster import Emitters
 
 PROGRAM = associated(__file__)
 
-BUFFERS = 6  # complex buffers of the padded grid on the device: 3 accumulators, 2 PSFs, a map
+BUFFERS = 5.25  # complex buffers of the padded grid on the device: 3 accumulators, 2 PSFs,
+                # and a map of a quarter of its size
 READ_PADDING = 1.5  # the images' grid is padded by this much for the ES read ...
 READ_TAPS, READ_BETA = 6, 2.03  # ... with these taps and this β per tap (FINUFFT's for 1.5x)
 
@@ -53,11 +55,11 @@ class IncoherentImages:
         h, w = optics.shape
         self.shape = (2 * h, 2 * w)
         self.options = rt.real_options + (f"-DTAPS={READ_TAPS}", f"-DES_TABLE={ES_TABLE}")
-        self.index = rt.to_device(_padded_index(em.index, (h, w)), np.int32)
+        self.index = rt.to_device(em.index, np.int32)
         self.maps = [rt.to_device(m, np.complex64) for m in _emitter_maps(em, optics)]
         self.acc = [empty(rt, self.shape) for _ in self.maps]
         self.psf = [empty(rt, self.shape) for _ in range(2)]
-        self.work = empty(rt, self.shape)
+        self.map = empty(rt, (h, w))
         self.pupil, self.ones = empty(rt, (h, w)), empty(rt, (h, w))
         self.flat = [rt.to_device(np.ones(n), np.float32) for n in (h, w)]
         self.read_shape = tuple(next_fast_len(math.ceil(READ_PADDING * n)) for n in self.shape)
@@ -82,31 +84,38 @@ class IncoherentImages:
     def images(self, progress: jobs.Progress = None) -> list[np.ndarray]:
         """(R + iG, B + i·coverage, cross) at the fine pixels: complex64 (H, W) each."""
         rt, em = self.rt, self.em
-        for acc in self.acc:
-            acc.fill(0)
+        h, w = self.optics.shape
         layers = [(z, int(em.starts[i]), int(em.starts[i + 1]))
                   for i, z in enumerate(self.optics.layers) if em.starts[i] < em.starts[i + 1]]
+        if not layers:
+            for acc in self.acc:
+                acc.fill(0)
         for done, (z, first, last) in enumerate(layers):
             self._transfer_functions(z)
             for values, acc, k in zip(self.maps, self.acc, (0, 0, 1)):
-                self.work.fill(0)
-                self.kernel("scatter_values")(rt.queue, (last - first,), None, self.work.data,
+                # the map on the (h, w) grid: on the 2x grid it fills the even bins only, and
+                # its transform there is this one tiled (multiply_tiled)
+                self.map.fill(0)
+                self.kernel("scatter_values")(rt.queue, (last - first,), None, self.map.data,
                                               self.index.data, values.data, np.int32(first))
-                rt.fft.forward(self.work)
-                self.kernel("multiply_add")(rt.queue, (acc.size,), None, acc.data,
-                                            self.work.data, self.psf[k].data)
+                rt.fft.forward(self.map)
+                self.kernel("multiply_tiled")(rt.queue, by_rows(self.shape), None, acc.data,
+                                              self.map.data, self.psf[k].data, np.int32(h),
+                                              np.int32(w), np.int32(done == 0))
             jobs.report(progress, done + 1, len(layers) + 1)
         out = []
+        corners = tuple(embedded(n, m) for n, m in zip(self.shape, self.read_shape))
         for acc in self.acc:
-            self.read.fill(0)
-            self.kernel("embed_deapodized")(rt.queue, self.shape, None, self.read.data,
+            rt.fft.clear(self.read, corners)
+            self.kernel("embed_deapodized")(rt.queue, by_rows(self.shape), None, self.read.data,
                                             *(np.int32(n) for n in self.read_shape), acc.data,
+                                            *(np.int32(n) for n in self.shape),
                                             *(d.data for d in self.deapodize))
-            rt.fft.backward(self.read)
-            self.kernel("read_pixels", imaging.PROGRAM)(rt.queue, (self.pixels.size,), None, self.pixels.data,
-                                       self.read.data, *(np.int32(n) for n in self.read_shape),
-                                       self.u.data, self.v.data, np.float32(self.scale),
-                                       self.es.data)
+            rt.fft.backward(self.read, nonzero=corners)
+            self.kernel("read_pixels", imaging.PROGRAM)(
+                rt.queue, (self.pixels.size,), None, self.pixels.data, self.read.data,
+                *(np.int32(n) for n in self.read_shape), self.u.data, self.v.data,
+                np.float32(self.scale), self.es.data)
             out.append(self.pixels.get())
         jobs.report(progress, 1, 1)
         return out
@@ -115,21 +124,20 @@ class IncoherentImages:
         """psf[0] ← F[|p₁|²] and psf[1] ← F[p₁·p₂*] of the layer at planar distance z [m]."""
         rt, o = self.rt, self.optics
         h, w = o.shape
+        corners = (embedded(h, 2 * h), embedded(w, 2 * w))
         self.ones.fill(1)
         for psf, lam in zip(self.psf, (o.wavelength, o.depth_wavelength)):
             dy, dx = o.pitch(lam)
             k = 2 * np.pi / lam
             self.pupil.fill(0)
-            self.kernel("add_layer", recording.PROGRAM)(rt.queue, (h, w), None, self.pupil.data, self.ones.data,
-                                     np.float32(dy), np.float32(dx), np.float32(k),
-                                     np.float32(z))
-            psf.fill(0)
-            self.kernel("pupil_window", imaging.PROGRAM)(
-                rt.queue, (h, w), None, psf.data, self.pupil.data, np.float32(dy),
-                np.float32(dx), np.float32(o.diameter / 2 * lam / o.wavelength),
-                np.float32(IRIS_TAPER), np.float32(k), np.float32(o.focus or 0),
-                self.flat[0].data, self.flat[1].data)
-            rt.fft.forward(psf)
+            self.kernel("add_layer", recording.PROGRAM)(
+                rt.queue, by_rows((h, w)), None, self.pupil.data, self.ones.data, np.int32(h),
+                np.int32(w), np.float32(dy), np.float32(dx), np.float32(k), np.float32(z))
+            rt.fft.clear(psf, corners)
+            imaging.window(rt, psf, self.pupil, (h, w), pitch=(dy, dx),
+                           radius=o.diameter / 2 * lam / o.wavelength, taper=IRIS_TAPER, k=k,
+                           focus=o.focus or 0.0, apodization=self.flat, options=self.options)
+            rt.fft.forward(psf, nonzero=corners)
         self.kernel("psf_products")(rt.queue, (self.psf[0].size,), None, self.psf[0].data,
                                     self.psf[1].data)
         for psf in self.psf:
@@ -139,14 +147,6 @@ class IncoherentImages:
 def _signed(n: int) -> np.ndarray:
     """Signed indices 0, 1, …, −1 of an n-sample FFT-order axis."""
     return np.fft.fftfreq(n) * n
-
-
-def _padded_index(index, shape) -> np.ndarray:
-    """Flat indices on the 2× padded grid of the bins ``index`` (flat, FFT order) of ``shape``."""
-    h, w = shape
-    r, c = np.unravel_index(np.asarray(index), shape)
-    sr, sc = np.where(r <= (h - 1) // 2, r, r - h), np.where(c <= (w - 1) // 2, c, c - w)
-    return ((2 * sr) % (2 * h)) * (2 * w) + (2 * sc) % (2 * w)
 
 
 def _emitter_maps(em: Emitters, optics: PupilOptics) -> list[np.ndarray]:

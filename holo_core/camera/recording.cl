@@ -16,12 +16,14 @@ __kernel void scatter(__global float2 *S, __global const int *idx, __global cons
 
 /* P += u·exp(ik(√(ρ² + z²) − z)): one layer's plane waves given the spherical curvature of
  * its distance z [m] (the Fresnel approximation per layer); (dy, dx) the pupil's pitch [m].
- * Global size (h, w). */
-__kernel void add_layer(__global float2 *P, __global const float2 *u, float dy, float dx,
-                        float k, float z)
+ * Global size: by_rows of (h, w). */
+__kernel void add_layer(__global float2 *P, __global const float2 *u, int h, int w, float dy,
+                        float dx, float k, float z)
 {
-    int r = get_global_id(0), c = get_global_id(1), w = get_global_size(1);
-    float y = signed_index(r, get_global_size(0)) * dy, x = signed_index(c, w) * dx;
+    int c = get_global_id(0), r = get_global_id(1);
+    if (c >= w)
+        return;
+    float y = signed_index(r, h) * dy, x = signed_index(c, w) * dx;
     float rho2 = x * x + y * y;
     P[r * w + c] += cmul(u[r * w + c], cexpi(k * rho2 / (sqrt(rho2 + z * z) + z)));
 }

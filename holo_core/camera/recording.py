@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..opencl import associated, get_runtime
-from ..opencl.arrays import empty
+from ..opencl.arrays import by_rows, empty
 from ..optics.imaging import ES_TABLE, TAPS, PupilImage
 from ..scene.camera import Camera
 from .optics import PupilOptics, iris
@@ -66,8 +66,9 @@ class PupilFields:
                                    self.index.data, self.amps[field].data,
                                    self.phase0[field == 3].data, phases.data, np.int32(first))
             rt.fft.backward(self.spectrum)
-            self.kernel("add_layer")(rt.queue, (h, w), None, self.pupil.data,
-                                     self.spectrum.data, np.float32(dy), np.float32(dx),
+            self.kernel("add_layer")(rt.queue, by_rows((h, w)), None, self.pupil.data,
+                                     self.spectrum.data, np.int32(h), np.int32(w),
+                                     np.float32(dy), np.float32(dx),
                                      np.float32(2 * np.pi / lam), np.float32(z))
         return self.pupil
 

@@ -4,15 +4,17 @@
 #include "spectrum_read.h"
 #include "fft_order.h"
 
-/* Q (2h, 2w, zeroed) at the pupil's samples: P·w(ρ)·exp(−ik(√(ρ² + f²) − f))·d(x)·d(y), the
- * iris w (1 inside (1 − taper)·radius, a raised cosine to 0 at the radius [m]), the thin lens
- * of Eq. 24 focused at f [m] (f = 0: none), and the deapodization d of the ES read that
- * follows. Global size (h, w) of P. */
-__kernel void pupil_window(__global float2 *Q, __global const float2 *P, float dy, float dx,
-                           float radius, float taper, float k, float f,
+/* Q (2h, 2w) at the pupil's samples: P·w(ρ)·exp(−ik(√(ρ² + f²) − f))·d(x)·d(y), the iris w
+ * (1 inside (1 − taper)·radius, a raised cosine to 0 at the radius [m]), the thin lens of
+ * Eq. 24 focused at f [m] (f = 0: none), and the deapodization d of the ES read that follows;
+ * the rest of Q is left as it is (the FFT takes it as zero). Global size: by_rows of P. */
+__kernel void pupil_window(__global float2 *Q, __global const float2 *P, int h, int w,
+                           float dy, float dx, float radius, float taper, float k, float f,
                            __global const float *dy_apod, __global const float *dx_apod)
 {
-    int r = get_global_id(0), c = get_global_id(1), h = get_global_size(0), w = get_global_size(1);
+    int c = get_global_id(0), r = get_global_id(1);
+    if (c >= w)
+        return;
     int sr = signed_index(r, h), sc = signed_index(c, w);
     float y = sr * dy, x = sc * dx, rho = sqrt(x * x + y * y);
     float inner = (1.0f - taper) * radius, win = 1.0f;

@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from ..opencl import associated
-from ..opencl.arrays import empty
+from ..opencl.arrays import by_rows, empty
 from ..propagation import grid
 from ..propagation.tilt import cached_array, es_table, es_transform
 from ..scene.camera import Camera
@@ -79,18 +79,30 @@ class PupilImage:
         rt = self.rt
         h, w = self.shape
         dy, dx = pitch
-        self.padded.fill(0)
-        rt.kernel(PROGRAM, "pupil_window", self.options)(
-            rt.queue, (h, w), None, self.padded.data, pupil.data, np.float32(dy),
-            np.float32(dx), np.float32(diameter / 2), np.float32(taper),
-            np.float32(lens_k or 0.0), np.float32(focus or 0), self.apod[0].data,
-            self.apod[1].data)
-        rt.fft.forward(self.padded)
+        corners = (grid.embedded(h, 2 * h), grid.embedded(w, 2 * w))
+        rt.fft.clear(self.padded, corners)
+        window(rt, self.padded, pupil, (h, w), pitch=pitch, radius=diameter / 2, taper=taper,
+               k=lens_k or 0.0, focus=focus or 0.0, apodization=self.apod, options=self.options)
+        rt.fft.forward(self.padded, nonzero=corners)
         rt.kernel(PROGRAM, "read_pixels", self.options)(
             rt.queue, (self.pixels.size,), None, self.pixels.data, self.padded.data,
             np.int32(2 * h), np.int32(2 * w), self.u.data, self.v.data, np.float32(scale),
             self.es.data)
         return self.pixels.get()
+
+
+def window(rt, padded, pupil, shape, *, pitch, radius, taper, k, focus, apodization,
+           options) -> None:
+    """``pupil`` (device, ``shape`` (h, w), FFT order) through the iris (``radius`` [m], its rim
+    ``taper``), the thin lens (wave number ``k`` [rad/m], focused at ``focus`` [m], 0: none)
+    and the ``apodization`` (per row, per column; device float32) into the corners of
+    ``padded`` (2h, 2w), FFT order; ``pitch`` (dy, dx) [m]. The rest of ``padded`` is left
+    as it is (``rt.fft.clear`` with the corners first)."""
+    (h, w), (dy, dx) = shape, pitch
+    rt.kernel(PROGRAM, "pupil_window", options)(
+        rt.queue, by_rows(shape), None, padded.data, pupil.data, np.int32(h), np.int32(w),
+        np.float32(dy), np.float32(dx), np.float32(radius), np.float32(taper), np.float32(k),
+        np.float32(focus), apodization[0].data, apodization[1].data)
 
 
 def assemble(radiance, coverage, cross, *, camera: Camera, supersample: int, wavelengths,

@@ -29,6 +29,13 @@ def signed_indices(n: int) -> np.ndarray:
     return np.fft.fftfreq(n, 1 / n)
 
 
+def embedded(n: int, size: int) -> tuple[tuple[int, int], tuple[int, int]]:
+    """Where the ``n`` samples of an FFT-order axis lie once zero-padded to ``size`` in FFT
+    order: its non-negative indices at the start, its negative ones at the end (two index
+    ranges; the FFTs' ``nonzero``)."""
+    return (0, (n + 1) // 2), (size - n // 2, size)
+
+
 def next_fast_len(n: int) -> int:
     """The smallest 2^a 3^b 5^c 7^d >= n (fast sizes for FFTW and VkFFT)."""
     return smooth_len(n, (2, 3, 5, 7))
