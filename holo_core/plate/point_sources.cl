@@ -4,9 +4,12 @@
  * complex log-field psi(x) = ln A(x) + i k (r(x) - |z|) of a row is expanded to second order
  * about the segment centre, exactly (the tile's centre phase in REAL, double where the device
  * has it; each row's difference to it in float); along the row
- * exp(psi) then costs two complex multiplies per pixel: E <- E*D, D <- D*C. PoCL does not
- * vectorise scalar loops with builtins, hence the explicit vector types. The carrier
- * exp(ik|z|) and the amplitude come folded from the host (float64).
+ * exp(psi) then costs two complex multiplies per pixel: E <- E*D, D <- D*C. The even and the
+ * odd pixels run as two independent recurrences of two-pixel steps (E <- E*F, F <- F*C^4,
+ * F = D*D' of a pixel and the next), so that the FMA units are not left waiting on one
+ * chain's latency. PoCL does not vectorise scalar loops with builtins, hence the explicit
+ * vector types. The carrier exp(ik|z|) and the amplitude come folded from the host
+ * (float64).
  *
  * Each point reaches only the disc rho <= cone*|z| its pitch samples alias-free, with a smooth
  * rim (see point_sources.py, cone_weight). Points are read in [first, last), or, when
@@ -75,15 +78,29 @@ static floatv exp_small(floatv x)       /* exp(x), |x| << 1 (a relative amplitud
         dr = t;                           \
     } while (0)
 
+/* the pixels of a segment, two at a time: the even chain (E0, F0) and the odd (E1, F1) */
+#define PAIR_LOOP                                    \
+    for (int m = 0; m < SEG; m += 2) {               \
+        ADD(m, e0r, e0i);                            \
+        ADD(m + 1, e1r, e1i);                        \
+        STEP(e0r, e0i, f0r, f0i, c4r, c4i, t);       \
+        STEP(e1r, e1i, f1r, f1i, c4r, c4i, t);       \
+    }
+
 /* the pixels of a segment in the cone's rim, weighted 1 - smoothstep(u) = (1-u)²(1+2u), where
  * the arguments give u from the pixel's column offset dx to the point */
+#define KEEP(u) ((1.0f - (u)) * (1.0f - (u)) * (1.0f + 2.0f * (u)))
 #define RIM_LOOP(...)                                                  \
-    for (int m = 0; m < SEG; m++) {                                    \
+    for (int m = 0; m < SEG; m += 2) {                                 \
         float dx = (float)m - xrel;                                    \
-        floatv u = __VA_ARGS__;                                        \
-        floatv keep = (1.0f - u) * (1.0f - u) * (1.0f + 2.0f * u);     \
-        ADD(m, keep * er, keep * ei);                                  \
-        STEP(er, ei, dr, di, cr, ci, t);                               \
+        floatv u0 = __VA_ARGS__;                                       \
+        dx += 1.0f;                                                    \
+        floatv u1 = __VA_ARGS__;                                       \
+        floatv k0 = KEEP(u0), k1 = KEEP(u1);                           \
+        ADD(m, k0 * e0r, k0 * e0i);                                    \
+        ADD(m + 1, k1 * e1r, k1 * e1i);                                \
+        STEP(e0r, e0i, f0r, f0i, c4r, c4i, t);                         \
+        STEP(e1r, e1i, f1r, f1i, c4r, c4i, t);                         \
     }
 
 /* acc[m][c] += v * amplitude c (with one channel the amplitude is folded into v already) */
@@ -169,15 +186,26 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
 #endif
         CIS(wrap(d1i * p + d2i * ud), exp_small(d1r * p + d2r * ud), dr, di);
         CIS(d2i * (p * p), exp_small(d2r * (p * p)), cr, ci);
+        /* the two chains: E1 = E0·D, F0 = D·(D·C), F1 = F0·C², both stepped by C⁴ */
+        floatv e0r = er, e0i = ei, e1r, e1i, f0r, f0i, f1r, f1i, c2r, c2i, c4r, c4i;
+        e1r = er * dr - ei * di;
+        e1i = er * di + ei * dr;
+        c2r = cr * cr - ci * ci;
+        c2i = 2 * cr * ci;
+        c4r = c2r * c2r - c2i * c2i;
+        c4i = 2 * c2r * c2i;
+        t = dr * cr - di * ci;                  /* D·C, the next pixel's D */
+        floatv ti = dr * ci + di * cr;
+        f0r = dr * t - di * ti;
+        f0i = dr * ti + di * t;
+        f1r = f0r * c2r - f0i * c2i;
+        f1i = f0r * c2i + f0i * c2r;
 
         /* the cone's rim: weight 1 - smoothstep over rho² in [inner2, 1]·rho_max², which keeps
          * the rim's diffraction (a Poisson-spot term as strong as the wave) out of the sum */
         real far_x = fabs(dxc) + half_seg, far_y = fabs(yt - yj) + half_rows;
         if (far_x * far_x + far_y * far_y <= inner2 * rho_max2) {
-            for (int m = 0; m < SEG; m++) {
-                ADD(m, er, ei);
-                STEP(er, ei, dr, di, cr, ci, t);
-            }
+            PAIR_LOOP
         } else {
             /* in pixel units, where float is ample for a weight */
             float pix2 = (float)(pitch * pitch), rim2 = (float)(rho_max2 / (pitch * pitch));
