@@ -10,7 +10,7 @@ STAMP  := $(VENV)/.installed
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --upgrade pip
-	$(PY) -m pip install -e '.[test,blender]'
+	$(PY) -m pip install -e '.[test,blender,bench]'
 	touch $@
 
 demo: $(STAMP)

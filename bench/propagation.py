@@ -1,72 +1,284 @@
-"""Angular spectrum speed: 1024² field, 2x padding, against plain NumPy of the same method.
+"""Propagation against the FFT bound and what a user would pick instead, side by side in one run.
 
-Prints both times (min and median of repeated runs, device arrays in and out for Holo), their
-ratio, and each result's error against a float64 NumPy reference. Run: make bench
+For each size, the same method five ways, timed in alternating rounds (medians):
+
+- the bound: FFTW with plans measured here once (FFTW_MEASURE, kept between runs in this
+  bench's own wisdom file), NumPy for the padding, the multiply and the crop; with one thread
+  and with all, the faster of the two;
+- scipy.fft with ``workers`` = all CPUs (pad, ``fft2``, multiply, ``ifft2``, crop);
+- Holo with the field on the device, and with NumPy in and out;
+- plain NumPy (complex64), at the smallest size.
+
+Methods: the angular spectrum (a field of n² samples, 2x padding: the transforms are (2n)²)
+and Fresnel; the camera pass's and the plate view's transforms: a pupil of n² samples in FFT
+order, zero-padded 2x into the corners of its spectrum's grid and transformed (``pupil``),
+and the images' n² spectra padded 1.5x the same way and transformed back (``read``).
+Prints the CPU, its load before and after, each median and its ratio to the bound and to
+scipy, and the angular spectrum's error against float64 NumPy.
+
+    python bench/propagation.py [--sizes 1024 2048 4096] [--rounds 5]
 """
 
+import argparse
+import math
 import os
+import pickle
 import statistics
 import sys
 import time
 
 import numpy as np
+import pyfftw
+import scipy.fft
 
 from holo_core.opencl import get_runtime
-from holo_core.propagation import angular_spectrum, transfer_function
-from holo_core.propagation.grid import padded_shape
+from holo_core.camera import incoherent
+from holo_core.opencl.arrays import by_rows, empty
+from holo_core.optics import imaging
+from holo_core.propagation import angular_spectrum, fresnel, grid, transfer_function
+from holo_core.propagation.fresnel import fresnel_transfer_host
 
 sys.path.insert(0, os.path.dirname(__file__))
 from sweep import cpu_name  # the bench folder's own helper
 
-N, PITCH, LAM, Z, REPEATS = 1024, 2e-6, 633e-9, 5e-3, 15
+LAM, PITCH, Z = 633e-9, 2e-6, 5e-3
+THREADS = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
 
 
-def numpy_asm(field, tf, dtype):
-    """The same method in plain NumPy: pad, fft2, multiply, ifft2, crop."""
-    h, w = field.shape
-    big = np.zeros(tf.shape, dtype)
-    r0, c0 = (tf.shape[0] - h) // 2, (tf.shape[1] - w) // 2
-    big[r0:r0 + h, c0:c0 + w] = field
-    return np.fft.ifft2(np.fft.fft2(big) * tf)[r0:r0 + h, c0:c0 + w]
+class Bound:
+    """FFTW's 2-D transforms of one grid with measured plans, one thread and all of them."""
+
+    def __init__(self, shape):
+        self.work = pyfftw.empty_aligned(shape, np.complex64)
+        self.plans = {th: [pyfftw.FFTW(self.work, self.work, axes=(0, 1), direction=d,
+                                       flags=("FFTW_MEASURE",), threads=th)
+                           for d in ("FFTW_FORWARD", "FFTW_BACKWARD")]
+                      for th in sorted({1, THREADS})}
+
+    def run(self, threads, direction):
+        self.plans[threads][direction == "backward"].execute()
 
 
-def timed(fn):
-    fn()
-    times = []
-    for _ in range(REPEATS):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times), statistics.median(times)
+def wisdom_file():
+    from platformdirs import user_cache_dir
+    return os.path.join(user_cache_dir("holo"), "bench-bound-wisdom.pickle")
+
+
+def bounds(shapes):
+    """A :class:`Bound` per shape, their plans measured once and kept in this bench's own
+    wisdom file (made after Holo's plans: those never see this wisdom)."""
+    try:
+        with open(wisdom_file(), "rb") as f:
+            pyfftw.import_wisdom(pickle.load(f))
+    except (OSError, pickle.UnpicklingError, EOFError):
+        pass
+    made = {shape: Bound(shape) for shape in sorted(set(shapes))}
+    os.makedirs(os.path.dirname(wisdom_file()), exist_ok=True)
+    with open(wisdom_file(), "wb") as f:
+        pickle.dump(pyfftw.export_wisdom(), f)
+    return made
+
+
+def random_field(n, seed):
+    rng = np.random.default_rng(seed)
+    return (rng.normal(size=(n, n)) + 1j * rng.normal(size=(n, n))).astype(np.complex64)
+
+
+class Convolution:
+    """The padded convolution of an n² field by the transfer function ``tf`` (2x padding)."""
+
+    def __init__(self, rt, n, tf, holo):
+        self.rt, self.n, self.tf, self.holo = rt, n, tf, holo
+        self.field = random_field(n, 1)
+        self.dev = rt.to_device(self.field)
+        self.shapes = [tf.shape]
+        holo(self.field)  # Holo's plans, before any of the bound's
+
+    def methods(self, bound: Bound):
+        n, tf, field = self.n, self.tf, self.field
+        shape = tf.shape
+        r0, c0 = (shape[0] - n) // 2, (shape[1] - n) // 2
+        tf_bound = (tf / tf.size).astype(np.complex64)  # FFTW's inverse is unnormalised
+        tf32 = tf.astype(np.complex64)
+
+        def fftw(threads):
+            def run():
+                w = bound.work
+                w[...] = 0
+                w[r0:r0 + n, c0:c0 + n] = field
+                bound.run(threads, "forward")
+                np.multiply(w, tf_bound, out=w)
+                bound.run(threads, "backward")
+                return w[r0:r0 + n, c0:c0 + n].copy()
+            return run
+
+        def scipy_fft():
+            big = np.zeros(shape, np.complex64)
+            big[r0:r0 + n, c0:c0 + n] = field
+            spec = scipy.fft.fft2(big, workers=THREADS, overwrite_x=True)
+            spec *= tf32
+            return scipy.fft.ifft2(spec, workers=THREADS, overwrite_x=True)[r0:r0 + n,
+                                                                             c0:c0 + n]
+
+        def numpy_fft():
+            big = np.zeros(shape, np.complex64)
+            big[r0:r0 + n, c0:c0 + n] = field
+            return np.fft.ifft2(np.fft.fft2(big) * tf32)[r0:r0 + n, c0:c0 + n]
+
+        def holo_device():
+            out = self.holo(self.dev)
+            self.rt.queue.finish()
+            return out
+
+        methods = {f"FFTW measured, {th} thread{'s' * (th > 1)}": fftw(th)
+                   for th in bound.plans}
+        methods["scipy.fft, workers=all"] = scipy_fft
+        if n <= 1024:
+            methods["NumPy"] = numpy_fft
+        methods["Holo, field on the device"] = holo_device
+        methods["Holo, NumPy in and out"] = lambda: self.holo(field)
+        return methods
+
+
+class Transform:
+    """An n² block in FFT order zero-padded into the corners of a size² grid and transformed:
+    'forward' (the pupil's: camera pass and plate view) or 'backward' (the images' spectra
+    into the camera pass's read grid)."""
+
+    def __init__(self, rt, n, size, direction):
+        self.rt, self.n, self.size, self.direction = rt, n, size, direction
+        self.block = random_field(n, 2)
+        self.parts = [((dr, dc), (sr, sc))
+                      for (dr, sr) in zip(map(lambda r: slice(*r), grid.embedded(n, size)),
+                                          (slice(0, (n + 1) // 2), slice((n + 1) // 2, n)))
+                      for (dc, sc) in zip(map(lambda r: slice(*r), grid.embedded(n, size)),
+                                          (slice(0, (n + 1) // 2), slice((n + 1) // 2, n)))]
+        self.shapes = [(size, size)]
+        self.pupil, self.padded = rt.to_device(self.block), empty(rt, (size, size))
+        self.flat = [rt.to_device(np.ones(n), np.float32)] * 2
+        self.nonzero = (grid.embedded(n, size),) * 2
+        self.options = rt.real_options + (f"-DTAPS={imaging.TAPS}",
+                                          f"-DES_TABLE={imaging.ES_TABLE}")
+        self.holo()  # Holo's plans, before any of the bound's
+
+    def place(self, w):
+        w[...] = 0
+        for dst, src in self.parts:
+            w[dst] = self.block[src]
+
+    def holo(self):
+        rt, n = self.rt, self.n
+        rt.fft.clear(self.padded, self.nonzero)
+        if self.direction == "forward":  # the pupil stage's own kernel (open iris, no lens)
+            imaging.window(rt, self.padded, self.pupil, (n, n), pitch=(1.0, 1.0),
+                           radius=4.0 * n, taper=0.0, k=0.0, focus=0.0,
+                           apodization=self.flat, options=self.options)
+            rt.fft.forward(self.padded, nonzero=self.nonzero)
+        else:  # the images' spectra into the read grid (camera/incoherent.py's kernel)
+            embed = rt.kernel(incoherent.PROGRAM, "embed_deapodized", self.options)
+            embed(rt.queue, by_rows((n, n)), None, self.padded.data, np.int32(self.size),
+                  np.int32(self.size), self.pupil.data, np.int32(n), np.int32(n),
+                  self.flat[0].data, self.flat[1].data)
+            rt.fft.backward(self.padded, nonzero=self.nonzero)
+        rt.queue.finish()
+        return self.padded
+
+    def methods(self, bound: Bound):
+        forward = self.direction == "forward"
+
+        def fftw(threads):
+            def run():
+                self.place(bound.work)
+                bound.run(threads, self.direction)
+                return bound.work
+            return run
+
+        def scipy_fft():
+            w = np.empty((self.size, self.size), np.complex64)
+            self.place(w)
+            if forward:
+                return scipy.fft.fft2(w, workers=THREADS, overwrite_x=True)
+            return scipy.fft.ifft2(w, workers=THREADS, overwrite_x=True, norm="forward")
+
+        methods = {f"FFTW measured, {th} thread{'s' * (th > 1)}": fftw(th)
+                   for th in bound.plans}
+        methods["scipy.fft, workers=all"] = scipy_fft
+        methods["Holo, on the device"] = self.holo
+        return methods
+
+
+def timed(methods, rounds):
+    """Median seconds of each method over alternating rounds (one warm-up call each)."""
+    for f in methods.values():
+        f()
+    times = {k: [] for k in methods}
+    for _ in range(rounds):
+        for k, f in methods.items():
+            t = time.perf_counter()
+            f()
+            times[k].append(time.perf_counter() - t)
+    return {k: statistics.median(v) for k, v in times.items()}
+
+
+def report(title, medians, bound_keys):
+    bound = min(medians[k] for k in bound_keys)
+    scipy_t = medians["scipy.fft, workers=all"]
+    print(f"{title}   (load {os.getloadavg()[0]:.1f})")
+    for k, t in medians.items():
+        print(f"  {k:30s} {t * 1e3:9.1f} ms  {t / bound:5.2f}x the bound  "
+              f"{t / scipy_t:5.2f}x scipy")
 
 
 def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[1024, 2048, 4096])
+    ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--methods", nargs="+", default=["asm", "fresnel", "pupil", "read"])
+    args = ap.parse_args()
     rt = get_runtime()
-    rng = np.random.default_rng(1)
-    field = (rng.normal(size=(N, N)) + 1j * rng.normal(size=(N, N))).astype(np.complex64)
-    shape = padded_shape(field.shape, 2)
-    tf64 = transfer_function(shape, wavelength=LAM, pitch=PITCH, distance=Z)
-    reference = numpy_asm(field.astype(np.complex128), tf64, np.complex128)
-    tf32 = tf64.astype(np.complex64)
-    dev = rt.to_device(field)
+    print(f"CPU: {cpu_name()}, {THREADS} CPUs, load average {os.getloadavg()[0]:.1f}; device: "
+          f"{rt.device.name.strip()} ({rt.device.platform.name.strip()}), FFT {rt.fft.name} "
+          f"({getattr(getattr(rt.fft, 'host', None), 'threads', '-')} threads)")
+    print("bound = the faster FFTW row; ratios are medians of alternating rounds\n")
+    asm = lambda u: angular_spectrum(u, wavelength=LAM, pitch=PITCH, distance=Z)
+    fre = lambda u: fresnel(u, wavelength=LAM, pitch=PITCH, distance=Z)
+    cases = []  # (title, case), Holo's plans made as each is built
+    for n in args.sizes:
+        shape = grid.padded_shape((n, n), 2)
+        if "asm" in args.methods:
+            tf = transfer_function(shape, wavelength=LAM, pitch=PITCH, distance=Z)
+            cases.append((f"angular spectrum, {n}² field, 2x padding ({shape[0]}²)",
+                          Convolution(rt, n, tf, asm)))
+        if "fresnel" in args.methods:
+            tf = fresnel_transfer_host(shape, LAM, (PITCH, PITCH), Z, (0.0, 0.0))
+            cases.append((f"Fresnel, {n}² field, 2x padding ({shape[0]}²)",
+                          Convolution(rt, n, tf, fre)))
+        if "pupil" in args.methods:
+            cases.append((f"camera pass / plate view: {n}² pupil into its 2x padded spectrum "
+                          f"({2 * n}²), forward", Transform(rt, n, 2 * n, "forward")))
+        if "read" in args.methods:
+            size = grid.next_fast_len(math.ceil(1.5 * n))
+            cases.append((f"camera pass: {n}² spectrum into its 1.5x read grid ({size}²), "
+                          f"inverse", Transform(rt, n, size, "backward")))
+    made = bounds([s for _, case in cases for s in case.shapes])
+    for title, case in cases:
+        methods = case.methods(made[case.shapes[0]])
+        report(title, timed(methods, args.rounds), [k for k in methods if k.startswith("FFTW")])
+        if isinstance(case, Convolution) and case.holo is asm and case.n <= 1024:
+            error(case)
+    print(f"\nload average at the end {os.getloadavg()[0]:.1f}")
 
-    def holo():
-        out = angular_spectrum(dev, wavelength=LAM, pitch=PITCH, distance=Z)
-        rt.queue.finish()
-        return out
 
-    t_holo, m_holo = timed(holo)
-    t_np, m_np = timed(lambda: numpy_asm(field, tf32, np.complex64))
-    err = lambda a: np.linalg.norm(a - reference) / np.linalg.norm(reference)
-    print(f"CPU: {cpu_name()}, load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} "
-          f"cores; device: {rt.device.name} ({rt.device.platform.name.strip()}), FFT backend: "
-          f"{rt.fft.name}")
-    print(f"field {N}x{N}, padding 2 -> {shape[0]}x{shape[1]}, distance {Z} m")
-    print(f"holo angular_spectrum : {t_holo * 1e3:7.1f} ms (median {m_holo * 1e3:.1f}), "
-          f"error vs float64 {err(holo().get()):.2e}")
-    print(f"plain numpy (complex64): {t_np * 1e3:7.1f} ms (median {m_np * 1e3:.1f}), "
-          f"error vs float64 {err(numpy_asm(field, tf32, np.complex64)):.2e}")
-    print(f"speed-up: {t_np / t_holo:.1f}x (targets: <= 30 ms, >= 6x, error <= 1e-5)")
+def error(case: Convolution):
+    """Holo's angular spectrum against the same method in float64 NumPy."""
+    shape, n = case.tf.shape, case.n
+    big = np.zeros(shape, complex)
+    r0 = (shape[0] - n) // 2
+    big[r0:r0 + n, r0:r0 + n] = case.field
+    ref = np.fft.ifft2(np.fft.fft2(big) * case.tf)[r0:r0 + n, r0:r0 + n]
+    got = case.holo(case.field)
+    print(f"  Holo's error against float64 NumPy: "
+          f"{np.linalg.norm(got - ref) / np.linalg.norm(ref):.2e}")
 
 
 if __name__ == "__main__":
