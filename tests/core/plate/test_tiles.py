@@ -232,15 +232,18 @@ def endpoint():
     ("garbage", r"answers, but not as a Dask scheduler \(its first message claims "
                 r"18446744073709551615 bytes\)"),
     ("address", r"not a scheduler address"),
+    ("unknown", r"unknown host 'no-such-host.invalid'"),  # a name reserved never to resolve
 ])
 def test_a_scheduler_that_cannot_serve_fails_fast_by_name_and_leaves_no_store(
         scene, tmp_path, endpoint, monkeypatch, kind, problem):
     """A silent port hung (killed at 150 s), a refused one waited 30 s for an OSError, garbage
-    ended in MemoryError (3.07 EiB), each leaving a store behind. The timeout is 10 s
+    ended in MemoryError (3.07 EiB), each leaving a store behind; an unknown host and an
+    address that is not one are named too. The timeout is 10 s
     (CONNECT_TIMEOUT); 0.5 s here."""
     from holo_core.plate import tiles
     monkeypatch.setattr(tiles, "CONNECT_TIMEOUT", 0.5)
-    address = "tcp://127.0.0.1:not-a-port" if kind == "address" else endpoint(kind)
+    address = {"address": "tcp://127.0.0.1:not-a-port",
+               "unknown": "tcp://no-such-host.invalid:8786"}.get(kind) or endpoint(kind)
     with pytest.raises(InputError, match=rf"scheduler {address}: {problem}"):
         _record(scene, tmp_path / "p.zarr", address)
     assert not list(tmp_path.iterdir()), "a recording that never started leaves nothing"
