@@ -82,8 +82,10 @@ class _Run:
     """One batched call: the broadcast batch, its memory checked, then plane by plane."""
 
     def __init__(self, plane, samples, pose, settings, moves, grid_of, returns_pitch):
-        if samples.ndim < 2:
-            raise InputError(f"field must be (..., H, W); got shape {tuple(samples.shape)}")
+        if samples.ndim < 2 or 0 in samples.shape[-2:]:  # found by the fuzz suite: a batch of
+            # wavelengths over an empty field failed reshaping it
+            raise InputError(f"field must be (..., H, W) with H, W >= 1; got shape "
+                             f"{tuple(samples.shape)}")
         self.plane, self.samples, self.settings = plane, samples, settings
         self.moves, self.returns_pitch = moves, returns_pitch
         self.batch_in = tuple(samples.shape[:-2])

@@ -195,3 +195,12 @@ def test_a_10_m_aperture_reads_only_the_light_and_dims_by_its_area(small_plate, 
     assert n_large == n_small, (n_large, n_small)
     err = np.abs(large * (10.0 / 4e-3) ** 2 - small).max() / small.max()
     assert err <= 1e-4, err
+
+
+def test_a_batch_over_an_empty_field_is_the_projects_error():
+    """Found by the fuzz suite's calls: two wavelengths over a 0x0 field failed reshaping."""
+    from holo_core.propagation import angular_spectrum
+    with pytest.raises(InputError, match=r"field must be \(\.\.\., H, W\) with H, W >= 1; got "
+                                         r"shape \(0, 0\)"):
+        angular_spectrum(np.zeros((0, 0), np.complex64), wavelength=[633e-9, 532e-9],
+                         pitch=1e-6, distance=1e-4)
