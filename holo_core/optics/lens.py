@@ -45,7 +45,16 @@ def _thin_lens(field, *, wavelength, pitch, focal_length, centre=(0.0, 0.0)):
     return like_input(out, from_host)
 
 
+def _thin_lens_adjoint(field, *, wavelength, pitch, focal_length, centre=(0.0, 0.0)):
+    """One plane of :func:`thin_lens`'s adjoint: it multiplies by t̄, the lens of focal length
+    −f."""
+    f = validate.within("focal_length", focal_length, validate.MAX_LENGTH)
+    return _thin_lens(field, wavelength=wavelength, pitch=pitch, focal_length=-f,
+                      centre=centre)
+
+
 thin_lens = batched(_thin_lens)
+thin_lens.adjoint = batched(_thin_lens_adjoint)
 thin_lens.__doc__ = """The field just behind a thin lens of focal length ``focal_length`` [m]
 (f < 0 diverges) centred at ``centre`` (x, y) [m]: U·exp(−ik(√(ρ² + f²) − f)).
 

@@ -1,11 +1,15 @@
 """Wave propagation between planes, SI metres and radians, exp(+ikr) waves (Sect. IV).
 
 grid.py: pixel centres, frequencies, padded sizes · convolution.py: the padded spectral
-convolution on the device · angular_spectrum.py: Eq. 10-15 with band limit ·
+convolution · angular_spectrum.py: Eq. 10-15 with band limit ·
 rayleigh_sommerfeld.py: direct integration of Eq. 7 · tilt.py: spectrum rotation (Eq. 11) and
 placed planes · resample.py: the four cases of Fig. 4 · fresnel.py: Fresnel and Fraunhofer ·
-batch.py: Fields and batches through each of them (the public names here).
+batch.py: Fields and batches through each of them (the public names here, each carrying its
+adjoint) · transfer.py: transfer functions, float64 on the host and on the device ·
+adjoint.py: a propagation's adjoint.
 """
+
+import numpy as np
 
 from .. import validate
 from . import angular_spectrum as _asm_module
@@ -14,13 +18,19 @@ from . import grid
 from . import rayleigh_sommerfeld as _rs_module
 from . import resample as _resample_module
 from . import tilt as _tilt_module
-from .angular_spectrum import alias_free_distance, transfer_function
+from .angular_spectrum import alias_free_distance
 from .batch import batched, rigid, translation
 from .resample import interpolation_matrix
+from .transfer import transfer_function
 
 
 def _shifted(kw):
     return translation(*kw.get("offset", (0.0, 0.0)), kw["distance"])
+
+
+def _shifted_back(kw):  # where an adjoint's output lies: the source's plane
+    x0, y0 = kw.get("offset", (0.0, 0.0))
+    return translation(-x0, -y0, -np.asarray(kw["distance"]))
 
 
 def _out_grid(kw, shape, pitch):
@@ -44,6 +54,11 @@ angular_spectrum = batched(_asm_module.angular_spectrum, moves=_shifted, grid_of
 fresnel = batched(_fresnel_module.fresnel, moves=_shifted, grid_of=_scaled_grid)
 fraunhofer = batched(_fresnel_module.fraunhofer, returns_pitch=True,
                      moves=lambda kw: translation(0.0, 0.0, kw["distance"]))
+angular_spectrum.adjoint = batched(_asm_module.angular_spectrum_adjoint, moves=_shifted_back,
+                                   grid_of=_scaled_grid)
+fresnel.adjoint = batched(_fresnel_module.fresnel_adjoint, moves=_shifted_back,
+                          grid_of=_scaled_grid)
+fraunhofer.adjoint = _fresnel_module.fraunhofer_adjoint
 rayleigh_sommerfeld = batched(_rs_module.rayleigh_sommerfeld, moves=_shifted,
                               grid_of=_out_grid)
 tilt = batched(_tilt_module.tilt, moves=lambda kw: rigid(kw["rotation"]), grid_of=_out_grid)

@@ -1,4 +1,6 @@
-"""Angular spectrum propagation to a parallel plane with a lateral offset (Eq. 10, 12-15).
+"""Angular spectrum propagation to a parallel plane with a lateral offset (Eq. 10, 12-15), its
+adjoint, and its transfer function (``transfer_function``, float64, kept in transfer.py beside
+the device's).
 
 The band limit follows Matsushima & Shimobaba (2009) and, for an offset, Matsushima (2010): a
 frequency is kept only where the transfer function's phase is sampled at the padded grid's
@@ -12,6 +14,7 @@ Evanescent components (fx² + fy² > 1/λ²) are dropped.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -22,10 +25,7 @@ from ..opencl.arrays import cached, nonzero_count
 from . import grid
 from .convolution import convolution_setup, convolve, symmetric
 from .scaled import scaled
-from .transfer import asm_transfer
-
-BAND_EDGE = 0.2  # fraction of the band-limited ray range given to the cosine roll-off
-
+from .transfer import BAND_EDGE, asm_transfer, transfer_function
 
 def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
                      band_limit=True, out_pitch=None, out_shape=None, read=None):
@@ -64,9 +64,10 @@ def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), p
     NumPy or device array like the input.
     """
     if out_pitch is not None or out_shape is not None:
-        return scaled("asm", field, wavelength=wavelength, pitch=pitch, distance=distance,
-                      offset=offset, padding=padding, out_pitch=out_pitch,
-                      out_shape=out_shape, band_limit=band_limit)
+        return scaled(field, transfer=functools.partial(_transfer, band_limit=band_limit),
+                      name="angular_spectrum", wavelength=wavelength, pitch=pitch,
+                      distance=distance, offset=offset, padding=padding, out_pitch=out_pitch,
+                      out_shape=out_shape)
     s = convolution_setup(field, wavelength, pitch, distance, offset, padding)
     wavelength, pitch, z, (x0, y0), padding = s.wavelength, s.pitch, s.z, s.offset, s.padding
     rt, dev, from_host, shape = s.rt, s.dev, s.from_host, s.shape
@@ -91,38 +92,21 @@ def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), p
     return like_input(convolve(rt, dev, tf, shape if quadrant else None), from_host)
 
 
-def transfer_function(shape, *, wavelength, pitch, distance, offset=(0.0, 0.0), band_limit=True):
-    """The transfer function exp(i2πz·fz)·exp(i2π(fx·x0 + fy·y0)) (Eq. 12-13), complex128.
-
-    ``shape`` is the (padded) grid in FFT order, ``wavelength`` [m], ``pitch`` [m] (or (x, y)),
-    ``distance`` [m], ``offset`` (x0, y0) [m]. The phase is formed as k·z (reduced mod 2π) plus
-    -2πz·f²/(1/λ + fz), which keeps float64 precision for large k·z.
-    """
-    px, py = grid.pitch_pair(pitch)
-    fy, fx = grid.freqs(shape[0], py)[:, None], grid.freqs(shape[1], px)[None, :]
-    x0, y0 = offset
-    f2 = fx * fx + fy * fy
-    fz2 = 1.0 / wavelength**2 - f2
-    keep = fz2 > 0
-    fz = np.sqrt(np.where(keep, fz2, 1.0))
-    carrier = math.remainder(2 * math.pi * distance / wavelength, 2 * math.pi)
-    phase = carrier - 2 * np.pi * distance * f2 / (1.0 / wavelength + fz) \
-        + 2 * np.pi * (fx * x0 + fy * y0)
-    if band_limit:
-        keep = keep * band_mask(shape, pitch, distance, offset, fx, fy, fz)
-    return keep * np.exp(1j * phase)
+def angular_spectrum_adjoint(field, *, wavelength, pitch, distance, offset=(0.0, 0.0),
+                             **settings):
+    """The adjoint of :func:`angular_spectrum` (the same keywords): a field on the target
+    plane back to the source's grid. The propagation pads, transforms, multiplies by H,
+    transforms back and crops at the same place, so its adjoint multiplies by H̄ instead, and
+    H̄(z, x0, y0) = H(−z, −x0, −y0), its band limit |x0 − z·f/fz| too: the angular spectrum
+    to −z with the offset negated."""
+    x0, y0 = validate.pair("offset", offset, "m")
+    return angular_spectrum(field, wavelength=wavelength, pitch=pitch,
+                            distance=-np.asarray(distance), offset=(-x0, -y0), **settings)
 
 
-def band_mask(shape, pitch, distance, offset, fx, fy, fz) -> np.ndarray:
-    """Weights in [0, 1]: 1 where the ray x0 - z·fx/fz lands well within half the padded
-    window, rolling off to 0 at its edge (per axis, multiplied)."""
-    weight = 1.0
-    px, py = grid.pitch_pair(pitch)
-    for n, p, o, f in ((shape[1], px, offset[0], fx), (shape[0], py, offset[1], fy)):
-        u = np.abs(o - distance * f / fz) / (n * p / 2)  # 1 at the edge of the band
-        t = np.clip((u - (1 - BAND_EDGE)) / BAND_EDGE, 0, 1)
-        weight = weight * np.where(u <= 1, np.cos(np.pi / 2 * t) ** 2, 0)
-    return weight
+def _transfer(shape, wavelength, pitch, distance, offset, band_limit) -> np.ndarray:
+    return transfer_function(shape, wavelength=wavelength, pitch=pitch, distance=distance,
+                             offset=offset, band_limit=band_limit)
 
 
 def alias_free_distance(shape, pitch, wavelength, offset=(0.0, 0.0)) -> float:

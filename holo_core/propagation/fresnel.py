@@ -1,8 +1,9 @@
-"""Paraxial propagation, for comparison and for the far field.
+"""Paraxial propagation, for comparison and for the far field, each beside its adjoint.
 
 ``fresnel`` is the Fresnel transfer function exp(ikz)·exp(-iπλz(fx² + fy²)) on the same padded
 grid as the angular spectrum (band-limited the same way); ``fraunhofer`` is the far field as one
-centred Fourier transform, on the grid of pitch λz/(W·pitch) it implies.
+centred Fourier transform, on the grid of pitch λz/(W·pitch) it implies: post·FFT(pre·u), whose
+adjoint is pre̅·FFTᴴ(post̅·y), FFTᴴ the unnormalised inverse.
 """
 
 from __future__ import annotations
@@ -14,10 +15,12 @@ import numpy as np
 from .. import validate
 from ..opencl import as_device, is_device_array, like_input
 from ..opencl.arrays import cached, copy
+from ..scene.field import Field
 from . import grid
+from .batch import batched
 from .convolution import convolution_setup, convolve, multiply, symmetric
 from .scaled import scaled
-from .transfer import fresnel_transfer
+from .transfer import fresnel_transfer, fresnel_transfer_host
 
 
 def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
@@ -29,8 +32,9 @@ def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
     ``out_shape``); accurate only where the paraxial approximation holds.
     """
     if out_pitch is not None or out_shape is not None:
-        return scaled("fresnel", field, wavelength=wavelength, pitch=pitch, distance=distance,
-                      offset=offset, padding=padding, out_pitch=out_pitch, out_shape=out_shape)
+        return scaled(field, transfer=fresnel_transfer_host, name="fresnel",
+                      wavelength=wavelength, pitch=pitch, distance=distance, offset=offset,
+                      padding=padding, out_pitch=out_pitch, out_shape=out_shape)
     s = convolution_setup(field, wavelength, pitch, distance, offset, padding)
     wavelength, pitch, z, (x0, y0), padding = s.wavelength, s.pitch, s.z, s.offset, s.padding
     rt, dev, from_host, shape = s.rt, s.dev, s.from_host, s.shape
@@ -50,17 +54,12 @@ def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
     return like_input(convolve(rt, dev, tf, shape if quadrant else None), from_host)
 
 
-def fresnel_transfer_host(shape, wavelength, pitch, distance, offset) -> np.ndarray:
-    """The Fresnel transfer function exp(ikz)·exp(-iπλz(fx² + fy²))·exp(i2π(fx·x0 + fy·y0)) on
-    the padded ``shape`` (FFT order), complex128, made in float64: the rays x0 - λz·f kept
-    inside half the window. ``pitch`` (x, y), ``wavelength``, ``distance``, ``offset`` [m]."""
-    (px, py), (x0, y0), z = pitch, offset, distance
-    fy, fx = grid.freqs(shape[0], py)[:, None], grid.freqs(shape[1], px)[None, :]
-    carrier = math.remainder(2 * math.pi * z / wavelength, 2 * math.pi)
-    phase = carrier - np.pi * wavelength * z * (fx**2 + fy**2) + 2 * np.pi * (fx * x0 + fy * y0)
-    keep = (np.abs(x0 - wavelength * z * fx) <= shape[1] * px / 2) \
-        & (np.abs(y0 - wavelength * z * fy) <= shape[0] * py / 2)
-    return np.where(keep, np.exp(1j * phase), 0)
+def fresnel_adjoint(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), **settings):
+    """The adjoint of :func:`fresnel` (the same keywords): Fresnel to −z with the offset
+    negated, as for the angular spectrum (its kept rays |x0 − λz·f| alike)."""
+    x0, y0 = validate.pair("offset", offset, "m")
+    return fresnel(field, wavelength=wavelength, pitch=pitch, distance=-np.asarray(distance),
+                   offset=(-x0, -y0), **settings)
 
 
 def centred_ramp(shape) -> np.ndarray:
@@ -117,3 +116,36 @@ def fraunhofer(field, *, wavelength, pitch, distance):
     rt.fft.forward(out)
     multiply(rt, out, post)
     return like_input(out, from_host), out_pitch
+
+
+def _fraunhofer_adjoint(field, *, wavelength, pitch, distance):
+    """The far field's adjoint: from its grid back to the source grid of ``pitch`` [m]."""
+    wavelength, pitch = grid.wave(wavelength, pitch)
+    z = validate.positive("distance", validate.within("distance", distance,
+                                                      validate.MAX_LENGTH), "m")
+    rt, dev, from_host = as_device(field)
+    h, w = dev.shape
+    conj_pre, _ = cached(rt, ("centred-dft-adjoint", (h, w)),
+                         lambda: (centred_ramp((h, w)).conj(), []))
+    conj_post, _ = cached(rt, ("fraunhofer-adjoint", (h, w), wavelength, pitch, z),
+                          lambda: (far_factor((h, w), wavelength, pitch, z).conj(), []))
+    out = copy(dev)
+    multiply(rt, out, conj_post)
+    rt.fft.backward(out)
+    multiply(rt, out, conj_pre)
+    return like_input(out, from_host)
+
+
+_batched_fraunhofer_adjoint = batched(_fraunhofer_adjoint)
+
+
+def fraunhofer_adjoint(field, *, wavelength, pitch, distance):
+    """The adjoint of :func:`~holo_core.propagation.fraunhofer`: a field on the far field's
+    grid back to the source grid. ``pitch`` [m] is the *source* grid's, as given to
+    fraunhofer; ``wavelength``, ``distance`` [m] (scalars or arrays over a batch). Arrays
+    (H, W) or (..., H, W), NumPy or device; complex64 like the input."""
+    if isinstance(field, Field):
+        raise validate.InputError("fraunhofer_adjoint takes arrays: a Field carries the far "
+                                  "field's pitch, and the adjoint needs the source's")
+    return _batched_fraunhofer_adjoint(field, wavelength=wavelength, pitch=pitch,
+                                       distance=distance)

@@ -27,12 +27,14 @@ from . import grid
 MAX_SAMPLES = 2**26  # padded samples (1 GiB of complex128), at most
 
 
-def scaled(kind, field, *, wavelength, pitch, distance, offset, padding, out_pitch, out_shape,
-           band_limit=True):
-    """``kind`` ('asm' or 'fresnel') propagation of ``field`` (H, W) to ``distance`` [m],
-    centred at ``offset`` (x0, y0) [m], on ``out_shape`` (rows, cols) samples of ``out_pitch``
-    [m] (a number or (x, y); default ``pitch``; the default shape keeps the input's window);
-    ``pitch`` [m] (a number or (x, y)); ``padding`` >= 1. Every setting is checked here."""
+def scaled(field, *, transfer, name, wavelength, pitch, distance, offset, padding, out_pitch,
+           out_shape):
+    """The propagation of ``field`` (H, W) by the transfer function ``transfer(shape,
+    wavelength, pitch (x, y), distance, offset) -> complex128`` (FFT order) to ``distance``
+    [m], centred at ``offset`` (x0, y0) [m], on ``out_shape`` (rows, cols) samples of
+    ``out_pitch`` [m] (a number or (x, y); default ``pitch``; the default shape keeps the
+    input's window); ``pitch`` [m] (a number or (x, y)); ``padding`` >= 1; ``name`` the
+    propagation's, for messages. Every setting is checked here."""
     wavelength, (px, py) = grid.wave_pair(wavelength, pitch)
     distance = validate.within("distance", distance, validate.MAX_LENGTH)
     x0, y0 = validate.pair("offset", offset, "m", validate.MAX_LENGTH)
@@ -44,7 +46,7 @@ def scaled(kind, field, *, wavelength, pitch, distance, offset, padding, out_pit
     h, w = u.shape
     oh, ow = (max(1, round(h * py / opy)), max(1, round(w * px / opx))) if out_shape is None \
         else validate.shape2d("out_shape", out_shape)
-    memory.check_host(f"{kind} onto {oh}x{ow} samples", 16.0 * 6 * max(
+    memory.check_host(f"{name} onto {oh}x{ow} samples", 16.0 * 6 * max(
         h * w, oh * ow) * padding * padding)
     extent = [max(n * p, 2 * abs(o) + m * q) for n, p, o, m, q in
               ((h, py, y0, oh, opy), (w, px, x0, ow, opx))]
@@ -58,8 +60,7 @@ def scaled(kind, field, *, wavelength, pitch, distance, offset, padding, out_pit
     r0, c0 = (shape[0] - h) // 2, (shape[1] - w) // 2
     big = np.zeros(shape, np.complex128)
     big[r0:r0 + h, c0:c0 + w] = u
-    spectrum = np.fft.fft2(big) * _transfer(kind, shape, wavelength, pitch, distance, offset,
-                                            band_limit)
+    spectrum = np.fft.fft2(big) * transfer(shape, wavelength, pitch, distance, offset)
     # each output axis: fractional indices a + j·b on the padded grid (its centre the offset)
     rows = _czt(spectrum, 0, r0 + (h - 1) / 2 - (oh - 1) / 2 * opy / py, opy / py, oh,
                 1 / (2 * opy) if opy > py else None, py)
@@ -67,15 +68,6 @@ def scaled(kind, field, *, wavelength, pitch, distance, offset, padding, out_pit
                1 / (2 * opx) if opx > px else None, px)
     out = (out / (shape[0] * shape[1])).astype(np.complex64)
     return to_device(out) if on_device else out
-
-
-def _transfer(kind, shape, wavelength, pitch, distance, offset, band_limit) -> np.ndarray:
-    from .angular_spectrum import transfer_function
-    if kind == "asm":
-        return transfer_function(shape, wavelength=wavelength, pitch=pitch, distance=distance,
-                                 offset=offset, band_limit=band_limit)
-    from .fresnel import fresnel_transfer_host
-    return fresnel_transfer_host(shape, wavelength, pitch, distance, offset)
 
 
 def _czt(spectrum, axis, a, b, count, cut, pitch) -> np.ndarray:

@@ -1,5 +1,7 @@
-"""Transfer functions made on the device (``transfer.cl``): a new distance costs one
-kernel pass over the padded grid, not a float64 grid built on the host and uploaded.
+"""Transfer functions: the float64 ones made on the host (``transfer_function``, the angular
+spectrum's reference and the scaled propagation's; ``fresnel_transfer_host``) beside those
+made on the device (``transfer.cl``), where a new distance costs one kernel pass over the
+padded grid, not a float64 grid built on the host and uploaded.
 
 The angular spectrum's chirp g = 2π·f²/(1/λ + fz) and 1/fz are made once per (grid,
 wavelength, pitch) in float64 on the host, for the grid's first quadrant only (both depend on
@@ -24,6 +26,7 @@ from ..opencl.arrays import by_rows, cached, empty
 from . import grid
 
 PROGRAM = associated(__file__)
+BAND_EDGE = 0.2  # fraction of the band-limited ray range given to the cosine roll-off
 
 
 def quadrant_shape(shape) -> tuple[int, int]:
@@ -123,3 +126,52 @@ def _ramp(n, pitch, x0) -> np.ndarray:
     """exp(i2π·f·x0) over the FFT-ordered frequencies of ``n`` samples, phase reduced in
     float64."""
     return np.exp(2j * np.pi * np.remainder(grid.freqs(n, pitch) * x0, 1.0))
+
+
+# --- on the host, in float64 ------------------------------------------------------------------
+
+def transfer_function(shape, *, wavelength, pitch, distance, offset=(0.0, 0.0), band_limit=True):
+    """The transfer function exp(i2πz·fz)·exp(i2π(fx·x0 + fy·y0)) (Eq. 12-13), complex128.
+
+    ``shape`` is the (padded) grid in FFT order, ``wavelength`` [m], ``pitch`` [m] (or (x, y)),
+    ``distance`` [m], ``offset`` (x0, y0) [m]. The phase is formed as k·z (reduced mod 2π) plus
+    -2πz·f²/(1/λ + fz), which keeps float64 precision for large k·z.
+    """
+    px, py = grid.pitch_pair(pitch)
+    fy, fx = grid.freqs(shape[0], py)[:, None], grid.freqs(shape[1], px)[None, :]
+    x0, y0 = offset
+    f2 = fx * fx + fy * fy
+    fz2 = 1.0 / wavelength**2 - f2
+    keep = fz2 > 0
+    fz = np.sqrt(np.where(keep, fz2, 1.0))
+    carrier = math.remainder(2 * math.pi * distance / wavelength, 2 * math.pi)
+    phase = carrier - 2 * np.pi * distance * f2 / (1.0 / wavelength + fz) \
+        + 2 * np.pi * (fx * x0 + fy * y0)
+    if band_limit:
+        keep = keep * band_mask(shape, pitch, distance, offset, fx, fy, fz)
+    return keep * np.exp(1j * phase)
+
+
+def band_mask(shape, pitch, distance, offset, fx, fy, fz) -> np.ndarray:
+    """Weights in [0, 1]: 1 where the ray x0 - z·fx/fz lands well within half the padded
+    window, rolling off to 0 at its edge (per axis, multiplied)."""
+    weight = 1.0
+    px, py = grid.pitch_pair(pitch)
+    for n, p, o, f in ((shape[1], px, offset[0], fx), (shape[0], py, offset[1], fy)):
+        u = np.abs(o - distance * f / fz) / (n * p / 2)  # 1 at the edge of the band
+        t = np.clip((u - (1 - BAND_EDGE)) / BAND_EDGE, 0, 1)
+        weight = weight * np.where(u <= 1, np.cos(np.pi / 2 * t) ** 2, 0)
+    return weight
+
+
+def fresnel_transfer_host(shape, wavelength, pitch, distance, offset) -> np.ndarray:
+    """The Fresnel transfer function exp(ikz)·exp(-iπλz(fx² + fy²))·exp(i2π(fx·x0 + fy·y0)) on
+    the padded ``shape`` (FFT order), complex128, made in float64: the rays x0 - λz·f kept
+    inside half the window. ``pitch`` (x, y), ``wavelength``, ``distance``, ``offset`` [m]."""
+    (px, py), (x0, y0), z = pitch, offset, distance
+    fy, fx = grid.freqs(shape[0], py)[:, None], grid.freqs(shape[1], px)[None, :]
+    carrier = math.remainder(2 * math.pi * z / wavelength, 2 * math.pi)
+    phase = carrier - np.pi * wavelength * z * (fx**2 + fy**2) + 2 * np.pi * (fx * x0 + fy * y0)
+    keep = (np.abs(x0 - wavelength * z * fx) <= shape[1] * px / 2) \
+        & (np.abs(y0 - wavelength * z * fy) <= shape[0] * py / 2)
+    return np.where(keep, np.exp(1j * phase), 0)
