@@ -24,6 +24,12 @@ from pathlib import Path
 
 import numpy as np
 
+from holo_core.io.image import atomic_path
+
+from . import register
+from .blender import compat
+from .render import pipeline
+
 
 def _colour_sphere(bpy, name, location, radius):
     bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=4, radius=radius, location=location)
@@ -39,7 +45,6 @@ def _colour_sphere(bpy, name, location, radius):
     me.color_attributes.active_color = attr
     bpy.ops.object.shade_smooth()
     # a glossy material whose Base Color is the colour attribute: Cycles lights it
-    from .blender import compat
     mat = bpy.data.materials.new(name)
     compat.enable_nodes(mat)
     tree = mat.node_tree
@@ -55,7 +60,6 @@ def _colour_sphere(bpy, name, location, radius):
 def _material(bpy, obj, rgb):
     mat = bpy.data.materials.new(obj.name)
     mat.diffuse_color = (*rgb, 1.0)
-    from .blender import compat
     compat.enable_nodes(mat)
     if mat.node_tree is not None:
         bsdf = next(n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
@@ -118,9 +122,6 @@ def build_scene(bpy, *, resolution=(1280, 720), fstop=2.8):
 
 def render_still(bpy, scene, out: Path) -> tuple[Path, Path]:
     """Blender's render of the composited frame: ``demo.png`` and float ``demo.exr``."""
-    from holo_core.io.image import atomic_path
-
-    from .blender import compat
     png, exr = out / "demo.png", out / "demo.exr"
     scene.render.filepath = str(out / "demo")  # the holographic layers go beside it
     for path, setter in ((exr, lambda: compat.set_exr_output(scene, multilayer=False)),
@@ -147,8 +148,6 @@ def main(argv=None):
     logging.basicConfig(level=logging.INFO, format="%(name)s: %(message)s")
     import bpy
 
-    from . import register
-    from .render import pipeline
     out = args.output.resolve()
     out.mkdir(parents=True, exist_ok=True)
     bpy.ops.wm.read_factory_settings(use_empty=True)

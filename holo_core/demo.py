@@ -15,9 +15,16 @@ from pathlib import Path
 
 import numpy as np
 
+from .io.hologram import write_hologram
 from .io.image import write_png
+from .io.view import write_view
+from .plate.record import record_hologram
+from .plate.view import render_view
 from .propagation import angular_spectrum, tilt
 from .propagation.grid import coords
+from .scene.camera import Camera, look_at
+from .scene.mesh import Mesh
+from .scene.plate import Plate
 
 log = logging.getLogger(__name__)
 LAM = 633e-9
@@ -68,7 +75,6 @@ def tilted_beam(n=256, pitch=0.5e-6, w0=20e-6, degrees=20.0):
 
 
 def _octahedron(centre, radius, colours=None):
-    from .scene.mesh import Mesh
     v = np.asarray(centre) + radius * np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0],
                                                 [0, 0, 1], [0, 0, -1.0]])
     tri = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5],
@@ -79,7 +85,6 @@ def _octahedron(centre, radius, colours=None):
 def scene_emitters():
     """A tilted 8×8 checkerboard, a vertex-coloured octahedron and three small bright
     beads (the paper's points), in metres (plate at z = 0)."""
-    from .scene.mesh import Mesh
     tex = (np.add.outer(np.arange(8), np.arange(8)) % 2)[..., None] * [0.75, 0.7, 0.6] + 0.05
     board = Mesh(vertices=np.array([[-0.1, -0.08, -0.03], [0.1, -0.08, -0.03],
                                     [0.1, 0.06, -0.16], [-0.1, 0.06, -0.16]]),
@@ -98,12 +103,6 @@ def holographic_scene(out: Path, resolution=1024, iterations=4) -> list[Path]:
     two viewpoints at two focus settings each: a hologram is recorded once and viewed from
     anywhere in front of it. Recorded without a camera, nothing is culled: surfaces hidden from
     a view show through the ones in front, as light does not occlude light."""
-    from .io.hologram import write_hologram
-    from .io.view import write_view
-    from .plate.record import record_hologram
-    from .plate.view import render_view
-    from .scene.camera import Camera, look_at
-    from .scene.plate import Plate
     plate = Plate(matrix_world=np.eye(4), width=0.3, height=0.3)
     log.info("demo: recording %d random-phase holograms", iterations)
     holos = [record_hologram(scene_emitters(), plate=plate, seed=i, resolution=resolution)

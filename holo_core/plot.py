@@ -20,6 +20,7 @@ import math
 import numpy as np
 
 from . import preview, validate
+from .scene.hologram import Hologram
 from .validate import InputError
 
 try:
@@ -76,7 +77,6 @@ def spectrum(field, pitch=None, *, ax=None, log=True, colorbar=True, **imshow):
 
 def hologram(h, colour: int = 0, *, ax=None, colorbar=True, **imshow):
     """The recorded intensity of one colour of a Hologram (|O|² for a complex hologram)."""
-    from .scene.hologram import Hologram
     if not isinstance(h, Hologram):
         raise InputError(f"h must be a Hologram; got {type(h).__name__}")
     c = validate.index("colour", colour, len(h.wavelengths))

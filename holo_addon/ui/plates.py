@@ -19,7 +19,8 @@ import numpy as np
 from bpy_extras.io_utils import ImportHelper
 from mathutils import Matrix
 
-from holo_core.io.hologram import HologramFileError, import_acquired, read_hologram
+from holo_core.io.acquired import import_acquired
+from holo_core.io.hologram import HologramFileError, read_hologram, write_hologram
 from holo_core.io.image import read_exr
 from holo_core.scene.hologram import Hologram
 from holo_core.worker import environment
@@ -164,7 +165,6 @@ class HOLO_OT_import_hologram(bpy.types.Operator, ImportHelper):
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         if acquired:  # a Holo file beside it, of the scan and what was said of it here
-            from holo_core.io.hologram import write_hologram
             path = write_hologram(path.with_name(f"{path.stem}_holo.exr"), hologram)
         obj = add_plate(context, hologram, path)
         self.report({"INFO"}, f"plate '{obj.name}' from {path}: {hologram!r}")

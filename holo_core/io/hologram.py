@@ -20,7 +20,7 @@ from .. import __version__, validate
 from ..scene.hologram import Hologram, HologramInfo
 from ..scene.plate import ViewingZone
 from ..validate import InputError
-from .image import write_exr
+from .image import read_exr, write_exr
 
 FORMAT = "holo-hologram"
 FORMAT_VERSION = 3  # 3: the encoding (complex or intensity) and the plate's viewing zone
@@ -128,7 +128,6 @@ def info_of(path, text: str) -> HologramInfo:
 
 
 def _read(path: Path, what="hologram"):
-    from .image import read_exr
     try:
         return read_exr(path, what=what)
     except HologramFileError:
@@ -249,11 +248,3 @@ def _flatten(value, shape):
         return value
     parts = [_flatten(v, dims[1:]) for v in value]
     return None if any(p is None for p in parts) else [x for p in parts for x in p]
-
-
-
-def __getattr__(name):  # acquired scans and lab arrays live in .acquired; the reader's old home
-    if name == "import_acquired":
-        from .acquired import import_acquired
-        return import_acquired
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

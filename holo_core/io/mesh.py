@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..memory import check_host
 from ..scene.mesh import Mesh
 from ..validate import InputError
 
@@ -89,7 +90,6 @@ def _check_indices(path, faces, count, first) -> None:
 
 
 def _read_obj(path: Path, data: bytes):
-    from ..memory import check_host
     check_host(f"{path} (OBJ text)", TEXT_BYTES * len(data))
     try:
         text = data.decode("utf-8-sig")
@@ -133,7 +133,6 @@ _PLY_FORMATS = {"ascii": None, "binary_little_endian": "<", "binary_big_endian":
 def _read_ply(path: Path, data: bytes):
     fmt, elements, body = _ply_header(path, data)
     if fmt is None:
-        from ..memory import check_host
         check_host(f"{path} (PLY text)", TEXT_BYTES * len(body))
     reader = _PlyText(path, body) if fmt is None else _PlyBinary(path, body, fmt)
     values = {name: reader.element(name, count, props) for name, count, props in elements}

@@ -15,7 +15,8 @@ import pytest
 from cli import run_cli as _cli_main
 from PIL import Image
 
-from holo_core.io.hologram import HologramFileError, import_acquired, read_hologram, write_hologram
+from holo_core.io.acquired import import_acquired
+from holo_core.io.hologram import HologramFileError, read_hologram, write_hologram
 from holo_core.io.image import write_exr
 from holo_core.io.mesh import MeshFileError, read_mesh
 from holo_core.io.view import write_view

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from holo_core import validate
-from holo_core.io.hologram import import_acquired
+from holo_core.io.acquired import import_acquired
 from holo_core.plate import Reference, record_points
 from holo_core.plate.point_sources import point_wave
 from holo_core.plate.record import reference_wave

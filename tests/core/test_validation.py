@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from holo_core.camera import render_camera
-from holo_core.io.hologram import import_acquired
+from holo_core.io.acquired import import_acquired
 from holo_core.optics.pupil import Pupil
 from holo_core.plate import Reference, reconstruct, record_hologram, record_points, render_view
 from holo_core.plate.sampling import choose
