@@ -1,4 +1,10 @@
-"""The command line run in the test's process."""
+"""The command line run in the test's process, or in a process of its own."""
+
+import os
+import subprocess
+import sys
+
+CUBE_OBJ = ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n")  # a unit square
 
 
 def run_cli(capsys, *args):
@@ -10,3 +16,10 @@ def run_cli(capsys, *args):
         status = e.code
     out = capsys.readouterr()
     return status, out.out, out.err
+
+
+def run_process(*args, env=None):
+    """``python -m holo_core ARGS`` in a process of its own (a subprocess.CompletedProcess)."""
+    return subprocess.run([sys.executable, "-m", "holo_core", *map(str, args)],
+                          capture_output=True, text=True, timeout=300,
+                          env={**os.environ, **(env or {})})

@@ -12,3 +12,10 @@ def rng():
 def rt():
     from holo_core.opencl import get_runtime
     return get_runtime()
+
+
+@pytest.fixture(scope="module")
+def point_hologram():
+    """The point behind a small plate of :mod:`pinhole`."""
+    import pinhole
+    return pinhole.record()

@@ -28,3 +28,18 @@ def empty_scene(addon, tmp_path):
     scene.holo.output_dir = str(tmp_path / "holo") + os.sep
     scene.render.filepath = str(tmp_path / "render") + os.sep
     return scene
+
+
+@pytest.fixture
+def worker_frames(monkeypatch):
+    """The frames of the worker processes started while the test runs, in order (a pass that
+    is reused starts none)."""
+    from holo_core import worker
+    started = []
+    original = worker.Worker.__init__
+
+    def counting(self, job, *args, **kwargs):
+        started.append(job.output.frame)
+        original(self, job, *args, **kwargs)
+    monkeypatch.setattr(worker.Worker, "__init__", counting)
+    return started

@@ -287,7 +287,7 @@ def test_the_plate_coverage_overlay_follows_the_lines_of_sight(empty_scene):
 def test_a_renders_warnings_reach_the_panel(empty_scene, tmp_path):
     """A render whose plate cuts the object: the warning is in Render ▸ Holo after the frame
     (a render's pass has no operator to report through)."""
-    from test_integration import _scene_with_pass
+    from test_compositor import _scene_with_pass
 
     from holo_addon.compositor import passes as compositing
     from holo_addon.ui import panels as ui

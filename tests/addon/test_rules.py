@@ -7,6 +7,7 @@ import pytest
 bpy = pytest.importorskip("bpy")
 
 from test_addon import _plate_camera_cube, _raster_alpha_and_depth, _read_exr, show_in_raster
+from test_compositor import BACKGROUND_SCENE  # noqa: E402
 
 
 def test_the_pass_depth_is_in_scene_units(empty_scene, tmp_path):
@@ -175,17 +176,16 @@ def test_layers_follow_the_output_path_at_render_time(empty_scene, tmp_path):
 
 
 def test_motion_blur_warns_once_and_makes_one_pass_per_frame(empty_scene, tmp_path, caplog,
-                                                           monkeypatch):
+                                                           worker_frames):
     """Motion blur on, -a over frames 1-3 of a moving cube: Blender evaluates each frame at
     its shutter's steps (sub-frames), but one pass per frame is made (3 workers, was 11),
     each of its own frame's geometry (its silhouette within half a pixel of the frame's
     projection: no in-between geometry left in the files), and one warning says the
     holographic object is not blurred."""
     from test_addon import _camera_columns
-    from test_integration import _middle, _moving_cube
+    from test_compositor import _middle, _moving_cube
 
     from holo_addon.render import pipeline
-    from holo_core import worker
     scene = empty_scene
     _, cam = _moving_cube(scene, tmp_path)
     scene.holo.mode = "CAMERA"
@@ -195,17 +195,10 @@ def test_motion_blur_warns_once_and_makes_one_pass_per_frame(empty_scene, tmp_pa
     assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
     pipeline.pass_file(pipeline.output_dir(scene), 1).unlink()
     scene.render.use_motion_blur = True
-    started = []
-    original = worker.Worker.__init__
-
-    def counting(self, job, *args, **kwargs):
-        started.append(job.output.frame)
-        original(self, job, *args, **kwargs)
-    monkeypatch.setattr(worker.Worker, "__init__", counting)
     scene.render.filepath = str(tmp_path / "frame_")
     scene.frame_start, scene.frame_end = 1, 3
     bpy.ops.render.render(animation=True)
-    assert started == [1, 2, 3], started
+    assert worker_frames == [1, 1, 2, 3], worker_frames  # Render Pass's, then the render's
     blur = [w for w in _warnings(caplog) if "motion blur" in w]
     assert len(blur) == 1, blur
     corners = np.array([(x, y, z) for x in (-0.2, 0.2) for y in (-0.2, 0.2) for z in (-0.2, 0.2)])
@@ -244,17 +237,7 @@ def test_a_stale_pass_warns_with_its_age(empty_scene, tmp_path, caplog):
     assert [w for w in _warnings(caplog) if "no holographic pass" in w]
 
 
-NO_EMITTER_LEFT = """
-import sys
-sys.path[:0] = [sys.argv[1], sys.argv[2]]
-import bpy
-bpy.ops.wm.read_factory_settings(use_empty=True)
-import holo_addon
-holo_addon.register()
-import test_integration
-scene = bpy.context.scene
-scene.holo.output_dir = sys.argv[3] + "/holo/"
-test_integration._scene_with_pass(scene, None)
+NO_EMITTER_LEFT = BACKGROUND_SCENE + """
 for obj in scene.objects:
     obj.holo.emitter = "NONE"
 scene.render.filepath = sys.argv[3] + "/frame_"

@@ -2,6 +2,7 @@
 .mat v7.3 and arrays, each with its optics given or read from its metadata; writes in the
 format the suffix names, or an error."""
 
+import io
 import json
 import logging
 
@@ -11,6 +12,7 @@ from PIL import Image
 
 from holo_core.io.acquired import import_acquired, write_acquired
 from holo_core.io.hologram import read_hologram, write_hologram
+from holo_core.io.image import write_exr
 from holo_core.scene import Hologram
 from holo_core.validate import InputError
 
@@ -164,3 +166,35 @@ def test_writes_follow_the_suffix_or_refuse(tmp_path, rng):
     assert not list(tmp_path.iterdir())
     exr = write_acquired(tmp_path / "h.exr", h)
     assert np.array_equal(read_hologram(exr).intensity, h.intensity)
+
+
+def _scan(tmp_path, image, name="s.png", **save):
+    path = tmp_path / name
+    image.save(path, **save)
+    return import_acquired(path, pitch=5e-6, wavelength=532e-9).intensity
+
+
+def test_scans_are_read_by_image_mode(tmp_path, rng):
+    grey = rng.integers(0, 256, (6, 7), dtype=np.uint8)
+    want = grey / 255.0
+    rgb = Image.fromarray(np.repeat(grey[..., None], 3, 2))
+    palette = rgb.convert("P", palette=Image.ADAPTIVE)
+    assert np.allclose(_scan(tmp_path, palette), want, atol=1e-6)                # the colours
+    la = Image.fromarray(np.stack([grey, 255 - grey], -1), "LA")
+    assert np.allclose(_scan(tmp_path, la), want, atol=1e-6)                     # alpha dropped
+    cmyk = _scan(tmp_path, rgb.convert("CMYK"), "s.tif")
+    assert np.allclose(cmyk, want, atol=1 / 255)
+    sixteen = rng.integers(0, 65536, (6, 7)).astype(np.int32)                  # int32 TIFF
+    assert np.allclose(_scan(tmp_path, Image.fromarray(sixteen), "i.tif"), sixteen / 65535)
+    exr = write_exr(tmp_path / "s.exr", {c: want * (i + 1) for i, c in enumerate("RGB")})
+    assert import_acquired(exr, pitch=5e-6, wavelength=532e-9).intensity.shape == (1, 6, 7)
+    assert np.allclose(import_acquired(exr, pitch=5e-6, wavelength=532e-9).intensity, 2 * want)
+
+
+def test_a_decompression_bomb_is_refused_from_its_header(tmp_path, monkeypatch):
+    monkeypatch.setenv("HOLO_MEMORY_LIMIT", "1G")
+    out = io.BytesIO()
+    Image.new("L", (12000, 12000)).save(out, "PNG")
+    (tmp_path / "bomb.png").write_bytes(out.getvalue())
+    with pytest.raises(InputError, match="12000x12000 pixels"):
+        import_acquired(tmp_path / "bomb.png", pitch=5e-6, wavelength=532e-9)

@@ -1,19 +1,25 @@
 """The hologram file: bit-exact round trip, and a clear error for each bad file."""
 
+import dataclasses
 import json
 
 import numpy as np
+import pinhole
 import pytest
+from cli import run_cli
 
+from holo_core.io.acquired import import_acquired
 from holo_core.io.hologram import (
     FORMAT_VERSION,
     HologramFileError,
-    import_acquired,
     read_hologram,
     write_hologram,
 )
 from holo_core.io.image import write_png
+from holo_core.io.view import write_view
 from holo_core.scene.hologram import Hologram
+from holo_core.validate import InputError
+from holo_core.view import RenderResult
 
 
 @pytest.fixture
@@ -94,3 +100,92 @@ def test_import_acquired_png(tmp_path, rng):
     assert err <= 0.5 / 255 + 1e-7, f"8-bit grey image read back off by {err:.2e}"
     with pytest.raises(ValueError, match=r"pitch must be in \[1e-08, 0.01\] \[m\]; got 0"):
         import_acquired(tmp_path / "scan.png", pitch=0, wavelength=532e-9)
+
+
+def test_a_non_finite_or_empty_hologram_is_never_written(tmp_path, point_hologram):
+    bad = Hologram(intensity=np.full((1, 4, 4), np.nan, np.float32), wavelengths=(633e-9,),
+                   pitch=8e-6)
+    with pytest.raises(HologramFileError, match="NaN"):
+        write_hologram(tmp_path / "h.exr", bad)
+    empty = Hologram(intensity=np.zeros((1, 0, 4), np.float32), wavelengths=(633e-9,), pitch=8e-6)
+    with pytest.raises(HologramFileError, match="no samples"):
+        write_hologram(tmp_path / "h.exr", empty)
+    assert not list(tmp_path.iterdir())
+
+
+def _with_meta(path, edit):
+    import OpenEXR
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        header = dict(f.header())
+        chans = {n: np.array(c.pixels) for n, c in f.channels().items()}
+    meta = json.loads(header["holo"])
+    edit(meta, chans)
+    header["holo"] = json.dumps(meta)
+    with OpenEXR.File(header, chans) as f:
+        f.write(str(path))
+
+
+@pytest.mark.parametrize("edit, problem", [
+    (lambda m, c: m.pop("pitch_m"), r"pitch_m must be a number \[m\]; got 'missing'"),
+    (lambda m, c: m.update(pitch_m=0), "pitch_m"),
+    (lambda m, c: m.update(pitch_m=-8e-6), "pitch_m"),
+    (lambda m, c: m.update(pitch_m=float("nan")), "pitch_m"),
+    (lambda m, c: m.update(pitch_m="8e-6"), "pitch_m"),
+    (lambda m, c: m.update(wavelengths_m=[0.0]), "wavelengths_m"),
+    (lambda m, c: m.update(band_sin=2.0), r"band_sin must be in \[0, 1\)"),
+    (lambda m, c: m.update(size_px=[16.5, 16]), "size_px"),
+    (lambda m, c: m["reference"].update(angle_rad=2.0), "reference.angle_rad"),
+    (lambda m, c: m.update(plate_to_world=(2 * np.eye(4)).ravel().tolist()), "rotation"),
+    (lambda m, c: m.update(bounds_m=[[0, 0, 0], [-1, 0, 0]]), "bounds_m"),
+    (lambda m, c: m.update(channels=["Q"]), "channels"),
+    (lambda m, c: c["c0.H"].__setitem__((3, 3), np.nan), "NaN"),
+])
+def test_hologram_metadata_and_pixels_are_checked(tmp_path, point_hologram, edit, problem):
+    path = write_hologram(tmp_path / "h.exr", point_hologram)
+    _with_meta(path, edit)
+    with pytest.raises(HologramFileError, match=f"{path}.*{problem}"):
+        read_hologram(path)
+
+
+def test_the_writer_refuses_what_the_reader_would(tmp_path, point_hologram):
+    """Finding 2: the writer applies the reader's schema; a description bent after
+    construction is refused with the file and the field named, and nothing is written."""
+    for field, value, problem in [("band", 1.5, r"band_sin must be in \[0, 1\)"),
+                                  ("pitch", 1e-300, r"pitch_m must be in \[1e-12, 1000\]"),
+                                  ("reference_amplitudes", (0.0,), "amplitudes.*> 0")]:
+        info = dataclasses.replace(point_hologram.info)
+        object.__setattr__(info, field, value)
+        bent = Hologram(info=info, intensity=point_hologram.intensity,
+                        object_wave=point_hologram.object_wave)
+        with pytest.raises(HologramFileError, match=f"h.exr: metadata .*{problem}"):
+            write_hologram(tmp_path / "h.exr", bent)
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("edit, problem", [
+    (lambda m: m.update(pitch_m=1e-300), r"pitch_m must be in \[1e-12, 1000\] \[m\]"),
+    (lambda m: m.update(wavelengths_m=[1e300]), "wavelengths_m must be in"),
+    (lambda m: m["reference"].update(amplitudes=[0.0]), "reference.amplitudes must be 1 numb"),
+])
+def test_a_file_of_absurd_optics_is_refused_by_the_reader_and_the_cli(tmp_path, point_hologram,
+                                                                      capsys, edit, problem):
+    """Findings 3 and 4: pitch 1e-300 passed the schema and rendered NaN (the CLI died with
+    ZeroDivisionError); a zero reference amplitude was accepted and failed later, unnamed."""
+    path = write_hologram(tmp_path / "h.exr", point_hologram)
+    _with_meta(path, lambda m, c: edit(m))
+    with pytest.raises(HologramFileError, match=f"{path}: metadata {problem}"):
+        read_hologram(path)
+    status, _, err = run_cli(capsys, "render", path, "-o", tmp_path / "v.exr", *pinhole.CAMERA_ARGS)
+    assert status == 2 and err.count("\n") == 1 and str(path) in err, err
+    assert not (tmp_path / "v.exr").exists()
+
+
+def test_write_hologram_and_write_view_refuse_other_suffixes(tmp_path, point_hologram):
+    """Finding 12 at the API: the EXR writers name the suffix instead of writing EXR bytes
+    under another name (or silently under another one)."""
+    with pytest.raises(InputError, match=r"r.png: the file is written as OpenEXR"):
+        write_hologram(tmp_path / "r.png", point_hologram)
+    view = RenderResult(rgb=np.ones((2, 2, 3)), alpha=np.ones((2, 2)), depth=np.ones((2, 2)))
+    with pytest.raises(InputError, match=r"v.png: the file is written as OpenEXR"):
+        write_view(view, tmp_path / "v.png")
+    assert not list(tmp_path.iterdir())

@@ -1,10 +1,12 @@
 """The rendered view's multilayer EXR (Blender's naming) and the hologram's new metadata."""
 
 import numpy as np
+import pytest
 
 from holo_core.io.hologram import read_hologram, write_hologram
 from holo_core.io.view import write_view
 from holo_core.plate.record import record_points
+from holo_core.validate import InputError
 from holo_core.view import RenderResult
 
 
@@ -31,3 +33,11 @@ def test_hologram_keeps_band_channels_and_density(tmp_path):
     back = read_hologram(write_hologram(tmp_path / "h.exr", h))
     assert back.channels == ("Y", "Z") and back.depth_channel() == 1
     assert back.band == 0.05 and back.point_density == 4e6
+
+
+def test_a_non_finite_view_is_not_written(tmp_path):
+    view = RenderResult(rgb=np.full((2, 2, 3), np.nan, np.float32), alpha=np.ones((2, 2)),
+                        depth=np.ones((2, 2)))
+    with pytest.raises(InputError, match="rgb is empty or not finite"):
+        write_view(view, tmp_path / "v.exr")
+    assert not list(tmp_path.iterdir())

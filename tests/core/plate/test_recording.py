@@ -8,13 +8,14 @@ from accuracy import POINT_SUM, PRIMITIVE_VS_POINTS, WRP_VS_DIRECT, rel_err
 
 from holo_core.plate.point_sources import Grid, cone_weight, point_wave
 from holo_core.plate.reconstruct import reconstruct
+from holo_core.io.hologram import read_hologram, write_hologram
 from holo_core.plate.record import Reference, record_hologram, record_points, reference_wave
 from holo_core.plate.sampling import choose
 from holo_core.plate.triangles import Primitive, primitive_wave, surface_field, surface_pitch
 from holo_core.propagation import angular_spectrum, grid
 from holo_core.scene.mesh import Mesh, sample_points
 from holo_core.scene.plate import Plate
-from holo_core.validate import SamplingWarning
+from holo_core.validate import InputError, SamplingWarning
 
 LAM, PITCH = 633e-9, 8e-6
 
@@ -260,3 +261,34 @@ def test_triangle_recording_reports_progress_per_primitive():
                     depth=False, method="auto", progress=seen.append)
     assert len(seen) >= 2 and seen == sorted(seen) and 0.1 <= seen[-1] <= 1.0, seen
     assert sum(0.1 <= f < 1.0 for f in seen) >= 2, "no report while the triangles ran"
+
+
+def test_points_nearer_than_the_plate_samples_are_refused_with_the_safe_distance():
+    with pytest.raises(InputError, match=r"points need \|z\| >= 0.000\d+ m"):
+        record_points([[0, 0, -4e-6]], [[1.0]], shape=(64, 64), pitch=8e-6,
+                      wavelengths=(633e-9,))
+
+
+def test_no_points_are_refused():
+    with pytest.raises(InputError, match="nothing to record"):
+        record_points(np.zeros((0, 3)), np.zeros((0, 1)), shape=(8, 8), pitch=8e-6,
+                      wavelengths=(633e-9,))
+
+
+def test_math_of_the_safe_distance():
+    """2 samples across the cone: |z| = 2p/tan θ, θ the cone's edge (CONE_FILL of Nyquist)."""
+    from holo_core.plate.point_sources import CONE_FILL, Grid, safe_distance
+    p, lam = 8e-6, 633e-9
+    s = CONE_FILL * lam / (2 * p)
+    assert math.isclose(safe_distance(Grid((8, 8), p, lam)), 2 * p * math.sqrt(1 - s * s) / s)
+
+
+def test_a_long_wavelength_hologram_is_written_and_read_back(tmp_path):
+    """Finding 2: λ long against the pitch chose a cone of sin θ >= 1, which the reader refuses
+    (here λ = 1 mm on a 39 µm pitch: 0.95·λ2/8p = 1.69 before the cone was capped)."""
+    plate = Plate(matrix_world=np.eye(4), width=0.0025, height=0.0025)
+    h = record_hologram(([[0.0, 0.0, -0.05]], [[1.0, 1.0, 1.0]]), plate=plate, resolution=64,
+                        wavelength=1e-3)
+    assert 0 < h.band < 1, f"band sin θ = {h.band}"
+    back = read_hologram(write_hologram(tmp_path / "h.exr", h))
+    assert back.band == h.band and back.wavelengths == h.wavelengths

@@ -88,3 +88,17 @@ def test_a_file_names_the_field_as_the_file_does(tmp_path):
         write_hologram(tmp_path / "h.exr", Hologram(info=info, intensity=h.intensity,
                                                     object_wave=h.object_wave))
     assert not list(tmp_path.iterdir())
+
+
+def test_holograms_in_memory_are_held_to_the_file_schema():
+    """Findings 3 and 4 at the API: the same fields are refused when a Hologram is made."""
+    good = {"intensity": np.ones((1, 4, 4), np.float32), "wavelengths": (633e-9,),
+            "pitch": 8e-6}
+    for change, field in [({"pitch": 1e-300}, "pitch"), ({"wavelengths": (1e9,)}, "wavelengths"),
+                          ({"reference_amplitudes": (0.0,)}, "reference_amplitudes"),
+                          ({"band": 1.0}, "band"), ({"point_density": -1.0}, "point_density"),
+                          ({"bounds": [[0, 0, 0], [-1, 0, 0]]}, "bounds"),
+                          ({"channels": ("Q",)}, "channels"), ({"reference_angle": 2.0},
+                                                                "reference_angle")]:
+        with pytest.raises(InputError, match=field):
+            Hologram(**{**good, **change})

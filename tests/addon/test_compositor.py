@@ -1,0 +1,299 @@
+"""The pass in Blender's render (holo_addon/compositor): each frame's pass made from that frame's
+scene by the frame handlers, the user's nodes kept, the layers written beside the frame, a
+failed or cancelled pass never composited."""
+
+import numpy as np
+import pytest
+
+bpy = pytest.importorskip("bpy")
+
+from test_addon import _camera_columns, _plate_camera_cube, _read_exr  # noqa: E402
+from test_export import _emitter_meshes  # noqa: E402
+
+
+def _moving_cube(scene, tmp_path):
+    cube, cam, plate = _plate_camera_cube(scene, cube_size=0.4)
+    plate.holo.zone_margin = 0.01  # a zone close around the camera: a sharper plate
+    bpy.ops.object.light_add(type="SUN", rotation=(np.radians(60), 0, 0))  # lights its front
+    bpy.context.object.data.energy = 3.0
+    scene.render.resolution_x, scene.render.resolution_y = 48, 36
+    scene.render.resolution_percentage = 100
+    scene.render.engine = "CYCLES"  # Workbench draws every object: emitters too
+    scene.cycles.samples = 4
+    scene.render.film_transparent = False
+    scene.holo.mode = "PLATE"
+    scene.holo.iterations = 1
+    scene.holo.max_resolution = 512
+    for frame, x in ((1, -0.15), (2, 0.15), (3, -0.05)):
+        cube.location.x = x
+        cube.keyframe_insert("location", frame=frame)
+    return cube, cam
+
+
+def _middle(path):
+    alpha = _read_exr(path)["ViewLayer.Combined.A"]
+    cols = np.nonzero(alpha > 0.5)[1]
+    return (cols.min() + cols.max() + 1) / 2
+
+
+def test_an_animation_started_away_from_the_timeline_frame_uses_each_frames_geometry(
+        empty_scene, tmp_path):
+    """The timeline rests on frame 1; frames 2-3 are rendered (a farm chunk): each pass shows
+    its own frame's cube, where the camera projects it (within half a pixel)."""
+    from holo_addon.blender import compat
+    from holo_addon.render import pipeline
+    scene = empty_scene
+    cube, cam = _moving_cube(scene, tmp_path)
+    scene.frame_set(1)
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    compat.set_png_output(scene)
+    scene.render.filepath = str(tmp_path / "frame_")
+    scene.frame_start, scene.frame_end = 2, 3
+    bpy.ops.render.render(animation=True)
+    out = pipeline.output_dir(scene)
+    corners = np.array([(x, y, z) for x in (-0.2, 0.2) for y in (-0.2, 0.2) for z in (-0.2, 0.2)])
+    for frame, x in ((2, 0.15), (3, -0.05)):
+        got = _middle(out / f"holo_pass_{frame:04d}.exr")
+        cols = _camera_columns(scene, cam, corners + (x, 0, 0))
+        want = (min(cols) + max(cols)) / 2
+        print(f"frame {frame}: silhouette middle {got} px, projected {want:.2f} px")
+        assert abs(got - want) <= 0.5, (frame, got, want)
+
+
+def _render_range(scene, start, end, folder, tmp_path):
+    from holo_addon.blender import compat
+    scene.holo.output_dir = str(folder) + "/"
+    compat.set_exr_output(scene, multilayer=False)
+    scene.render.filepath = str(tmp_path / folder.name / "frame_")
+    scene.frame_start, scene.frame_end = start, end
+    bpy.ops.render.render(animation=True)
+
+
+def test_three_frames_as_one_animation_or_separate_frames_give_identical_passes(
+        empty_scene, tmp_path):
+    """A cube and the camera both move; ``-a`` over frames 1-3 and three single-frame runs
+    (as a farm splits them) give bit-identical passes, each where the camera projects that
+    frame's cube (within half a pixel), and each frame's composite shows its own pass."""
+    from holo_addon.render import pipeline
+    scene = empty_scene
+    cube, cam = _moving_cube(scene, tmp_path)
+    for frame, dx in ((1, 0.0), (2, 0.05), (3, 0.1)):
+        cam.location.x = dx
+        cam.keyframe_insert("location", frame=frame)
+    scene.frame_set(1)
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    _render_range(scene, 1, 3, tmp_path / "all", tmp_path)
+    for frame in (3, 1, 2):  # separate runs, in any order, from wherever the timeline rests
+        _render_range(scene, frame, frame, tmp_path / "single", tmp_path)
+    corners = np.array([(x, y, z) for x in (-0.2, 0.2) for y in (-0.2, 0.2) for z in (-0.2, 0.2)])
+    for frame, x in ((1, -0.15), (2, 0.15), (3, -0.05)):
+        a, b = (_read_exr(pipeline.pass_file(tmp_path / run, frame)) for run in ("all", "single"))
+        assert all(np.array_equal(a[k], b[k]) for k in a), f"frame {frame}: passes differ"
+        scene.frame_set(frame)
+        cols = _camera_columns(scene, cam, corners + (x, 0, 0))
+        want, got = (min(cols) + max(cols)) / 2, _middle(pipeline.pass_file(tmp_path / "all",
+                                                                             frame))
+        image = _read_exr(tmp_path / "all" / f"frame_{frame:04d}.exr")
+        rgb = np.stack([image[c] for c in "RGB"], -1)
+        shown = np.nonzero((np.abs(rgb - rgb[0, 0]).max(-1) > 0.05).any(0))[0]
+        composite = (shown.min() + shown.max() + 1) / 2
+        print(f"frame {frame}: pass middle {got}, composite {composite}, projected {want:.2f} px")
+        assert abs(got - want) <= 0.5 and abs(composite - got) <= 0.5
+
+
+def test_compositing_keeps_the_users_nodes_and_links(empty_scene, tmp_path):
+    """A user's Render Layers → Glare → output chain (and a Viewer) survives the setup: every
+    node and link stays, the chain's result feeds the Depth Combine, whose result goes out."""
+    from holo_addon.blender import compat
+    from holo_addon.compositor import passes as compositing
+    from holo_addon.render import pipeline
+    from holo_core.io.view import write_view
+    from holo_core.view import RenderResult
+    scene = empty_scene
+    _plate_camera_cube(scene)
+    tree = compat.compositor_tree(scene)
+    rl = tree.nodes.new("CompositorNodeRLayers")
+    glare = tree.nodes.new("CompositorNodeGlare")
+    viewer = tree.nodes.new("CompositorNodeViewer")
+    tree.links.new(rl.outputs["Image"], glare.inputs[0])
+    tree.links.new(glare.outputs[0], compat.output_socket(tree))
+    tree.links.new(rl.outputs["Image"], viewer.inputs[0])
+
+    def links():
+        return {(l.from_node.name, l.from_socket.identifier, l.to_node.name,
+                 l.to_socket.identifier) for l in tree.links}
+    before, nodes = links(), {n.name for n in tree.nodes}
+    out = pipeline.output_dir(scene)
+    write_view(RenderResult(rgb=np.ones((24, 32, 3)), alpha=np.ones((24, 32)),
+                            depth=np.ones((24, 32))), pipeline.pass_file(out, scene.frame_current))
+    for _ in range(2):  # again: only the add-on's nodes are rebuilt
+        compositing.setup(scene, out)
+    combine = tree.nodes[compositing.NODE_PREFIX + "Depth Combine"]
+    output_link = next(l for l in before if l[0] == glare.name)
+    assert before - links() == {output_link}, "only the link into the output is re-routed"
+    assert nodes <= {n.name for n in tree.nodes}
+    assert combine.inputs[2].links[0].from_node == glare
+    assert compat.output_socket(tree).links[0].from_node == combine
+    assert sum(n.name.startswith(compositing.NODE_PREFIX + "Depth") for n in tree.nodes) == 1
+
+
+def _scene_with_pass(scene, tmp_path):
+    from holo_addon.blender import compat
+    _moving_cube(scene, tmp_path)
+    scene.frame_set(1)
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    compat.set_exr_output(scene, multilayer=False)
+
+
+def _shown_columns(path):
+    image = _read_exr(path)
+    rgb = np.stack([image[c] for c in "RGB"], -1)
+    return np.nonzero((np.abs(rgb - rgb[0, 0]).max(-1) > 0.05).any(0))[0]
+
+
+def _read_parts(path):
+    """Every channel of every part (Blender 5 writes a multilayer EXR as one part per layer)."""
+    import OpenEXR
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        return {k: v.pixels.copy() for part in f.parts for k, v in part.channels.items()}
+
+
+def test_each_rendered_frame_gets_its_holographic_layers_beside_it(empty_scene, tmp_path):
+    """Beside the frame ``shot_0001.exr`` a multilayer ``holo_shot_0001.exr``: the composite
+    (equal to the frame), the pass alone (equal to the pass file), its depth, and the
+    composite's depth (the nearer of the pass's and the raster's), depths in ``.Z`` channels
+    as Blender's own passes (Blender's File Output names them ``.V``)."""
+    from holo_addon.render import pipeline
+    scene = empty_scene
+    _scene_with_pass(scene, tmp_path)
+    scene.render.filepath = str(tmp_path / "out" / "shot_####")
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    scene.frame_start = scene.frame_end = 1
+    bpy.ops.render.render(animation=True)
+    layers = _read_parts(tmp_path / "out" / "holo_shot_0001.exr")
+    frame = _read_exr(tmp_path / "out" / "shot_0001.exr")
+    holo = _read_exr(pipeline.pass_file(pipeline.output_dir(scene), 1))
+    for c in "RGBA":
+        np.testing.assert_allclose(layers[f"Composite.{c}"], frame[c], atol=1e-6)
+        np.testing.assert_allclose(layers[f"Holo.{c}"], holo[f"ViewLayer.Combined.{c}"],
+                                   atol=1e-6)
+    assert not [k for k in layers if k.endswith(".V")], "depth channels are named .Z"
+    np.testing.assert_allclose(layers["HoloDepth.Z"], holo["ViewLayer.Depth.Z"], rtol=1e-6)
+    shown = holo["ViewLayer.Combined.A"] > 0.5
+    assert shown.any() and (layers["Depth.Z"] <= layers["HoloDepth.Z"]).all()
+    np.testing.assert_allclose(layers["Depth.Z"][shown], layers["HoloDepth.Z"][shown],
+                               rtol=1e-6)
+
+
+def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monkeypatch):
+    """In the interface a handler cannot cancel the render: the failed frame shows the raster
+    alone (the stale pass set aside, kept), and the next good pass shows again."""
+    from holo_addon.compositor import passes as compositing
+    from holo_addon.render import pipeline
+    from holo_core.worker import WorkerError
+    scene = empty_scene
+    _scene_with_pass(scene, tmp_path)
+    monkeypatch.setattr(compositing, "EXIT_ON_FAILURE", False)
+    original = pipeline.run
+
+    def broken(job, progress=None, on_log=None):
+        raise WorkerError("a crash in native code")
+    monkeypatch.setattr(pipeline, "run", broken)
+    assert pipeline.pass_file(pipeline.output_dir(scene), 1).is_file()  # the stale pass
+    scene.render.filepath = str(tmp_path / "failed.exr")
+    bpy.ops.render.render(write_still=True)
+    assert _shown_columns(tmp_path / "failed.exr").size == 0, "a stale pass was composited"
+    assert (pipeline.output_dir(scene) / "holo_pass_0001.stale.exr").is_file()
+    monkeypatch.setattr(pipeline, "run", original)
+    scene.render.filepath = str(tmp_path / "good.exr")
+    bpy.ops.render.render(write_still=True)
+    assert _shown_columns(tmp_path / "good.exr").size > 0
+
+
+# a background Blender's script (argv: the repository, tests/addon, a folder): the add-on and a
+# moving cube whose pass is composited, rendered into the folder by what follows
+BACKGROUND_SCENE = """
+import sys
+sys.path[:0] = [sys.argv[1], sys.argv[2]]
+import bpy
+bpy.ops.wm.read_factory_settings(use_empty=True)
+import holo_addon
+holo_addon.register()
+import test_compositor
+scene = bpy.context.scene
+scene.holo.output_dir = sys.argv[3] + "/holo/"
+test_compositor._scene_with_pass(scene, None)
+"""
+FAILING_FARM_RENDER = BACKGROUND_SCENE + """from holo_addon.render import pipeline
+def broken(job, progress=None, on_log=None):
+    raise RuntimeError("the worker failed")
+pipeline.run = broken
+scene.render.filepath = sys.argv[3] + "/frame_"
+bpy.ops.render.render(animation=True)
+print("rendered")
+"""
+
+
+def test_a_failed_pass_fails_a_background_animation(tmp_path):
+    """``blender -b ... -a``: the process ends with status 1 and the error, before writing the
+    frame."""
+    import subprocess
+    import sys
+    from pathlib import Path
+    here = Path(__file__).resolve()
+    run = subprocess.run([sys.executable, "-c", FAILING_FARM_RENDER, str(here.parents[2]),
+                          str(here.parent), str(tmp_path)], capture_output=True, text=True,
+                         timeout=600)
+    assert run.returncode == 1, run.stdout[-2000:] + run.stderr[-2000:]
+    assert "the holographic pass of frame 1 failed: the worker failed" in run.stderr
+    assert "rendered" not in run.stdout and not list(tmp_path.glob("frame_*"))
+
+
+def test_renders_use_render_modifier_levels(empty_scene, tmp_path, monkeypatch):
+    """Subdivision at level 0 in the viewport and 2 in renders: the pass of an F12 render is
+    made from level 2 (a cube's 12 triangles become 192)."""
+    from holo_addon.render import pipeline
+    scene = empty_scene
+    _scene_with_pass(scene, tmp_path)
+    cube = next(o for o in scene.objects if o.holo.emitter == "POINTS")
+    sub = cube.modifiers.new("subdivision", "SUBSURF")
+    sub.levels, sub.render_levels = 0, 2
+    seen = []
+    original = pipeline.run
+
+    def run(job, progress=None, on_log=None):
+        seen.append(sum(len(m.triangles) for m in job.job.points))
+        return original(job, progress, on_log)
+    monkeypatch.setattr(pipeline, "run", run)
+    scene.render.filepath = str(tmp_path / "f12.exr")
+    bpy.ops.render.render(write_still=True)
+    assert seen == [192], seen
+    assert len(_emitter_meshes(scene)[0].triangles) == 12  # the viewport's level
+
+
+def test_the_pass_of_a_render_can_be_cancelled(empty_scene, tmp_path, monkeypatch):
+    """Cancel Pass while a render makes its pass: the worker stops, the frame shows the raster
+    alone (the stale pass set aside) and the panel's state is cleared."""
+    from holo_addon.compositor import passes as compositing
+    from holo_addon.render import pipeline
+    scene = empty_scene
+    _scene_with_pass(scene, tmp_path)
+    scene.holo.exposure = 1.0                      # the pass is out of date: the worker runs
+    original, clicked = pipeline.run, []
+
+    def run(job, progress=None, on_log=None):
+        def user(fraction):
+            if not clicked:                        # the user clicks while it runs
+                clicked.append(bpy.ops.holo.cancel_pass())
+            progress(fraction)
+        return original(job, user, on_log)
+    monkeypatch.setattr(pipeline, "run", run)
+    scene.render.filepath = str(tmp_path / "cancelled.exr")
+    bpy.ops.render.render(write_still=True)
+    assert clicked == [{"FINISHED"}]
+    assert _shown_columns(tmp_path / "cancelled.exr").size == 0
+    assert (pipeline.output_dir(scene) / "holo_pass_0001.stale.exr").is_file()
+    assert compositing.RUNNING["frame"] is None and not bpy.ops.holo.cancel_pass.poll()

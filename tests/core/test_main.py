@@ -1,0 +1,114 @@
+"""The command line (``python -m holo_core``): a bad argument, an output it cannot write, an
+interrupt or any failure is one line and a status (2, 130, 1), and the output is checked
+before the work."""
+
+import re
+import subprocess
+import sys
+
+import pinhole
+import pytest
+from cli import CUBE_OBJ, run_cli, run_process
+
+from holo_core.io.hologram import write_hologram
+
+
+def test_max_points_0_is_refused_on_one_line(tmp_path):
+    (tmp_path / "q.obj").write_text(CUBE_OBJ)
+    run = run_process("record", tmp_path / "q.obj", "-o", tmp_path / "h.exr", "--max-points", 0)
+    assert run.returncode == 2 and "--max-points" in run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1 and not (tmp_path / "h.exr").exists()
+
+
+def test_cli_bad_arguments_name_the_argument_and_its_range(tmp_path):
+    (tmp_path / "q.obj").write_text(CUBE_OBJ)
+    for args, problem in [(["--pitch", "0"], "--pitch: '0' is out of range (metres, from 1e-12"),
+                          (["--resolution", "0", "0"], "--resolution: '0' is out of range"),
+                          (["--wavelengths", "nan"], "--wavelengths: 'nan' is out of range")]:
+        run = run_process("record", tmp_path / "q.obj", "-o", tmp_path / "h.exr", *args)
+        assert run.returncode == 2 and problem in run.stderr, run.stderr
+        assert len(run.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("output, status", [("/proc/holo.exr", 2), ("below/a/file", 2)])
+def test_cli_unwritable_output_is_one_line(tmp_path, point_hologram, output, status):
+    path = write_hologram(tmp_path / "h.exr", point_hologram)
+    (tmp_path / "below").write_text("a file")
+    run = run_process("render", path, "-o", output if output.startswith("/") else tmp_path / output,
+              *pinhole.CAMERA_ARGS)
+    assert run.returncode == status, run.stderr
+    lines = [l for l in run.stderr.strip().splitlines() if not l.startswith("warning: ")]
+    assert "Traceback" not in run.stderr and len(lines) == 1, run.stderr
+
+
+def test_cli_render_into_a_folder_writes_inside_it(tmp_path, point_hologram):
+    path = write_hologram(tmp_path / "h.exr", point_hologram)
+    (tmp_path / "views").mkdir()
+    run = run_process("render", path, "-o", tmp_path / "views", *pinhole.CAMERA_ARGS)
+    assert run.returncode == 0, run.stderr
+    assert (tmp_path / "views" / "h_view.exr").is_file() and not (tmp_path / "views.exr").exists()
+
+
+def test_cli_sigint_ends_in_one_line(tmp_path):
+    import signal
+    proc = subprocess.Popen([sys.executable, "-c",
+                             "import time, sys\nfrom holo_core.__main__ import main\n"
+                             "import holo_core.__main__ as m\n"
+                             "m.info = lambda a: time.sleep(30)\n"
+                             "sys.exit(main(['info', 'x']))"],
+                            stderr=subprocess.PIPE, text=True)
+    import time
+    time.sleep(1.5)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130 and err.strip() == "interrupted", err
+
+
+def test_cli_unexpected_failure_is_one_line_and_debug_shows_the_traceback(tmp_path):
+    code = ("import sys\nimport holo_core.__main__ as m\n"
+            "def boom(a): raise RuntimeError('driver fault')\nm.info = boom\n"
+            "sys.exit(m.main(sys.argv[1:]))")
+    quiet = subprocess.run([sys.executable, "-c", code, "info", "x"], capture_output=True,
+                           text=True)
+    assert quiet.returncode == 1 and quiet.stderr.strip().splitlines() == [
+        "error: RuntimeError: driver fault (--debug shows the traceback)"]
+    loud = subprocess.run([sys.executable, "-c", code, "--debug", "info", "x"],
+                          capture_output=True, text=True)
+    assert "Traceback" in loud.stderr and loud.returncode == 1
+
+
+def test_cli_wavelengths_below_1_are_refused_as_nanometres(tmp_path, capsys):
+    """The CLI's --wavelengths is the one length in nm: 633e-9 (metres) is refused."""
+    (tmp_path / "q.obj").write_text(CUBE_OBJ)
+    status, _, err = run_cli(capsys, "record", tmp_path / "q.obj", "-o", tmp_path / "h.exr",
+                               "--wavelengths", "633e-9")
+    assert status == 2 and "--wavelengths: '633e-9' is out of range (nm, from 1" in err, err
+    assert "633 is red light" in err and not list(tmp_path.glob("*.exr"))
+
+
+@pytest.mark.parametrize("output, problem", [
+    ("/sys/holo.exr", "its folder /sys is not writable"),  # read-only, even for root
+    ("{tmp}/a_file/h.exr", "is not a folder"),
+    ("{tmp}/r.png", r"r.png: the file is written as OpenEXR; name it \*\.exr"),
+])
+@pytest.mark.parametrize("command", ["record", "render"])
+def test_cli_output_is_checked_before_the_work(tmp_path, point_hologram, capsys, monkeypatch,
+                                              output, problem, command):
+    """Findings 11 and 12: a read-only folder was found only after the whole recording, and
+    -o r.png wrote EXR bytes under a .png name."""
+    import holo_core.plate.record
+    import holo_core.plate.view
+
+    def never(*_, **__):
+        raise AssertionError("the work started before the output was checked")
+    monkeypatch.setattr(holo_core.plate.record, "record_points", never)
+    monkeypatch.setattr(holo_core.plate.view, "render_view", never)
+    (tmp_path / "q.obj").write_text(CUBE_OBJ)
+    (tmp_path / "a_file").write_text("a file")
+    source = tmp_path / "q.obj" if command == "record" else \
+        write_hologram(tmp_path / "h.exr", point_hologram)
+    before = sorted(tmp_path.iterdir())
+    status, out, err = run_cli(capsys, command, source, "-o", output.format(tmp=tmp_path),
+                                 "--resolution", 16, 16)
+    assert status == 2 and re.search(problem, err) and err.count("\n") == 1, err
+    assert out == "" and sorted(tmp_path.iterdir()) == before
