@@ -23,11 +23,10 @@ import numpy as np
 from holo_core import __version__
 from holo_core.io.hologram import FORMAT_VERSION
 from holo_core.job import CameraRoute, Job, Output, PlateRoute, Radiance
-from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.plate import ViewingZone
 
 from . import radiance
-from .plates import export_imported, scene_plate, with_plate, zone_around
+from .plates import export_imported, scene_plate, with_plate
 from .scene import ExportError, SceneData, export_scene
 
 log = logging.getLogger(__name__)
@@ -134,7 +133,6 @@ def read(scene, depsgraph, *, render=True) -> Prepared:
             data = with_plate(data, plate, depsgraph)
     lighting = radiance.digest(scene, depsgraph) if lit else ""
     settings = Settings.from_scene(scene, data.unit)
-    view, zone = data.view, None
     if mode == "CAMERA":  # recorded for this view at every render: no plate file
         fingerprint = digest(data, mode, settings.speckle, settings.samples, lighting)
         route = settings.camera_route()
@@ -143,10 +141,6 @@ def read(scene, depsgraph, *, render=True) -> Prepared:
         fingerprint = imported.holo.fingerprint or paths[0].name
         route = settings.plate_route(data.plate, paths, record=False)
     else:
-        if data.plate.zone is None:  # the camera's pupil and the margin, kept once recorded
-            zone = kept(zone_around(data.plate, data.camera, plate.holo.zone_margin * data.unit))
-            data = replace(data, plate=replace(data.plate, zone=zone))
-        view = zone_view(data)  # the radiance as the zone's centre sees it, not the camera
         # a plate is a scene asset: its digest leaves the camera out (its zone is in it)
         fingerprint = digest(data, *settings.recording(), lighting, camera=False)
         paths = hologram_paths(out, data.plate_name, settings.iterations, fingerprint)
@@ -160,11 +154,11 @@ def read(scene, depsgraph, *, render=True) -> Prepared:
                                     frame if animated else None))
     job = Job(camera=data.camera, points=tuple(data.points), triangles=tuple(data.triangles),
               route=route, output=output)
-    light = partial(radiance.request, scene, depsgraph.view_layer.name, view,
+    light = partial(radiance.request, scene, depsgraph.view_layer.name, data.view,
                     data.points + data.triangles, data.names,
                     samples=settings.lighting_samples) if lit else None
     return Prepared(job=job, fingerprint=fingerprint, plate_name=data.plate_name,
-                    warnings=data.warnings, zone=zone, lighting=light)
+                    warnings=data.warnings, zone=data.zone, lighting=light)
 
 
 def digest(data: SceneData, *settings, camera=True) -> str:
@@ -213,21 +207,3 @@ def hologram_paths(out: Path, plate_name: str, n: int, fingerprint: str) -> tupl
     a camera returned) is not recorded again."""
     stem = f"{bpy.path.clean_name(plate_name)}_hologram_{fingerprint}"
     return tuple(out / (f"{stem}.exr" if i == 0 else f"{stem}.{i}.exr") for i in range(n))
-
-
-def kept(zone: ViewingZone) -> ViewingZone:
-    """``zone`` as the plate's settings keep it (single precision), so that the digest of a
-    job read after it is kept is the digest of this one."""
-    return ViewingZone(centre=tuple(map(float, np.float32(zone.centre))),
-                       half_extents=tuple(map(float, np.float32(zone.half_extents))),
-                       pupil=float(np.float32(zone.pupil)))
-
-
-def zone_view(data: SceneData) -> Camera:
-    """A pinhole at the zone's centre looking at the emitters' centre, with the render
-    camera's lens and frame: what a plate's radiance is rendered from."""
-    plate = data.plate
-    eye = plate.matrix_world[:3, :3] @ np.asarray(plate.zone.centre) + plate.matrix_world[:3, 3]
-    every = np.concatenate([m.vertices for m in data.points + data.triangles])
-    centre = (every.min(0) + every.max(0)) / 2
-    return replace(data.view, matrix_world=look_at(eye, centre, up=plate.matrix_world[:3, 1]))

@@ -11,7 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from holo_core.scene.camera import Camera
+from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.mesh import Mesh, sample_points
 from holo_core.scene.plate import Plate, ViewingZone
 from holo_core.validate import InputError
@@ -39,17 +39,44 @@ def scene_plate(scene, *, required: bool):
 
 
 def with_plate(data: SceneData, plate_object, depsgraph) -> SceneData:
-    """``data`` with the plate ``plate_object`` as ``depsgraph`` evaluates it, checked against
-    the camera: in front of it (an :class:`ExportError` otherwise), covering what the camera
-    sees of the emitters (a warning when it covers part, an error when none), the camera's
-    pupil inside its viewing zone (a warning naming it otherwise)."""
-    name = plate_object.name
+    """``data`` with the plate ``plate_object`` as ``depsgraph`` evaluates it and its viewing
+    zone (the plate's own, else the camera's pupil with the plate's Zone Margin around it:
+    ``data.zone``, to keep on the plate once it is recorded), checked against the camera: in
+    front of it (an :class:`ExportError` otherwise), covering what the camera sees of the
+    emitters (a warning when it covers part, an error when none), the camera's pupil inside
+    its viewing zone (a warning naming it otherwise). Its ``view``, the camera of the
+    emitters' radiance, is the zone's centre (:func:`zone_view`)."""
+    name, camera = plate_object.name, data.camera
     plate = plate_from_object(evaluated(plate_object, depsgraph), data.unit)
-    _in_front(plate, name, data.camera)
+    _in_front(plate, name, camera)
+    zone = None
+    if plate.zone is None:
+        zone = kept(zone_around(plate, camera, plate_object.holo.zone_margin * data.unit))
     warnings = data.warnings + tuple(filter(None, (
-        outside_zone(plate, name, data.camera),
-        plate_coverage(plate, name, data.camera, data.points + data.triangles))))
-    return replace(data, plate=plate, plate_name=name, warnings=warnings)
+        outside_zone(plate, name, camera),
+        plate_coverage(plate, name, camera, data.points + data.triangles))))
+    data = replace(data, plate=replace(plate, zone=plate.zone or zone), plate_name=name,
+                   warnings=warnings, zone=zone)
+    return replace(data, view=zone_view(data))
+
+
+def kept(zone: ViewingZone) -> ViewingZone:
+    """``zone`` as the plate's settings keep it (single precision), so that the digest of a
+    job read after it is kept is the digest of this one."""
+    return ViewingZone(centre=tuple(map(float, np.float32(zone.centre))),
+                       half_extents=tuple(map(float, np.float32(zone.half_extents))),
+                       pupil=float(np.float32(zone.pupil)))
+
+
+def zone_view(data: SceneData) -> Camera:
+    """A pinhole at the zone's centre looking at the emitters' centre, with the render
+    camera's lens and frame: what a plate's radiance is rendered from (a camera moving inside
+    the zone reuses the plate, and its highlights are the zone centre's)."""
+    plate = data.plate
+    eye = plate.matrix_world[:3, :3] @ np.asarray(plate.zone.centre) + plate.matrix_world[:3, 3]
+    every = np.concatenate([m.vertices for m in data.points + data.triangles])
+    centre = (every.min(0) + every.max(0)) / 2
+    return replace(data.view, matrix_world=look_at(eye, centre, up=plate.matrix_world[:3, 1]))
 
 
 def _in_front(plate: Plate, name: str, camera: Camera) -> None:

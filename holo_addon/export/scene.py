@@ -14,7 +14,7 @@ import numpy as np
 
 from holo_core.scene.camera import Camera
 from holo_core.scene.mesh import Mesh
-from holo_core.scene.plate import Plate
+from holo_core.scene.plate import Plate, ViewingZone
 
 from ..blender.materials import base_colour, principled, unhonoured
 from . import bake
@@ -36,7 +36,8 @@ class SceneData:
     objects; ``view``: the render's whole frame as a pinhole (the camera of the emitters'
     radiance, before any crop); ``region``: the render region when it is not cropped (left,
     top, right, bottom) [px from the top-left] (the pass is cleared outside it), else None;
-    ``unit``: metres per Blender unit."""
+    ``unit``: metres per Blender unit; ``zone``: a plate's viewing zone resolved now (not yet
+    kept on the plate), else None."""
 
     points: list
     triangles: list
@@ -48,6 +49,7 @@ class SceneData:
     view: Camera | None = None
     region: tuple | None = None
     unit: float = 1.0
+    zone: ViewingZone | None = None
 
 
 def scale(scene) -> float:
