@@ -3,11 +3,14 @@ depth with the rasterized scene. Shaped as the glTF add-on, each folder importin
 below it (ui → compositor → render → export → blender):
 
 - ``blender/``: Blender helpers shared by the rest (4.x/5.x ``compat``, ``materials``, ``objects``)
-- ``export/``: the scene as the render sees it → holo_core's plain data in metres (``scene``),
-  what Cycles needs to render the emitters' lit radiance and its digest (``radiance``), and
-  procedural Base Colours baked by Cycles (``bake``, Lighting: Albedo)
-- ``render/``: the job, run in a worker process (``pipeline``), with the preferences'
-  ``options``; the Cycles script that renders the emitters' radiance (``cycles_radiance``)
+- ``export/``: the scene as the render sees it → holo_core's nouns in metres (``scene``), the
+  plate checked against the camera's view (``plates``), the whole typed job read in one visit
+  with its digests (``job``), what Cycles needs to render the emitters' lit radiance and its
+  digest (``radiance``), and procedural Base Colours baked by Cycles (``bake``, Lighting:
+  Albedo)
+- ``render/``: the job made in a worker process or its pass reused (``pipeline``), with the
+  preferences' ``options``; the Cycles script that renders the emitters' radiance
+  (``cycles_radiance``)
 - ``compositor/``: the pass in the compositor: Depth Combine, per-frame passes, frame handlers
 - ``ui/``: ``properties`` (Object.holo, Scene.holo), ``preferences``, ``operators``, ``plates``
   (the viewing zone, the planner, File ▸ Import ▸ Hologram), ``panels``, and the plate's
