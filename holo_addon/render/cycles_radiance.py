@@ -8,7 +8,9 @@ frame being rendered, with the scene's own Cycles settings (light paths, clampin
 seed) but samples of its own (``samples``), denoised by OpenImageDenoise. Also: the emitters
 are seen by the camera and every ray; every other object is hidden from the camera alone, so
 it still casts its shadows on the emitters, lights them indirectly and shows in their
-reflections; the film is transparent; depth of field and motion blur are off (the hologram
+reflections, except the instancers of emitters (collection instances, geometry-node and
+particle instancers), which Cycles' instances inherit their visibility from: those stay visible
+to the camera with their own geometry off; the film is transparent; depth of field and motion blur are off (the hologram
 makes its own); the render is cropped to the emitters' region; the compositor and sequencer
 are off. The result is a float RGBA OpenEXR (premultiplied).
 
@@ -30,6 +32,16 @@ RAYS = ("visible_camera", "visible_diffuse", "visible_glossy", "visible_transmis
         "visible_volume_scatter", "visible_shadow")
 
 
+def instancers_of(depsgraph, emitters: set) -> set:
+    """Names of the objects that instance one of ``emitters`` (collection instances,
+    geometry-node and particle instancers): Cycles gives an instance its instancer's ray
+    visibility, so these must stay visible to the camera for the instances to be seen."""
+    return {inst.parent.original.name for inst in depsgraph.object_instances
+            if inst.is_instance and inst.parent is not None
+            and inst.object.original.name in emitters
+            and inst.parent.original.name not in emitters}
+
+
 def main(args: dict) -> None:
     if bpy.data.filepath != args["blend"]:  # the bpy module: the file is opened here
         bpy.ops.wm.open_mainfile(filepath=args["blend"], load_ui=False)
@@ -43,10 +55,15 @@ def main(args: dict) -> None:
     scene = bpy.data.scenes[args["scene"]]
     scene.frame_set(args["frame"])
     emitters = set(args["emitters"])
+    instancers = instancers_of(scene.view_layers[args["view_layer"]].depsgraph, emitters)
     for obj in bpy.data.objects:
-        if obj.name in emitters:
+        if obj.name in emitters:  # an ordinary object here, not the raster's holdout
             for name in RAYS:
                 setattr(obj, name, True)
+            obj.is_holdout = False
+        elif obj.name in instancers:  # Cycles hides an instancer's instances with it
+            obj.visible_camera = True
+            obj.show_instancer_for_render = False  # its own geometry: not an emitter
         else:
             obj.visible_camera = False
     r = scene.render

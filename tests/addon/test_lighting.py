@@ -12,46 +12,57 @@ from test_addon import _read_exr
 SIZE = (128, 96)
 
 
-def _lit_scene(scene):
-    """A smooth glossy grey sphere on a grey floor under a low sun (its shadow falls on the
-    floor in view) and a dim grey world; a 50 mm pinhole camera; Cycles at 32 samples."""
+def lit_stage(scene, size, *, sun=(65, -70), camera=((0.4, -3.4, 1.5), (0.6, 0.0, 0.2))):
+    """Cycles at 32 samples (no denoising, a box filter, the Standard view, float EXR out) of
+    ``size``, a dim grey world, a grey floor under a low sun (its rotation ``sun`` about x and
+    z in degrees) and a 50 mm pinhole camera at ``camera`` (where, looking at); returns the
+    sun."""
     from holo_addon.blender import compat
     from holo_addon.demo import point_at
     scene.render.engine = "CYCLES"
     scene.cycles.samples = 32
     scene.cycles.use_denoising = False
     scene.cycles.pixel_filter_type = "BOX"
-    scene.render.resolution_x, scene.render.resolution_y = SIZE
+    scene.render.resolution_x, scene.render.resolution_y = size
     scene.render.resolution_percentage = 100
     scene.view_settings.view_transform = "Standard"
     compat.set_exr_output(scene, multilayer=False)
     world = bpy.data.worlds.new("dim")
     world.color = (0.05, 0.05, 0.05)
     scene.world = world
+    bpy.ops.mesh.primitive_plane_add(size=8, location=(0, 0, 0))
+    paint(bpy.context.object, "floor", (0.5, 0.5, 0.5))
+    bpy.ops.object.light_add(type="SUN", rotation=(np.radians(sun[0]), 0, np.radians(sun[1])))
+    light = bpy.context.object
+    light.data.energy = 3.0
+    bpy.ops.object.camera_add(location=camera[0])
+    cam = bpy.context.object
+    point_at(cam, camera[1])
+    cam.data.lens = 50
+    scene.camera = cam
+    return light
+
+
+def paint(obj, name, rgb, roughness=0.5):
+    """A Principled material ``name`` of Base Color ``rgb`` on ``obj``."""
+    from holo_addon.blender import compat
+    material = bpy.data.materials.new(name)
+    compat.enable_nodes(material)
+    bsdf = next(n for n in material.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
+    bsdf.inputs["Base Color"].default_value = (*rgb, 1)
+    bsdf.inputs["Roughness"].default_value = roughness
+    obj.data.materials.append(material)
+
+
+def _lit_scene(scene):
+    """A smooth glossy grey sphere on the lit stage (its shadow falls on the floor in
+    view)."""
+    sun = lit_stage(scene, SIZE)
     bpy.ops.mesh.primitive_uv_sphere_add(segments=48, ring_count=24, radius=0.3,
                                          location=(0, 0, 0.3))
     sphere = bpy.context.object
     bpy.ops.object.shade_smooth()
-    grey = bpy.data.materials.new("glossy grey")
-    compat.enable_nodes(grey)
-    bsdf = next(n for n in grey.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
-    bsdf.inputs["Base Color"].default_value = (0.6, 0.6, 0.6, 1)
-    bsdf.inputs["Roughness"].default_value = 0.3
-    sphere.data.materials.append(grey)
-    bpy.ops.mesh.primitive_plane_add(size=8, location=(0, 0, 0))
-    floor = bpy.data.materials.new("floor")
-    compat.enable_nodes(floor)
-    next(n for n in floor.node_tree.nodes if n.type == "BSDF_PRINCIPLED").inputs[
-        "Base Color"].default_value = (0.5, 0.5, 0.5, 1)
-    bpy.context.object.data.materials.append(floor)
-    bpy.ops.object.light_add(type="SUN", rotation=(np.radians(65), 0, np.radians(-70)))
-    sun = bpy.context.object
-    sun.data.energy = 3.0
-    bpy.ops.object.camera_add(location=(0.4, -3.4, 1.5))
-    cam = bpy.context.object
-    point_at(cam, (0.6, 0.0, 0.2))
-    cam.data.lens = 50
-    scene.camera = cam
+    paint(sphere, "glossy grey", (0.6, 0.6, 0.6), roughness=0.3)
     scene.holo.samples = 4
     bpy.context.view_layer.update()
     return sphere, sun
