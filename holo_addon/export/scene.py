@@ -154,7 +154,12 @@ def _base_texture(obj):
 def camera_from_object(scene, obj, unit: float, depsgraph=None, *, crop=True) -> Camera:
     """Blender's camera (lens, sensor, fit, shift, render size, pixel aspect, depth of field)
     as :class:`holo_core.scene.camera.Camera`; a focus object as ``depsgraph`` places it.
-    With ``crop``, a render cropped to its region gets the region's camera."""
+    With ``crop``, a render cropped to its region gets the region's camera.
+
+    The lens and sensor scale with the scene, as in Cycles: its millimetres are thousandths
+    of a Blender unit (the aperture is lens·1e-3 / (2·N) units), so a scene at any
+    ``unit_settings.scale_length`` gets the same depth of field, and a camera of metres
+    ``unit`` x the lens and sensor Blender shows (the field of view is their ratio)."""
     cam, r = obj.data, scene.render
     if cam.type != "PERSP":
         raise ExportError(f"camera '{obj.name}' must be perspective (it is {cam.type})")
@@ -173,8 +178,8 @@ def camera_from_object(scene, obj, unit: float, depsgraph=None, *, crop=True) ->
             focus = cam.dof.focus_distance * unit
         if focus <= 0:
             raise ExportError("the camera's focus must lie in front of it (focus distance > 0)")
-    camera = Camera(matrix_world=m, lens=cam.lens, sensor_width=cam.sensor_width,
-                    sensor_height=cam.sensor_height, sensor_fit=cam.sensor_fit,
+    camera = Camera(matrix_world=m, lens=cam.lens * unit, sensor_width=cam.sensor_width * unit,
+                    sensor_height=cam.sensor_height * unit, sensor_fit=cam.sensor_fit,
                     shift_x=cam.shift_x, shift_y=cam.shift_y, resolution=res,
                     pixel_aspect=(r.pixel_aspect_x, r.pixel_aspect_y),
                     focus_distance=focus, fstop=fstop)
