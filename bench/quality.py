@@ -104,11 +104,10 @@ def build(bpy, size, fstop):
 def cycles(bpy, scene, out):
     """Cycles' image (linear RGB), alpha and planar Depth of the holographic objects."""
     from holo_addon.blender import compat
-    from holo_addon.blender.objects import RAY_VISIBILITY
+    from holo_addon.blender.objects import show_as_raster
     for obj in scene.objects:
         if obj.type == "MESH" and not obj.holo.is_plate:
-            for name in RAY_VISIBILITY:
-                setattr(obj, name, True)
+            show_as_raster(obj)
     scene.render.engine = "CYCLES"
     scene.cycles.samples = 32
     scene.cycles.max_bounces = 0  # the emission alone: no light bounced between the surfaces

@@ -15,8 +15,9 @@ line saying what to install.
 The second form validates the zip with that release's extension tool and installs it with
 Blender's own installer into a fresh user folder (``BLENDER_USER_RESOURCES``), then on a small
 scene (a holographic sphere, a sun, a plate, a camera) records the hologram, renders the
-holographic pass (the sphere lit by Cycles in a process of its own), sets up the Depth Combine
-on that release's compositor API and renders the frame. It fails when any step fails, and on
+holographic pass (the sphere lit by Cycles in a process of its own), sets up the compositing
+(the pass filling the emitters' holdouts) on that release's compositor API and renders the
+frame. It fails when any step fails, and on
 any deprecation warning from the add-on's or the core's code. Not part of ``make test``: each
 release is a 370 MB download.
 """

@@ -8,6 +8,7 @@ media type; 4.2-4.5 call EEVEE ``BLENDER_EEVEE_NEXT``.
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 
 import bpy
 
@@ -54,6 +55,15 @@ def depth_combine(tree):
     else:
         node.use_alpha = True
         node.use_antialias_z = False
+    return node
+
+
+def math_node(tree, operation: str, *, clamp=False):
+    """A compositor Math node (4.x ``CompositorNodeMath``, 5.x the shader nodes' Math)."""
+    idname = "CompositorNodeMath" if hasattr(bpy.types, "CompositorNodeMath") \
+        else "ShaderNodeMath"
+    node = tree.nodes.new(idname)
+    node.operation, node.use_clamp = operation, clamp
     return node
 
 
@@ -131,6 +141,23 @@ def set_exr_output(scene, *, multilayer: bool):
     else:
         s.file_format = "OPEN_EXR_MULTILAYER" if multilayer else "OPEN_EXR"
     s.color_depth = "32"
+
+
+@contextmanager
+def png_output(scene):
+    """The scene's render output as 8-bit RGBA PNG for a while (Image.save_render writes in
+    it), then as it was."""
+    s = scene.render.image_settings
+    names = [n for n in ("media_type", "file_format", "color_mode", "color_depth")
+             if hasattr(s, n)]
+    kept = {n: getattr(s, n) for n in names}
+    try:
+        set_png_output(scene)
+        s.color_mode = "RGBA"
+        yield s
+    finally:
+        for name in names:  # the media type first: it decides which formats are allowed
+            setattr(s, name, kept[name])
 
 
 def set_png_output(scene):

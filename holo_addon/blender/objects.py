@@ -1,6 +1,6 @@
-"""Objects in Blender's render: the ray visibility that keeps emitters out of the camera's view
-of the raster (the holographic pass shows them) while they still cast shadows, light and show
-in reflections, and keeps the plate out of it altogether."""
+"""Objects in Blender's render: an emitter is a holdout in the raster (the holographic pass
+fills its hole, so Cycles' depth of field and motion blur decide what covers what) while it
+still casts shadows, lights and shows in reflections; the plate is out of the raster."""
 
 from __future__ import annotations
 
@@ -10,29 +10,58 @@ import bpy
 
 RAY_VISIBILITY = ("visible_camera", "visible_diffuse", "visible_glossy", "visible_transmission",
                   "visible_volume_scatter", "visible_shadow")
+HOLDOUT = "is_holdout"
 KEPT = "holo_ray_visibility"  # the user's own ray visibility, while the add-on sets it
 
 
 def raster_visibility(obj) -> None:
-    """An emitter is seen by the camera only through the holographic pass: hidden from camera
-    rays alone, it still casts its shadow on raster objects, lights them indirectly and shows
-    in their reflections and refractions (Object ▸ Visibility ▸ Ray Visibility; Cycles and
-    EEVEE honour it, Workbench draws every object). The plate is a construction plane, hidden
-    from every ray. The user's own ray visibility is kept on the object and restored when it
-    is neither again. *Disable in Renders* stays the user's: it leaves the object out of the
-    hologram too."""
+    """An emitter is a holdout in the raster (Object ▸ Visibility ▸ Holdout): the camera sees
+    a hole where it is the nearest surface, cut by Cycles' (or EEVEE's) own depth of field and
+    motion blur, which the holographic pass fills (:mod:`holo_addon.compositor.tree`); it
+    still casts its shadow on raster objects, lights them indirectly and shows in their
+    reflections and refractions (a holdout is one for camera rays alone). The plate is a
+    construction plane, hidden from every ray. The user's own visibility is kept on the
+    object and restored when it is neither again. *Disable in Renders* stays the user's: it
+    leaves the object out of the hologram too."""
     emitter, plate = obj.holo.emitter != "NONE", obj.holo.is_plate
     if not (emitter or plate):
         kept = obj.get(KEPT)
         if kept is not None:
-            for name in RAY_VISIBILITY:
-                setattr(obj, name, bool(kept.get(name, True)))
+            for name in (*RAY_VISIBILITY, HOLDOUT):
+                setattr(obj, name, bool(kept.get(name, name != HOLDOUT)))
             del obj[KEPT]
         return
     if obj.get(KEPT) is None:
-        obj[KEPT] = {name: bool(getattr(obj, name)) for name in RAY_VISIBILITY}
+        obj[KEPT] = {name: bool(getattr(obj, name)) for name in (*RAY_VISIBILITY, HOLDOUT)}
     for name in RAY_VISIBILITY:
-        setattr(obj, name, not plate and name != "visible_camera")
+        setattr(obj, name, not plate)
+    setattr(obj, HOLDOUT, not plate)
+
+
+def is_holdout_emitter(obj) -> bool:
+    """Whether an emitter's raster visibility is the holdout above (files from before it hid
+    emitters from camera rays instead, which leaves no hole for the pass)."""
+    return obj.is_holdout and obj.visible_camera
+
+
+def show_as_raster(obj) -> None:
+    """``obj`` an ordinary object of the raster: seen by every ray, no holdout."""
+    for name in RAY_VISIBILITY:
+        setattr(obj, name, True)
+    setattr(obj, HOLDOUT, False)
+
+
+@contextmanager
+def seen_by_every_ray(obj):
+    """``obj`` as an ordinary object (:func:`show_as_raster`) for a while, as a bake needs
+    it."""
+    kept = {name: getattr(obj, name) for name in (*RAY_VISIBILITY, HOLDOUT)}
+    try:
+        show_as_raster(obj)
+        yield obj
+    finally:
+        for name, value in kept.items():
+            setattr(obj, name, value)
 
 
 @contextmanager

@@ -19,7 +19,7 @@ import bpy
 import numpy as np
 
 from ..blender.materials import principled
-from ..blender.objects import RAY_VISIBILITY
+from ..blender.objects import seen_by_every_ray
 
 UV_NAME = "Holo Bake"
 SIZE = 1024      # texels along the atlas side
@@ -94,16 +94,14 @@ def bake(obj, scene, size: int = SIZE) -> bpy.types.Image:
             tree.nodes.active = node
             targets.append(node)
     engine, selected = scene.render.engine, obj.select_get()
-    rays = {name: getattr(obj, name) for name in RAY_VISIBILITY}
     scene.render.engine = "CYCLES"
     samples, scene.cycles.samples = scene.cycles.samples, BAKE_SAMPLES
     try:
         obj.select_set(True)
-        for name in RAY_VISIBILITY:  # an emitter is hidden from rays, which the bake needs
-            setattr(obj, name, True)
-        with bpy.context.temp_override(scene=scene, object=obj, active_object=obj,
-                                       selected_objects=[obj],
-                                       selected_editable_objects=[obj]):
+        # an emitter is a holdout in the raster, which the bake must not see
+        with seen_by_every_ray(obj), bpy.context.temp_override(
+                scene=scene, object=obj, active_object=obj, selected_objects=[obj],
+                selected_editable_objects=[obj]):
             bpy.ops.object.bake(type="DIFFUSE", pass_filter={"COLOR"}, margin=4,
                                 use_clear=True, uv_layer=UV_NAME)
         # packed (and kept by a fake user) while the nodes still use it: an image nobody uses
@@ -114,8 +112,6 @@ def bake(obj, scene, size: int = SIZE) -> bpy.types.Image:
         scene.cycles.samples = samples
         scene.render.engine = engine
         obj.select_set(selected)
-        for name, value in rays.items():
-            setattr(obj, name, value)
         for node in targets:
             node.id_data.nodes.remove(node)
     obj["holo_bake"] = digest(obj)

@@ -23,9 +23,11 @@ import numpy as np
 from holo_core import __version__
 from holo_core.io.hologram import FORMAT_VERSION
 from holo_core.job import CameraRoute, Job, Output, PlateRoute, Radiance
+from holo_core.scene.mesh import Mesh
 from holo_core.scene.plate import ViewingZone
 
 from . import radiance
+from .motion import with_motion
 from .plates import export_imported, scene_plate, with_plate
 from .scene import ExportError, SceneData, export_scene
 
@@ -134,7 +136,8 @@ def read(scene, depsgraph, *, render=True) -> Prepared:
     lighting = radiance.digest(scene, depsgraph) if lit else ""
     settings = Settings.from_scene(scene, data.unit)
     if mode == "CAMERA":  # recorded for this view at every render: no plate file
-        fingerprint = digest(data, mode, settings.speckle, settings.samples, lighting)
+        fingerprint = digest(data, mode, settings.speckle, settings.samples, lighting,
+                             kinds=False)
         route = settings.camera_route()
     elif imported:
         paths = (Path(bpy.path.abspath(imported.holo.hologram)),)
@@ -148,10 +151,12 @@ def read(scene, depsgraph, *, render=True) -> Prepared:
                                      record=not all(p.is_file() for p in paths))
     frame, region, unit = scene.frame_current, data.region, data.unit
     animated = lit and getattr(scene.cycles, "use_animated_seed", False)
+    kinds = mode != "CAMERA"  # a camera hologram renders points and triangles alike
     output = Output(folder=out, frame=frame, render=render, depth_unit=unit, border=region,
-                    pass_key=digest(data, *astuple(settings), frame, region, unit, lighting),
+                    pass_key=digest(data, *astuple(settings), frame, region, unit, lighting,
+                                    kinds=kinds),
                     shot_key=digest(data, *astuple(settings), region, unit, lighting, "shot",
-                                    frame if animated else None))
+                                    frame if animated else None, kinds=kinds))
     job = Job(camera=data.camera, points=tuple(data.points), triangles=tuple(data.triangles),
               route=route, output=output)
     light = partial(radiance.request, scene, depsgraph.view_layer.name, data.view,
@@ -161,20 +166,19 @@ def read(scene, depsgraph, *, render=True) -> Prepared:
                     warnings=data.warnings, zone=data.zone, lighting=light)
 
 
-def digest(data: SceneData, *settings, camera=True) -> str:
+def digest(data: SceneData, *settings, camera=True, kinds=True) -> str:
     """A digest of everything the hologram depends on: each emitter's kind, evaluated
     geometry and colours (vertex colours, texture and UVs, material colours), the plate
     and its viewing zone, the camera (its pose, lens and focus; ``camera=False`` leaves
     it out, for a plate recorded for its zone), ``settings`` and the core's version and
-    file format."""
+    file format. ``kinds=False``: the emitters' kinds left out (a camera hologram renders
+    points and triangles alike)."""
     h = hashlib.sha256(f"holo {__version__} format {FORMAT_VERSION}".encode())
-    for kind, meshes in (("points", data.points), ("triangles", data.triangles)):
-        for mesh in meshes:
-            h.update(kind.encode())
-            for a in (mesh.vertices, mesh.colours, mesh.uvs, mesh.texture):
-                h.update(b"-" if a is None else
-                         np.ascontiguousarray(a, np.float64).tobytes() + repr(a.shape).encode())
-            h.update(b"|")
+    meshes = [(kind, mesh_digest(m)) for kind, group in (("points", data.points),
+                                                          ("triangles", data.triangles))
+              for m in group]
+    for kind, mesh in meshes if kinds else sorted(("", d) for _, d in meshes):
+        h.update(kind.encode() + mesh + b"|")
     plate = () if data.plate is None else (data.plate.matrix_world,
                                              (data.plate.width, data.plate.height))
     zone = data.plate.zone if data.plate is not None else None
@@ -188,6 +192,40 @@ def digest(data: SceneData, *settings, camera=True) -> str:
             data.camera.focus_distance) if camera else ("no camera",)
     h.update(repr(lens + settings).encode())
     return h.hexdigest()[:16]
+
+
+def mesh_digest(mesh: Mesh) -> bytes:
+    """A mesh's geometry, colours and motion across the shutter, digested."""
+    h = hashlib.sha256()
+    for a in (mesh.vertices, mesh.colours, mesh.uvs, mesh.texture,
+              *(() if mesh.motion is None else (mesh.motion,))):
+        h.update(b"-" if a is None else
+                 np.ascontiguousarray(a, np.float64).tobytes() + repr(a.shape).encode())
+    return h.digest()
+
+
+def moving(prepared: Prepared, samples, opening: float, closing: float) -> Prepared:
+    """``prepared`` with its emitters blurred across the shutter from ``opening`` to
+    ``closing`` [frames] (Camera mode; ``samples``: :class:`holo_addon.export.motion.Sample`
+    of the shutter's times): their meshes carry their motion, and the digests of the pass
+    and of its static shot change with it. Itself where nothing moves."""
+    job = prepared.job
+    if not isinstance(job.route, CameraRoute) or len(samples) < 2:
+        return prepared
+    blurred = with_motion(job, samples, opening, closing)
+    moved = [m for m in blurred.points + blurred.triangles if m.motion is not None]
+    if not moved:
+        return prepared
+
+    def rekeyed(key: str) -> str:
+        h = hashlib.sha256(key.encode())
+        for mesh in moved:
+            h.update(mesh_digest(mesh))
+        return h.hexdigest()[:16]
+    output = replace(job.output, pass_key=rekeyed(job.output.pass_key),
+                     shot_key=rekeyed(job.output.shot_key))
+    return replace(prepared, job=replace(blurred, output=output),
+                   fingerprint=rekeyed(prepared.fingerprint))
 
 
 def output_dir(scene) -> Path:

@@ -77,19 +77,8 @@ def mesh_from_object(obj, depsgraph, unit: float, matrix=None, notes=None, *,
     ev = obj if obj.is_evaluated else obj.evaluated_get(depsgraph)
     me = ev.to_mesh()
     try:
-        me.calc_loop_triangles()
-        nt = len(me.loop_triangles)
-        if nt == 0:
-            raise ExportError(f"object '{obj.name}' has no faces to emit from")
-        co = np.empty(len(me.vertices) * 3)
-        me.vertices.foreach_get("co", co)
-        loops = np.empty(nt * 3, np.int64)
-        me.loop_triangles.foreach_get("loops", loops)
-        lv = np.empty(len(me.loops), np.int64)
-        me.loops.foreach_get("vertex_index", lv)
-        m = np.array(ev.matrix_world if matrix is None else matrix, np.float64)
-        world = co.reshape(-1, 3) @ m[:3, :3].T + m[:3, 3]
-        vertices = world[lv[loops]] * unit
+        vertices, loops, lv = _corners(obj, ev, me, unit, matrix)
+        nt = len(loops) // 3
         mat_index = np.empty(nt, np.int64)
         me.loop_triangles.foreach_get("material_index", mat_index)
         colours, uvs, texture = _colours(ev, me, loops, lv, mat_index,
@@ -101,6 +90,35 @@ def mesh_from_object(obj, depsgraph, unit: float, matrix=None, notes=None, *,
         ev.to_mesh_clear()
     return Mesh(vertices=vertices, triangles=np.arange(nt * 3).reshape(nt, 3),
                 colours=colours, uvs=uvs, texture=texture)
+
+
+def _corners(obj, ev, me, unit: float, matrix=None):
+    """(the triangles' corners (3T, 3) in world metres, each corner's loop (3T,), each loop's
+    vertex) of the evaluated mesh ``me`` of ``ev``; ``matrix``: an instance's world matrix."""
+    me.calc_loop_triangles()
+    nt = len(me.loop_triangles)
+    if nt == 0:
+        raise ExportError(f"object '{obj.name}' has no faces to emit from")
+    co = np.empty(len(me.vertices) * 3)
+    me.vertices.foreach_get("co", co)
+    loops = np.empty(nt * 3, np.int64)
+    me.loop_triangles.foreach_get("loops", loops)
+    lv = np.empty(len(me.loops), np.int64)
+    me.loops.foreach_get("vertex_index", lv)
+    m = np.array(ev.matrix_world if matrix is None else matrix, np.float64)
+    world = co.reshape(-1, 3) @ m[:3, :3].T + m[:3, 3]
+    return world[lv[loops]] * unit, loops, lv
+
+
+def corner_positions(obj, depsgraph, unit: float, matrix=None) -> np.ndarray:
+    """Where the triangles' corners of ``obj`` are now, as :func:`mesh_from_object` exports
+    them (world metres, the same order), without their colours."""
+    ev = obj if obj.is_evaluated else obj.evaluated_get(depsgraph)
+    me = ev.to_mesh()
+    try:
+        return _corners(obj, ev, me, unit, matrix)[0]
+    finally:
+        ev.to_mesh_clear()
 
 
 def _colours(obj, me, loops, loop_vertex, mat_index, notes=None):
@@ -309,6 +327,12 @@ def _rendered_collections(view_layer) -> set:
 
 def _renders(obj, shown: set) -> bool:
     return not obj.hide_render and any(c.as_pointer() in shown for c in obj.users_collection)
+
+
+def camera_matrix(scene, depsgraph, unit: float) -> np.ndarray:
+    """The scene camera's world matrix [m] (its scale removed) as ``depsgraph`` evaluates
+    it."""
+    return world_matrix(evaluated(scene.camera, depsgraph).matrix_world, unit, normalise=True)
 
 
 def evaluated(obj, depsgraph):

@@ -27,13 +27,13 @@ from holo_core.job import Result, pass_file
 from holo_core.view import BACKGROUND_DEPTH, RenderResult
 
 from ..export import bake
-from ..export.job import Prepared, output_dir, read
+from ..export.job import Prepared, moving, output_dir, read
 from ..export.scene import ExportError, border_pixels, render_size
 from .options import worker_options
 
 log = logging.getLogger(__name__)
-__all__ = ["Prepared", "apply", "cached_pass", "check_hologram", "clear_pass", "output_dir",
-           "pass_file", "prepare", "reload_passes", "run", "start", "stored_key"]
+__all__ = ["Prepared", "apply", "cached_pass", "check_hologram", "clear_pass", "moving",
+           "output_dir", "pass_file", "prepare", "run", "start", "stored_key"]
 
 
 def prepare(scene, depsgraph, *, render=True, bake=False) -> Prepared:
@@ -147,29 +147,17 @@ def clear_pass(scene, frame: int) -> Path:
     return path
 
 
-def reload_passes(path: Path) -> None:
-    """The compositor's image sequences of holographic passes read ``path``'s folder again."""
-    for image in bpy.data.images:
-        name = Path(image.filepath).name if image.filepath else ""
-        if image.source == "SEQUENCE" and name.startswith("holo_pass_"):
-            if Path(bpy.path.abspath(image.filepath)).parent != path.parent:
-                image.filepath = str(path)
-            image.reload()
-
-
 def apply(scene, prepared: Prepared, result: Result) -> None:
     """Store the result in the scene (main thread): the plate references its hologram and
     keeps the viewing zone its job resolved (so that the camera may move inside it without a
-    new recording), and the image sequences of holographic passes read this frame's file from
-    the output folder (which may have changed since compositing was set up)."""
+    new recording); the compositor reads the pass
+    (:func:`holo_addon.compositor.tree.pass_made`)."""
     plate = scene.objects.get(prepared.plate_name) if prepared.plate_name else None
     if plate is not None:
         plate.holo.hologram = str(prepared.holograms[0])
         plate.holo.fingerprint = prepared.fingerprint
         if prepared.zone is not None:
             _keep_zone(plate, prepared.zone)
-    if result.pass_path is not None:
-        reload_passes(result.pass_path)
 
 
 def _keep_zone(plate, zone) -> None:

@@ -19,7 +19,9 @@ from holo_core.job import Report, Result
 from holo_core.worker import WorkerError
 
 from ..blender.objects import shown_as_rendered
-from ..compositor import passes
+from ..compositor import tree
+from ..compositor.session import session
+from ..export import motion
 from ..export.scene import ExportError, viewport_matches_render
 from ..render import pipeline
 
@@ -46,10 +48,15 @@ class _PipelineOperator:
         return True
 
     def _prepare(self, context):
+        scene = context.scene
         try:  # what the render draws, emitters hidden in the viewport only included
-            with shown_as_rendered(context.scene, getattr(context, "view_layer", None)):
-                job = pipeline.prepare(context.scene, context.evaluated_depsgraph_get(),
+            with shown_as_rendered(scene, getattr(context, "view_layer", None)):
+                job = pipeline.prepare(scene, context.evaluated_depsgraph_get(),
                                        render=self.render, bake=True)
+                if motion.blurs(scene):  # blurred as the render's raster will be
+                    now = motion.sample(scene, context.evaluated_depsgraph_get())
+                    job = pipeline.moving(job, [now, *motion.evaluate_shutter(
+                        scene, context.evaluated_depsgraph_get)], *motion.shutter(scene))
         except USER_ERRORS as e:
             self.report({"ERROR"}, str(e))
             return None
@@ -160,6 +167,7 @@ class _PipelineOperator:
 
     def _done(self, context, job, result):
         pipeline.apply(context.scene, job, result)
+        made = tree.pass_made(context.scene, result)
         msg = "camera hologram"
         if result.reused is not None and result.reused == result.pass_path:
             msg = "up to date"
@@ -168,17 +176,27 @@ class _PipelineOperator:
         elif job.holograms:
             what = "recorded" if result.recorded else "up to date"
             msg = f"hologram {what}: {job.holograms[0]}"
-        if result.pass_path is not None:
-            msg += f"; holographic pass: {result.pass_path}"
-            report = result.report
-            if report.speckle_contrast is not None:
-                looks = f"{report.looks} samples, " if report.looks else ""
-                msg += f" ({looks}speckle contrast {report.speckle_contrast:.3f})"
+        if made is not None:
+            msg += f"; holographic pass: {made}{speckle(result.report)}"
         self.report({"INFO"}, msg)
         return self.finish(context)
 
     def finish(self, context):
         return {"FINISHED"}
+
+
+def speckle(report) -> str:
+    """What a pass's report says of its speckle: the contrast between its looks, where it
+    has two or more (one look has no spread to measure; the looks' limit has none)."""
+    looks, contrast = report.looks, report.speckle_contrast
+    if not looks:
+        return ""
+    if contrast is None:  # one look has no spread to measure (the view's NaN)
+        return " (1 look: its speckle is not measured; two or more looks are)" \
+            if looks == 1 else ""
+    if looks == 1 and contrast == 0:
+        return " (the looks' limit: no speckle)"
+    return f" ({looks} samples, speckle contrast {contrast:.3f})"
 
 
 class HOLO_OT_record_hologram(_PipelineOperator, bpy.types.Operator):
@@ -214,7 +232,7 @@ class HOLO_OT_setup_compositing(bpy.types.Operator):
 
     def execute(self, context):
         try:
-            passes.setup(context.scene, pipeline.output_dir(context.scene))
+            tree.setup(context.scene, pipeline.output_dir(context.scene))
         except USER_ERRORS as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
@@ -233,16 +251,12 @@ class HOLO_OT_render(_PipelineOperator, bpy.types.Operator):
         if bpy.ops.holo.setup_compositing() != {"FINISHED"}:
             return {"CANCELLED"}
         scene = context.scene
-        if viewport_matches_render(scene):  # the pass is fresh: the render handler skips it
-            scene.holo["skip_pass_once"] = True
-        try:
-            if bpy.app.background:
-                bpy.ops.render.render(write_still=True)
-            else:
-                bpy.ops.render.render("INVOKE_DEFAULT", write_still=True)
-        finally:
-            if bpy.app.background:
-                scene.holo.pop("skip_pass_once", None)
+        if viewport_matches_render(scene):  # the pass is fresh: the render composites it
+            session.made_for_render(scene.name, scene.frame_current)
+        if bpy.app.background:
+            bpy.ops.render.render(write_still=True)
+        else:
+            bpy.ops.render.render("INVOKE_DEFAULT", write_still=True)
         return {"FINISHED"}
 
 
@@ -254,12 +268,11 @@ class HOLO_OT_cancel_pass(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return passes.RUNNING["frame"] is not None
+        return session.running.frame is not None
 
     def execute(self, context):
-        passes.RUNNING["cancel"] = True
         self.report({"INFO"}, f"cancelling the holographic pass of frame "
-                              f"{passes.RUNNING['frame']}")
+                              f"{session.cancel_pass()}")
         return {"FINISHED"}
 
 
@@ -287,7 +300,7 @@ class HOLO_OT_remove_compositing(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     def execute(self, context):
-        if not passes.remove(context.scene):
+        if not tree.remove(context.scene):
             self.report({"INFO"}, "the compositor has no holographic pass")
             return {"CANCELLED"}
         self.report({"INFO"}, "compositor: the holographic pass removed, the user's nodes "

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import bpy
 
-from ..compositor.passes import RUNNING, WARNINGS, uses_pass
+from ..compositor.session import session
+from ..compositor.tree import uses_pass
 from . import plates
 
 
@@ -41,15 +42,16 @@ class HOLO_PT_scene(bpy.types.Panel):
             col.prop(h, "opacity_threshold")
             layout.prop(h, "show_coverage")
         layout.prop(h, "pass_on_render")
-        if RUNNING["frame"] is not None:  # a render is making its pass
+        running, warnings = session.running, session.warnings
+        if running.frame is not None:  # a render is making its pass
             box = layout.box()
-            box.label(text=f"Pass of frame {RUNNING['frame']}: {RUNNING['fraction']:.0%}",
+            box.label(text=f"Pass of frame {running.frame}: {running.fraction:.0%}",
                       icon="TIME")
             box.operator("holo.cancel_pass", icon="CANCEL")
-        if WARNINGS["texts"]:  # of the latest pass a render made
+        if warnings["texts"]:  # of the latest pass a render made
             box = layout.box()
-            box.label(text=f"Pass of frame {WARNINGS['frame']}:", icon="ERROR")
-            for text in WARNINGS["texts"][-3:]:
+            box.label(text=f"Pass of frame {warnings['frame']}:", icon="ERROR")
+            for text in warnings["texts"][-3:]:
                 box.label(text=text)
         col = layout.column(align=True)
         if h.mode == "PLATE":  # camera holograms are recorded with each pass

@@ -25,11 +25,10 @@ from holo_core.io.image import read_exr
 from holo_core.scene.hologram import Hologram
 from holo_core.worker import environment
 
+from ..compositor.session import session
 from ..export.plates import plate_from_object, zone_around
 from ..export.scene import ExportError, camera_from_object, emitter_instances, scale
 from ..render.options import device, runtime_paths
-
-_plans: dict = {}  # plate object name → the planner's lines, shown in its panel
 
 
 def plate_object(context):
@@ -122,14 +121,14 @@ class HOLO_OT_plan_plate(bpy.types.Operator):
         r = subprocess.run(command, capture_output=True, text=True, timeout=120, check=False,
                            env=environment(runtime_paths(), device() or None))
         lines = (r.stdout if r.returncode == 0 else r.stderr).strip().splitlines()
-        _plans[obj.name] = lines
+        session.plans[obj.name] = lines
         for line in lines:
             self.report({"INFO"} if r.returncode == 0 else {"ERROR"}, line)
         return {"FINISHED"} if r.returncode == 0 else {"CANCELLED"}
 
 
 def plan_lines(obj) -> list[str]:
-    return _plans.get(obj.name, [])
+    return session.plans.get(obj.name, [])
 
 
 class HOLO_OT_import_hologram(bpy.types.Operator, ImportHelper):

@@ -18,10 +18,10 @@ from bpy.props import FloatProperty, StringProperty
 
 from holo_core.worker import environment
 
+from ..compositor.session import session
 from ..render.options import ADDON, device, runtime_paths, runtime_prefix
 
 CPU_RUNTIME = ("intel-opencl-rt", "intel-cmplr-lib-rt")
-_listing: list[str] = []  # the last device listing, shown in the preferences
 
 
 def list_devices() -> list[str]:
@@ -40,8 +40,8 @@ class HOLO_OT_check_devices(bpy.types.Operator):
     bl_label = "Check Devices"
 
     def execute(self, context):
-        _listing[:] = list_devices()
-        for line in _listing:
+        session.devices = list_devices()
+        for line in session.devices:
             self.report({"INFO"}, line)
         return {"FINISHED"}
 
@@ -70,7 +70,7 @@ class HOLO_OT_install_cpu_runtime(bpy.types.Operator):
             tail = (r.stderr or r.stdout).strip().splitlines()[-1:] or ["no output"]
             self.report({"ERROR"}, f"installing {' '.join(CPU_RUNTIME)} failed: {tail[0]}")
             return {"CANCELLED"}
-        _listing[:] = list_devices()
+        session.devices = list_devices()
         self.report({"INFO"}, f"installed into {runtime_prefix()}")
         return {"FINISHED"}
 
@@ -102,7 +102,7 @@ class HoloPreferences(bpy.types.AddonPreferences):
         row.operator(HOLO_OT_check_devices.bl_idname, icon="VIEWZOOM")
         row.operator(HOLO_OT_install_cpu_runtime.bl_idname, icon="IMPORT")
         box = layout.box()
-        for line in _listing or ["Check Devices lists what the worker process finds."]:
+        for line in session.devices or ["Check Devices lists what the worker process finds."]:
             box.label(text=line.strip())
 
 

@@ -4,14 +4,22 @@
   ray meets the nearest triangle (a depth buffer, perspective-correct attributes), which
   emits its colour from the hit point, at distance R, with a random phase per look (speckle
   is averaged over looks, Sect. VII-E). Bare points go to their nearest bin.
+- Motion blur (:func:`across_shutter`). Meshes that move (``Mesh.motion``) are rasterized at
+  times spread over the shutter, close enough that no vertex moves more than half a bin from
+  one to the next, and each time's emitters weigh 1/N: the image, its coverage and its depth
+  pair are then the shutter's time average (the emitters are mutually incoherent), as a
+  camera's exposure is.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import math
+
 import numpy as np
 
+from .. import validate
 from ..scene.camera import Camera
 from ..scene.mesh import surface_colour
 from ..validate import InputError
@@ -175,8 +183,9 @@ def grid_indices(flat, shape):
     return np.where(r > (h - 1) // 2, r - h, r), np.where(c > (w - 1) // 2, c - w, c)
 
 
-def _sorted_emitters(index, depth, distance, colour, coverage, optics):
-    layer = optics.layer_of(depth) if len(depth) else np.zeros(0, np.int64)
+def _sorted_emitters(index, depth, distance, colour, coverage, optics, layer=None):
+    if layer is None:
+        layer = optics.layer_of(depth) if len(depth) else np.zeros(0, np.int64)
     order = np.argsort(layer, kind="stable")
     starts = np.searchsorted(layer[order], np.arange(len(optics.layers) + 1))
     return Emitters(index=index[order], depth=depth[order], distance=distance[order],
@@ -207,9 +216,68 @@ def point_emitters(positions, colours, camera: Camera, optics: PupilOptics) -> E
                             optics)
 
 
+MOTION_STEP = 0.5   # bins a vertex may move between two of the shutter's times
+MAX_TIMES = 256     # times across the shutter, at most
+
+
+def shutter_times(meshes, camera: Camera, optics: PupilOptics) -> np.ndarray:
+    """Times in (0, 1) across the shutter at which moving ``meshes`` are rasterized: the
+    midpoints of N equal intervals, N a multiple of the motion steps' intervals such that no
+    vertex moves more than :data:`MOTION_STEP` bins between two times (one time, 0.5, when
+    nothing moves)."""
+    moving = [m.motion for m in meshes if m.motion is not None]
+    if not moving:
+        return np.array([0.5])
+    per = 1
+    for motion in moving:
+        k = len(motion) - 1
+        local = camera_space(camera, motion.reshape(-1, 3)).reshape(motion.shape)
+        d = np.maximum(-local[..., 2], 1e-9)
+        t = local[..., :2] / d[..., None]
+        n = np.sqrt(1 + (t ** 2).sum(-1))[..., None]
+        bins = -t / n / optics.bin
+        jump = float(np.abs(np.diff(bins, axis=0)).max(initial=0))
+        per = max(per, k * math.ceil(jump / MOTION_STEP))
+    count = per
+    if count > MAX_TIMES:
+        validate.warn_sampling(f"the motion across the shutter needs {count} times to stay "
+                               f"within {MOTION_STEP} fine pixel a step; using {MAX_TIMES} "
+                               f"(the blur may show steps)")
+        count = MAX_TIMES
+    return (np.arange(count) + 0.5) / count
+
+
+def across_shutter(meshes, camera: Camera, optics: PupilOptics) -> Emitters | None:
+    """The emitters of ``meshes`` averaged over the shutter (module docstring): each bin's
+    emitters of all times summed with weight 1/N in colour and coverage, their depth and
+    distance the coverage-weighted mean, per depth layer. Without motion, :func:`rasterize`."""
+    times = shutter_times(meshes, camera, optics)
+    if len(times) == 1:
+        return rasterize(meshes, camera, optics)
+    parts = [rasterize([m.at_shutter(t) for m in meshes], camera, optics) for t in times]
+    parts = [p for p in parts if len(p.index)]
+    if not parts:
+        return None
+    w = 1 / len(times)
+    cat = {k: np.concatenate([getattr(p, k) for p in parts])
+           for k in ("index", "depth", "distance", "colour", "coverage", "layer")}
+    size = math.prod(optics.shape)
+    keys, inverse = np.unique(cat["layer"] * size + cat["index"], return_inverse=True)
+    cover = np.bincount(inverse, cat["coverage"] * w)
+    weight = np.maximum(cover, 1e-300)
+
+    def mean(a):
+        return np.bincount(inverse, a * cat["coverage"] * w) / weight
+    colour = np.stack([np.bincount(inverse, cat["colour"][:, c] * w) for c in range(3)], -1)
+    return _sorted_emitters(keys % size, mean(cat["depth"]), mean(cat["distance"]), colour,
+                            cover, optics, layer=keys // size)
+
+
 def depth_range(meshes, camera: Camera, points=None) -> tuple[float, float]:
-    """(near, far) planar depths [m] of the emitters in front of ``camera``."""
-    zs = [-camera_space(camera, m.vertices)[:, 2] for m in meshes]
+    """(near, far) planar depths [m] of the emitters in front of ``camera`` (across the
+    shutter, for meshes that move)."""
+    zs = [-camera_space(camera, m.vertices if m.motion is None else
+                        m.motion.reshape(-1, 3))[:, 2] for m in meshes]
     if points is not None and len(points):
         zs.append(-camera_space(camera, points)[:, 2])
     z = np.concatenate(zs) if zs else np.zeros(0)

@@ -27,7 +27,7 @@ from ..validate import InputError
 from ..view import RenderResult
 from .incoherent import IncoherentImages, grid_bytes
 from .optics import SUPERSAMPLE, PupilOptics, choose_optics
-from .raster import depth_range, merged, point_emitters, raster_bytes, rasterize
+from .raster import across_shutter, depth_range, merged, point_emitters, raster_bytes
 from .recording import PupilFields, intensity_hologram, reconstruct_object_wave
 
 log = logging.getLogger(__name__)
@@ -49,7 +49,8 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
                   supersample=SUPERSAMPLE, pupil_diameter=None, exposure=1.0, seed=0,
                   via="object_wave", progress: jobs.Progress = None, on_sample=None):
     """Render ``meshes`` (and bare ``points``: (positions (N, 3) [m], colours (N, 3))) as
-    ``camera`` sees them through its camera hologram (module docstring).
+    ``camera`` sees them through its camera hologram (module docstring); meshes that move
+    (``Mesh.motion``) are averaged over the shutter (motion blur, :func:`.raster.across_shutter`).
 
     samples : looks with independent random emitter phases, averaged progressively
         (speckle; the 'object_wave' and 'hologram' routes); ``on_sample(result, n)`` gets the
@@ -84,7 +85,7 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     pos, colours = (None, None) if points is None else _points(points)
     optics = choose_optics(camera, depth_range(meshes, camera, pos), supersample=supersample,
                            pupil_diameter=pupil_diameter)
-    em = rasterize(meshes, camera, optics) if meshes else None
+    em = across_shutter(meshes, camera, optics) if meshes else None
     if pos is not None:
         em = merged(em, point_emitters(pos, colours, camera, optics), optics)
     if em is None or not len(em.index):
@@ -196,7 +197,7 @@ class _Accumulator:
         colour, alpha, depth, radiance, coverage = assemble(
             self.rgb / n, self.coverage / n, self.cross, camera=self.camera, supersample=s,
             wavelengths=(o.wavelength, o.depth_wavelength), centre=o.centre,
-            exposure=self.exposure)
+            exposure=self.exposure, soft=self.exact)
         mean = self.lum / n
         spread = np.sqrt(np.maximum(self.lum2 / n - mean**2, 0) / max(n - 1, 1))
         solid = alpha >= 1

@@ -32,6 +32,7 @@ TAPS, ES_TABLE = 4, 4096  # the image read: 4 taps at 2x padding agree with 6 to
 IRIS_TAPER = 0.1       # the iris's raised-cosine rim, a fraction of its radius
 COVERAGE_EDGE = (0.25, 0.75)  # coverage mapped to alpha 0 … 1 (0.5: the geometric edge)
 COVERAGE_FLOOR = 0.05  # the colour is radiance / coverage where coverage exceeds this
+SOFT_FLOOR = 1e-3      # soft alpha: coverage below this is clear, within this of 1 opaque
 
 
 def iris_weights(shape, pitch, diameter, taper=IRIS_TAPER) -> np.ndarray:
@@ -106,23 +107,36 @@ def window(rt, padded, pupil, shape, *, pitch, radius, taper, k, focus, apodizat
 
 
 def assemble(radiance, coverage, cross, *, camera: Camera, supersample: int, wavelengths,
-             centre: float, exposure: float):
+             centre: float, exposure: float, soft: bool = False):
     """The view from the fine pixels' images: ``radiance`` (H·s, W·s, C), ``coverage``
     (H·s, W·s) (1 where surfaces cover a fine pixel), ``cross`` (H·s, W·s) the depth pair's
     u1·conj(u2) at ``wavelengths`` (λ1, λ2) [m] unwrapped around ``centre`` [m], ``exposure``
     radiance to pixel value. Returns (colour, alpha, planar depth [m], radiance, coverage) at
-    the camera's pixels (radiance times the exposure)."""
+    the camera's pixels (radiance times the exposure).
+
+    ``soft`` (images without speckle: the looks' limit): alpha is the coverage itself (0
+    below ``SOFT_FLOOR``, 1 within it of 1, where a uniform surface's coverage ripples by
+    3e-5), which the pupil has blurred as it blurs the colour, so a defocused or moving edge
+    fades over the width Blender's raster gives it and the pass premultiplied is the
+    radiance (within 0.2 %). Else
+    (speckled looks) alpha ramps from coverage 0.25 to 0.75, and a speckle minimum inside a
+    surface leaves no hole."""
     s = supersample
     radiance = downsample(radiance, s)
     coverage = downsample(coverage, s)
-    lo, hi = COVERAGE_EDGE
-    # a pixel's coverage, or its 3×3 neighbourhood's where higher: a speckle minimum
-    # inside a surface leaves no hole, while a straight edge keeps its half-way crossing
-    solid = np.maximum(coverage, box_mean(coverage, 1))
-    alpha = np.clip((solid - lo) / (hi - lo), 0, 1).astype(np.float32)
+    if soft:
+        alpha = np.clip((coverage - SOFT_FLOOR) / (1 - 2 * SOFT_FLOOR), 0, 1).astype(np.float32)
+        floor = SOFT_FLOOR
+    else:
+        lo, hi = COVERAGE_EDGE
+        # a pixel's coverage, or its 3×3 neighbourhood's where higher: a speckle minimum
+        # inside a surface leaves no hole, while a straight edge keeps its half-way crossing
+        solid = np.maximum(coverage, box_mean(coverage, 1))
+        alpha = np.clip((solid - lo) / (hi - lo), 0, 1).astype(np.float32)
+        floor = COVERAGE_FLOOR
     # the surfaces' own colour: radiance over coverage (what the pass stores premultiplied
     # by alpha); the colour and the partner share their speckle, which this divides out
-    colour = radiance / np.maximum(coverage, COVERAGE_FLOOR)[..., None] * exposure
+    colour = radiance / np.maximum(coverage, floor)[..., None] * exposure
     ray = from_cross_spectrum(downsample(cross, s), wavelengths=tuple(wavelengths),
                               centre=centre)
     tx, ty = camera.pixel_tangents()

@@ -21,13 +21,19 @@ SAMPLING_STREAM = 0x5A4D  # seeds mesh sampling apart from the phases (see surfa
 @dataclass(frozen=True, eq=False, kw_only=True)
 class Mesh:
     """A triangle mesh: ``vertices`` (V, 3) [m], ``triangles`` (T, 3) int, optional
-    ``colours`` (V, C) linear intensities, ``uvs`` (V, 2) and ``texture`` (h, w, C)."""
+    ``colours`` (V, C) linear intensities, ``uvs`` (V, 2) and ``texture`` (h, w, C).
+
+    ``motion``, optional: (K, V, 3) [m] the vertices at K >= 2 equally spaced times from the
+    shutter's opening to its closing, between which the mesh moves linearly (as Cycles
+    interpolates its motion steps); a render averages the image over the shutter (motion
+    blur). ``vertices`` stay the frame's own time, where colours and textures are found."""
 
     vertices: np.ndarray
     triangles: np.ndarray
     colours: np.ndarray | None = None
     uvs: np.ndarray | None = None
     texture: np.ndarray | None = None
+    motion: np.ndarray | None = None
 
     def __post_init__(self):
         v = _numbers("vertices", self.vertices, "a finite (V, 3) array [m]")
@@ -43,6 +49,25 @@ class Mesh:
         object.__setattr__(self, "vertices", v.astype(np.float64, copy=False))
         object.__setattr__(self, "triangles", t.astype(np.int64, copy=False))
         self._check_appearance(len(v))
+        if self.motion is not None:
+            m = _numbers("motion", self.motion, "a finite (K, V, 3) array [m], K >= 2")
+            if m.ndim != 3 or m.shape[0] < 2 or m.shape[1:] != v.shape or \
+                    not np.isfinite(m).all():
+                raise InputError(f"motion must be a finite (K, V, 3) array [m] with K >= 2 "
+                                 f"and V = {len(v)} vertices; got shape {m.shape}")
+            object.__setattr__(self, "motion", m.astype(np.float64, copy=False))
+
+    def at_shutter(self, t: float) -> Mesh:
+        """The mesh at ``t`` in [0, 1] of its shutter (0 opens, 1 closes), interpolated
+        linearly between its motion steps; itself when it does not move."""
+        if self.motion is None:
+            return self
+        k = len(self.motion) - 1
+        i = min(int(t * k), k - 1)
+        f = t * k - i
+        moved = (1 - f) * self.motion[i] + f * self.motion[i + 1]
+        return Mesh(vertices=moved, triangles=self.triangles, colours=self.colours,
+                    uvs=self.uvs, texture=self.texture)
 
     def _check_appearance(self, count):
         """Colours (V, C) and a texture (h, w[, C]) of finite intensities >= 0; UVs (V, 2)."""
@@ -72,8 +97,9 @@ class Mesh:
                 else f"{self.colours.shape[1]} colour channels" if self.colours is not None
                 else "no colours")
         t, v = len(self.triangles), len(self.vertices)
+        moving = "" if self.motion is None else f", moving ({len(self.motion)} steps)"
         return (f"Mesh({t} triangle{'s' * (t != 1)}, {v} vert{'ices' if v != 1 else 'ex'}, extent "
-                f"{' x '.join(preview.length(e) for e in hi - lo)}, {look})")
+                f"{' x '.join(preview.length(e) for e in hi - lo)}, {look}{moving})")
 
     def areas(self) -> np.ndarray:
         a, b, c = (self.vertices[self.triangles[:, i]] for i in range(3))

@@ -13,10 +13,10 @@ bpy = pytest.importorskip("bpy")
 @pytest.fixture(scope="session")
 def addon():
     import holo_addon
-    from holo_addon.compositor import passes as compositing
+    from holo_addon.compositor.session import session
     holo_addon.register()
     # a failed pass in a render ends a background Blender (os._exit): not pytest's process
-    compositing.EXIT_ON_FAILURE = False
+    session.exit_on_failure = False
     yield holo_addon
     holo_addon.unregister()
 

@@ -12,6 +12,7 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
+from holo_addon.blender.objects import show_as_raster
 from holo_core.io.view import write_view
 from holo_core.view import RenderResult
 
@@ -70,8 +71,9 @@ def test_export_known_mesh_in_metres(empty_scene):
     # the focus object's distance along the view axis, in metres
     assert data.camera.focus_distance == pytest.approx(3.0 + 0.2, abs=1e-6)
     from holo_addon.blender.objects import RAY_VISIBILITY
-    assert not cube.visible_camera and cube.visible_shadow and cube.visible_glossy, \
-        "an emitter is out of the camera's view of the raster, in its shadows and reflections"
+    assert cube.is_holdout and cube.visible_camera and cube.visible_shadow and \
+        cube.visible_glossy, "an emitter is a holdout in the raster, in its shadows and " \
+                             "reflections"
     assert not any(getattr(plate, n) for n in RAY_VISIBILITY), "the plate is out of the raster"
     assert not cube.hide_render and not plate.hide_render, "Disable in Renders is the user's"
 
@@ -114,27 +116,35 @@ def _read_exr(path):
         return {k: v.pixels.copy() for k, v in f.channels().items()}
 
 
-def _flat_plane(name, size, location, rgb):
+def _flat_plane(name, size, location, rgb, *, emission=1.0):
+    """A plane facing the camera on −Y of Base Color ``rgb``, shining it (an emission of
+    strength ``emission``: its colour in Cycles whatever the light)."""
+    from holo_addon.blender import compat
     bpy.ops.mesh.primitive_plane_add(size=size, location=location, rotation=(np.pi / 2, 0, 0))
     obj = bpy.context.object
     obj.name = name
     mat = bpy.data.materials.new(name)
-    mat.diffuse_color = (*rgb, 1)
+    compat.enable_nodes(mat)
+    bsdf = next(n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
+    bsdf.inputs["Base Color"].default_value = (*rgb, 1)
+    bsdf.inputs["Emission Color"].default_value = (*rgb, 1)
+    bsdf.inputs["Emission Strength"].default_value = emission
     obj.data.materials.append(mat)
     return obj
 
 
 def test_compositing_keeps_the_nearer_surface(empty_scene, tmp_path):
-    """A holographic pass (green square at 2 m) against rasterized planes: red at 1.5 m over
-    the left half, blue at 3 m behind everything. Each pixel must show the nearer one."""
+    """A holographic green square at 2 m against raster planes in Cycles: red at 1.5 m over
+    the left half, blue at 3 m behind everything. Each pixel shows the nearer one: the red
+    plane covers the square's left half, the square covers the blue plane."""
     from holo_addon.blender import compat
     from holo_addon.demo import point_at
-    from holo_addon.render import pipeline
     scene = empty_scene
-    scene.render.engine = "BLENDER_WORKBENCH"
-    scene.display.shading.light = "FLAT"
-    scene.display.shading.color_type = "MATERIAL"
+    scene.render.engine = "CYCLES"
+    scene.cycles.samples = 8
+    scene.cycles.pixel_filter_type = "BOX"
     scene.view_settings.view_transform = "Standard"
+    scene.holo.lighting = "ALBEDO"
     w, h = 64, 48
     scene.render.resolution_x, scene.render.resolution_y = w, h
     scene.render.resolution_percentage = 100
@@ -143,39 +153,27 @@ def test_compositing_keeps_the_nearer_surface(empty_scene, tmp_path):
     scene.camera = bpy.context.object
     _flat_plane("red", 4, (-2.0, -3.5, 0), (1, 0, 0))     # 1.5 m from the camera, left half
     _flat_plane("blue", 20, (0, -2.0, 0), (0, 0, 1))      # 3 m, fills the frame
-    rgb = np.zeros((h, w, 3), np.float32)
-    alpha = np.zeros((h, w), np.float32)
-    depth = np.full((h, w), 1e10, np.float32)
-    square = (slice(12, 36), slice(16, 48))
-    rgb[square] = (0, 1, 0)
-    alpha[square] = 1
-    depth[square] = 2.0
-    out = pipeline.output_dir(scene)
-    out.mkdir(parents=True)
-    write_view(RenderResult(rgb=rgb, alpha=alpha, depth=depth), pipeline.pass_file(out, scene.frame_current))
+    square = _flat_plane("green", 0.8, (0, -3.0, 0), (0, 1, 0), emission=0.0)  # 35.6 px
+    square.holo.emitter = "POINTS"
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
     assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
-    scene.holo.pass_on_render = False  # the pass above stands for the holographic objects
     compat.set_exr_output(scene, multilayer=False)
     scene.render.filepath = str(tmp_path / "composite.exr")
     bpy.ops.render.render(write_still=True)
     c = _read_exr(tmp_path / "composite.exr")
     img = np.stack([c["R"], c["G"], c["B"]], -1)
     dominant = np.argmax(img, -1)               # 0 red, 1 green, 2 blue
-    cols = np.arange(w)[None, :].repeat(h, 0)
-    in_square = np.zeros((h, w), bool)
-    in_square[square] = True
+    rows, cols = np.mgrid[:h, :w]
+    in_square = (np.abs(rows + 0.5 - h / 2) < 15) & (np.abs(cols + 0.5 - w / 2) < 15)
     red_side = cols < w // 2 - 2                 # the red plane's half, clear of its edge
     blue_side = cols >= w // 2 + 2
+    outside = (np.abs(rows + 0.5 - h / 2) > 20) | (np.abs(cols + 0.5 - w / 2) > 20)
     assert (dominant[in_square & red_side] == 0).mean() > 0.99, "red (nearer) must cover"
     assert (dominant[in_square & blue_side] == 1).mean() > 0.99, "green (nearer) must show"
-    assert (dominant[~in_square & blue_side] == 2).mean() > 0.99
-    assert (dominant[~in_square & red_side] == 0).mean() > 0.99
-
-
-def show_in_raster(obj):
-    from holo_addon.blender.objects import RAY_VISIBILITY
-    for name in RAY_VISIBILITY:
-        setattr(obj, name, True)
+    assert (dominant[outside & blue_side] == 2).mean() > 0.99
+    assert (dominant[outside & red_side] == 0).mean() > 0.99
+    green = img[in_square & blue_side]
+    assert np.abs(green - (0, 1, 0)).max() < 0.05, "the pass fills the hole with its colour"
 
 
 def _raster_alpha_and_depth(scene, tmp_path):
@@ -238,7 +236,7 @@ def test_silhouette_and_depth_match_blenders_raster(empty_scene, tmp_path, mode,
     bpy.context.view_layer.update()
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
     holo = _read_exr(pipeline.pass_file(pipeline.output_dir(scene), scene.frame_current))
-    show_in_raster(obj)
+    show_as_raster(obj)
     alpha, depth = _raster_alpha_and_depth(scene, tmp_path)
     mine, theirs = holo["ViewLayer.Combined.A"] > 0.5, alpha > 0.5
     iou = (mine & theirs).sum() / (mine | theirs).sum()
@@ -404,8 +402,8 @@ def test_blender_process_loads_no_opencl_driver(empty_scene, monkeypatch):
     scene.holo.mode = "CAMERA"
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
     assert bpy.ops.holo.check_devices() == {"FINISHED"}
-    from holo_addon.ui import preferences
-    assert any("<- would use" in line for line in preferences._listing), preferences._listing
+    from holo_addon.compositor.session import session
+    assert any("<- would use" in line for line in session.devices), session.devices
 
 
 def test_a_killed_worker_is_reported_and_earlier_files_stay(empty_scene, monkeypatch):

@@ -2,6 +2,10 @@
 scene by the frame handlers, the user's nodes kept, the layers written beside the frame, a
 failed or cancelled pass never composited."""
 
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -105,9 +109,10 @@ def test_three_frames_as_one_animation_or_separate_frames_give_identical_passes(
 
 def test_compositing_keeps_the_users_nodes_and_links(empty_scene, tmp_path):
     """A user's Render Layers → Glare → output chain (and a Viewer) survives the setup: every
-    node and link stays, the chain's result feeds the Depth Combine, whose result goes out."""
+    node and link stays, the chain's result is the raster the pass fills, the composite goes
+    out."""
     from holo_addon.blender import compat
-    from holo_addon.compositor import passes as compositing
+    from holo_addon.compositor import tree as compositing
     from holo_addon.render import pipeline
     from holo_core.io.view import write_view
     from holo_core.view import RenderResult
@@ -130,13 +135,14 @@ def test_compositing_keeps_the_users_nodes_and_links(empty_scene, tmp_path):
                             depth=np.ones((24, 32))), pipeline.pass_file(out, scene.frame_current))
     for _ in range(2):  # again: only the add-on's nodes are rebuilt
         compositing.setup(scene, out)
-    combine = tree.nodes[compositing.NODE_PREFIX + "Depth Combine"]
+    raster = tree.nodes[compositing.NODE_PREFIX + "Raster"]
+    combine = tree.nodes[compositing.NODE_PREFIX + "Composite"]
     output_link = next(l for l in before if l[0] == glare.name)
     assert before - links() == {output_link}, "only the link into the output is re-routed"
     assert nodes <= {n.name for n in tree.nodes}
-    assert combine.inputs[2].links[0].from_node == glare
+    assert raster.inputs[0].links[0].from_node == glare
     assert compat.output_socket(tree).links[0].from_node == combine
-    assert sum(n.name.startswith(compositing.NODE_PREFIX + "Depth") for n in tree.nodes) == 1
+    assert sum(n.name == compositing.NODE_PREFIX + "Composite" for n in tree.nodes) == 1
 
 
 def _scene_with_pass(scene, tmp_path):
@@ -191,12 +197,12 @@ def test_each_rendered_frame_gets_its_holographic_layers_beside_it(empty_scene, 
 def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monkeypatch):
     """In the interface a handler cannot cancel the render: the failed frame shows the raster
     alone (the stale pass set aside, kept), and the next good pass shows again."""
-    from holo_addon.compositor import passes as compositing
+    from holo_addon.compositor.session import session
     from holo_addon.render import pipeline
     from holo_core.worker import WorkerError
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
-    monkeypatch.setattr(compositing, "EXIT_ON_FAILURE", False)
+    monkeypatch.setattr(session, "exit_on_failure", False)
     original = pipeline.run
 
     def broken(job, progress=None, on_log=None):
@@ -213,20 +219,69 @@ def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monke
     assert _shown_columns(tmp_path / "good.exr").size > 0
 
 
-# a background Blender's script (argv: the repository, tests/addon, a folder): the add-on and a
-# moving cube whose pass is composited, rendered into the folder by what follows
-BACKGROUND_SCENE = """
+def test_after_save_as_a_failed_pass_never_composites_the_old_folders(
+        empty_scene, tmp_path, monkeypatch):
+    """A .blend with its pass in its folder's holo/, saved as another .blend in another
+    folder: the compositor's image follows the new folder (Blender kept the old folder's
+    file), so a failed pass there shows the raster alone, not the old folder's pass; the next
+    good pass shows."""
+    from holo_addon.compositor.session import session
+    from holo_addon.render import pipeline
+    from holo_core.worker import WorkerError
+    scene = empty_scene
+    scene.holo.output_dir = "//holo/"
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "a" / "shot.blend"))
+    scene = bpy.context.scene
+    _scene_with_pass(scene, tmp_path)
+    assert (tmp_path / "a" / "holo" / "holo_pass_0001.exr").is_file()
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "b" / "shot.blend"))
+    scene = bpy.context.scene
+    (image,) = [i for i in bpy.data.images if i.source == "SEQUENCE"]
+    assert bpy.path.abspath(image.filepath) == str(tmp_path / "b" / "holo" / "holo_pass_0001.exr")
+    monkeypatch.setattr(session, "exit_on_failure", False)
+    original = pipeline.run
+
+    def broken(job, progress=None, on_log=None):
+        raise WorkerError("a crash in native code")
+    monkeypatch.setattr(pipeline, "run", broken)
+    scene.render.filepath = str(tmp_path / "failed.exr")
+    bpy.ops.render.render(write_still=True)
+    assert _shown_columns(tmp_path / "failed.exr").size == 0, "the old folder's pass showed"
+    assert (tmp_path / "a" / "holo" / "holo_pass_0001.exr").is_file(), "the old file is kept"
+    monkeypatch.setattr(pipeline, "run", original)
+    scene.render.filepath = str(tmp_path / "good.exr")
+    bpy.ops.render.render(write_still=True)
+    assert _shown_columns(tmp_path / "good.exr").size > 0
+    assert (tmp_path / "b" / "holo" / "holo_pass_0001.exr").is_file()
+
+
+# a background Blender's script (argv: the repository, tests/addon, a folder): the add-on
+# registered and the scene's holographic output in the folder; BACKGROUND_SCENE adds a moving
+# cube whose pass is composited, rendered into the folder by what follows
+BACKGROUND = """
 import sys
 sys.path[:0] = [sys.argv[1], sys.argv[2]]
 import bpy
 bpy.ops.wm.read_factory_settings(use_empty=True)
 import holo_addon
 holo_addon.register()
-import test_compositor
 scene = bpy.context.scene
 scene.holo.output_dir = sys.argv[3] + "/holo/"
+"""
+BACKGROUND_SCENE = BACKGROUND + """import test_compositor
 test_compositor._scene_with_pass(scene, None)
 """
+
+
+def in_background(script: str, tmp_path):
+    """``script`` (:data:`BACKGROUND` and what follows) run by a Python of its own, on
+    ``tmp_path``: the ended process."""
+    here = Path(__file__).resolve()
+    return subprocess.run([sys.executable, "-c", script, str(here.parents[2]), str(here.parent),
+                           str(tmp_path)], capture_output=True, text=True, timeout=600,
+                          check=False)
 FAILING_FARM_RENDER = BACKGROUND_SCENE + """from holo_addon.render import pipeline
 def broken(job, progress=None, on_log=None):
     raise RuntimeError("the worker failed")
@@ -240,13 +295,7 @@ print("rendered")
 def test_a_failed_pass_fails_a_background_animation(tmp_path):
     """``blender -b ... -a``: the process ends with status 1 and the error, before writing the
     frame."""
-    import subprocess
-    import sys
-    from pathlib import Path
-    here = Path(__file__).resolve()
-    run = subprocess.run([sys.executable, "-c", FAILING_FARM_RENDER, str(here.parents[2]),
-                          str(here.parent), str(tmp_path)], capture_output=True, text=True,
-                         timeout=600)
+    run = in_background(FAILING_FARM_RENDER, tmp_path)
     assert run.returncode == 1, run.stdout[-2000:] + run.stderr[-2000:]
     assert "the holographic pass of frame 1 failed: the worker failed" in run.stderr
     assert "rendered" not in run.stdout and not list(tmp_path.glob("frame_*"))
@@ -277,7 +326,7 @@ def test_renders_use_render_modifier_levels(empty_scene, tmp_path, monkeypatch):
 def test_the_pass_of_a_render_can_be_cancelled(empty_scene, tmp_path, monkeypatch):
     """Cancel Pass while a render makes its pass: the worker stops, the frame shows the raster
     alone (the stale pass set aside) and the panel's state is cleared."""
-    from holo_addon.compositor import passes as compositing
+    from holo_addon.compositor.session import session
     from holo_addon.render import pipeline
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
@@ -296,4 +345,4 @@ def test_the_pass_of_a_render_can_be_cancelled(empty_scene, tmp_path, monkeypatc
     assert clicked == [{"FINISHED"}]
     assert _shown_columns(tmp_path / "cancelled.exr").size == 0
     assert (pipeline.output_dir(scene) / "holo_pass_0001.stale.exr").is_file()
-    assert compositing.RUNNING["frame"] is None and not bpy.ops.holo.cancel_pass.poll()
+    assert session.running.frame is None and not bpy.ops.holo.cancel_pass.poll()

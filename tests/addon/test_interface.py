@@ -194,7 +194,7 @@ def test_the_panels_draw_every_state(empty_scene):
     """Render ▸ Holo in both modes and while a render makes its pass (progress and Cancel
     Pass), Object ▸ Holo for an emitter and a plate: every property and operator they show
     exists."""
-    from holo_addon.compositor import passes as compositing
+    from holo_addon.compositor.session import session
     from holo_addon.ui import panels as ui
     cube, _, plate = _plate_camera_cube(empty_scene)
     context = SimpleNamespace(scene=empty_scene, object=cube)
@@ -202,11 +202,12 @@ def test_the_panels_draw_every_state(empty_scene):
         empty_scene.holo.mode = mode
         drawn = _draw(ui.HOLO_PT_scene, context)
         assert ("prop", "speckle" if mode == "CAMERA" else "iterations") in drawn
-    compositing.RUNNING.update(frame=7, fraction=0.42)
+    session.pass_started(7)
+    session.running.fraction = 0.42
     try:
         drawn = _draw(ui.HOLO_PT_scene, context)
     finally:
-        compositing.RUNNING["frame"] = None
+        session.pass_ended()
     assert ("label", "Pass of frame 7: 42%") in drawn and ("operator", "holo.cancel_pass") in drawn
     assert ("prop", "emitter") in _draw(ui.HOLO_PT_object, context)
     context.object = plate
@@ -239,22 +240,37 @@ def test_a_renders_pass_shows_its_progress_in_the_status_bar(monkeypatch):
     the Properties editors (the panel's progress and Cancel Pass), and clears both after."""
     from contextlib import nullcontext
 
-    from holo_addon.compositor import passes as compositing
+    from holo_addon.compositor import handlers
+    from holo_addon.compositor.session import Running, session
     redrawn = []
     area = SimpleNamespace(type="PROPERTIES", tag_redraw=lambda: redrawn.append(1))
     window = SimpleNamespace(workspace=_Workspace(),
                              screen=SimpleNamespace(areas=[area, SimpleNamespace(type="VIEW_3D")]))
     context = SimpleNamespace(window_manager=SimpleNamespace(windows=[window]),
                               temp_override=lambda **_: nullcontext())
-    monkeypatch.setattr(compositing, "bpy", SimpleNamespace(context=context))
-    monkeypatch.setattr(compositing, "_shown", [None])
+    monkeypatch.setattr(handlers, "bpy", SimpleNamespace(context=context))
+    monkeypatch.setattr(session, "shown", None)
     for frame, fraction in ((12, 0.0), (12, 0.25), (12, 0.25), (None, 0.25)):
-        compositing.RUNNING.update(frame=frame, fraction=fraction)
-        assert compositing._show_progress() == 0.25  # the timer runs again in 0.25 s
+        session.running = Running(frame=frame, fraction=fraction)
+        assert handlers._show_progress() == 0.25  # the timer runs again in 0.25 s
     status = window.workspace.status
     assert status[:2] == [f"Holo: holographic pass of frame 12: {p} (Render Properties ▸ Holo "
                           f"▸ Cancel Pass)" for p in ("0%", "25%")]
     assert status[2:] == [None] and len(redrawn) == 3  # unchanged text: not set again
+
+
+def test_a_pass_of_one_look_reports_no_nan_contrast():
+    """A plate view of one look has no spread to measure: said in words, not "nan"; the
+    looks' limit has no speckle; several looks give their contrast."""
+    from holo_addon.ui.operators import speckle
+    from holo_core.job import Report
+    from holo_core.view import RenderResult
+    one = speckle(Report.of(RenderResult(rgb=0, alpha=0, depth=0, info={
+        "samples": 1, "speckle_contrast": float("nan")})))
+    assert "nan" not in one and "not measured" in one, one
+    assert "no speckle" in speckle(Report(looks=1, speckle_contrast=0.0))
+    assert speckle(Report(looks=4, speckle_contrast=0.1234)) == \
+        " (4 samples, speckle contrast 0.123)"
 
 
 def test_the_plate_coverage_overlay_follows_the_lines_of_sight(empty_scene):
@@ -289,7 +305,7 @@ def test_a_renders_warnings_reach_the_panel(empty_scene, tmp_path):
     (a render's pass has no operator to report through)."""
     from test_compositor import _scene_with_pass
 
-    from holo_addon.compositor import passes as compositing
+    from holo_addon.compositor.session import session
     from holo_addon.ui import panels as ui
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
@@ -297,7 +313,7 @@ def test_a_renders_warnings_reach_the_panel(empty_scene, tmp_path):
     plate.scale = (0.3, 0.3, 1)
     scene.render.filepath = str(tmp_path / "cut.exr")
     bpy.ops.render.render(write_still=True)
-    assert compositing.WARNINGS["frame"] == 1
+    assert session.warnings["frame"] == 1
     drawn = _draw(ui.HOLO_PT_scene, SimpleNamespace(scene=scene))
     (warning,) = [text for kind, text in drawn if kind == "label" and "cut from the pass" in text]
     assert "covers" in warning
@@ -309,11 +325,11 @@ def test_a_renders_warnings_reach_the_panel(empty_scene, tmp_path):
 def test_a_failed_render_pass_reaches_blenders_reports(addon, monkeypatch):
     """In the interface a failed render pass is put in Blender's reports (status bar, Info
     log) by the holo.report operator, and shown in a popup."""
-    from holo_addon.compositor import passes as compositing
+    from holo_addon.compositor import handlers
     with pytest.raises(RuntimeError, match="Error: Holo: the pass of frame 3 failed"):
         bpy.ops.holo.report(message="Holo: the pass of frame 3 failed")
     shown = []
     monkeypatch.setattr(bpy.types.WindowManager, "popup_menu",
                         lambda self, draw, title, icon: shown.append((title, icon)), raising=False)
-    compositing._show_error("Holo: the pass of frame 3 failed")
+    handlers._show_error("Holo: the pass of frame 3 failed")
     assert shown == [("Holo", "ERROR")]

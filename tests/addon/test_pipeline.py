@@ -55,6 +55,10 @@ def test_an_up_to_date_pass_is_not_rendered_again(empty_scene, worker_frames):
     scene.holo.exposure = 1.0
     assert bpy.ops.holo.render_pass() == {"FINISHED"} and worker_frames == [1, 1]
     assert pipeline.cached_pass(pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get()))
+    # a camera hologram renders points and triangles alike: switching the kind is no change
+    cube = next(o for o in scene.objects if o.holo.emitter == "POINTS")
+    cube.holo.emitter = "TRIANGLES"
+    assert bpy.ops.holo.render_pass() == {"FINISHED"} and worker_frames == [1, 1]
 
 
 def test_a_render_region_without_crop_clears_the_pass_outside_it(empty_scene, tmp_path):

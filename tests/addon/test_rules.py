@@ -6,8 +6,10 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from test_addon import _plate_camera_cube, _raster_alpha_and_depth, _read_exr, show_in_raster
-from test_compositor import BACKGROUND_SCENE  # noqa: E402
+from test_addon import _plate_camera_cube, _raster_alpha_and_depth, _read_exr
+from test_compositor import BACKGROUND, BACKGROUND_SCENE, in_background  # noqa: E402
+
+from holo_addon.blender.objects import show_as_raster
 
 
 def test_the_pass_depth_is_in_scene_units(empty_scene, tmp_path):
@@ -28,7 +30,7 @@ def test_the_pass_depth_is_in_scene_units(empty_scene, tmp_path):
     bpy.context.view_layer.update()
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
     holo = _read_exr(pipeline.pass_file(pipeline.output_dir(scene), 1))
-    show_in_raster(cube)
+    show_as_raster(cube)
     alpha, depth = _raster_alpha_and_depth(scene, tmp_path)
     both = (holo["ViewLayer.Combined.A"] > 0.5) & (alpha > 0.5) & (depth < 1e9)
     extent = np.ptp(depth[both])
@@ -149,7 +151,7 @@ def _warnings(caplog):
 def test_f12_without_compositing_warns_in_blenders_report(empty_scene, tmp_path, caplog):
     """An emitter and no Set Up Compositing: F12 warns (the log, Render ▸ Holo, and Blender's
     reports in the interface) naming the object and the fix, instead of a silent vanish."""
-    from holo_addon.compositor import passes
+    from holo_addon.compositor.session import session
     scene = empty_scene
     _plate_camera_cube(scene)
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
@@ -157,7 +159,7 @@ def test_f12_without_compositing_warns_in_blenders_report(empty_scene, tmp_path,
     bpy.ops.render.render(write_still=True)
     (warning,) = [w for w in _warnings(caplog) if "not in this render" in w]
     assert "'Cube'" in warning and "Set Up Compositing" in warning, warning
-    assert warning in passes.WARNINGS["texts"]
+    assert warning in session.warnings["texts"]
     assert bpy.ops.holo.report(message=warning, level="WARNING") == {"FINISHED"}
 
 
@@ -175,21 +177,20 @@ def test_layers_follow_the_output_path_at_render_time(empty_scene, tmp_path):
     assert (tmp_path / "farm" / "holo_take_0001.exr").is_file()
 
 
-def test_motion_blur_warns_once_and_makes_one_pass_per_frame(empty_scene, tmp_path, caplog,
-                                                           worker_frames):
-    """Motion blur on, -a over frames 1-3 of a moving cube: Blender evaluates each frame at
-    its shutter's steps (sub-frames), but one pass per frame is made (3 workers, was 11),
-    each of its own frame's geometry (its silhouette within half a pixel of the frame's
-    projection: no in-between geometry left in the files), and one warning says the
-    holographic object is not blurred."""
+def test_motion_blur_in_plate_mode_warns_once_and_makes_one_pass_per_frame(
+        empty_scene, tmp_path, caplog, worker_frames):
+    """Motion blur on in Plate mode (a plate is recorded once for many frames, unblurred),
+    -a over frames 1-3 of a moving cube: Blender evaluates each frame at its shutter's steps
+    (sub-frames), but one pass per frame is made (3 workers, was 11), each of its own
+    frame's geometry (its silhouette within half a pixel of the frame's projection: no
+    in-between geometry left in the files), and one warning says the holographic object is
+    not blurred. (Camera mode blurs it: tests/addon/test_blur.py.)"""
     from test_addon import _camera_columns
     from test_compositor import _middle, _moving_cube
 
     from holo_addon.render import pipeline
     scene = empty_scene
     _, cam = _moving_cube(scene, tmp_path)
-    scene.holo.mode = "CAMERA"
-    scene.holo.samples = 2
     scene.frame_set(1)
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
     assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
@@ -256,13 +257,7 @@ def test_with_no_emitter_left_frames_render_the_raster_alone_with_exit_0(tmp_pat
     """``blender -b ... -a`` on a file whose last emitter was un-marked: the frames render
     (the raster alone: the cube, a raster object again, and clear passes) and the process
     ends with status 0 (it ended with 1)."""
-    import subprocess
-    import sys
-    from pathlib import Path
-    here = Path(__file__).resolve()
-    run = subprocess.run([sys.executable, "-c", NO_EMITTER_LEFT, str(here.parents[2]),
-                          str(here.parent), str(tmp_path)], capture_output=True, text=True,
-                         timeout=600, check=False)
+    run = in_background(NO_EMITTER_LEFT, tmp_path)
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
     assert "rendered" in run.stdout
     frames = sorted(p.name for p in tmp_path.glob("frame_*"))
@@ -270,6 +265,43 @@ def test_with_no_emitter_left_frames_render_the_raster_alone_with_exit_0(tmp_pat
     for frame in (1, 2):
         alpha = _read_exr(tmp_path / "holo" / f"holo_pass_{frame:04d}.exr")
         assert not alpha["ViewLayer.Combined.A"].any(), f"frame {frame}'s pass is clear"
+
+
+FARM_LOG = BACKGROUND + """
+from test_addon import _plate_camera_cube
+_plate_camera_cube(scene)
+scene.render.engine = "CYCLES"
+scene.cycles.samples = 1
+scene.render.resolution_x, scene.render.resolution_y = 32, 24
+scene.holo.lighting = "ALBEDO"
+assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+scene.render.filepath = sys.argv[3] + "/frame_"
+scene.frame_start, scene.frame_end = 1, 2
+bpy.ops.render.render(animation=True)
+scene.frame_start, scene.frame_end = 2, 2
+bpy.ops.render.render(animation=True)
+import os
+os._exit(0)  # bpy 4.2.0's teardown after a render crashes, 4.5.15's never returns
+"""
+
+
+def test_a_background_render_logs_what_each_frames_pass_was(tmp_path):
+    """``blender -b ... -a`` (Set Up Compositing before any pass) of a still cube: the log
+    says per frame what its pass was, its file and its warnings (none here): frame 1's made,
+    in how many seconds; frame 2's the static shot's (frame 1's, only the frame changed);
+    rendered again, frame 2's up to date."""
+    import re
+    run = in_background(FARM_LOG, tmp_path)
+    lines = [ln for ln in run.stderr.splitlines() if "Holo: frame" in ln]
+    print("\n".join(lines))
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert len(lines) == 3, lines
+    assert re.search(r"^INFO Holo: frame 1: holographic pass made in [0-9.]+ s: .*"
+                     r"holo_pass_0001\.exr; no warnings$", lines[0]), lines[0]
+    assert re.search(r"^INFO Holo: frame 2: holographic pass reused from holo_pass_0001\.exr "
+                     r"\(a static shot: only the frame changed\): .*holo_pass_0002\.exr; no "
+                     r"warnings$", lines[1]), lines[1]
+    assert re.search(r"^INFO Holo: frame 2: holographic pass reused \(up to date\)", lines[2])
 
 
 def _links(tree):
@@ -282,7 +314,7 @@ def test_remove_holo_compositing_restores_the_users_own_tree(empty_scene, tmp_pa
     link is as it was and the Depth pass is off again; a scene without a compositor gets
     none back."""
     from holo_addon.blender import compat
-    from holo_addon.compositor import passes
+    from holo_addon.compositor import tree as passes
     scene = empty_scene
     _composited_cube(scene)
     assert bpy.ops.holo.remove_compositing() == {"FINISHED"}

@@ -94,7 +94,7 @@ def test_the_rules_see_real_imports():
     """The reader resolves relative imports: the plate's view is seen importing the scene."""
     edges = {(a, b) for a, b, _ in _edges("holo_core")}
     assert ("holo_core.plate.view", "holo_core.scene.camera") in edges
-    assert ("holo_addon.ui.panels", "holo_addon.compositor.passes") in \
+    assert ("holo_addon.ui.panels", "holo_addon.compositor.session") in \
         {(a, b) for a, b, _ in _edges("holo_addon")}
 
 

@@ -113,7 +113,7 @@ def test_a_ten_million_vertex_mesh_is_refused_by_render_camera(monkeypatch):
     at 10^6): 18.6 GiB for 2·10^7 triangles against an 8 GiB budget."""
     import holo_core.camera.render as render
     monkeypatch.setenv("HOLO_MEMORY_LIMIT", "8G")
-    monkeypatch.setattr(render, "rasterize", _never)
+    monkeypatch.setattr(render, "across_shutter", _never)
     cam = Camera(matrix_world=look_at((0, 0, 0.5), (0, 0, -1)), resolution=(64, 64))
     with pytest.raises(InputError, match=r"rasterizing 20000000 triangles needs 1\d\.\d GiB of "
                                          r"memory; 6.4 GiB is available"):
