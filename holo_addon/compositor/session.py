@@ -40,6 +40,7 @@ class Session:
     exit_on_failure : None: a failed pass ends a background Blender with status 1 (as farms
         need); True or False decide it (tests keep their process)
     shown : the status bar's text as it was last set
+    preview : what the viewport's preview shows and makes (:class:`holo_addon.ui.preview.Preview`)
     """
 
     running: Running = field(default_factory=Running)
@@ -53,6 +54,7 @@ class Session:
     devices: list = field(default_factory=list)
     exit_on_failure: bool | None = None
     shown: str | None = None
+    preview: object | None = None
 
     # -- a render ------------------------------------------------------------------------
     def render_started(self) -> None:

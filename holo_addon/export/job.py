@@ -115,15 +115,16 @@ class Prepared:
         return replace(self.job, radiance=self.lighting())
 
 
-def read(scene, depsgraph, *, render=True) -> Prepared:
+def read(scene, depsgraph, *, render=True, preview=1) -> Prepared:
     """The scene as ``depsgraph`` evaluates it, as one job (``render``: view it into the
     frame's pass; else a plate's recording alone). Raises :class:`ExportError` for a scene
     that cannot be recorded. With Lighting: Scene, what the emitters' radiance depends on
     (lights, world, every object the render draws, Cycles' settings) enters the hologram's
     and the pass's digests, so a changed light renders again and an unchanged scene is
-    reused."""
+    reused. ``preview`` > 1 (Camera mode): the viewport's preview, at 1/``preview`` of the
+    render's resolution (the same frame), into the output folder's ``preview/``."""
     mode = scene.holo.mode
-    out = output_dir(scene)
+    out = output_dir(scene) / "preview" if preview > 1 else output_dir(scene)
     plate = scene_plate(scene, required=mode == "PLATE")
     imported = plate if mode == "PLATE" and plate.holo.imported else None
     lit = scene.holo.lighting == "SCENE" and not imported
@@ -133,6 +134,9 @@ def read(scene, depsgraph, *, render=True) -> Prepared:
         data = export_scene(scene, depsgraph, lit=lit)
         if mode == "PLATE":
             data = with_plate(data, plate, depsgraph)
+    if preview > 1:
+        data = replace(data, camera=coarser(data.camera, preview),
+                       view=coarser(data.view, preview), region=None)
     lighting = radiance.digest(scene, depsgraph) if lit else ""
     settings = Settings.from_scene(scene, data.unit)
     if mode == "CAMERA":  # recorded for this view at every render: no plate file
@@ -226,6 +230,12 @@ def moving(prepared: Prepared, samples, opening: float, closing: float) -> Prepa
                      shot_key=rekeyed(job.output.shot_key))
     return replace(prepared, job=replace(blurred, output=output),
                    fingerprint=rekeyed(prepared.fingerprint))
+
+
+def coarser(camera: Camera, factor: int) -> Camera:
+    """``camera``'s frame at 1/``factor`` of its resolution (the same field of view)."""
+    w, h = camera.resolution
+    return replace(camera, resolution=(max(1, round(w / factor)), max(1, round(h / factor))))
 
 
 def output_dir(scene) -> Path:

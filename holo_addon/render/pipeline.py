@@ -36,13 +36,14 @@ __all__ = ["Prepared", "apply", "cached_pass", "check_hologram", "clear_pass", "
            "output_dir", "pass_file", "prepare", "run", "start", "stored_key"]
 
 
-def prepare(scene, depsgraph, *, render=True, bake=False) -> Prepared:
-    """The scene read into a job (:func:`holo_addon.export.job.read`). With ``bake``,
-    emitters whose Base Color needs it are baked first (:mod:`holo_addon.export.bake`; never
-    inside a render; Lighting: Albedo only)."""
+def prepare(scene, depsgraph, *, render=True, bake=False, preview=1) -> Prepared:
+    """The scene read into a job (:func:`holo_addon.export.job.read`; ``preview``: the
+    viewport's, at 1/``preview`` of the render's resolution). With ``bake``, emitters whose
+    Base Color needs it are baked first (:mod:`holo_addon.export.bake`; never inside a
+    render; Lighting: Albedo only)."""
     if bake and scene.holo.lighting != "SCENE":
         depsgraph = bake_emitters(scene) or depsgraph
-    return read(scene, depsgraph, render=render)
+    return read(scene, depsgraph, render=render, preview=preview)
 
 
 def bake_emitters(scene):

@@ -135,27 +135,41 @@ def _toggle(panel, context):
     panel.layout.prop(context.scene.holo, "show_coverage", text="Holo Plate Coverage")
 
 
+def attach(handlers, draw, kind: str, drawn: list) -> bool:
+    """In the interface (a background Blender draws nothing): the app ``handlers`` ((name,
+    function), ...) and ``draw`` in every 3D view's window region at ``kind`` (POST_VIEW,
+    POST_PIXEL), its handle kept in ``drawn``. Returns whether it attached them."""
+    if bpy.app.background:
+        return False
+    for name, fn in handlers:
+        getattr(bpy.app.handlers, name).append(fn)
+    drawn.append(bpy.types.SpaceView3D.draw_handler_add(draw, (), "WINDOW", kind))
+    return True
+
+
+def detach(handlers, drawn: list) -> bool:
+    """Undo :func:`attach`; returns whether there was anything attached."""
+    if not drawn:
+        return False
+    bpy.types.SpaceView3D.draw_handler_remove(drawn.pop(), "WINDOW")
+    for name, fn in handlers:
+        found = getattr(bpy.app.handlers, name)
+        if fn in found:
+            found.remove(fn)
+    return True
+
+
 HANDLERS = (("depsgraph_update_post", _update), ("frame_change_post", _update),
             ("load_post", _forget))
 _handle = []
 
 
 def register():
-    if bpy.app.background:  # nothing to draw
-        return
-    for name, fn in HANDLERS:
-        getattr(bpy.app.handlers, name).append(fn)
-    _handle.append(bpy.types.SpaceView3D.draw_handler_add(_draw, (), "WINDOW", "POST_VIEW"))
-    bpy.types.VIEW3D_PT_overlay_guides.append(_toggle)
+    if attach(HANDLERS, _draw, "POST_VIEW", _handle):
+        bpy.types.VIEW3D_PT_overlay_guides.append(_toggle)
 
 
 def unregister():
-    if not _handle:
-        return
-    bpy.types.VIEW3D_PT_overlay_guides.remove(_toggle)
-    bpy.types.SpaceView3D.draw_handler_remove(_handle.pop(), "WINDOW")
-    for name, fn in HANDLERS:
-        handlers = getattr(bpy.app.handlers, name)
-        if fn in handlers:
-            handlers.remove(fn)
+    if detach(HANDLERS, _handle):
+        bpy.types.VIEW3D_PT_overlay_guides.remove(_toggle)
     _cache.clear()

@@ -6,7 +6,7 @@ import bpy
 
 from ..compositor.session import session
 from ..compositor.tree import uses_pass
-from . import plates
+from . import plates, preview
 
 
 class HOLO_PT_scene(bpy.types.Panel):
@@ -41,6 +41,12 @@ class HOLO_PT_scene(bpy.types.Panel):
             col.prop(h, "composition")
             col.prop(h, "opacity_threshold")
             layout.prop(h, "show_coverage")
+        if h.mode == "CAMERA":
+            layout.prop(h, "preview")
+            shown = preview.state()
+            if h.preview and shown.latency is not None:
+                layout.label(text=f"Preview: {shown.latency:.1f} s from the change to the "
+                                  f"picture", icon="HIDE_OFF")
         layout.prop(h, "pass_on_render")
         running, warnings = session.running, session.warnings
         if running.frame is not None:  # a render is making its pass

@@ -152,6 +152,11 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                                             "plate covers from the camera: green when they "
                                             "take in every holographic object, orange when "
                                             "part, red when none")
+    preview: BoolProperty(name="Viewport Preview", default=True,
+                          description="In camera view, show the holographic objects in the "
+                                      "viewport: the latest pass, and a preview pass at a "
+                                      "quarter of the render's resolution made again when the "
+                                      "scene changes (Camera mode)")
     pass_on_render: BoolProperty(name="Pass on Every Render", default=True,
                                  description="Render the holographic pass before each Blender "
                                              "render or animation frame (recording again only "
