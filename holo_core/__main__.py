@@ -101,12 +101,11 @@ def _read(path):
 
 def plan(args) -> int:
     """What a plate will take and give, before any recording (the plate's frame: the plate is
-    z = 0, the objects behind it, the camera in front)."""
+    z = 0, the objects behind it, the camera in front), in plain words, the verdict first."""
     import numpy as np
 
-    from . import memory
-    from .plate.sampling import plan as plan_plate
-    from .plate.sampling import check_in_front, plan_view
+    from .plate.plan import plan as plan_plate
+    from .plate.plan import plan_view
     from .scene.camera import Camera, look_at
     from .scene.plate import ViewingZone
     if args.bounds is not None:  # where they are: no move
@@ -124,46 +123,60 @@ def plan(args) -> int:
         shift = np.array([-(lo[0] + hi[0]) / 2, -(lo[1] + hi[1]) / 2, -hi[2] - args.distance])
         bounds = np.array([lo + shift, hi + shift])
     eye = np.array(args.camera if args.camera else (0.0, 0.0, args.distance))
-    check_in_front("--camera", eye)  # before the zone around it, in the option's name
+    if eye[2] <= 0:
+        raise ValueError(f"--camera must be in front of the plate (z > 0 in its frame: the plate "
+                         f"is z = 0, the objects behind it); got ({eye[0]:g}, {eye[1]:g}, "
+                         f"{eye[2]:g}) m, {'on' if eye[2] == 0 else 'behind'} the plate")
     target = np.array(args.look_at) if args.look_at else bounds.mean(0)
     focus = args.focus_distance or float(np.linalg.norm(eye - target))
     cam = Camera(matrix_world=look_at(eye, target, up=(0, 1, 0)), lens=args.lens,
                  sensor_width=args.sensor_width, resolution=tuple(args.resolution),
                  fstop=args.fstop, focus_distance=focus if args.fstop else None)
-    zone = ViewingZone.around(eye, cam.aperture_diameter or 0.0, args.zone_margin) \
-        if args.zone is None else ViewingZone(centre=args.zone[:3], half_extents=args.zone[3:],
-                                              pupil=cam.aperture_diameter or 0.0)
-    p = plan_plate(tuple(args.plate_size), bounds, zone=zone, resolution=args.samples,
-                   encoding=args.encoding, camera=(eye, cam.pixel_angle(),
-                                                   cam.aperture_diameter),
-                   max_resolution=args.max_samples)
-    v = plan_view(p, position=eye, pixel_angle=cam.pixel_angle(), pupil=cam.aperture_diameter,
-                  resolution=cam.resolution, distance=float(np.linalg.norm(eye - target)))
+    pupil, pixel = cam.aperture_diameter or 0.0, cam.pixel_angle()
+    if args.zone is not None:
+        zone = ViewingZone(centre=args.zone[:3], half_extents=args.zone[3:], pupil=pupil,
+                           pixel=pixel)
+    else:
+        path = [eye + (x, 0.0, 0.0) for x in (-args.dolly / 2, args.dolly / 2)]
+        zone = ViewingZone.fit(path, pupil, args.zone_margin, pixel)
+    p = plan_plate(tuple(args.plate_size), bounds, zone=zone, pixel_angle=pixel,
+                   looks=args.looks)
+    v = plan_view(p, position=eye, pixel_angle=pixel, pupil=pupil or None,
+                  resolution=cam.resolution)
     rows, cols = p.shape
-    um = 1e6
-    print(f"plate       {args.plate_size[0]:g} x {args.plate_size[1]:g} m, {cols} x {rows} "
-          f"samples at pitch {p.pitch * um:.3g} µm, {p.encoding} "
-          f"({'the object wave' if p.encoding == 'complex' else '|O + R|², off axis'})")
-    print(f"zone        {zone.describe()}")
-    print(f"band        sin θ = {p.band:.3g}: the widest line from an object point to the zone")
-    print(f"wavelength  λ = {p.wavelength * um:.4g} µm from the pitch and the band (depth "
-          f"partner {p.depth_wavelength * um:.6g} µm)")
-    print(f"emitters    one per {p.step:.3g} rad seen from the zone's centre; occlusion on "
-          f"{p.slabs()} slabs of {p.slab * 1e3:.3g} mm")
-    print(f"memory      {memory.gib(p.memory_bytes())} while recording "
-          f"({memory.gib(8 * 4 * rows * cols)} the plate)")
-    print(f"recording   about {p.record_seconds():.0f} s on a 2-core CPU")
-    lens = f"{cam.lens:g} mm f/{cam.fstop:g}" if cam.fstop else f"{cam.lens:g} mm pinhole"
-    print(f"view        {cam.resolution[0]} x {cam.resolution[1]} px, {lens}, from "
-          f"({eye[0]:g}, {eye[1]:g}, {eye[2]:g}) m: resolves {v.spot_px:.2f} px (λ/D), "
-          + ("sharp" if v.sharp else f"blurred to about {v.blur_px:.2f} px"))
-    print(f"sharp view  needs {v.sharp_samples} samples along the plate's longer side "
-          f"(a fine pixel, {0.5:g} px" + (", at a pinhole's best: use a lens)" if not cam.fstop
-                                           else ")"))
+    gb = 2.0**30
+    lens = f"{cam.lens:g} mm f/{cam.fstop:g}" if cam.fstop else f"a {cam.lens:g} mm pinhole"
+    verdict = ("sharp" if v.sharp else f"blurred: they resolve {v.spot_px:.2g} px where a sharp "
+               f"view resolves half a pixel; a longer lens, a wider aperture or Camera mode "
+               f"makes them sharp")
+    print(f"verdict     views of {cam.resolution[0]} x {cam.resolution[1]} px through {lens} "
+          f"are {verdict}; the plate records in about {_duration(p.record_seconds())} here, "
+          f"each view about {_duration(v.seconds)}")
+    print(f"plate       {p.size[0] * 1e3:.4g} x {p.size[1] * 1e3:.4g} mm of the "
+          f"{args.plate_size[0]:g} x {args.plate_size[1]:g} m plate (where the objects' light "
+          f"reaches the zone): {cols} x {rows} samples ({rows * cols / 1e6:.3g} Mpx), "
+          f"{p.pitch * 1e6:.3g} x {p.row_pitch * 1e6:.3g} µm apart")
+    print(f"zone        {zone.describe()}, for the camera at ({eye[0]:g}, {eye[1]:g}, "
+          f"{eye[2]:g}) m")
+    print(f"wavelength  {p.wavelength * 1e6:.4g} µm (the depth partner "
+          f"{p.depth_wavelength * 1e6:.6g} µm): through {lens} a view resolves half a pixel")
+    print(f"emitters    about {p.emitters:,}, one per resolved spot seen from the zone's centre")
+    print(f"disk        {p.disk_bytes() / gb:.3g} GB for {p.looks} look(s); memory while "
+          f"recording {p.memory_bytes() / gb:.3g} GB in one piece, "
+          f"{p.memory_bytes(tiled=True) / gb:.3g} GB tile by tile")
+    print(f"per view    reads {v.window / 1e6:.3g} Mpx of the plate, about "
+          f"{_duration(v.seconds)} for {p.looks} look(s)")
     if v.outside_zone > 0:
-        print(f"warning     the camera's pupil reaches {v.outside_zone:.3g} m beyond the zone")
-    print(f"per view    about {v.seconds:.1f} s a look (a view of n looks: n times that)")
+        print(f"warning     the camera's pupil reaches {v.outside_zone * 1e3:.3g} mm beyond the "
+              f"zone: its views will be cut off or soft")
     return 0
+
+
+def _duration(seconds: float) -> str:
+    """``seconds`` as a person reads it: 40 s, 3 min, 2.5 h."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.2g} h"
 
 
 def info(args) -> int:
@@ -322,14 +335,13 @@ def main(argv=None) -> int:
                    help="the objects' nearest point behind the plate [m] (0.3)")
     p.add_argument("--plate-size", type=POSITIVE, nargs=2, default=(0.1, 0.1),
                    metavar=("W", "H"), help="[m] (0.1 0.1)")
-    p.add_argument("--samples", type=PIXELS, default=None,
-                   help="samples along the plate's longer side (default: a sharp view's)")
-    p.add_argument("--max-samples", type=PIXELS, default=65536,
-                   help="the most samples the default may choose (65536)")
-    p.add_argument("--encoding", choices=["complex", "intensity"], default="complex")
     p.add_argument("--zone-margin", type=_number(float, lambda v: 0 <= v <= MAX_LENGTH,
-                                                 "metres >= 0"), default=0.03,
-                   help="the viewing zone reaches this far beyond the camera's pupil [m] (0.03)")
+                                                 "metres >= 0"), default=0.01,
+                   help="the viewing zone reaches this far beyond the camera's pupil [m] (0.01)")
+    p.add_argument("--dolly", type=_number(float, lambda v: 0 <= v <= MAX_LENGTH,
+                                           "metres >= 0"), default=0.0,
+                   help="the camera moves this far along x, centred on --camera [m] (0)")
+    p.add_argument("--looks", type=PIXELS, default=2, help="coded looks to record (2)")
     p.add_argument("--camera", type=FINITE, nargs=3, metavar=("X", "Y", "Z"),
                    help="camera position [m] in the plate's frame (default: on the axis, "
                         "--distance in front)")

@@ -80,15 +80,14 @@ def _plate(job: Job, progress):
     record_share = 0.0 if not route.record else (0.85 if job.output.render else 1.0)
     if route.record:
         # a plate with its viewing zone is a scene asset: the camera sizes nothing of it (its
-        # samples are Max Hologram Size), so moving or refocusing it never records again
-        asset = route.plate.zone is not None
+        # samples follow the zone and the views it is made for; the camera gives only the
+        # pixel angle a zone of an earlier file lacks), so moving or refocusing the camera
+        # never records again
         # the iterations are coded looks of one seed where n allows (look_code), else seeds
         codes = [look_code(i, n) for i in range(n)]
         holos = [record_hologram(
             list(job.points), triangles=list(job.triangles), plate=route.plate,
-            camera=None if asset else job.camera,
-            resolution=route.max_resolution if asset else None,
-            max_resolution=route.max_resolution, wavelength=route.wavelength,
+            camera=job.camera, wavelength=route.wavelength,
             seed=route.seed + (0 if code else i), code=code,
             progress=jobs.scaled(progress, record_share * i / n, record_share * (i + 1) / n))
             for i, code in enumerate(codes)]

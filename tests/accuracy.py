@@ -58,3 +58,8 @@ def rel_err(a, ref) -> float:
     """Relative complex error ||a - ref|| / ||ref|| in float64."""
     a, ref = np.asarray(a, np.complex128), np.asarray(ref, np.complex128)
     return float(np.linalg.norm(a - ref) / np.linalg.norm(ref))
+# the zone sum (per-tile exact phase, row recurrence, the window exact in its rim, the
+# visibility linear along 32-sample segments) vs float64 NumPy: measured 7e-6 with a smooth
+# visibility, 1e-3 with a table of random values (kinks every grid cell)
+ZONE_SUM = 1e-4
+ZONE_SUM_ROUGH_VISIBILITY = 3e-3

@@ -435,7 +435,7 @@ def usable(h) -> None:
     """A hologram that reads must reconstruct and render finite: pitch 1e-300 passed the
     schema and rendered NaN, a zero reference amplitude reconstructed NaN."""
     from holo_core.optics.pupil import Pupil
-    from holo_core.plate.reconstruct import reconstruct
+    from holo_core.plate.reconstruction import reconstruct
     from holo_core.plate.view import render_view
     from holo_core.scene.camera import Camera, look_at
     for c in range(len(h.wavelengths)):
@@ -508,10 +508,11 @@ def api_calls():
     """(name, function, valid keyword arguments) of cheap public calls."""
     from holo_core import propagation as prop
     from holo_core.camera import render_camera
-    from holo_core.plate.reconstruct import reconstruct
+    from holo_core.plate.plan import plan
+    from holo_core.plate.reconstruction import reconstruct
     from holo_core.plate.record import record_points
+    from holo_core.plate.sampling import choose
     from holo_core.plate.view import render_view
-    from holo_core.plate.sampling import choose, plan
     from holo_core.scene import Camera, Hologram, Mesh, look_at, sample_points
     from holo_core.scene.plate import ViewingZone
     field = np.ones((16, 16), np.complex64)
@@ -543,9 +544,8 @@ def api_calls():
                             "resolution": 64, "max_resolution": 64, "wavelength": None}),
         ("plan", plan, {"plate_size": (0.05, 0.05), "bounds": [[-0.01, -0.01, -0.31],
                                                                 [0.01, 0.01, -0.29]],
-                        "zone": ViewingZone.around((0, 0, 0.3), 0.01, 0.01), "resolution": 256,
-                        "encoding": "complex", "wavelength": None,
-                        "camera": ((0, 0, 0.3), 5e-4, 0.01)}),
+                        "zone": ViewingZone.around((0, 0, 0.3), 0.01, 0.01), "pixel_angle": 5e-4,
+                        "supersample": 2, "looks": 2, "wavelength": None}),
         ("render_camera", render_camera, {"meshes": Mesh(**tri), "camera": Camera(
             matrix_world=look_at((0, 0, 0.5), (0, 0, -1)), resolution=(8, 8)), "samples": 1,
             "supersample": 1, "seed": 0, "exposure": 1.0, "via": "object_wave"}),
@@ -602,9 +602,9 @@ def sane(result) -> None:
     if isinstance(result, Hologram):
         result = result.intensity
     if hasattr(result, "memory_bytes"):  # a plate's plan: every figure it states finite
-        result = np.array([result.pitch, result.wavelength, result.depth_wavelength,
-                           result.band, result.slab, result.memory_bytes(),
-                           result.record_seconds()])
+        result = np.array([result.pitch, result.row_pitch, result.wavelength,
+                           result.depth_wavelength, *result.band, result.memory_bytes(),
+                           result.disk_bytes(), result.record_seconds()])
     if isinstance(result, (tuple, list)):
         for r in result:
             sane(r)

@@ -104,7 +104,7 @@ def plate_zone(obj) -> ViewingZone | None:
         return None
     try:
         return ViewingZone(centre=tuple(holo.zone_centre), half_extents=tuple(holo.zone_half),
-                           pupil=holo.zone_pupil)
+                           pupil=holo.zone_pupil, pixel=holo.zone_pixel)
     except InputError as e:
         raise ExportError(f"plate '{obj.name}': its viewing zone: {e}") from None
 

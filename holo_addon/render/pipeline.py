@@ -166,6 +166,7 @@ def _keep_zone(plate, zone) -> None:
         plate.holo.zone_centre = zone.centre
         plate.holo.zone_half = zone.half_extents
         plate.holo.zone_pupil = zone.pupil
+        plate.holo.zone_pixel = zone.pixel
         plate.holo.zone_set = True
     except AttributeError:  # a context that may not write ID data (inside a render)
         log.warning("plate '%s': its viewing zone is used for this frame but not kept (Fit "

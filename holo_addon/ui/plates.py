@@ -60,7 +60,8 @@ class HOLO_OT_fit_zone(bpy.types.Operator):
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         obj.holo.zone_centre, obj.holo.zone_half = zone.centre, zone.half_extents
-        obj.holo.zone_pupil, obj.holo.zone_set = zone.pupil, True
+        obj.holo.zone_pupil, obj.holo.zone_pixel = zone.pupil, zone.pixel
+        obj.holo.zone_set = True
         self.report({"INFO"}, f"plate '{obj.name}': viewing zone {zone.describe()}")
         return {"FINISHED"}
 
@@ -84,7 +85,6 @@ def plan_command(context) -> list[str]:
     command = [sys.executable, "-m", "holo_core", "plan",
                "--bounds", *map(_number, local.min(0)), *map(_number, local.max(0)),
                "--plate-size", _number(plate.width), _number(plate.height),
-               "--samples", str(scene.holo.max_resolution),
                "--camera", *map(_number, eye), "--look-at", *map(_number, look),
                "--lens", _number(camera.lens), "--sensor-width", _number(camera.sensor_width),
                "--resolution", *map(str, camera.resolution),
@@ -215,7 +215,8 @@ def add_plate(context, hologram: Hologram, path: Path):
     obj.holo.hologram = bpy.path.relpath(str(path)) if bpy.data.filepath else str(path)
     if hologram.zone is not None:
         obj.holo.zone_centre, obj.holo.zone_half = hologram.zone.centre, hologram.zone.half_extents
-        obj.holo.zone_pupil, obj.holo.zone_set = hologram.zone.pupil, True
+        obj.holo.zone_pupil, obj.holo.zone_pixel = hologram.zone.pupil, hologram.zone.pixel
+        obj.holo.zone_set = True
     context.scene.holo.mode = "PLATE"
     return obj
 

@@ -76,6 +76,9 @@ class HoloObjectSettings(bpy.types.PropertyGroup):
                                                "the plate's axes")
     zone_pupil: FloatProperty(name="Zone Pupil", default=0.0, min=0.0, options={"HIDDEN"},
                               description="The entrance pupil [m] the zone is made for")
+    zone_pixel: FloatProperty(name="Zone Pixel", default=0.0, min=0.0, options={"HIDDEN"},
+                              description="The pixel angle [rad] of the views the zone is made "
+                                          "for: with the pupil, it sets how sharp they are")
 
 
 def _show_coverage(_settings, context):

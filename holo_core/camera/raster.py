@@ -20,6 +20,7 @@ import math
 import numpy as np
 
 from .. import validate
+from ..optics.raster import bin_rays, crossing_chunks
 from ..scene.camera import Camera
 from ..scene.mesh import surface_colour
 from ..validate import InputError
@@ -46,13 +47,6 @@ def camera_space(camera: Camera, points) -> np.ndarray:
     return (np.asarray(points, np.float64) - camera.position) @ camera.rotation
 
 
-def _bin_rays(kx, ky, b):
-    """View tangents (t_x, t_y) of the rays of bins (kx, ky) (signed indices)."""
-    alpha, beta = kx * b, ky * b
-    gamma = np.sqrt(np.clip(1 - alpha * alpha - beta * beta, 1e-12, None))
-    return -alpha / gamma, -beta / gamma
-
-
 RASTER_CHUNK = 4_000_000  # bin-triangle pairs tested at once
 TRIANGLE_BYTES = 1000  # host bytes per triangle of the largest mesh while rasterizing (its
                        # projected corners and bin boxes: measured 920 at 10^6 triangles)
@@ -71,90 +65,26 @@ def raster_bytes(meshes, chunk=RASTER_CHUNK) -> float:
 def rasterize(meshes, camera: Camera, optics: PupilOptics, *, chunk=RASTER_CHUNK) -> Emitters:
     """The surfaces of ``meshes`` (world metres) the camera sees, one emitter per bin."""
     h, w = optics.shape
-    b = optics.bin
     zbuf = np.full(h * w, np.inf)
     owner = np.full(h * w, -1, np.int64)  # (mesh, triangle) packed
     bary = np.zeros((h * w, 2), np.float32)
     meshes = list(meshes)
-    for m, mesh in enumerate(meshes):
-        v = camera_space(camera, mesh.vertices)
-        tri = np.asarray(mesh.triangles)
-        d = -v[:, 2]
-        t = v[:, :2] / np.where(d > 1e-9, d, 1)[:, None]
-        p0, p1, p2 = (t[tri[:, i]] for i in range(3))
-        area = (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - \
-            (p2[:, 0] - p0[:, 0]) * (p1[:, 1] - p0[:, 1])
-        # triangles reaching behind the pupil, or seen edge-on (or degenerate), are not seen
-        tri_ids = np.nonzero((d[tri] > 1e-9).all(1) & (area != 0))[0]
-        if not len(tri_ids):
-            continue
-        box = _bin_boxes(t[tri[tri_ids]], b, h, w)
-        keep = (box[:, 1] >= box[:, 0]) & (box[:, 3] >= box[:, 2])
-        tri_ids, box = tri_ids[keep], box[keep]
-        sizes = (box[:, 1] - box[:, 0] + 1) * (box[:, 3] - box[:, 2] + 1)
-        ends = np.cumsum(sizes)
-        lo = 0
-        while lo < len(tri_ids):
-            hi = max(lo + 1, int(np.searchsorted(ends, (ends[lo - 1] if lo else 0) + chunk)))
-            _raster_chunk(tri_ids[lo:hi], box[lo:hi], sizes[lo:hi], tri, t, d, b, h, w,
-                          m, zbuf, owner, bary)
-            lo = hi
+    for kx, ky, depth, mesh, triangle, weights in crossing_chunks(
+            meshes, camera.position, camera.rotation, optics.bin, (h, w), chunk):
+        flat = (ky % h) * w + kx % w
+        order = np.lexsort((depth, flat))  # nearest first within each bin
+        flat, depth = flat[order], depth[order]
+        first = np.ones(len(flat), bool)
+        first[1:] = flat[1:] != flat[:-1]
+        sel = order[first]
+        flat, depth = flat[first], depth[first]
+        nearer = depth < zbuf[flat]
+        flat, sel = flat[nearer], sel[nearer]
+        zbuf[flat] = depth[nearer]
+        owner[flat] = (mesh[sel] << 40) | triangle[sel]
+        bary[flat] = weights[sel, 1:]  # perspective-correct: λ_i/d_i over Σ λ_j/d_j
     covered = np.nonzero(owner >= 0)[0]
     return _emitters(meshes, covered, owner[covered], bary[covered], zbuf[covered], optics)
-
-
-def _bin_boxes(tris, b, h, w):
-    """Bin ranges (kx0, kx1, ky0, ky1) that may hold each projected triangle (T, 3, 2) of view
-    tangents: its edges sampled, as direction cosines bend them, plus one bin."""
-    s = np.linspace(0, 1, 9)[:, None]
-    pts = np.concatenate([tris[:, i:i + 1] * (1 - s) + tris[:, (i + 1) % 3:(i + 1) % 3 + 1] * s
-                          for i in range(3)], 1)
-    n = np.sqrt(1 + (pts ** 2).sum(-1))
-    kx, ky = -pts[..., 0] / n / b, -pts[..., 1] / n / b
-    box = np.stack([np.floor(kx.min(1)) - 1, np.ceil(kx.max(1)) + 1,
-                    np.floor(ky.min(1)) - 1, np.ceil(ky.max(1)) + 1], 1)
-    lim = np.array([-(w // 2), (w - 1) // 2, -(h // 2), (h - 1) // 2])
-    box[:, 0::2] = np.maximum(box[:, 0::2], lim[0::2])
-    box[:, 1::2] = np.minimum(box[:, 1::2], lim[1::2])
-    return box.astype(np.int64)
-
-
-def _raster_chunk(ids, box, sizes, tri, t, d, b, h, w, m, zbuf, owner, bary):
-    total = int(sizes.sum())
-    which = np.repeat(np.arange(len(ids)), sizes)
-    q = np.arange(total) - np.repeat(np.cumsum(sizes) - sizes, sizes)
-    width = (box[:, 1] - box[:, 0] + 1)[which]
-    kx = box[which, 0] + q % width
-    ky = box[which, 2] + q // width
-    tx, ty = _bin_rays(kx, ky, b)
-    corners = tri[ids][which]
-    p0, p1, p2 = (t[corners[:, i]] for i in range(3))
-    area = (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p2[:, 0] - p0[:, 0]) * (p1[:, 1] - p0[:, 1])
-    l1 = ((tx - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p2[:, 0] - p0[:, 0]) * (ty - p0[:, 1]))
-    l2 = ((p1[:, 0] - p0[:, 0]) * (ty - p0[:, 1]) - (tx - p0[:, 0]) * (p1[:, 1] - p0[:, 1]))
-    l1, l2 = l1 / area, l2 / area
-    inside = (l1 >= 0) & (l2 >= 0) & (l1 + l2 <= 1)
-    if not inside.any():
-        return
-    l1, l2, corners, which = l1[inside], l2[inside], corners[inside], which[inside]
-    inv = (1 - l1 - l2) / d[corners[:, 0]] + l1 / d[corners[:, 1]] + l2 / d[corners[:, 2]]
-    depth = 1 / inv
-    flat = (ky[inside] % h) * w + kx[inside] % w
-    order = np.lexsort((depth, flat))  # nearest first within each bin
-    flat, depth = flat[order], depth[order]
-    first = np.ones(len(flat), bool)
-    first[1:] = flat[1:] != flat[:-1]
-    sel = order[first]
-    flat, depth = flat[first], depth[first]
-    nearer = depth < zbuf[flat]
-    flat, sel = flat[nearer], sel[nearer]
-    zbuf[flat] = depth[nearer]
-    owner[flat] = (m << 40) | ids[which[sel]]
-    # perspective-correct barycentrics: λ_i/d_i over Σ λ_j/d_j
-    c = corners[sel]
-    w1 = l1[sel] / d[c[:, 1]] / inv[sel]
-    w2 = l2[sel] / d[c[:, 2]] / inv[sel]
-    bary[flat] = np.stack([w1, w2], -1)
 
 
 def _emitters(meshes, covered, owner, bary, depth, optics: PupilOptics) -> Emitters:
@@ -171,7 +101,7 @@ def _emitters(meshes, covered, owner, bary, depth, optics: PupilOptics) -> Emitt
         c = surface_colour(mesh, corners, weights, 3)
         colour[sel] = c if c.shape[1] == 3 else np.repeat(c.mean(1, keepdims=True), 3, 1)
     ky, kx = grid_indices(covered, optics.shape)
-    tx, ty = _bin_rays(kx, ky, optics.bin)
+    tx, ty = bin_rays(kx, ky, optics.bin)
     distance = depth * np.sqrt(1 + tx * tx + ty * ty)
     return _sorted_emitters(covered, depth, distance, colour, np.ones(len(covered)), optics)
 
@@ -206,7 +136,7 @@ def point_emitters(positions, colours, camera: Camera, optics: PupilOptics) -> E
     h, w = optics.shape
     inside = (np.abs(kx) <= (w - 1) // 2) & (np.abs(ky) <= (h - 1) // 2)
     kx, ky, col, depth = kx[inside], ky[inside], col[inside], -local[inside, 2]
-    tx, ty = _bin_rays(kx, ky, optics.bin)
+    tx, ty = bin_rays(kx, ky, optics.bin)
     dist = depth * np.sqrt(1 + tx * tx + ty * ty)
     index, inverse = np.unique((ky % h) * w + kx % w, return_inverse=True)
     weight = col.sum(1) + 1e-30

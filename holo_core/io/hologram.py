@@ -5,7 +5,9 @@ hologram's), and ``c<c>.O.re`` / ``c<c>.O.im`` the complex object wave (a comple
 optional beside an intensity). The header attribute ``holo`` holds the metadata (see
 :func:`metadata`: the encoding, the optics, the plate's pose and its viewing zone); files are
 written atomically and read back bit-exactly. Version 2 files (intensity holograms without a
-viewing zone) are read as well.
+viewing zone) and version 3 files (no carrier, a zone without its pixel angle) are read as well.
+A plate stored against its zone's carrier (version 4) names it: ``carrier`` holds the point it
+converges on, the origin of the samples and their row pitch.
 """
 
 from __future__ import annotations
@@ -18,13 +20,14 @@ import numpy as np
 
 from .. import __version__, validate
 from ..scene.hologram import Hologram, HologramInfo
-from ..scene.plate import ViewingZone
+from ..scene.plate import Carrier, ViewingZone
 from ..validate import InputError
 from .image import read_exr, write_exr
 
 FORMAT = "holo-hologram"
-FORMAT_VERSION = 3  # 3: the encoding (complex or intensity) and the plate's viewing zone
-READS = (2, 3)      # 2: the depth partner 'Z' records every emitter at unit intensity
+FORMAT_VERSION = 4  # 4: the samples' carrier and the zone's pixel angle
+READS = (2, 3, 4)   # 2: the depth partner 'Z' records every emitter at unit intensity;
+                    # 3: the encoding (complex or intensity) and the plate's viewing zone
 
 
 class HologramFileError(InputError):
@@ -37,7 +40,7 @@ FILE_KEYS = {"wavelengths": "wavelengths_m", "pitch": "pitch_m", "shape": "size_
              "reference_azimuth": "reference.azimuth_rad",
              "reference_amplitudes": "reference.amplitudes", "bounds": "bounds_m",
              "band": "band_sin", "point_density": "point_density_per_m2",
-             "zone": "viewing_zone", "keeps_object_wave": "object_wave"}
+             "zone": "viewing_zone", "keeps_object_wave": "object_wave", "carrier": "carrier"}
 
 
 def metadata(h: Hologram | HologramInfo) -> dict:
@@ -55,7 +58,10 @@ def metadata(h: Hologram | HologramInfo) -> dict:
         "point_density_per_m2": float(info.point_density), "encoding": info.encoding,
         "viewing_zone": None if info.zone is None else {
             "centre_m": list(info.zone.centre), "half_extents_m": list(info.zone.half_extents),
-            "pupil_m": info.zone.pupil},
+            "pupil_m": info.zone.pupil, "pixel_rad": info.zone.pixel},
+        "carrier": None if info.carrier is None else {
+            "centre_m": list(info.carrier.centre), "origin_m": list(info.carrier.origin),
+            "row_pitch_m": info.carrier.row_pitch},
     }
 
 
@@ -159,7 +165,7 @@ def _described(path: Path, header) -> HologramInfo:
                                 f"is holo {__version__}, which reads versions "
                                 f"{', '.join(map(str, READS))})"[:400])
     meta = {"band_sin": 0.0, "channels": [], "point_density_per_m2": 0.0,
-            "encoding": "intensity", "viewing_zone": None, **meta}
+            "encoding": "intensity", "viewing_zone": None, "carrier": None, **meta}
     schema = _Schema(path, meta)
     ref = meta.get("reference")
     if not isinstance(ref, dict):
@@ -183,6 +189,7 @@ def _described(path: Path, header) -> HologramInfo:
         "encoding": schema.kind("encoding", str, "a string"),
         "keeps_object_wave": schema.kind("object_wave", bool, "true or false"),
         "zone": _zone(path, meta["viewing_zone"]),
+        "carrier": _carrier(path, meta["carrier"]),
     }
     fields["shape"] = tuple(int(n) for n in fields["shape"])
     try:
@@ -199,14 +206,30 @@ def _zone(path, zone) -> ViewingZone | None:
     if not isinstance(zone, dict):
         _Schema(path, {"viewing_zone": zone}).fail(
             "viewing_zone", "null or an object with centre_m, half_extents_m and pupil_m")
-    sub = _Schema(path, {"pupil_m": 0.0, **zone}, "viewing_zone.")
+    sub = _Schema(path, {"pupil_m": 0.0, "pixel_rad": 0.0, **zone}, "viewing_zone.")
     try:
         return ViewingZone(centre=sub.numbers("centre_m", "three coordinates [m]", shape=3),
                            half_extents=sub.numbers("half_extents_m", "three half widths [m]",
                                                     shape=3),
-                           pupil=sub.numbers("pupil_m", "a number [m]"))
+                           pupil=sub.numbers("pupil_m", "a number [m]"),
+                           pixel=sub.numbers("pixel_rad", "a number [rad]"))
     except InputError as e:
         raise HologramFileError(f"{path}: metadata viewing_zone: {e}") from None
+
+
+def _carrier(path, carrier) -> Carrier | None:
+    if carrier is None:
+        return None
+    if not isinstance(carrier, dict):
+        _Schema(path, {"carrier": carrier}).fail(
+            "carrier", "null or an object with centre_m, origin_m and row_pitch_m")
+    sub = _Schema(path, carrier, "carrier.")
+    try:
+        return Carrier(centre=sub.numbers("centre_m", "three coordinates [m]", shape=3),
+                       origin=sub.numbers("origin_m", "two coordinates [m]", shape=2),
+                       row_pitch=sub.numbers("row_pitch_m", "a number [m]"))
+    except InputError as e:
+        raise HologramFileError(f"{path}: metadata carrier: {e}") from None
 
 
 class _Schema:

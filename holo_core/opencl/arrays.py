@@ -179,3 +179,12 @@ def cached(rt, key, make):
     while sum(v[0].nbytes for v in lru.values()) > CACHE_BYTES and len(lru) > 1:
         lru.popitem(last=False)
     return lru[key]
+
+
+def copy_plane(dst, src, plane: int, *, into: bool = False) -> None:
+    """Copy plane ``plane`` of a (P, H, W) device stack ``src`` into the (H, W) device array
+    ``dst`` (``into``: the (H, W) ``src`` into plane ``plane`` of the stack ``dst``)."""
+    rt_queue = (src if into else dst).queue
+    nbytes = (src if into else dst).nbytes
+    offsets = {"dst_offset": plane * nbytes} if into else {"src_offset": plane * nbytes}
+    cl.enqueue_copy(rt_queue, dst.data, src.data, byte_count=nbytes, **offsets)

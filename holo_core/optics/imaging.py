@@ -56,9 +56,11 @@ class PupilImage:
         signed indices (r or r − h, c or c − w) from the optical axis)
     bin : the spectrum's bin spacing in direction cosine, λ/(w·dx) = λ/(h·dy)
     camera : the camera whose pixels are read (its resolution is the fine one)
+    centre : (α, β) the direction cosines of the spectrum's centre bin (default the axis): a
+        pupil field demodulated by exp(−ik(α·x + β·y)) holds the directions around it
     """
 
-    def __init__(self, rt, shape, *, bin: float, camera: Camera):
+    def __init__(self, rt, shape, *, bin: float, camera: Camera, centre=(0.0, 0.0)):
         self.rt = rt
         h, w = self.shape = tuple(shape)
         self.padded = empty(rt, (2 * h, 2 * w))
@@ -66,8 +68,8 @@ class PupilImage:
                                   np.float32) for n in (h, w)]
         self.es = cached_array(rt, "es-table", es_table, TAPS)
         alpha, beta, _ = camera.direction_cosines()
-        self.u = rt.to_device(2 * alpha / bin, np.float32)
-        self.v = rt.to_device(2 * beta / bin, np.float32)
+        self.u = rt.to_device(2 * (alpha - centre[0]) / bin, np.float32)
+        self.v = rt.to_device(2 * (beta - centre[1]) / bin, np.float32)
         self.pixels = empty(rt, alpha.shape)
         self.options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
 

@@ -16,10 +16,13 @@ from .. import jobs, memory, validate
 from ..propagation import grid
 from ..scene.hologram import ENCODINGS, Hologram, HologramInfo
 from ..scene.mesh import Mesh, facing, sample_points, visible_from
-from ..scene.plate import DEFAULT_ZONE_MARGIN, Plate, ViewingZone
+from ..scene.plate import DEFAULT_ZONE_MARGIN, Carrier, Plate, ViewingZone
 from ..validate import InputError
+from .emitters import zone_emitters
+from .plan import LAYERS, RIM, plan
 from .point_sources import cone_filter, point_bytes, point_wave
 from .triangles import depth_texture, mesh_primitives, primitive_wave, surface_pitch
+from .zone_sum import ZoneEmitters, ZoneSum, ZoneWindow
 
 DEFAULT_WAVELENGTHS = (633e-9, 532e-9, 473e-9)  # HeNe red, Nd:YAG green, DPSS blue [m]
 MIN_OBLIQUITY = 0.1  # a primitive seen more edge-on than this (cos) gets no brighter
@@ -218,7 +221,7 @@ def _array(name, value, allowed, shape) -> np.ndarray:
 @validate.scale_free()
 def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, zone=None,
                     zone_margin=DEFAULT_ZONE_MARGIN, resolution=None, max_resolution=2048,
-                    wavelength=None, encoding="complex", depth=True, seed=0, method="slabs",
+                    wavelength=None, encoding="complex", depth=True, seed=0, method="zone",
                     cull=True, code=None, progress: jobs.Progress = None) -> Hologram:
     """Record a scene in world metres onto ``plate``, choosing the optics automatically
     (:mod:`holo_core.plate.sampling`; the choice is logged and stored in the hologram).
@@ -230,25 +233,31 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, zon
     plate : Plate
     triangles : sequence of Mesh
         World-space meshes recorded as textured triangles (their texture, else the mean of
-        their corners' colours): with ``method='slabs'`` as the other meshes; with a point
+        their corners' colours): with ``method='zone'`` as the other meshes; with a point
         sum, each carried to the plate by tilted-plane propagation.
     camera : holo_core.scene.camera.Camera, optional
-        With ``method='slabs'``, only where neither ``zone`` nor ``plate.zone`` is given:
-        the viewing zone covers its pupil (:func:`record_plate`). With a point sum, it sizes
-        the cone and the wavelength to this view (:func:`holo_core.plate.sampling.choose`).
-    zone, zone_margin, encoding, code
-        As for :func:`record_plate` ('complex', the object wave, by default; 'intensity' is
-        |O + R|²).
-    resolution, max_resolution, wavelength
-        As for :func:`holo_core.plate.sampling.plan` (slabs) or ``choose`` (point sums).
+        With ``method='zone'``: the zone's reference view where the zone does not give one
+        (:func:`record_plate`). With a point sum, it sizes the cone and the wavelength to
+        this view (:func:`holo_core.plate.sampling.choose`).
+    zone, zone_margin, code
+        As for :func:`record_plate`.
+    encoding
+        A point sum's: 'complex' (the object wave, the default) or 'intensity' (|O + R|²); a
+        plate of meshes is complex (:func:`record_plate`).
+    resolution, max_resolution
+        A point sum's samples (:func:`holo_core.plate.sampling.choose`); a plate of meshes
+        takes what its zone asks (:mod:`holo_core.plate.plan`).
+    wavelength
+        λ1 [m] instead of the chosen one.
     depth : bool
         Also record the depth partner λ2 (Sect. VII-C).
     seed : int
         Seeds the emitters' random phases (and the mesh sampling).
-    method : {'slabs', 'auto', 'direct', 'wrp'}
-        'slabs' (the default for meshes): the plate as a scene asset, independent of any
-        camera, with occlusion (:func:`record_plate`). Bare points and the others: the point
-        sums of :func:`holo_core.plate.point_sources.point_wave`, without occlusion.
+    method : {'zone', 'auto', 'direct', 'wrp'}
+        'zone' (the default for meshes): the plate as a scene asset, independent of any
+        camera, with occlusion, its samples against the carrier converging on its zone
+        (:func:`record_plate`). Bare points and the others: the point sums of
+        :func:`holo_core.plate.point_sources.point_wave`, without occlusion.
     cull : bool
         For a point sum with a camera, keep only the points and triangles it sees
         (:func:`holo_core.scene.mesh.visible_from`): a hologram shows surfaces hidden from its
@@ -264,17 +273,20 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, zon
     if meshes is None and all(isinstance(e, Mesh) for e in emitters):
         meshes = list(emitters)
     triangles = list(triangles)
-    if method == "slabs" and meshes is not None:
+    if method == "zone" and meshes is not None:
+        if resolution is not None:
+            raise InputError("resolution applies to point sums; a plate of meshes takes the "
+                             "samples its zone asks (holo_core.plate.plan): give a wavelength "
+                             "to change them")
         return record_plate(meshes + triangles, plate=plate, camera=camera, zone=zone,
-                            zone_margin=zone_margin, resolution=resolution,
-                            max_resolution=max_resolution, wavelength=wavelength,
+                            zone_margin=zone_margin, wavelength=wavelength,
                             encoding=encoding, depth=depth, seed=seed, code=code,
                             progress=progress)
     if code is not None:
-        raise InputError("code applies to plates of meshes (method 'slabs'); bare points and "
+        raise InputError("code applies to plates of meshes (method 'zone'); bare points and "
                          "point sums take independent seeds")
-    if method == "slabs":
-        method = "auto"  # bare points: no surface to mask with
+    if method == "zone":
+        method = "auto"  # bare points: no surface to be hidden by
     probe = [m.vertices for m in meshes + triangles] if meshes is not None else \
         [np.asarray(emitters[0], np.float64)] + [m.vertices for m in triangles]
     if not sum(len(p) for p in probe):
@@ -392,17 +404,19 @@ def _triangle_waves(prims, s, wavelengths, channels, view, seed, progress: jobs.
 
 # --- plates as scene assets ------------------------------------------------------------------
 
-PLATE_METHODS = ("slabs", "auto", "direct", "wrp")
+PLATE_METHODS = ("zone", "auto", "direct", "wrp")
 
 
 def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
-                 zone_margin=DEFAULT_ZONE_MARGIN, resolution=None, max_resolution=8192,
-                 wavelength=None, encoding="complex", depth=True, seed=0, code=None,
-                 keep_object_wave=False, progress: jobs.Progress = None) -> Hologram:
+                 zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
+                 code=None, encoding="complex", progress: jobs.Progress = None) -> Hologram:
     """A plate hologram of ``meshes`` (world metres), independent of any camera: what it
-    records depends on the meshes, the plate's placement, size and sampling, the wavelengths
-    and the viewing zone (:mod:`holo_core.plate.slabs`: emitters on depth slabs, occlusion by
-    silhouette masks, so objects hide each other from every point of the zone).
+    records depends on the meshes, the plate's placement and size, the viewing zone and the
+    views' sharpness (:mod:`holo_core.plate.plan`). Its samples are the object wave against
+    the carrier converging on the zone's centre (:mod:`.carrier`), as many as the zone can
+    see; every emitter is seen from the zone points it is seen from (:mod:`.emitters`:
+    occlusion by depth buffers over the zone), its light summed onto its footprint
+    (:mod:`.zone_sum`).
 
     Parameters
     ----------
@@ -410,15 +424,14 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
         World-space surfaces; colours are linear RGB intensities.
     plate : Plate
     camera : Camera, optional
-        Only where no zone is given: the zone covers its pupil with ``zone_margin`` [m]
-        around it, and ``resolution`` defaults to what its sharp view needs.
+        The zone's reference view where the zone does not say: its pupil and pixel angle
+        set the wavelength (λ = D·Δ/2: its views resolve a fine pixel); and where no zone is
+        given, the zone covers its pupil with ``zone_margin`` [m] around it.
     zone : ViewingZone, optional
         The region [m, the plate's frame] the plate will be looked at from; default
-        ``plate.zone``, else from ``camera``, else the plate's own size mirrored at the
-        objects' distance in front of it.
-    resolution, max_resolution, wavelength, encoding
-        As for :func:`holo_core.plate.sampling.plan` (encoding 'complex': the object wave,
-        the default; 'intensity': |O + R|² for a display or a print).
+        ``plate.zone``, else from ``camera``.
+    wavelength : float, optional
+        λ1 [m] instead of the planned one.
     depth : bool
         Also record the depth partner λ2 (Sect. VII-C).
     seed : int
@@ -428,20 +441,23 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
         cells (i, j) they lie in (k = k1·m + k2): the mean intensity of the m² looks has no
         cross terms between emitters of neighbouring cells (the looks' speckle cancels
         where random looks would only average it down).
-    keep_object_wave : bool
-        An intensity plate also stores the object wave it recorded.
+    encoding : 'complex'
+        The object wave (against its carrier); a display's or a print's intensity pattern is
+        made from it (:mod:`holo_core.io.display`).
     """
-    from .sampling import plan, plan_view
-    from .slabs import mesh_bytes, record_slabs
     if not isinstance(plate, Plate):
         raise InputError(f"plate must be a Plate; got {type(plate).__name__}")
+    if encoding != "complex":
+        raise InputError(f"encoding must be 'complex' for a plate of meshes (a display's "
+                         f"intensity pattern is made from it: holo_core.io.display); got "
+                         f"{encoding!r}"[:200])
     meshes = [meshes] if isinstance(meshes, Mesh) else list(meshes)
     if not meshes or not all(isinstance(m, Mesh) for m in meshes):
         raise InputError("meshes must be a Mesh or a non-empty sequence of Mesh")
     seed = validate.seed(seed)
-    # before the meshes are moved into the plate's frame: 10^7 triangles took 8 GB and more
-    memory.check_host(f"the slabs' silhouettes and emitters of "
-                      f"{sum(len(m.triangles) for m in meshes)} triangles", mesh_bytes(meshes))
+    memory.check_host(f"moving {sum(len(m.triangles) for m in meshes)} triangles onto the "
+                      f"plate", sum(320.0 * len(m.triangles) + 96.0 * len(m.vertices)
+                                    for m in meshes))
     local = [replace(m, vertices=plate.to_plate(m.vertices)) for m in meshes]
     every = np.concatenate([m.vertices for m in local])
     bounds = np.array([every.min(0), every.max(0)])
@@ -449,31 +465,59 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
         raise InputError(f"the objects must lie behind the plate (z < 0 in its frame); they "
                          f"reach z = {bounds[1, 2]:.4g} m")
     zone = resolve_zone(plate, zone, camera, zone_margin, bounds)
-    view = None
-    if camera is not None:
-        view = (plate.to_plate(camera.position[None])[0], camera.pixel_angle(),
-                camera.aperture_diameter)
-    p = plan((plate.width, plate.height), bounds, zone=zone, resolution=resolution,
-             encoding=encoding, wavelength=wavelength, camera=view,
-             max_resolution=max_resolution)
+    pixel = zone.pixel or (camera.pixel_angle() if camera is not None else None)
+    if pixel is None and wavelength is None:
+        raise InputError("a plate needs the sharpness of its views: a camera, a zone with its "
+                         "pixel angle, or a wavelength")
+    p = plan((plate.width, plate.height), bounds, zone=zone, pixel_angle=pixel or 1.0,
+             wavelength=wavelength)
     log.info("sampling: %s", p.describe())
-    if view is not None:
-        v = plan_view(p, position=view[0], pixel_angle=view[1], pupil=view[2],
-                      resolution=camera.resolution)
-        if not v.sharp:
-            log.warning("plate: its views from this camera resolve %.2f px (a sharp view needs "
-                        "%d samples along the plate's longer side; it has %d)", v.blur_px,
-                        v.sharp_samples, max(p.shape))
     channels = ["R", "G", "B"] + (["Z"] if depth else [])
-    wavelengths = [p.wavelength] * 3 + ([p.depth_wavelength] if depth else [])
     memory.check_host(f"a {p.shape[1]}x{p.shape[0]} plate of {len(channels)} channels",
                       p.memory_bytes(len(channels)))
-    waves, density = record_slabs(local, plan=p, wavelengths=list(zip(wavelengths, channels)),
-                                  seed=seed, code=code, progress=progress)
-    return encode(waves, wavelengths=tuple(wavelengths), pitch=p.pitch, band=p.band,
-                  encoding=encoding, reference_angle=p.reference_angle,
-                  plate=plate.matrix_world, bounds=bounds, channels=tuple(channels),
-                  point_density=density, zone=zone, keep_object_wave=keep_object_wave)
+    em = zone_emitters(local, zone, p.spacing, layers=LAYERS)
+    if not len(em):
+        raise InputError(f"no surface of the meshes is seen from the viewing zone "
+                         f"({zone.describe()})")
+    phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, len(em))
+    if code is not None:
+        k, m = code
+        k1, k2 = divmod(k, m)
+        phases = phases + 2 * np.pi * (k1 * em.cell[:, 1] + k2 * em.cell[:, 0]) / m
+    # |a| = √I·|p − Z|: each emitter's light reaches the zone's centre with its own amplitude
+    reach = np.linalg.norm(em.position - np.asarray(zone.centre), axis=1)
+    wave = np.exp(1j * phases) * reach
+    partial = em.visibility.reshape(len(em), -1).min(1) < 1
+    rows = np.where(partial, np.cumsum(partial) - 1, -1).astype(np.int32)
+    table = np.round(em.visibility[partial] * 255).astype(np.uint8)
+    window = ZoneWindow(origin=p.origin, pitch=p.pitch, row_pitch=p.row_pitch, shape=p.shape,
+                        centre=zone.centre, half_extents=zone.half_extents, rim=RIM)
+    groups = [(p.wavelength, np.sqrt(em.colour) * wave[:, None])]
+    if depth:
+        groups.append((p.depth_wavelength, wave[:, None]))
+    samples = np.zeros((len(channels),) + p.shape, np.complex64)
+    band, done, c = 256, 0, 0
+    for lam, amplitude in groups:
+        total = ZoneSum(ZoneEmitters(position=em.position, amplitude=amplitude,
+                                     visibility=rows, table=table, grid=em.grid), window, lam)
+        for r0 in range(0, p.shape[0], band):
+            rows_here = min(band, p.shape[0] - r0)
+            samples[c:c + total.channels, r0:r0 + rows_here] = total.region(
+                r0, 0, rows_here, p.shape[1])
+            done += rows_here
+            jobs.report(progress, done, len(groups) * p.shape[0])
+        c += total.channels
+    if not np.isfinite(samples).all():  # never a hologram of NaN: it would be written as one
+        raise RuntimeError("the object wave holds non-finite samples (the OpenCL device's "
+                           "arithmetic failed); nothing was recorded")
+    distance = float(np.linalg.norm(bounds.mean(0) - np.asarray(zone.centre)))
+    wavelengths = (p.wavelength,) * 3 + ((p.depth_wavelength,) if depth else ())
+    return Hologram(object_wave=samples, encoding="complex", wavelengths=wavelengths,
+                    pitch=p.pitch, band=max(p.band), channels=tuple(channels),
+                    point_density=1 / (p.spacing * distance) ** 2, zone=zone, bounds=bounds,
+                    plate=plate.matrix_world, carrier=Carrier(centre=zone.centre,
+                                                              origin=p.origin,
+                                                              row_pitch=p.row_pitch))
 
 
 def look_code(k: int, n: int):

@@ -23,10 +23,16 @@ import math
 
 import numpy as np
 
+from ..opencl.arrays import copy_plane
+from ..opencl.runtime import associated
 from ..propagation import angular_spectrum, grid, tilt
 from ..propagation.angular_spectrum import BAND_EDGE
+from ..propagation.tilt import ES_TABLE, cached_array, es_table, es_transform
+from ..propagation.tilt import TAPS as ES_TAPS
 from ..scene.hologram import Hologram
 from ..scene.plate import box_corners
+
+PROGRAM = associated(__file__)
 
 WINDOW_MARGIN = 0.1   # the window reaches this fraction of its size beyond the cone ...
 WINDOW_SAMPLES = 8    # ... and at least this many samples
@@ -181,3 +187,248 @@ def field_at_pupil(u, window, h: Hologram, *, wavelength, position, rotation, n,
               out_padding=PUPIL_PADDING)
     return np.ascontiguousarray(np.fft.ifftshift(at))
 
+
+
+# --- plates stored against a carrier converging on their zone ---------------------------------
+
+DECIMATION_STOP = 50.0   # [dB] the decimation filter's stop band: light towards the rest of the
+                         # zone, as strong as the pupil's own, kept out of the pupil
+PASS_MARGIN = 1.1        # the filter passes this much beyond the pupil's own band ...
+TRANSITION = 0.35        # ... and falls to its stop band over this fraction of the pass band
+BAND_ROWS = 512          # samples read and filtered per band of rows
+
+
+def kaiser_lowpass(cutoff: float, transition: float) -> np.ndarray:
+    """A linear-phase low-pass FIR (odd taps, unit DC gain) with its −6 dB point at ``cutoff``
+    and ``transition`` wide (both in cycles per sample), its stop band DECIMATION_STOP below
+    (Kaiser's window and formulas)."""
+    a = DECIMATION_STOP
+    beta = 0.1102 * (a - 8.7)
+    taps = int(math.ceil((a - 8) / (2.285 * 2 * math.pi * transition))) | 1
+    n = np.arange(taps) - (taps - 1) / 2
+    h = 2 * cutoff * np.sinc(2 * cutoff * n) * np.kaiser(taps, beta)
+    return (h / h.sum()).astype(np.float32)
+
+
+class CarrierPupil:
+    """One camera's pupil field from a plate stored against its zone's carrier.
+
+    Per channel: the window the pupil sees the objects through is read band by band, turned
+    onto the carrier converging on the pupil's centre P (``demodulate``: exact, float64), low-
+    passed to the light that enters the pupil and thinned to what that light needs
+    (``decimate``, :func:`kaiser_lowpass`: the rest of the zone's light is filtered off), and
+    its samples, each a point source of the plate (Rayleigh–Sommerfeld, Eq. 7: weight
+    (q·pitch)²·cos θ/(λR)), summed into the pupil's plane waves by a type-1 non-uniform FFT
+    onto the camera's spectrum bins, with the curvature of their distance (depth layers as the
+    camera hologram's). The Riemann sum is exact for band-limited samples whose band plus the
+    pupil's stays below their rate; the decimation keeps to that.
+
+    rt : the OpenCL runtime
+    h : the hologram (carrier plate; only its metadata is read here)
+    position, rotation : the pupil's centre (3,) [m] and the camera's axes (3, 3) in the
+        plate's frame
+    diameter : the pupil's diameter [m]
+    bin : the spectrum's bin spacing in direction cosine; shape : (h, w) pupil samples
+    centre : (α, β) the direction cosines of the spectrum's centre bin: the pupil fields come
+        demodulated by exp(−ik(α·x + β·y)) (the spectrum holds the directions the samples'
+        light arrives from, not the whole field of view)
+    window : (row0, row1, col0, col1) of the plate's samples that can reach the pupil
+    """
+
+    def __init__(self, rt, h, *, position, rotation, diameter, bin, shape, window,
+                 centre=(0.0, 0.0)):
+        self.rt, self.h, self.centre = rt, h, centre
+        self._gathers = {}
+        self.position = np.asarray(position, np.float64)
+        self.rotation = np.asarray(rotation, np.float64)
+        self.diameter, self.bin, self.shape = diameter, bin, tuple(shape)
+        self.window = window
+
+    def _design(self, wavelength):
+        """((q, taps) along rows, (q, taps) along columns) of the decimation at
+        ``wavelength`` [m]: the pass band the pupil's light needs (its width seen from the
+        window's nearest point, PASS_MARGIN beyond), the stop band TRANSITION beyond it, and
+        every q-th sample while the stop band's edge plus the pupil's own band stay below the
+        rate (the Riemann sum onto the pupil then has no alias)."""
+        h = self.h
+        r0, r1, c0, c1 = self.window
+        x, y = h.carrier.coords(h.pitch, [r0, r1], [c0, c1])
+        corners = np.array([[xx, yy, 0.0] for xx in x for yy in y])
+        nearest = float(np.min(np.linalg.norm(corners - self.position, axis=1)))
+        nearest = min(nearest, float(self.position[2]))
+        band = PASS_MARGIN * self.diameter / (2 * wavelength * nearest)  # [1/m]
+        out = []
+        for pitch in (h.carrier.row_pitch, h.pitch):
+            q = max(1, int(1 / (pitch * band * (1 + TRANSITION + 1 / PASS_MARGIN))))
+            out.append((1, np.ones(1, np.float32)) if q == 1 else
+                       (q, kaiser_lowpass((1 + TRANSITION / 2) * band * pitch,
+                                          TRANSITION * band * pitch)))
+        return out
+
+    def fields(self, read, channels, wavelength, *, amplitude=1.0):
+        """The pupil fields (device (planes, h, w) complex64, FFT order) of the plate's
+        ``channels`` (all at ``wavelength`` [m]); ``read(channels, r0, r1, c0, c1)`` returns
+        their samples (C, r1 − r0, c1 − c0); ``amplitude`` scales them (the emitters'
+        density)."""
+        along_rows, along_cols = self._design(wavelength)
+        key = (along_rows[0], along_cols[0])
+        if key not in self._gathers:  # one per decimation: every look and channel shares it
+            self._gathers[key] = _Gather(self, *key)
+        decimated = self._decimated(read, channels, wavelength, along_rows, along_cols)
+        return self._gathers[key].pupil(decimated, len(channels), wavelength,
+                                        amplitude / wavelength)
+
+    def _decimated(self, read, channels, wavelength, along_rows, along_cols):
+        """The window's samples turned onto the pupil's carrier, filtered and thinned to every
+        q-th along each axis (``along_rows``, ``along_cols``: (q, taps)): device
+        (C, rows, cols) at the rows r0 + q·i and columns c0 + q·j of the plate."""
+        rt, h = self.rt, self.h
+        ph, pw = h.shape
+        r0, r1, c0, c1 = self.window
+        (qy, taps_y), (qx, taps_x) = along_rows, along_cols
+        pad_y, pad_x = (len(taps_y) - 1) // 2, (len(taps_x) - 1) // 2
+        rr0, rr1 = max(r0 - pad_y, 0), min(r1 + pad_y, ph)
+        cc0, cc1 = max(c0 - pad_x, 0), min(c1 + pad_x, pw)
+        out_cols, out_rows = -(-(c1 - c0) // qx), -(-(r1 - r0) // qy)
+        planes = len(channels)
+        rowpass = rt.scratch("plate-rowpass", (planes, rr1 - rr0, out_cols))
+        k = 2 * math.pi / wavelength
+        real = rt.real
+        taps = [rt.to_device(t) for t in (taps_x, taps_y)]
+        for b0 in range(rr0, rr1, BAND_ROWS):
+            b1 = min(b0 + BAND_ROWS, rr1)
+            band = rt.to_device(np.ascontiguousarray(read(channels, b0, b1, cc0, cc1),
+                                                     np.complex64))
+            x0, y0 = h.carrier.coords(h.pitch, [b0], [cc0])
+            rt.kernel(PROGRAM, "demodulate", rt.real_options)(
+                rt.queue, (b1 - b0, cc1 - cc0), None, band.data, np.int32(planes),
+                np.int32(b1 - b0), np.int32(cc1 - cc0),
+                *(real(v) for v in (h.pitch, h.carrier.row_pitch, x0[0], y0[0], k,
+                                    *self.position, *h.carrier.centre)))
+            rt.kernel(PROGRAM, "decimate", (f"-DTAPS={len(taps_x)}", "-DALONG_COLS"))(
+                rt.queue, (b1 - b0, out_cols, planes), None, rowpass.data, band.data,
+                np.int32(b1 - b0), np.int32(cc1 - cc0), np.int32(b1 - b0),
+                np.int32(out_cols), np.int32(b0 - rr0), np.int32(rr1 - rr0), np.int32(qx),
+                np.int32(c0 - cc0 - pad_x), taps[0].data)
+        result = rt.scratch("plate-decimated", (planes, out_rows, out_cols))
+        rt.kernel(PROGRAM, "decimate", (f"-DTAPS={len(taps_y)}",))(
+            rt.queue, (out_rows, out_cols, planes), None, result.data, rowpass.data,
+            np.int32(rr1 - rr0), np.int32(out_cols), np.int32(out_rows), np.int32(out_cols),
+            np.int32(0), np.int32(out_rows), np.int32(qy), np.int32(r0 - rr0 - pad_y),
+            taps[1].data)
+        return result
+
+
+class _Gather:
+    """The decimated samples' way onto a pupil's spectrum grid, the same for every look and
+    channel of a view: their grid coordinates (gy, gx: 2× oversampled bins, around the
+    spectrum's centre), Rayleigh–Sommerfeld weights (Eq. 7: (q·pitch)²·cos θ/R, times 1/λ
+    per wavelength), depth layers, and the cells of the grid they are listed by."""
+
+    def __init__(self, view: CarrierPupil, qy: int, qx: int):
+        rt, h = view.rt, view.h
+        self.view = view
+        r0, r1, c0, c1 = view.window
+        rows = r0 + qy * np.arange(-(-(r1 - r0) // qy))
+        cols = c0 + qx * np.arange(-(-(c1 - c0) // qx))
+        x, y = h.carrier.coords(h.pitch, rows, cols)
+        d = np.stack(np.broadcast_arrays(view.position[0] - x[None, :],
+                                         view.position[1] - y[:, None],
+                                         np.full((1, 1), view.position[2])), -1)
+        r = np.linalg.norm(d, axis=-1)
+        local = (d / r[..., None]) @ view.rotation   # propagation directions, camera axes
+        gx = 2 * (local[..., 0] - view.centre[0]) / view.bin
+        gy = 2 * (local[..., 1] - view.centre[1]) / view.bin
+        weight = qx * h.pitch * qy * h.carrier.row_pitch * (view.position[2] / r) / r
+        self.depth = -((-d) @ view.rotation)[..., 2]
+        hh, ww = view.shape
+        self.count = gy.size
+        # only the grid points the samples reach: their box in grid coordinates, in cells
+        self.lo = (max(int(np.floor(gy.min() - ES_TAPS / 2)), -hh),
+                   max(int(np.floor(gx.min() - ES_TAPS / 2)), -ww))
+        self.hi = (min(int(np.ceil(gy.max() + ES_TAPS / 2)), hh - 1),
+                   min(int(np.ceil(gx.max() + ES_TAPS / 2)), ww - 1))
+        self.cells = tuple(-(-(b - a + 1) // SPREAD_CELL) for a, b in zip(self.lo, self.hi))
+        ci = np.clip(((gy.ravel() - self.lo[0]) // SPREAD_CELL).astype(np.int64), 0,
+                     self.cells[0] - 1)
+        cj = np.clip(((gx.ravel() - self.lo[1]) // SPREAD_CELL).astype(np.int64), 0,
+                     self.cells[1] - 1)
+        key = ci * self.cells[1] + cj
+        order = np.argsort(key, kind="stable")
+        start = np.searchsorted(key[order], np.arange(self.cells[0] * self.cells[1] + 1))
+        self.at = [rt.to_device(a.ravel()[order], np.float32) for a in (gy, gx)]
+        self.index, self.start = rt.to_device(order, np.int32), rt.to_device(start, np.int32)
+        self.weight = weight.ravel()[order]
+        self.order = order
+        self.deapod = [rt.to_device(es_transform(grid.signed_indices(n) / (2 * n), ES_TAPS),
+                                    np.float32) for n in (hh, ww)]
+        self.layers = {}
+
+    def _layers(self, wavelength):
+        """(planar distance [m], sorted weights on the device) per depth layer."""
+        key = round(wavelength, 12)
+        if key not in self.layers:
+            self.layers[key] = [(z, self.view.rt.to_device(self.weight * mask.ravel()[self.order],
+                                                          np.float32))
+                                for z, mask in _layers(self.depth, wavelength,
+                                                       self.view.diameter)]
+        return self.layers[key]
+
+    def pupil(self, values, planes, wavelength, scale):
+        """The pupil fields (device (planes, h, w)) of the decimated samples ``values``
+        (device (planes, rows, cols)) at ``wavelength`` [m], times ``scale``: spread onto the
+        2× oversampled spectrum grid per depth layer, transformed, deapodized and curved by
+        the layer's distance."""
+        view = self.view
+        rt = view.rt
+        hh, ww = view.shape
+        es = cached_array(rt, "es-table", es_table, ES_TAPS)
+        options = (f"-DCHANNELS={planes}", f"-DES_TAPS={ES_TAPS}", f"-DES_TABLE={ES_TABLE}",
+                   f"-DCELL={SPREAD_CELL}")
+        grid_shape = (2 * hh, 2 * ww)
+        pupil = rt.scratch("carrier-pupil", (planes, hh, ww))
+        pupil.fill(0)
+        dy, dx = wavelength / (hh * view.bin), wavelength / (ww * view.bin)
+        k = 2 * math.pi / wavelength
+        if self.hi[0] < self.lo[0] or self.hi[1] < self.lo[1]:
+            return pupil
+        for z, weight in self._layers(wavelength):
+            spread = rt.scratch("carrier-spread", (planes,) + grid_shape)
+            spread.fill(0)
+            rt.kernel(PROGRAM, "spread", options)(
+                rt.queue, (self.hi[0] - self.lo[0] + 1, self.hi[1] - self.lo[1] + 1), None,
+                spread.data, np.int32(grid_shape[0]), np.int32(grid_shape[1]),
+                np.int32(self.lo[0]), np.int32(self.lo[1]), values.data,
+                np.int32(self.count), weight.data, self.at[0].data, self.at[1].data,
+                self.index.data, self.start.data, np.int32(self.cells[0]),
+                np.int32(self.cells[1]), np.float32(scale), es.data)
+            for p in range(planes):
+                buf = rt.scratch("carrier-fft", grid_shape)
+                copy_plane(buf, spread, p)
+                rt.fft.backward(buf)
+                copy_plane(spread, buf, p, into=True)
+            rt.kernel(PROGRAM, "pupil_layer", ())(
+                rt.queue, (hh, ww, planes), None, pupil.data, spread.data, np.int32(hh),
+                np.int32(ww), self.deapod[0].data, self.deapod[1].data, np.float32(dy),
+                np.float32(dx), np.float32(k), np.float32(z))
+        return pupil
+
+
+SPREAD_CELL = 2  # grid units a side of the cells the samples are listed by for the gather
+LAYER_PHASE = math.pi / 2  # a layer's largest curvature error at the pupil's rim [rad]
+
+
+def _layers(depth, wavelength, diameter):
+    """(planar distance [m], mask) per depth layer of the samples: spaced in 1/z so that the
+    curvature error at the pupil's rim stays within a quarter wave (the camera hologram's
+    rule)."""
+    inv = 1 / depth
+    step = 16 * LAYER_PHASE * wavelength / (2 * math.pi * diameter**2)
+    lo, hi = float(inv.min()), float(inv.max())
+    n = max(1, int(math.ceil((hi - lo) / step)))
+    edges = np.linspace(lo, hi, n + 1)
+    which = np.clip(np.searchsorted(edges, inv, side="right") - 1, 0, n - 1)
+    for layer in range(n):
+        mask = which == layer
+        if mask.any():
+            yield float(1 / (0.5 * (edges[layer] + edges[layer + 1]))), mask.astype(np.float64)

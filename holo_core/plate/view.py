@@ -25,21 +25,30 @@ import numpy as np
 
 from .. import jobs, memory, validate
 from ..opencl import get_runtime
-from ..opencl.arrays import cached
+from ..opencl.arrays import cached, copy_plane, empty
 from ..optics import depth as depth_mod
 from ..optics import speckle
 from ..optics.imaging import IRIS_TAPER, PupilImage, assemble, iris_weights
-from ..optics.pupil import Pupil, camera_pupil, intensity_supersample
+from ..optics.pupil import Pupil, camera_pupil, defocus_limited_diameter, intensity_supersample
 from ..propagation import grid
 from ..propagation.convolution import convolve
 from ..propagation.tilt import tilt_reach
 from ..scene.camera import Camera
 from ..scene.hologram import Hologram
+from ..scene.plate import box_corners
 from ..validate import InputError
 from ..view import BACKGROUND_DEPTH, RenderResult, as_rgb
-from .reconstruct import reconstruct
-from .to_pupil import (field_at_pupil, lit_diameter, overlaps, plate_window, pupil_grid,
-                       window_of)
+from .reconstruction import reconstruct
+from .to_pupil import (
+    CarrierPupil,
+    cone_on_plate,
+    field_at_pupil,
+    lit_diameter,
+    overlaps,
+    plate_window,
+    pupil_grid,
+    window_of,
+)
 
 log = logging.getLogger(__name__)
 COVERAGE_RADIUS = 1  # the coverage's speckle is averaged over (2r+1)² pixels before alpha
@@ -163,6 +172,28 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     pupil = aperture or camera_pupil(fine, lam0, centre, apodize=apodize)
     rotation, position = camera_in_plate(first, camera)
     _check_zone(first, camera, position, pupil.diameter)
+    if first.carrier is not None:
+        if aperture is None and camera.fstop is None:  # a pinhole: the camera hologram's rule
+            depth = -((box_corners(first.bounds) - position) @ rotation)[:, 2]
+            diameter, focus = defocus_limited_diameter(camera.pixel_angle() / supersample,
+                                                       float(depth.min()), float(depth.max()))
+            if first.zone is not None:  # ... within the zone, where the plate sends light
+                room = np.asarray(first.zone.half_extents[:2]) - np.abs(
+                    position[:2] - np.asarray(first.zone.centre[:2]))
+                diameter = min(diameter, max(2 * float(room.min()), 1e-3 * diameter))
+            pupil = Pupil(diameter=diameter, focus=focus, apodize=apodize)
+        looks, shape = carrier_looks(holos, camera, fine, pupil, rotation, position, colours,
+                                     z_ch, supersample=supersample, chromatic=chromatic,
+                                     progress=progress)
+        if looks is None:
+            warnings.warn("the view is black: the camera sees the objects beside the plate, "
+                          "not through it", EmptyViewWarning, stacklevel=2)
+            return _finish(np.zeros(camera.resolution[::-1] + (len(colours),)), None, None,
+                           first, camera, pupil, exposure, opacity_threshold, lam0)
+        return _compose(looks, colours, z_ch, first, camera, fine, pupil,
+                        supersample=supersample, composition=composition,
+                        depth_estimate=depth_estimate, centre=centre, exposure=exposure,
+                        threshold=opacity_threshold, n=shape)
     lit = lit_diameter(first, position, rotation, pupil.diameter)  # the pupil's part in light
     window = plate_window(first, position, rotation, lit, _corners(camera, rotation))
     unseen = _unseen(first, rotation, position) or (None if overlaps(first, window) else (
@@ -225,6 +256,109 @@ def _iris_sum(n, d, diameter, taper, lit) -> float:
     return area / (d * d)
 
 
+EDGE_BINS = 8  # the pupil's spectrum reaches this many bins beyond the image and its blur
+
+
+def carrier_looks(holos, camera: Camera, fine: Camera, pupil: Pupil, rotation, position,
+                  colours, z_ch, *, supersample, chromatic=True, progress=None):
+    """(each look's complex images (channel -> (H·s, W·s)), the pupil's samples (h, w)) of
+    plates stored against their zone's carrier (:class:`~holo_core.plate.to_pupil.
+    CarrierPupil`); (None, None) where the pupil sees the objects beside the plate."""
+    first = holos[0]
+    window = carrier_window(first, camera, rotation, position, pupil.diameter)
+    if window is None:
+        return None, None
+    lam0 = first.wavelengths[colours[0]]
+    bin_ = min(camera.pixel_angle() / supersample, lam0 / pupil.diameter)
+    shape, middle = _spectrum_box(first, fine, rotation, position, pupil, bin_, window)
+    rt = get_runtime()
+    memory.check_device(rt, f"the {shape[1]}x{shape[0]} pupil's spectra",
+                        96.0 * math.prod(shape), 32.0 * math.prod(shape))
+    view = CarrierPupil(rt, first, position=position, rotation=rotation,
+                        diameter=pupil.diameter, bin=bin_, shape=shape, window=window,
+                        centre=middle)
+    hh, ww = shape
+    taper = IRIS_TAPER if pupil.apodize else 0.0
+    iris = iris_weights(shape, (lam0 / (hh * bin_), lam0 / (ww * bin_)), pupil.diameter, taper)
+    scale = 1 / math.sqrt(hh * ww * float(np.sum(iris**2)))
+    # the emitters' spacing seen from the zone's centre over the bins': a surface of emitters
+    # of intensity I shows I (one emitter per bin is the camera hologram's calibration)
+    distance = float(np.linalg.norm(np.asarray(first.bounds).mean(0)
+                                    - np.asarray(first.zone.centre)))
+    spacing = 1 / (math.sqrt(first.point_density) * distance)
+    groups = {}
+    for c in colours + ([z_ch] if z_ch is not None else []):
+        groups.setdefault(first.wavelengths[c], []).append(c)
+    imagers = {lam: PupilImage(rt, shape, bin=bin_, camera=fine, centre=middle)
+               for lam in groups}
+    looks = []
+    for i, h in enumerate(holos):
+        images = {}
+        for g, (lam, chans) in enumerate(groups.items()):
+            lo, hi = min(chans), max(chans) + 1
+            if hi - lo != len(chans):
+                raise InputError(f"a plate's channels at one wavelength must be neighbours; "
+                                 f"got {chans}")
+            waves = view.fields(lambda _, r0, r1, c0, c1: h.object_wave[lo:hi, r0:r1, c0:c1],
+                                chans, lam, amplitude=spacing / bin_)
+            lens = lam0 if chromatic else lam
+            for m, c in enumerate(chans):
+                images[c] = imagers[lam].image(
+                    plane_of(rt, waves, m), pitch=(lam / (hh * bin_), lam / (ww * bin_)),
+                    diameter=pupil.diameter, focus=pupil.focus, taper=taper,
+                    lens_k=2 * np.pi / lens, scale=scale)
+            jobs.report(progress, i * len(groups) + g + 1, len(holos) * len(groups))
+        looks.append(images)
+    return looks, shape
+
+
+def carrier_window(h: Hologram, camera: Camera, rotation, position, diameter):
+    """(row0, row1, col0, col1) of a carrier plate's samples the pupil sees the objects
+    through (the cone from its rim to the objects' box, cut to the camera's field of view),
+    or None where that misses the samples."""
+    r = diameter / 2
+    rim = np.array([position + s * r * rotation[:, a] for a in (0, 1) for s in (-1, 1)]
+                   + [position])
+    lo, hi = cone_on_plate(h.bounds, rim)
+    d = _corners(camera, rotation)
+    t = -rim[:, None, 2:3] / np.minimum(d[None, :, 2:3], -1e-12)
+    seen = (rim[:, None, :2] + t * d[None, :, :2]).reshape(-1, 2)
+    lo, hi = np.maximum(lo, seen.min(0)), np.minimum(hi, seen.max(0))
+    o, step = np.asarray(h.carrier.origin), np.array([h.pitch, h.carrier.row_pitch])
+    c0, r0 = np.floor((lo - o) / step).astype(int) - 1
+    c1, r1 = np.ceil((hi - o) / step).astype(int) + 2
+    rows, cols = h.shape
+    r0, r1, c0, c1 = max(r0, 0), min(r1, rows), max(c0, 0), min(c1, cols)
+    return None if r1 <= r0 or c1 <= c0 else (int(r0), int(r1), int(c0), int(c1))
+
+
+def _spectrum_box(h: Hologram, fine: Camera, rotation, position, pupil: Pupil, bin_, window):
+    """((h, w) bins, (α, β) centre) of the pupil's spectrum: the directions the window's light
+    arrives from, within the fine pixels' field of view, widened by the defocus blur of the
+    objects' depths and EDGE_BINS."""
+    alpha, beta, _ = fine.direction_cosines()
+    r0, r1, c0, c1 = window
+    x, y = h.carrier.coords(h.pitch, [r0, r1], [c0, c1])
+    corners = np.array([[xx, yy, 0.0] for xx in x for yy in y])
+    seen = (position - corners) / np.linalg.norm(position - corners, axis=1)[:, None] @ rotation
+    lo = np.maximum(seen[:, :2].min(0), [alpha.min(), beta.min()])
+    hi = np.minimum(seen[:, :2].max(0), [alpha.max(), beta.max()])
+    depth = np.clip(-((box_corners(h.bounds) - position) @ rotation)[:, 2], 1e-9, None)
+    blur = 0.0 if pupil.focus is None else \
+        pupil.diameter * float(np.max(np.abs(1 / depth - 1 / pupil.focus)))
+    margin = blur + EDGE_BINS * bin_
+    lo, hi = lo - margin, hi + margin
+    shape = tuple(grid.next_fast_len(math.ceil((hi[i] - lo[i]) / bin_) + 1) for i in (1, 0))
+    return shape, tuple(map(float, (lo + hi) / 2))
+
+
+def plane_of(rt, stack, m):
+    """Plane ``m`` of a device stack (P, h, w) as its own (h, w) device array."""
+    out = empty(rt, stack.shape[1:])
+    copy_plane(out, stack, m)
+    return out
+
+
 def nyquist_supersample(h: Hologram, camera: Camera) -> int:
     """The supersampling at which a view of ``h`` through ``camera``'s lens samples its
     intensity at the Nyquist rate (:func:`holo_core.optics.pupil.intensity_supersample`;
@@ -273,7 +407,7 @@ def _compose(looks, colours, z_ch, first: Hologram, camera, fine, pupil, *, supe
             "resolution_limit_rad": limit, "pixel_angle_rad": camera.pixel_angle(),
             "resolution_limit_px": limit / camera.pixel_angle(),
             "wavelengths_m": list(first.wavelengths), "exposure": exposure,
-            "pupil_samples": [n, n], "iterations": len(looks), "samples": len(looks),
+            "pupil_samples": list(n) if isinstance(n, tuple) else [n, n], "iterations": len(looks), "samples": len(looks),
             "speckle_contrast": _spread(looks, colours, z_ch, supersample)}
     log.info("render: aperture %.4g m, resolution limit λ/D = %.3g rad = %.2f px",
              pupil.diameter, limit, info["resolution_limit_px"])

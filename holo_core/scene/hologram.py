@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import preview, validate
 from ..validate import InputError
-from .plate import ViewingZone
+from .plate import Carrier, ViewingZone
 
 CHANNEL_ROLES = ("R", "G", "B", "Y", "Z")
 ENCODINGS = ("complex", "intensity")
@@ -41,6 +41,10 @@ class HologramInfo:
     point_density : emitters per m² of surface, which calibrates radiance (0: unknown)
     zone : the :class:`~holo_core.scene.plate.ViewingZone` it was recorded for (the plate's
         frame), or None (unknown: an acquired or earlier hologram)
+    carrier : the :class:`~holo_core.scene.plate.Carrier` a complex plate's samples are stored
+        against (the object wave is samples·exp(−ik|x − carrier.centre|), sample (0, 0) at
+        carrier.origin; ``band`` is then the samples' band around it), or None (the samples
+        are the object wave, centred on the plate)
     """
 
     wavelengths: tuple
@@ -57,6 +61,7 @@ class HologramInfo:
     channels: tuple = ()
     point_density: float = 0.0
     zone: ViewingZone | None = None
+    carrier: Carrier | None = None
 
     def __post_init__(self):
         wavelengths = self.wavelengths
@@ -85,6 +90,10 @@ class HologramInfo:
         self._check_optics()
         if self.zone is not None and not isinstance(self.zone, ViewingZone):
             raise InputError(f"zone must be a ViewingZone or None; got {type(self.zone).__name__}")
+        if self.carrier is not None and (not isinstance(self.carrier, Carrier)
+                                         or self.encoding != "complex"):
+            raise InputError(f"carrier must be a Carrier of a complex hologram, or None; got "
+                             f"{type(self.carrier).__name__} on an {self.encoding} hologram")
 
     def _set(self, name, value):
         object.__setattr__(self, name, value)
@@ -151,15 +160,20 @@ class HologramInfo:
         return self.channels.index("Z") if "Z" in self.channels else None
 
     @property
+    def row_pitch(self) -> float:
+        """The rows' spacing [m]: the pitch, or a carrier plate's own."""
+        return self.pitch if self.carrier is None else self.carrier.row_pitch
+
+    @property
     def size(self) -> tuple[float, float]:
         """Physical (width, height) [m]."""
-        return self.shape[1] * self.pitch, self.shape[0] * self.pitch
+        return self.shape[1] * self.pitch, self.shape[0] * self.row_pitch
 
 
 # the fields a hologram's description holds beside its shape (which its samples give)
 DESCRIPTION = ("wavelengths", "pitch", "encoding", "reference_angle", "reference_azimuth",
                "reference_amplitudes", "plate", "bounds", "band", "channels", "point_density",
-               "zone")
+               "zone", "carrier")
 
 
 def _described(name):
@@ -235,6 +249,8 @@ class Hologram:
     channels = _described("channels")
     point_density = _described("point_density")
     zone = _described("zone")
+    carrier = _described("carrier")
+    row_pitch = _described("row_pitch")
     shape = _described("shape")
     size = _described("size")
 

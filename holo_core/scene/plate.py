@@ -30,11 +30,14 @@ class ViewingZone:
     pupil : [m] the entrance pupil the zone is made for (the camera's aperture diameter; it
         sets how far apart the plate's emitters may lie, one resolved spot seen from there);
         0 when unknown
+    pixel : [rad] the pixel angle of the views the zone is made for (with the pupil, it sets
+        the wavelength: views resolve a fine pixel); 0 when unknown
     """
 
     centre: tuple
     half_extents: tuple
     pupil: float = 0.0
+    pixel: float = 0.0
 
     def __post_init__(self):
         c = validate.vector("zone centre", self.centre, 3, "m")
@@ -54,11 +57,17 @@ class ViewingZone:
         object.__setattr__(self, "centre", tuple(map(float, c)))
         object.__setattr__(self, "half_extents", tuple(map(float, e)))
         object.__setattr__(self, "pupil", pupil)
+        pixel = validate.finite("zone pixel", self.pixel, "rad")
+        if not 0 <= pixel <= math.pi:
+            raise InputError(f"zone pixel must be in [0, π] [rad]; got {self.pixel!r}")
+        object.__setattr__(self, "pixel", pixel)
 
     @classmethod
-    def around(cls, position, pupil: float = 0.0, margin: float = DEFAULT_ZONE_MARGIN):
+    def around(cls, position, pupil: float = 0.0, margin: float = DEFAULT_ZONE_MARGIN,
+               pixel: float = 0.0):
         """The zone covering a pupil of diameter ``pupil`` [m] centred at ``position`` (3,) [m]
-        (the plate's frame), ``margin`` [m] beyond it in every direction (in depth too)."""
+        (the plate's frame), ``margin`` [m] beyond it in every direction (in depth too), for
+        views of pixels ``pixel`` [rad]."""
         margin = validate.finite("zone margin", margin, "m")
         if margin < 0:
             raise InputError(f"zone margin must be >= 0 [m]; got {margin!r}")
@@ -69,7 +78,29 @@ class ViewingZone:
                              f"got ({p[0]:g}, {p[1]:g}, {p[2]:g}) m")
         half = pupil / 2 + margin
         depth = min(margin, 0.5 * float(p[2]))  # never reaching the plate
-        return cls(centre=tuple(p), half_extents=(half, half, depth), pupil=pupil)
+        return cls(centre=tuple(p), half_extents=(half, half, depth), pupil=pupil, pixel=pixel)
+
+    @classmethod
+    def fit(cls, positions, pupil: float = 0.0, margin: float = DEFAULT_ZONE_MARGIN,
+            pixel: float = 0.0):
+        """The smallest zone holding a pupil of diameter ``pupil`` [m] at every one of
+        ``positions`` (N, 3) [m] (a shot's camera path, the plate's frame), ``margin`` [m]
+        beyond it (in depth, at most half the nearest position's distance), for views of
+        pixels ``pixel`` [rad]."""
+        p = np.atleast_2d(validate.array("positions", positions, "(N, 3) positions [m]"))
+        if p.ndim != 2 or p.shape[1] != 3 or not len(p) or not np.isfinite(p).all():
+            raise InputError(f"positions must be (N, 3) finite camera positions [m]; got "
+                             f"shape {p.shape}")
+        margin = validate.finite("zone margin", margin, "m")
+        if margin < 0:
+            raise InputError(f"zone margin must be >= 0 [m]; got {margin!r}")
+        pupil = validate.finite("pupil", pupil, "m")
+        lo, hi = p.min(0), p.max(0)
+        reach = pupil / 2 + margin
+        depth = (hi[2] - lo[2]) / 2 + min(margin, 0.5 * float(lo[2]))
+        return cls(centre=tuple((lo + hi) / 2), half_extents=(
+            (hi[0] - lo[0]) / 2 + reach, (hi[1] - lo[1]) / 2 + reach, depth), pupil=pupil,
+            pixel=pixel)
 
     def corners(self) -> np.ndarray:
         """The box's eight corners (8, 3) [m] in the plate's frame."""
@@ -87,6 +118,46 @@ class ViewingZone:
         (x, y, z), (hx, hy, hz) = self.centre, self.half_extents
         return (f"the box centred at ({x:.4g}, {y:.4g}, {z:.4g}) m in the plate's frame, "
                 f"±({hx:.4g}, {hy:.4g}, {hz:.4g}) m")
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Carrier:
+    """The converging spherical carrier of a plate's samples.
+
+    centre : (3,) [m] the point it converges on (the zone's centre), the plate's frame, z > 0
+    origin : (x, y) [m] of sample (row 0, column 0) in the plate's frame: the samples cover
+        the window the zone's light crosses, not necessarily the plate's centre
+    row_pitch : [m] the rows' spacing along y (the columns': the hologram's pitch); a zone
+        wider than tall asks fewer rows
+    """
+
+    centre: tuple
+    origin: tuple
+    row_pitch: float
+
+    def __post_init__(self):
+        c = validate.vector("carrier centre", self.centre, 3, "m")
+        if not c[2] > 0:
+            raise InputError(f"carrier centre must lie in front of the plate (z > 0 in its "
+                             f"frame) [m]; got {c.tolist()}")
+        o = validate.vector("carrier origin", self.origin, 2, "m")
+        object.__setattr__(self, "centre", tuple(map(float, c)))
+        object.__setattr__(self, "origin", tuple(map(float, o)))
+        object.__setattr__(self, "row_pitch", validate.pitch("carrier row_pitch",
+                                                             self.row_pitch))
+
+    def coords(self, pitch: float, rows, cols) -> tuple[np.ndarray, np.ndarray]:
+        """(x (cols,), y (rows,)) [m] of the samples ``rows`` and ``cols`` (index ranges or
+        arrays) in the plate's frame, columns ``pitch`` [m] apart."""
+        return (self.origin[0] + np.asarray(cols, np.float64) * pitch,
+                self.origin[1] + np.asarray(rows, np.float64) * self.row_pitch)
+
+    def phase(self, wavelength: float, pitch: float, rows, cols) -> np.ndarray:
+        """k·|x − c| reduced to [0, 2π) (rows, cols) float64 at the samples."""
+        x, y = self.coords(pitch, rows, cols)
+        cx, cy, cz = self.centre
+        r = np.sqrt((x[None, :] - cx) ** 2 + (y[:, None] - cy) ** 2 + cz * cz)
+        return np.remainder(2 * math.pi / wavelength * r, 2 * math.pi)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
@@ -121,7 +192,8 @@ class Plate:
         if position[2] <= 0:
             raise InputError(f"the camera must be in front of the plate (z > 0 in its frame) to "
                              f"define its viewing zone; it is at z = {position[2]:.4g} m")
-        return ViewingZone.around(position, camera.aperture_diameter or 0.0, margin)
+        return ViewingZone.around(position, camera.aperture_diameter or 0.0, margin,
+                                  camera.pixel_angle())
 
 
 def box_corners(bounds) -> np.ndarray:

@@ -15,9 +15,11 @@ from test_addon import _camera_columns, _plate_camera_cube, _read_exr  # noqa: E
 from test_export import _emitter_meshes  # noqa: E402
 
 
-def _moving_cube(scene, tmp_path):
+def _moving_cube(scene, tmp_path, margin=0.01):
+    """A cube that moves between frames 1-3 before a pinhole camera and a plate whose zone
+    reaches ``margin`` [m] around the camera (the plate sends light only into its zone)."""
     cube, cam, plate = _plate_camera_cube(scene, cube_size=0.4)
-    plate.holo.zone_margin = 0.01  # a zone close around the camera: a sharper plate
+    plate.holo.zone_margin = margin
     bpy.ops.object.light_add(type="SUN", rotation=(np.radians(60), 0, 0))  # lights its front
     bpy.context.object.data.energy = 3.0
     scene.render.resolution_x, scene.render.resolution_y = 48, 36
@@ -81,7 +83,9 @@ def test_three_frames_as_one_animation_or_separate_frames_give_identical_passes(
     frame's cube (within half a pixel), and each frame's composite shows its own pass."""
     from holo_addon.render import pipeline
     scene = empty_scene
-    cube, cam = _moving_cube(scene, tmp_path)
+    # a zone that holds the camera's 10 cm move with room for its pinhole pupil (the widest
+    # its defocus allows, 34 cm here)
+    cube, cam = _moving_cube(scene, tmp_path, margin=0.25)
     for frame, dx in ((1, 0.0), (2, 0.05), (3, 0.1)):
         cam.location.x = dx
         cam.keyframe_insert("location", frame=frame)

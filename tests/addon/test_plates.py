@@ -83,8 +83,8 @@ def test_the_zone_is_drawn_as_its_box(empty_scene):
 
 
 def test_planner_in_the_panel(empty_scene):
-    """Plan Plate states, before recording, the plate's samples, wavelength, memory, time and
-    what the camera's view of it resolves (the core's planner, in a child process)."""
+    """Plan Plate states, before recording, its verdict, the plate's samples, wavelength,
+    disk, memory, time and what the camera's view of it resolves."""
     from holo_addon.ui import plates
     scene = empty_scene
     _, _, plate = _plate_scene(scene)
@@ -93,7 +93,7 @@ def test_planner_in_the_panel(empty_scene):
     lines = plates.plan_lines(plate)
     print("\n".join(lines))
     text = "\n".join(lines)
-    for word in ("256 x 256 samples", "λ =", "memory", "recording", "sharp view  needs"):
+    for word in ("verdict", "Mpx", "µm apart", "wavelength", "GB", "tile by tile", "per view"):
         assert word in text, word
 
 

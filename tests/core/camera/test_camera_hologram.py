@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from holo_core.camera.optics import choose_optics
-from holo_core.camera.raster import _bin_rays, depth_range, grid_indices, point_emitters, rasterize
+from holo_core.camera.raster import depth_range, grid_indices, point_emitters, rasterize
+from holo_core.optics.raster import bin_rays
 from holo_core.camera.recording import (
     intensity_hologram,
     object_wave,
@@ -122,7 +123,7 @@ def test_object_wave_on_the_pupil_equals_the_spherical_waves():
     rng = np.random.default_rng(3)
     kx, ky = rng.integers(-4, 5, 6), rng.integers(-4, 5, 6)
     depth = rng.choice(optics.layers, 6)
-    tx, ty = _bin_rays(kx, ky, optics.bin)
+    tx, ty = bin_rays(kx, ky, optics.bin)
     local = np.stack([tx * depth, ty * depth, -depth], -1)
     pts = camera.position + local @ camera.rotation.T
     em = point_emitters(pts, np.ones((6, 3)), camera, optics)
@@ -134,7 +135,7 @@ def test_object_wave_on_the_pupil_equals_the_spherical_waves():
     phases = random_phases(len(em.index), 5)
     ref = np.zeros((h, w), complex)
     ey, ex = grid_indices(em.index, optics.shape)
-    etx, ety = _bin_rays(ex, ey, optics.bin)
+    etx, ety = bin_rays(ex, ey, optics.bin)
     for j in range(len(em.index)):  # each emitter is one point: on its bin's ray, at its depth
         p = np.array([etx[j], ety[j], -1.0]) * em.depth[j]
         r = np.sqrt((x - p[0]) ** 2 + (y - p[1]) ** 2 + p[2] ** 2)
@@ -236,13 +237,13 @@ def test_camera_hologram_equals_the_plate_hologram_carried_to_the_pupil():
     camera = Camera(matrix_world=pose, resolution=(48, 48), fstop=8.0, focus_distance=0.5)
     optics = choose_optics(camera, (0.5, 0.5))
     kx, ky = np.array([0, 2, -3, 1, -1]), np.array([0, -2, 1, 3, -3])
-    tx, ty = _bin_rays(kx, ky, optics.bin)
+    tx, ty = bin_rays(kx, ky, optics.bin)
     depth = optics.layers[0]
     pts = np.stack([tx * depth, ty * depth, np.full(5, d_c - depth)], -1)
     em = point_emitters(pts, np.ones((5, 3)), camera, optics)
     o = object_wave(em, optics, camera, seed=5)
     ey, ex = grid_indices(em.index, optics.shape)
-    etx, ety = _bin_rays(ex, ey, optics.bin)
+    etx, ety = bin_rays(ex, ey, optics.bin)
     emitters = np.stack([etx * em.depth, ety * em.depth, d_c - em.depth], -1)
     amps = em.distance * np.exp(1j * random_phases(len(em.index), 5))  # amplitude 1 at the pupil
     lam, (dy, dx), (h, w) = optics.wavelength, optics.pitch(), optics.shape

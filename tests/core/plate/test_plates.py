@@ -3,11 +3,10 @@ any camera in the viewing zone as the camera hologram of that camera sees the sc
 plate's field carried to the pupil, then the camera hologram's own pupil → image stage), with
 occlusion between the objects, parallax included.
 
-The issue's scene made cheap: the same objects, 640x360 pixels at 50 mm f/2.8 rendered in the
-crop around the objects, a 6 cm plate of 1024² samples halfway (its views resolve λ/D = 0.8 px,
-so both renderers read one sample per pixel: supersample 1), cameras 1 cm apart in a zone 1 cm
-around the centre camera's pupil. ``bench/plate_views.py`` measures the full size: the 10 cm
-plate of 4096², cameras 2 cm apart.
+The plate scene made cheap: the same objects, 640x360 pixels at 50 mm f/2.8 rendered in the
+crop around the objects, a 6 cm plate halfway, stored against the carrier converging on a zone
+1 cm around the centre camera's pupil (its views resolve the camera hologram's fine pixel),
+cameras 1 cm apart. ``bench/shot.py`` measures the demo's scale over a camera move.
 """
 
 import re
@@ -19,14 +18,14 @@ from plate_scene import camera, meshes
 
 from holo_core.camera.render import render_camera
 from holo_core.plate.record import look_code, record_hologram, record_plate
-from holo_core.plate.view import EmptyViewWarning, OutsideZoneWarning, plate_wave, render_view
+from holo_core.plate.view import EmptyViewWarning, OutsideZoneWarning, render_view
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.hologram import Hologram
 from holo_core.scene.mesh import Mesh
 from holo_core.scene.plate import Plate, ViewingZone
 from holo_core.validate import InputError
 
-SAMPLES, MARGIN, SUPERSAMPLE = 1024, 0.01, 2
+MARGIN, SUPERSAMPLE = 0.01, 2
 PLATE = Plate(matrix_world=np.eye(4), width=0.06, height=0.06)
 NEAR = 0.625  # [m] the cube lies nearer than this from the cameras, the sphere farther
 EYES = {"left": (-0.01, 0.0, 0.3), "centre": (0.0, 0.0, 0.3), "right": (0.01, 0.0, 0.3)}
@@ -45,9 +44,8 @@ def iou(a, b) -> float:
 
 @pytest.fixture(scope="module")
 def recorded():
-    """The plate, recorded once for the centre camera's zone (3 cm around its pupil)."""
-    return record_plate(meshes(), plate=PLATE, camera=camera("centre"), zone_margin=MARGIN,
-                        resolution=SAMPLES)
+    """The plate, recorded once for the centre camera's zone (1 cm around its pupil)."""
+    return record_plate(meshes(), plate=PLATE, camera=camera("centre"), zone_margin=MARGIN)
 
 
 @pytest.fixture(scope="module")
@@ -66,28 +64,26 @@ def views(recorded):
 
 @pytest.mark.parametrize("eye", list(EYES))
 def test_views_of_one_recording_equal_the_camera_holograms(views, eye):
-    """Three cameras 2 cm apart inside the zone: the plate's view against the camera hologram
-    of the same camera (the looks' limit). Inside the objects: PSNR >= 18.5 dB (measured
-    19.3-19.8: the plate resolves 0.84 px here, the camera hologram 0.5 px, and the plate's
-    single set of random phases leaves some speckle where colours meet; 1536² samples, 0.56
-    px, gave 22.9-23.1 with slabs of 2 spots), silhouette IoU >= 0.97 (0.981-0.984), mean
-    colour within 3 % (0.3-1.2 %)."""
+    """Three cameras 1 cm apart inside the zone: the plate's view against the camera hologram
+    of the same camera (the looks' limit). Inside the objects: PSNR >= 21.5 dB (measured
+    23.6-24.2 with one look: its single set of random phases leaves speckle where colours
+    meet), silhouette IoU >= 0.97 (0.972-0.974), mean colour within 3 % (0-1.1 %)."""
     plate, cam = views[eye]
     inside = (cam.alpha >= 1) & (plate.alpha >= 1)
     p, j = psnr(plate, cam, inside), iou(plate.alpha > 0.5, cam.alpha > 0.5)
     ratio = plate.rgb[inside].mean(0) / cam.rgb[inside].mean(0)
     print(f"{eye}: PSNR {p:.2f} dB, IoU {j:.4f}, colour ratio {np.round(ratio, 3)}")
-    assert p >= 18.5 and j >= 0.97, (p, j)
+    assert p >= 21.5 and j >= 0.97, (p, j)
     assert np.abs(ratio - 1).max() <= 0.03, ratio
 
 
 def test_occlusion_boundary_shows_parallax(views):
     """The cube hides a part of the sphere behind it, a part that changes between the left and
     the right views. In each view the cube (the depths nearer than NEAR) and the visible part
-    of the sphere match the camera hologram's (IoU >= 0.92; measured 0.975-0.98 for the cube,
-    0.935-0.946 for the sphere's visible crescent, whose rims weigh more), and the sphere's
+    of the sphere match the camera hologram's (IoU >= 0.92; measured 0.967-0.970 for the cube,
+    0.955-0.963 for the sphere's visible crescent, whose rims weigh more), and the sphere's
     visible area changes from the left view to the right by what the camera holograms show
-    (within 25 %; measured 146 against 137 pixels)."""
+    (within 25 %; measured 125 against 139 pixels)."""
     areas, ious = {}, {}
     for eye, (plate, cam) in views.items():
         for name, mask in (("cube", lambda v: (v.alpha >= 0.5) & (v.depth < NEAR)),
@@ -105,9 +101,11 @@ def test_occlusion_boundary_shows_parallax(views):
 def test_speckle_of_the_views(views):
     """The colour is radiance over the depth partner's coverage, which share their speckle:
     on the cube's faces (uniform squares: the 3x3 neighbourhoods of one colour) the colour's
-    contrast against the camera hologram's is below 0.1 (measured 0.048-0.060)."""
+    contrast against the camera hologram's is below 0.1 (measured 0.025-0.030)."""
     for eye, (plate, cam) in views.items():
-        solid = (plate.alpha >= 1) & (plate.depth < NEAR)
+        # the cube's faces where both are opaque (the camera hologram's alpha is its coverage,
+        # which its pupil blurs at the edges)
+        solid = (plate.alpha >= 1) & (cam.alpha >= 1) & (plate.depth < NEAR)
         lum = plate.rgb.mean(-1)
         ref = cam.rgb.mean(-1)
         # pixels whose camera-hologram neighbourhood is flat: inside a checker square
@@ -124,14 +122,14 @@ def test_coded_looks_cancel_the_cross_terms_of_neighbouring_emitters(recorded, v
     """The checkerboard pair of coded looks (:func:`look_code`: one seed, the second look's
     emitters shifted by π on every other lattice cell) has in its mean intensity no cross
     terms between emitters of the four nearest cells: against each camera's camera hologram
-    the pair's view gains at least 1 dB over its first look alone (measured 2.7-3.7 dB)."""
+    the pair's view gains at least 1 dB over its first look alone (measured 2.0-2.8 dB)."""
     assert [look_code(k, 4) for k in range(4)] == [(0, 2), (1, 2), (2, 2), (3, 2)]
     assert [look_code(k, 2) for k in range(2)] == [(0, 2), (3, 2)]
     assert look_code(0, 1) is None and look_code(2, 3) is None
     with pytest.raises(InputError, match="look must be an integer in \\[0, 1\\]"):
         look_code(2, 2)
     second = record_plate(meshes(), plate=PLATE, camera=camera("centre"), zone_margin=MARGIN,
-                          resolution=SAMPLES, code=look_code(1, 2))
+                          code=look_code(1, 2))
     for eye, position in EYES.items():
         one, reference = views[eye]
         pair = render_view([recorded, second], camera(position, crop=True),
@@ -142,17 +140,20 @@ def test_coded_looks_cancel_the_cross_terms_of_neighbouring_emitters(recorded, v
 
 
 def test_camera_settings_never_change_the_plate():
-    """With its zone given, the plate does not depend on the camera: another position inside
-    the zone, focus, f-stop and resolution record the same samples, bit for bit."""
-    zone = ViewingZone(centre=(0, 0, 0.3), half_extents=(0.04, 0.04, 0.03), pupil=0.05 / 2.8)
+    """With its zone given (where and for which pupil and pixels), the plate does not depend
+    on the camera: another position inside the zone, focus, f-stop and resolution record the
+    same samples, bit for bit."""
+    zone = ViewingZone(centre=(0, 0, 0.3), half_extents=(0.04, 0.04, 0.03), pupil=0.05 / 2.8,
+                       pixel=4.5e-3)
     plate = Plate(matrix_world=np.eye(4), width=0.02, height=0.02, zone=zone)
     square = _square(0.01, -0.3)
-    a = record_hologram(square, plate=plate, camera=camera("centre", 0.1), resolution=96)
-    b = record_hologram(square, plate=plate, resolution=96, camera=Camera(
+    a = record_hologram(square, plate=plate, camera=camera("centre", 0.1))
+    b = record_hologram(square, plate=plate, camera=Camera(
         matrix_world=look_at((0.01, 0.01, 0.29), (0, 0, -0.3)), lens=35, fstop=8,
         focus_distance=1.0, resolution=(33, 17)))
     assert a.object_wave.tobytes() == b.object_wave.tobytes()
     assert a.zone is zone and a.encoding == "complex" and a.intensity is None
+    assert a.carrier.centre == zone.centre
 
 
 def test_camera_outside_the_zone_is_warned_by_name():
@@ -182,33 +183,16 @@ def test_camera_outside_the_zone_is_warned_by_name():
     assert "(1, 2, 3.3) m in the world" in said[0], said
 
 
-def test_intensity_plate_reconstructs_the_object_wave():
-    """|O + R|² off axis (sin ϑ = 3 sin θ), reconstructed as R'·H with the DC term suppressed
-    and the twin and |O|² terms filtered off: the object wave comes back (measured 1e-3 of its
-    energy; 2 % allowed), and the view equals the object wave's view (PSNR >= 40 dB)."""
-    zone = ViewingZone(centre=(0, 0, 0.3), half_extents=(0.02, 0.02, 0.02), pupil=0.05 / 2.8)
-    plate = Plate(matrix_world=np.eye(4), width=0.03, height=0.03, zone=zone)
-    tex = np.random.default_rng(5).uniform(0.2, 1.0, (6, 6, 3))
-    h = record_plate(_square(0.012, -0.3, texture=tex), plate=plate, resolution=256,
-                     encoding="intensity", keep_object_wave=True)
-    assert h.encoding == "intensity" and h.intensity.shape == h.object_wave.shape
-    errors = []
-    for c in range(len(h.wavelengths)):
-        back = plate_wave(h, c)
-        back = back if isinstance(back, np.ndarray) else back.get()
-        # within the cone, short of its rim (where |O|²'s band, [b, 5b] around the carrier,
-        # begins): the spectra of the two
-        f = np.fft.fftfreq(back.shape[0], h.pitch) * h.wavelengths[c]
-        inner = np.hypot(f[:, None], f[None, :]) <= 0.9 * h.band
-        a_, b_ = np.fft.fft2(back)[inner], np.fft.fft2(h.object_wave[c])[inner]
-        errors.append(np.linalg.norm(a_ - b_) / np.linalg.norm(b_))
-    cam = Camera(matrix_world=look_at((0, 0, 0.3), (0, 0, -0.3)), resolution=(48, 48),
-                 sensor_width=1.6, fstop=2.8, focus_distance=0.6)  # the square: 30 px
-    a = render_view(h, cam, source="hologram", supersample=2)
-    b = render_view(h, cam, source="object_wave", supersample=2)
-    p = psnr(a, b, b.alpha >= 1)
-    print(f"reconstruction against the object wave: {np.round(errors, 5)}; views {p:.1f} dB")
-    assert max(errors) < 0.02 and p >= 40, (errors, p)
+def test_a_plate_of_meshes_is_complex_and_its_resolution_the_zones():
+    """A plate of meshes records the object wave against its carrier (a display's intensity
+    pattern is made from it); a resolution of samples is a point sum's, refused by name."""
+    plate = Plate(matrix_world=np.eye(4), width=0.03, height=0.03)
+    with pytest.raises(InputError, match="encoding must be 'complex' for a plate of meshes"):
+        record_plate(_square(0.012, -0.3), plate=plate, camera=camera("centre", 0.1),
+                     encoding="intensity")
+    with pytest.raises(InputError, match="resolution applies to point sums"):
+        record_hologram(_square(0.012, -0.3), plate=plate, camera=camera("centre", 0.1),
+                        resolution=256)
 
 
 def _square(size, z, texture=None):

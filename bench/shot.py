@@ -1,0 +1,183 @@
+"""A plate that serves a whole shot: the demo's scale recorded once, viewed over a camera move,
+against each frame's own camera hologram, in one run.
+
+The scene: a textured cube partly hiding a textured sphere, about a metre across 3.5 m from
+the camera; a 1 m plate halfway; a 40 mm lens at f/2.8 and 1280×720; a dolly of ``--dolly``
+(10 cm) across. The zone is fitted to the shot (every pupil of the move, ``--margin`` around
+it); the plate is recorded once as ``--looks`` coded looks. For three frames (start, middle,
+end of the move) the camera hologram's pass (its looks' limit, what the add-on renders by
+default) and the plate's view are timed and compared: PSNR inside the objects, silhouette
+IoU. Prints the CPU and its load, the plan, the recording's time and the peak memory of all
+its processes, and the frame count from which the plate costs less than a pass per frame.
+
+    python bench/shot.py [--scale 1.0] [--looks 2] [--dolly 0.1] [--out DIR]
+"""
+
+import argparse
+import math
+import os
+import platform
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import psutil
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
+
+from plate_scene import cube, sphere  # noqa: E402
+
+from holo_core.camera.render import render_camera  # noqa: E402
+from holo_core.io.image import write_png  # noqa: E402
+from holo_core.plate.plan import plan, plan_view  # noqa: E402
+from holo_core.plate.record import look_code, record_plate  # noqa: E402
+from holo_core.plate.view import render_view  # noqa: E402
+from holo_core.scene.camera import Camera, look_at  # noqa: E402
+from holo_core.scene.plate import Plate, ViewingZone  # noqa: E402
+
+DISTANCE = 1.75   # [m] camera to plate, plate to the objects' middle
+TARGET = np.array([0.0, 0.0, -DISTANCE])
+PLATE = Plate(matrix_world=np.eye(4), width=1.0, height=1.0)
+
+
+def scene():
+    """A cube 0.5 m across in front, a sphere of radius 0.3 m behind and to the right."""
+    return [cube(centre=np.array([-0.15, -0.08, -1.55]), size=0.5, angles=(0.35, 0.6)),
+            sphere(centre=np.array([0.22, 0.1, -1.95]), radius=0.3, n=96)]
+
+
+def camera(x: float, scale: float) -> Camera:
+    eye = np.array([x, 0.0, DISTANCE])
+    size = (round(1280 * scale), round(720 * scale))
+    return Camera(matrix_world=look_at(eye, TARGET, up=(0, 1, 0)), lens=40, sensor_width=36,
+                  resolution=size, fstop=2.8,
+                  focus_distance=float(np.linalg.norm(np.array([-0.15, -0.08, -1.55]) - eye)))
+
+
+class PeakMemory:
+    """The peak resident memory of this process and its children, sampled every 50 ms."""
+
+    def __init__(self):
+        self.peak, self._stop = 0, threading.Event()
+        self._thread = threading.Thread(target=self._watch, daemon=True)
+
+    def _watch(self):
+        me = psutil.Process()
+        while not self._stop.is_set():
+            total = me.memory_info().rss
+            for child in me.children(recursive=True):
+                try:
+                    total += child.memory_info().rss
+                except psutil.Error:
+                    pass
+            self.peak = max(self.peak, total)
+            time.sleep(0.05)
+
+    def __enter__(self):
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._thread.join()
+
+
+def timed(f, *args, **kw):
+    t = time.perf_counter()
+    out = f(*args, **kw)
+    return out, time.perf_counter() - t
+
+
+def psnr(view, reference, inside) -> float:
+    err = view.rgb[inside] - reference.rgb[inside]
+    return float(20 * np.log10(reference.rgb[inside].max() / np.sqrt(np.mean(err**2))))
+
+
+def iou(a, b) -> float:
+    return float((a & b).sum() / max((a | b).sum(), 1))
+
+
+def cpu() -> str:
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip() + f", {os.cpu_count()} cores"
+    except OSError:
+        pass
+    return platform.processor() or "unknown CPU"
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--scale", type=float, default=1.0, help="image size, of 1280x720 (1)")
+    p.add_argument("--looks", type=int, default=2, help="coded looks recorded (2)")
+    p.add_argument("--dolly", type=float, default=0.1, help="the camera's move [m] (0.1)")
+    p.add_argument("--margin", type=float, default=0.01, help="zone margin [m] (0.01)")
+    p.add_argument("--out", type=Path, default=None, help="a folder for the frames' PNGs")
+    args = p.parse_args()
+    xs = np.linspace(-args.dolly / 2, args.dolly / 2, 3)
+    cams = [camera(x, args.scale) for x in xs]
+    meshes = scene()
+    print(f"CPU: {cpu()}; load {os.getloadavg()[0]:.1f} (1 min) at the start")
+    zone = ViewingZone.fit([c.position for c in cams], pupil=cams[0].aperture_diameter,
+                           margin=args.margin, pixel=cams[0].pixel_angle())
+    plate = Plate(matrix_world=PLATE.matrix_world, width=PLATE.width, height=PLATE.height,
+                  zone=zone)
+    every = np.concatenate([m.vertices for m in meshes])
+    planned = plan((plate.width, plate.height), [every.min(0), every.max(0)], zone=zone,
+                   pixel_angle=cams[0].pixel_angle(), looks=args.looks)
+    print(f"plan: {planned.describe()}")
+    print(f"view plan (middle frame): "
+          f"{plan_view(planned, position=cams[1].position, pixel_angle=cams[1].pixel_angle(), pupil=cams[1].aperture_diameter, resolution=cams[1].resolution).describe()}")
+    # warm: programs built and FFT plans made on a small frame
+    small = camera(0.0, 0.1)
+    render_camera(meshes, small, via="incoherent")
+    codes = [look_code(k, args.looks) for k in range(args.looks)]
+    plates, seconds = [], []
+    with PeakMemory() as memory:
+        for code in codes:
+            h, t = timed(record_plate, meshes, plate=plate, seed=0, code=code)
+            plates.append(h)
+            seconds.append(t)
+            print(f"  look {len(plates)}: {t:.1f} s (load {os.getloadavg()[0]:.1f})",
+                  flush=True)
+    record_s = sum(seconds)
+    h = plates[0]
+    print(f"recording: {h.shape[1]}x{h.shape[0]} samples x {len(h.channels)} channels x "
+          f"{args.looks} looks in {record_s:.1f} s; peak memory of all processes "
+          f"{memory.peak / 2**30:.2f} GiB")
+    rows = []
+    for i, cam in enumerate(cams):
+        ref, cam_s = timed(render_camera, meshes, cam, via="incoherent")
+        view, view_s = timed(render_view, plates, cam)
+        inside = (ref.alpha >= 1) & (view.alpha >= 1)
+        rows.append((xs[i], psnr(view, ref, inside), iou(view.alpha > 0.5, ref.alpha > 0.5),
+                     view_s, cam_s))
+        print(f"frame at x = {xs[i] * 100:+.1f} cm: PSNR {rows[-1][1]:.2f} dB, IoU "
+              f"{rows[-1][2]:.4f}; view {view_s:.1f} s, camera pass {cam_s:.1f} s (load "
+              f"{os.getloadavg()[0]:.1f})", flush=True)
+        if args.out is not None:
+            args.out.mkdir(parents=True, exist_ok=True)
+            for name, v in (("plate", view), ("camera", ref)):
+                write_png(args.out / f"frame{i}_{name}.png",
+                          np.clip(v.rgb * v.alpha[..., None], 0, 1) ** (1 / 2.2))
+    view_s = float(np.mean([r[3] for r in rows]))
+    cam_s = float(np.mean([r[4] for r in rows]))
+    print(f"\na view {view_s:.1f} s = {view_s / cam_s:.2f} x the camera pass ({cam_s:.1f} s)")
+    if cam_s > view_s:
+        n = math.ceil(record_s / (cam_s - view_s))
+        print(f"the plate (recorded once in {record_s:.0f} s) costs less than a pass per "
+              f"frame from {n} frames on; 24 frames: {record_s + 24 * view_s:.0f} s against "
+              f"{24 * cam_s:.0f} s")
+    else:
+        print("a view costs more than the camera pass: no break-even")
+    print(f"PSNR {min(r[1] for r in rows):.2f}-{max(r[1] for r in rows):.2f} dB, IoU "
+          f"{min(r[2] for r in rows):.4f}-{max(r[2] for r in rows):.4f}; load at the end "
+          f"{os.getloadavg()[0]:.1f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,158 @@
+"""Rays through a pupil's bins and the surfaces they cross (a depth-buffered raster).
+
+A pupil's spectrum bin (kx, ky) at spacing b in direction cosine is one direction of arrival,
+α = kx·b, β = ky·b (Eq. 22); its ray leaves the pupil's centre along −(α, β, γ). Both the
+camera hologram (one emitter where each bin's ray meets the nearest surface) and the plate
+(emitters on every surface a bin's ray crosses, seen from the zone's centre) raster meshes
+onto these rays.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def bin_rays(kx, ky, b):
+    """View tangents (t_x, t_y) of the rays of bins (kx, ky) (signed indices)."""
+    alpha, beta = kx * b, ky * b
+    gamma = np.sqrt(np.clip(1 - alpha * alpha - beta * beta, 1e-12, None))
+    return -alpha / gamma, -beta / gamma
+
+
+def bin_boxes(tris, b, h, w):
+    """Bin ranges (kx0, kx1, ky0, ky1) that may hold each projected triangle (T, 3, 2) of view
+    tangents: its edges sampled, as direction cosines bend them, plus one bin."""
+    s = np.linspace(0, 1, 9)[:, None]
+    pts = np.concatenate([tris[:, i:i + 1] * (1 - s) + tris[:, (i + 1) % 3:(i + 1) % 3 + 1] * s
+                          for i in range(3)], 1)
+    n = np.sqrt(1 + (pts ** 2).sum(-1))
+    kx, ky = -pts[..., 0] / n / b, -pts[..., 1] / n / b
+    box = np.stack([np.floor(kx.min(1)) - 1, np.ceil(kx.max(1)) + 1,
+                    np.floor(ky.min(1)) - 1, np.ceil(ky.max(1)) + 1], 1)
+    lim = np.array([-(w // 2), (w - 1) // 2, -(h // 2), (h - 1) // 2])
+    box[:, 0::2] = np.maximum(box[:, 0::2], lim[0::2])
+    box[:, 1::2] = np.minimum(box[:, 1::2], lim[1::2])
+    return box.astype(np.int64)
+
+
+@dataclass(frozen=True, eq=False)
+class Crossings:
+    """Where bins' rays cross triangles: signed bins ``kx``, ``ky``, planar ``depth`` [m],
+    ``mesh`` and ``triangle`` indices, perspective-correct barycentric ``bary`` (n, 3), and
+    ``layer``: 0 for the nearest crossing of its bin, 1 for the next, …"""
+
+    kx: np.ndarray
+    ky: np.ndarray
+    depth: np.ndarray
+    mesh: np.ndarray
+    triangle: np.ndarray
+    bary: np.ndarray
+    layer: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.depth)
+
+    def select(self, keep) -> Crossings:
+        return Crossings(*(a[keep] for a in (self.kx, self.ky, self.depth, self.mesh,
+                                              self.triangle, self.bary, self.layer)))
+
+
+def crossings(meshes, position, rotation, b, shape, *, layers=1, chunk=2_000_000,
+              coincident=1e-6) -> Crossings:
+    """The first ``layers`` surfaces each bin's ray crosses (nearest first) for a pupil at
+    ``position`` [m] with axes ``rotation`` (columns X right, Y up, Z back, world frame) and
+    bins ``b`` apart on a grid of ``shape`` (h, w); crossings within ``coincident``·depth of
+    the previous one (a ray through an edge two triangles share) count once."""
+    h, w = shape
+    parts = list(crossing_chunks(meshes, position, rotation, b, shape, chunk))
+    if not parts:
+        empty = np.zeros(0)
+        return Crossings(empty.astype(np.int64), empty.astype(np.int64), empty,
+                         empty.astype(np.int64), empty.astype(np.int64), np.zeros((0, 3)),
+                         empty.astype(np.int64))
+    kx, ky, depth, mesh, tri_id, bary = (np.concatenate([p[i] for p in parts])
+                                         for i in range(6))
+    flat = (ky % h) * w + kx % w
+    order = np.lexsort((depth, flat))
+    flat, depth = flat[order], depth[order]
+    same_bin = np.r_[False, flat[1:] == flat[:-1]]
+    repeat = same_bin & (np.r_[np.inf, np.diff(depth)] <= coincident * depth)
+    kept = order[~repeat]
+    flat, depth, same_bin = flat[~repeat], depth[~repeat], same_bin[~repeat]
+    start = np.maximum.accumulate(np.where(same_bin, 0, np.arange(len(flat))))
+    layer = np.arange(len(flat)) - start
+    inside = layer < layers
+    kept = kept[inside]
+    return Crossings(kx[kept], ky[kept], depth[inside], mesh[kept], tri_id[kept], bary[kept],
+                     layer[inside])
+
+
+def nearest_depth(meshes, position, rotation, b, shape, *, chunk=2_000_000) -> np.ndarray:
+    """The planar depth [m] (h, w) of the nearest surface along each bin's ray (FFT order;
+    inf where none), for a pupil at ``position`` [m] with axes ``rotation`` (a depth buffer:
+    what :func:`crossings` finds first, without keeping the rest)."""
+    h, w = shape
+    zbuf = np.full(h * w, np.inf)
+    for part in crossing_chunks(meshes, position, rotation, b, shape, chunk):
+        kx, ky, depth = part[0], part[1], part[2]
+        np.minimum.at(zbuf, (ky % h) * w + kx % w, depth)
+    return zbuf.reshape(shape)
+
+
+def crossing_chunks(meshes, position, rotation, b, shape, chunk):
+    """Every crossing of the bins' rays with the meshes' triangles, a chunk of at most
+    ``chunk`` bin-triangle pairs at a time: tuples (kx, ky, planar depth [m], mesh index,
+    triangle index, perspective-correct barycentrics (n, 3)) (:func:`_chunk`)."""
+    h, w = shape
+    for m, mesh in enumerate(meshes):
+        v = (np.asarray(mesh.vertices, np.float64) - position) @ rotation
+        tri = np.asarray(mesh.triangles)
+        d = -v[:, 2]
+        t = v[:, :2] / np.where(d > 1e-9, d, 1)[:, None]
+        p0, p1, p2 = (t[tri[:, i]] for i in range(3))
+        area = (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - \
+            (p2[:, 0] - p0[:, 0]) * (p1[:, 1] - p0[:, 1])
+        ids = np.nonzero((d[tri] > 1e-9).all(1) & (area != 0))[0]
+        if not len(ids):
+            continue
+        box = bin_boxes(t[tri[ids]], b, h, w)
+        keep = (box[:, 1] >= box[:, 0]) & (box[:, 3] >= box[:, 2])
+        ids, box = ids[keep], box[keep]
+        sizes = (box[:, 1] - box[:, 0] + 1) * (box[:, 3] - box[:, 2] + 1)
+        ends = np.cumsum(sizes)
+        lo = 0
+        while lo < len(ids):
+            hi = max(lo + 1, int(np.searchsorted(ends, (ends[lo - 1] if lo else 0) + chunk)))
+            part = _chunk(ids[lo:hi], box[lo:hi], sizes[lo:hi], tri, t, d, b, m)
+            if part is not None:
+                yield part
+            lo = hi
+
+
+def _chunk(ids, box, sizes, tri, t, d, b, m):
+    """Every crossing of the bins in ``box`` with the triangles ``ids`` (mesh ``m``)."""
+    total = int(sizes.sum())
+    which = np.repeat(np.arange(len(ids)), sizes)
+    q = np.arange(total) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    width = (box[:, 1] - box[:, 0] + 1)[which]
+    kx = box[which, 0] + q % width
+    ky = box[which, 2] + q // width
+    tx, ty = bin_rays(kx, ky, b)
+    corners = tri[ids][which]
+    p0, p1, p2 = (t[corners[:, i]] for i in range(3))
+    area = (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p2[:, 0] - p0[:, 0]) * \
+        (p1[:, 1] - p0[:, 1])
+    l1 = ((tx - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p2[:, 0] - p0[:, 0]) * (ty - p0[:, 1]))
+    l2 = ((p1[:, 0] - p0[:, 0]) * (ty - p0[:, 1]) - (tx - p0[:, 0]) * (p1[:, 1] - p0[:, 1]))
+    l1, l2 = l1 / area, l2 / area
+    inside = (l1 >= 0) & (l2 >= 0) & (l1 + l2 <= 1)
+    if not inside.any():
+        return None
+    l1, l2, corners, which = l1[inside], l2[inside], corners[inside], which[inside]
+    inv = (1 - l1 - l2) / d[corners[:, 0]] + l1 / d[corners[:, 1]] + l2 / d[corners[:, 2]]
+    w1 = l1 / d[corners[:, 1]] / inv
+    w2 = l2 / d[corners[:, 2]] / inv
+    bary = np.stack([1 - w1 - w2, w1, w2], -1)
+    return (kx[inside], ky[inside], 1 / inv, np.full(len(inv), m), ids[which], bary)

@@ -1,0 +1,79 @@
+/* Which emitters a point of the viewing zone sees (plate/emitters.py).
+ *
+ * depth_raster: one work item per triangle fills the depth buffer of the rays of a pupil's
+ *     bins (kx, ky), b apart in direction cosine (FFT order, h x w): every bin of the
+ *     triangle's box whose ray crosses it keeps the nearest planar depth (atomic min on the
+ *     depth's bits: positive floats order as their integers). Vertices come as view tangents
+ *     (tx, ty) and planar depth d, relative to the pupil.
+ * seen_from: one work item per emitter: its direction and planar depth from the pupil, and the
+ *     depth test against the buffer, bilinear between the four bins around its direction,
+ *     with a slack for its surface's slope (bias_bins bins of it, plus bias_depth of the depth).
+ */
+
+__kernel void depth_raster(__global int *zbuf, int h, int w, float b,
+                           __global const float *tx, __global const float *ty,
+                           __global const float *d, __global const int *tri, int triangles)
+{
+    int t = get_global_id(0);
+    if (t >= triangles)
+        return;
+    int i0 = tri[3 * t], i1 = tri[3 * t + 1], i2 = tri[3 * t + 2];
+    float d0 = d[i0], d1 = d[i1], d2 = d[i2];
+    if (!(d0 > 1e-9f && d1 > 1e-9f && d2 > 1e-9f))
+        return;                              /* reaching behind the pupil: not seen */
+    float ax = tx[i0], ay = ty[i0], bx = tx[i1], by = ty[i1], cx = tx[i2], cy = ty[i2];
+    float area = (bx - ax) * (cy - ay) - (cx - ax) * (by - ay);
+    if (area == 0)
+        return;
+    /* the bins' box: direction cosines of the corners, one bin beyond (edges bend little) */
+    float kx0 = 1e30f, kx1 = -1e30f, ky0 = 1e30f, ky1 = -1e30f;
+    float px[3] = {ax, bx, cx}, py[3] = {ay, by, cy};
+    for (int v = 0; v < 3; v++) {
+        float n = sqrt(1 + px[v] * px[v] + py[v] * py[v]);
+        float kx = -px[v] / n / b, ky = -py[v] / n / b;
+        kx0 = fmin(kx0, kx); kx1 = fmax(kx1, kx); ky0 = fmin(ky0, ky); ky1 = fmax(ky1, ky);
+    }
+    int c0 = max((int)floor(kx0) - 1, -(w / 2)), c1 = min((int)ceil(kx1) + 1, (w - 1) / 2);
+    int r0 = max((int)floor(ky0) - 1, -(h / 2)), r1 = min((int)ceil(ky1) + 1, (h - 1) / 2);
+    float inv_area = 1 / area;
+    for (int ky = r0; ky <= r1; ky++)
+    for (int kx = c0; kx <= c1; kx++) {
+        float alpha = kx * b, beta = ky * b;
+        float gamma = sqrt(fmax(1 - alpha * alpha - beta * beta, 1e-12f));
+        float rx = -alpha / gamma, ry = -beta / gamma;
+        float l1 = ((rx - ax) * (cy - ay) - (cx - ax) * (ry - ay)) * inv_area;
+        float l2 = ((bx - ax) * (ry - ay) - (rx - ax) * (by - ay)) * inv_area;
+        if (l1 < 0 || l2 < 0 || l1 + l2 > 1)
+            continue;
+        float inv = (1 - l1 - l2) / d0 + l1 / d1 + l2 / d2;
+        int flat = (ky < 0 ? ky + h : ky) * w + (kx < 0 ? kx + w : kx);
+        atomic_min(zbuf + flat, as_int(1 / inv));
+    }
+}
+
+__kernel void seen_from(__global float *seen, int point, __global const float *zbuf, int h,
+                        int w, float b, __global const float *px, __global const float *py,
+                        __global const float *pz, __global const float *slope,
+                        float bias_bins, float bias_depth, int emitters)
+{
+    int e = get_global_id(0);
+    if (e >= emitters)
+        return;
+    float x = px[e], y = py[e], z = pz[e];          /* camera axes, relative to the pupil */
+    float dist = sqrt(x * x + y * y + z * z), depth = -z;
+    float kx = -x / dist / b, ky = -y / dist / b;
+    float bias = (bias_bins * b * slope[e] + bias_depth) * depth;
+    int x0 = (int)floor(kx), y0 = (int)floor(ky);
+    float fx = kx - x0, fy = ky - y0, acc = 0;
+    for (int dy = 0; dy < 2; dy++)
+    for (int dx = 0; dx < 2; dx++) {
+        int r = y0 + dy, c = x0 + dx;
+        r = r < 0 ? r + h : r;
+        c = c < 0 ? c + w : c;
+        if (r < 0 || r >= h || c < 0 || c >= w)
+            continue;
+        float weight = (dy ? fy : 1 - fy) * (dx ? fx : 1 - fx);
+        acc += weight * (depth <= zbuf[r * w + c] + bias);
+    }
+    seen[(long)point * emitters + e] = acc;
+}

@@ -1,0 +1,163 @@
+"""A plate's emitters: the surfaces its viewing zone can see, one emitter per direction the
+zone's reference pupil resolves, with the zone points each is seen from.
+
+- Where (:func:`zone_emitters`). The rays of a pupil at the zone's centre, bins ``spacing``
+  apart in direction cosine (one resolved spot of the views), cross the surfaces; every
+  crossing up to ``layers`` deep is a candidate, so that what one zone point sees behind an
+  edge that hides it from the centre is there (depth peeling). The emitters lie on a lattice
+  of directions from the centre: their bins are the cells of the looks' phase codes.
+- Seen from where (:func:`visibility`). Each point of a grid over the zone's centre plane
+  rasters the nearest surfaces (a depth buffer, the same bins); an emitter is seen from it
+  where it is no farther than that buffer (bilinear between the four bins around its
+  direction, with a bias for its surface's slope). A ray from an emitter through the plate
+  reaches the zone between grid points: the plate's sum interpolates there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..opencl import get_runtime
+from ..opencl.runtime import associated
+from ..optics.raster import bin_rays, crossings
+from ..scene.camera import look_at
+from ..scene.mesh import surface_colour
+from ..scene.plate import ViewingZone
+from ..validate import InputError
+
+PROGRAM = associated(__file__)
+
+EDGE_BINS = 4          # bins around the objects' directions
+BIAS_BINS = 1.5        # the depth test's slack: the surface's depth change over this many bins
+BIAS_DEPTH = 2e-3      # ... plus this fraction of the depth
+MAX_SLOPE = 11.0       # tan 85°: a surface seen more edge-on gets no more slack
+GRID_POINTS = (3, 17)  # the zone's visibility grid, points a side (at least, at most)
+
+
+@dataclass(frozen=True, eq=False)
+class Emitters:
+    """Emitters in the plate's frame: ``position`` (n, 3) [m], linear ``colour`` (n, 3),
+    ``cell`` (n, 2) their bin (kx, ky) from the zone's centre, ``visibility`` (n, G, G) in
+    [0, 1] from the zone's grid points, ``grid`` the points' offsets from the zone's centre
+    ((x0, step_x), (y0, step_y)) [m]."""
+
+    position: np.ndarray
+    colour: np.ndarray
+    cell: np.ndarray
+    visibility: np.ndarray
+    grid: tuple
+
+    def __len__(self) -> int:
+        return len(self.position)
+
+
+def zone_frame(zone: ViewingZone, bounds) -> np.ndarray:
+    """The axes (columns) of a pupil at the zone's centre looking at the objects' box
+    ``bounds`` (2, 3) [m] (the plate's frame), +y kept up."""
+    target = np.asarray(bounds, np.float64).mean(0)
+    return look_at(zone.centre, target, up=(0.0, 1.0, 0.0))[:3, :3]
+
+
+def bins_covering(points, position, rotation, spacing) -> tuple[int, int]:
+    """(h, w) of a bin grid ``spacing`` apart (FFT order) around the directions of ``points``
+    (N, 3) [m] seen from ``position`` with axes ``rotation``."""
+    v = (np.asarray(points, np.float64) - position) @ rotation
+    r = np.linalg.norm(v, axis=1)
+    half_x = np.abs(v[:, 0] / r).max() / spacing + EDGE_BINS
+    half_y = np.abs(v[:, 1] / r).max() / spacing + EDGE_BINS
+    return 2 * math.ceil(half_y) + 1, 2 * math.ceil(half_x) + 1
+
+
+def grid_points(zone: ViewingZone) -> tuple[int, int]:
+    """(rows, cols) of the zone's visibility grid: about one point per pupil across it, at
+    least GRID_POINTS[0] a side."""
+    hx, hy = zone.half_extents[:2]
+    step = zone.pupil or max(hx, hy) / 4
+    return tuple(int(np.clip(math.ceil(2 * half / step) + 1, *GRID_POINTS)) for half in (hy, hx))
+
+
+def zone_emitters(meshes, zone: ViewingZone, spacing: float, *, layers=3,
+                  grid: tuple | None = None) -> Emitters:
+    """The emitters of ``meshes`` (the plate's frame) that the zone sees (module docstring),
+    ``spacing`` apart in direction cosine from the zone's centre."""
+    if not meshes:
+        raise InputError("a plate needs at least one mesh to record")
+    every = np.concatenate([m.vertices for m in meshes])
+    bounds = np.array([every.min(0), every.max(0)])
+    rotation = zone_frame(zone, bounds)
+    centre = np.asarray(zone.centre, np.float64)
+    shape = bins_covering(every, centre, rotation, spacing)
+    hits = crossings(meshes, centre, rotation, spacing, shape, layers=layers)
+    position = _points(hits, centre, rotation, spacing)
+    colour = np.ones((len(hits), 3))
+    normal = np.zeros((len(hits), 3))
+    for m, mesh in enumerate(meshes):
+        sel = hits.mesh == m
+        if not sel.any():
+            continue
+        corners = np.asarray(mesh.triangles)[hits.triangle[sel]]
+        c = surface_colour(mesh, corners, hits.bary[sel], 3)
+        colour[sel] = c if c.shape[1] == 3 else np.repeat(c.mean(1, keepdims=True), 3, 1)
+        v = np.asarray(mesh.vertices, np.float64)[corners]
+        n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+        normal[sel] = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    g = grid or grid_points(zone)
+    offsets, seen = visibility(meshes, position, normal, zone, rotation, spacing, g)
+    keep = seen.reshape(len(seen), -1).max(1) > 0
+    return Emitters(position=position[keep], colour=np.clip(colour[keep], 0, None),
+                    cell=np.stack([hits.kx, hits.ky], 1)[keep], visibility=seen[keep],
+                    grid=offsets)
+
+
+def _points(hits, centre, rotation, spacing) -> np.ndarray:
+    """The crossings' points [m] in the plate's frame."""
+    tx, ty = bin_rays(hits.kx, hits.ky, spacing)
+    local = np.stack([tx, ty, -np.ones_like(tx)], -1) * hits.depth[:, None]
+    return local @ rotation.T + centre
+
+
+def visibility(meshes, position, normal, zone: ViewingZone, rotation, spacing, g, rt=None):
+    """(grid offsets ((x0, step_x), (y0, step_y)) [m], (n, gy, gx) visibility in [0, 1]) of
+    the points ``position`` (n, 3) on surfaces of ``normal`` from the g = (gy, gx) points of
+    the zone's centre plane (module docstring; ``visibility.cl``)."""
+    rt = rt or get_runtime()
+    centre = np.asarray(zone.centre, np.float64)
+    hx, hy = zone.half_extents[:2]
+    xs, ys = np.linspace(-hx, hx, g[1]), np.linspace(-hy, hy, g[0])
+    vertices = np.concatenate([np.asarray(m.vertices, np.float64) for m in meshes])
+    starts = np.cumsum([0] + [len(m.vertices) for m in meshes])
+    triangles = np.concatenate([np.asarray(m.triangles) + s for m, s in zip(meshes, starts)])
+    tri = rt.to_device(triangles.astype(np.int32))
+    n = len(position)
+    seen = rt.to_device(np.zeros(g[0] * g[1] * max(n, 1), np.float32))
+    for iy, y in enumerate(ys):
+        for ix, x in enumerate(xs):
+            eye = centre + (x, y, 0.0)
+            h, w = bins_covering(vertices, eye, rotation, spacing)
+            zbuf = rt.to_device(np.full(h * w, np.inf, np.float32))
+            v = (vertices - eye) @ rotation
+            d = -v[:, 2]
+            t = v[:, :2] / np.where(d > 1e-9, d, 1)[:, None]
+            rt.kernel(PROGRAM, "depth_raster")(
+                rt.queue, (len(triangles),), None, zbuf.data, np.int32(h), np.int32(w),
+                np.float32(spacing), rt.to_device(t[:, 0], np.float32).data,
+                rt.to_device(t[:, 1], np.float32).data, rt.to_device(d, np.float32).data,
+                tri.data, np.int32(len(triangles)))
+            local = (position - eye) @ rotation
+            toward = eye - position
+            dist = np.linalg.norm(toward, axis=1)
+            cos = np.abs(np.sum(normal * toward, 1)) / dist
+            slope = np.minimum(np.sqrt(np.clip(1 - cos * cos, 0, None)) / np.maximum(cos, 1e-9),
+                               MAX_SLOPE)
+            rt.kernel(PROGRAM, "seen_from")(
+                rt.queue, (max(n, 1),), None, seen.data, np.int32(iy * g[1] + ix), zbuf.data,
+                np.int32(h), np.int32(w), np.float32(spacing),
+                *(rt.to_device(local[:, i], np.float32).data for i in range(3)),
+                rt.to_device(slope, np.float32).data, np.float32(BIAS_BINS),
+                np.float32(BIAS_DEPTH), np.int32(n))
+    step = lambda a: float(a[1] - a[0]) if len(a) > 1 else 1.0  # noqa: E731
+    table = seen.get()[:g[0] * g[1] * n].reshape(g[0], g[1], n).transpose(2, 0, 1)
+    return ((float(xs[0]), step(xs)), (float(ys[0]), step(ys))), np.ascontiguousarray(table)

@@ -1,0 +1,293 @@
+"""A plate's plan: what it samples, what its views resolve, and what both cost, before any
+recording. Pure arithmetic: it imports no OpenCL or FFT driver, so Blender's process calls it.
+
+- Wavelength. A view resolves λ/D through its camera's pupil D; the plate is made for a
+  reference view (the zone's pupil and a pixel angle Δ): λ = D·Δ/s makes that one fine pixel
+  of s per pixel, as the camera hologram does.
+- Samples. The plate stores its object wave against the carrier converging on the zone's
+  centre (:mod:`.carrier`), so it carries only the directions from each of its points into
+  the zone (widened by a soft rim): band = the largest difference of direction cosines between
+  the line towards the zone's centre and a line towards a point of the zone, pitch =
+  λ/(2·band), over the window the light from the objects to the zone crosses.
+- Emitters. One per resolved spot seen from the zone's centre (the fine bin λ/D), on up to
+  ``layers`` surfaces along each ray (depth peeling); each lights its footprint, the cone
+  from it to the zone cut by the plate: a recording costs the footprints' samples.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import validate
+from ..optics.depth import partner_wavelength
+from ..optics.pupil import defocus_limited_diameter
+from ..scene.plate import ViewingZone, box_corners
+from ..validate import InputError
+
+SUPERSAMPLE = 2        # fine pixels per pixel: the reference view resolves one
+RIM = 0.15             # the zone's soft rim, a fraction of its half widths
+LAYERS = 3             # surfaces an emitter ray may cross and still be recorded (depth peeling)
+DEPTH_MARGIN = 1.25    # the depth pair's unambiguous range over the objects' extent
+TILE = 2048            # samples a side of a tile of a tiled recording
+LOOKS = 2              # coded looks recorded by default (the checkerboard pair)
+CHANNELS = 4           # R, G, B at λ1 and the depth partner at λ2
+SAMPLE_BYTES = 8       # complex64
+# measured on the development machine (2-core EPYC Zen 5, Intel's CPU OpenCL, idle): the
+# zone sum's pairs (emitter, sample) per second, per channel group (three colours cost one)
+PAIRS_PER_SECOND = 2.0e9
+EMITTER_SECONDS = 2e-5   # per emitter and visibility grid point: the depth buffers' tests
+VIEW_SAMPLE_SECONDS = 6e-9   # per window sample and channel of a view: read, demodulate, filter
+FINE_PIXEL_SECONDS = 3e-7    # per fine pixel and look of a view: spectra, image, assembly
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class PlatePlan:
+    """A plate's sampling and costs (module docstring).
+
+    zone : the :class:`ViewingZone`; bounds : (2, 3) the objects' box [m], the plate's frame
+    pupil : the reference view's pupil [m] (the zone's, or for pinhole views the widest whose
+        defocus over the objects' depths stays within a fine pixel, within the zone)
+    wavelength, depth_wavelength : λ1 of the colours and the depth partner λ2 [m]
+    spacing : the emitters' spacing in direction cosine seen from the zone's centre
+    band : the samples' band in direction cosine (x, y) (the zone's angle seen from the plate)
+    pitch, row_pitch : the samples' spacing along x and y [m]; origin : (x, y) [m] of sample
+        (0, 0); shape : (rows, cols)
+    emitters : the estimated emitter count; footprint : the mean samples an emitter lights
+    looks : coded looks to record; tile : samples a side of a tiled recording's tile
+    """
+
+    zone: ViewingZone
+    bounds: np.ndarray
+    pupil: float
+    wavelength: float
+    depth_wavelength: float
+    spacing: float
+    band: tuple
+    pitch: float
+    row_pitch: float
+    origin: tuple
+    shape: tuple
+    emitters: int
+    footprint: float
+    looks: int = LOOKS
+    tile: int = TILE
+
+    @property
+    def samples(self) -> int:
+        return math.prod(self.shape)
+
+    @property
+    def size(self) -> tuple[float, float]:
+        """(width, height) [m] of the sampled window."""
+        return self.shape[1] * self.pitch, self.shape[0] * self.row_pitch
+
+    def disk_bytes(self, channels=CHANNELS) -> float:
+        """Bytes of the recorded plate, every look."""
+        return SAMPLE_BYTES * channels * self.looks * self.samples
+
+    def memory_bytes(self, channels=CHANNELS, tiled=False) -> float:
+        """Host bytes while recording: the whole plate of one look in memory, or one tile's
+        channels and the emitters' tables when ``tiled``."""
+        per_emitter = 8 * 3 + 8 * channels + 4 * 4 + 64  # position, amplitudes, footprint, …
+        held = self.tile ** 2 if tiled else self.samples
+        return 2 * SAMPLE_BYTES * channels * held + per_emitter * self.emitters
+
+    def record_seconds(self, channels=CHANNELS) -> float:
+        """Estimated seconds to record every look on the development machine."""
+        groups = 1 + (channels > 3)
+        pairs = self.emitters * self.footprint
+        return self.looks * groups * pairs / PAIRS_PER_SECOND
+
+    def describe(self) -> str:
+        """The plan in plain words: samples, spacing, size on disk, time."""
+        mpx = self.samples / 1e6
+        return (f"{self.shape[1]} x {self.shape[0]} samples ({mpx:.3g} Mpx, "
+                f"{self.pitch * 1e6:.3g} µm apart, {self.size[0] * 1e3:.4g} x "
+                f"{self.size[1] * 1e3:.4g} mm of the plate) for the zone {self.zone.describe()}; "
+                f"about {self.emitters:,} emitters; {self.looks} look(s): "
+                f"{self.disk_bytes() / 2**30:.3g} GB, about {self.record_seconds():.0f} s to "
+                f"record here")
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ViewPlan:
+    """What one camera's view of a plate will be (:func:`plan_view`).
+
+    spot_px : the view's resolution λ/D in pixels; sharp : whether it is at most a fine pixel
+    outside_zone : how far [m] the pupil reaches beyond the zone (0: inside)
+    window : samples of the plate the view reads; seconds : its estimated time, every look
+    """
+
+    spot_px: float
+    sharp: bool
+    outside_zone: float
+    window: int
+    seconds: float
+
+    def describe(self) -> str:
+        verdict = ("sharp" if self.sharp else f"about {self.spot_px:.2g} px blurred")
+        where = ("inside the zone" if not self.outside_zone else
+                 f"{self.outside_zone * 1e3:.3g} mm outside the zone")
+        return (f"the view is {verdict} (resolves {self.spot_px:.2g} px), the camera "
+                f"{where}; it reads {self.window / 1e6:.3g} Mpx of the plate, about "
+                f"{self.seconds:.0f} s here")
+
+
+def plan(plate_size, bounds, *, zone: ViewingZone, pixel_angle: float,
+         supersample: int = SUPERSAMPLE, looks: int = LOOKS, wavelength=None,
+         tile: int = TILE) -> PlatePlan:
+    """The plan of a plate of ``plate_size`` (width, height) [m] for objects in the box
+    ``bounds`` (2, 3) [m] (the plate's frame, z < 0) seen from ``zone``, whose views have
+    pixels of ``pixel_angle`` [rad] (module docstring). ``wavelength`` [m] overrides λ1."""
+    width, height = validate.pair("plate_size", plate_size, "m")
+    validate.positive("plate width", width, "m")
+    validate.positive("plate height", height, "m")
+    if not isinstance(zone, ViewingZone):
+        raise InputError(f"zone must be a ViewingZone; got {type(zone).__name__}")
+    box = _box(bounds)
+    pixel = validate.positive("pixel_angle", pixel_angle, "rad")
+    s = validate.integer("supersample", supersample, 1, 16)
+    looks = validate.integer("looks", looks, 1, 64)
+    tile = validate.integer("tile", tile, 256)
+    if tile % 256:
+        raise InputError(f"tile must be a multiple of 256 samples; got {tile}")
+    # a pinhole's views: the widest pupil its defocus allows, within the zone
+    pupil = zone.pupil or min(pinhole_pupil(box, zone.centre, pixel / s)[0],
+                              2 * min(zone.half_extents[:2]) or math.inf)
+    if wavelength is None:
+        lam = pupil * pixel / s
+        if not validate.MIN_LENGTH <= lam <= validate.MAX_LENGTH:
+            raise InputError(f"pixel_angle {pixel:.3g} rad through the zone's pupil of "
+                             f"{pupil:.3g} m asks views at λ = {lam:.3g} m, outside the "
+                             f"[{validate.MIN_LENGTH:g}, {validate.MAX_LENGTH:g}] m a "
+                             f"plate holds: give the views' real pixel angle and pupil")
+    else:
+        lam = validate.length("wavelength", wavelength)
+    extent = float(np.linalg.norm(box[1] - box[0]))
+    half_depth = DEPTH_MARGIN * extent / 2
+    size = " x ".join(f"{d:.3g}" for d in box[1] - box[0])
+    if extent == 0:
+        raise InputError(f"bounds: the objects' box ({size} m) has no size; give the box the "
+                         f"objects fill")
+    if not lam < 2 * half_depth:
+        raise InputError(f"bounds: the objects' box ({size} m) is smaller than the wavelength "
+                         f"its views need (λ = {lam:.3g} m), and the depth pair tells depths "
+                         f"apart only within a range above it: give the objects' real size")
+    lam2 = partner_wavelength(lam, half_depth)
+    lo, hi = window_on_plate(box, zone, width, height)
+    band = zone_band(lo, hi, zone)
+    pitch, row_pitch = (min(lam, lam2) / (2 * b) for b in band)
+    shape = (int(math.ceil((hi[1] - lo[1]) / row_pitch)) + 1,
+             int(math.ceil((hi[0] - lo[0]) / pitch)) + 1)
+    if hi[0] - lo[0] < pitch or hi[1] - lo[1] < row_pitch:
+        raise InputError(f"plate_size {width:g} x {height:g} m: where the objects' light "
+                         f"crosses it, it is narrower than one sample at the pitch the zone "
+                         f"needs ({pitch:.3g} x {row_pitch:.3g} m): make it larger")
+    spacing = lam / pupil
+    emitters, footprint = _emitters(box, zone, spacing, pitch * row_pitch)
+    return PlatePlan(zone=zone, bounds=box, pupil=pupil, wavelength=lam, depth_wavelength=lam2,
+                     spacing=spacing, band=band, pitch=pitch, row_pitch=row_pitch,
+                     origin=(float(lo[0]), float(lo[1])), shape=shape, emitters=emitters,
+                     footprint=footprint, looks=looks, tile=tile)
+
+
+def pinhole_pupil(box, eye, bin_angle) -> tuple[float, float]:
+    """(diameter [m], focus [m]) of a pinhole view's pupil from ``eye`` (3,) [m] of the box
+    ``box`` (2, 3) [m]: the widest whose defocus over the box's depths stays within a fine bin
+    ``bin_angle`` [rad], focused on their middle in 1/z (the camera hologram's rule)."""
+    corners = box_corners(box) - np.asarray(eye, np.float64)
+    axis = -corners.mean(0) / np.linalg.norm(corners.mean(0))
+    depth = np.clip(corners @ -axis, 1e-9, None)
+    return defocus_limited_diameter(bin_angle, float(depth.min()), float(depth.max()))
+
+
+def _box(bounds) -> np.ndarray:
+    try:
+        box = np.asarray(bounds, np.float64).reshape(2, 3)
+    except (TypeError, ValueError):
+        box = np.full((2, 3), np.nan)
+    if not np.isfinite(box).all() or (box[0] > box[1]).any() or box[1, 2] >= 0:
+        raise InputError(f"bounds must be the objects' box (min, max corners [m]) behind the "
+                         f"plate (z < 0 in its frame); got {np.asarray(bounds).tolist()!r}"[:300])
+    return box
+
+
+def rim_corners(zone: ViewingZone) -> np.ndarray:
+    """The zone box's corners (8, 3) [m] with its soft rim (x and y widened by RIM)."""
+    c, e = np.asarray(zone.centre), np.asarray(zone.half_extents)
+    e = e * np.array([1 + RIM, 1 + RIM, 1.0])
+    return box_corners((c - e, c + e))
+
+
+def window_on_plate(box, zone: ViewingZone, width, height) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) (x, y) [m] of the plate's part that light from the objects' box to the zone
+    (with its rim) crosses, cut to the plate's size."""
+    objects, eyes = box_corners(box), rim_corners(zone)
+    t = -objects[:, None, 2] / (eyes[None, :, 2] - objects[:, None, 2])
+    xy = objects[:, None, :2] + t[..., None] * (eyes[None, :, :2] - objects[:, None, :2])
+    lo, hi = xy.reshape(-1, 2).min(0), xy.reshape(-1, 2).max(0)
+    edge = np.array([width / 2, height / 2])
+    lo, hi = np.maximum(lo, -edge), np.minimum(hi, edge)
+    if (hi <= lo).any():
+        raise InputError(f"no light from the objects reaches the viewing zone through the "
+                         f"{width:g} x {height:g} m plate: the zone ({zone.describe()}) sees "
+                         f"the objects beside it")
+    return lo, hi
+
+
+def zone_band(lo, hi, zone: ViewingZone) -> tuple[float, float]:
+    """The largest differences of direction cosines (x, y) between the line from a point of
+    the window [lo, hi] (x, y) [m] to the zone's centre and one to a point of the zone with
+    its rim: the carrier-free samples' band along each axis."""
+    corners = np.array([[x, y, 0.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])])
+    to_eyes = rim_corners(zone)[None] - corners[:, None]
+    to_centre = np.asarray(zone.centre)[None] - corners
+    d = to_eyes / np.linalg.norm(to_eyes, axis=-1, keepdims=True) \
+        - (to_centre / np.linalg.norm(to_centre, axis=-1, keepdims=True))[:, None]
+    return float(np.abs(d[..., 0]).max()), float(np.abs(d[..., 1]).max())
+
+
+def _emitters(box, zone: ViewingZone, spacing, area) -> tuple[int, float]:
+    """(the emitters' count, the samples an emitter's footprint holds), estimated: the box's
+    solid angle seen from the zone's centre over a spot, times the surfaces a ray meets (two,
+    the front one and, for some rays, what the zone sees behind an edge); the footprint is the
+    zone's box with its rim, scaled from the zone's plane onto the plate at the objects'
+    middle depth."""
+    centre = np.asarray(zone.centre)
+    v = box_corners(box) - centre
+    t = v[:, :2] / -v[:, 2:3]
+    solid = float(np.prod(t.max(0) - t.min(0)))
+    emitters = int(1.5 * solid / spacing**2) + 1
+    depth = -float(box.mean(0)[2])
+    scale = depth / (depth + centre[2])
+    e = np.asarray(zone.half_extents) * (1 + RIM)
+    return emitters, float(4 * e[0] * e[1] * scale**2 / area)
+
+
+def plan_view(p: PlatePlan, *, position, pixel_angle, pupil=None, resolution) -> ViewPlan:
+    """What a camera at ``position`` (3,) [m] in the plate's frame with pixels of
+    ``pixel_angle`` [rad], an entrance pupil of ``pupil`` [m] (None: a pinhole, the plan's
+    own) and ``resolution`` (W, H) sees of the plate planned as ``p``."""
+    position = validate.vector("position", position, 3, "m")
+    if position[2] <= 0:
+        raise InputError(f"the camera must be in front of the plate (z > 0 in its frame); it "
+                         f"is at z = {position[2]:.4g} m")
+    pixel = validate.positive("pixel_angle", pixel_angle, "rad")
+    pupil = p.pupil if pupil is None else validate.positive("pupil", pupil, "m")
+    w, h = validate.shape2d("resolution", resolution)
+    spot = p.wavelength / (pupil * pixel)
+    objects = box_corners(p.bounds)
+    t = -objects[:, 2:3] / (position[2] - objects[:, 2:3])
+    xy = objects[:, :2] + t * (position[None, :2] - objects[:, :2])
+    lo = np.maximum(xy.min(0) - pupil, p.origin)
+    hi = np.minimum(xy.max(0) + pupil, np.asarray(p.origin) + np.asarray(p.size))
+    window = int(np.prod(np.maximum(hi - lo, 0)) / (p.pitch * p.row_pitch))
+    fine = max(SUPERSAMPLE, math.ceil(SUPERSAMPLE * spot))
+    seconds = p.looks * (CHANNELS * window * VIEW_SAMPLE_SECONDS
+                         + w * h * fine * fine * FINE_PIXEL_SECONDS)
+    return ViewPlan(spot_px=spot, sharp=spot <= 1 / SUPERSAMPLE + 1e-9,
+                    outside_zone=p.zone.distance_outside(position, pupil / 2),
+                    window=window, seconds=seconds)

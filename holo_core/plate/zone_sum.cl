@@ -1,0 +1,224 @@
+/* The plate's samples against the carrier converging on the viewing zone: for each sample x,
+ *
+ *     B(x) = exp(ik(|x - Z| - Z_z)) · Σ_j a_j · w_j(x) · exp(ik(r_j(x) - |z_j|)) / r_j(x),
+ *
+ * the emitters j at p_j = (x_j, y_j, z_j) (z_j < 0) whose light leaves through x towards the
+ * zone, w_j(x) their window towards the zone (a box, with a soft rim) times their visibility
+ * from the zone point the ray p_j -> x reaches (bilinear between the zone's grid points). The
+ * carrier exp(ik|z_j|)·exp(ikZ_z) comes folded into a_j from the host (float64).
+ *
+ * A work item owns a tile of VEC rows (the vector lanes) by SEG columns and writes it once. For
+ * each emitter the phase k(r - |z|) is exact at the tile's centre (in REAL: double where the
+ * device has it), each row's difference to it in float; along a row it follows its second-order
+ * expansion about the segment centre by a recurrence (two complex multiplies per sample:
+ * E <- E·D, D <- D·C, as in point_sources.cl). The window varies over millimetres, the tile
+ * spans a fraction of one: it is evaluated at the segment's two ends and taken linearly in
+ * between.
+ *
+ * Emitters are listed per block of BLOCK×BLOCK samples (list[start[b] .. start[b+1])): a work
+ * item reads its block's list and skips the emitters whose footprint misses its tile.
+ * Rows lie row_pitch apart, columns pitch apart (a zone wider than tall asks fewer rows).
+ * Options: -DVEC=1|4|8|16, -DSEG=<columns>, -DCHANNELS=<n>, -DGRID_X, -DGRID_Y=<the zone grid's points along x, y>.
+ */
+#include "holo_complex.h"
+
+#define CAT_(a, b) a##b
+#define CAT(a, b) CAT_(a, b)
+#ifdef HOLO_FP64
+typedef double real;
+#else
+typedef float real;
+#endif
+
+#if VEC == 1
+typedef float floatv;
+#define LANE_ID(c) 0.0f
+#else
+typedef CAT(float, VEC) floatv;
+#define LANE_ID(c) CAT(vload, VEC)(0, c)
+#endif
+
+__constant float LANES[16] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
+
+static floatv wrap(floatv x) { return x - 6.28318531f * rint(x * 0.159154943f); }
+
+static floatv exp_small(floatv x)
+{
+    return 1 + x * (1 + x * (0.5f + x * (1 / 6.0f + x * (1 / 24.0f + x * (1 / 120.0f
+           + x * (1 / 720.0f))))));
+}
+
+#define CIS(x, m, re, im)                  \
+    do {                                   \
+        floatv cos_, sin_;                 \
+        HOLO_CIS(floatv, x, cos_, sin_);   \
+        re = (m) * cos_;                   \
+        im = (m) * sin_;                   \
+    } while (0)
+
+/* 1 - smoothstep over the rim: 1 inside |u| <= half, 0 beyond half + rim */
+static floatv rim_weight(floatv u, floatv inner, float rim)
+{
+    floatv t = clamp((fabs(u) - inner) / rim, 0.0f, 1.0f);
+    return (1.0f - t) * (1.0f - t) * (1.0f + 2.0f * t);
+}
+
+/* the emitter's window towards the zone where its ray through (x, y) reaches the zone's
+ * centre plane, xi = p + s·(x - p) (s = (Z_z - z_j) / -z_j), relative to the zone's centre:
+ * its box widened by the parallax of the box's depth, with a soft rim */
+#define WINDOW(x, y) (rim_weight((floatv)(xjf + s * ((x) - xjf)), ex + ez * fabs((x) - xjf) * inv_depth, \
+                              rim_x) \
+                   * rim_weight(yjf + s * ((y) - yjf), ey + ez * fabs((y) - yjf) * inv_depth, rim_y))
+
+/* the emitter's visibility from the zone point its ray through (x, y) reaches: bilinear over
+ * the zone's GRID_Y x GRID_X points (table row ``row``), clamped to the grid's edge */
+static floatv visibility(float x, floatv y, float xj, float yj, float s,
+                         __global const uchar *vis, int row, float g0x, float g0y, float gsx,
+                         float gsy)
+{
+    float xi = xj + s * (x - xj);
+    floatv eta = yj + s * (y - yj);
+    float fx = clamp((xi - g0x) / gsx, 0.0f, GRID_X - 1.0001f);
+    floatv fy = clamp((eta - g0y) / gsy, 0.0f, GRID_Y - 1.0001f);
+    int ix = (int)fx;
+    float ax = fx - ix;
+    __global const uchar *v = vis + row * GRID_X * GRID_Y;
+    float lanes[VEC > 1 ? VEC : 1], fyl[VEC > 1 ? VEC : 1];
+#if VEC == 1
+    fyl[0] = fy;
+#else
+    CAT(vstore, VEC)(fy, 0, fyl);
+#endif
+    for (int l = 0; l < VEC; l++) {
+        int iy = (int)fyl[l];
+        float ay = fyl[l] - iy;
+        int o = iy * GRID_X + ix;
+        float a = v[o] * (1 - ax) + v[o + 1] * ax;
+        float b = v[o + GRID_X] * (1 - ax) + v[o + GRID_X + 1] * ax;
+        lanes[l] = (a * (1 - ay) + b * ay) * (1.0f / 255.0f);
+    }
+#if VEC == 1
+    return lanes[0];
+#else
+    return CAT(vload, VEC)(0, lanes);
+#endif
+}
+
+__kernel void zone_sum(__global float2 *out, int row_first, int col_first, int oh, int ow,
+                       real pitch, real row_pitch, real x0, real y0, real k,
+                       real zx, real zy, real zz,
+                       float ex, float ey, float ez, float rim_x, float rim_y,
+                       __global const real *px, __global const real *py,
+                       __global const real *pz, __global const float2 *amp,
+                       __global const int *foot,       /* c0, c1, r0, r1 per emitter */
+                       __global const int *vis_row, __global const uchar *vis,
+                       float g0x, float g0y, float gsx, float gsy,
+                       __global const int *list, __global const int *start, int blocks_x,
+                       int block)
+{
+    int ty = get_global_id(0), tx = get_global_id(1);
+    int row0 = row_first + ty * VEC, col0 = col_first + tx * SEG;
+    int row_end = row_first + oh, col_end = col_first + ow;
+    if (row0 >= row_end || col0 >= col_end)
+        return;
+    real half_seg = (SEG - 1) * (real)0.5 * pitch, half_rows = (VEC - 1) * (real)0.5 * row_pitch;
+    real xc = x0 + col0 * pitch + half_seg;
+    real yt = y0 + row0 * row_pitch + half_rows;
+    floatv lane_v = (LANE_ID(LANES) - 0.5f * (VEC - 1)) * (float)row_pitch;
+    float u0 = -(float)half_seg, p = (float)pitch;
+
+    floatv acc_r[SEG][CHANNELS], acc_i[SEG][CHANNELS];
+    for (int m = 0; m < SEG; m++)
+        for (int c = 0; c < CHANNELS; c++)
+            acc_r[m][c] = acc_i[m][c] = 0;
+
+    int b = (row0 / block) * blocks_x + col0 / block;
+    for (int n = start[b], n1 = start[b + 1]; n < n1; n++) {
+        int j = list[n];
+        int4 f = vload4(j, foot);
+        if (f.s1 < col0 || f.s0 >= col0 + SEG || f.s3 < row0 || f.s2 >= row0 + VEC)
+            continue;
+        real xj = px[j], yj = py[j], zj = pz[j], az = fabs(zj);
+        real dxc = xc - xj, dyc = yt - yj, rho2 = dxc * dxc + dyc * dyc;
+        real rc = sqrt(rho2 + zj * zj);
+        real pc = k * rho2 / (rc + az);
+        pc -= (real)(2 * M_PI) * rint(pc * (real)(0.5 / M_PI));
+        float dx = (float)dxc, kf = (float)k;
+        floatv v = lane_v, dy = (float)dyc + v;
+        floatv c2f = dy * dy + (float)(zj * zj), r = sqrt(dx * dx + c2f);
+        floatv phase = (float)pc + kf * (v * (2 * (float)dyc + v)) / (r + (float)rc);
+        floatv inv_r = 1.0f / r, inv_r2 = inv_r * inv_r;
+        floatv d1r = -dx * inv_r2, d1i = kf * dx * inv_r;
+        floatv d2r = -(c2f - dx * dx) * inv_r2 * inv_r2, d2i = kf * c2f * inv_r2 * inv_r;
+        float ud = u0 * p + p * p / 2;
+        floatv er, ei, dr, di, cr, ci, t;
+        t = inv_r * exp_small(d1r * u0 + d2r * (u0 * u0 / 2));
+        CIS(wrap(phase + d1i * u0 + d2i * (u0 * u0 / 2)), t, er, ei);
+        CIS(wrap(d1i * p + d2i * ud), exp_small(d1r * p + d2r * ud), dr, di);
+        CIS(d2i * (p * p), exp_small(d2r * (p * p)), cr, ci);
+
+        /* the window: 1 over most segments; in its rim, evaluated at every sample */
+        float s = (float)((zz - zj) / az), inv_depth = (float)(1 / az);
+        float xjf = (float)(xj - zx), yjf = (float)(yj - zy);
+        float xa = (float)(xc - half_seg - zx), xb = (float)(xc + half_seg - zx);
+        floatv yr = (float)(yt - zy) + v;
+        int row = vis_row[j];
+        floatv va = 1, vstep = 0;
+        if (row >= 0) {    /* the visibility varies over centimetres: linear along the segment */
+            va = visibility(xa, yr, xjf, yjf, s, vis, row, g0x, g0y, gsx, gsy);
+            floatv vb = visibility(xb, yr, xjf, yjf, s, vis, row, g0x, g0y, gsx, gsy);
+            vstep = (vb - va) * (1.0f / (SEG > 1 ? SEG - 1 : 1));
+        }
+        floatv wa = WINDOW(xa, yr), wb = WINDOW(xb, yr);
+        int flat = all(wa == 1.0f) && all(wb == 1.0f);
+        float2 a[CHANNELS];
+        for (int c = 0; c < CHANNELS; c++)
+            a[c] = amp[j * CHANNELS + c];
+        floatv vt = va;
+        for (int m = 0; m < SEG; m++) {
+            floatv wt = flat ? vt : vt * WINDOW(xa + m * p, yr);
+            floatv vr = wt * er, vi = wt * ei;
+            for (int c = 0; c < CHANNELS; c++) {
+                acc_r[m][c] += a[c].x * vr - a[c].y * vi;
+                acc_i[m][c] += a[c].x * vi + a[c].y * vr;
+            }
+            vt += vstep;
+            t = er * dr - ei * di;
+            ei = er * di + ei * dr;
+            er = t;
+            t = dr * cr - di * ci;
+            di = dr * ci + di * cr;
+            dr = t;
+        }
+    }
+
+    /* the carrier: exp(ik(|x - Z| - Z_z)) per sample, exact in REAL */
+    float lane_r[VEC > 1 ? VEC : 1], lane_i[VEC > 1 ? VEC : 1];
+    for (int m = 0; m < SEG; m++) {
+        int col = col0 + m;
+        if (col >= col_end)
+            break;
+        real x = x0 + col * pitch - zx;
+        for (int c = 0; c < CHANNELS; c++) {
+#if VEC == 1
+            lane_r[0] = acc_r[m][c];
+            lane_i[0] = acc_i[m][c];
+#else
+            CAT(vstore, VEC)(acc_r[m][c], 0, lane_r);
+            CAT(vstore, VEC)(acc_i[m][c], 0, lane_i);
+#endif
+            for (int l = 0; l < VEC; l++) {
+                int row = row0 + l;
+                if (row >= row_end)
+                    break;
+                real y = y0 + row * row_pitch - zy, rho2 = x * x + y * y;
+                real ph = k * rho2 / (sqrt(rho2 + zz * zz) + zz);
+                ph -= (real)(2 * M_PI) * rint(ph * (real)(0.5 / M_PI));
+                float2 carrier = cexpi((float)ph);
+                float2 acc = (float2)(lane_r[l], lane_i[l]);
+                out[((long)c * oh + row - row_first) * ow + col - col_first] =
+                    cmul(acc, carrier);
+            }
+        }
+    }
+}

@@ -1,0 +1,171 @@
+"""The plate's samples as a sum over emitters, against the carrier converging on the zone.
+
+What the plate stores is B(x) = O(x)·exp(+ik|x − Z|): the object wave O times the conjugate of
+the spherical wave converging on the viewing zone's centre Z (:mod:`holo_core.plate.carrier`).
+The light that reaches the zone from a plate point leaves it within the zone's angle around
+the direction towards Z, so B is band-limited to that angle and sampled at its own Nyquist
+pitch, however wide the angles between the plate's normal and the objects (facts §7).
+
+B(x) = exp(ik|x − Z|) · Σ_j a_j·w_j(x)·exp(ik·r_j(x)) / r_j(x), r_j(x) = |x − p_j|, where w_j
+keeps emitter j's light that leaves through x towards the zone (the box of the zone, a soft
+rim around it, and the emitter's visibility from the zone point its ray reaches; Eq. 3 for
+each emitter, evaluated exactly at every sample: no sampling of O itself). Each emitter
+reaches only its footprint, the cone from it to the zone cut by the plate: the sum costs the
+footprints' samples, not the plate's times the emitters'.
+
+The kernel (``zone_sum.cl``) forms the phase exactly at each tile's centre (float64 where the
+device has it) and follows it along rows by a recurrence, as the point sum does.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..opencl import get_runtime
+from ..opencl.runtime import associated
+
+PROGRAM = associated(__file__)
+
+SEG = 32       # columns per work item: the recurrence's segment
+BLOCK = 256    # emitters are listed per BLOCK x BLOCK samples
+
+
+@dataclass(frozen=True, slots=True, kw_only=True, eq=False)
+class ZoneWindow:
+    """Where the samples lie and the zone they serve, all in the plate's frame [m].
+
+    origin : (x, y) of sample (row 0, column 0)
+    pitch, row_pitch : the samples' spacing along x (columns) and y (rows) [m]
+    shape : (rows, cols) of the whole window
+    centre : Z (3,), the zone's centre (the carrier converges on it)
+    half_extents : (3,) the zone box's half widths
+    rim : the soft rim's width, a fraction of the half widths in x and y
+    """
+
+    origin: tuple
+    pitch: float
+    row_pitch: float
+    shape: tuple
+    centre: tuple
+    half_extents: tuple
+    rim: float
+
+
+
+@dataclass(frozen=True, slots=True, kw_only=True, eq=False)
+class ZoneEmitters:
+    """Emitters in the plate's frame with what the sum needs of them.
+
+    position : (n, 3) [m], z < 0
+    amplitude : (n, C) complex, a_j per channel (the random phase included; |a_j| carries the
+        distance to the zone's centre so that the zone sees √I)
+    visibility : (n,) int row of ``table`` (−1: seen from the whole zone)
+    table : (m, Gy, Gx) uint8, the visibility 0…255 from the zone's Gy × Gx grid points
+    grid : ((x0, step_x), (y0, step_y)) of the grid points, relative to the zone's centre [m]
+    """
+
+    position: np.ndarray
+    amplitude: np.ndarray
+    visibility: np.ndarray
+    table: np.ndarray
+    grid: tuple
+
+
+def footprints(position, window: ZoneWindow) -> np.ndarray:
+    """(n, 4) int: the sample ranges (c0, c1, r0, r1), inclusive, that each emitter's cone
+    towards the zone (its box widened by the rim) covers on the plate, clipped to the window
+    (c1 < c0 where it misses)."""
+    p = np.asarray(position, np.float64)
+    c = np.asarray(window.centre)
+    e = np.asarray(window.half_extents) * np.array([1 + window.rim, 1 + window.rim, 1.0])
+    corners = np.array([c + np.array([sx, sy, sz]) * e for sx in (-1, 1) for sy in (-1, 1)
+                        for sz in (-1, 1)])
+    t = -p[:, None, 2] / (corners[None, :, 2] - p[:, None, 2])
+    xy = p[:, None, :2] + t[..., None] * (corners[None, :, :2] - p[:, None, :2])
+    lo, hi = xy.min(1), xy.max(1)
+    o, dx, dy = np.asarray(window.origin), window.pitch, window.row_pitch
+    h, w = window.shape
+    c0 = np.maximum(np.floor((lo[:, 0] - o[0]) / dx), 0)
+    c1 = np.minimum(np.ceil((hi[:, 0] - o[0]) / dx), w - 1)
+    r0 = np.maximum(np.floor((lo[:, 1] - o[1]) / dy), 0)
+    r1 = np.minimum(np.ceil((hi[:, 1] - o[1]) / dy), h - 1)
+    return np.stack([c0, c1, r0, r1], 1).astype(np.int32)
+
+
+def block_lists(foot, shape, block=BLOCK) -> tuple[np.ndarray, np.ndarray, int]:
+    """(list, start, blocks_x): the emitters whose footprint overlaps each block of
+    ``block``² samples, block b's in list[start[b]:start[b + 1]]."""
+    h, w = shape
+    bx, by = -(-w // block), -(-h // block)
+    ok = (foot[:, 1] >= foot[:, 0]) & (foot[:, 3] >= foot[:, 2])
+    j = np.nonzero(ok)[0]
+    f = foot[j].astype(np.int64) // block
+    nx, ny = f[:, 1] - f[:, 0] + 1, f[:, 3] - f[:, 2] + 1
+    count = nx * ny
+    emitter = np.repeat(j, count)
+    q = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+    col = np.repeat(f[:, 0], count) + q % np.repeat(nx, count)
+    row = np.repeat(f[:, 2], count) + q // np.repeat(nx, count)
+    b = row * bx + col
+    order = np.argsort(b, kind="stable")
+    start = np.searchsorted(b[order], np.arange(bx * by + 1)).astype(np.int32)
+    return emitter[order].astype(np.int32), start, int(bx)
+
+
+class ZoneSum:
+    """The sum of ``em``'s channels over ``window`` at ``wavelength`` [m], its emitters on the
+    device once; :meth:`region` computes any block of rows and columns (module docstring)."""
+
+    def __init__(self, em: ZoneEmitters, window: ZoneWindow, wavelength: float, rt=None):
+        self.rt = rt = rt or get_runtime()
+        self.window, self.k = window, 2 * math.pi / wavelength
+        pos = np.asarray(em.position, np.float64)
+        centre = np.asarray(window.centre, np.float64)
+        # the carriers exp(ik|z_j|) of the kernel's phase and exp(ik·Z_z) of its epilogue,
+        # folded in float64
+        fold = np.exp(1j * np.remainder(self.k * (np.abs(pos[:, 2]) + centre[2]), 2 * math.pi))
+        amp = np.ascontiguousarray(em.amplitude * fold[:, None], np.complex64)
+        self.channels = amp.shape[1]
+        foot = footprints(pos, window)
+        lst, start, self.blocks_x = block_lists(foot, window.shape)
+        self.pairs = float(np.sum((foot[:, 1] - foot[:, 0] + 1.0).clip(0)
+                                  * (foot[:, 3] - foot[:, 2] + 1.0).clip(0)))
+        table = em.table if len(em.table) else np.zeros((1, 2, 2), np.uint8)
+        self.options = (f"-DVEC={rt.lanes}", f"-DSEG={SEG}", f"-DCHANNELS={self.channels}",
+                        f"-DGRID_Y={table.shape[1]}", f"-DGRID_X={table.shape[2]}", "-cl-fast-relaxed-math") + rt.real_options
+        self.args = [*(rt.to_device(pos[:, i], rt.real).data for i in range(3)),
+                     rt.to_device(amp).data, rt.to_device(foot).data,
+                     rt.to_device(np.asarray(em.visibility, np.int32)).data,
+                     rt.to_device(np.ascontiguousarray(table, np.uint8)).data,
+                     *(np.float32(v) for v in (*em.grid[0][:1], *em.grid[1][:1],
+                                               em.grid[0][1], em.grid[1][1])),
+                     rt.to_device(lst if len(lst) else np.zeros(1, np.int32)).data,
+                     rt.to_device(start).data, np.int32(self.blocks_x), np.int32(BLOCK)]
+        self._keep = self.args  # the device buffers live as long as the sum
+
+    def region(self, row0: int, col0: int, rows: int, cols: int) -> np.ndarray:
+        """B (C, rows, cols) complex64 from sample (row0, col0); row0 and col0 multiples of
+        the work items' tile (lanes, SEG)."""
+        rt, win = self.rt, self.window
+        out = rt.scratch("zone-sum", (self.channels, rows, cols))
+        real = rt.real
+        e = win.half_extents
+        rt.kernel(PROGRAM, "zone_sum", self.options)(
+            rt.queue, (-(-rows // rt.lanes), -(-cols // SEG)), (1, 1), out.data,
+            np.int32(row0), np.int32(col0), np.int32(rows), np.int32(cols),
+            *(real(v) for v in (win.pitch, win.row_pitch, win.origin[0], win.origin[1], self.k,
+                                *win.centre)),
+            *(np.float32(v) for v in (e[0], e[1], e[2], win.rim * e[0], win.rim * e[1])),
+            *self.args)
+        return out.get()
+
+
+def zone_sum(em: ZoneEmitters, window: ZoneWindow, wavelength: float, region=None,
+             rt=None) -> np.ndarray:
+    """B (C, rows, cols) complex64 over ``region`` (row0, col0, rows, cols) of the window
+    (default: all of it) at ``wavelength`` [m] (module docstring)."""
+    h, w = window.shape
+    return ZoneSum(em, window, wavelength, rt).region(*(region or (0, 0, h, w)))
