@@ -188,3 +188,15 @@ def copy_plane(dst, src, plane: int, *, into: bool = False) -> None:
     nbytes = (src if into else dst).nbytes
     offsets = {"dst_offset": plane * nbytes} if into else {"src_offset": plane * nbytes}
     cl.enqueue_copy(rt_queue, dst.data, src.data, byte_count=nbytes, **offsets)
+
+
+def upload_window(dst, host, planes, row0: int, col0: int) -> None:
+    """Copy the window of rows ``row0`` … and columns ``col0`` … of ``host`` (C, H, W) (a
+    C-contiguous NumPy array), its planes ``planes`` (a sequence of indices), into the device
+    stack ``dst`` (len(planes), rows, cols): one rectangle copy per plane, no host copy."""
+    rows, cols = dst.shape[1:]
+    item = host.dtype.itemsize
+    for m, p in enumerate(planes):
+        cl.enqueue_copy(dst.queue, dst.data, host[p], buffer_origin=(0, m * rows),
+                        host_origin=(col0 * item, row0), region=(cols * item, rows),
+                        buffer_pitches=(cols * item,), host_pitches=(host.shape[2] * item,))

@@ -20,7 +20,6 @@ recordings never write one store at once (its lock).
 from __future__ import annotations
 
 import logging
-import math
 import os
 import socket
 import struct

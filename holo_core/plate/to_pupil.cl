@@ -1,12 +1,13 @@
 /* A carrier plate's light towards one pupil (plate/to_pupil.py).
  *
- * demodulate: B(x)·exp(ik(|x - P| - |x - Z|)) in place: the samples against the carrier
- *     converging on the pupil's centre P instead of the zone's centre Z. The phase's distance
- *     difference is formed as (P - Z)·(P + Z - 2x) / (|x - P| + |x - Z|) in REAL (double where
- *     the device has it), then reduced.
- * decimate: a low-pass FIR over one axis and every q-th sample (TAPS taps h, the output's
- *     sample n at input q·n + first + t): the light that leaves towards other parts of the zone
- *     is filtered off before the samples thin out to what the pupil sees.
+ * demodulate_decimate: B(x)·exp(ik(|x - P| - |x - Z|)), the samples against the carrier
+ *     converging on the pupil's centre P instead of the zone's centre Z, low-passed along
+ *     each row and thinned to every Q-th column; decimate then does the same along columns.
+ *     The phase is exact at each segment's centre (demodulate_centres: the distances'
+ *     difference (P - Z)·(P + Z - 2x) / (|x - P| + |x - Z|) in REAL, double where the device
+ *     has it, reduced) and follows in float from there. The low-pass (TAPS taps h) filters
+ *     off the light that leaves towards other parts of the zone before the samples thin out
+ *     to what the pupil sees.
  * spread: the type-1 non-uniform FFT's gather: each point (row, col) of the 2× oversampled
  *     spectrum grid sums the samples within ES_TAPS/2 of it (their grid coordinates gy, gx),
  *     weighted by the ES kernel (its table es: value and slope per interval), finding them in
@@ -27,6 +28,12 @@
 #ifndef CELL
 #define CELL 3
 #endif
+#define SEGMENT 32   /* columns per exact phase (demodulate_centres) */
+#ifndef PLANES
+#define PLANES 1
+#define GROUP 1
+#define Q 1
+#endif
 
 #ifdef HOLO_FP64
 typedef double real;
@@ -34,52 +41,95 @@ typedef double real;
 typedef float real;
 #endif
 
-__kernel void demodulate(__global float2 *b, int planes, int rows, int cols, real pitch,
-                         real row_pitch, real x0, real y0, real k, real px, real py, real pz, real zx, real zy,
-                         real zz)
+/* the phase k(|x - P| - |x - Z|) at the centre of each segment of SEGMENT columns of each row,
+ * formed in REAL and reduced: what demodulate adds its float differences to */
+__kernel void demodulate_centres(__global float *table, int rows, int segments, real pitch,
+                                 real row_pitch, real x0, real y0, real k, real px, real py,
+                                 real pz, real zx, real zy, real zz)
 {
-    int r = get_global_id(0), c = get_global_id(1);
-    if (r >= rows || c >= cols)
+    int s = get_global_id(0), r = get_global_id(1);
+    if (r >= rows || s >= segments)
         return;
-    real x = x0 + c * pitch, y = y0 + r * row_pitch;
+    real x = x0 + (s * SEGMENT + SEGMENT / 2) * pitch, y = y0 + r * row_pitch;
     real ax = px - x, ay = py - y, bx = zx - x, by = zy - y;
     real to_p = sqrt(ax * ax + ay * ay + pz * pz), to_z = sqrt(bx * bx + by * by + zz * zz);
     real num = (px - zx) * (px + zx - 2 * x) + (py - zy) * (py + zy - 2 * y) + (pz - zz) * (pz + zz);
     real ph = k * num / (to_p + to_z);
-    ph -= (real)(2 * M_PI) * rint(ph * (real)(0.5 / M_PI));
-    float2 turn = cexpi((float)ph);
-    for (int plane = 0; plane < planes; plane++) {
-        long i = ((long)plane * rows + r) * cols + c;
-        b[i] = cmul(b[i], turn);
+    table[r * segments + s] = (float)(ph - (real)(2 * M_PI) * rint(ph * (real)(0.5 / M_PI)));
+}
+
+/* exp(ik(|x - P| - |x - Z|)) at column c of row r: the segment centre's phase (table) plus,
+ * in float, the change of each distance from there: |x - A| - |x_c - A| =
+ * dx·(a + a_c)/(|x - A| + |x_c - A|) with a = x - A_x, a_c = a - dx (y and z held) */
+inline float2 turn_towards_pupil(int c, int r, real pitch, real row_pitch, real x0, real y0,
+                                 float k, real px, real py, real pz, real zx, real zy, real zz,
+                                 __global const float *table, int segments)
+{
+    int s = c / SEGMENT;
+    float dx = (float)((c - (s * SEGMENT + SEGMENT / 2)) * pitch);
+    real x = x0 + c * pitch, y = y0 + r * row_pitch;
+    float ax = (float)(x - px), ay = (float)(y - py), bx = (float)(x - zx), by = (float)(y - zy);
+    float pz2 = (float)(pz * pz), zz2 = (float)(zz * zz);
+    float axc = ax - dx, bxc = bx - dx;
+    float rp = sqrt(ax * ax + ay * ay + pz2), rpc = sqrt(axc * axc + ay * ay + pz2);
+    float rz = sqrt(bx * bx + by * by + zz2), rzc = sqrt(bxc * bxc + by * by + zz2);
+    float change = dx * ((ax + axc) / (rp + rpc) - (bx + bxc) / (rz + rzc));
+    return cexpi(table[r * segments + s] + k * change);
+}
+
+/* Turned onto the pupil's carrier (turn_towards_pupil) and decimated along the row at once: a
+ * work group of GROUP outputs of one row loads the GROUP·Q + TAPS samples they read into local
+ * memory, each turned once, then each output sums its TAPS taps h there. The input's column 0
+ * is the plate's column col0 (its x is x0); output j reads input Q·j + first + t. */
+__kernel void demodulate_decimate(__global float2 *out, __global const float2 *in, int rows,
+                                  int cols, int out_cols, int out_row0, int out_height,
+                                  int first, __constant float *h, real pitch, real row_pitch,
+                                  real x0, real y0, float k, real px, real py, real pz,
+                                  real zx, real zy, real zz, __global const float *table,
+                                  int segments)
+{
+    __local float2 span[PLANES][GROUP * Q + TAPS];
+    int lid = get_local_id(0), j0 = get_group_id(0) * GROUP, r = get_global_id(1);
+    int start = Q * j0 + first;
+    for (int i = lid; i < GROUP * Q + TAPS; i += GROUP) {
+        int c = start + i;
+        float2 turn = 0;
+        if (c >= 0 && c < cols)
+            turn = turn_towards_pupil(c, r, pitch, row_pitch, x0, y0, k, px, py, pz, zx, zy,
+                                      zz, table, segments);
+        for (int p = 0; p < PLANES; p++)
+            span[p][i] = c >= 0 && c < cols ? cmul(in[((long)p * rows + r) * cols + c], turn)
+                                            : (float2)0;
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    int j = j0 + lid;
+    if (j >= out_cols)
+        return;
+    for (int p = 0; p < PLANES; p++) {
+        float2 acc = 0;
+        for (int t = 0; t < TAPS; t++)
+            acc += h[t] * span[p][lid * Q + t];
+        out[((long)p * out_height + out_row0 + r) * out_cols + j] = acc;
     }
 }
 
-/* along columns (axis 1) when ALONG_COLS, else along rows; the input (planes, rows, cols),
- * the output's rows from out_row0 of (planes, out_height, out_cols), out_rows of them */
+/* along rows: the input (planes, rows, cols), the output's rows from out_row0 of (planes,
+ * out_height, out_cols), out_rows of them; output row i reads input row q·i + first + t */
 __kernel void decimate(__global float2 *out, __global const float2 *in, int rows, int cols,
                        int out_rows, int out_cols, int out_row0, int out_height, int q,
                        int first, __constant float *h)
 {
-    int r = get_global_id(0), c = get_global_id(1), plane = get_global_id(2);
+    int c = get_global_id(0), r = get_global_id(1), plane = get_global_id(2);
     if (r >= out_rows || c >= out_cols)
         return;
     __global const float2 *src = in + (long)plane * rows * cols;
     float2 acc = 0;
-#ifdef ALONG_COLS
-    int start = q * c + first;
-    for (int t = 0; t < TAPS; t++) {
-        int j = start + t;
-        if (j >= 0 && j < cols)
-            acc += h[t] * src[(long)r * cols + j];
-    }
-#else
     int start = q * r + first;
     for (int t = 0; t < TAPS; t++) {
         int i = start + t;
         if (i >= 0 && i < rows)
             acc += h[t] * src[(long)i * cols + c];
     }
-#endif
     out[((long)plane * out_height + out_row0 + r) * out_cols + c] = acc;
 }
 
@@ -105,7 +155,7 @@ __kernel void spread(__global float2 *out, int grid_h, int grid_w, int row_first
                      __global const int *start, int cells_h, int cells_w, float scale,
                      __constant float2 *es)
 {
-    int gr_i = row_first + get_global_id(0), gc_i = col_first + get_global_id(1);
+    int gc_i = col_first + get_global_id(0), gr_i = row_first + get_global_id(1);
     float gr = gr_i, gc = gc_i;                          /* signed grid coordinates */
     int row = gr_i < 0 ? gr_i + grid_h : gr_i, col = gc_i < 0 ? gc_i + grid_w : gc_i;
     int ci0 = max((int)floor((gr - 0.5f * ES_TAPS - row_first) / CELL), 0);
@@ -136,7 +186,7 @@ __kernel void pupil_layer(__global float2 *u, __global const float2 *g, int h, i
                           __global const float *dr, __global const float *dc, float dy,
                           float dx, float k, float z)
 {
-    int r = get_global_id(0), c = get_global_id(1), ch = get_global_id(2);
+    int c = get_global_id(0), r = get_global_id(1), ch = get_global_id(2);
     int sr = r < (h + 1) / 2 ? r : r - h, sc = c < (w + 1) / 2 ? c : c - w;
     int gr = sr < 0 ? sr + 2 * h : sr, gc = sc < 0 ? sc + 2 * w : sc;
     float y = sr * dy, x = sc * dx, rho2 = x * x + y * y;

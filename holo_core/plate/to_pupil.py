@@ -23,12 +23,11 @@ import math
 
 import numpy as np
 
-from ..opencl.arrays import copy_plane
+from ..opencl.arrays import copy_plane, empty, upload_window
 from ..opencl.runtime import associated
 from ..propagation import angular_spectrum, grid, tilt
 from ..propagation.angular_spectrum import BAND_EDGE
 from ..propagation.tilt import ES_TABLE, cached_array, es_table, es_transform
-from ..propagation.tilt import TAPS as ES_TAPS
 from ..scene.hologram import Hologram
 from ..scene.plate import box_corners
 
@@ -196,6 +195,8 @@ DECIMATION_STOP = 50.0   # [dB] the decimation filter's stop band: light towards
 PASS_MARGIN = 1.1        # the filter passes this much beyond the pupil's own band ...
 TRANSITION = 0.35        # ... and falls to its stop band over this fraction of the pass band
 BAND_ROWS = 512          # samples read and filtered per band of rows
+DEMODULATE_SEGMENT = 32  # columns per exact phase (to_pupil.cl's SEGMENT)
+DECIMATE_GROUP = 64      # outputs of a row decimated by one work group
 
 
 def kaiser_lowpass(cutoff: float, transition: float) -> np.ndarray:
@@ -265,20 +266,20 @@ class CarrierPupil:
                                           TRANSITION * band * pitch)))
         return out
 
-    def fields(self, read, channels, wavelength, *, amplitude=1.0):
-        """The pupil fields (device (planes, h, w) complex64, FFT order) of the plate's
-        ``channels`` (all at ``wavelength`` [m]); ``read(channels, r0, r1, c0, c1)`` returns
-        their samples (C, r1 − r0, c1 − c0); ``amplitude`` scales them (the emitters'
-        density)."""
+    def fields(self, samples, channels, wavelength, *, amplitude=1.0):
+        """The pupil fields (device (planes, h, w) complex64, FFT order) of ``channels`` (all
+        at ``wavelength`` [m], neighbours) of one look's ``samples`` (C, H, W): a NumPy array,
+        or any array sliced as [c0:c1, r0:r1, c0:c1] (a store's); ``amplitude`` scales them
+        (the emitters' density)."""
         along_rows, along_cols = self._design(wavelength)
         key = (along_rows[0], along_cols[0])
         if key not in self._gathers:  # one per decimation: every look and channel shares it
             self._gathers[key] = _Gather(self, *key)
-        decimated = self._decimated(read, channels, wavelength, along_rows, along_cols)
+        decimated = self._decimated(samples, channels, wavelength, along_rows, along_cols)
         return self._gathers[key].pupil(decimated, len(channels), wavelength,
                                         amplitude / wavelength)
 
-    def _decimated(self, read, channels, wavelength, along_rows, along_cols):
+    def _decimated(self, samples, channels, wavelength, along_rows, along_cols):
         """The window's samples turned onto the pupil's carrier, filtered and thinned to every
         q-th along each axis (``along_rows``, ``along_cols``: (q, taps)): device
         (C, rows, cols) at the rows r0 + q·i and columns c0 + q·j of the plate."""
@@ -295,24 +296,35 @@ class CarrierPupil:
         k = 2 * math.pi / wavelength
         real = rt.real
         taps = [rt.to_device(t) for t in (taps_x, taps_y)]
+        options = rt.real_options + (f"-DTAPS={len(taps_x)}", f"-DQ={qx}",
+                                     f"-DPLANES={planes}", f"-DGROUP={DECIMATE_GROUP}")
         for b0 in range(rr0, rr1, BAND_ROWS):
             b1 = min(b0 + BAND_ROWS, rr1)
-            band = rt.to_device(np.ascontiguousarray(read(channels, b0, b1, cc0, cc1),
-                                                     np.complex64))
+            band = empty(rt, (planes, b1 - b0, cc1 - cc0))
+            if isinstance(samples, np.ndarray) and samples.flags.c_contiguous and \
+                    samples.dtype == np.complex64:  # in memory: the window's rectangle alone
+                upload_window(band, samples, channels, b0, cc0)
+            else:  # a store's tiles, read
+                band.set(np.ascontiguousarray(
+                    samples[channels[0]:channels[-1] + 1, b0:b1, cc0:cc1], np.complex64))
             x0, y0 = h.carrier.coords(h.pitch, [b0], [cc0])
-            rt.kernel(PROGRAM, "demodulate", rt.real_options)(
-                rt.queue, (b1 - b0, cc1 - cc0), None, band.data, np.int32(planes),
-                np.int32(b1 - b0), np.int32(cc1 - cc0),
-                *(real(v) for v in (h.pitch, h.carrier.row_pitch, x0[0], y0[0], k,
-                                    *self.position, *h.carrier.centre)))
-            rt.kernel(PROGRAM, "decimate", (f"-DTAPS={len(taps_x)}", "-DALONG_COLS"))(
-                rt.queue, (b1 - b0, out_cols, planes), None, rowpass.data, band.data,
-                np.int32(b1 - b0), np.int32(cc1 - cc0), np.int32(b1 - b0),
-                np.int32(out_cols), np.int32(b0 - rr0), np.int32(rr1 - rr0), np.int32(qx),
-                np.int32(c0 - cc0 - pad_x), taps[0].data)
+            segments = -(-(cc1 - cc0) // DEMODULATE_SEGMENT)
+            table = rt.scratch("plate-demodulate", (b1 - b0, segments), np.float32)
+            geometry = (h.pitch, h.carrier.row_pitch, x0[0], y0[0])
+            points = (*self.position, *h.carrier.centre)
+            rt.kernel(PROGRAM, "demodulate_centres", rt.real_options)(
+                rt.queue, (segments, b1 - b0), None, table.data, np.int32(b1 - b0),
+                np.int32(segments), *(real(v) for v in (*geometry, k, *points)))
+            groups = -(-out_cols // DECIMATE_GROUP)
+            rt.kernel(PROGRAM, "demodulate_decimate", options)(
+                rt.queue, (groups * DECIMATE_GROUP, b1 - b0), (DECIMATE_GROUP, 1),
+                rowpass.data, band.data, np.int32(b1 - b0), np.int32(cc1 - cc0),
+                np.int32(out_cols), np.int32(b0 - rr0), np.int32(rr1 - rr0),
+                np.int32(c0 - cc0 - pad_x), taps[0].data, *(real(v) for v in geometry),
+                np.float32(k), *(real(v) for v in points), table.data, np.int32(segments))
         result = rt.scratch("plate-decimated", (planes, out_rows, out_cols))
         rt.kernel(PROGRAM, "decimate", (f"-DTAPS={len(taps_y)}",))(
-            rt.queue, (out_rows, out_cols, planes), None, result.data, rowpass.data,
+            rt.queue, (out_cols, out_rows, planes), None, result.data, rowpass.data,
             np.int32(rr1 - rr0), np.int32(out_cols), np.int32(out_rows), np.int32(out_cols),
             np.int32(0), np.int32(out_rows), np.int32(qy), np.int32(r0 - rr0 - pad_y),
             taps[1].data)
@@ -396,7 +408,7 @@ class _Gather:
             spread = rt.scratch("carrier-spread", (planes,) + grid_shape)
             spread.fill(0)
             rt.kernel(PROGRAM, "spread", options)(
-                rt.queue, (self.hi[0] - self.lo[0] + 1, self.hi[1] - self.lo[1] + 1), None,
+                rt.queue, (self.hi[1] - self.lo[1] + 1, self.hi[0] - self.lo[0] + 1), None,
                 spread.data, np.int32(grid_shape[0]), np.int32(grid_shape[1]),
                 np.int32(self.lo[0]), np.int32(self.lo[1]), values.data,
                 np.int32(self.count), weight.data, self.at[0].data, self.at[1].data,
@@ -408,12 +420,15 @@ class _Gather:
                 rt.fft.backward(buf)
                 copy_plane(spread, buf, p, into=True)
             rt.kernel(PROGRAM, "pupil_layer", ())(
-                rt.queue, (hh, ww, planes), None, pupil.data, spread.data, np.int32(hh),
+                rt.queue, (ww, hh, planes), None, pupil.data, spread.data, np.int32(hh),
                 np.int32(ww), self.deapod[0].data, self.deapod[1].data, np.float32(dy),
                 np.float32(dx), np.float32(k), np.float32(z))
         return pupil
 
 
+SPREAD_TAPS = 4  # the gather's ES kernel taps per axis: 1e-4 at 2x oversampling, as the
+                 # image's read (optics/imaging.py TAPS); 6 cost twice as much for 1e-5
+ES_TAPS = SPREAD_TAPS
 SPREAD_CELL = 2  # grid units a side of the cells the samples are listed by for the gather
 LAYER_PHASE = math.pi / 2  # a layer's largest curvature error at the pupil's rim [rad]
 

@@ -299,8 +299,7 @@ def carrier_looks(holos, camera: Camera, fine: Camera, pupil: Pupil, rotation, p
             if hi - lo != len(chans):
                 raise InputError(f"a plate's channels at one wavelength must be neighbours; "
                                  f"got {chans}")
-            waves = view.fields(lambda _, r0, r1, c0, c1: h.object_wave[lo:hi, r0:r1, c0:c1],
-                                chans, lam, amplitude=spacing / bin_)
+            waves = view.fields(h.object_wave, chans, lam, amplitude=spacing / bin_)
             lens = lam0 if chromatic else lam
             for m, c in enumerate(chans):
                 images[c] = imagers[lam].image(
