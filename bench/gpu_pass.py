@@ -11,6 +11,11 @@ seconds per backend, the ratio of the warm passes against the first backend, and
 backends' pictures differ.
 
     python bench/gpu_pass.py JOB.pickle [--backends vkfft numpy] [--runs 2] [--device gpu]
+                             [--suite]
+
+The whole GPU check in one call: ``--suite`` first runs the core's tests on the device
+(``HOLO_DEVICE``, the OpenCL and FFT caches in a fresh folder, so that nothing carried from
+another machine is read) and prints their summary line, then times the pass.
 
 On a machine with an NVIDIA GPU: pyopencl, NVIDIA's OpenCL driver (a vendor file in
 /etc/OpenCL/vendors naming libnvidia-opencl.so.1) and pyvkfft built with
@@ -66,18 +71,22 @@ def make_job(path: Path, resolution, fstop, samples) -> None:
 # --- one backend in this process ---------------------------------------------------------------
 
 class Stages:
-    """Exclusive seconds per stage: a stage's time less that of the stages inside it."""
+    """Exclusive seconds per stage: a stage's time less that of the stages inside it; and, for
+    stages wrapped with ``grid_of``, the seconds and calls per grid it names."""
 
-    def __init__(self):
+    def __init__(self, sync=None):
         self.seconds = defaultdict(float)
+        self.grids = defaultdict(lambda: [0.0, 0])  # grid_of(...) -> [seconds, calls]
         self.stack = []
         self.on = False
-        self.sync = None
+        self.sync = sync
 
-    def wrap(self, owner, attr, name, sync=False):
+    def wrap(self, owner, attr, name, sync=False, grid_of=None):
+        """Time ``owner.attr`` as the stage ``name`` (the device synchronised around it with
+        ``sync``); returns what undoes the wrapping."""
         fn = getattr(owner, attr, None)
         if fn is None:  # a stage this version of the core does not have: its time is 'other'
-            return
+            return lambda: None
 
         def timed(*args, **kwargs):
             if not self.on:
@@ -96,15 +105,20 @@ class Stages:
                 self.seconds[name] += spent - inner
                 if self.stack:
                     self.stack[-1] += spent
+                if grid_of is not None:
+                    cell = self.grids[grid_of(*args, **kwargs)]
+                    cell[0] += spent - inner
+                    cell[1] += 1
 
         setattr(owner, attr, timed)
+        return lambda: setattr(owner, attr, fn)
 
 
 def child(job_path: Path, backend: str, runs: int, result_path: Path) -> None:
     logging.basicConfig(level=logging.INFO, format="  %(name)s: %(message)s", stream=sys.stderr)
     t0 = time.perf_counter()
     from holo_core import runner
-    from holo_core.camera import recording
+    from holo_core.camera import incoherent, recording
     from holo_core.camera import render as camera_render
     from holo_core.job import Job
     from holo_core.opencl import get_runtime
@@ -120,7 +134,14 @@ def child(job_path: Path, backend: str, runs: int, result_path: Path) -> None:
     stages.wrap(recording.PupilFields, "__init__", "device setup and uploads", sync=True)
     stages.wrap(recording.PupilFields, "object_wave", "object wave kernels", sync=True)
     stages.wrap(recording.PupilFields, "image", "image kernels and readback", sync=True)
+    # the incoherent route (the add-on's default: the looks' limit in one pass)
+    stages.wrap(incoherent.IncoherentImages, "__init__", "device setup and uploads", sync=True)
+    stages.wrap(incoherent.IncoherentImages, "_transfer_functions", "PSF transfer functions",
+                sync=True)
+    stages.wrap(incoherent.IncoherentImages, "images", "maps, products, reads (kernels)",
+                sync=True)
     stages.wrap(camera_render._Accumulator, "add", "accumulate looks (host)")
+    stages.wrap(camera_render._Accumulator, "add_expected", "accumulate looks (host)")
     stages.wrap(camera_render._Accumulator, "result", "result: colour, depth (host)")
     stages.wrap(runner, "_write_pass", "write EXR and PNG")
 
@@ -132,8 +153,8 @@ def child(job_path: Path, backend: str, runs: int, result_path: Path) -> None:
         print(f"  {backend}: run {timings[-1]:.3f} s", file=sys.stderr, flush=True)
     rt = get_runtime()
     stages.sync = rt.queue.finish
-    stages.wrap(rt.fft, "forward", "FFT forward (padded pupil)", sync=True)
-    stages.wrap(rt.fft, "backward", "FFT backward (layers)", sync=True)
+    stages.wrap(rt.fft, "forward", "FFT forward", sync=True)
+    stages.wrap(rt.fft, "backward", "FFT backward", sync=True)
     stages.on = True
     t = time.perf_counter()
     view = runner.run(job).view
@@ -149,6 +170,20 @@ def child(job_path: Path, backend: str, runs: int, result_path: Path) -> None:
 
 
 # --- the parent ---------------------------------------------------------------------------------
+
+def run_suite(device: str) -> bool:
+    """The core's tests on ``device`` in a child process with fresh OpenCL and FFT caches."""
+    cache = Path(tempfile.mkdtemp(prefix="holo-gpu-suite-"))
+    env = dict(os.environ, HOLO_DEVICE=device, XDG_CACHE_HOME=str(cache),
+               PYOPENCL_CACHE_FAILURE_FATAL="", PYTHONUNBUFFERED="1")
+    print(f"== the core's tests on HOLO_DEVICE={device!r} (caches in {cache})", flush=True)
+    r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+                        "tests/core"], cwd=ROOT, env=env, capture_output=True, text=True)
+    lines = r.stdout.strip().splitlines()
+    failed = [line for line in lines if line.startswith(("FAILED", "ERROR"))]
+    print("\n".join(failed + lines[-1:]), flush=True)
+    return r.returncode == 0
+
 
 def run_backend(args, backend, cache, index, out: Path) -> dict | None:
     env = dict(os.environ, HOLO_FFT=backend, PYTHONUNBUFFERED="1", XDG_CACHE_HOME=str(cache))
@@ -214,6 +249,8 @@ def main():
     p.add_argument("--keep-caches", action="store_true",
                    help="let the first process use the user's kernel caches")
     p.add_argument("--make-job", action="store_true", help="write the demo's job to JOB")
+    p.add_argument("--suite", action="store_true",
+                   help="run the core's tests on the device first (the whole GPU check)")
     p.add_argument("--resolution", type=int, nargs=2, default=(1920, 1080))
     p.add_argument("--fstop", type=float, default=2.8)
     p.add_argument("--samples", type=int, default=16)
@@ -224,6 +261,7 @@ def main():
         return make_job(args.job, args.resolution, args.fstop, args.samples)
     if args.child:
         return child(args.job, args.child, max(args.runs, 1), args.result)
+    suite_ok = run_suite(args.device) if args.suite else True
     out = Path(tempfile.mkdtemp(prefix="holo-gpu-pass-"))
     results = {}
     for backend in args.backends:
@@ -235,7 +273,7 @@ def main():
             results.setdefault(backend, []).append(r)
     if results:
         report(results)
-    return 0 if len(results) == len(args.backends) else 1
+    return 0 if len(results) == len(args.backends) and suite_ok else 1
 
 
 if __name__ == "__main__":

@@ -47,6 +47,7 @@ log = logging.getLogger(__name__)
 BLOCK_BYTES = 1 << 18  # a block of columns or rows: 256 KiB, within any current core's L2
 ALIGN = 8              # column blocks start on multiples of 8 samples (64 bytes)
 WORK_GRIDS = 2         # padded work arrays kept, the most recently used
+PARALLEL_SAMPLES = 1 << 19  # grids of fewer samples are transformed on the caller's thread
 FORWARD, BACKWARD = "FFTW_FORWARD", "FFTW_BACKWARD"
 
 
@@ -218,10 +219,12 @@ class HostFFT:
 
     # --- the passes -----------------------------------------------------------------------
 
-    def run(self, tasks, job) -> None:
-        """``job(task)`` for every task, the threads taking the next one as they come free."""
+    def run(self, tasks, job, samples: int) -> None:
+        """``job(task)`` for every task, the threads taking the next one as they come free; a
+        grid of fewer than ``PARALLEL_SAMPLES`` stays on the caller's thread (waking others
+        costs more there, on a loaded machine most of all)."""
         tasks = list(tasks)
-        if self.pool is None or len(tasks) < 2:
+        if self.pool is None or len(tasks) < 2 or samples < PARALLEL_SAMPLES:
             for t in tasks:
                 job(t)
             return
@@ -288,7 +291,7 @@ class HostFFT:
             if after is not None:
                 after(c0, c1)
 
-        self.run(blocks(cols, self.column_width(a.shape[0])), job)
+        self.run(blocks(cols, self.column_width(a.shape[0])), job, a.size)
 
     def rows(self, a, directions, before=None, between=None) -> None:
         """Transform every row of ``a`` in place by each of ``directions`` in turn, block by
@@ -302,7 +305,7 @@ class HostFFT:
                     between(r0, r1)
                 self.execute(a[r0:r1], 1, d)
 
-        self.run(blocks([(0, a.shape[0])], self.row_height(a.shape[1])), job)
+        self.run(blocks([(0, a.shape[0])], self.row_height(a.shape[1])), job, a.size)
 
     # --- 2-D transforms ---------------------------------------------------------------------
 
