@@ -4,9 +4,9 @@
 A stage's time is measured with the device synchronised around it (exclusive of the stages
 inside it), the median of ``--rounds`` runs. Its bound, measured in the same run:
 
-- a transform: FFTW's 2-D transform of the same grid with a plan measured here once (one
-  thread; planning limited to ``--plan-seconds``, kept in this bench's own wisdom file), what
-  the transform costs without the pruning;
+- a transform: FFTW's 2-D transform of the same grid with a plan measured once (one thread;
+  planning limited to ``--plan-seconds``, kept in this bench's own wisdom file; in a process
+  of its own, after the stages), what the transform costs without the pruning;
 - a padded convolution (a propagation): two such transforms and one pass of NumPy's multiply;
 - an element-wise stage: the bytes it must read and write over this machine's copy
   bandwidth (a NumPy copy of 512 MiB, measured here);
@@ -22,6 +22,7 @@ f/2.8; made here in a child process when it is missing).
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import pickle
 import statistics
@@ -110,6 +111,35 @@ class Bounds:
     def memory(self, nbytes) -> float:
         return nbytes / self.bandwidth
 
+    def of(self, grids) -> dict:
+        """The bounds of ``grids`` ((kind, shape) pairs) and the bandwidth, as plain data."""
+        return {"bandwidth": self.bandwidth,
+                "grids": [[kind, list(shape), self.transform(tuple(shape)) if kind ==
+                           "transform" else self.convolution(tuple(shape))]
+                          for kind, shape in grids]}
+
+
+class Measured:
+    """The bounds measured by a child process (``--bounds-of``): FFTW's wisdom never meets
+    Holo's in one process, where a plan Holo measures would keep both in its wisdom file."""
+
+    def __init__(self, grids, plan_seconds):
+        r = subprocess.run([sys.executable, __file__, "--bounds-of", json.dumps(grids),
+                            "--plan-seconds", str(plan_seconds)], capture_output=True,
+                           text=True, check=True)
+        data = json.loads(r.stdout.strip().splitlines()[-1])
+        self.bandwidth = data["bandwidth"]
+        self.grids = {(kind, tuple(shape)): t for kind, shape, t in data["grids"]}
+
+    def transform(self, shape) -> float:
+        return self.grids["transform", tuple(shape)]
+
+    def convolution(self, shape) -> float:
+        return self.grids["convolution", tuple(shape)]
+
+    def memory(self, nbytes) -> float:
+        return nbytes / self.bandwidth
+
 
 def fft_stages(stages: Stages) -> list:
     """Time every host transform and convolution by its grid (the wrappers' undo)."""
@@ -145,7 +175,7 @@ def measured(run, wrap, rounds, sync) -> tuple[Stages, float]:
     return median_of(results)
 
 
-def report(title, stages: Stages, total, bounds: Bounds, memory_bytes, host):
+def report(title, stages: Stages, total, bounds: Measured, memory_bytes, host):
     """The stages' table: time, bound, ratio; ``memory_bytes``: stage -> bytes it moves;
     ``host``: stages with no bound."""
     print(f"\n{title}: {total:.2f} s in all (load {os.getloadavg()[0]:.1f})")
@@ -169,7 +199,7 @@ def report(title, stages: Stages, total, bounds: Bounds, memory_bytes, host):
 
 # --- the camera pass --------------------------------------------------------------------------
 
-def camera_pass(job_path: Path, bounds: Bounds, rt, rounds):
+def camera_pass(job_path: Path, rt, rounds) -> list:
     from holo_core import runner
     from holo_core.camera import incoherent
     from holo_core.camera import render as camera_render
@@ -208,15 +238,15 @@ def camera_pass(job_path: Path, bounds: Bounds, rt, rounds):
         # 2 pupils (h·w) into the 2x grid, and the PSFs' products (read 2, write 2 grids)
         "PSF kernels (pupils)": 8 * (2 * 2 * h * w + 4 * grid),
     }
-    report(f"camera pass, {view.rgb.shape[1]}x{view.rgb.shape[0]}, pupil {w}x{h} "
-           f"({view.info['layers']} layer)", stages, total, bounds, memory_bytes,
-           {"emitters (host)", "result: colour, alpha, depth (host)",
-            "write EXR and PNG (host)", "device setup and uploads"})
+    return [(f"camera pass, {view.rgb.shape[1]}x{view.rgb.shape[0]}, pupil {w}x{h} "
+             f"({view.info['layers']} layer)", stages, total, memory_bytes,
+             {"emitters (host)", "result: colour, alpha, depth (host)",
+              "write EXR and PNG (host)", "device setup and uploads"})]
 
 
 # --- a plate's recording (its slab steps) and a view ------------------------------------------
 
-def plate(samples: int, bounds: Bounds, rt, rounds):
+def plate(samples: int, rt, rounds) -> list:
     from plate_scene import PLATE, camera, meshes
 
     from holo_core.plate import slabs
@@ -233,9 +263,8 @@ def plate(samples: int, bounds: Bounds, rt, rounds):
         lambda st: [st.wrap(slabs, "record_slabs", "slab recording (host: emitters, masks)")]
         + fft_stages(st), rounds, rt.queue.finish)
     h = plates[-1]
-    report(f"plate recording by slabs, {h.shape[1]}x{h.shape[0]} (its slab steps are the "
-           f"convolutions)", stages, total, bounds, {},
-           {"slab recording (host: emitters, masks)"})
+    tables = [(f"plate recording by slabs, {h.shape[1]}x{h.shape[0]} (its slab steps are the "
+               f"convolutions)", stages, total, {}, {"slab recording (host: emitters, masks)"})]
     stages, total = measured(
         lambda: render_view(h, centre),
         lambda st: [st.wrap(plate_view, "field_at_pupil",
@@ -244,9 +273,9 @@ def plate(samples: int, bounds: Bounds, rt, rounds):
                             "pixels)"),
                     st.wrap(plate_view, "_compose", "compose the looks (host)")]
         + fft_stages(st), rounds, rt.queue.finish)
-    report(f"plate view, {centre.resolution[0]}x{centre.resolution[1]} from the "
-           f"{h.shape[1]}x{h.shape[0]} plate", stages, total, bounds, {},
-           {"compose the looks (host)"})
+    return tables + [(f"plate view, {centre.resolution[0]}x{centre.resolution[1]} from the "
+                      f"{h.shape[1]}x{h.shape[0]} plate", stages, total, {},
+                      {"compose the looks (host)"})]
 
 
 def main():
@@ -256,19 +285,28 @@ def main():
     p.add_argument("--plan-seconds", type=float, default=60.0)
     p.add_argument("--parts", nargs="+", default=["camera", "plate"])
     p.add_argument("--rounds", type=int, default=3, help="runs of a pass or a view (medians)")
+    p.add_argument("--bounds-of", help=argparse.SUPPRESS)
     args = p.parse_args()
+    if args.bounds_of:  # the child: the bounds alone, printed as JSON
+        print(json.dumps(Bounds(args.plan_seconds).of(json.loads(args.bounds_of))))
+        return
     if "camera" in args.parts and not args.job.is_file():
         subprocess.run([sys.executable, str(ROOT / "bench" / "gpu_pass.py"), str(args.job),
                         "--make-job"], check=True)
     rt = get_runtime()
     print(f"CPU: {cpu_name()}, load average {os.getloadavg()[0]:.1f}; device: "
           f"{rt.device.name.strip()} ({rt.device.platform.name.strip()}), FFT {rt.fft.name}")
-    bounds = Bounds(args.plan_seconds)
-    print(f"copy bandwidth {bounds.bandwidth / 1e9:.1f} GB/s (read + written)")
+    tables = []
     if "camera" in args.parts:
-        camera_pass(args.job, bounds, rt, args.rounds)
+        tables += camera_pass(args.job, rt, args.rounds)
     if "plate" in args.parts:
-        plate(args.plate_samples, bounds, rt, args.rounds)
+        tables += plate(args.plate_samples, rt, args.rounds)
+    grids = sorted({(kind, tuple(shape)) for _, st, *_ in tables for kind, shape in st.grids})
+    bounds = Measured([[kind, list(shape)] for kind, shape in grids], args.plan_seconds)
+    print(f"copy bandwidth {bounds.bandwidth / 1e9:.1f} GB/s (read + written); the bounds "
+          f"measured after the stages, in a process of their own")
+    for title, stages, total, memory_bytes, host in tables:
+        report(title, stages, total, bounds, memory_bytes, host)
     print(f"\nload average at the end {os.getloadavg()[0]:.1f}")
 
 
