@@ -115,7 +115,8 @@ class Wisdom:
     def path(self) -> str:
         from platformdirs import user_cache_dir
         suffix = "" if self.rigour == "FFTW_MEASURE" else "-patient"
-        return os.path.join(user_cache_dir("holo"), f"fftw-wisdom-{platform.node()}{suffix}.pickle")
+        name = f"fftw-wisdom-{platform.node()}{suffix}.pickle"
+        return os.path.join(user_cache_dir("holo"), name)
 
     def load(self) -> None:
         try:
@@ -180,13 +181,16 @@ class Wisdom:
 
     @contextlib.contextmanager
     def _file_lock(self):
-        os.makedirs(os.path.dirname(self.path), exist_ok=True)
+        """The wisdom file's lock, where the system has advisory locks and the cache can be
+        written (else none: the atomic replace still keeps the file whole)."""
         try:
             import fcntl
-        except ImportError:  # no advisory locks (Windows): the atomic replace still holds
+            os.makedirs(os.path.dirname(self.path), exist_ok=True)
+            f = open(self.path + ".lock", "a")
+        except (ImportError, OSError):
             yield
             return
-        with open(self.path + ".lock", "a") as f:
+        with f:
             fcntl.flock(f, fcntl.LOCK_EX)
             try:
                 yield
