@@ -29,7 +29,7 @@ import numpy as np
 
 from .. import jobs
 from ..opencl import associated
-from ..opencl.arrays import by_rows, empty
+from ..opencl.arrays import by_rows, empty, fill
 from ..optics import imaging
 from ..optics.imaging import ES_TABLE, IRIS_TAPER
 from ..propagation.grid import embedded, next_fast_len
@@ -89,13 +89,13 @@ class IncoherentImages:
                   for i, z in enumerate(self.optics.layers) if em.starts[i] < em.starts[i + 1]]
         if not layers:
             for acc in self.acc:
-                acc.fill(0)
+                fill(rt, acc, 0)
         for done, (z, first, last) in enumerate(layers):
             self._transfer_functions(z)
             for values, acc, k in zip(self.maps, self.acc, (0, 0, 1)):
                 # the map on the (h, w) grid: on the 2x grid it fills the even bins only, and
                 # its transform there is this one tiled (multiply_tiled)
-                self.map.fill(0)
+                fill(rt, self.map, 0)
                 self.kernel("scatter_values")(rt.queue, (last - first,), None, self.map.data,
                                               self.index.data, values.data, np.int32(first))
                 rt.fft.forward(self.map)
@@ -125,11 +125,11 @@ class IncoherentImages:
         rt, o = self.rt, self.optics
         h, w = o.shape
         corners = (embedded(h, 2 * h), embedded(w, 2 * w))
-        self.ones.fill(1)
+        fill(rt, self.ones, 1)
         for psf, lam in zip(self.psf, (o.wavelength, o.depth_wavelength)):
             dy, dx = o.pitch(lam)
             k = 2 * np.pi / lam
-            self.pupil.fill(0)
+            fill(rt, self.pupil, 0)
             self.kernel("add_layer", recording.PROGRAM)(
                 rt.queue, by_rows((h, w)), None, self.pupil.data, self.ones.data, np.int32(h),
                 np.int32(w), np.float32(dy), np.float32(dx), np.float32(k), np.float32(z))

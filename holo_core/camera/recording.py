@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..opencl import associated, get_runtime
-from ..opencl.arrays import by_rows, empty
+from ..opencl.arrays import by_rows, empty, fill
 from ..optics.imaging import ES_TABLE, TAPS, PupilImage
 from ..scene.camera import Camera
 from .optics import PupilOptics, iris
@@ -56,12 +56,12 @@ class PupilFields:
         lam = self.wavelengths[field == 3]
         dy, dx = optics.pitch(lam)
         h, w = optics.shape
-        self.pupil.fill(0)
+        fill(rt, self.pupil, 0)
         for layer, z in enumerate(optics.layers):
             first, last = int(em.starts[layer]), int(em.starts[layer + 1])
             if first == last:
                 continue
-            self.spectrum.fill(0)
+            fill(rt, self.spectrum, 0)
             self.kernel("scatter")(rt.queue, (last - first,), None, self.spectrum.data,
                                    self.index.data, self.amps[field].data,
                                    self.phase0[field == 3].data, phases.data, np.int32(first))

@@ -22,7 +22,7 @@ import numpy as np
 
 from .. import jobs, memory, validate
 from ..opencl import associated, get_runtime
-from ..opencl.arrays import cached, empty, window
+from ..opencl.arrays import cached, empty, fill, window
 from ..propagation import grid
 from ..propagation.convolution import chirp_transfer, convolve
 from ..validate import InputError
@@ -121,7 +121,7 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
     nbytes = 8.0 * amp.shape[1] * math.prod(g.shape)
     memory.check_device(rt, f"the {g.shape[1]}x{g.shape[0]} object wave", nbytes, nbytes)
     out = empty(rt, (amp.shape[1],) + g.shape)
-    out.fill(0)
+    fill(rt, out, 0)
     if len(pos):
         if method == "wrp":
             _wrp(rt, out, pos, amp, g, obliquity, progress)
@@ -363,7 +363,7 @@ def _slab(rt, out, pos, amp, plane, g: Grid, w_shape, obliquity):
         _sum(rt, out, local, amp, g, obliquity, binned=True)
         return
     wrp = empty(rt, out.shape[:1] + w_shape)
-    wrp.fill(0)
+    fill(rt, wrp, 0)
     _sum(rt, wrp, local, amp, _on_plane(g, w_shape), obliquity, binned=True)
     padded = tuple(grid.next_fast_len(n) for n in w_shape)  # no wrap: the margin holds it
 

@@ -21,11 +21,11 @@ import numpy as np
 
 from .. import validate
 from ..opencl import like_input
-from ..opencl.arrays import cached, nonzero_count
+from ..opencl.arrays import cached, nonzero_count, recycled
 from . import grid
 from .convolution import convolution_setup, convolve, symmetric
 from .scaled import scaled
-from .transfer import BAND_EDGE, asm_transfer, transfer_function
+from .transfer import BAND_EDGE, asm_transfer, quadrant_shape, transfer_function
 
 def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
                      band_limit=True, out_pitch=None, out_shape=None, read=None):
@@ -77,7 +77,8 @@ def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), p
     def make():  # on the device (transfer.py); the float64 reference is transfer_function
         tf = asm_transfer(rt, shape, wavelength=wavelength, pitch=pitch, distance=z,
                           offset=(x0, y0), band_limit=band_limit, edge=BAND_EDGE,
-                          quadrant=quadrant)
+                          quadrant=quadrant, out=recycled(rt, "transfer", quadrant_shape(shape)
+                                                          if quadrant else shape))
         # with no offset the straight-through wave (f = 0) always passes
         reaches = quadrant or (x0, y0) == (0.0, 0.0) or nonzero_count(rt, tf) > 0
         notes = sampling_notes(dev.shape, shape, wavelength, pitch, z, (x0, y0), padding,

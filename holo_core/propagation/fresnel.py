@@ -14,13 +14,13 @@ import numpy as np
 
 from .. import validate
 from ..opencl import as_device, is_device_array, like_input
-from ..opencl.arrays import cached, copy
+from ..opencl.arrays import cached, copy, recycled
 from ..scene.field import Field
 from . import grid
 from .batch import batched
 from .convolution import convolution_setup, convolve, multiply, symmetric
 from .scaled import scaled
-from .transfer import fresnel_transfer, fresnel_transfer_host
+from .transfer import fresnel_transfer, fresnel_transfer_host, quadrant_shape
 
 
 def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
@@ -47,7 +47,9 @@ def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
 
     def made():  # on the device where it has float64 (transfer.py), else on the host
         tf = fresnel_transfer(rt, shape, wavelength=wavelength, pitch=pitch, distance=z,
-                              offset=(x0, y0), quadrant=quadrant)
+                              offset=(x0, y0), quadrant=quadrant, out=recycled(
+                                  rt, "transfer", quadrant_shape(shape) if quadrant else shape)
+                              if rt.has_fp64 else None)
         return make() if tf is None else (tf, [])
 
     tf, _ = cached(rt, ("fresnel", shape, wavelength, pitch, z, x0, y0, quadrant), made)

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..opencl import associated
 from ..opencl.arrays import by_rows, cached, empty
+from ..validate import InputError
 from . import grid
 
 PROGRAM = associated(__file__)
@@ -35,13 +36,14 @@ def quadrant_shape(shape) -> tuple[int, int]:
 
 
 def asm_transfer(rt, shape, *, wavelength, pitch, distance, offset, band_limit, edge,
-                 split=None, quadrant=False):
+                 split=None, quadrant=False, out=None):
     """The band-limited angular spectrum's transfer function on the padded ``shape`` (FFT
     order), times 1/(H·W), as a complex64 device array. ``pitch`` (x, y) [m], ``wavelength``,
     ``distance``, ``offset`` [m]; ``edge`` the band's roll-off fraction; ``split=False`` takes
     the direct float64 route (float64 devices only), else the chirp table's; ``quadrant``
     (offset (0, 0) only: the function is even in fx and fy) makes the first quadrant only
-    (:func:`quadrant_shape`)."""
+    (:func:`quadrant_shape`); ``out``: the device array to fill (of that shape), else a new
+    one."""
     h, w = shape
     px, py = pitch
     x0, y0 = offset
@@ -49,8 +51,8 @@ def asm_transfer(rt, shape, *, wavelength, pitch, distance, offset, band_limit, 
     half = (h * py / 2, w * px / 2)
     if split is not False:
         return _from_chirp(rt, shape, wavelength, pitch, distance, offset, band_limit,
-                           edge, carrier, half, quadrant)
-    out = empty(rt, shape)
+                           edge, carrier, half, quadrant, out)
+    out = _output(rt, out, shape)
     rt.kernel(PROGRAM, "asm_transfer", rt.real_options)(
         rt.queue, (w, h), None, out.data, np.float64(1 / (h * py)), np.float64(1 / (w * px)),
         np.float64(1 / wavelength), np.float64(distance), np.float64(carrier),
@@ -59,17 +61,18 @@ def asm_transfer(rt, shape, *, wavelength, pitch, distance, offset, band_limit, 
     return out
 
 
-def fresnel_transfer(rt, shape, *, wavelength, pitch, distance, offset, quadrant=False):
+def fresnel_transfer(rt, shape, *, wavelength, pitch, distance, offset, quadrant=False,
+                     out=None):
     """The Fresnel transfer function (see :func:`~holo_core.propagation.fresnel.fresnel`) on
-    the device, times 1/(H·W) (its first quadrant only with ``quadrant``, offset (0, 0));
-    None where the device lacks float64 (the host makes it)."""
+    the device, times 1/(H·W) (its first quadrant only with ``quadrant``, offset (0, 0)), into
+    ``out`` if given; None where the device lacks float64 (the host makes it)."""
     if not rt.has_fp64:
         return None
     h, w = shape
     px, py = pitch
     carrier = math.remainder(2 * math.pi * distance / wavelength, 2 * math.pi)
     made = quadrant_shape(shape) if quadrant else shape
-    out = empty(rt, made)
+    out = _output(rt, out, made)
     rt.kernel(PROGRAM, "fresnel_transfer", rt.real_options)(
         rt.queue, by_rows(made), None, out.data, np.int32(bool(quadrant)), np.int32(h),
         np.int32(w), np.int32(made[1]), np.float64(1 / (h * py)), np.float64(1 / (w * px)),
@@ -99,10 +102,10 @@ _chirp_table = functools.lru_cache(maxsize=1)(chirp_table)  # its two parts are 
 
 
 def _from_chirp(rt, shape, wavelength, pitch, distance, offset, band_limit, edge, carrier,
-                half, quadrant):
+                half, quadrant, out):
     h, w = shape
     made = quadrant_shape(shape) if quadrant else shape
-    out = empty(rt, made)
+    out = _output(rt, out, made)
     px, py = pitch
     x0, y0 = offset
     table = [cached(rt, ("asm-chirp", part, shape, wavelength, pitch), lambda part=part: (
@@ -119,6 +122,17 @@ def _from_chirp(rt, shape, wavelength, pitch, distance, offset, band_limit, edge
         np.float32(1 / (h * py)), np.float32(1 / (w * px)), np.float32(x0), np.float32(y0),
         np.float32(half[0]), np.float32(half[1]), np.int32(bool(band_limit)),
         np.float32(edge), np.float32(1 / (h * w)))
+    return out
+
+
+def _output(rt, out, shape):
+    """``out`` checked to be a complex64 device array of ``shape`` (the kernels write all of
+    it), else a new one."""
+    if out is None:
+        return empty(rt, shape)
+    if tuple(out.shape) != tuple(shape) or out.dtype != np.complex64:
+        raise InputError(f"out must be complex64 of {tuple(shape)}; got {out.dtype} of "
+                         f"{tuple(out.shape)}")
     return out
 
 
