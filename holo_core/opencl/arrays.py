@@ -151,6 +151,12 @@ def fill(rt: Runtime, a: cla.Array, value) -> None:
 def embed(rt: Runtime, dst: cla.Array, src: cla.Array, r0: int, c0: int) -> None:
     """dst = zeros with ``src`` placed at row ``r0``, column ``c0``."""
     fill(rt, dst, 0)
+    place(rt, dst, src, r0, c0)
+
+
+def place(rt: Runtime, dst: cla.Array, src: cla.Array, r0: int, c0: int) -> None:
+    """``src`` copied into ``dst`` at row ``r0``, column ``c0``; the rest of ``dst`` as it
+    was."""
     _rect(rt, dst, src, (0, 0), (r0, c0), src.shape)
 
 

@@ -7,14 +7,17 @@
  * waves travelling backwards in either frame are dropped. m: row-major M (target -> source
  * axes). dft, dfs: frequency steps (row, col) of target and source; c*: centre (row, col)
  * indices over the grid size, of the target (A comes centred); scale: sample areas and the
- * inverse FFT's 1/N. Global size (ht, wt). Options: -DTAPS=<n> -DES_TABLE=<entries>. */
+ * inverse FFT's 1/N. Global size: by_rows of (ht, wt). Options: -DTAPS=<n>,
+ * -DES_TABLE=<entries>. */
 __kernel void rotate_spectrum(__global float2 *dst, __global const float2 *A, int hs, int ws,
-                              real dft_y, real dft_x, real dfs_y, real dfs_x, real inv_l2,
-                              real m00, real m01, real m02, real m10, real m11, real m12,
-                              real m20, real m21, real m22, real ct_y, real ct_x, float scale,
-                              __global const float2 *es)
+                              int ht, int wt, real dft_y, real dft_x, real dfs_y, real dfs_x,
+                              real inv_l2, real m00, real m01, real m02, real m10, real m11,
+                              real m12, real m20, real m21, real m22, real ct_y, real ct_x,
+                              float scale, __global const float2 *es)
 {
-    int i = get_global_id(0), j = get_global_id(1), ht = get_global_size(0), wt = get_global_size(1);
+    int j = get_global_id(0), i = get_global_id(1);
+    if (j >= wt)
+        return;
     int ie = i <= (ht - 1) / 2 ? i : i - ht, jk = j <= (wt - 1) / 2 ? j : j - wt;
     real fe = ie * dft_y, fk = jk * dft_x;
     real fz2 = inv_l2 - fk * fk - fe * fe;

@@ -19,7 +19,7 @@ import numpy as np
 
 from .. import validate
 from ..opencl import as_device, associated, like_input
-from ..opencl.arrays import cached, embed, empty, window
+from ..opencl.arrays import by_rows, cached, empty, place, window
 from ..validate import InputError
 from . import grid
 from .angular_spectrum import angular_spectrum
@@ -80,10 +80,12 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
                                grid.padding_factor(out_padding))
     spectrum = rt.scratch("tilt-source", (hs, ws))
     (r0, c0), (t0, u0) = _corner(src.shape, (hs, ws)), _corner(out_shape, (ht, wt))
-    embed(rt, spectrum, src, r0, c0)
+    lies = ((r0, r0 + src.shape[0]),), ((c0, c0 + src.shape[1]),)  # where the source is
+    rt.fft.clear(spectrum, lies)
+    place(rt, spectrum, src, r0, c0)
     centre = ((r0 + (src.shape[0] - 1) / 2) / hs, (c0 + (src.shape[1] - 1) / 2) / ws)
     multiply(rt, spectrum, cached_array(rt, "deapodize", _deapodization, (hs, ws), centre))
-    rt.fft.forward(spectrum)
+    rt.fft.forward(spectrum, nonzero=lies)
     multiply(rt, spectrum, cached_array(rt, "centring", _centring, (hs, ws), centre))
     target = empty(rt, (ht, wt))
     freq = [1 / (ht * out_pitch), 1 / (wt * out_pitch), 1 / (hs * pitch), 1 / (ws * pitch),
@@ -92,9 +94,10 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     scale = np.float32(pitch**2 / (out_pitch**2 * ht * wt))
     options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
     rt.kernel(PROGRAM, "rotate_spectrum", options)(
-        rt.queue, (ht, wt), None, target.data, spectrum.data, np.int32(hs), np.int32(ws),
-        *(rt.real(f) for f in freq), scale, cached_array(rt, "es-table", es_table).data)
-    rt.fft.backward(target)
+        rt.queue, by_rows((ht, wt)), None, target.data, spectrum.data, np.int32(hs),
+        np.int32(ws), np.int32(ht), np.int32(wt), *(rt.real(f) for f in freq), scale,
+        cached_array(rt, "es-table", es_table).data)
+    rt.fft.backward(target, read=((u0, u0 + out_shape[1]),))
     return like_input(window(rt, target, out_shape, t0, u0), from_host)
 
 
