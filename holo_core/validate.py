@@ -4,15 +4,19 @@ file), the problem and the allowed range."""
 from __future__ import annotations
 
 import contextvars
+import difflib
+import functools
+import inspect
 import math
 import warnings
 from contextlib import contextmanager
 
 import numpy as np
 
-# Lengths a hologram's pitch and wavelengths may take [m]: 1 pm to 1 km, scale-free within
-# (Sect. VII-B), and far enough from float underflow that squares and ratios stay normal
-MIN_LENGTH, MAX_LENGTH = 1e-12, 1e3
+# Lengths any pitch, wavelength or size may take [m] where the physics, not a person, chose
+# them (the plate renderer's scale-free wavelengths, a file it wrote): 0.1 pm to 1 km, far
+# enough from float underflow that squares and ratios stay normal (1e-26 in float32's 1e-38)
+MIN_LENGTH, MAX_LENGTH = 1e-13, 1e3
 
 
 class InputError(ValueError):
@@ -27,6 +31,38 @@ class SamplingWarning(UserWarning):
 
 def warn_sampling(message: str) -> None:
     warnings.warn(message, SamplingWarning, stacklevel=3)
+
+
+def keywords(function: str, given, allowed) -> None:
+    """:class:`InputError` naming ``function`` and the first keyword of ``given`` it does not
+    take (with the nearest one it does), before any work: a misspelt setting is the caller's
+    mistake, not an inner function's ``TypeError``."""
+    allowed = tuple(allowed)
+    for name in given:
+        if name not in allowed:
+            near = difflib.get_close_matches(name, allowed, 1)
+            hint = f" (did you mean {near[0]!r}?)" if near else ""
+            raise InputError(f"{function}() takes no keyword {name!r}{hint}; it takes "
+                             f"{', '.join(allowed)}"[:400])
+
+
+def public(function):
+    """Decorate a public function so that a keyword it does not take, or a missing or extra
+    argument, is an :class:`InputError` naming it (:func:`keywords`), not a ``TypeError``."""
+    signature = inspect.signature(function)
+    named = [p.name for p in signature.parameters.values()
+             if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+
+    @functools.wraps(function)
+    def call(*args, **kwargs):
+        keywords(function.__name__, kwargs, named)
+        try:
+            signature.bind(*args, **kwargs)
+        except TypeError as e:
+            raise InputError(f"{function.__name__}(): {e}") from None
+        return function(*args, **kwargs)
+
+    return call
 
 
 def positive(name: str, value, unit: str = "") -> float:
@@ -57,13 +93,45 @@ def length(name: str, value, unit: str = "m") -> float:
     return v
 
 
-# What optics means by a wavelength and a sample pitch [m]: soft X-ray to far infrared, a
-# wafer-stepper's 10 nm to a coarse 1 cm sampling. Outside these, a number is far more likely a
-# value in the wrong unit (633 for 633 nm) than a real setup, and is refused with that hint.
-WAVELENGTH_RANGE = (1e-9, 1e-3)
-PITCH_RANGE = (1e-8, 1e-2)
+# The waves holograms are recorded with, and how finely they are sampled [m]. Each bound
+# guards against a number typed in another unit, never against real physics:
+# - a wavelength from 0.1 pm (electrons of a 1 MV holography microscope: 0.87 pm; 300 kV:
+#   1.97 pm; hard X-rays: 10-100 pm) to 1 cm (millimetre-wave and microwave holography);
+#   633 (nm typed as metres) lies beyond it and is refused with its likely unit;
+# - a pitch from 1 pm (an electron hologram sampled in the object plane: a few pm at atomic
+#   resolution) to 1 cm (a coarse antenna array); 8 (µm typed as metres) is refused likewise.
+WAVELENGTH_RANGE = (1e-13, 1e-2)
+PITCH_RANGE = (1e-12, 1e-2)
 _UNITS = (("nanometres", 1e-9), ("micrometres", 1e-6), ("millimetres", 1e-3))
 _TYPICAL = {"wavelength": 550e-9, "pitch": 5e-6}  # the likely unit is the one that lands nearest
+_SPANS = {"wavelength": "MeV electrons to microwaves", "pitch": "an electron hologram's pm "
+          "sampling to a coarse antenna array"}
+# Where a real length that is in range still looks like millimetres typed as metres, a
+# UnitWarning says so: a camera's or scanner's pixel is 0.5-50 µm and a film scan's at most
+# a few hundred µm, so a pitch of 1 mm or more (0.00345 for 3.45 µm) is more likely in mm.
+MILLIMETRE_PITCH = 1e-3
+
+
+class UnitWarning(UserWarning):
+    """A length that is physically possible but looks like a number in another unit (a pitch
+    of 0.00345 m for 3.45 µm typed in millimetres); the message names the likely value."""
+
+
+def warn_millimetres(name: str, value: float, why: str) -> None:
+    """Warn (:class:`UnitWarning`) that ``value`` [m] of ``name`` looks like millimetres,
+    saying ``why`` and what the value in millimetres would be in metres."""
+    warnings.warn(f"{name} {value:g} m {why}; if it is in millimetres, pass {value * 1e-3:g}",
+                  UnitWarning, stacklevel=3)
+
+
+def pitch_typed(name: str, value) -> float:
+    """A pitch [m] a person gave for a scan (:func:`pitch`), warned (:class:`UnitWarning`)
+    when it is :data:`MILLIMETRE_PITCH` or more."""
+    v = pitch(name, value)
+    if v >= MILLIMETRE_PITCH and not _SCALE_FREE.get():
+        warn_millimetres(name, v, f"is {v * 1e3:g} mm, coarser than any camera's or scanner's "
+                         f"pixel (0.5-50 µm)")
+    return v
 
 
 _SCALE_FREE = contextvars.ContextVar("holo_scale_free", default=False)
@@ -72,9 +140,10 @@ _SCALE_FREE = contextvars.ContextVar("holo_scale_free", default=False)
 @contextmanager
 def scale_free():
     """Within this block (or a function it decorates) wavelengths and pitches are any lengths
-    in [MIN_LENGTH, MAX_LENGTH]: the plate renderer chooses its own wavelength for the image
-    (Sect. VII-B, scale-free: 2 mm for a 40-pixel view of a 30 cm plate), and a hologram it
-    made carries it. Numbers a person types reach the checks outside such a block."""
+    in [MIN_LENGTH, MAX_LENGTH]. Internal: the plate renderer chooses its own wavelength for
+    the image (Sect. VII-B, scale-free: 2 cm for a 40-pixel view of a 3 m plate), and a
+    hologram it made carries it. Numbers a person types reach :data:`WAVELENGTH_RANGE` and
+    :data:`PITCH_RANGE` outside such a block; real waves and samplings all lie inside them."""
     token = _SCALE_FREE.set(True)
     try:
         yield
@@ -107,7 +176,8 @@ def _optical(name: str, value, limits: tuple[float, float], kind: str) -> float:
         _, unit, f = min(fits)
         metres = f"{v * f:g}" if "e" in f"{v:g}" else f"{v:g}e{round(math.log10(f))}"
         hint = f" ({v:g} looks like {unit}: pass {metres})"
-    raise InputError(f"{name} must be in [{lo:g}, {hi:g}] [m]; got {value!r}{hint}")
+    raise InputError(f"{name} must be in [{lo:g}, {hi:g}] [m] ({_SPANS[kind]}); got "
+                     f"{value!r}{hint}")
 
 
 def integer(name: str, value, minimum: int | None = None, maximum: int | None = None) -> int:

@@ -37,10 +37,13 @@ def batched(plane, *, moves=None, grid_of=None, returns_pitch=False):
 
     moves(settings) -> (4, 4): where the output plane lies in the input plane's frame;
     grid_of(settings, shape, pitch) -> (out shape, out pitch (x, y)); returns_pitch: the plane
-    function returns (field, (row pitch, col pitch)) (the far field)."""
+    function returns (field, (x pitch, y pitch)) (the far field)."""
+
+    taken = [p for p in _parameters(plane) if p != "field"]
 
     @functools.wraps(plane)
     def call(field, **settings):
+        validate.keywords(plane.__name__, settings, taken)
         is_field = isinstance(field, Field)
         if not is_field and not _batched(field, settings):
             return plane(field, **settings)
@@ -139,7 +142,7 @@ class _Run:
             result = self.plane(src, **kw)
             if self.returns_pitch:
                 result, far = result
-                pitch = (far[1], far[0])
+                pitch = far
             if on_device:
                 put_plane(rt, out, i, result)
             else:

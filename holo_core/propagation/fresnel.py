@@ -88,13 +88,14 @@ def fraunhofer(field, *, wavelength, pitch, distance):
     """The far field at ``distance`` > 0 and the pitch of its grid.
 
     U(x', y') = exp(ikz)·exp(ik(x'² + y'²)/(2z))/(iλz) · pitch² · Σ U(x, y)·exp(-i2π(x x' + y y')/(λz))
-    on the centred grid of the input's shape with pitch λz/(W·pitch) (per axis: λz/(H·pitch)
-    for rows). ``wavelength``, ``pitch``, ``distance`` in metres. Warns when ``distance`` is
+    on the centred grid of the input's shape with pitch λz/(W·pitch) along x and λz/(H·pitch)
+    along y. ``wavelength``, ``pitch``, ``distance`` in metres. Warns when ``distance`` is
     short of the Fraunhofer distance 2·D²/λ of the field's non-zero extent D.
 
     Returns
     -------
-    (field, (row pitch, column pitch)): complex64 like the input, pitches in metres.
+    (field, (x pitch, y pitch)): complex64 like the input, pitches in metres (x along the
+    columns, y along the rows: every pitch pair in the project is (x, y)).
     """
     wavelength, pitch = grid.wave(wavelength, pitch)
     z = validate.positive("distance", validate.within("distance", distance, validate.MAX_LENGTH),
@@ -108,7 +109,7 @@ def fraunhofer(field, *, wavelength, pitch, distance):
                 f"(2·D²/λ = {2 * extent**2 / wavelength:.4g} m); use fresnel or angular_spectrum")
     rt, dev, from_host = as_device(field)
     h, w = dev.shape
-    out_pitch = (wavelength * z / (h * pitch), wavelength * z / (w * pitch))
+    out_pitch = (wavelength * z / (w * pitch), wavelength * z / (h * pitch))
 
     pre, _ = cached(rt, ("centred-dft", (h, w)), lambda: (centred_ramp((h, w)), []))
     post, _ = cached(rt, ("fraunhofer", (h, w), wavelength, pitch, z),

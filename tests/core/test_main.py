@@ -22,7 +22,7 @@ def test_max_points_0_is_refused_on_one_line(tmp_path):
 
 def test_cli_bad_arguments_name_the_argument_and_its_range(tmp_path):
     (tmp_path / "q.obj").write_text(CUBE_OBJ)
-    for args, problem in [(["--pitch", "0"], "--pitch: '0' is out of range (metres, from 1e-12"),
+    for args, problem in [(["--pitch", "0"], "--pitch: '0' is out of range (metres, from 1e-13"),
                           (["--resolution", "0", "0"], "--resolution: '0' is out of range"),
                           (["--wavelengths", "nan"], "--wavelengths: 'nan' is out of range")]:
         run = run_process("record", tmp_path / "q.obj", "-o", tmp_path / "h.exr", *args)

@@ -80,8 +80,8 @@ def test_a_given_value_wins_and_the_difference_is_logged(tmp_path, rng, caplog):
 def test_metadata_in_the_wrong_unit_is_refused_naming_the_file(tmp_path, rng):
     np.save(tmp_path / "f.npy", rng.random((5, 7)))
     (tmp_path / "f.json").write_text(json.dumps({"pitch_m": 3.45, "wavelength_m": LAM}))
-    with pytest.raises(InputError, match=r"f.npy: metadata pitch_m must be in \[1e-08, 0.01\] "
-                                         r"\[m\]; got 3.45 \(3.45 looks like micrometres"):
+    with pytest.raises(InputError, match=r"f.npy: metadata pitch_m must be in \[1e-12, 0.01\] "
+                                         r"\[m\] \(.*\); got 3.45 \(3.45 looks like micrometres"):
         import_acquired(tmp_path / "f.npy")
 
 

@@ -98,7 +98,7 @@ def test_import_acquired_png(tmp_path, rng):
     assert h.shape == (20, 30) and h.wavelengths == (532e-9,) and h.pitch == 5e-6
     err = np.abs(h.intensity[0] - grey).max()
     assert err <= 0.5 / 255 + 1e-7, f"8-bit grey image read back off by {err:.2e}"
-    with pytest.raises(ValueError, match=r"pitch must be in \[1e-08, 0.01\] \[m\]; got 0"):
+    with pytest.raises(ValueError, match=r"pitch must be in \[1e-12, 0.01\] \[m\] \(.*\); got 0"):
         import_acquired(tmp_path / "scan.png", pitch=0, wavelength=532e-9)
 
 
@@ -151,7 +151,7 @@ def test_the_writer_refuses_what_the_reader_would(tmp_path, point_hologram):
     """Finding 2: the writer applies the reader's schema; a description bent after
     construction is refused with the file and the field named, and nothing is written."""
     for field, value, problem in [("band", 1.5, r"band_sin must be in \[0, 1\)"),
-                                  ("pitch", 1e-300, r"pitch_m must be in \[1e-12, 1000\]"),
+                                  ("pitch", 1e-300, r"pitch_m must be in \[1e-13, 1000\]"),
                                   ("reference_amplitudes", (0.0,), "amplitudes.*> 0")]:
         info = dataclasses.replace(point_hologram.info)
         object.__setattr__(info, field, value)
@@ -163,7 +163,7 @@ def test_the_writer_refuses_what_the_reader_would(tmp_path, point_hologram):
 
 
 @pytest.mark.parametrize("edit, problem", [
-    (lambda m: m.update(pitch_m=1e-300), r"pitch_m must be in \[1e-12, 1000\] \[m\]"),
+    (lambda m: m.update(pitch_m=1e-300), r"pitch_m must be in \[1e-13, 1000\] \[m\]"),
     (lambda m: m.update(wavelengths_m=[1e300]), "wavelengths_m must be in"),
     (lambda m: m["reference"].update(amplitudes=[0.0]), "reference.amplitudes must be 1 numb"),
 ])

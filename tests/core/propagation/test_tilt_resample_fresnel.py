@@ -109,14 +109,24 @@ def test_fraunhofer_equals_rayleigh_sommerfeld_in_the_far_field():
     pitch, n, z = 2e-6, 256, 0.5
     x, y = mesh((n, n), pitch)
     aperture = ((np.abs(x) <= 10e-6) & (np.abs(y) <= 10e-6)).astype(np.complex64)
-    far, (py, px) = fraunhofer(aperture, wavelength=LAM, pitch=pitch, distance=z)
+    far, (px, py) = fraunhofer(aperture, wavelength=LAM, pitch=pitch, distance=z)
     assert py == px == pytest.approx(LAM * z / (n * pitch))
+
     # paraxial centre (ρ <= 3.5 mm: the dropped k·ρ⁴/(8z³) term stays below 2e-3 rad)
     m = 8
     ref = rayleigh_sommerfeld(aperture, wavelength=LAM, pitch=pitch, distance=z,
                               out_shape=(m, m), out_pitch=px)
     got = far[n // 2 - m // 2:n // 2 + m // 2, n // 2 - m // 2:n // 2 + m // 2]
     assert rel_err(got, ref) <= 2e-3, rel_err(got, ref)
+
+
+def test_the_far_field_pitch_is_x_then_y():
+    """A 64-row, 96-column field: the far field's x pitch (along its 96 columns) is
+    λz/(96·pitch), its y pitch λz/(64·pitch), as every pitch pair is (x, y)."""
+    pitch, z = 2e-6, 0.5
+    _, (px, py) = fraunhofer(np.ones((64, 96), np.complex64), wavelength=LAM, pitch=pitch,
+                             distance=z)
+    assert (px, py) == pytest.approx((LAM * z / (96 * pitch), LAM * z / (64 * pitch)))
 
 
 def test_rayleigh_sommerfeld_kernel_equals_float64_numpy(rng):
