@@ -1,13 +1,15 @@
 """Seeded fuzzing of the readers, the hologram writer and the API.
 
-Readers: valid files made here, mutated, each read once. ``write``: holograms of hostile field
-values, each refused or written and read back unchanged (the writer holds the reader's schema).
+Readers: valid files made here, mutated, each read once (``lab``: the laboratory arrays,
+``.npy``, HDF5 and MATLAB v7.3, that :func:`~holo_core.io.acquired.write_acquired` writes).
+``write``: holograms of hostile field values, each refused or written and read back unchanged
+(the writer holds the reader's schema).
 ``api``: public calls with one or two hostile arguments. Every case must end in a result
 (checked for sanity: finite, and a hologram that reconstructs and renders finite) or the
 project's InputError, whose message names the file for a reader, within ``CASE_SECONDS`` and
 under an address-space limit; anything else is a finding. Run as ``python tools/fuzz.py TARGET
-CASES SEED`` (TARGET: hologram, ply, obj, scan, write, api, store, layout); it prints one JSON
-line: the outcome counts and up to 10 examples of each failure kind. ``store``: a valid tiled
+CASES SEED`` (TARGET: hologram, ply, obj, scan, lab, write, api, store, layout); it prints one
+JSON line: the outcome counts and up to 10 examples of each failure kind. ``store``: a valid tiled
 plate's files damaged one or two at a time (bytes, JSON, links to /dev/zero or outside, FIFOs,
 folders, missing files, another chunk's bytes), read back exactly as recorded or refused;
 ``layout``: a display's layout and tiles damaged (a tile listed up to 300 times too).
@@ -103,6 +105,17 @@ def scan_file(rng) -> tuple[bytes, str]:
     out = io.BytesIO()
     im.save(out, fmt)
     return out.getvalue(), ".tif" if fmt == "TIFF" else ".png"
+
+
+def lab_file(rng) -> tuple[bytes, str]:
+    """A laboratory array as write_acquired writes it: .npy, HDF5 or MATLAB v7.3."""
+    from holo_core.io.acquired import write_acquired
+    from holo_core.scene.hologram import Hologram
+    suffix = str(rng.choice([".npy", ".h5", ".mat"]))
+    h = Hologram(intensity=rng.random((1, 9, 11)).astype(np.float32), wavelengths=(532e-9,),
+                 pitch=5e-6)
+    with tempfile.TemporaryDirectory() as d:
+        return write_acquired(Path(d) / f"a{suffix}", h).read_bytes(), suffix
 
 
 # --- mutations --------------------------------------------------------------------------------
@@ -256,6 +269,7 @@ MUTATIONS = {
     "ply": [bit_flips, truncate, splice, token_edit, token_edit, line_edit, ply_face_property],
     "obj": [bit_flips, truncate, splice, token_edit, line_edit, bom_or_encoding],
     "scan": [bit_flips, truncate, splice, huge_dimensions],
+    "lab": [bit_flips, truncate, splice, splice],
 }
 
 
@@ -615,8 +629,8 @@ def sane(result) -> None:
 # --- running --------------------------------------------------------------------------------
 
 def make(reader, rng):
-    if reader == "scan":
-        return scan_file(rng)
+    if reader in ("scan", "lab"):
+        return (scan_file if reader == "scan" else lab_file)(rng)
     return {"hologram": hologram_file, "ply": ply_file, "obj": obj_file}[reader](rng), \
         {"hologram": ".exr", "ply": ".ply", "obj": ".obj"}[reader]
 

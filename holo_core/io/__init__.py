@@ -1,7 +1,10 @@
 """Every file format, and nothing else: no physics is imported here.
 
 - ``image.py``: atomic writes, PNG and OpenEXR images
-- ``hologram.py``: hologram files (EXR with their metadata) and acquired scans
+- ``hologram.py``: hologram files (EXR with their metadata)
+- ``acquired.py``: acquired scans and laboratory arrays in and out (PNG, TIFF, EXR, .npy, HDF5,
+  MATLAB v7.3), nothing read from outside the file named
+- ``jsonfile.py``: JSON metadata bounded (size, nesting depth) before it is parsed
 - ``mesh.py``: OBJ and PLY meshes
 - ``view.py``: a rendered view as a multilayer EXR and a PNG preview
 """
