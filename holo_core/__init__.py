@@ -11,10 +11,12 @@ _API = {"Camera": ".scene", "look_at": ".scene", "Plate": ".scene", "ViewingZone
         "Hologram": ".scene",
         "Mesh": ".scene", "Pupil": ".optics", "record_hologram": ".plate",
         "record_points": ".plate", "reconstruct": ".plate", "render_view": ".plate",
-        "sideband": ".plate", "find_carrier": ".plate",
+        "sideband": ".acquired", "find_carrier": ".acquired",
         "render_camera": ".camera", "RenderResult": ".view", "write_view": ".io.view",
         "read_hologram": ".io.hologram", "write_hologram": ".io.hologram",
-        "import_acquired": ".io.acquired", "write_acquired": ".io.acquired",
+        "import_acquired": ".acquired", "read_acquired": ".io.acquired",
+        "write_acquired": ".io.acquired", "object_hologram": ".acquired",
+        "autofocus": ".acquired", "unwrap": ".acquired",
         "read_mesh": ".io.mesh", "InputError": ".validate",
         "angular_spectrum": ".propagation", "fresnel": ".propagation",
         "fraunhofer": ".propagation", "rayleigh_sommerfeld": ".propagation",
@@ -24,16 +26,17 @@ _API = {"Camera": ".scene", "look_at": ".scene", "Plate": ".scene", "ViewingZone
         "adjoint": ".propagation.adjoint", "gerchberg_saxton": ".phase",
         "optimise_phase": ".phase", "double_phase": ".phase"}
 # the packages, imported on first use too (plot needs matplotlib: pip install 'holo[plot]')
-_PACKAGES = ("camera", "io", "opencl", "optics", "phase", "plate", "plot", "propagation",
-             "scene", "validate")
+_PACKAGES = ("acquired", "camera", "io", "opencl", "optics", "phase", "plate", "plot",
+             "propagation", "scene", "units", "validate")
 # the names `from holo_core import *` gives (every _API name; test_notebook holds them equal)
 __all__ = ["Camera", "Field", "Hologram", "InputError", "Mesh", "Plate", "Pupil", "RenderResult",
-           "ViewingZone", "adjoint", "angular_spectrum", "double_phase", "find_carrier",
-           "fraunhofer", "fresnel", "gerchberg_saxton", "import_acquired", "look_at",
-           "optimise_phase", "propagate_to_plane", "psnr", "rayleigh_sommerfeld", "read_hologram",
-           "read_mesh", "reconstruct", "record_hologram", "record_points", "render_camera",
-           "render_view", "resample", "sideband", "ssim", "thin_lens", "tilt", "to_device",
-           "write_acquired", "write_hologram", "write_view"]
+           "ViewingZone", "adjoint", "angular_spectrum", "autofocus", "double_phase",
+           "find_carrier", "fraunhofer", "fresnel", "gerchberg_saxton", "import_acquired",
+           "look_at", "object_hologram", "optimise_phase", "propagate_to_plane", "psnr",
+           "rayleigh_sommerfeld", "read_acquired", "read_hologram", "read_mesh", "reconstruct",
+           "record_hologram", "record_points", "render_camera", "render_view", "resample",
+           "sideband", "ssim", "thin_lens", "tilt", "to_device", "unwrap", "write_acquired",
+           "write_hologram", "write_view"]
 
 
 def __getattr__(name):  # the top-level API, imported on first use (keeps `import` light)

@@ -1,4 +1,5 @@
-"""Command line: ``python -m holo_core devices | demo | plan | record | info | render``."""
+"""Command line: ``python -m holo_core devices | demo | plan | record | info | render |
+import``."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import sys
 import warnings
 from pathlib import Path
 
+from . import units
 from .validate import MAX_LENGTH, MIN_LENGTH
 
 
@@ -188,13 +190,30 @@ def info(args) -> int:
 
 
 def render(args) -> int:
-    import numpy as np
-
     from .io.view import write_view
     from .plate.view import render_view
-    from .scene.camera import Camera, look_at
     out = _output(args.output, args.hologram, "_view", preview=True)
-    h = _read(args.hologram)
+    h = _scan_or_hologram(args)
+    view = render_view(h, _camera(args, h), supersample=args.supersample or "auto",
+                       composition=args.composition, source=args.source,
+                       progress=_progress_bar())
+    print()
+    for path in write_view(view, out):
+        print(path)
+    return 0
+
+
+def _camera(args, h):
+    """The camera the options describe; without ``--camera``, for a hologram of objects on one
+    stated plane (an acquired one), the camera that frames it, focused there."""
+    import numpy as np
+
+    from .acquired import default_camera
+    from .plate.view import stated_plane
+    from .scene.camera import Camera, look_at
+    resolution = tuple(args.resolution) if args.resolution else None
+    if not args.camera and stated_plane(h) is not None:
+        return default_camera(h, resolution=resolution)
     plate = np.asarray(h.plate)
     centre = (plate @ np.append(np.asarray(h.bounds).mean(0), 1.0))[:3]
     eye = args.camera if args.camera else plate[:3, 3] + plate[:3, 2] * 3 * max(h.size)
@@ -202,21 +221,87 @@ def render(args) -> int:
     focus = args.focus_distance
     if args.fstop and focus is None:
         focus = float(np.linalg.norm(np.asarray(eye) - centre))
-    cam = Camera(matrix_world=look_at(eye, target, up=plate[:3, 1]), lens=args.lens,
-                 sensor_width=args.sensor_width, resolution=tuple(args.resolution),
-                 fstop=args.fstop, focus_distance=focus if args.fstop else None)
-    view = render_view(h, cam, supersample=args.supersample or "auto", composition=args.composition,
-                       source=args.source, progress=_progress_bar())
-    print()
-    for path in write_view(view, out):
-        print(path)
+    return Camera(matrix_world=look_at(eye, target, up=plate[:3, 1]), lens=args.lens,
+                  sensor_width=args.sensor_width, resolution=resolution or (256, 256),
+                  fstop=args.fstop, focus_distance=focus if args.fstop else None)
+
+
+def _scan_or_hologram(args):
+    """A Holo hologram file (or store) as it is; a scan (PNG, TIFF, EXR, .npy, HDF5, .mat)
+    imported with ``--pitch``, ``--wavelength`` and ``--distance``: its object wave at that
+    distance (:func:`import_scan`)."""
+    from .io.hologram import HologramFileError
+    path = Path(args.hologram)
+    given = [n for n in ("pitch", "wavelength", "distance") if getattr(args, n, None)]
+    if _is_store(args.hologram) or (path.suffix.lower() == ".exr" and not given):
+        try:
+            return _read(args.hologram)
+        except HologramFileError as e:
+            if "without hologram metadata" not in str(e):
+                raise
+    if len(given) < 3:
+        missing = ", ".join(f"--{n}" for n in ("pitch", "wavelength", "distance")
+                            if n not in given)
+        raise ValueError(f"{path} is a scan, not a Holo hologram: give {missing} (the pitch [m], "
+                         f"the wavelength [nm, or with a unit], how far behind it the objects "
+                         f"lie [m]), or import it: python -m holo_core import {path} --pitch "
+                         f"... --wavelength ... --distance ...")
+    return import_scan(args)[0]
+
+
+def import_scan(args):
+    """(the object hologram, the carrier line) of a scan: read, its carrier found (or the
+    reference's angle and azimuth given), the sideband filtered, placed at its distance."""
+    from .acquired import Aperture, object_hologram
+    from .acquired import import_acquired as import_with_carrier
+    from .io.acquired import read_acquired
+    h = import_with_carrier(args.hologram, pitch=args.pitch, wavelength=args.wavelength,
+                            reference_angle=args.reference_angle,
+                            reference_azimuth=args.reference_azimuth, page=args.page,
+                            dataset=args.dataset, distance=args.distance,
+                            sideband=args.sideband)
+    reference = None if args.reference_hologram is None else \
+        read_acquired(args.reference_hologram, pitch=h.pitch, wavelength=h.wavelengths[0],
+                      page=args.page, dataset=args.dataset)
+    aperture = Aperture(radius=args.radius, unit=args.radius_unit, edge=args.edge,
+                        width=args.edge_width, window=args.window)
+    obj = object_hologram(h, aperture=aperture, reference_hologram=reference)
+    line = (f"reference {h.reference_angle:.6g} rad ({math.degrees(h.reference_angle):.4g}°) "
+            f"at azimuth {h.reference_azimuth:.6g} rad "
+            f"({math.degrees(h.reference_azimuth):.4g}°)")
+    print(f"{args.hologram}: {line}; objects {args.distance:g} m behind, band sin θ "
+          f"{obj.band:.4g}")
+    return obj, line
+
+
+def import_(args) -> int:
+    """A scan to a Holo hologram (its object wave at the distance) and, unless --no-view, the
+    view of the camera that frames it."""
+    from .io.hologram import write_hologram
+    from .io.view import write_view
+    from .plate.view import render_view
+    out = _output(args.output, args.hologram, "_holo")
+    view_out = None if args.no_view else \
+        _output(args.output if _is_folder(args.output) else out.with_name(
+            f"{out.stem}_view.exr"), args.hologram, "_view", preview=True)
+    h, _ = import_scan(args)
+    print(write_hologram(out, h))
+    if view_out is not None:
+        view = render_view(h, _camera(args, h), supersample="auto", progress=_progress_bar())
+        print()
+        for path in write_view(view, view_out):
+            print(path)
     return 0
+
+
+def _is_folder(output) -> bool:
+    return Path(output).is_dir() or str(output).endswith(("/", "\\"))
 
 
 def _file_in(output, source, tag) -> Path:
     """``output``, or where it names a folder, ``<folder>/<source's stem><tag>.exr``."""
     out = Path(output)
-    if out.is_dir() or str(output).endswith(("/", "\\")):
+    if _is_folder(output):
         return out / f"{Path(source).stem}{tag}.exr"
     return out
 
@@ -257,6 +342,36 @@ SUPERSAMPLE = _number(int, lambda v: 1 <= v <= 16, "an integer from 1 to 16")
 FINITE = _number(float, lambda v: True, "a finite number")
 COUNT = _number(int, lambda v: v >= 1, "an integer >= 1")
 PIXELS = _number(int, lambda v: 1 <= v <= 65536, "an integer from 1 to 65536")
+INDEX = _number(int, lambda v: v >= 0, "an integer >= 0")
+
+
+def _with_unit(reader, allowed):
+    """An argparse type: a number with an optional unit, read by ``reader`` (text → metres),
+    finite and > 0, else an error naming ``allowed``."""
+    def parse(text):
+        try:
+            value = reader(text)
+        except ValueError as e:  # InputError: the unit or the number
+            raise argparse.ArgumentTypeError(f"{e} ({allowed})") from None
+        if not value > 0:
+            raise argparse.ArgumentTypeError(f"{text!r} is out of range ({allowed})")
+        return value
+    return parse
+
+
+def _scan_wavelength(text: str) -> float:
+    """A wavelength [m]: a plain number in nm (below 1 refused: 633e-9 would be metres; an
+    X-ray's 0.154 nm is written with its unit), or a length or a voltage with its unit."""
+    value, unit = units.split(text, "--wavelength")
+    if unit is None and value < 1:
+        raise units.InputError(f"{text!r}: a plain number is in nm (633 is red light); write "
+                               f"a unit for others: 0.154nm, 1.97pm, 300kV")
+    return units.wavelength(text, "--wavelength")
+
+
+LENGTH = _with_unit(lambda text: units.length(text, "length"),
+                    "metres, or a number with its unit: 3.45um, 5cm")
+WAVE = _with_unit(_scan_wavelength, "nm, or a number with its unit: 633nm, 1.97pm, 300kV")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -275,6 +390,39 @@ class _Parser(argparse.ArgumentParser):
 
 
 NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
+
+
+def _scan_options(p, lead: str) -> None:
+    """The options of an acquired scan: its optics, its carrier and its sideband filter."""
+    p.add_argument("--pitch", type=LENGTH, help=lead + "its pixel pitch [m, or with a unit: "
+                   "3.45um] (default: the file's)")
+    p.add_argument("--wavelength", type=WAVE, help=lead + "its wavelength [nm, or with a unit: "
+                   "1.97pm, or an electron microscope's voltage: 300kV] (default: the file's)")
+    p.add_argument("--distance", type=LENGTH,
+                   help=lead + "how far behind it the objects lie [m, or with a unit: 5cm]")
+    p.add_argument("--sideband", choices=["auto", "lower", "upper"], default="auto",
+                   help="which order of the spectrum's pair is the carrier: auto (the one that "
+                        "focuses behind at --distance), lower or upper (holospy's sb)")
+    p.add_argument("--reference-angle", type=FINITE, default=None,
+                   help="the reference's angle [rad] (default: the file's, else found)")
+    p.add_argument("--reference-azimuth", type=FINITE, default=None,
+                   help="the reference's azimuth [rad] from +x towards +y")
+    p.add_argument("--radius", type=POSITIVE, default=None,
+                   help="the sideband aperture's radius in --radius-unit (default: |fc|/3)")
+    p.add_argument("--radius-unit", choices=["carrier", "1/m", "1/mm", "1/um", "1/nm", "mrad",
+                                             "rad"], default="carrier",
+                   help="carrier: a fraction of |fc| (holospy: 0.5 strong, 1/3 weak phase)")
+    p.add_argument("--edge", choices=["hard", "tanh", "cosine"], default="hard",
+                   help="the aperture's edge (tanh: holospy's)")
+    p.add_argument("--edge-width", type=POSITIVE, default=0.05,
+                   help="the edge's width, a fraction of the radius (0.05)")
+    p.add_argument("--window", choices=["none", "hann", "hamming", "blackman", "gaussian",
+                                        "butterworth"], default="none",
+                   help="an apodisation across the aperture")
+    p.add_argument("--reference-hologram", default=None,
+                   help="a reference (vacuum) hologram's file: the wave is divided by its own")
+    p.add_argument("--page", type=INDEX, default=None, help="the page of a multi-page scan")
+    p.add_argument("--dataset", default=None, help="the dataset of an HDF5 or .mat file")
 
 
 def _progress_bar(width=40):
@@ -367,7 +515,8 @@ def main(argv=None) -> int:
                    help="point the camera looks at [m] (default: the objects' centre)")
     p.add_argument("--lens", type=POSITIVE, default=50.0, help="focal length [mm] (50)")
     p.add_argument("--sensor-width", type=POSITIVE, default=36.0, help="[mm] (36)")
-    p.add_argument("--resolution", type=PIXELS, nargs=2, default=(256, 256), metavar=("W", "H"))
+    p.add_argument("--resolution", type=PIXELS, nargs=2, default=None, metavar=("W", "H"),
+                   help="(256 256; an acquired hologram's: its band's Nyquist sampling)")
     p.add_argument("--fstop", type=POSITIVE, default=None, help="f-number (default: pinhole)")
     p.add_argument("--focus-distance", type=POSITIVE, default=None,
                    help="[m] (default with --fstop: the objects' centre)")
@@ -375,13 +524,27 @@ def main(argv=None) -> int:
                    help="speckle low-pass factor (default: the intensity's Nyquist rate)")
     p.add_argument("--composition", choices=["mean", "max"], default="mean")
     p.add_argument("--source", choices=["hologram", "object_wave"], default="hologram")
+    _scan_options(p, "a scan given as HOLOGRAM (PNG, TIFF, EXR, .npy, HDF5, .mat): ")
+    p = sub.add_parser("import", help="import a scan (an acquired off-axis hologram): its "
+                                      "carrier found, its object wave at its distance written "
+                                      "as a Holo hologram, and the view that frames it")
+    p.add_argument("hologram", metavar="scan",
+                   help="PNG, TIFF, EXR, .npy, HDF5 or .mat (v7.3) file")
+    p.add_argument("-o", "--output", required=True,
+                   help="hologram file to write (.exr), or a folder for <scan>_holo.exr; the "
+                        "view goes beside it (<name>_view.exr and .png)")
+    p.add_argument("--no-view", action="store_true", help="write the hologram only")
+    p.add_argument("--resolution", type=PIXELS, nargs=2, default=None, metavar=("W", "H"),
+                   help="the view's size (default: its band's Nyquist sampling)")
+    p.set_defaults(camera=None)
+    _scan_options(p, "")
     args = parser.parse_args(argv)
     warnings.formatwarning = lambda message, category, *_: \
         f"warning: {message} ({category.__name__})\n"
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     command = {"devices": devices, "demo": demo, "plan": plan, "record": record, "info": info,
-               "render": render}[args.command]
+               "render": render, "import": import_}[args.command]
     try:
         return command(args)
     except ValueError as e:  # InputError and the like: the user can act on the message

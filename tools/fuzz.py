@@ -424,8 +424,8 @@ def read_case(reader, path):
         assert np.isfinite(m.vertices).all() and len(m.triangles)
         assert m.triangles.min() >= 0 and m.triangles.max() < len(m.vertices)
     else:
-        from holo_core.io.acquired import import_acquired
-        h = named(path, import_acquired, pitch=5e-6, wavelength=532e-9)
+        from holo_core.io.acquired import read_acquired
+        h = named(path, read_acquired, pitch=5e-6, wavelength=532e-9)
         assert h.intensity.ndim == 3 and len(h.intensity) == 1
         assert np.isfinite(h.intensity).all() and (h.intensity >= 0).all()
 

@@ -19,7 +19,7 @@ import numpy as np
 from bpy_extras.io_utils import ImportHelper
 from mathutils import Matrix
 
-from holo_core.io.acquired import import_acquired
+from holo_core.acquired import import_acquired
 from holo_core.io.hologram import HologramFileError, read_hologram, write_hologram
 from holo_core.io.image import read_exr
 from holo_core.scene.hologram import Hologram

@@ -1,11 +1,11 @@
 """Acquired holograms in and out: camera scans and laboratory arrays.
 
-In (:func:`import_acquired`): PNG (8- and 16-bit, grey or colour, animated PNG frames as pages),
+In (:func:`read_acquired`): PNG (8- and 16-bit, grey or colour, animated PNG frames as pages),
 TIFF (every page, or the one asked for), OpenEXR (a scan's Y or R/G/B channels, or a Holo
 hologram file's intensity), NumPy ``.npy``, HDF5 (``.h5``, ``.hdf5``; HyperSpy's files with
 their calibration) and MATLAB ``.mat`` v7.3 (HDF5 inside; read through h5py, the optional extra
 ``lab``), or an array in memory. Out (:func:`write_acquired`): the format the file name's suffix
-asks for, or an error; whatever it writes, :func:`import_acquired` reads back.
+asks for, or an error; whatever it writes, :func:`read_acquired` reads back.
 
 Pitch, wavelength and the reference's angles are given, or read from the file's metadata under
 these keys (SI units, as the hologram file's metadata names them):
@@ -87,7 +87,7 @@ class _Scan:
 
 
 @validate.public
-def import_acquired(source, *, pitch=None, wavelength=None, reference_angle=None,
+def read_acquired(source, *, pitch=None, wavelength=None, reference_angle=None,
                     reference_azimuth=None, page=None, dataset=None):
     """An acquired (real) intensity hologram from a file or an array.
 
@@ -96,7 +96,7 @@ def import_acquired(source, *, pitch=None, wavelength=None, reference_angle=None
     source : path or array
         A PNG, TIFF, EXR, ``.npy``, HDF5 or ``.mat`` v7.3 file, or an (H, W) or (P, H, W)
         array of intensities (real; integers scaled by their bit depth). A hologram from
-        memory: ``import_acquired(frame, pitch=3.45e-6, wavelength=633e-9)``.
+        memory: ``read_acquired(frame, pitch=3.45e-6, wavelength=633e-9)``.
     pitch : float, optional
         Sample spacing [m]; default the file's ``pitch_m``. One of 1 mm or more is warned
         (:class:`~holo_core.validate.UnitWarning`: it looks like millimetres).
@@ -149,7 +149,7 @@ def import_acquired(source, *, pitch=None, wavelength=None, reference_angle=None
 
 def write_acquired(path, hologram: Hologram, *, colour: int = 0) -> Path:
     """Write one colour of ``hologram``'s intensity in the format ``path``'s suffix asks for,
-    with its pitch, wavelength and reference angles as the metadata :func:`import_acquired`
+    with its pitch, wavelength and reference angles as the metadata :func:`read_acquired`
     reads: ``.npy`` (and ``<name>.json``), ``.h5``/``.hdf5`` (dataset ``intensity``, attributes),
     ``.mat`` v7.3 (variable ``intensity`` and scalar ones), ``.tif``/``.tiff`` (float32),
     ``.png`` (16-bit of intensity/max, the max as ``intensity_scale``: 1/65535 of the peak),

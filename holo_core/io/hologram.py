@@ -148,8 +148,8 @@ def _described(path: Path, header) -> HologramInfo:
     format and version this reads, each field of its type), every value by the description
     itself, its complaint naming the file and the field as the file names it."""
     if "holo" not in header:
-        raise HologramFileError(f"{path}: an EXR image without hologram metadata; "
-                                f"import it with import_acquired(pitch=, wavelength=, ...)")
+        raise HologramFileError(f"{path}: an EXR image without hologram metadata; import it "
+                                f"with holo_core.import_acquired(pitch=, wavelength=, ...)")
     try:
         meta = json.loads(header["holo"])
     except (TypeError, ValueError, RecursionError) as e:

@@ -163,7 +163,7 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     _check_settings(holos, camera, supersample, exposure, opacity_threshold)
     fine = _supersampled(camera, supersample)
     colours, z_ch = first.colour_channels(), first.depth_channel()
-    if z_ch is None:
+    if z_ch is None and stated_plane(first) is None:
         warnings.warn("the hologram has no depth channel (record it with depth=True): the "
                       f"view's depth is the background ({BACKGROUND_DEPTH:g} m) everywhere, so a "
                       "Z-combine puts it behind every surface", NoDepthWarning, stacklevel=2)
@@ -534,6 +534,27 @@ def _depth(crosses, brightness, *, estimate, wavelengths, centre, focus, camera:
                                   supersample)
 
 
+def stated_plane(h: Hologram) -> float | None:
+    """z [m] of the one plane behind the hologram its objects lie on, where its bounds are a
+    flat box there, wide in x and y (an acquired hologram's stated distance), else None."""
+    bounds = np.asarray(h.bounds)
+    z = float(bounds[0, 2])
+    wide = bool((bounds[1, :2] > bounds[0, :2]).all())
+    return z if wide and z == bounds[1, 2] and z < 0 else None
+
+
+def plane_depth(h: Hologram, camera: Camera, z: float) -> np.ndarray:
+    """The planar depth [m] (along the view axis, as Blender's Depth pass) at which each
+    pixel's ray meets the plane ``z`` [m] of the hologram's frame; the background's where it
+    never does."""
+    rotation, position = camera_in_plate(h, camera)
+    tx, ty = camera.pixel_tangents()
+    direction = np.stack([tx, ty, -np.ones_like(tx)], -1) @ np.asarray(rotation).T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (z - position[2]) / direction[..., 2]
+    return np.where(np.isfinite(t) & (t > 0), t, BACKGROUND_DEPTH)
+
+
 def _supersampled(camera: Camera, s: int) -> Camera:
     if s == 1:
         return camera
@@ -582,6 +603,9 @@ def _finish(radiance, ray, coverage, h: Hologram, camera, pupil, exposure, thres
     else:  # unknown emitter density: relative to the brightest pixels
         alpha = (lum > threshold * ref).astype(np.float32) if ref > 0 else np.zeros_like(lum)
     depth = np.full(lum.shape, BACKGROUND_DEPTH, np.float32)
+    plane = stated_plane(h)
+    if ray is None and plane is not None:  # an acquired hologram's objects: one plane
+        ray = plane_depth(h, camera, plane)
     if ray is not None:
         depth = np.where(alpha > 0, ray, BACKGROUND_DEPTH).astype(np.float32)
     limit = lam0 / pupil.diameter

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from holo_core import validate
-from holo_core.io.acquired import import_acquired
+from holo_core.io.acquired import read_acquired
 from holo_core.plate import Reference, record_points
 from holo_core.plate.point_sources import point_wave
 from holo_core.plate.record import reference_wave
@@ -47,7 +47,7 @@ CALLS = {
                                              pitch=w["pitch"], wavelengths=(w["wavelength"],)),
     "Hologram": lambda w: Hologram(intensity=np.ones((1, 4, 4), np.float32),
                                    wavelengths=(w["wavelength"],), pitch=w["pitch"]),
-    "import_acquired": lambda w: import_acquired("missing.png", **w),
+    "read_acquired": lambda w: read_acquired("missing.png", **w),
 }
 
 

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from holo_core.camera import render_camera
-from holo_core.io.acquired import import_acquired
+from holo_core.io.acquired import read_acquired
 from holo_core.optics.pupil import Pupil
 from holo_core.plate import Reference, reconstruct, record_hologram, record_points, render_view
 from holo_core.plate.sampling import choose
@@ -166,8 +166,8 @@ BAD_CALLS = {
     "render_camera points 'x'": (lambda h: render_camera(points="x", camera=FAR), "points"),
     "render_camera exposure -1": (lambda h: render_camera(TRIANGLE, FAR, exposure=-1.0),
                                   "exposure"),
-    "import_acquired wavelength 1e-300": (
-        lambda h: import_acquired("missing.png", pitch=5e-6, wavelength=1e-300), "wavelength"),
+    "read_acquired wavelength 1e-300": (
+        lambda h: read_acquired("missing.png", pitch=5e-6, wavelength=1e-300), "wavelength"),
     # scene nouns
     "Hologram pitch 1e-300 (rendered all-NaN)": (lambda h: hologram(pitch=1e-300), "pitch"),
     "Hologram wavelengths scalar (was TypeError)": (lambda h: hologram(wavelengths=633e-9),

@@ -8,7 +8,7 @@ import pinhole
 import pytest
 from cli import run_cli
 
-from holo_core.io.acquired import import_acquired
+from holo_core.io.acquired import read_acquired
 from holo_core.io.hologram import (
     FORMAT_VERSION,
     HologramFileError,
@@ -94,12 +94,12 @@ def test_unknown_version_and_missing_channel(tmp_path, hologram):
 def test_import_acquired_png(tmp_path, rng):
     grey = rng.random((20, 30))
     write_png(tmp_path / "scan.png", grey)
-    h = import_acquired(tmp_path / "scan.png", pitch=5e-6, wavelength=532e-9, reference_angle=0.01)
+    h = read_acquired(tmp_path / "scan.png", pitch=5e-6, wavelength=532e-9, reference_angle=0.01)
     assert h.shape == (20, 30) and h.wavelengths == (532e-9,) and h.pitch == 5e-6
     err = np.abs(h.intensity[0] - grey).max()
     assert err <= 0.5 / 255 + 1e-7, f"8-bit grey image read back off by {err:.2e}"
     with pytest.raises(ValueError, match=r"pitch must be in \[1e-12, 0.01\] \[m\] \(.*\); got 0"):
-        import_acquired(tmp_path / "scan.png", pitch=0, wavelength=532e-9)
+        read_acquired(tmp_path / "scan.png", pitch=0, wavelength=532e-9)
 
 
 def test_a_non_finite_or_empty_hologram_is_never_written(tmp_path, point_hologram):

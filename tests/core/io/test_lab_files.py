@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from holo_core.io import jsonfile
-from holo_core.io.acquired import MAX_PAGES, import_acquired, write_acquired
+from holo_core.io.acquired import MAX_PAGES, read_acquired, write_acquired
 from holo_core.scene import Hologram
 from holo_core.units import electron_wavelength
 from holo_core.validate import InputError
@@ -45,7 +45,7 @@ def test_external_storage_is_refused_naming_the_file(tmp_path, h5py, outside):
         f.create_dataset("x", shape=(8, 8), dtype="u1", external=[(str(raw), 0, 64)])
     with pytest.raises(InputError, match=rf"lab.h5:x stores its samples in another file "
                                          rf"\({raw}\); refused"):
-        import_acquired(path, **OPTICS)
+        read_acquired(path, **OPTICS)
 
 
 def test_external_links_are_refused_on_the_way_to_the_dataset(tmp_path, h5py, outside):
@@ -58,9 +58,9 @@ def test_external_links_are_refused_on_the_way_to_the_dataset(tmp_path, h5py, ou
     for name in ("frames", "group/secret"):
         with pytest.raises(InputError, match=rf"lab.h5:{name.split('/')[0]} is an external "
                                              rf"link to .*outside.h5"):
-            import_acquired(path, dataset=name, **OPTICS)
+            read_acquired(path, dataset=name, **OPTICS)
     # the search for the only dataset does not follow links either: the own one is found
-    assert import_acquired(path, **OPTICS).shape == (4, 4)
+    assert read_acquired(path, **OPTICS).shape == (4, 4)
 
 
 def test_metadata_is_not_read_through_an_external_link(tmp_path, h5py, outside):
@@ -73,7 +73,7 @@ def test_metadata_is_not_read_through_an_external_link(tmp_path, h5py, outside):
         f["pitch_m"] = h5py.ExternalLink(str(other), "/pitch_m")
     with pytest.raises(InputError, match=r"pitch must be given \[m\]: .*lab.mat holds no "
                                          r"pitch_m"):
-        import_acquired(path, wavelength=633e-9)
+        read_acquired(path, wavelength=633e-9)
 
 
 def test_virtual_datasets_are_refused_naming_their_sources(tmp_path, h5py, outside):
@@ -84,7 +84,7 @@ def test_virtual_datasets_are_refused_naming_their_sources(tmp_path, h5py, outsi
         layout[:] = h5py.VirtualSource(str(other), "secret", shape=(8, 8))
         f.create_virtual_dataset("v", layout)
     with pytest.raises(InputError, match=rf"lab.h5:v is a virtual dataset mapping {other}"):
-        import_acquired(path, **OPTICS)
+        read_acquired(path, **OPTICS)
 
 
 def test_a_damaged_hdf5_file_is_named(tmp_path, h5py, rng):
@@ -105,7 +105,7 @@ def test_a_damaged_hdf5_file_is_named(tmp_path, h5py, rng):
         path = tmp_path / f"case{case}.mat"
         path.write_bytes(bytes(damaged))
         try:
-            import_acquired(path)
+            read_acquired(path)
             outcomes.add("read")
         except InputError as e:
             assert str(path) in str(e), str(e)
@@ -121,7 +121,7 @@ def test_a_chunk_larger_than_the_memory_is_refused_before_reading(tmp_path, h5py
                          dtype="f8")
     monkeypatch.setenv("HOLO_MEMORY_LIMIT", "64M")
     with pytest.raises(InputError, match=r"lab.h5:x \(chunks of 4096x4096\) needs"):
-        import_acquired(path, **OPTICS)
+        read_acquired(path, **OPTICS)
 
 
 @pytest.mark.parametrize("where", ["sidecar", "tiff"])
@@ -139,7 +139,7 @@ def test_deeply_nested_json_is_refused_naming_the_file(tmp_path, where):
         Image.fromarray(np.ones((4, 4), np.float32)).save(path, description=nested)
     with pytest.raises(InputError, match=r"f\.(json|tif).*JSON nested 100001 levels deep; "
                                          r"metadata may nest at most 64"):
-        import_acquired(path, **OPTICS)
+        read_acquired(path, **OPTICS)
 
 
 def test_the_json_depth_ignores_brackets_in_strings():
@@ -152,7 +152,7 @@ def test_an_npz_named_npy_is_named(tmp_path):
     (tmp_path / "f.npz").rename(tmp_path / "f.npy")
     with pytest.raises(InputError, match=r"f.npy: a zip archive \(.npz, several arrays\) "
                                          r"named .npy"):
-        import_acquired(tmp_path / "f.npy", **OPTICS)
+        read_acquired(tmp_path / "f.npy", **OPTICS)
 
 
 def test_a_million_pages_are_refused_up_front_and_one_is_read(tmp_path):
@@ -164,10 +164,10 @@ def test_a_million_pages_are_refused_up_front_and_one_is_read(tmp_path):
     pages[123_456] = 0.5
     del pages
     with pytest.raises(InputError, match=r"holds 1000000 pages; pass page=i"):
-        import_acquired(path, **OPTICS)
+        read_acquired(path, **OPTICS)
     with pytest.raises(InputError, match=rf"page='all' returns at most {MAX_PAGES} holograms"):
-        import_acquired(path, **OPTICS, page="all")
-    assert float(import_acquired(path, **OPTICS, page=123_456).intensity.max()) == 0.5
+        read_acquired(path, **OPTICS, page="all")
+    assert float(read_acquired(path, **OPTICS, page=123_456).intensity.max()) == 0.5
 
 
 # --- scans read by their layout ---------------------------------------------------------------
@@ -211,7 +211,7 @@ def test_16_bit_colour_pngs_keep_their_16_bits(tmp_path, rng, colour_type, chann
     path = tmp_path / "colour16.png"
     _png(path, samples, colour_type)
     want = samples[..., :3].astype(np.float64).mean(-1) / 65535
-    got = import_acquired(path, **OPTICS).intensity[0]
+    got = read_acquired(path, **OPTICS).intensity[0]
     assert np.abs(got - want).max() <= 1e-7, np.abs(got - want).max()
 
 
@@ -221,7 +221,7 @@ def test_16_bit_grey_with_alpha_is_refused_naming_its_layout(tmp_path, rng):
     _png(path, rng.integers(0, 65536, (7, 9, 2)).astype(np.uint16), 4)
     with pytest.raises(InputError, match=r"la16.png: 16-bit samples laid out as LA;16B, of "
                                          r"which Pillow reads only 8 bits a sample"):
-        import_acquired(path, **OPTICS)
+        read_acquired(path, **OPTICS)
 
 
 def _tiff(path, planes: np.ndarray, planar: bool, compress=False) -> None:
@@ -267,8 +267,8 @@ def test_a_planar_16_bit_tiff_stack_is_read_as_pages(tmp_path, rng):
     path = tmp_path / "stack.tif"
     _tiff(path, planes, planar=True)
     with pytest.raises(InputError, match=r"stack.tif: holds 3 pages"):
-        import_acquired(path, **OPTICS)
-    every = import_acquired(path, **OPTICS, page="all")
+        read_acquired(path, **OPTICS)
+    every = read_acquired(path, **OPTICS, page="all")
     for h, plane in zip(every, planes):
         assert np.array_equal(h.intensity[0], (plane / 65535).astype(np.float32))
 
@@ -277,7 +277,7 @@ def test_interleaved_16_bit_rgb_tiff_is_colour_at_16_bits(tmp_path, rng):
     planes = rng.integers(0, 65536, (3, 5, 7)).astype(np.uint16)
     path = tmp_path / "rgb.tif"
     _tiff(path, planes, planar=False)
-    got = import_acquired(path, **OPTICS).intensity[0]
+    got = read_acquired(path, **OPTICS).intensity[0]
     assert np.abs(got - planes.mean(0) / 65535).max() <= 1e-7
 
 
@@ -287,7 +287,7 @@ def test_a_compressed_planar_16_bit_tiff_is_refused_naming_its_layout(tmp_path, 
           compress=True)
     with pytest.raises(InputError, match=r"packed.tif: a TIFF of 3 16-bit samples per pixel "
                                          r"stored as separate planes, deflate: not read"):
-        import_acquired(path, **OPTICS, page=0)
+        read_acquired(path, **OPTICS, page=0)
 
 
 def test_a_hyperspy_file_gives_its_calibration(tmp_path, h5py, rng):
@@ -305,19 +305,19 @@ def test_a_hyperspy_file_gives_its_calibration(tmp_path, h5py, rng):
                                "size": 16})
         g.create_group("metadata/Acquisition_instrument/TEM").attrs["beam_energy"] = 300.0
         g.create_dataset("original_metadata/lut", data=np.ones((4, 4)))
-    h = import_acquired(path)
+    h = read_acquired(path)
     assert h.pitch == pytest.approx(0.9197e-9) and h.wavelengths[0] == electron_wavelength(3e5)
     assert electron_wavelength(3e5) == pytest.approx(1.9687e-12, rel=1e-4)
 
 
 @pytest.mark.parametrize("name", ["h.exr", "h.npy", "h.png"])
 def test_every_written_format_reads_back_with_its_optics(tmp_path, rng, name):
-    """Whatever write_acquired writes, import_acquired reads: its .exr (a Holo hologram file)
+    """Whatever write_acquired writes, read_acquired reads: its .exr (a Holo hologram file)
     was unreadable."""
     frame = rng.random((1, 5, 7)).astype(np.float32)
     h = Hologram(intensity=frame, wavelengths=(532e-9,), pitch=2e-6, reference_angle=0.02,
                  reference_azimuth=0.5, reference_amplitudes=(1.5,))
-    back = import_acquired(write_acquired(tmp_path / name, h))
+    back = read_acquired(write_acquired(tmp_path / name, h))
     assert (back.pitch, back.wavelengths, back.reference_angle, back.reference_azimuth) == \
         (2e-6, (532e-9,), 0.02, 0.5)
     assert np.abs(back.intensity - frame).max() <= 1.5 / 65535 * frame.max()

@@ -1,0 +1,169 @@
+"""Numerical refocus of an acquired wave and autofocus over a range of distances.
+
+:func:`refocus` carries the object wave by the angular spectrum (the project's, band-limited
+and exact for any angle) to any distance; :func:`autofocus` scores the amplitude of the wave at
+each distance with a focus metric and returns the best. The metrics are the ones DHM tools
+offer (PyHoloscope, pyDHM; Langehanenberg et al. 2008), each on the amplitude A = |u|:
+
+- ``brenner``: Σ (A(x+2) − A(x))² along rows and columns (Brenner et al. 1976);
+- ``sobel_variance``: the variance of the Sobel gradient's magnitude (Tenengrad variance);
+- ``gradient``: Σ |∇A|² (Tenengrad);
+- ``variance``: var(A)/mean(A), the normalised variance;
+- ``tamura``: √(std(A)/mean(A)), Tamura's coefficient;
+- ``peak``: the peak intensity max |u|².
+
+:func:`decimate` puts a band-limited wave on the coarsest grid that holds it first, which
+makes a search over many distances cheap. An object that shows in amplitude is sharpest where
+they are largest (``extremum='max'``); a pure phase object is flattest in focus
+(``extremum='min'``). Distances are propagation distances [m]: an object behind the hologram
+(z < 0) is brought into focus by a negative one.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import validate
+from ..propagation import angular_spectrum
+from ..validate import InputError
+
+
+def _brenner(a):
+    return float(np.sum((a[:, 2:] - a[:, :-2]) ** 2) + np.sum((a[2:] - a[:-2]) ** 2))
+
+
+def _sobel(a):
+    gx = (a[:-2, 2:] + 2 * a[1:-1, 2:] + a[2:, 2:]) - (a[:-2, :-2] + 2 * a[1:-1, :-2] + a[2:, :-2])
+    gy = (a[2:, :-2] + 2 * a[2:, 1:-1] + a[2:, 2:]) - (a[:-2, :-2] + 2 * a[:-2, 1:-1] + a[:-2, 2:])
+    return np.hypot(gx, gy)
+
+
+def _gradient(a):
+    return float(np.sum(np.diff(a, axis=1) ** 2) + np.sum(np.diff(a, axis=0) ** 2))
+
+
+def _ratio(top, bottom):
+    return float(top / bottom) if bottom > 0 else 0.0
+
+
+METRICS = {
+    "brenner": _brenner,
+    "sobel_variance": lambda a: float(np.var(_sobel(a))),
+    "gradient": _gradient,
+    "variance": lambda a: _ratio(np.var(a), np.mean(a)),
+    "tamura": lambda a: float(np.sqrt(_ratio(np.std(a), np.mean(a)))),
+    "peak": lambda a: float(np.max(a) ** 2),
+}
+
+
+@dataclass(frozen=True, slots=True)
+class Focus:
+    """The result of :func:`autofocus`: the best ``distance`` [m], every distance tried and
+    its ``score`` under ``metric``."""
+
+    distance: float
+    distances: np.ndarray
+    scores: np.ndarray
+    metric: str
+
+
+def focus_metric(wave, metric: str = "brenner") -> float:
+    """The focus metric ``metric`` (:data:`METRICS`) of a complex wave's amplitude."""
+    validate.choice("metric", metric, tuple(METRICS))
+    return METRICS[metric](np.abs(np.asarray(wave)).astype(np.float64))
+
+
+@validate.public
+def refocus(wave, *, wavelength, pitch, distance) -> np.ndarray:
+    """The wave ``distance`` [m] away (negative: back towards an object behind the hologram)
+    by the angular spectrum, complex64 (H, W); ``wavelength``, ``pitch`` [m]. A sequence of
+    distances gives a (D, H, W) focus stack."""
+    return angular_spectrum(np.asarray(wave, np.complex64), wavelength=wavelength, pitch=pitch,
+                            distance=distance)
+
+
+@validate.public
+def autofocus(wave, *, wavelength, pitch, distances, metric="brenner", extremum="max",
+              region=None) -> Focus:
+    """The distance [m] among ``distances`` at which ``wave`` is sharpest by ``metric``.
+
+    Parameters
+    ----------
+    wave : (H, W) complex array
+        An object wave (e.g. :func:`~holo_core.acquired.sideband`'s).
+    wavelength, pitch : float
+        [m].
+    distances : sequence of float
+        Propagation distances [m] to try, one plane at a time (memory: one plane).
+    metric : str
+        One of :data:`METRICS`.
+    extremum : 'max' or 'min'
+        Sharpest at the largest score (objects that show in amplitude) or the smallest
+        (pure phase objects).
+    region : (row0, row1, col0, col1), optional
+        The window the metric reads (default: the whole plane).
+    """
+    u = validate.host_field("wave", wave).astype(np.complex64)
+    distances = np.asarray(distances, np.float64).reshape(-1)
+    if not distances.size or not np.isfinite(distances).all():
+        raise InputError(f"distances must be a non-empty sequence of finite numbers [m]; got "
+                         f"{distances!r}"[:300])
+    validate.choice("metric", metric, tuple(METRICS))
+    validate.choice("extremum", extremum, ("max", "min"))
+    rows = _region(region, u.shape)
+    scores = np.array([focus_metric(refocus(u, wavelength=wavelength, pitch=pitch,
+                                            distance=float(z))[rows], metric)
+                       for z in distances])
+    best = int(np.argmax(scores) if extremum == "max" else np.argmin(scores))
+    return Focus(distance=float(distances[best]), distances=distances, scores=scores,
+                 metric=metric)
+
+
+def _region(region, shape):
+    if region is None:
+        return (slice(None), slice(None))
+    try:
+        r0, r1, c0, c1 = (validate.integer("region", v, 0) for v in region)
+    except (TypeError, ValueError):
+        raise InputError(f"region must be (row0, row1, col0, col1); got {region!r}") from None
+    if not (r0 < r1 <= shape[0] and c0 < c1 <= shape[1]) or min(r1 - r0, c1 - c0) < 3:
+        raise InputError(f"region must lie in the {shape[0]}x{shape[1]} plane, at least 3x3; "
+                         f"got {region!r}")
+    return (slice(r0, r1), slice(c0, c1))
+
+
+@validate.public
+def decimate(wave, *, pitch, band) -> tuple[np.ndarray, float]:
+    """(the wave, its pitch [m]) on the coarsest grid that still holds its ``band`` [1/m]:
+    its spectrum cropped to ±band (and 2 bins) about zero, as a band-limited wave (a sideband
+    filter's) allows, exactly. Refocusing and autofocus on it cost (band·2·pitch)² of the
+    full grid's."""
+    u = validate.host_field("wave", wave)
+    pitch = validate.pitch("pitch", pitch)
+    band = validate.positive("band", band, "1/m")
+    rows, cols = u.shape
+    keep = [min(n, 2 * math.ceil(band * n * pitch) + 4) for n in (rows, cols)]
+    if keep[0] * cols != keep[1] * rows:  # one pitch for both axes: the larger ratio
+        ratio = max(keep[0] / rows, keep[1] / cols)
+        keep = [min(n, 2 * math.ceil(ratio * n / 2)) for n in (rows, cols)]
+    spectrum = np.fft.fftshift(np.fft.fft2(u))
+    r0, c0 = (rows - keep[0]) // 2, (cols - keep[1]) // 2
+    small = np.fft.ifft2(np.fft.ifftshift(spectrum[r0:r0 + keep[0], c0:c0 + keep[1]]))
+    small *= keep[0] * keep[1] / (rows * cols)  # the same amplitudes on fewer samples
+    return small.astype(np.complex64), pitch * cols / keep[1]
+
+
+def depth_of_focus(wavelength: float, band: float) -> float:
+    """λ/NA² [m]: the range over which an image of numerical aperture NA = sin θ = λ·band
+    (``band`` [1/m], the wave's highest spatial frequency) stays in focus."""
+    na = validate.positive("band", band, "1/m") * validate.wavelength("wavelength", wavelength)
+    if na >= 1:
+        raise InputError(f"band must be below 1/λ = {1 / wavelength:.6g} 1/m; got {band!r}")
+    return wavelength / na**2
+
+
+__all__ = ["METRICS", "Focus", "autofocus", "decimate", "depth_of_focus", "focus_metric",
+           "refocus"]

@@ -1,0 +1,241 @@
+"""From a scan to a view in one step: the file read, the carrier found, the object wave
+filtered out and placed at its distance, and a camera that frames it.
+
+- :func:`import_acquired`: the scan (:func:`holo_core.io.acquired.read_acquired`) with its
+  carrier found in the spectrum unless an angle is given or stated, stored as the
+  hologram's reference angle and azimuth (and logged); with a ``distance``, the order is the
+  one that focuses behind the hologram, and the objects' plane is its bounds.
+- :func:`object_hologram`: the complex hologram of the object wave (the sideband filter's),
+  its band the aperture's, its objects on the plane ``distance`` behind it: what the plate
+  viewer renders, its depth that plane's.
+- :func:`default_camera`: a camera on the hologram's axis that frames it and is focused on
+  the objects' plane, its pupil wide enough for the whole band.
+
+The order by focus: the two orders are a wave and its conjugate; the +1 order comes into focus
+behind the hologram (a virtual image at −distance), the twin in front (+distance). The one
+whose amplitude at −distance has the higher Tamura coefficient (√(std/mean) of the amplitude:
+a sharp image of an object that shows in amplitude, dark around it) is taken; the two
+coefficients are logged, and a margin under :data:`ORDER_MARGIN` is warned (a pure phase
+object: name the sideband).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import warnings
+from dataclasses import replace
+
+import numpy as np
+
+from .. import validate
+from ..io.acquired import read_acquired
+from ..scene.camera import Camera, look_at
+from ..scene.hologram import Hologram
+from ..validate import InputError
+from .carrier import Carrier, InlineHologramError, intensity_of, locate
+from .focus import decimate, focus_metric, refocus
+from .sideband import ITERATIONS, Aperture, sideband
+
+log = logging.getLogger(__name__)
+
+ORDER_MARGIN = 0.05   # the orders' Tamura coefficients closer than this (relative): warned
+FAR = 1000            # a distance beyond this many hologram widths looks like millimetres
+VIEW_DISTANCE = 2     # the default camera stands this many object distances in front
+FRAME_MARGIN = 1.05   # its field of view takes in the plate and this much more
+VIEW_PIXELS = (256, 2048)  # the default view's side: the band's Nyquist sampling, within these
+
+
+class OrderWarning(UserWarning):
+    """The two orders of an off-axis hologram focus alike at the stated distance (a phase
+    object, or a wrong distance): the order taken may be the twin."""
+
+
+@validate.public
+def import_acquired(source, *, pitch=None, wavelength=None, reference_angle=None,
+                    reference_azimuth=None, page=None, dataset=None, distance=None,
+                    sideband="auto", find_carrier=True):
+    """An acquired intensity hologram, its carrier found (:mod:`holo_core.acquired.carrier`).
+
+    Parameters
+    ----------
+    source, pitch, wavelength, reference_angle, reference_azimuth, page, dataset
+        As :func:`holo_core.io.acquired.read_acquired` (the file, or an array, and its optics
+        [m, rad]). A reference angle given or stated by the file is used as it is.
+    distance : float, optional
+        How far behind the hologram its objects lie [m]: the objects' plane becomes the
+        hologram's bounds, and ``sideband='auto'`` takes the order that focuses there.
+    sideband : 'auto', 'lower' or 'upper'
+        Which of the spectrum's pair is the carrier: 'auto' by focus with a distance (this
+        module's docstring), else 'lower'; or named, as holospy's ``sb``.
+    find_carrier : bool
+        False keeps an unknown angle at 0 (the scan as it is read).
+
+    Returns
+    -------
+    Hologram (with ``reference_angle`` and ``reference_azimuth`` of the carrier), or a list for
+    ``page='all'``. An in-line hologram (no sideband) is returned with angle 0 and logged.
+    """
+    validate.choice("sideband", sideband, ("auto", "lower", "upper"))
+    read = read_acquired(source, pitch=pitch, wavelength=wavelength,
+                         reference_angle=reference_angle, reference_azimuth=reference_azimuth,
+                         page=page, dataset=dataset)
+    holograms = read if isinstance(read, list) else [read]
+    if distance is not None:
+        distance = checked_distance(distance, holograms[0])
+    out = []
+    for h in holograms:
+        if find_carrier and reference_angle is None and h.reference_angle == 0:
+            h = _with_carrier(h, sideband, distance, source)
+        if distance is not None:
+            h = replace(h, bounds=plane_bounds(h, distance))
+        out.append(h)
+    return out if isinstance(read, list) else out[0]
+
+
+def checked_distance(distance, h: Hologram) -> float:
+    """The objects' distance [m] behind ``h``: > 0, and warned
+    (:class:`~holo_core.validate.UnitWarning`) beyond :data:`FAR` widths of the hologram."""
+    d = validate.positive("distance", validate.within("distance", distance,
+                                                      validate.MAX_LENGTH), "m")
+    width = max(h.size)
+    if d > FAR * width:
+        validate.warn_millimetres("distance", d, f"is {d / width:.3g} times the hologram's "
+                                  f"{width * 1e3:.3g} mm width: its objects would be resolved "
+                                  f"no finer than {h.wavelengths[0] * d / width * 1e3:.3g} mm")
+    return d
+
+
+def plane_bounds(h: Hologram, distance: float) -> np.ndarray:
+    """The bounds of objects on the plane ``distance`` [m] behind ``h``, its size wide: a
+    flat box, the one plane the view's depth lies on."""
+    w, ht = h.size
+    return np.array([[-w / 2, -ht / 2, -distance], [w / 2, ht / 2, -distance]])
+
+
+def _with_carrier(h: Hologram, side: str, distance, source) -> Hologram:
+    """``h`` with the carrier found in its spectrum as its reference angle and azimuth."""
+    name = source if isinstance(source, (str, bytes)) or hasattr(source, "__fspath__") \
+        else "array"
+    intensity, pitch, wavelength = intensity_of(h, 0, None)
+    try:
+        carrier = locate(intensity, pitch, sideband="lower" if side == "auto" else side,
+                         wavelength=wavelength)
+    except InlineHologramError as e:
+        log.warning("%s: %s", name, e)
+        return h
+    if side == "auto" and distance is not None:
+        carrier = _order_by_focus(h, carrier, distance)
+    angle = carrier.angle
+    if angle is None:
+        raise InputError(f"{name}: its carrier {carrier.frequency} 1/m is beyond 1/λ: the "
+                         f"wavelength {wavelength!r} m cannot be right")
+    log.info("%s: %s", name, carrier.describe())
+    return replace(h, reference_angle=angle, reference_azimuth=carrier.azimuth)
+
+
+def _order_by_focus(h: Hologram, carrier: Carrier, distance: float) -> Carrier:
+    """The carrier of the order whose wave is sharper at −``distance`` (this module's rule),
+    judged on the aperture's band alone (the wave resampled to its Nyquist rate)."""
+    wave, pitch = _baseband(h, carrier)
+    lam = h.wavelengths[0]
+    behind = focus_metric(refocus(wave, wavelength=lam, pitch=pitch, distance=-distance),
+                          "tamura")
+    front = focus_metric(refocus(wave, wavelength=lam, pitch=pitch, distance=distance),
+                         "tamura")  # the twin's amplitude behind: conj(o) carried by −d
+    if abs(behind - front) < ORDER_MARGIN * max(behind, front):
+        warnings.warn(f"the two orders focus alike at {distance:g} m behind the hologram "
+                      f"(Tamura {behind:.4g} and {front:.4g}): a phase object, or another "
+                      f"distance; the order taken may be the twin: name the sideband",
+                      OrderWarning, stacklevel=4)
+    twin = front > behind
+    log.info("orders at -%g m: Tamura %.4g (%s) against %.4g (the other): the %s", distance,
+             behind, carrier.sideband, front, "other" if twin else carrier.sideband)
+    if not twin:
+        return replace(carrier, rule=carrier.rule + "; the order that focuses behind")
+    return Carrier(fx=-carrier.fx, fy=-carrier.fy, wavelength=carrier.wavelength,
+                   rule=carrier.rule.replace(carrier.sideband, "the other") +
+                   "; the order that focuses behind", contrast=carrier.contrast,
+                   half="upper" if carrier.sideband == "lower" else "lower")
+
+
+def _baseband(h: Hologram, carrier: Carrier) -> tuple[np.ndarray, float]:
+    """The plain sideband filter's wave (radius |f_R|/3) on the coarsest grid that holds its
+    band (cheap refocusing for the order's choice)."""
+    wave = sideband(h, carrier=carrier, iterations=0)
+    return decimate(wave, pitch=h.pitch, band=carrier.norm / 3)
+
+
+@validate.public
+def object_hologram(hologram: Hologram, *, distance=None, aperture: Aperture | None = None,
+                    reference_hologram=None, subtract=(), iterations=ITERATIONS) -> Hologram:
+    """The complex hologram of ``hologram``'s object wave (:func:`~holo_core.acquired.sideband`
+    with its stated carrier, ``aperture``, reference hologram and subtracted intensities), its
+    band the aperture's and its objects on the plane ``distance`` [m] behind it (default: its
+    bounds, as :func:`import_acquired` set them)."""
+    if not isinstance(hologram, Hologram) or hologram.intensity is None:
+        raise InputError(f"hologram must be an intensity Hologram (import_acquired's); got "
+                         f"{type(hologram).__name__}")
+    if distance is None:
+        bounds = np.asarray(hologram.bounds)
+        if bounds[0, 2] != bounds[1, 2] or bounds[0, 2] >= 0:
+            raise InputError("distance must be given [m] (how far behind the hologram its "
+                             "objects lie): the hologram does not state it")
+        distance = -float(bounds[0, 2])
+    distance = checked_distance(distance, hologram)
+    if not hologram.reference_angle:
+        raise InlineHologramError("hologram states no carrier (its reference angle is 0): "
+                                  "import it with holo_core.import_acquired, which finds it, "
+                                  "or give the reference's angle and azimuth")
+    aperture = aperture or Aperture()
+    waves = [sideband(hologram, c, aperture=aperture, reference_hologram=reference_hologram,
+                      subtract=subtract, iterations=iterations)
+             for c in range(len(hologram.wavelengths))]
+    lam = hologram.wavelengths[0]
+    s = math.sin(hologram.reference_angle) / lam
+    radius = aperture.radius_per_m(s, lam, hologram.band)
+    return Hologram(object_wave=np.stack(waves), encoding="complex",
+                    wavelengths=hologram.wavelengths, pitch=hologram.pitch,
+                    plate=hologram.plate, bounds=plane_bounds(hologram, distance),
+                    band=min(radius * lam, 0.999), channels=hologram.channels)
+
+
+@validate.public
+def default_camera(hologram: Hologram, *, distance=None, resolution=None) -> Camera:
+    """A camera that frames ``hologram`` and is focused on its objects' plane ``distance``
+    [m] behind it (default: its bounds').
+
+    It stands on the hologram's axis :data:`VIEW_DISTANCE` times the distance in front, so
+    the frustum through the plate's edges takes in an object plane only 10 % wider than the
+    plate; its field of view is the plate's width and :data:`FRAME_MARGIN`; its pupil takes
+    in the whole cone of the hologram's band (sin θ) from the object plane, so it resolves
+    what the hologram recorded; ``resolution`` (W, H) [px] defaults to the band's Nyquist
+    sampling of the framed plane (within :data:`VIEW_PIXELS`)."""
+    if not isinstance(hologram, Hologram):
+        raise InputError(f"hologram must be a Hologram; got {type(hologram).__name__}")
+    bounds = np.asarray(hologram.bounds)
+    if distance is None:
+        if bounds[0, 2] >= 0:
+            raise InputError("distance must be given [m]: the hologram's bounds put no "
+                             "objects behind it")
+        distance = -float(bounds[:, 2].mean())
+    distance = checked_distance(distance, hologram)
+    width, height = hologram.size
+    lam = max(hologram.wavelengths)
+    band = hologram.band or min(1.0, lam / (2 * hologram.pitch))
+    standoff = VIEW_DISTANCE * distance
+    plane = (width, height)
+    if resolution is None:
+        side = 2 * band / lam * max(plane) * (1 + 1 / VIEW_DISTANCE) * FRAME_MARGIN
+        n = int(min(max(math.ceil(side / 16) * 16, VIEW_PIXELS[0]), VIEW_PIXELS[1]))
+        resolution = (n, max(16, round(n * height / width / 2) * 2)) if width >= height else \
+            (max(16, round(n * width / height / 2) * 2), n)
+    sensor = 36.0  # spans the image's larger side, the plate's larger side
+    lens = sensor * standoff / (FRAME_MARGIN * max(plane))
+    pupil = 2 * (standoff + distance) * math.tan(math.asin(min(band, 0.999)))
+    plate = np.asarray(hologram.plate, np.float64)
+    eye = (plate @ np.array([0.0, 0.0, standoff, 1.0]))[:3]
+    centre = (plate @ np.array([0.0, 0.0, -distance, 1.0]))[:3]
+    return Camera(matrix_world=look_at(eye, centre, up=plate[:3, 1]), lens=lens,
+                  sensor_width=sensor, resolution=tuple(resolution),
+                  fstop=lens * 1e-3 / pupil, focus_distance=standoff + distance)
