@@ -254,7 +254,15 @@ def import_scan(args):
     reference's angle and azimuth given), the sideband filtered, placed at its distance."""
     from .acquired import Aperture, object_hologram
     from .acquired import import_acquired as import_with_carrier
+    from .acquired.scan import complex_scan
     from .io.acquired import read_acquired
+    if args.pitch and args.wavelength and args.distance:
+        wave = complex_scan(args.hologram, pitch=args.pitch, wavelength=args.wavelength,
+                            distance=args.distance)
+        if wave is not None:
+            print(f"{args.hologram}: a complex object wave (channels re, im); objects "
+                  f"{args.distance:g} m behind")
+            return wave, ""
     h = import_with_carrier(args.hologram, pitch=args.pitch, wavelength=args.wavelength,
                             reference_angle=args.reference_angle,
                             reference_azimuth=args.reference_azimuth, page=args.page,

@@ -58,12 +58,13 @@ def srgb(linear: np.ndarray) -> np.ndarray:
 
 
 def length(metres: float) -> str:
-    """A length [m] in the unit that reads best: '633 nm', '3.45 µm', '1.2 mm', '0.5 m'."""
+    """A length [m] in the unit that reads best: '633 nm', '3.45 µm', '1.2 mm', '0.5 m',
+    '1.97 pm' (an electron's wave)."""
     m = abs(float(metres))
-    for unit, scale in (("m", 1.0), ("mm", 1e-3), ("µm", 1e-6)):
+    for unit, scale in (("m", 1.0), ("mm", 1e-3), ("µm", 1e-6), ("nm", 1e-9)):
         if m >= scale * (1 - 5e-5) or m == 0:
             return f"{metres / scale:.4g} {unit}"
-    return f"{metres / 1e-9:.4g} nm"
+    return f"{metres / 1e-12:.4g} pm"
 
 
 def lengths(values) -> str:
@@ -71,7 +72,7 @@ def lengths(values) -> str:
     values = [float(v) for v in values]
     top = max(abs(v) for v in values) if values else 0.0
     unit = length(top).split()[-1]
-    scale = {"nm": 1e-9, "µm": 1e-6, "mm": 1e-3, "m": 1.0}[unit]
+    scale = {"pm": 1e-12, "nm": 1e-9, "µm": 1e-6, "mm": 1e-3, "m": 1.0}[unit]
     return "/".join(f"{v / scale:.4g}" for v in values) + f" {unit}"
 
 

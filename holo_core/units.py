@@ -19,8 +19,10 @@ ELECTRON_MASS = 9.1093837015e-31    # m_e [kg]
 ELEMENTARY_CHARGE = 1.602176634e-19  # e [C]
 LIGHT_SPEED = 299792458.0           # c [m/s]
 
-METRES = {"pm": 1e-12, "nm": 1e-9, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "micron": 1e-6,
-          "mm": 1e-3, "cm": 1e-2, "m": 1.0, "angstrom": 1e-10, "å": 1e-10}
+# each unit as a power of ten of a metre: 5 µm is 5 / 10⁶ m, correctly rounded (5 · 1e-6 is not)
+DECADES = {"pm": -12, "nm": -9, "um": -6, "µm": -6, "μm": -6, "micron": -6, "mm": -3, "cm": -2,
+           "m": 0, "angstrom": -10, "å": -10}
+METRES = {unit: 10.0**e for unit, e in DECADES.items()}
 VOLTS = {"v": 1.0, "kv": 1e3, "mv": 1e6}
 _NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s.].*)?$")
 
@@ -53,11 +55,11 @@ def length(text: str, name: str, default_unit: str = "m") -> float:
     """``text`` (a number, with a unit of :data:`METRES` or in ``default_unit``) in metres."""
     value, unit = split(text, name)
     unit = default_unit if unit is None else unit
-    factor = METRES.get(unit) or METRES.get(unit.lower())
-    if factor is None:
+    decade = DECADES.get(unit, DECADES.get(unit.lower()))
+    if decade is None:
         raise InputError(f"{name}: unknown unit {unit!r}; use one of "
-                         f"{', '.join(sorted(METRES))}"[:300])
-    return value * factor
+                         f"{', '.join(sorted(DECADES))}"[:300])
+    return value / 10**-decade if decade < 0 else value * 10**decade
 
 
 def wavelength(text: str, name: str = "wavelength", default_unit: str = "nm") -> float:

@@ -19,9 +19,8 @@ import numpy as np
 from bpy_extras.io_utils import ImportHelper
 from mathutils import Matrix
 
-from holo_core.acquired import import_acquired
-from holo_core.io.hologram import HologramFileError, read_hologram, write_hologram
-from holo_core.io.image import read_exr
+from holo_core.acquired.framing import default_camera, stated_plane
+from holo_core.io.hologram import HologramFileError, read_hologram
 from holo_core.scene.hologram import Hologram
 from holo_core.worker import environment
 
@@ -131,66 +130,189 @@ def plan_lines(obj) -> list[str]:
     return session.plans.get(obj.name, [])
 
 
+_PITCH_UNITS = [("UM", "µm", "Micrometres (cameras, SLMs, scanned film)", 1e-6),
+                ("NM", "nm", "Nanometres (electron and X-ray holograms)", 1e-9),
+                ("MM", "mm", "Millimetres (antenna arrays)", 1e-3)]
+_WAVE_UNITS = [("NM", "nm", "Nanometres (light, X-rays)", 1e-9),
+               ("PM", "pm", "Picometres (electrons)", 1e-12),
+               ("UM", "µm", "Micrometres (infrared)", 1e-6),
+               ("KV", "kV", "An electron microscope's accelerating voltage", None)]
+_RADIUS_UNITS = [("carrier", "Fraction of Carrier", ("A fraction of the carrier's frequency "
+                                                     "(1/3: weak phase objects, 0.5: holospy's "
+                                                     "for strong ones)")),
+                 ("1/mm", "Cycles per mm", "Spatial frequency [1/mm]"),
+                 ("mrad", "mrad", "The scattering angle [mrad]")]
+
+
+_PITCH_FACTOR = {key: factor for key, *_, factor in _PITCH_UNITS}
+_WAVE_FACTOR = {key: factor for key, *_, factor in _WAVE_UNITS}
+
+
+def _items(units):
+    return [(key, name, text) for key, name, text, *_ in units]
+
+
 class HOLO_OT_import_hologram(bpy.types.Operator, ImportHelper):
-    """Import a hologram as a plate: a file recorded by Holo, placed where its metadata puts it, or an acquired one (an intensity scan, or a complex EXR of channels re and im) with the pitch, wavelength and distance given here"""
+    """Import a hologram as a plate: a file recorded by Holo, placed where its metadata puts it, or an acquired one (a scan, a lab array, or a complex EXR of channels re and im) with its pitch, wavelength and distance: its carrier found, its object wave filtered out and placed at that distance"""
 
     bl_idname = "holo.import_hologram"
     bl_label = "Import Hologram"
     bl_options = {"REGISTER", "UNDO"}
     filename_ext = ".exr"
-    filter_glob: bpy.props.StringProperty(default="*.exr;*.png;*.tif;*.tiff",
-                                          options={"HIDDEN"})
-    pitch: bpy.props.FloatProperty(name="Pitch [µm]", default=8.0, min=1e-3, max=1e4,
-                                   description="An acquired hologram's sample spacing")
-    wavelength: bpy.props.FloatProperty(name="Wavelength [nm]", default=633.0, min=1.0,
-                                        max=1e7, description="An acquired hologram's "
-                                                             "wavelength")
-    distance: bpy.props.FloatProperty(name="Distance [m]", default=0.1, min=1e-6,
+    filter_glob: bpy.props.StringProperty(
+        default="*.exr;*.png;*.tif;*.tiff;*.npy;*.h5;*.hdf5;*.mat", options={"HIDDEN"})
+    pitch: bpy.props.FloatProperty(name="Pitch", default=3.45, min=1e-6, max=1e6,
+                                   description="An acquired hologram's sample spacing, in the "
+                                               "unit beside it")
+    pitch_unit: bpy.props.EnumProperty(name="Pitch Unit", items=_items(_PITCH_UNITS),
+                                       default="UM")
+    wavelength: bpy.props.FloatProperty(name="Wavelength", default=633.0, min=1e-6, max=1e7,
+                                        description="An acquired hologram's wavelength, in the "
+                                                    "unit beside it (kV: electrons of that "
+                                                    "accelerating voltage)")
+    wavelength_unit: bpy.props.EnumProperty(name="Wavelength Unit", items=_items(_WAVE_UNITS),
+                                            default="NM")
+    distance: bpy.props.FloatProperty(name="Distance", default=0.05, min=1e-9, soft_max=10.0,
+                                      subtype="DISTANCE", unit="LENGTH",
                                       description="How far behind an acquired hologram its "
                                                   "objects lie")
-    reference_angle: bpy.props.FloatProperty(name="Reference Angle", default=0.0, min=0.0,
+    carrier: bpy.props.EnumProperty(
+        name="Carrier", default="FIND",
+        items=[("FIND", "Find in Spectrum", ("The +1 order's carrier found in the hologram's "
+                                             "spectrum (the file's reference angle, if it "
+                                             "states one)")),
+               ("GIVEN", "Reference Angle", "The reference's angle and azimuth given here")])
+    sideband: bpy.props.EnumProperty(
+        name="Sideband", default="AUTO",
+        items=[("AUTO", "Auto", "The order that comes into focus at the distance"),
+               ("LOWER", "Lower", "holospy's 'lower': the carrier with f_y > 0"),
+               ("UPPER", "Upper", "holospy's 'upper': the carrier with f_y < 0")])
+    reference_angle: bpy.props.FloatProperty(name="Reference Angle", default=0.05, min=0.0,
                                              max=1.5, subtype="ANGLE",
-                                             description="An acquired intensity hologram's "
-                                                         "off-axis reference angle")
+                                             description="The off-axis reference's angle to "
+                                                         "the hologram's normal")
+    reference_azimuth: bpy.props.FloatProperty(name="Azimuth", default=0.0, subtype="ANGLE",
+                                               description="The reference's direction in the "
+                                                           "hologram's plane, from +x to +y")
+    radius: bpy.props.FloatProperty(name="Filter Radius", default=1 / 3, min=1e-6,
+                                    description="The sideband filter's radius, in its unit")
+    radius_unit: bpy.props.EnumProperty(name="Radius Unit", items=_RADIUS_UNITS,
+                                        default="carrier")
+    edge: bpy.props.EnumProperty(
+        name="Filter Edge", default="HARD",
+        items=[("HARD", "Hard", "A hard-edged aperture"),
+               ("TANH", "Smooth (tanh)", "holospy's smooth edge"),
+               ("COSINE", "Raised Cosine", "A raised-cosine (Tukey) edge")])
+    edge_width: bpy.props.FloatProperty(name="Edge Width", default=0.05, min=1e-3, max=1.0,
+                                        description="The edge's width, a fraction of the radius")
+    window: bpy.props.EnumProperty(
+        name="Apodisation", default="NONE",
+        items=[(k.upper(), k.capitalize(), f"A {k} window across the filter")
+               for k in ("none", "hann", "hamming", "blackman", "gaussian", "butterworth")])
+    add_camera: bpy.props.BoolProperty(name="Add Camera", default=True,
+                                       description="Add a camera that frames the plate, focused "
+                                                   "at the distance, as the scene's camera")
+
+    def draw(self, context):
+        layout = self.layout
+        for prop, unit in (("pitch", "pitch_unit"), ("wavelength", "wavelength_unit")):
+            row = layout.row(align=True)
+            row.prop(self, prop)
+            row.prop(self, unit, text="")
+        layout.prop(self, "distance")
+        layout.prop(self, "carrier")
+        if self.carrier == "GIVEN":
+            layout.prop(self, "reference_angle")
+            layout.prop(self, "reference_azimuth")
+        else:
+            layout.prop(self, "sideband")
+        row = layout.row(align=True)
+        row.prop(self, "radius")
+        row.prop(self, "radius_unit", text="")
+        layout.prop(self, "edge")
+        if self.edge != "HARD":
+            layout.prop(self, "edge_width")
+        layout.prop(self, "window")
+        layout.prop(self, "add_camera")
+
+    def import_options(self, context) -> list[str]:
+        """The dialog's optics and filter as ``python -m holo_core import`` options, lengths
+        in metres (the scene's unit applied to the distance)."""
+        if self.wavelength_unit == "KV":
+            wavelength = f"{_number(self.wavelength)}kV"
+        else:
+            wavelength = f"{_number(self.wavelength * _WAVE_FACTOR[self.wavelength_unit])}m"
+        options = ["--pitch", f"{_number(self.pitch * _PITCH_FACTOR[self.pitch_unit])}m",
+                   "--wavelength", wavelength,
+                   "--distance", f"{_number(self.distance * scale(context.scene))}m",
+                   "--radius", _number(self.radius), "--radius-unit", self.radius_unit,
+                   "--edge", self.edge.lower(), "--edge-width", _number(self.edge_width),
+                   "--window", self.window.lower()]
+        if self.carrier == "GIVEN":
+            return options + ["--reference-angle", _number(self.reference_angle),
+                              "--reference-azimuth", _number(self.reference_azimuth)]
+        return options + ["--sideband", self.sideband.lower()]
 
     def execute(self, context):
         path = Path(self.filepath)
         try:
-            hologram, acquired = imported(path, pitch=self.pitch * 1e-6,
-                                          wavelength=self.wavelength * 1e-9,
-                                          distance=self.distance,
-                                          reference_angle=self.reference_angle)
+            hologram, written, lines = imported(path, self.import_options(context))
         except (HologramFileError, ValueError, OSError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        if acquired:  # a Holo file beside it, of the scan and what was said of it here
-            path = write_hologram(path.with_name(f"{path.stem}_holo.exr"), hologram)
-        obj = add_plate(context, hologram, path)
+        for line in lines:
+            self.report({"INFO"}, line)
+        obj = add_plate(context, hologram, written or path)
+        if self.add_camera and stated_plane(hologram) is not None:
+            add_camera(context, hologram)
         self.report({"INFO"}, f"plate '{obj.name}' from {path}: {hologram!r}")
         return {"FINISHED"}
 
 
-def imported(path: Path, *, pitch, wavelength, distance, reference_angle=0.0):
-    """(the hologram of ``path``, whether it was acquired): a Holo hologram file as it is;
-    else an acquired one (a complex EXR of channels re, im; else an intensity scan), its
-    objects a plate-sized box ``distance`` [m] behind it."""
+def imported(path: Path, options: list[str]):
+    """(the hologram of ``path``, the Holo file written for it or None, the lines to report):
+    a Holo hologram file as it is; else an acquired one (a scan, a lab array, a complex EXR of
+    channels re and im) through ``python -m holo_core import`` with ``options`` in a child
+    process (the sideband filter and the carrier's search use the core's OpenCL stages, which
+    never run in Blender's process), written beside it as ``<name>_holo.exr``."""
     try:
-        return read_hologram(path), False
+        return read_hologram(path), None, []
     except HologramFileError as e:
         if "without hologram metadata" not in str(e) and path.suffix.lower() == ".exr":
             raise
-    channels = read_exr(path, what="hologram")[1] if path.suffix.lower() == ".exr" else {}
-    if {"re", "im"} <= set(channels):
-        wave = (channels["re"] + 1j * channels["im"]).astype(np.complex64)[None]
-        h = Hologram(object_wave=wave, encoding="complex", wavelengths=(wavelength,),
-                     pitch=pitch)
-    else:
-        h = import_acquired(path, pitch=pitch, wavelength=wavelength,
-                            reference_angle=reference_angle)
-    w, ht = h.size
-    bounds = np.array([[-w / 2, -ht / 2, -distance], [w / 2, ht / 2, -distance]])
-    return Hologram(**{**{k: getattr(h, k) for k in h.__dataclass_fields__},
-                       "bounds": bounds}), True
+    out = path.with_name(f"{path.stem}_holo.exr")
+    command = [sys.executable, "-m", "holo_core", "import", str(path), "-o", str(out),
+               "--no-view", *options]
+    r = subprocess.run(command, capture_output=True, text=True, timeout=1800, check=False,
+                       env=environment(runtime_paths(), device() or None))
+    if r.returncode != 0:
+        raise HologramFileError((r.stderr.strip().splitlines() or [f"{path}: import failed"])[-1])
+    lines = [line for line in r.stdout.strip().splitlines() if line.strip()]
+    return read_hologram(out), out, lines[:-1]
+
+
+def add_camera(context, hologram: Hologram):
+    """A camera that frames the plate and is focused on its objects' plane
+    (:func:`holo_core.acquired.framing.default_camera`), as the scene's camera; the render's
+    size is the camera's."""
+    camera = default_camera(hologram)
+    unit = scale(context.scene)
+    data = bpy.data.cameras.new("Hologram Camera")
+    data.lens, data.sensor_width, data.sensor_fit = camera.lens, camera.sensor_width, "AUTO"
+    data.dof.use_dof = True
+    data.dof.focus_distance = camera.focus_distance / unit
+    data.dof.aperture_fstop = camera.fstop
+    data.clip_end = max(data.clip_end, 4 * camera.focus_distance / unit)
+    obj = bpy.data.objects.new("Hologram Camera", data)
+    context.collection.objects.link(obj)
+    m = np.array(camera.matrix_world, np.float64)
+    m[:3, 3] /= unit
+    obj.matrix_world = Matrix(m.tolist())
+    scene = context.scene
+    scene.camera = obj
+    scene.render.resolution_x, scene.render.resolution_y = camera.resolution
+    scene.render.resolution_percentage = 100
+    return obj
 
 
 def add_plate(context, hologram: Hologram, path: Path):
@@ -222,7 +344,8 @@ def add_plate(context, hologram: Hologram, path: Path):
 
 
 def _menu(menu, _context):
-    menu.layout.operator(HOLO_OT_import_hologram.bl_idname, text="Hologram (.exr)")
+    menu.layout.operator(HOLO_OT_import_hologram.bl_idname,
+                         text="Hologram (.exr, scan, lab array)")
 
 
 CLASSES = (HOLO_OT_fit_zone, HOLO_OT_plan_plate, HOLO_OT_import_hologram)

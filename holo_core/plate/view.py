@@ -24,6 +24,7 @@ from dataclasses import replace
 import numpy as np
 
 from .. import jobs, memory, validate
+from ..acquired.framing import stated_plane
 from ..opencl import get_runtime
 from ..opencl.arrays import cached, copy_plane, empty
 from ..optics import depth as depth_mod
@@ -532,15 +533,6 @@ def _depth(crosses, brightness, *, estimate, wavelengths, centre, focus, camera:
     ray, bright = depth_mod.keep_brightest([ranges(c) for c in crosses], brightness)
     return speckle.pick_brightest(planar(ray, _supersampled(camera, supersample)), bright,
                                   supersample)
-
-
-def stated_plane(h: Hologram) -> float | None:
-    """z [m] of the one plane behind the hologram its objects lie on, where its bounds are a
-    flat box there, wide in x and y (an acquired hologram's stated distance), else None."""
-    bounds = np.asarray(h.bounds)
-    z = float(bounds[0, 2])
-    wide = bool((bounds[1, :2] > bounds[0, :2]).all())
-    return z if wide and z == bounds[1, 2] and z < 0 else None
 
 
 def plane_depth(h: Hologram, camera: Camera, z: float) -> np.ndarray:

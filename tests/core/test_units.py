@@ -150,3 +150,24 @@ def test_the_plate_renderer_keeps_its_scale_free_wavelengths():
         validate.wavelength("wavelength", 2e-2)
     with pytest.raises(InputError, match="pitch must be in"):
         Hologram(intensity=np.ones((1, 4, 4), np.float32), wavelengths=(633e-9,), pitch=0.05)
+
+
+@pytest.mark.parametrize("text, metres", [("3.45um", 3.45e-6), ("3.45 µm", 3.45e-6),
+                                          ("5cm", 0.05), ("0.05", 0.05), ("1.97pm", 1.97e-12),
+                                          ("2e-3 m", 2e-3), ("1.5angstrom", 1.5e-10)])
+def test_lengths_with_their_units(text, metres):
+    from holo_core import units
+    assert units.length(text, "length") == metres
+
+
+def test_an_electron_microscope_states_its_wave_as_a_voltage():
+    """λ = h/√(2·m·e·U·(1 + e·U/(2·m·c²))): 1.9687 pm at 300 kV (holospy's Fe needle), 2.5079
+    pm at 200 kV, 0.8719 pm at 1 MV (tabulated relativistic values)."""
+    from holo_core import units
+    for text, pm in (("300kV", 1.9687), ("200 kV", 2.5079), ("1MV", 0.8719)):
+        assert units.wavelength(text) == pytest.approx(pm * 1e-12, rel=1e-4), text
+    assert units.wavelength("633") == 633e-9  # a plain number: nm, as --wavelengths
+    with pytest.raises(InputError, match="unknown unit 'furlong'"):
+        units.length("3 furlong", "length")
+    with pytest.raises(InputError, match="millivolts"):
+        units.wavelength("300mV")

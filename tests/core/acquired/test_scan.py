@@ -153,3 +153,18 @@ def test_autofocus_finds_the_distance_within_a_depth_of_focus(imported, metric):
     print(f"{metric}: {-found.distance * 1e3:.2f} mm (depth of focus {dof * 1e3:.2f} mm, on "
           f"{wave.shape[0]}x{wave.shape[1]})")
     assert abs(-found.distance - scans.DISTANCE) <= dof, found.distance
+
+
+def test_a_complex_wave_file_imports_as_its_plane(tmp_path, capsys, rng):
+    """An EXR of an acquired object wave (channels re, im: a phase-shifting setup's result)
+    needs no filter: imported as it is, its objects on the plane at the distance."""
+    from holo_core.io.image import write_exr
+    wave = rng.normal(size=(32, 48)) + 1j * rng.normal(size=(32, 48))
+    path = write_exr(tmp_path / "wave.exr", {"re": wave.real, "im": wave.imag})
+    status, out, err = run_cli(capsys, "import", path, "--pitch", "5um", "--wavelength", "633",
+                               "--distance", "1cm", "-o", tmp_path / "h.exr", "--no-view")
+    assert status == 0, err
+    h = read_hologram(tmp_path / "h.exr")
+    assert h.encoding == "complex" and h.shape == (32, 48) and h.pitch == 5e-6
+    assert np.allclose(h.object_wave[0], wave.astype(np.complex64))
+    assert h.bounds[0][2] == h.bounds[1][2] == -0.01 and "complex object wave" in out
