@@ -34,9 +34,9 @@ from ..io.acquired import read_acquired
 from ..scene.hologram import Hologram
 from ..validate import InputError
 from .carrier import Carrier, InlineHologramError, intensity_of, locate
+from .filters import ITERATIONS, Aperture, sideband
 from .focus import decimate, focus_metric, refocus
 from .framing import checked_distance, plane_bounds
-from .filters import ITERATIONS, Aperture, sideband
 
 log = logging.getLogger(__name__)
 

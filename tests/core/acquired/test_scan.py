@@ -121,7 +121,12 @@ def test_render_takes_the_written_hologram_and_frames_it(imported, tmp_path, cap
     """``render`` of the written hologram (objects on one stated plane) uses the camera that
     frames it, as import did; ``render`` of the scan itself without its optics says what it
     needs."""
-    _, hologram, view, scan = imported
+    _, _, view, scan = imported
+    status, _, err = run_cli(capsys, "render", scan.parent / "out" / "letter_scan_2048_holo.exr",
+                             "-o", tmp_path / "v.exr")
+    assert status == 0, err
+    again = {k.split(".", 1)[1]: v for k, v in read_exr(tmp_path / "v.exr")[1].items()}
+    assert np.array_equal(again["Combined.A"], view["Combined.A"])
     status, _, err = run_cli(capsys, "render", scan, "-o", tmp_path / "v.exr")
     assert status == 2 and "is a scan, not a Holo hologram: give --pitch, --wavelength, " \
         "--distance" in err, err
