@@ -18,6 +18,7 @@ A single (H, W) array with scalar settings goes straight to the plane function, 
 from __future__ import annotations
 
 import functools
+import inspect
 import math
 
 import numpy as np
@@ -39,11 +40,15 @@ def batched(plane, *, moves=None, grid_of=None, returns_pitch=False):
     grid_of(settings, shape, pitch) -> (out shape, out pitch (x, y)); returns_pitch: the plane
     function returns (field, (x pitch, y pitch)) (the far field)."""
 
+    # the keywords it takes, checked before any work; a plane that passes **settings on (an
+    # adjoint) leaves them to the function it calls
+    forwards = bool(plane.__code__.co_flags & inspect.CO_VARKEYWORDS)
     taken = [p for p in _parameters(plane) if p != "field"]
 
     @functools.wraps(plane)
     def call(field, **settings):
-        validate.keywords(plane.__name__, settings, taken)
+        if not forwards:
+            validate.keywords(plane.__name__, settings, taken)
         is_field = isinstance(field, Field)
         if not is_field and not _batched(field, settings):
             return plane(field, **settings)
