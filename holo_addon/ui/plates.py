@@ -298,7 +298,9 @@ def add_camera(context, hologram: Hologram):
     camera = default_camera(hologram)
     unit = scale(context.scene)
     data = bpy.data.cameras.new("Hologram Camera")
-    data.lens, data.sensor_width, data.sensor_fit = camera.lens, camera.sensor_width, "AUTO"
+    # Blender's millimetres are thousandths of a scene unit, as camera_from_object reads them
+    data.lens, data.sensor_width = camera.lens / unit, camera.sensor_width / unit
+    data.sensor_fit = "AUTO"
     data.dof.use_dof = True
     data.dof.focus_distance = camera.focus_distance / unit
     data.dof.aperture_fstop = camera.fstop
