@@ -20,10 +20,13 @@ def raster_visibility(obj) -> None:
     motion blur, which the holographic pass fills (:mod:`holo_addon.compositor.tree`); it
     still casts its shadow on raster objects, lights them indirectly and shows in their
     reflections and refractions (a holdout is one for camera rays alone). The plate is a
-    construction plane, hidden from every ray. The user's own visibility is kept on the
-    object and restored when it is neither again. *Disable in Renders* stays the user's: it
-    leaves the object out of the hologram too."""
+    construction plane, hidden from every ray; an imported plate (File ▸ Import ▸ Hologram)
+    is the window its recorded objects are seen through, so it is a holdout for camera rays
+    alone, the hole the pass fills. The user's own visibility is kept on the object and
+    restored when it is neither again. *Disable in Renders* stays the user's: it leaves the
+    object out of the hologram too."""
     emitter, plate = obj.holo.emitter != "NONE", obj.holo.is_plate
+    window = plate and obj.holo.imported
     if not (emitter or plate):
         kept = obj.get(KEPT)
         if kept is not None:
@@ -34,8 +37,8 @@ def raster_visibility(obj) -> None:
     if obj.get(KEPT) is None:
         obj[KEPT] = {name: bool(getattr(obj, name)) for name in (*RAY_VISIBILITY, HOLDOUT)}
     for name in RAY_VISIBILITY:
-        setattr(obj, name, not plate)
-    setattr(obj, HOLDOUT, not plate)
+        setattr(obj, name, not plate or (window and name == "visible_camera"))
+    setattr(obj, HOLDOUT, not plate or window)
 
 
 def is_holdout_emitter(obj) -> bool:

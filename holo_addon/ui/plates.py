@@ -25,6 +25,7 @@ from holo_core.scene.hologram import Hologram
 from holo_core.worker import environment
 
 from ..compositor.session import session
+from ..blender.objects import raster_visibility
 from ..export.plates import plate_from_object, zone_around
 from ..export.scene import ExportError, camera_from_object, emitter_instances, scale
 from ..render.options import device, runtime_paths
@@ -336,6 +337,7 @@ def add_plate(context, hologram: Hologram, path: Path):
             other.holo.is_plate = False  # one plate per scene: the imported one
     obj.holo.is_plate = True
     obj.holo.imported = True
+    raster_visibility(obj)  # the window its objects are seen through: a hole the pass fills
     obj.holo.hologram = bpy.path.relpath(str(path)) if bpy.data.filepath else str(path)
     if hologram.zone is not None:
         obj.holo.zone_centre, obj.holo.zone_half = hologram.zone.centre, hologram.zone.half_extents
