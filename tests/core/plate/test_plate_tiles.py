@@ -26,6 +26,7 @@ from stores import cancel_after, settled  # noqa: E402
 from holo_core import jobs  # noqa: E402
 from holo_core.io import tiles as store  # noqa: E402
 from holo_core.io.hologram import metadata, read_hologram  # noqa: E402
+from holo_core.plate.carrier import physical_field, window  # noqa: E402
 from holo_core.plate.record import record_plate  # noqa: E402
 from holo_core.plate.view import camera_in_plate, carrier_window, render_view  # noqa: E402
 from holo_core.validate import InputError  # noqa: E402
@@ -245,3 +246,17 @@ def test_options_of_the_other_route_are_refused_on_one_line(tmp_path, capsys, ar
                              *args)
     assert status == 2 and err.count("\n") == 1 and re.search(problem, err), err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sq.obj"]
+
+
+def test_the_physical_field_of_a_store_reads_only_the_tiles_under_its_region(in_memory,
+                                                                           recorded,
+                                                                           monkeypatch):
+    """physical_field over the window's first fifth along each axis reads the samples within
+    the kernel's reach of it, all in tile (0, 0), and equals the field of the plate in memory."""
+    url, _ = recorded
+    reads = _Reads(monkeypatch)
+    x0, y0, x1, y1 = window(in_memory)
+    region = (x0, y0, x0 + 0.2 * (x1 - x0), y0 + 0.2 * (y1 - y0))
+    tiled = physical_field(store.open_plate(url), 2, region=region)
+    assert reads.tiles == {(0, 0)}
+    assert np.array_equal(tiled.samples, physical_field(in_memory, 2, region=region).samples)
