@@ -191,7 +191,6 @@ def main():
                 scene.holo.output_dir = str(out / "holo") + os.sep
                 scene.holo.mode = mode
                 scene.holo.samples = args.samples
-                scene.holo.max_resolution = 768
                 scene.holo.iterations = 2
                 t = time.perf_counter()
                 ok = bpy.ops.holo.render_pass() == {"FINISHED"}

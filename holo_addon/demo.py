@@ -143,7 +143,6 @@ def main(argv=None):
     p.add_argument("--samples", type=int, default=16)
     p.add_argument("--mode", choices=("CAMERA", "PLATE"), default="CAMERA")
     p.add_argument("--iterations", type=int, default=2, help="plate mode: recordings")
-    p.add_argument("--max-resolution", type=int, default=768, help="plate mode: hologram size")
     args = p.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(name)s: %(message)s")
     import bpy
@@ -158,7 +157,6 @@ def main(argv=None):
     scene.holo.mode = args.mode
     scene.holo.samples = args.samples
     scene.holo.iterations = args.iterations
-    scene.holo.max_resolution = args.max_resolution
     scene.render.filepath = str(out / "demo")  # the holographic layers go beside it
     plate = scene.objects["Hologram Plate"]
     if args.mode == "PLATE":  # say before recording what this plate's views will resolve

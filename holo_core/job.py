@@ -35,7 +35,6 @@ MAX_SAMPLES = 1 << 16      # a camera hologram's looks, at most
 MAX_SUPERSAMPLE = 16       # fine pixels per pixel per axis, at most
 MAX_EXPOSURE = 1e20        # linear; with colours up to 1e12 the float32 view stays finite
 MAX_FRAME = 1048574        # Blender's last frame
-MAX_RESOLUTION = 65536     # a plate's samples per side, at most
 SPECKLE = {"EXACT": "incoherent", "LOOKS": "object_wave"}  # the camera hologram's way per setting
 
 
@@ -88,11 +87,14 @@ class PlateRoute(_Route):
     the view of them from the job's camera (:func:`holo_core.plate.view.render_view`).
 
     plate : the :class:`~holo_core.scene.plate.Plate`; with its viewing zone it is a scene
-        asset (recorded at ``max_resolution`` samples, the camera sizing nothing)
+        asset (its samples follow the zone and its views' sharpness, the camera sizing
+        nothing)
     holograms : the iterations' files [paths]: coded looks of one seed where their count
         allows, else seeds ``seed``, ``seed + 1``, ...
     record : record them (False: they are current, and are read)
-    max_resolution : the plate's samples per side, at most
+    memory_budget, disk_budget : [bytes] what the recording may hold in memory and its files
+        on disk, or None (no limit): a plate that needs more is refused before any work, with
+        its sizes
     wavelength : the recording's wavelength [m], or None (chosen by the planner)
     composition : 'mean' or 'max' of the iterations' views
     opacity_threshold : the view's coverage taken as opaque, in [0, 1]
@@ -103,7 +105,8 @@ class PlateRoute(_Route):
     plate: Plate
     holograms: tuple
     record: bool = True
-    max_resolution: int = 1024
+    memory_budget: float | None = None
+    disk_budget: float | None = None
     wavelength: float | None = None
     composition: str = "mean"
     opacity_threshold: float = 0.5
@@ -116,8 +119,10 @@ class PlateRoute(_Route):
         if not self.holograms:
             raise InputError("holograms must name at least one file (one per iteration)")
         _set(self, "record", _flag("record", self.record))
-        _set(self, "max_resolution", validate.integer("max_resolution", self.max_resolution,
-                                                      16, MAX_RESOLUTION))
+        for name in ("memory_budget", "disk_budget"):
+            value = getattr(self, name)
+            if value is not None and not validate.finite(name, _real(name, value), "bytes") > 0:
+                raise InputError(f"{name} must be > 0 [bytes] or None; got {value!r}")
         if self.wavelength is not None:
             _set(self, "wavelength", validate.length("wavelength",
                                                      _real("wavelength", self.wavelength)))

@@ -88,6 +88,7 @@ def _plate(job: Job, progress):
         holos = [record_hologram(
             list(job.points), triangles=list(job.triangles), plate=route.plate,
             camera=job.camera, wavelength=route.wavelength,
+            budget=(route.memory_budget, route.disk_budget),
             seed=route.seed + (0 if code else i), code=code,
             progress=jobs.scaled(progress, record_share * i / n, record_share * (i + 1) / n))
             for i, code in enumerate(codes)]

@@ -40,7 +40,8 @@ class Settings:
 
     mode: str                     # 'CAMERA' (camera hologram) or 'PLATE'
     samples: int
-    max_resolution: int
+    memory_budget: float          # [bytes] a plate's recording, at most
+    disk_budget: float            # [bytes] a plate's files, at most
     wavelength: float | None
     iterations: int
     supersample: int
@@ -55,7 +56,9 @@ class Settings:
     @classmethod
     def from_scene(cls, scene, unit: float) -> Settings:
         h = scene.holo
-        return cls(mode=h.mode, samples=h.samples, max_resolution=h.max_resolution,
+        gb = 2.0**30
+        return cls(mode=h.mode, samples=h.samples, memory_budget=h.plate_memory * gb,
+                   disk_budget=h.plate_disk * gb,
                    wavelength=h.wavelength * unit if h.wavelength > 0 else None,
                    iterations=h.iterations, supersample=h.supersample,
                    composition=h.composition, exposure=2.0 ** h.exposure,
@@ -64,8 +67,7 @@ class Settings:
 
     def recording(self) -> tuple:
         """The settings a hologram depends on."""
-        return (self.max_resolution, self.wavelength, self.iterations, self.seed,
-                self.lighting)
+        return (self.wavelength, self.iterations, self.seed, self.lighting)
 
     def camera_route(self) -> CameraRoute:
         return CameraRoute(samples=self.samples, speckle=self.speckle,
@@ -74,7 +76,8 @@ class Settings:
 
     def plate_route(self, plate, holograms, record: bool) -> PlateRoute:
         return PlateRoute(plate=plate, holograms=holograms, record=record,
-                          max_resolution=self.max_resolution, wavelength=self.wavelength,
+                          memory_budget=self.memory_budget, disk_budget=self.disk_budget,
+                          wavelength=self.wavelength,
                           supersample=self.supersample, composition=self.composition,
                           exposure=self.exposure, opacity_threshold=self.opacity_threshold,
                           seed=self.seed)

@@ -30,7 +30,8 @@ class HOLO_PT_scene(bpy.types.Panel):
             if h.speckle == "LOOKS":
                 col.prop(h, "samples")
         else:
-            col.prop(h, "max_resolution")
+            col.prop(h, "plate_memory")
+            col.prop(h, "plate_disk")
             col.prop(h, "wavelength")
             col.prop(h, "iterations")
         col.prop(h, "seed")
@@ -112,6 +113,7 @@ def draw_plate(layout, context, h) -> None:
         layout.label(text="Viewing zone: set around the camera when recorded")
     row = layout.row(align=True)
     row.operator("holo.fit_zone", icon="CAMERA_DATA")
+    row.operator("holo.fit_zone_to_shot", icon="RENDER_ANIMATION")
     row.operator("holo.plan_plate", icon="INFO")
     col = layout.column(align=True)
     for line in plates.plan_lines(context.object):

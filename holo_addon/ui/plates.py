@@ -1,9 +1,10 @@
-"""The plate as a scene asset: its viewing zone (Fit Zone to Camera), the planner (Plan Plate:
-what a plate will take and give before any recording) and File ▸ Import ▸ Hologram.
+"""The plate as a scene asset: its viewing zone (Fit Zone to Camera, Fit Zone to Shot: the
+camera's pupil over the frame range), the planner (Plan Plate: what a plate will take and give
+before any recording) and File ▸ Import ▸ Hologram.
 
-The planner runs ``python -m holo_core plan`` in a child process, as the worker runs (no
-OpenCL, nor the core's physics, in Blender's process), and its lines are shown in the
-plate's panel. An imported hologram becomes a plate object placed where its metadata puts it,
+The planner is pure arithmetic (:mod:`holo_core.plate.plan`, no OpenCL, nor the core's
+physics): it runs in Blender's process, and its lines are shown in the plate's panel, the
+verdict first. An imported hologram becomes a plate object placed where its metadata puts it,
 linked to its file (kept, relative to the .blend, when the .blend is saved) and viewed as it
 is: it is never recorded.
 """
@@ -21,11 +22,14 @@ from mathutils import Matrix
 
 from holo_core.acquired.framing import default_camera, stated_plane
 from holo_core.io.hologram import HologramFileError, read_hologram
+from holo_core.plate.plan import plan, plan_view, summary
 from holo_core.scene.hologram import Hologram
+from holo_core.scene.plate import ViewingZone
+from holo_core.validate import InputError
 from holo_core.worker import environment
 
-from ..compositor.session import session
 from ..blender.objects import raster_visibility
+from ..compositor.session import session
 from ..export.plates import plate_from_object, zone_around
 from ..export.scene import ExportError, camera_from_object, emitter_instances, scale
 from ..render.options import device, runtime_paths
@@ -34,6 +38,13 @@ from ..render.options import device, runtime_paths
 def plate_object(context):
     obj = context.object
     return obj if obj is not None and obj.type == "MESH" and obj.holo.is_plate else None
+
+
+def _keep(obj, zone) -> None:
+    """The zone on the plate's settings (what the next recording is for)."""
+    obj.holo.zone_centre, obj.holo.zone_half = zone.centre, zone.half_extents
+    obj.holo.zone_pupil, obj.holo.zone_pixel = zone.pupil, zone.pixel
+    obj.holo.zone_set = True
 
 
 class HOLO_OT_fit_zone(bpy.types.Operator):
@@ -59,16 +70,60 @@ class HOLO_OT_fit_zone(bpy.types.Operator):
         except (ExportError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        obj.holo.zone_centre, obj.holo.zone_half = zone.centre, zone.half_extents
-        obj.holo.zone_pupil, obj.holo.zone_pixel = zone.pupil, zone.pixel
-        obj.holo.zone_set = True
+        _keep(obj, zone)
         self.report({"INFO"}, f"plate '{obj.name}': viewing zone {zone.describe()}")
         return {"FINISHED"}
 
 
-def plan_command(context) -> list[str]:
-    """``python -m holo_core plan`` for the selected plate, the holographic objects, the
-    scene camera and Max Hologram Size, all in the plate's frame."""
+class HOLO_OT_fit_zone_to_shot(bpy.types.Operator):
+    """Set the plate's viewing zone around the scene camera's pupil at every frame of the scene's range, the Zone Margin around it: the plate is recorded once and every frame of the shot renders from it"""
+
+    bl_idname = "holo.fit_zone_to_shot"
+    bl_label = "Fit Zone to Shot"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return HOLO_OT_fit_zone.poll(context)
+
+    def execute(self, context):
+        scene, obj, unit = context.scene, plate_object(context), scale(context.scene)
+        try:
+            zone, frames = shot_zone(scene, obj, unit)
+        except (ExportError, ValueError) as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        _keep(obj, zone)
+        self.report({"INFO"}, f"plate '{obj.name}': viewing zone {zone.describe()}, the "
+                              f"camera's pupil over frames {frames[0]}-{frames[-1]}")
+        return {"FINISHED"}
+
+
+def shot_zone(scene, obj, unit):
+    """(the zone holding the scene camera's pupil at every frame of the scene's range with the
+    plate's Zone Margin around it, the frames); the timeline is put back where it was."""
+    frames = list(range(scene.frame_start, scene.frame_end + 1, max(1, scene.frame_step)))
+    current, positions, camera = scene.frame_current, [], None
+    try:
+        for frame in frames:
+            scene.frame_set(frame)
+            plate = plate_from_object(obj, unit)
+            camera = camera_from_object(scene, scene.camera, unit)
+            positions.append(plate.to_plate(camera.position[None])[0])
+    finally:
+        scene.frame_set(current)
+    if min(p[2] for p in positions) <= 0:
+        raise ExportError(f"the camera passes behind plate '{obj.name}' during the shot: "
+                          f"viewers must stay on its +Z side")
+    zone = ViewingZone.fit(positions, camera.aperture_diameter or 0.0,
+                           obj.holo.zone_margin * unit, camera.pixel_angle())
+    return zone, frames
+
+
+def plan_summary(context) -> list[str]:
+    """The planner's verdict and figures (:func:`holo_core.plate.plan.summary`) for the
+    selected plate, the holographic objects, the scene camera and the recording settings,
+    in the plate's frame; the planner runs here, in Blender's process (pure arithmetic)."""
     scene, obj, unit = context.scene, plate_object(context), scale(context.scene)
     plate = plate_from_object(obj, unit)
     camera = camera_from_object(scene, scene.camera, unit)
@@ -80,29 +135,27 @@ def plan_command(context) -> list[str]:
         raise ExportError("no holographic emitters to plan for")
     local = plate.to_plate(np.concatenate(corners) * unit)
     eye = plate.to_plate(camera.position[None])[0]
-    look = plate.to_plate((camera.position - camera.rotation[:, 2])[None])[0]
     zone = plate.zone or zone_around(plate, camera, obj.holo.zone_margin * unit)
-    command = [sys.executable, "-m", "holo_core", "plan",
-               "--bounds", *map(_number, local.min(0)), *map(_number, local.max(0)),
-               "--plate-size", _number(plate.width), _number(plate.height),
-               "--camera", *map(_number, eye), "--look-at", *map(_number, look),
-               "--lens", _number(camera.lens), "--sensor-width", _number(camera.sensor_width),
-               "--resolution", *map(str, camera.resolution),
-               "--zone", *map(_number, zone.centre), *map(_number, zone.half_extents)]
-    command += ["--fstop", _number(camera.fstop), "--focus-distance",
-                _number(camera.focus_distance)] if camera.fstop else ["--pinhole"]
-    return command
-
-
-def _number(value) -> str:
-    """A number as the command line reads it, exactly, in positional notation: argparse takes
-    '-1.9e-08' for an option, never for a negative number (and NumPy 2's repr of its scalars
-    is ``np.float64(...)``)."""
-    return np.format_float_positional(float(value), unique=True, trim="-")
+    h = scene.holo
+    p = plan((plate.width, plate.height), [local.min(0), local.max(0)], zone=zone,
+             pixel_angle=zone.pixel or camera.pixel_angle(), looks=h.iterations,
+             wavelength=h.wavelength * unit if h.wavelength > 0 else None)
+    v = plan_view(p, position=eye, pixel_angle=camera.pixel_angle(),
+                  pupil=camera.aperture_diameter, resolution=camera.resolution)
+    lens = f"{camera.lens:g} mm f/{camera.fstop:g}" if camera.fstop else \
+        f"a {camera.lens:g} mm pinhole"
+    lines = summary(p, v, lens=lens, resolution=camera.resolution,
+                    plate_size=(plate.width, plate.height), camera=eye)
+    gb = 2.0**30
+    try:
+        p.check_budget(memory=h.plate_memory * gb, disk=h.plate_disk * gb)
+    except InputError as e:
+        lines.insert(1, f"refused     {e}")
+    return lines
 
 
 class HOLO_OT_plan_plate(bpy.types.Operator):
-    """State what the plate will take and give before recording it: its samples, wavelength, memory and time, and what the scene camera's view of it resolves"""
+    """State what the plate will take and give before recording it: whether its views are sharp, its samples, wavelength, disk, memory and time, and what the scene camera's view of it reads"""
 
     bl_idname = "holo.plan_plate"
     bl_label = "Plan Plate"
@@ -114,21 +167,26 @@ class HOLO_OT_plan_plate(bpy.types.Operator):
     def execute(self, context):
         obj = plate_object(context)
         try:
-            command = plan_command(context)
+            lines = plan_summary(context)
         except (ExportError, ValueError) as e:
+            session.plans[obj.name] = [str(e)]
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        r = subprocess.run(command, capture_output=True, text=True, timeout=120, check=False,
-                           env=environment(runtime_paths(), device() or None))
-        lines = (r.stdout if r.returncode == 0 else r.stderr).strip().splitlines()
         session.plans[obj.name] = lines
         for line in lines:
-            self.report({"INFO"} if r.returncode == 0 else {"ERROR"}, line)
-        return {"FINISHED"} if r.returncode == 0 else {"CANCELLED"}
+            self.report({"WARNING"} if line.startswith("refused") else {"INFO"}, line)
+        return {"FINISHED"}
 
 
 def plan_lines(obj) -> list[str]:
     return session.plans.get(obj.name, [])
+
+
+def _number(value) -> str:
+    """A number as the command line reads it, exactly, in positional notation: argparse takes
+    '-1.9e-08' for an option, never for a negative number (and NumPy 2's repr of its scalars
+    is ``np.float64(...)``)."""
+    return np.format_float_positional(float(value), unique=True, trim="-")
 
 
 _PITCH_UNITS = [("UM", "µm", "Micrometres (cameras, SLMs, scanned film)", 1e-6),
@@ -352,7 +410,8 @@ def _menu(menu, _context):
                          text="Hologram (.exr, scan, lab array)")
 
 
-CLASSES = (HOLO_OT_fit_zone, HOLO_OT_plan_plate, HOLO_OT_import_hologram)
+CLASSES = (HOLO_OT_fit_zone, HOLO_OT_fit_zone_to_shot, HOLO_OT_plan_plate,
+           HOLO_OT_import_hologram)
 
 
 def register():

@@ -122,9 +122,14 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                                options=BLEND_RELATIVE,
                                description="Where holograms and the holographic pass of each "
                                            "frame are written (// is the .blend's folder)")
-    max_resolution: IntProperty(name="Max Hologram Size", default=1024, min=64, max=8192,
-                                description="Largest hologram side in samples; the optics are "
-                                            "chosen automatically up to this size")
+    plate_memory: FloatProperty(name="Memory Budget", default=8.0, min=0.1, soft_max=256.0,
+                                description="What recording a plate may hold in memory [GB]: "
+                                            "a plate that needs more is refused before any "
+                                            "work, with its size (Plan Plate says it)")
+    plate_disk: FloatProperty(name="Disk Budget", default=100.0, min=0.1, soft_max=10000.0,
+                              description="What a plate's files may take on disk [GB], every "
+                                          "iteration: a plate that needs more is refused "
+                                          "before any work, with its size")
     wavelength: FloatProperty(name="Wavelength", default=0.0, min=0.0, max=1.0, precision=6,
                               subtype="DISTANCE", unit="LENGTH",
                               description="Recording wavelength (0: chosen for the image's "

@@ -101,6 +101,24 @@ class PlatePlan:
         pairs = self.emitters * self.footprint
         return self.looks * groups * pairs / PAIRS_PER_SECOND
 
+    def check_budget(self, *, memory=None, disk=None, channels=CHANNELS) -> None:
+        """:class:`InputError` with the sizes and what would take less, before any work, when
+        the recording needs more than ``memory`` or its plate more than ``disk`` [bytes]
+        (None: no limit)."""
+        gb = 2.0**30
+        advice = ("a smaller viewing zone, objects nearer the plate, a coarser view (fewer "
+                  "pixels or a smaller aperture) or fewer looks need less; Camera mode needs "
+                  "no plate")
+        if disk is not None and self.disk_bytes(channels) > disk:
+            raise InputError(f"the plate needs {self.disk_bytes(channels) / gb:.3g} GB on disk "
+                             f"({self.looks} look(s) of {self.shape[1]} x {self.shape[0]} "
+                             f"samples, {channels} channels); the disk budget is "
+                             f"{disk / gb:.3g} GB: {advice}")
+        if memory is not None and self.memory_bytes(channels) > memory:
+            raise InputError(f"recording the plate needs {self.memory_bytes(channels) / gb:.3g} "
+                             f"GB of memory in one piece; the memory budget is "
+                             f"{memory / gb:.3g} GB: record it tile by tile, or {advice}")
+
     def describe(self) -> str:
         """The plan in plain words: samples, spacing, size on disk, time."""
         mpx = self.samples / 1e6
@@ -134,6 +152,48 @@ class ViewPlan:
         return (f"the view is {verdict} (resolves {self.spot_px:.2g} px), the camera "
                 f"{where}; it reads {self.window / 1e6:.3g} Mpx of the plate, about "
                 f"{self.seconds:.0f} s here")
+
+
+def summary(p: PlatePlan, v: ViewPlan, *, lens: str, resolution, plate_size,
+            camera) -> list[str]:
+    """The plan in plain words, the verdict first: whether ``v``'s views (``resolution``
+    (W, H) through ``lens``, e.g. '40 mm f/2.8', from ``camera`` (3,) [m]) are sharp, how
+    long the recording and a view take, then the samples, the zone, the wavelength, the
+    emitters, disk and memory (mm, µm, seconds, GB)."""
+    rows, cols = p.shape
+    gb = 2.0**30
+    verdict = ("sharp" if v.sharp else f"blurred: they resolve {v.spot_px:.2g} px where a sharp "
+               f"view resolves half a pixel; a longer lens, a wider aperture or Camera mode "
+               f"makes them sharp")
+    lines = [
+        f"verdict     views of {resolution[0]} x {resolution[1]} px through {lens} are "
+        f"{verdict}; the plate records in about {duration(p.record_seconds())} here, each "
+        f"view about {duration(v.seconds)}",
+        f"plate       {p.size[0] * 1e3:.4g} x {p.size[1] * 1e3:.4g} mm of the {plate_size[0]:g} "
+        f"x {plate_size[1]:g} m plate (where the objects' light reaches the zone): {cols} x "
+        f"{rows} samples ({rows * cols / 1e6:.3g} Mpx), {p.pitch * 1e6:.3g} x "
+        f"{p.row_pitch * 1e6:.3g} µm apart",
+        f"zone        {p.zone.describe()}, for the camera at ({camera[0]:g}, {camera[1]:g}, "
+        f"{camera[2]:g}) m",
+        f"wavelength  {p.wavelength * 1e6:.4g} µm (the depth partner "
+        f"{p.depth_wavelength * 1e6:.6g} µm): through {lens} a view resolves half a pixel",
+        f"emitters    about {p.emitters:,}, one per resolved spot seen from the zone's centre",
+        f"disk        {p.disk_bytes() / gb:.3g} GB for {p.looks} look(s); memory while "
+        f"recording {p.memory_bytes() / gb:.3g} GB in one piece, "
+        f"{p.memory_bytes(tiled=True) / gb:.3g} GB tile by tile",
+        f"per view    reads {v.window / 1e6:.3g} Mpx of the plate, about "
+        f"{duration(v.seconds)} for {p.looks} look(s)"]
+    if v.outside_zone > 0:
+        lines.append(f"warning     the camera's pupil reaches {v.outside_zone * 1e3:.3g} mm "
+                     f"beyond the zone: its views will be cut off or soft")
+    return lines
+
+
+def duration(seconds: float) -> str:
+    """``seconds`` as a person reads it: 40 s, 3 min, 2.5 h."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.2g} h"
 
 
 def plan(plate_size, bounds, *, zone: ViewingZone, pixel_angle: float,

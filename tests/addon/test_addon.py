@@ -267,7 +267,6 @@ def test_animation_renders_a_pass_per_frame(empty_scene, tmp_path):
     scene.render.engine = "BLENDER_WORKBENCH"
     scene.holo.mode = "PLATE"  # the plate's hologram is kept between frames
     scene.holo.iterations = 1
-    scene.holo.max_resolution = 512
     for frame, x in ((1, -0.15), (2, 0.15), (3, 0.15)):
         cube.location.x = x
         cube.keyframe_insert("location", frame=frame)
@@ -310,14 +309,13 @@ def _camera_columns(scene, cam, points):
     return cols[:, 0]
 
 
-def _earlier_outputs(scene, *, size=(32, 24), iterations=1, max_resolution=256):
+def _earlier_outputs(scene, *, size=(32, 24), iterations=1):
     """A small scene's job, with random bytes standing for its earlier hologram and pass."""
     from holo_addon.render import pipeline
     _plate_camera_cube(scene)
     scene.holo.mode = "PLATE"
     scene.render.resolution_x, scene.render.resolution_y = size
     scene.holo.iterations = iterations
-    scene.holo.max_resolution = max_resolution
     job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
     job.job.output.folder.mkdir(parents=True)
     earlier = {p: os.urandom(64) for p in (job.holograms[0],
@@ -398,7 +396,6 @@ def test_blender_process_loads_no_opencl_driver(empty_scene, monkeypatch):
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
     scene.holo.mode = "PLATE"
     scene.holo.iterations = 1
-    scene.holo.max_resolution = 256
     assert bpy.ops.holo.record_hologram() == {"FINISHED"}
     scene.holo.mode = "CAMERA"
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
@@ -414,8 +411,7 @@ def test_a_killed_worker_is_reported_and_earlier_files_stay(empty_scene, monkeyp
     import threading
 
     from holo_addon.render import pipeline
-    _, earlier = _earlier_outputs(empty_scene, size=(160, 120), iterations=8,
-                                  max_resolution=2048)
+    _, earlier = _earlier_outputs(empty_scene, size=(160, 120), iterations=8)
     start = pipeline.start
 
     def start_then_kill(job):

@@ -29,7 +29,6 @@ def _moving_cube(scene, tmp_path, margin=0.01):
     scene.render.film_transparent = False
     scene.holo.mode = "PLATE"
     scene.holo.iterations = 1
-    scene.holo.max_resolution = 512
     for frame, x in ((1, -0.15), (2, 0.15), (3, -0.05)):
         cube.location.x = x
         cube.keyframe_insert("location", frame=frame)

@@ -235,15 +235,13 @@ def test_a_procedural_base_colour_is_baked_and_recorded(empty_scene):
 
 
 def test_a_state_recorded_before_is_not_recorded_again(empty_scene, monkeypatch):
-    """Max Hologram Size 256 → 128 → 256: two recordings, not three; each state has its own
-    files (farm workers on different frames never share a hologram file). The render's size,
-    which a plate does not depend on, records nothing."""
+    """Iterations 1 → 2 → 1: two recordings, not three; each state has its own files (farm
+    workers on different frames never share a hologram file). The render's size, which a
+    plate does not depend on, records nothing."""
     from holo_addon.render import pipeline
     scene = empty_scene
     _plate_camera_cube(scene)
     scene.holo.mode = "PLATE"
-    scene.holo.iterations = 1
-    scene.holo.max_resolution = 256
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
     recorded = []
     original = pipeline.run
@@ -253,8 +251,8 @@ def test_a_state_recorded_before_is_not_recorded_again(empty_scene, monkeypatch)
         return original(job, progress, on_log)
     monkeypatch.setattr(pipeline, "run", run)
     paths = []
-    for samples in (256, 128, 256):
-        scene.holo.max_resolution = samples
+    for iterations in (1, 2, 1):
+        scene.holo.iterations = iterations
         assert bpy.ops.holo.record_hologram() == {"FINISHED"}
         paths.append(_prepare(scene).holograms[0])
     assert recorded == [True, True, False], recorded

@@ -221,7 +221,7 @@ def test_controls_show_only_where_they_apply(empty_scene):
     from holo_addon.ui import panels as ui
     cube, _, plate = _plate_camera_cube(empty_scene)
     context = SimpleNamespace(scene=empty_scene, object=cube)
-    plate_only = {("prop", n) for n in ("max_resolution", "wavelength", "iterations",
+    plate_only = {("prop", n) for n in ("plate_memory", "plate_disk", "wavelength", "iterations",
                                         "composition", "opacity_threshold", "show_coverage")}
     plate_only |= {("operator", "holo.record_hologram")}
     for mode, hidden in (("CAMERA", plate_only), ("PLATE", {("prop", "samples")})):

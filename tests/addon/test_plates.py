@@ -23,7 +23,6 @@ def _plate_scene(scene):
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
     scene.holo.mode = "PLATE"
     scene.holo.iterations = 1
-    scene.holo.max_resolution = 256
     plate.holo.zone_margin = 0.2
     return cube, cam, plate
 
@@ -95,22 +94,6 @@ def test_planner_in_the_panel(empty_scene):
     text = "\n".join(lines)
     for word in ("verdict", "Mpx", "µm apart", "wavelength", "GB", "tile by tile", "per view"):
         assert word in text, word
-
-
-def test_the_planners_numbers_reach_its_command_line_exactly():
-    """A camera on the plate's axis sits at coordinates like -1.9e-08 m, which argparse takes
-    for an option in exponent notation: the panel passes every number positionally, and each
-    one parses back to the same float (the demo's plate mode failed here)."""
-    import argparse
-
-    from holo_addon.ui import plates
-    values = [-1.92585e-08, -3.0, 0.1, 1e-30, 2.5e12, -7.16867e-08]
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--camera", type=float, nargs=3)
-    parser.add_argument("--look-at", type=float, nargs=3)
-    args = parser.parse_args(["--camera", *map(plates._number, values[:3]),
-                              "--look-at", *map(plates._number, values[3:])])
-    assert args.camera + args.look_at == values
 
 
 def test_import_a_hologram_and_keep_its_link(empty_scene, tmp_path, rng):
@@ -204,3 +187,38 @@ def test_import_a_scan_and_composite_its_letter(empty_scene, tmp_path):
     assert iou >= 0.95, iou
     assert shown[dot].mean() >= 0.9 and cols[dot].mean() > cols[truth].mean()
     assert wall_seen > 0.01, "the raster around the plate's window is the wall"
+
+
+def test_a_shot_records_once_and_every_frame_renders_from_it(empty_scene):
+    """Fit Zone to Shot: the camera dollies 10 cm over frames 1-3; the zone holds its pupil at
+    every frame (the Zone Margin around it), the plate is recorded for the first frame and
+    every later frame renders from it, recording nothing; the planner, run in Blender's
+    process, gives its verdict first."""
+    from holo_addon.render import pipeline
+    from holo_addon.ui import plates
+    scene = empty_scene
+    _, cam, plate = _plate_scene(scene)
+    plate.holo.zone_margin = 0.01
+    for frame, x in ((1, -0.05), (3, 0.05)):
+        cam.location.x = x
+        cam.keyframe_insert("location", frame=frame)
+    scene.frame_start, scene.frame_end = 1, 3
+    scene.frame_set(2)
+    bpy.context.view_layer.objects.active = plate
+    assert bpy.ops.holo.fit_zone_to_shot() == {"FINISHED"}
+    assert scene.frame_current == 2
+    zone = ViewingZone(centre=tuple(plate.holo.zone_centre),
+                       half_extents=tuple(plate.holo.zone_half), pupil=plate.holo.zone_pupil)
+    pupil = 0.05 / 2.8
+    assert zone.half_extents[0] == pytest.approx(0.05 + pupil / 2 + 0.01, rel=1e-4), zone
+    assert zone.half_extents[1] == pytest.approx(pupil / 2 + 0.01, rel=1e-4), zone
+    assert bpy.ops.holo.plan_plate() == {"FINISHED"}
+    assert plates.plan_lines(plate)[0].startswith("verdict"), plates.plan_lines(plate)
+    records = []
+    for frame in (1, 2, 3):
+        scene.frame_set(frame)
+        job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
+        records.append(job.records)
+        assert not [w for w in job.warnings if "viewing zone" in w], job.warnings
+        assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert records == [True, False, False], records

@@ -140,7 +140,8 @@ CAMERA = [
     ("job not a dict", lambda d: d.clear() or d.update(job=[1]), "job has no field 'job'"),
 ]
 PLATE = [
-    ("max resolution 0", _set("route", "max_resolution", value=0), "max_resolution"),
+    ("memory budget 0", _set("route", "memory_budget", value=0), "memory_budget"),
+    ("disk budget nan", _set("route", "disk_budget", value=float("nan")), "disk_budget"),
     ("wavelength -1", _set("route", "wavelength", value=-1.0), "wavelength"),
     ("composition unknown", _set("route", "composition", value="median"), "composition"),
     ("opacity threshold 2", _set("route", "opacity_threshold", value=2.0), "opacity_threshold"),

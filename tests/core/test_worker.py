@@ -25,7 +25,7 @@ def cube(size=0.4):
     return Mesh(vertices=c, triangles=np.array(faces), colours=np.full((8, 3), 0.8))
 
 
-def job(tmp_path, *, resolution=(32, 24), max_resolution=256, iterations=1, route=None,
+def job(tmp_path, *, resolution=(32, 24), iterations=1, route=None,
         **output):
     """A plate of a cube and its view (or ``route``'s), frame 1 into ``tmp_path/holo``."""
     plate = Plate(matrix_world=look_at((0, -1.5, 0), (0, 0, 0), up=(0, 0, 1)),
@@ -33,7 +33,7 @@ def job(tmp_path, *, resolution=(32, 24), max_resolution=256, iterations=1, rout
     cam = Camera(matrix_world=look_at((0, -3.0, 0), (0, 0, 0), up=(0, 0, 1)),
                  resolution=resolution)
     out = tmp_path / "holo"
-    route = route or PlateRoute(plate=plate, max_resolution=max_resolution, supersample=1,
+    route = route or PlateRoute(plate=plate, supersample=1,
                                 holograms=tuple(out / f"h{i}.exr" for i in range(iterations)))
     return Job(points=(cube(),), camera=cam, route=route,
                output=Output(folder=out, frame=1, **output))
@@ -78,7 +78,7 @@ def _unchanged(files, out):
 
 
 def test_cancel_kills_the_worker_within_a_second_and_keeps_earlier_files(tmp_path):
-    j = job(tmp_path, resolution=(320, 240), max_resolution=1024, iterations=3)
+    j = job(tmp_path, resolution=(320, 240), iterations=3)
     files = _earlier(j)
     w = worker.Worker(j)
     while not any(kind == "progress" for kind, _ in w.poll(timeout=0.1)):
@@ -109,7 +109,7 @@ def test_cancel_from_the_progress_callback(tmp_path):
 
 def test_a_killed_worker_is_a_clear_report(tmp_path):
     """SIGKILL is what the kernel's out-of-memory killer sends."""
-    j = job(tmp_path, resolution=(320, 240), max_resolution=1024, iterations=3)
+    j = job(tmp_path, resolution=(320, 240), iterations=3)
     files = _earlier(j)
     w = worker.Worker(j)
     while not any(kind == "progress" for kind, _ in w.poll(timeout=0.1)):
@@ -199,7 +199,7 @@ def test_a_plates_iterations_are_coded_looks_of_one_seed(tmp_path):
     assert result.recorded == j.route.holograms and result.pass_path is None
     a, b = (read_hologram(p) for p in j.route.holograms)
     assert not np.array_equal(a.object_wave, b.object_wave), "the looks are one recording"
-    same = dict(plate=j.route.plate, camera=j.camera, max_resolution=256, seed=0)
+    same = dict(plate=j.route.plate, camera=j.camera, seed=0)
     for code, look in ((None, a), ((3, 2), b)):
         h = record_hologram(list(j.points), code=code, **same)
         assert np.array_equal(h.object_wave, look.object_wave), code
