@@ -11,7 +11,7 @@ _API = {"Camera": ".scene", "look_at": ".scene", "Plate": ".scene", "ViewingZone
         "Hologram": ".scene",
         "Mesh": ".scene", "Pupil": ".optics", "record_hologram": ".plate",
         "record_points": ".plate", "reconstruct": ".plate", "render_view": ".plate",
-        "sideband": ".acquired", "find_carrier": ".acquired",
+        "physical_field": ".plate", "sideband": ".acquired", "find_carrier": ".acquired",
         "render_camera": ".camera", "RenderResult": ".view", "write_view": ".io.view",
         "read_hologram": ".io.hologram", "write_hologram": ".io.hologram",
         "import_acquired": ".acquired", "read_acquired": ".io.acquired",
@@ -32,11 +32,11 @@ _PACKAGES = ("acquired", "camera", "io", "opencl", "optics", "phase", "plate", "
 __all__ = ["Camera", "Field", "Hologram", "InputError", "Mesh", "Plate", "Pupil", "RenderResult",
            "ViewingZone", "adjoint", "angular_spectrum", "autofocus", "double_phase",
            "find_carrier", "fraunhofer", "fresnel", "gerchberg_saxton", "import_acquired",
-           "look_at", "object_hologram", "optimise_phase", "propagate_to_plane", "psnr",
-           "rayleigh_sommerfeld", "read_acquired", "read_hologram", "read_mesh", "reconstruct",
-           "record_hologram", "record_points", "render_camera", "render_view", "resample",
-           "sideband", "ssim", "thin_lens", "tilt", "to_device", "unwrap", "write_acquired",
-           "write_hologram", "write_view"]
+           "look_at", "object_hologram", "optimise_phase", "physical_field", "propagate_to_plane",
+           "psnr", "rayleigh_sommerfeld", "read_acquired", "read_hologram", "read_mesh",
+           "reconstruct", "record_hologram", "record_points", "render_camera", "render_view",
+           "resample", "sideband", "ssim", "thin_lens", "tilt", "to_device", "unwrap",
+           "write_acquired", "write_hologram", "write_view"]
 
 
 def __getattr__(name):  # the top-level API, imported on first use (keeps `import` light)

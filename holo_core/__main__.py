@@ -40,15 +40,29 @@ def demo(args) -> int:
     return 0
 
 
+POINT_OPTIONS = {"pitch": "--pitch", "wavelengths": "--wavelengths",
+                 "reference_angle": "--reference-angle", "spacing": "--spacing",
+                 "max_points": "--max-points"}
+ZONE_OPTIONS = {"camera": "--camera", "look_at": "--look-at", "zone": "--zone",
+                "dolly": "--dolly", "zone_margin": "--zone-margin", "plate_size": "--plate-size",
+                "focus_distance": "--focus-distance", "look": "--look"}
+
+
 def record(args) -> int:
+    """A plate of the mesh: by default against the carrier converging on its viewing zone,
+    with occlusion (``--method zone``), else a point sum (``auto``, ``direct``, ``wrp``);
+    into an EXR file, or tile by tile on Dask into a store (NAME.zarr or a URL)."""
     import dataclasses
 
-    import numpy as np
-
-    from .io.hologram import write_hologram
     from .io.mesh import read_mesh
-    from .plate.record import Reference, record_points
-    from .scene.mesh import default_spacing, sample_points
+    zone = args.method == "zone"
+    for name, flag in (ZONE_OPTIONS if not zone else POINT_OPTIONS).items():
+        if getattr(args, name) is not None:
+            raise ValueError(f"{flag} applies to " + (
+                "point sums (--method auto, direct or wrp); a plate of meshes (--method zone, "
+                "the default) plans its samples and wavelength from its viewing zone" if zone
+                else "a plate of meshes (--method zone, the default); a point sum records "
+                     "the hologram --resolution and --pitch give"))
     tiled = _is_store(args.output)
     if tiled:  # before the work: the store's path or URL, made absolute for the workers
         from .io.tiles import check_output
@@ -56,33 +70,86 @@ def record(args) -> int:
     else:
         out = _output(args.output, args.mesh, "")
     mesh = read_mesh(args.mesh)
-    shape = (args.resolution[1], args.resolution[0])
-    wavelengths = tuple(w * 1e-9 for w in args.wavelengths)
-    vertices = mesh.vertices.copy()
     if args.distance is not None:  # place the mesh's nearest point at -distance, centred
+        vertices = mesh.vertices.copy()
         lo, hi = vertices.min(0), vertices.max(0)
         vertices -= [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, hi[2] + args.distance]
         mesh = dataclasses.replace(mesh, vertices=vertices)
-    spacing = args.spacing or default_spacing(max(wavelengths), args.pitch, shape, vertices)
+    return (_record_zone if zone else _record_points)(args, mesh, out, tiled)
+
+
+def _record_zone(args, mesh, out, tiled) -> int:
+    """The plate of meshes: its zone and reference view from the camera options, the plate
+    (z = 0 of the world, the mesh behind it) as large as the light to the zone needs."""
+    import numpy as np
+
+    from .io.hologram import write_hologram
+    from .plate.plan import plan as plan_plate
+    from .plate.plan import window_on_plate
+    from .plate.record import look_code, record_plate
+    from .scene.plate import Plate
+    v = mesh.vertices
+    bounds = np.array([v.min(0), v.max(0)])
+    if bounds[1, 2] >= 0:
+        raise ValueError(f"the mesh must lie behind the plate (z < 0; the plate is z = 0, the "
+                         f"camera in front): it reaches z = {bounds[1, 2]:.4g} m; give "
+                         f"--distance to place it")
+    centre = bounds.mean(0)
+    cam, zone = _camera_and_zone(args, bounds, (centre[0], centre[1], -bounds[1, 2]),
+                                 tuple(args.resolution or (640, 360)))
+    if args.plate_size is not None:
+        size = tuple(args.plate_size)
+    else:  # wide enough for all the light from the objects to the zone
+        lo, hi = window_on_plate(bounds, zone, math.inf, math.inf)
+        size = tuple(2 * np.maximum(np.abs(lo), np.abs(hi)))
+    plate = Plate(matrix_world=np.eye(4), width=size[0], height=size[1], zone=zone)
+    p = plan_plate(size, bounds, zone=zone, pixel_angle=zone.pixel, looks=1)
+    print(f"plate of {p.describe()}")
+    code = look_code(*args.look) if args.look else None
+    common = {"plate": plate, "camera": cam, "code": code, "progress": _progress_bar()}
+    if tiled:
+        record_plate(mesh, url=out, tile=args.tile, scheduler=args.scheduler,
+                     overwrite=args.overwrite,
+                     dashboard=lambda link: print(f"Dask dashboard: {link}"), **common)
+        print(f"\n{out}")
+        return 0
+    holo = record_plate(mesh, **common)
+    print()
+    print(write_hologram(out, holo))
+    return 0
+
+
+def _record_points(args, mesh, out, tiled) -> int:
+    """A point sum of points sampled on the mesh (no occlusion), of the given size."""
+    import numpy as np
+
+    from .io.hologram import write_hologram
+    from .plate.record import Reference, record_points
+    from .scene.mesh import default_spacing, sample_points
+    shape = tuple(reversed(args.resolution or (1024, 1024)))
+    pitch = args.pitch or 8e-6
+    wavelengths = tuple(w * 1e-9 for w in (args.wavelengths or (633, 532, 473)))
+    spacing = args.spacing or default_spacing(max(wavelengths), pitch, shape, mesh.vertices)
     pos, colours = sample_points(mesh, spacing, channels=len(wavelengths),
-                                 max_points=args.max_points)
+                                 max_points=args.max_points or 200_000)
     colours = colours[:, :len(wavelengths)] if colours.shape[1] >= len(wavelengths) else \
         np.repeat(colours.mean(1, keepdims=True), len(wavelengths), 1)
     print(f"{len(pos)} point emitters ({spacing:.3g} m apart) -> {shape[1]}x{shape[0]} "
-          f"hologram, pitch {args.pitch:.3g} m, wavelengths {args.wavelengths} nm")
+          f"hologram, pitch {pitch:.3g} m, wavelengths "
+          f"{[round(w * 1e9, 3) for w in wavelengths]} nm")
     if tiled:  # a complex plate in tiles, on Dask (the object wave: no reference)
         from .plate.tiles import record_tiled
         method = "direct" if args.method == "auto" else args.method
-        record_tiled(pos, colours, url=out, shape=shape, pitch=args.pitch,
+        record_tiled(pos, colours, url=out, shape=shape, pitch=pitch,
                      wavelengths=wavelengths, tile=args.tile, method=method,
                      scheduler=args.scheduler, overwrite=args.overwrite,
                      progress=_progress_bar(),
                      dashboard=lambda link: print(f"Dask dashboard: {link}"))
         print(f"\n{out}")
         return 0
-    holo = record_points(pos, colours, shape=shape, pitch=args.pitch, wavelengths=wavelengths,
-                         reference=Reference(angle=args.reference_angle), method=args.method,
-                         progress=_progress_bar())
+    holo = record_points(pos, colours, shape=shape, pitch=pitch, wavelengths=wavelengths,
+                         reference=Reference(angle=args.reference_angle or 0.0),
+                         method=args.method, progress=_progress_bar())
     print()
     print(write_hologram(out, holo))
     return 0
@@ -108,8 +175,6 @@ def plan(args) -> int:
 
     from .plate.plan import plan as plan_plate
     from .plate.plan import plan_view, summary
-    from .scene.camera import Camera, look_at
-    from .scene.plate import ViewingZone
     if args.bounds is not None:  # where they are: no move
         bounds = np.reshape(args.bounds, (2, 3))
     else:
@@ -124,23 +189,10 @@ def plan(args) -> int:
             raise ValueError("plan needs the objects: a mesh file, --box W H D or --bounds [m]")
         shift = np.array([-(lo[0] + hi[0]) / 2, -(lo[1] + hi[1]) / 2, -hi[2] - args.distance])
         bounds = np.array([lo + shift, hi + shift])
-    eye = np.array(args.camera if args.camera else (0.0, 0.0, args.distance))
-    if eye[2] <= 0:
-        raise ValueError(f"--camera must be in front of the plate (z > 0 in its frame: the plate "
-                         f"is z = 0, the objects behind it); got ({eye[0]:g}, {eye[1]:g}, "
-                         f"{eye[2]:g}) m, {'on' if eye[2] == 0 else 'behind'} the plate")
-    target = np.array(args.look_at) if args.look_at else bounds.mean(0)
-    focus = args.focus_distance or float(np.linalg.norm(eye - target))
-    cam = Camera(matrix_world=look_at(eye, target, up=(0, 1, 0)), lens=args.lens,
-                 sensor_width=args.sensor_width, resolution=tuple(args.resolution),
-                 fstop=args.fstop, focus_distance=focus if args.fstop else None)
-    pupil, pixel = cam.aperture_diameter or 0.0, cam.pixel_angle()
-    if args.zone is not None:
-        zone = ViewingZone(centre=args.zone[:3], half_extents=args.zone[3:], pupil=pupil,
-                           pixel=pixel)
-    else:
-        path = [eye + (x, 0.0, 0.0) for x in (-args.dolly / 2, args.dolly / 2)]
-        zone = ViewingZone.fit(path, pupil, args.zone_margin, pixel)
+    cam, zone = _camera_and_zone(args, bounds, (0.0, 0.0, args.distance),
+                                 tuple(args.resolution))
+    eye, pixel = np.asarray(cam.position), cam.pixel_angle()
+    pupil = cam.aperture_diameter or 0.0
     p = plan_plate(tuple(args.plate_size), bounds, zone=zone, pixel_angle=pixel,
                    looks=args.looks)
     v = plan_view(p, position=eye, pixel_angle=pixel, pupil=pupil or None,
@@ -150,6 +202,67 @@ def plan(args) -> int:
                         plate_size=tuple(args.plate_size), camera=eye):
         print(line)
     return 0
+
+
+def _camera_and_zone(args, bounds, eye, resolution):
+    """(the reference camera, the viewing zone) of ``plan`` and ``record``'s options: the
+    camera at ``--camera`` (default ``eye`` [m]) looking at ``--look-at`` (default the
+    objects' box ``bounds`` centre), focused there unless ``--focus-distance``; the zone
+    ``--zone``, else ``--zone-margin`` around its pupil along the ``--dolly``."""
+    import numpy as np
+
+    from .scene.camera import Camera, look_at
+    from .scene.plate import ViewingZone
+    eye = np.array(args.camera if args.camera else eye, np.float64)
+    if eye[2] <= 0:
+        raise ValueError(f"--camera must be in front of the plate (z > 0 in its frame: the plate "
+                         f"is z = 0, the objects behind it); got ({eye[0]:g}, {eye[1]:g}, "
+                         f"{eye[2]:g}) m, {'on' if eye[2] == 0 else 'behind'} the plate")
+    target = np.array(args.look_at) if args.look_at else np.asarray(bounds).mean(0)
+    focus = args.focus_distance or float(np.linalg.norm(eye - target))
+    cam = Camera(matrix_world=look_at(eye, target, up=(0, 1, 0)), lens=args.lens,
+                 sensor_width=args.sensor_width, resolution=resolution,
+                 fstop=args.fstop, focus_distance=focus if args.fstop else None)
+    pupil, pixel = cam.aperture_diameter or 0.0, cam.pixel_angle()
+    if args.zone is not None:
+        return cam, ViewingZone(centre=args.zone[:3], half_extents=args.zone[3:], pupil=pupil,
+                                pixel=pixel)
+    dolly = args.dolly or 0.0
+    path = [eye + (x, 0.0, 0.0) for x in (-dolly / 2, dolly / 2)]
+    margin = 0.01 if args.zone_margin is None else args.zone_margin
+    return cam, ViewingZone.fit(path, pupil, margin, pixel)
+
+
+def _view_options(p, *, plate_size=None, point_sums=False):
+    """The options of a plate's zone and its reference camera, for ``plan`` and ``record``
+    (``point_sums``: where a point sum ignores them, their help says so)."""
+    only = " (--method zone)" if point_sums else ""
+    metres = _number(float, lambda v: 0 <= v <= MAX_LENGTH, "metres >= 0")
+    p.add_argument("--zone", type=FINITE, nargs=6, metavar=("X", "Y", "Z", "HX", "HY", "HZ"),
+                   help="the viewing zone's centre and half widths [m] in the plate's frame "
+                        "(default: --zone-margin around the camera's pupil)" + only)
+    p.add_argument("--plate-size", type=POSITIVE, nargs=2, default=plate_size,
+                   metavar=("W", "H"), help=f"[m] ({' '.join(map(str, plate_size))})"
+                   if plate_size else "[m] (default: wide enough for all the light from the "
+                                      "objects to the zone)" + only)
+    p.add_argument("--zone-margin", type=metres, default=None,
+                   help="the viewing zone reaches this far beyond the camera's pupil [m] "
+                        "(0.01)" + only)
+    p.add_argument("--dolly", type=metres, default=None,
+                   help="the camera moves this far along x, centred on --camera [m] (0)" + only)
+    p.add_argument("--camera", type=FINITE, nargs=3, metavar=("X", "Y", "Z"),
+                   help="camera position [m] in the plate's frame (default: on the axis, as "
+                        "far in front as the objects' nearest point is behind)" + only)
+    p.add_argument("--look-at", type=FINITE, nargs=3, metavar=("X", "Y", "Z"),
+                   help="[m] (default: the objects' centre)" + only)
+    p.add_argument("--lens", type=POSITIVE, default=50.0, help="focal length [mm] (50)" + only)
+    p.add_argument("--sensor-width", type=POSITIVE, default=36.0, help="[mm] (36)" + only)
+    p.add_argument("--fstop", type=POSITIVE, default=2.8,
+                   help="f-number (2.8); 0 is refused" + only)
+    p.add_argument("--pinhole", dest="fstop", action="store_const", const=None,
+                   help="a camera without a lens" + only)
+    p.add_argument("--focus-distance", type=POSITIVE, default=None,
+                   help="[m] (default: the objects' centre)" + only)
 
 
 def info(args) -> int:
@@ -187,14 +300,22 @@ def _camera(args, h):
         return default_camera(h, resolution=resolution)
     plate = np.asarray(h.plate)
     centre = (plate @ np.append(np.asarray(h.bounds).mean(0), 1.0))[:3]
-    eye = args.camera if args.camera else plate[:3, 3] + plate[:3, 2] * 3 * max(h.size)
+    if args.camera:
+        eye = args.camera
+    elif h.zone is not None:  # the centre of the zone it was recorded for
+        eye = (plate @ np.append(h.zone.centre, 1.0))[:3]
+    else:
+        eye = plate[:3, 3] + plate[:3, 2] * 3 * max(h.size)
     target = args.look_at if args.look_at else centre
+    fstop = args.fstop
+    if fstop is None and h.zone is not None and h.zone.pupil:  # the zone's own views
+        fstop = args.lens * 1e-3 / h.zone.pupil
     focus = args.focus_distance
-    if args.fstop and focus is None:
+    if fstop and focus is None:
         focus = float(np.linalg.norm(np.asarray(eye) - centre))
     return Camera(matrix_world=look_at(eye, target, up=plate[:3, 1]), lens=args.lens,
                   sensor_width=args.sensor_width, resolution=resolution or (256, 256),
-                  fstop=args.fstop, focus_distance=focus if args.fstop else None)
+                  fstop=fstop, focus_distance=focus if fstop else None)
 
 
 def _scan_or_hologram(args):
@@ -425,20 +546,34 @@ def main(argv=None) -> int:
     p.add_argument("-o", "--output", required=True,
                    help="hologram file to write (.exr), or a folder for <mesh>.exr, or a "
                         "tiled plate NAME.zarr (a folder or an fsspec URL; recorded on Dask)")
-    p.add_argument("--resolution", type=PIXELS, nargs=2, default=(1024, 1024),
-                   metavar=("W", "H"), help="hologram size in pixels (default 1024 1024)")
-    p.add_argument("--pitch", type=METRES, default=8e-6, help="sample spacing [m] (8e-6)")
-    p.add_argument("--wavelengths", type=NANOMETRES, nargs="+", default=[633, 532, 473],
-                   help="wavelengths [nm, not m like the other lengths] (633 532 473)")
-    p.add_argument("--reference-angle", type=FINITE, default=0.0, help="ϑ [rad] (0)")
+    p.add_argument("--method", choices=["zone", "auto", "direct", "wrp"], default="zone",
+                   help="zone (default): the plate of meshes, with occlusion, against the "
+                        "carrier converging on its viewing zone, sampled as the zone needs; "
+                        "auto, direct, wrp: a point sum of points sampled on the mesh, no "
+                        "occlusion (auto: the faster)")
+    p.add_argument("--resolution", type=PIXELS, nargs=2, default=None, metavar=("W", "H"),
+                   help="zone: the views' pixels, which with --lens and --sensor-width set "
+                        "the sharpness the plate records (640 360); a point sum: the "
+                        "hologram's samples (1024 1024)")
     p.add_argument("--distance", type=POSITIVE, default=None,
-                   help="move the mesh so its nearest point is this far in front [m]")
+                   help="move the mesh so its nearest point is this far behind the plate, "
+                        "centred on its axis [m] (default: where it is)")
+    _view_options(p, point_sums=True)
+    p.add_argument("--look", type=_number(int, lambda v: v >= 0, "an integer >= 0"), nargs=2,
+                   metavar=("K", "N"), help="record coded look K of N (--method zone; default: "
+                                            "one look of random phases)")
+    p.add_argument("--pitch", type=METRES, default=None,
+                   help="a point sum's sample spacing [m] (8e-6)")
+    p.add_argument("--wavelengths", type=NANOMETRES, nargs="+", default=None,
+                   help="a point sum's wavelengths [nm, not m like the other lengths] (633 532 "
+                        "473)")
+    p.add_argument("--reference-angle", type=FINITE, default=None,
+                   help="a point sum's reference ϑ [rad] (0)")
     p.add_argument("--spacing", type=POSITIVE, default=None,
-                   help="point spacing on the surface [m] (default: the hologram's resolution)")
-    p.add_argument("--max-points", type=COUNT, default=200_000,
-                   help="the most point emitters sampled on the mesh (200000)")
-    p.add_argument("--method", choices=["auto", "direct", "wrp"], default="auto",
-                   help="point emitter sum (default: the faster)")
+                   help="a point sum's point spacing on the surface [m] (default: the "
+                        "hologram's resolution)")
+    p.add_argument("--max-points", type=COUNT, default=None,
+                   help="a point sum's most point emitters sampled on the mesh (200000)")
     p.add_argument("--tile", type=PIXELS, default=2048,
                    help="with an output NAME.zarr or URL: samples per tile side (2048)")
     p.add_argument("--scheduler", default=None,
@@ -455,33 +590,11 @@ def main(argv=None) -> int:
                    help="the objects' box [m] instead of a mesh")
     p.add_argument("--bounds", type=FINITE, nargs=6, metavar=("X0", "Y0", "Z0", "X1", "Y1", "Z1"),
                    help="the objects' box [m] in the plate's frame, where it is (no --distance)")
-    p.add_argument("--zone", type=FINITE, nargs=6, metavar=("X", "Y", "Z", "HX", "HY", "HZ"),
-                   help="the viewing zone's centre and half widths [m] in the plate's frame "
-                        "(default: --zone-margin around the camera's pupil)")
     p.add_argument("--distance", type=POSITIVE, default=0.3,
                    help="the objects' nearest point behind the plate [m] (0.3)")
-    p.add_argument("--plate-size", type=POSITIVE, nargs=2, default=(0.1, 0.1),
-                   metavar=("W", "H"), help="[m] (0.1 0.1)")
-    p.add_argument("--zone-margin", type=_number(float, lambda v: 0 <= v <= MAX_LENGTH,
-                                                 "metres >= 0"), default=0.01,
-                   help="the viewing zone reaches this far beyond the camera's pupil [m] (0.01)")
-    p.add_argument("--dolly", type=_number(float, lambda v: 0 <= v <= MAX_LENGTH,
-                                           "metres >= 0"), default=0.0,
-                   help="the camera moves this far along x, centred on --camera [m] (0)")
     p.add_argument("--looks", type=PIXELS, default=2, help="coded looks to record (2)")
-    p.add_argument("--camera", type=FINITE, nargs=3, metavar=("X", "Y", "Z"),
-                   help="camera position [m] in the plate's frame (default: on the axis, "
-                        "--distance in front)")
-    p.add_argument("--look-at", type=FINITE, nargs=3, metavar=("X", "Y", "Z"),
-                   help="[m] (default: the objects' centre)")
-    p.add_argument("--lens", type=POSITIVE, default=50.0, help="focal length [mm] (50)")
-    p.add_argument("--sensor-width", type=POSITIVE, default=36.0, help="[mm] (36)")
     p.add_argument("--resolution", type=PIXELS, nargs=2, default=(640, 360), metavar=("W", "H"))
-    p.add_argument("--fstop", type=POSITIVE, default=2.8, help="f-number (2.8); 0 is refused")
-    p.add_argument("--pinhole", dest="fstop", action="store_const", const=None,
-                   help="a camera without a lens")
-    p.add_argument("--focus-distance", type=POSITIVE, default=None,
-                   help="[m] (default: the objects' centre)")
+    _view_options(p, plate_size=(0.1, 0.1))
     p = sub.add_parser("info", help="print a hologram file's metadata")
     p.add_argument("hologram")
     p = sub.add_parser("render", help="render a view of a hologram to EXR (+ PNG preview)")
@@ -489,14 +602,17 @@ def main(argv=None) -> int:
     p.add_argument("-o", "--output", required=True,
                    help="view file to write (.exr), or a folder for <hologram>_view.exr")
     p.add_argument("--camera", type=FINITE, nargs=3, metavar=("X", "Y", "Z"),
-                   help="camera position [m], world (default: 3 plate sizes in front)")
+                   help="camera position [m], world (default: the centre of the zone the plate was "
+                        "recorded for, else 3 plate sizes in front)")
     p.add_argument("--look-at", type=FINITE, nargs=3, metavar=("X", "Y", "Z"),
                    help="point the camera looks at [m] (default: the objects' centre)")
     p.add_argument("--lens", type=POSITIVE, default=50.0, help="focal length [mm] (50)")
     p.add_argument("--sensor-width", type=POSITIVE, default=36.0, help="[mm] (36)")
     p.add_argument("--resolution", type=PIXELS, nargs=2, default=None, metavar=("W", "H"),
                    help="(256 256; an acquired hologram's: its band's Nyquist sampling)")
-    p.add_argument("--fstop", type=POSITIVE, default=None, help="f-number (default: pinhole)")
+    p.add_argument("--fstop", type=POSITIVE, default=None,
+                   help="f-number (default: the pupil of the zone the plate was recorded for, "
+                        "else a pinhole)")
     p.add_argument("--focus-distance", type=POSITIVE, default=None,
                    help="[m] (default with --fstop: the objects' centre)")
     p.add_argument("--supersample", type=SUPERSAMPLE, default=None,

@@ -23,6 +23,7 @@ import numpy as np
 from holo_core import __version__
 from holo_core.io.hologram import FORMAT_VERSION
 from holo_core.job import CameraRoute, Job, Output, PlateRoute, Radiance
+from holo_core.scene.camera import Camera
 from holo_core.scene.mesh import Mesh
 from holo_core.scene.plate import ViewingZone
 

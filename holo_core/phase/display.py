@@ -214,9 +214,14 @@ def _carrier(shape, pitch: float, wavelength: float, sin_angle: float, azimuth: 
 
 def display_field(hologram: Hologram, display: Display, *, channel=0) -> np.ndarray:
     """The plate's object wave of ``channel`` on the display's grid, complex64 (rows, cols):
-    the plate's window around its centre, resampled band-limited; outside the plate, zero."""
+    the plate's window around its centre, resampled band-limited; outside the plate, zero. A
+    plate stored against its zone's carrier gives its physical field there
+    (:func:`holo_core.plate.carrier.field_at`: its samples interpolated band-limited and
+    re-modulated), reading only the samples under the display."""
     display = _display(display)
     wave, channel = _object_wave(hologram, channel)
+    if hologram.carrier is not None:
+        return _carrier_field(hologram, display, channel)
     window = tuple(_window(n, hologram.pitch, n_out, display.pitch)
                    for n, n_out in zip(hologram.shape, display.shape))
     _check_memory(display, [w.stop - w.start for w in window])
@@ -224,6 +229,22 @@ def display_field(hologram: Hologram, display: Display, *, channel=0) -> np.ndar
     # indexing first: a chunked store reads only the window, not the gigapixel plate
     u = np.asarray(wave[channel, window[0], window[1]], np.complex64)
     return resample(u, pitch=hologram.pitch, out_shape=display.shape, out_pitch=display.pitch)
+
+
+def _carrier_field(hologram: Hologram, display: Display, channel: int) -> np.ndarray:
+    """A carrier plate's physical field on the display's grid, centred on the plate."""
+    from ..plate import carrier
+    rows, cols = display.shape
+    xs, ys = ((np.arange(n) - (n - 1) / 2) * display.pitch for n in (cols, rows))
+    region = (xs[0], ys[0], xs[-1], ys[-1])
+    reads = [min(math.ceil(n * display.pitch / step) + 2 * carrier.TAPS, size)
+             for n, step, size in ((rows, hologram.row_pitch, hologram.shape[0]),
+                                   (cols, hologram.pitch, hologram.shape[1]))]
+    _check_memory(display, reads)
+    reach = 1 / (2 * carrier.physical_pitch(hologram, channel, region))
+    _warn_band(reach, display, f"a display of pitch <= {1 / (4 * reach):.4g} m holds it (the "
+                               f"carrier's direction and the zone's band)")
+    return carrier.field_at(hologram, channel, xs, ys)
 
 
 PATTERN_SAMPLE_BYTES = 96  # host bytes per display sample while encoding (measured: 88 for
@@ -264,13 +285,20 @@ def _check_band(hologram: Hologram, channel: int, display: Display) -> None:
     """Log a warning when the wave may reach past half the display's Nyquist frequency, which
     the encodings' low-pass (a 4f filter or the carrier's room) needs free."""
     wavelength = hologram.wavelengths[channel]
-    reach = hologram.band / wavelength if hologram.band else 1 / (2 * hologram.pitch)
+    half = 1 / (4 * display.pitch)
+    _warn_band(hologram.band / wavelength if hologram.band else 1 / (2 * hologram.pitch),
+               display, f"record the plate with band <= {half * wavelength:.4g} or a plate "
+                        f"pitch >= {2 * display.pitch:.4g} m")
+
+
+def _warn_band(reach: float, display: Display, advice: str) -> None:
+    """Log a warning, with ``advice``, when a wave reaching ``reach`` [cycles/m] passes half
+    the display's Nyquist frequency."""
     half = 1 / (4 * display.pitch)
     if reach > half * (1 + 1e-9):
         log.warning("the plate's wave reaches %.4g cycles/m, beyond half the display's Nyquist "
                     "frequency (%.4g cycles/m): the encoding's low-pass will cut or alias it; "
-                    "record the plate with band <= %.4g or a plate pitch >= %.4g m", reach, half,
-                    half * wavelength, 2 * display.pitch)
+                    "%s", reach, half, advice)
 
 
 def _display(display) -> Display:

@@ -14,6 +14,8 @@ viewed by any camera in that zone.
 - ``record.py``: the plate of meshes against its carrier; point sums (complex, or
   H = |O + R|² with its reference, Eq. 4, 19)
 - ``reconstruction.py``: R'·H with the DC term suppressed (Sect. VI)
+- ``tiles.py``: plates larger than memory, recorded tile by tile as Dask tasks into a tiled
+  store (plates of meshes against their carrier; point sums)
 - ``to_pupil.py``: the plate's light carried to a camera's entrance pupil (a carrier plate's
   by demodulation, decimation and a non-uniform FFT; a full-band one by the angular spectrum)
 - ``view.py``: a camera's image of it, by the camera hologram's own pupil stage (Sect. VII)
@@ -27,6 +29,7 @@ from importlib import import_module
 # and Blender's process imports it without the OpenCL driver the recorder and the viewer load
 _API = {"Reference": ".record", "record_hologram": ".record", "record_plate": ".record",
         "record_points": ".record", "reconstruct": ".reconstruction", "render_view": ".view",
+        "physical_field": ".carrier",
         "find_carrier": "..acquired", "sideband": "..acquired"}  # their home: acquired/
 __all__ = sorted(_API)
 

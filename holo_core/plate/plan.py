@@ -101,10 +101,10 @@ class PlatePlan:
         pairs = self.emitters * self.footprint
         return self.looks * groups * pairs / PAIRS_PER_SECOND
 
-    def check_budget(self, *, memory=None, disk=None, channels=CHANNELS) -> None:
+    def check_budget(self, *, memory=None, disk=None, channels=CHANNELS, tiled=False) -> None:
         """:class:`InputError` with the sizes and what would take less, before any work, when
-        the recording needs more than ``memory`` or its plate more than ``disk`` [bytes]
-        (None: no limit)."""
+        the recording needs more than ``memory`` (the whole plate, or one tile when
+        ``tiled``) or its plate more than ``disk`` [bytes] (None: no limit)."""
         gb = 2.0**30
         advice = ("a smaller viewing zone, objects nearer the plate, a coarser view (fewer "
                   "pixels or a smaller aperture) or fewer looks need less; Camera mode needs "
@@ -114,10 +114,12 @@ class PlatePlan:
                              f"({self.looks} look(s) of {self.shape[1]} x {self.shape[0]} "
                              f"samples, {channels} channels); the disk budget is "
                              f"{disk / gb:.3g} GB: {advice}")
-        if memory is not None and self.memory_bytes(channels) > memory:
-            raise InputError(f"recording the plate needs {self.memory_bytes(channels) / gb:.3g} "
-                             f"GB of memory in one piece; the memory budget is "
-                             f"{memory / gb:.3g} GB: record it tile by tile, or {advice}")
+        need = self.memory_bytes(channels, tiled=tiled)
+        if memory is not None and need > memory:
+            piece = "a tile at a time" if tiled else "in one piece"
+            raise InputError(f"recording the plate needs {need / gb:.3g} GB of memory {piece}; "
+                             f"the memory budget is {memory / gb:.3g} GB: "
+                             f"{'' if tiled else 'record it tile by tile, or '}{advice}")
 
     def describe(self) -> str:
         """The plan in plain words: samples, spacing, size on disk, time."""

@@ -22,11 +22,18 @@ def reconstruct(hologram: Hologram, colour: int = 0, *, dc_suppression=True) -> 
     """The virtual image's wave on z = 0 for one colour, complex64 (H, W) (Eq. 18).
 
     ``colour`` indexes ``hologram.wavelengths``; ``dc_suppression`` subtracts the mean
-    intensity first (Eq. 20-21).
+    intensity first (Eq. 20-21). A complex hologram holds the object wave itself: its samples
+    (a plate without a carrier), or for a plate stored against its zone's carrier the physical
+    field re-modulated from them (:func:`holo_core.plate.carrier.physical_field` with its
+    defaults: the carrier's window at the finest pitch the field needs there; that function
+    returns it as a Field, with its pitch and pose, and takes a region and a pitch).
     """
     if not isinstance(hologram, Hologram):
         raise InputError(f"hologram must be a Hologram; got {type(hologram).__name__}")
     colour = validate.index("colour", colour, len(hologram.wavelengths))
+    if hologram.encoding == "complex":
+        from .carrier import physical_field
+        return np.asarray(physical_field(hologram, colour).samples, np.complex64)
     h = hologram.intensity[colour].astype(np.float64)
     if dc_suppression:
         h = h - h.mean()

@@ -19,7 +19,7 @@ from ..scene.mesh import Mesh, facing, sample_points, visible_from
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Carrier, Plate, ViewingZone
 from ..validate import InputError
 from .emitters import zone_emitters
-from .plan import LAYERS, RIM, plan
+from .plan import LAYERS, RIM, TILE, PlatePlan, plan
 from .point_sources import cone_filter, point_bytes, point_wave
 from .triangles import depth_texture, mesh_primitives, primitive_wave, surface_pitch
 from .zone_sum import ZoneEmitters, ZoneSum, ZoneWindow
@@ -241,7 +241,7 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, zon
         (:func:`record_plate`). With a point sum, it sizes the cone and the wavelength to
         this view (:func:`holo_core.plate.sampling.choose`).
     zone, zone_margin, code, budget
-        As for :func:`record_plate`.
+        As for :func:`record_plate` (the budget applies to plates of meshes).
     encoding
         A point sum's: 'complex' (the object wave, the default) or 'intensity' (|O + R|²); a
         plate of meshes is complex (:func:`record_plate`).
@@ -410,8 +410,9 @@ PLATE_METHODS = ("zone", "auto", "direct", "wrp")
 
 def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
                  zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
-                 code=None, encoding="complex", budget=(None, None),
-                 progress: jobs.Progress = None) -> Hologram:
+                 code=None, encoding="complex", budget=(None, None), url=None, tile=TILE,
+                 scheduler=None, overwrite=False, progress: jobs.Progress = None,
+                 dashboard=None) -> Hologram:
     """A plate hologram of ``meshes`` (world metres), independent of any camera: what it
     records depends on the meshes, the plate's placement and size, the viewing zone and the
     views' sharpness (:mod:`holo_core.plate.plan`). Its samples are the object wave against
@@ -445,16 +446,94 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
         where random looks would only average it down).
     encoding : 'complex'
         The object wave (against its carrier); a display's or a print's intensity pattern is
-        made from it (:mod:`holo_core.io.display`).
+        made from it (:mod:`holo_core.phase.display`).
     budget : (memory, disk) [bytes]
         What the recording may hold in memory and the plate take on disk (None: no limit);
-        a plate that needs more is refused before any work, with its sizes.
+        a plate that needs more is refused before any work, with its sizes (in memory, the
+        whole plate; tiled, one tile).
+    url : str or path, optional
+        Record tile by tile into the tiled store there, on Dask, and return it opened
+        (:func:`holo_core.plate.tiles.record_plate_tiled`: ``tile`` samples a side, a
+        multiple of 256; ``scheduler``, ``overwrite``, ``dashboard`` as there). Default: the
+        whole plate in memory.
+    progress : callable, optional
+        Called with the fraction done (rows in memory, tiles in a store).
     """
+    if url is not None:
+        from .tiles import record_plate_tiled
+        return record_plate_tiled(meshes, url=url, plate=plate, camera=camera, zone=zone,
+                                  zone_margin=zone_margin, wavelength=wavelength, depth=depth,
+                                  seed=seed, code=code, encoding=encoding, tile=tile,
+                                  scheduler=scheduler, overwrite=overwrite, progress=progress,
+                                  dashboard=dashboard, budget=budget)
+    return prepare_plate(meshes, plate=plate, camera=camera, zone=zone,
+                         zone_margin=zone_margin, wavelength=wavelength, depth=depth, seed=seed,
+                         code=code, encoding=encoding, budget=budget).record(progress)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True, eq=False)
+class PlateRecording:
+    """A plate of meshes ready to be summed (:func:`prepare_plate`): what it will be
+    (``info``, its carrier included), where its samples lie (``window``), its emitters per
+    wavelength (``groups``: (λ [m], :class:`ZoneEmitters`) in channel order) and what it was
+    made from (``plan``, ``meshes`` in the plate's frame, ``seed``, ``code``). Any block of it
+    is the same sum computed alone (:meth:`sums`): recorded whole in memory (:meth:`record`)
+    or tile by tile (:mod:`.tiles`), its samples are the same."""
+
+    info: HologramInfo
+    window: ZoneWindow
+    groups: tuple
+    plan: PlatePlan
+    meshes: tuple
+    seed: int
+    code: tuple | None
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.window.shape
+
+    def sums(self, rt=None) -> list[ZoneSum]:
+        """One :class:`ZoneSum` per wavelength, its emitters on the device."""
+        return [ZoneSum(em, self.window, lam, rt) for lam, em in self.groups]
+
+    def region(self, sums, row0: int, col0: int, rows: int, cols: int) -> np.ndarray:
+        """The samples (C, rows, cols) complex64 of a block (row0, col0 multiples of 256),
+        every channel; :class:`RuntimeError` if any is not finite (never written)."""
+        samples = np.concatenate([s.region(row0, col0, rows, cols) for s in sums])
+        if not np.isfinite(samples).all():  # never a hologram of NaN: it would be written
+            raise RuntimeError(f"the object wave holds non-finite samples in rows {row0}-"
+                               f"{row0 + rows - 1}, columns {col0}-{col0 + cols - 1} (the "
+                               f"OpenCL device's arithmetic failed); nothing was recorded")
+        return samples
+
+    def record(self, progress: jobs.Progress = None) -> Hologram:
+        """The whole plate in memory, summed in bands of rows."""
+        rows, cols = self.shape
+        samples = np.zeros((len(self.info.wavelengths), rows, cols), np.complex64)
+        sums = self.sums()
+        for r0 in range(0, rows, BAND_ROWS):
+            here = min(BAND_ROWS, rows - r0)
+            samples[:, r0:r0 + here] = self.region(sums, r0, 0, here, cols)
+            jobs.report(progress, r0 + here, rows)
+        return Hologram(info=self.info, object_wave=samples)
+
+
+BAND_ROWS = 256  # rows of the plate summed at once in memory (a multiple of the block lists')
+
+
+def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
+                  zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
+                  code=None, encoding="complex", tile=None,
+                  budget=(None, None)) -> PlateRecording:
+    """The emitters, visibility tables and sampling of a plate of ``meshes`` (the arguments
+    as :func:`record_plate` takes them), before any sum: the plan, the emitters the zone sees
+    with their amplitudes. The host's memory and the ``budget`` are checked for the whole
+    plate, or with ``tile`` (samples a side) for one tile of it."""
     if not isinstance(plate, Plate):
         raise InputError(f"plate must be a Plate; got {type(plate).__name__}")
     if encoding != "complex":
         raise InputError(f"encoding must be 'complex' for a plate of meshes (a display's "
-                         f"intensity pattern is made from it: holo_core.io.display); got "
+                         f"intensity pattern is made from it: holo_core.phase.display); got "
                          f"{encoding!r}"[:200])
     meshes = [meshes] if isinstance(meshes, Mesh) else list(meshes)
     if not meshes or not all(isinstance(m, Mesh) for m in meshes):
@@ -475,12 +554,14 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
         raise InputError("a plate needs the sharpness of its views: a camera, a zone with its "
                          "pixel angle, or a wavelength")
     p = plan((plate.width, plate.height), bounds, zone=zone, pixel_angle=pixel or 1.0,
-             wavelength=wavelength)
+             wavelength=wavelength, **({} if tile is None else {"tile": tile}))
     log.info("sampling: %s", p.describe())
     channels = ["R", "G", "B"] + (["Z"] if depth else [])
-    p.check_budget(memory=budget[0], disk=budget[1], channels=len(channels))
-    memory.check_host(f"a {p.shape[1]}x{p.shape[0]} plate of {len(channels)} channels",
-                      p.memory_bytes(len(channels)))
+    p.check_budget(memory=budget[0], disk=budget[1], channels=len(channels),
+                   tiled=tile is not None)
+    held = f"a {p.tile}x{p.tile} tile" if tile is not None else f"a {p.shape[1]}x{p.shape[0]} plate"
+    memory.check_host(f"{held} of {len(channels)} channels",
+                      p.memory_bytes(len(channels), tiled=tile is not None))
     em = zone_emitters(local, zone, p.spacing, layers=LAYERS)
     if not len(em):
         raise InputError(f"no surface of the meshes is seen from the viewing zone "
@@ -498,32 +579,21 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
     table = np.round(em.visibility[partial] * 255).astype(np.uint8)
     window = ZoneWindow(origin=p.origin, pitch=p.pitch, row_pitch=p.row_pitch, shape=p.shape,
                         centre=zone.centre, half_extents=zone.half_extents, rim=RIM)
-    groups = [(p.wavelength, np.sqrt(em.colour) * wave[:, None])]
+    amplitudes = [(p.wavelength, np.sqrt(em.colour) * wave[:, None])]
     if depth:
-        groups.append((p.depth_wavelength, wave[:, None]))
-    samples = np.zeros((len(channels),) + p.shape, np.complex64)
-    band, done, c = 256, 0, 0
-    for lam, amplitude in groups:
-        total = ZoneSum(ZoneEmitters(position=em.position, amplitude=amplitude,
-                                     visibility=rows, table=table, grid=em.grid), window, lam)
-        for r0 in range(0, p.shape[0], band):
-            rows_here = min(band, p.shape[0] - r0)
-            samples[c:c + total.channels, r0:r0 + rows_here] = total.region(
-                r0, 0, rows_here, p.shape[1])
-            done += rows_here
-            jobs.report(progress, done, len(groups) * p.shape[0])
-        c += total.channels
-    if not np.isfinite(samples).all():  # never a hologram of NaN: it would be written as one
-        raise RuntimeError("the object wave holds non-finite samples (the OpenCL device's "
-                           "arithmetic failed); nothing was recorded")
+        amplitudes.append((p.depth_wavelength, wave[:, None]))
+    groups = tuple((lam, ZoneEmitters(position=em.position, amplitude=a, visibility=rows,
+                                      table=table, grid=em.grid)) for lam, a in amplitudes)
     distance = float(np.linalg.norm(bounds.mean(0) - np.asarray(zone.centre)))
     wavelengths = (p.wavelength,) * 3 + ((p.depth_wavelength,) if depth else ())
-    return Hologram(object_wave=samples, encoding="complex", wavelengths=wavelengths,
-                    pitch=p.pitch, band=max(p.band), channels=tuple(channels),
-                    point_density=1 / (p.spacing * distance) ** 2, zone=zone, bounds=bounds,
-                    plate=plate.matrix_world, carrier=Carrier(centre=zone.centre,
-                                                              origin=p.origin,
-                                                              row_pitch=p.row_pitch))
+    info = HologramInfo(shape=p.shape, encoding="complex", wavelengths=wavelengths,
+                        pitch=p.pitch, band=max(p.band), channels=tuple(channels),
+                        point_density=1 / (p.spacing * distance) ** 2, zone=zone,
+                        bounds=bounds, plate=plate.matrix_world,
+                        carrier=Carrier(centre=zone.centre, origin=p.origin,
+                                        row_pitch=p.row_pitch))
+    return PlateRecording(info=info, window=window, groups=groups, plan=p, meshes=tuple(local),
+                          seed=seed, code=None if code is None else tuple(code))
 
 
 def look_code(k: int, n: int):

@@ -1,20 +1,26 @@
-"""Gigapixel plates: point emitters recorded tile by tile, out of core, as Dask tasks.
+"""Gigapixel plates: recorded tile by tile, out of core, as Dask tasks.
 
-The plate's object wave (Eq. 3) is written tile by tile into a tiled store
-(:mod:`holo_core.io.tiles`), so no process ever holds the whole plate: a task computes one
-tile from the emitters whose cone reaches it (``point_sources``: a point lights only the disc
-its pitch samples alias-free, ρ ≤ |z|·tan θ), writes it and its record. Every tile is the
-whole plate's recording cut to its rows and columns (the same sum, the same sample positions,
-the same random phases), so a tiled plate equals the plate recorded in memory.
+The plate's samples are written tile by tile into a tiled store (:mod:`holo_core.io.tiles`),
+so no process ever holds the whole plate: a task computes one tile, writes it and its record.
+Every tile is the whole plate's recording cut to its rows and columns (the same sums, the same
+sample positions, the same phases), so a tiled plate equals the plate recorded in memory.
+
+- Point emitters (:func:`record_tiled`): a tile sums the emitters whose cone reaches it
+  (``point_sources``: a point lights only the disc its pitch samples alias-free).
+- Plates of meshes (:func:`record_plate_tiled`), with occlusion, against the carrier
+  converging on their zone: the emitters the zone sees and their visibility tables are found
+  once, on the client (:func:`holo_core.plate.record.prepare_plate`); a tile is
+  :meth:`ZoneSum.region <holo_core.plate.zone_sum.ZoneSum.region>` of its block, from the
+  emitters whose footprint reaches it.
 
 The tasks run on Dask's distributed scheduler: by default a local cluster with one worker
 process per core (each its own OpenCL context), or the cluster at ``scheduler``
 (``tcp://host:8786``, or the environment's ``DASK_SCHEDULER_ADDRESS``) with no other change;
-the emitters are scattered to the workers once, not sent with every tile. A store holds one
-recording (the digest of its emitters, colours, phases, method and sampling): the same call
-again resumes it, keeping the tiles that read back whole and writing again those missing or
-damaged; another recording is refused by name (or replaces it with ``overwrite``), and two
-recordings never write one store at once (its lock).
+the emitters are scattered to the workers once, not sent with every tile (a worker puts them
+on its device once). A store holds one recording (the digest of what its samples depend on):
+the same call again resumes it, keeping the tiles that read back whole and writing again those
+missing or damaged; another recording is refused by name (or replaces it with ``overwrite``),
+and two recordings never write one store at once (its lock).
 """
 
 from __future__ import annotations
@@ -24,19 +30,24 @@ import os
 import socket
 import struct
 from contextlib import contextmanager
+from dataclasses import replace
 
 import numpy as np
 
 from .. import jobs, validate
 from ..io import tiles as store
+from ..opencl import get_runtime
 from ..scene.hologram import Hologram, HologramInfo
+from ..scene.plate import DEFAULT_ZONE_MARGIN
 from ..validate import InputError
 from .point_sources import check_distance, point_wave, sampling_grid
-from .record import DEFAULT_WAVELENGTHS, point_amplitudes
+from .record import DEFAULT_WAVELENGTHS, PlateRecording, point_amplitudes, prepare_plate
+from .zone_sum import BLOCK
 
 log = logging.getLogger(__name__)
 DEFAULT_TILE = 2048
-TILE_STEP = 64  # tiles are multiples of this: the kernel's column segments (<= 32) align
+TILE_STEP = 64  # point tiles are multiples of this: the kernel's column segments (<= 32) align
+ZONE_TILE_STEP = BLOCK  # a plate of meshes' tiles: multiples of its emitters' block lists
 CONNECT_TIMEOUT = 10.0  # [s] to reach a scheduler and hear its first message
 MAX_HANDSHAKE = 2**20   # bytes a Dask scheduler's first message may claim (a few hundred)
 
@@ -79,25 +90,84 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
     pos, wavelengths, amp = point_amplitudes(positions, colours, wavelengths, phases, seed)
     shape = validate.shape2d("shape", shape)
     pitch = validate.pitch("pitch", pitch)
-    tile = validate.integer("tile", tile, store.MIN_TILE, store.MAX_TILE)
-    if tile % TILE_STEP:
-        raise InputError(f"tile must be a multiple of {TILE_STEP} samples in "
-                         f"[{store.MIN_TILE}, {store.MAX_TILE}]; got {tile}")
+    tile = _tile(tile, TILE_STEP)
     validate.choice("method", method, ("direct", "wrp"))
-    if not isinstance(overwrite, bool):
-        raise InputError(f"overwrite must be True or False; got {overwrite!r}"[:200])
+    _flag("overwrite", overwrite)
     for lam in set(wavelengths):
         check_distance(pos, sampling_grid(shape, lam, pitch, band))
     info = HologramInfo(shape=shape, encoding="complex", wavelengths=wavelengths, pitch=pitch,
                         band=band or 0.0, plate=np.eye(4) if plate is None else plate,
                         channels=channels, zone=zone,
                         bounds=np.array([pos.min(0), pos.max(0)]) if bounds is None else bounds)
-    files = store.check_output(url)  # before the work: the output's problems come first
-    address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
-    if address:
-        _probe(address)  # fails fast, before the store is touched
+    files, address = _output_and_scheduler(url, scheduler)
     recording = _recording(pos, colours, phases, seed, method=method, shape=shape,
                            pitch=pitch, band=band, wavelengths=wavelengths, tile=tile)
+    _record_tiles(files, info, tile, recording, overwrite=overwrite, address=address,
+                  task=record_tile, shared=(pos, amp), progress=progress, dashboard=dashboard)
+    return store.open_plate(files.name)
+
+
+def record_plate_tiled(meshes, *, url, plate, camera=None, zone=None,
+                       zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
+                       code=None, encoding="complex", tile=DEFAULT_TILE, scheduler=None,
+                       overwrite=False, progress: jobs.Progress = None,
+                       dashboard=None, budget=(None, None)) -> Hologram:
+    """Record the plate of ``meshes`` (with occlusion, against the carrier converging on its
+    zone: :func:`holo_core.plate.record.record_plate`, whose other arguments these are) into
+    the tiled store at ``url`` and return it opened (:func:`holo_core.io.tiles.open_plate`).
+
+    The emitters and their visibility tables are found once, here, and scattered once to the
+    workers; each task sums one tile (``tile`` samples a side, a multiple of 256: the
+    emitters' block lists) and writes it with its record. The store's digest covers the
+    meshes in the plate's frame (vertices, triangles, colours, UVs, texture: the plate's pose
+    too), the zone, the plan (samples, pitches, origin, wavelengths), the seed, the coded
+    look, the tile and the emitters found (their positions, amplitudes and visibility): only
+    the same recording resumes into it. ``url``, ``scheduler``, ``overwrite``, ``progress``,
+    ``dashboard``: as for :func:`record_tiled`.
+    """
+    tile = _tile(tile, ZONE_TILE_STEP)
+    _flag("overwrite", overwrite)
+    files, address = _output_and_scheduler(url, scheduler)
+    job = prepare_plate(meshes, plate=plate, camera=camera, zone=zone, zone_margin=zone_margin,
+                        wavelength=wavelength, depth=depth, seed=seed, code=code,
+                        encoding=encoding, tile=tile, budget=budget)
+    recording = _plate_recording(job, tile)
+    _record_tiles(files, job.info, tile, recording, overwrite=overwrite, address=address,
+                  task=record_plate_tile, shared=replace(job, meshes=()), progress=progress,
+                  dashboard=dashboard)
+    return store.open_plate(files.name)
+
+
+def _tile(tile, step) -> int:
+    tile = validate.integer("tile", tile, store.MIN_TILE, store.MAX_TILE)
+    if tile % step:
+        raise InputError(f"tile must be a multiple of {step} samples in "
+                         f"[{store.MIN_TILE}, {store.MAX_TILE}]; got {tile}")
+    return tile
+
+
+def _flag(name, value) -> bool:
+    if not isinstance(value, bool):
+        raise InputError(f"{name} must be True or False; got {value!r}"[:200])
+    return value
+
+
+def _output_and_scheduler(url, scheduler):
+    """(the store's files, the scheduler's address or None), each checked before the work:
+    the output's problems first, then a scheduler that cannot serve (before the store is
+    touched)."""
+    files = store.check_output(url)
+    address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
+    if address:
+        _probe(address)
+    return files, address
+
+
+def _record_tiles(files, info, tile, recording, *, overwrite, address, task, shared, progress,
+                  dashboard) -> None:
+    """Write the tiles of ``recording`` still missing from the store (resumed, made, or
+    replaced with ``overwrite``): ``shared`` scattered once to every worker, then one
+    ``task(shared, spec, i, j)`` per tile."""
     with store.recording_into(files, info, tile, recording, overwrite=overwrite) as plate:
         todo = _to_record(plate)
         log.info("%s: %d of %d tiles to record", files.name, len(todo), plate.written().size)
@@ -106,11 +176,10 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
             with client_for(address) as client:
                 if dashboard is not None:
                     dashboard(client.dashboard_link)
-                points = client.scatter((pos, amp), broadcast=True)
-                futures = [client.submit(record_tile, points, spec, int(i), int(j), pure=False)
+                data = client.scatter(shared, broadcast=True)
+                futures = [client.submit(task, data, spec, int(i), int(j), pure=False)
                            for i, j in todo]
                 _wait(client, futures, progress)
-    return store.open_plate(files.name)
 
 
 def _recording(pos, colours, phases, seed, **sampling) -> dict:
@@ -124,6 +193,29 @@ def _recording(pos, colours, phases, seed, **sampling) -> dict:
              "sampling": store.array_digest(np.array(
                  [*sampling["shape"], sampling["pitch"], sampling["band"] or 0.0,
                   sampling["tile"], *sampling["wavelengths"]], np.float64)),
+             "encoding": "complex"}
+    return {"digest": store.digest_of(parts), "parts": parts}
+
+
+def _plate_recording(job: PlateRecording, tile: int) -> dict:
+    """What a store of a plate of meshes records: its digest and the parts a message names
+    when two differ."""
+    meshes = store.digest_of({str(n): [None if a is None else store.array_digest(a)
+                                       for a in (m.vertices, m.triangles, m.colours, m.uvs,
+                                                 m.texture)]
+                              for n, m in enumerate(job.meshes)})
+    z, p = job.info.zone, job.plan
+    emitters = [store.array_digest(np.asarray(a)) for _, em in job.groups
+                for a in (em.position, em.amplitude, em.visibility, em.table, em.grid)]
+    parts = {"method": "zone", "meshes": meshes[:16],
+             "zone": store.array_digest(np.array([*z.centre, *z.half_extents, z.pupil,
+                                                  z.pixel], np.float64)),
+             "plan": store.array_digest(np.array(
+                 [*p.shape, p.pitch, p.row_pitch, *p.origin, *job.info.wavelengths, *p.band,
+                  p.spacing, tile], np.float64)),
+             "seed": job.seed, "code": None if job.code is None else list(job.code),
+             "emitters": len(job.groups[0][1].position),
+             "emitters_found": store.digest_of({"groups": emitters})[:16],
              "encoding": "complex"}
     return {"digest": store.digest_of(parts), "parts": parts}
 
@@ -149,10 +241,7 @@ def record_tile(points, spec: dict, i: int, j: int) -> tuple[int, int]:
     (positions, amplitudes) whose cones reach it, written with its record. A store that now
     holds another recording (replaced while this task waited) is left alone."""
     pos, amp = points
-    plate = store.read_store(spec["url"], records=False)
-    if plate.recording["digest"] != spec["recording"]:
-        raise InputError(f"{spec['url']}: now holds another recording; tile ({i}, {j}) of "
-                         f"recording {spec['recording'][:12]} is not written")
+    plate = _still_ours(spec, i, j)
     info, tile = plate.info, plate.tile
     shape, pitch, band = plate.shape, info.pitch, info.band or None
     r0, r1, c0, c1 = store.tile_window(shape, tile, i, j)
@@ -175,6 +264,33 @@ def record_tile(points, spec: dict, i: int, j: int) -> tuple[int, int]:
                                       method=plate.recording["parts"]["method"])
     plate.write_tile(i, j, waves)
     return i, j
+
+
+def record_plate_tile(job: PlateRecording, spec: dict, i: int, j: int) -> tuple[int, int]:
+    """One task: tile (i, j) of the store ``spec`` names, the zone sum of ``job``'s emitters
+    over its block, written with its record. The emitters go onto this worker's device once
+    per recording (kept in its runtime's cache for the next tiles). A store that now holds
+    another recording (replaced while this task waited) is left alone."""
+    plate = _still_ours(spec, i, j)
+    r0, r1, c0, c1 = store.tile_window(plate.shape, plate.tile, i, j)
+    rt = get_runtime()
+    key = ("zone-sums", spec["recording"])
+    if key not in rt.cache:
+        for other in [k for k in rt.cache if isinstance(k, tuple) and k[0] == "zone-sums"]:
+            del rt.cache[other]  # an earlier recording's emitters: their device memory freed
+        rt.cache[key] = job.sums(rt)
+    plate.write_tile(i, j, job.region(rt.cache[key], r0, c0, r1 - r0, c1 - c0))
+    return i, j
+
+
+def _still_ours(spec: dict, i: int, j: int):
+    """The store ``spec`` names (its metadata checked, no record read), or
+    :class:`InputError` if it now holds another recording than ``spec``'s."""
+    plate = store.read_store(spec["url"], records=False)
+    if plate.recording["digest"] != spec["recording"]:
+        raise InputError(f"{spec['url']}: now holds another recording; tile ({i}, {j}) of "
+                         f"recording {spec['recording'][:12]} is not written")
+    return plate
 
 
 @contextmanager
@@ -221,12 +337,12 @@ def _probe(address) -> None:
     what = f"scheduler {address}"
     try:
         scheme, location = parse_address(address)
+        if scheme not in ("tcp", "tls"):
+            return  # another transport (inproc://, ucx://): Dask's own timeout applies
         host, port = parse_host_port(location)
     except (ValueError, TypeError) as e:
         raise InputError(f"{what}: not a scheduler address (tcp://host:port; {e})"[:300]) \
             from None
-    if scheme not in ("tcp", "tls"):
-        return  # another transport: Dask's own timeout applies
     try:
         with socket.create_connection((host, port), timeout=CONNECT_TIMEOUT) as s:
             if scheme == "tls":

@@ -13,8 +13,6 @@ import pytest
 bpy = pytest.importorskip("bpy")
 
 from holo_addon.blender.objects import show_as_raster
-from holo_core.io.view import write_view
-from holo_core.view import RenderResult
 
 ROOT = Path(__file__).resolve().parents[2]
 

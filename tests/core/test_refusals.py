@@ -39,7 +39,8 @@ def test_record_any_number_of_wavelengths_then_render(tmp_path, capsys, waveleng
     four wavelengths gave a 4-channel rgb the view writer refused; both render now."""
     (tmp_path / "tri.obj").write_text(TRIANGLE_OBJ)
     status, _, err = cli(capsys, "record", tmp_path / "tri.obj", "-o", tmp_path / "h.exr",
-                         "--resolution", 256, 256, "--wavelengths", *wavelengths,
+                         "--method", "auto", "--resolution", 256, 256, "--wavelengths",
+                         *wavelengths,
                          "--distance", 0.02, "--max-points", 500)
     assert status == 0, err
     status, out, err = cli(capsys, "render", tmp_path / "h.exr", "-o", tmp_path / "v.exr",

@@ -9,13 +9,14 @@ import os
 import re
 import socket
 import threading
-import time
 
 import numpy as np
 import pytest
 
 distributed = pytest.importorskip("distributed")
 zarr = pytest.importorskip("zarr")
+
+from stores import cancel_after, settled  # noqa: E402
 
 from holo_core import jobs  # noqa: E402
 from holo_core.io import tiles as store  # noqa: E402
@@ -26,14 +27,6 @@ from holo_core.plate.to_pupil import window_of  # noqa: E402
 from holo_core.validate import InputError  # noqa: E402
 
 SHAPE, PITCH, TILE, WAVELENGTHS = (1024, 1024), 8e-6, 256, (633e-9, 532e-9)
-
-
-@pytest.fixture(scope="module")
-def scheduler():
-    """One local cluster for the module, reached by its address as a remote one would be."""
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=":0") as cluster:
-        yield cluster.scheduler_address
 
 
 @pytest.fixture(scope="module")
@@ -83,16 +76,9 @@ def test_dask_and_other_tools_open_the_store_as_it_is(scene, scheduler, tmp_path
 def test_a_cancelled_recording_resumes_and_a_half_written_tile_is_written_again(
         scene, in_memory, scheduler, tmp_path):
     url = tmp_path / "p.zarr"
-    calls = []
-
-    def cancel_after_four(fraction):
-        calls.append(fraction)
-        if len(calls) == 4:
-            raise jobs.Cancelled()
-
     with pytest.raises(jobs.Cancelled):
-        _record(scene, url, scheduler, progress=cancel_after_four)
-    done = _settled(url)  # the tiles already running when cancelled end their write
+        _record(scene, url, scheduler, progress=cancel_after(4))
+    done = settled(url)  # the tiles already running when cancelled end their write
     assert 4 <= done.sum() < done.size, done.sum()
     with pytest.raises(HologramFileError, match=r"tiles are not written yet \(tile \(\d, \d\) "
                                                 r"first\); resume"):
@@ -104,14 +90,6 @@ def test_a_cancelled_recording_resumes_and_a_half_written_tile_is_written_again(
     h = _record(scene, url, scheduler)
     assert np.abs(h.object_wave[...] - in_memory.object_wave).max() <= \
         1e-6 * np.abs(in_memory.object_wave).max()
-
-
-def _settled(url):
-    done, before = store.tiles_done(url), None
-    while before is None or not np.array_equal(done, before):
-        time.sleep(1.0)
-        before, done = done, store.tiles_done(url)
-    return done
 
 
 def test_the_scheduler_comes_from_the_environment(scene, in_memory, scheduler, tmp_path,
@@ -170,7 +148,8 @@ def test_the_command_line_records_a_tiled_plate_on_the_scheduler_and_reads_it(
     (tmp_path / "tri.obj").write_text("v -0.002 -0.002 0\nv 0.002 -0.002 0\nv 0 0.002 0\n"
                                       "f 1 2 3\n")
     url = tmp_path / "tri.zarr"
-    assert main(["record", str(tmp_path / "tri.obj"), "-o", str(url), "--resolution", "512",
+    assert main(["record", str(tmp_path / "tri.obj"), "-o", str(url), "--method", "direct",
+                 "--resolution", "512",
                  "512", "--wavelengths", "633", "--distance", "0.02", "--tile", "256",
                  "--scheduler", scheduler, "--max-points", "2000"]) == 0
     assert store.tiles_done(url).shape == (2, 2) and store.tiles_done(url).all()
@@ -258,7 +237,8 @@ def test_a_relative_store_is_written_where_the_user_is_not_where_the_workers_are
                                       "f 1 2 3\n")
     workers = os.getcwd()  # the cluster's processes started here
     monkeypatch.chdir(tmp_path)
-    assert main(["record", "tri.obj", "-o", "rel.zarr", "--resolution", "256", "256",
+    assert main(["record", "tri.obj", "-o", "rel.zarr", "--method", "direct",
+                 "--resolution", "256", "256",
                  "--wavelengths", "633", "--distance", "0.02", "--tile", "128", "--scheduler",
                  scheduler, "--max-points", "500"]) == 0, capsys.readouterr().err
     assert store.tiles_done(tmp_path / "rel.zarr").all()
@@ -311,7 +291,8 @@ def test_the_command_line_says_each_in_one_line_before_the_work(tmp_path, endpoi
                                       "f 1 2 3\n")
     (tmp_path / "a_file.zarr").write_text("mine")
     args = [a.format(tmp=tmp_path) if a != "closed" else endpoint("closed") for a in args]
-    status, out, err = run_cli(capsys, "record", tmp_path / "tri.obj", *args, "--resolution",
-                               256, 256, "--wavelengths", 633, "--distance", 0.02)
+    status, out, err = run_cli(capsys, "record", tmp_path / "tri.obj", *args, "--method",
+                               "direct", "--resolution", 256, 256, "--wavelengths", 633,
+                               "--distance", 0.02)
     assert status == 2 and err.count("\n") == 1 and re.search(problem, err), (status, err)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file.zarr", "tri.obj"]

@@ -5,47 +5,13 @@ towards the zone and its visibility, times the conjugate carrier converging on t
 import numpy as np
 import pytest
 from accuracy import ZONE_SUM, ZONE_SUM_ROUGH_VISIBILITY, rel_err
+from zone_reference import reference
 
 from holo_core.plate.zone_sum import ZoneEmitters, ZoneSum, ZoneWindow, footprints, zone_sum
 
 WAVELENGTH = 5e-6
 WINDOW = ZoneWindow(origin=(-0.03, -0.025), pitch=2.3e-5, row_pitch=3.1e-5, shape=(448, 704),
                     centre=(0.01, -0.005, 0.3), half_extents=(0.03, 0.02, 0.01), rim=0.15)
-
-
-def rim(u, inner, width):
-    t = np.clip((np.abs(u) - inner) / width, 0, 1)
-    return (1 - t) ** 2 * (1 + 2 * t)
-
-
-def reference(em: ZoneEmitters, win: ZoneWindow, wavelength) -> np.ndarray:
-    """B(x) = exp(ik|x − Z|)·Σ a_j·w_j(x)·exp(ik·r_j)/r_j in float64, one emitter at a time."""
-    k = 2 * np.pi / wavelength
-    x = win.origin[0] + np.arange(win.shape[1]) * win.pitch
-    y = win.origin[1] + np.arange(win.shape[0]) * win.row_pitch
-    X, Y = np.meshgrid(x, y)
-    Z, e = np.asarray(win.centre), np.asarray(win.half_extents)
-    (g0x, gsx), (g0y, gsy) = em.grid
-    out = np.zeros((em.amplitude.shape[1],) + win.shape, complex)
-    for j, p in enumerate(em.position):
-        s = (Z[2] - p[2]) / -p[2]  # the ray through x reaches the zone's plane at xi
-        xi, eta = p[0] - Z[0] + s * (X - p[0]), p[1] - Z[1] + s * (Y - p[1])
-        w = rim(xi, e[0] + e[2] * np.abs(X - p[0]) / -p[2], win.rim * e[0]) * \
-            rim(eta, e[1] + e[2] * np.abs(Y - p[1]) / -p[2], win.rim * e[1])
-        if em.visibility[j] >= 0:
-            v = em.table[em.visibility[j]] / 255.0
-            gy, gx = v.shape
-            fx = np.clip((xi - g0x) / gsx, 0, gx - 1.0001)
-            fy = np.clip((eta - g0y) / gsy, 0, gy - 1.0001)
-            ix, iy = fx.astype(int), fy.astype(int)
-            ax, ay = fx - ix, fy - iy
-            top = v[iy, ix] * (1 - ax) + v[iy, ix + 1] * ax
-            bottom = v[iy + 1, ix] * (1 - ax) + v[iy + 1, ix + 1] * ax
-            w = w * (top * (1 - ay) + bottom * ay)
-        r = np.sqrt((X - p[0]) ** 2 + (Y - p[1]) ** 2 + p[2] ** 2)
-        out += em.amplitude[j][:, None, None] * (w * np.exp(1j * k * r) / r)[None]
-    rz = np.sqrt((X - Z[0]) ** 2 + (Y - Z[1]) ** 2 + Z[2] ** 2)
-    return out * np.exp(1j * k * rz)[None]
 
 
 def emitters(rng, n, table):

@@ -1,0 +1,262 @@
+"""Plates of meshes in tiles: recorded with occlusion against their zone's carrier, tile by
+tile as Dask tasks into a Zarr store, they equal the plate recorded in memory bit for bit; a
+view of the store reads only the tiles its window overlaps and equals the view of the plate in
+memory; a cancelled or killed recording resumes, keeping the tiles written; the store's digest
+covers what the samples depend on; the command line records a mesh as such a plate."""
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from plate_scene import PLATE, camera, meshes
+
+pytest.importorskip("distributed")
+zarr = pytest.importorskip("zarr")
+
+from stores import cancel_after, settled  # noqa: E402
+
+from holo_core import jobs  # noqa: E402
+from holo_core.io import tiles as store  # noqa: E402
+from holo_core.io.hologram import metadata, read_hologram  # noqa: E402
+from holo_core.plate.carrier import physical_field, window  # noqa: E402
+from holo_core.plate.record import record_plate  # noqa: E402
+from holo_core.plate.view import camera_in_plate, carrier_window, render_view  # noqa: E402
+from holo_core.validate import InputError  # noqa: E402
+
+SCALE, TILE = 0.25, 256  # a plate of 504 x 559 samples: 2 x 3 tiles
+ROOT = Path(__file__).resolve().parents[3]
+SCENE = {"plate": PLATE, "camera": camera("centre", SCALE), "zone_margin": 0.025}
+
+
+@pytest.fixture(scope="module")
+def in_memory():
+    return record_plate(meshes(), **SCENE)
+
+
+def _record(url, scheduler, scene=meshes, **kw):
+    return record_plate(scene(), **{**SCENE, **kw}, url=url, tile=TILE, scheduler=scheduler)
+
+
+@pytest.fixture(scope="module")
+def recorded(scheduler, tmp_path_factory):
+    url = tmp_path_factory.mktemp("plate") / "p.zarr"
+    return url, _record(url, scheduler)
+
+
+def _files(url):
+    """Each written file of the store and its modification time [ns]."""
+    return {p: p.stat().st_mtime_ns for p in Path(url).rglob("*")
+            if p.is_file() and p.name != store.LOCK and "zarr.json" not in p.name}
+
+
+def test_a_tiled_plate_of_meshes_equals_the_plate_recorded_in_memory(in_memory, recorded):
+    """Each tile is ZoneSum.region of its block from the same emitters, amplitudes and
+    visibility tables (found once on the client): bit-equal to the plate summed in memory in
+    bands of rows; the store holds the EXR's metadata with the carrier, chunked by tile."""
+    url, h = recorded
+    assert h.shape == in_memory.shape == (504, 559)
+    assert np.array_equal(h.object_wave[...], in_memory.object_wave)
+    assert h.carrier == in_memory.carrier and h.zone.centre == in_memory.zone.centre
+    group = zarr.open_group(str(url), mode="r")
+    assert group["object_wave"].chunks == (1, TILE, TILE)
+    assert store.tiles_done(url).shape == (2, 3) and store.tiles_done(url).all()
+    meta = dict(group.attrs["holo"])
+    assert meta == metadata(in_memory), "one schema, the carrier included"
+
+
+class _Reads:
+    """The tiles a store's reads touch (patched into its PlateStore)."""
+
+    def __init__(self, monkeypatch):
+        self.tiles, read = set(), store.PlateStore.read_tile
+
+        def counted(plate, c, i, j):
+            self.tiles.add((i, j))
+            return read(plate, c, i, j)
+        monkeypatch.setattr(store.PlateStore, "read_tile", counted)
+
+
+def test_a_view_of_the_store_reads_its_window_only_and_equals_the_view_in_memory(
+        in_memory, recorded, monkeypatch):
+    """The left camera's window (rows 111-397, columns 35-388) overlaps 4 of the 6 tiles: only
+    those are read, and its view equals the view of the plate in memory, bit for bit."""
+    url, _ = recorded
+    reads = _Reads(monkeypatch)
+    cam = camera("left", SCALE)
+    view = render_view(store.open_plate(url), cam, supersample=2)
+    rotation, position = camera_in_plate(in_memory, cam)
+    r0, r1, c0, c1 = carrier_window(in_memory, cam, rotation, position, cam.aperture_diameter)
+    overlapped = {(i, j) for i in range(r0 // TILE, (r1 - 1) // TILE + 1)
+                  for j in range(c0 // TILE, (c1 - 1) // TILE + 1)}
+    assert reads.tiles == overlapped and len(overlapped) == 4, (reads.tiles, (r0, r1, c0, c1))
+    ref = render_view(in_memory, cam, supersample=2)
+    for name in ("rgb", "alpha", "depth"):
+        assert np.array_equal(getattr(view, name), getattr(ref, name)), name
+
+
+def test_a_cancelled_recording_resumes_keeping_the_tiles_written(in_memory, scheduler,
+                                                                 tmp_path):
+    url = tmp_path / "p.zarr"
+    with pytest.raises(jobs.Cancelled):
+        _record(url, scheduler, progress=cancel_after(2))
+    done = settled(url)  # the tiles already running when cancelled end their write
+    assert 2 <= done.sum() < done.size, done.sum()
+    before = _files(url)
+    h = _record(url, scheduler)
+    assert np.array_equal(h.object_wave[...], in_memory.object_wave)
+    after = _files(url)
+    assert all(after[p] == t for p, t in before.items()), "a tile written was written again"
+    assert len(after) > len(before)
+
+
+KILLED = textwrap.dedent("""
+    import sys, time
+    sys.path[:0] = [{tests!r}]
+    import distributed
+    from plate_scene import PLATE, camera, meshes
+    from holo_core.plate import record
+    region = record.PlateRecording.region
+
+    def slow(self, *args):  # a tile a second: the kill lands mid-recording
+        time.sleep(1.0)
+        return region(self, *args)
+
+    if __name__ == "__main__":
+        record.PlateRecording.region = slow  # the workers share this process
+        with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                      dashboard_address=":0") as cluster:
+            record.record_plate(meshes(), plate=PLATE, camera=camera("centre", {scale}),
+                                zone_margin=0.025, url={url!r}, tile={tile},
+                                scheduler=cluster.scheduler_address)
+""")
+
+
+def test_a_killed_recording_resumes(in_memory, scheduler, tmp_path):
+    """The recording's process is killed (SIGKILL) after its first tiles: its lock is free (an
+    flock dies with its holder), the tiles it wrote are kept, and the same call completes the
+    plate, equal to the plate in memory."""
+    url = tmp_path / "p.zarr"
+    script = tmp_path / "killed.py"
+    script.write_text(KILLED.format(tests=str(ROOT / "tests"), scale=SCALE, url=str(url),
+                                    tile=TILE))
+    proc = subprocess.Popen([sys.executable, str(script)], start_new_session=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 240
+        while not (url / "zarr.json").exists() or not store.tiles_done(url).any():
+            assert proc.poll() is None, proc.stderr.read()
+            assert time.monotonic() < deadline, "no tile written in 240 s"
+            time.sleep(0.2)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        proc.stderr.close()
+    done = store.tiles_done(url)
+    assert 1 <= done.sum() < done.size, done
+    before = _files(url)
+    h = _record(url, scheduler)
+    assert np.array_equal(h.object_wave[...], in_memory.object_wave)
+    assert all(_files(url)[p] == t for p, t in before.items() if "tiles_done" in str(p))
+
+
+def _moved(dx):
+    def scene():
+        cube, sphere = meshes()
+        return [replace(cube, vertices=cube.vertices + [dx, 0, 0]), sphere]
+    return scene
+
+
+def _recoloured():
+    cube, sphere = meshes()
+    return [cube, replace(sphere, texture=sphere.texture[..., ::-1])]
+
+
+@pytest.mark.parametrize("change, kw, part", [
+    ("a cube moved 10 µm", {"scene": _moved(1e-5)}, "meshes"),
+    ("the sphere's texture", {"scene": _recoloured}, "meshes"),
+    ("the zone", {"zone_margin": 0.03}, "zone"),
+    ("the seed", {"seed": 1}, "seed"),
+    ("the coded look", {"code": (3, 2)}, "code"),
+    ("the wavelength (the plan)", {"wavelength": 4.1e-5}, "plan"),
+])
+def test_the_digest_covers_what_the_samples_depend_on(recorded, scheduler, change, kw, part):
+    """Resuming into the store with any of these changed is refused, naming the part (before
+    any tile is summed), and the store is left as it was."""
+    url, _ = recorded
+    before = _files(url)
+    with pytest.raises(InputError, match=rf"holds another recording \(its [^)]*\b{part}\b"
+                                         rf"[^)]*differ"):
+        _record(url, scheduler, **kw)
+    assert _files(url) == before
+
+
+def test_a_tile_that_does_not_align_with_the_emitters_block_lists_is_refused(tmp_path):
+    with pytest.raises(InputError, match=r"tile must be a multiple of 256 samples"):
+        record_plate(meshes(), **SCENE, url=tmp_path / "p.zarr", tile=320)
+    assert not list(tmp_path.iterdir())
+
+
+SQUARES_OBJ = "".join(  # two coloured squares 3 cm across, one 2 cm behind the other
+    f"v {x:g} {y:g} {z:g} {r} {g} {b}\n" for z, dx, (r, g, b) in
+    ((0.0, 0.0, (0.9, 0.2, 0.1)), (-0.02, 0.012, (0.1, 0.4, 0.9)))
+    for x, y in ((dx - 0.015, -0.015), (dx + 0.015, -0.015), (dx + 0.015, 0.015),
+                 (dx - 0.015, 0.015))) + "f 1 2 3\nf 1 3 4\nf 5 6 7\nf 5 7 8\n"
+
+
+def test_the_command_line_records_a_mesh_as_a_carrier_plate(scheduler, tmp_path, capsys):
+    """``record MESH -o NAME.zarr`` records the plate of meshes against its zone's carrier (the
+    camera and zone options as ``plan`` takes them), as ``-o NAME.exr`` does in memory: the
+    two hold the same samples; ``render`` views the store from its zone's centre."""
+    from cli import run_cli
+    (tmp_path / "sq.obj").write_text(SQUARES_OBJ)
+    common = ("--distance", 0.3, "--camera", 0, 0, 0.3, "--resolution", 160, 90, "--lens", 50)
+    status, out, err = run_cli(capsys, "record", tmp_path / "sq.obj", "-o", tmp_path / "p.zarr",
+                               *common, "--tile", TILE, "--scheduler", scheduler)
+    assert status == 0, err
+    assert "Dask dashboard: http" in out and "samples" in out
+    status, _, err = run_cli(capsys, "record", tmp_path / "sq.obj", "-o", tmp_path / "p.exr",
+                             *common)
+    assert status == 0, err
+    tiled, whole = store.open_plate(tmp_path / "p.zarr"), read_hologram(tmp_path / "p.exr")
+    assert tiled.carrier is not None and tiled.carrier == whole.carrier
+    assert np.array_equal(tiled.object_wave[...], whole.object_wave)
+    status, _, err = run_cli(capsys, "render", tmp_path / "p.zarr", "-o", tmp_path / "v.exr",
+                             "--resolution", 64, 36)
+    assert status == 0 and (tmp_path / "v.exr").stat().st_size > 0, err
+
+
+@pytest.mark.parametrize("args, problem", [
+    (["--pitch", "8e-6"], r"--pitch applies to point sums \(--method auto, direct or wrp\)"),
+    (["--method", "direct", "--camera", "0", "0", "0.3"],
+     r"--camera applies to a plate of meshes \(--method zone, the default\)"),
+])
+def test_options_of_the_other_route_are_refused_on_one_line(tmp_path, capsys, args, problem):
+    from cli import run_cli
+    (tmp_path / "sq.obj").write_text(SQUARES_OBJ)
+    status, _, err = run_cli(capsys, "record", tmp_path / "sq.obj", "-o", tmp_path / "p.exr",
+                             *args)
+    assert status == 2 and err.count("\n") == 1 and re.search(problem, err), err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sq.obj"]
+
+
+def test_the_physical_field_of_a_store_reads_only_the_tiles_under_its_region(in_memory,
+                                                                           recorded,
+                                                                           monkeypatch):
+    """physical_field over the window's first fifth along each axis reads the samples within
+    the kernel's reach of it, all in tile (0, 0), and equals the field of the plate in memory."""
+    url, _ = recorded
+    reads = _Reads(monkeypatch)
+    x0, y0, x1, y1 = window(in_memory)
+    region = (x0, y0, x0 + 0.2 * (x1 - x0), y0 + 0.2 * (y1 - y0))
+    tiled = physical_field(store.open_plate(url), 2, region=region)
+    assert reads.tiles == {(0, 0)}
+    assert np.array_equal(tiled.samples, physical_field(in_memory, 2, region=region).samples)
