@@ -5,10 +5,10 @@
   emits its colour from the hit point, at distance R, with a random phase per look (speckle
   is averaged over looks, Sect. VII-E). Bare points go to their nearest bin.
 - Motion blur (:func:`across_shutter`). Meshes that move (``Mesh.motion``) are rasterized at
-  times spread over the shutter, close enough that no vertex moves more than half a bin from
-  one to the next, and each time's emitters weigh 1/N: the image, its coverage and its depth
-  pair are then the shutter's time average (the emitters are mutually incoherent), as a
-  camera's exposure is.
+  times spread over the shutter, close enough that no vertex moves more than a bin (a fine
+  pixel) from one to the next, and each time's emitters weigh 1/N: the image, its coverage
+  and its depth pair are then the shutter's time average (the emitters are mutually
+  incoherent), as a camera's exposure is. Each time costs a rasterization.
 """
 
 from __future__ import annotations
@@ -146,8 +146,9 @@ def point_emitters(positions, colours, camera: Camera, optics: PupilOptics) -> E
                             optics)
 
 
-MOTION_STEP = 0.5   # bins a vertex may move between two of the shutter's times
+MOTION_STEP = 1.0   # bins a vertex may move between two of the shutter's times
 MAX_TIMES = 256     # times across the shutter, at most
+DENSE_CELLS = 1 << 23  # (layer, bin) cells summed in dense grids, at most (six of 64 MiB)
 
 
 def shutter_times(meshes, camera: Camera, optics: PupilOptics) -> np.ndarray:
@@ -184,22 +185,37 @@ def across_shutter(meshes, camera: Camera, optics: PupilOptics) -> Emitters | No
     times = shutter_times(meshes, camera, optics)
     if len(times) == 1:
         return rasterize(meshes, camera, optics)
-    parts = [rasterize([m.at_shutter(t) for m in meshes], camera, optics) for t in times]
-    parts = [p for p in parts if len(p.index)]
-    if not parts:
-        return None
-    w = 1 / len(times)
-    cat = {k: np.concatenate([getattr(p, k) for p in parts])
-           for k in ("index", "depth", "distance", "colour", "coverage", "layer")}
     size = math.prod(optics.shape)
-    keys, inverse = np.unique(cat["layer"] * size + cat["index"], return_inverse=True)
-    cover = np.bincount(inverse, cat["coverage"] * w)
+    cells = len(optics.layers) * size
+    w = 1 / len(times)
+    # each time's emitters hold one (layer, bin) each: summed where they land, into dense
+    # grids where those fit (a layer of a 720p frame's pupil: 1.1e6 cells), else by key
+    sums = np.zeros((6, cells)) if cells <= DENSE_CELLS else None
+    parts = []
+    for t in times:
+        p = rasterize([m.at_shutter(t) for m in meshes], camera, optics)
+        if not len(p.index):
+            continue
+        key, c = p.layer * size + p.index, p.coverage * w
+        rows = (c, p.depth * c, p.distance * c, *(p.colour.T * w))
+        if sums is None:
+            parts.append((key, np.stack(rows)))
+        else:
+            sums[:, key] += rows
+    if sums is not None:
+        keys = np.nonzero(sums[0])[0]
+        sums = sums[:, keys]
+    elif parts:
+        keys, inverse = np.unique(np.concatenate([k for k, _ in parts]), return_inverse=True)
+        rows = np.concatenate([r for _, r in parts], axis=1)
+        sums = np.stack([np.bincount(inverse, row) for row in rows])
+    else:
+        return None
+    if not len(keys):
+        return None
+    cover = sums[0]
     weight = np.maximum(cover, 1e-300)
-
-    def mean(a):
-        return np.bincount(inverse, a * cat["coverage"] * w) / weight
-    colour = np.stack([np.bincount(inverse, cat["colour"][:, c] * w) for c in range(3)], -1)
-    return _sorted_emitters(keys % size, mean(cat["depth"]), mean(cat["distance"]), colour,
+    return _sorted_emitters(keys % size, sums[1] / weight, sums[2] / weight, sums[3:].T,
                             cover, optics, layer=keys // size)
 
 
