@@ -23,13 +23,16 @@ from __future__ import annotations
 
 import logging
 import os
+import sys
 import threading
+import time
 import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 
 import numpy as np
+import platformdirs
 import pyopencl as cl
 import pyopencl.array as cla
 
@@ -236,6 +239,7 @@ class Runtime:
         if key not in self._programs:
             text = Path(source).read_text()
             opts = [f"-I{HEADERS}", *options]
+            clear_stale_cache_lock()
             with warnings.catch_warnings():  # PoCL's clang notes vector ABIs; not our concern
                 warnings.simplefilter("ignore", cl.CompilerWarning)
                 self._programs[key] = cl.Program(self.context, text).build(options=opts)
@@ -293,3 +297,23 @@ def set_device(spec: str | None) -> Runtime:
     with _lock:
         _default = Runtime(choose_device(spec))
         return _default
+
+
+STALE_LOCK = 10.0  # [s] pyopencl holds its program cache's lock for milliseconds
+
+
+def clear_stale_cache_lock() -> None:
+    """Remove pyopencl's program-cache lock where a killed process left it (a cancelled
+    worker killed while it read the cache): the next process would otherwise wait a minute
+    for it and then fail. A lock older than STALE_LOCK seconds has no living holder."""
+    base = os.getenv("XDG_CACHE_HOME") if sys.platform == "darwin" else None
+    base = os.path.join(base, "pyopencl") if base else \
+        platformdirs.user_cache_dir("pyopencl", "pyopencl")
+    version = ".".join(str(i) for i in sys.version_info)
+    lock = Path(base) / f"pyopencl-compiler-cache-v2-py{version}" / "lock"
+    try:
+        if time.time() - lock.stat().st_mtime > STALE_LOCK:
+            lock.unlink()
+            log.warning("removed a stale OpenCL program-cache lock %s", lock)
+    except FileNotFoundError:
+        pass

@@ -6,6 +6,7 @@ import pathlib
 import re
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -133,3 +134,22 @@ def test_fft_backend_round_trip(rt, rng):
     assert np.allclose(dev.get(), np.fft.fft2(a), atol=1e-3)
     rt.fft.backward(dev)
     assert np.allclose(dev.get() / a.size, a, atol=1e-5)
+
+
+def test_a_killed_process_s_cache_lock_is_cleared(tmp_path, monkeypatch):
+    """pyopencl's program-cache lock left by a killed worker would stall the next build a
+    minute and fail it: one older than STALE_LOCK goes, a fresh one (a living holder) stays."""
+    if sys.platform != "linux":
+        pytest.skip("the XDG cache folder is Linux's")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    folder = tmp_path / "pyopencl" / ("pyopencl-compiler-cache-v2-py"
+                                      + ".".join(str(i) for i in sys.version_info))
+    folder.mkdir(parents=True)
+    lock = folder / "lock"
+    lock.touch()
+    runtime.clear_stale_cache_lock()
+    assert lock.exists()
+    old = time.time() - 2 * runtime.STALE_LOCK
+    os.utime(lock, (old, old))
+    runtime.clear_stale_cache_lock()
+    assert not lock.exists()
