@@ -7,10 +7,15 @@ system reports available, for render farms that share a machine.
 
 from __future__ import annotations
 
+import math
 import os
+
+import numpy as np
 
 from .validate import InputError
 
+PAGE = 4096  # [bytes] the alignment of aligned_zeros: a CPU OpenCL device reads such arrays in
+             # place (a buffer over host memory is copied unless it starts aligned)
 SHARE = 0.8  # of the available host or device memory one step may take (the rest: the
              # interpreter, the OS, the driver)
 
@@ -68,3 +73,14 @@ def check_device(rt, what: str, nbytes: float, largest: float) -> None:
     if nbytes > SHARE * dev.global_mem_size:
         raise InputError(f"{what} needs {gib(nbytes)} of device memory; {dev.name.strip()} has "
                          f"{gib(dev.global_mem_size)}")
+
+
+def aligned_zeros(shape, dtype=np.complex64) -> np.ndarray:
+    """A C-contiguous array of zeros whose data starts on a PAGE boundary: a plate's samples
+    made so are read in place by a CPU OpenCL device (:func:`holo_core.opencl.arrays.
+    host_buffer`), a view then copying none of them."""
+    dtype = np.dtype(dtype)
+    nbytes = math.prod(shape) * dtype.itemsize
+    raw = np.zeros(nbytes + PAGE, np.uint8)
+    start = -raw.ctypes.data % PAGE
+    return raw[start:start + nbytes].view(dtype).reshape(shape)

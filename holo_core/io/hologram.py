@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__, validate
+from .. import __version__, memory, validate
 from ..scene.hologram import Hologram, HologramInfo
 from ..scene.plate import Carrier, ViewingZone
 from ..validate import InputError
@@ -119,8 +119,9 @@ def read_hologram(path) -> Hologram:
                                     f"{info.shape}")
     wave = None
     if info.keeps_object_wave:
-        wave = np.stack([names[f"c{c}.O.re"] + 1j * names[f"c{c}.O.im"] for c in colours])
-        wave = wave.astype(np.complex64)
+        wave = memory.aligned_zeros((len(info.wavelengths),) + info.shape)
+        for c in colours:  # page-aligned: a CPU device's views read it in place
+            wave[c].real, wave[c].imag = names[f"c{c}.O.re"], names[f"c{c}.O.im"]
     h = Hologram(info=info, intensity=np.stack([names[f"c{c}.H"] for c in colours])
                  if intensity else None, object_wave=wave)
     check_pixels(str(path), h)

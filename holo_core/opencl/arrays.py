@@ -221,6 +221,20 @@ def upload_window(dst, host, planes, row0: int, col0: int) -> None:
                         buffer_pitches=(cols * item,), host_pitches=(host.shape[2] * item,))
 
 
+def host_buffer(rt, host) -> cl.Buffer | None:
+    """A read-only buffer over the NumPy array ``host``'s own memory, where the device is a
+    CPU and ``host`` is C-contiguous and starts on the device's base alignment (as
+    :func:`holo_core.memory.aligned_zeros` makes it): kernels then read it in place, no byte
+    copied. None otherwise (a GPU would copy the whole array; the caller copies what it
+    needs)."""
+    if not (rt.is_cpu and isinstance(host, np.ndarray) and host.flags.c_contiguous):
+        return None
+    if host.ctypes.data % max(rt.device.mem_base_addr_align // 8, 1):
+        return None
+    return cl.Buffer(rt.context, cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR,
+                     hostbuf=host)
+
+
 def recycled(rt, kind: str, shape, dtype=np.complex64) -> cla.Array:
     """A device array for a new :func:`cached` entry of ``kind``: a fresh one until ``RECYCLED``
     of that kind and shape exist, then the oldest of them, its entry dropped from the cache.

@@ -509,7 +509,7 @@ class PlateRecording:
     def record(self, progress: jobs.Progress = None) -> Hologram:
         """The whole plate in memory, summed in bands of rows."""
         rows, cols = self.shape
-        samples = np.zeros((len(self.info.wavelengths), rows, cols), np.complex64)
+        samples = memory.aligned_zeros((len(self.info.wavelengths), rows, cols))
         sums = self.sums()
         for r0 in range(0, rows, BAND_ROWS):
             here = min(BAND_ROWS, rows - r0)

@@ -80,25 +80,33 @@ inline float2 turn_towards_pupil(int c, int r, real pitch, real row_pitch, real 
 /* Turned onto the pupil's carrier (turn_towards_pupil) and decimated along the row at once: a
  * work group of GROUP outputs of one row loads the GROUP·Q + TAPS samples they read into local
  * memory, each turned once, then each output sums its TAPS taps h there. The input's column 0
- * is the plate's column col0 (its x is x0); output j reads input Q·j + first + t. */
-__kernel void demodulate_decimate(__global float2 *out, __global const float2 *in, int rows,
-                                  int cols, int out_cols, int out_row0, int out_height,
-                                  int first, __constant float *h, real pitch, real row_pitch,
+ * is the plate's column col0 (its x is x0); output j reads input Q·j + lead + t. The input's
+ * sample (p, r, c) is in[first + p·plane + r·stride + c]: a band copied to the device, or the
+ * host's whole array read in place. */
+__kernel void demodulate_decimate(__global float2 *out, __global const float2 *in, long first,
+                                  long plane, int stride, int rows, int cols, int out_cols,
+                                  int out_row0, int out_height,
+                                  int lead, __constant float *h, real pitch, real row_pitch,
                                   real x0, real y0, float k, real px, real py, real pz,
                                   real zx, real zy, real zz, __global const float *table,
                                   int segments)
 {
-    __local float2 span[PLANES][GROUP * Q + TAPS];
+    /* polyphase order: input i at (i % Q)·PHASE + i / Q, so that the outputs of a group
+     * read their taps from neighbouring places (the vector lanes of a CPU load together) */
+#define PHASE (GROUP + (TAPS + Q - 1) / Q + 1)
+    __local float2 span[PLANES][Q * PHASE];
     int lid = get_local_id(0), j0 = get_group_id(0) * GROUP, r = get_global_id(1);
-    int start = Q * j0 + first;
+    int start = Q * j0 + lead;
     for (int i = lid; i < GROUP * Q + TAPS; i += GROUP) {
         int c = start + i;
         float2 turn = 0;
         if (c >= 0 && c < cols)
             turn = turn_towards_pupil(c, r, pitch, row_pitch, x0, y0, k, px, py, pz, zx, zy,
                                       zz, table, segments);
+        int at = (i % Q) * PHASE + i / Q;
         for (int p = 0; p < PLANES; p++)
-            span[p][i] = c >= 0 && c < cols ? cmul(in[((long)p * rows + r) * cols + c], turn)
+            span[p][at] = c >= 0 && c < cols ? cmul(in[first + p * plane + (long)r * stride + c],
+                                                   turn)
                                             : (float2)0;
     }
     barrier(CLK_LOCAL_MEM_FENCE);
@@ -107,8 +115,9 @@ __kernel void demodulate_decimate(__global float2 *out, __global const float2 *i
         return;
     for (int p = 0; p < PLANES; p++) {
         float2 acc = 0;
-        for (int t = 0; t < TAPS; t++)
-            acc += h[t] * span[p][lid * Q + t];
+        for (int ph = 0; ph < Q; ph++)       /* tap t = ph + Q·m */
+            for (int m = 0; ph + Q * m < TAPS; m++)
+                acc += h[ph + Q * m] * span[p][ph * PHASE + lid + m];
         out[((long)p * out_height + out_row0 + r) * out_cols + j] = acc;
     }
 }

@@ -11,6 +11,7 @@ The physical field re-modulated from the samples (carrier.physical_field: a Kais
 sinc and the exact carrier) is checked against the float64 direct sum of the same emitters
 (tests/zone_reference.py) on fine grids, whole and within the zone's own band."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -105,6 +106,26 @@ def test_views_of_the_carrier_and_the_full_band_plate_agree(plate):
     print(f"carrier against full band: PSNR {p:.1f} dB, IoU {j:.4f}, depth {dz * 1e3:.2f} "
           f"mm, coverage ratio {np.median(a.coverage[inside] / b.coverage[inside]):.3f}")
     assert p >= 30 and j >= 0.97 and dz <= 1e-3, (p, j, dz)
+
+
+def test_a_view_reads_the_samples_in_place_as_it_would_copy_them(plate):
+    """A recorded plate's samples start on a page, so a CPU device's view reads them where
+    they are; the same samples elsewhere (unaligned: copied band by band) give the same view
+    bit for bit."""
+    from holo_core.opencl import get_runtime
+    from holo_core.opencl.arrays import host_buffer
+    rt = get_runtime()
+    assert plate.object_wave.ctypes.data % 4096 == 0
+    raw = np.empty(plate.object_wave.nbytes + 8, np.uint8)
+    moved = raw[8:].view(np.complex64).reshape(plate.object_wave.shape)
+    moved[...] = plate.object_wave
+    assert host_buffer(rt, moved) is None
+    if rt.is_cpu:
+        assert host_buffer(rt, plate.object_wave) is not None
+    cam = camera("left", SCALE)
+    a = render_view(plate, cam, supersample=2)
+    b = render_view(dataclasses.replace(plate, object_wave=moved), cam, supersample=2)
+    assert np.array_equal(a.rgb, b.rgb) and np.array_equal(a.depth, b.depth)
 
 
 # --- the physical field, re-modulated wherever it is needed --------------------------------
