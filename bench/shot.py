@@ -10,7 +10,7 @@ default) and the plate's view are timed and compared: PSNR inside the objects, s
 IoU. Prints the CPU and its load, the plan, the recording's time and the peak memory of all
 its processes, and the frame count from which the plate costs less than a pass per frame.
 
-    python bench/shot.py [--scale 1.0] [--looks 2] [--dolly 0.1] [--out DIR]
+    python bench/shot.py [--scale 1.0] [--looks 2] [--dolly 0.1] [--supersample 2] [--out DIR]
 """
 
 import argparse
@@ -116,6 +116,8 @@ def main():
     p.add_argument("--looks", type=int, default=2, help="coded looks recorded (2)")
     p.add_argument("--dolly", type=float, default=0.1, help="the camera's move [m] (0.1)")
     p.add_argument("--margin", type=float, default=0.01, help="zone margin [m] (0.01)")
+    p.add_argument("--supersample", type=int, default=2,
+                   help="fine pixels per pixel of the views (2, the plan's reference view)")
     p.add_argument("--out", type=Path, default=None, help="a folder for the frames' PNGs")
     args = p.parse_args()
     xs = np.linspace(-args.dolly / 2, args.dolly / 2, 3)
@@ -145,6 +147,7 @@ def main():
             print(f"  look {len(plates)}: {t:.1f} s (load {os.getloadavg()[0]:.1f})",
                   flush=True)
     record_s = sum(seconds)
+    render_view(plates, small, supersample=args.supersample)  # the view's programs built
     h = plates[0]
     print(f"recording: {h.shape[1]}x{h.shape[0]} samples x {len(h.channels)} channels x "
           f"{args.looks} looks in {record_s:.1f} s; peak memory of all processes "
@@ -152,7 +155,7 @@ def main():
     rows = []
     for i, cam in enumerate(cams):
         ref, cam_s = timed(render_camera, meshes, cam, via="incoherent")
-        view, view_s = timed(render_view, plates, cam)
+        view, view_s = timed(render_view, plates, cam, supersample=args.supersample)
         inside = (ref.alpha >= 1) & (view.alpha >= 1)
         rows.append((xs[i], psnr(view, ref, inside), iou(view.alpha > 0.5, ref.alpha > 0.5),
                      view_s, cam_s))

@@ -95,6 +95,10 @@ class PlateRoute(_Route):
     memory_budget, disk_budget : [bytes] what the recording may hold in memory and its files
         on disk, or None (no limit): a plate that needs more is refused before any work, with
         its sizes
+    scheduler : a Dask scheduler's address (``tcp://host:8786``) for a plate recorded tile
+        by tile, or None (``DASK_SCHEDULER_ADDRESS``, else a local cluster); a plate is
+        recorded so, into NAME.zarr beside each NAME.exr, when one look of it exceeds the
+        memory budget or the host's memory
     wavelength : the recording's wavelength [m], or None (chosen by the planner)
     composition : 'mean' or 'max' of the iterations' views
     opacity_threshold : the view's coverage taken as opaque, in [0, 1]
@@ -107,6 +111,7 @@ class PlateRoute(_Route):
     record: bool = True
     memory_budget: float | None = None
     disk_budget: float | None = None
+    scheduler: str | None = None
     wavelength: float | None = None
     composition: str = "mean"
     opacity_threshold: float = 0.5
@@ -123,6 +128,10 @@ class PlateRoute(_Route):
             value = getattr(self, name)
             if value is not None and not validate.finite(name, _real(name, value), "bytes") > 0:
                 raise InputError(f"{name} must be > 0 [bytes] or None; got {value!r}")
+        if self.scheduler is not None and not (isinstance(self.scheduler, str)
+                                               and self.scheduler.strip()):
+            raise InputError(f"scheduler must be a Dask scheduler's address (tcp://host:port) "
+                             f"or None; got {self.scheduler!r}"[:200])
         if self.wavelength is not None:
             _set(self, "wavelength", validate.length("wavelength",
                                                      _real("wavelength", self.wavelength)))

@@ -25,14 +25,17 @@ from pathlib import Path
 
 import numpy as np
 
-from . import jobs
+from . import jobs, memory
 from .camera.render import render_camera
-from .io.hologram import read_hologram, write_hologram
+from .io.hologram import write_hologram
 from .io.image import check_writable, read_exr
+from .io.tiles import TiledWave, read_plate, store_of
 from .io.view import write_view
 from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result
-from .plate.record import look_code, record_hologram
+from .plate.record import look_code, plate_plan, record_hologram, record_plate
 from .plate.view import nyquist_supersample, render_view
+from .scene.hologram import Hologram
+from .scene.mesh import Mesh
 from .scene.radiance import projected
 from .view import BACKGROUND_DEPTH
 
@@ -85,15 +88,12 @@ def _plate(job: Job, progress):
         # never records again
         # the iterations are coded looks of one seed where n allows (look_code), else seeds
         codes = [look_code(i, n) for i in range(n)]
-        holos = [record_hologram(
-            list(job.points), triangles=list(job.triangles), plate=route.plate,
-            camera=job.camera, wavelength=route.wavelength,
-            budget=(route.memory_budget, route.disk_budget),
-            seed=route.seed + (0 if code else i), code=code,
-            progress=jobs.scaled(progress, record_share * i / n, record_share * (i + 1) / n))
-            for i, code in enumerate(codes)]
+        tiled = needs_tiles(job)
+        holos = [_record_look(job, path, i, code, tiled, jobs.scaled(
+            progress, record_share * i / n, record_share * (i + 1) / n))
+            for i, (path, code) in enumerate(zip(route.holograms, codes))]
     else:
-        holos = [read_hologram(p) for p in route.holograms]
+        holos = [read_plate(p) for p in route.holograms]
     view = None
     if job.output.render:
         # the route's Supersample, or the intensity's Nyquist rate where that is finer
@@ -107,8 +107,47 @@ def _plate(job: Job, progress):
     # every stage has finished: only now are files replaced (each one atomically)
     job.output.folder.mkdir(parents=True, exist_ok=True)
     for path, h in zip(route.holograms, holos):
-        write_hologram(path, h)
+        if not isinstance(h.object_wave, TiledWave):  # a store is written as it is recorded
+            write_hologram(path, h)
     return view, route.holograms
+
+
+def needs_tiles(job: Job) -> bool:
+    """Whether the job's plate of meshes must be recorded tile by tile: the whole plate of one
+    look exceeds the route's memory budget or the host's share of its memory. Bare points are
+    recorded in memory (their point sums are planned by their own rule)."""
+    route = job.route
+    meshes = list(job.points) + list(job.triangles)
+    if not meshes or not all(isinstance(m, Mesh) for m in meshes):
+        return False
+    p, _, _ = plate_plan(meshes, plate=route.plate, camera=job.camera,
+                         wavelength=route.wavelength)
+    limit = memory.SHARE * memory.host_available()
+    if route.memory_budget is not None:
+        limit = min(limit, route.memory_budget)
+    need = p.memory_bytes(tiled=False)
+    if need > limit:
+        log.info("the plate needs %s in one piece, more than %s: recording it tile by tile "
+                 "into %s", memory.gib(need), memory.gib(limit),
+                 store_of(route.holograms[0]).name)
+    return need > limit
+
+
+def _record_look(job: Job, path, i: int, code, tiled: bool, progress) -> Hologram:
+    """Look ``i`` of the plate (coded by ``code``, else seed + i): in memory, or tile by tile
+    on Dask into :func:`store_of` ``path`` (a cancelled recording resumes there, its tiles
+    kept)."""
+    route = job.route
+    seed = route.seed + (0 if code else i)
+    budget = (route.memory_budget, route.disk_budget)
+    if tiled:
+        return record_plate(list(job.points) + list(job.triangles), plate=route.plate,
+                            camera=job.camera, wavelength=route.wavelength, seed=seed,
+                            code=code, budget=budget, url=str(store_of(path)),
+                            scheduler=route.scheduler, progress=progress)
+    return record_hologram(list(job.points), triangles=list(job.triangles), plate=route.plate,
+                           camera=job.camera, wavelength=route.wavelength, budget=budget,
+                           seed=seed, code=code, progress=progress)
 
 
 def _check_outputs(job: Job) -> None:

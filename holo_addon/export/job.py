@@ -22,6 +22,7 @@ import numpy as np
 
 from holo_core import __version__
 from holo_core.io.hologram import FORMAT_VERSION
+from holo_core.io.tiles import plate_current
 from holo_core.job import CameraRoute, Job, Output, PlateRoute, Radiance
 from holo_core.scene.camera import Camera
 from holo_core.scene.mesh import Mesh
@@ -156,7 +157,7 @@ def read(scene, depsgraph, *, render=True, preview=1) -> Prepared:
         fingerprint = digest(data, *settings.recording(), lighting, camera=False)
         paths = hologram_paths(out, data.plate_name, settings.iterations, fingerprint)
         route = settings.plate_route(data.plate, paths,
-                                     record=not all(p.is_file() for p in paths))
+                                     record=not all(plate_current(p) for p in paths))
     frame, region, unit = scene.frame_current, data.region, data.unit
     animated = lit and getattr(scene.cycles, "use_animated_seed", False)
     kinds = mode != "CAMERA"  # a camera hologram renders points and triangles alike

@@ -1,5 +1,5 @@
 """What the worker takes from the add-on's preferences: device, memory limit, cache, the
-runtime's packages."""
+runtime's packages, the Dask scheduler of tiled plates."""
 
 from __future__ import annotations
 
@@ -43,3 +43,11 @@ def worker_options() -> dict:
     cache = bpy.path.abspath(prefs.cache_dir) if prefs is not None and prefs.cache_dir else None
     return {"paths": runtime_paths(), "device": device() or None,
             "memory_limit": f"{limit}G" if limit > 0 else None, "cache_dir": cache}
+
+
+def scheduler() -> str | None:
+    """The Dask scheduler's address the user chose for tiled plates (None: the environment's
+    DASK_SCHEDULER_ADDRESS, else a local cluster)."""
+    prefs = addon_preferences()
+    address = prefs.scheduler.strip() if prefs is not None else ""
+    return address or None

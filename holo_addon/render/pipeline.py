@@ -14,22 +14,23 @@ from __future__ import annotations
 
 import json
 import logging
+from dataclasses import replace
 from pathlib import Path
 
 import bpy
 import numpy as np
 
 from holo_core import jobs, worker
-from holo_core.io.hologram import read_hologram
 from holo_core.io.image import exr_attribute
+from holo_core.io.tiles import read_plate, store_of
 from holo_core.io.view import copy_view, write_view
-from holo_core.job import Result, pass_file
+from holo_core.job import PlateRoute, Result, pass_file
 from holo_core.view import BACKGROUND_DEPTH, RenderResult
 
 from ..export import bake
 from ..export.job import Prepared, moving, output_dir, read
 from ..export.scene import ExportError, border_pixels, render_size
-from .options import worker_options
+from .options import scheduler, worker_options
 
 log = logging.getLogger(__name__)
 __all__ = ["Prepared", "apply", "cached_pass", "check_hologram", "clear_pass", "moving",
@@ -61,7 +62,10 @@ def start(prepared: Prepared) -> worker.Worker:
     """The job running in a worker process (see :class:`holo_core.worker.Worker`); with
     Lighting: Scene (and something to record), the scene is written for Cycles first and the
     worker has Cycles render the emitters' radiance before it records."""
-    return worker.Worker(prepared.lit(), **worker_options())
+    job = prepared.lit()
+    if isinstance(job.route, PlateRoute):  # a plate too large for memory records on Dask
+        job = replace(job, route=replace(job.route, scheduler=scheduler()))
+    return worker.Worker(job, **worker_options())
 
 
 def run(prepared: Prepared, progress: jobs.Progress = None, on_log=None) -> Result:
@@ -180,7 +184,7 @@ def check_hologram(scene) -> Path:
     if not plates or not plates[0].holo.hologram:
         raise ExportError("no hologram recorded yet: run Record Hologram first")
     path = Path(bpy.path.abspath(plates[0].holo.hologram))
-    if not path.is_file():
+    if not path.is_file() and not store_of(path).is_dir():
         raise ExportError(f"the hologram file {path} is missing: record it again")
-    read_hologram(path)  # HologramFileError names the file and the problem
+    read_plate(path)  # HologramFileError names the file (or store) and the problem
     return path

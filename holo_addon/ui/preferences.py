@@ -88,6 +88,12 @@ class HoloPreferences(bpy.types.AddonPreferences):
         description="The most memory (GiB) Holo may use; a larger pass is refused with the "
                     "size it needs. 0: what the system has free (set it on shared farm nodes)")
 
+    scheduler: StringProperty(
+        name="Dask Scheduler", default="",
+        description="The Dask scheduler (tcp://host:8786) that records a plate too large for "
+                    "memory tile by tile on many machines. Empty: DASK_SCHEDULER_ADDRESS, "
+                    "else a local cluster of this machine's cores")
+
     cache_dir: StringProperty(
         name="Cache Folder", subtype="DIR_PATH", default="",
         description="Where compiled OpenCL kernels and FFT plans are kept between runs. Empty: "
@@ -97,6 +103,7 @@ class HoloPreferences(bpy.types.AddonPreferences):
         layout = self.layout
         layout.prop(self, "device")
         layout.prop(self, "memory_limit")
+        layout.prop(self, "scheduler")
         layout.prop(self, "cache_dir")
         row = layout.row()
         row.operator(HOLO_OT_check_devices.bl_idname, icon="VIEWZOOM")

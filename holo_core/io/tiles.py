@@ -49,7 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from ..scene.hologram import Hologram, HologramInfo
-from .hologram import HologramFileError, info_of, metadata
+from .hologram import HologramFileError, info_of, metadata, read_hologram
 
 WAVE, DONE, LOCK = "object_wave", "tiles_done", "holo.lock"
 MIN_TILE, MAX_TILE = 64, 16384
@@ -711,3 +711,33 @@ def tiles_done(url) -> np.ndarray:
     """The flags (rows of tiles, columns of tiles) of the tiles whose record names the store's
     recording (their chunks are checked when read)."""
     return read_store(url).written()
+
+
+def store_of(path) -> Path:
+    """The tiled store that holds a plate file's samples when its plate is recorded tile by
+    tile (:func:`holo_core.runner.needs_tiles`): NAME.zarr beside NAME.exr."""
+    return Path(path).with_suffix(".zarr")
+
+
+def read_plate(path) -> Hologram:
+    """The hologram file at ``path``, or the complete tiled store beside it
+    (:func:`store_of`)."""
+    path = Path(path)
+    if not path.is_file() and store_of(path).is_dir():
+        return open_plate(str(store_of(path)))
+    return read_hologram(path)
+
+
+def plate_current(path) -> bool:
+    """Whether the plate file at ``path``, or the tiled store beside it, is there whole (a
+    store's every tile written by its recording; a cancelled one resumes)."""
+    path = Path(path)
+    if path.is_file():
+        return True
+    if not store_of(path).is_dir():
+        return False
+    try:
+        store = read_store(str(store_of(path)))
+    except HologramFileError:  # a StoreError too
+        return False
+    return not store.bad and bool(store.written().all()) and not store.foreign().any()

@@ -521,24 +521,17 @@ class PlateRecording:
 BAND_ROWS = 256  # rows of the plate summed at once in memory (a multiple of the block lists')
 
 
-def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
-                  zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
-                  code=None, encoding="complex", tile=None,
-                  budget=(None, None)) -> PlateRecording:
-    """The emitters, visibility tables and sampling of a plate of ``meshes`` (the arguments
-    as :func:`record_plate` takes them), before any sum: the plan, the emitters the zone sees
-    with their amplitudes. The host's memory and the ``budget`` are checked for the whole
-    plate, or with ``tile`` (samples a side) for one tile of it."""
+def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
+               zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, tile=None
+               ) -> tuple[PlatePlan, list, ViewingZone]:
+    """(the plan, the meshes in the plate's frame, the zone) of a plate of ``meshes`` (the
+    arguments as :func:`record_plate` takes them): what its recording will hold and cost,
+    before any emitter is found."""
     if not isinstance(plate, Plate):
         raise InputError(f"plate must be a Plate; got {type(plate).__name__}")
-    if encoding != "complex":
-        raise InputError(f"encoding must be 'complex' for a plate of meshes (a display's "
-                         f"intensity pattern is made from it: holo_core.phase.display); got "
-                         f"{encoding!r}"[:200])
     meshes = [meshes] if isinstance(meshes, Mesh) else list(meshes)
     if not meshes or not all(isinstance(m, Mesh) for m in meshes):
         raise InputError("meshes must be a Mesh or a non-empty sequence of Mesh")
-    seed = validate.seed(seed)
     memory.check_host(f"moving {sum(len(m.triangles) for m in meshes)} triangles onto the "
                       f"plate", sum(320.0 * len(m.triangles) + 96.0 * len(m.vertices)
                                     for m in meshes))
@@ -555,6 +548,26 @@ def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None
                          "pixel angle, or a wavelength")
     p = plan((plate.width, plate.height), bounds, zone=zone, pixel_angle=pixel or 1.0,
              wavelength=wavelength, **({} if tile is None else {"tile": tile}))
+    return p, local, zone
+
+
+def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
+                  zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
+                  code=None, encoding="complex", tile=None,
+                  budget=(None, None)) -> PlateRecording:
+    """The emitters, visibility tables and sampling of a plate of ``meshes`` (the arguments
+    as :func:`record_plate` takes them), before any sum: the plan, the emitters the zone sees
+    with their amplitudes. The host's memory and the ``budget`` are checked for the whole
+    plate, or with ``tile`` (samples a side) for one tile of it."""
+    if encoding != "complex":
+        raise InputError(f"encoding must be 'complex' for a plate of meshes (a display's "
+                         f"intensity pattern is made from it: holo_core.phase.display); got "
+                         f"{encoding!r}"[:200])
+    seed = validate.seed(seed)
+    p, local, zone = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
+                                zone_margin=zone_margin, wavelength=wavelength, tile=tile)
+    every = np.concatenate([m.vertices for m in local])
+    bounds = np.array([every.min(0), every.max(0)])
     log.info("sampling: %s", p.describe())
     channels = ["R", "G", "B"] + (["Z"] if depth else [])
     p.check_budget(memory=budget[0], disk=budget[1], channels=len(channels),

@@ -27,6 +27,7 @@ from .convolution import convolution_setup, convolve, symmetric
 from .scaled import scaled
 from .transfer import BAND_EDGE, asm_transfer, quadrant_shape, transfer_function
 
+
 def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
                      band_limit=True, out_pitch=None, out_shape=None, read=None):
     """The field on the parallel plane at ``distance``, its centre shifted by ``offset``.

@@ -260,3 +260,31 @@ def test_the_physical_field_of_a_store_reads_only_the_tiles_under_its_region(in_
     tiled = physical_field(store.open_plate(url), 2, region=region)
     assert reads.tiles == {(0, 0)}
     assert np.array_equal(tiled.samples, physical_field(in_memory, 2, region=region).samples)
+
+
+def test_the_pipeline_records_a_plate_beyond_memory_in_tiles(scheduler, tmp_path, monkeypatch):
+    """A job's plate whose one look exceeds the memory budget is recorded tile by tile on Dask
+    (the route's scheduler) into NAME.zarr beside each NAME.exr, no EXR written; its pass is
+    the in-memory route's bit for bit; the next job finds the store whole and reads it."""
+    from holo_core import runner
+    from holo_core.job import Job, Output, PlateRoute
+
+    cam = camera("centre", SCALE)
+
+    def job(folder, **route):
+        holograms = (folder / "h.exr",)
+        return Job(points=tuple(meshes()), camera=cam, output=Output(folder=folder, frame=1),
+                   route=PlateRoute(plate=PLATE, holograms=holograms, supersample=2,
+                                    scheduler=scheduler, **route))
+
+    assert not runner.needs_tiles(job(tmp_path / "a"))
+    assert runner.needs_tiles(job(tmp_path / "a", memory_budget=1e6))
+    whole = runner.run(job(tmp_path / "a"))
+    monkeypatch.setattr(runner, "needs_tiles", lambda job: True)
+    tiled = runner.run(job(tmp_path / "b"))
+    assert not (tmp_path / "b" / "h.exr").exists() and store.plate_current(tmp_path / "b" / "h.exr")
+    assert np.array_equal(store.read_plate(tmp_path / "b" / "h.exr").object_wave[...],
+                          read_hologram(tmp_path / "a" / "h.exr").object_wave)
+    assert np.array_equal(tiled.view.rgb, whole.view.rgb)
+    again = runner.run(job(tmp_path / "b", record=False))
+    assert np.array_equal(again.view.rgb, whole.view.rgb)
