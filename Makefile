@@ -5,7 +5,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo figures test fuzz test-runtimes bench bench-runtimes bench-quality devices extension check-lts clean
+.PHONY: demo demo-plate figures test fuzz test-runtimes bench bench-runtimes bench-quality devices extension check-lts clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -15,6 +15,10 @@ $(STAMP): pyproject.toml
 
 demo: $(STAMP)
 	$(PY) -m holo_addon.demo -o out
+
+# The demo scene from a plate recorded once (Plate mode): README, "Plates that serve a shot"
+demo-plate: $(STAMP)
+	$(PY) -m holo_addon.demo --mode PLATE -o out/plate
 
 figures: $(STAMP)
 	$(PY) -m holo_core demo -o out

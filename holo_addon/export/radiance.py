@@ -28,6 +28,7 @@ from holo_core.job import Radiance
 from holo_core.scene.camera import Camera
 
 from ..blender import compat
+from .scene import scale
 
 SIMPLE = {"BOOLEAN", "INT", "FLOAT", "STRING", "ENUM"}
 RAYS = ("visible_camera", "visible_diffuse", "visible_glossy", "visible_transmission",
@@ -173,7 +174,7 @@ def request(scene, view_layer: str, camera: Camera, meshes, emitter_names, *,
     args = {"blend": str(blend), "scene": scene.name, "view_layer": view_layer,
             "frame": scene.frame_current, "emitters": sorted(set(emitter_names)),
             "border": border(box, camera.resolution), "image": str(image), "samples": samples,
-            "compat": compat.__file__}
+            "compat": compat.__file__, "view": view_matrix(camera, scale(scene))}
     script = str(Path(__file__).resolve().parents[1] / "render" / "cycles_radiance.py")
     if bpy.app.binary_path:  # Blender: a background Blender without the user's add-ons
         command = [bpy.app.binary_path, "-b", "--factory-startup", "-noaudio", str(blend),
@@ -183,6 +184,15 @@ def request(scene, view_layer: str, camera: Camera, meshes, emitter_names, *,
     left, top, right, bottom = box
     return Radiance(command=tuple(command), image=image, folder=folder,
                     camera=camera.cropped(left, top, right - left, bottom - top))
+
+
+def view_matrix(camera: Camera, unit: float) -> list:
+    """The pose Cycles renders the radiance from, in Blender units (``unit``: metres per
+    unit): the camera the emitters are projected from, which for a plate is its zone's centre
+    (not the scene's camera)."""
+    m = np.array(camera.matrix_world, np.float64)
+    m[:3, 3] /= unit
+    return m.tolist()
 
 
 def write_scene(scene, path: Path) -> None:

@@ -17,7 +17,7 @@ are off. The result is a float RGBA OpenEXR (premultiplied).
 JSON: ``blend``, ``scene``, ``view_layer``, ``frame``, ``emitters`` (object names),
 ``border`` (min x, max x, min y, max y as Blender's render region), ``image`` (the output
 path), ``samples``, ``compat`` (the path of :mod:`holo_addon.blender.compat`, loaded on its
-own).
+own), ``view`` (the pose [Blender units] the radiance is seen from).
 It imports nothing of the add-on's package, which the process does not have.
 """
 
@@ -27,6 +27,7 @@ import os
 import sys
 
 import bpy
+from mathutils import Matrix
 
 RAYS = ("visible_camera", "visible_diffuse", "visible_glossy", "visible_transmission",
         "visible_volume_scatter", "visible_shadow")
@@ -40,6 +41,23 @@ def instancers_of(depsgraph, emitters: set) -> set:
             if inst.is_instance and inst.parent is not None
             and inst.object.original.name in emitters
             and inst.parent.original.name not in emitters}
+
+
+def view_from(scene, matrix) -> None:
+    """Render from the pose ``matrix`` (4×4, Blender units) where the scene's camera stands
+    elsewhere (a plate's radiance is seen from its zone's centre): a stand-in object with the
+    camera's own lens and frame, free of its parents, constraints and animation."""
+    camera = scene.camera
+    if camera is None or camera.type != "CAMERA":
+        return
+    view = Matrix(matrix)
+    if all(abs(a - b) <= 1e-6 * max(1.0, abs(b)) for row, want in zip(camera.matrix_world, view)
+           for a, b in zip(row, want)):
+        return
+    stand_in = bpy.data.objects.new("Holo radiance view", camera.data)
+    scene.collection.objects.link(stand_in)
+    stand_in.matrix_world = view
+    scene.camera = stand_in
 
 
 def main(args: dict) -> None:
@@ -66,6 +84,7 @@ def main(args: dict) -> None:
             obj.show_instancer_for_render = False  # its own geometry: not an emitter
         else:
             obj.visible_camera = False
+    view_from(scene, args["view"])
     r = scene.render
     r.engine = "CYCLES"
     r.film_transparent = True

@@ -36,8 +36,10 @@ LOOKS = 2              # coded looks recorded by default (the checkerboard pair)
 CHANNELS = 4           # R, G, B at λ1 and the depth partner at λ2
 SAMPLE_BYTES = 8       # complex64
 # measured on the development machine (2-core EPYC Zen 5, Intel's CPU OpenCL, idle): the
-# zone sum's pairs (emitter, sample) per second, per channel group (three colours cost one)
-PAIRS_PER_SECOND = 2.0e9
+# zone sum's pairs (emitter, sample) per second, per channel group (three colours cost one),
+# as this plan counts them (its footprints are the cones' whole; the sum skips their faded
+# rims): bench/shot.py's plate 58 s for 311 s at 2e9, the demo's plate about 270 s for 2760 s
+PAIRS_PER_SECOND = 1.5e10
 EMITTER_SECONDS = 2e-5   # per emitter and visibility grid point: the depth buffers' tests
 VIEW_SAMPLE_SECONDS = 6e-9   # per window sample and channel of a view: read, demodulate, filter
 FINE_PIXEL_SECONDS = 3e-7    # per fine pixel and look of a view: spectra, image, assembly

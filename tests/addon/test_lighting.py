@@ -91,13 +91,31 @@ def _grow(mask, steps):
     return out
 
 
+def _plate_between(scene, target):
+    """Plate mode through a 1 m plate halfway from the camera to ``target`` (its centre), its
+    zone around the camera's pupil: the radiance is seen from the zone's centre, which the
+    camera (aimed beside the target) shares."""
+    from holo_addon.demo import point_at
+    eye = np.array(scene.camera.location)
+    bpy.ops.mesh.primitive_plane_add(size=1.0, location=tuple((eye + np.array(target)) / 2))
+    plate = bpy.context.object
+    point_at(plate, target)  # −Z towards the objects: +Z faces the camera
+    plate.holo.is_plate = True
+    scene.holo.mode = "PLATE"
+    scene.holo.iterations = 2
+    bpy.context.view_layer.update()
+
+
+@pytest.mark.parametrize("mode", ["CAMERA", "PLATE"])
 def test_a_lit_holographic_sphere_shades_and_casts_its_shadow_as_cycles_does(
-        empty_scene, tmp_path):
+        empty_scene, tmp_path, mode):
     """Cycles renders the sphere as an ordinary object, then as a POINTS emitter through its
-    camera hologram, composited: inside the object (the pass's alpha, one pixel in from the
-    rim) the luminance correlates >= 0.9 with Cycles' and its mean is within 15 %, the
-    specular highlight is where Cycles has it (within 2 px), and the floor in the sphere's
-    shadow is no more than 1.15 times as bright as in Cycles."""
+    camera hologram (or a plate's view, the plate recorded for the camera's zone), composited:
+    inside the object (the pass's alpha, one pixel in from the rim) the luminance correlates
+    >= 0.9 with Cycles' and its mean is within 15 %, the specular highlight is where Cycles
+    has it (within 2 px), and the floor in the sphere's shadow is no more than 1.15 times as
+    bright as in Cycles. (A plate's radiance was rendered from the scene's camera but projected
+    from the zone's view, aimed elsewhere: its highlight moved.)"""
     from holo_addon.render import pipeline
     scene = empty_scene
     sphere, _ = _lit_scene(scene)
@@ -106,6 +124,8 @@ def test_a_lit_holographic_sphere_shades_and_casts_its_shadow_as_cycles_does(
     unshadowed = _render(scene, tmp_path / "no_sphere.exr")
     sphere.hide_render = False
     sphere.holo.emitter = "POINTS"
+    if mode == "PLATE":
+        _plate_between(scene, tuple(sphere.location))
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
     assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
     composite = _render(scene, tmp_path / "holo.exr")
@@ -119,7 +139,7 @@ def test_a_lit_holographic_sphere_shades_and_casts_its_shadow_as_cycles_does(
     shift = float(np.hypot(*np.subtract(*peak)))
     shadow = (_luminance(reference) < 0.5 * _luminance(unshadowed)) & ~_grow(alpha > 0.5, 2)
     shade = mine[shadow].mean() / theirs[shadow].mean()
-    print(f"lit sphere: {inside.sum()} px inside, luminance correlation {corr:.3f}, mean "
+    print(f"lit sphere ({mode}): {inside.sum()} px inside, luminance correlation {corr:.3f}, mean "
           f"ratio {ratio:.3f}, highlight {peak[0]} vs Cycles' {peak[1]} ({shift:.1f} px); "
           f"shadow {shadow.sum()} px, {shade:.3f} x Cycles'")
     assert inside.sum() > 300 and shadow.sum() > 100, (inside.sum(), shadow.sum())
