@@ -29,7 +29,7 @@ import numpy as np
 
 from .. import jobs
 from ..opencl import associated
-from ..opencl.arrays import by_rows, empty, fill
+from ..opencl.arrays import by_rows, empty, fill, read
 from ..optics import imaging
 from ..optics.imaging import ES_TABLE, IRIS_TAPER
 from ..propagation.grid import embedded, next_fast_len
@@ -116,7 +116,7 @@ class IncoherentImages:
                 rt.queue, (self.pixels.size,), None, self.pixels.data, self.read.data,
                 *(np.int32(n) for n in self.read_shape), self.u.data, self.v.data,
                 np.float32(self.scale), self.es.data)
-            out.append(self.pixels.get())
+            out.append(read(self.pixels))
         jobs.report(progress, 1, 1)
         return out
 

@@ -19,6 +19,7 @@ import numpy as np
 
 from .. import jobs, memory, validate
 from ..opencl import get_runtime
+from ..opencl.arrays import read, write
 from ..optics.imaging import COVERAGE_FLOOR, assemble
 from ..optics.speckle import downsample
 from ..scene.camera import Camera
@@ -106,8 +107,8 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
         for f in range(4):
             wave = fields.object_wave(f, phases)
             if via == "hologram":
-                wave.set(np.ascontiguousarray(np.fft.ifftshift(reconstruct_object_wave(
-                    intensity_hologram(np.fft.fftshift(wave.get())))), np.complex64))
+                write(wave, np.fft.ifftshift(reconstruct_object_wave(
+                    intensity_hologram(np.fft.fftshift(read(wave))))))
             images.append(fields.image(f))
             jobs.report(progress, (n - 1) * 4 + f + 1, samples * 4)
         acc.add(images)

@@ -28,6 +28,7 @@ import pyopencl as cl
 import pyopencl.array as cla
 
 from ..validate import InputError
+from .arrays import read, write
 
 log = logging.getLogger(__name__)
 
@@ -62,7 +63,7 @@ class _Mapped:
 
     def __enter__(self) -> np.ndarray:
         if self.copy:
-            self.host = self.arr.get()
+            self.host = read(self.arr)
         else:
             self.host, _ = cl.enqueue_map_buffer(self.q, self.arr.base_data, self.flags,
                                                  self.arr.offset, self.arr.shape, self.arr.dtype)
@@ -71,7 +72,7 @@ class _Mapped:
     def __exit__(self, *exc):
         if self.copy:
             if self.flags != cl.map_flags.READ:
-                self.arr.set(self.host)
+                write(self.arr, self.host)
         else:
             self.host.base.release(self.q)
 

@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from ..opencl import associated
-from ..opencl.arrays import by_rows, empty
+from ..opencl.arrays import by_rows, empty, read
 from ..propagation import grid
 from ..propagation.tilt import cached_array, es_table, es_transform
 from ..scene.camera import Camera
@@ -91,7 +91,7 @@ class PupilImage:
             rt.queue, (self.pixels.size,), None, self.pixels.data, self.padded.data,
             np.int32(2 * h), np.int32(2 * w), self.u.data, self.v.data, np.float32(scale),
             self.es.data)
-        return self.pixels.get()
+        return read(self.pixels)
 
 
 def window(rt, padded, pupil, shape, *, pitch, radius, taper, k, focus, apodization,

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..opencl import get_runtime
+from ..opencl.arrays import read
 from ..opencl.runtime import associated
 from ..optics.raster import bin_rays, crossings
 from ..scene.camera import look_at
@@ -159,5 +160,5 @@ def visibility(meshes, position, normal, zone: ViewingZone, rotation, spacing, g
                 rt.to_device(slope, np.float32).data, np.float32(BIAS_BINS),
                 np.float32(BIAS_DEPTH), np.int32(n))
     step = lambda a: float(a[1] - a[0]) if len(a) > 1 else 1.0  # noqa: E731
-    table = seen.get()[:g[0] * g[1] * n].reshape(g[0], g[1], n).transpose(2, 0, 1)
+    table = read(seen)[:g[0] * g[1] * n].reshape(g[0], g[1], n).transpose(2, 0, 1)
     return ((float(xs[0]), step(xs)), (float(ys[0]), step(ys))), np.ascontiguousarray(table)

@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from ..opencl.arrays import copy_plane, host_buffer, upload_window
+from ..opencl.arrays import copy_plane, host_buffer, upload_window, write
 from ..opencl.runtime import associated
 from ..propagation import angular_spectrum, grid, tilt
 from ..propagation.angular_spectrum import BAND_EDGE
@@ -317,8 +317,7 @@ class CarrierPupil:
                         samples.dtype == np.complex64:
                     upload_window(band, samples, channels, b0, cc0)
                 else:
-                    band.set(np.ascontiguousarray(
-                        samples[channels[0]:channels[-1] + 1, b0:b1, cc0:cc1], np.complex64))
+                    write(band, samples[channels[0]:channels[-1] + 1, b0:b1, cc0:cc1])
                 source = band.data
                 first, plane, stride = 0, (b1 - b0) * (cc1 - cc0), cc1 - cc0
             x0, y0 = h.carrier.coords(h.pitch, [b0], [cc0])

@@ -15,8 +15,9 @@
  * spans a fraction of one: it is evaluated at the segment's two ends and taken linearly in
  * between.
  *
- * Emitters are listed per block of BLOCK×BLOCK samples (list[start[b] .. start[b+1])): a work
- * item reads its block's list and skips the emitters whose footprint misses its tile.
+ * Emitters are listed per block of BLOCK×BLOCK samples of the region computed (list[start[b] ..
+ * start[b+1]), b counted from the region's first block): a work item reads its block's list
+ * and skips the emitters whose footprint misses its tile.
  * Rows lie row_pitch apart, columns pitch apart (a zone wider than tall asks fewer rows).
  * Options: -DVEC=1|4|8|16, -DSEG=<columns>, -DCHANNELS=<n>, -DGRID_X, -DGRID_Y=<the zone grid's points along x, y>.
  */
@@ -114,7 +115,7 @@ __kernel void zone_sum(__global float2 *out, int row_first, int col_first, int o
                        __global const int *vis_row, __global const uchar *vis,
                        float g0x, float g0y, float gsx, float gsy,
                        __global const int *list, __global const int *start, int blocks_x,
-                       int block)
+                       int block, int block_row0, int block_col0)
 {
     int ty = get_global_id(0), tx = get_global_id(1);
     int row0 = row_first + ty * VEC, col0 = col_first + tx * SEG;
@@ -132,7 +133,7 @@ __kernel void zone_sum(__global float2 *out, int row_first, int col_first, int o
         for (int c = 0; c < CHANNELS; c++)
             acc_r[m][c] = acc_i[m][c] = 0;
 
-    int b = (row0 / block) * blocks_x + col0 / block;
+    int b = (row0 / block - block_row0) * blocks_x + col0 / block - block_col0;
     for (int n = start[b], n1 = start[b + 1]; n < n1; n++) {
         int j = list[n];
         int4 f = vload4(j, foot);

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..opencl import get_runtime
+from ..opencl.arrays import read
 from ..opencl.runtime import associated
 
 PROGRAM = associated(__file__)
@@ -95,24 +96,32 @@ def footprints(position, window: ZoneWindow) -> np.ndarray:
     return np.stack([c0, c1, r0, r1], 1).astype(np.int32)
 
 
-def block_lists(foot, shape, block=BLOCK) -> tuple[np.ndarray, np.ndarray, int]:
-    """(list, start, blocks_x): the emitters whose footprint overlaps each block of
-    ``block``² samples, block b's in list[start[b]:start[b + 1]]."""
+def block_lists(foot, shape, block=BLOCK, region=None) -> tuple[np.ndarray, np.ndarray, tuple]:
+    """(list, start, (blocks_y, blocks_x, first row, first column of blocks)): the emitters
+    whose footprint overlaps each block of ``block``² samples of ``region`` (row0, col0, rows,
+    cols; default the whole ``shape``), block b's (counted from the region's first block) in
+    list[start[b]:start[b + 1]]. Only the region's blocks are listed: a tile's lists cost
+    what the tile holds, not the plate."""
     h, w = shape
-    bx, by = -(-w // block), -(-h // block)
-    ok = (foot[:, 1] >= foot[:, 0]) & (foot[:, 3] >= foot[:, 2])
+    row0, col0, rows, cols = region or (0, 0, h, w)
+    br0, bc0 = row0 // block, col0 // block
+    by, bx = (row0 + rows - 1) // block - br0 + 1, (col0 + cols - 1) // block - bc0 + 1
+    f = foot.astype(np.int64) // block
+    c0, c1 = np.maximum(f[:, 0], bc0) - bc0, np.minimum(f[:, 1], bc0 + bx - 1) - bc0
+    r0, r1 = np.maximum(f[:, 2], br0) - br0, np.minimum(f[:, 3], br0 + by - 1) - br0
+    ok = (foot[:, 1] >= foot[:, 0]) & (foot[:, 3] >= foot[:, 2]) & (c1 >= c0) & (r1 >= r0)
     j = np.nonzero(ok)[0]
-    f = foot[j].astype(np.int64) // block
-    nx, ny = f[:, 1] - f[:, 0] + 1, f[:, 3] - f[:, 2] + 1
+    c0, c1, r0, r1 = c0[j], c1[j], r0[j], r1[j]
+    nx, ny = c1 - c0 + 1, r1 - r0 + 1
     count = nx * ny
     emitter = np.repeat(j, count)
     q = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
-    col = np.repeat(f[:, 0], count) + q % np.repeat(nx, count)
-    row = np.repeat(f[:, 2], count) + q // np.repeat(nx, count)
+    col = np.repeat(c0, count) + q % np.repeat(nx, count)
+    row = np.repeat(r0, count) + q // np.repeat(nx, count)
     b = row * bx + col
     order = np.argsort(b, kind="stable")
     start = np.searchsorted(b[order], np.arange(bx * by + 1)).astype(np.int32)
-    return emitter[order].astype(np.int32), start, int(bx)
+    return emitter[order].astype(np.int32), start, (int(by), int(bx), int(br0), int(bc0))
 
 
 class ZoneSum:
@@ -129,8 +138,7 @@ class ZoneSum:
         fold = np.exp(1j * np.remainder(self.k * (np.abs(pos[:, 2]) + centre[2]), 2 * math.pi))
         amp = np.ascontiguousarray(em.amplitude * fold[:, None], np.complex64)
         self.channels = amp.shape[1]
-        foot = footprints(pos, window)
-        lst, start, self.blocks_x = block_lists(foot, window.shape)
+        self.foot = foot = footprints(pos, window)
         self.pairs = float(np.sum((foot[:, 1] - foot[:, 0] + 1.0).clip(0)
                                   * (foot[:, 3] - foot[:, 2] + 1.0).clip(0)))
         table = em.table if len(em.table) else np.zeros((1, 2, 2), np.uint8)
@@ -141,15 +149,18 @@ class ZoneSum:
                      rt.to_device(np.asarray(em.visibility, np.int32)).data,
                      rt.to_device(np.ascontiguousarray(table, np.uint8)).data,
                      *(np.float32(v) for v in (*em.grid[0][:1], *em.grid[1][:1],
-                                               em.grid[0][1], em.grid[1][1])),
-                     rt.to_device(lst if len(lst) else np.zeros(1, np.int32)).data,
-                     rt.to_device(start).data, np.int32(self.blocks_x), np.int32(BLOCK)]
+                                               em.grid[0][1], em.grid[1][1]))]
         self._keep = self.args  # the device buffers live as long as the sum
 
     def region(self, row0: int, col0: int, rows: int, cols: int) -> np.ndarray:
         """B (C, rows, cols) complex64 from sample (row0, col0); row0 and col0 multiples of
         the work items' tile (lanes, SEG)."""
         rt, win = self.rt, self.window
+        lst, start, (_, blocks_x, block_row0, block_col0) = block_lists(
+            self.foot, win.shape, region=(row0, col0, rows, cols))
+        lists = [rt.to_device(lst if len(lst) else np.zeros(1, np.int32)).data,
+                 rt.to_device(start).data, np.int32(blocks_x), np.int32(BLOCK),
+                 np.int32(block_row0), np.int32(block_col0)]
         out = rt.scratch("zone-sum", (self.channels, rows, cols))
         real = rt.real
         e = win.half_extents
@@ -159,8 +170,8 @@ class ZoneSum:
             *(real(v) for v in (win.pitch, win.row_pitch, win.origin[0], win.origin[1], self.k,
                                 *win.centre)),
             *(np.float32(v) for v in (e[0], e[1], e[2], win.rim * e[0], win.rim * e[1])),
-            *self.args)
-        return out.get()
+            *self.args, *lists)
+        return read(out)
 
 
 def zone_sum(em: ZoneEmitters, window: ZoneWindow, wavelength: float, region=None,
