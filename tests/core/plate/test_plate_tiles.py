@@ -168,6 +168,23 @@ def test_a_killed_recording_resumes(in_memory, scheduler, tmp_path):
     assert all(_files(url)[p] == t for p, t in before.items() if "tiles_done" in str(p))
 
 
+def test_the_scheduler_comes_from_the_environment(in_memory, scheduler, tmp_path,
+                                                   monkeypatch):
+    """No scheduler given: DASK_SCHEDULER_ADDRESS names the cluster (a farm's), as Dask's own
+    clients take it: an address where nothing listens is refused naming it (no local cluster
+    instead), the module's cluster records the plate recorded in memory."""
+    import socket
+    with socket.socket() as s:  # a port just freed: nothing listens there
+        s.bind(("127.0.0.1", 0))
+        nowhere = f"tcp://127.0.0.1:{s.getsockname()[1]}"
+    monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", nowhere)
+    with pytest.raises(InputError, match=re.escape(nowhere)):
+        _record(tmp_path / "p.zarr", None)
+    monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", scheduler)
+    h = _record(tmp_path / "p.zarr", None)
+    assert np.array_equal(h.object_wave[...], in_memory.object_wave)
+
+
 def _a_tile_written(url) -> bool:
     """Whether the store at ``url`` holds a written tile yet: a store still being made (its
     group there, its metadata not yet: not a plate) holds none."""
