@@ -97,13 +97,18 @@ __kernel void demodulate_decimate(__global float2 *out, __global const float2 *i
     __local float2 span[PLANES][Q * PHASE];
     int lid = get_local_id(0), j0 = get_group_id(0) * GROUP, r = get_global_id(1);
     int start = Q * j0 + lead;
-    for (int i = lid; i < GROUP * Q + TAPS; i += GROUP) {
+    /* item lid stages inputs lid·Q + ph, at ph·PHASE + lid: the lanes store side by side;
+     * then the TAPS inputs past the group's, item by item */
+    for (int n = 0; n < Q + (TAPS + GROUP - 1) / GROUP; n++) {
+        int i = n < Q ? lid * Q + n : GROUP * Q + (n - Q) * GROUP + lid;
+        if (i >= GROUP * Q + TAPS)
+            continue;
         int c = start + i;
         float2 turn = 0;
         if (c >= 0 && c < cols)
             turn = turn_towards_pupil(c, r, pitch, row_pitch, x0, y0, k, px, py, pz, zx, zy,
                                       zz, table, segments);
-        int at = (i % Q) * PHASE + i / Q;
+        int at = n < Q ? n * PHASE + lid : (i % Q) * PHASE + i / Q;
         for (int p = 0; p < PLANES; p++)
             span[p][at] = c >= 0 && c < cols ? cmul(in[first + p * plane + (long)r * stride + c],
                                                    turn)
