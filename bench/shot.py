@@ -134,9 +134,6 @@ def main():
     print(f"plan: {planned.describe()}")
     print(f"view plan (middle frame): "
           f"{plan_view(planned, position=cams[1].position, pixel_angle=cams[1].pixel_angle(), pupil=cams[1].aperture_diameter, resolution=cams[1].resolution).describe()}")
-    # warm: programs built and FFT plans made on a small frame
-    small = camera(0.0, 0.1)
-    render_camera(meshes, small, via="incoherent")
     codes = [look_code(k, args.looks) for k in range(args.looks)]
     plates, seconds = [], []
     with PeakMemory() as memory:
@@ -147,7 +144,9 @@ def main():
             print(f"  look {len(plates)}: {t:.1f} s (load {os.getloadavg()[0]:.1f})",
                   flush=True)
     record_s = sum(seconds)
-    render_view(plates, small, supersample=args.supersample)  # the view's programs built
+    # both renderers warm at the frame's size (programs built, FFT plans read or measured)
+    render_camera(meshes, cams[1], via="incoherent")
+    render_view(plates, cams[1], supersample=args.supersample)
     h = plates[0]
     print(f"recording: {h.shape[1]}x{h.shape[0]} samples x {len(h.channels)} channels x "
           f"{args.looks} looks in {record_s:.1f} s; peak memory of all processes "
