@@ -5,6 +5,8 @@ towards +z; fields are exp(+ikr) waves (time dependence exp(-iωt)); arrays are 
 [y, x] with column j at x = (j - (W-1)/2)·pitch.
 """
 
+from .lazy import lazy_names
+
 __version__ = "0.1.0"
 
 _API = {"Camera": ".scene", "look_at": ".scene", "Plate": ".scene", "ViewingZone": ".scene",
@@ -39,14 +41,4 @@ __all__ = ["Camera", "Field", "Hologram", "InputError", "Mesh", "Plate", "Pupil"
            "write_acquired", "write_hologram", "write_view"]
 
 
-def __getattr__(name):  # the top-level API, imported on first use (keeps `import` light)
-    from importlib import import_module
-    if name in _PACKAGES:
-        return import_module(f".{name}", __name__)
-    if name not in _API:
-        raise AttributeError(f"module 'holo_core' has no attribute {name!r}")
-    return getattr(import_module(_API[name], __name__), name)
-
-
-def __dir__():
-    return sorted({*globals(), *_API, *_PACKAGES})
+__getattr__, __dir__ = lazy_names(__name__, _API, _PACKAGES)

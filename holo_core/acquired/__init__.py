@@ -17,6 +17,8 @@ The names below are imported on first use, so that ``framing`` comes without the
 stages the others use.
 """
 
+from ..lazy import lazy_names
+
 _API = {"Carrier": ".carrier", "InlineHologramError": ".carrier", "find_carrier": ".carrier",
         "METRICS": ".focus", "Focus": ".focus", "autofocus": ".focus", "decimate": ".focus",
         "depth_of_focus": ".focus", "focus_metric": ".focus", "refocus": ".focus",
@@ -31,12 +33,4 @@ __all__ = ["METRICS", "Aperture", "Carrier", "Focus", "InlineHologramError", "Or
            "refocus", "remove_background", "remove_tilt", "sideband", "stated_plane", "unwrap"]
 
 
-def __getattr__(name):
-    from importlib import import_module
-    if name not in _API:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(import_module(_API[name], __name__), name)
-
-
-def __dir__():
-    return sorted({*globals(), *_API})
+__getattr__, __dir__ = lazy_names(__name__, _API)

@@ -10,18 +10,12 @@
 - ``metrics.py``: image quality against a reference, :func:`psnr` and :func:`ssim`
 """
 
+from ..lazy import lazy_names
+
 # imported on first use: depth.py and pupil.py are arithmetic the planner uses without the
 # OpenCL driver that lens.py's propagation loads
 _API = {"thin_lens": ".lens", "psnr": ".metrics", "ssim": ".metrics", "Pupil": ".pupil"}
 __all__ = ["Pupil", "psnr", "ssim", "thin_lens"]
 
 
-def __getattr__(name):
-    from importlib import import_module
-    if name not in _API:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(import_module(_API[name], __name__), name)
-
-
-def __dir__():
-    return sorted({*globals(), *_API})
+__getattr__, __dir__ = lazy_names(__name__, _API)

@@ -19,53 +19,13 @@
  * its amplitude times exp(psi) to its own plane of `out` (stride h*w).
  * Options: -DVEC=1|4|8|16, -DSEG=<columns>, -DCHANNELS=<n>, -DOBLIQUITY (A = |z|/r^2
  * instead of 1/r). */
-#include "holo_complex.h"
-
-#define CAT_(a, b) a##b
-#define CAT(a, b) CAT_(a, b)
-#ifdef HOLO_FP64
-typedef double real;
-#else
-typedef float real;
-#endif
-
-#if VEC == 1
-typedef float floatv;
-#define LANE_ID(c) 0.0f
-#else
-typedef CAT(float, VEC) floatv;
-#define LANE_ID(c) CAT(vload, VEC)(0, c)
-#endif
+#include "lane_series.h"
 
 #ifdef OBLIQUITY
 #define NAMP 2
 #else
 #define NAMP 1
 #endif
-
-__constant float LANES[16] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
-
-/* Builtin exp and sincos are library calls on PoCL, slower than the whole recurrence: the
- * arguments here are small, so short series do (errors below 1e-8). */
-static floatv wrap(floatv x)            /* x reduced to [-pi, pi] */
-{
-    return x - 6.28318531f * rint(x * 0.159154943f);
-}
-
-static floatv exp_small(floatv x)       /* exp(x), |x| << 1 (a relative amplitude change) */
-{
-    return 1 + x * (1 + x * (0.5f + x * (1 / 6.0f + x * (1 / 24.0f + x * (1 / 120.0f
-           + x * (1 / 720.0f))))));
-}
-
-/* (re, im) = m * exp(i x) for x in [-pi, pi] */
-#define CIS(x, m, re, im)                  \
-    do {                                   \
-        floatv cos_, sin_;                 \
-        HOLO_CIS(floatv, x, cos_, sin_);   \
-        re = (m) * cos_;                   \
-        im = (m) * sin_;                   \
-    } while (0)
 
 /* one pixel along the row: E <- E*D, D <- D*C */
 #define STEP(er, ei, dr, di, cr, ci, t)   \
@@ -226,13 +186,8 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
     for (int c = 0; c < CHANNELS; c++)
     for (int m = 0; m < SEG; m++) {
         int col = col0 + m;
-#if VEC == 1
-        lane_r[0] = acc_r[m][c];
-        lane_i[0] = acc_i[m][c];
-#else
-        CAT(vstore, VEC)(acc_r[m][c], 0, lane_r);
-        CAT(vstore, VEC)(acc_i[m][c], 0, lane_i);
-#endif
+        UNLANE(acc_r[m][c], lane_r);
+        UNLANE(acc_i[m][c], lane_i);
         for (int l = 0; l < VEC; l++) {
             int row = row0 + l;
             if (row < h && col < w)

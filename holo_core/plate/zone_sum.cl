@@ -21,41 +21,7 @@
  * Rows lie row_pitch apart, columns pitch apart (a zone wider than tall asks fewer rows).
  * Options: -DVEC=1|4|8|16, -DSEG=<columns>, -DCHANNELS=<n>, -DGRID_X, -DGRID_Y=<the zone grid's points along x, y>.
  */
-#include "holo_complex.h"
-
-#define CAT_(a, b) a##b
-#define CAT(a, b) CAT_(a, b)
-#ifdef HOLO_FP64
-typedef double real;
-#else
-typedef float real;
-#endif
-
-#if VEC == 1
-typedef float floatv;
-#define LANE_ID(c) 0.0f
-#else
-typedef CAT(float, VEC) floatv;
-#define LANE_ID(c) CAT(vload, VEC)(0, c)
-#endif
-
-__constant float LANES[16] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
-
-static floatv wrap(floatv x) { return x - 6.28318531f * rint(x * 0.159154943f); }
-
-static floatv exp_small(floatv x)
-{
-    return 1 + x * (1 + x * (0.5f + x * (1 / 6.0f + x * (1 / 24.0f + x * (1 / 120.0f
-           + x * (1 / 720.0f))))));
-}
-
-#define CIS(x, m, re, im)                  \
-    do {                                   \
-        floatv cos_, sin_;                 \
-        HOLO_CIS(floatv, x, cos_, sin_);   \
-        re = (m) * cos_;                   \
-        im = (m) * sin_;                   \
-    } while (0)
+#include "lane_series.h"
 
 /* 1 - smoothstep over the rim: 1 inside |u| <= half, 0 beyond half + rim */
 static floatv rim_weight(floatv u, floatv inner, float rim)
@@ -85,11 +51,7 @@ static floatv visibility(float x, floatv y, float xj, float yj, float s,
     float ax = fx - ix;
     __global const uchar *v = vis + row * GRID_X * GRID_Y;
     float lanes[VEC > 1 ? VEC : 1], fyl[VEC > 1 ? VEC : 1];
-#if VEC == 1
-    fyl[0] = fy;
-#else
-    CAT(vstore, VEC)(fy, 0, fyl);
-#endif
+    UNLANE(fy, fyl);
     for (int l = 0; l < VEC; l++) {
         int iy = (int)fyl[l];
         float ay = fyl[l] - iy;
@@ -201,13 +163,8 @@ __kernel void zone_sum(__global float2 *out, int row_first, int col_first, int o
             break;
         real x = x0 + col * pitch - zx;
         for (int c = 0; c < CHANNELS; c++) {
-#if VEC == 1
-            lane_r[0] = acc_r[m][c];
-            lane_i[0] = acc_i[m][c];
-#else
-            CAT(vstore, VEC)(acc_r[m][c], 0, lane_r);
-            CAT(vstore, VEC)(acc_i[m][c], 0, lane_i);
-#endif
+            UNLANE(acc_r[m][c], lane_r);
+            UNLANE(acc_i[m][c], lane_i);
             for (int l = 0; l < VEC; l++) {
                 int row = row0 + l;
                 if (row >= row_end)
