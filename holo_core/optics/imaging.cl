@@ -38,3 +38,34 @@ __kernel void read_pixels(__global float2 *out, __global const float2 *A, int h,
     int i = get_global_id(0);
     out[i] = scale * sample_spectrum_es(A, h, w, u[i], v[i], es);
 }
+
+/* The speckle's box low-pass and sampling (Sect. VII-E), before the images leave the device:
+ * camera pixel (row y, col x) of a W-pixel row from its s×s fine pixels of A (W·s wide), the
+ * mean of |A|² (block_power), and the mean of A·conj(B) added to out where add != 0
+ * (block_cross: the depth pair's cross image, summed over the colours at its wavelength).
+ * Global size (W, H). */
+__kernel void block_power(__global float *out, __global const float2 *A, int s, int W)
+{
+    int x = get_global_id(0), y = get_global_id(1);
+    float sum = 0.0f;
+    for (int i = 0; i < s; i++) {
+        __global const float2 *row = A + (size_t)(y * s + i) * W * s + x * s;
+        for (int j = 0; j < s; j++)
+            sum += dot(row[j], row[j]);
+    }
+    out[y * W + x] = sum / (s * s);
+}
+
+__kernel void block_cross(__global float2 *out, __global const float2 *A,
+                          __global const float2 *B, int s, int W, int add)
+{
+    int x = get_global_id(0), y = get_global_id(1);
+    float2 sum = (float2)(0.0f, 0.0f);
+    for (int i = 0; i < s; i++) {
+        size_t at = (size_t)(y * s + i) * W * s + x * s;
+        for (int j = 0; j < s; j++)
+            sum += cmul(A[at + j], cconj(B[at + j]));
+    }
+    sum /= (float)(s * s);
+    out[y * W + x] = add ? out[y * W + x] + sum : sum;
+}

@@ -29,7 +29,7 @@ from ..opencl import get_runtime
 from ..opencl.arrays import cached, copy_plane, empty
 from ..optics import depth as depth_mod
 from ..optics import speckle
-from ..optics.imaging import IRIS_TAPER, PupilImage, assemble, iris_weights
+from ..optics.imaging import IRIS_TAPER, PupilImage, assemble, fold_look, iris_weights
 from ..optics.pupil import Pupil, camera_pupil, defocus_limited_diameter, intensity_supersample
 from ..propagation import grid
 from ..propagation.convolution import convolve
@@ -164,6 +164,7 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     _check_settings(holos, camera, supersample, exposure, opacity_threshold)
     fine = _supersampled(camera, supersample)
     colours, z_ch = first.colour_channels(), first.depth_channel()
+    keep_fine = composition == "max" or depth_estimate == "brightest"  # else the pixels' means
     if z_ch is None and stated_plane(first) is None:
         warnings.warn("the hologram has no depth channel (record it with depth=True): the "
                       f"view's depth is the background ({BACKGROUND_DEPTH:g} m) everywhere, so a "
@@ -185,7 +186,7 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
             pupil = Pupil(diameter=diameter, focus=focus, apodize=apodize)
         looks, shape = carrier_looks(holos, camera, fine, pupil, rotation, position, colours,
                                      z_ch, supersample=supersample, chromatic=chromatic,
-                                     progress=progress)
+                                     keep_fine=keep_fine, progress=progress)
         if looks is None:
             warnings.warn("the view is black: the camera sees the objects beside the plate, "
                           "not through it", EmptyViewWarning, stacklevel=2)
@@ -218,6 +219,7 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     # radiance |A|² / (σ·b²): a surface of emitters of intensity I, σ per m², shows I
     density = first.point_density or 1.0
     looks = []
+    same = _same(first, colours)
     for i, h in enumerate(holos):
         done = jobs.scaled(progress, i / len(holos), (i + 1) / len(holos))
         images = {}
@@ -231,12 +233,13 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
             at = field_at_pupil(u, window, h, wavelength=lam, position=position,
                                 rotation=rotation, n=n, pitch=d)
             lens = lam0 if chromatic else lam
-            a = imagers[lam].image(rt.to_device(at, np.complex64), pitch=(d, d),
-                                   diameter=pupil.diameter, focus=pupil.focus, taper=taper,
-                                   lens_k=2 * np.pi / lens, scale=scale)
-            images[c] = a * (n * d / (lam * math.sqrt(density)))
+            images[c] = imagers[lam].image(
+                rt.to_device(at, np.complex64), pitch=(d, d), diameter=pupil.diameter,
+                focus=pupil.focus, taper=taper, lens_k=2 * np.pi / lens,
+                scale=scale * n * d / (lam * math.sqrt(density)), out=_fine_image(rt, fine, c))
             jobs.report(done, m + 1, len(channels))
-        looks.append(images)
+        looks.append(fold_look(rt, images, same=same, partner=z_ch, supersample=supersample,
+                               keep_fine=keep_fine))
     return _compose(looks, colours, z_ch, first, camera, fine, pupil, supersample=supersample,
                     composition=composition, depth_estimate=depth_estimate, centre=centre,
                     exposure=exposure, threshold=opacity_threshold, n=n)
@@ -258,13 +261,15 @@ def _iris_sum(n, d, diameter, taper, lit) -> float:
 
 
 EDGE_BINS = 8  # the pupil's spectrum reaches this many bins beyond the image and its blur
+SPREAD_PLANES = 8  # the looks' channels spread onto a view's bins in one pass, at most
 
 
 def carrier_looks(holos, camera: Camera, fine: Camera, pupil: Pupil, rotation, position,
-                  colours, z_ch, *, supersample, chromatic=True, progress=None):
-    """(each look's complex images (channel -> (H·s, W·s)), the pupil's samples (h, w)) of
-    plates stored against their zone's carrier (:class:`~holo_core.plate.to_pupil.
-    CarrierPupil`); (None, None) where the pupil sees the objects beside the plate."""
+                  colours, z_ch, *, supersample, chromatic=True, keep_fine=False,
+                  progress=None):
+    """(each look's images at the pixels (:func:`~holo_core.optics.imaging.fold_look`), the
+    pupil's samples (h, w)) of plates stored against their zone's carrier
+    (:class:`~holo_core.plate.to_pupil.CarrierPupil`); (None, None) where the pupil sees the objects beside the plate."""
     first = holos[0]
     window = carrier_window(first, camera, rotation, position, pupil.diameter)
     if window is None:
@@ -273,8 +278,11 @@ def carrier_looks(holos, camera: Camera, fine: Camera, pupil: Pupil, rotation, p
     bin_ = min(camera.pixel_angle() / supersample, lam0 / pupil.diameter)
     shape, middle = _spectrum_box(first, fine, rotation, position, pupil, bin_, window)
     rt = get_runtime()
-    memory.check_device(rt, f"the {shape[1]}x{shape[0]} pupil's spectra",
-                        96.0 * math.prod(shape), 32.0 * math.prod(shape))
+    channels = len(colours) + (z_ch is not None)
+    batch = max(1, SPREAD_PLANES // channels)  # looks spread onto the bins in one pass
+    planes, bins = batch * channels, math.prod(shape)
+    memory.check_device(rt, f"the {shape[1]}x{shape[0]} pupil's spectra of {planes} planes",
+                        (40.0 * planes + 64) * bins, 32.0 * planes * bins)
     view = CarrierPupil(rt, first, position=position, rotation=rotation,
                         diameter=pupil.diameter, bin=bin_, shape=shape, window=window,
                         centre=middle)
@@ -292,24 +300,44 @@ def carrier_looks(holos, camera: Camera, fine: Camera, pupil: Pupil, rotation, p
         groups.setdefault(first.wavelengths[c], []).append(c)
     imagers = {lam: PupilImage(rt, shape, bin=bin_, camera=fine, centre=middle)
                for lam in groups}
-    looks = []
-    for i, h in enumerate(holos):
+    for lam, chans in groups.items():
+        if max(chans) + 1 - min(chans) != len(chans):
+            raise InputError(f"a plate's channels at one wavelength must be neighbours; got "
+                             f"{chans}")
+    looks, same = [], _same(first, colours)
+    for i in range(len(holos)):
+        if i % batch == 0:
+            parts = [(h.object_wave, chans, lam) for h in holos[i:i + batch]
+                     for lam, chans in groups.items()]
+            waves = view.fields(parts, amplitude=spacing / bin_, progress=jobs.scaled(
+                progress, i / len(holos), (i + 0.8 * len(parts) / len(groups)) / len(holos)))
+            m = 0
         images = {}
-        for g, (lam, chans) in enumerate(groups.items()):
-            lo, hi = min(chans), max(chans) + 1
-            if hi - lo != len(chans):
-                raise InputError(f"a plate's channels at one wavelength must be neighbours; "
-                                 f"got {chans}")
-            waves = view.fields(h.object_wave, chans, lam, amplitude=spacing / bin_)
+        for lam, chans in groups.items():
             lens = lam0 if chromatic else lam
-            for m, c in enumerate(chans):
+            for c in chans:
                 images[c] = imagers[lam].image(
                     plane_of(rt, waves, m), pitch=(lam / (hh * bin_), lam / (ww * bin_)),
                     diameter=pupil.diameter, focus=pupil.focus, taper=taper,
-                    lens_k=2 * np.pi / lens, scale=scale)
-            jobs.report(progress, i * len(groups) + g + 1, len(holos) * len(groups))
-        looks.append(images)
+                    lens_k=2 * np.pi / lens, scale=scale, out=_fine_image(rt, fine, c))
+                m += 1
+        looks.append(fold_look(rt, images, same=same, partner=z_ch, supersample=supersample,
+                               keep_fine=keep_fine))
+        jobs.report(progress, i + 1, len(holos))
     return looks, shape
+
+
+def _fine_image(rt, fine: Camera, channel: int):
+    """The device array a view's image of ``channel`` at the ``fine`` pixels is read into."""
+    w, h = fine.resolution
+    return rt.scratch(f"view-image-{channel}", (h, w))
+
+
+def _same(h: Hologram, colours) -> list:
+    """The colour channels at the first colour's wavelength: the depth pair's first member
+    is their sum (Eq. 26)."""
+    lam0 = h.wavelengths[colours[0]]
+    return [c for c in colours if h.wavelengths[c] == lam0]
 
 
 def carrier_window(h: Hologram, camera: Camera, rotation, position, diameter):
@@ -372,33 +400,30 @@ def nyquist_supersample(h: Hologram, camera: Camera) -> int:
 
 def _compose(looks, colours, z_ch, first: Hologram, camera, fine, pupil, *, supersample,
              composition, depth_estimate, centre, exposure, threshold, n) -> RenderResult:
-    """The view from each iteration's images at the fine pixels (``looks``: channel → complex
-    image, radiance |A|² calibrated): with the depth partner and a known emitter density, as
-    the camera hologram assembles it (:func:`holo_core.optics.imaging.assemble`)."""
+    """The view from each iteration's images at the pixels (``looks``: :class:`~holo_core.
+    optics.imaging.Folded`, radiance |A|² calibrated): with the depth partner and a known
+    emitter density, as the camera hologram assembles it (:func:`holo_core.optics.imaging.
+    assemble`, here of the pixels' means: the box filter is linear)."""
     lam0 = first.wavelengths[colours[0]]
-    radiance = speckle.compose([np.stack([np.abs(im[c]) ** 2 for c in colours], -1)
-                                for im in looks], composition)
+    radiance = _radiance(looks, colours, composition, supersample)
     if z_ch is None:
-        return _finish(speckle.downsample(radiance, supersample), None, None, first, camera,
-                       pupil, exposure, threshold, lam0)
+        return _finish(radiance, None, None, first, camera, pupil, exposure, threshold, lam0)
     pair = (lam0, first.wavelengths[z_ch])
-    same = [c for c in colours if first.wavelengths[c] == lam0]
-    crosses = [sum(im[c] for c in same) * np.conj(im[z_ch]) for im in looks]
-    brightness = [np.abs(sum(im[c] for c in same)) for im in looks]
-    coverage = np.mean([np.abs(im[z_ch]) ** 2 for im in looks], 0)
+    cross = sum(look.cross for look in looks)
+    coverage = np.mean([look.power[z_ch] for look in looks], 0)
+    depth_of = {"same": _same(first, colours), "partner": z_ch, "estimate": depth_estimate,
+                "wavelengths": pair, "centre": centre, "camera": camera,
+                "supersample": supersample}
     if not first.point_density:  # bare points: no coverage to calibrate; alpha from luminance
-        ray = _depth(crosses, brightness, estimate=depth_estimate, wavelengths=pair,
-                     centre=centre, focus=None, camera=camera, supersample=supersample)
-        return _finish(speckle.downsample(radiance, supersample), ray, None, first, camera,
-                       pupil, exposure, threshold, lam0)
+        return _finish(radiance, _depth(looks, cross, **depth_of), None, first, camera, pupil,
+                       exposure, threshold, lam0)
     exposure = 1.0 if exposure is None else exposure
     colour, alpha, depth, shown, cover = assemble(
-        as_rgb(radiance), coverage, sum(crosses), camera=camera, supersample=supersample,
-        wavelengths=pair, centre=centre, exposure=exposure)
+        as_rgb(radiance), coverage, cross, camera=camera, supersample=1, wavelengths=pair,
+        centre=centre, exposure=exposure)
     if depth_estimate == "brightest":
-        ray = _depth(crosses, brightness, estimate=depth_estimate, wavelengths=pair,
-                     centre=centre, focus=None, camera=camera, supersample=supersample)
-        depth = np.where(alpha > 0, ray, BACKGROUND_DEPTH).astype(np.float32)
+        depth = np.where(alpha > 0, _depth(looks, cross, **depth_of),
+                         BACKGROUND_DEPTH).astype(np.float32)
     if not np.isfinite(colour).all() or np.abs(colour).max(initial=0) > np.finfo(np.float32).max:
         raise InputError(f"exposure must keep the view's pixels within float32 (finite); got "
                          f"{exposure!r}")
@@ -407,24 +432,34 @@ def _compose(looks, colours, z_ch, first: Hologram, camera, fine, pupil, *, supe
             "resolution_limit_rad": limit, "pixel_angle_rad": camera.pixel_angle(),
             "resolution_limit_px": limit / camera.pixel_angle(),
             "wavelengths_m": list(first.wavelengths), "exposure": exposure,
-            "pupil_samples": list(n) if isinstance(n, tuple) else [n, n], "iterations": len(looks), "samples": len(looks),
-            "speckle_contrast": _spread(looks, colours, z_ch, supersample)}
+            "pupil_samples": list(n) if isinstance(n, tuple) else [n, n],
+            "iterations": len(looks), "samples": len(looks),
+            "speckle_contrast": _spread(looks, colours, z_ch)}
     log.info("render: aperture %.4g m, resolution limit λ/D = %.3g rad = %.2f px",
              pupil.diameter, limit, info["resolution_limit_px"])
     return RenderResult(rgb=colour, alpha=alpha, depth=depth, info=info, coverage=cover,
                         radiance=shown)
 
 
-def _spread(looks, colours, z_ch, supersample) -> float:
+def _radiance(looks, colours, composition, supersample) -> np.ndarray:
+    """(H, W, colours) radiance at the pixels: the looks' mean of the pixels' means, or the
+    pixels' mean of the looks' maximum at the fine pixels (Sect. VII-E)."""
+    if composition == "mean":
+        return np.stack([np.mean([look.power[c] for look in looks], 0) for c in colours], -1)
+    return speckle.downsample(speckle.compose(
+        [np.stack([np.abs(look.fine[c]) ** 2 for c in colours], -1) for look in looks],
+        composition), supersample)
+
+
+def _spread(looks, colours, z_ch) -> float:
     """The speckle contrast of the mean colour over the iterations: the spread of each
     iteration's colour (radiance over coverage) over √n, median over covered pixels; NaN for
     a single iteration."""
     if len(looks) < 2:
         return float("nan")
-    s = supersample
-    lum = [speckle.downsample(np.mean([np.abs(im[c]) ** 2 for c in colours], 0), s)
-           / np.maximum(speckle.downsample(np.abs(im[z_ch]) ** 2, s), 0.05) for im in looks]
-    cover = speckle.downsample(np.mean([np.abs(im[z_ch]) ** 2 for im in looks], 0), s)
+    lum = [np.mean([look.power[c] for c in colours], 0) / np.maximum(look.power[z_ch], 0.05)
+           for look in looks]
+    cover = np.mean([look.power[z_ch] for look in looks], 0)
     mean, spread = np.mean(lum, 0), np.std(lum, 0) / math.sqrt(len(looks))
     solid = cover >= 0.75
     return float(np.median(spread[solid] / np.maximum(mean[solid], 1e-30))) if solid.any() \
@@ -517,20 +552,25 @@ def _check_settings(holos, camera: Camera, supersample, exposure, threshold) -> 
                           HOLOGRAM_SAMPLE_BYTES * np.prod(first.shape))
 
 
-def _depth(crosses, brightness, *, estimate, wavelengths, centre, focus, camera: Camera,
+def _depth(looks, cross, *, same, partner, estimate, wavelengths, centre, camera: Camera,
            supersample) -> np.ndarray:
-    """Planar depth [m] from the per-iteration cross images u1·conj(u2) of the depth pair."""
-    def ranges(cross):
-        return depth_mod.from_cross_spectrum(cross, wavelengths=wavelengths, centre=centre,
-                                             focus=focus)
+    """Planar depth [m] from the depth pair's cross image u1·conj(u2): of the pixels' means
+    summed over the iterations (``cross``: the intensity-weighted consensus), or per fine
+    pixel from the brightest iteration (their ``fine`` images, ``same`` summed into u1)."""
+    def ranges(c):
+        return depth_mod.from_cross_spectrum(c, wavelengths=wavelengths, centre=centre,
+                                             focus=None)
 
     def planar(ray, cam):
         tx, ty = cam.pixel_tangents()
         return ray / np.sqrt(1 + tx * tx + ty * ty)
 
     if estimate == "consensus":
-        return planar(ranges(speckle.downsample(sum(crosses), supersample)), camera)
-    ray, bright = depth_mod.keep_brightest([ranges(c) for c in crosses], brightness)
+        return planar(ranges(cross), camera)
+    first = [sum(look.fine[c] for c in same) for look in looks]
+    ray, bright = depth_mod.keep_brightest(
+        [ranges(u * np.conj(look.fine[partner])) for u, look in zip(first, looks)],
+        [np.abs(u) for u in first])
     return speckle.pick_brightest(planar(ray, _supersampled(camera, supersample)), bright,
                                   supersample)
 

@@ -128,6 +128,23 @@ def test_a_view_reads_the_samples_in_place_as_it_would_copy_them(plate):
     assert np.array_equal(a.rgb, b.rgb) and np.array_equal(a.depth, b.depth)
 
 
+def test_a_views_pixels_fold_on_the_device_as_the_fine_images_do_on_the_host(plate):
+    """The view folds its fine images to the pixels on the device (imaging.fold_look); a
+    composition by maximum and a depth by the brightest look compose the fine images
+    themselves on the host. With one look the maximum is the mean: both views' radiance and
+    colour agree to float32 rounding, and the brightest look's depth lies within the objects'
+    depths seen from the camera."""
+    cam = camera("left", SCALE)
+    a = render_view(plate, cam, supersample=2)
+    b = render_view(plate, cam, supersample=2, composition="max", depth_estimate="brightest")
+    assert rel_err(b.radiance, a.radiance) < 1e-5 and rel_err(b.rgb, a.rgb) < 1e-5
+    assert np.array_equal(a.alpha, b.alpha)
+    near, far = np.percentile(a.depth[a.alpha > 0], [1, 99])
+    seen = b.depth[b.alpha > 0]
+    assert np.isfinite(seen).all() and np.median(np.abs(seen - a.depth[a.alpha > 0])) < 0.1 * (
+        far - near), (near, far)
+
+
 # --- the physical field, re-modulated wherever it is needed --------------------------------
 
 ZONE = ViewingZone(centre=(0.01, -0.005, 0.3), half_extents=(0.03, 0.02, 0.01))
