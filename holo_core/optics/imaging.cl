@@ -39,33 +39,78 @@ __kernel void read_pixels(__global float2 *out, __global const float2 *A, int h,
     out[i] = scale * sample_spectrum_es(A, h, w, u[i], v[i], es);
 }
 
-/* The speckle's box low-pass and sampling (Sect. VII-E), before the images leave the device:
- * camera pixel (row y, col x) of a W-pixel row from its s×s fine pixels of A (W·s wide), the
- * mean of |A|² (block_power), and the mean of A·conj(B) added to out where add != 0
- * (block_cross: the depth pair's cross image, summed over the colours at its wavelength).
- * Global size (W, H). */
-__kernel void block_power(__global float *out, __global const float2 *A, int s, int W)
+/* Every look's images read at the fine pixels and folded to the camera's pixels at once (the
+ * speckle's box low-pass and sampling, Sect. VII-E): camera pixel (x, y) of a W×H image takes
+ * its s×s fine pixels, each one's ray from the affine view tangents (t0 + col·dt, r0 + row·dr:
+ * Camera.tangent_steps), its direction cosines (α, β) = −(t_x, t_y)/√(1 + t_x² + t_y²) and its
+ * bins (u, v) = (α − ca, β − cb)·bin2, read with the ES kernel in each of the PLANES spectra A
+ * (h, w each; the looks' LOOK_PLANES channels, look after look) times its scale. Out: each
+ * plane's mean |A|² (power, (PLANES, H, W)), each look's mean u1·conj(u2) (cross, (looks, H,
+ * W)) with u1 the sum of the channels in the bit mask SAME and u2 channel PARTNER (−1: none),
+ * and with KEEP_FINE the fine images themselves (fine, (PLANES, H·s, W·s)). */
+#ifdef LOOK_PLANES
+#define LOOKS (PLANES / LOOK_PLANES)
+__kernel void read_folded(__global float *power, __global float2 *cross, __global float2 *fine,
+                          __global const float2 *A, int h, int w, int W, int H, int s, real t0,
+                          real dt, real r0, real dr, real ca, real cb, real bin2,
+                          __global const float *scale, __global const float2 *es)
 {
     int x = get_global_id(0), y = get_global_id(1);
-    float sum = 0.0f;
-    for (int i = 0; i < s; i++) {
-        __global const float2 *row = A + (size_t)(y * s + i) * W * s + x * s;
-        for (int j = 0; j < s; j++)
-            sum += dot(row[j], row[j]);
+    float pw[PLANES];
+    float2 cr[LOOKS];
+    for (int p = 0; p < PLANES; p++)
+        pw[p] = 0.0f;
+    for (int l = 0; l < LOOKS; l++)
+        cr[l] = 0.0f;
+    for (int i = 0; i < s; i++)
+    for (int j = 0; j < s; j++) {
+        int row = y * s + i, col = x * s + j;
+        real tx = t0 + col * dt, ty = r0 + row * dr, n = sqrt(tx * tx + ty * ty + 1);
+        real u = (-tx / n - ca) * bin2, v = (-ty / n - cb) * bin2;
+        int u0 = (int)floor(u) - TAPS / 2 + 1, v0 = (int)floor(v) - TAPS / 2 + 1;
+        float fu = (float)(u - u0), fv = (float)(v - v0), wu[TAPS];
+        for (int du = 0; du < TAPS; du++)
+            wu[du] = es_weight(es, fu - du);
+        float2 a[PLANES];
+        for (int p = 0; p < PLANES; p++)
+            a[p] = 0.0f;
+        for (int dv = 0; dv < TAPS; dv++) {
+            int m = v0 + dv;
+            if (m < -(h / 2) || m > (h - 1) / 2)
+                continue;
+            float wv = es_weight(es, fv - dv);
+            size_t at = (size_t)(m < 0 ? m + h : m) * w;
+            for (int du = 0; du < TAPS; du++) {
+                int k = u0 + du;
+                if (k < -(w / 2) || k > (w - 1) / 2)
+                    continue;
+                float wgt = wv * wu[du];
+                size_t here = at + (k < 0 ? k + w : k);
+                for (int p = 0; p < PLANES; p++)
+                    a[p] += wgt * A[(size_t)p * h * w + here];
+            }
+        }
+        for (int p = 0; p < PLANES; p++) {
+            a[p] *= scale[p];
+            pw[p] += dot(a[p], a[p]);
+#if KEEP_FINE
+            fine[((size_t)p * H * s + row) * W * s + col] = a[p];
+#endif
+        }
+#if PARTNER >= 0
+        for (int l = 0; l < LOOKS; l++) {
+            float2 u1 = 0.0f;
+            for (int c = 0; c < LOOK_PLANES; c++)
+                if (SAME >> c & 1)
+                    u1 += a[l * LOOK_PLANES + c];
+            cr[l] += cmul(u1, cconj(a[l * LOOK_PLANES + PARTNER]));
+        }
+#endif
     }
-    out[y * W + x] = sum / (s * s);
+    float mean = 1.0f / (s * s);
+    for (int p = 0; p < PLANES; p++)
+        power[((size_t)p * H + y) * W + x] = pw[p] * mean;
+    for (int l = 0; l < LOOKS; l++)
+        cross[((size_t)l * H + y) * W + x] = cr[l] * mean;
 }
-
-__kernel void block_cross(__global float2 *out, __global const float2 *A,
-                          __global const float2 *B, int s, int W, int add)
-{
-    int x = get_global_id(0), y = get_global_id(1);
-    float2 sum = (float2)(0.0f, 0.0f);
-    for (int i = 0; i < s; i++) {
-        size_t at = (size_t)(y * s + i) * W * s + x * s;
-        for (int j = 0; j < s; j++)
-            sum += cmul(A[at + j], cconj(B[at + j]));
-    }
-    sum /= (float)(s * s);
-    out[y * W + x] = add ? out[y * W + x] + sum : sum;
-}
+#endif

@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..opencl import associated
-from ..opencl.arrays import by_rows, empty, read
+from ..opencl.arrays import by_rows, copy_plane, empty, read
 from ..propagation import grid
 from ..propagation.tilt import cached_array, es_table, es_transform
 from ..scene.camera import Camera
@@ -68,38 +68,106 @@ class PupilImage:
         self.apod = [rt.to_device(1 / es_transform(grid.signed_indices(n) / (2 * n), TAPS),
                                   np.float32) for n in (h, w)]
         self.es = cached_array(rt, "es-table", es_table, TAPS)
-        alpha, beta, _ = camera.direction_cosines()
-        self.u = rt.to_device(2 * (alpha - centre[0]) / bin, np.float32)
-        self.v = rt.to_device(2 * (beta - centre[1]) / bin, np.float32)
-        self.pixels = empty(rt, alpha.shape)
+        self.camera, self.bin, self.centre = camera, bin, tuple(map(float, centre))
         self.options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
+        self._pixels = None
+
+    def _directions(self):
+        """(u, v, pixels): each fine pixel's bin (device float32) and its image's buffer, made
+        on the first :meth:`image` (:meth:`fold` finds the bins in its kernel)."""
+        if self._pixels is None:
+            alpha, beta, _ = self.camera.direction_cosines()
+            self._pixels = (self.rt.to_device(2 * (alpha - self.centre[0]) / self.bin,
+                                              np.float32),
+                            self.rt.to_device(2 * (beta - self.centre[1]) / self.bin,
+                                              np.float32),
+                            empty(self.rt, alpha.shape))
+        return self._pixels
 
     def image(self, pupil, *, pitch, diameter, focus=None, taper=IRIS_TAPER, lens_k=None,
-              scale=1.0, out=None):
+              scale=1.0) -> np.ndarray:
         """The complex image (H, W) of ``pupil`` (device, (h, w), FFT order, samples
         ``pitch`` = (dy, dx) [m] apart): the iris of ``diameter`` [m] with its rim ``taper``
         (0: a hard edge), the thin lens focused at ``focus`` [m] (None: none) whose wave number
-        is ``lens_k`` [rad/m], and the spectrum read at the pixels times ``scale``. A NumPy
-        array, or with ``out`` (device (H, W) complex64) written there and left on the device
-        (:func:`fold_look`)."""
+        is ``lens_k`` [rad/m], and the spectrum read at the pixels times ``scale``."""
         rt = self.rt
         h, w = self.shape
-        dy, dx = pitch
-        corners = (grid.embedded(h, 2 * h), grid.embedded(w, 2 * w))
-        rt.fft.clear(self.padded, corners)
-        window(rt, self.padded, pupil, (h, w), pitch=pitch, radius=diameter / 2, taper=taper,
-               k=lens_k or 0.0, focus=focus or 0.0, apodization=self.apod, options=self.options)
-        rt.fft.forward(self.padded, nonzero=corners)
-        pixels = self.pixels if out is None else out
+        self._spectrum(pupil, pitch=pitch, diameter=diameter, focus=focus, taper=taper,
+                       lens_k=lens_k)
+        u, v, pixels = self._directions()
         rt.kernel(PROGRAM, "read_pixels", self.options)(
             rt.queue, (pixels.size,), None, pixels.data, self.padded.data,
-            np.int32(2 * h), np.int32(2 * w), self.u.data, self.v.data, np.float32(scale),
+            np.int32(2 * h), np.int32(2 * w), u.data, v.data, np.float32(scale),
             self.es.data)
-        return read(pixels) if out is None else out
+        return read(pixels)
+
+    def _spectrum(self, pupil, *, pitch, diameter, focus, taper, lens_k) -> None:
+        """``padded``: the spectrum of ``pupil`` through the iris and the lens (:meth:`image`)."""
+        h, w = self.shape
+        corners = (grid.embedded(h, 2 * h), grid.embedded(w, 2 * w))
+        self.rt.fft.clear(self.padded, corners)
+        window(self.rt, self.padded, pupil, (h, w), pitch=pitch, radius=diameter / 2,
+               taper=taper, k=lens_k or 0.0, focus=focus or 0.0, apodization=self.apod,
+               options=self.options)
+        self.rt.fft.forward(self.padded, nonzero=corners)
+
+    def fold(self, pupils, channels, *, same, partner, supersample, diameter, focus=None,
+             taper=IRIS_TAPER, keep_fine=False) -> list:
+        """Each look's images folded to the camera's pixels as they are read (speckle
+        reduction, Sect. VII-E): a list of :class:`Folded`, one per look. What a view composes
+        is linear in the fine pixels' intensities and the depth pair's cross image, so one
+        kernel reads every look's spectra at each fine pixel (its bins and ES weights found
+        once for them all) and keeps only the pixels' means: no fine image is stored unless
+        ``keep_fine`` asks for them (a composition by maximum, a depth by the brightest look).
+
+        pupils : device (P, h, w), FFT order: the looks' channels, look after look
+        channels : {channel: (pitch (dy, dx) [m], lens wave number [rad/m], scale)}, a look's
+            planes in order
+        same, partner : the colour channels at the depth pair's first wavelength (their sum is
+            u1) and the depth channel (u2; None: none)
+        diameter, focus, taper : the iris [m], the lens's focus [m] (None: none), its rim
+        """
+        rt, (h, w), s = self.rt, self.shape, supersample
+        names = list(channels)
+        planes = pupils.shape[0]
+        looks = planes // len(names)
+        cols, rows = (n // s for n in self.camera.resolution)
+        spectra = rt.scratch("pupil-spectra", (planes, 2 * h, 2 * w))
+        one = rt.scratch("pupil-plane", (h, w))
+        scales = rt.to_device(np.array([channels[names[p % len(names)]][2]
+                                        for p in range(planes)]), np.float32)
+        for p in range(planes):
+            pitch, lens_k, _ = channels[names[p % len(names)]]
+            copy_plane(one, pupils, p)
+            self._spectrum(one, pitch=pitch, diameter=diameter, focus=focus, taper=taper,
+                           lens_k=lens_k)
+            copy_plane(spectra, self.padded, p, into=True)
+        pair = (sum(1 << names.index(c) for c in same), names.index(partner)) \
+            if partner is not None else (0, -1)
+        options = self.options + (f"-DPLANES={planes}", f"-DLOOK_PLANES={len(names)}",
+                                  f"-DSAME={pair[0]}", f"-DPARTNER={pair[1]}",
+                                  f"-DKEEP_FINE={int(keep_fine)}")
+        power = rt.scratch("pixel-power", (planes, rows, cols), np.float32)
+        cross = rt.scratch("pixel-cross", (looks, rows, cols))
+        fine = rt.scratch("pixel-fine", (planes, rows * s, cols * s)) if keep_fine else cross
+        t0, dt, r0, dr = self.camera.tangent_steps()
+        real = rt.real
+        rt.kernel(PROGRAM, "read_folded", options)(
+            rt.queue, (cols, rows), None, power.data, cross.data, fine.data, spectra.data,
+            np.int32(2 * h), np.int32(2 * w), np.int32(cols), np.int32(rows), np.int32(s),
+            *(real(v) for v in (t0, dt, r0, dr, *self.centre, 2 / self.bin)), scales.data,
+            self.es.data)
+        power, cross = read(power), read(cross)
+        fine = read(fine) if keep_fine else None
+        return [Folded({c: power[look * len(names) + m] for m, c in enumerate(names)},
+                       cross[look] if partner is not None else None,
+                       {c: fine[look * len(names) + m] for m, c in enumerate(names)}
+                       if keep_fine else None)
+                for look in range(looks)]
 
 
 class Folded(NamedTuple):
-    """One look's images at the camera's pixels (:func:`fold_look`).
+    """One look's images at the camera's pixels (:meth:`PupilImage.fold`).
 
     power : channel → (H, W) float32, the mean |A|² over each pixel's s×s fine pixels
     cross : (H, W) complex64, the mean of u1·conj(u2) of the depth pair (u1 the sum of the
@@ -112,33 +180,15 @@ class Folded(NamedTuple):
     fine: dict | None
 
 
-def fold_look(rt, images, *, same, partner, supersample, keep_fine=False) -> Folded:
-    """One look's fine images (channel → device (H·s, W·s) complex64, :meth:`PupilImage.image`
-    with ``out``) box-filtered to the camera's pixels on the device (speckle reduction, Sect.
-    VII-E): what the view composes is linear in the intensities and the depth pair's cross
-    image, so only the pixels' means leave the device (a 1280×720 view at s = 2 reads 8 MB a
-    channel where its fine images were 29 MB). ``same``: the colour channels at the depth
-    pair's first wavelength, ``partner``: the depth channel (None: none); ``keep_fine`` also
-    reads the fine images (a composition by maximum, a depth by the brightest look)."""
+def fold_images(images, *, same, partner, supersample, keep_fine=False) -> Folded:
+    """One look's fine images (channel → (H·s, W·s) complex NumPy arrays) at the camera's
+    pixels, as :meth:`PupilImage.fold` folds them on the device: for images read one by one
+    (a full-band plate's channels, each on its own wavelength's bins)."""
     s = supersample
-    rows, cols = (n // s for n in next(iter(images.values())).shape)
-    options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
-    power = {}
-    for c, a in images.items():
-        out = rt.scratch(f"pixel-power-{c}", (rows, cols), np.float32)
-        rt.kernel(PROGRAM, "block_power", options)(
-            rt.queue, (cols, rows), None, out.data, a.data, np.int32(s), np.int32(cols))
-        power[c] = read(out)
-    cross = None
-    if partner is not None:
-        out = rt.scratch("pixel-cross", (rows, cols))
-        for i, c in enumerate(same):
-            rt.kernel(PROGRAM, "block_cross", options)(
-                rt.queue, (cols, rows), None, out.data, images[c].data, images[partner].data,
-                np.int32(s), np.int32(cols), np.int32(i > 0))
-        cross = read(out)
-    fine = {c: read(a) for c, a in images.items()} if keep_fine else None
-    return Folded(power, cross, fine)
+    cross = None if partner is None else downsample(
+        sum(images[c] for c in same) * np.conj(images[partner]), s).astype(np.complex64)
+    return Folded({c: downsample(np.abs(a) ** 2, s).astype(np.float32)
+                   for c, a in images.items()}, cross, dict(images) if keep_fine else None)
 
 
 def window(rt, padded, pupil, shape, *, pitch, radius, taper, k, focus, apodization,

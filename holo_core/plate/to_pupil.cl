@@ -127,14 +127,15 @@ __kernel void demodulate_decimate(__global float2 *out, __global const float2 *i
     }
 }
 
-/* along rows: the input (planes, rows, cols), the output's rows from out_row0 of (planes,
- * out_height, out_cols), out_rows of them; output row i reads input row q·i + first + t */
+/* along rows: the input (planes, rows, cols); output row i reads input row q·i + first + t.
+ * Output (i, c) of each plane goes to out[slot[i·cols + c]·stride + plane0 + plane]: the
+ * spread's order, every plane of a sample side by side (it reads them together). */
 __kernel void decimate(__global float2 *out, __global const float2 *in, int rows, int cols,
-                       int out_rows, int out_cols, int out_row0, int out_height, int q,
+                       int out_rows, __global const int *slot, int stride, int plane0, int q,
                        int first, __constant float *h)
 {
     int c = get_global_id(0), r = get_global_id(1), plane = get_global_id(2);
-    if (r >= out_rows || c >= out_cols)
+    if (r >= out_rows || c >= cols)
         return;
     __global const float2 *src = in + (long)plane * rows * cols;
     float2 acc = 0;
@@ -144,7 +145,7 @@ __kernel void decimate(__global float2 *out, __global const float2 *in, int rows
         if (i >= 0 && i < rows)
             acc += h[t] * src[(long)i * cols + c];
     }
-    out[((long)plane * out_height + out_row0 + r) * out_cols + c] = acc;
+    out[(long)slot[r * cols + c] * stride + plane0 + plane] = acc;
 }
 
 inline float es_weight(float t, __constant float2 *es)
@@ -161,11 +162,10 @@ inline float es_weight(float t, __constant float2 *es)
  * coordinates from (row_first, col_first): the samples within ES_TAPS/2 of each point. The
  * samples are listed by cells of CELL x CELL grid units from (row_first, col_first) (cell c's
  * in [start[c], start[c + 1]), cells_w a row): their grid coordinates gy, gx, weights wt and
- * their index n into the values v (CHANNELS, count) */
+ * their values v (count, CHANNELS), in that order */
 __kernel void spread(__global float2 *out, int grid_h, int grid_w, int row_first,
-                     int col_first, __global const float2 *v, int count,
-                     __global const float *wt, __global const float *gy,
-                     __global const float *gx, __global const int *index,
+                     int col_first, __global const float2 *v, __global const float *wt,
+                     __global const float *gy, __global const float *gx,
                      __global const int *start, int cells_h, int cells_w, float scale,
                      __constant float2 *es)
 {
@@ -186,9 +186,8 @@ __kernel void spread(__global float2 *out, int grid_h, int grid_w, int row_first
         if (fabs(dy) >= 0.5f * ES_TAPS || fabs(dx) >= 0.5f * ES_TAPS)
             continue;
         float w = scale * wt[m] * es_weight(dy, es) * es_weight(dx, es);
-        int n = index[m];
         for (int ch = 0; ch < CHANNELS; ch++)
-            sum[ch] += w * v[(long)ch * count + n];
+            sum[ch] += w * v[(long)m * CHANNELS + ch];
     }
     for (int ch = 0; ch < CHANNELS; ch++)
         out[((long)ch * grid_h + row) * grid_w + col] = sum[ch];

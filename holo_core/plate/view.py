@@ -26,10 +26,10 @@ import numpy as np
 from .. import jobs, memory, validate
 from ..acquired.framing import stated_plane
 from ..opencl import get_runtime
-from ..opencl.arrays import cached, copy_plane, empty
+from ..opencl.arrays import cached
 from ..optics import depth as depth_mod
 from ..optics import speckle
-from ..optics.imaging import IRIS_TAPER, PupilImage, assemble, fold_look, iris_weights
+from ..optics.imaging import IRIS_TAPER, PupilImage, assemble, fold_images, iris_weights
 from ..optics.pupil import Pupil, camera_pupil, defocus_limited_diameter, intensity_supersample
 from ..propagation import grid
 from ..propagation.convolution import convolve
@@ -236,10 +236,10 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
             images[c] = imagers[lam].image(
                 rt.to_device(at, np.complex64), pitch=(d, d), diameter=pupil.diameter,
                 focus=pupil.focus, taper=taper, lens_k=2 * np.pi / lens,
-                scale=scale * n * d / (lam * math.sqrt(density)), out=_fine_image(rt, fine, c))
+                scale=scale * n * d / (lam * math.sqrt(density)))
             jobs.report(done, m + 1, len(channels))
-        looks.append(fold_look(rt, images, same=same, partner=z_ch, supersample=supersample,
-                               keep_fine=keep_fine))
+        looks.append(fold_images(images, same=same, partner=z_ch, supersample=supersample,
+                                 keep_fine=keep_fine))
     return _compose(looks, colours, z_ch, first, camera, fine, pupil, supersample=supersample,
                     composition=composition, depth_estimate=depth_estimate, centre=centre,
                     exposure=exposure, threshold=opacity_threshold, n=n)
@@ -281,8 +281,10 @@ def carrier_looks(holos, camera: Camera, fine: Camera, pupil: Pupil, rotation, p
     channels = len(colours) + (z_ch is not None)
     batch = max(1, SPREAD_PLANES // channels)  # looks spread onto the bins in one pass
     planes, bins = batch * channels, math.prod(shape)
+    # per plane and bin: the spread grid and the padded spectrum (2×2 oversampled), the pupil
+    fine_bytes = 8.0 * planes * math.prod(fine.resolution) if keep_fine else 0.0
     memory.check_device(rt, f"the {shape[1]}x{shape[0]} pupil's spectra of {planes} planes",
-                        (40.0 * planes + 64) * bins, 32.0 * planes * bins)
+                        72.0 * planes * bins + fine_bytes, 32.0 * planes * bins)
     view = CarrierPupil(rt, first, position=position, rotation=rotation,
                         diameter=pupil.diameter, bin=bin_, shape=shape, window=window,
                         centre=middle)
@@ -298,39 +300,25 @@ def carrier_looks(holos, camera: Camera, fine: Camera, pupil: Pupil, rotation, p
     groups = {}
     for c in colours + ([z_ch] if z_ch is not None else []):
         groups.setdefault(first.wavelengths[c], []).append(c)
-    imagers = {lam: PupilImage(rt, shape, bin=bin_, camera=fine, centre=middle)
-               for lam in groups}
-    for lam, chans in groups.items():
+    imager = PupilImage(rt, shape, bin=bin_, camera=fine, centre=middle)  # any wavelength's
+    for chans in groups.values():
         if max(chans) + 1 - min(chans) != len(chans):
             raise InputError(f"a plate's channels at one wavelength must be neighbours; got "
                              f"{chans}")
-    looks, same = [], _same(first, colours)
-    for i in range(len(holos)):
-        if i % batch == 0:
-            parts = [(h.object_wave, chans, lam) for h in holos[i:i + batch]
-                     for lam, chans in groups.items()]
-            waves = view.fields(parts, amplitude=spacing / bin_, progress=jobs.scaled(
-                progress, i / len(holos), (i + 0.8 * len(parts) / len(groups)) / len(holos)))
-            m = 0
-        images = {}
-        for lam, chans in groups.items():
-            lens = lam0 if chromatic else lam
-            for c in chans:
-                images[c] = imagers[lam].image(
-                    plane_of(rt, waves, m), pitch=(lam / (hh * bin_), lam / (ww * bin_)),
-                    diameter=pupil.diameter, focus=pupil.focus, taper=taper,
-                    lens_k=2 * np.pi / lens, scale=scale, out=_fine_image(rt, fine, c))
-                m += 1
-        looks.append(fold_look(rt, images, same=same, partner=z_ch, supersample=supersample,
-                               keep_fine=keep_fine))
-        jobs.report(progress, i + 1, len(holos))
+    # each channel's pupil pitch, lens and scale: a look's planes in the order fields gives
+    optics = {c: ((lam / (hh * bin_), lam / (ww * bin_)), 2 * np.pi / (lam0 if chromatic
+                                                                     else lam), scale)
+              for lam, chans in groups.items() for c in chans}
+    looks = []
+    for i in range(0, len(holos), batch):
+        parts = [(h.object_wave, chans, lam) for h in holos[i:i + batch]
+                 for lam, chans in groups.items()]
+        waves = view.fields(parts, amplitude=spacing / bin_, progress=jobs.scaled(
+            progress, i / len(holos), min(i + batch, len(holos)) / len(holos)))
+        looks += imager.fold(waves, optics, same=_same(first, colours), partner=z_ch,
+                             supersample=supersample, diameter=pupil.diameter,
+                             focus=pupil.focus, taper=taper, keep_fine=keep_fine)
     return looks, shape
-
-
-def _fine_image(rt, fine: Camera, channel: int):
-    """The device array a view's image of ``channel`` at the ``fine`` pixels is read into."""
-    w, h = fine.resolution
-    return rt.scratch(f"view-image-{channel}", (h, w))
 
 
 def _same(h: Hologram, colours) -> list:
@@ -364,13 +352,13 @@ def _spectrum_box(h: Hologram, fine: Camera, rotation, position, pupil: Pupil, b
     """((h, w) bins, (α, β) centre) of the pupil's spectrum: the directions the window's light
     arrives from, within the fine pixels' field of view, widened by the defocus blur of the
     objects' depths and EDGE_BINS."""
-    alpha, beta, _ = fine.direction_cosines()
+    least, greatest = fine.direction_range()
     r0, r1, c0, c1 = window
     x, y = h.carrier.coords(h.pitch, [r0, r1], [c0, c1])
     corners = np.array([[xx, yy, 0.0] for xx in x for yy in y])
     seen = (position - corners) / np.linalg.norm(position - corners, axis=1)[:, None] @ rotation
-    lo = np.maximum(seen[:, :2].min(0), [alpha.min(), beta.min()])
-    hi = np.minimum(seen[:, :2].max(0), [alpha.max(), beta.max()])
+    lo = np.maximum(seen[:, :2].min(0), least)
+    hi = np.minimum(seen[:, :2].max(0), greatest)
     depth = np.clip(-((box_corners(h.bounds) - position) @ rotation)[:, 2], 1e-9, None)
     blur = 0.0 if pupil.focus is None else \
         pupil.diameter * float(np.max(np.abs(1 / depth - 1 / pupil.focus)))
@@ -378,13 +366,6 @@ def _spectrum_box(h: Hologram, fine: Camera, rotation, position, pupil: Pupil, b
     lo, hi = lo - margin, hi + margin
     shape = tuple(grid.next_fast_len(math.ceil((hi[i] - lo[i]) / bin_) + 1) for i in (1, 0))
     return shape, tuple(map(float, (lo + hi) / 2))
-
-
-def plane_of(rt, stack, m):
-    """Plane ``m`` of a device stack (P, h, w) as its own (h, w) device array."""
-    out = empty(rt, stack.shape[1:])
-    copy_plane(out, stack, m)
-    return out
 
 
 def nyquist_supersample(h: Hologram, camera: Camera) -> int:

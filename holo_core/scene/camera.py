@@ -154,6 +154,29 @@ class Camera:
         n = np.sqrt(tx * tx + ty * ty + 1)
         return -tx / n, -ty / n, 1 / n
 
+    def tangent_steps(self) -> tuple[float, float, float, float]:
+        """(t_x of column 0, its step per column, t_y of row 0, its step per row): the pixel
+        centres' view tangents (:meth:`pixel_tangents`) are affine in their column and row,
+        so a kernel finds any pixel's ray from these four numbers."""
+        w, h = self.resolution
+        s, dx, dy, ycor = self._plane()
+        return (0.5 - w / 2 + dx) / s, 1 / s, ((h - 0.5) * ycor - 0.5 * ycor * h + dy) / s, \
+            -ycor / s
+
+    def direction_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """((α, β) least, (α, β) greatest) of :meth:`direction_cosines` over the pixels, from
+        the image's edge pixels alone: α = −t_x/√(1 + t_x² + t_y²) is monotone in t_x along a
+        row (β likewise along a column), so its extremes lie in the first or last column."""
+        w, h = self.resolution
+        rows, cols = np.arange(h) + 0.5, np.arange(w) + 0.5
+        edge_rows = np.concatenate([rows, rows, np.full(2 * w, 0.5)])
+        edge_rows[2 * h + w:] = h - 0.5
+        edge_cols = np.concatenate([np.full(h, 0.5), np.full(h, w - 0.5), cols, cols])
+        tx, ty = self.pixel_tangents(rows=edge_rows, cols=edge_cols)
+        n = np.sqrt(tx * tx + ty * ty + 1)
+        ab = np.stack([-tx / n, -ty / n])
+        return ab.min(1), ab.max(1)
+
     def pixel_angle(self) -> float:
         """The angle one pixel spans at the image centre [rad] (the smaller of x and y)."""
         s, _, _, ycor = self._plane()

@@ -21,3 +21,20 @@ def test_a_cropped_camera_keeps_every_pixels_ray():
 def test_a_singular_pose_is_refused():
     with pytest.raises(InputError, match="singular"):
         Camera(matrix_world=np.diag([1.0, 0.0, 1.0, 1.0]))
+
+
+@pytest.mark.parametrize("shift", [(0.0, 0.0), (0.4, -0.3), (-1.2, 0.9)])
+def test_the_direction_range_is_that_of_every_pixel(shift):
+    """Camera.direction_range reads the image's edge pixels only: it equals the least and
+    greatest direction cosines of all pixels, the axis inside the image or beyond it; and
+    Camera.tangent_steps gives every pixel's tangents."""
+    cam = Camera(matrix_world=np.eye(4), lens=30, sensor_width=36, resolution=(64, 36),
+                 shift_x=shift[0], shift_y=shift[1])
+    alpha, beta, _ = cam.direction_cosines()
+    least, greatest = cam.direction_range()
+    t0, dt, r0, dr = cam.tangent_steps()  # the kernels' pixel rays
+    tx, ty = cam.pixel_tangents()
+    assert np.allclose(tx, t0 + np.arange(64) * dt, rtol=0, atol=1e-15)
+    assert np.allclose(ty, r0 + np.arange(36)[:, None] * dr, rtol=0, atol=1e-15)
+    assert np.array_equal(least, [alpha.min(), beta.min()])
+    assert np.array_equal(greatest, [alpha.max(), beta.max()])
