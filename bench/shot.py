@@ -4,11 +4,12 @@ against each frame's own camera hologram, in one run.
 The scene: a textured cube partly hiding a textured sphere, about a metre across 3.5 m from
 the camera; a 1 m plate halfway; a 40 mm lens at f/2.8 and 1280×720; a dolly of ``--dolly``
 (10 cm) across. The zone is fitted to the shot (every pupil of the move, ``--margin`` around
-it); the plate is recorded once as ``--looks`` coded looks. For three frames (start, middle,
-end of the move) the camera hologram's pass (its looks' limit, what the add-on renders by
-default) and the plate's view are timed and compared: PSNR inside the objects, silhouette
-IoU. Prints the CPU and its load, the plan, the recording's time and the peak memory of all
-its processes, and the frame count from which the plate costs less than a pass per frame.
+it); the plate is recorded once, its ``--looks`` coded looks in one pass. For three frames
+(start, middle, end of the move) the camera hologram's pass (its looks' limit, what the
+add-on renders by default) and the plate's view are timed and compared: PSNR inside the
+objects, silhouette IoU. Prints the CPU and its load, the plan, the recording's time and
+the peak memory of all its processes, and the frame count from which the plate costs less
+than a pass per frame.
 
     python bench/shot.py [--scale 1.0] [--looks 2] [--dolly 0.1] [--supersample 2] [--out DIR]
 """
@@ -33,7 +34,7 @@ from plate_scene import cube, sphere  # noqa: E402
 from holo_core.camera.render import render_camera  # noqa: E402
 from holo_core.io.image import write_png  # noqa: E402
 from holo_core.plate.plan import plan, plan_view  # noqa: E402
-from holo_core.plate.record import look_code, record_plate  # noqa: E402
+from holo_core.plate.record import record_looks  # noqa: E402
 from holo_core.plate.view import render_view  # noqa: E402
 from holo_core.scene.camera import Camera, look_at  # noqa: E402
 from holo_core.scene.plate import Plate, ViewingZone  # noqa: E402
@@ -134,16 +135,10 @@ def main():
     print(f"plan: {planned.describe()}")
     print(f"view plan (middle frame): "
           f"{plan_view(planned, position=cams[1].position, pixel_angle=cams[1].pixel_angle(), pupil=cams[1].aperture_diameter, resolution=cams[1].resolution).describe()}")
-    codes = [look_code(k, args.looks) for k in range(args.looks)]
-    plates, seconds = [], []
-    with PeakMemory() as memory:
-        for code in codes:
-            h, t = timed(record_plate, meshes, plate=plate, seed=0, code=code)
-            plates.append(h)
-            seconds.append(t)
-            print(f"  look {len(plates)}: {t:.1f} s (load {os.getloadavg()[0]:.1f})",
-                  flush=True)
-    record_s = sum(seconds)
+    with PeakMemory() as memory:  # every look in one pass, as the pipeline records them
+        plates, record_s = timed(record_looks, meshes, looks=args.looks, plate=plate, seed=0)
+    print(f"  {args.looks} look(s) in one pass: {record_s:.1f} s (load "
+          f"{os.getloadavg()[0]:.1f})", flush=True)
     # both renderers warm at the frame's size (programs built, FFT plans read or measured)
     render_camera(meshes, cams[1], via="incoherent")
     render_view(plates, cams[1], supersample=args.supersample)

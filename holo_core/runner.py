@@ -32,7 +32,8 @@ from .io.image import check_writable, read_exr
 from .io.tiles import TiledWave, read_plate, store_of
 from .io.view import write_view
 from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result
-from .plate.record import look_code, plate_plan, record_hologram, record_plate
+from .plate.plan import CHANNELS
+from .plate.record import look_code, plate_plan, record_hologram, record_looks, record_plate
 from .plate.view import nyquist_supersample, render_view
 from .scene.hologram import Hologram
 from .scene.mesh import Mesh
@@ -89,9 +90,16 @@ def _plate(job: Job, progress):
         # the iterations are coded looks of one seed where n allows (look_code), else seeds
         codes = [look_code(i, n) for i in range(n)]
         tiled = needs_tiles(job)
-        holos = [_record_look(job, path, i, code, tiled, jobs.scaled(
-            progress, record_share * i / n, record_share * (i + 1) / n))
-            for i, (path, code) in enumerate(zip(route.holograms, codes))]
+        meshes = list(job.points) + list(job.triangles)
+        if not tiled and meshes and all(isinstance(m, Mesh) for m in meshes):  # one pass
+            holos = record_looks(meshes, looks=n, plate=route.plate, camera=job.camera,
+                                 wavelength=route.wavelength, seed=route.seed,
+                                 budget=(route.memory_budget, route.disk_budget),
+                                 progress=jobs.scaled(progress, 0, record_share))
+        else:
+            holos = [_record_look(job, path, i, code, tiled, jobs.scaled(
+                progress, record_share * i / n, record_share * (i + 1) / n))
+                for i, (path, code) in enumerate(zip(route.holograms, codes))]
     else:
         holos = [read_plate(p) for p in route.holograms]
     view = None
@@ -113,9 +121,10 @@ def _plate(job: Job, progress):
 
 
 def needs_tiles(job: Job) -> bool:
-    """Whether the job's plate of meshes must be recorded tile by tile: the whole plate of one
-    look exceeds the route's memory budget or the host's share of its memory. Bare points are
-    recorded in memory (their point sums are planned by their own rule)."""
+    """Whether the job's plate of meshes must be recorded tile by tile: its looks' whole plates,
+    recorded in memory together (:func:`record_looks`), exceed the route's memory budget or
+    the host's share of its memory. Bare points are recorded in memory (their point sums are
+    planned by their own rule)."""
     route = job.route
     meshes = list(job.points) + list(job.triangles)
     if not meshes or not all(isinstance(m, Mesh) for m in meshes):
@@ -125,11 +134,11 @@ def needs_tiles(job: Job) -> bool:
     limit = memory.SHARE * memory.host_available()
     if route.memory_budget is not None:
         limit = min(limit, route.memory_budget)
-    need = p.memory_bytes(tiled=False)
+    need = p.memory_bytes(CHANNELS * len(route.holograms), tiled=False)
     if need > limit:
-        log.info("the plate needs %s in one piece, more than %s: recording it tile by tile "
-                 "into %s", memory.gib(need), memory.gib(limit),
-                 store_of(route.holograms[0]).name)
+        log.info("the plate's %d look(s) need %s in one piece, more than %s: recording them "
+                 "tile by tile into %s", len(route.holograms), memory.gib(need),
+                 memory.gib(limit), store_of(route.holograms[0]).name)
     return need > limit
 
 

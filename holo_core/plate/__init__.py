@@ -28,6 +28,7 @@ from importlib import import_module
 # the names below import their modules on first use: the planner (plan.py) is pure arithmetic,
 # and Blender's process imports it without the OpenCL driver the recorder and the viewer load
 _API = {"Reference": ".record", "record_hologram": ".record", "record_plate": ".record",
+        "record_looks": ".record",
         "record_points": ".record", "reconstruct": ".reconstruction", "render_view": ".view",
         "physical_field": ".carrier",
         "find_carrier": "..acquired", "sideband": "..acquired"}  # their home: acquired/

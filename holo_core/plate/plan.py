@@ -40,6 +40,8 @@ SAMPLE_BYTES = 8       # complex64
 # as this plan counts them (its footprints are the cones' whole; the sum skips their faded
 # rims): bench/shot.py's plate 58 s for 311 s at 2e9, the demo's plate about 270 s for 2760 s
 PAIRS_PER_SECOND = 1.5e10
+FURTHER_LOOK = 0.35      # a further look in the same pass, of a look's time (its channels
+                         # only: on the shot's plate two looks took 34.6 s, one by one 51.5 s)
 EMITTER_SECONDS = 2e-5   # per emitter and visibility grid point: the depth buffers' tests
 VIEW_SAMPLE_SECONDS = 6e-9   # per window sample and channel of a view: read, demodulate, filter
 FINE_PIXEL_SECONDS = 3e-7    # per fine pixel and look of a view: spectra, image, assembly
@@ -98,15 +100,17 @@ class PlatePlan:
         return 2 * SAMPLE_BYTES * channels * held + per_emitter * self.emitters
 
     def record_seconds(self, channels=CHANNELS) -> float:
-        """Estimated seconds to record every look on the development machine."""
+        """Estimated seconds to record every look in one pass on the development machine."""
         groups = 1 + (channels > 3)
         pairs = self.emitters * self.footprint
-        return self.looks * groups * pairs / PAIRS_PER_SECOND
+        return (1 + FURTHER_LOOK * (self.looks - 1)) * groups * pairs / PAIRS_PER_SECOND
 
-    def check_budget(self, *, memory=None, disk=None, channels=CHANNELS, tiled=False) -> None:
+    def check_budget(self, *, memory=None, disk=None, channels=CHANNELS, tiled=False,
+                     held=1) -> None:
         """:class:`InputError` with the sizes and what would take less, before any work, when
         the recording needs more than ``memory`` (the whole plate, or one tile when
-        ``tiled``) or its plate more than ``disk`` [bytes] (None: no limit)."""
+        ``tiled``; of ``held`` looks recorded together) or its plate more than ``disk``
+        [bytes] (None: no limit)."""
         gb = 2.0**30
         advice = ("a smaller viewing zone, objects nearer the plate, a coarser view (fewer "
                   "pixels or a smaller aperture) or fewer looks need less; Camera mode needs "
@@ -116,7 +120,7 @@ class PlatePlan:
                              f"({self.looks} look(s) of {self.shape[1]} x {self.shape[0]} "
                              f"samples, {channels} channels); the disk budget is "
                              f"{disk / gb:.3g} GB: {advice}")
-        need = self.memory_bytes(channels, tiled=tiled)
+        need = self.memory_bytes(channels * held, tiled=tiled)
         if memory is not None and need > memory:
             piece = "a tile at a time" if tiled else "in one piece"
             raise InputError(f"recording the plate needs {need / gb:.3g} GB of memory {piece}; "

@@ -468,7 +468,25 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
                                   dashboard=dashboard, budget=budget)
     return prepare_plate(meshes, plate=plate, camera=camera, zone=zone,
                          zone_margin=zone_margin, wavelength=wavelength, depth=depth, seed=seed,
-                         code=code, encoding=encoding, budget=budget).record(progress)
+                         code=code, encoding=encoding, budget=budget).record(progress)[0]
+
+
+@validate.scale_free()  # as record_hologram: the renderer's jobs come this way
+def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
+                 zone: ViewingZone | None = None, zone_margin=DEFAULT_ZONE_MARGIN,
+                 wavelength=None, depth=True, seed=0, budget=(None, None),
+                 progress: jobs.Progress = None) -> list[Hologram]:
+    """``looks`` looks of one plate (:func:`record_plate`'s arguments), recorded in memory in
+    one pass: the coded looks of ``seed`` (:func:`look_code`) where ``looks`` allows, else
+    seeds ``seed``, ``seed`` + 1, …. The looks differ only in their emitters' phases, so one
+    sum carries them all as further channels: each emitter's distance, phase and visibility
+    at a sample are found once for every look (on the shot's plate, two looks in 36 s where
+    one after the other took 53 s). ``budget`` covers all the looks held together."""
+    looks = validate.integer("looks", looks, 1)
+    codes = tuple(look_code(k, looks) for k in range(looks))
+    return prepare_plate(meshes, plate=plate, camera=camera, zone=zone,
+                         zone_margin=zone_margin, wavelength=wavelength, depth=depth, seed=seed,
+                         codes=codes, budget=budget).record(progress)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
@@ -478,7 +496,9 @@ class PlateRecording:
     wavelength (``groups``: (λ [m], :class:`ZoneEmitters`) in channel order) and what it was
     made from (``plan``, ``meshes`` in the plate's frame, ``seed``, ``code``). Any block of it
     is the same sum computed alone (:meth:`sums`): recorded whole in memory (:meth:`record`)
-    or tile by tile (:mod:`.tiles`), its samples are the same."""
+    or tile by tile (:mod:`.tiles`), its samples are the same. With ``looks`` > 1 (one pass,
+    :func:`record_looks`) the groups' channels are the looks' channels, look after look
+    within each wavelength: a block's samples are (R₀ G₀ B₀ R₁ G₁ B₁ … Z₀ Z₁ …)."""
 
     info: HologramInfo
     window: ZoneWindow
@@ -487,6 +507,7 @@ class PlateRecording:
     meshes: tuple
     seed: int
     code: tuple | None
+    looks: int = 1
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -506,16 +527,29 @@ class PlateRecording:
                                f"OpenCL device's arithmetic failed); nothing was recorded")
         return samples
 
-    def record(self, progress: jobs.Progress = None) -> Hologram:
-        """The whole plate in memory, summed in bands of rows."""
+    def record(self, progress: jobs.Progress = None) -> list[Hologram]:
+        """Each look's whole plate in memory, summed in bands of rows."""
         rows, cols = self.shape
-        samples = memory.aligned_zeros((len(self.info.wavelengths), rows, cols))
+        channels = len(self.info.wavelengths)
+        waves = [memory.aligned_zeros((channels, rows, cols)) for _ in range(self.looks)]
+        # a block's channel of look l, channel c: the groups hold each wavelength's channels
+        # look after look
+        where, first = [], 0
+        for _, em in self.groups:
+            per_look = em.amplitude.shape[1] // self.looks
+            where += [[first + look * per_look + c for c in range(per_look)]
+                      for look in range(self.looks)]
+            first += em.amplitude.shape[1]
+        picks = [[i for g in range(len(self.groups)) for i in where[g * self.looks + look]]
+                 for look in range(self.looks)]
         sums = self.sums()
         for r0 in range(0, rows, BAND_ROWS):
             here = min(BAND_ROWS, rows - r0)
-            samples[:, r0:r0 + here] = self.region(sums, r0, 0, here, cols)
+            block = self.region(sums, r0, 0, here, cols)
+            for wave, pick in zip(waves, picks):
+                wave[:, r0:r0 + here] = block[pick]
             jobs.report(progress, r0 + here, rows)
-        return Hologram(info=self.info, object_wave=samples)
+        return [Hologram(info=self.info, object_wave=w) for w in waves]
 
 
 BAND_ROWS = 256  # rows of the plate summed at once in memory (a multiple of the block lists')
@@ -553,48 +587,51 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
 
 def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
                   zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
-                  code=None, encoding="complex", tile=None,
-                  budget=(None, None)) -> PlateRecording:
+                  code=None, encoding="complex", tile=None, budget=(None, None),
+                  codes=None) -> PlateRecording:
     """The emitters, visibility tables and sampling of a plate of ``meshes`` (the arguments
     as :func:`record_plate` takes them), before any sum: the plan, the emitters the zone sees
     with their amplitudes. The host's memory and the ``budget`` are checked for the whole
-    plate, or with ``tile`` (samples a side) for one tile of it."""
+    plate, or with ``tile`` (samples a side) for one tile of it. ``codes`` (in place of
+    ``code``): several looks summed at once (:func:`record_looks`), look l's phases coded
+    by codes[l], or where that is None drawn from ``seed`` + l."""
     if encoding != "complex":
         raise InputError(f"encoding must be 'complex' for a plate of meshes (a display's "
                          f"intensity pattern is made from it: holo_core.phase.display); got "
                          f"{encoding!r}"[:200])
     seed = validate.seed(seed)
+    if codes is not None and code is not None:
+        raise InputError("give code (one look) or codes (several), not both")
+    codes = (code,) if codes is None else tuple(codes)
     p, local, zone = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
                                 zone_margin=zone_margin, wavelength=wavelength, tile=tile)
     every = np.concatenate([m.vertices for m in local])
     bounds = np.array([every.min(0), every.max(0)])
     log.info("sampling: %s", p.describe())
     channels = ["R", "G", "B"] + (["Z"] if depth else [])
+    held_channels = len(channels) * len(codes)  # every look's, in one pass
     p.check_budget(memory=budget[0], disk=budget[1], channels=len(channels),
-                   tiled=tile is not None)
+                   tiled=tile is not None, held=len(codes))
     held = f"a {p.tile}x{p.tile} tile" if tile is not None else f"a {p.shape[1]}x{p.shape[0]} plate"
-    memory.check_host(f"{held} of {len(channels)} channels",
-                      p.memory_bytes(len(channels), tiled=tile is not None))
+    memory.check_host(f"{held} of {held_channels} channels",
+                      p.memory_bytes(held_channels, tiled=tile is not None))
     em = zone_emitters(local, zone, p.spacing, layers=LAYERS)
     if not len(em):
         raise InputError(f"no surface of the meshes is seen from the viewing zone "
                          f"({zone.describe()})")
-    phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, len(em))
-    if code is not None:
-        k, m = code
-        k1, k2 = divmod(k, m)
-        phases = phases + 2 * np.pi * (k1 * em.cell[:, 1] + k2 * em.cell[:, 0]) / m
     # |a| = √I·|p − Z|: each emitter's light reaches the zone's centre with its own amplitude
     reach = np.linalg.norm(em.position - np.asarray(zone.centre), axis=1)
-    wave = np.exp(1j * phases) * reach
+    waves = [np.exp(1j * _phases(em, seed + (0 if c else look), c)) * reach
+             for look, c in enumerate(codes)]
     partial = em.visibility.reshape(len(em), -1).min(1) < 1
     rows = np.where(partial, np.cumsum(partial) - 1, -1).astype(np.int32)
     table = np.round(em.visibility[partial] * 255).astype(np.uint8)
     window = ZoneWindow(origin=p.origin, pitch=p.pitch, row_pitch=p.row_pitch, shape=p.shape,
                         centre=zone.centre, half_extents=zone.half_extents, rim=RIM)
-    amplitudes = [(p.wavelength, np.sqrt(em.colour) * wave[:, None])]
+    amplitudes = [(p.wavelength, np.concatenate([np.sqrt(em.colour) * wave[:, None]
+                                                 for wave in waves], 1))]
     if depth:
-        amplitudes.append((p.depth_wavelength, wave[:, None]))
+        amplitudes.append((p.depth_wavelength, np.stack(waves, 1)))
     groups = tuple((lam, ZoneEmitters(position=em.position, amplitude=a, visibility=rows,
                                       table=table, grid=em.grid)) for lam, a in amplitudes)
     distance = float(np.linalg.norm(bounds.mean(0) - np.asarray(zone.centre)))
@@ -606,7 +643,19 @@ def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None
                         carrier=Carrier(centre=zone.centre, origin=p.origin,
                                         row_pitch=p.row_pitch))
     return PlateRecording(info=info, window=window, groups=groups, plan=p, meshes=tuple(local),
-                          seed=seed, code=None if code is None else tuple(code))
+                          seed=seed, code=None if codes[0] is None else tuple(codes[0]),
+                          looks=len(codes))
+
+
+def _phases(em, seed: int, code) -> np.ndarray:
+    """The emitters' random phases [rad] of ``seed``, shifted by ``code`` (k, m): 2π·(k1·i +
+    k2·j)/m on the lattice cells (i, j) they lie in (k = k1·m + k2; :func:`record_plate`)."""
+    phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, len(em))
+    if code is not None:
+        k, m = code
+        k1, k2 = divmod(k, m)
+        phases = phases + 2 * np.pi * (k1 * em.cell[:, 1] + k2 * em.cell[:, 0]) / m
+    return phases
 
 
 def look_code(k: int, n: int):

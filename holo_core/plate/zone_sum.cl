@@ -141,9 +141,11 @@ __kernel void zone_sum(__global float2 *out, int row_first, int col_first, int o
         for (int m = 0; m < SEG; m++) {
             floatv wt = flat ? vt : vt * WINDOW(xa + m * p, yr);
             floatv vr = wt * er, vi = wt * ei;
-            for (int c = 0; c < CHANNELS; c++) {
-                acc_r[m][c] += a[c].x * vr - a[c].y * vi;
-                acc_i[m][c] += a[c].x * vi + a[c].y * vr;
+            for (int c = 0; c < CHANNELS; c++) {  /* fma written out: each channel's sum is
+                                                      the same wherever it lies (looks summed
+                                                      together equal looks summed alone) */
+                acc_r[m][c] = fma(a[c].x, vr, fma(-a[c].y, vi, acc_r[m][c]));
+                acc_i[m][c] = fma(a[c].x, vi, fma(a[c].y, vr, acc_i[m][c]));
             }
             vt += vstep;
             t = er * dr - ei * di;

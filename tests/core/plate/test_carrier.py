@@ -22,7 +22,7 @@ from zone_reference import carrier_plate, object_wave
 
 from holo_core.plate.carrier import demodulate, modulate, physical_field, physical_pitch, window
 from holo_core.plate.reconstruction import reconstruct
-from holo_core.plate.record import record_plate
+from holo_core.plate.record import look_code, record_looks, record_plate
 from holo_core.plate.view import render_view
 from holo_core.plate.zone_sum import ZoneEmitters
 from holo_core.scene.hologram import Hologram
@@ -143,6 +143,25 @@ def test_a_views_pixels_fold_on_the_device_as_the_fine_images_do_on_the_host(pla
     seen = b.depth[b.alpha > 0]
     assert np.isfinite(seen).all() and np.median(np.abs(seen - a.depth[a.alpha > 0])) < 0.1 * (
         far - near), (near, far)
+
+
+@pytest.mark.parametrize("looks", [2, 3])
+def test_looks_recorded_together_equal_looks_recorded_alone(looks):
+    """record_looks sums every look in one pass (the looks as further channels): each look
+    equals record_plate's of its code (2: the checkerboard pair of one seed) or of its own
+    seed (3: independent looks), bit for bit; and its memory budget counts every look."""
+    kw = {"plate": PLATE, "camera": camera("centre", SCALE), "zone_margin": 0.025}
+    together = record_looks(meshes(), looks=looks, seed=4, **kw)
+    assert len(together) == looks
+    for k, h in enumerate(together):
+        code = look_code(k, looks)
+        alone = record_plate(meshes(), seed=4 + (0 if code else k), code=code, **kw)
+        assert np.array_equal(h.object_wave, alone.object_wave), k
+        assert h.carrier == alone.carrier and h.wavelengths == alone.wavelengths
+    one = together[0].object_wave.nbytes  # a look recorded alone fits where all do not
+    assert len(record_looks(meshes(), looks=1, budget=(2.5 * one, None), **kw)) == 1
+    with pytest.raises(InputError, match="memory budget"):
+        record_looks(meshes(), looks=looks, budget=(2.5 * one, None), **kw)
 
 
 # --- the physical field, re-modulated wherever it is needed --------------------------------
