@@ -413,16 +413,18 @@ class _Gather:
         self.hi = (min(int(np.ceil(gy.max() + ES_TAPS / 2)), hh - 1),
                    min(int(np.ceil(gx.max() + ES_TAPS / 2)), ww - 1))
         self.cells = tuple(-(-(b - a + 1) // SPREAD_CELL) for a, b in zip(self.lo, self.hi))
-        ci = np.clip(((gy.ravel() - self.lo[0]) // SPREAD_CELL).astype(np.int64), 0,
+        # (truncation is the floor here: what lies below the box's first cell is clipped to it)
+        ci = np.clip(((gy.ravel() - self.lo[0]) * (1 / SPREAD_CELL)).astype(np.int64), 0,
                      self.cells[0] - 1)
-        cj = np.clip(((gx.ravel() - self.lo[1]) // SPREAD_CELL).astype(np.int64), 0,
+        cj = np.clip(((gx.ravel() - self.lo[1]) * (1 / SPREAD_CELL)).astype(np.int64), 0,
                      self.cells[1] - 1)
         key = ci * self.cells[1] + cj
         order = np.argsort(key, kind="stable")
-        start = np.searchsorted(key[order], np.arange(self.cells[0] * self.cells[1] + 1))
+        start = np.zeros(self.cells[0] * self.cells[1] + 1, np.int32)
+        np.cumsum(np.bincount(key, minlength=self.cells[0] * self.cells[1]), out=start[1:])
         self.at = [rt.to_device(a.ravel()[order], np.float32) for a in (gy, gx)]
-        slot = np.empty_like(order)
-        slot[order] = np.arange(len(order))
+        slot = np.empty(len(order), np.int32)
+        slot[order] = np.arange(len(order), dtype=np.int32)
         # where the decimation puts each sample: in the gather's order, planes side by side
         self.slot, self.start = rt.to_device(slot, np.int32), rt.to_device(start, np.int32)
         self.weight = weight.ravel()[order]
