@@ -11,7 +11,8 @@ objects, silhouette IoU. Prints the CPU and its load, the plan, the recording's 
 the peak memory of all its processes, and the frame count from which the plate costs less
 than a pass per frame.
 
-    python bench/shot.py [--scale 1.0] [--looks 2] [--dolly 0.1] [--supersample 2] [--out DIR]
+    python bench/shot.py [--scale 1.0] [--looks 2] [--dolly 0.1] [--supersample 2] [--repeat 3]
+                          [--out DIR]
 """
 
 import argparse
@@ -119,6 +120,8 @@ def main():
     p.add_argument("--margin", type=float, default=0.01, help="zone margin [m] (0.01)")
     p.add_argument("--supersample", type=int, default=2,
                    help="fine pixels per pixel of the views (2, the plan's reference view)")
+    p.add_argument("--repeat", type=int, default=3,
+                   help="each frame's view and pass timed this many times, the median kept (3)")
     p.add_argument("--out", type=Path, default=None, help="a folder for the frames' PNGs")
     args = p.parse_args()
     xs = np.linspace(-args.dolly / 2, args.dolly / 2, 3)
@@ -148,13 +151,19 @@ def main():
           f"{memory.peak / 2**30:.2f} GiB")
     rows = []
     for i, cam in enumerate(cams):
-        ref, cam_s = timed(render_camera, meshes, cam, via="incoherent")
-        view, view_s = timed(render_view, plates, cam, supersample=args.supersample)
+        passes, views = [], []
+        for _ in range(args.repeat):  # alternated, so that a slow spell of the host hits both
+            ref, t = timed(render_camera, meshes, cam, via="incoherent")
+            passes.append(t)
+            view, t = timed(render_view, plates, cam, supersample=args.supersample)
+            views.append(t)
+        cam_s, view_s = float(np.median(passes)), float(np.median(views))
         inside = (ref.alpha >= 1) & (view.alpha >= 1)
         rows.append((xs[i], psnr(view, ref, inside), iou(view.alpha > 0.5, ref.alpha > 0.5),
                      view_s, cam_s))
         print(f"frame at x = {xs[i] * 100:+.1f} cm: PSNR {rows[-1][1]:.2f} dB, IoU "
-              f"{rows[-1][2]:.4f}; view {view_s:.1f} s, camera pass {cam_s:.1f} s (load "
+              f"{rows[-1][2]:.4f}; view {view_s:.2f} s ({min(views):.2f}-{max(views):.2f}), "
+              f"camera pass {cam_s:.2f} s ({min(passes):.2f}-{max(passes):.2f}) (load "
               f"{os.getloadavg()[0]:.1f})", flush=True)
         if args.out is not None:
             args.out.mkdir(parents=True, exist_ok=True)
@@ -163,7 +172,8 @@ def main():
                           np.clip(v.rgb * v.alpha[..., None], 0, 1) ** (1 / 2.2))
     view_s = float(np.mean([r[3] for r in rows]))
     cam_s = float(np.mean([r[4] for r in rows]))
-    print(f"\na view {view_s:.1f} s = {view_s / cam_s:.2f} x the camera pass ({cam_s:.1f} s)")
+    print(f"\na view {view_s:.2f} s = {view_s / cam_s:.2f} x the camera pass ({cam_s:.2f} s), "
+          f"the medians of {args.repeat} runs a frame averaged over the frames")
     if cam_s > view_s:
         n = math.ceil(record_s / (cam_s - view_s))
         print(f"the plate (recorded once in {record_s:.0f} s) costs less than a pass per "

@@ -1,4 +1,5 @@
-"""2-D FFTs of complex64 device arrays, in place and unnormalised in both directions.
+"""2-D FFTs of complex64 device arrays, in place and unnormalised in both directions: of an
+(H, W) array, or of each plane of a (P, H, W) stack.
 
 Callers fold the 1/N of the inverse into something they multiply anyway (a transfer function).
 The backend depends on the device (``HOLO_FFT`` overrides: ``fftw``, ``vkfft``, ``numpy``):
@@ -90,12 +91,15 @@ class FFTW:
         """Nothing: the passes zero what lies outside ``nonzero``."""
 
     def forward(self, arr, nonzero=None, read=None):
-        with _Mapped(self.runtime, arr) as host:
-            self.host.transform(host, "FFTW_FORWARD", nonzero, read)
+        self._planes(arr, "FFTW_FORWARD", nonzero, read)
 
     def backward(self, arr, nonzero=None, read=None):
-        with _Mapped(self.runtime, arr) as host:
-            self.host.transform(host, "FFTW_BACKWARD", nonzero, read)
+        self._planes(arr, "FFTW_BACKWARD", nonzero, read)
+
+    def _planes(self, arr, direction, nonzero, read):
+        with _Mapped(self.runtime, arr) as host:  # a stack mapped once, its planes in turn
+            for plane in host.reshape((-1,) + host.shape[-2:]):
+                self.host.transform(plane, direction, nonzero, read)
 
     def convolve(self, field, transfer, padded=None):
         """The padded convolution of ``field`` (h, w; NumPy or device) by ``transfer`` (H, W,
@@ -161,4 +165,4 @@ class HostNumpy:
 
     def backward(self, arr, nonzero=None, read=None):
         with _Mapped(self.runtime, arr) as host:
-            host[...] = np.fft.ifft2(host) * host.size
+            host[...] = np.fft.ifft2(host) * (host.shape[-2] * host.shape[-1])

@@ -10,8 +10,11 @@
  * the rest of Q is left as it is (the FFT takes it as zero). Global size: by_rows of P. */
 __kernel void pupil_window(__global float2 *Q, __global const float2 *P, int h, int w,
                            float dy, float dx, float radius, float taper, float k, float f,
-                           __global const float *dy_apod, __global const float *dx_apod)
+                           __global const float *dy_apod, __global const float *dx_apod,
+                           int plane)
 {
+    Q += (size_t)plane * 4 * h * w;   /* plane `plane` of stacks of P and Q */
+    P += (size_t)plane * h * w;
     int c = get_global_id(0), r = get_global_id(1);
     if (c >= w)
         return;

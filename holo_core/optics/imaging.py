@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..opencl import associated
-from ..opencl.arrays import by_rows, copy_plane, empty, read
+from ..opencl.arrays import by_rows, empty, read
 from ..propagation import grid
 from ..propagation.tilt import cached_array, es_table, es_transform
 from ..scene.camera import Camera
@@ -133,15 +133,16 @@ class PupilImage:
         looks = planes // len(names)
         cols, rows = (n // s for n in self.camera.resolution)
         spectra = rt.scratch("pupil-spectra", (planes, 2 * h, 2 * w))
-        one = rt.scratch("pupil-plane", (h, w))
         scales = rt.to_device(np.array([channels[names[p % len(names)]][2]
                                         for p in range(planes)]), np.float32)
-        for p in range(planes):
+        corners = (grid.embedded(h, 2 * h), grid.embedded(w, 2 * w))
+        rt.fft.clear(spectra, corners)
+        for p in range(planes):  # each plane windowed into its spectrum's corners ...
             pitch, lens_k, _ = channels[names[p % len(names)]]
-            copy_plane(one, pupils, p)
-            self._spectrum(one, pitch=pitch, diameter=diameter, focus=focus, taper=taper,
-                           lens_k=lens_k)
-            copy_plane(spectra, self.padded, p, into=True)
+            window(rt, spectra, pupils, (h, w), pitch=pitch, radius=diameter / 2, taper=taper,
+                   k=lens_k, focus=focus or 0.0, apodization=self.apod, options=self.options,
+                   plane=p)
+        rt.fft.forward(spectra, nonzero=corners)  # ... and every plane transformed in place
         pair = (sum(1 << names.index(c) for c in same), names.index(partner)) \
             if partner is not None else (0, -1)
         options = self.options + (f"-DPLANES={planes}", f"-DLOOK_PLANES={len(names)}",
@@ -192,17 +193,18 @@ def fold_images(images, *, same, partner, supersample, keep_fine=False) -> Folde
 
 
 def window(rt, padded, pupil, shape, *, pitch, radius, taper, k, focus, apodization,
-           options) -> None:
+           options, plane=0) -> None:
     """``pupil`` (device, ``shape`` (h, w), FFT order) through the iris (``radius`` [m], its rim
     ``taper``), the thin lens (wave number ``k`` [rad/m], focused at ``focus`` [m], 0: none)
     and the ``apodization`` (per row, per column; device float32) into the corners of
     ``padded`` (2h, 2w), FFT order; ``pitch`` (dy, dx) [m]. The rest of ``padded`` is left
-    as it is (``rt.fft.clear`` with the corners first)."""
+    as it is (``rt.fft.clear`` with the corners first). ``plane``: of stacks (P, h, w) and
+    (P, 2h, 2w) given as ``pupil`` and ``padded``."""
     (h, w), (dy, dx) = shape, pitch
     rt.kernel(PROGRAM, "pupil_window", options)(
         rt.queue, by_rows(shape), None, padded.data, pupil.data, np.int32(h), np.int32(w),
         np.float32(dy), np.float32(dx), np.float32(radius), np.float32(taper), np.float32(k),
-        np.float32(focus), apodization[0].data, apodization[1].data)
+        np.float32(focus), apodization[0].data, apodization[1].data, np.int32(plane))
 
 
 def assemble(radiance, coverage, cross, *, camera: Camera, supersample: int, wavelengths,

@@ -39,12 +39,12 @@ SAMPLE_BYTES = 8       # complex64
 # zone sum's pairs (emitter, sample) per second, per channel group (three colours cost one),
 # as this plan counts them (its footprints are the cones' whole; the sum skips their faded
 # rims): bench/shot.py's plate 58 s for 311 s at 2e9, the demo's plate about 270 s for 2760 s
-PAIRS_PER_SECOND = 1.5e10
+PAIRS_PER_SECOND = 1.2e10  # the shot's two looks in one pass: 36 s recorded, 35 s planned
 FURTHER_LOOK = 0.35      # a further look in the same pass, of a look's time (its channels
                          # only: on the shot's plate two looks took 34.6 s, one by one 51.5 s)
 EMITTER_SECONDS = 2e-5   # per emitter and visibility grid point: the depth buffers' tests
-VIEW_SAMPLE_SECONDS = 6e-9   # per window sample and channel of a view: read, demodulate, filter
-FINE_PIXEL_SECONDS = 3e-7    # per fine pixel and look of a view: spectra, image, assembly
+VIEW_SAMPLE_SECONDS = 3.9e-9  # per window sample and channel of a view: read, filter, gather
+FINE_PIXEL_SECONDS = 7e-8    # per fine pixel and look of a view: spectra, image, assembly
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)

@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from .. import jobs
-from ..opencl.arrays import copy_plane, host_buffer, upload_window, write
+from ..opencl.arrays import host_buffer, upload_window, write
 from ..opencl.runtime import associated
 from ..propagation import angular_spectrum, grid, tilt
 from ..propagation.angular_spectrum import BAND_EDGE
@@ -469,13 +469,8 @@ class _Gather:
                 np.int32(self.lo[0]), np.int32(self.lo[1]), values.data, weight.data,
                 self.at[0].data, self.at[1].data, self.start.data, np.int32(self.cells[0]),
                 np.int32(self.cells[1]), np.float32(scale), es.data)
-            # only the pupil's columns of the transform are read (pupil_layer)
-            read = [(0, (ww + 1) // 2), (2 * ww - ww // 2, 2 * ww)]
-            for p in range(planes):
-                buf = rt.scratch("carrier-fft", grid_shape)
-                copy_plane(buf, spread, p)
-                rt.fft.backward(buf, read=read)
-                copy_plane(spread, buf, p, into=True)
+            # every plane in place; only the pupil's columns are read (pupil_layer)
+            rt.fft.backward(spread, read=[(0, (ww + 1) // 2), (2 * ww - ww // 2, 2 * ww)])
             for first, to, n, wavelength in runs:
                 dy, dx = wavelength / (hh * view.bin), wavelength / (ww * view.bin)
                 rt.kernel(PROGRAM, "pupil_layer", ())(

@@ -49,6 +49,22 @@ def test_an_inverse_told_which_columns_are_read_gets_those_right(rng):
     _close(a[:, 40:77], want[:, 40:77])
 
 
+@pytest.mark.parametrize("backend", ["fftw", "numpy"])
+def test_a_stack_is_transformed_plane_by_plane(rng, backend):
+    """A (P, H, W) device stack: each plane's 2-D transform, in both directions unnormalised,
+    against NumPy's (the inverse's scale is a plane's H·W, not the stack's size)."""
+    from holo_core.opencl import get_runtime
+    from holo_core.opencl.fft import FFTW, HostNumpy
+    rt = get_runtime()
+    fft = (FFTW if backend == "fftw" else HostNumpy)(rt)
+    a = _random(rng, (3, 40, 56))
+    stack = rt.to_device(a)
+    fft.forward(stack)
+    _close(stack.get(), np.fft.fft2(a))
+    fft.backward(stack)
+    _close(stack.get(), a * (40 * 56))
+
+
 def test_the_padded_convolution_equals_numpy(rng):
     """pad, FFT, multiply, inverse FFT, crop in the passes: as NumPy does it in float64."""
     engine = HostFFT(threads=2, planner="estimate")
