@@ -187,8 +187,8 @@ def summary(p: PlatePlan, v: ViewPlan, *, lens: str, resolution, plate_size,
         f"{p.depth_wavelength * 1e6:.6g} µm): through {lens} a view resolves half a pixel",
         f"emitters    about {p.emitters:,}, one per resolved spot seen from the zone's centre",
         f"disk        {p.disk_bytes() / gb:.3g} GB for {p.looks} look(s); memory while "
-        f"recording {p.memory_bytes() / gb:.3g} GB in one piece, "
-        f"{p.memory_bytes(tiled=True) / gb:.3g} GB tile by tile",
+        f"recording {p.memory_bytes(CHANNELS * p.looks) / gb:.3g} GB in one piece (the looks "
+        f"together), {p.memory_bytes(tiled=True) / gb:.3g} GB tile by tile",
         f"per view    reads {v.window / 1e6:.3g} Mpx of the plate, about "
         f"{duration(v.seconds)} for {p.looks} look(s)"]
     if v.outside_zone > 0:
