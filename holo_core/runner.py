@@ -33,7 +33,7 @@ from .io.tiles import TiledWave, read_plate, store_of
 from .io.view import write_view
 from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result
 from .plate.plan import CHANNELS
-from .plate.record import look_code, plate_plan, record_hologram, record_looks, record_plate
+from .plate.record import plate_plan, record_hologram, record_looks
 from .plate.view import nyquist_supersample, render_view
 from .scene.hologram import Hologram
 from .scene.mesh import Mesh
@@ -88,18 +88,19 @@ def _plate(job: Job, progress):
         # pixel angle a zone of an earlier file lacks), so moving or refocusing the camera
         # never records again
         # the iterations are coded looks of one seed where n allows (look_code), else seeds
-        codes = [look_code(i, n) for i in range(n)]
-        tiled = needs_tiles(job)
         meshes = list(job.points) + list(job.triangles)
-        if not tiled and meshes and all(isinstance(m, Mesh) for m in meshes):  # one pass
+        if meshes and all(isinstance(m, Mesh) for m in meshes):  # every look in one pass
+            # beyond memory: tile by tile on Dask, each look into store_of its path (a
+            # cancelled recording resumes there, its tiles kept)
+            urls = [str(store_of(p)) for p in route.holograms] if needs_tiles(job) else None
             holos = record_looks(meshes, looks=n, plate=route.plate, camera=job.camera,
                                  wavelength=route.wavelength, seed=route.seed,
-                                 budget=(route.memory_budget, route.disk_budget),
+                                 budget=(route.memory_budget, route.disk_budget), urls=urls,
+                                 scheduler=route.scheduler,
                                  progress=jobs.scaled(progress, 0, record_share))
-        else:
-            holos = [_record_look(job, path, i, code, tiled, jobs.scaled(
-                progress, record_share * i / n, record_share * (i + 1) / n))
-                for i, (path, code) in enumerate(zip(route.holograms, codes))]
+        else:  # bare points: independent seeds
+            holos = [_record_look(job, i, jobs.scaled(
+                progress, record_share * i / n, record_share * (i + 1) / n)) for i in range(n)]
     else:
         holos = [read_plate(p) for p in route.holograms]
     view = None
@@ -142,21 +143,13 @@ def needs_tiles(job: Job) -> bool:
     return need > limit
 
 
-def _record_look(job: Job, path, i: int, code, tiled: bool, progress) -> Hologram:
-    """Look ``i`` of the plate (coded by ``code``, else seed + i): in memory, or tile by tile
-    on Dask into :func:`store_of` ``path`` (a cancelled recording resumes there, its tiles
-    kept)."""
+def _record_look(job: Job, i: int, progress) -> Hologram:
+    """Look ``i`` of a hologram of bare points (their point sum, seed + i), in memory."""
     route = job.route
-    seed = route.seed + (0 if code else i)
-    budget = (route.memory_budget, route.disk_budget)
-    if tiled:
-        return record_plate(list(job.points) + list(job.triangles), plate=route.plate,
-                            camera=job.camera, wavelength=route.wavelength, seed=seed,
-                            code=code, budget=budget, url=str(store_of(path)),
-                            scheduler=route.scheduler, progress=progress)
     return record_hologram(list(job.points), triangles=list(job.triangles), plate=route.plate,
-                           camera=job.camera, wavelength=route.wavelength, budget=budget,
-                           seed=seed, code=code, progress=progress)
+                           camera=job.camera, wavelength=route.wavelength,
+                           budget=(route.memory_budget, route.disk_budget),
+                           seed=route.seed + i, progress=progress)
 
 
 def _check_outputs(job: Job) -> None:

@@ -474,16 +474,27 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
 @validate.scale_free()  # as record_hologram: the renderer's jobs come this way
 def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
                  zone: ViewingZone | None = None, zone_margin=DEFAULT_ZONE_MARGIN,
-                 wavelength=None, depth=True, seed=0, budget=(None, None),
-                 progress: jobs.Progress = None) -> list[Hologram]:
+                 wavelength=None, depth=True, seed=0, budget=(None, None), urls=None,
+                 tile=TILE, scheduler=None, overwrite=False, progress: jobs.Progress = None,
+                 dashboard=None) -> list[Hologram]:
     """``looks`` looks of one plate (:func:`record_plate`'s arguments), recorded in memory in
     one pass: the coded looks of ``seed`` (:func:`look_code`) where ``looks`` allows, else
     seeds ``seed``, ``seed`` + 1, …. The looks differ only in their emitters' phases, so one
     sum carries them all as further channels: each emitter's distance, phase and visibility
     at a sample are found once for every look (on the shot's plate, two looks in 36 s where
-    one after the other took 53 s). ``budget`` covers all the looks held together."""
+    one after the other took 53 s). ``budget`` covers all the looks held together. ``urls``
+    (one a look): each look tile by tile into its own store, every tile's looks summed at
+    once (:func:`holo_core.plate.tiles.record_looks_tiled`; ``tile``, ``scheduler``,
+    ``overwrite``, ``dashboard`` as for :func:`record_plate`)."""
     looks = validate.integer("looks", looks, 1)
     codes = tuple(look_code(k, looks) for k in range(looks))
+    if urls is not None:
+        from .tiles import record_looks_tiled
+        return record_looks_tiled(meshes, urls=list(urls), codes=codes, plate=plate,
+                                  camera=camera, zone=zone, zone_margin=zone_margin,
+                                  wavelength=wavelength, depth=depth, seed=seed, tile=tile,
+                                  scheduler=scheduler, overwrite=overwrite, progress=progress,
+                                  dashboard=dashboard, budget=budget)
     return prepare_plate(meshes, plate=plate, camera=camera, zone=zone,
                          zone_margin=zone_margin, wavelength=wavelength, depth=depth, seed=seed,
                          codes=codes, budget=budget).record(progress)
@@ -494,11 +505,13 @@ class PlateRecording:
     """A plate of meshes ready to be summed (:func:`prepare_plate`): what it will be
     (``info``, its carrier included), where its samples lie (``window``), its emitters per
     wavelength (``groups``: (λ [m], :class:`ZoneEmitters`) in channel order) and what it was
-    made from (``plan``, ``meshes`` in the plate's frame, ``seed``, ``code``). Any block of it
-    is the same sum computed alone (:meth:`sums`): recorded whole in memory (:meth:`record`)
-    or tile by tile (:mod:`.tiles`), its samples are the same. With ``looks`` > 1 (one pass,
-    :func:`record_looks`) the groups' channels are the looks' channels, look after look
-    within each wavelength: a block's samples are (R₀ G₀ B₀ R₁ G₁ B₁ … Z₀ Z₁ …)."""
+    made from (``plan``, ``meshes`` in the plate's frame, ``seed``, ``codes``: each look's
+    code, or None for the look of seed + its index). Any block of it is the same sum computed
+    alone (:meth:`sums`): recorded whole in memory (:meth:`record`) or tile by tile
+    (:mod:`.tiles`), its samples are the same. Every look is summed in one pass
+    (:func:`record_looks`): the groups' channels are the looks' channels, look after look
+    within each wavelength, so a block's samples are (R₀ G₀ B₀ R₁ G₁ B₁ … Z₀ Z₁ …)
+    (:meth:`look_channels`)."""
 
     info: HologramInfo
     window: ZoneWindow
@@ -506,8 +519,25 @@ class PlateRecording:
     plan: PlatePlan
     meshes: tuple
     seed: int
-    code: tuple | None
-    looks: int = 1
+    codes: tuple
+
+    @property
+    def looks(self) -> int:
+        return len(self.codes)
+
+    def look_channels(self, look: int) -> list[int]:
+        """The channels of a block's samples (:meth:`region`) that are look ``look``'s, in the
+        hologram's channel order."""
+        out, first = [], 0
+        for _, em in self.groups:
+            per_look = em.amplitude.shape[1] // self.looks
+            out += range(first + look * per_look, first + (look + 1) * per_look)
+            first += em.amplitude.shape[1]
+        return out
+
+    def look_seed(self, look: int) -> int:
+        """The seed of look ``look``'s random phases (its code shifts them, where it has one)."""
+        return self.seed + (0 if self.codes[look] else look)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -532,16 +562,7 @@ class PlateRecording:
         rows, cols = self.shape
         channels = len(self.info.wavelengths)
         waves = [memory.aligned_zeros((channels, rows, cols)) for _ in range(self.looks)]
-        # a block's channel of look l, channel c: the groups hold each wavelength's channels
-        # look after look
-        where, first = [], 0
-        for _, em in self.groups:
-            per_look = em.amplitude.shape[1] // self.looks
-            where += [[first + look * per_look + c for c in range(per_look)]
-                      for look in range(self.looks)]
-            first += em.amplitude.shape[1]
-        picks = [[i for g in range(len(self.groups)) for i in where[g * self.looks + look]]
-                 for look in range(self.looks)]
+        picks = [self.look_channels(look) for look in range(self.looks)]
         sums = self.sums()
         for r0 in range(0, rows, BAND_ROWS):
             here = min(BAND_ROWS, rows - r0)
@@ -622,7 +643,7 @@ def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None
     # |a| = √I·|p − Z|: each emitter's light reaches the zone's centre with its own amplitude
     reach = np.linalg.norm(em.position - np.asarray(zone.centre), axis=1)
     waves = [np.exp(1j * _phases(em, seed + (0 if c else look), c)) * reach
-             for look, c in enumerate(codes)]
+             for look, c in enumerate(codes)]  # PlateRecording.look_seed
     partial = em.visibility.reshape(len(em), -1).min(1) < 1
     rows = np.where(partial, np.cumsum(partial) - 1, -1).astype(np.int32)
     table = np.round(em.visibility[partial] * 255).astype(np.uint8)
@@ -643,8 +664,7 @@ def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None
                         carrier=Carrier(centre=zone.centre, origin=p.origin,
                                         row_pitch=p.row_pitch))
     return PlateRecording(info=info, window=window, groups=groups, plan=p, meshes=tuple(local),
-                          seed=seed, code=None if codes[0] is None else tuple(codes[0]),
-                          looks=len(codes))
+                          seed=seed, codes=tuple(None if c is None else tuple(c) for c in codes))
 
 
 def _phases(em, seed: int, code) -> np.ndarray:

@@ -25,6 +25,7 @@ and two recordings never write one store at once (its lock).
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import socket
@@ -99,12 +100,12 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
                         band=band or 0.0, plate=np.eye(4) if plate is None else plate,
                         channels=channels, zone=zone,
                         bounds=np.array([pos.min(0), pos.max(0)]) if bounds is None else bounds)
-    files, address = _output_and_scheduler(url, scheduler)
+    files, address = _output_and_scheduler([url], scheduler)
     recording = _recording(pos, colours, phases, seed, method=method, shape=shape,
                            pitch=pitch, band=band, wavelengths=wavelengths, tile=tile)
-    _record_tiles(files, info, tile, recording, overwrite=overwrite, address=address,
+    _record_tiles(files, info, tile, [recording], overwrite=overwrite, address=address,
                   task=record_tile, shared=(pos, amp), progress=progress, dashboard=dashboard)
-    return store.open_plate(files.name)
+    return store.open_plate(files[0].name)
 
 
 def record_plate_tiled(meshes, *, url, plate, camera=None, zone=None,
@@ -125,17 +126,38 @@ def record_plate_tiled(meshes, *, url, plate, camera=None, zone=None,
     the same recording resumes into it. ``url``, ``scheduler``, ``overwrite``, ``progress``,
     ``dashboard``: as for :func:`record_tiled`.
     """
+    return record_looks_tiled(meshes, urls=[url], codes=(code,), plate=plate, camera=camera,
+                              zone=zone, zone_margin=zone_margin, wavelength=wavelength,
+                              depth=depth, seed=seed, encoding=encoding, tile=tile,
+                              scheduler=scheduler, overwrite=overwrite, progress=progress,
+                              dashboard=dashboard, budget=budget)[0]
+
+
+def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
+                       zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
+                       encoding="complex", tile=DEFAULT_TILE, scheduler=None, overwrite=False,
+                       progress: jobs.Progress = None, dashboard=None,
+                       budget=(None, None)) -> list[Hologram]:
+    """The looks ``codes`` of one plate of ``meshes`` (look l coded by codes[l], or where that
+    is None of seed + l), each into its own tiled store at ``urls`` [l], every tile's looks
+    summed in one pass (:func:`holo_core.plate.record.record_looks`): one task a tile computes
+    them all and writes each into its store. Each store is a look's own recording (its digest
+    as :func:`record_plate_tiled` makes it, the emitters' amplitudes its look's): a look
+    recorded alone resumes into it and the other way round. Returns the stores opened."""
     tile = _tile(tile, ZONE_TILE_STEP)
     _flag("overwrite", overwrite)
-    files, address = _output_and_scheduler(url, scheduler)
+    if len(urls) != len(codes) or not urls:
+        raise InputError(f"urls must name one store per look; got {len(urls)} for "
+                         f"{len(codes)} look(s)")
+    files, address = _output_and_scheduler(urls, scheduler)
     job = prepare_plate(meshes, plate=plate, camera=camera, zone=zone, zone_margin=zone_margin,
-                        wavelength=wavelength, depth=depth, seed=seed, code=code,
+                        wavelength=wavelength, depth=depth, seed=seed, codes=codes,
                         encoding=encoding, tile=tile, budget=budget)
-    recording = _plate_recording(job, tile)
-    _record_tiles(files, job.info, tile, recording, overwrite=overwrite, address=address,
+    recordings = [_plate_recording(job, tile, look) for look in range(job.looks)]
+    _record_tiles(files, job.info, tile, recordings, overwrite=overwrite, address=address,
                   task=record_plate_tile, shared=replace(job, meshes=()), progress=progress,
                   dashboard=dashboard)
-    return store.open_plate(files.name)
+    return [store.open_plate(f.name) for f in files]
 
 
 def _tile(tile, step) -> int:
@@ -152,33 +174,42 @@ def _flag(name, value) -> bool:
     return value
 
 
-def _output_and_scheduler(url, scheduler):
-    """(the store's files, the scheduler's address or None), each checked before the work:
-    the output's problems first, then a scheduler that cannot serve (before the store is
+def _output_and_scheduler(urls, scheduler):
+    """(the stores' files, the scheduler's address or None), each checked before the work:
+    the outputs' problems first, then a scheduler that cannot serve (before a store is
     touched)."""
-    files = store.check_output(url)
+    files = [store.check_output(url) for url in urls]
+    if len({f.name for f in files}) != len(files):
+        raise InputError(f"each look needs a store of its own; got {[f.name for f in files]}")
     address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
     if address:
         _probe(address)
     return files, address
 
 
-def _record_tiles(files, info, tile, recording, *, overwrite, address, task, shared, progress,
-                  dashboard) -> None:
-    """Write the tiles of ``recording`` still missing from the store (resumed, made, or
-    replaced with ``overwrite``): ``shared`` scattered once to every worker, then one
-    ``task(shared, spec, i, j)`` per tile."""
-    with store.recording_into(files, info, tile, recording, overwrite=overwrite) as plate:
-        todo = _to_record(plate)
-        log.info("%s: %d of %d tiles to record", files.name, len(todo), plate.written().size)
+def _record_tiles(files, info, tile, recordings, *, overwrite, address, task, shared,
+                  progress, dashboard) -> None:
+    """Write the tiles of each of ``recordings`` still missing from its store (``files``: one
+    each; resumed, made, or replaced with ``overwrite``): ``shared`` scattered once to every
+    worker, then one ``task(shared, spec, i, j)`` per tile that any store lacks."""
+    with contextlib.ExitStack() as held:
+        plates = [held.enter_context(store.recording_into(f, info, tile, r, overwrite=overwrite))
+                  for f, r in zip(files, recordings)]
+        lacking = [set(_to_record(plate)) for plate in plates]
+        todo = sorted(set().union(*lacking))
+        for f, plate, missing in zip(files, plates, lacking):
+            log.info("%s: %d of %d tiles to record", f.name, len(missing), plate.written().size)
         if todo:
-            spec = {"url": files.url, "recording": recording["digest"]}
+            spec = {"urls": [f.url for f in files],
+                    "recordings": [r["digest"] for r in recordings]}
             with client_for(address) as client:
                 if dashboard is not None:
                     dashboard(client.dashboard_link)
                 data = client.scatter(shared, broadcast=True)
-                futures = [client.submit(task, data, spec, int(i), int(j), pure=False)
-                           for i, j in todo]
+                # a tile is written only into the stores that lack it (the others keep theirs)
+                futures = [client.submit(task, data, {**spec, "looks": [
+                    k for k, missing in enumerate(lacking) if (i, j) in missing]},
+                    int(i), int(j), pure=False) for i, j in todo]
                 _wait(client, futures, progress)
 
 
@@ -197,23 +228,32 @@ def _recording(pos, colours, phases, seed, **sampling) -> dict:
     return {"digest": store.digest_of(parts), "parts": parts}
 
 
-def _plate_recording(job: PlateRecording, tile: int) -> dict:
-    """What a store of a plate of meshes records: its digest and the parts a message names
-    when two differ."""
+def _plate_recording(job: PlateRecording, tile: int, look: int = 0) -> dict:
+    """What the store of look ``look`` of a plate of meshes records: its digest and the parts
+    a message names when two differ (the look's own seed, code and amplitudes: the same
+    whether it is recorded alone or with other looks)."""
     meshes = store.digest_of({str(n): [None if a is None else store.array_digest(a)
                                        for a in (m.vertices, m.triangles, m.colours, m.uvs,
                                                  m.texture)]
                               for n, m in enumerate(job.meshes)})
     z, p = job.info.zone, job.plan
-    emitters = [store.array_digest(np.asarray(a)) for _, em in job.groups
-                for a in (em.position, em.amplitude, em.visibility, em.table, em.grid)]
+    mine = job.look_channels(look)
+    first = 0
+    emitters = []
+    for _, em in job.groups:  # the look's own amplitude columns
+        width = em.amplitude.shape[1]
+        columns = [c - first for c in mine if first <= c < first + width]
+        first += width
+        emitters += [store.array_digest(np.ascontiguousarray(a)) for a in (
+            em.position, em.amplitude[:, columns], em.visibility, em.table, em.grid)]
     parts = {"method": "zone", "meshes": meshes[:16],
              "zone": store.array_digest(np.array([*z.centre, *z.half_extents, z.pupil,
                                                   z.pixel], np.float64)),
              "plan": store.array_digest(np.array(
                  [*p.shape, p.pitch, p.row_pitch, *p.origin, *job.info.wavelengths, *p.band,
                   p.spacing, tile], np.float64)),
-             "seed": job.seed, "code": None if job.code is None else list(job.code),
+             "seed": job.look_seed(look),
+             "code": None if job.codes[look] is None else list(job.codes[look]),
              "emitters": len(job.groups[0][1].position),
              "emitters_found": store.digest_of({"groups": emitters})[:16],
              "encoding": "complex"}
@@ -241,7 +281,7 @@ def record_tile(points, spec: dict, i: int, j: int) -> tuple[int, int]:
     (positions, amplitudes) whose cones reach it, written with its record. A store that now
     holds another recording (replaced while this task waited) is left alone."""
     pos, amp = points
-    plate = _still_ours(spec, i, j)
+    plate, = _still_ours(spec, i, j).values()
     info, tile = plate.info, plate.tile
     shape, pitch, band = plate.shape, info.pitch, info.band or None
     r0, r1, c0, c1 = store.tile_window(shape, tile, i, j)
@@ -267,30 +307,39 @@ def record_tile(points, spec: dict, i: int, j: int) -> tuple[int, int]:
 
 
 def record_plate_tile(job: PlateRecording, spec: dict, i: int, j: int) -> tuple[int, int]:
-    """One task: tile (i, j) of the store ``spec`` names, the zone sum of ``job``'s emitters
-    over its block, written with its record. The emitters go onto this worker's device once
-    per recording (kept in its runtime's cache for the next tiles). A store that now holds
-    another recording (replaced while this task waited) is left alone."""
-    plate = _still_ours(spec, i, j)
-    r0, r1, c0, c1 = store.tile_window(plate.shape, plate.tile, i, j)
+    """One task: tile (i, j) of the stores ``spec`` names (one a look), the zone sum of
+    ``job``'s emitters over its block, every look at once, each look's channels written into
+    its store with its record (the stores of ``spec``'s "looks": those that lack the tile). The emitters go onto this worker's device once per recording
+    (kept in its runtime's cache for the next tiles). Stores that now hold another recording
+    (replaced while this task waited) are left alone."""
+    plates = _still_ours(spec, i, j)
+    first = next(iter(plates.values()))
+    r0, r1, c0, c1 = store.tile_window(first.shape, first.tile, i, j)
     rt = get_runtime()
-    key = ("zone-sums", spec["recording"])
+    key = ("zone-sums", *spec["recordings"])
     if key not in rt.cache:
         for other in [k for k in rt.cache if isinstance(k, tuple) and k[0] == "zone-sums"]:
             del rt.cache[other]  # an earlier recording's emitters: their device memory freed
         rt.cache[key] = job.sums(rt)
-    plate.write_tile(i, j, job.region(rt.cache[key], r0, c0, r1 - r0, c1 - c0))
+    samples = job.region(rt.cache[key], r0, c0, r1 - r0, c1 - c0)
+    for look, plate in plates.items():
+        plate.write_tile(i, j, samples[job.look_channels(look)])
     return i, j
 
 
-def _still_ours(spec: dict, i: int, j: int):
-    """The store ``spec`` names (its metadata checked, no record read), or
-    :class:`InputError` if it now holds another recording than ``spec``'s."""
-    plate = store.read_store(spec["url"], records=False)
-    if plate.recording["digest"] != spec["recording"]:
-        raise InputError(f"{spec['url']}: now holds another recording; tile ({i}, {j}) of "
-                         f"recording {spec['recording'][:12]} is not written")
-    return plate
+def _still_ours(spec: dict, i: int, j: int) -> dict:
+    """{look: its store} of the looks ``spec`` writes (its "looks", default all; their
+    metadata checked, no record read), or :class:`InputError` if one now holds another
+    recording than ``spec``'s (none is then written)."""
+    plates = {}
+    for look in spec.get("looks", range(len(spec["urls"]))):
+        url, digest = spec["urls"][look], spec["recordings"][look]
+        plate = store.read_store(url, records=False)
+        if plate.recording["digest"] != digest:
+            raise InputError(f"{url}: now holds another recording; tile ({i}, {j}) of "
+                             f"recording {digest[:12]} is not written")
+        plates[look] = plate
+    return plates
 
 
 @contextmanager

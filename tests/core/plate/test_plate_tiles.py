@@ -288,6 +288,28 @@ def test_the_physical_field_of_a_store_reads_only_the_tiles_under_its_region(in_
     assert np.array_equal(tiled.samples, physical_field(in_memory, 2, region=region).samples)
 
 
+def test_looks_recorded_together_in_tiles_equal_them_in_memory(scheduler, tmp_path):
+    """record_looks into one store a look sums every tile's looks in one task: each store
+    equals that look in memory bit for bit; a look recorded alone finds its store whole (the
+    same recording: nothing written again); four coded looks, whose first and last are the
+    pair's, fill the two new stores and leave the pair's as they were."""
+    from holo_core.plate.record import look_code, record_looks
+    urls = [tmp_path / f"look{k}.zarr" for k in range(2)]
+    tiled = record_looks(meshes(), looks=2, urls=urls, tile=TILE, scheduler=scheduler, **SCENE)
+    for h, want in zip(tiled, record_looks(meshes(), looks=2, **SCENE)):
+        assert np.array_equal(h.object_wave[...], want.object_wave)
+    before = [_files(u) for u in urls]
+    alone = _record(urls[1], scheduler, code=look_code(1, 2))
+    assert _files(urls[1]) == before[1]
+    assert np.array_equal(alone.object_wave[...], tiled[1].object_wave[...])
+    four = [urls[0], tmp_path / "a.zarr", tmp_path / "b.zarr", urls[1]]
+    more = record_looks(meshes(), looks=4, urls=four, tile=TILE, scheduler=scheduler, **SCENE)
+    assert [_files(u) for u in urls] == before
+    for k in (1, 2):
+        assert np.array_equal(more[k].object_wave[...], record_plate(
+            meshes(), code=look_code(k, 4), **SCENE).object_wave)
+
+
 def test_the_pipeline_records_a_plate_beyond_memory_in_tiles(scheduler, tmp_path, monkeypatch):
     """A job's plate whose one look exceeds the memory budget is recorded tile by tile on Dask
     (the route's scheduler) into NAME.zarr beside each NAME.exr, no EXR written; its pass is

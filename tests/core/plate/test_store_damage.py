@@ -455,6 +455,6 @@ def test_a_task_of_a_replaced_recording_writes_nothing(copy):
     points = (np.array([[0.0, 0.0, -0.02]]), np.ones((1, 2), complex))
     with pytest.raises(InputError, match=r"now holds another recording; tile \(1, 2\) of "
                                                 r"recording 0123456789ab is not written"):
-        recorder.record_tile(points, {"url": str(copy),
-                                      "recording": "0123456789ab" * 5 + "cdef"}, 1, 2)
+        recorder.record_tile(points, {"urls": [str(copy)],
+                                      "recordings": ["0123456789ab" * 5 + "cdef"]}, 1, 2)
     assert {p: p.read_bytes() for p in copy.rglob("*") if p.is_file()} == before
