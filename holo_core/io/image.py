@@ -242,25 +242,27 @@ def write_png(path, image: np.ndarray) -> Path:
     return write_atomic(path, png_bytes(image))
 
 
-def write_exr(path, channels: dict, *, preview=None, **header) -> Path:
-    """Float32 OpenEXR (ZIP) of named (H, W) ``channels``, row 0 at the top, with extra
-    ``header`` attributes, written atomically; with a ``preview`` image in [0, 1] (or the
-    bytes of a PNG file) also a PNG beside it, the two renamed into place as one unit."""
+def write_exr(path, channels: dict, *, preview=None, compression="zip", **header) -> Path:
+    """Float32 OpenEXR of named (H, W) ``channels``, row 0 at the top, with extra ``header``
+    attributes, written atomically; with a ``preview`` image in [0, 1] (or the bytes of a PNG
+    file) also a PNG beside it, the two renamed into place as one unit. ``compression``:
+    'zip', or 'none' for data that barely compresses and is read often (a plate's samples)."""
     import OpenEXR  # noqa: F401 -- before the write opens: a SIGTERM inside an import is lost
     check_writable(path, ".exr")
     paths = [path] + ([Path(path).with_suffix(".png")] if preview is not None else [])
     with atomic_paths(*paths) as temps:
-        _exr_to(temps[0], channels, **header)
+        _exr_to(temps[0], channels, compression=compression, **header)
         if preview is not None:
             Path(temps[1]).write_bytes(preview if isinstance(preview, bytes)
                                        else png_bytes(preview))
     return Path(path)
 
 
-def _exr_to(filename, channels: dict, **header) -> None:
+def _exr_to(filename, channels: dict, compression="zip", **header) -> None:
     import OpenEXR
     data = {n: np.ascontiguousarray(a, np.float32) for n, a in channels.items()}
-    head = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage, **header}
+    codec = {"zip": OpenEXR.ZIP_COMPRESSION, "none": OpenEXR.NO_COMPRESSION}[compression]
+    head = {"compression": codec, "type": OpenEXR.scanlineimage, **header}
     with OpenEXR.File(head, data) as f:
         f.write(str(filename))
 

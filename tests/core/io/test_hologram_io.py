@@ -52,6 +52,23 @@ def test_round_trip_is_bit_exact(tmp_path, hologram):
     assert not list(tmp_path.glob(".*")), "temporary file left behind"
 
 
+def test_a_plate_is_written_uncompressed_and_reads_back_whole(tmp_path, hologram):
+    """A carrier plate's samples (speckle, which ZIP barely shrinks) are written without
+    compression, to be read fast by every frame; other holograms keep ZIP. Both bit-exact."""
+    import OpenEXR
+
+    from holo_core.scene.plate import Carrier
+    plate = dataclasses.replace(hologram, intensity=None, encoding="complex",
+                                reference_amplitudes=(), reference_angle=0.0,
+                                carrier=Carrier(centre=(0, 0, 1.5), origin=(-1e-4, -1e-4),
+                                                row_pitch=8e-6))
+    for h, codec in ((plate, OpenEXR.NO_COMPRESSION), (hologram, OpenEXR.ZIP_COMPRESSION)):
+        path = write_hologram(tmp_path / f"{codec}.exr", h)
+        with OpenEXR.File(str(path), header_only=True) as f:
+            assert f.header()["compression"] == codec
+        assert read_hologram(path).object_wave.tobytes() == h.object_wave.tobytes()
+
+
 def test_missing_and_non_exr_files(tmp_path):
     with pytest.raises(HologramFileError, match="no such file"):
         read_hologram(tmp_path / "absent.exr")
