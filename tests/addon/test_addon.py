@@ -406,15 +406,21 @@ def test_a_killed_worker_is_reported_and_earlier_files_stay(empty_scene, monkeyp
     """A worker killed mid-run (what the out-of-memory killer does) is an error report from
     the operator, not a dead Blender, and the earlier hologram and pass are untouched."""
     import signal
-    import threading
 
     from holo_addon.render import pipeline
     _, earlier = _earlier_outputs(empty_scene, size=(160, 120), iterations=8)
     start = pipeline.start
 
-    def start_then_kill(job):
-        w = start(job)
-        threading.Timer(2.0, os.kill, (w.process.pid, signal.SIGKILL)).start()
+    def start_then_kill(job):  # killed once it reports work under way (not by a clock: the
+        w = start(job)          # job may take less than any fixed delay)
+        translate = w._translate
+
+        def kill_at_work(msg):
+            if msg is not None and "progress" in msg and w.process.poll() is None:
+                os.kill(w.process.pid, signal.SIGKILL)
+            return translate(msg)
+
+        w._translate = kill_at_work
         return w
 
     monkeypatch.setattr(pipeline, "start", start_then_kill)
