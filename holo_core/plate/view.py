@@ -267,9 +267,10 @@ SPREAD_PLANES = 8  # the looks' channels spread onto a view's bins in one pass, 
 def carrier_looks(holos, camera: Camera, fine: Camera, pupil: Pupil, rotation, position,
                   colours, z_ch, *, supersample, chromatic=True, keep_fine=False,
                   progress=None):
-    """(each look's images at the pixels (:func:`~holo_core.optics.imaging.fold_look`), the
-    pupil's samples (h, w)) of plates stored against their zone's carrier
-    (:class:`~holo_core.plate.to_pupil.CarrierPupil`); (None, None) where the pupil sees the objects beside the plate."""
+    """(each look's images at the pixels (:meth:`~holo_core.optics.imaging.PupilImage.fold`),
+    the pupil's samples (h, w)) of plates stored against their zone's carrier
+    (:class:`~holo_core.plate.to_pupil.CarrierPupil`); (None, None) where the pupil sees the
+    objects beside the plate."""
     first = holos[0]
     window = carrier_window(first, camera, rotation, position, pupil.diameter)
     if window is None:

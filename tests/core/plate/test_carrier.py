@@ -129,7 +129,7 @@ def test_a_view_reads_the_samples_in_place_as_it_would_copy_them(plate):
 
 
 def test_a_views_pixels_fold_on_the_device_as_the_fine_images_do_on_the_host(plate):
-    """The view folds its fine images to the pixels on the device (imaging.fold_look); a
+    """The view folds its fine images to the pixels on the device (PupilImage.fold); a
     composition by maximum and a depth by the brightest look compose the fine images
     themselves on the host. With one look the maximum is the mean: both views' radiance and
     colour agree to float32 rounding, and the brightest look's depth lies within the objects'
