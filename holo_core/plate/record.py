@@ -453,22 +453,17 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
         whole plate; tiled, one tile).
     url : str or path, optional
         Record tile by tile into the tiled store there, on Dask, and return it opened
-        (:func:`holo_core.plate.tiles.record_plate_tiled`: ``tile`` samples a side, a
+        (:func:`holo_core.plate.tiles.record_looks_tiled`: ``tile`` samples a side, a
         multiple of 256; ``scheduler``, ``overwrite``, ``dashboard`` as there). Default: the
         whole plate in memory.
     progress : callable, optional
         Called with the fraction done (rows in memory, tiles in a store).
     """
-    if url is not None:
-        from .tiles import record_plate_tiled
-        return record_plate_tiled(meshes, url=url, plate=plate, camera=camera, zone=zone,
-                                  zone_margin=zone_margin, wavelength=wavelength, depth=depth,
-                                  seed=seed, code=code, encoding=encoding, tile=tile,
-                                  scheduler=scheduler, overwrite=overwrite, progress=progress,
-                                  dashboard=dashboard, budget=budget)
-    return prepare_plate(meshes, plate=plate, camera=camera, zone=zone,
-                         zone_margin=zone_margin, wavelength=wavelength, depth=depth, seed=seed,
-                         code=code, encoding=encoding, budget=budget).record(progress)[0]
+    return _record_codes(meshes, codes=(code,), urls=None if url is None else [url],
+                         plate=plate, camera=camera, zone=zone, zone_margin=zone_margin,
+                         wavelength=wavelength, depth=depth, seed=seed, encoding=encoding,
+                         budget=budget, tile=tile, scheduler=scheduler, overwrite=overwrite,
+                         progress=progress, dashboard=dashboard)[0]
 
 
 @validate.scale_free()  # as record_hologram: the renderer's jobs come this way
@@ -487,17 +482,23 @@ def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
     once (:func:`holo_core.plate.tiles.record_looks_tiled`; ``tile``, ``scheduler``,
     ``overwrite``, ``dashboard`` as for :func:`record_plate`)."""
     looks = validate.integer("looks", looks, 1)
-    codes = tuple(look_code(k, looks) for k in range(looks))
+    return _record_codes(meshes, codes=tuple(look_code(k, looks) for k in range(looks)),
+                         urls=urls, plate=plate, camera=camera, zone=zone,
+                         zone_margin=zone_margin, wavelength=wavelength, depth=depth, seed=seed,
+                         budget=budget, tile=tile, scheduler=scheduler, overwrite=overwrite,
+                         progress=progress, dashboard=dashboard)
+
+
+def _record_codes(meshes, *, codes, urls, tile, scheduler, overwrite, dashboard, progress,
+                  **plate) -> list[Hologram]:
+    """The looks ``codes`` of a plate (``plate``: :func:`prepare_plate`'s other arguments) in
+    one pass: in memory, or with ``urls`` tile by tile, a store a look."""
     if urls is not None:
         from .tiles import record_looks_tiled
-        return record_looks_tiled(meshes, urls=list(urls), codes=codes, plate=plate,
-                                  camera=camera, zone=zone, zone_margin=zone_margin,
-                                  wavelength=wavelength, depth=depth, seed=seed, tile=tile,
+        return record_looks_tiled(meshes, urls=list(urls), codes=codes, tile=tile,
                                   scheduler=scheduler, overwrite=overwrite, progress=progress,
-                                  dashboard=dashboard, budget=budget)
-    return prepare_plate(meshes, plate=plate, camera=camera, zone=zone,
-                         zone_margin=zone_margin, wavelength=wavelength, depth=depth, seed=seed,
-                         codes=codes, budget=budget).record(progress)
+                                  dashboard=dashboard, **plate)
+    return prepare_plate(meshes, codes=codes, **plate).record(progress)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)

@@ -7,7 +7,7 @@ sample positions, the same phases), so a tiled plate equals the plate recorded i
 
 - Point emitters (:func:`record_tiled`): a tile sums the emitters whose cone reaches it
   (``point_sources``: a point lights only the disc its pitch samples alias-free).
-- Plates of meshes (:func:`record_plate_tiled`), with occlusion, against the carrier
+- Plates of meshes (:func:`record_looks_tiled`), with occlusion, against the carrier
   converging on their zone: the emitters the zone sees and their visibility tables are found
   once, on the client (:func:`holo_core.plate.record.prepare_plate`); a tile is
   :meth:`ZoneSum.region <holo_core.plate.zone_sum.ZoneSum.region>` of its block, from the
@@ -108,42 +108,28 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
     return store.open_plate(files[0].name)
 
 
-def record_plate_tiled(meshes, *, url, plate, camera=None, zone=None,
-                       zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
-                       code=None, encoding="complex", tile=DEFAULT_TILE, scheduler=None,
-                       overwrite=False, progress: jobs.Progress = None,
-                       dashboard=None, budget=(None, None)) -> Hologram:
-    """Record the plate of ``meshes`` (with occlusion, against the carrier converging on its
-    zone: :func:`holo_core.plate.record.record_plate`, whose other arguments these are) into
-    the tiled store at ``url`` and return it opened (:func:`holo_core.io.tiles.open_plate`).
-
-    The emitters and their visibility tables are found once, here, and scattered once to the
-    workers; each task sums one tile (``tile`` samples a side, a multiple of 256: the
-    emitters' block lists) and writes it with its record. The store's digest covers the
-    meshes in the plate's frame (vertices, triangles, colours, UVs, texture: the plate's pose
-    too), the zone, the plan (samples, pitches, origin, wavelengths), the seed, the coded
-    look, the tile and the emitters found (their positions, amplitudes and visibility): only
-    the same recording resumes into it. ``url``, ``scheduler``, ``overwrite``, ``progress``,
-    ``dashboard``: as for :func:`record_tiled`.
-    """
-    return record_looks_tiled(meshes, urls=[url], codes=(code,), plate=plate, camera=camera,
-                              zone=zone, zone_margin=zone_margin, wavelength=wavelength,
-                              depth=depth, seed=seed, encoding=encoding, tile=tile,
-                              scheduler=scheduler, overwrite=overwrite, progress=progress,
-                              dashboard=dashboard, budget=budget)[0]
-
-
 def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
                        zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
                        encoding="complex", tile=DEFAULT_TILE, scheduler=None, overwrite=False,
                        progress: jobs.Progress = None, dashboard=None,
                        budget=(None, None)) -> list[Hologram]:
-    """The looks ``codes`` of one plate of ``meshes`` (look l coded by codes[l], or where that
-    is None of seed + l), each into its own tiled store at ``urls`` [l], every tile's looks
-    summed in one pass (:func:`holo_core.plate.record.record_looks`): one task a tile computes
-    them all and writes each into its store. Each store is a look's own recording (its digest
-    as :func:`record_plate_tiled` makes it, the emitters' amplitudes its look's): a look
-    recorded alone resumes into it and the other way round. Returns the stores opened."""
+    """The looks ``codes`` of one plate of ``meshes`` (with occlusion, against the carrier
+    converging on its zone: :func:`holo_core.plate.record.record_plate`, whose other
+    arguments these are; look l coded by codes[l], or where that is None of seed + l), each
+    into its own tiled store at ``urls`` [l], returned opened
+    (:func:`holo_core.io.tiles.open_plate`).
+
+    The emitters and their visibility tables are found once, here, and scattered once to the
+    workers; each task sums one tile (``tile`` samples a side, a multiple of 256: the
+    emitters' block lists) for every look at once (as :func:`holo_core.plate.record.
+    record_looks` does in memory) and writes each look with its record into the stores that
+    lack it. A store's digest covers the meshes in the plate's frame (vertices, triangles,
+    colours, UVs, texture: the plate's pose too), the zone, the plan (samples, pitches,
+    origin, wavelengths), its look's seed, code and amplitudes, the tile and the emitters
+    found (their positions and visibility): only the same recording resumes into it, and a
+    look recorded alone resumes into a store made with others and the other way round.
+    ``scheduler``, ``overwrite``, ``progress``, ``dashboard``: as for :func:`record_tiled`.
+    """
     tile = _tile(tile, ZONE_TILE_STEP)
     _flag("overwrite", overwrite)
     if len(urls) != len(codes) or not urls:
