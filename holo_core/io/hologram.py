@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -122,13 +124,33 @@ def read_hologram(path) -> Hologram:
                                     f"{info.shape}")
     wave = None
     if info.keeps_object_wave:
-        wave = memory.aligned_zeros((len(info.wavelengths),) + info.shape)
-        for c in colours:  # page-aligned: a CPU device's views read it in place
-            wave[c].real, wave[c].imag = names[f"c{c}.O.re"], names[f"c{c}.O.im"]
+        wave = _complex([(names[f"c{c}.O.re"], names[f"c{c}.O.im"]) for c in colours])
     h = Hologram(info=info, intensity=np.stack([names[f"c{c}.H"] for c in colours])
                  if intensity else None, object_wave=wave)
     check_pixels(str(path), h)
     return h
+
+
+def _complex(parts) -> np.ndarray:
+    """(C, H, W) complex64 of the channels' (real, imaginary) float32 planes ``parts``,
+    page-aligned (a CPU device's views read it in place), interleaved in blocks of rows over
+    the cores: a frame of an animation reads its plate this way (a look of 6754 × 6761
+    samples: 0.33 s against 0.63 s in one thread)."""
+    h, w = parts[0][0].shape
+    wave = memory.aligned_zeros((len(parts), h, w))
+
+    def fill(block):
+        c, r0 = block
+        out = wave[c, r0:r0 + ROWS_A_BLOCK]
+        out.real, out.imag = (p[r0:r0 + ROWS_A_BLOCK] for p in parts[c])
+
+    with ThreadPoolExecutor(os.cpu_count() or 1) as pool:  # NumPy's copies release the GIL
+        list(pool.map(fill, [(c, r0) for c in range(len(parts)) for r0 in range(0, h,
+                                                                              ROWS_A_BLOCK)]))
+    return wave
+
+
+ROWS_A_BLOCK = 512
 
 
 def info_of(path, text: str) -> HologramInfo:
