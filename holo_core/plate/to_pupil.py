@@ -277,7 +277,7 @@ class CarrierPupil:
         r0:r1, c0:c1] (a store's); the planes in the parts' order, ``amplitude`` scaling them
         (the emitters' density). The parts that thin out alike share one gather onto the
         bins: every look and channel is spread in one pass, which finds each sample's bins
-        once (a view of two looks of four channels: 0.63 s of gathers become 0.35 s)."""
+        once (a view of two looks of four channels: 0.63 s of gathers become 0.20 s)."""
         designs = [self._design(wavelength) for _, _, wavelength in parts]
         planes = sum(len(channels) for _, channels, _ in parts)
         out = self.rt.scratch("carrier-pupils", (planes,) + self.shape)
@@ -390,7 +390,6 @@ class _Gather:
         r0, r1, c0, c1 = view.window
         rows = r0 + qy * np.arange(-(-(r1 - r0) // qy))
         cols = c0 + qx * np.arange(-(-(c1 - c0) // qx))
-        self.lattice = (len(rows), len(cols))  # the decimated samples (rows, cols)
         x, y = h.carrier.coords(h.pitch, rows, cols)
         # d = P − x per sample, by its row and column parts (broadcast, never stacked)
         dx, dy, dz = (view.position[0] - x)[None, :], (view.position[1] - y)[:, None], \
