@@ -150,6 +150,7 @@ class PupilImage:
                                   f"-DKEEP_FINE={int(keep_fine)}")
         power = rt.scratch("pixel-power", (planes, rows, cols), np.float32)
         cross = rt.scratch("pixel-cross", (looks, rows, cols))
+        # without KEEP_FINE the kernel never writes ``fine``: any buffer fills the argument
         fine = rt.scratch("pixel-fine", (planes, rows * s, cols * s)) if keep_fine else cross
         t0, dt, r0, dr = self.camera.tangent_steps()
         real = rt.real

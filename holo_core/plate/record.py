@@ -526,19 +526,23 @@ class PlateRecording:
     def looks(self) -> int:
         return len(self.codes)
 
+    def look_columns(self, look: int) -> list[slice]:
+        """Per group, the columns of its emitters' amplitudes that are look ``look``'s."""
+        return [slice(look * n, (look + 1) * n)
+                for n in (em.amplitude.shape[1] // self.looks for _, em in self.groups)]
+
     def look_channels(self, look: int) -> list[int]:
         """The channels of a block's samples (:meth:`region`) that are look ``look``'s, in the
         hologram's channel order."""
         out, first = [], 0
-        for _, em in self.groups:
-            per_look = em.amplitude.shape[1] // self.looks
-            out += range(first + look * per_look, first + (look + 1) * per_look)
+        for (_, em), columns in zip(self.groups, self.look_columns(look)):
+            out += range(first + columns.start, first + columns.stop)
             first += em.amplitude.shape[1]
         return out
 
     def look_seed(self, look: int) -> int:
         """The seed of look ``look``'s random phases (its code shifts them, where it has one)."""
-        return self.seed + (0 if self.codes[look] else look)
+        return _look_seed(self.seed, self.codes, look)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -643,8 +647,8 @@ def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None
                          f"({zone.describe()})")
     # |a| = √I·|p − Z|: each emitter's light reaches the zone's centre with its own amplitude
     reach = np.linalg.norm(em.position - np.asarray(zone.centre), axis=1)
-    waves = [np.exp(1j * _phases(em, seed + (0 if c else look), c)) * reach
-             for look, c in enumerate(codes)]  # PlateRecording.look_seed
+    waves = [np.exp(1j * _phases(em, _look_seed(seed, codes, look), c)) * reach
+             for look, c in enumerate(codes)]
     partial = em.visibility.reshape(len(em), -1).min(1) < 1
     rows = np.where(partial, np.cumsum(partial) - 1, -1).astype(np.int32)
     table = np.round(em.visibility[partial] * 255).astype(np.uint8)
@@ -666,6 +670,12 @@ def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None
                                         row_pitch=p.row_pitch))
     return PlateRecording(info=info, window=window, groups=groups, plan=p, meshes=tuple(local),
                           seed=seed, codes=tuple(None if c is None else tuple(c) for c in codes))
+
+
+def _look_seed(seed: int, codes, look: int) -> int:
+    """The seed of look ``look``'s phases: the plate's, shifted by the look's code where it
+    has one, else seed + look (independent looks)."""
+    return seed + (0 if codes[look] else look)
 
 
 def _phases(em, seed: int, code) -> np.ndarray:

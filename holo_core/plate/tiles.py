@@ -223,15 +223,10 @@ def _plate_recording(job: PlateRecording, tile: int, look: int = 0) -> dict:
                                                  m.texture)]
                               for n, m in enumerate(job.meshes)})
     z, p = job.info.zone, job.plan
-    mine = job.look_channels(look)
-    first = 0
-    emitters = []
-    for _, em in job.groups:  # the look's own amplitude columns
-        width = em.amplitude.shape[1]
-        columns = [c - first for c in mine if first <= c < first + width]
-        first += width
-        emitters += [store.array_digest(np.ascontiguousarray(a)) for a in (
-            em.position, em.amplitude[:, columns], em.visibility, em.table, em.grid)]
+    emitters = [store.array_digest(np.ascontiguousarray(a))  # the look's own amplitudes
+                for (_, em), columns in zip(job.groups, job.look_columns(look))
+                for a in (em.position, em.amplitude[:, columns], em.visibility, em.table,
+                          em.grid)]
     parts = {"method": "zone", "meshes": meshes[:16],
              "zone": store.array_digest(np.array([*z.centre, *z.half_extents, z.pupil,
                                                   z.pixel], np.float64)),
@@ -295,9 +290,10 @@ def record_tile(points, spec: dict, i: int, j: int) -> tuple[int, int]:
 def record_plate_tile(job: PlateRecording, spec: dict, i: int, j: int) -> tuple[int, int]:
     """One task: tile (i, j) of the stores ``spec`` names (one a look), the zone sum of
     ``job``'s emitters over its block, every look at once, each look's channels written into
-    its store with its record (the stores of ``spec``'s "looks": those that lack the tile). The emitters go onto this worker's device once per recording
-    (kept in its runtime's cache for the next tiles). Stores that now hold another recording
-    (replaced while this task waited) are left alone."""
+    its store with its record (the stores of ``spec``'s "looks": those that lack the tile).
+    The emitters go onto this worker's device once per recording (kept in its runtime's cache
+    for the next tiles). Stores that now hold another recording (replaced while this task
+    waited) are left alone."""
     plates = _still_ours(spec, i, j)
     first = next(iter(plates.values()))
     r0, r1, c0, c1 = store.tile_window(first.shape, first.tile, i, j)

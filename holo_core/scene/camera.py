@@ -147,10 +147,11 @@ class Camera:
         xy[depth <= 0] = np.nan
         return xy, depth
 
-    def direction_cosines(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def direction_cosines(self, rows=None, cols=None) -> tuple[np.ndarray, np.ndarray,
+                                                               np.ndarray]:
         """Eq. 22: (α, β, γ) per pixel (H, W) of the light arriving along each pixel's ray,
-        in camera axes."""
-        tx, ty = self.pixel_tangents()
+        in camera axes; or at given (rows, cols) positions (:meth:`pixel_tangents`)."""
+        tx, ty = self.pixel_tangents(rows=rows, cols=cols)
         n = np.sqrt(tx * tx + ty * ty + 1)
         return -tx / n, -ty / n, 1 / n
 
@@ -172,9 +173,7 @@ class Camera:
         edge_rows = np.concatenate([rows, rows, np.full(2 * w, 0.5)])
         edge_rows[2 * h + w:] = h - 0.5
         edge_cols = np.concatenate([np.full(h, 0.5), np.full(h, w - 0.5), cols, cols])
-        tx, ty = self.pixel_tangents(rows=edge_rows, cols=edge_cols)
-        n = np.sqrt(tx * tx + ty * ty + 1)
-        ab = np.stack([-tx / n, -ty / n])
+        ab = np.stack(self.direction_cosines(rows=edge_rows, cols=edge_cols)[:2])
         return ab.min(1), ab.max(1)
 
     def pixel_angle(self) -> float:
