@@ -7,9 +7,12 @@ the camera; a 1 m plate halfway; a 40 mm lens at f/2.8 and 1280×720; a dolly of
 it); the plate is recorded once, its ``--looks`` coded looks in one pass. For three frames
 (start, middle, end of the move) the camera hologram's pass (its looks' limit, what the
 add-on renders by default) and the plate's view are timed and compared: PSNR inside the
-objects, silhouette IoU. Prints the CPU and its load, the plan, the recording's time and
-the peak memory of all its processes, and the frame count from which the plate costs less
-than a pass per frame.
+objects, silhouette IoU. Then the frames as the add-on makes them, jobs handed to worker
+processes that write their passes: a render's frames in the one worker it keeps (the plate
+held after the first), a farm's single frames in a worker each (the plate's files read each
+time), the camera pass's frames alike. Prints the CPU and its load, the plan, the recording's
+time and the peak memory of all its processes, and for each way the frame count from which
+the plate costs less than a pass per frame.
 
     python bench/shot.py [--scale 1.0] [--looks 2] [--dolly 0.1] [--supersample 2] [--repeat 3]
                           [--out DIR]
@@ -23,6 +26,7 @@ import sys
 import tempfile
 import threading
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -34,9 +38,10 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 from plate_scene import cube, sphere  # noqa: E402
 
 from holo_core.camera.render import render_camera  # noqa: E402
-from holo_core.io.hologram import write_hologram  # noqa: E402
 from holo_core.io.image import write_png  # noqa: E402
+from holo_core import worker  # noqa: E402
 from holo_core.io.tiles import read_plate  # noqa: E402
+from holo_core.job import CameraRoute, Job, Output, PlateRoute  # noqa: E402
 from holo_core.plate.plan import plan, plan_view  # noqa: E402
 from holo_core.plate.record import record_looks  # noqa: E402
 from holo_core.plate.view import render_view  # noqa: E402
@@ -101,16 +106,16 @@ def break_even(how: str, record_s: float, frame_s: float, cam_s: float) -> None:
               f"break-even")
 
 
-def files_of(plates) -> tuple[float, float, float, int]:
-    """(seconds to write the looks' EXRs, to read them back the first time and the next,
-    their bytes). The next read is what the frames after the first find: the files in the
-    page cache."""
-    with tempfile.TemporaryDirectory() as folder:
-        paths = [Path(folder) / f"look{k}.exr" for k in range(len(plates))]
-        _, write_s = timed(lambda: [write_hologram(p, h) for p, h in zip(paths, plates)])
-        size = sum(p.stat().st_size for p in paths)
-        reads = [timed(lambda: [read_plate(p) for p in paths])[1] for _ in range(3)]
-    return write_s, reads[0], float(np.median(reads[1:])), size
+def worker_frames(route, cams, folder: Path, *, resident: bool, meshes=()) -> list[float]:
+    """Each camera's frame made as the add-on makes it: a job handed to a worker process
+    (``resident``: the one a render keeps between its frames), its pass written; the seconds
+    of each, from the job's hand-over to its result."""
+    out = []
+    for i, cam in enumerate(cams):
+        job = Job(camera=cam, route=route, points=tuple(meshes),
+                  output=Output(folder=folder, frame=i + 1))
+        out.append(timed(worker.run, job, resident=resident)[1])
+    return out
 
 
 def timed(f, *args, **kw):
@@ -201,13 +206,39 @@ def main():
     print(f"\na view {view_s:.2f} s = {view_s / cam_s:.2f} x the camera pass ({cam_s:.2f} s), "
           f"the medians of {args.repeat} runs a frame averaged over the frames")
     break_even("in one process (the plate in memory)", record_s, view_s, cam_s)
-    # the add-on renders each frame in a worker of its own, which reads the plate's files
-    write_s, first_s, read_s, size = files_of(plates)
-    print(f"the plate's files: {size / 2**30:.2f} GiB, written in {write_s:.1f} s, read in "
-          f"{first_s:.1f} s the first time, {read_s:.1f} s the next (each frame of the add-on's "
-          f"animation reads them)")
-    break_even("a worker a frame (the plate read from its files)", record_s + write_s,
-               view_s + read_s, cam_s)
+    # the add-on's frames: jobs handed to a worker process. A render's frames share one: its
+    # first frame records the plate and writes its files, the next view it held in memory; a
+    # farm rendering one frame a Blender starts one a frame, which reads the plate's files
+    with tempfile.TemporaryDirectory() as folder:
+        folder = Path(folder)
+        paths = tuple(folder / f"look{k}.exr" for k in range(args.looks))
+        route = PlateRoute(plate=plate, holograms=paths, supersample=args.supersample)
+        viewed = replace(route, record=False)
+        try:
+            first = worker_frames(route, cams[:1], folder / "kept", resident=True,
+                                  meshes=meshes)[0]
+            held = worker_frames(viewed, cams[1:] + cams, folder / "kept", resident=True)
+            cam_held = worker_frames(CameraRoute(supersample=args.supersample), cams * 2,
+                                     folder / "cam", resident=True, meshes=meshes)
+        finally:
+            worker.release()
+        size = sum(p.stat().st_size for p in paths)
+        read_s = float(np.median([timed(lambda: [read_plate(p) for p in paths])[1]
+                                  for _ in range(2)]))
+        fresh = worker_frames(viewed, cams, folder / "fresh", resident=False)
+    frame_s, cam_frame = float(np.median(held)), float(np.median(cam_held[1:]))
+    print(f"the add-on's render, its frames in the worker it keeps: the first {first:.1f} s "
+          f"(the process started, the plate recorded and its files written, its view), then "
+          f"{frame_s:.2f} s a frame ({min(held):.2f}-{max(held):.2f}); the camera pass "
+          f"{cam_frame:.2f} s a frame ({min(cam_held[1:]):.2f}-{max(cam_held[1:]):.2f}); "
+          f"passes written (load {os.getloadavg()[0]:.1f})")
+    break_even("the add-on's render (one worker for its frames)", first - frame_s, frame_s,
+               cam_frame)
+    print(f"the plate's files: {size / 2**30:.2f} GiB, read in {read_s:.1f} s from the page "
+          f"cache; a worker started for each frame (a farm's single frames, the files read "
+          f"each time): {np.median(fresh):.2f} s a frame ({min(fresh):.2f}-{max(fresh):.2f})")
+    break_even("a worker a frame", first - float(np.median(fresh)), float(np.median(fresh)),
+               cam_frame)
     print(f"PSNR {min(r[1] for r in rows):.2f}-{max(r[1] for r in rows):.2f} dB, IoU "
           f"{min(r[2] for r in rows):.4f}-{max(r[2] for r in rows):.4f}; load at the end "
           f"{os.getloadavg()[0]:.1f}")

@@ -102,8 +102,8 @@ class PlateRoute(_Route):
     wavelength : the recording's wavelength [m], or None (chosen by the planner)
     composition : 'mean' or 'max' of the iterations' views
     opacity_threshold : the view's coverage taken as opaque, in [0, 1]
-    supersample, exposure, seed : as every route (the supersampling: the intensity's Nyquist
-        rate where that is finer; the seed: the recording's random phases)
+    supersample, exposure, seed : as every route (the seed: the recording's random phases; a
+        supersampling below the view's speckle Nyquist rate is said in the log, not raised)
     """
 
     plate: Plate

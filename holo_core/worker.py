@@ -4,11 +4,13 @@ Blender's process never loads an OpenCL driver: drivers bring native libraries t
 Blender's (Intel's CPU runtime needs a newer TBB than Blender bundles, and PoCL's LLVM then
 meets Intel's), and a driver crash or an out-of-memory must not take unsaved work down with it.
 The parent hands a :class:`~holo_core.job.Job` as plain data (its ``to_dict``, pickled into a
-folder of its own) to ``python -m holo_core.runner FOLDER``, which runs it
-(:func:`holo_core.runner.run`), reports progress and log records as JSON lines on its stdout,
-writes its outputs atomically once every stage has finished, and leaves its
-:class:`~holo_core.job.Result` in the folder; the parent kills it to cancel, so a cancelled or
-failed run leaves earlier files as they were.
+folder of its own) to a ``python -m holo_core.runner --serve`` process, one folder a line on
+its stdin; it runs each (:func:`holo_core.runner.run`), reports progress and log records as
+JSON lines on its stdout, writes its outputs atomically once every stage has finished, and
+leaves its :class:`~holo_core.job.Result` in the folder; the parent kills it to cancel, so a
+cancelled or failed run leaves earlier files as they were. A process serves one job, or, kept
+between the frames of a render (``resident``), the frames one after another with the plate
+held in memory.
 
 :class:`Worker` is the parent's handle, as Cycles' ``engine.py`` is Blender's on its renderer;
 this module and what it imports load nothing of OpenCL.
@@ -16,6 +18,7 @@ this module and what it imports load nothing of OpenCL.
 
 from __future__ import annotations
 
+import atexit
 import json
 import os
 import pickle
@@ -73,6 +76,117 @@ def _death(code: int) -> str:
     return f"signal {name}{why.get(-code, '')}"
 
 
+class _Process:
+    """A worker process (``python -m holo_core.runner --serve``) and the reader of its stdout.
+
+    It runs the job folders written to its stdin one after another, and ends when its stdin
+    closes, when it is left idle (the runner's ``IDLE_SECONDS``) or after a failed job. Its
+    stderr goes to a file of its own folder (the last line explains a death)."""
+
+    def __init__(self, env: dict):
+        self.env = env
+        self.folder = Path(tempfile.mkdtemp(prefix="holo-process-"))
+        self.stderr = open(self.folder / "stderr.txt", "w+b")
+        self.popen = subprocess.Popen(
+            [sys.executable, "-m", "holo_core.runner", "--serve"],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.stderr,
+            env=env, cwd=self.folder,
+            start_new_session=os.name == "posix")  # its group: the renderer it runs dies too
+        self.messages: queue.SimpleQueue = queue.SimpleQueue()
+        self.busy = False
+        threading.Thread(target=self._read, daemon=True, name="holo-worker-reader").start()
+
+    def _read(self):
+        with self.popen.stdout:
+            for line in self.popen.stdout:
+                try:
+                    self.messages.put(json.loads(line))
+                except ValueError:
+                    pass
+        self.messages.put(None)  # end of output: the process has ended or is ending
+
+    def alive(self) -> bool:
+        return self.popen.poll() is None
+
+    def submit(self, folder: Path, *, last: bool) -> None:
+        """Hand it the job in ``folder``; ``last``: close its stdin (it ends after this
+        job)."""
+        self.busy = True
+        self.popen.stdin.write(f"{folder}\n".encode())
+        self.popen.stdin.flush()
+        if last:
+            self.popen.stdin.close()
+
+    def stderr_tail(self) -> str:
+        self.stderr.flush()
+        self.stderr.seek(0)
+        lines = [ln for ln in self.stderr.read().decode(errors="replace").splitlines()
+                 if ln.strip()]
+        return f"; its last output: {lines[-1][-300:]}" if lines else ""
+
+    def kill(self) -> None:
+        """Kill it and whatever it started (a renderer: its process group)."""
+        if self.popen.poll() is None:
+            if os.name == "posix":
+                try:
+                    os.killpg(self.popen.pid, signal.SIGKILL)
+                except OSError:
+                    self.popen.kill()
+            else:
+                self.popen.kill()
+        self.popen.wait()
+
+    def close(self) -> None:
+        """Its end: stdin closed, it is given a moment to end on its own, then killed; its
+        folder removed."""
+        try:
+            if not self.popen.stdin.closed:
+                self.popen.stdin.close()
+            self.popen.wait(timeout=2)
+        except (OSError, subprocess.TimeoutExpired):
+            pass
+        self.kill()
+        self.stderr.close()
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+
+# the process kept between jobs (resident=True)
+_resident: _Process | None = None
+_resident_lock = threading.Lock()
+
+
+def _process(env: dict, resident: bool) -> _Process:
+    """A fresh process of environment ``env``, or with ``resident`` the kept one: started
+    when there is none alive with this environment (a preference or variable changed since
+    starts a fresh one), or, while it is busy with another job, a fresh one not kept."""
+    global _resident
+    if not resident:
+        return _Process(env)
+    with _resident_lock:
+        kept = _resident
+        if kept is not None and kept.busy:
+            return _Process(env)
+        if kept is not None and (kept.env != env or not kept.alive()):
+            kept.close()
+            kept = None
+        if kept is None:
+            kept = _resident = _Process(env)
+        return kept
+
+
+def release() -> None:
+    """End the resident worker process (a render's end): the plate it keeps in memory between
+    frames is freed. Nothing happens when there is none; a job it runs is killed."""
+    global _resident
+    with _resident_lock:
+        kept, _resident = _resident, None
+    if kept is not None:
+        kept.close()
+
+
+atexit.register(release)
+
+
 class Worker:
     """One job in a worker process.
 
@@ -81,55 +195,59 @@ class Worker:
     last ``("done", result)`` or ``("failed", message)``. ``wait()`` runs it to the end
     (``blender --background``); ``cancel()`` kills it; ``stop_and_keep()`` kills it and hands
     over its latest running pass.
+
+    ``resident``: the job runs in the process kept between jobs (started on first use), which
+    keeps the plate's holograms it read or recorded in memory, with its OpenCL programs and
+    FFT plans: the next frame of a shot renders from them, where a fresh process would read
+    the plate's files again. The process lives until :func:`release`, until it is idle for
+    the runner's ``IDLE_SECONDS``, or until this process ends; a cancelled or failed job ends
+    it (the next starts a fresh one).
     """
 
     def __init__(self, job: Job, *, paths=(), device: str | None = None,
-                 memory_limit: str | None = None, cache_dir: str | None = None):
+                 memory_limit: str | None = None, cache_dir: str | None = None,
+                 resident: bool = False):
         data = pickle.dumps(job.to_dict(), protocol=pickle.HIGHEST_PROTOCOL)  # plain data
         self.folder = Path(tempfile.mkdtemp(prefix="holo-worker-"))
         (self.folder / "job.pickle").write_bytes(data)
-        self._stderr = open(self.folder / "stderr.txt", "w+b")
         self._scratch = None if job.radiance is None else job.radiance.folder
-        self.process = subprocess.Popen(
-            [sys.executable, "-m", "holo_core.runner", str(self.folder)],
-            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=self._stderr,
-            env=environment(paths, device, memory_limit, cache_dir), cwd=self.folder,
-            start_new_session=os.name == "posix")  # its group: the renderer it runs dies too
-        self._messages: queue.SimpleQueue = queue.SimpleQueue()
+        env = environment(paths, device, memory_limit, cache_dir)
+        self._server = _process(env, resident)
+        self._resident = self._server is _resident
+        try:
+            self._server.submit(self.folder, last=not self._resident)
+        except OSError:  # the kept process ended as it was handed the job: a fresh one
+            release()
+            self._server, self._resident = _process(env, False), False
+            self._server.submit(self.folder, last=True)
         self._error = None
         self.finished = False
         self.partial = 0  # samples of the latest running pass in the folder
-        threading.Thread(target=self._read, daemon=True, name="holo-worker-reader").start()
 
-    def _read(self):
-        with self.process.stdout:
-            for line in self.process.stdout:
-                try:
-                    self._messages.put(json.loads(line))
-                except ValueError:
-                    pass
-        self._messages.put(None)  # end of output: the process has ended or is ending
+    @property
+    def process(self) -> subprocess.Popen:
+        """The worker's process (kept between jobs when resident)."""
+        return self._server.popen
 
     def poll(self, timeout: float | None = None) -> list[tuple]:
         """Messages that arrived (waiting up to ``timeout`` seconds for the first one)."""
         out = []
         while not self.finished:
             try:
-                msg = self._messages.get(timeout=timeout) if timeout and not out else \
-                    self._messages.get_nowait()
+                msg = self._server.messages.get(timeout=timeout) if timeout and not out \
+                    else self._server.messages.get_nowait()
             except queue.Empty:
                 break
             out.append(self._translate(msg))
             if out[-1][0] in ("done", "failed"):
-                self.finished = True
-                self._cleanup()
+                self._end(kill=out[-1][0] == "failed")
         return out
 
     def _translate(self, msg):
         if msg is None:
             code = self.process.wait()
             return ("failed", self._error or f"the worker process ended with {_death(code)}"
-                    f"{self._stderr_tail()}")
+                    f"{self._server.stderr_tail()}")
         if "progress" in msg:
             return ("progress", float(msg["progress"]))
         if "log" in msg:
@@ -140,16 +258,8 @@ class Worker:
         if "error" in msg:
             self._error = msg["error"]
             return self._translate(None)
-        self.process.wait()
         with open(self.folder / "result.pickle", "rb") as f:
             return ("done", Result.from_dict(pickle.load(f)))
-
-    def _stderr_tail(self) -> str:
-        self._stderr.flush()
-        self._stderr.seek(0)
-        lines = [ln for ln in self._stderr.read().decode(errors="replace").splitlines()
-                 if ln.strip()]
-        return f"; its last output: {lines[-1][-300:]}" if lines else ""
 
     def wait(self, progress: jobs.Progress = None, on_log=None) -> Result:
         """Run to the end; ``progress`` may raise :class:`holo_core.jobs.Cancelled`, which
@@ -169,30 +279,17 @@ class Worker:
                 elif kind == "failed":
                     raise WorkerError(value)
 
-    def _kill(self) -> None:
-        """Kill the worker and whatever it started (a renderer: its process group)."""
-        if self.process.poll() is None:
-            if os.name == "posix":
-                try:
-                    os.killpg(self.process.pid, signal.SIGKILL)
-                except OSError:
-                    self.process.kill()
-            else:
-                self.process.kill()
-        self.process.wait()
-
     def cancel(self) -> None:
         """Kill the worker now (its partial work is never written)."""
-        self._kill()
-        self.finished = True
-        self._cleanup()
+        self._server.kill()
+        self._end(kill=True)
 
     def stop_and_keep(self, path) -> int:
         """Kill the worker and write its latest running pass to ``path`` with its PNG (as one
         unit, as :func:`holo_core.io.view.write_view` writes them): returns its samples, or 0
         when there was none yet (nothing is written)."""
         self.poll()  # the newest partial message
-        self._kill()
+        self._server.kill()
         src = self.folder / "partial.exr"
         kept = self.partial if self.partial and src.is_file() else 0
         if kept:
@@ -200,15 +297,23 @@ class Worker:
             with atomic_paths(path, path.with_suffix(".png")) as (exr, png):
                 shutil.copyfile(src, exr)
                 shutil.copyfile(src.with_suffix(".png"), png)
-        self.finished = True
-        self._cleanup()
+        self._end(kill=True)
         return kept
 
-    def _cleanup(self):
-        self._stderr.close()
+    def _end(self, *, kill: bool) -> None:
+        """The job's end: its folders removed; its process closed unless it is the resident
+        one and the job finished (a killed or failed one is ended: the next job starts a
+        fresh process)."""
+        self.finished = True
         shutil.rmtree(self.folder, ignore_errors=True)
         if self._scratch:
             shutil.rmtree(self._scratch, ignore_errors=True)
+        if self._resident and not kill:
+            self._server.busy = False
+        elif self._resident:
+            release()
+        else:
+            self._server.close()
 
 
 def run(job: Job, progress: jobs.Progress = None, on_log=None, **options) -> Result:

@@ -42,8 +42,10 @@ def render_init(scene, *_):
 @persistent
 def render_ended(*_):
     """A render completed or was cancelled: a pass an operator made for it is not for the
-    next one, nor a shutter it left incomplete."""
+    next one, nor a shutter it left incomplete, and the worker kept between its frames ends
+    (the plate it held in memory is freed)."""
     session.made = session.shutter = session.frame_done = None
+    pipeline.release()
 
 
 @persistent
@@ -153,7 +155,8 @@ def _frame_pass(scene, frame: int, job) -> None:
     session.pass_started(frame)
     started = time.perf_counter()
     try:
-        result = pipeline.run(job, _progress, _log)
+        # the frames of a render share one worker, which holds the plate between them
+        result = pipeline.run(job, _progress, _log, resident=True)
         pipeline.apply(scene, job, result)
         tree.pass_made(scene, result)
     except jobs.Cancelled:

@@ -34,7 +34,7 @@ from .options import scheduler, worker_options
 
 log = logging.getLogger(__name__)
 __all__ = ["Prepared", "apply", "cached_pass", "check_hologram", "clear_pass", "moving",
-           "output_dir", "pass_file", "prepare", "run", "start", "stored_key"]
+           "output_dir", "pass_file", "prepare", "release", "run", "start", "stored_key"]
 
 
 def prepare(scene, depsgraph, *, render=True, bake=False, preview=1) -> Prepared:
@@ -58,25 +58,34 @@ def bake_emitters(scene):
     return bpy.context.evaluated_depsgraph_get() if todo else None
 
 
-def start(prepared: Prepared) -> worker.Worker:
+def start(prepared: Prepared, *, resident: bool = False) -> worker.Worker:
     """The job running in a worker process (see :class:`holo_core.worker.Worker`); with
     Lighting: Scene (and something to record), the scene is written for Cycles first and the
-    worker has Cycles render the emitters' radiance before it records."""
+    worker has Cycles render the emitters' radiance before it records. ``resident``: in the
+    process kept between a render's frames (the plate held in memory; :func:`release` at
+    the render's end)."""
     job = prepared.lit()
     if isinstance(job.route, PlateRoute):  # a plate too large for memory records on Dask
         job = replace(job, route=replace(job.route, scheduler=scheduler()))
-    return worker.Worker(job, **worker_options())
+    return worker.Worker(job, resident=resident, **worker_options())
 
 
-def run(prepared: Prepared, progress: jobs.Progress = None, on_log=None) -> Result:
+def release() -> None:
+    """The render has ended: the worker process kept between its frames ends, and the plate
+    it held is freed."""
+    worker.release()
+
+
+def run(prepared: Prepared, progress: jobs.Progress = None, on_log=None, *,
+        resident: bool = False) -> Result:
     """Run the job in a worker process and wait for it, unless its pass can be reused
     (:func:`cached_pass`). ``progress`` may raise :class:`holo_core.jobs.Cancelled` (the
     worker is killed); a failed worker raises :class:`holo_core.worker.WorkerError` with
-    its reason."""
+    its reason. ``resident``: as :func:`start`'s."""
     cached = cached_pass(prepared)
     if cached is not None:
         return cached
-    return start(prepared).wait(progress, on_log)
+    return start(prepared, resident=resident).wait(progress, on_log)
 
 
 def cached_pass(prepared: Prepared) -> Result | None:

@@ -134,11 +134,12 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                               subtype="DISTANCE", unit="LENGTH",
                               description="Recording wavelength (0: chosen for the image's "
                                           "resolution)")
-    iterations: IntProperty(name="Iterations", default=4, min=1, max=64,
+    iterations: IntProperty(name="Iterations", default=2, min=1, max=64,
                             description="Looks of the plate, averaged against speckle "
                                         "(Sect. VII-E): 2 or a square number are coded looks "
                                         "whose neighbouring emitters' cross terms cancel; "
-                                        "others use independent random phases")
+                                        "others use independent random phases. Each look "
+                                        "adds to the recording and to every frame's view")
     supersample: IntProperty(name="Supersample", default=2, min=1, max=4,
                              description="Render at this multiple of the resolution, then "
                                          "low-pass and downsample")

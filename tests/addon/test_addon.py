@@ -276,9 +276,9 @@ def test_animation_renders_a_pass_per_frame(empty_scene, tmp_path):
     scene.render.filepath = str(tmp_path / "frame_")
     recorded = []
     original = pipeline.run
-    def run(job, progress=None, on_log=None):
+    def run(job, progress=None, on_log=None, **kw):
         recorded.append(job.records)
-        return original(job, progress, on_log)
+        return original(job, progress, on_log, **kw)
     pipeline.run = run
     try:
         bpy.ops.render.render(animation=True)
@@ -411,8 +411,8 @@ def test_a_killed_worker_is_reported_and_earlier_files_stay(empty_scene, monkeyp
     _, earlier = _earlier_outputs(empty_scene, size=(160, 120), iterations=8)
     start = pipeline.start
 
-    def start_then_kill(job):  # killed once it reports work under way (not by a clock: the
-        w = start(job)          # job may take less than any fixed delay)
+    def start_then_kill(job, **kw):  # killed once it reports work under way (not by a clock: the
+        w = start(job, **kw)    # job may take less than any fixed delay)
         translate = w._translate
 
         def kill_at_work(msg):

@@ -76,11 +76,19 @@ def _render_range(scene, start, end, folder, tmp_path):
 
 
 def test_three_frames_as_one_animation_or_separate_frames_give_identical_passes(
-        empty_scene, tmp_path):
+        empty_scene, tmp_path, monkeypatch):
     """A cube and the camera both move; ``-a`` over frames 1-3 and three single-frame runs
     (as a farm splits them) give bit-identical passes, each where the camera projects that
-    frame's cube (within half a pixel), and each frame's composite shows its own pass."""
+    frame's cube (within half a pixel), and each frame's composite shows its own pass. The
+    animation's frames share one worker process, which holds the plate between them (so the
+    identical passes also say that the plate held equals the plate read), and it ends with
+    the render."""
     from holo_addon.render import pipeline
+    from holo_core import worker
+    started = []
+    process = worker._Process.__init__
+    monkeypatch.setattr(worker._Process, "__init__",
+                        lambda self, env: (started.append(1), process(self, env))[-1])
     scene = empty_scene
     # a zone that holds the camera's 10 cm move with room for its pinhole pupil (the widest
     # its defocus allows, 34 cm here)
@@ -91,7 +99,9 @@ def test_three_frames_as_one_animation_or_separate_frames_give_identical_passes(
     scene.frame_set(1)
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
     assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    started.clear()
     _render_range(scene, 1, 3, tmp_path / "all", tmp_path)
+    assert started == [1] and worker._resident is None, "the frames did not share a worker"
     for frame in (3, 1, 2):  # separate runs, in any order, from wherever the timeline rests
         _render_range(scene, frame, frame, tmp_path / "single", tmp_path)
     corners = np.array([(x, y, z) for x in (-0.2, 0.2) for y in (-0.2, 0.2) for z in (-0.2, 0.2)])
@@ -208,7 +218,7 @@ def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monke
     monkeypatch.setattr(session, "exit_on_failure", False)
     original = pipeline.run
 
-    def broken(job, progress=None, on_log=None):
+    def broken(job, progress=None, on_log=None, **_):
         raise WorkerError("a crash in native code")
     monkeypatch.setattr(pipeline, "run", broken)
     assert pipeline.pass_file(pipeline.output_dir(scene), 1).is_file()  # the stale pass
@@ -246,7 +256,7 @@ def test_after_save_as_a_failed_pass_never_composites_the_old_folders(
     monkeypatch.setattr(session, "exit_on_failure", False)
     original = pipeline.run
 
-    def broken(job, progress=None, on_log=None):
+    def broken(job, progress=None, on_log=None, **_):
         raise WorkerError("a crash in native code")
     monkeypatch.setattr(pipeline, "run", broken)
     scene.render.filepath = str(tmp_path / "failed.exr")
@@ -286,7 +296,7 @@ def in_background(script: str, tmp_path):
                            str(tmp_path)], capture_output=True, text=True, timeout=600,
                           check=False)
 FAILING_FARM_RENDER = BACKGROUND_SCENE + """from holo_addon.render import pipeline
-def broken(job, progress=None, on_log=None):
+def broken(job, progress=None, on_log=None, **_):
     raise RuntimeError("the worker failed")
 pipeline.run = broken
 scene.render.filepath = sys.argv[3] + "/frame_"
@@ -316,9 +326,9 @@ def test_renders_use_render_modifier_levels(empty_scene, tmp_path, monkeypatch):
     seen = []
     original = pipeline.run
 
-    def run(job, progress=None, on_log=None):
+    def run(job, progress=None, on_log=None, **kw):
         seen.append(sum(len(m.triangles) for m in job.job.points))
-        return original(job, progress, on_log)
+        return original(job, progress, on_log, **kw)
     monkeypatch.setattr(pipeline, "run", run)
     scene.render.filepath = str(tmp_path / "f12.exr")
     bpy.ops.render.render(write_still=True)
@@ -336,12 +346,12 @@ def test_the_pass_of_a_render_can_be_cancelled(empty_scene, tmp_path, monkeypatc
     scene.holo.exposure = 1.0                      # the pass is out of date: the worker runs
     original, clicked = pipeline.run, []
 
-    def run(job, progress=None, on_log=None):
+    def run(job, progress=None, on_log=None, **kw):
         def user(fraction):
             if not clicked:                        # the user clicks while it runs
                 clicked.append(bpy.ops.holo.cancel_pass())
             progress(fraction)
-        return original(job, user, on_log)
+        return original(job, user, on_log, **kw)
     monkeypatch.setattr(pipeline, "run", run)
     scene.render.filepath = str(tmp_path / "cancelled.exr")
     bpy.ops.render.render(write_still=True)

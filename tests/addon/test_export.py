@@ -246,9 +246,9 @@ def test_a_state_recorded_before_is_not_recorded_again(empty_scene, monkeypatch)
     recorded = []
     original = pipeline.run
 
-    def run(job, progress=None, on_log=None):
+    def run(job, progress=None, on_log=None, **kw):
         recorded.append(job.records)
-        return original(job, progress, on_log)
+        return original(job, progress, on_log, **kw)
     monkeypatch.setattr(pipeline, "run", run)
     paths = []
     for iterations in (1, 2, 1):

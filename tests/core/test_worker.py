@@ -206,3 +206,82 @@ def test_a_plates_iterations_are_coded_looks_of_one_seed(tmp_path):
     with pytest.raises(InputError, match="code applies to plates of meshes"):
         record_hologram((np.array([[0.0, 0.0, -1.0]]), np.ones((1, 3))), plate=j.route.plate,
                         resolution=64, code=(1, 2))
+
+
+def _moved(j, frame, x):
+    """``j`` as frame ``frame``, its camera moved to ``x`` [m] and the plate read, not
+    recorded."""
+    cam = dataclasses.replace(j.camera, matrix_world=look_at((x, -3.0, 0), (0, 0, 0),
+                                                             up=(0, 0, 1)))
+    return dataclasses.replace(j, camera=cam, route=dataclasses.replace(j.route, record=False),
+                               output=dataclasses.replace(j.output, frame=frame))
+
+
+def test_a_resident_worker_renders_the_next_frames_from_the_plate_it_holds(tmp_path):
+    """A render's frames in the process kept between them: the first records the plate, the
+    next render from it held in memory (said in the log; the same process), each pass equal
+    bit for bit to a fresh worker's that reads the files; a plate file written again since
+    is read again; release() ends the process."""
+    first = job(tmp_path, iterations=2)
+    logs = []
+    try:
+        worker.run(first, resident=True)
+        pid = worker._resident.popen.pid
+        frames = [_moved(first, 2, 0.05), _moved(first, 3, -0.05)]
+        for j in frames:
+            kept = worker.run(j, on_log=lambda *r: logs.append(r[1]), resident=True)
+            fresh = worker.run(dataclasses.replace(j, output=dataclasses.replace(
+                j.output, folder=tmp_path / "fresh")))
+            a, b = _pass(kept.pass_path), _pass(fresh.pass_path)
+            assert all(np.array_equal(a[k], b[k]) for k in a), "the held plate's view differs"
+        assert worker._resident.popen.pid == pid, "a frame started a process of its own"
+        assert sum("held in memory from the job before: 2 of 2" in t for t in logs) == 2, logs
+        # the plate recorded again (another seed) by another process: read again
+        again = dataclasses.replace(first, route=dataclasses.replace(first.route, seed=7),
+                                    output=dataclasses.replace(first.output, render=False))
+        runner.run(again)
+        logs.clear()
+        kept = worker.run(frames[0], on_log=lambda *r: logs.append(r[1]), resident=True)
+        fresh = worker.run(dataclasses.replace(frames[0], output=dataclasses.replace(
+            frames[0].output, folder=tmp_path / "fresh")))
+        assert not any("held in memory" in t for t in logs), logs
+        a, b = _pass(kept.pass_path), _pass(fresh.pass_path)
+        assert all(np.array_equal(a[k], b[k]) for k in a), "the rewritten plate was not read"
+        process = worker._resident.popen
+    finally:
+        worker.release()
+    assert process.poll() is not None and worker._resident is None
+
+
+def test_a_cancelled_resident_job_ends_its_process_and_the_next_starts_afresh(tmp_path):
+    j = job(tmp_path, resolution=(320, 240), iterations=3)
+    try:
+        w = worker.Worker(j, resident=True)
+        while not any(kind == "progress" for kind, _ in w.poll(timeout=0.1)):
+            assert not w.finished, "the worker ended before its first progress report"
+        w.cancel()
+        assert w.process.returncode == -signal.SIGKILL and worker._resident is None
+        result = worker.run(job(tmp_path / "next"), resident=True)
+        assert result.pass_path.is_file() and worker._resident.popen.poll() is None
+    finally:
+        worker.release()
+
+
+def test_a_serving_worker_ends_when_its_parent_goes_or_it_is_left_idle(tmp_path):
+    """Its stdin closed (the parent ended) or no job for the idle time: it ends, freeing what
+    it held."""
+    import subprocess
+    import sys
+    env = worker.environment()
+    for code, close in (("runner.serve()", True), ("runner.serve(idle=0.5)", False)):
+        p = subprocess.Popen([sys.executable, "-c", f"from holo_core import runner; {code}"],
+                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env)
+        if close:
+            p.stdin.close()
+        try:
+            assert p.wait(timeout=20) == 0
+        finally:
+            p.kill()
+            p.wait()
+            for stream in (p.stdin, p.stdout):
+                stream.close()
