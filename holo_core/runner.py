@@ -323,9 +323,6 @@ class _Forward(logging.Handler):
         self.send({"log": [record.levelno, record.getMessage()]})
 
 
-IDLE_SECONDS = 600.0  # a serving worker left this long without a job ends (its plate freed)
-
-
 def _channel():
     """``send(message)``: one JSON line to the parent on the process's stdout; anything else
     printed, by Python or a driver, goes to stderr from here on. The core's log records are
@@ -373,12 +370,12 @@ def main(folder: str) -> int:
     return 0 if _job(Path(folder), _channel(), None) else 1
 
 
-def serve(idle: float = IDLE_SECONDS) -> int:
-    """The worker of many jobs: each line of stdin names a job's folder, run in turn (as
-    :func:`main` runs one), the plate's holograms kept in memory between them
-    (:class:`KeptPlates`). It ends when stdin closes (the parent ended, or has no more), when
-    no job came for ``idle`` seconds, or after a job failed (a driver's state after an error
-    is not trusted with the next)."""
+def serve(idle: float) -> int:
+    """The worker of many jobs (``python -m holo_core.runner --serve IDLE``): each line of
+    stdin names a job's folder, run in turn (as :func:`main` runs one), the plate's
+    holograms kept in memory between them (:class:`KeptPlates`). It ends when stdin closes
+    (the parent ended, or has no more), when no job came for ``idle`` seconds, or after a
+    job failed (a driver's state after an error is not trusted with the next)."""
     send, kept = _channel(), KeptPlates()
     lines: queue.SimpleQueue = queue.SimpleQueue()
 
@@ -402,4 +399,5 @@ def serve(idle: float = IDLE_SECONDS) -> int:
 
 if __name__ == "__main__":  # run as the package's module, so that its log records are the
     from holo_core import runner  # core's ("holo_core.runner", not "__main__") and reach the parent
-    sys.exit(runner.serve() if sys.argv[1:] == ["--serve"] else runner.main(sys.argv[1]))
+    sys.exit(runner.serve(float(sys.argv[2])) if sys.argv[1] == "--serve" else
+             runner.main(sys.argv[1]))

@@ -29,6 +29,7 @@ import subprocess
 import sys
 import tempfile
 import threading
+import time
 from pathlib import Path
 
 from . import jobs
@@ -80,7 +81,7 @@ class _Process:
     """A worker process (``python -m holo_core.runner --serve``) and the reader of its stdout.
 
     It runs the job folders written to its stdin one after another, and ends when its stdin
-    closes, when it is left idle (the runner's ``IDLE_SECONDS``) or after a failed job. Its
+    closes, when it is left idle (``IDLE_SECONDS``) or after a failed job. Its
     stderr goes to a file of its own folder (the last line explains a death)."""
 
     def __init__(self, env: dict):
@@ -88,12 +89,13 @@ class _Process:
         self.folder = Path(tempfile.mkdtemp(prefix="holo-process-"))
         self.stderr = open(self.folder / "stderr.txt", "w+b")
         self.popen = subprocess.Popen(
-            [sys.executable, "-m", "holo_core.runner", "--serve"],
+            [sys.executable, "-m", "holo_core.runner", "--serve", str(IDLE_SECONDS)],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.stderr,
             env=env, cwd=self.folder,
             start_new_session=os.name == "posix")  # its group: the renderer it runs dies too
         self.messages: queue.SimpleQueue = queue.SimpleQueue()
         self.busy = False
+        self.idle_since = time.monotonic()
         threading.Thread(target=self._read, daemon=True, name="holo-worker-reader").start()
 
     def _read(self):
@@ -105,8 +107,11 @@ class _Process:
                     pass
         self.messages.put(None)  # end of output: the process has ended or is ending
 
-    def alive(self) -> bool:
-        return self.popen.poll() is None
+    def ready(self) -> bool:
+        """Alive, and idle for too short a time to be ending (it ends after IDLE_SECONDS
+        without a job: one handed over just then could be lost)."""
+        fresh = time.monotonic() - self.idle_since < IDLE_SECONDS - IDLE_GRACE
+        return fresh and self.popen.poll() is None
 
     def submit(self, folder: Path, *, last: bool) -> None:
         """Hand it the job in ``folder``; ``last``: close its stdin (it ends after this
@@ -150,6 +155,8 @@ class _Process:
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
+IDLE_SECONDS = 600  # a serving worker left this long without a job ends (its plate freed)
+IDLE_GRACE = 60     # ... and is not handed a job in its last minute
 # the process kept between jobs (resident=True)
 _resident: _Process | None = None
 _resident_lock = threading.Lock()
@@ -166,7 +173,7 @@ def _process(env: dict, resident: bool) -> _Process:
         kept = _resident
         if kept is not None and kept.busy:
             return _Process(env)
-        if kept is not None and (kept.env != env or not kept.alive()):
+        if kept is not None and (kept.env != env or not kept.ready()):
             kept.close()
             kept = None
         if kept is None:
@@ -200,7 +207,7 @@ class Worker:
     keeps the plate's holograms it read or recorded in memory, with its OpenCL programs and
     FFT plans: the next frame of a shot renders from them, where a fresh process would read
     the plate's files again. The process lives until :func:`release`, until it is idle for
-    the runner's ``IDLE_SECONDS``, or until this process ends; a cancelled or failed job ends
+    ``IDLE_SECONDS``, or until this process ends; a cancelled or failed job ends
     it (the next starts a fresh one).
     """
 
@@ -217,6 +224,8 @@ class Worker:
         try:
             self._server.submit(self.folder, last=not self._resident)
         except OSError:  # the kept process ended as it was handed the job: a fresh one
+            if not self._resident:
+                raise
             release()
             self._server, self._resident = _process(env, False), False
             self._server.submit(self.folder, last=True)
@@ -310,6 +319,7 @@ class Worker:
             shutil.rmtree(self._scratch, ignore_errors=True)
         if self._resident and not kill:
             self._server.busy = False
+            self._server.idle_since = time.monotonic()
         elif self._resident:
             release()
         else:

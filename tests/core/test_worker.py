@@ -273,7 +273,7 @@ def test_a_serving_worker_ends_when_its_parent_goes_or_it_is_left_idle(tmp_path)
     import subprocess
     import sys
     env = worker.environment()
-    for code, close in (("runner.serve()", True), ("runner.serve(idle=0.5)", False)):
+    for code, close in (("runner.serve(idle=600)", True), ("runner.serve(idle=0.5)", False)):
         p = subprocess.Popen([sys.executable, "-c", f"from holo_core import runner; {code}"],
                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env)
         if close:
@@ -285,3 +285,16 @@ def test_a_serving_worker_ends_when_its_parent_goes_or_it_is_left_idle(tmp_path)
             p.wait()
             for stream in (p.stdin, p.stdout):
                 stream.close()
+
+
+def test_a_resident_worker_near_its_idle_end_is_not_handed_a_job(tmp_path):
+    """A kept process idle for nearly IDLE_SECONDS may be ending on its own: the next job
+    goes to a fresh one, and the old one is closed."""
+    try:
+        worker.run(job(tmp_path / "a"), resident=True)
+        old = worker._resident
+        old.idle_since -= worker.IDLE_SECONDS - worker.IDLE_GRACE
+        worker.run(job(tmp_path / "b"), resident=True)
+        assert worker._resident is not old and old.popen.poll() is not None
+    finally:
+        worker.release()
