@@ -7,7 +7,7 @@ towards +z; fields are exp(+ikr) waves (time dependence exp(-iωt)); arrays are 
 
 from .lazy import lazy_names
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 _API = {"Camera": ".scene", "look_at": ".scene", "Plate": ".scene", "ViewingZone": ".scene",
         "Hologram": ".scene",
