@@ -194,17 +194,22 @@ __kernel void spread(__global float2 *out, int grid_h, int grid_w, int row_first
 }
 
 /* U (P, h, w) += the (2h, 2w) grid's transform at the pupil's samples (FFT order),
- * deapodized (1 / (dr·dc)), times the layer's curvature exp(ik(√(ρ² + z²) - z)) and scale:
- * plane u0 + ch of U from plane g0 + ch of the grids */
-__kernel void pupil_layer(__global float2 *u, __global const float2 *g, int h, int w, int u0,
-                          int g0, __global const float *dr, __global const float *dc, float dy,
-                          float dx, float k, float z, float scale)
+ * deapodized (1 / (dr·dc)), times the layer's curvature exp(ik(√(ρ² + z²) - z)) and scale,
+ * for the n planes of one wavelength: plane pairs[i].x of U from plane pairs[i].y of the
+ * grids (the curvature found once for all of them) */
+__kernel void pupil_layer(__global float2 *u, __global const float2 *g, int h, int w,
+                          __global const int2 *pairs, int n, __global const float *dr,
+                          __global const float *dc, float dy, float dx, float k, float z,
+                          float scale)
 {
-    int c = get_global_id(0), r = get_global_id(1), ch = get_global_id(2);
+    int c = get_global_id(0), r = get_global_id(1);
     int sr = r < (h + 1) / 2 ? r : r - h, sc = c < (w + 1) / 2 ? c : c - w;
     int gr = sr < 0 ? sr + 2 * h : sr, gc = sc < 0 ? sc + 2 * w : sc;
     float y = sr * dy, x = sc * dx, rho2 = x * x + y * y;
     float curve = k * rho2 / (sqrt(rho2 + z * z) + z);
-    float2 val = g[((long)(g0 + ch) * 2 * h + gr) * 2 * w + gc] * (scale / (dr[r] * dc[c]));
-    u[((long)(u0 + ch) * h + r) * w + c] += cmul(val, cexpi(curve));
+    float2 turn = cexpi(curve) * (scale / (dr[r] * dc[c]));
+    for (int i = 0; i < n; i++) {
+        int2 p = pairs[i];
+        u[((long)p.x * h + r) * w + c] += cmul(g[((long)p.y * 2 * h + gr) * 2 * w + gc], turn);
+    }
 }

@@ -460,6 +460,13 @@ class _Gather:
         if self.hi[0] < self.lo[0] or self.hi[1] < self.lo[1]:
             return
         spread = rt.scratch("carrier-spread", (planes,) + grid_shape)
+        # each wavelength's (plane of out, plane of the grids): its curvature found once
+        planes_by_wavelength = {}
+        for first, to, n, wavelength in runs:
+            planes_by_wavelength.setdefault(wavelength, []).extend(
+                (to + i, first + i) for i in range(n))
+        planes_by_wavelength = {lam: rt.to_device(np.array(p, np.int32))
+                                for lam, p in planes_by_wavelength.items()}
         for z, weight in self._layers(min(run[3] for run in runs)):
             spread.fill(0)
             rt.kernel(PROGRAM, "spread", options)(
@@ -470,11 +477,11 @@ class _Gather:
                 np.int32(self.cells[1]), np.float32(scale), es.data)
             # every plane in place; only the pupil's columns are read (pupil_layer)
             rt.fft.backward(spread, read=[(0, (ww + 1) // 2), (2 * ww - ww // 2, 2 * ww)])
-            for first, to, n, wavelength in runs:
+            for wavelength, pairs in planes_by_wavelength.items():
                 dy, dx = wavelength / (hh * view.bin), wavelength / (ww * view.bin)
                 rt.kernel(PROGRAM, "pupil_layer", ())(
-                    rt.queue, (ww, hh, n), None, out.data, spread.data, np.int32(hh),
-                    np.int32(ww), np.int32(to), np.int32(first), self.deapod[0].data,
+                    rt.queue, (ww, hh), None, out.data, spread.data, np.int32(hh),
+                    np.int32(ww), pairs.data, np.int32(pairs.shape[0]), self.deapod[0].data,
                     self.deapod[1].data, np.float32(dy), np.float32(dx),
                     np.float32(2 * math.pi / wavelength), np.float32(z),
                     np.float32(1 / wavelength))
