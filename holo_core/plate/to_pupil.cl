@@ -11,7 +11,7 @@
  * spread: the type-1 non-uniform FFT's gather: each point (row, col) of the 2× oversampled
  *     spectrum grid sums the samples within ES_TAPS/2 of it (their grid coordinates gy, gx),
  *     weighted by the ES kernel (its table es: value and slope per interval), finding them in
- *     the cells of the grid they are listed by.
+ *     the cells of the grid they are listed by (a row of cells is one run of the list).
  */
 #include "holo_complex.h"
 
@@ -179,9 +179,8 @@ __kernel void spread(__global float2 *out, int grid_h, int grid_w, int row_first
     float2 sum[CHANNELS];
     for (int ch = 0; ch < CHANNELS; ch++)
         sum[ch] = 0;
-    for (int ci = ci0; ci <= ci1; ci++)
-    for (int cj = cj0; cj <= cj1; cj++)
-    for (int m = start[ci * cells_w + cj], m1 = start[ci * cells_w + cj + 1]; m < m1; m++) {
+    for (int ci = ci0; ci <= ci1; ci++)  /* a row's cells cj0..cj1 are one run of the list */
+    for (int m = start[ci * cells_w + cj0], m1 = start[ci * cells_w + cj1 + 1]; m < m1; m++) {
         float dy = gy[m] - gr, dx = gx[m] - gc;
         if (fabs(dy) >= 0.5f * ES_TAPS || fabs(dx) >= 0.5f * ES_TAPS)
             continue;
