@@ -238,14 +238,15 @@ def assemble(radiance, coverage, cross, *, camera: Camera, supersample: int, wav
         floor = COVERAGE_FLOOR
     # the surfaces' own colour: radiance over coverage (what the pass stores premultiplied
     # by alpha); the colour and the partner share their speckle, which this divides out
-    colour = radiance / np.maximum(coverage, floor)[..., None] * exposure
+    colour = radiance / np.maximum(coverage, floor)[..., None] * np.float32(exposure)
     ray = from_cross_spectrum(downsample(cross, s), wavelengths=tuple(wavelengths),
                               centre=centre)
     tx, ty = camera.pixel_tangents()
     planar = ray / np.sqrt(1 + tx * tx + ty * ty)
     depth = np.where(alpha > 0, planar, BACKGROUND_DEPTH).astype(np.float32)
-    return (colour.astype(np.float32), alpha, depth, (radiance * exposure).astype(np.float32),
-            coverage.astype(np.float32))
+    f32 = np.float32  # images of float32 looks stay float32, uncopied (0.04 s at 1280×720)
+    return (colour.astype(f32, copy=False), alpha, depth,
+            (radiance * f32(exposure)).astype(f32, copy=False), coverage.astype(f32, copy=False))
 
 
 def pupil_grid_bytes(shape) -> float:
