@@ -1,12 +1,14 @@
 """The worker process's side: :func:`run` makes a :class:`~holo_core.job.Job`'s pass (and a
-plate's holograms), dispatching on its route, and :func:`main` is the process
-(``python -m holo_core.runner FOLDER``, started by :class:`holo_core.worker.Worker`).
+plate's holograms), dispatching on its route; :func:`serve` is the process
+(``python -m holo_core.runner --serve IDLE``, started by :class:`holo_core.worker.Worker`),
+which runs the job folders named on its stdin in turn, holding the plate between them
+(:class:`KeptPlates`), and :func:`main` runs one (``python -m holo_core.runner FOLDER``).
 
-The process reads the job's plain data from ``FOLDER/job.pickle`` (checked again as it
-becomes a Job: the child trusts nothing it is handed), reports progress and log records as
-JSON lines on its stdout, writes its outputs atomically once every stage has finished, and
-leaves its :class:`~holo_core.job.Result` in ``FOLDER/result.pickle``. This module loads the
-OpenCL driver; the parent never imports it.
+For each job the process reads its plain data from ``FOLDER/job.pickle`` (checked again as
+it becomes a Job: the child trusts nothing it is handed), reports progress and log records
+as JSON lines on its stdout, writes its outputs atomically once every stage has finished,
+and leaves its :class:`~holo_core.job.Result` in ``FOLDER/result.pickle``. This module loads
+the OpenCL driver; the parent never imports it.
 """
 
 from __future__ import annotations
