@@ -8,6 +8,9 @@
  * seen_from: one work item per emitter: its direction and planar depth from the pupil, and the
  *     depth test against the buffer, bilinear between the four bins around its direction,
  *     with a slack for its surface's slope (bias_bins bins of it, plus bias_depth of the depth).
+ *     The emitter comes as its offset from the zone's centre and its surface's normal; the
+ *     pupil as its offset (ex, ey) from the centre in the zone's plane and the camera axes
+ *     (rotation's columns), so the host hands the emitters over once for every pupil.
  */
 
 __kernel void depth_raster(__global int *zbuf, int h, int w, float b,
@@ -53,16 +56,23 @@ __kernel void depth_raster(__global int *zbuf, int h, int w, float b,
 
 __kernel void seen_from(__global float *seen, int point, __global const float *zbuf, int h,
                         int w, float b, __global const float *px, __global const float *py,
-                        __global const float *pz, __global const float *slope,
-                        float bias_bins, float bias_depth, int emitters)
+                        __global const float *pz, __global const float *nx,
+                        __global const float *ny, __global const float *nz, float ex, float ey,
+                        __constant float *axes, float max_slope, float bias_bins,
+                        float bias_depth, int emitters)
 {
     int e = get_global_id(0);
     if (e >= emitters)
         return;
-    float x = px[e], y = py[e], z = pz[e];          /* camera axes, relative to the pupil */
+    float3 p = (float3)(px[e] - ex, py[e] - ey, pz[e]);  /* from the pupil, plate's axes */
+    float x = p.x * axes[0] + p.y * axes[3] + p.z * axes[6];  /* ... along the camera's */
+    float y = p.x * axes[1] + p.y * axes[4] + p.z * axes[7];   /* (the rotation's columns) */
+    float z = p.x * axes[2] + p.y * axes[5] + p.z * axes[8];
     float dist = sqrt(x * x + y * y + z * z), depth = -z;
+    float cosine = fabs(nx[e] * p.x + ny[e] * p.y + nz[e] * p.z) / dist;
+    float slope = fmin(sqrt(fmax(1 - cosine * cosine, 0.0f)) / fmax(cosine, 1e-9f), max_slope);
     float kx = -x / dist / b, ky = -y / dist / b;
-    float bias = (bias_bins * b * slope[e] + bias_depth) * depth;
+    float bias = (bias_bins * b * slope + bias_depth) * depth;
     int x0 = (int)floor(kx), y0 = (int)floor(ky);
     float fx = kx - x0, fy = ky - y0, acc = 0;
     for (int dy = 0; dy < 2; dy++)

@@ -134,6 +134,10 @@ def visibility(meshes, position, normal, zone: ViewingZone, rotation, spacing, g
     tri = rt.to_device(triangles.astype(np.int32))
     n = len(position)
     seen = rt.to_device(np.zeros(g[0] * g[1] * max(n, 1), np.float32))
+    # the emitters from the zone's centre, and their normals, handed over once for all pupils
+    offsets = [rt.to_device(a, np.float32) for a in (np.asarray(position, np.float64) - centre).T]
+    normals = [rt.to_device(a, np.float32) for a in np.asarray(normal, np.float64).T]
+    axes = rt.to_device(np.asarray(rotation, np.float64).ravel(), np.float32)  # its rows
     for iy, y in enumerate(ys):
         for ix, x in enumerate(xs):
             eye = centre + (x, y, 0.0)
@@ -147,17 +151,11 @@ def visibility(meshes, position, normal, zone: ViewingZone, rotation, spacing, g
                 np.float32(spacing), rt.to_device(t[:, 0], np.float32).data,
                 rt.to_device(t[:, 1], np.float32).data, rt.to_device(d, np.float32).data,
                 tri.data, np.int32(len(triangles)))
-            local = (position - eye) @ rotation
-            toward = eye - position
-            dist = np.linalg.norm(toward, axis=1)
-            cos = np.abs(np.sum(normal * toward, 1)) / dist
-            slope = np.minimum(np.sqrt(np.clip(1 - cos * cos, 0, None)) / np.maximum(cos, 1e-9),
-                               MAX_SLOPE)
             rt.kernel(PROGRAM, "seen_from")(
                 rt.queue, (max(n, 1),), None, seen.data, np.int32(iy * g[1] + ix), zbuf.data,
-                np.int32(h), np.int32(w), np.float32(spacing),
-                *(rt.to_device(local[:, i], np.float32).data for i in range(3)),
-                rt.to_device(slope, np.float32).data, np.float32(BIAS_BINS),
+                np.int32(h), np.int32(w), np.float32(spacing), *(a.data for a in offsets),
+                *(a.data for a in normals), np.float32(x), np.float32(y), axes.data,
+                np.float32(MAX_SLOPE), np.float32(BIAS_BINS),
                 np.float32(BIAS_DEPTH), np.int32(n))
     step = lambda a: float(a[1] - a[0]) if len(a) > 1 else 1.0  # noqa: E731
     table = read(seen)[:g[0] * g[1] * n].reshape(g[0], g[1], n).transpose(2, 0, 1)
