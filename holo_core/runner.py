@@ -79,7 +79,8 @@ def run(job: Job, progress: jobs.Progress = None, on_partial=None, *,
                                  seed=route.seed, progress=progress,
                                  via=SPECKLE[route.speckle], on_sample=sample)
         else:
-            view, recorded = _plate(job, progress, kept or KeptPlates(hold=False))
+            view, recorded = _plate(job, progress,
+                                    KeptPlates(hold=False) if kept is None else kept)
         path = None if view is None else _write_pass(job, view, lit)
     report = Report.of(view, warnings=tuple(dict.fromkeys(heard.texts)),
                        seconds=time.perf_counter() - start, radiance_seconds=lit)

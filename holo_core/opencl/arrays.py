@@ -200,15 +200,6 @@ def cached(rt, key, make):
     return lru[key]
 
 
-def copy_plane(dst, src, plane: int, *, into: bool = False) -> None:
-    """Copy plane ``plane`` of a (P, H, W) device stack ``src`` into the (H, W) device array
-    ``dst`` (``into``: the (H, W) ``src`` into plane ``plane`` of the stack ``dst``)."""
-    rt_queue = (src if into else dst).queue
-    nbytes = (src if into else dst).nbytes
-    offsets = {"dst_offset": plane * nbytes} if into else {"src_offset": plane * nbytes}
-    cl.enqueue_copy(rt_queue, dst.data, src.data, byte_count=nbytes, **offsets)
-
-
 def upload_window(dst, host, planes, row0: int, col0: int) -> None:
     """Copy the window of rows ``row0`` … and columns ``col0`` … of ``host`` (C, H, W) (a
     C-contiguous NumPy array), its planes ``planes`` (a sequence of indices), into the device

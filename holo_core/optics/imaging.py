@@ -64,7 +64,6 @@ class PupilImage:
     def __init__(self, rt, shape, *, bin: float, camera: Camera, centre=(0.0, 0.0)):
         self.rt = rt
         h, w = self.shape = tuple(shape)
-        self.padded = empty(rt, (2 * h, 2 * w))
         self.apod = [rt.to_device(1 / es_transform(grid.signed_indices(n) / (2 * n), TAPS),
                                   np.float32) for n in (h, w)]
         self.es = cached_array(rt, "es-table", es_table, TAPS)
@@ -96,20 +95,27 @@ class PupilImage:
                        lens_k=lens_k)
         u, v, pixels = self._directions()
         rt.kernel(PROGRAM, "read_pixels", self.options)(
-            rt.queue, (pixels.size,), None, pixels.data, self.padded.data,
+            rt.queue, (pixels.size,), None, pixels.data, self._padded().data,
             np.int32(2 * h), np.int32(2 * w), u.data, v.data, np.float32(scale),
             self.es.data)
         return read(pixels)
 
-    def _spectrum(self, pupil, *, pitch, diameter, focus, taper, lens_k) -> None:
-        """``padded``: the spectrum of ``pupil`` through the iris and the lens (:meth:`image`)."""
+    def _padded(self):
+        """The (2h, 2w) spectrum :meth:`image` reads (only it: :meth:`fold` has a stack)."""
         h, w = self.shape
+        return self.rt.scratch("pupil-padded", (2 * h, 2 * w))
+
+    def _spectrum(self, pupil, *, pitch, diameter, focus, taper, lens_k) -> None:
+        """:meth:`_padded`: the spectrum of ``pupil`` through the iris and the lens
+        (:meth:`image`)."""
+        h, w = self.shape
+        padded = self._padded()
         corners = (grid.embedded(h, 2 * h), grid.embedded(w, 2 * w))
-        self.rt.fft.clear(self.padded, corners)
-        window(self.rt, self.padded, pupil, (h, w), pitch=pitch, radius=diameter / 2,
+        self.rt.fft.clear(padded, corners)
+        window(self.rt, padded, pupil, (h, w), pitch=pitch, radius=diameter / 2,
                taper=taper, k=lens_k or 0.0, focus=focus or 0.0, apodization=self.apod,
                options=self.options)
-        self.rt.fft.forward(self.padded, nonzero=corners)
+        self.rt.fft.forward(padded, nonzero=corners)
 
     def fold(self, pupils, channels, *, same, partner, supersample, diameter, focus=None,
              taper=IRIS_TAPER, keep_fine=False) -> list:

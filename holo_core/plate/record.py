@@ -490,15 +490,15 @@ def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
 
 
 def _record_codes(meshes, *, codes, urls, tile, scheduler, overwrite, dashboard, progress,
-                  **plate) -> list[Hologram]:
-    """The looks ``codes`` of a plate (``plate``: :func:`prepare_plate`'s other arguments) in
-    one pass: in memory, or with ``urls`` tile by tile, a store a look."""
+                  **settings) -> list[Hologram]:
+    """The looks ``codes`` of a plate (``settings``: :func:`prepare_plate`'s other arguments)
+    in one pass: in memory, or with ``urls`` tile by tile, a store a look."""
     if urls is not None:
         from .tiles import record_looks_tiled
         return record_looks_tiled(meshes, urls=list(urls), codes=codes, tile=tile,
                                   scheduler=scheduler, overwrite=overwrite, progress=progress,
-                                  dashboard=dashboard, **plate)
-    return prepare_plate(meshes, codes=codes, **plate).record(progress)
+                                  dashboard=dashboard, **settings)
+    return prepare_plate(meshes, codes=codes, **settings).record(progress)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
