@@ -137,7 +137,10 @@ class Files:
         for folder, dirs, files in os.walk(self.local):  # os.walk never follows links
             for name in dirs + files:
                 path = os.path.join(folder, name)
-                kind = _kind(os.lstat(path).st_mode)
+                try:
+                    kind = _kind(os.lstat(path).st_mode)
+                except FileNotFoundError:  # gone since the listing: a recording's temporary
+                    continue               # file renamed into place (nothing left to refuse)
                 if kind not in ("a folder", "a regular file"):
                     raise self.fail(f"holds {kind} {os.path.relpath(path, self.local)}: a store "
                                     f"holds only folders and regular files, and none is read")
