@@ -15,7 +15,7 @@ time and the peak memory of all its processes, and for each way the frame count 
 the plate costs less than a pass per frame.
 
     python bench/shot.py [--scale 1.0] [--looks 2] [--dolly 0.1] [--supersample 2] [--repeat 3]
-                          [--out DIR]
+                          [--out DIR] [--in-process] [--stages]
 """
 
 import argparse
@@ -26,6 +26,7 @@ import sys
 import tempfile
 import threading
 import time
+from collections import defaultdict
 from dataclasses import replace
 from pathlib import Path
 
@@ -154,6 +155,11 @@ def main():
     p.add_argument("--repeat", type=int, default=3,
                    help="each frame's view and pass timed this many times, the median kept (3)")
     p.add_argument("--out", type=Path, default=None, help="a folder for the frames' PNGs")
+    p.add_argument("--in-process", action="store_true",
+                   help="only the frames in this process: not the add-on's worker frames")
+    p.add_argument("--stages", action="store_true",
+                   help="also one view of the middle frame with the device synchronised "
+                        "around each kernel and transform: where its time goes")
     args = p.parse_args()
     xs = np.linspace(-args.dolly / 2, args.dolly / 2, 3)
     cams = [camera(x, args.scale) for x in xs]
@@ -206,6 +212,52 @@ def main():
     print(f"\na view {view_s:.2f} s = {view_s / cam_s:.2f} x the camera pass ({cam_s:.2f} s), "
           f"the medians of {args.repeat} runs a frame averaged over the frames")
     break_even("in one process (the plate in memory)", record_s, view_s, cam_s)
+    if args.stages:
+        view_stages(plates, cams[1], args.supersample)
+    if not args.in_process:
+        addon_frames(args, cams, meshes, plate)
+    print(f"PSNR {min(r[1] for r in rows):.2f}-{max(r[1] for r in rows):.2f} dB, IoU "
+          f"{min(r[2] for r in rows):.4f}-{max(r[2] for r in rows):.4f}; load at the end "
+          f"{os.getloadavg()[0]:.1f}")
+
+
+def view_stages(plates, cam, supersample) -> None:
+    """One view with the device synchronised around each kernel launch and each transform:
+    the seconds of each, and what is left for the host (and the launches' own cost)."""
+    from functools import partial
+
+    from holo_core.opencl import get_runtime
+    rt = get_runtime()
+    seconds = defaultdict(float)
+
+    def synced(name, f, *a, **kw):
+        rt.queue.finish()
+        t = time.perf_counter()
+        out = f(*a, **kw)
+        rt.queue.finish()
+        seconds[name] += time.perf_counter() - t
+        return out
+
+    def kernel(program, name, options=()):
+        return partial(synced, name, type(rt).kernel(rt, program, name, options))
+
+    fft = rt.fft
+    rt.kernel = kernel  # the instance's attributes shadow the methods until deleted
+    fft.forward, fft.backward = (partial(synced, f"FFT {n}", getattr(fft, n))
+                                 for n in ("forward", "backward"))
+    try:
+        _, total = timed(render_view, plates, cam, supersample=supersample)
+    finally:
+        del rt.kernel, fft.forward, fft.backward
+    print(f"a view's stages, each synchronised ({rt.device.name.strip()}, FFT {fft.name}): "
+          f"{total:.3f} s in all")
+    for name, s in sorted(seconds.items(), key=lambda kv: -kv[1]):
+        print(f"  {name:28s} {s:.4f} s")
+    print(f"  {'host and launches':28s} {total - sum(seconds.values()):.4f} s")
+
+
+def addon_frames(args, cams, meshes, plate) -> None:
+    """The frames as the add-on makes them, and their break-even counts."""
     # the add-on's frames: jobs handed to a worker process. A render's frames share one: its
     # first frame records the plate and writes its files, the next view it held in memory; a
     # farm rendering one frame a Blender starts one a frame, which reads the plate's files
@@ -242,9 +294,6 @@ def main():
           f"each time): {fresh_s:.2f} s a frame ({min(fresh):.2f}-{max(fresh):.2f}); the "
           f"camera pass so: {cam_fresh_s:.2f} s ({min(cam_fresh):.2f}-{max(cam_fresh):.2f})")
     break_even("a worker a frame", first - fresh_s, fresh_s, cam_fresh_s)
-    print(f"PSNR {min(r[1] for r in rows):.2f}-{max(r[1] for r in rows):.2f} dB, IoU "
-          f"{min(r[2] for r in rows):.4f}-{max(r[2] for r in rows):.4f}; load at the end "
-          f"{os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

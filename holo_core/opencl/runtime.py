@@ -218,6 +218,14 @@ class Runtime:
             return 8
         return 16
 
+    @property
+    def series_group(self) -> tuple[int, int] | None:
+        """The work-group shape of the recurrence kernels (the point and zone sums), whose work
+        items each own a tile of lanes x columns: (1, 1) on CPUs, where a work item is one
+        thread running its own vectors; None on GPUs, where the driver packs the items into
+        warps (a group of one would leave 31 of a warp's 32 threads idle)."""
+        return (1, 1) if self.is_cpu else None
+
     @cached_property
     def has_fp64(self) -> bool:
         return _has_fp64(self.device)

@@ -165,7 +165,7 @@ class ZoneSum:
         real = rt.real
         e = win.half_extents
         rt.kernel(PROGRAM, "zone_sum", self.options)(
-            rt.queue, (-(-rows // rt.lanes), -(-cols // SEG)), (1, 1), out.data,
+            rt.queue, (-(-rows // rt.lanes), -(-cols // SEG)), rt.series_group, out.data,
             np.int32(row0), np.int32(col0), np.int32(rows), np.int32(cols),
             *(real(v) for v in (win.pitch, win.row_pitch, win.origin[0], win.origin[1], self.k,
                                 *win.centre)),
