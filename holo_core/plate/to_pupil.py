@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from .. import jobs
-from ..opencl.arrays import host_buffer, upload_window, write
+from ..opencl.arrays import resident, upload_window, write
 from ..opencl.runtime import associated
 from ..propagation import angular_spectrum, grid, tilt
 from ..propagation.angular_spectrum import BAND_EDGE
@@ -325,8 +325,10 @@ class CarrierPupil:
         group = _decimate_group(rt, planes, qx, len(taps_x))
         options = rt.real_options + (f"-DTAPS={len(taps_x)}", f"-DQ={qx}",
                                      f"-DPLANES={planes}", f"-DGROUP={group}")
-        in_place = host_buffer(rt, samples) if getattr(samples, "dtype", None) == \
-            np.complex64 else None  # a CPU device reads the host's samples where they are
+        # a CPU reads the host's samples where they are, a GPU its copy of them, kept between
+        # views
+        in_place = resident(rt, samples) if getattr(samples, "dtype", None) == np.complex64 \
+            else None
         for b0 in range(rr0, rr1, BAND_ROWS):
             b1 = min(b0 + BAND_ROWS, rr1)
             if in_place is not None:

@@ -116,7 +116,8 @@ def test_core_and_physics_tests_never_load_blender(tmp_path):
     r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
                         "-p", "spy", "tests/core/test_validation.py"],
                        cwd=ROOT, capture_output=True, text=True,
-                       env={**os.environ, "PYTHONPATH": str(tmp_path)})
+                       env={**os.environ, "PYTHONPATH": os.pathsep.join(
+                           [str(tmp_path)] + [p for p in [os.environ.get("PYTHONPATH")] if p])})
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     assert (tmp_path / "bpy.txt").read_text() == "False"
 
@@ -153,3 +154,39 @@ def test_a_killed_process_s_cache_lock_is_cleared(tmp_path, monkeypatch):
     os.utime(lock, (old, old))
     runtime.clear_stale_cache_lock()
     assert not lock.exists()
+
+
+def test_a_gpu_keeps_one_copy_of_an_array_it_reads_while_the_array_lives(monkeypatch):
+    """arrays.resident on a device that is not a CPU (a runtime told it is not): the array is
+    copied once and read from the copy, made read-only while the copy is kept, the copy
+    dropped with the array, and the least recently used copy dropped to fit the budget (its
+    array writable again). On a CPU it is the array's own memory."""
+    import gc
+
+    import pyopencl as cl
+
+    from holo_core.opencl import arrays
+
+    rt = runtime.Runtime(choose_device())
+    arrays.resident(rt, np.ones(4, np.complex64))
+    assert "resident" not in rt.cache  # a CPU reads the array itself: no copies kept
+    rt.__dict__["is_cpu"] = False  # the cached property, as on a GPU
+    rng = np.random.default_rng(3)
+    a = (rng.standard_normal((3, 64, 48)) + 1j * rng.standard_normal((3, 64, 48))).astype(
+        np.complex64)
+    buf = arrays.resident(rt, a)
+    assert arrays.resident(rt, a) is buf and not a.flags.writeable
+    back = np.empty_like(a)
+    cl.enqueue_copy(rt.queue, back, buf)
+    assert np.array_equal(back, a)
+    with pytest.raises(ValueError):
+        a[0, 0, 0] = 1
+    monkeypatch.setattr(arrays, "RESIDENT_SHARE", 1.5 * a.nbytes / rt.device.global_mem_size)
+    b = a.copy()
+    b.flags.writeable = True
+    assert arrays.resident(rt, b) is not None
+    assert a.flags.writeable and list(rt.cache["resident"]) == [id(b)]  # a's copy made room
+    del b
+    gc.collect()
+    assert not rt.cache["resident"]  # b's copy went with it
+    assert arrays.resident(rt, np.zeros((6, 64, 48), np.complex64)) is None  # over the budget

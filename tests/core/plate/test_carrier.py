@@ -20,6 +20,7 @@ from accuracy import PHYSICAL_FIELD, rel_err
 from plate_scene import PLATE, camera, meshes
 from zone_reference import carrier_plate, object_wave
 
+from holo_core.opencl import get_runtime
 from holo_core.plate.carrier import demodulate, modulate, physical_field, physical_pitch, window
 from holo_core.plate.reconstruction import reconstruct
 from holo_core.plate.record import look_code, record_looks, record_plate
@@ -149,14 +150,20 @@ def test_a_views_pixels_fold_on_the_device_as_the_fine_images_do_on_the_host(pla
 def test_looks_recorded_together_equal_looks_recorded_alone(looks):
     """record_looks sums every look in one pass (the looks as further channels): each look
     equals record_plate's of its code (2: the checkerboard pair of one seed) or of its own
-    seed (3: independent looks), bit for bit; and its memory budget counts every look."""
+    seed (3: independent looks), bit for bit on a CPU (the kernel's fused multiply-adds are
+    written out); on a GPU, whose compiler may fuse other products when the channels change
+    the kernel's code, within float32 rounding: 1e-5 of the largest sample; and its memory
+    budget counts every look."""
     kw = {"plate": PLATE, "camera": camera("centre", SCALE), "zone_margin": 0.025}
+    exact = get_runtime().is_cpu
     together = record_looks(meshes(), looks=looks, seed=4, **kw)
     assert len(together) == looks
     for k, h in enumerate(together):
         code = look_code(k, looks)
         alone = record_plate(meshes(), seed=4 + (0 if code else k), code=code, **kw)
-        assert np.array_equal(h.object_wave, alone.object_wave), k
+        a, b = h.object_wave, alone.object_wave
+        assert np.array_equal(a, b) if exact else \
+            np.max(np.abs(a - b)) <= 1e-5 * np.max(np.abs(b)), (k, np.max(np.abs(a - b)))
         assert h.carrier == alone.carrier and h.wavelengths == alone.wavelengths
     one = together[0].object_wave.nbytes  # a look recorded alone fits where all do not
     assert len(record_looks(meshes(), looks=1, budget=(2.5 * one, None), **kw)) == 1
