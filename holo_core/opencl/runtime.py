@@ -275,6 +275,20 @@ class Runtime:
             self.cache[key] = cla.empty(self.queue, shape, dtype)
         return self.cache[key]
 
+    def workspace(self, tag: str, shape: tuple[int, ...], dtype=np.complex64) -> cla.Array:
+        """A reusable work array of any shape: one buffer per tag, grown by a quarter more than
+        asked when a call needs more; its content is undefined on return. For arrays whose
+        shape follows the input (a plate view's window follows the camera), where
+        :meth:`scratch` would keep one of each shape: a shot's frames would add one a frame."""
+        dtype = np.dtype(dtype)
+        nbytes = max(int(np.prod(shape)) * dtype.itemsize, 1)
+        key = ("workspace", tag)
+        if key not in self.cache or self.cache[key].size < nbytes:
+            self.cache.pop(key, None)  # the smaller buffer goes before the larger is made
+            self.cache[key] = cl.Buffer(self.context, cl.mem_flags.READ_WRITE,
+                                        nbytes + nbytes // 4)
+        return cla.Array(self.queue, shape, dtype, data=self.cache[key])
+
     def to_device(self, host: np.ndarray, dtype=None) -> cla.Array:
         a = np.ascontiguousarray(host, dtype=dtype)
         return cla.to_device(self.queue, a)

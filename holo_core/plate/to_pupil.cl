@@ -212,3 +212,92 @@ __kernel void pupil_layer(__global float2 *u, __global const float2 *g, int h, i
         u[((long)p.x * h + r) * w + c] += cmul(g[((long)p.y * 2 * h + gr) * 2 * w + gc], turn);
     }
 }
+
+/* The gather's list, made on the device (_Gather in to_pupil.py): each decimated sample's
+ * place on the spectrum grid, its weight and depth (gather_geometry), its cell (gather_keys,
+ * counting each cell's samples), its place in the list: the cells in order, each cell's
+ * samples by their index (gather_place, then gather_sort_cells: the atomic counter places a
+ * cell's few samples in any order, the sort makes the list the same every time), and the
+ * samples' values in the list's order (gather_permute). */
+
+/* sample (i, j) at x = x0 + j·xs, y = y0 + i·ys on the plate: d = P - x; its direction's
+ * cosines along the camera's axes (rot: the rotation's columns, row-major 3x3) less the
+ * pupil's centre, in grid units (2/bin); weight w0/|d|² (Eq. 7 with the samples' area and
+ * d_z); the inverse of its depth along the camera's axis */
+__kernel void gather_geometry(__global float *gy, __global float *gx, __global float *wt,
+                              __global float *inv_depth, int rows, int cols, real x0, real xs,
+                              real y0, real ys, real px, real py, real pz,
+                              __constant real *rot, real cy, real cx, real grid_units, real w0)
+{
+    int j = get_global_id(0), i = get_global_id(1);
+    if (j >= cols || i >= rows)
+        return;
+    real dx = px - (x0 + j * xs), dy = py - (y0 + i * ys), dz = pz;
+    real r2 = dx * dx + dy * dy + dz * dz, r = sqrt(r2);
+    real a0 = dx * rot[0] + dy * rot[3] + dz * rot[6];
+    real a1 = dx * rot[1] + dy * rot[4] + dz * rot[7];
+    real a2 = dx * rot[2] + dy * rot[5] + dz * rot[8];
+    long n = (long)i * cols + j;
+    gx[n] = (float)(grid_units * (a0 / r - cx));
+    gy[n] = (float)(grid_units * (a1 / r - cy));
+    wt[n] = (float)(w0 / r2);
+    inv_depth[n] = (float)(1 / a2);
+}
+
+/* each sample's cell (CELL grid units a side from (lo_y, lo_x), clipped to the cells_h x
+ * cells_w box), and the count of each cell's samples */
+__kernel void gather_keys(__global int *key, __global volatile int *count,
+                          __global const float *gy, __global const float *gx, float lo_y,
+                          float lo_x, int cells_h, int cells_w)
+{
+    int n = get_global_id(0);
+    int ci = clamp((int)((gy[n] - lo_y) * (1.0f / CELL)), 0, cells_h - 1);
+    int cj = clamp((int)((gx[n] - lo_x) * (1.0f / CELL)), 0, cells_w - 1);
+    key[n] = ci * cells_w + cj;
+    atomic_inc(count + ci * cells_w + cj);
+}
+
+__kernel void gather_place(__global int *order, __global volatile int *fill,
+                           __global const int *key, __global const int *start)
+{
+    int n = get_global_id(0), k = key[n];
+    order[start[k] + atomic_inc(fill + k)] = n;
+}
+
+__kernel void gather_sort_cells(__global int *order, __global const int *start)
+{
+    int c = get_global_id(0);
+    for (int m = start[c] + 1, end = start[c + 1]; m < end; m++) {
+        int v = order[m], p = m;
+        for (; p > start[c] && order[p - 1] > v; p--)
+            order[p] = order[p - 1];
+        order[p] = v;
+    }
+}
+
+/* the samples' grid places, weights and inverse depths in the list's order; slot: each
+ * sample's place in the list (where the decimation writes it) */
+__kernel void gather_permute(__global float *at_y, __global float *at_x, __global float *wt_at,
+                             __global float *inv_at, __global int *slot,
+                             __global const int *order, __global const float *gy,
+                             __global const float *gx, __global const float *wt,
+                             __global const float *inv_depth)
+{
+    int m = get_global_id(0), n = order[m];
+    at_y[m] = gy[n];
+    at_x[m] = gx[n];
+    wt_at[m] = wt[n];
+    inv_at[m] = inv_depth[n];
+    slot[n] = m;
+}
+
+/* the weights of depth layer ``layer`` of ``layers``, spaced evenly in 1/depth from lo by
+ * step (the last takes what lies beyond), 0 for the samples of the others */
+__kernel void layer_weights(__global float *out, __global const float *wt,
+                            __global const float *inv_at, float lo, float step, int layers,
+                            int layer)
+{
+    int m = get_global_id(0);
+    int which = clamp((int)floor((inv_at[m] - lo) / step), 0, layers - 1);
+    out[m] = which == layer ? wt[m] : 0.0f;
+}

@@ -168,8 +168,9 @@ def test_a_gpu_keeps_one_copy_of_an_array_it_reads_while_the_array_lives(monkeyp
     from holo_core.opencl import arrays
 
     rt = runtime.Runtime(choose_device())
-    arrays.resident(rt, np.ones(4, np.complex64))
-    assert "resident" not in rt.cache  # a CPU reads the array itself: no copies kept
+    if rt.is_cpu:
+        arrays.resident(rt, np.ones(4, np.complex64))
+        assert "resident" not in rt.cache  # a CPU reads the array itself: no copies kept
     rt.__dict__["is_cpu"] = False  # the cached property, as on a GPU
     rng = np.random.default_rng(3)
     a = (rng.standard_normal((3, 64, 48)) + 1j * rng.standard_normal((3, 64, 48))).astype(
