@@ -254,6 +254,12 @@ def view_stages(plates, cam, supersample) -> None:
     for name, s in sorted(seconds.items(), key=lambda kv: -kv[1]):
         print(f"  {name:28s} {s:.4f} s")
     print(f"  {'host and launches':28s} {total - sum(seconds.values()):.4f} s")
+    import cProfile
+    import pstats
+    profile = cProfile.Profile()
+    profile.runcall(render_view, plates, cam, supersample=supersample)
+    print("the same view's Python functions by their own time (the device not synchronised):")
+    pstats.Stats(profile, stream=sys.stdout).sort_stats("tottime").print_stats(12)
 
 
 def addon_frames(args, cams, meshes, plate) -> None:

@@ -14,6 +14,8 @@ hologram's image of the plate's field carried to the pupil).
 
 from __future__ import annotations
 
+import functools
+
 import math
 from typing import NamedTuple
 
@@ -22,7 +24,7 @@ import numpy as np
 from ..opencl import associated
 from ..opencl.arrays import by_rows, empty, read
 from ..propagation import grid
-from ..propagation.tilt import cached_array, es_table, es_transform
+from ..propagation.tilt import cached_array, es_profile, es_table
 from ..scene.camera import Camera
 from ..view import BACKGROUND_DEPTH
 from .depth import from_cross_spectrum
@@ -49,6 +51,13 @@ def iris_weights(shape, pitch, diameter, taper=IRIS_TAPER) -> np.ndarray:
     return np.where(rho >= radius, 0.0, np.where(rho > inner, edge, 1.0))
 
 
+@functools.lru_cache(maxsize=32)
+def iris_power(shape, pitch, diameter, taper=IRIS_TAPER) -> float:
+    """Σ w² of :func:`iris_weights` (the views' calibration), once for each pupil grid: a
+    shot's frames share it."""
+    return float(np.sum(iris_weights(shape, pitch, diameter, taper) ** 2))
+
+
 class PupilImage:
     """The image a pupil field forms at a camera's (fine) pixels.
 
@@ -64,8 +73,7 @@ class PupilImage:
     def __init__(self, rt, shape, *, bin: float, camera: Camera, centre=(0.0, 0.0)):
         self.rt = rt
         h, w = self.shape = tuple(shape)
-        self.apod = [rt.to_device(1 / es_transform(grid.signed_indices(n) / (2 * n), TAPS),
-                                  np.float32) for n in (h, w)]
+        self.apod = [es_profile(rt, n, TAPS, inverse=True) for n in (h, w)]
         self.es = cached_array(rt, "es-table", es_table, TAPS)
         self.camera, self.bin, self.centre = camera, bin, tuple(map(float, centre))
         self.options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")

@@ -30,7 +30,7 @@ from ..opencl.arrays import resident, upload_window, write
 from ..opencl.runtime import associated
 from ..propagation import angular_spectrum, grid, tilt
 from ..propagation.angular_spectrum import BAND_EDGE
-from ..propagation.tilt import ES_TABLE, cached_array, es_table, es_transform
+from ..propagation.tilt import ES_TABLE, cached_array, es_profile, es_table
 from ..scene.hologram import Hologram
 from ..scene.plate import box_corners
 from ..validate import InputError
@@ -444,8 +444,7 @@ class _Gather:
         rt.kernel(PROGRAM, "gather_permute", ())(
             rt.queue, (count,), None, *(a.data for a in self.at), self.weight.data,
             self.inverse.data, self.slot.data, order.data, gy.data, gx.data, wt.data, inv.data)
-        self.deapod = [rt.to_device(es_transform(grid.signed_indices(n) / (2 * n), ES_TAPS),
-                                    np.float32) for n in (hh, ww)]
+        self.deapod = [es_profile(rt, n, ES_TAPS) for n in (hh, ww)]
         self.layers = {}
 
     def _layers(self, wavelength):

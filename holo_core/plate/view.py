@@ -29,7 +29,7 @@ from ..opencl import get_runtime
 from ..opencl.arrays import cached
 from ..optics import depth as depth_mod
 from ..optics import speckle
-from ..optics.imaging import IRIS_TAPER, PupilImage, assemble, fold_images, iris_weights
+from ..optics.imaging import IRIS_TAPER, PupilImage, assemble, fold_images, iris_power
 from ..optics.pupil import Pupil, camera_pupil, defocus_limited_diameter, intensity_supersample
 from ..propagation import grid
 from ..propagation.convolution import convolve
@@ -251,7 +251,7 @@ def _iris_sum(n, d, diameter, taper, lit) -> float:
     [m]) counts the whole iris, its area over d² (the rim's raised cosine integrated
     radially), so that the part beyond the light dims the view as it would the camera's."""
     if lit >= diameter:
-        return float(np.sum(iris_weights((n, n), (d, d), diameter, taper) ** 2))
+        return iris_power((n, n), (d, d), diameter, taper)
     radius = diameter / 2
     inner = (1 - taper) * radius
     rho = np.linspace(inner, radius, 4097)
@@ -291,8 +291,8 @@ def carrier_looks(holos, camera: Camera, fine: Camera, pupil: Pupil, rotation, p
                         centre=middle)
     hh, ww = shape
     taper = IRIS_TAPER if pupil.apodize else 0.0
-    iris = iris_weights(shape, (lam0 / (hh * bin_), lam0 / (ww * bin_)), pupil.diameter, taper)
-    scale = 1 / math.sqrt(hh * ww * float(np.sum(iris**2)))
+    scale = 1 / math.sqrt(hh * ww * iris_power(
+        tuple(shape), (lam0 / (hh * bin_), lam0 / (ww * bin_)), pupil.diameter, taper))
     # the emitters' spacing seen from the zone's centre over the bins': a surface of emitters
     # of intensity I shows I (one emitter per bin is the camera hologram's calibration)
     distance = float(np.linalg.norm(np.asarray(first.bounds).mean(0)

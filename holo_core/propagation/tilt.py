@@ -127,6 +127,15 @@ def cached_array(rt, name, make, *args):
     return cached(rt, (name, *args), lambda: (make(*args), None))[0]
 
 
+def es_profile(rt, n: int, taps=TAPS, *, inverse=False):
+    """:func:`es_transform` at the n signed indices of a grid oversampled twice (index/(2n)),
+    or its inverse: a device float32 array (n,) in FFT order, made once per runtime."""
+    def make():
+        t = es_transform(grid.signed_indices(n) / (2 * n), taps)
+        return rt.to_device(1 / t if inverse else t, np.float32), None
+    return cached(rt, ("es-profile", n, taps, inverse), make)[0]
+
+
 def es_table(taps=TAPS, beta=ES_BETA):
     """(value, slope) per table interval, packed as complex: what ``es_weight`` reads."""
     phi = es_kernel(np.linspace(-taps / 2, taps / 2, ES_TABLE + 1), taps, beta)
