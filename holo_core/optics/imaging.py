@@ -255,7 +255,9 @@ def assemble(radiance, coverage, cross, *, camera: Camera, supersample: int, wav
     colour = radiance / np.maximum(coverage, floor)[..., None] * np.float32(exposure)
     ray = from_cross_spectrum(downsample(cross, s), wavelengths=tuple(wavelengths),
                               centre=centre)
-    tx, ty = camera.pixel_tangents()
+    w, h = camera.resolution  # the tangents by row and by column, broadcast
+    tx, ty = camera.pixel_tangents(rows=np.arange(h)[:, None] + 0.5,
+                                   cols=np.arange(w)[None, :] + 0.5)
     planar = ray / np.sqrt(1 + tx * tx + ty * ty)
     depth = np.where(alpha > 0, planar, BACKGROUND_DEPTH).astype(np.float32)
     f32 = np.float32  # images of float32 looks stay float32, uncopied (0.04 s at 1280×720)

@@ -34,13 +34,10 @@ def box_mean(image, radius: int) -> np.ndarray:
     if radius == 0:
         return image
     a = np.pad(np.asarray(image, np.float64), radius, mode="edge")
-    for axis in (0, 1):
-        c = np.cumsum(a, axis)
-        c = np.concatenate([np.zeros_like(c.take([0], axis)), c], axis)
-        n = a.shape[axis] - 2 * radius
-        a = (c.take(range(2 * radius + 1, n + 2 * radius + 1), axis) - c.take(range(n), axis))
-        a = a / (2 * radius + 1)
-    return a
+    n = 2 * radius + 1
+    h, w = a.shape[0] - 2 * radius, a.shape[1] - 2 * radius
+    rows = sum(a[i:i + h] for i in range(n))  # the shifted copies summed: no running sum's
+    return sum(rows[:, j:j + w] for j in range(n)) / (n * n)  # rounding to carry
 
 
 def pick_brightest(values, brightness, factor: int) -> np.ndarray:
