@@ -12,6 +12,7 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cla
 from pyopencl.reduction import ReductionKernel
+from pyopencl.scan import ExclusiveScanKernel
 
 from ..validate import InputError, host_field
 from .runtime import Runtime, get_runtime
@@ -246,6 +247,18 @@ def host_buffer(rt, host) -> cl.Buffer | None:
         return None
     return cl.Buffer(rt.context, cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR,
                      hostbuf=host)
+
+
+def exclusive_scan(rt, counts: cla.Array, out: cla.Array) -> None:
+    """out[i] = counts[0] + … + counts[i − 1] (int32 device arrays of one length)."""
+    if "exclusive-scan" not in rt.cache:
+        rt.cache["exclusive-scan"] = ExclusiveScanKernel(rt.context, np.int32, "a+b", "0")
+    rt.cache["exclusive-scan"](counts, out, queue=rt.queue)
+
+
+def extent(a: cla.Array) -> tuple[float, float]:
+    """(min, max) of a device array's values."""
+    return float(cla.min(a).get()), float(cla.max(a).get())
 
 
 RESIDENT_SHARE = 0.5  # of a GPU's memory, at most, for the copies resident() keeps

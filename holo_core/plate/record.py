@@ -658,8 +658,10 @@ def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None
                                                  for wave in waves], 1))]
     if depth:
         amplitudes.append((p.depth_wavelength, np.stack(waves, 1)))
+    classes, mixing = _code_classes(em, codes)
     groups = tuple((lam, ZoneEmitters(position=em.position, amplitude=a, visibility=rows,
-                                      table=table, grid=em.grid)) for lam, a in amplitudes)
+                                      table=table, grid=em.grid, classes=classes,
+                                      mixing=mixing)) for lam, a in amplitudes)
     distance = float(np.linalg.norm(bounds.mean(0) - np.asarray(zone.centre)))
     wavelengths = (p.wavelength,) * 3 + ((p.depth_wavelength,) if depth else ())
     info = HologramInfo(shape=p.shape, encoding="complex", wavelengths=wavelengths,
@@ -670,6 +672,22 @@ def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None
                                         row_pitch=p.row_pitch))
     return PlateRecording(info=info, window=window, groups=groups, plan=p, meshes=tuple(local),
                           seed=seed, codes=tuple(None if c is None else tuple(c) for c in codes))
+
+
+def _code_classes(em, codes) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(each emitter's class, the looks' factors (looks, classes)) where the looks are coded
+    looks of one seed (:func:`_phases`): look l's phases are look 0's plus 2π·s_l/m, s_l
+    taking m values over the lattice cells, so the emitters fall in the classes of equal
+    shifts and each look is the classes' sums times exp(2πi·(s_l − s_0)/m)
+    (:class:`ZoneEmitters`). (None, None) for a single look or independent ones."""
+    if len(codes) < 2 or any(c is None for c in codes) or len({c[1] for c in codes}) > 1:
+        return None, None
+    m = codes[0][1]
+    shifts = np.stack([(k // m * em.cell[:, 1] + k % m * em.cell[:, 0]) % m
+                       for k, _ in codes], 1)
+    kinds, classes = np.unique(shifts, axis=0, return_inverse=True)
+    mixing = np.exp(2j * np.pi * (kinds - kinds[:, :1]).T / m)
+    return classes.reshape(-1).astype(np.int32), mixing
 
 
 def _look_seed(seed: int, codes, look: int) -> int:

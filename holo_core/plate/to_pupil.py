@@ -22,11 +22,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pyopencl.array as cla
-from pyopencl.scan import ExclusiveScanKernel
 
 from .. import jobs
-from ..opencl.arrays import resident, upload_window, write
+from ..opencl.arrays import empty, exclusive_scan, extent, resident, upload_window, write
 from ..opencl.runtime import associated
 from ..propagation import angular_spectrum, grid, tilt
 from ..propagation.angular_spectrum import BAND_EDGE
@@ -407,8 +405,7 @@ class _Gather:
                                                 *view.position)), rot.data,
             real(view.centre[1]), real(view.centre[0]), real(2 / view.bin),
             real(qx * h.pitch * qy * h.carrier.row_pitch * view.position[2]))
-        (gy_lo, gy_hi), (gx_lo, gx_hi), self.inverse_depth = (
-            (float(cla.min(a).get()), float(cla.max(a).get())) for a in (gy, gx, inv))
+        (gy_lo, gy_hi), (gx_lo, gx_hi), self.inverse_depth = map(extent, (gy, gx, inv))
         hh, ww = view.shape
         # only the grid points the samples reach: their box in grid coordinates, in cells
         self.lo = (max(math.floor(gy_lo - ES_TAPS / 2), -hh),
@@ -426,10 +423,8 @@ class _Gather:
             rt.queue, (count,), None, key.data, counts.data, gy.data, gx.data,
             np.float32(self.lo[0]), np.float32(self.lo[1]), np.int32(self.cells[0]),
             np.int32(self.cells[1]))
-        self.start = cla.empty(rt.queue, (n_cells + 1,), np.int32)
-        if "gather-scan" not in rt.cache:
-            rt.cache["gather-scan"] = ExclusiveScanKernel(rt.context, np.int32, "a+b", "0")
-        rt.cache["gather-scan"](counts, self.start, queue=rt.queue)
+        self.start = empty(rt, (n_cells + 1,), np.int32)
+        exclusive_scan(rt, counts, self.start)
         order, fill = (rt.workspace(f"gather-{name}", shape, np.int32)
                        for name, shape in (("order", (count,)), ("fill", (n_cells,))))
         fill.fill(0)
@@ -437,10 +432,10 @@ class _Gather:
                                               key.data, self.start.data)
         rt.kernel(PROGRAM, "gather_sort_cells", ())(rt.queue, (n_cells,), None, order.data,
                                                    self.start.data)
-        self.at = [cla.empty(rt.queue, (count,), np.float32) for _ in range(2)]
-        self.weight, self.inverse = (cla.empty(rt.queue, (count,), np.float32) for _ in range(2))
+        self.at = [empty(rt, (count,), np.float32) for _ in range(2)]
+        self.weight, self.inverse = (empty(rt, (count,), np.float32) for _ in range(2))
         # where the decimation puts each sample: in the gather's order, planes side by side
-        self.slot = cla.empty(rt.queue, (count,), np.int32)
+        self.slot = empty(rt, (count,), np.int32)
         rt.kernel(PROGRAM, "gather_permute", ())(
             rt.queue, (count,), None, *(a.data for a in self.at), self.weight.data,
             self.inverse.data, self.slot.data, order.data, gy.data, gx.data, wt.data, inv.data)
@@ -467,7 +462,7 @@ class _Gather:
 
     def _layer(self, i, n, lo, hi):
         rt = self.view.rt
-        out = cla.empty(rt.queue, (self.count,), np.float32)
+        out = empty(rt, (self.count,), np.float32)
         rt.kernel(PROGRAM, "layer_weights", ())(
             rt.queue, (self.count,), None, out.data, self.weight.data, self.inverse.data,
             np.float32(lo), np.float32((hi - lo) / n), np.int32(n), np.int32(i))

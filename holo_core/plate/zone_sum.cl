@@ -67,7 +67,8 @@ static floatv visibility(float x, floatv y, float xj, float yj, float s,
 #endif
 }
 
-__kernel void zone_sum(__global float2 *out, int row_first, int col_first, int oh, int ow,
+__kernel void zone_sum(__global float2 *out, int first_plane, int row_first, int col_first,
+                       int oh, int ow,
                        real pitch, real row_pitch, real x0, real y0, real k,
                        real zx, real zy, real zz,
                        float ex, float ey, float ez, float rim_x, float rim_y,
@@ -176,9 +177,24 @@ __kernel void zone_sum(__global float2 *out, int row_first, int col_first, int o
                 ph -= (real)(2 * M_PI) * rint(ph * (real)(0.5 / M_PI));
                 float2 carrier = cexpi((float)ph);
                 float2 acc = (float2)(lane_r[l], lane_i[l]);
-                out[((long)c * oh + row - row_first) * ow + col - col_first] =
+                out[((long)(first_plane + c) * oh + row - row_first) * ow + col - col_first] =
                     cmul(acc, carrier);
             }
         }
+    }
+}
+
+/* the looks' samples from the classes' sums (ZoneEmitters.classes): look l's channel c is
+ * sum_k mixing[l, k] * sums[k, c], at each of ``plane`` samples */
+__kernel void mix_classes(__global float2 *out, __global const float2 *sums,
+                          __global const float2 *mixing, int looks, int classes, long plane)
+{
+    long n = get_global_id(0);
+    int c = get_global_id(1);
+    for (int l = 0; l < looks; l++) {
+        float2 acc = 0;
+        for (int k = 0; k < classes; k++)
+            acc += cmul(mixing[l * classes + k], sums[(long)(k * CHANNELS + c) * plane + n]);
+        out[(long)(l * CHANNELS + c) * plane + n] = acc;
     }
 }

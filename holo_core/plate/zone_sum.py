@@ -66,6 +66,12 @@ class ZoneEmitters:
     visibility : (n,) int row of ``table`` (−1: seen from the whole zone)
     table : (m, Gy, Gx) uint8, the visibility 0…255 from the zone's Gy × Gx grid points
     grid : ((x0, step_x), (y0, step_y)) of the grid points, relative to the zone's centre [m]
+    classes, mixing : optional, for L looks of C channels each (amplitude (n, L·C), look after
+        look) that differ by a phase factor per emitter taken from a few values (coded looks):
+        each emitter's class (n,) int and the factors (L, K) complex, look l's amplitudes
+        mixing[l, classes]·(look 0's). The sum then runs once per class with look 0's C
+        channels and mixes the classes' sums into the looks: a look costs no more emitter
+        work (the coded pair: 4 channels an emitter, not 8)
     """
 
     position: np.ndarray
@@ -73,6 +79,8 @@ class ZoneEmitters:
     visibility: np.ndarray
     table: np.ndarray
     grid: tuple
+    classes: np.ndarray | None = None
+    mixing: np.ndarray | None = None
 
 
 def footprints(position, window: ZoneWindow) -> np.ndarray:
@@ -136,13 +144,21 @@ class ZoneSum:
         # the carriers exp(ik|z_j|) of the kernel's phase and exp(ik·Z_z) of its epilogue,
         # folded in float64
         fold = np.exp(1j * np.remainder(self.k * (np.abs(pos[:, 2]) + centre[2]), 2 * math.pi))
-        amp = np.ascontiguousarray(em.amplitude * fold[:, None], np.complex64)
-        self.channels = amp.shape[1]
+        self.channels = em.amplitude.shape[1]
+        self.mixing = None if em.classes is None else np.asarray(em.mixing, np.complex64)
+        summed = em.amplitude if self.mixing is None else \
+            em.amplitude[:, :self.channels // len(self.mixing)]  # look 0's: the classes mix it
+        amp = np.ascontiguousarray(summed * fold[:, None], np.complex64)
         self.foot = foot = footprints(pos, window)
+        # (the emitters, their footprints) of each class; None: all of them, the looks summed
+        # as channels
+        self.members = [(None, foot)] if self.mixing is None else \
+            [(m, foot[m]) for m in (np.nonzero(em.classes == k)[0]
+                                    for k in range(self.mixing.shape[1]))]
         self.pairs = float(np.sum((foot[:, 1] - foot[:, 0] + 1.0).clip(0)
                                   * (foot[:, 3] - foot[:, 2] + 1.0).clip(0)))
         table = em.table if len(em.table) else np.zeros((1, 2, 2), np.uint8)
-        self.options = (f"-DVEC={rt.lanes}", f"-DSEG={SEG}", f"-DCHANNELS={self.channels}",
+        self.options = (f"-DVEC={rt.lanes}", f"-DSEG={SEG}", f"-DCHANNELS={amp.shape[1]}",
                         f"-DGRID_Y={table.shape[1]}", f"-DGRID_X={table.shape[2]}", "-cl-fast-relaxed-math") + rt.real_options
         self.args = [*(rt.to_device(pos[:, i], rt.real).data for i in range(3)),
                      rt.to_device(amp).data, rt.to_device(foot).data,
@@ -156,21 +172,33 @@ class ZoneSum:
         """B (C, rows, cols) complex64 from sample (row0, col0); row0 and col0 multiples of
         the work items' tile (lanes, SEG)."""
         rt, win = self.rt, self.window
-        lst, start, (_, blocks_x, block_row0, block_col0) = block_lists(
-            self.foot, win.shape, region=(row0, col0, rows, cols))
-        lists = [rt.to_device(lst if len(lst) else np.zeros(1, np.int32)).data,
-                 rt.to_device(start).data, np.int32(blocks_x), np.int32(BLOCK),
-                 np.int32(block_row0), np.int32(block_col0)]
-        out = rt.scratch("zone-sum", (self.channels, rows, cols))
+        per_class = self.channels // len(self.members)
+        sums = rt.workspace("zone-sum", (len(self.members) * per_class, rows, cols))
         real = rt.real
         e = win.half_extents
-        rt.kernel(PROGRAM, "zone_sum", self.options)(
-            rt.queue, (-(-rows // rt.lanes), -(-cols // SEG)), rt.series_group, out.data,
-            np.int32(row0), np.int32(col0), np.int32(rows), np.int32(cols),
-            *(real(v) for v in (win.pitch, win.row_pitch, win.origin[0], win.origin[1], self.k,
-                                *win.centre)),
-            *(np.float32(v) for v in (e[0], e[1], e[2], win.rim * e[0], win.rim * e[1])),
-            *self.args, *lists)
+        for k, (members, foot) in enumerate(self.members):
+            lst, start, (_, blocks_x, block_row0, block_col0) = block_lists(
+                foot, win.shape, region=(row0, col0, rows, cols))
+            if members is not None:
+                lst = members[lst]
+            lists = [rt.to_device(lst if len(lst) else np.zeros(1, np.int32), np.int32).data,
+                     rt.to_device(start).data, np.int32(blocks_x), np.int32(BLOCK),
+                     np.int32(block_row0), np.int32(block_col0)]
+            rt.kernel(PROGRAM, "zone_sum", self.options)(
+                rt.queue, (-(-rows // rt.lanes), -(-cols // SEG)), rt.series_group, sums.data,
+                np.int32(k * per_class), np.int32(row0), np.int32(col0), np.int32(rows),
+                np.int32(cols), *(real(v) for v in (win.pitch, win.row_pitch, win.origin[0],
+                                                    win.origin[1], self.k, *win.centre)),
+                *(np.float32(v) for v in (e[0], e[1], e[2], win.rim * e[0], win.rim * e[1])),
+                *self.args, *lists)
+        if self.mixing is None:
+            return read(sums)
+        out = rt.workspace("zone-sum-looks", (self.channels, rows, cols))
+        looks, classes = self.mixing.shape
+        rt.kernel(PROGRAM, "mix_classes", self.options)(  # CHANNELS: a class's
+            rt.queue, (rows * cols, per_class), None, out.data, sums.data,
+            rt.to_device(self.mixing).data, np.int32(looks), np.int32(classes),
+            np.int64(rows * cols))
         return read(out)
 
 

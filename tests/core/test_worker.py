@@ -190,8 +190,10 @@ def test_an_unwritable_output_folder_is_refused_before_the_recording(tmp_path, m
 
 def test_a_plates_iterations_are_coded_looks_of_one_seed(tmp_path):
     """Two iterations of a plate are the checkerboard pair of one seed (look_code): the first
-    is the seed's plain recording, the second its coded partner, bit for bit; bare points
-    refuse a code (their looks take independent seeds)."""
+    is the seed's plain recording, the second its coded partner, within float32 rounding
+    (1e-5 of the largest sample: recorded together, the pair is summed by the classes of
+    equal code shifts and mixed); bare points refuse a code (their looks take independent
+    seeds)."""
     from holo_core.io.hologram import read_hologram
     from holo_core.plate.record import record_hologram
     j = job(tmp_path, iterations=2, render=False)
@@ -202,7 +204,8 @@ def test_a_plates_iterations_are_coded_looks_of_one_seed(tmp_path):
     same = dict(plate=j.route.plate, camera=j.camera, seed=0)
     for code, look in ((None, a), ((3, 2), b)):
         h = record_hologram(list(j.points), code=code, **same)
-        assert np.array_equal(h.object_wave, look.object_wave), code
+        assert np.max(np.abs(h.object_wave - look.object_wave)) <= 1e-5 * np.max(
+            np.abs(h.object_wave)), code
     with pytest.raises(InputError, match="code applies to plates of meshes"):
         record_hologram((np.array([[0.0, 0.0, -1.0]]), np.ones((1, 3))), plate=j.route.plate,
                         resolution=64, code=(1, 2))

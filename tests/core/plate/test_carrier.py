@@ -148,14 +148,15 @@ def test_a_views_pixels_fold_on_the_device_as_the_fine_images_do_on_the_host(pla
 
 @pytest.mark.parametrize("looks", [2, 3])
 def test_looks_recorded_together_equal_looks_recorded_alone(looks):
-    """record_looks sums every look in one pass (the looks as further channels): each look
-    equals record_plate's of its code (2: the checkerboard pair of one seed) or of its own
-    seed (3: independent looks), bit for bit on a CPU (the kernel's fused multiply-adds are
-    written out); on a GPU, whose compiler may fuse other products when the channels change
-    the kernel's code, within float32 rounding: 1e-5 of the largest sample; and its memory
-    budget counts every look."""
+    """record_looks sums every look in one pass: each look equals record_plate's of its code
+    (2: the checkerboard pair of one seed, summed once per class of equal code shifts and
+    mixed) or of its own seed (3: independent looks, summed as further channels) within
+    float32 rounding, 1e-5 of the largest sample; the independent looks bit for bit on a CPU
+    (the kernel's fused multiply-adds are written out; a GPU compiler may fuse other
+    products when the channels change the kernel's code); and its memory budget counts every
+    look."""
     kw = {"plate": PLATE, "camera": camera("centre", SCALE), "zone_margin": 0.025}
-    exact = get_runtime().is_cpu
+    exact = get_runtime().is_cpu and looks == 3
     together = record_looks(meshes(), looks=looks, seed=4, **kw)
     assert len(together) == looks
     for k, h in enumerate(together):

@@ -292,7 +292,9 @@ def test_looks_recorded_together_in_tiles_equal_them_in_memory(scheduler, tmp_pa
     """record_looks into one store a look sums every tile's looks in one task: each store
     equals that look in memory bit for bit; a look recorded alone finds its store whole (the
     same recording: nothing written again); four coded looks, whose first and last are the
-    pair's, fill the two new stores and leave the pair's as they were."""
+    pair's, fill the two new stores and leave the pair's as they were, each new look within
+    float32 rounding (1e-5 of the largest sample) of the look recorded alone (the looks
+    together are summed by classes of equal code shifts and mixed)."""
     from holo_core.plate.record import look_code, record_looks
     urls = [tmp_path / f"look{k}.zarr" for k in range(2)]
     tiled = record_looks(meshes(), looks=2, urls=urls, tile=TILE, scheduler=scheduler, **SCENE)
@@ -306,8 +308,9 @@ def test_looks_recorded_together_in_tiles_equal_them_in_memory(scheduler, tmp_pa
     more = record_looks(meshes(), looks=4, urls=four, tile=TILE, scheduler=scheduler, **SCENE)
     assert [_files(u) for u in urls] == before
     for k in (1, 2):
-        assert np.array_equal(more[k].object_wave[...], record_plate(
-            meshes(), code=look_code(k, 4), **SCENE).object_wave)
+        got, want = more[k].object_wave[...], record_plate(
+            meshes(), code=look_code(k, 4), **SCENE).object_wave
+        assert np.max(np.abs(got - want)) <= 1e-5 * np.max(np.abs(want))
 
 
 def test_the_pipeline_records_a_plate_beyond_memory_in_tiles(scheduler, tmp_path, monkeypatch):
