@@ -214,12 +214,17 @@ def upload_window(dst, host, planes, row0: int, col0: int) -> None:
                         buffer_pitches=(cols * item,), host_pitches=(host.shape[2] * item,))
 
 
-def read(a: cla.Array) -> np.ndarray:
-    """A new host array of the device array ``a``'s samples (C-contiguous ``a``), waited for.
+def read(a: cla.Array, out: np.ndarray | None = None) -> np.ndarray:
+    """A new host array of the device array ``a``'s samples (C-contiguous ``a``), or ``out``
+    (C-contiguous, ``a``'s shape and type) filled with them, waited for.
     pyopencl's ``get`` keeps each read's event on ``a``, and with it the host array it filled
     (up to 12 of them), so reading a reused array (a scratch buffer, an imager's pixels) held
     a dozen copies alive: 1.6 GB a worker for the tiles of a plate."""
-    out = np.empty(a.shape, a.dtype)
+    if out is None:
+        out = np.empty(a.shape, a.dtype)
+    elif out.shape != a.shape or out.dtype != a.dtype or not out.flags.c_contiguous:
+        raise InputError(f"a {out.shape} {out.dtype} array cannot take a device array of "
+                         f"{a.shape} {a.dtype}")
     cl.enqueue_copy(a.queue, out, a.base_data, src_offset=a.offset, wait_for=a.events,
                     is_blocking=True)
     return out

@@ -171,6 +171,11 @@ class ZoneSum:
     def region(self, row0: int, col0: int, rows: int, cols: int) -> np.ndarray:
         """B (C, rows, cols) complex64 from sample (row0, col0); row0 and col0 multiples of
         the work items' tile (lanes, SEG)."""
+        return read(self.on_device(row0, col0, rows, cols))
+
+    def on_device(self, row0: int, col0: int, rows: int, cols: int):
+        """As :meth:`region`, on the device: the runtime's workspace, valid until the next
+        sum of any :class:`ZoneSum` of the runtime."""
         rt, win = self.rt, self.window
         per_class = self.channels // len(self.members)
         sums = rt.workspace("zone-sum", (len(self.members) * per_class, rows, cols))
@@ -192,14 +197,14 @@ class ZoneSum:
                 *(np.float32(v) for v in (e[0], e[1], e[2], win.rim * e[0], win.rim * e[1])),
                 *self.args, *lists)
         if self.mixing is None:
-            return read(sums)
+            return sums
         out = rt.workspace("zone-sum-looks", (self.channels, rows, cols))
         looks, classes = self.mixing.shape
         rt.kernel(PROGRAM, "mix_classes", self.options)(  # CHANNELS: a class's
             rt.queue, (rows * cols, per_class), None, out.data, sums.data,
             rt.to_device(self.mixing).data, np.int32(looks), np.int32(classes),
             np.int64(rows * cols))
-        return read(out)
+        return out
 
 
 def zone_sum(em: ZoneEmitters, window: ZoneWindow, wavelength: float, region=None,

@@ -286,3 +286,22 @@ def test_bad_physical_fields_are_refused_naming_the_field(emitters, kw, problem)
     h = carrier_plate(emitters, ZONE, LAMBDA)
     with pytest.raises(InputError, match=problem):
         physical_field(h, **kw)
+
+
+def test_a_zone_sum_that_comes_back_not_finite_records_nothing(monkeypatch):
+    """A device whose zone sum comes back with NaN (its arithmetic failed) stops the
+    recording with the rows where it happened; no plate is returned, so none is written."""
+    from holo_core.plate import zone_sum
+
+    summed = zone_sum.ZoneSum.on_device
+
+    def failed(self, row0, *args):
+        out = summed(self, row0, *args)
+        if row0 >= 256:
+            out.fill(np.complex64(np.nan))
+        return out
+
+    monkeypatch.setattr(zone_sum.ZoneSum, "on_device", failed)
+    kw = {"plate": PLATE, "camera": camera("centre", SCALE), "zone_margin": 0.025}
+    with pytest.raises(RuntimeError, match="non-finite samples in rows 256-"):
+        record_looks(meshes(), looks=2, seed=4, **kw)
