@@ -279,7 +279,8 @@ class Runtime:
         """A reusable work array of any shape: one buffer per tag, grown by a quarter more than
         asked when a call needs more; its content is undefined on return. For arrays whose
         shape follows the input (a plate view's window follows the camera), where
-        :meth:`scratch` would keep one of each shape: a shot's frames would add one a frame."""
+        :meth:`scratch` would keep one of each shape met (a move whose window changes size, one a
+        frame)."""
         dtype = np.dtype(dtype)
         nbytes = max(int(np.prod(shape)) * dtype.itemsize, 1)
         key = ("workspace", tag)
