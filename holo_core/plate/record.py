@@ -550,8 +550,15 @@ class PlateRecording:
         return self.window.shape
 
     def sums(self, rt=None) -> list[ZoneSum]:
-        """One :class:`ZoneSum` per wavelength, its emitters on the device."""
-        return [ZoneSum(em, self.window, lam, rt) for lam, em in self.groups]
+        """The :class:`ZoneSum` of the wavelengths, its emitters on the device: the depth
+        pair's partner summed with the colours in one pass where their channels an emitter
+        fit the kernel's accumulators (FUSED_CHANNELS), else one a wavelength."""
+        (lam, em), *rest = self.groups
+        per_emitter = sum(e.amplitude.shape[1] // (1 if e.mixing is None else len(e.mixing))
+                          for _, e in self.groups)
+        if len(rest) == 1 and per_emitter <= FUSED_CHANNELS:
+            return [ZoneSum(em, self.window, lam, rt, partner=rest[0])]
+        return [ZoneSum(e, self.window, lam, rt) for lam, e in self.groups]
 
     def region(self, sums, row0: int, col0: int, rows: int, cols: int) -> np.ndarray:
         """The samples (C, rows, cols) complex64 of a block (row0, col0 multiples of 256),
@@ -594,6 +601,8 @@ def _not_finite(row0, col0, rows, cols):
 
 
 BAND_ROWS = 256  # rows of the plate summed at once in memory (a multiple of the block lists')
+FUSED_CHANNELS = 8  # channels an emitter the zone sum carries in one pass at most: its
+                    # accumulators (32 columns x 16 lanes x re, im) stay within a core's L1
 
 
 def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,

@@ -23,6 +23,34 @@
  */
 #include "lane_series.h"
 
+#ifndef CHANNELS2
+#define CHANNELS2 0
+#endif
+#define ALL (CHANNELS + CHANNELS2)
+
+/* the recurrence's start at the segment's first column for the wave number K: E its value,
+ * D its step, C the step's step (the geometry, t, step_m and curve_m, shared by both) */
+#define SERIES(K, er, ei, dr, di, cr, ci) {                                                  \
+        real pc_ = (K) * rho2 / (rc + az);                                                  \
+        pc_ -= (real)(2 * M_PI) * rint(pc_ * (real)(0.5 / M_PI));                           \
+        float kf_ = (float)(K);                                                             \
+        floatv phase_ = (float)pc_ + kf_ * (v * (2 * (float)dyc + v)) / (r + (float)rc);     \
+        floatv d1i_ = kf_ * dx * inv_r, d2i_ = kf_ * c2f * inv_r2 * inv_r;                   \
+        CIS(wrap(phase_ + d1i_ * u0 + d2i_ * (u0 * u0 / 2)), t, er, ei);                    \
+        CIS(wrap(d1i_ * p + d2i_ * ud), step_m, dr, di);                                     \
+        CIS(d2i_ * (p * p), curve_m, cr, ci);                                                \
+    }
+
+/* E <- E·D, D <- D·C: two complex multiplies a sample */
+#define ADVANCE(er, ei, dr, di, cr, ci) {                                                    \
+        floatv t_ = er * dr - ei * di;                                                       \
+        ei = er * di + ei * dr;                                                              \
+        er = t_;                                                                             \
+        t_ = dr * cr - di * ci;                                                              \
+        di = dr * ci + di * cr;                                                              \
+        dr = t_;                                                                             \
+    }
+
 /* 1 - smoothstep over the rim: 1 inside |u| <= half, 0 beyond half + rim */
 static floatv rim_weight(floatv u, floatv inner, float rim)
 {
@@ -69,11 +97,12 @@ static floatv visibility(float x, floatv y, float xj, float yj, float s,
 
 __kernel void zone_sum(__global float2 *out, int first_plane, int row_first, int col_first,
                        int oh, int ow,
-                       real pitch, real row_pitch, real x0, real y0, real k,
+                       real pitch, real row_pitch, real x0, real y0, real k, real k2,
                        real zx, real zy, real zz,
                        float ex, float ey, float ez, float rim_x, float rim_y,
                        __global const real *px, __global const real *py,
                        __global const real *pz, __global const float2 *amp,
+                       __global const float2 *amp2,
                        __global const int *foot,       /* c0, c1, r0, r1 per emitter */
                        __global const int *vis_row, __global const uchar *vis,
                        float g0x, float g0y, float gsx, float gsy,
@@ -91,9 +120,9 @@ __kernel void zone_sum(__global float2 *out, int first_plane, int row_first, int
     floatv lane_v = (LANE_ID(LANES) - 0.5f * (VEC - 1)) * (float)row_pitch;
     float u0 = -(float)half_seg, p = (float)pitch;
 
-    floatv acc_r[SEG][CHANNELS], acc_i[SEG][CHANNELS];
+    floatv acc_r[SEG][ALL], acc_i[SEG][ALL];
     for (int m = 0; m < SEG; m++)
-        for (int c = 0; c < CHANNELS; c++)
+        for (int c = 0; c < ALL; c++)
             acc_r[m][c] = acc_i[m][c] = 0;
 
     int b = (row0 / block - block_row0) * blocks_x + col0 / block - block_col0;
@@ -105,21 +134,20 @@ __kernel void zone_sum(__global float2 *out, int first_plane, int row_first, int
         real xj = px[j], yj = py[j], zj = pz[j], az = fabs(zj);
         real dxc = xc - xj, dyc = yt - yj, rho2 = dxc * dxc + dyc * dyc;
         real rc = sqrt(rho2 + zj * zj);
-        real pc = k * rho2 / (rc + az);
-        pc -= (real)(2 * M_PI) * rint(pc * (real)(0.5 / M_PI));
-        float dx = (float)dxc, kf = (float)k;
+        float dx = (float)dxc;
         floatv v = lane_v, dy = (float)dyc + v;
         floatv c2f = dy * dy + (float)(zj * zj), r = sqrt(dx * dx + c2f);
-        floatv phase = (float)pc + kf * (v * (2 * (float)dyc + v)) / (r + (float)rc);
         floatv inv_r = 1.0f / r, inv_r2 = inv_r * inv_r;
-        floatv d1r = -dx * inv_r2, d1i = kf * dx * inv_r;
-        floatv d2r = -(c2f - dx * dx) * inv_r2 * inv_r2, d2i = kf * c2f * inv_r2 * inv_r;
+        floatv d1r = -dx * inv_r2, d2r = -(c2f - dx * dx) * inv_r2 * inv_r2;
         float ud = u0 * p + p * p / 2;
         floatv er, ei, dr, di, cr, ci, t;
         t = inv_r * exp_small(d1r * u0 + d2r * (u0 * u0 / 2));
-        CIS(wrap(phase + d1i * u0 + d2i * (u0 * u0 / 2)), t, er, ei);
-        CIS(wrap(d1i * p + d2i * ud), exp_small(d1r * p + d2r * ud), dr, di);
-        CIS(d2i * (p * p), exp_small(d2r * (p * p)), cr, ci);
+        floatv step_m = exp_small(d1r * p + d2r * ud), curve_m = exp_small(d2r * (p * p));
+        SERIES(k, er, ei, dr, di, cr, ci);
+#if CHANNELS2
+        floatv er2, ei2, dr2, di2, cr2, ci2;  /* the partner wavelength's, same geometry */
+        SERIES(k2, er2, ei2, dr2, di2, cr2, ci2);
+#endif
 
         /* the window: 1 over most segments; in its rim, evaluated at every sample */
         float s = (float)((zz - zj) / az), inv_depth = (float)(1 / az);
@@ -135,9 +163,11 @@ __kernel void zone_sum(__global float2 *out, int first_plane, int row_first, int
         }
         floatv wa = WINDOW(xa, yr), wb = WINDOW(xb, yr);
         int flat = all(wa == 1.0f) && all(wb == 1.0f);
-        float2 a[CHANNELS];
+        float2 a[ALL];
         for (int c = 0; c < CHANNELS; c++)
             a[c] = amp[j * CHANNELS + c];
+        for (int c = CHANNELS; c < ALL; c++)
+            a[c] = amp2[j * (ALL - CHANNELS) + c - CHANNELS];
         floatv vt = va;
         for (int m = 0; m < SEG; m++) {
             floatv wt = flat ? vt : vt * WINDOW(xa + m * p, yr);
@@ -148,13 +178,16 @@ __kernel void zone_sum(__global float2 *out, int first_plane, int row_first, int
                 acc_r[m][c] = fma(a[c].x, vr, fma(-a[c].y, vi, acc_r[m][c]));
                 acc_i[m][c] = fma(a[c].x, vi, fma(a[c].y, vr, acc_i[m][c]));
             }
+#if CHANNELS2
+            vr = wt * er2, vi = wt * ei2;
+            for (int c = CHANNELS; c < ALL; c++) {
+                acc_r[m][c] = fma(a[c].x, vr, fma(-a[c].y, vi, acc_r[m][c]));
+                acc_i[m][c] = fma(a[c].x, vi, fma(a[c].y, vr, acc_i[m][c]));
+            }
+            ADVANCE(er2, ei2, dr2, di2, cr2, ci2);
+#endif
             vt += vstep;
-            t = er * dr - ei * di;
-            ei = er * di + ei * dr;
-            er = t;
-            t = dr * cr - di * ci;
-            di = dr * ci + di * cr;
-            dr = t;
+            ADVANCE(er, ei, dr, di, cr, ci);
         }
     }
 
@@ -165,7 +198,8 @@ __kernel void zone_sum(__global float2 *out, int first_plane, int row_first, int
         if (col >= col_end)
             break;
         real x = x0 + col * pitch - zx;
-        for (int c = 0; c < CHANNELS; c++) {
+        for (int c = 0; c < ALL; c++) {
+            real kc = c < CHANNELS ? k : k2;
             UNLANE(acc_r[m][c], lane_r);
             UNLANE(acc_i[m][c], lane_i);
             for (int l = 0; l < VEC; l++) {
@@ -173,7 +207,7 @@ __kernel void zone_sum(__global float2 *out, int first_plane, int row_first, int
                 if (row >= row_end)
                     break;
                 real y = y0 + row * row_pitch - zy, rho2 = x * x + y * y;
-                real ph = k * rho2 / (sqrt(rho2 + zz * zz) + zz);
+                real ph = kc * rho2 / (sqrt(rho2 + zz * zz) + zz);
                 ph -= (real)(2 * M_PI) * rint(ph * (real)(0.5 / M_PI));
                 float2 carrier = cexpi((float)ph);
                 float2 acc = (float2)(lane_r[l], lane_i[l]);
@@ -184,8 +218,10 @@ __kernel void zone_sum(__global float2 *out, int first_plane, int row_first, int
     }
 }
 
-/* the looks' samples from the classes' sums (ZoneEmitters.classes): look l's channel c is
- * sum_k mixing[l, k] * sums[k, c], at each of ``plane`` samples */
+/* the looks' samples from the classes' sums (ZoneEmitters.classes; a class's ALL planes,
+ * CHANNELS at the first wavelength then CHANNELS2 at the partner's): look l's channel c is
+ * sum_k mixing[l, k] * sums[k, c], at each of ``plane`` samples, the looks' planes of the
+ * first wavelength first, then the partner's */
 __kernel void mix_classes(__global float2 *out, __global const float2 *sums,
                           __global const float2 *mixing, int looks, int classes, long plane)
 {
@@ -194,7 +230,9 @@ __kernel void mix_classes(__global float2 *out, __global const float2 *sums,
     for (int l = 0; l < looks; l++) {
         float2 acc = 0;
         for (int k = 0; k < classes; k++)
-            acc += cmul(mixing[l * classes + k], sums[(long)(k * CHANNELS + c) * plane + n]);
-        out[(long)(l * CHANNELS + c) * plane + n] = acc;
+            acc += cmul(mixing[l * classes + k], sums[(long)(k * ALL + c) * plane + n]);
+        int to = c < CHANNELS ? l * CHANNELS + c
+                              : looks * CHANNELS + l * CHANNELS2 + c - CHANNELS;
+        out[(long)to * plane + n] = acc;
     }
 }

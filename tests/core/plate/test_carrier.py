@@ -20,7 +20,6 @@ from accuracy import PHYSICAL_FIELD, rel_err
 from plate_scene import PLATE, camera, meshes
 from zone_reference import carrier_plate, object_wave
 
-from holo_core.opencl import get_runtime
 from holo_core.plate.carrier import demodulate, modulate, physical_field, physical_pitch, window
 from holo_core.plate.reconstruction import reconstruct
 from holo_core.plate.record import look_code, record_looks, record_plate
@@ -151,20 +150,18 @@ def test_looks_recorded_together_equal_looks_recorded_alone(looks):
     """record_looks sums every look in one pass: each look equals record_plate's of its code
     (2: the checkerboard pair of one seed, summed once per class of equal code shifts and
     mixed) or of its own seed (3: independent looks, summed as further channels) within
-    float32 rounding, 1e-5 of the largest sample; the independent looks bit for bit on a CPU
-    (the kernel's fused multiply-adds are written out; a GPU compiler may fuse other
-    products when the channels change the kernel's code); and its memory budget counts every
-    look."""
+    float32 rounding, 1e-5 of the largest sample (a look alone sums its depth partner in the
+    colours' pass, three independent looks theirs apart, and the compiler's fast arithmetic
+    rounds the two kernels' shared steps alike only to float32); and its memory budget
+    counts every look."""
     kw = {"plate": PLATE, "camera": camera("centre", SCALE), "zone_margin": 0.025}
-    exact = get_runtime().is_cpu and looks == 3
     together = record_looks(meshes(), looks=looks, seed=4, **kw)
     assert len(together) == looks
     for k, h in enumerate(together):
         code = look_code(k, looks)
         alone = record_plate(meshes(), seed=4 + (0 if code else k), code=code, **kw)
         a, b = h.object_wave, alone.object_wave
-        assert np.array_equal(a, b) if exact else \
-            np.max(np.abs(a - b)) <= 1e-5 * np.max(np.abs(b)), (k, np.max(np.abs(a - b)))
+        assert np.max(np.abs(a - b)) <= 1e-5 * np.max(np.abs(b)), (k, np.max(np.abs(a - b)))
         assert h.carrier == alone.carrier and h.wavelengths == alone.wavelengths
     one = together[0].object_wave.nbytes  # a look recorded alone fits where all do not
     assert len(record_looks(meshes(), looks=1, budget=(2.5 * one, None), **kw)) == 1

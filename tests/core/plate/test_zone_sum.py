@@ -41,6 +41,24 @@ def test_zone_sum_equals_float64_numpy(rng, rough):
     assert err <= (ZONE_SUM_ROUGH_VISIBILITY if rough else ZONE_SUM), err
 
 
+def test_a_partner_wavelength_summed_in_the_same_pass_equals_float64_numpy(rng):
+    """The depth pair's partner (one channel at λ2 = 0.98·λ1) summed in the colours' pass
+    (ZoneSum partner=): each wavelength's channels within ZONE_SUM of the float64 sum at its
+    own wavelength, the partner's after the colours'."""
+    n = 60
+    table = np.full((n // 2, 3, 5), 255, np.uint8)
+    table[:, :, :2] = 96
+    em = emitters(rng, n, table)
+    depth = ZoneEmitters(position=em.position, amplitude=em.amplitude[:, :1] * 1j,
+                         visibility=em.visibility, table=table, grid=em.grid)
+    both = ZoneSum(em, WINDOW, WAVELENGTH, partner=(0.98 * WAVELENGTH, depth)).region(
+        0, 0, *WINDOW.shape)
+    assert both.shape == (4,) + WINDOW.shape
+    for got, (e, lam) in ((both[:3], (em, WAVELENGTH)), (both[3:], (depth, 0.98 * WAVELENGTH))):
+        err = rel_err(got, reference(e, WINDOW, lam))
+        assert err <= ZONE_SUM, err
+
+
 def test_regions_tile_the_whole_window(rng):
     """A window computed in blocks (a tiled recording's tasks) equals it computed whole, bit
     for bit: each sample's sum runs over the same emitters in the same order."""
