@@ -39,9 +39,12 @@ SAMPLE_BYTES = 8       # complex64
 # zone sum's pairs (emitter, sample) per second, per channel group (three colours cost one),
 # as this plan counts them (its footprints are the cones' whole; the sum skips their faded
 # rims): bench/shot.py's plate 58 s for 311 s at 2e9, the demo's plate about 270 s for 2760 s
-PAIRS_PER_SECOND = 1.2e10  # the shot's two looks in one pass: 36 s recorded, 35 s planned
-FURTHER_LOOK = 0.35      # a further look in the same pass, of a look's time (its channels
-                         # only: on the shot's plate two looks took 34.6 s, one by one 51.5 s)
+PAIRS_PER_SECOND = 8.8e9   # one look, its depth partner in the colours' pass: the shot's
+                           # 17.6 s recorded (its two looks 19.7 s, planned 19.7 s)
+FURTHER_LOOK = 0.35      # a further independent look in the same pass, of a look's time (its
+                         # channels: on the shot's plate two looks took 34.6 s, apart 51.5 s)
+FURTHER_CODED = 0.12     # a further coded look (2 or m² looks): its classes' set-up and mixing
+COLOURS_ONLY = 0.8       # no depth partner: the colours' recurrence alone
 EMITTER_SECONDS = 2e-5   # per emitter and visibility grid point: the depth buffers' tests
 VIEW_SAMPLE_SECONDS = 3.9e-9  # per window sample and channel of a view: read, filter, gather
 FINE_PIXEL_SECONDS = 7e-8    # per fine pixel and look of a view: spectra, image, assembly
@@ -101,9 +104,10 @@ class PlatePlan:
 
     def record_seconds(self, channels=CHANNELS) -> float:
         """Estimated seconds to record every look in one pass on the development machine."""
-        groups = 1 + (channels > 3)
-        pairs = self.emitters * self.footprint
-        return (1 + FURTHER_LOOK * (self.looks - 1)) * groups * pairs / PAIRS_PER_SECOND
+        coded = self.looks == 2 or math.isqrt(self.looks) ** 2 == self.looks
+        further = FURTHER_CODED if coded else FURTHER_LOOK
+        pairs = self.emitters * self.footprint * (1.0 if channels > 3 else COLOURS_ONLY)
+        return (1 + further * (self.looks - 1)) * pairs / PAIRS_PER_SECOND
 
     def check_budget(self, *, memory=None, disk=None, channels=CHANNELS, tiled=False,
                      held=1) -> None:
