@@ -272,7 +272,8 @@ def _launch(rt, out, pos, amp, g: Grid, obliquity, seg, *, first=0, last=None, b
     starts, (reach_x, reach_y) = bins if binned else (_dummy(rt), (0, 0))
     last = len(pos.x) if last is None else last
     rt.kernel(PROGRAM, "point_wave", options)(
-        rt.queue, (-(-h // lanes), -(-w // seg)), rt.series_group, out.data, np.int32(h), np.int32(w),
+        rt.queue, (-(-h // lanes), -(-w // seg)), rt.series_group, out.data, np.int32(h),
+        np.int32(w),
         *(rt.real(v) for v in (g.pitch, x0, y0, k, cone2, (1 - g.rim) ** 2)),
         pos.x.data, pos.y.data, pos.z.data, amp.data,
         np.int32(first), np.int32(last), np.int32(binned), starts.data, np.int32(reach_x),

@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from .. import jobs
-from ..opencl.arrays import empty, exclusive_scan, extent, resident, upload_window, write
+from ..opencl.arrays import empty, exclusive_scan, extent, read, resident, upload_window, write
 from ..opencl.runtime import associated
 from ..propagation import angular_spectrum, grid, tilt
 from ..propagation.angular_spectrum import BAND_EDGE
@@ -448,14 +448,14 @@ class _Gather:
         hologram's rule)."""
         key = round(wavelength, 12)
         if key not in self.layers:
-            rt, (lo, hi) = self.view.rt, self.inverse_depth
+            lo, hi = self.inverse_depth
             step = 16 * LAYER_PHASE * wavelength / (2 * math.pi * self.view.diameter**2)
             n = max(1, int(math.ceil((hi - lo) / step)))
             edges = np.linspace(lo, hi, n + 1)
             if n == 1:
                 self.layers[key] = [(2 / (lo + hi), self.weight)]
             else:  # the layers that hold samples
-                which = np.clip(np.floor((self.inverse.get() - lo) / ((hi - lo) / n)), 0, n - 1)
+                which = np.clip(np.floor((read(self.inverse) - lo) / ((hi - lo) / n)), 0, n - 1)
                 self.layers[key] = [(2 / (edges[i] + edges[i + 1]), self._layer(i, n, lo, hi))
                                     for i in np.unique(which).astype(int)]
         return self.layers[key]
