@@ -15,7 +15,6 @@ hologram's image of the plate's field carried to the pupil).
 from __future__ import annotations
 
 import functools
-
 import math
 from typing import NamedTuple
 

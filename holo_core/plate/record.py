@@ -707,8 +707,7 @@ def _code_classes(em, codes) -> tuple[np.ndarray | None, np.ndarray | None]:
     if len(codes) < 2 or any(c is None for c in codes) or len({c[1] for c in codes}) > 1:
         return None, None
     m = codes[0][1]
-    shifts = np.stack([(k // m * em.cell[:, 1] + k % m * em.cell[:, 0]) % m
-                       for k, _ in codes], 1)
+    shifts = np.stack([_code_steps(em, code) % m for code in codes], 1)
     kinds, classes = np.unique(shifts, axis=0, return_inverse=True)
     mixing = np.exp(2j * np.pi * (kinds - kinds[:, :1]).T / m)
     return classes.reshape(-1).astype(np.int32), mixing
@@ -725,10 +724,15 @@ def _phases(em, seed: int, code) -> np.ndarray:
     k2·j)/m on the lattice cells (i, j) they lie in (k = k1·m + k2; :func:`record_plate`)."""
     phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, len(em))
     if code is not None:
-        k, m = code
-        k1, k2 = divmod(k, m)
-        phases = phases + 2 * np.pi * (k1 * em.cell[:, 1] + k2 * em.cell[:, 0]) / m
+        phases = phases + 2 * np.pi * _code_steps(em, code) / code[1]
     return phases
+
+
+def _code_steps(em, code) -> np.ndarray:
+    """k1·i + k2·j (int) for the emitters' lattice cells (i, j) and code (k1·m + k2, m): their
+    phases are shifted by 2π/m times it."""
+    k1, k2 = divmod(code[0], code[1])
+    return k1 * em.cell[:, 1] + k2 * em.cell[:, 0]
 
 
 def look_code(k: int, n: int):

@@ -461,6 +461,8 @@ class _Gather:
         return self.layers[key]
 
     def _layer(self, i, n, lo, hi):
+        """The sorted weights of layer ``i`` of ``n`` spread evenly over the inverse depths
+        ``lo`` … ``hi`` [1/m], 0 for the other layers' samples (a device array)."""
         rt = self.view.rt
         out = empty(rt, (self.count,), np.float32)
         rt.kernel(PROGRAM, "layer_weights", ())(

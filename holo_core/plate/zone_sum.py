@@ -150,6 +150,7 @@ class ZoneSum:
         groups = [(self.k, em)] + ([] if partner is None else [(self.k2, partner[1])])
         amps = [self._summed(k, e, pos, window) for k, e in groups]
         self.channels = sum(e.amplitude.shape[1] for _, e in groups)
+        self.planes = sum(a.shape[1] for a in amps)  # a class's sums: its channels an emitter
         self.foot = foot = footprints(pos, window)
         # (the emitters, their footprints) of each class; None: all of them, the looks summed
         # as channels
@@ -164,6 +165,7 @@ class ZoneSum:
                         f"-DGRID_Y={table.shape[1]}", f"-DGRID_X={table.shape[2]}",
                         "-cl-fast-relaxed-math") + rt.real_options
         amp = [rt.to_device(a).data for a in amps]
+        self._mixing = None if self.mixing is None else rt.to_device(self.mixing)
         self.args = [*(rt.to_device(pos[:, i], rt.real).data for i in range(3)),
                      amp[0], amp[-1], rt.to_device(foot).data,
                      rt.to_device(np.asarray(em.visibility, np.int32)).data,
@@ -191,8 +193,7 @@ class ZoneSum:
         """As :meth:`region`, on the device: the runtime's workspace, valid until the next
         sum of any :class:`ZoneSum` of the runtime."""
         rt, win = self.rt, self.window
-        per_class = self.channels // len(self.members)
-        sums = rt.workspace("zone-sum", (len(self.members) * per_class, rows, cols))
+        sums = rt.workspace("zone-sum", (len(self.members) * self.planes, rows, cols))
         real = rt.real
         e = win.half_extents
         for k, (members, foot) in enumerate(self.members):
@@ -205,7 +206,7 @@ class ZoneSum:
                      np.int32(block_row0), np.int32(block_col0)]
             rt.kernel(PROGRAM, "zone_sum", self.options)(
                 rt.queue, (-(-rows // rt.lanes), -(-cols // SEG)), rt.series_group, sums.data,
-                np.int32(k * per_class), np.int32(row0), np.int32(col0), np.int32(rows),
+                np.int32(k * self.planes), np.int32(row0), np.int32(col0), np.int32(rows),
                 np.int32(cols), *(real(v) for v in (win.pitch, win.row_pitch, win.origin[0],
                                                     win.origin[1], self.k, self.k2,
                                                     *win.centre)),
@@ -215,10 +216,9 @@ class ZoneSum:
             return sums
         out = rt.workspace("zone-sum-looks", (self.channels, rows, cols))
         looks, classes = self.mixing.shape
-        rt.kernel(PROGRAM, "mix_classes", self.options)(  # CHANNELS: a class's
-            rt.queue, (rows * cols, per_class), None, out.data, sums.data,
-            rt.to_device(self.mixing).data, np.int32(looks), np.int32(classes),
-            np.int64(rows * cols))
+        rt.kernel(PROGRAM, "mix_classes", self.options)(
+            rt.queue, (rows * cols, self.planes), None, out.data, sums.data,
+            self._mixing.data, np.int32(looks), np.int32(classes), np.int64(rows * cols))
         return out
 
 

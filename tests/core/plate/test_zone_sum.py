@@ -59,6 +59,28 @@ def test_a_partner_wavelength_summed_in_the_same_pass_equals_float64_numpy(rng):
         assert err <= ZONE_SUM, err
 
 
+def test_looks_mixed_from_classes_equal_float64_numpy(rng):
+    """Four looks of three channels that differ by a phase factor per emitter from three
+    classes (ZoneEmitters.classes, mixing: fewer classes than looks, as where a scene's
+    emitters miss a lattice class): each look within ZONE_SUM of the float64 sum of its own
+    amplitudes."""
+    n = 60
+    base = emitters(rng, n, np.full((n // 2, 3, 5), 200, np.uint8))
+    classes = rng.integers(0, 3, n).astype(np.int32)
+    mixing = np.exp(2j * np.pi * np.array([[0, 0, 0], [0, 1, 2], [1, 3, 2], [3, 1, 0]]) / 4)
+    looks = [mixing[look, classes][:, None] * base.amplitude for look in range(4)]
+    em = ZoneEmitters(position=base.position, amplitude=np.concatenate(looks, 1),
+                      visibility=base.visibility, table=base.table, grid=base.grid,
+                      classes=classes, mixing=mixing)
+    got = zone_sum(em, WINDOW, WAVELENGTH)
+    for look, a in enumerate(looks):
+        want = reference(ZoneEmitters(position=base.position, amplitude=a,
+                                      visibility=base.visibility, table=base.table,
+                                      grid=base.grid), WINDOW, WAVELENGTH)
+        err = rel_err(got[3 * look:3 * look + 3], want)
+        assert err <= ZONE_SUM, (look, err)
+
+
 def test_regions_tile_the_whole_window(rng):
     """A window computed in blocks (a tiled recording's tasks) equals it computed whole, bit
     for bit: each sample's sum runs over the same emitters in the same order."""
