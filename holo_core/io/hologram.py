@@ -1,13 +1,16 @@
 """The hologram and its file: OpenEXR, float32 channels per wavelength, metadata as JSON.
 
 Channels, for colour c = 0, 1, ...: ``c<c>.H`` the intensity hologram (an intensity
-hologram's), and ``c<c>.O.re`` / ``c<c>.O.im`` the complex object wave (a complex hologram's,
-optional beside an intensity). The header attribute ``holo`` holds the metadata (see
+hologram's), and the complex object wave (a complex hologram's, optional beside an intensity):
+``c<c>.O`` of a complex hologram, its samples' (real, imaginary) pairs side by side in a row
+twice the hologram's width (the complex64 array as it lies in memory: a plate's 1.8 GB are
+written without a copy), or beside an intensity ``c<c>.O.re`` / ``c<c>.O.im`` (an EXR's
+channels share one width). The header attribute ``holo`` holds the metadata (see
 :func:`metadata`: the encoding, the optics, the plate's pose and its viewing zone); files are
-written atomically and read back bit-exactly. Version 2 files (intensity holograms without a
-viewing zone) and version 3 files (no carrier, a zone without its pixel angle) are read as well.
-A plate stored against its zone's carrier (version 4) names it: ``carrier`` holds the point it
-converges on, the origin of the samples and their row pitch.
+written atomically and read back bit-exactly. A plate stored against its zone's carrier names
+it: ``carrier`` holds the point it converges on, the origin of the samples and their row
+pitch. Older versions are read as well: 2 (intensity holograms without a viewing zone), 3 (no
+carrier, a zone without its pixel angle) and 4 (a complex hologram's ``O.re`` and ``O.im``).
 """
 
 from __future__ import annotations
@@ -27,9 +30,10 @@ from ..validate import InputError
 from .image import read_exr, write_exr
 
 FORMAT = "holo-hologram"
-FORMAT_VERSION = 4  # 4: the samples' carrier and the zone's pixel angle
-READS = (2, 3, 4)   # 2: the depth partner 'Z' records every emitter at unit intensity;
-                    # 3: the encoding (complex or intensity) and the plate's viewing zone
+FORMAT_VERSION = 5  # 5: a complex hologram's samples as (real, imaginary) pairs, ``c<c>.O``
+READS = (2, 3, 4, 5)  # 2: the depth partner 'Z' records every emitter at unit intensity;
+                      # 3: the encoding (complex or intensity) and the plate's viewing zone;
+                      # 4: the samples' carrier and the zone's pixel angle
 
 
 class HologramFileError(InputError):
@@ -78,9 +82,11 @@ def write_hologram(path, h: Hologram) -> Path:
     for c in range(len(h.wavelengths)):
         if h.intensity is not None:
             channels[f"c{c}.H"] = h.intensity[c]
-        if h.object_wave is not None:
+        if h.object_wave is not None and h.intensity is not None:
             channels[f"c{c}.O.re"] = h.object_wave[c].real
             channels[f"c{c}.O.im"] = h.object_wave[c].imag
+        elif h.object_wave is not None:  # pairs: the samples as they lie, not split in copies
+            channels[f"c{c}.O"] = np.ascontiguousarray(h.object_wave[c]).view(np.float32)
     # a plate's object wave is speckle, which ZIP barely shrinks (the shot's look: 1.14 GB
     # against 1.46 GB) at 15 s to write and 5 s to read it, where a frame reads it each time
     write_exr(path, channels, holo=header,
@@ -113,17 +119,23 @@ def read_hologram(path) -> Hologram:
     colours = range(len(info.wavelengths))
     intensity = info.encoding == "intensity"
     wanted = [f"c{c}.H" for c in colours] if intensity else []
-    if info.keeps_object_wave:
+    pairs = info.keeps_object_wave and "c0.O" in names  # version 5's complex hologram
+    if pairs:
+        wanted += [f"c{c}.O" for c in colours]
+    elif info.keeps_object_wave:
         wanted += [f"c{c}.O.{p}" for c in colours for p in ("re", "im")]
     missing = [n for n in wanted if n not in names]
     if missing:
         raise HologramFileError(f"{path}: missing channel(s) {', '.join(missing)}")
     for n in wanted:
-        if names[n].shape != info.shape:
+        shape = (info.shape[0], 2 * info.shape[1]) if pairs else info.shape
+        if names[n].shape != shape:
             raise HologramFileError(f"{path}: channel {n} is {names[n].shape}, metadata says "
-                                    f"{info.shape}")
+                                    f"{shape}")
     wave = None
-    if info.keeps_object_wave:
+    if pairs:
+        wave = _complex([(names[f"c{c}.O"],) for c in colours])
+    elif info.keeps_object_wave:
         wave = _complex([(names[f"c{c}.O.re"], names[f"c{c}.O.im"]) for c in colours])
     h = Hologram(info=info, intensity=np.stack([names[f"c{c}.H"] for c in colours])
                  if intensity else None, object_wave=wave)
@@ -132,17 +144,20 @@ def read_hologram(path) -> Hologram:
 
 
 def _complex(parts) -> np.ndarray:
-    """(C, H, W) complex64 of the channels' (real, imaginary) float32 planes ``parts``,
-    page-aligned (a CPU device's views read it in place), interleaved in blocks of rows over
-    the cores: a frame of an animation reads its plate this way (a look of 6754 × 6761
-    samples: 0.33 s against 0.63 s in one thread)."""
+    """(C, H, W) complex64 of each channel's float32 planes ``parts``: (real, imaginary), or
+    the pairs (H, 2W) alone; page-aligned (a CPU device's views read it in place), copied in
+    blocks of rows over the cores: a frame of an animation reads its plate this way (a look
+    of 6754 × 6761 samples: 0.33 s against 0.63 s in one thread)."""
     h, w = parts[0][0].shape
-    wave = memory.aligned_zeros((len(parts), h, w))
+    wave = memory.aligned_zeros((len(parts), h, w if len(parts[0]) == 2 else w // 2))
 
     def fill(block):
         c, r0 = block
         out = wave[c, r0:r0 + ROWS_A_BLOCK]
-        out.real, out.imag = (p[r0:r0 + ROWS_A_BLOCK] for p in parts[c])
+        if len(parts[c]) == 1:
+            out.view(np.float32)[...] = parts[c][0][r0:r0 + ROWS_A_BLOCK]
+        else:
+            out.real, out.imag = (p[r0:r0 + ROWS_A_BLOCK] for p in parts[c])
 
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:  # NumPy's copies release the GIL
         list(pool.map(fill, [(c, r0) for c in range(len(parts)) for r0 in range(0, h,

@@ -69,6 +69,38 @@ def test_a_plate_is_written_uncompressed_and_reads_back_whole(tmp_path, hologram
         assert read_hologram(path).object_wave.tobytes() == h.object_wave.tobytes()
 
 
+def test_a_complex_hologram_is_stored_as_pairs_and_version_4_still_reads(tmp_path, hologram):
+    """Format 5 stores a complex hologram's samples as they lie in memory, (real, imaginary)
+    pairs along each row of ``c<c>.O``; a file of format 4 (``O.re``, ``O.im``) reads the
+    same samples; a pairs channel of the wrong width is refused, naming it."""
+    import OpenEXR
+    plate = dataclasses.replace(hologram, intensity=None, encoding="complex",
+                                reference_amplitudes=(), reference_angle=0.0)
+    path = write_hologram(tmp_path / "h.exr", plate)
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        chans = {n: np.array(c.pixels) for n, c in f.channels().items()}
+        header = dict(f.header())
+    assert sorted(chans) == ["c0.O", "c1.O", "c2.O"]
+    h, w = plate.shape
+    for c, pairs in enumerate(chans[f"c{c}.O"] for c in range(3)):
+        assert pairs.shape == (h, 2 * w)
+        assert np.array_equal(pairs[:, 0::2], plate.object_wave[c].real)
+        assert np.array_equal(pairs[:, 1::2], plate.object_wave[c].imag)
+    old = {f"c{c}.O.{p}": np.ascontiguousarray(pairs[:, k::2])
+           for c in range(3) for k, p in enumerate(("re", "im")) for pairs in [chans[f"c{c}.O"]]}
+    meta = {**json.loads(header["holo"]), "format_version": 4}
+    del header["dataWindow"], header["displayWindow"]
+    with OpenEXR.File({**header, "holo": json.dumps(meta)}, old) as f:
+        f.write(str(tmp_path / "v4.exr"))
+    assert read_hologram(tmp_path / "v4.exr").object_wave.tobytes() == \
+        plate.object_wave.tobytes()
+    narrow = {n: np.ascontiguousarray(a[:, :w]) for n, a in chans.items()}
+    with OpenEXR.File(header, narrow) as f:
+        f.write(str(tmp_path / "narrow.exr"))
+    with pytest.raises(HologramFileError, match=f"narrow.exr: channel c0.O is \\({h}, {w}\\)"):
+        read_hologram(tmp_path / "narrow.exr")
+
+
 def test_missing_and_non_exr_files(tmp_path):
     with pytest.raises(HologramFileError, match="no such file"):
         read_hologram(tmp_path / "absent.exr")
