@@ -39,8 +39,9 @@ SAMPLE_BYTES = 8       # complex64
 # zone sum's pairs (emitter, sample) per second, per channel group (three colours cost one),
 # as this plan counts them (its footprints are the cones' whole; the sum skips their faded
 # rims): bench/shot.py's plate 58 s for 311 s at 2e9, the demo's plate about 270 s for 2760 s
-PAIRS_PER_SECOND = 8.8e9   # one look, its depth partner in the colours' pass: the shot's
-                           # 17.6 s recorded (its two looks 19.7 s, planned 19.8 s)
+PAIRS_PER_SECOND = 1.0e10  # one look, its depth partner in the colours' pass, the colours
+                           # one amplitude an emitter: the shot's 16.2 s recorded (its two
+                           # looks 16.8-18.5 s, planned 17.4 s)
 FURTHER_LOOK = 0.35      # a further independent look in the same pass, of a look's time (its
                          # channels: on the shot's plate two looks took 34.6 s, apart 51.5 s)
 FURTHER_CODED = 0.12     # a further coded look (2 or m² looks): its classes' set-up and mixing

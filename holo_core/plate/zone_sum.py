@@ -32,6 +32,7 @@ PROGRAM = associated(__file__)
 
 SEG = 32       # columns per work item: the recurrence's segment
 BLOCK = 256    # emitters are listed per BLOCK x BLOCK samples
+SHARED_PHASE = 1e-6  # an emitter's channels whose amplitudes' phases agree to this share one
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
@@ -81,6 +82,20 @@ class ZoneEmitters:
     grid: tuple
     classes: np.ndarray | None = None
     mixing: np.ndarray | None = None
+
+
+def shared_phase(a: np.ndarray, tolerance=SHARED_PHASE):
+    """(w (n,) complex64, s (n, C) float32) with a = w[:, None]·s, where each row of the
+    amplitudes ``a`` (n, C) shares one phase (an emitter's colours: √I_c times its wave), to
+    ``tolerance`` of its largest; None where any row does not."""
+    a = np.asarray(a, np.complex128)
+    if not a.size:
+        return np.zeros(len(a), np.complex64), np.zeros(a.shape, np.float32)
+    w = a[np.arange(len(a)), np.abs(a).argmax(1)]
+    ratio = a / np.where(w == 0, 1, w)[:, None]
+    if np.abs(ratio.imag).max() > tolerance:
+        return None
+    return w.astype(np.complex64), ratio.real.astype(np.float32)
 
 
 def footprints(position, window: ZoneWindow) -> np.ndarray:
@@ -150,7 +165,15 @@ class ZoneSum:
         groups = [(self.k, em)] + ([] if partner is None else [(self.k2, partner[1])])
         amps = [self._summed(k, e, pos, window) for k, e in groups]
         self.channels = sum(e.amplitude.shape[1] for _, e in groups)
-        self.planes = sum(a.shape[1] for a in amps)  # a class's sums: its channels an emitter
+        counts = [a.shape[1] for a in amps]
+        self.planes = sum(counts)  # a class's sums: its channels an emitter
+        shared = [shared_phase(a) for a in amps]
+        self.shaded = all(f is not None for f in shared)
+        if self.shaded:  # each wavelength's channels one amplitude an emitter, times shares
+            shade = np.concatenate([f[1] for f in shared], 1)
+            amps = [f[0][:, None] for f in shared]
+        else:
+            shade = np.zeros(1, np.float32)
         self.foot = foot = footprints(pos, window)
         # (the emitters, their footprints) of each class; None: all of them, the looks summed
         # as channels
@@ -160,14 +183,16 @@ class ZoneSum:
         self.pairs = float(np.sum((foot[:, 1] - foot[:, 0] + 1.0).clip(0)
                                   * (foot[:, 3] - foot[:, 2] + 1.0).clip(0)))
         table = em.table if len(em.table) else np.zeros((1, 2, 2), np.uint8)
-        self.options = (f"-DVEC={rt.lanes}", f"-DSEG={SEG}", f"-DCHANNELS={amps[0].shape[1]}",
-                        f"-DCHANNELS2={amps[1].shape[1] if partner else 0}",
+        self.options = (f"-DVEC={rt.lanes}", f"-DSEG={SEG}", f"-DCHANNELS={counts[0]}",
+                        f"-DCHANNELS2={counts[1] if partner else 0}",
+                        f"-DSHADED={int(self.shaded)}",
                         f"-DGRID_Y={table.shape[1]}", f"-DGRID_X={table.shape[2]}",
                         "-cl-fast-relaxed-math") + rt.real_options
-        amp = [rt.to_device(a).data for a in amps]
+        amp = [rt.to_device(np.ascontiguousarray(a, np.complex64)).data for a in amps]
         self._mixing = None if self.mixing is None else rt.to_device(self.mixing)
         self.args = [*(rt.to_device(pos[:, i], rt.real).data for i in range(3)),
-                     amp[0], amp[-1], rt.to_device(foot).data,
+                     amp[0], amp[-1], rt.to_device(shade, np.float32).data,
+                     rt.to_device(foot).data,
                      rt.to_device(np.asarray(em.visibility, np.int32)).data,
                      rt.to_device(np.ascontiguousarray(table, np.uint8)).data,
                      *(np.float32(v) for v in (*em.grid[0][:1], *em.grid[1][:1],
@@ -182,7 +207,7 @@ class ZoneSum:
                                         2 * math.pi))
         a = em.amplitude if self.mixing is None else \
             em.amplitude[:, :em.amplitude.shape[1] // len(self.mixing)]
-        return np.ascontiguousarray(a * fold[:, None], np.complex64)
+        return a * fold[:, None]
 
     def region(self, row0: int, col0: int, rows: int, cols: int) -> np.ndarray:
         """B (C, rows, cols) complex64 from sample (row0, col0); row0 and col0 multiples of

@@ -14,58 +14,71 @@ WINDOW = ZoneWindow(origin=(-0.03, -0.025), pitch=2.3e-5, row_pitch=3.1e-5, shap
                     centre=(0.01, -0.005, 0.3), half_extents=(0.03, 0.02, 0.01), rim=0.15)
 
 
-def emitters(rng, n, table):
+def emitters(rng, n, table, shared=False):
+    """``n`` emitters with random amplitudes of three channels, or ``shared``: the channels of
+    an emitter one wave times real shares (a plate's colours: √I_c, some of them 0), which
+    the kernel sums with a real multiply a channel (ZoneSum.shaded)."""
     pos = np.stack([rng.uniform(-0.02, 0.02, n), rng.uniform(-0.02, 0.02, n),
                     rng.uniform(-0.35, -0.25, n)], 1)
-    amp = rng.normal(size=(n, 3)) + 1j * rng.normal(size=(n, 3))
+    if shared:
+        shares = rng.uniform(0, 1, (n, 3)) * (rng.uniform(size=(n, 3)) > 0.2)
+        amp = shares * (rng.normal(size=n) + 1j * rng.normal(size=n))[:, None]
+    else:
+        amp = rng.normal(size=(n, 3)) + 1j * rng.normal(size=(n, 3))
     rows = np.where(np.arange(n) % 2 == 0, np.arange(n) // 2, -1).astype(np.int32)
     return ZoneEmitters(position=pos, amplitude=amp, visibility=rows, table=table,
                         grid=((-0.035, 0.0175), (-0.024, 0.012)))
 
 
 @pytest.mark.parametrize("rough", [False, True])
-def test_zone_sum_equals_float64_numpy(rng, rough):
+@pytest.mark.parametrize("shared", [False, True])
+def test_zone_sum_equals_float64_numpy(rng, rough, shared):
     """Three colour channels, 60 emitters 0.25-0.35 m behind, every other one seen from part
     of the zone: smooth visibility tables (an edge across the zone) within ZONE_SUM, random
-    ones (a kink at every grid cell) within ZONE_SUM_ROUGH_VISIBILITY."""
+    ones (a kink at every grid cell) within ZONE_SUM_ROUGH_VISIBILITY; each with random
+    amplitudes and with the channels of an emitter sharing one phase."""
     n = 60
     if rough:
         table = rng.integers(0, 256, (n // 2, 3, 5)).astype(np.uint8)
     else:
         table = np.full((n // 2, 3, 5), 255, np.uint8)
         table[:, :, :2] = 96
-    em = emitters(rng, n, table)
+    em = emitters(rng, n, table, shared)
+    assert ZoneSum(em, WINDOW, WAVELENGTH).shaded == shared
     got, want = zone_sum(em, WINDOW, WAVELENGTH), reference(em, WINDOW, WAVELENGTH)
     err = rel_err(got, want)
     print(f"relative error {err:.2e}")
     assert err <= (ZONE_SUM_ROUGH_VISIBILITY if rough else ZONE_SUM), err
 
 
-def test_a_partner_wavelength_summed_in_the_same_pass_equals_float64_numpy(rng):
+@pytest.mark.parametrize("shared", [False, True])
+def test_a_partner_wavelength_summed_in_the_same_pass_equals_float64_numpy(rng, shared):
     """The depth pair's partner (one channel at λ2 = 0.98·λ1) summed in the colours' pass
     (ZoneSum partner=): each wavelength's channels within ZONE_SUM of the float64 sum at its
     own wavelength, the partner's after the colours'."""
     n = 60
     table = np.full((n // 2, 3, 5), 255, np.uint8)
     table[:, :, :2] = 96
-    em = emitters(rng, n, table)
+    em = emitters(rng, n, table, shared)
     depth = ZoneEmitters(position=em.position, amplitude=em.amplitude[:, :1] * 1j,
                          visibility=em.visibility, table=table, grid=em.grid)
-    both = ZoneSum(em, WINDOW, WAVELENGTH, partner=(0.98 * WAVELENGTH, depth)).region(
-        0, 0, *WINDOW.shape)
+    pair = ZoneSum(em, WINDOW, WAVELENGTH, partner=(0.98 * WAVELENGTH, depth))
+    assert pair.shaded == shared
+    both = pair.region(0, 0, *WINDOW.shape)
     assert both.shape == (4,) + WINDOW.shape
     for got, (e, lam) in ((both[:3], (em, WAVELENGTH)), (both[3:], (depth, 0.98 * WAVELENGTH))):
         err = rel_err(got, reference(e, WINDOW, lam))
         assert err <= ZONE_SUM, err
 
 
-def test_looks_mixed_from_classes_equal_float64_numpy(rng):
+@pytest.mark.parametrize("shared", [False, True])
+def test_looks_mixed_from_classes_equal_float64_numpy(rng, shared):
     """Four looks of three channels that differ by a phase factor per emitter from three
     classes (ZoneEmitters.classes, mixing: fewer classes than looks, as where a scene's
     emitters miss a lattice class): each look within ZONE_SUM of the float64 sum of its own
     amplitudes."""
     n = 60
-    base = emitters(rng, n, np.full((n // 2, 3, 5), 200, np.uint8))
+    base = emitters(rng, n, np.full((n // 2, 3, 5), 200, np.uint8), shared)
     classes = rng.integers(0, 3, n).astype(np.int32)
     mixing = np.exp(2j * np.pi * np.array([[0, 0, 0], [0, 1, 2], [1, 3, 2], [3, 1, 0]]) / 4)
     looks = [mixing[look, classes][:, None] * base.amplitude for look in range(4)]
