@@ -119,7 +119,7 @@ def read_hologram(path) -> Hologram:
     colours = range(len(info.wavelengths))
     intensity = info.encoding == "intensity"
     wanted = [f"c{c}.H" for c in colours] if intensity else []
-    pairs = info.keeps_object_wave and "c0.O" in names  # version 5's complex hologram
+    pairs = info.keeps_object_wave and any(f"c{c}.O" in names for c in colours)  # format 5
     if pairs:
         wanted += [f"c{c}.O" for c in colours]
     elif info.keeps_object_wave:

@@ -99,6 +99,9 @@ def test_a_complex_hologram_is_stored_as_pairs_and_version_4_still_reads(tmp_pat
         f.write(str(tmp_path / "narrow.exr"))
     with pytest.raises(HologramFileError, match=f"narrow.exr: channel c0.O is \\({h}, {w}\\)"):
         read_hologram(tmp_path / "narrow.exr")
+    _rewrite(path, drop="c0.O")
+    with pytest.raises(HologramFileError, match=r"missing channel\(s\) c0.O$"):
+        read_hologram(path)
 
 
 def test_missing_and_non_exr_files(tmp_path):
