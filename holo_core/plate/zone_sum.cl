@@ -23,6 +23,7 @@
  * (amp) and the shares s_c (shade): a starts the recurrence, and each channel adds s_c times the
  * light, a real multiply where a complex one was (SHADED; the shot's sums: 20 % less time).
  * Options: -DVEC=1|4|8|16, -DSEG=<columns>, -DCHANNELS=<n>, -DCHANNELS2=<n>, -DSHADED=0|1,
+ * -DPARTNER_LERP=0|1,
  * -DGRID_X, -DGRID_Y=<the zone grid's points along x, y>.
  */
 #include "lane_series.h"
@@ -32,6 +33,9 @@
 #endif
 #ifndef SHADED
 #define SHADED 0
+#endif
+#ifndef PARTNER_LERP
+#define PARTNER_LERP 0
 #endif
 #define ALL (CHANNELS + CHANNELS2)
 
@@ -89,8 +93,21 @@
         for (int c = CHANNELS; c < ALL; c++)                                                 \
             ADD(m, c, vr_, vi_);                                                             \
     }
-/* sample m's light weighted by w, at both wavelengths; then the recurrences' next sample */
-#if CHANNELS2
+/* sample m's light weighted by w, at both wavelengths; then the recurrences' next sample.
+ * PARTNER_LERP: the partner's light is the colours' E times K = ρ·exp(i(k2 − k)(r − |z|)),
+ * which turns by less than PARTNER_TURN over a segment: K is exact at its two ends and linear
+ * between (off by at most PARTNER_TURN²/8 of its size), a complex multiply-add a sample in
+ * place of the partner's own recurrence */
+#if PARTNER_LERP
+#define LIGHT(m, w) {                                                                        \
+        floatv vr_ = (w) * er, vi_ = (w) * ei;                                               \
+        for (int c = 0; c < CHANNELS; c++)                                                   \
+            ADD(m, c, vr_, vi_);                                                             \
+        acc_r[m][CHANNELS] = fma(kr, vr_, fma(-ki, vi_, acc_r[m][CHANNELS]));                \
+        acc_i[m][CHANNELS] = fma(kr, vi_, fma(ki, vr_, acc_i[m][CHANNELS]));                 \
+    }
+#define STEP { kr += dkr; ki += dki; ADVANCE(er, ei, dr, di, cr, ci); }
+#elif CHANNELS2
 #define LIGHT(m, w) ACCUMULATE(m, (w) * er, (w) * ei, (w) * er2, (w) * ei2)
 #define STEP { ADVANCE(er2, ei2, dr2, di2, cr2, ci2); ADVANCE(er, ei, dr, di, cr, ci); }
 #else
@@ -191,13 +208,29 @@ __kernel void zone_sum(__global float2 *out, int first_plane, int row_first, int
         t = inv_r * exp_small(d1r * u0 + d2r * (u0 * u0 / 2));
         floatv step_m = exp_small(d1r * p + d2r * ud), curve_m = exp_small(d2r * (p * p));
         SERIES(k, er, ei, dr, di, cr, ci);
-#if CHANNELS2
+#if PARTNER_LERP  /* K at the segment's first and last columns (the phase as SERIES has it) */
+        floatv kr, ki, dkr, dki;
+        {
+            float dk = (float)(k2 - k), u1 = u0 + (SEG - 1) * p;
+            floatv at = (float)((k2 - k) * rho2 / (rc + az))
+                        + dk * (v * (2 * (float)dyc + v)) / (r + (float)rc);
+            floatv d1 = dk * dx * inv_r, d2 = dk * c2f * inv_r2 * inv_r;
+            floatv ar, ai, br, bi;
+            CIS(wrap(at + d1 * u0 + d2 * (u0 * u0 / 2)), 1.0f, ar, ai);
+            CIS(wrap(at + d1 * u1 + d2 * (u1 * u1 / 2)), 1.0f, br, bi);
+            float2 rho = amp2[j];
+            kr = rho.x * ar - rho.y * ai;
+            ki = rho.x * ai + rho.y * ar;
+            dkr = (rho.x * br - rho.y * bi - kr) * (1.0f / (SEG - 1));
+            dki = (rho.x * bi + rho.y * br - ki) * (1.0f / (SEG - 1));
+        }
+#elif CHANNELS2
         floatv er2, ei2, dr2, di2, cr2, ci2;  /* the partner wavelength's, same geometry */
         SERIES(k2, er2, ei2, dr2, di2, cr2, ci2);
 #endif
 #if SHADED  /* the channels' shared phase and scale starts the recurrence: it follows E */
         SCALE(er, ei, amp[j]);
-#if CHANNELS2
+#if CHANNELS2 && !PARTNER_LERP
         SCALE(er2, ei2, amp2[j]);
 #endif
 #endif

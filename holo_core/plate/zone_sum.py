@@ -33,6 +33,8 @@ PROGRAM = associated(__file__)
 SEG = 32       # columns per work item: the recurrence's segment
 BLOCK = 256    # emitters are listed per BLOCK x BLOCK samples
 SHARED_PHASE = 1e-6  # an emitter's channels whose amplitudes' phases agree to this share one
+PARTNER_TURN = 0.01  # [rad] the most (k2 - k)·|Δr| may turn over a segment for the partner to
+                     # ride on the colours' recurrence (linear between its ends: 1.25e-5 off)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
@@ -96,6 +98,16 @@ def shared_phase(a: np.ndarray, tolerance=SHARED_PHASE):
     if np.abs(ratio.imag).max() > tolerance:
         return None
     return w.astype(np.complex64), ratio.real.astype(np.float32)
+
+
+def _partner_ratio(partner, w):
+    """(w, ρ) (n,) complex64 for the partner carried by the colours' light: the colours'
+    shared amplitude ``w`` (the partner's own where an emitter's colours are all 0: their
+    shares are 0 then) and the partner's amplitude ``partner`` over it."""
+    w = np.asarray(w, np.complex128)
+    black = w == 0
+    w[black] = partner[black]
+    return w.astype(np.complex64), (partner / np.where(w == 0, 1, w)).astype(np.complex64)
 
 
 def footprints(position, window: ZoneWindow) -> np.ndarray:
@@ -169,11 +181,16 @@ class ZoneSum:
         self.planes = sum(counts)  # a class's sums: its channels an emitter
         shared = [shared_phase(a) for a in amps]
         self.shaded = all(f is not None for f in shared)
-        if self.shaded:  # each wavelength's channels one amplitude an emitter, times shares
-            shade = np.concatenate([f[1] for f in shared], 1)
+        # the partner as the colours' light turned by (k2 - k)(r - |z|), linear over a
+        # segment, where that turns by at most PARTNER_TURN (|dr/dx| <= 1)
+        self.partner_lerp = self.shaded and counts[-1] == 1 and partner is not None and \
+            abs(self.k2 - self.k) * SEG * window.pitch <= PARTNER_TURN
+        if self.partner_lerp:
+            amps = [a[:, None] for a in _partner_ratio(amps[1][:, 0], shared[0][0])]
+        elif self.shaded:  # each wavelength's channels one amplitude an emitter, times shares
             amps = [f[0][:, None] for f in shared]
-        else:
-            shade = np.zeros(1, np.float32)
+        shade = np.concatenate([f[1] for f in shared], 1) if self.shaded else \
+            np.zeros(1, np.float32)
         self.foot = foot = footprints(pos, window)
         # (the emitters, their footprints) of each class; None: all of them, the looks summed
         # as channels
@@ -186,6 +203,7 @@ class ZoneSum:
         self.options = (f"-DVEC={rt.lanes}", f"-DSEG={SEG}", f"-DCHANNELS={counts[0]}",
                         f"-DCHANNELS2={counts[1] if partner else 0}",
                         f"-DSHADED={int(self.shaded)}",
+                        f"-DPARTNER_LERP={int(self.partner_lerp)}",
                         f"-DGRID_Y={table.shape[1]}", f"-DGRID_X={table.shape[2]}",
                         "-cl-fast-relaxed-math") + rt.real_options
         amp = [rt.to_device(np.ascontiguousarray(a, np.complex64)).data for a in amps]
