@@ -41,7 +41,8 @@ SAMPLE_BYTES = 8       # complex64
 # rims): bench/shot.py's plate 58 s for 311 s at 2e9, the demo's plate about 270 s for 2760 s
 PAIRS_PER_SECOND = 1.0e10  # one look, its depth partner in the colours' pass, the colours
                            # one amplitude an emitter: the shot's 16.2 s recorded (its two
-                           # looks 16.8-18.5 s, planned 17.4 s)
+                           # looks 16.2-19.0 s with the partner on the colours' recurrence,
+                           # planned 17.4 s)
 FURTHER_LOOK = 0.35      # a further independent look in the same pass, of a look's time (its
                          # channels: on the shot's plate two looks took 34.6 s, apart 51.5 s)
 FURTHER_CODED = 0.12     # a further coded look (2 or m² looks): its classes' set-up and mixing
