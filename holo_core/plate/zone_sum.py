@@ -179,18 +179,7 @@ class ZoneSum:
         self.channels = sum(e.amplitude.shape[1] for _, e in groups)
         counts = [a.shape[1] for a in amps]
         self.planes = sum(counts)  # a class's sums: its channels an emitter
-        shared = [shared_phase(a) for a in amps]
-        self.shaded = all(f is not None for f in shared)
-        # the partner as the colours' light turned by (k2 - k)(r - |z|), linear over a
-        # segment, where that turns by at most PARTNER_TURN (|dr/dx| <= 1)
-        self.partner_lerp = self.shaded and counts[-1] == 1 and partner is not None and \
-            abs(self.k2 - self.k) * SEG * window.pitch <= PARTNER_TURN
-        if self.partner_lerp:
-            amps = [a[:, None] for a in _partner_ratio(amps[1][:, 0], shared[0][0])]
-        elif self.shaded:  # each wavelength's channels one amplitude an emitter, times shares
-            amps = [f[0][:, None] for f in shared]
-        shade = np.concatenate([f[1] for f in shared], 1) if self.shaded else \
-            np.zeros(1, np.float32)
+        amps, shade = self._factored(amps, partner is not None, window)
         self.foot = foot = footprints(pos, window)
         # (the emitters, their footprints) of each class; None: all of them, the looks summed
         # as channels
@@ -216,6 +205,23 @@ class ZoneSum:
                      *(np.float32(v) for v in (*em.grid[0][:1], *em.grid[1][:1],
                                                em.grid[0][1], em.grid[1][1]))]
         self._keep = self.args  # the device buffers live as long as the sum
+
+    def _factored(self, amps, partner: bool, window) -> tuple[list, np.ndarray]:
+        """The amplitudes as the kernel takes them, and the channels' real shares. Where each
+        emitter's channels of a wavelength share one phase (``shaded``), one amplitude an
+        emitter and wavelength; where the partner's light also turns from the colours' by
+        (k2 - k)(r - |z|) at most PARTNER_TURN over a segment (|dr/dx| <= 1:
+        ``partner_lerp``), the colours' amplitude and the partner's over it."""
+        shared = [shared_phase(a) for a in amps]
+        self.shaded = all(f is not None for f in shared)
+        self.partner_lerp = self.shaded and partner and amps[-1].shape[1] == 1 and \
+            abs(self.k2 - self.k) * SEG * window.pitch <= PARTNER_TURN
+        if not self.shaded:
+            return amps, np.zeros(1, np.float32)
+        shade = np.concatenate([f[1] for f in shared], 1)
+        if self.partner_lerp:
+            return [a[:, None] for a in _partner_ratio(amps[1][:, 0], shared[0][0])], shade
+        return [f[0][:, None] for f in shared], shade
 
     def _summed(self, k, em, pos, window) -> np.ndarray:
         """The amplitudes the kernel sums at wave number ``k`` [rad/m]: the carriers exp(ik|z_j|)
