@@ -128,7 +128,7 @@ def read_hologram(path) -> Hologram:
     if missing:
         raise HologramFileError(f"{path}: missing channel(s) {', '.join(missing)}")
     for n in wanted:
-        shape = (info.shape[0], 2 * info.shape[1]) if pairs else info.shape
+        shape = (info.shape[0], 2 * info.shape[1]) if n.endswith(".O") else info.shape
         if names[n].shape != shape:
             raise HologramFileError(f"{path}: channel {n} is {names[n].shape}, metadata says "
                                     f"{shape}")

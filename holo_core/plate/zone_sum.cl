@@ -85,13 +85,14 @@
         acc_i[m][c] = fma(a[c].x, vi, fma(a[c].y, vr, acc_i[m][c]));                         \
     }
 #endif
+#define ADD_RANGE(m, c0, c1, vr, vi)                                                         \
+        for (int c = c0; c < c1; c++)                                                        \
+            ADD(m, c, vr, vi)
 #define ACCUMULATE(m, vr, vi, vr2, vi2) {                                                    \
         floatv vr_ = (vr), vi_ = (vi);                                                       \
-        for (int c = 0; c < CHANNELS; c++)                                                   \
-            ADD(m, c, vr_, vi_);                                                             \
+        ADD_RANGE(m, 0, CHANNELS, vr_, vi_);                                                 \
         vr_ = (vr2), vi_ = (vi2);                                                            \
-        for (int c = CHANNELS; c < ALL; c++)                                                 \
-            ADD(m, c, vr_, vi_);                                                             \
+        ADD_RANGE(m, CHANNELS, ALL, vr_, vi_);                                               \
     }
 /* sample m's light weighted by w, at both wavelengths; then the recurrences' next sample.
  * PARTNER_LERP: the partner's light is the colours' E times K = ρ·exp(i(k2 − k)(r − |z|)),
@@ -101,8 +102,7 @@
 #if PARTNER_LERP
 #define LIGHT(m, w) {                                                                        \
         floatv vr_ = (w) * er, vi_ = (w) * ei;                                               \
-        for (int c = 0; c < CHANNELS; c++)                                                   \
-            ADD(m, c, vr_, vi_);                                                             \
+        ADD_RANGE(m, 0, CHANNELS, vr_, vi_);                                                 \
         acc_r[m][CHANNELS] = fma(kr, vr_, fma(-ki, vi_, acc_r[m][CHANNELS]));                \
         acc_i[m][CHANNELS] = fma(kr, vi_, fma(ki, vr_, acc_i[m][CHANNELS]));                 \
     }
@@ -276,29 +276,31 @@ __kernel void zone_sum(__global float2 *out, int first_plane, int row_first, int
         }
     }
 
-    /* the carrier: exp(ik(|x - Z| - Z_z)) per sample, exact in REAL */
+    /* the carrier: exp(ik(|x - Z| - Z_z)) per sample, exact in REAL, its distance found once
+     * for both wave numbers and its factor once for a wavelength's channels */
     float lane_r[VEC > 1 ? VEC : 1], lane_i[VEC > 1 ? VEC : 1];
+    float2 carrier[2][VEC > 1 ? VEC : 1];
+    int lanes = min(VEC, row_end - row0);
     for (int m = 0; m < SEG; m++) {
         int col = col0 + m;
         if (col >= col_end)
             break;
         real x = x0 + col * pitch - zx;
+        for (int l = 0; l < lanes; l++) {
+            real y = y0 + (row0 + l) * row_pitch - zy, rho2 = x * x + y * y;
+            real to_zone = rho2 / (sqrt(rho2 + zz * zz) + zz);  /* |x - Z| - Z_z */
+            for (int w = 0; w < (CHANNELS2 ? 2 : 1); w++) {
+                real ph = (w ? k2 : k) * to_zone;
+                ph -= (real)(2 * M_PI) * rint(ph * (real)(0.5 / M_PI));
+                carrier[w][l] = cexpi((float)ph);
+            }
+        }
         for (int c = 0; c < ALL; c++) {
-            real kc = c < CHANNELS ? k : k2;
             UNLANE(acc_r[m][c], lane_r);
             UNLANE(acc_i[m][c], lane_i);
-            for (int l = 0; l < VEC; l++) {
-                int row = row0 + l;
-                if (row >= row_end)
-                    break;
-                real y = y0 + row * row_pitch - zy, rho2 = x * x + y * y;
-                real ph = kc * rho2 / (sqrt(rho2 + zz * zz) + zz);
-                ph -= (real)(2 * M_PI) * rint(ph * (real)(0.5 / M_PI));
-                float2 carrier = cexpi((float)ph);
-                float2 acc = (float2)(lane_r[l], lane_i[l]);
-                out[((long)(first_plane + c) * oh + row - row_first) * ow + col - col_first] =
-                    cmul(acc, carrier);
-            }
+            for (int l = 0; l < lanes; l++)
+                out[((long)(first_plane + c) * oh + row0 + l - row_first) * ow + col - col_first] =
+                    cmul((float2)(lane_r[l], lane_i[l]), carrier[c >= CHANNELS][l]);
         }
     }
 }
