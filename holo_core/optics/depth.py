@@ -47,7 +47,10 @@ def from_cross_spectrum(cross, *, wavelengths, centre, focus=None) -> np.ndarray
     cross = np.asarray(cross)
     turn = np.exp(-1j * np.remainder(dk * x_c, 2 * np.pi)).astype(
         np.complex64 if cross.dtype == np.complex64 else np.complex128)
-    return f + x_c + np.angle(cross * turn) / dk
+    ray = np.angle(cross * turn)  # then in place: the steps of a 1280×720 view cost passes
+    ray /= ray.dtype.type(dk)    # over memory, not arithmetic
+    ray += ray.dtype.type(f + x_c)
+    return ray
 
 
 def keep_brightest(ranges, magnitudes) -> tuple[np.ndarray, np.ndarray]:

@@ -236,32 +236,47 @@ def assemble(radiance, coverage, cross, *, camera: Camera, supersample: int, wav
     radiance (within 0.2 %). Else
     (speckled looks) alpha ramps from coverage 0.25 to 0.75, and a speckle minimum inside a
     surface leaves no hole."""
-    s = supersample
+    s, f32 = supersample, np.float32
     radiance = downsample(radiance, s)
     coverage = downsample(coverage, s)
+    # each step in place on an image of the pixels' own: a 1280×720 view's composition is
+    # passes over a few MB, which the memory's speed, not the arithmetic, sets
     if soft:
-        alpha = np.clip((coverage - SOFT_FLOOR) / (1 - 2 * SOFT_FLOOR), 0, 1).astype(np.float32)
+        alpha = np.clip((coverage - SOFT_FLOOR) / (1 - 2 * SOFT_FLOOR), 0, 1).astype(f32)
         floor = SOFT_FLOOR
     else:
         lo, hi = COVERAGE_EDGE
         # a pixel's coverage, or its 3×3 neighbourhood's where higher: a speckle minimum
         # inside a surface leaves no hole, while a straight edge keeps its half-way crossing
-        solid = np.maximum(coverage, box_mean(coverage, 1))
-        alpha = np.clip((solid - lo) / (hi - lo), 0, 1).astype(np.float32)
+        solid = box_mean(coverage, 1)
+        np.maximum(solid, coverage, out=solid)
+        solid -= lo
+        solid *= 1 / (hi - lo)
+        alpha = np.clip(solid, 0, 1, out=solid).astype(f32, copy=False)
         floor = COVERAGE_FLOOR
     # the surfaces' own colour: radiance over coverage (what the pass stores premultiplied
     # by alpha); the colour and the partner share their speckle, which this divides out
-    colour = radiance / np.maximum(coverage, floor)[..., None] * np.float32(exposure)
-    ray = from_cross_spectrum(downsample(cross, s), wavelengths=tuple(wavelengths),
-                              centre=centre)
+    per_cover = np.maximum(coverage, floor)
+    np.divide(per_cover.dtype.type(exposure), per_cover, out=per_cover)
+    colour = np.empty(radiance.shape, np.result_type(radiance, per_cover))
+    for c in range(radiance.shape[-1]):  # a channel at a time: broadcast over the last axis,
+        np.multiply(radiance[..., c], per_cover, out=colour[..., c])  # numpy loops by 3
+    depth = from_cross_spectrum(downsample(cross, s), wavelengths=tuple(wavelengths),
+                                centre=centre).astype(f32, copy=False)
+    depth /= _ray_per_depth(camera)  # planar: along the view axis, as Blender's Depth pass
+    np.copyto(depth, f32(BACKGROUND_DEPTH), where=alpha <= 0)
+    return (colour.astype(f32, copy=False), alpha, depth,
+            (radiance * f32(exposure)).astype(f32, copy=False), coverage.astype(f32, copy=False))
+
+
+def _ray_per_depth(camera: Camera) -> np.ndarray:
+    """(H, W) float32: a pixel's distance along its ray per unit of planar depth,
+    √(1 + t_x² + t_y²) of its centre's view tangents."""
     w, h = camera.resolution  # the tangents by row and by column, broadcast
     tx, ty = camera.pixel_tangents(rows=np.arange(h)[:, None] + 0.5,
                                    cols=np.arange(w)[None, :] + 0.5)
-    planar = ray / np.sqrt(1 + tx * tx + ty * ty)
-    depth = np.where(alpha > 0, planar, BACKGROUND_DEPTH).astype(np.float32)
-    f32 = np.float32  # images of float32 looks stay float32, uncopied (0.04 s at 1280×720)
-    return (colour.astype(f32, copy=False), alpha, depth,
-            (radiance * f32(exposure)).astype(f32, copy=False), coverage.astype(f32, copy=False))
+    ratio = (1 + tx * tx).astype(np.float32) + (ty * ty).astype(np.float32)
+    return np.sqrt(ratio, out=ratio)
 
 
 def pupil_grid_bytes(shape) -> float:

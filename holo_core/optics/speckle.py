@@ -33,11 +33,19 @@ def box_mean(image, radius: int) -> np.ndarray:
     edge keeps its half-way crossing where it was."""
     if radius == 0:
         return image
-    a = np.pad(np.asarray(image, np.float64), radius, mode="edge")
+    image = np.asarray(image)  # float32 stays float32: a sum of nine carries 5e-7 at most
+    a = np.pad(image if image.dtype.kind == "f" else image.astype(np.float64), radius,
+               mode="edge")
     n = 2 * radius + 1
     h, w = a.shape[0] - 2 * radius, a.shape[1] - 2 * radius
-    rows = sum(a[i:i + h] for i in range(n))  # the shifted copies summed: no running sum's
-    return sum(rows[:, j:j + w] for j in range(n)) / (n * n)  # rounding to carry
+    rows = a[:h].copy()  # the shifted copies summed in place: no running sum's rounding
+    for i in range(1, n):  # to carry, and no temporary a term
+        rows += a[i:i + h]
+    out = rows[:, :w].copy()
+    for j in range(1, n):
+        out += rows[:, j:j + w]
+    out *= out.dtype.type(1 / (n * n))
+    return out
 
 
 def pick_brightest(values, brightness, factor: int) -> np.ndarray:

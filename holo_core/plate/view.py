@@ -391,8 +391,9 @@ def _compose(looks, colours, z_ch, first: Hologram, camera, fine, pupil, *, supe
     if z_ch is None:
         return _finish(radiance, None, None, first, camera, pupil, exposure, threshold, lam0)
     pair = (lam0, first.wavelengths[z_ch])
-    cross = sum(look.cross for look in looks)
-    coverage = np.mean([look.power[z_ch] for look in looks], 0)
+    cross = _summed([look.cross for look in looks])
+    coverage = _summed([look.power[z_ch] for look in looks])
+    coverage *= coverage.dtype.type(1 / len(looks))
     depth_of = {"same": _same(first, colours), "partner": z_ch, "estimate": depth_estimate,
                 "wavelengths": pair, "centre": centre, "camera": camera,
                 "supersample": supersample}
@@ -406,7 +407,7 @@ def _compose(looks, colours, z_ch, first: Hologram, camera, fine, pupil, *, supe
     if depth_estimate == "brightest":
         depth = np.where(alpha > 0, _depth(looks, cross, **depth_of),
                          BACKGROUND_DEPTH).astype(np.float32)
-    if not np.isfinite(colour).all() or np.abs(colour).max(initial=0) > np.finfo(np.float32).max:
+    if not (np.isfinite(colour.min(initial=0)) and np.isfinite(colour.max(initial=0))):
         raise InputError(f"exposure must keep the view's pixels within float32 (finite); got "
                          f"{exposure!r}")
     limit = lam0 / pupil.diameter
@@ -416,7 +417,7 @@ def _compose(looks, colours, z_ch, first: Hologram, camera, fine, pupil, *, supe
             "wavelengths_m": list(first.wavelengths), "exposure": exposure,
             "pupil_samples": list(n) if isinstance(n, tuple) else [n, n],
             "iterations": len(looks), "samples": len(looks),
-            "speckle_contrast": _spread(looks, colours, z_ch)}
+            "speckle_contrast": _spread(looks, colours, z_ch, coverage)}
     log.info("render: aperture %.4g m, resolution limit λ/D = %.3g rad = %.2f px",
              pupil.diameter, limit, info["resolution_limit_px"])
     return RenderResult(rgb=colour, alpha=alpha, depth=depth, info=info, coverage=cover,
@@ -427,25 +428,41 @@ def _radiance(looks, colours, composition, supersample) -> np.ndarray:
     """(H, W, colours) radiance at the pixels: the looks' mean of the pixels' means, or the
     pixels' mean of the looks' maximum at the fine pixels (Sect. VII-E)."""
     if composition == "mean":
-        return np.stack([np.mean([look.power[c] for look in looks], 0) for c in colours], -1)
+        first = looks[0].power[colours[0]]
+        radiance = np.empty(first.shape + (len(colours),), first.dtype)
+        for i, c in enumerate(colours):  # summed where it is kept: no stacked copies
+            _summed([look.power[c] for look in looks], out=radiance[..., i])
+        radiance *= radiance.dtype.type(1 / len(looks))
+        return radiance
     return speckle.downsample(speckle.compose(
         [np.stack([np.abs(look.fine[c]) ** 2 for c in colours], -1) for look in looks],
         composition), supersample)
 
 
-def _spread(looks, colours, z_ch) -> float:
+def _summed(images, out=None) -> np.ndarray:
+    """The sum of ``images`` (each (H, W)), added in place into ``out`` or a copy of the first."""
+    out = np.copy(images[0]) if out is None else np.copyto(out, images[0]) or out
+    for image in images[1:]:
+        out += image
+    return out
+
+
+def _spread(looks, colours, z_ch, coverage) -> float:
     """The speckle contrast of the mean colour over the iterations: the spread of each
-    iteration's colour (radiance over coverage) over √n, median over covered pixels; NaN for
-    a single iteration."""
-    if len(looks) < 2:
+    iteration's colour (radiance over coverage) over √n, median over the pixels whose mean
+    ``coverage`` is 0.75 or more; NaN for a single iteration."""
+    n = len(looks)
+    solid = np.flatnonzero(coverage >= 0.75)
+    if n < 2 or not solid.size:
         return float("nan")
-    lum = [np.mean([look.power[c] for c in colours], 0) / np.maximum(look.power[z_ch], 0.05)
-           for look in looks]
-    cover = np.mean([look.power[z_ch] for look in looks], 0)
-    mean, spread = np.mean(lum, 0), np.std(lum, 0) / math.sqrt(len(looks))
-    solid = cover >= 0.75
-    return float(np.median(spread[solid] / np.maximum(mean[solid], 1e-30))) if solid.any() \
-        else float("nan")
+    lum = np.empty((n, solid.size), np.float32)  # each look's colour at the solid pixels
+    for k, look in enumerate(looks):
+        colour = np.take(look.power[colours[0]], solid)
+        for c in colours[1:]:
+            colour += np.take(look.power[c], solid)
+        lum[k] = colour / (len(colours) * np.maximum(np.take(look.power[z_ch], solid), 0.05))
+    mean, spread = lum.mean(0), lum.std(0) / np.float32(math.sqrt(n))
+    return float(np.median(spread / np.maximum(mean, 1e-30)))
 
 
 class OutsideZoneWarning(UserWarning):
