@@ -256,7 +256,8 @@ def _iris_sum(n, d, diameter, taper, lit) -> float:
     inner = (1 - taper) * radius
     rho = np.linspace(inner, radius, 4097)
     rim = (0.5 * (1 + np.cos(np.pi * (rho - inner) / max(radius - inner, 1e-300)))) ** 2
-    area = math.pi * inner**2 + float(np.trapz(rim * 2 * math.pi * rho, rho))
+    ring = rim * 2 * math.pi * rho  # integrated by the trapezoid rule (NumPy 2 renamed
+    area = math.pi * inner**2 + float(np.sum((ring[1:] + ring[:-1]) * np.diff(rho)) / 2)  # trapz)
     return area / (d * d)
 
 

@@ -34,7 +34,7 @@ def test_a_card_moving_eight_pixels_fades_over_eight_pixels():
     coverage summed over the image is the still card's (within 1 %: the shutter's times, a
     fine pixel of motion apart, sample the edge's bins; measured 0.5 %)."""
     still = render_camera([_card()], CAMERA, via="incoherent")
-    px = 1.0 / CAMERA.project(np.array([[0.5, 0, 0], [1.5, 0, 0]]))[0][:, 0].ptp()  # m/px
+    px = 1.0 / np.ptp(CAMERA.project(np.array([[0.5, 0, 0], [1.5, 0, 0]]))[0][:, 0])  # m/px
     start, end = _card(-4 * px), _card(4 * px)
     moving = Mesh(vertices=_card().vertices, triangles=_card().triangles,
                   colours=_card().colours, motion=np.stack([start.vertices, end.vertices]))
