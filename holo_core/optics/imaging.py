@@ -35,6 +35,7 @@ IRIS_TAPER = 0.1       # the iris's raised-cosine rim, a fraction of its radius
 COVERAGE_EDGE = (0.25, 0.75)  # coverage mapped to alpha 0 … 1 (0.5: the geometric edge)
 COVERAGE_FLOOR = 0.05  # the colour is radiance / coverage where coverage exceeds this
 SOFT_FLOOR = 1e-3      # soft alpha: coverage below this is clear, within this of 1 opaque
+SPECTRA = "pupil-spectra"  # the workspace of a stack of padded spectra (P, 2h, 2w)
 
 
 def iris_weights(shape, pitch, diameter, taper=IRIS_TAPER) -> np.ndarray:
@@ -145,7 +146,7 @@ class PupilImage:
         planes = pupils.shape[0]
         looks = planes // len(names)
         cols, rows = (n // s for n in self.camera.resolution)
-        spectra = rt.scratch("pupil-spectra", (planes, 2 * h, 2 * w))
+        spectra = rt.workspace(SPECTRA, (planes, 2 * h, 2 * w))
         scales = rt.to_device(np.array([channels[names[p % len(names)]][2]
                                         for p in range(planes)]), np.float32)
         corners = (grid.embedded(h, 2 * h), grid.embedded(w, 2 * w))

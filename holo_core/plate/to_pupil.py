@@ -25,6 +25,7 @@ import numpy as np
 
 from .. import jobs
 from ..opencl.arrays import empty, exclusive_scan, extent, read, resident, upload_window, write
+from ..optics.imaging import SPECTRA
 from ..opencl.runtime import associated
 from ..propagation import angular_spectrum, grid, tilt
 from ..propagation.angular_spectrum import BAND_EDGE
@@ -487,7 +488,9 @@ class _Gather:
         grid_shape = (2 * hh, 2 * ww)
         if self.hi[0] < self.lo[0] or self.hi[1] < self.lo[1]:
             return
-        spread = rt.workspace("carrier-spread", (planes,) + grid_shape)
+        # the buffer of the imager's spectra (PupilImage.fold), of this shape: the grids are
+        # spent once their layers are in ``out``, and a view keeps one stack, not two
+        spread = rt.workspace(SPECTRA, (planes,) + grid_shape)
         # each wavelength's (plane of out, plane of the grids): its curvature found once
         planes_by_wavelength = {}
         for first, to, n, wavelength in runs:

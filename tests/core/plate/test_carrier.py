@@ -128,6 +128,19 @@ def test_a_view_reads_the_samples_in_place_as_it_would_copy_them(plate):
     assert np.array_equal(a.rgb, b.rgb) and np.array_equal(a.depth, b.depth)
 
 
+def test_views_over_a_move_keep_one_stack_of_spectra(plate):
+    """The pupil's spectrum grows and shrinks with the window as the camera moves: its
+    spectra (and the spread grids before them, in the same buffer) are one work array grown
+    as needed, not one kept per shape met (205 MiB each on the shot of bench/shot.py)."""
+    from holo_core.opencl import get_runtime
+    from holo_core.optics.imaging import SPECTRA
+    rt = get_runtime()
+    for eye in ("left", "centre", "right"):
+        render_view(plate, camera(eye, SCALE), supersample=2)
+    stacks = [k for k in rt.cache if isinstance(k, tuple) and SPECTRA in k]
+    assert stacks == [("workspace", SPECTRA)], stacks
+
+
 def test_a_views_pixels_fold_on_the_device_as_the_fine_images_do_on_the_host(plate):
     """The view folds its fine images to the pixels on the device (PupilImage.fold); a
     composition by maximum and a depth by the brightest look compose the fine images
