@@ -5,7 +5,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo demo-plate figures test fuzz test-runtimes bench bench-runtimes bench-quality devices extension check-lts clean
+.PHONY: demo demo-plate figures test test-numpy2 fuzz test-runtimes bench bench-runtimes bench-quality devices extension check-lts clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -28,6 +28,15 @@ figures: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest tests/core
 	$(PY) -m pytest tests/addon
+	$(MAKE) test-numpy2
+
+# The core's tests again under NumPy 2, as a Python user's environment without bpy installs
+# them (bpy's wheels pin NumPy 1 in .venv): a virtual environment of its own
+VENV2 ?= .venv-numpy2
+test-numpy2:
+	test -x $(VENV2)/bin/python || $(PYTHON) -m venv $(VENV2)
+	$(VENV2)/bin/python -m pip install -q -e '.[test]' 'numpy>=2'
+	$(VENV2)/bin/python -m pytest tests/core
 
 # The readers' fuzz suite at 5000 cases each (make test runs 300; about 4 minutes).
 FUZZ_CASES ?= 5000

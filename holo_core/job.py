@@ -28,7 +28,7 @@ from . import validate
 from .scene.camera import Camera
 from .scene.mesh import Mesh
 from .scene.plate import Plate, ViewingZone
-from .validate import InputError
+from .validate import InputError, shown
 from .view import RenderResult
 
 MAX_SAMPLES = 1 << 16      # a camera hologram's looks, at most
@@ -127,7 +127,7 @@ class PlateRoute(_Route):
         for name in ("memory_budget", "disk_budget"):
             value = getattr(self, name)
             if value is not None and not validate.finite(name, _real(name, value), "bytes") > 0:
-                raise InputError(f"{name} must be > 0 [bytes] or None; got {value!r}")
+                raise InputError(f"{name} must be > 0 [bytes] or None; got {shown(value)}")
         if self.scheduler is not None and not (isinstance(self.scheduler, str)
                                                and self.scheduler.strip()):
             raise InputError(f"scheduler must be a Dask scheduler's address (tcp://host:port) "
@@ -473,7 +473,7 @@ def _path(name: str, value, *, optional=False) -> Path | None:
     if value is None and optional:
         return None
     if not isinstance(value, (str, Path)) or not str(value) or "\0" in str(value):
-        raise InputError(f"{name} must be a path; got {value!r}"[:300])
+        raise InputError(f"{name} must be a path; got {shown(value)}"[:300])
     return Path(value)
 
 
@@ -485,14 +485,14 @@ def _paths(name: str, values) -> tuple:
 
 def _flag(name: str, value) -> bool:
     if not isinstance(value, (bool, np.bool_)):
-        raise InputError(f"{name} must be true or false; got {value!r}"[:300])
+        raise InputError(f"{name} must be true or false; got {shown(value)}"[:300])
     return bool(value)
 
 
 def _real(name: str, value):
     """``value`` when it is a number (a string or a flag is not, whatever it spells)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
-        raise InputError(f"{name} must be a number; got {value!r}"[:300])
+        raise InputError(f"{name} must be a number; got {shown(value)}"[:300])
     return value
 
 
@@ -500,7 +500,7 @@ def _exposure(value) -> float:
     v = validate.finite("exposure", _real("exposure", value))
     if not 0 < v <= MAX_EXPOSURE:
         raise InputError(f"exposure must be in (0, {MAX_EXPOSURE:g}] (a linear factor); got "
-                         f"{value!r}")
+                         f"{shown(value)}")
     return v
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import re
 
-from .validate import InputError
+from .validate import InputError, shown
 
 # CODATA 2018 (exact where SI defines them)
 PLANCK = 6.62607015e-34             # h [J s]
@@ -31,7 +31,7 @@ def electron_wavelength(voltage: float) -> float:
     """The wavelength [m] of electrons accelerated through ``voltage`` [V] (> 0), with the
     relativistic correction: λ = h / √(2·m·e·U·(1 + e·U/(2·m·c²)))."""
     if not (isinstance(voltage, (int, float)) and math.isfinite(voltage) and voltage > 0):
-        raise InputError(f"accelerating voltage must be > 0 [V]; got {voltage!r}")
+        raise InputError(f"accelerating voltage must be > 0 [V]; got {shown(voltage)}")
     energy = ELEMENTARY_CHARGE * voltage
     momentum = math.sqrt(2 * ELECTRON_MASS * energy *
                          (1 + energy / (2 * ELECTRON_MASS * LIGHT_SPEED**2)))

@@ -29,6 +29,18 @@ class SamplingWarning(UserWarning):
     """A grid cannot represent the requested wave alias-free; the message names the safe limit."""
 
 
+def shown(value) -> str:
+    """``value`` as an error message names it: its repr, NumPy's numbers (alone, or in a list
+    or tuple) written as numbers, as NumPy 1 wrote them (NumPy 2's repr is np.float64(633.0)
+    where the user passed 633.0; its str is still 633.0)."""
+    if isinstance(value, np.generic):
+        return str(value)
+    if isinstance(value, (list, tuple)) and any(isinstance(v, np.generic) for v in value):
+        inner = ", ".join(shown(v) for v in value)
+        return f"[{inner}]" if isinstance(value, list) else \
+            f"({inner}{',' if len(value) == 1 else ''})"
+    return repr(value)
+
 def warn_sampling(message: str) -> None:
     warnings.warn(message, SamplingWarning, stacklevel=3)
 
@@ -69,14 +81,14 @@ def positive(name: str, value, unit: str = "") -> float:
     """``value`` as a float, or :class:`InputError` unless it is finite and > 0."""
     v = _finite(name, value, unit)
     if v <= 0:
-        raise InputError(f"{name} must be > 0{_unit(unit)}; got {value!r}")
+        raise InputError(f"{name} must be > 0{_unit(unit)}; got {shown(value)}")
     return v
 
 
 def at_least(name: str, value, minimum: float, unit: str = "") -> float:
     v = _finite(name, value, unit)
     if v < minimum:
-        raise InputError(f"{name} must be >= {minimum}{_unit(unit)}; got {value!r}")
+        raise InputError(f"{name} must be >= {minimum}{_unit(unit)}; got {shown(value)}")
     return v
 
 
@@ -89,7 +101,7 @@ def length(name: str, value, unit: str = "m") -> float:
     v = _finite(name, value, unit)
     if not MIN_LENGTH <= v <= MAX_LENGTH:
         raise InputError(f"{name} must be in [{MIN_LENGTH:g}, {MAX_LENGTH:g}]{_unit(unit)}; "
-                         f"got {value!r}")
+                         f"got {shown(value)}")
     return v
 
 
@@ -177,7 +189,7 @@ def _optical(name: str, value, limits: tuple[float, float], kind: str) -> float:
         metres = f"{v * f:g}" if "e" in f"{v:g}" else f"{v:g}e{round(math.log10(f))}"
         hint = f" ({v:g} looks like {unit}: pass {metres})"
     raise InputError(f"{name} must be in [{lo:g}, {hi:g}] [m] ({_SPANS[kind]}); got "
-                     f"{value!r}{hint}")
+                     f"{shown(value)}{hint}")
 
 
 def integer(name: str, value, minimum: int | None = None, maximum: int | None = None) -> int:
@@ -188,10 +200,10 @@ def integer(name: str, value, minimum: int | None = None, maximum: int | None = 
     if isinstance(value, (float, np.floating)) and math.isfinite(value) and value == int(value):
         ok = True  # 2.0 is the integer 2
     if not ok:
-        raise InputError(f"{name} must be {allowed}; got {value!r}")
+        raise InputError(f"{name} must be {allowed}; got {shown(value)}")
     v = int(value)
     if (minimum is not None and v < minimum) or (maximum is not None and v > maximum):
-        raise InputError(f"{name} must be {allowed}; got {value!r}")
+        raise InputError(f"{name} must be {allowed}; got {shown(value)}")
     return v
 
 
@@ -199,7 +211,7 @@ def choice(name: str, value, options: tuple) -> str:
     """One of the strings ``options``."""
     if not isinstance(value, str) or value not in options:
         raise InputError(f"{name} must be one of {', '.join(map(repr, options))}; got "
-                         f"{value!r}"[:300])
+                         f"{shown(value)}"[:300])
     return value
 
 
@@ -220,7 +232,7 @@ def vector(name: str, value, size: int = 3, unit: str = "") -> np.ndarray:
     except (TypeError, ValueError):
         v = None
     if v is None or v.shape != (size,) or not np.isfinite(v).all():
-        raise InputError(f"{name} must be {size} finite numbers{_unit(unit)}; got {value!r}")
+        raise InputError(f"{name} must be {size} finite numbers{_unit(unit)}; got {shown(value)}")
     return v
 
 
@@ -229,7 +241,7 @@ def pair(name: str, value, unit: str = "", limit: float | None = None) -> tuple[
     try:
         x, y = value
     except (TypeError, ValueError):
-        raise InputError(f"{name} must be a pair (x, y){_unit(unit)}; got {value!r}") from None
+        raise InputError(f"{name} must be a pair (x, y){_unit(unit)}; got {shown(value)}") from None
     if limit is None:
         return _finite(name, x, unit), _finite(name, y, unit)
     return within(name, x, limit, unit), within(name, y, limit, unit)
@@ -240,7 +252,8 @@ def within(name: str, value, limit: float, unit: str = "m") -> float:
     wave's phase k·z meaningful in float64)."""
     v = _finite(name, value, unit)
     if abs(v) > limit:
-        raise InputError(f"{name} must be in [-{limit:g}, {limit:g}]{_unit(unit)}; got {value!r}")
+        raise InputError(f"{name} must be in [-{limit:g}, {limit:g}]{_unit(unit)}; got "
+                         f"{shown(value)}")
     return v
 
 
@@ -260,7 +273,7 @@ def shape2d(name: str, value) -> tuple[int, int]:
     except (TypeError, ValueError):
         ok = False
     if not ok or h < 1 or w < 1:
-        raise InputError(f"{name} must be a pair of integers >= 1 (rows, cols); got {value!r}")
+        raise InputError(f"{name} must be a pair of integers >= 1 (rows, cols); got {shown(value)}")
     return h, w
 
 
@@ -312,9 +325,9 @@ def _finite(name: str, value, unit: str) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise InputError(f"{name} must be a number{_unit(unit)}; got {value!r}") from None
+        raise InputError(f"{name} must be a number{_unit(unit)}; got {shown(value)}") from None
     if not math.isfinite(v):
-        raise InputError(f"{name} must be finite{_unit(unit)}; got {value!r}")
+        raise InputError(f"{name} must be finite{_unit(unit)}; got {shown(value)}")
     return v
 
 

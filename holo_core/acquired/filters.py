@@ -27,7 +27,7 @@ import numpy as np
 from .. import validate
 from ..propagation import grid
 from ..scene.hologram import Hologram
-from ..validate import InputError
+from ..validate import InputError, shown
 from .carrier import Carrier, check_off_axis, intensity_of, locate, sideband_contrast
 
 ITERATIONS = 8      # passes that take the zero order's and the twin's leakage away ...
@@ -75,7 +75,7 @@ class Aperture:
         width = validate.positive("aperture width", self.width)
         if width > 1:
             raise InputError(f"aperture width must be in (0, 1] (a fraction of the radius); "
-                             f"got {self.width!r}")
+                             f"got {shown(self.width)}")
 
     @classmethod
     def holospy(cls) -> Aperture:
@@ -273,7 +273,7 @@ def _carrier(hologram, h, pitch, wavelength, carrier, sideband) -> Carrier:
         nyquist = (1 / (2 * pitch[0]), 1 / (2 * pitch[1]))
         if abs(fx) > nyquist[0] or abs(fy) > nyquist[1]:
             raise InputError(f"carrier must be within the Nyquist frequency ±{nyquist[0]:.6g} "
-                             f"1/m (x), ±{nyquist[1]:.6g} 1/m (y); got {carrier!r}")
+                             f"1/m (x), ±{nyquist[1]:.6g} 1/m (y); got {shown(carrier)}")
         return Carrier(fx=fx, fy=fy, wavelength=wavelength, rule="given")
     validate.choice("carrier", carrier, ("auto", "reference", "spectrum"))
     if carrier == "reference" and stated is None:

@@ -28,7 +28,7 @@ import numpy as np
 
 from .. import validate
 from ..propagation import angular_spectrum
-from ..validate import InputError
+from ..validate import InputError, shown
 
 
 def _brenner(a):
@@ -128,10 +128,10 @@ def _region(region, shape):
     try:
         r0, r1, c0, c1 = (validate.integer("region", v, 0) for v in region)
     except (TypeError, ValueError):
-        raise InputError(f"region must be (row0, row1, col0, col1); got {region!r}") from None
+        raise InputError(f"region must be (row0, row1, col0, col1); got {shown(region)}") from None
     if not (r0 < r1 <= shape[0] and c0 < c1 <= shape[1]) or min(r1 - r0, c1 - c0) < 3:
         raise InputError(f"region must lie in the {shape[0]}x{shape[1]} plane, at least 3x3; "
-                         f"got {region!r}")
+                         f"got {shown(region)}")
     return (slice(r0, r1), slice(c0, c1))
 
 
@@ -161,7 +161,7 @@ def depth_of_focus(wavelength: float, band: float) -> float:
     (``band`` [1/m], the wave's highest spatial frequency) stays in focus."""
     na = validate.positive("band", band, "1/m") * validate.wavelength("wavelength", wavelength)
     if na >= 1:
-        raise InputError(f"band must be below 1/λ = {1 / wavelength:.6g} 1/m; got {band!r}")
+        raise InputError(f"band must be below 1/λ = {1 / wavelength:.6g} 1/m; got {shown(band)}")
     return wavelength / na**2
 
 

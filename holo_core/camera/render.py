@@ -24,7 +24,7 @@ from ..optics.imaging import COVERAGE_FLOOR, assemble
 from ..optics.speckle import downsample
 from ..scene.camera import Camera
 from ..scene.mesh import Mesh
-from ..validate import InputError
+from ..validate import InputError, shown
 from ..view import RenderResult
 from .incoherent import IncoherentImages, grid_bytes
 from .optics import SUPERSAMPLE, PupilOptics, choose_optics
@@ -75,7 +75,7 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     supersample = validate.integer("supersample", supersample, 1, MAX_SUPERSAMPLE)
     seed = validate.seed(seed)
     if not 0 < validate.finite("exposure", exposure) <= MAX_EXPOSURE:
-        raise InputError(f"exposure must be in (0, {MAX_EXPOSURE:g}]; got {exposure!r}")
+        raise InputError(f"exposure must be in (0, {MAX_EXPOSURE:g}]; got {shown(exposure)}")
     w, h = camera.resolution
     memory.check_host(f"a {w}x{h} camera view at supersample {supersample}",
                       FINE_PIXEL_BYTES * w * h * supersample**2)

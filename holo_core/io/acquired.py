@@ -52,7 +52,7 @@ import numpy as np
 
 from .. import memory, units, validate
 from ..scene.hologram import Hologram
-from ..validate import InputError
+from ..validate import InputError, shown
 from . import jsonfile
 from .hologram import HologramFileError, check_pixels, read_hologram, write_hologram
 from .image import atomic_paths, check_writable, read_exr
@@ -714,7 +714,7 @@ def _optics(name: str, given: dict, meta: dict, required=True) -> dict:
         else:
             out[key] = 0.0 if value is None else validate.finite(arg, value, "rad")
         if key == "reference_angle_rad" and not 0 <= out[key] < math.pi / 2:
-            raise InputError(f"{arg} must be in [0, π/2) rad; got {out[key]!r}")
+            raise InputError(f"{arg} must be in [0, π/2) rad; got {shown(out[key])}")
     return out
 
 

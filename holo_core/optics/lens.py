@@ -25,7 +25,8 @@ def _thin_lens(field, *, wavelength, pitch, focal_length, centre=(0.0, 0.0)):
     wavelength, (px, py) = grid.wave_pair(wavelength, pitch)
     f = validate.within("focal_length", focal_length, validate.MAX_LENGTH)
     if abs(f) < validate.MIN_LENGTH:
-        raise validate.InputError(f"focal_length must be non-zero [m]; got {focal_length!r}")
+        raise validate.InputError(f"focal_length must be non-zero [m]; got "
+                                  f"{validate.shown(focal_length)}")
     cx, cy = validate.pair("centre", centre, "m", validate.MAX_LENGTH)
     rt, dev, from_host = as_device(field)
     h, w = dev.shape

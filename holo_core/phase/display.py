@@ -29,7 +29,7 @@ from ..io import display as display_io
 from ..io.image import check_writable
 from ..propagation import grid, resample
 from ..scene.hologram import Hologram
-from ..validate import InputError
+from ..validate import InputError, shown
 from .encoding import double_phase, normalised
 
 log = logging.getLogger(__name__)
@@ -199,7 +199,7 @@ def _sin_angle(angle, pitch: float, wavelength: float) -> float:
     if not 0 <= a < math.pi / 2 or math.sin(a) > most * (1 + 1e-12):
         limit = math.asin(min(most, 1.0))
         raise InputError(f"angle must be in [0, {limit:.6g}] rad (sin ϑ <= λ/(2·pitch), beyond "
-                         f"which the carrier aliases); got {angle!r}")
+                         f"which the carrier aliases); got {shown(angle)}")
     return math.sin(a)
 
 

@@ -25,7 +25,7 @@ from ..opencl import associated, get_runtime
 from ..opencl.arrays import cached, empty, fill, window
 from ..propagation import grid
 from ..propagation.convolution import chirp_transfer, convolve
-from ..validate import InputError
+from ..validate import InputError, shown
 
 PROGRAM = associated(__file__)
 
@@ -142,7 +142,7 @@ def sampling_grid(shape, wavelength, pitch, band) -> Grid:
     if not 0 < band <= most * (1 + 1e-9) or band >= 1:  # sin θ: no direction lies past 90°
         limit = f"(0, {most:.4g}]" if most < 1 else "(0, 1)"
         raise InputError(f"band must be in {limit} (sin θ of the cone the pitch samples); "
-                         f"got {band!r}")
+                         f"got {shown(band)}")
     return g._replace(fill=band * 2 * g.pitch / g.wavelength)
 
 

@@ -18,7 +18,7 @@ from ..propagation import grid
 from ..scene.hologram import ENCODINGS, Hologram, HologramInfo
 from ..scene.mesh import Mesh, facing, sample_points, visible_from
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Carrier, Plate, ViewingZone
-from ..validate import InputError
+from ..validate import InputError, shown
 from .emitters import zone_emitters
 from .plan import LAYERS, RIM, TILE, PlatePlan, plan
 from .point_sources import cone_filter, point_bytes, point_wave
@@ -57,7 +57,7 @@ class Reference:
     def __post_init__(self):
         a = validate.finite("reference angle", self.angle, "rad")
         if not 0 <= a < math.pi / 2:
-            raise InputError(f"reference angle must be in [0, π/2) rad; got {self.angle!r}")
+            raise InputError(f"reference angle must be in [0, π/2) rad; got {shown(self.angle)}")
         validate.finite("reference azimuth", self.azimuth, "rad")
         validate.positive("reference beam_ratio", self.beam_ratio)
 

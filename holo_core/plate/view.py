@@ -37,7 +37,7 @@ from ..propagation.tilt import tilt_reach
 from ..scene.camera import Camera
 from ..scene.hologram import Hologram
 from ..scene.plate import box_corners
-from ..validate import InputError
+from ..validate import InputError, shown
 from ..view import BACKGROUND_DEPTH, RenderResult, as_rgb
 from .reconstruction import reconstruct
 from .to_pupil import (
@@ -410,7 +410,7 @@ def _compose(looks, colours, z_ch, first: Hologram, camera, fine, pupil, *, supe
                          BACKGROUND_DEPTH).astype(np.float32)
     if not (np.isfinite(colour.min(initial=0)) and np.isfinite(colour.max(initial=0))):
         raise InputError(f"exposure must keep the view's pixels within float32 (finite); got "
-                         f"{exposure!r}")
+                         f"{shown(exposure)}")
     limit = lam0 / pupil.diameter
     info = {"aperture_m": pupil.diameter, "focus_m": pupil.focus,
             "resolution_limit_rad": limit, "pixel_angle_rad": camera.pixel_angle(),
@@ -534,7 +534,7 @@ def _check_settings(holos, camera: Camera, supersample, exposure, threshold) -> 
         validate.positive("exposure", exposure)
     threshold = validate.finite("opacity_threshold", threshold)
     if not 0 <= threshold <= 1:
-        raise InputError(f"opacity_threshold must be in [0, 1]; got {threshold!r}")
+        raise InputError(f"opacity_threshold must be in [0, 1]; got {shown(threshold)}")
     first = holos[0]
     for i, h in enumerate(holos[1:], 1):
         for name in ("wavelengths", "pitch", "shape", "channels"):
@@ -628,7 +628,7 @@ def _finish(radiance, ray, coverage, h: Hologram, camera, pupil, exposure, thres
     if np.abs(rgb).max(initial=0) > np.finfo(np.float32).max:  # a view of inf pixels
         raise InputError(f"exposure must keep the view's pixels within float32: at most "
                          f"{np.finfo(np.float32).max / np.abs(radiance).max():.3g} for this "
-                         f"view; got {exposure!r}")
+                         f"view; got {shown(exposure)}")
     rgb = as_rgb(rgb)  # one, two, four or more channels: the stated colours
     if coverage is not None:  # geometric: half covered at a silhouette edge, whatever the colour
         alpha = (coverage > threshold).astype(np.float32)

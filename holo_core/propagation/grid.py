@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from .. import validate
-from ..validate import InputError
+from ..validate import InputError, shown
 
 
 def coords(n: int, pitch: float) -> np.ndarray:
@@ -87,12 +87,12 @@ def pitch_pair(pitch, name: str = "pitch") -> tuple[float, float]:
         p = validate.pitch(name, pitch)
         return p, p
     if np.shape(pitch) != (2,):
-        raise InputError(f"{name} must be a number or a pair (x, y) [m]; got {pitch!r}"[:300])
+        raise InputError(f"{name} must be a number or a pair (x, y) [m]; got {shown(pitch)}"[:300])
     return validate.pitch(name, pitch[0]), validate.pitch(name, pitch[1])
 
 
 def padding_factor(padding) -> float:
     p = validate.at_least("padding", padding, 1.0)
     if p > 16:
-        raise InputError(f"padding must be in [1, 16]; got {padding!r}")
+        raise InputError(f"padding must be in [1, 16]; got {shown(padding)}")
     return p

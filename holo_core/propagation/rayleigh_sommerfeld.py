@@ -15,7 +15,7 @@ import numpy as np
 from .. import validate
 from ..opencl import as_device, associated, is_device_array, like_input
 from ..opencl.arrays import empty
-from ..validate import InputError
+from ..validate import InputError, shown
 from . import grid
 
 PROGRAM = associated(__file__)
@@ -52,7 +52,7 @@ def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0)
     if abs(z) < validate.MIN_LENGTH:
         raise InputError(f"distance must be non-zero for rayleigh_sommerfeld, |distance| >= "
                          f"{validate.MIN_LENGTH:g} m (the integral is singular on the source "
-                         f"plane); got {distance!r}")
+                         f"plane); got {shown(distance)}")
     x0, y0 = validate.pair("offset", offset, "m", validate.MAX_LENGTH)
     out_pitch = pitch if out_pitch is None else validate.pitch("out_pitch", out_pitch)
     if not is_device_array(field):

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .. import preview, validate
-from ..validate import InputError
+from ..validate import InputError, shown
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
@@ -57,7 +57,7 @@ class Field:
             else None
         if lam is None or not _broadcasts(lam.shape, batch):
             raise InputError(f"wavelength must be a number [m] or an array broadcast against "
-                             f"the batch shape {batch}; got {self.wavelength!r}"[:300])
+                             f"the batch shape {batch}; got {shown(self.wavelength)}"[:300])
         for v in lam.reshape(-1):
             validate.wavelength("wavelength", v)
         object.__setattr__(self, "wavelength", float(lam) if lam.ndim == 0 else lam)
@@ -148,7 +148,7 @@ def pitches(pitch) -> tuple[float, float]:
         p = validate.pitch("pitch", pitch)
         return p, p
     if np.shape(pitch) != (2,):
-        raise InputError(f"pitch must be a number or a pair (x, y) [m]; got {pitch!r}"[:300])
+        raise InputError(f"pitch must be a number or a pair (x, y) [m]; got {shown(pitch)}"[:300])
     return validate.pitch("pitch", pitch[0]), validate.pitch("pitch", pitch[1])
 
 

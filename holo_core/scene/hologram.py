@@ -9,7 +9,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .. import preview, validate
-from ..validate import InputError
+from ..validate import InputError, shown
 from .plate import Carrier, ViewingZone
 
 CHANNEL_ROLES = ("R", "G", "B", "Y", "Z")
@@ -67,7 +67,7 @@ class HologramInfo:
         wavelengths = self.wavelengths
         if np.ndim(wavelengths) != 1 or not 1 <= len(wavelengths) <= MAX_CHANNELS:
             raise InputError(f"wavelengths must be 1 to {MAX_CHANNELS} wavelengths [m]; "
-                             f"got {wavelengths!r}")
+                             f"got {shown(wavelengths)}")
         self._set("wavelengths", tuple(validate.wavelength("wavelengths", w)
                                        for w in wavelengths))
         self._set("pitch", validate.pitch("pitch", self.pitch))
@@ -136,7 +136,7 @@ class HologramInfo:
         band = validate.finite("band", self.band)
         if not 0 <= band < 1:
             raise InputError(f"band must be in [0, 1) (sin θ of the object wave's cone; 0: "
-                             f"all); got {self.band!r}")
+                             f"all); got {shown(self.band)}")
         self._set("band", band)
         try:
             bounds = np.asarray(self.bounds, np.float64)
@@ -145,11 +145,11 @@ class HologramInfo:
         if bounds.shape != (2, 3) or not np.isfinite(bounds).all() or \
                 (bounds[0] > bounds[1]).any():
             raise InputError(f"bounds must be two finite corners (min, max) of (x, y, z) [m], "
-                             f"min <= max; got {self.bounds!r}")
+                             f"min <= max; got {shown(self.bounds)}")
         self._set("bounds", bounds)
         density = validate.finite("point_density", self.point_density, "1/m²")
         if density < 0:
-            raise InputError(f"point_density must be >= 0 [1/m²]; got {self.point_density!r}")
+            raise InputError(f"point_density must be >= 0 [1/m²]; got {shown(self.point_density)}")
         self._set("point_density", density)
 
     def colour_channels(self) -> list[int]:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import validate
-from ..validate import InputError
+from ..validate import InputError, shown
 
 DEFAULT_ZONE_MARGIN = 0.05  # [m] the default zone reaches this far beyond the camera's pupil
 
@@ -59,7 +59,7 @@ class ViewingZone:
         object.__setattr__(self, "pupil", pupil)
         pixel = validate.finite("zone pixel", self.pixel, "rad")
         if not 0 <= pixel <= math.pi:
-            raise InputError(f"zone pixel must be in [0, π] [rad]; got {self.pixel!r}")
+            raise InputError(f"zone pixel must be in [0, π] [rad]; got {shown(self.pixel)}")
         object.__setattr__(self, "pixel", pixel)
 
     @classmethod
@@ -70,7 +70,7 @@ class ViewingZone:
         views of pixels ``pixel`` [rad]."""
         margin = validate.finite("zone margin", margin, "m")
         if margin < 0:
-            raise InputError(f"zone margin must be >= 0 [m]; got {margin!r}")
+            raise InputError(f"zone margin must be >= 0 [m]; got {shown(margin)}")
         pupil = validate.finite("pupil", pupil, "m")
         p = validate.vector("position", position, 3, "m")
         if p[2] <= 0:  # a zone behind the plate sees none of its light
@@ -93,7 +93,7 @@ class ViewingZone:
                              f"shape {p.shape}")
         margin = validate.finite("zone margin", margin, "m")
         if margin < 0:
-            raise InputError(f"zone margin must be >= 0 [m]; got {margin!r}")
+            raise InputError(f"zone margin must be >= 0 [m]; got {shown(margin)}")
         pupil = validate.finite("pupil", pupil, "m")
         lo, hi = p.min(0), p.max(0)
         reach = pupil / 2 + margin

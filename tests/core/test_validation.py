@@ -27,6 +27,7 @@ from holo_core.propagation import (
     tilt,
 )
 from holo_core.scene import Camera, Hologram, Mesh, Plate, look_at, sample_points
+from holo_core import validate
 from holo_core.validate import InputError
 
 GOOD = {"wavelength": 633e-9, "pitch": 1e-6, "distance": 1e-3}
@@ -287,3 +288,15 @@ def test_other_stages_reject_bad_settings():
         resample(FIELD, pitch=1e-6, out_shape=(0, 4), out_pitch=1e-6)
     with pytest.raises(ValueError, match=r"out_pitch must be in \[1e-12, 0.01\] \[m\] \(.*\)"):
         resample(FIELD, pitch=1e-6, out_shape=(4, 4), out_pitch=-1)
+
+
+@pytest.mark.parametrize("value, text", [
+    (np.float64(633.0), "633.0"), (np.float32(0.1), "0.1"), (np.int64(-3), "-3"),
+    (np.bool_(True), "True"), ([np.float64(1.5), 2], "[1.5, 2]"), ((np.float64(2.0),), "(2.0,)"),
+    ("f", "'f'"), (None, "None")])
+def test_numpy_numbers_are_named_as_numbers(value, text):
+    """Errors name a NumPy number as the number it is, also under NumPy 2, whose repr writes
+    np.float64(633.0) (the nanometre wavelength's refusal read so there)."""
+    assert validate.shown(value) == text
+    with pytest.raises(InputError, match=r"got -2\.5$"):
+        validate.positive("pitch", np.float64(-2.5))
