@@ -33,7 +33,7 @@ import numpy as np
 from . import jobs, memory
 from .camera.render import render_camera
 from .io.hologram import write_hologram
-from .io.image import check_writable, read_exr
+from .io.image import check_room, check_writable, read_exr
 from .io.tiles import TiledWave, read_plate, store_of
 from .io.view import write_view
 from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result
@@ -101,6 +101,7 @@ def _plate(job: Job, progress, kept: KeptPlates):
         # the iterations are coded looks of one seed where n allows (look_code), else seeds
         meshes = list(job.points) + list(job.triangles)
         if meshes and all(isinstance(m, Mesh) for m in meshes):  # every look in one pass
+            _check_room(job)  # before the recording: a full disk is said now, not after it
             # beyond memory: tile by tile on Dask, each look into store_of its path (a
             # cancelled recording resumes there, its tiles kept)
             urls = [str(store_of(p)) for p in route.holograms] if needs_tiles(job) else None
@@ -189,6 +190,23 @@ def _note_supersampling(chosen: int, nyquist: int) -> None:
     if chosen < nyquist:
         log.info("Supersample %d samples the view's speckle below its Nyquist rate: %d "
                  "would average it a little further, at more time a frame", chosen, nyquist)
+
+
+def _check_room(job: Job) -> None:
+    """:class:`InputError` where the disk that takes the plate's files has less room than
+    the plan says they need (each look's samples in memory as written, or its tiled store),
+    before any emitter is found."""
+    route = job.route
+    meshes = list(job.points) + list(job.triangles)
+    p, _, _ = plate_plan(meshes, plate=route.plate, camera=job.camera,
+                         wavelength=route.wavelength)
+    look = p.disk_bytes(CHANNELS) / p.looks
+    folders = {}
+    for path in route.holograms:  # the looks that share a disk need its room together
+        folders.setdefault(Path(os.path.realpath(Path(path).parent)), []).append(path)
+    for paths in folders.values():
+        check_room(paths[0], look * len(paths), f"the plate's {len(paths)} look(s) "
+                   f"({p.shape[1]} x {p.shape[0]} samples, {CHANNELS} channels)")
 
 
 def needs_tiles(job: Job) -> bool:

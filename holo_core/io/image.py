@@ -15,6 +15,7 @@ from __future__ import annotations
 import fcntl
 import itertools
 import os
+import shutil
 import signal
 import socket
 import stat
@@ -110,9 +111,7 @@ def check_writable(path, suffix: str | None = None) -> Path:
     if path.is_dir():
         raise InputError(f"{path}: is a folder; name the file to write")
     folder = _folder(path)
-    existing = folder
-    while not existing.exists() and existing != existing.parent:
-        existing = existing.parent
+    existing = _existing(folder)
     if not existing.is_dir():
         raise InputError(f"{path}: cannot create its folder ({existing} is not a folder)")
     probe = existing / f".{path.stem}{TEMP_TAG}{_HOST}.{os.getpid()}.{next(_count)}.probe"
@@ -126,6 +125,30 @@ def check_writable(path, suffix: str | None = None) -> Path:
         raise InputError(f"{path}: its folder {existing} is not writable ({e.strerror})") \
             from None
     return folder / path.name
+
+
+def check_room(path, nbytes: float, what: str) -> None:
+    """:class:`InputError` where the disk that would hold ``path`` (a file or a folder, made
+    or not) has less than ``nbytes`` free, naming ``what`` needs the room, the folder and both
+    sizes. A file replaced is written beside its old version first (atomically), so the old
+    one's room is not counted. Call it before a long job, with :func:`check_writable`."""
+    existing = _existing(_folder(Path(path)))
+    try:
+        free = shutil.disk_usage(existing).free
+    except OSError:  # a folder the system cannot measure: the write itself will say
+        return
+    if nbytes > free:
+        gb = 2.0**30
+        raise InputError(f"{what} need {nbytes / gb:.3g} GB on disk, and {existing} has "
+                         f"{free / gb:.3g} GB free: free some room there, or write them to "
+                         f"another folder")
+
+
+def _existing(folder: Path) -> Path:
+    """``folder``, or the nearest folder above it that exists."""
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    return folder
 
 
 _FORMATS = {".exr": "OpenEXR", ".png": "PNG"}

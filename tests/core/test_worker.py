@@ -188,6 +188,31 @@ def test_an_unwritable_output_folder_is_refused_before_the_recording(tmp_path, m
     assert recorded == [], "the recording ran before the output was checked"
 
 
+def test_a_plate_larger_than_the_disks_room_is_refused_before_the_recording(tmp_path,
+                                                                            monkeypatch):
+    """A plate's files that would not fit on the disk that takes them are an InputError
+    naming the folder, the room they need and the room there is, before anything is
+    recorded (a full disk found after the recording lost it: the shot's 16 s)."""
+    import shutil
+
+    from holo_core.io import image
+    recorded = []
+    monkeypatch.setattr(runner, "record_looks", lambda *a, **k: recorded.append(1))
+    j = job(tmp_path, iterations=2)
+    p, _, _ = runner.plate_plan(list(j.points), plate=j.route.plate, camera=j.camera)
+    need = 2 * p.disk_bytes() / p.looks  # two looks
+    usage = shutil.disk_usage(tmp_path)
+    monkeypatch.setattr(image.shutil, "disk_usage",
+                        lambda path: usage._replace(free=int(need * 0.99)))
+    number = r"[\d.]+(e-\d+)?"
+    with pytest.raises(InputError, match=rf"the plate's 2 look\(s\) .* need {number} GB on "
+                       rf"disk, and {tmp_path} has {number} GB free"):
+        runner.run(j)
+    assert recorded == [], "the recording ran before the disk's room was checked"
+    monkeypatch.undo()  # the disk's own room, enough: the plate is recorded and written
+    assert runner.run(j).recorded == j.route.holograms
+
+
 def test_a_plates_iterations_are_coded_looks_of_one_seed(tmp_path):
     """Two iterations of a plate are the checkerboard pair of one seed (look_code): the first
     is the seed's plain recording, the second its coded partner, within float32 rounding
