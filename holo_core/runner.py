@@ -101,10 +101,12 @@ def _plate(job: Job, progress, kept: KeptPlates):
         # the iterations are coded looks of one seed where n allows (look_code), else seeds
         meshes = list(job.points) + list(job.triangles)
         if meshes and all(isinstance(m, Mesh) for m in meshes):  # every look in one pass
-            _check_room(job)  # before the recording: a full disk is said now, not after it
+            planned = _plan(job)
+            _check_room(route, planned)  # before the recording: a full disk is said now
             # beyond memory: tile by tile on Dask, each look into store_of its path (a
             # cancelled recording resumes there, its tiles kept)
-            urls = [str(store_of(p)) for p in route.holograms] if needs_tiles(job) else None
+            urls = [str(store_of(p)) for p in route.holograms] \
+                if needs_tiles(job, planned) else None
             holos = record_looks(meshes, looks=n, plate=route.plate, camera=job.camera,
                                  wavelength=route.wavelength, seed=route.seed,
                                  budget=(route.memory_budget, route.disk_budget), urls=urls,
@@ -192,34 +194,33 @@ def _note_supersampling(chosen: int, nyquist: int) -> None:
                  "would average it a little further, at more time a frame", chosen, nyquist)
 
 
-def _check_room(job: Job) -> None:
-    """:class:`InputError` where the disk that takes the plate's files has less room than
-    the plan says they need (each look's samples in memory as written, or its tiled store),
-    before any emitter is found."""
+def _plan(job: Job):
+    """The plan of the job's plate of meshes (:func:`plate_plan`), before any emitter is
+    found."""
     route = job.route
-    meshes = list(job.points) + list(job.triangles)
-    p, _, _ = plate_plan(meshes, plate=route.plate, camera=job.camera,
-                         wavelength=route.wavelength)
-    look = p.disk_bytes(CHANNELS) / p.looks
-    folders = {}
-    for path in route.holograms:  # the looks that share a disk need its room together
-        folders.setdefault(Path(os.path.realpath(Path(path).parent)), []).append(path)
-    for paths in folders.values():
-        check_room(paths[0], look * len(paths), f"the plate's {len(paths)} look(s) "
-                   f"({p.shape[1]} x {p.shape[0]} samples, {CHANNELS} channels)")
+    p, _, _ = plate_plan(list(job.points) + list(job.triangles), plate=route.plate,
+                         camera=job.camera, wavelength=route.wavelength)
+    return p
 
 
-def needs_tiles(job: Job) -> bool:
+def _check_room(route: PlateRoute, p) -> None:
+    """:class:`InputError` where the disk that takes the plate's files has less room than
+    the plan ``p`` says they need (each look's samples as written, or its tiled store)."""
+    check_room(route.holograms, p.disk_bytes(CHANNELS) / p.looks,
+               f"the plate's {{n}} look(s) ({p.shape[1]} x {p.shape[0]} samples, {CHANNELS} "
+               f"channels)")
+
+
+def needs_tiles(job: Job, planned=None) -> bool:
     """Whether the job's plate of meshes must be recorded tile by tile: its looks' whole plates,
     recorded in memory together (:func:`record_looks`), exceed the route's memory budget or
     the host's share of its memory. Bare points are recorded in memory (their point sums are
-    planned by their own rule)."""
+    planned by their own rule). ``planned``: the plate's plan where the caller has it."""
     route = job.route
     meshes = list(job.points) + list(job.triangles)
     if not meshes or not all(isinstance(m, Mesh) for m in meshes):
         return False
-    p, _, _ = plate_plan(meshes, plate=route.plate, camera=job.camera,
-                         wavelength=route.wavelength)
+    p = planned or _plan(job)
     limit = memory.SHARE * memory.host_available()
     if route.memory_budget is not None:
         limit = min(limit, route.memory_budget)

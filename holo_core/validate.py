@@ -41,6 +41,7 @@ def shown(value) -> str:
             f"({inner}{',' if len(value) == 1 else ''})"
     return repr(value)
 
+
 def warn_sampling(message: str) -> None:
     warnings.warn(message, SamplingWarning, stacklevel=3)
 

@@ -127,21 +127,25 @@ def check_writable(path, suffix: str | None = None) -> Path:
     return folder / path.name
 
 
-def check_room(path, nbytes: float, what: str) -> None:
-    """:class:`InputError` where the disk that would hold ``path`` (a file or a folder, made
-    or not) has less than ``nbytes`` free, naming ``what`` needs the room, the folder and both
+def check_room(paths, nbytes: float, what: str) -> None:
+    """:class:`InputError` where the disk that would hold some of ``paths`` (files or
+    folders, made or not) has less free than ``nbytes`` [bytes] for each of them, naming
+    what needs the room (``what``, its ``{n}`` the count of those files), the folder and both
     sizes. A file replaced is written beside its old version first (atomically), so the old
     one's room is not counted. Call it before a long job, with :func:`check_writable`."""
-    existing = _existing(_folder(Path(path)))
-    try:
-        free = shutil.disk_usage(existing).free
-    except OSError:  # a folder the system cannot measure: the write itself will say
-        return
-    if nbytes > free:
-        gb = 2.0**30
-        raise InputError(f"{what} need {nbytes / gb:.3g} GB on disk, and {existing} has "
-                         f"{free / gb:.3g} GB free: free some room there, or write them to "
-                         f"another folder")
+    folders = {}
+    for path in paths:  # the files that share a folder need its room together
+        folders.setdefault(_existing(_folder(Path(path))), []).append(path)
+    for existing, held in folders.items():
+        try:
+            free = shutil.disk_usage(existing).free
+        except OSError:  # a folder the system cannot measure: the write itself will say
+            continue
+        need, gb = nbytes * len(held), 2.0**30
+        if need > free:
+            raise InputError(f"{what.format(n=len(held))} need {need / gb:.3g} GB on disk, "
+                             f"and {existing} has {free / gb:.3g} GB free: free some room there, "
+                             f"or write them to another folder")
 
 
 def _existing(folder: Path) -> Path:

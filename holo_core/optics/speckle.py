@@ -39,7 +39,7 @@ def box_mean(image, radius: int) -> np.ndarray:
     n = 2 * radius + 1
     h, w = a.shape[0] - 2 * radius, a.shape[1] - 2 * radius
     rows = a[:h].copy()  # the shifted copies summed in place: no running sum's rounding
-    for i in range(1, n):  # to carry, and no temporary a term
+    for i in range(1, n):  # to carry, and no temporary array for each shifted copy
         rows += a[i:i + h]
     out = rows[:, :w].copy()
     for j in range(1, n):

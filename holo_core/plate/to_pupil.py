@@ -25,8 +25,8 @@ import numpy as np
 
 from .. import jobs
 from ..opencl.arrays import empty, exclusive_scan, extent, read, resident, upload_window, write
-from ..optics.imaging import SPECTRA
 from ..opencl.runtime import associated
+from ..optics.imaging import SPECTRA
 from ..propagation import angular_spectrum, grid, tilt
 from ..propagation.angular_spectrum import BAND_EDGE
 from ..propagation.tilt import ES_TABLE, cached_array, es_profile, es_table

@@ -256,8 +256,8 @@ def _iris_sum(n, d, diameter, taper, lit) -> float:
     inner = (1 - taper) * radius
     rho = np.linspace(inner, radius, 4097)
     rim = (0.5 * (1 + np.cos(np.pi * (rho - inner) / max(radius - inner, 1e-300)))) ** 2
-    ring = rim * 2 * math.pi * rho  # integrated by the trapezoid rule (NumPy 2 renamed
-    area = math.pi * inner**2 + float(np.sum((ring[1:] + ring[:-1]) * np.diff(rho)) / 2)  # trapz)
+    ring = rim * 2 * math.pi * rho  # by the trapezoid rule, written out (NumPy 2 renamed trapz)
+    area = math.pi * inner**2 + float(np.sum((ring[1:] + ring[:-1]) * np.diff(rho)) / 2)
     return area / (d * d)
 
 
@@ -442,7 +442,10 @@ def _radiance(looks, colours, composition, supersample) -> np.ndarray:
 
 def _summed(images, out=None) -> np.ndarray:
     """The sum of ``images`` (each (H, W)), added in place into ``out`` or a copy of the first."""
-    out = np.copy(images[0]) if out is None else np.copyto(out, images[0]) or out
+    if out is None:
+        out = np.copy(images[0])
+    else:
+        np.copyto(out, images[0])
     for image in images[1:]:
         out += image
     return out

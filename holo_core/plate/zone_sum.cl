@@ -23,8 +23,7 @@
  * (amp) and the shares s_c (shade): a starts the recurrence, and each channel adds s_c times the
  * light, a real multiply where a complex one was (SHADED; the shot's sums: 20 % less time).
  * Options: -DVEC=1|4|8|16, -DSEG=<columns>, -DCHANNELS=<n>, -DCHANNELS2=<n>, -DSHADED=0|1,
- * -DPARTNER_LERP=0|1,
- * -DGRID_X, -DGRID_Y=<the zone grid's points along x, y>.
+ * -DPARTNER_LERP=0|1, -DGRID_X, -DGRID_Y=<the zone grid's points along x, y>.
  */
 #include "lane_series.h"
 

@@ -331,7 +331,7 @@ def test_the_pipeline_records_a_plate_beyond_memory_in_tiles(scheduler, tmp_path
     assert not runner.needs_tiles(job(tmp_path / "a"))
     assert runner.needs_tiles(job(tmp_path / "a", memory_budget=1e6))
     whole = runner.run(job(tmp_path / "a"))
-    monkeypatch.setattr(runner, "needs_tiles", lambda job: True)
+    monkeypatch.setattr(runner, "needs_tiles", lambda job, planned=None: True)
     tiled = runner.run(job(tmp_path / "b"))
     assert not (tmp_path / "b" / "h.exr").exists() and store.plate_current(tmp_path / "b" / "h.exr")
     assert np.array_equal(store.read_plate(tmp_path / "b" / "h.exr").object_wave[...],

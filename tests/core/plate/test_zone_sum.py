@@ -30,20 +30,20 @@ def emitters(rng, n, table, shared=False):
                         grid=((-0.035, 0.0175), (-0.024, 0.012)))
 
 
-@pytest.mark.parametrize("rough", [False, "hidden", True])
+@pytest.mark.parametrize("tables", ["smooth", "hidden", "rough"])
 @pytest.mark.parametrize("shared", [False, True])
-def test_zone_sum_equals_float64_numpy(rng, rough, shared):
+def test_zone_sum_equals_float64_numpy(rng, tables, shared):
     """Three colour channels, 60 emitters 0.25-0.35 m behind, every other one seen from part
-    of the zone: smooth visibility tables (an edge across the zone; or ``hidden``, the
-    emitter unseen from the zone's lower part, its light there weighing 0) within ZONE_SUM, random ones (a kink at every grid cell) within
-    ZONE_SUM_ROUGH_VISIBILITY; each with random amplitudes and with the channels of an
-    emitter sharing one phase."""
+    of the zone: smooth visibility tables (an edge across the zone) and ``hidden`` ones (the
+    emitter unseen from the zone's lower part, its light there weighing 0) within ZONE_SUM,
+    ``rough`` ones (random: a kink at every grid cell) within ZONE_SUM_ROUGH_VISIBILITY; each
+    with random amplitudes and with the channels of an emitter sharing one phase."""
     n = 60
-    if rough is True:
+    if tables == "rough":
         table = rng.integers(0, 256, (n // 2, 3, 5)).astype(np.uint8)
     else:
         table = np.full((n // 2, 3, 5), 255, np.uint8)
-        if rough == "hidden":  # the zone's lower points do not see it
+        if tables == "hidden":  # the zone's lower points do not see it
             table[:, :2, :] = 0
         else:
             table[:, :, :2] = 96
@@ -52,7 +52,7 @@ def test_zone_sum_equals_float64_numpy(rng, rough, shared):
     got, want = zone_sum(em, WINDOW, WAVELENGTH), reference(em, WINDOW, WAVELENGTH)
     err = rel_err(got, want)
     print(f"relative error {err:.2e}")
-    assert err <= (ZONE_SUM_ROUGH_VISIBILITY if rough is True else ZONE_SUM), err
+    assert err <= (ZONE_SUM_ROUGH_VISIBILITY if tables == "rough" else ZONE_SUM), err
 
 
 @pytest.mark.parametrize("shared", [False, True])
