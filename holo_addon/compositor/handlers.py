@@ -9,7 +9,9 @@ import json
 import logging
 import os
 import sys
+import tempfile
 import time
+from pathlib import Path
 
 import bpy
 from bpy.app.handlers import persistent
@@ -35,8 +37,8 @@ def render_init(scene, *_):
     if tree.uses_pass(scene):  # a frame of the render (F12's) gets a clear pass where it has
         # none before Blender's copy of the image looks for it (found missing then, it stays
         # missing for the render: the Image node's grey)
-        tree.point_passes(scene, rendering=scene.frame_start <= scene.frame_current <=
-                          scene.frame_end)
+        _point_passes(scene, scene.frame_current,
+                      rendering=scene.frame_start <= scene.frame_current <= scene.frame_end)
 
 
 @persistent
@@ -104,7 +106,8 @@ def render_frame(scene, depsgraph=None):
                                 f"(Render ▸ Holo ▸ Set Up Compositing, or Render with "
                                 f"Hologram)")
         return
-    tree.point_passes(scene, frame, rendering=True)
+    if not _point_passes(scene, frame, rendering=True):
+        return
     blur = names and motion.blurs(scene)
     if names and scene.render.use_motion_blur and not blur:
         _warn_once("blur", "Holo: motion blur is on: in Plate mode the holographic objects "
@@ -144,6 +147,22 @@ def render_frame(scene, depsgraph=None):
         session.shutter = pending
         return
     _frame_pass(scene, frame, job)
+
+
+def _point_passes(scene, frame: int, *, rendering: bool) -> bool:
+    """The compositor reads frame ``frame``'s pass from the output folder
+    (:func:`tree.point_passes`); a folder that cannot be written fails the frame (a farm's
+    render exits with status 1), where Blender would render on and write the frame without
+    its pass. Returns whether it could."""
+    try:
+        tree.point_passes(scene, frame, rendering=rendering)
+    except OSError as e:
+        where = e.filename or scene.holo.output_dir
+        failed(scene, f"Holo: the holographic pass of frame {frame} cannot be written: the "
+                      f"Output Folder (Render Properties ▸ Holo) {where}: "
+                      f"{e.strerror or e}")
+        return False
+    return True
 
 
 def _frame_pass(scene, frame: int, job) -> None:
@@ -306,8 +325,20 @@ def failed(scene, message: str) -> None:
         tree.point_passes(scene)
     except (OSError, ValueError) as e:
         log.error("the stale pass could not be set aside: %s", e)
+        _raster_alone(scene)
     if not bpy.app.background:
         bpy.app.timers.register(lambda: _show_error(message), first_interval=0.0)
+
+
+def _raster_alone(scene) -> None:
+    """The frame composites a clear pass kept in this process's own temporary folder: the
+    output folder cannot take one (it cannot be written), and the images must not go on
+    reading another folder's pass."""
+    folder = Path(tempfile.gettempdir()) / f"holo-clear-{os.getpid()}"
+    try:
+        tree.read_passes_from(pipeline.clear_pass(scene, scene.frame_current, folder))
+    except OSError as e:
+        log.error("no clear pass could be written for the failed frame: %s", e)
 
 
 def _show_error(message):
@@ -381,5 +412,5 @@ def _log_to_stderr() -> None:
     logger = logging.getLogger(ADDON_LOG)
     if logger.level == logging.NOTSET or logger.level > logging.INFO:
         logger.setLevel(logging.INFO)
-    if STDERR not in logger.handlers:
-        logger.addHandler(STDERR)
+    if STDERR not in logger.handlers and not logging.getLogger().handlers:
+        logger.addHandler(STDERR)  # where a script logs already (basicConfig), it says them

@@ -158,13 +158,21 @@ def point_passes(scene, frame: int | None = None, *, rendering=False) -> Path | 
         path = pipeline.pass_file(pipeline.output_dir(scene), frame)
     except ValueError:
         return None
-    if rendering and not path.is_file():
-        pipeline.clear_pass(scene, frame)
+    try:
+        if rendering and not path.is_file():
+            pipeline.clear_pass(scene, frame)  # OSError: a folder that cannot be written
+    finally:  # the images follow the folder even then: never another folder's pass
+        read_passes_from(path)
+    return path
+
+
+def read_passes_from(path: Path) -> None:
+    """The compositor's image sequences of holographic passes read ``path`` (a frame's pass
+    file; the sequence finds the other frames beside it), read again."""
     for image in passes_images():
         if Path(bpy.path.abspath(image.filepath)) != path:
             image.filepath = str(path)
         image.reload()
-    return path
 
 
 def pass_made(scene, result) -> Path | None:

@@ -143,10 +143,10 @@ def stored_key(path) -> str | None:
     return _header(path).get("pass_key")
 
 
-def clear_pass(scene, frame: int) -> Path:
+def clear_pass(scene, frame: int, folder: Path | None = None) -> Path:
     """Frame ``frame``'s pass with nothing in it (no emitter is left in the render): clear,
     at the background's depth, the render's size (its crop's, when cropped), so the frame
-    composites the raster alone."""
+    composites the raster alone; in ``folder`` (default: the output folder)."""
     r = scene.render
     w, h = render_size(r)
     if r.use_border and r.use_crop_to_border:
@@ -155,7 +155,7 @@ def clear_pass(scene, frame: int) -> Path:
     view = RenderResult(rgb=np.zeros((h, w, 3), np.float32), alpha=np.zeros((h, w), np.float32),
                         depth=np.full((h, w), BACKGROUND_DEPTH, np.float32),
                         info={"emitters": 0})
-    path = pass_file(output_dir(scene), frame)
+    path = pass_file(output_dir(scene) if folder is None else folder, frame)
     path.parent.mkdir(parents=True, exist_ok=True)
     write_view(view, path)
     return path

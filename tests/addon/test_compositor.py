@@ -232,6 +232,27 @@ def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monke
     assert _shown_columns(tmp_path / "good.exr").size > 0
 
 
+def test_an_output_folder_that_cannot_be_written_fails_the_frame(empty_scene, tmp_path,
+                                                                monkeypatch):
+    """An Output Folder under a file: the render's frame fails, naming the setting (a
+    background render exits with status 1 there), and it composites no pass of the folder
+    before."""
+    from holo_addon.compositor import handlers
+    from holo_addon.compositor.session import session
+    scene = empty_scene
+    _scene_with_pass(scene, tmp_path)
+    monkeypatch.setattr(session, "exit_on_failure", False)
+    said = []
+    original = handlers.failed
+    monkeypatch.setattr(handlers, "failed", lambda s, m: (said.append(m), original(s, m)))
+    (tmp_path / "a file").write_text("")
+    scene.holo.output_dir = str(tmp_path / "a file" / "holo") + "/"
+    scene.render.filepath = str(tmp_path / "failed.exr")
+    bpy.ops.render.render(write_still=True)
+    assert said and all("Output Folder" in m and "a file" in m for m in said), said
+    assert _shown_columns(tmp_path / "failed.exr").size == 0, "the earlier folder's pass showed"
+
+
 def test_after_save_as_a_failed_pass_never_composites_the_old_folders(
         empty_scene, tmp_path, monkeypatch):
     """A .blend with its pass in its folder's holo/, saved as another .blend in another
