@@ -25,6 +25,7 @@ import sys
 import threading
 import time
 import traceback
+import warnings
 from dataclasses import replace
 from pathlib import Path
 
@@ -39,7 +40,7 @@ from .io.view import write_view
 from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result
 from .plate.plan import CHANNELS
 from .plate.record import plate_plan, record_hologram, record_looks
-from .plate.view import nyquist_supersample, render_view
+from .plate.view import OutsideZoneWarning, nyquist_supersample, render_view
 from .scene.hologram import Hologram
 from .scene.mesh import Mesh
 from .scene.radiance import projected
@@ -102,11 +103,11 @@ def _plate(job: Job, progress, kept: KeptPlates):
         meshes = list(job.points) + list(job.triangles)
         if meshes and all(isinstance(m, Mesh) for m in meshes):  # every look in one pass
             planned = _plan(job)
-            _check_room(route, planned)  # before the recording: a full disk is said now
+            tiled = needs_tiles(job, planned)
+            _check_room(route, planned, tiled)  # before the recording: a full disk is said now
             # beyond memory: tile by tile on Dask, each look into store_of its path (a
             # cancelled recording resumes there, its tiles kept)
-            urls = [str(store_of(p)) for p in route.holograms] \
-                if needs_tiles(job, planned) else None
+            urls = [str(store_of(p)) for p in route.holograms] if tiled else None
             holos = record_looks(meshes, looks=n, plate=route.plate, camera=job.camera,
                                  wavelength=route.wavelength, seed=route.seed,
                                  budget=(route.memory_budget, route.disk_budget), urls=urls,
@@ -195,20 +196,21 @@ def _note_supersampling(chosen: int, nyquist: int) -> None:
 
 
 def _plan(job: Job):
-    """The plan of the job's plate of meshes (:func:`plate_plan`), before any emitter is
-    found."""
+    """The plan of the job's plate of meshes (:func:`plate_plan`) and its looks, before any
+    emitter is found."""
     route = job.route
     p, _, _ = plate_plan(list(job.points) + list(job.triangles), plate=route.plate,
                          camera=job.camera, wavelength=route.wavelength)
-    return p
+    return replace(p, looks=len(route.holograms))
 
 
-def _check_room(route: PlateRoute, p) -> None:
+def _check_room(route: PlateRoute, p, tiled: bool) -> None:
     """:class:`InputError` where the disk that takes the plate's files has less room than
-    the plan ``p`` says they need (each look's samples as written, or its tiled store)."""
-    check_room(route.holograms, p.disk_bytes(CHANNELS) / p.looks,
+    the plan ``p`` says they need (each look's samples as written, or ``tiled``, its tiled
+    store's whole tiles)."""
+    check_room(route.holograms, p.disk_bytes(CHANNELS, tiled=tiled) / p.looks,
                f"the plate's {{n}} look(s) ({p.shape[1]} x {p.shape[0]} samples, {CHANNELS} "
-               f"channels)")
+               f"channels{', in tiles' if tiled else ''})")
 
 
 def needs_tiles(job: Job, planned=None) -> bool:
@@ -224,12 +226,12 @@ def needs_tiles(job: Job, planned=None) -> bool:
     limit = memory.SHARE * memory.host_available()
     if route.memory_budget is not None:
         limit = min(limit, route.memory_budget)
-    need = p.memory_bytes(CHANNELS * len(route.holograms), tiled=False)
-    if need > limit:
+    if p.needs_tiles(limit):
         log.info("the plate's %d look(s) need %s in one piece, more than %s: recording them "
-                 "tile by tile into %s", len(route.holograms), memory.gib(need),
+                 "tile by tile into %s", p.looks, memory.gib(p.memory_bytes(CHANNELS * p.looks)),
                  memory.gib(limit), store_of(route.holograms[0]).name)
-    return need > limit
+        return True
+    return False
 
 
 def _record_look(job: Job, i: int, progress) -> Hologram:
@@ -317,20 +319,34 @@ def _outside_border(view, border) -> None:
 
 
 class _Heard(logging.Handler):
-    """The warnings the core logs while it is installed (the report's ``warnings``)."""
+    """The warnings the core logs while it is installed, and those it raises as Python
+    warnings (a view softer than its plate was made for, a black view, a hologram without
+    depth), logged here in turn: the report's ``warnings``, and the log the worker sends to
+    its parent. A camera beyond the plate's zone is left to the job's maker, which checks it
+    before the job with its own names for the plate and its settings (the add-on's)."""
 
     def __init__(self):
         super().__init__(logging.WARNING)
         self.texts = []
+        self.caught = warnings.catch_warnings(record=True)
 
     def emit(self, record):
         self.texts.append(record.getMessage())
 
     def __enter__(self):
         logging.getLogger("holo_core").addHandler(self)
+        self.raised = self.caught.__enter__()
+        warnings.simplefilter("always")
         return self
 
     def __exit__(self, *exc):
+        self.caught.__exit__(*exc)
+        for w in self.raised:
+            if w.category.__module__.startswith("holo_core.") and \
+                    not issubclass(w.category, OutsideZoneWarning):
+                log.warning("%s", w.message)
+            elif not issubclass(w.category, OutsideZoneWarning):
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         logging.getLogger("holo_core").removeHandler(self)
 
 

@@ -34,6 +34,7 @@ from .plates import export_imported, scene_plate, with_plate
 from .scene import ExportError, SceneData, export_scene
 
 log = logging.getLogger(__name__)
+EXPOSURE_STOPS = 64.0  # either way: the core takes an exposure up to 1e20, 66 stops
 
 
 @dataclass(frozen=True)
@@ -63,7 +64,7 @@ class Settings:
                    disk_budget=h.plate_disk * gb,
                    wavelength=h.wavelength * unit if h.wavelength > 0 else None,
                    iterations=h.iterations, supersample=h.supersample,
-                   composition=h.composition, exposure=2.0 ** h.exposure,
+                   composition=h.composition, exposure=2.0 ** _stops(h.exposure),
                    opacity_threshold=h.opacity_threshold, seed=h.seed, lighting=h.lighting,
                    lighting_samples=h.lighting_samples, speckle=h.speckle)
 
@@ -241,6 +242,14 @@ def coarser(camera: Camera, factor: int) -> Camera:
     """``camera``'s frame at 1/``factor`` of its resolution (the same field of view)."""
     w, h = camera.resolution
     return replace(camera, resolution=(max(1, round(w / factor)), max(1, round(h / factor))))
+
+
+def _stops(exposure: float) -> float:
+    """Scene.holo.exposure [stops], checked: a script may set what the panel cannot."""
+    if not -EXPOSURE_STOPS <= exposure <= EXPOSURE_STOPS:
+        raise ExportError(f"Exposure (Render Properties ▸ Holo) must be within "
+                          f"±{EXPOSURE_STOPS:g} stops; got {exposure:g}")
+    return exposure
 
 
 def output_dir(scene) -> Path:

@@ -127,7 +127,8 @@ def outside_zone(plate: Plate, name: str, camera: Camera) -> str | None:
         return None
     return (f"the camera's pupil reaches {beyond:.3g} m beyond plate '{name}''s viewing zone "
             f"({plate.zone.describe()}): its view may be cut off or soft; use Fit Zone to "
-            f"Camera (Object ▸ Holo) to record the plate for where the camera is now")
+            f"Shot (Object ▸ Holo) to record the plate for every frame of the camera's move, "
+            f"or Fit Zone to Camera for where it is now")
 
 
 def export_imported(scene, depsgraph, plate_object) -> SceneData:

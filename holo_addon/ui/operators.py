@@ -15,6 +15,7 @@ import logging
 import bpy
 
 from holo_core.io.hologram import HologramFileError
+from holo_core.io.tiles import plate_files
 from holo_core.job import Report, Result
 from holo_core.worker import WorkerError
 
@@ -175,7 +176,7 @@ class _PipelineOperator:
             msg = f"a static shot: {result.reused.name} reused (only the frame changed)"
         elif job.holograms:
             what = "recorded" if result.recorded else "up to date"
-            msg = f"hologram {what}: {job.holograms[0]}"
+            msg = f"hologram {what}: {plate_files(job.holograms[0])}"
         if made is not None:
             msg += f"; holographic pass: {made}{speckle(result.report)}"
         self.report({"INFO"}, msg)

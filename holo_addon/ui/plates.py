@@ -20,6 +20,7 @@ import numpy as np
 from bpy_extras.io_utils import ImportHelper
 from mathutils import Matrix
 
+from holo_core import memory
 from holo_core.acquired.framing import default_camera, stated_plane
 from holo_core.io.hologram import HologramFileError, read_hologram
 from holo_core.plate.plan import plan, plan_view, summary
@@ -150,10 +151,17 @@ def plan_summary(context) -> list[str]:
     lines = summary(p, v, lens=lens, resolution=camera.resolution,
                     plate_size=(plate.width, plate.height), camera=eye)
     gb = 2.0**30
+    # as the recording decides: tile by tile where the looks exceed the memory in one piece
+    tiled = p.needs_tiles(min(memory.SHARE * memory.host_available(), h.plate_memory * gb))
     try:
-        p.check_budget(memory=h.plate_memory * gb, disk=h.plate_disk * gb)
+        p.check_budget(memory=h.plate_memory * gb, disk=h.plate_disk * gb, tiled=tiled,
+                       held=p.looks)
     except InputError as e:
         lines.insert(1, f"refused     {e}")
+    else:
+        if tiled:
+            lines.insert(1, "tiles       the looks exceed the memory in one piece: they are "
+                            "recorded tile by tile, into a store beside each file")
     return lines
 
 

@@ -14,6 +14,7 @@ from bpy.props import (
 )
 
 from ..blender.objects import raster_visibility
+from ..export.job import EXPOSURE_STOPS
 from . import overlay
 
 # 4.5+ ask a path property to declare that it takes "//" (relative to the .blend); 4.2 has no
@@ -149,6 +150,7 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                               description="How the recordings combine into the image: the mean "
                                           "is smoother, the maximum brighter")
     exposure: FloatProperty(name="Exposure", default=0.0, soft_min=-10.0, soft_max=10.0,
+                            min=-EXPOSURE_STOPS, max=EXPOSURE_STOPS,
                             description="Brightness of the holographic objects in stops, as "
                                         "Blender's Film Exposure: +1 doubles it")
     opacity_threshold: FloatProperty(name="Opacity Threshold", default=0.5, min=0.0, max=1.0,

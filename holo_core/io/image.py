@@ -141,11 +141,11 @@ def check_room(paths, nbytes: float, what: str) -> None:
             free = shutil.disk_usage(existing).free
         except OSError:  # a folder the system cannot measure: the write itself will say
             continue
-        need, gb = nbytes * len(held), 2.0**30
+        need = nbytes * len(held)
         if need > free:
-            raise InputError(f"{what.format(n=len(held))} need {need / gb:.3g} GB on disk, "
-                             f"and {existing} has {free / gb:.3g} GB free: free some room there, "
-                             f"or write them to another folder")
+            raise InputError(f"{what.format(n=len(held))} need {memory.gib(need)} on disk, and "
+                             f"{existing} has {memory.gib(free)} free: free some room there, or "
+                             f"write them to another folder")
 
 
 def _existing(folder: Path) -> Path:

@@ -725,10 +725,15 @@ def store_of(path) -> Path:
 def read_plate(path) -> Hologram:
     """The hologram file at ``path``, or the complete tiled store beside it
     (:func:`store_of`)."""
+    found = plate_files(path)
+    return open_plate(str(found)) if found.suffix == ".zarr" else read_hologram(found)
+
+
+def plate_files(path) -> Path:
+    """Where the plate of file ``path`` is: the file, or the tiled store beside it when only
+    that was written (:func:`store_of`)."""
     path = Path(path)
-    if not path.is_file() and store_of(path).is_dir():
-        return open_plate(str(store_of(path)))
-    return read_hologram(path)
+    return store_of(path) if not path.is_file() and store_of(path).is_dir() else path
 
 
 def plate_current(path) -> bool:

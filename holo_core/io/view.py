@@ -27,7 +27,7 @@ def write_view(result: RenderResult, path, *, layer="ViewLayer") -> tuple[Path, 
     channels = {f"{layer}.Combined.{c}": rgb[..., i] for i, c in enumerate("RGB")}
     channels[f"{layer}.Combined.A"] = result.alpha
     channels[f"{layer}.Depth.Z"] = result.depth
-    write_exr(path, channels, preview=srgb(result.rgb),
+    write_exr(path, channels, preview=srgb(rgb),  # as the EXR shows over black
               holo=json.dumps(result.info, default=float))
     return path, path.with_suffix(".png")
 

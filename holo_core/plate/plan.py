@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import memory as memory_mod
 from .. import validate
 from ..optics.depth import partner_wavelength
 from ..optics.pupil import defocus_limited_diameter
@@ -28,6 +29,8 @@ from ..scene.plate import ViewingZone, box_corners
 from ..validate import InputError
 
 SUPERSAMPLE = 2        # fine pixels per pixel: the reference view resolves one
+SHARP_SLACK = 1e-6     # of a spot: a zone's pixel and pupil kept in float32 (a .blend's) round
+                       # them by 6e-8
 RIM = 0.15             # the zone's soft rim, a fraction of its half widths
 LAYERS = 3             # surfaces an emitter ray may cross and still be recorded (depth peeling)
 DEPTH_MARGIN = 1.25    # the depth pair's unambiguous range over the objects' extent
@@ -93,9 +96,18 @@ class PlatePlan:
         """(width, height) [m] of the sampled window."""
         return self.shape[1] * self.pitch, self.shape[0] * self.row_pitch
 
-    def disk_bytes(self, channels=CHANNELS) -> float:
-        """Bytes of the recorded plate, every look."""
-        return SAMPLE_BYTES * channels * self.looks * self.samples
+    def disk_bytes(self, channels=CHANNELS, tiled=False) -> float:
+        """Bytes of the recorded plate, every look: its files, or its tiled stores, which
+        keep their edge tiles whole."""
+        held = self.samples if not tiled else \
+            math.ceil(self.shape[0] / self.tile) * math.ceil(self.shape[1] / self.tile) * \
+            self.tile ** 2
+        return SAMPLE_BYTES * channels * self.looks * held
+
+    def needs_tiles(self, limit: float) -> bool:
+        """Whether the looks, recorded together in one piece, need more than ``limit``
+        [bytes] of memory: the recording then goes tile by tile."""
+        return self.memory_bytes(CHANNELS * self.looks) > limit
 
     def memory_bytes(self, channels=CHANNELS, tiled=False) -> float:
         """Host bytes while recording: the whole plate of one look in memory, or one tile's
@@ -117,20 +129,22 @@ class PlatePlan:
         the recording needs more than ``memory`` (the whole plate, or one tile when
         ``tiled``; of ``held`` looks recorded together) or its plate more than ``disk``
         [bytes] (None: no limit)."""
-        gb = 2.0**30
         advice = ("a smaller viewing zone, objects nearer the plate, a coarser view (fewer "
                   "pixels or a smaller aperture) or fewer looks need less; Camera mode needs "
                   "no plate")
-        if disk is not None and self.disk_bytes(channels) > disk:
-            raise InputError(f"the plate needs {self.disk_bytes(channels) / gb:.3g} GB on disk "
+        stored = self.disk_bytes(channels, tiled=tiled)
+        if disk is not None and stored > disk:
+            raise InputError(f"the plate needs {memory_mod.gib(stored)} on disk "
                              f"({self.looks} look(s) of {self.shape[1]} x {self.shape[0]} "
-                             f"samples, {channels} channels); the disk budget is "
-                             f"{disk / gb:.3g} GB: {advice}")
+                             f"samples, {channels} channels{', in tiles' if tiled else ''}); "
+                             f"the disk budget is {memory_mod.gib(disk)}: "
+                             f"{advice}")
         need = self.memory_bytes(channels * held, tiled=tiled)
         if memory is not None and need > memory:
             piece = "a tile at a time" if tiled else "in one piece"
-            raise InputError(f"recording the plate needs {need / gb:.3g} GB of memory {piece}; "
-                             f"the memory budget is {memory / gb:.3g} GB: "
+            raise InputError(f"recording the plate needs {memory_mod.gib(need)} of memory "
+                             f"{piece}; the memory budget is "
+                             f"{memory_mod.gib(memory)}: "
                              f"{'' if tiled else 'record it tile by tile, or '}{advice}")
 
     def describe(self) -> str:
@@ -140,7 +154,7 @@ class PlatePlan:
                 f"{self.pitch * 1e6:.3g} µm apart, {self.size[0] * 1e3:.4g} x "
                 f"{self.size[1] * 1e3:.4g} mm of the plate) for the zone {self.zone.describe()}; "
                 f"about {self.emitters:,} emitters; {self.looks} look(s): "
-                f"{self.disk_bytes() / 2**30:.3g} GB, about {self.record_seconds():.0f} s to "
+                f"{memory_mod.gib(self.disk_bytes())}, about {self.record_seconds():.0f} s to "
                 f"record here")
 
 
@@ -165,7 +179,7 @@ class ViewPlan:
                  f"{self.outside_zone * 1e3:.3g} mm outside the zone")
         return (f"the view is {verdict} (resolves {self.spot_px:.2g} px), the camera "
                 f"{where}; it reads {self.window / 1e6:.3g} Mpx of the plate, about "
-                f"{self.seconds:.0f} s here")
+                f"{duration(self.seconds)} here")
 
 
 def summary(p: PlatePlan, v: ViewPlan, *, lens: str, resolution, plate_size,
@@ -173,9 +187,8 @@ def summary(p: PlatePlan, v: ViewPlan, *, lens: str, resolution, plate_size,
     """The plan in plain words, the verdict first: whether ``v``'s views (``resolution``
     (W, H) through ``lens``, e.g. '40 mm f/2.8', from ``camera`` (3,) [m]) are sharp, how
     long the recording and a view take, then the samples, the zone, the wavelength, the
-    emitters, disk and memory (mm, µm, seconds, GB)."""
+    emitters, disk and memory (mm, µm, seconds, GiB)."""
     rows, cols = p.shape
-    gb = 2.0**30
     verdict = ("sharp" if v.sharp else f"blurred: they resolve {v.spot_px:.2g} px where a sharp "
                f"view resolves half a pixel; a longer lens, a wider aperture or Camera mode "
                f"makes them sharp")
@@ -192,9 +205,11 @@ def summary(p: PlatePlan, v: ViewPlan, *, lens: str, resolution, plate_size,
         f"wavelength  {p.wavelength * 1e6:.4g} µm (the depth partner "
         f"{p.depth_wavelength * 1e6:.6g} µm): through {lens} a view resolves half a pixel",
         f"emitters    about {p.emitters:,}, one per resolved spot seen from the zone's centre",
-        f"disk        {p.disk_bytes() / gb:.3g} GB for {p.looks} look(s); memory while "
-        f"recording {p.memory_bytes(CHANNELS * p.looks) / gb:.3g} GB in one piece (the looks "
-        f"together), {p.memory_bytes(tiled=True) / gb:.3g} GB tile by tile",
+        f"disk        {memory_mod.gib(p.disk_bytes())} for {p.looks} look(s) "
+        f"({memory_mod.gib(p.disk_bytes(tiled=True))} recorded tile by tile); memory while "
+        f"recording {memory_mod.gib(p.memory_bytes(CHANNELS * p.looks))} in one piece (the "
+        f"looks together), {memory_mod.gib(p.memory_bytes(CHANNELS * p.looks, tiled=True))} "
+        f"tile by tile",
         f"per view    reads {v.window / 1e6:.3g} Mpx of the plate, about "
         f"{duration(v.seconds)} for {p.looks} look(s)"]
     if v.outside_zone > 0:
@@ -204,7 +219,9 @@ def summary(p: PlatePlan, v: ViewPlan, *, lens: str, resolution, plate_size,
 
 
 def duration(seconds: float) -> str:
-    """``seconds`` as a person reads it: 40 s, 3 min, 2.5 h."""
+    """``seconds`` as a person reads it: 0.3 s, 40 s, 3 min, 2.5 h."""
+    if seconds < 9.5:
+        return f"{max(seconds, 0.1):.1g} s"
     if seconds < 90:
         return f"{seconds:.0f} s"
     return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.2g} h"
@@ -256,6 +273,11 @@ def plan(plate_size, bounds, *, zone: ViewingZone, pixel_angle: float,
     pitch, row_pitch = (min(lam, lam2) / (2 * b) for b in band)
     shape = (int(math.ceil((hi[1] - lo[1]) / row_pitch)) + 1,
              int(math.ceil((hi[0] - lo[0]) / pitch)) + 1)
+    if (hi[0] - lo[0] < pitch or hi[1] - lo[1] < row_pitch) and wavelength is not None:
+        raise InputError(f"wavelength {lam:.3g} m asks samples {pitch:.3g} x {row_pitch:.3g} m "
+                         f"apart, wider than the {hi[0] - lo[0]:.3g} x {hi[1] - lo[1]:.3g} m "
+                         f"of the plate the objects' light crosses: give a shorter one, or "
+                         f"none (the views' sharpness then sets it)")
     if hi[0] - lo[0] < pitch or hi[1] - lo[1] < row_pitch:
         raise InputError(f"plate_size {width:g} x {height:g} m: where the objects' light "
                          f"crosses it, it is narrower than one sample at the pitch the zone "
@@ -359,9 +381,9 @@ def plan_view(p: PlatePlan, *, position, pixel_angle, pupil=None, resolution) ->
     lo = np.maximum(xy.min(0) - pupil, p.origin)
     hi = np.minimum(xy.max(0) + pupil, np.asarray(p.origin) + np.asarray(p.size))
     window = int(np.prod(np.maximum(hi - lo, 0)) / (p.pitch * p.row_pitch))
-    fine = max(SUPERSAMPLE, math.ceil(SUPERSAMPLE * spot))
+    fine = max(SUPERSAMPLE, math.ceil(SUPERSAMPLE * spot * (1 - SHARP_SLACK)))
     seconds = p.looks * (CHANNELS * window * VIEW_SAMPLE_SECONDS
                          + w * h * fine * fine * FINE_PIXEL_SECONDS)
-    return ViewPlan(spot_px=spot, sharp=spot <= 1 / SUPERSAMPLE + 1e-9,
+    return ViewPlan(spot_px=spot, sharp=spot * SUPERSAMPLE <= 1 + SHARP_SLACK,
                     outside_zone=p.zone.distance_outside(position, pupil / 2),
                     window=window, seconds=seconds)

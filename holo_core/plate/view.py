@@ -39,6 +39,7 @@ from ..scene.hologram import Hologram
 from ..scene.plate import box_corners
 from ..validate import InputError, shown
 from ..view import BACKGROUND_DEPTH, RenderResult, as_rgb
+from .plan import SHARP_SLACK, SUPERSAMPLE
 from .reconstruction import reconstruct
 from .to_pupil import (
     CarrierPupil,
@@ -421,8 +422,28 @@ def _compose(looks, colours, z_ch, first: Hologram, camera, fine, pupil, *, supe
             "speckle_contrast": _spread(looks, colours, z_ch, coverage)}
     log.info("render: aperture %.4g m, resolution limit λ/D = %.3g rad = %.2f px",
              pupil.diameter, limit, info["resolution_limit_px"])
+    _check_sharp(first, camera, pupil.diameter, info["resolution_limit_px"])
     return RenderResult(rgb=colour, alpha=alpha, depth=depth, info=info, coverage=cover,
                         radiance=shown)
+
+
+class SoftViewWarning(UserWarning):
+    """A plate's view resolving less than a sharp view does: the camera's pixels are finer,
+    or its pupil narrower, than those the plate was recorded for."""
+
+
+def _check_sharp(h: Hologram, camera: Camera, diameter: float, spot_px: float) -> None:
+    """Warn (:class:`SoftViewWarning`) when a view of the plate ``h`` through a pupil of
+    ``diameter`` [m] resolves ``spot_px`` pixels, more than the half pixel of a sharp view."""
+    if spot_px * SUPERSAMPLE <= 1 + SHARP_SLACK:
+        return
+    made = "" if h.zone is None or not h.zone.pixel else (
+        f"; the plate was recorded for pixels of {h.zone.pixel:.3g} rad"
+        + (f" through a pupil of {h.zone.pupil:.3g} m" if h.zone.pupil else ""))
+    warnings.warn(f"this view resolves {spot_px:.2g} px where a sharp view resolves "
+                  f"{1 / SUPERSAMPLE:g}: its pixels are {camera.pixel_angle():.3g} rad through "
+                  f"a pupil of {diameter:.3g} m{made}; it looks soft: record the plate for "
+                  f"this camera's pixels and pupil", SoftViewWarning, stacklevel=3)
 
 
 def _radiance(looks, colours, composition, supersample) -> np.ndarray:

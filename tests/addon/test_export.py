@@ -79,6 +79,8 @@ def test_exposure_is_in_stops_and_unsaved_files_need_a_folder(empty_scene):
     assert Settings.from_scene(scene, 1.0).exposure == 2.0
     scene.holo.exposure = -2.0
     assert Settings.from_scene(scene, 1.0).exposure == 0.25
+    scene.holo.exposure = 1e6  # a script's: held to the core's range, which float32 keeps
+    assert Settings.from_scene(scene, 1.0).exposure == 2.0**64
     scene.holo.output_dir = "//holo/"
     assert not bpy.data.filepath
     with pytest.raises(ExportError, match="save the .blend first"):

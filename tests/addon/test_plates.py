@@ -92,7 +92,7 @@ def test_planner_in_the_panel(empty_scene):
     lines = plates.plan_lines(plate)
     print("\n".join(lines))
     text = "\n".join(lines)
-    for word in ("verdict", "Mpx", "µm apart", "wavelength", "GB", "tile by tile", "per view"):
+    for word in ("verdict", "Mpx", "µm apart", "wavelength", "GiB", "tile by tile", "per view"):
         assert word in text, word
 
 

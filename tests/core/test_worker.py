@@ -205,8 +205,8 @@ def test_a_plate_larger_than_the_disks_room_is_refused_before_the_recording(tmp_
     monkeypatch.setattr(image.shutil, "disk_usage",
                         lambda path: usage._replace(free=int(need * 0.99)))
     number = r"[\d.]+(e-\d+)?"
-    with pytest.raises(InputError, match=rf"the plate's 2 look\(s\) .* need {number} GB on "
-                       rf"disk, and {tmp_path} has {number} GB free"):
+    with pytest.raises(InputError, match=rf"the plate's 2 look\(s\) .* need {number} GiB on "
+                       rf"disk, and {tmp_path} has {number} GiB free"):
         runner.run(j)
     assert recorded == [], "the recording ran before the disk's room was checked"
     monkeypatch.undo()  # the disk's own room, enough: the plate is recorded and written
@@ -326,3 +326,18 @@ def test_a_resident_worker_near_its_idle_end_is_not_handed_a_job(tmp_path):
         assert worker._resident is not old and old.popen.poll() is not None
     finally:
         worker.release()
+
+
+def test_the_core_s_warnings_reach_the_report(tmp_path):
+    """A view that resolves less than its plate was recorded for (the camera stopped down
+    from f/2.8 to f/8): the core's Python warning is in the job's report, which the add-on
+    shows; the camera it was recorded for reports none of it."""
+    made = job(tmp_path)
+    cam = dataclasses.replace(made.camera, lens=50.0, fstop=2.8, focus_distance=3.0)
+    made = dataclasses.replace(made, points=(), triangles=(cube(),), camera=cam)
+    first = runner.run(made)
+    assert not [w for w in first.report.warnings if "resolves" in w], first.report.warnings
+    stopped = dataclasses.replace(made, camera=dataclasses.replace(cam, fstop=8.0),
+                                  route=dataclasses.replace(made.route, record=False))
+    said = [w for w in runner.run(stopped).report.warnings if "resolves" in w]
+    assert len(said) == 1 and "where a sharp view resolves 0.5" in said[0], said

@@ -181,3 +181,19 @@ def test_a_view_is_written_as_one_unit(tmp_path, monkeypatch):
     with pytest.raises(RuntimeError):
         write_view(view(0.75), tmp_path / "v.exr")
     assert (exr.read_bytes(), png.read_bytes()) == before and temps(tmp_path) == []
+
+
+def test_a_views_png_preview_shows_what_its_exr_shows_over_black(tmp_path):
+    """The PNG preview is the EXR's premultiplied colour (emission over black) through the
+    sRGB curve: where the view is clear (alpha 0) it is black whatever colour the pixel
+    holds, where opaque the colour, where half covered half of it (linear)."""
+    from PIL import Image
+    rgb = np.empty((2, 3, 3), np.float32)
+    rgb[...] = (0.8, 0.4, 0.2)
+    alpha = np.array([[0, 0.5, 1], [1, 0, 0.5]], np.float32)
+    png, = write_view(RenderResult(rgb=rgb, alpha=alpha, depth=np.ones((2, 3))),
+                      tmp_path / "v.exr")[1:]
+    shown = np.asarray(Image.open(png), np.float64)[..., :3] / 255
+    expect = image_files.srgb(rgb * alpha[..., None])
+    assert np.abs(shown - expect).max() <= 0.5 / 255 + 1e-9, (shown, expect)
+    assert not shown[alpha == 0].any()

@@ -17,6 +17,7 @@ from holo_core.plate.plan import RIM, plan, plan_view, rim_corners, zone_band
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.hologram import Hologram
 from holo_core.scene.plate import Carrier, ViewingZone
+from holo_core.validate import InputError
 
 BOX = np.array([[-0.02, -0.015, -0.33], [0.025, 0.02, -0.28]])
 ROOT = Path(__file__).resolve().parents[3]
@@ -71,6 +72,40 @@ def test_views_blur_where_the_camera_outresolves_the_plate():
     assert "blurred" in v.describe()
 
 
+def test_a_zone_kept_in_single_precision_plans_its_own_views_sharp():
+    """A .blend keeps the zone's pixel angle and pupil in float32: the plan made from them
+    for the very camera they came from says sharp (float32 rounding put the spot at
+    0.50000001 px and the verdict at "blurred")."""
+    px, pupil = 1.125e-3 / 2, 0.05 / 2.8
+    kept = float(np.float32(px)), float(np.float32(pupil))
+    zone = ViewingZone.around((0, 0, 0.3), kept[1], 0.01, pixel=kept[0])
+    p = plan((0.1, 0.1), BOX, zone=zone, pixel_angle=kept[0])
+    v = plan_view(p, position=(0, 0, 0.3), pixel_angle=px, pupil=pupil, resolution=(1280, 720))
+    assert v.spot_px != 0.5 and v.spot_px == pytest.approx(0.5, rel=1e-6)
+    assert v.sharp, v.describe()
+
+
+def test_a_tiled_plate_is_planned_with_its_whole_edge_tiles():
+    """A tiled store keeps its edge tiles whole: the plan's disk for it counts the tiles that
+    cover the plate, every look, and the budget refuses by that size; in one piece, the
+    samples alone."""
+    p = plan((0.1, 0.1), BOX, zone=ZONE, pixel_angle=1e-3, looks=2, tile=256)
+    tiles = -(-p.shape[0] // 256) * -(-p.shape[1] // 256)
+    assert p.disk_bytes() == 8 * 4 * 2 * p.samples
+    assert p.disk_bytes(tiled=True) == 8 * 4 * 2 * tiles * 256**2 > p.disk_bytes()
+    between = (p.disk_bytes() + p.disk_bytes(tiled=True)) / 2
+    p.check_budget(disk=between)
+    with pytest.raises(InputError, match=r"needs .* GiB on disk .* in tiles\); the disk budget"):
+        p.check_budget(disk=between, tiled=True)
+
+
+def test_a_wavelength_too_long_for_the_plate_is_named():
+    """A wavelength given by hand that asks samples wider than the plate's window is refused
+    naming the wavelength, not the plate's size."""
+    with pytest.raises(InputError, match=r"wavelength 0\.05 m asks samples .* give a shorter"):
+        plan((0.1, 0.1), BOX, zone=ZONE, pixel_angle=1e-3, wavelength=0.05)
+
+
 def test_importing_the_planner_loads_no_driver():
     """Blender's process calls the planner directly: importing it loads neither OpenCL nor an
     FFT library."""
@@ -91,7 +126,7 @@ def test_planner_on_the_command_line(capsys):
     out = capsys.readouterr().out
     print(out)
     assert out.startswith("verdict     views of 1280 x 720 px through 40 mm f/2.8 are sharp")
-    for word in ("Mpx", "µm apart", "GB for 2 look(s)", "tile by tile", "per view"):
+    for word in ("Mpx", "µm apart", "GiB for 2 look(s)", "tile by tile", "per view"):
         assert word in out, word
     assert main(["plan", "--box", "0.06", "0.05", "0.09", "--distance", "0.27",
                  "--camera", "0.01", "-1e-3", "-0.3"]) == 2

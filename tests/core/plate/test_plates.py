@@ -18,7 +18,8 @@ from plate_scene import camera, meshes
 
 from holo_core.camera.render import render_camera
 from holo_core.plate.record import look_code, record_hologram, record_plate
-from holo_core.plate.view import EmptyViewWarning, OutsideZoneWarning, render_view
+from holo_core.plate.view import (EmptyViewWarning, OutsideZoneWarning, SoftViewWarning,
+                                  render_view)
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.hologram import Hologram
 from holo_core.scene.mesh import Mesh
@@ -56,10 +57,20 @@ def views(recorded):
         cam = camera(position, crop=True)
         with warnings.catch_warnings():
             warnings.simplefilter("error", OutsideZoneWarning)
+            warnings.simplefilter("error", SoftViewWarning)  # the cameras it was made for
             plate = render_view(recorded, cam, supersample=SUPERSAMPLE)
         out[eye] = plate, render_camera(meshes(), cam, via="incoherent",
                                         supersample=SUPERSAMPLE)
     return out
+
+
+def test_a_view_softer_than_the_plate_was_made_for_is_said(recorded):
+    """A camera stopped down to f/5.6 where the plate was recorded for f/2.8: its view resolves
+    a pixel, not half of one, and says so with the plate's own pixels and pupil (the cameras
+    it was made for say nothing: the views above turn the warning into an error)."""
+    with pytest.warns(SoftViewWarning, match=r"resolves 1(\.0)? px where a sharp view resolves "
+                      r"0\.5.* recorded for pixels of .* through a pupil of 0\.0179 m"):
+        render_view(recorded, camera("centre", fstop=5.6, crop=True), supersample=SUPERSAMPLE)
 
 
 @pytest.mark.parametrize("eye", list(EYES))
