@@ -138,10 +138,10 @@ def _record_points(args, mesh, out, tiled) -> int:
           f"hologram, pitch {pitch:.3g} m, wavelengths "
           f"{[round(w * 1e9, 3) for w in wavelengths]} nm")
     if tiled:  # a complex plate in tiles, on Dask (the object wave: no reference)
-        from .plate.tiles import record_tiled
+        from .plate.tiles import DEFAULT_TILE, record_tiled
         method = "direct" if args.method == "auto" else args.method
         record_tiled(pos, colours, url=out, shape=shape, pitch=pitch,
-                     wavelengths=wavelengths, tile=args.tile, method=method,
+                     wavelengths=wavelengths, tile=args.tile or DEFAULT_TILE, method=method,
                      scheduler=args.scheduler, overwrite=args.overwrite,
                      progress=_progress_bar(),
                      dashboard=lambda link: print(f"Dask dashboard: {link}"))
@@ -574,8 +574,9 @@ def main(argv=None) -> int:
                         "hologram's resolution)")
     p.add_argument("--max-points", type=COUNT, default=None,
                    help="a point sum's most point emitters sampled on the mesh (200000)")
-    p.add_argument("--tile", type=PIXELS, default=2048,
-                   help="with an output NAME.zarr or URL: samples per tile side (2048)")
+    p.add_argument("--tile", type=PIXELS, default=None,
+                   help="with an output NAME.zarr or URL: samples per tile side (a plate of "
+                        "meshes: fitted to the plate, at most 2048; a point sum: 2048)")
     p.add_argument("--scheduler", default=None,
                    help="with an output NAME.zarr or URL: a Dask scheduler's address "
                         "(tcp://host:8786; default DASK_SCHEDULER_ADDRESS, else a local "

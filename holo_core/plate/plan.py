@@ -34,7 +34,8 @@ SHARP_SLACK = 1e-6     # of a spot: a zone's pixel and pupil kept in float32 (a 
 RIM = 0.15             # the zone's soft rim, a fraction of its half widths
 LAYERS = 3             # surfaces an emitter ray may cross and still be recorded (depth peeling)
 DEPTH_MARGIN = 1.25    # the depth pair's unambiguous range over the objects' extent
-TILE = 2048            # samples a side of a tile of a tiled recording
+TILE = 2048            # samples a side of a tiled recording's tile, at most (fitted_tile)
+TILE_COST = 2**17      # samples a tile costs beyond its own: its task, its emitters' lists
 LOOKS = 2              # coded looks recorded by default (the checkerboard pair)
 CHANNELS = 4           # R, G, B at λ1 and the depth partner at λ2
 SAMPLE_BYTES = 8       # complex64
@@ -229,7 +230,7 @@ def duration(seconds: float) -> str:
 
 def plan(plate_size, bounds, *, zone: ViewingZone, pixel_angle: float,
          supersample: int = SUPERSAMPLE, looks: int = LOOKS, wavelength=None,
-         tile: int = TILE) -> PlatePlan:
+         tile: int | None = None) -> PlatePlan:
     """The plan of a plate of ``plate_size`` (width, height) [m] for objects in the box
     ``bounds`` (2, 3) [m] (the plate's frame, z < 0) seen from ``zone``, whose views have
     pixels of ``pixel_angle`` [rad] (module docstring). ``wavelength`` [m] overrides λ1."""
@@ -242,9 +243,10 @@ def plan(plate_size, bounds, *, zone: ViewingZone, pixel_angle: float,
     pixel = validate.positive("pixel_angle", pixel_angle, "rad")
     s = validate.integer("supersample", supersample, 1, 16)
     looks = validate.integer("looks", looks, 1, 64)
-    tile = validate.integer("tile", tile, 256)
-    if tile % 256:
-        raise InputError(f"tile must be a multiple of 256 samples; got {tile}")
+    if tile is not None:
+        tile = validate.integer("tile", tile, 256)
+        if tile % 256:
+            raise InputError(f"tile must be a multiple of 256 samples; got {tile}")
     # a pinhole's views: the widest pupil its defocus allows, within the zone
     pupil = zone.pupil or min(pinhole_pupil(box, zone.centre, pixel / s)[0],
                               2 * min(zone.half_extents[:2]) or math.inf)
@@ -287,7 +289,19 @@ def plan(plate_size, bounds, *, zone: ViewingZone, pixel_angle: float,
     return PlatePlan(zone=zone, bounds=box, pupil=pupil, wavelength=lam, depth_wavelength=lam2,
                      spacing=spacing, band=band, pitch=pitch, row_pitch=row_pitch,
                      origin=(float(lo[0]), float(lo[1])), shape=shape, emitters=emitters,
-                     footprint=footprint, looks=looks, tile=tile)
+                     footprint=footprint, looks=looks, tile=tile or fitted_tile(shape))
+
+
+def fitted_tile(shape, largest=TILE, step=256) -> int:
+    """The side of a tiled recording's tiles for a plate of ``shape`` (rows, cols): the
+    multiple of ``step`` up to ``largest`` whose tiles cover it with the fewest samples, each
+    tile counted TILE_COST more. A store keeps its edge tiles whole, so a tile that fits the
+    plate wastes little: the shot's plate, 2269 rows, kept 4096 in tiles of 2048 (twice its
+    samples on disk) and keeps 2304 in tiles of 1152 (10 % more than its samples)."""
+    def cost(t):
+        tiles = math.ceil(shape[0] / t) * math.ceil(shape[1] / t)
+        return tiles * (t * t + TILE_COST), -t
+    return min(range(step, largest + 1, step), key=cost)
 
 
 def pinhole_pupil(box, eye, bin_angle) -> tuple[float, float]:

@@ -20,7 +20,7 @@ from ..scene.mesh import Mesh, facing, sample_points, visible_from
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Carrier, Plate, ViewingZone
 from ..validate import InputError, shown
 from .emitters import zone_emitters
-from .plan import LAYERS, RIM, TILE, PlatePlan, plan
+from .plan import LAYERS, RIM, PlatePlan, plan
 from .point_sources import cone_filter, point_bytes, point_wave
 from .triangles import depth_texture, mesh_primitives, primitive_wave, surface_pitch
 from .zone_sum import ZoneEmitters, ZoneSum, ZoneWindow
@@ -411,7 +411,7 @@ PLATE_METHODS = ("zone", "auto", "direct", "wrp")
 
 def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
                  zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
-                 code=None, encoding="complex", budget=(None, None), url=None, tile=TILE,
+                 code=None, encoding="complex", budget=(None, None), url=None, tile=None,
                  scheduler=None, overwrite=False, progress: jobs.Progress = None,
                  dashboard=None) -> Hologram:
     """A plate hologram of ``meshes`` (world metres), independent of any camera: what it
@@ -455,7 +455,8 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
     url : str or path, optional
         Record tile by tile into the tiled store there, on Dask, and return it opened
         (:func:`holo_core.plate.tiles.record_looks_tiled`: ``tile`` samples a side, a
-        multiple of 256; ``scheduler``, ``overwrite``, ``dashboard`` as there). Default: the
+        multiple of 256, by default fitted to the plate (:func:`holo_core.plate.plan.
+        fitted_tile`); ``scheduler``, ``overwrite``, ``dashboard`` as there). Default: the
         whole plate in memory.
     progress : callable, optional
         Called with the fraction done (rows in memory, tiles in a store).
@@ -471,7 +472,7 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
 def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
                  zone: ViewingZone | None = None, zone_margin=DEFAULT_ZONE_MARGIN,
                  wavelength=None, depth=True, seed=0, budget=(None, None), urls=None,
-                 tile=TILE, scheduler=None, overwrite=False, progress: jobs.Progress = None,
+                 tile=None, scheduler=None, overwrite=False, progress: jobs.Progress = None,
                  dashboard=None) -> list[Hologram]:
     """``looks`` looks of one plate (:func:`record_plate`'s arguments), recorded in memory in
     one pass: the coded looks of ``seed`` (:func:`look_code`) where ``looks`` allows, else

@@ -42,7 +42,8 @@ from ..scene.hologram import Hologram, HologramInfo
 from ..scene.plate import DEFAULT_ZONE_MARGIN
 from ..validate import InputError
 from .point_sources import check_distance, point_wave, sampling_grid
-from .record import DEFAULT_WAVELENGTHS, PlateRecording, point_amplitudes, prepare_plate
+from .record import (DEFAULT_WAVELENGTHS, PlateRecording, plate_plan, point_amplitudes,
+                     prepare_plate)
 from .zone_sum import BLOCK
 
 log = logging.getLogger(__name__)
@@ -110,7 +111,7 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
 
 def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
                        zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
-                       encoding="complex", tile=DEFAULT_TILE, scheduler=None, overwrite=False,
+                       encoding="complex", tile=None, scheduler=None, overwrite=False,
                        progress: jobs.Progress = None, dashboard=None,
                        budget=(None, None)) -> list[Hologram]:
     """The looks ``codes`` of one plate of ``meshes`` (with occlusion, against the carrier
@@ -121,7 +122,7 @@ def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
 
     The emitters and their visibility tables are found once, here, and scattered once to the
     workers; each task sums one tile (``tile`` samples a side, a multiple of 256: the
-    emitters' block lists) for every look at once (as :func:`holo_core.plate.record.
+    emitters' block lists; by default the plan's, fitted to the plate) for every look at once (as :func:`holo_core.plate.record.
     record_looks` does in memory) and writes each look with its record into the stores that
     lack it. A store's digest covers the meshes in the plate's frame (vertices, triangles,
     colours, UVs, texture: the plate's pose too), the zone, the plan (samples, pitches,
@@ -130,6 +131,9 @@ def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
     look recorded alone resumes into a store made with others and the other way round.
     ``scheduler``, ``overwrite``, ``progress``, ``dashboard``: as for :func:`record_tiled`.
     """
+    if tile is None:
+        tile = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
+                          zone_margin=zone_margin, wavelength=wavelength)[0].tile
     tile = _tile(tile, ZONE_TILE_STEP)
     _flag("overwrite", overwrite)
     if len(urls) != len(codes) or not urls:

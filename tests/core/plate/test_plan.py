@@ -166,3 +166,17 @@ def test_complex_plate_file_keeps_its_zone(tmp_path, rng):
               holo=json.dumps(old))
     v2 = read_hologram(tmp_path / "v2.exr")
     assert v2.encoding == "intensity" and v2.zone is None and v2.shape == (12, 20)
+
+
+def test_a_tiled_recordings_tiles_fit_the_plate():
+    """The default tile side is fitted to the plate: the shot's 2525 x 11965 samples are
+    covered with at most 10 % more in whole tiles (tiles of 2048 kept 67 % more), never by
+    tiles larger than TILE, and a plate of whole 2048-sample tiles keeps them."""
+    from holo_core.plate.plan import TILE, fitted_tile
+    for shape, most in (((2525, 11965), 0.10), ((2269, 74000), 0.15), ((4096, 4096), 0.0)):
+        t = fitted_tile(shape)
+        covered = -(-shape[0] // t) * -(-shape[1] // t) * t * t
+        assert t % 256 == 0 and t <= TILE and covered <= (1 + most) * shape[0] * shape[1], t
+    assert fitted_tile((4096, 4096)) == TILE
+    p = plan((0.1, 0.1), BOX, zone=ZONE, pixel_angle=1e-3)
+    assert p.tile == fitted_tile(p.shape)
