@@ -138,8 +138,9 @@ def read(scene, depsgraph, *, render=True, preview=1) -> Prepared:
         data = export_imported(scene, depsgraph, imported)
     else:
         data = export_scene(scene, depsgraph, lit=lit)
-        if mode == "PLATE":
-            data = with_plate(data, plate, depsgraph)
+        if mode == "PLATE":  # a render's frame beyond the zone fails where the user says so
+            data = with_plate(data, plate, depsgraph,
+                              strict=preview <= 1 and scene.holo.outside_zone == "FAIL")
     if preview > 1:
         data = replace(data, camera=coarser(data.camera, preview),
                        view=coarser(data.view, preview), region=None)

@@ -38,23 +38,26 @@ def scene_plate(scene, *, required: bool):
     return plates[0] if plates else None
 
 
-def with_plate(data: SceneData, plate_object, depsgraph) -> SceneData:
+def with_plate(data: SceneData, plate_object, depsgraph, strict=False) -> SceneData:
     """``data`` with the plate ``plate_object`` as ``depsgraph`` evaluates it and its viewing
     zone (the plate's own, else the camera's pupil with the plate's Zone Margin around it:
     ``data.zone``, to keep on the plate once it is recorded), checked against the camera: in
     front of it (an :class:`ExportError` otherwise), covering what the camera sees of the
     emitters (a warning when it covers part, an error when none), the camera's pupil inside
-    its viewing zone (a warning naming it otherwise). Its ``view``, the camera of the
-    emitters' radiance, is the zone's centre (:func:`zone_view`)."""
+    its viewing zone (a warning naming it otherwise; ``strict``: an :class:`ExportError`).
+    Its ``view``, the camera of the emitters' radiance, is the zone's centre
+    (:func:`zone_view`)."""
     name, camera = plate_object.name, data.camera
     plate = plate_from_object(evaluated(plate_object, depsgraph), data.unit)
     _in_front(plate, name, camera)
     zone = None
     if plate.zone is None:
         zone = kept(zone_around(plate, camera, plate_object.holo.zone_margin * data.unit))
+    beyond = outside_zone(plate, name, camera)
+    if beyond and strict:
+        raise ExportError(f"{beyond} (Outside Zone: Fail)")
     warnings = data.warnings + tuple(filter(None, (
-        outside_zone(plate, name, camera),
-        plate_coverage(plate, name, camera, data.points + data.triangles))))
+        beyond, plate_coverage(plate, name, camera, data.points + data.triangles))))
     data = replace(data, plate=replace(plate, zone=plate.zone or zone), plate_name=name,
                    warnings=warnings, zone=zone)
     return replace(data, view=zone_view(data))

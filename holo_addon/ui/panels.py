@@ -32,6 +32,7 @@ class HOLO_PT_scene(bpy.types.Panel):
         else:
             col.prop(h, "plate_memory")
             col.prop(h, "plate_disk")
+            col.prop(h, "outside_zone")
             col.prop(h, "wavelength")
             col.prop(h, "iterations")
         col.prop(h, "seed")

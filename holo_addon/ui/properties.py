@@ -124,13 +124,22 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                                description="Where holograms and the holographic pass of each "
                                            "frame are written (// is the .blend's folder)")
     plate_memory: FloatProperty(name="Memory Budget", default=8.0, min=0.1, soft_max=256.0,
-                                description="What recording a plate may hold in memory [GB]: "
-                                            "a plate that needs more is refused before any "
-                                            "work, with its size (Plan Plate says it)")
+                                description="What recording a plate may hold in memory [GiB]: "
+                                            "a plate that needs more is recorded tile by tile "
+                                            "into a store; one whose tile needs more is "
+                                            "refused before any work, with its size (Plan "
+                                            "Plate says it)")
     plate_disk: FloatProperty(name="Disk Budget", default=100.0, min=0.1, soft_max=10000.0,
-                              description="What a plate's files may take on disk [GB], every "
+                              description="What a plate's files may take on disk [GiB], every "
                                           "iteration: a plate that needs more is refused "
                                           "before any work, with its size")
+    outside_zone: EnumProperty(
+        name="Outside Zone", default="WARN",
+        items=[("WARN", "Warn", "A frame whose camera reaches beyond the plate's viewing zone "
+                                "renders, cut off or soft, with a warning"),
+               ("FAIL", "Fail", "A frame whose camera reaches beyond the plate's viewing zone "
+                                "fails (a background render, a farm's, exits with status 1)")],
+        description="What a render does with a frame the plate was not recorded for")
     wavelength: FloatProperty(name="Wavelength", default=0.0, min=0.0, max=1.0, precision=6,
                               subtype="DISTANCE", unit="LENGTH",
                               description="Recording wavelength (0: chosen for the image's "

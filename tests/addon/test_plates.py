@@ -32,6 +32,7 @@ def test_camera_moves_inside_the_zone_never_record_again(empty_scene):
     the camera moves 10 cm and turns, refocuses, changes its f-stop, and the render changes
     size: the hologram is current for each. A camera beyond the zone is warned, the zone
     named, and a changed margin sets a new zone (a new recording)."""
+    from holo_addon.export.scene import ExportError
     from holo_addon.render import pipeline
     scene = empty_scene
     _, cam, plate = _plate_scene(scene)
@@ -61,6 +62,12 @@ def test_camera_moves_inside_the_zone_never_record_again(empty_scene):
     said = [w for w in outside.warnings if "viewing zone" in w]
     assert said and "beyond plate 'Plane''s viewing zone (the box centred at" in said[0], \
         outside.warnings
+    assert "Fit Zone to Shot" in said[0]
+    scene.holo.outside_zone = "FAIL"  # a farm's frame the plate was not made for: it fails
+    with pytest.raises(ExportError, match=r"beyond plate 'Plane''s viewing zone .*\(Outside "
+                       r"Zone: Fail\)"):
+        job()
+    scene.holo.outside_zone = "WARN"
     plate.holo.zone_margin = 0.3
     assert not plate.holo.zone_set
     assert job().fingerprint != first.fingerprint
