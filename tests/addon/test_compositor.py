@@ -335,6 +335,24 @@ def test_a_failed_pass_fails_a_background_animation(tmp_path):
     assert "rendered" not in run.stdout and not list(tmp_path.glob("frame_*"))
 
 
+UNWRITABLE_FARM_RENDER = BACKGROUND_SCENE + """open(sys.argv[3] + "/a file", "w").close()
+scene.holo.output_dir = sys.argv[3] + "/a file/holo/"
+scene.render.filepath = sys.argv[3] + "/frame_"
+bpy.ops.render.render(animation=True)
+print("rendered")
+"""
+
+
+def test_an_unwritable_output_folder_fails_a_background_animation(tmp_path):
+    """``blender -b ... -a`` with an Output Folder under a file: status 1 and the error naming
+    the setting, before any frame is written (Blender's handlers printed a traceback and
+    rendered on)."""
+    run = in_background(UNWRITABLE_FARM_RENDER, tmp_path)
+    assert run.returncode == 1, run.stdout[-2000:] + run.stderr[-2000:]
+    assert "cannot be written: the Output Folder" in run.stderr, run.stderr[-2000:]
+    assert "rendered" not in run.stdout and not list(tmp_path.glob("frame_*"))
+
+
 def test_renders_use_render_modifier_levels(empty_scene, tmp_path, monkeypatch):
     """Subdivision at level 0 in the viewport and 2 in renders: the pass of an F12 render is
     made from level 2 (a cube's 12 triangles become 192)."""
