@@ -309,13 +309,13 @@ def failed(scene, message: str) -> None:
     composite shows the raster alone (the holographic objects' holes empty), never a pass of
     another state, folder or file; the error goes to Blender's reports and a popup. (Muting
     the node would not do: the render has already evaluated its copy of the compositor.)"""
-    log.error(message)
     exit_now = bpy.app.background if session.exit_on_failure is None else \
         session.exit_on_failure
-    if exit_now:
+    if exit_now:  # said once, on stderr whatever the log's handlers (the farm's output)
         sys.stderr.write(message + "\n")
         sys.stderr.flush()
         os._exit(1)
+    log.error(message)
     try:
         stale = pipeline.pass_file(pipeline.output_dir(scene), scene.frame_current)
         if stale.is_file() and not _is_clear(stale):

@@ -128,9 +128,9 @@ def outside_zone(plate: Plate, name: str, camera: Camera) -> str | None:
     beyond = plate.zone.distance_outside(position, (camera.aperture_diameter or 0.0) / 2)
     if beyond <= 1e-9:
         return None
-    return (f"the camera's pupil reaches {beyond:.3g} m beyond plate '{name}''s viewing zone "
-            f"({plate.zone.describe()}): its view may be cut off or soft; use Fit Zone to "
-            f"Shot (Object ▸ Holo) to record the plate for every frame of the camera's move, "
+    return (f"the camera's pupil reaches {beyond:.3g} m beyond the viewing zone of plate "
+            f"'{name}' ({plate.zone.describe()}): its view may be cut off or soft; use Fit Zone "
+            f"to Shot (Object ▸ Holo) to record the plate for every frame of the camera's move, "
             f"or Fit Zone to Camera for where it is now")
 
 

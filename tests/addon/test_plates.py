@@ -60,11 +60,11 @@ def test_camera_moves_inside_the_zone_never_record_again(empty_scene):
     bpy.context.view_layer.update()
     outside = job()
     said = [w for w in outside.warnings if "viewing zone" in w]
-    assert said and "beyond plate 'Plane''s viewing zone (the box centred at" in said[0], \
+    assert said and "beyond the viewing zone of plate 'Plane' (the box centred at" in said[0], \
         outside.warnings
     assert "Fit Zone to Shot" in said[0]
     scene.holo.outside_zone = "FAIL"  # a farm's frame the plate was not made for: it fails
-    with pytest.raises(ExportError, match=r"beyond plate 'Plane''s viewing zone .*\(Outside "
+    with pytest.raises(ExportError, match=r"beyond the viewing zone of plate 'Plane' .*\(Outside "
                        r"Zone: Fail\)"):
         job()
     scene.holo.outside_zone = "WARN"
