@@ -135,10 +135,11 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                                           "before any work, with its size")
     outside_zone: EnumProperty(
         name="Outside Zone", default="WARN",
-        items=[("WARN", "Warn", "A frame whose camera reaches beyond the plate's viewing zone "
-                                "renders, cut off or soft, with a warning"),
-               ("FAIL", "Fail", "A frame whose camera reaches beyond the plate's viewing zone "
-                                "fails (a background render, a farm's, exits with status 1)")],
+        items=[("WARN", "Warn", ("A frame whose camera reaches beyond the plate's viewing "
+                                 "zone renders, cut off or soft, with a warning")),
+               ("FAIL", "Fail", ("A frame whose camera reaches beyond the plate's viewing "
+                                 "zone fails (a background render, a farm's, exits with "
+                                 "status 1)"))],
         description="What a render does with a frame the plate was not recorded for")
     wavelength: FloatProperty(name="Wavelength", default=0.0, min=0.0, max=1.0, precision=6,
                               subtype="DISTANCE", unit="LENGTH",

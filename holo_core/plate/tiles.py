@@ -42,8 +42,7 @@ from ..scene.hologram import Hologram, HologramInfo
 from ..scene.plate import DEFAULT_ZONE_MARGIN
 from ..validate import InputError
 from .point_sources import check_distance, point_wave, sampling_grid
-from .record import (DEFAULT_WAVELENGTHS, PlateRecording, plate_plan, point_amplitudes,
-                     prepare_plate)
+from .record import DEFAULT_WAVELENGTHS, PlateRecording, plate_plan, point_amplitudes, prepare_plate
 from .zone_sum import BLOCK
 
 log = logging.getLogger(__name__)
