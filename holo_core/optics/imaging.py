@@ -34,6 +34,7 @@ TAPS, ES_TABLE = 4, 4096  # the image read: 4 taps at 2x padding agree with 6 to
 IRIS_TAPER = 0.1       # the iris's raised-cosine rim, a fraction of its radius
 COVERAGE_EDGE = (0.25, 0.75)  # coverage mapped to alpha 0 … 1 (0.5: the geometric edge)
 COVERAGE_FLOOR = 0.05  # the colour is radiance / coverage where coverage exceeds this
+COVERAGE_RADIUS = 1    # a speckle minimum inside a surface: the (2r+1)² pixels' mean
 SOFT_FLOOR = 1e-3      # soft alpha: coverage below this is clear, within this of 1 opaque
 SPECTRA = "pupil-spectra"  # the workspace of a stack of padded spectra (P, 2h, 2w)
 
@@ -247,9 +248,9 @@ def assemble(radiance, coverage, cross, *, camera: Camera, supersample: int, wav
         floor = SOFT_FLOOR
     else:
         lo, hi = COVERAGE_EDGE
-        # a pixel's coverage, or its 3×3 neighbourhood's where higher: a speckle minimum
+        # a pixel's coverage, or its neighbourhood's mean where higher: a speckle minimum
         # inside a surface leaves no hole, while a straight edge keeps its half-way crossing
-        solid = box_mean(coverage, 1)
+        solid = box_mean(coverage, COVERAGE_RADIUS)
         np.maximum(solid, coverage, out=solid)
         solid -= lo
         solid *= 1 / (hi - lo)

@@ -51,7 +51,6 @@ FURTHER_LOOK = 0.35      # a further independent look in the same pass, of a loo
                          # channels: on the shot's plate two looks took 34.6 s, apart 51.5 s)
 FURTHER_CODED = 0.12     # a further coded look (2 or m² looks): its classes' set-up and mixing
 COLOURS_ONLY = 0.8       # no depth partner: the colours' recurrence alone
-EMITTER_SECONDS = 2e-5   # per emitter and visibility grid point: the depth buffers' tests
 VIEW_SAMPLE_SECONDS = 3.9e-9  # per window sample and channel of a view: read, filter, gather
 FINE_PIXEL_SECONDS = 7e-8    # per fine pixel and look of a view: spectra, image, assembly
 

@@ -53,7 +53,6 @@ from .to_pupil import (
 )
 
 log = logging.getLogger(__name__)
-COVERAGE_RADIUS = 1  # the coverage's speckle is averaged over (2r+1)² pixels before alpha
 VIEW_MARGIN = 0.1  # the window reaches this fraction of the image beyond its corners
 
 
