@@ -55,9 +55,16 @@ def limit_from_env() -> int | None:
     return int(value)
 
 
+def host_share(budget: float | None = None) -> float:
+    """Bytes one step may take: SHARE of the host's available memory, and at most
+    ``budget`` [bytes] where one is set."""
+    share = SHARE * host_available()
+    return share if budget is None else min(share, budget)
+
+
 def check_host(what: str, nbytes: float) -> None:
     """Refuse ``what`` when it needs more than the host's share of available memory."""
-    budget = SHARE * host_available()
+    budget = host_share()
     if nbytes > budget:
         raise InputError(f"{what} needs {gib(nbytes)} of memory; {gib(budget)} is available "
                          f"(lower the resolution or the size, or free memory)")

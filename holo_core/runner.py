@@ -223,9 +223,7 @@ def needs_tiles(job: Job, planned=None) -> bool:
     if not meshes or not all(isinstance(m, Mesh) for m in meshes):
         return False
     p = planned or _plan(job)
-    limit = memory.SHARE * memory.host_available()
-    if route.memory_budget is not None:
-        limit = min(limit, route.memory_budget)
+    limit = memory.host_share(route.memory_budget)
     if p.needs_tiles(limit):
         log.info("the plate's %d look(s) need %s in one piece, more than %s: recording them "
                  "tile by tile into %s", p.looks, memory.gib(p.memory_bytes(CHANNELS * p.looks)),
@@ -342,10 +340,11 @@ class _Heard(logging.Handler):
     def __exit__(self, *exc):
         self.caught.__exit__(*exc)
         for w in self.raised:
-            if w.category.__module__.startswith("holo_core.") and \
-                    not issubclass(w.category, OutsideZoneWarning):
+            if issubclass(w.category, OutsideZoneWarning):
+                continue
+            if w.category.__module__.startswith("holo_core."):
                 log.warning("%s", w.message)
-            elif not issubclass(w.category, OutsideZoneWarning):
+            else:  # another library's: as it would have been shown
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         logging.getLogger("holo_core").removeHandler(self)
 

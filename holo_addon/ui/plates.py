@@ -152,7 +152,7 @@ def plan_summary(context) -> list[str]:
                     plate_size=(plate.width, plate.height), camera=eye)
     gb = 2.0**30
     # as the recording decides: tile by tile where the looks exceed the memory in one piece
-    tiled = p.needs_tiles(min(memory.SHARE * memory.host_available(), h.plate_memory * gb))
+    tiled = p.needs_tiles(memory.host_share(h.plate_memory * gb))
     try:
         p.check_budget(memory=h.plate_memory * gb, disk=h.plate_disk * gb, tiled=tiled,
                        held=p.looks)

@@ -274,12 +274,13 @@ def plan(plate_size, bounds, *, zone: ViewingZone, pixel_angle: float,
     pitch, row_pitch = (min(lam, lam2) / (2 * b) for b in band)
     shape = (int(math.ceil((hi[1] - lo[1]) / row_pitch)) + 1,
              int(math.ceil((hi[0] - lo[0]) / pitch)) + 1)
-    if (hi[0] - lo[0] < pitch or hi[1] - lo[1] < row_pitch) and wavelength is not None:
+    narrow = hi[0] - lo[0] < pitch or hi[1] - lo[1] < row_pitch
+    if narrow and wavelength is not None:
         raise InputError(f"wavelength {lam:.3g} m asks samples {pitch:.3g} x {row_pitch:.3g} m "
                          f"apart, wider than the {hi[0] - lo[0]:.3g} x {hi[1] - lo[1]:.3g} m "
                          f"of the plate the objects' light crosses: give a shorter one, or "
                          f"none (the views' sharpness then sets it)")
-    if hi[0] - lo[0] < pitch or hi[1] - lo[1] < row_pitch:
+    if narrow:
         raise InputError(f"plate_size {width:g} x {height:g} m: where the objects' light "
                          f"crosses it, it is narrower than one sample at the pitch the zone "
                          f"needs ({pitch:.3g} x {row_pitch:.3g} m): make it larger")
@@ -295,8 +296,8 @@ def fitted_tile(shape, largest=TILE, step=256) -> int:
     """The side of a tiled recording's tiles for a plate of ``shape`` (rows, cols): the
     multiple of ``step`` up to ``largest`` whose tiles cover it with the fewest samples, each
     tile counted TILE_COST more. A store keeps its edge tiles whole, so a tile that fits the
-    plate wastes little: the shot's plate, 2269 rows, kept 4096 in tiles of 2048 (twice its
-    samples on disk) and keeps 2304 in tiles of 1152 (10 % more than its samples)."""
+    plate wastes little: bench/shot.py's plate, 2525 x 11965 samples, took 67 % more in
+    tiles of 2048 and takes 8.5 % more in its fitted 1280."""
     def cost(t):
         tiles = math.ceil(shape[0] / t) * math.ceil(shape[1] / t)
         return tiles * (t * t + TILE_COST), -t

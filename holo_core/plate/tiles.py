@@ -121,13 +121,14 @@ def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
 
     The emitters and their visibility tables are found once, here, and scattered once to the
     workers; each task sums one tile (``tile`` samples a side, a multiple of 256: the
-    emitters' block lists; by default the plan's, fitted to the plate) for every look at once (as :func:`holo_core.plate.record.
-    record_looks` does in memory) and writes each look with its record into the stores that
-    lack it. A store's digest covers the meshes in the plate's frame (vertices, triangles,
-    colours, UVs, texture: the plate's pose too), the zone, the plan (samples, pitches,
-    origin, wavelengths), its look's seed, code and amplitudes, the tile and the emitters
-    found (their positions and visibility): only the same recording resumes into it, and a
-    look recorded alone resumes into a store made with others and the other way round.
+    emitters' block lists; by default the plan's, fitted to the plate) for every look at
+    once (as :func:`holo_core.plate.record.record_looks` does in memory) and writes each
+    look with its record into the stores that lack it. A store's digest covers the meshes
+    in the plate's frame (vertices, triangles, colours, UVs, texture: the plate's pose too),
+    the zone, the plan (samples, pitches, origin, wavelengths), its look's seed, code and
+    amplitudes, the tile and the emitters found (their positions and visibility): only the
+    same recording resumes into it, and a look recorded alone resumes into a store made with
+    others and the other way round.
     ``scheduler``, ``overwrite``, ``progress``, ``dashboard``: as for :func:`record_tiled`.
     """
     if tile is None:
