@@ -82,7 +82,7 @@ class Kernel:
                              f"array or buffer; got {type(value).__name__}")
         dtype = np.dtype(rt.real if arg.type == REAL else arg.type)
         if dtype.kind in "iu":
-            if not isinstance(value, numbers.Integral):
+            if not isinstance(value, (numbers.Integral, np.bool_)):
                 raise InputError(f"kernel {self.name}: argument {arg.name!r} must be an "
                                  f"integer ({dtype}); got {type(value).__name__} {value!r}")
             limits = np.iinfo(dtype)
