@@ -35,11 +35,7 @@
 #define Q 1
 #endif
 
-#ifdef HOLO_FP64
-typedef double real;
-#else
-typedef float real;
-#endif
+#include "real.h"
 
 /* the phase k(|x - P| - |x - Z|) at the centre of each segment of SEGMENT columns of each row,
  * formed in REAL and reduced: what demodulate adds its float differences to */
