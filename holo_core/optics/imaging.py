@@ -15,7 +15,6 @@ hologram's image of the plate's field carried to the pupil).
 from __future__ import annotations
 
 import functools
-import math
 from typing import NamedTuple
 
 import numpy as np
@@ -286,8 +285,3 @@ def _ray_per_depth(camera: Camera) -> np.ndarray:
                                    cols=np.arange(w)[None, :] + 0.5)
     ratio = (1 + tx * tx).astype(np.float32) + (ty * ty).astype(np.float32)
     return np.sqrt(ratio, out=ratio)
-
-
-def pupil_grid_bytes(shape) -> float:
-    """Device bytes of a :class:`PupilImage` of ``shape`` (its 2× padded spectrum)."""
-    return 4 * 8.0 * math.prod(shape)
