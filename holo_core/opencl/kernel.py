@@ -3,8 +3,9 @@ keyword: each argument named as in the ``.cl`` file and typed (a device buffer, 
 type, or the kernels' ``real``), so that a launch reads without the ``.cl`` file open and a
 wrong argument fails naming the kernel and the argument::
 
-    DECIMATE = kernel(PROGRAM, "decimate", out=BUFFER, src=BUFFER, rows=np.int32, ...)
-    DECIMATE.launch(rt, (cols, rows), out=stack, src=rowpass, rows=n, ...)
+    MULTIPLY_TILED = kernel(PROGRAM, "multiply_tiled", acc=BUFFER, m=BUFFER, k=BUFFER,
+                            h=np.int32, w=np.int32, first=np.int32)
+    MULTIPLY_TILED.launch(rt, global_size, acc=acc, m=spectrum, k=psf, h=h, w=w, first=0)
 
 The scalars are cast to their types here, and pyopencl is told the types once per kernel
 object (``set_scalar_arg_dtypes``), so that it packs them without asking each call.
@@ -56,9 +57,9 @@ class Kernel:
         name. Raises :class:`~holo_core.validate.InputError` naming the kernel and the
         argument for one missing, unknown or of the wrong kind."""
         return self._kernel(rt, tuple(options))(rt.queue, global_size, local_size,
-                                                *self.values(rt, values))
+                                                *self._values(rt, values))
 
-    def values(self, rt, given: dict) -> list:
+    def _values(self, rt, given: dict) -> list:
         """The arguments ``given`` by name, in the kernel's order: buffers as they are (a
         device array's buffer), scalars cast to their types."""
         names = [a.name for a in self.args]
