@@ -175,10 +175,9 @@ class Transform:
                            apodization=self.flat, options=self.options)
             rt.fft.forward(self.padded, nonzero=self.nonzero)
         else:  # the images' spectra into the read grid (camera/incoherent.py's kernel)
-            embed = rt.kernel(incoherent.PROGRAM, "embed_deapodized", self.options)
-            embed(rt.queue, by_rows((n, n)), None, self.padded.data, np.int32(self.size),
-                  np.int32(self.size), self.pupil.data, np.int32(n), np.int32(n),
-                  self.flat[0].data, self.flat[1].data)
+            incoherent.EMBED_DEAPODIZED.launch(
+                rt, by_rows((n, n)), options=self.options, Q=self.padded, H=self.size,
+                W=self.size, A=self.pupil, h=n, w=n, ay=self.flat[0], ax=self.flat[1])
             rt.fft.backward(self.padded, nonzero=self.nonzero)
         rt.queue.finish()
         return self.padded

@@ -227,6 +227,7 @@ def view_stages(plates, cam, supersample) -> None:
     from functools import partial
 
     from holo_core.opencl import get_runtime
+    from holo_core.opencl.kernel import Kernel
     rt = get_runtime()
     seconds = defaultdict(float)
 
@@ -238,17 +239,20 @@ def view_stages(plates, cam, supersample) -> None:
         seconds[name] += time.perf_counter() - t
         return out
 
-    def kernel(program, name, options=()):
-        return partial(synced, name, type(rt).kernel(rt, program, name, options))
+    launch = Kernel.launch
+
+    def launched(self, *a, **kw):
+        return synced(self.name, launch, self, *a, **kw)
 
     fft = rt.fft
-    rt.kernel = kernel  # the instance's attributes shadow the methods until deleted
+    Kernel.launch = launched  # every launch, until put back
     fft.forward, fft.backward = (partial(synced, f"FFT {n}", getattr(fft, n))
                                  for n in ("forward", "backward"))
     try:
         _, total = timed(render_view, plates, cam, supersample=supersample)
     finally:
-        del rt.kernel, fft.forward, fft.backward
+        Kernel.launch = launch
+        del fft.forward, fft.backward
     print(f"a view's stages, each synchronised ({rt.device.name.strip()}, FFT {fft.name}): "
           f"{total:.3f} s in all")
     for name, s in sorted(seconds.items(), key=lambda kv: -kv[1]):

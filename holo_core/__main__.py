@@ -12,7 +12,7 @@ import warnings
 from pathlib import Path
 
 from . import units
-from .validate import MAX_LENGTH, MIN_LENGTH
+from .validate import MAX_LENGTH, MAX_SUPERSAMPLE, MIN_LENGTH
 
 
 def devices(_args) -> int:
@@ -438,7 +438,8 @@ METRES = _number(float, lambda v: MIN_LENGTH <= v <= MAX_LENGTH,
 NANOMETRES = _number(float, lambda v: 1 <= v <= MAX_LENGTH * 1e9,
                      f"nm, from 1 to {MAX_LENGTH * 1e9:g}: 633 is red light; 633e-9 would be "
                      f"metres, which this option does not take")
-SUPERSAMPLE = _number(int, lambda v: 1 <= v <= 16, "an integer from 1 to 16")
+SUPERSAMPLE = _number(int, lambda v: 1 <= v <= MAX_SUPERSAMPLE,
+                      f"an integer from 1 to {MAX_SUPERSAMPLE}")
 FINITE = _number(float, lambda v: True, "a finite number")
 COUNT = _number(int, lambda v: v >= 1, "an integer >= 1")
 PIXELS = _number(int, lambda v: 1 <= v <= 65536, "an integer from 1 to 65536")

@@ -28,11 +28,10 @@ from . import validate
 from .scene.camera import Camera
 from .scene.mesh import Mesh
 from .scene.plate import Plate, ViewingZone
-from .validate import InputError, shown
+from .validate import MAX_SUPERSAMPLE, InputError, shown
 from .view import RenderResult
 
 MAX_SAMPLES = 1 << 16      # a camera hologram's looks, at most
-MAX_SUPERSAMPLE = 16       # fine pixels per pixel per axis, at most
 MAX_EXPOSURE = 1e20        # linear; with colours up to 1e12 the float32 view stays finite
 MAX_FRAME = 1048574        # Blender's last frame
 SPECKLE = {"EXACT": "incoherent", "LOOKS": "object_wave"}  # the camera hologram's way per setting

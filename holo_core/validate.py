@@ -17,6 +17,7 @@ import numpy as np
 # them (the plate renderer's scale-free wavelengths, a file it wrote): 0.1 pm to 1 km, far
 # enough from float underflow that squares and ratios stay normal (1e-26 in float32's 1e-38)
 MIN_LENGTH, MAX_LENGTH = 1e-13, 1e3
+MAX_SUPERSAMPLE = 16  # fine pixels per pixel per axis, at most (either renderer, a job, the CLI)
 
 
 class InputError(ValueError):

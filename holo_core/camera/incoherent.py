@@ -26,10 +26,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy import int32
 
 from .. import jobs
 from ..opencl import associated
 from ..opencl.arrays import by_rows, empty, fill, read
+from ..opencl.kernel import BUFFER, kernel
 from ..optics import imaging
 from ..optics.imaging import ES_TABLE, IRIS_TAPER
 from ..propagation.grid import embedded, next_fast_len
@@ -40,6 +42,13 @@ from .optics import PupilOptics, iris
 from .raster import Emitters
 
 PROGRAM = associated(__file__)
+SCATTER_VALUES = kernel(PROGRAM, "scatter_values", M=BUFFER, idx=BUFFER, val=BUFFER,
+                        first=int32)
+PSF_PRODUCTS = kernel(PROGRAM, "psf_products", p1=BUFFER, p2=BUFFER)
+MULTIPLY_TILED = kernel(PROGRAM, "multiply_tiled", acc=BUFFER, m=BUFFER, k=BUFFER, h=int32,
+                        w=int32, first=int32)
+EMBED_DEAPODIZED = kernel(PROGRAM, "embed_deapodized", Q=BUFFER, H=int32, W=int32, A=BUFFER,
+                          h=int32, w=int32, ay=BUFFER, ax=BUFFER)
 
 BUFFERS = 5.25  # complex buffers of the padded grid on the device: 3 accumulators, 2 PSFs,
                 # and a map of a quarter of its size
@@ -78,9 +87,6 @@ class IncoherentImages:
         # the unnormalised inverse FFT
         self.scale = 1 / (h * w * float(np.sum(iris(optics, h, w) ** 2)) * math.prod(self.shape))
 
-    def kernel(self, name, program=PROGRAM):
-        return self.rt.kernel(program, name, self.options)
-
     def images(self, progress: jobs.Progress = None) -> list[np.ndarray]:
         """(R + iG, B + i·coverage, cross) at the fine pixels: complex64 (H, W) each."""
         rt, em = self.rt, self.em
@@ -96,26 +102,24 @@ class IncoherentImages:
                 # the map on the (h, w) grid: on the 2x grid it fills the even bins only, and
                 # its transform there is this one tiled (multiply_tiled)
                 fill(rt, self.map, 0)
-                self.kernel("scatter_values")(rt.queue, (last - first,), None, self.map.data,
-                                              self.index.data, values.data, np.int32(first))
+                SCATTER_VALUES.launch(rt, (last - first,), options=self.options, M=self.map,
+                                      idx=self.index, val=values, first=first)
                 rt.fft.forward(self.map)
-                self.kernel("multiply_tiled")(rt.queue, by_rows(self.shape), None, acc.data,
-                                              self.map.data, self.psf[k].data, np.int32(h),
-                                              np.int32(w), np.int32(done == 0))
+                MULTIPLY_TILED.launch(rt, by_rows(self.shape), options=self.options, acc=acc,
+                                      m=self.map, k=self.psf[k], h=h, w=w, first=done == 0)
             jobs.report(progress, done + 1, len(layers) + 1)
         out = []
         corners = tuple(embedded(n, m) for n, m in zip(self.shape, self.read_shape))
+        (read_h, read_w), (acc_h, acc_w) = self.read_shape, self.shape
         for acc in self.acc:
             rt.fft.clear(self.read, corners)
-            self.kernel("embed_deapodized")(rt.queue, by_rows(self.shape), None, self.read.data,
-                                            *(np.int32(n) for n in self.read_shape), acc.data,
-                                            *(np.int32(n) for n in self.shape),
-                                            *(d.data for d in self.deapodize))
+            EMBED_DEAPODIZED.launch(rt, by_rows(self.shape), options=self.options, Q=self.read,
+                                    H=read_h, W=read_w, A=acc, h=acc_h, w=acc_w,
+                                    ay=self.deapodize[0], ax=self.deapodize[1])
             rt.fft.backward(self.read, nonzero=corners)
-            self.kernel("read_pixels", imaging.PROGRAM)(
-                rt.queue, (self.pixels.size,), None, self.pixels.data, self.read.data,
-                *(np.int32(n) for n in self.read_shape), self.u.data, self.v.data,
-                np.float32(self.scale), self.es.data)
+            imaging.READ_PIXELS.launch(rt, (self.pixels.size,), options=self.options,
+                                       out=self.pixels, A=self.read, h=read_h, w=read_w,
+                                       u=self.u, v=self.v, scale=self.scale, es=self.es)
             out.append(read(self.pixels))
         jobs.report(progress, 1, 1)
         return out
@@ -130,16 +134,15 @@ class IncoherentImages:
             dy, dx = o.pitch(lam)
             k = 2 * np.pi / lam
             fill(rt, self.pupil, 0)
-            self.kernel("add_layer", recording.PROGRAM)(
-                rt.queue, by_rows((h, w)), None, self.pupil.data, self.ones.data, np.int32(h),
-                np.int32(w), np.float32(dy), np.float32(dx), np.float32(k), np.float32(z))
+            recording.ADD_LAYER.launch(rt, by_rows((h, w)), options=self.options, P=self.pupil,
+                                       u=self.ones, h=h, w=w, dy=dy, dx=dx, k=k, z=z)
             rt.fft.clear(psf, corners)
             imaging.window(rt, psf, self.pupil, (h, w), pitch=(dy, dx),
                            radius=o.diameter / 2 * lam / o.wavelength, taper=IRIS_TAPER, k=k,
                            focus=o.focus or 0.0, apodization=self.flat, options=self.options)
             rt.fft.forward(psf, nonzero=corners)
-        self.kernel("psf_products")(rt.queue, (self.psf[0].size,), None, self.psf[0].data,
-                                    self.psf[1].data)
+        PSF_PRODUCTS.launch(rt, (self.psf[0].size,), options=self.options, p1=self.psf[0],
+                            p2=self.psf[1])
         for psf in self.psf:
             rt.fft.forward(psf)
 

@@ -17,15 +17,21 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
+from numpy import float32, int32
 
 from ..opencl import associated, get_runtime
 from ..opencl.arrays import by_rows, empty, fill
+from ..opencl.kernel import BUFFER, kernel
 from ..optics.imaging import ES_TABLE, TAPS, PupilImage
 from ..scene.camera import Camera
 from .optics import PupilOptics, iris
 from .raster import Emitters
 
 PROGRAM = associated(__file__)
+SCATTER = kernel(PROGRAM, "scatter", S=BUFFER, idx=BUFFER, amp=BUFFER, phase0=BUFFER,
+                 phi=BUFFER, first=int32)
+ADD_LAYER = kernel(PROGRAM, "add_layer", P=BUFFER, u=BUFFER, h=int32, w=int32, dy=float32,
+                   dx=float32, k=float32, z=float32)
 
 
 class PupilFields:
@@ -46,9 +52,6 @@ class PupilFields:
         self.scale = 1 / math.sqrt(h * w * float(np.sum(iris(optics, h, w) ** 2)))
         self.options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
 
-    def kernel(self, name):
-        return self.rt.kernel(PROGRAM, name, self.options)
-
     def object_wave(self, field: int, phases):
         """The pupil's object wave (device, (h, w) FFT order) of colour channel ``field``
         (0-2) or the depth partner (3), emitter phases ``phases`` (device float32)."""
@@ -62,14 +65,12 @@ class PupilFields:
             if first == last:
                 continue
             fill(rt, self.spectrum, 0)
-            self.kernel("scatter")(rt.queue, (last - first,), None, self.spectrum.data,
-                                   self.index.data, self.amps[field].data,
-                                   self.phase0[field == 3].data, phases.data, np.int32(first))
+            SCATTER.launch(rt, (last - first,), options=self.options, S=self.spectrum,
+                           idx=self.index, amp=self.amps[field],
+                           phase0=self.phase0[field == 3], phi=phases, first=first)
             rt.fft.backward(self.spectrum)
-            self.kernel("add_layer")(rt.queue, by_rows((h, w)), None, self.pupil.data,
-                                     self.spectrum.data, np.int32(h), np.int32(w),
-                                     np.float32(dy), np.float32(dx),
-                                     np.float32(2 * np.pi / lam), np.float32(z))
+            ADD_LAYER.launch(rt, by_rows((h, w)), options=self.options, P=self.pupil,
+                             u=self.spectrum, h=h, w=w, dy=dy, dx=dx, k=2 * np.pi / lam, z=z)
         return self.pupil
 
     def image(self, field: int) -> np.ndarray:

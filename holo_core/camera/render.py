@@ -24,7 +24,7 @@ from ..optics.imaging import COVERAGE_FLOOR, assemble
 from ..optics.speckle import downsample
 from ..scene.camera import Camera
 from ..scene.mesh import Mesh
-from ..validate import InputError, shown
+from ..validate import MAX_SUPERSAMPLE, InputError, shown
 from ..view import RenderResult
 from .incoherent import IncoherentImages, grid_bytes
 from .optics import SUPERSAMPLE, PupilOptics, choose_optics
@@ -135,7 +135,6 @@ def _incoherent(rt, em, optics: PupilOptics, camera: Camera, fine: Camera, expos
     return result
 
 
-MAX_SUPERSAMPLE = 16  # fine pixels per pixel per axis, at most
 MAX_SAMPLES = 1 << 16  # looks, at most
 MAX_EXPOSURE = 1e20    # with colours up to 1e12 the float32 view stays finite
 

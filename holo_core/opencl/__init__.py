@@ -1,8 +1,10 @@
-"""OpenCL runtime: device choice, context and program cache (runtime.py), FFT backends
-(fft.py; FFTW's passes on CPU devices in host_fft.py), device-array helpers (arrays.py),
-packaged drivers made visible to the ICD loader (icd.py), and the kernels' shared headers
-(holo_complex.h, fft_order.h, spectrum_read.h, lane_series.h). Each kernel's .cl file lives
-beside the module that launches it (``runtime.associated``)."""
+"""OpenCL runtime, a stack from the floor up: whole-array copies to and from the host
+(copies.py), FFT backends (fft.py; FFTW's passes on CPU devices in host_fft.py), device choice,
+context and program cache (runtime.py), device-array helpers (arrays.py), kernel signatures
+and their launch by keyword (kernel.py); packaged drivers made visible to the ICD loader
+(icd.py), and the kernels' shared headers (holo_complex.h, real.h, fft_order.h,
+spectrum_read.h, lane_series.h). Each kernel's .cl file lives beside the module that launches
+it (``runtime.associated``), its signature written there."""
 
 import os
 

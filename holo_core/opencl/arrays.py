@@ -15,6 +15,7 @@ from pyopencl.reduction import ReductionKernel
 from pyopencl.scan import ExclusiveScanKernel
 
 from ..validate import InputError, host_field
+from .copies import read, write  # noqa: F401 (callers take every array helper from here)
 from .runtime import Runtime, get_runtime
 
 
@@ -212,32 +213,6 @@ def upload_window(dst, host, planes, row0: int, col0: int) -> None:
         cl.enqueue_copy(dst.queue, dst.data, host[p], buffer_origin=(0, m * rows),
                         host_origin=(col0 * item, row0), region=(cols * item, rows),
                         buffer_pitches=(cols * item,), host_pitches=(host.shape[2] * item,))
-
-
-def read(a: cla.Array, out: np.ndarray | None = None) -> np.ndarray:
-    """A new host array of the device array ``a``'s samples (C-contiguous ``a``), or ``out``
-    (C-contiguous, ``a``'s shape and type) filled with them, waited for.
-    pyopencl's ``get`` keeps each read's event on ``a``, and with it the host array it filled
-    (up to 12 of them), so reading a reused array (a scratch buffer, an imager's pixels) held
-    a dozen copies alive: 1.6 GB a worker for the tiles of a plate."""
-    if out is None:
-        out = np.empty(a.shape, a.dtype)
-    elif out.shape != a.shape or out.dtype != a.dtype or not out.flags.c_contiguous:
-        raise InputError(f"a {out.shape} {out.dtype} array cannot take a device array of "
-                         f"{a.shape} {a.dtype}")
-    cl.enqueue_copy(a.queue, out, a.base_data, src_offset=a.offset, wait_for=a.events,
-                    is_blocking=True)
-    return out
-
-
-def write(a: cla.Array, host) -> None:
-    """Copy the host array ``host`` (``a``'s shape) into the device array ``a``, waited for,
-    no event kept on ``a`` (:func:`read`: pyopencl's ``set`` keeps the host array alive)."""
-    host = np.ascontiguousarray(host, a.dtype)
-    if host.shape != a.shape:
-        raise InputError(f"a {host.shape} array cannot fill a device array of {a.shape}")
-    cl.enqueue_copy(a.queue, a.base_data, host, dst_offset=a.offset, wait_for=a.events,
-                    is_blocking=True)
 
 
 def host_buffer(rt, host) -> cl.Buffer | None:

@@ -29,7 +29,7 @@ import pyopencl as cl
 import pyopencl.array as cla
 
 from ..validate import InputError
-from .arrays import read, write
+from .copies import read, write
 
 log = logging.getLogger(__name__)
 

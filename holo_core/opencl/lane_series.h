@@ -8,11 +8,7 @@
 
 #define CAT_(a, b) a##b
 #define CAT(a, b) CAT_(a, b)
-#ifdef HOLO_FP64
-typedef double real;
-#else
-typedef float real;
-#endif
+#include "real.h"
 
 #if VEC == 1
 typedef float floatv;

@@ -37,6 +37,7 @@ import pyopencl as cl
 import pyopencl.array as cla
 
 from ..validate import InputError
+from .fft import backend_for
 
 log = logging.getLogger(__name__)
 # drivers that print build logs make pyopencl warn for its own generated kernels
@@ -264,7 +265,6 @@ class Runtime:
     def fft(self):
         """The FFT backend for this device (see :mod:`holo_core.opencl.fft`)."""
         if self._fft is None:
-            from .fft import backend_for
             self._fft = backend_for(self)
         return self._fft
 

@@ -4,11 +4,7 @@
 #define HOLO_SPECTRUM_READ_H
 #include "holo_complex.h"
 
-#ifdef HOLO_FP64
-typedef double real;
-#else
-typedef float real;
-#endif
+#include "real.h"
 
 /* exp(i2π·t), with t reduced to [-0.5, 0.5] in REAL precision first. */
 inline float2 turn(real t)

@@ -15,13 +15,14 @@ hologram's image of the plate's field carried to the pupil).
 from __future__ import annotations
 
 import functools
-import math
 from typing import NamedTuple
 
 import numpy as np
+from numpy import float32, int32
 
 from ..opencl import associated
 from ..opencl.arrays import by_rows, empty, read
+from ..opencl.kernel import BUFFER, REAL, kernel
 from ..propagation import grid
 from ..propagation.tilt import cached_array, es_profile, es_table
 from ..scene.camera import Camera
@@ -30,6 +31,14 @@ from .depth import from_cross_spectrum
 from .speckle import box_mean, downsample
 
 PROGRAM = associated(__file__)
+PUPIL_WINDOW = kernel(PROGRAM, "pupil_window", Q=BUFFER, P=BUFFER, h=int32, w=int32,
+                      dy=float32, dx=float32, radius=float32, taper=float32, k=float32,
+                      f=float32, dy_apod=BUFFER, dx_apod=BUFFER, plane=int32)
+READ_PIXELS = kernel(PROGRAM, "read_pixels", out=BUFFER, A=BUFFER, h=int32, w=int32, u=BUFFER,
+                     v=BUFFER, scale=float32, es=BUFFER)
+READ_FOLDED = kernel(PROGRAM, "read_folded", power=BUFFER, cross=BUFFER, fine=BUFFER,
+                     A=BUFFER, h=int32, w=int32, W=int32, H=int32, s=int32, t0=REAL, dt=REAL,
+                     r0=REAL, dr=REAL, ca=REAL, cb=REAL, bin2=REAL, scale=BUFFER, es=BUFFER)
 TAPS, ES_TABLE = 4, 4096  # the image read: 4 taps at 2x padding agree with 6 to 100 dB PSNR
 IRIS_TAPER = 0.1       # the iris's raised-cosine rim, a fraction of its radius
 COVERAGE_EDGE = (0.25, 0.75)  # coverage mapped to alpha 0 … 1 (0.5: the geometric edge)
@@ -103,10 +112,9 @@ class PupilImage:
         self._spectrum(pupil, pitch=pitch, diameter=diameter, focus=focus, taper=taper,
                        lens_k=lens_k)
         u, v, pixels = self._directions()
-        rt.kernel(PROGRAM, "read_pixels", self.options)(
-            rt.queue, (pixels.size,), None, pixels.data, self._padded().data,
-            np.int32(2 * h), np.int32(2 * w), u.data, v.data, np.float32(scale),
-            self.es.data)
+        READ_PIXELS.launch(rt, (pixels.size,), options=self.options, out=pixels,
+                           A=self._padded(), h=2 * h, w=2 * w, u=u, v=v, scale=scale,
+                           es=self.es)
         return read(pixels)
 
     def _padded(self):
@@ -168,12 +176,11 @@ class PupilImage:
         # without KEEP_FINE the kernel never writes ``fine``: any buffer fills the argument
         fine = rt.scratch("pixel-fine", (planes, rows * s, cols * s)) if keep_fine else cross
         t0, dt, r0, dr = self.camera.tangent_steps()
-        real = rt.real
-        rt.kernel(PROGRAM, "read_folded", options)(
-            rt.queue, (cols, rows), None, power.data, cross.data, fine.data, spectra.data,
-            np.int32(2 * h), np.int32(2 * w), np.int32(cols), np.int32(rows), np.int32(s),
-            *(real(v) for v in (t0, dt, r0, dr, *self.centre, 2 / self.bin)), scales.data,
-            self.es.data)
+        ca, cb = self.centre
+        READ_FOLDED.launch(rt, (cols, rows), options=options, power=power, cross=cross,
+                           fine=fine, A=spectra, h=2 * h, w=2 * w, W=cols, H=rows, s=s, t0=t0,
+                           dt=dt, r0=r0, dr=dr, ca=ca, cb=cb, bin2=2 / self.bin, scale=scales,
+                           es=self.es)
         power, cross = read(power), read(cross)
         fine = read(fine) if keep_fine else None
         return [Folded({c: power[look * len(names) + m] for m, c in enumerate(names)},
@@ -217,10 +224,9 @@ def window(rt, padded, pupil, shape, *, pitch, radius, taper, k, focus, apodizat
     as it is (``rt.fft.clear`` with the corners first). ``plane``: of stacks (P, h, w) and
     (P, 2h, 2w) given as ``pupil`` and ``padded``."""
     (h, w), (dy, dx) = shape, pitch
-    rt.kernel(PROGRAM, "pupil_window", options)(
-        rt.queue, by_rows(shape), None, padded.data, pupil.data, np.int32(h), np.int32(w),
-        np.float32(dy), np.float32(dx), np.float32(radius), np.float32(taper), np.float32(k),
-        np.float32(focus), apodization[0].data, apodization[1].data, np.int32(plane))
+    PUPIL_WINDOW.launch(rt, by_rows(shape), options=options, Q=padded, P=pupil, h=h, w=w,
+                        dy=dy, dx=dx, radius=radius, taper=taper, k=k, f=focus,
+                        dy_apod=apodization[0], dx_apod=apodization[1], plane=plane)
 
 
 def assemble(radiance, coverage, cross, *, camera: Camera, supersample: int, wavelengths,
@@ -279,8 +285,3 @@ def _ray_per_depth(camera: Camera) -> np.ndarray:
                                    cols=np.arange(w)[None, :] + 0.5)
     ratio = (1 + tx * tx).astype(np.float32) + (ty * ty).astype(np.float32)
     return np.sqrt(ratio, out=ratio)
-
-
-def pupil_grid_bytes(shape) -> float:
-    """Device bytes of a :class:`PupilImage` of ``shape`` (its 2× padded spectrum)."""
-    return 4 * 8.0 * math.prod(shape)

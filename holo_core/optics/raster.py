@@ -89,18 +89,6 @@ def crossings(meshes, position, rotation, b, shape, *, layers=1, chunk=2_000_000
                      layer[inside])
 
 
-def nearest_depth(meshes, position, rotation, b, shape, *, chunk=2_000_000) -> np.ndarray:
-    """The planar depth [m] (h, w) of the nearest surface along each bin's ray (FFT order;
-    inf where none), for a pupil at ``position`` [m] with axes ``rotation`` (a depth buffer:
-    what :func:`crossings` finds first, without keeping the rest)."""
-    h, w = shape
-    zbuf = np.full(h * w, np.inf)
-    for part in crossing_chunks(meshes, position, rotation, b, shape, chunk):
-        kx, ky, depth = part[0], part[1], part[2]
-        np.minimum.at(zbuf, (ky % h) * w + kx % w, depth)
-    return zbuf.reshape(shape)
-
-
 def crossing_chunks(meshes, position, rotation, b, shape, chunk):
     """Every crossing of the bins' rays with the meshes' triangles, a chunk of at most
     ``chunk`` bin-triangle pairs at a time: tuples (kx, ky, planar depth [m], mesh index,

@@ -19,9 +19,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy import float32, int32
 
 from ..opencl import get_runtime
 from ..opencl.arrays import read
+from ..opencl.kernel import BUFFER, kernel
 from ..opencl.runtime import associated
 from ..optics.raster import bin_rays, crossings
 from ..scene.camera import look_at
@@ -30,6 +32,12 @@ from ..scene.plate import ViewingZone
 from ..validate import InputError
 
 PROGRAM = associated(__file__)
+DEPTH_RASTER = kernel(PROGRAM, "depth_raster", zbuf=BUFFER, h=int32, w=int32, b=float32,
+                      tx=BUFFER, ty=BUFFER, d=BUFFER, tri=BUFFER, triangles=int32)
+SEEN_FROM = kernel(PROGRAM, "seen_from", seen=BUFFER, point=int32, zbuf=BUFFER, h=int32,
+                   w=int32, b=float32, px=BUFFER, py=BUFFER, pz=BUFFER, nx=BUFFER, ny=BUFFER,
+                   nz=BUFFER, ex=float32, ey=float32, axes=BUFFER, max_slope=float32,
+                   bias_bins=float32, bias_depth=float32, emitters=int32)
 
 EDGE_BINS = 4          # bins around the objects' directions
 BIAS_BINS = 1.5        # the depth test's slack: the surface's depth change over this many bins
@@ -135,8 +143,10 @@ def visibility(meshes, position, normal, zone: ViewingZone, rotation, spacing, g
     n = len(position)
     seen = rt.to_device(np.zeros(g[0] * g[1] * max(n, 1), np.float32))
     # the emitters from the zone's centre, and their normals, handed over once for all pupils
-    offsets = [rt.to_device(a, np.float32) for a in (np.asarray(position, np.float64) - centre).T]
-    normals = [rt.to_device(a, np.float32) for a in np.asarray(normal, np.float64).T]
+    offsets = dict(zip(("px", "py", "pz"), (rt.to_device(a, np.float32) for a in (
+        np.asarray(position, np.float64) - centre).T)))
+    normals = dict(zip(("nx", "ny", "nz"), (rt.to_device(a, np.float32)
+                                            for a in np.asarray(normal, np.float64).T)))
     axes = rt.to_device(np.asarray(rotation, np.float64).ravel(), np.float32)  # its rows
     for iy, y in enumerate(ys):
         for ix, x in enumerate(xs):
@@ -146,17 +156,15 @@ def visibility(meshes, position, normal, zone: ViewingZone, rotation, spacing, g
             v = (vertices - eye) @ rotation
             d = -v[:, 2]
             t = v[:, :2] / np.where(d > 1e-9, d, 1)[:, None]
-            rt.kernel(PROGRAM, "depth_raster")(
-                rt.queue, (len(triangles),), None, zbuf.data, np.int32(h), np.int32(w),
-                np.float32(spacing), rt.to_device(t[:, 0], np.float32).data,
-                rt.to_device(t[:, 1], np.float32).data, rt.to_device(d, np.float32).data,
-                tri.data, np.int32(len(triangles)))
-            rt.kernel(PROGRAM, "seen_from")(
-                rt.queue, (max(n, 1),), None, seen.data, np.int32(iy * g[1] + ix), zbuf.data,
-                np.int32(h), np.int32(w), np.float32(spacing), *(a.data for a in offsets),
-                *(a.data for a in normals), np.float32(x), np.float32(y), axes.data,
-                np.float32(MAX_SLOPE), np.float32(BIAS_BINS),
-                np.float32(BIAS_DEPTH), np.int32(n))
+            DEPTH_RASTER.launch(rt, (len(triangles),), zbuf=zbuf, h=h, w=w, b=spacing,
+                                tx=rt.to_device(t[:, 0], np.float32),
+                                ty=rt.to_device(t[:, 1], np.float32),
+                                d=rt.to_device(d, np.float32), tri=tri,
+                                triangles=len(triangles))
+            SEEN_FROM.launch(rt, (max(n, 1),), seen=seen, point=iy * g[1] + ix, zbuf=zbuf, h=h,
+                             w=w, b=spacing, **offsets, **normals, ex=x, ey=y, axes=axes,
+                             max_slope=MAX_SLOPE, bias_bins=BIAS_BINS, bias_depth=BIAS_DEPTH,
+                             emitters=n)
     step = lambda a: float(a[1] - a[0]) if len(a) > 1 else 1.0  # noqa: E731
     table = read(seen)[:g[0] * g[1] * n].reshape(g[0], g[1], n).transpose(2, 0, 1)
     return ((float(xs[0]), step(xs)), (float(ys[0]), step(ys))), np.ascontiguousarray(table)

@@ -19,10 +19,12 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from numpy import int32
 
 from .. import jobs, memory, validate
 from ..opencl import associated, get_runtime
 from ..opencl.arrays import cached, empty, fill, window
+from ..opencl.kernel import BUFFER, REAL, kernel
 from ..propagation import grid
 from ..propagation.convolution import chirp_transfer, convolve
 from ..validate import InputError, shown
@@ -258,6 +260,12 @@ def _sum(rt, out, pos, amp, g: Grid, obliquity, *, binned, progress=None):
         done += cum[-1]
 
 
+POINT_WAVE = kernel(PROGRAM, "point_wave", out=BUFFER, h=int32, w=int32, pitch=REAL, x0=REAL,
+                    y0=REAL, k=REAL, cone2=REAL, inner2=REAL, px=BUFFER, py=BUFFER,
+                    pz=BUFFER, amp=BUFFER, first=int32, last=int32, binned=int32,
+                    bin_start=BUFFER, reach_x=int32, reach_y=int32)
+
+
 def _launch(rt, out, pos, amp, g: Grid, obliquity, seg, *, first=0, last=None, bins=None):
     lanes = rt.lanes
     channels = amp.shape[1]
@@ -271,13 +279,11 @@ def _launch(rt, out, pos, amp, g: Grid, obliquity, seg, *, first=0, last=None, b
     binned = bins is not None
     starts, (reach_x, reach_y) = bins if binned else (_dummy(rt), (0, 0))
     last = len(pos.x) if last is None else last
-    rt.kernel(PROGRAM, "point_wave", options)(
-        rt.queue, (-(-h // lanes), -(-w // seg)), rt.series_group, out.data, np.int32(h),
-        np.int32(w),
-        *(rt.real(v) for v in (g.pitch, x0, y0, k, cone2, (1 - g.rim) ** 2)),
-        pos.x.data, pos.y.data, pos.z.data, amp.data,
-        np.int32(first), np.int32(last), np.int32(binned), starts.data, np.int32(reach_x),
-        np.int32(reach_y))
+    POINT_WAVE.launch(rt, (-(-h // lanes), -(-w // seg)), rt.series_group, options=options,
+                      out=out, h=h, w=w, pitch=g.pitch, x0=x0, y0=y0, k=k, cone2=cone2,
+                      inner2=(1 - g.rim) ** 2, px=pos.x, py=pos.y, pz=pos.z, amp=amp,
+                      first=first, last=last, binned=binned, bin_start=starts,
+                      reach_x=reach_x, reach_y=reach_y)
 
 
 def _dummy(rt):

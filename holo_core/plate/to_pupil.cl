@@ -35,11 +35,7 @@
 #define Q 1
 #endif
 
-#ifdef HOLO_FP64
-typedef double real;
-#else
-typedef float real;
-#endif
+#include "real.h"
 
 /* the phase k(|x - P| - |x - Z|) at the centre of each segment of SEGMENT columns of each row,
  * formed in REAL and reduced: what demodulate adds its float differences to */
@@ -81,12 +77,12 @@ inline float2 turn_towards_pupil(int c, int r, real pitch, real row_pitch, real 
  * work group of GROUP outputs of one row loads the GROUP·Q + TAPS samples they read into local
  * memory, each turned once, then each output sums its TAPS taps h there. The input's column 0
  * is the plate's column col0 (its x is x0); output j reads input Q·j + lead + t. The input's
- * sample (p, r, c) is in[first + p·plane + r·stride + c]: a band copied to the device, or the
- * host's whole array read in place. */
-__kernel void demodulate_decimate(__global float2 *out, __global const float2 *in, long first,
-                                  long plane, int stride, int rows, int cols, int out_cols,
-                                  int out_row0, int out_height,
-                                  int lead, __constant float *h, real pitch, real row_pitch,
+ * sample (p, r, c) is samples[first + p·plane + r·stride + c]: a band copied to the device, or
+ * the host's whole array read in place. */
+__kernel void demodulate_decimate(__global float2 *out, __global const float2 *samples,
+                                  long first, long plane, int stride, int rows, int cols,
+                                  int out_cols, int out_row0, int out_height, int lead,
+                                  __constant float *h, real pitch, real row_pitch,
                                   real x0, real y0, float k, real px, real py, real pz,
                                   real zx, real zy, real zz, __global const float *table,
                                   int segments)
@@ -110,9 +106,8 @@ __kernel void demodulate_decimate(__global float2 *out, __global const float2 *i
                                       zz, table, segments);
         int at = n < Q ? n * PHASE + lid : (i % Q) * PHASE + i / Q;
         for (int p = 0; p < PLANES; p++)
-            span[p][at] = c >= 0 && c < cols ? cmul(in[first + p * plane + (long)r * stride + c],
-                                                   turn)
-                                            : (float2)0;
+            span[p][at] = c >= 0 && c < cols
+                ? cmul(samples[first + p * plane + (long)r * stride + c], turn) : (float2)0;
     }
     barrier(CLK_LOCAL_MEM_FENCE);
     int j = j0 + lid;
@@ -130,14 +125,14 @@ __kernel void demodulate_decimate(__global float2 *out, __global const float2 *i
 /* along rows: the input (planes, rows, cols); output row i reads input row q·i + first + t.
  * Output (i, c) of each plane goes to out[slot[i·cols + c]·stride + plane0 + plane]: the
  * spread's order, every plane of a sample side by side (it reads them together). */
-__kernel void decimate(__global float2 *out, __global const float2 *in, int rows, int cols,
-                       int out_rows, __global const int *slot, int stride, int plane0, int q,
-                       int first, __constant float *h)
+__kernel void decimate(__global float2 *out, __global const float2 *rowpass, int rows,
+                       int cols, int out_rows, __global const int *slot, int stride,
+                       int plane0, int q, int first, __constant float *h)
 {
     int c = get_global_id(0), r = get_global_id(1), plane = get_global_id(2);
     if (r >= out_rows || c >= cols)
         return;
-    __global const float2 *src = in + (long)plane * rows * cols;
+    __global const float2 *src = rowpass + (long)plane * rows * cols;
     float2 acc = 0;
     int start = q * r + first;
     for (int t = 0; t < TAPS; t++) {

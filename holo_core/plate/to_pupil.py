@@ -22,9 +22,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy import float32, int32, int64
 
 from .. import jobs
 from ..opencl.arrays import empty, exclusive_scan, extent, read, resident, upload_window, write
+from ..opencl.kernel import BUFFER, REAL, kernel
 from ..opencl.runtime import associated
 from ..optics.imaging import SPECTRA
 from ..propagation import angular_spectrum, grid, tilt
@@ -203,6 +205,39 @@ DECIMATE_GROUPS = (256, 64, 16)  # outputs of a row decimated by one work group:
                                  # whose inputs fit the device's local memory (256 against
                                  # 64: 0.67 s against 0.80 s on the shot's view, a 2-core CPU)
 
+# the kernels of to_pupil.cl, their arguments in its order
+_GEOMETRY = dict(pitch=REAL, row_pitch=REAL, x0=REAL, y0=REAL)  # of a band's first sample
+_POINTS = dict(px=REAL, py=REAL, pz=REAL, zx=REAL, zy=REAL, zz=REAL)  # pupil's, zone's centre
+DEMODULATE_CENTRES = kernel(PROGRAM, "demodulate_centres", table=BUFFER, rows=int32,
+                            segments=int32, **_GEOMETRY, k=REAL, **_POINTS)
+DEMODULATE_DECIMATE = kernel(
+    PROGRAM, "demodulate_decimate", out=BUFFER, samples=BUFFER, first=int64, plane=int64,
+    stride=int32, rows=int32, cols=int32, out_cols=int32, out_row0=int32, out_height=int32,
+    lead=int32, h=BUFFER, **_GEOMETRY, k=float32, **_POINTS, table=BUFFER, segments=int32)
+DECIMATE = kernel(PROGRAM, "decimate", out=BUFFER, rowpass=BUFFER, rows=int32, cols=int32,
+                  out_rows=int32, slot=BUFFER, stride=int32, plane0=int32, q=int32,
+                  first=int32, h=BUFFER)
+SPREAD = kernel(PROGRAM, "spread", out=BUFFER, grid_h=int32, grid_w=int32, row_first=int32,
+                col_first=int32, v=BUFFER, wt=BUFFER, gy=BUFFER, gx=BUFFER, start=BUFFER,
+                cells_h=int32, cells_w=int32, scale=float32, es=BUFFER)
+PUPIL_LAYER = kernel(PROGRAM, "pupil_layer", u=BUFFER, g=BUFFER, h=int32, w=int32,
+                     pairs=BUFFER, n=int32, dr=BUFFER, dc=BUFFER, dy=float32, dx=float32,
+                     k=float32, z=float32, scale=float32)
+GATHER_GEOMETRY = kernel(
+    PROGRAM, "gather_geometry", gy=BUFFER, gx=BUFFER, wt=BUFFER, inv_depth=BUFFER, rows=int32,
+    cols=int32, x0=REAL, xs=REAL, y0=REAL, ys=REAL, px=REAL, py=REAL, pz=REAL, rot=BUFFER,
+    cy=REAL, cx=REAL, grid_units=REAL, w0=REAL)
+GATHER_KEYS = kernel(PROGRAM, "gather_keys", key=BUFFER, count=BUFFER, gy=BUFFER, gx=BUFFER,
+                     lo_y=float32, lo_x=float32, cells_h=int32, cells_w=int32)
+GATHER_PLACE = kernel(PROGRAM, "gather_place", order=BUFFER, fill=BUFFER, key=BUFFER,
+                      start=BUFFER)
+GATHER_SORT_CELLS = kernel(PROGRAM, "gather_sort_cells", order=BUFFER, start=BUFFER)
+GATHER_PERMUTE = kernel(
+    PROGRAM, "gather_permute", at_y=BUFFER, at_x=BUFFER, wt_at=BUFFER, inv_at=BUFFER,
+    slot=BUFFER, order=BUFFER, gy=BUFFER, gx=BUFFER, wt=BUFFER, inv_depth=BUFFER)
+LAYER_WEIGHTS = kernel(PROGRAM, "layer_weights", out=BUFFER, wt=BUFFER, inv_at=BUFFER,
+                       lo=float32, step=float32, layers=int32, layer=int32)
+
 
 def kaiser_lowpass(cutoff: float, transition: float) -> np.ndarray:
     """A linear-phase low-pass FIR (odd taps, unit DC gain) with its −6 dB point at ``cutoff``
@@ -321,7 +356,6 @@ class CarrierPupil:
         planes = len(channels)
         rowpass = rt.workspace("plate-rowpass", (planes, rr1 - rr0, out_cols))
         k = 2 * math.pi / wavelength
-        real = rt.real
         taps = [rt.to_device(t) for t in (taps_x, taps_y)]
         group = _decimate_group(rt, planes, qx, len(taps_x))
         options = rt.real_options + (f"-DTAPS={len(taps_x)}", f"-DQ={qx}",
@@ -349,24 +383,23 @@ class CarrierPupil:
             x0, y0 = h.carrier.coords(h.pitch, [b0], [cc0])
             segments = -(-(cc1 - cc0) // DEMODULATE_SEGMENT)
             table = rt.workspace("plate-demodulate", (b1 - b0, segments), np.float32)
-            geometry = (h.pitch, h.carrier.row_pitch, x0[0], y0[0])
-            points = (*self.position, *h.carrier.centre)
-            rt.kernel(PROGRAM, "demodulate_centres", rt.real_options)(
-                rt.queue, (segments, b1 - b0), None, table.data, np.int32(b1 - b0),
-                np.int32(segments), *(real(v) for v in (*geometry, k, *points)))
+            geometry = dict(pitch=h.pitch, row_pitch=h.carrier.row_pitch, x0=x0[0], y0=y0[0])
+            points = dict(zip(("px", "py", "pz", "zx", "zy", "zz"),
+                              (*self.position, *h.carrier.centre)))
+            DEMODULATE_CENTRES.launch(rt, (segments, b1 - b0), options=rt.real_options,
+                                      table=table, rows=b1 - b0, segments=segments,
+                                      **geometry, k=k, **points)
             groups = -(-out_cols // group)
-            rt.kernel(PROGRAM, "demodulate_decimate", options)(
-                rt.queue, (groups * group, b1 - b0), (group, 1),
-                rowpass.data, source, np.int64(first), np.int64(plane), np.int32(stride),
-                np.int32(b1 - b0), np.int32(cc1 - cc0),
-                np.int32(out_cols), np.int32(b0 - rr0), np.int32(rr1 - rr0),
-                np.int32(c0 - cc0 - pad_x), taps[0].data, *(real(v) for v in geometry),
-                np.float32(k), *(real(v) for v in points), table.data, np.int32(segments))
-        rt.kernel(PROGRAM, "decimate", (f"-DTAPS={len(taps_y)}",))(
-            rt.queue, (out_cols, out_rows, planes), None, out.data, rowpass.data,
-            np.int32(rr1 - rr0), np.int32(out_cols), np.int32(out_rows), slot.data,
-            np.int32(out.shape[1]), np.int32(at), np.int32(qy), np.int32(r0 - rr0 - pad_y),
-            taps[1].data)
+            DEMODULATE_DECIMATE.launch(
+                rt, (groups * group, b1 - b0), (group, 1), options=options, out=rowpass,
+                samples=source, first=first, plane=plane, stride=stride, rows=b1 - b0,
+                cols=cc1 - cc0, out_cols=out_cols, out_row0=b0 - rr0, out_height=rr1 - rr0,
+                lead=c0 - cc0 - pad_x, h=taps[0], **geometry, k=k, **points, table=table,
+                segments=segments)
+        DECIMATE.launch(rt, (out_cols, out_rows, planes), options=(f"-DTAPS={len(taps_y)}",),
+                        out=out, rowpass=rowpass, rows=rr1 - rr0, cols=out_cols,
+                        out_rows=out_rows, slot=slot, stride=out.shape[1], plane0=at, q=qy,
+                        first=r0 - rr0 - pad_y, h=taps[1])
 
 
 def _decimate_group(rt, planes: int, q: int, taps: int) -> int:
@@ -400,12 +433,12 @@ class _Gather:
         gy, gx, wt, inv = (rt.workspace(f"gather-{name}", (count,), np.float32)
                            for name in ("gy", "gx", "weight", "inverse-depth"))
         rot = rt.to_device(np.asarray(view.rotation), real)
-        rt.kernel(PROGRAM, "gather_geometry", rt.real_options)(
-            rt.queue, (cols, rows), None, gy.data, gx.data, wt.data, inv.data, np.int32(rows),
-            np.int32(cols), *(real(v) for v in (x0, qx * h.pitch, y0, qy * h.carrier.row_pitch,
-                                                *view.position)), rot.data,
-            real(view.centre[1]), real(view.centre[0]), real(2 / view.bin),
-            real(qx * h.pitch * qy * h.carrier.row_pitch * view.position[2]))
+        px, py, pz = view.position
+        GATHER_GEOMETRY.launch(
+            rt, (cols, rows), options=rt.real_options, gy=gy, gx=gx, wt=wt, inv_depth=inv,
+            rows=rows, cols=cols, x0=x0, xs=qx * h.pitch, y0=y0, ys=qy * h.carrier.row_pitch,
+            px=px, py=py, pz=pz, rot=rot, cy=view.centre[1], cx=view.centre[0],
+            grid_units=2 / view.bin, w0=qx * h.pitch * qy * h.carrier.row_pitch * pz)
         (gy_lo, gy_hi), (gx_lo, gx_hi), self.inverse_depth = map(extent, (gy, gx, inv))
         hh, ww = view.shape
         # only the grid points the samples reach: their box in grid coordinates, in cells
@@ -420,26 +453,23 @@ class _Gather:
         key = rt.workspace("gather-key", (count,), np.int32)
         counts = rt.workspace("gather-count", (n_cells + 1,), np.int32)
         counts.fill(0)
-        rt.kernel(PROGRAM, "gather_keys", (f"-DCELL={SPREAD_CELL}",))(
-            rt.queue, (count,), None, key.data, counts.data, gy.data, gx.data,
-            np.float32(self.lo[0]), np.float32(self.lo[1]), np.int32(self.cells[0]),
-            np.int32(self.cells[1]))
+        GATHER_KEYS.launch(rt, (count,), options=(f"-DCELL={SPREAD_CELL}",), key=key,
+                           count=counts, gy=gy, gx=gx, lo_y=self.lo[0], lo_x=self.lo[1],
+                           cells_h=self.cells[0], cells_w=self.cells[1])
         self.start = empty(rt, (n_cells + 1,), np.int32)
         exclusive_scan(rt, counts, self.start)
         order, fill = (rt.workspace(f"gather-{name}", shape, np.int32)
                        for name, shape in (("order", (count,)), ("fill", (n_cells,))))
         fill.fill(0)
-        rt.kernel(PROGRAM, "gather_place", ())(rt.queue, (count,), None, order.data, fill.data,
-                                              key.data, self.start.data)
-        rt.kernel(PROGRAM, "gather_sort_cells", ())(rt.queue, (n_cells,), None, order.data,
-                                                   self.start.data)
+        GATHER_PLACE.launch(rt, (count,), order=order, fill=fill, key=key, start=self.start)
+        GATHER_SORT_CELLS.launch(rt, (n_cells,), order=order, start=self.start)
         self.at = [empty(rt, (count,), np.float32) for _ in range(2)]
         self.weight, self.inverse = (empty(rt, (count,), np.float32) for _ in range(2))
         # where the decimation puts each sample: in the gather's order, planes side by side
         self.slot = empty(rt, (count,), np.int32)
-        rt.kernel(PROGRAM, "gather_permute", ())(
-            rt.queue, (count,), None, *(a.data for a in self.at), self.weight.data,
-            self.inverse.data, self.slot.data, order.data, gy.data, gx.data, wt.data, inv.data)
+        GATHER_PERMUTE.launch(rt, (count,), at_y=self.at[0], at_x=self.at[1], wt_at=self.weight,
+                              inv_at=self.inverse, slot=self.slot, order=order, gy=gy, gx=gx,
+                              wt=wt, inv_depth=inv)
         self.deapod = [es_profile(rt, n, ES_TAPS) for n in (hh, ww)]
         self.layers = {}
 
@@ -466,9 +496,8 @@ class _Gather:
         ``lo`` … ``hi`` [1/m], 0 for the other layers' samples (a device array)."""
         rt = self.view.rt
         out = empty(rt, (self.count,), np.float32)
-        rt.kernel(PROGRAM, "layer_weights", ())(
-            rt.queue, (self.count,), None, out.data, self.weight.data, self.inverse.data,
-            np.float32(lo), np.float32((hi - lo) / n), np.int32(n), np.int32(i))
+        LAYER_WEIGHTS.launch(rt, (self.count,), out=out, wt=self.weight, inv_at=self.inverse,
+                             lo=lo, step=(hi - lo) / n, layers=n, layer=i)
         return out
 
     def pupil(self, values, runs, out, scale):
@@ -500,22 +529,19 @@ class _Gather:
                                 for lam, p in planes_by_wavelength.items()}
         for z, weight in self._layers(min(run[3] for run in runs)):
             spread.fill(0)
-            rt.kernel(PROGRAM, "spread", options)(
-                rt.queue, (self.hi[1] - self.lo[1] + 1, self.hi[0] - self.lo[0] + 1), None,
-                spread.data, np.int32(grid_shape[0]), np.int32(grid_shape[1]),
-                np.int32(self.lo[0]), np.int32(self.lo[1]), values.data, weight.data,
-                self.at[0].data, self.at[1].data, self.start.data, np.int32(self.cells[0]),
-                np.int32(self.cells[1]), np.float32(scale), es.data)
+            SPREAD.launch(rt, (self.hi[1] - self.lo[1] + 1, self.hi[0] - self.lo[0] + 1),
+                          options=options, out=spread, grid_h=grid_shape[0],
+                          grid_w=grid_shape[1], row_first=self.lo[0], col_first=self.lo[1],
+                          v=values, wt=weight, gy=self.at[0], gx=self.at[1], start=self.start,
+                          cells_h=self.cells[0], cells_w=self.cells[1], scale=scale, es=es)
             # every plane in place; only the pupil's columns are read (pupil_layer)
             rt.fft.backward(spread, read=[(0, (ww + 1) // 2), (2 * ww - ww // 2, 2 * ww)])
             for wavelength, pairs in planes_by_wavelength.items():
                 dy, dx = wavelength / (hh * view.bin), wavelength / (ww * view.bin)
-                rt.kernel(PROGRAM, "pupil_layer", ())(
-                    rt.queue, (ww, hh), None, out.data, spread.data, np.int32(hh),
-                    np.int32(ww), pairs.data, np.int32(pairs.shape[0]), self.deapod[0].data,
-                    self.deapod[1].data, np.float32(dy), np.float32(dx),
-                    np.float32(2 * math.pi / wavelength), np.float32(z),
-                    np.float32(1 / wavelength))
+                PUPIL_LAYER.launch(rt, (ww, hh), u=out, g=spread, h=hh, w=ww, pairs=pairs,
+                                   n=pairs.shape[0], dr=self.deapod[0], dc=self.deapod[1],
+                                   dy=dy, dx=dx, k=2 * math.pi / wavelength, z=z,
+                                   scale=1 / wavelength)
 
 
 SPREAD_TAPS = 4  # the gather's ES kernel taps per axis: 1e-4 at 2x oversampling, as the

@@ -37,7 +37,7 @@ from ..propagation.tilt import tilt_reach
 from ..scene.camera import Camera
 from ..scene.hologram import Hologram
 from ..scene.plate import box_corners
-from ..validate import InputError, shown
+from ..validate import MAX_SUPERSAMPLE, InputError, shown
 from ..view import BACKGROUND_DEPTH, RenderResult, as_rgb
 from .plan import SHARP_SLACK, SUPERSAMPLE
 from .reconstruction import reconstruct
@@ -515,9 +515,6 @@ class NoDepthWarning(UserWarning):
 
 class EmptyViewWarning(UserWarning):
     """No light of the hologram reaches the camera: the view is black (the message says why)."""
-
-
-MAX_SUPERSAMPLE = 16  # render_view's largest supersampling factor per axis
 
 
 def _unseen(h: Hologram, rotation, position) -> str | None:

@@ -23,12 +23,24 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy import float32, int32, int64
 
 from ..opencl import get_runtime
 from ..opencl.arrays import read
+from ..opencl.kernel import BUFFER, REAL, kernel
 from ..opencl.runtime import associated
 
 PROGRAM = associated(__file__)
+ZONE_SUM = kernel(
+    PROGRAM, "zone_sum", out=BUFFER, first_plane=int32, row_first=int32, col_first=int32,
+    oh=int32, ow=int32, pitch=REAL, row_pitch=REAL, x0=REAL, y0=REAL, k=REAL, k2=REAL, zx=REAL,
+    zy=REAL, zz=REAL, ex=float32, ey=float32, ez=float32, rim_x=float32, rim_y=float32,
+    px=BUFFER, py=BUFFER, pz=BUFFER, amp=BUFFER, amp2=BUFFER, shade=BUFFER, foot=BUFFER,
+    vis_row=BUFFER, vis=BUFFER, g0x=float32, g0y=float32, gsx=float32, gsy=float32,
+    list=BUFFER, start=BUFFER, blocks_x=int32, block=int32, block_row0=int32,
+    block_col0=int32)
+MIX_CLASSES = kernel(PROGRAM, "mix_classes", out=BUFFER, sums=BUFFER, mixing=BUFFER,
+                     looks=int32, classes=int32, plane=int64)
 
 SEG = 32       # columns per work item: the recurrence's segment
 BLOCK = 256    # emitters are listed per BLOCK x BLOCK samples
@@ -195,16 +207,17 @@ class ZoneSum:
                         f"-DPARTNER_LERP={int(self.partner_lerp)}",
                         f"-DGRID_Y={table.shape[1]}", f"-DGRID_X={table.shape[2]}",
                         "-cl-fast-relaxed-math") + rt.real_options
-        amp = [rt.to_device(np.ascontiguousarray(a, np.complex64)).data for a in amps]
+        amp = [rt.to_device(np.ascontiguousarray(a, np.complex64)) for a in amps]
         self._mixing = None if self.mixing is None else rt.to_device(self.mixing)
-        self.args = [*(rt.to_device(pos[:, i], rt.real).data for i in range(3)),
-                     amp[0], amp[-1], rt.to_device(shade, np.float32).data,
-                     rt.to_device(foot).data,
-                     rt.to_device(np.asarray(em.visibility, np.int32)).data,
-                     rt.to_device(np.ascontiguousarray(table, np.uint8)).data,
-                     *(np.float32(v) for v in (*em.grid[0][:1], *em.grid[1][:1],
-                                               em.grid[0][1], em.grid[1][1]))]
-        self._keep = self.args  # the device buffers live as long as the sum
+        (g0x, gsx), (g0y, gsy) = em.grid
+        # the emitters' arguments of the kernel, on the device as long as the sum lives
+        self.args = dict(zip(("px", "py", "pz"), (rt.to_device(pos[:, i], rt.real)
+                                                  for i in range(3))),
+                         amp=amp[0], amp2=amp[-1], shade=rt.to_device(shade, np.float32),
+                         foot=rt.to_device(foot),
+                         vis_row=rt.to_device(np.asarray(em.visibility, np.int32)),
+                         vis=rt.to_device(np.ascontiguousarray(table, np.uint8)),
+                         g0x=g0x, g0y=g0y, gsx=gsx, gsy=gsy)
 
     def _factored(self, amps, partner: bool, window) -> tuple[list, np.ndarray]:
         """The amplitudes as the kernel takes them, and the channels' real shares. Where each
@@ -243,31 +256,29 @@ class ZoneSum:
         sum of any :class:`ZoneSum` of the runtime."""
         rt, win = self.rt, self.window
         sums = rt.workspace("zone-sum", (len(self.members) * self.planes, rows, cols))
-        real = rt.real
         e = win.half_extents
         for k, (members, foot) in enumerate(self.members):
             lst, start, (_, blocks_x, block_row0, block_col0) = block_lists(
                 foot, win.shape, region=(row0, col0, rows, cols))
             if members is not None:
                 lst = members[lst]
-            lists = [rt.to_device(lst if len(lst) else np.zeros(1, np.int32), np.int32).data,
-                     rt.to_device(start).data, np.int32(blocks_x), np.int32(BLOCK),
-                     np.int32(block_row0), np.int32(block_col0)]
-            rt.kernel(PROGRAM, "zone_sum", self.options)(
-                rt.queue, (-(-rows // rt.lanes), -(-cols // SEG)), rt.series_group, sums.data,
-                np.int32(k * self.planes), np.int32(row0), np.int32(col0), np.int32(rows),
-                np.int32(cols), *(real(v) for v in (win.pitch, win.row_pitch, win.origin[0],
-                                                    win.origin[1], self.k, self.k2,
-                                                    *win.centre)),
-                *(np.float32(v) for v in (e[0], e[1], e[2], win.rim * e[0], win.rim * e[1])),
-                *self.args, *lists)
+            ZONE_SUM.launch(
+                rt, (-(-rows // rt.lanes), -(-cols // SEG)), rt.series_group,
+                options=self.options, out=sums, first_plane=k * self.planes, row_first=row0,
+                col_first=col0, oh=rows, ow=cols, pitch=win.pitch, row_pitch=win.row_pitch,
+                x0=win.origin[0], y0=win.origin[1], k=self.k, k2=self.k2,
+                **dict(zip(("zx", "zy", "zz"), win.centre)), ex=e[0], ey=e[1], ez=e[2],
+                rim_x=win.rim * e[0], rim_y=win.rim * e[1], **self.args,
+                list=rt.to_device(lst if len(lst) else np.zeros(1, np.int32), np.int32),
+                start=rt.to_device(start), blocks_x=blocks_x, block=BLOCK,
+                block_row0=block_row0, block_col0=block_col0)
         if self.mixing is None:
             return sums
         out = rt.workspace("zone-sum-looks", (self.channels, rows, cols))
         looks, classes = self.mixing.shape
-        rt.kernel(PROGRAM, "mix_classes", self.options)(
-            rt.queue, (rows * cols, self.planes), None, out.data, sums.data,
-            self._mixing.data, np.int32(looks), np.int32(classes), np.int64(rows * cols))
+        MIX_CLASSES.launch(rt, (rows * cols, self.planes), options=self.options, out=out,
+                           sums=sums, mixing=self._mixing, looks=looks, classes=classes,
+                           plane=rows * cols)
         return out
 
 

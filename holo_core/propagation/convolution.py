@@ -12,14 +12,18 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+from numpy import float32
 
 from .. import validate
 from ..opencl import as_device, associated, get_runtime, is_device_array
 from ..opencl.arrays import embed, empty, read_first, window
+from ..opencl.kernel import BUFFER, kernel
 from ..validate import InputError, host_field
 from . import grid
 
 PROGRAM = associated(__file__)
+MULTIPLY = kernel(PROGRAM, "multiply", a=BUFFER, t=BUFFER)
+CHIRP_TRANSFER = kernel(PROGRAM, "chirp_transfer", t=BUFFER, wg=BUFFER, c=float32, d=float32)
 
 
 class Setup(NamedTuple):
@@ -90,11 +94,10 @@ def chirp_transfer(rt, wg, carrier: float, distance: float):
     the (w, g) pairs of a chirp shared by every distance (w the weight with the inverse FFT's
     1/N, g = 2πf²/(1/λ + fz) [rad/m]): ``carrier`` c [rad], ``distance`` d [m]."""
     out = empty(rt, wg.shape)
-    rt.kernel(PROGRAM, "chirp_transfer")(rt.queue, (wg.size,), None, out.data, wg.data,
-                                         np.float32(carrier), np.float32(distance))
+    CHIRP_TRANSFER.launch(rt, (wg.size,), t=out, wg=wg, c=carrier, d=distance)
     return out
 
 
 def multiply(rt, a, factor) -> None:
     """``a`` *= ``factor``, element-wise, on the device (both complex64, the same size)."""
-    rt.kernel(PROGRAM, "multiply")(rt.queue, (a.size,), None, a.data, factor.data)
+    MULTIPLY.launch(rt, (a.size,), a=a, t=factor)

@@ -5,11 +5,7 @@
  * k(r - |z|) = k·ρ²/(r + |z|), which stays small. REAL is double where the device has it. */
 #include "holo_complex.h"
 
-#ifdef HOLO_FP64
-typedef double real;
-#else
-typedef float real;
-#endif
+#include "real.h"
 
 __kernel void rs_direct(__global float2 *out, __global const float2 *src,
                         int h, int w, real pitch, real src_x0, real src_y0,

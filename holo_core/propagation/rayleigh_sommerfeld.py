@@ -11,14 +11,19 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy import int32
 
 from .. import validate
 from ..opencl import as_device, associated, is_device_array, like_input
 from ..opencl.arrays import empty
+from ..opencl.kernel import BUFFER, REAL, kernel
 from ..validate import InputError, shown
 from . import grid
 
 PROGRAM = associated(__file__)
+RS_DIRECT = kernel(PROGRAM, "rs_direct", out=BUFFER, src=BUFFER, h=int32, w=int32,
+                   pitch=REAL, src_x0=REAL, src_y0=REAL, out_pitch=REAL, out_x0=REAL,
+                   out_y0=REAL, z=REAL, k=REAL, sgn=REAL, gr=REAL, gi=REAL)
 
 
 def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0),
@@ -70,10 +75,10 @@ def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0)
     k, sgn = 2 * math.pi / wavelength, math.copysign(1.0, z)
     g = pitch**2 * np.exp(1j * math.remainder(sgn * k * abs(z), 2 * math.pi))
     out = empty(rt, out_shape)
-    args = [pitch, src_x0, src_y0, out_pitch, out_x0, out_y0, abs(z), k, sgn, g.real, g.imag]
-    rt.kernel(PROGRAM, "rs_direct", rt.real_options)(
-        rt.queue, out_shape, None, out.data, src.data, np.int32(src.shape[0]),
-        np.int32(src.shape[1]), *(rt.real(a) for a in args))
+    RS_DIRECT.launch(rt, out_shape, options=rt.real_options, out=out, src=src, h=src.shape[0],
+                     w=src.shape[1], pitch=pitch, src_x0=src_x0, src_y0=src_y0,
+                     out_pitch=out_pitch, out_x0=out_x0, out_y0=out_y0, z=abs(z), k=k,
+                     sgn=sgn, gr=g.real, gi=g.imag)
     return like_input(out, from_host)
 
 

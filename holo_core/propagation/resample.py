@@ -14,13 +14,17 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy import int32
 
 from .. import validate
 from ..opencl import as_device, associated, like_input
 from ..opencl.arrays import empty
+from ..opencl.kernel import BUFFER, kernel
 from . import grid
 
 PROGRAM = associated(__file__)
+APPLY_AXIS0, APPLY_AXIS1 = (kernel(PROGRAM, name, out=BUFFER, K=BUFFER, src=BUFFER,
+                                   n_in=int32) for name in ("apply_axis0", "apply_axis1"))
 
 
 def resample(field, *, pitch, out_shape, out_pitch):
@@ -50,11 +54,9 @@ def resample(field, *, pitch, out_shape, out_pitch):
     ky = rt.to_device(interpolation_matrix(h, pitch, oh, out_pitch), np.float32)
     kx = rt.to_device(interpolation_matrix(w, pitch, ow, out_pitch), np.float32)
     rows = empty(rt, (oh, w))
-    rt.kernel(PROGRAM, "apply_axis0")(rt.queue, (oh, w), None, rows.data, ky.data, src.data,
-                                      np.int32(h))
+    APPLY_AXIS0.launch(rt, (oh, w), out=rows, K=ky, src=src, n_in=h)
     out = empty(rt, (oh, ow))
-    rt.kernel(PROGRAM, "apply_axis1")(rt.queue, (oh, ow), None, out.data, kx.data, rows.data,
-                                      np.int32(w))
+    APPLY_AXIS1.launch(rt, (oh, ow), out=out, K=kx, src=rows, n_in=w)
     return like_input(out, from_host)
 
 

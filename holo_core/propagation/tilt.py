@@ -16,16 +16,23 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy import float32, int32
 
 from .. import validate
 from ..opencl import as_device, associated, like_input
 from ..opencl.arrays import by_rows, cached, empty, place, window
+from ..opencl.kernel import BUFFER, REAL, kernel
 from ..validate import InputError
 from . import grid
 from .angular_spectrum import angular_spectrum
 from .convolution import multiply
 
 PROGRAM = associated(__file__)
+_ROTATION = {f"m{i}{j}": REAL for i in range(3) for j in range(3)}  # its rows
+ROTATE_SPECTRUM = kernel(PROGRAM, "rotate_spectrum", dst=BUFFER, A=BUFFER, hs=int32,
+                         ws=int32, ht=int32, wt=int32, dft_y=REAL, dft_x=REAL,
+                         dfs_y=REAL, dfs_x=REAL, inv_l2=REAL, **_ROTATION, ct_y=REAL,
+                         ct_x=REAL, scale=float32, es=BUFFER)
 
 TAPS = 6                # spectrum interpolation taps per axis (error ~10^-(TAPS-1) at padding 2)
 ES_BETA = 2.30          # the kernel's shape per tap for 2x oversampling (Barnett et al. 2019)
@@ -88,15 +95,13 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     rt.fft.forward(spectrum, nonzero=lies)
     multiply(rt, spectrum, cached_array(rt, "centring", _centring, (hs, ws), centre))
     target = empty(rt, (ht, wt))
-    freq = [1 / (ht * out_pitch), 1 / (wt * out_pitch), 1 / (hs * pitch), 1 / (ws * pitch),
-            1 / wavelength**2, *m.ravel(),
-            (t0 + (out_shape[0] - 1) / 2) / ht, (u0 + (out_shape[1] - 1) / 2) / wt]
-    scale = np.float32(pitch**2 / (out_pitch**2 * ht * wt))
     options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
-    rt.kernel(PROGRAM, "rotate_spectrum", options)(
-        rt.queue, by_rows((ht, wt)), None, target.data, spectrum.data, np.int32(hs),
-        np.int32(ws), np.int32(ht), np.int32(wt), *(rt.real(f) for f in freq), scale,
-        cached_array(rt, "es-table", es_table).data)
+    ROTATE_SPECTRUM.launch(
+        rt, by_rows((ht, wt)), options=options, dst=target, A=spectrum, hs=hs, ws=ws, ht=ht,
+        wt=wt, dft_y=1 / (ht * out_pitch), dft_x=1 / (wt * out_pitch), dfs_y=1 / (hs * pitch),
+        dfs_x=1 / (ws * pitch), inv_l2=1 / wavelength**2, **dict(zip(_ROTATION, m.ravel())),
+        ct_y=(t0 + (out_shape[0] - 1) / 2) / ht, ct_x=(u0 + (out_shape[1] - 1) / 2) / wt,
+        scale=pitch**2 / (out_pitch**2 * ht * wt), es=cached_array(rt, "es-table", es_table))
     rt.fft.backward(target, read=((u0, u0 + out_shape[1]),))
     return like_input(window(rt, target, out_shape, t0, u0), from_host)
 

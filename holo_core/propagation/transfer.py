@@ -20,13 +20,27 @@ import functools
 import math
 
 import numpy as np
+from numpy import float32, float64, int32
 
 from ..opencl import associated
 from ..opencl.arrays import by_rows, cached, empty
+from ..opencl.kernel import BUFFER, kernel
 from ..validate import InputError
 from . import grid
 
 PROGRAM = associated(__file__)
+ASM_TRANSFER = kernel(PROGRAM, "asm_transfer", t=BUFFER, dfy=float64, dfx=float64,
+                      inv_l=float64, z=float64, c=float64, x0=float64, y0=float64,
+                      half_y=float64, half_x=float64, band=int32, edge=float32, scale=float32)
+FRESNEL_TRANSFER = kernel(PROGRAM, "fresnel_transfer", t=BUFFER, quadrant=int32, h=int32,
+                          w=int32, gw=int32, dfy=float64, dfx=float64, lam=float64,
+                          z=float64, c=float64, x0=float64, y0=float64, half_y=float64,
+                          half_x=float64, scale=float32)
+ASM_TRANSFER_CHIRP = kernel(
+    PROGRAM, "asm_transfer_chirp", t=BUFFER, g=BUFFER, inv_fz=BUFFER, qw=int32, ry=BUFFER,
+    rx=BUFFER, shifted=int32, quadrant=int32, h=int32, w=int32, gw=int32, z_hi=float32,
+    z_lo=float32, c=float32, dfy=float32, dfx=float32, x0=float32, y0=float32,
+    half_y=float32, half_x=float32, band=int32, edge=float32, scale=float32)
 BAND_EDGE = 0.2  # fraction of the band-limited ray range given to the cosine roll-off
 
 
@@ -53,11 +67,10 @@ def asm_transfer(rt, shape, *, wavelength, pitch, distance, offset, band_limit, 
         return _from_chirp(rt, shape, wavelength, pitch, distance, offset, band_limit,
                            edge, carrier, half, quadrant, out)
     out = _output(rt, out, shape)
-    rt.kernel(PROGRAM, "asm_transfer", rt.real_options)(
-        rt.queue, (w, h), None, out.data, np.float64(1 / (h * py)), np.float64(1 / (w * px)),
-        np.float64(1 / wavelength), np.float64(distance), np.float64(carrier),
-        np.float64(x0), np.float64(y0), np.float64(half[0]), np.float64(half[1]),
-        np.int32(bool(band_limit)), np.float32(edge), np.float32(1 / (h * w)))
+    ASM_TRANSFER.launch(rt, (w, h), options=rt.real_options, t=out, dfy=1 / (h * py),
+                        dfx=1 / (w * px), inv_l=1 / wavelength, z=distance, c=carrier, x0=x0,
+                        y0=y0, half_y=half[0], half_x=half[1], band=bool(band_limit),
+                        edge=edge, scale=1 / (h * w))
     return out
 
 
@@ -73,12 +86,11 @@ def fresnel_transfer(rt, shape, *, wavelength, pitch, distance, offset, quadrant
     carrier = math.remainder(2 * math.pi * distance / wavelength, 2 * math.pi)
     made = quadrant_shape(shape) if quadrant else shape
     out = _output(rt, out, made)
-    rt.kernel(PROGRAM, "fresnel_transfer", rt.real_options)(
-        rt.queue, by_rows(made), None, out.data, np.int32(bool(quadrant)), np.int32(h),
-        np.int32(w), np.int32(made[1]), np.float64(1 / (h * py)), np.float64(1 / (w * px)),
-        np.float64(wavelength), np.float64(distance), np.float64(carrier),
-        np.float64(offset[0]), np.float64(offset[1]), np.float64(h * py / 2),
-        np.float64(w * px / 2), np.float32(1 / (h * w)))
+    FRESNEL_TRANSFER.launch(rt, by_rows(made), options=rt.real_options, t=out,
+                            quadrant=bool(quadrant), h=h, w=w, gw=made[1], dfy=1 / (h * py),
+                            dfx=1 / (w * px), lam=wavelength, z=distance, c=carrier,
+                            x0=offset[0], y0=offset[1], half_y=h * py / 2, half_x=w * px / 2,
+                            scale=1 / (h * w))
     return out
 
 
@@ -114,14 +126,11 @@ def _from_chirp(rt, shape, wavelength, pitch, distance, offset, band_limit, edge
     rx, _ = cached(rt, ("ramp", w, px, x0), lambda: (_ramp(w, px, x0), []))
     z_hi = np.float32(distance)
     z_lo = np.float32(distance - float(z_hi))
-    rt.kernel(PROGRAM, "asm_transfer_chirp")(
-        rt.queue, by_rows(made), None, out.data, table[0].data, table[1].data,
-        np.int32(w // 2 + 1), ry.data,
-        rx.data, np.int32(x0 != 0 or y0 != 0), np.int32(bool(quadrant)), np.int32(h),
-        np.int32(w), np.int32(made[1]), z_hi, z_lo, np.float32(carrier),
-        np.float32(1 / (h * py)), np.float32(1 / (w * px)), np.float32(x0), np.float32(y0),
-        np.float32(half[0]), np.float32(half[1]), np.int32(bool(band_limit)),
-        np.float32(edge), np.float32(1 / (h * w)))
+    ASM_TRANSFER_CHIRP.launch(
+        rt, by_rows(made), t=out, g=table[0], inv_fz=table[1], qw=w // 2 + 1, ry=ry, rx=rx,
+        shifted=x0 != 0 or y0 != 0, quadrant=bool(quadrant), h=h, w=w, gw=made[1], z_hi=z_hi,
+        z_lo=z_lo, c=carrier, dfy=1 / (h * py), dfx=1 / (w * px), x0=x0, y0=y0,
+        half_y=half[0], half_x=half[1], band=bool(band_limit), edge=edge, scale=1 / (h * w))
     return out
 
 

@@ -6,7 +6,8 @@
 - scene/ holds the nouns: it imports no stage (plate, camera, io, optics, propagation, opencl);
 - the add-on's folders import only those below them: ui → compositor → render → export →
   blender, and blender/ imports nothing else of the add-on;
-- no private name (``_x``) is imported from another module.
+- no private name (``_x``) is imported from another module;
+- no circle of imports among a package's modules, imports inside functions included.
 """
 
 import ast
@@ -19,14 +20,14 @@ ROOT = Path(__file__).resolve().parents[2]
 LAYERS = ["blender", "export", "render", "compositor", "ui"]  # each may import those before it
 
 
-def _module(path: Path) -> str:
-    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+def _module(path: Path, root: Path = ROOT) -> str:
+    parts = list(path.relative_to(root).with_suffix("").parts)
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def _imports(path: Path):
+def _imports(path: Path, root: Path = ROOT):
     """(imported module, names) for each import of ``path``, relative ones resolved."""
-    here = _module(path).split(".")
+    here = _module(path, root).split(".")
     package = here if path.name == "__init__.py" else here[:-1]
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
@@ -45,6 +46,50 @@ def _edges(package: str):
     for path in sorted((ROOT / package).rglob("*.py")):
         for module, names in _imports(path):
             yield _module(path), module, names
+
+
+def _graph(package: str, root: Path = ROOT) -> dict[str, set[str]]:
+    """Module -> the modules of ``package`` it imports, read from every import statement
+    (inside functions too). ``from p import x`` reaches the module ``p.x`` where there is one,
+    else ``p``; a package's ``__init__`` run before its submodules is no edge."""
+    paths = sorted((root / package).rglob("*.py"))
+    graph = {_module(path, root): set() for path in paths}
+    for path in paths:
+        a = _module(path, root)
+        for module, names in _imports(path, root):
+            subs = [f"{module}.{n}" for n in names if f"{module}.{n}" in graph]
+            for b in subs or [module]:
+                if b in graph and b != a and not (subs and b == module):
+                    graph[a].add(b)
+    return graph
+
+
+def _circles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan's), each sorted."""
+    index, low, stack, on, found = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while not component or component[-1] != v:
+                component.append(stack.pop())
+                on.discard(component[-1])
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return sorted(found)
 
 
 def _places(module: str) -> list[str]:
@@ -88,6 +133,36 @@ def test_no_private_name_crosses_a_module(package):
             if b.split(".")[0] in ("holo_core", "holo_addon") and n.startswith("_")
             and not n.startswith("__")]
     assert hits == [], hits
+
+
+def _file(module: str) -> str:
+    path = ROOT.joinpath(*module.split("."))
+    return str((path.with_suffix(".py") if path.with_suffix(".py").is_file()
+                else path / "__init__.py").relative_to(ROOT))
+
+
+@pytest.mark.parametrize("package", ["holo_core", "holo_addon"])
+def test_no_import_circle(package):
+    """Every module of a package can be imported after the ones it imports: no module reaches
+    itself through the imports of others, an import inside a function counted like one at the
+    top (it only moves the circle from import time to call time)."""
+    circles = [" <-> ".join(_file(m) for m in c) for c in _circles(_graph(package))]
+    assert circles == [], f"import circles in {package}: {circles}"
+
+
+def test_the_circle_reader_sees_hidden_and_relative_imports(tmp_path):
+    """A circle closed by an import inside a function, written with relative imports and
+    ``from . import x``, is found; the package's ``__init__`` importing its modules is none."""
+    pkg = tmp_path / "pkg"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("from .a import f\nfrom . import sub\n")
+    (pkg / "a.py").write_text("from .sub import b\n")
+    (pkg / "sub" / "__init__.py").write_text("")
+    (pkg / "sub" / "b.py").write_text("def g():\n    from .. import c\n")
+    (pkg / "c.py").write_text("import pkg.a\nfrom . import d\n")
+    (pkg / "d.py").write_text("from pkg import a\n")
+    circles = _circles(_graph("pkg", tmp_path))
+    assert circles == [["pkg.a", "pkg.c", "pkg.d", "pkg.sub.b"]], circles
 
 
 def test_the_rules_see_real_imports():
