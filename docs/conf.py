@@ -26,6 +26,7 @@ extensions = [
     "api_pages",
     "docstrings",
     "bench_results",
+    "cli_help",
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
@@ -33,7 +34,30 @@ exclude_patterns = ["_build", "jupyter_execute", "**.ipynb_checkpoints"]
 root_doc = "index"
 
 # MyST: $…$ maths as the paper writes it, ::: fences, anchors for headings to three levels
-myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
+myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist", "substitution"]
+
+
+def _formats():
+    """The file formats' names and versions, as the readers and writers hold them."""
+    import importlib
+
+    found = {}
+    for key, module, names in (("hologram", "holo_core.io.hologram", ("FORMAT", "FORMAT_VERSION",
+                                                                      "READS")),
+                               ("display", "holo_core.io.display", ("FORMAT", "VERSION")),
+                               ("store", "holo_core.io.tiles", ("STORE_FORMAT",))):
+        try:
+            m = importlib.import_module(module)
+        except ImportError:  # a module moved: the page says so rather than a stale number
+            m = None
+        for name in names:
+            value = getattr(m, name, "(see the module)")
+            found[f"{key}_{name.lower()}"] = (", ".join(map(str, value))
+                                              if isinstance(value, tuple) else str(value))
+    return found
+
+
+myst_substitutions = {"version": holo_core.__version__, **_formats()}
 myst_heading_anchors = 3
 
 # The tutorials run at every build, each in a fresh kernel; a cell that raises fails the build
