@@ -3,9 +3,11 @@
 ``{bench-list}`` lists every ``bench/*.py`` with the first paragraph of its docstring (what it
 measures); ``{bench-results}`` renders each ``bench/results/NAME.json`` (written by
 ``bench/results.py``) as a table of its figures under the machine, its load and the date.
+Both are for MyST pages: they write Markdown (a definition list, pipe tables).
 """
 
 import ast
+import datetime
 import json
 import re
 from pathlib import Path
@@ -19,8 +21,8 @@ HELPERS = {"results.py"}  # bench/ modules that measure nothing themselves
 
 
 def _literal_roles(text):
-    """``:meth:`x``` and the like as inline literals: the benches' docstrings name code that
-    the API pages need not document."""
+    """``:meth:`x``` and the like as inline code: the benches' docstrings name code that the
+    API pages need not document."""
     return re.sub(r":[a-z]+:`~?([^`]+)`", r"``\1``", text)
 
 
@@ -32,30 +34,39 @@ def _value(v):
     return str(v)
 
 
-def _table(header, rows):
-    """An RST list-table (cells as literal text: figures are not markup)."""
-    out = [".. list-table::", "   :header-rows: 1", ""]
-    for row in [header, *rows]:
-        out.append("   * - " + _cell(row[0]))
-        out += ["     - " + _cell(c) for c in row[1:]]
-    return out
+def _date(iso):
+    try:
+        return datetime.datetime.fromisoformat(iso).astimezone(datetime.timezone.utc).strftime(
+            "%Y-%m-%d %H:%M UTC")
+    except ValueError:
+        return iso
 
 
 def _cell(text):
+    """Figures are text, not markup."""
     text = str(text).replace("\n", " ")
-    return text.replace("\\", "\\\\").replace("*", "\\*").replace("`", "\\`").replace("|", "\\|") \
-        or "—"
+    for c in "\\|*_`$<[":
+        text = text.replace(c, "\\" + c)
+    return text or "—"
 
 
-class _Rst(SphinxDirective):
-    def rst(self, lines):
+def _table(header, rows):
+    """A Markdown pipe table."""
+    out = ["| " + " | ".join(_cell(c) for c in header) + " |",
+           "|" + "---|" * len(header)]
+    return out + ["| " + " | ".join(_cell(c) for c in row) + " |" for row in rows]
+
+
+class _Markdown(SphinxDirective):
+    def parse(self, lines):
         container = nodes.container()
-        self.state.nested_parse(StringList(lines, source=str(BENCH)), self.content_offset,
+        flat = [part for line in lines for part in line.split("\n")]  # a line an entry
+        self.state.nested_parse(StringList(flat, source=str(BENCH)), self.content_offset,
                                 container)
         return container.children
 
 
-class BenchList(_Rst):
+class BenchList(_Markdown):
     """Each bench and what it measures (its docstring's first paragraphs)."""
 
     def run(self):
@@ -66,27 +77,26 @@ class BenchList(_Rst):
             self.env.note_dependency(str(path))
             doc = ast.get_docstring(ast.parse(path.read_text())) or "(no docstring)"
             first = doc.split("\n\n")[0]
-            lines += [f"``bench/{path.name}``", "   " + _literal_roles(first).replace(
-                "\n", "\n   "), ""]
-        return self.rst(lines)
+            lines += [f"`bench/{path.name}`", ": " + _literal_roles(first).replace(
+                "\n", "\n  "), ""]
+        return self.parse(lines)
 
 
-class BenchResults(_Rst):
+class BenchResults(_Markdown):
     """The latest result of every bench that has one."""
 
     def run(self):
         found = sorted((BENCH / "results").glob("*.json"))
         if not found:
-            return self.rst(["No bench has written its figures here yet: run one (``python "
-                             "bench/sweep.py``) and build again."])
+            return self.parse(["No bench has written its figures here yet: run one (`python "
+                               "bench/sweep.py`) and build again."])
         lines = []
         for path in found:
             self.env.note_dependency(str(path))
             r = json.loads(path.read_text())
             m = r.get("machine", {})
-            title = f"``{r.get('bench', path.stem)}``"
-            lines += [title, "~" * len(title), "",
-                      f"``{r.get('command', '')}`` on {r.get('date', '')}: "
+            lines += [f"**`bench/{r.get('bench', path.stem)}.py`**", "",
+                      f"`{r.get('command', '')}` on {_date(r.get('date', ''))}: "
                       f"{_cell(m.get('cpu', '?'))}, {m.get('cores', '?')} cores "
                       f"({m.get('usable_cpus', '?')} usable), load average "
                       f"{_value(m.get('load_at_start', []))} at the start and "
@@ -102,7 +112,7 @@ class BenchResults(_Rst):
                 lines += _table(("", *columns), [
                     (k, *(_value(row.get(c, "")) for c in columns)) for k, row in tables.items()
                 ]) + [""]
-        return self.rst(lines)
+        return self.parse(lines)
 
 
 def setup(app):
