@@ -30,12 +30,12 @@ import numpy as np
 
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="holo-bench-"))
 sys.path.append(str(Path(__file__).resolve().parents[1]))  # after PYTHONPATH: a tree named there
-import bpy  # noqa: E402
+import bpy
 
-import holo_addon  # noqa: E402
-from holo_addon.blender import compat  # noqa: E402
-from holo_addon.demo import point_at  # noqa: E402
-from holo_core.io.image import exr_attribute, read_exr, srgb  # noqa: E402
+import holo_addon
+from holo_addon.blender import compat
+from holo_addon.demo import point_at
+from holo_core.io.image import exr_attribute, read_exr, srgb
 
 
 def fresh(out: Path, size, *, samples=128, view="Standard", world=None):

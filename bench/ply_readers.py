@@ -18,10 +18,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
-import fuzz  # noqa: E402
+import fuzz
 
-from holo_core.io.mesh import read_mesh  # noqa: E402
-from holo_core.validate import InputError  # noqa: E402
+from holo_core.io.mesh import read_mesh
+from holo_core.validate import InputError
 
 FACES = 1_000_000
 CASES = 2000

@@ -31,8 +31,8 @@ import numpy as np
 import pyfftw
 import scipy.fft
 
-from holo_core.opencl import get_runtime
 from holo_core.camera import incoherent
+from holo_core.opencl import get_runtime
 from holo_core.opencl.arrays import by_rows, empty
 from holo_core.optics import imaging
 from holo_core.propagation import angular_spectrum, fresnel, grid, transfer_function
@@ -149,9 +149,9 @@ class Transform:
         self.rt, self.n, self.size, self.direction = rt, n, size, direction
         self.block = random_field(n, 2)
         self.parts = [((dr, dc), (sr, sc))
-                      for (dr, sr) in zip(map(lambda r: slice(*r), grid.embedded(n, size)),
+                      for (dr, sr) in zip((slice(*r) for r in grid.embedded(n, size)),
                                           (slice(0, (n + 1) // 2), slice((n + 1) // 2, n)))
-                      for (dc, sc) in zip(map(lambda r: slice(*r), grid.embedded(n, size)),
+                      for (dc, sc) in zip((slice(*r) for r in grid.embedded(n, size)),
                                           (slice(0, (n + 1) // 2), slice((n + 1) // 2, n)))]
         self.shapes = [(size, size)]
         self.pupil, self.padded = rt.to_device(self.block), empty(rt, (size, size))

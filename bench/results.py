@@ -59,7 +59,7 @@ def write(name: str, figures: dict, *, device: str | None = None) -> Path:
     the command that ran the bench and, where given, the OpenCL device. Atomic (a temporary
     file renamed over the last result)."""
     record = {"bench": name,
-              "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+              "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
               "command": " ".join([Path(sys.argv[0]).name, *sys.argv[1:]]),
               "machine": machine(), "device": device, "figures": _plain(figures)}
     RESULTS.mkdir(exist_ok=True)

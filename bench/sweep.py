@@ -16,6 +16,8 @@ import statistics
 import time
 
 import numpy as np
+import results  # the bench folder's own: the figures as data
+from results import cpu_name  # propagation.py, record.py and stages.py take it from here
 
 from holo_core.opencl import get_runtime, to_device
 from holo_core.opencl.arrays import recycled
@@ -24,9 +26,6 @@ from holo_core.propagation.angular_spectrum import BAND_EDGE
 from holo_core.propagation.convolution import symmetric
 from holo_core.propagation.grid import padded_shape
 from holo_core.propagation.transfer import asm_transfer, quadrant_shape
-
-import results  # the bench folder's own: the figures as data
-from results import cpu_name  # propagation.py, record.py and stages.py take it from here
 
 PITCH, LAM = 2e-6, 633e-9
 

@@ -36,7 +36,7 @@ def _value(v):
 
 def _date(iso):
     try:
-        return datetime.datetime.fromisoformat(iso).astimezone(datetime.timezone.utc).strftime(
+        return datetime.datetime.fromisoformat(iso).astimezone(datetime.UTC).strftime(
             "%Y-%m-%d %H:%M UTC")
     except ValueError:
         return iso

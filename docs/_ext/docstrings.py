@@ -65,7 +65,7 @@ def _lookup(path):
     for cut in range(len(parts), 0, -1):
         try:
             obj = importlib.import_module(".".join(parts[:cut]))
-        except Exception:  # not a module there: try a shorter prefix
+        except Exception:  # noqa: BLE001 -- not a module there (or one that fails): shorter
             continue
         try:
             for attr in parts[cut:]:
