@@ -39,6 +39,7 @@ from holo_core.propagation import angular_spectrum, fresnel, grid, transfer_func
 from holo_core.propagation.fresnel import fresnel_transfer_host
 
 sys.path.insert(0, os.path.dirname(__file__))
+import results
 from sweep import cpu_name  # the bench folder's own helper
 
 LAM, PITCH, Z = 633e-9, 2e-6, 5e-3
@@ -227,6 +228,7 @@ def report(title, medians, bound_keys):
     for k, t in medians.items():
         print(f"  {k:30s} {t * 1e3:9.1f} ms  {t / bound:5.2f}x the bound  "
               f"{t / scipy_t:5.2f}x scipy")
+    return {"bound [ms]": bound * 1e3, **{f"{k}, × bound": t / bound for k, t in medians.items()}}
 
 
 def main():
@@ -261,12 +263,16 @@ def main():
             cases.append((f"camera pass: {n}² spectrum into its 1.5x read grid ({size}²), "
                           f"inverse", Transform(rt, n, size, "backward")))
     made = bounds([s for _, case in cases for s in case.shapes])
+    table = {}
     for title, case in cases:
         methods = case.methods(made[case.shapes[0]])
-        report(title, timed(methods, args.rounds), [k for k in methods if k.startswith("FFTW")])
+        table[title] = report(title, timed(methods, args.rounds),
+                              [k for k in methods if k.startswith("FFTW")])
         if isinstance(case, Convolution) and case.holo is asm and case.n <= 1024:
-            error(case)
+            table[title]["error against float64 NumPy"] = error(case)
     print(f"\nload average at the end {os.getloadavg()[0]:.1f}")
+    results.write("propagation", table, device=f"{rt.device.name.strip()} "
+                  f"({rt.device.platform.name.strip()}), FFT {rt.fft.name}")
 
 
 def error(case: Convolution):
@@ -277,8 +283,9 @@ def error(case: Convolution):
     big[r0:r0 + n, r0:r0 + n] = case.field
     ref = np.fft.ifft2(np.fft.fft2(big) * case.tf)[r0:r0 + n, r0:r0 + n]
     got = case.holo(case.field)
-    print(f"  Holo's error against float64 NumPy: "
-          f"{np.linalg.norm(got - ref) / np.linalg.norm(ref):.2e}")
+    err = float(np.linalg.norm(got - ref) / np.linalg.norm(ref))
+    print(f"  Holo's error against float64 NumPy: {err:.2e}")
+    return err
 
 
 if __name__ == "__main__":

@@ -18,7 +18,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-RESULTS = Path(__file__).resolve().parent / "results"
+# HOLO_BENCH_RESULTS: another folder (runtimes.py sends its per-device runs there, keeping
+# bench/results/ for the default device's)
+RESULTS = Path(os.environ.get("HOLO_BENCH_RESULTS") or Path(__file__).resolve().parent / "results")
 # the load as the bench process began (this module is imported at its start)
 _LOAD_AT_START = os.getloadavg()
 
@@ -67,5 +69,5 @@ def write(name: str, figures: dict, *, device: str | None = None) -> Path:
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     tmp.write_text(json.dumps(record, indent=1, ensure_ascii=False) + "\n")
     os.replace(tmp, path)
-    print(f"figures written to {path.relative_to(RESULTS.parent.parent)}")
+    print(f"figures written to {path}")
     return path

@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 import psutil
+import results  # the bench folder's own: the figures as data
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
@@ -219,6 +220,14 @@ def main():
     print(f"PSNR {min(r[1] for r in rows):.2f}-{max(r[1] for r in rows):.2f} dB, IoU "
           f"{min(r[2] for r in rows):.4f}-{max(r[2] for r in rows):.4f}; load at the end "
           f"{os.getloadavg()[0]:.1f}")
+    figures = {"plate": f"{h.shape[1]} x {h.shape[0]} samples, {len(h.channels)} channels, "
+                        f"{args.looks} looks", "recording [s]": record_s,
+               "recording's peak memory [GiB]": memory.peak / 2**30,
+               "a view / the camera pass (goal <= 0.5)": view_s / cam_s}
+    figures.update({f"frame at x = {x * 100:+.1f} cm": {
+        "PSNR [dB]": p, "IoU": q, "view [s]": v, "camera pass [s]": c}
+        for x, p, q, v, c in rows})
+    results.write("shot", figures)
 
 
 def view_stages(plates, cam, supersample) -> None:

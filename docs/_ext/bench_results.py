@@ -109,7 +109,7 @@ class BenchResults(_Markdown):
                 lines += _table(("figure", "value"), scalars) + [""]
             if tables:
                 columns = list(dict.fromkeys(c for row in tables.values() for c in row))
-                lines += _table(("", *columns), [
+                lines += _table(("case", *columns), [
                     (k, *(_value(row.get(c, "")) for c in columns)) for k, row in tables.items()
                 ]) + [""]
         return self.parse(lines)
