@@ -39,7 +39,7 @@ from holo_core.propagation import angular_spectrum, fresnel, grid, transfer_func
 from holo_core.propagation.fresnel import fresnel_transfer_host
 
 sys.path.insert(0, os.path.dirname(__file__))
-import results
+import results  # the bench folder's own: the figures as data
 from sweep import cpu_name  # the bench folder's own helper
 
 LAM, PITCH, Z = 633e-9, 2e-6, 5e-3

@@ -20,7 +20,7 @@ from holo_core.plate.point_sources import Grid, cone_weight, point_wave
 from holo_core.propagation import grid
 
 sys.path.insert(0, os.path.dirname(__file__))
-import results
+import results  # the bench folder's own: the figures as data
 from sweep import cpu_name  # the bench folder's own helper
 
 LAM, PITCH, SHAPE = 633e-9, 8e-6, (1024, 1024)
