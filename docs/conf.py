@@ -22,6 +22,7 @@ extensions = [
     "myst_nb",
     "sphinx.ext.autodoc",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax from the build, not a CDN: the pages read offline
     "numpydoc",
     "api_pages",
     "docstrings",
