@@ -21,6 +21,11 @@ def _kind(obj):
     return "data"
 
 
+def _options(obj):
+    """A table's value is its docstring's business, not a repr of its functions."""
+    return ["   :no-value:"] if _kind(obj) == "data" else []
+
+
 def _packages():
     """The subpackages ``dir(holo_core)`` names beside the API (the core's own floors)."""
     names = []
@@ -56,7 +61,7 @@ def write(app):
     for package in sorted(groups):
         lines += _heading(f"From ``{package}``", "-")
         for name, obj, home in groups[package]:
-            lines += [f".. auto{_kind(obj)}:: holo_core.{name}", "",
+            lines += [f".. auto{_kind(obj)}:: holo_core.{name}", *_options(obj), "",
                       f"   *Defined in* ``{home}``.", ""]
     _write(out / "names.rst", lines)
     lines = [*_heading("The packages", "="),
@@ -73,7 +78,7 @@ def write(app):
             if id(obj) in top:  # documented once, under its top-level name
                 again.append(f":py:obj:`holo_core.{top[id(obj)]}`")
             elif not inspect.ismodule(obj):
-                lines += [f".. auto{_kind(obj)}:: holo_core.{name}.{member}", ""]
+                lines += [f".. auto{_kind(obj)}:: holo_core.{name}.{member}", *_options(obj), ""]
         if again:
             lines += ["Also here: " + ", ".join(again) + ".", ""]
     _write(out / "packages.rst", lines)
