@@ -19,6 +19,8 @@ Only the add-on's operators are called, so the same script measures an earlier t
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import json
 import os
 import sys
@@ -27,15 +29,16 @@ import time
 from pathlib import Path
 
 import numpy as np
+import results  # the bench folder's own: the figures as data
 
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="holo-bench-"))
 sys.path.append(str(Path(__file__).resolve().parents[1]))  # after PYTHONPATH: a tree named there
-import bpy  # noqa: E402
+import bpy
 
-import holo_addon  # noqa: E402
-from holo_addon.blender import compat  # noqa: E402
-from holo_addon.demo import point_at  # noqa: E402
-from holo_core.io.image import exr_attribute, read_exr, srgb  # noqa: E402
+import holo_addon
+from holo_addon.blender import compat
+from holo_addon.demo import point_at
+from holo_core.io.image import exr_attribute, read_exr, srgb
 
 
 def fresh(out: Path, size, *, samples=128, view="Standard", world=None):
@@ -321,7 +324,12 @@ if __name__ == "__main__":
     OUT = Path(args.out).resolve()
     OUT.mkdir(parents=True, exist_ok=True)
     holo_addon.register()
-    for name in args.scenes:
-        SCENES[name](tuple(args.size))
+    figures = {}
+    for name in args.scenes:  # each scene's measured lines are its figures
+        with contextlib.redirect_stdout(io.StringIO()) as said:
+            SCENES[name](tuple(args.size))
+        sys.stdout.write(said.getvalue())
+        figures[name] = " ".join(line.strip() for line in said.getvalue().splitlines())
+    results.write("artist", figures)
     sys.stdout.flush()
     os._exit(0)  # bpy's own teardown is slow and says nothing

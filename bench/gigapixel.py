@@ -26,6 +26,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import results  # the bench folder's own: the figures as data
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT)]
@@ -162,6 +163,14 @@ def main():
         print(f"time = {fixed:.1f} s + {slope * 1e9:.1f} s per Gpx (largest deviation "
               f"{worst:.1%} of the longest): {1e-6 / slope / cores:.2f} Mpx/s per core "
               f"beyond the cluster's start")
+    table = {f"{size}², tiled": {"points": r["points"], "record [s]": r["record_s"],
+                                 "Mpx/s per core": size * size / 1e6 / r["record_s"] / cores,
+                                 "peak [GB]": r["record_gb"], "a 640x360 view [s]": r["view_s"],
+                                 "the view's peak [GB]": r["view_gb"]}
+             for size, r in tiled.items()}
+    table.update({f"{size}², in memory": {"record [s]": r["record_s"], "peak [GB]": r["record_gb"]}
+                  for size, r in memory.items()})
+    results.write("gigapixel", table)
 
 
 if __name__ == "__main__":

@@ -23,6 +23,8 @@ import tempfile
 import time
 from pathlib import Path
 
+import results  # the bench folder's own: the figures as data
+
 ROOT = Path(__file__).resolve().parents[1]
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="holo-bench-"))
 
@@ -103,6 +105,12 @@ def main(argv=None):
           f"the rest of the same pass; goal: at most 25 %)\n"
           f"  whole passes, best of {args.rounds}: Albedo {albedo:.1f} s, Scene {lit:.1f} s "
           f"({lit / albedo - 1:+.1%})")
+    results.write("lighting", {"resolution": f"{w}x{h}", "samples": args.samples,
+                               "lighting's share of the pass, least (goal <= 0.25)": min(shares),
+                               "lighting's share of the pass, most": max(shares),
+                               "pass, Lighting: Albedo [s]": albedo,
+                               "pass, Lighting: Scene [s]": lit,
+                               "Scene / Albedo": lit / albedo})
 
 
 if __name__ == "__main__":

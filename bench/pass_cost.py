@@ -16,6 +16,8 @@ import tempfile
 import time
 from pathlib import Path
 
+import results  # the bench folder's own: the figures as data
+
 ROOT = Path(__file__).resolve().parents[1]
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="holo-bench-"))
 
@@ -74,6 +76,9 @@ def main():
     print("\nsize        pass [s]  Cycles [s]  pass/Cycles")
     for size, holo, cycles in rows:
         print(f"{size:10s} {holo:9.1f} {cycles:11.1f} {holo / cycles:12.2f}")
+    results.write("pass_cost", {size: {"pass [s]": holo, "Cycles [s]": cycles,
+                                        "pass / Cycles": holo / cycles}
+                                 for size, holo, cycles in rows})
 
 
 if __name__ == "__main__":

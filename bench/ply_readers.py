@@ -15,13 +15,14 @@ from collections import Counter
 from pathlib import Path
 
 import numpy as np
+import results  # the bench folder's own: the figures as data
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
-import fuzz  # noqa: E402
+import fuzz
 
-from holo_core.io.mesh import read_mesh  # noqa: E402
-from holo_core.validate import InputError  # noqa: E402
+from holo_core.io.mesh import read_mesh
+from holo_core.validate import InputError
 
 FACES = 1_000_000
 CASES = 2000
@@ -93,8 +94,13 @@ def main():
         ours, theirs = timed(read_mesh, path), timed(plyfile_mesh, path)
         print(f"1M-triangle binary PLY: holo {ours:.3f} s, plyfile {theirs:.3f} s "
               f"(plyfile/holo = {theirs / ours:.2f})")
-    print(f"fuzz, {CASES} mutated PLYs: holo {fuzz_outcomes(read_mesh, InputError)}")
-    print(f"fuzz, {CASES} mutated PLYs: plyfile {fuzz_outcomes(plyfile_mesh, PlyParseError)}")
+    holo, other = fuzz_outcomes(read_mesh, InputError), fuzz_outcomes(plyfile_mesh, PlyParseError)
+    print(f"fuzz, {CASES} mutated PLYs: holo {holo}")
+    print(f"fuzz, {CASES} mutated PLYs: plyfile {other}")
+    results.write("ply_readers", {"1M-triangle binary PLY, holo [s]": ours,
+                                  "… plyfile [s]": theirs, "plyfile / holo": theirs / ours,
+                                  f"{CASES} mutated PLYs, holo": str(holo),
+                                  f"{CASES} mutated PLYs, plyfile": str(other)})
 
 
 if __name__ == "__main__":

@@ -31,14 +31,15 @@ import numpy as np
 import pyfftw
 import scipy.fft
 
-from holo_core.opencl import get_runtime
 from holo_core.camera import incoherent
+from holo_core.opencl import get_runtime
 from holo_core.opencl.arrays import by_rows, empty
 from holo_core.optics import imaging
 from holo_core.propagation import angular_spectrum, fresnel, grid, transfer_function
 from holo_core.propagation.fresnel import fresnel_transfer_host
 
 sys.path.insert(0, os.path.dirname(__file__))
+import results  # the bench folder's own: the figures as data
 from sweep import cpu_name  # the bench folder's own helper
 
 LAM, PITCH, Z = 633e-9, 2e-6, 5e-3
@@ -149,9 +150,9 @@ class Transform:
         self.rt, self.n, self.size, self.direction = rt, n, size, direction
         self.block = random_field(n, 2)
         self.parts = [((dr, dc), (sr, sc))
-                      for (dr, sr) in zip(map(lambda r: slice(*r), grid.embedded(n, size)),
+                      for (dr, sr) in zip((slice(*r) for r in grid.embedded(n, size)),
                                           (slice(0, (n + 1) // 2), slice((n + 1) // 2, n)))
-                      for (dc, sc) in zip(map(lambda r: slice(*r), grid.embedded(n, size)),
+                      for (dc, sc) in zip((slice(*r) for r in grid.embedded(n, size)),
                                           (slice(0, (n + 1) // 2), slice((n + 1) // 2, n)))]
         self.shapes = [(size, size)]
         self.pupil, self.padded = rt.to_device(self.block), empty(rt, (size, size))
@@ -226,6 +227,7 @@ def report(title, medians, bound_keys):
     for k, t in medians.items():
         print(f"  {k:30s} {t * 1e3:9.1f} ms  {t / bound:5.2f}x the bound  "
               f"{t / scipy_t:5.2f}x scipy")
+    return {"bound [ms]": bound * 1e3, **{f"{k}, × bound": t / bound for k, t in medians.items()}}
 
 
 def main():
@@ -260,12 +262,16 @@ def main():
             cases.append((f"camera pass: {n}² spectrum into its 1.5x read grid ({size}²), "
                           f"inverse", Transform(rt, n, size, "backward")))
     made = bounds([s for _, case in cases for s in case.shapes])
+    table = {}
     for title, case in cases:
         methods = case.methods(made[case.shapes[0]])
-        report(title, timed(methods, args.rounds), [k for k in methods if k.startswith("FFTW")])
+        table[title] = report(title, timed(methods, args.rounds),
+                              [k for k in methods if k.startswith("FFTW")])
         if isinstance(case, Convolution) and case.holo is asm and case.n <= 1024:
-            error(case)
+            table[title]["error against float64 NumPy"] = error(case)
     print(f"\nload average at the end {os.getloadavg()[0]:.1f}")
+    results.write("propagation", table, device=f"{rt.device.name.strip()} "
+                  f"({rt.device.platform.name.strip()}), FFT {rt.fft.name}")
 
 
 def error(case: Convolution):
@@ -276,8 +282,9 @@ def error(case: Convolution):
     big[r0:r0 + n, r0:r0 + n] = case.field
     ref = np.fft.ifft2(np.fft.fft2(big) * case.tf)[r0:r0 + n, r0:r0 + n]
     got = case.holo(case.field)
-    print(f"  Holo's error against float64 NumPy: "
-          f"{np.linalg.norm(got - ref) / np.linalg.norm(ref):.2e}")
+    err = float(np.linalg.norm(got - ref) / np.linalg.norm(ref))
+    print(f"  Holo's error against float64 NumPy: {err:.2e}")
+    return err
 
 
 if __name__ == "__main__":

@@ -8,9 +8,13 @@ import os
 import re
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
+import results  # the bench folder's own: the figures as data
+
 HERE = Path(__file__).parent
+SCRATCH = tempfile.mkdtemp(prefix="holo-bench-runtimes-")
 FIGURES = {  # bench script -> (column, pattern of its figure, unit)
     "propagation.py": ("1024² ASM", r"holo angular_spectrum :\s+([\d.]+) ms", "ms"),
     "record.py": ("point sum", r"([\d.]+e\+\d+) pairs/s in the cones", "pairs/s"),
@@ -25,7 +29,8 @@ def usable_devices():
 
 
 def run(script, spec):
-    env = {**os.environ, "HOLO_DEVICE": spec, "PYTHONUNBUFFERED": "1"}
+    env = {**os.environ, "HOLO_DEVICE": spec, "PYTHONUNBUFFERED": "1",
+           "HOLO_BENCH_RESULTS": SCRATCH}  # bench/results/ keeps the default device's runs
     r = subprocess.run([sys.executable, str(HERE / script)], env=env, capture_output=True,
                        text=True)
     print(f"--- {script} on {spec}\n{r.stdout}{r.stderr[-1500:] if r.returncode else ''}",
@@ -42,6 +47,7 @@ def main():
     print("device".ljust(50) + "".join(n.rjust(24) for n in names))
     for desc, figures in rows:
         print(desc[:49].ljust(50) + "".join(f.rjust(24) for f in figures))
+    results.write("runtimes", {desc: dict(zip(names, figures)) for desc, figures in rows})
 
 
 if __name__ == "__main__":

@@ -32,15 +32,16 @@ from pathlib import Path
 
 import numpy as np
 import psutil
+import results  # the bench folder's own: the figures as data
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
 from plate_scene import cube, sphere  # noqa: E402
 
+from holo_core import worker  # noqa: E402
 from holo_core.camera.render import render_camera  # noqa: E402
 from holo_core.io.image import write_png  # noqa: E402
-from holo_core import worker  # noqa: E402
 from holo_core.io.tiles import read_plate  # noqa: E402
 from holo_core.job import CameraRoute, Job, Output, PlateRoute  # noqa: E402
 from holo_core.plate.plan import plan, plan_view  # noqa: E402
@@ -219,6 +220,14 @@ def main():
     print(f"PSNR {min(r[1] for r in rows):.2f}-{max(r[1] for r in rows):.2f} dB, IoU "
           f"{min(r[2] for r in rows):.4f}-{max(r[2] for r in rows):.4f}; load at the end "
           f"{os.getloadavg()[0]:.1f}")
+    figures = {"plate": f"{h.shape[1]} x {h.shape[0]} samples, {len(h.channels)} channels, "
+                        f"{args.looks} looks", "recording [s]": record_s,
+               "recording's peak memory [GiB]": memory.peak / 2**30,
+               "a view / the camera pass (goal <= 0.5)": view_s / cam_s}
+    figures.update({f"frame at x = {x * 100:+.1f} cm": {
+        "PSNR [dB]": p, "IoU": q, "view [s]": v, "camera pass [s]": c}
+        for x, p, q, v, c in rows})
+    results.write("shot", figures)
 
 
 def view_stages(plates, cam, supersample) -> None:

@@ -24,6 +24,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import results  # the bench folder's own: the figures as data
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "bench")]
@@ -114,14 +115,21 @@ def main():
                   + f" (load {os.getloadavg()[0]:.1f})", flush=True)
     plate, camera = frames["PLATE"], frames["CAMERA"]
     first, frame_s, pass_s = plate[0], float(np.median(plate[1:])), float(np.median(camera))
+    figures = {"frames": args.frames, "dolly [m]": args.dolly,
+               "plate mode: the first frame [s]": first, "plate mode: a frame, median [s]": frame_s,
+               "camera mode: a frame, median [s]": pass_s}
     print(f"plate: the first frame {first:.1f} s (the plate recorded, lit by Cycles, written), "
           f"then {frame_s:.2f} s a frame; camera holograms {pass_s:.2f} s a frame")
     if pass_s > frame_s:
         n = int(np.ceil((first - frame_s) / (pass_s - frame_s)))
         print(f"the plate costs less than a camera hologram per frame from {n} frames on; "
               f"24 frames: {first + 23 * frame_s:.0f} s against {24 * pass_s:.0f} s")
+        figures.update({"break-even [frames]": n, "24 frames from the plate [s]":
+                        first + 23 * frame_s, "24 frames as camera holograms [s]": 24 * pass_s})
     else:
         print("a plate's frame costs more than a camera hologram's: no break-even")
+        figures["break-even [frames]"] = "none"
+    results.write("shot_blender", figures)
 
 
 if __name__ == "__main__":

@@ -39,6 +39,7 @@ import pyfftw
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "tests"), os.path.dirname(__file__)]
 
+import results  # noqa: E402  (the bench folder's own: the figures as data)
 from gpu_pass import Stages  # noqa: E402  (the bench folder's own helpers)
 from sweep import cpu_name  # noqa: E402
 
@@ -180,21 +181,29 @@ def report(title, stages: Stages, total, bounds: Measured, memory_bytes, host):
     ``host``: stages with no bound."""
     print(f"\n{title}: {total:.2f} s in all (load {os.getloadavg()[0]:.1f})")
     print(f"  {'stage':44s} {'seconds':>8s} {'bound':>8s} {'x bound':>8s}")
+    rows = {f"{title}: all": {"s": total}}
     for (kind, shape), (seconds, calls) in sorted(stages.grids.items(), key=lambda kv: -kv[1][0]):
         bound = calls * (bounds.transform(shape) if kind == "transform" else
                          bounds.convolution(shape))
         label = f"{calls} {kind}{'s' * (calls > 1)} of {shape[0]}x{shape[1]}"
         print(f"  {label:44s} {seconds:8.3f} {bound:8.3f} {seconds / bound:8.2f}")
+        rows[f"{title}: {label}"] = {"s": seconds, "bound [s]": bound, "× bound": seconds / bound}
     for name, seconds in sorted(stages.seconds.items(), key=lambda kv: -kv[1]):
         if name in ("transforms", "convolutions (propagations)"):
             continue
         if name in memory_bytes:
             bound = bounds.memory(memory_bytes[name])
             print(f"  {name:44s} {seconds:8.3f} {bound:8.3f} {seconds / bound:8.2f}")
+            rows[f"{title}: {name}"] = {"s": seconds, "bound [s]": bound,
+                                        "× bound": seconds / bound}
         else:
             print(f"  {name:44s} {seconds:8.3f} {'(host)' if name in host else '':>8s}")
+            rows[f"{title}: {name}"] = {"s": seconds, "bound [s]": "(host)" if name in host
+                                        else ""}
     other = total - sum(stages.seconds.values())
     print(f"  {'other':44s} {other:8.3f}")
+    rows[f"{title}: other"] = {"s": other}
+    return rows
 
 
 # --- the camera pass --------------------------------------------------------------------------
@@ -305,9 +314,12 @@ def main():
     bounds = Measured([[kind, list(shape)] for kind, shape in grids], args.plan_seconds)
     print(f"copy bandwidth {bounds.bandwidth / 1e9:.1f} GB/s (read + written); the bounds "
           f"measured after the stages, in a process of their own")
+    figures = {"copy bandwidth, read + written [GB/s]": {"s": bounds.bandwidth / 1e9}}
     for title, stages, total, memory_bytes, host in tables:
-        report(title, stages, total, bounds, memory_bytes, host)
+        figures.update(report(title, stages, total, bounds, memory_bytes, host))
     print(f"\nload average at the end {os.getloadavg()[0]:.1f}")
+    results.write("stages", figures, device=f"{rt.device.name.strip()} "
+                  f"({rt.device.platform.name.strip()}), FFT {rt.fft.name}")
 
 
 if __name__ == "__main__":

@@ -12,12 +12,12 @@ make bench, or python bench/sweep.py [--steps N] [--size N].
 
 import argparse
 import os
-import platform
 import statistics
-import subprocess
 import time
 
 import numpy as np
+import results  # the bench folder's own: the figures as data
+from results import cpu_name  # propagation.py, record.py and stages.py take it from here
 
 from holo_core.opencl import get_runtime, to_device
 from holo_core.opencl.arrays import recycled
@@ -38,15 +38,6 @@ def numpy_step(field, shape, z):
     r0, c0 = (shape[0] - h) // 2, (shape[1] - w) // 2
     big[r0:r0 + h, c0:c0 + w] = field
     return np.fft.ifft2(np.fft.fft2(big) * tf)[r0:r0 + h, c0:c0 + w]
-
-
-def cpu_name() -> str:
-    try:
-        out = subprocess.run(["lscpu"], check=False, capture_output=True, text=True).stdout
-        return next(line.split(":", 1)[1].strip() for line in out.splitlines()
-                    if line.startswith("Model name"))
-    except (OSError, StopIteration):
-        return platform.processor() or "unknown CPU"
 
 
 def main():
@@ -117,6 +108,18 @@ def main():
           f"({len(plain)} steps): holo is {np_med / new:.1f}x faster")
     print(f"error vs float64 NumPy at 3 distances: {', '.join(f'{e:.1e}' for e in errors)}")
     print(f"load average at the end {os.getloadavg()[0]:.1f}")
+    results.write("sweep", {
+        "field": f"{n}x{n}, padded to {shape[0]}x{shape[1]}, {len(distances)} distances",
+        "repeated distance, cached transfer [ms/step]": rep * 1e3,
+        "a new distance's transfer function [ms]": tf * 1e3,
+        "transfer function / propagation (target <= 0.2)": tf / rep,
+        "sweep, a new distance each step [ms/step]": new * 1e3,
+        "sweep step / repeated step (target <= 1.2)": new / rep,
+        "sweep as one batched call [ms/step]": batch * 1e3,
+        "plain NumPy, kernel rebuilt per step [ms/step]": np_med * 1e3,
+        "Holo's speed-up over plain NumPy": np_med / new,
+        "largest error against float64 NumPy": max(errors)},
+        device=f"{rt.device.name.strip()} ({rt.device.platform.name.strip()}), FFT {rt.fft.name}")
 
 
 if __name__ == "__main__":

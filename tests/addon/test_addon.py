@@ -12,7 +12,7 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from holo_addon.blender.objects import show_as_raster
+from holo_addon.blender.objects import show_as_raster  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -332,7 +332,7 @@ def test_missing_or_corrupt_hologram_is_reported(empty_scene):
         pipeline.check_hologram(scene)
     missing = pipeline.output_dir(scene) / "gone.exr"
     plate.holo.hologram = str(missing)
-    with pytest.raises(ValueError, match="gone.exr is missing"):
+    with pytest.raises(ValueError, match=r"gone\.exr is missing"):
         pipeline.check_hologram(scene)
     # a corrupt file the plate believes current: the operator reports it, naming the file
     scene.render.resolution_x, scene.render.resolution_y = 32, 24

@@ -8,8 +8,7 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from test_addon import _flat_plane, _read_exr
-
+from test_addon import _flat_plane, _read_exr  # noqa: E402
 
 SIZE = (320, 180)
 ROWS = slice(60, 120)           # rows clear of every card's top and bottom
@@ -125,9 +124,10 @@ def test_any_unit_scale_gives_the_same_pass_and_depth_of_field(empty_scene, tmp_
     the pass has the same depth layers, aperture in Blender units and image (alpha within
     1e-3, depth in scene units within 1e-4 relative), and its edges match Cycles' at each
     scale. (At 0.01 the f/2.8 lens was taken in metres: a 100x wider blur, 64 layers.)"""
+    import json
+
     from holo_addon.render import pipeline
     from holo_core.io.image import exr_attribute
-    import json
     scene = empty_scene
     green = _cards(scene, 2.8)
     cycles = _render(scene, tmp_path / "cycles.exr")

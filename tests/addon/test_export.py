@@ -83,7 +83,7 @@ def test_exposure_is_in_stops_and_unsaved_files_need_a_folder(empty_scene):
     assert Settings.from_scene(scene, 1.0).exposure == 2.0**64
     scene.holo.output_dir = "//holo/"
     assert not bpy.data.filepath
-    with pytest.raises(ExportError, match="save the .blend first"):
+    with pytest.raises(ExportError, match=r"save the \.blend first"):
         pipeline.output_dir(scene)
 
 

@@ -7,8 +7,8 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from test_addon import _read_exr
-from test_lighting import _grow, _luminance, _render, lit_stage, paint
+from test_addon import _read_exr  # noqa: E402
+from test_lighting import _grow, _luminance, _render, lit_stage, paint  # noqa: E402
 
 SIZE = (160, 120)
 

@@ -7,7 +7,7 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from test_addon import _read_exr
+from test_addon import _read_exr  # noqa: E402
 
 SIZE = (128, 96)
 

@@ -10,7 +10,7 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from test_addon import _plate_camera_cube, _read_exr
+from test_addon import _plate_camera_cube, _read_exr  # noqa: E402
 
 
 def _perspective(scene, cam, size):

@@ -6,10 +6,10 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from test_addon import _plate_camera_cube, _raster_alpha_and_depth, _read_exr
+from test_addon import _plate_camera_cube, _raster_alpha_and_depth, _read_exr  # noqa: E402
 from test_compositor import BACKGROUND, BACKGROUND_SCENE, in_background  # noqa: E402
 
-from holo_addon.blender.objects import show_as_raster
+from holo_addon.blender.objects import show_as_raster  # noqa: E402
 
 
 def test_the_pass_depth_is_in_scene_units(empty_scene, tmp_path):

@@ -9,8 +9,17 @@ import sys
 import numpy as np
 import pytest
 
-from holo_core.job import (CameraRoute, Job, Output, Plan, PlateRoute, Radiance, Report, Result,
-                           pass_file)
+from holo_core.job import (
+    CameraRoute,
+    Job,
+    Output,
+    Plan,
+    PlateRoute,
+    Radiance,
+    Report,
+    Result,
+    pass_file,
+)
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.mesh import Mesh
 from holo_core.scene.plate import Plate, ViewingZone
@@ -48,10 +57,10 @@ def test_a_job_crosses_the_process_boundary_as_plain_data(tmp_path):
         plain = job.to_dict()
         kinds = set()
 
-        def walk(v):
+        def walk(v, kinds=kinds):
             kinds.add(type(v).__name__)
             for w in (v.values() if isinstance(v, dict) else v if isinstance(v, list) else ()):
-                walk(w)
+                walk(w, kinds)
         walk(plain)
         assert kinds <= {"dict", "list", "str", "int", "float", "bool", "NoneType", "ndarray"}, \
             kinds

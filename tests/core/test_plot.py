@@ -13,7 +13,7 @@ from holo_core.view import RenderResult
 matplotlib = pytest.importorskip("matplotlib")
 matplotlib.use("Agg")
 plot = pytest.importorskip("holo_core.plot")
-import matplotlib.pyplot as plt
+import matplotlib.pyplot as plt  # noqa: E402
 
 PITCH, N = 2e-6, 128
 

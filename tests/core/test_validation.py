@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 
+from holo_core import validate
 from holo_core.camera import render_camera
 from holo_core.io.acquired import read_acquired
 from holo_core.optics.pupil import Pupil
@@ -27,7 +28,6 @@ from holo_core.propagation import (
     tilt,
 )
 from holo_core.scene import Camera, Hologram, Mesh, Plate, look_at, sample_points
-from holo_core import validate
 from holo_core.validate import InputError
 
 GOOD = {"wavelength": 633e-9, "pitch": 1e-6, "distance": 1e-3}

@@ -128,7 +128,7 @@ def test_bad_settings_are_refused(rng):
         sideband(h, carrier=(0.0, 0.0))
     with pytest.raises(InputError, match="carrier must be within the Nyquist"):
         sideband(h, carrier=(1e6, 0.0))
-    with pytest.raises(InputError, match="radius must be <= |carrier|"):
+    with pytest.raises(InputError, match=r"radius must be <= \|carrier\|"):
         sideband(h, radius=50e3)
     with pytest.raises(InputError, match="carrier must be one of"):
         sideband(h, carrier="peak")

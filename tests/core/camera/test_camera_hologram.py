@@ -9,7 +9,6 @@ import pytest
 
 from holo_core.camera.optics import choose_optics
 from holo_core.camera.raster import depth_range, grid_indices, point_emitters, rasterize
-from holo_core.optics.raster import bin_rays
 from holo_core.camera.recording import (
     intensity_hologram,
     object_wave,
@@ -17,6 +16,7 @@ from holo_core.camera.recording import (
     reconstruct_object_wave,
 )
 from holo_core.camera.render import render_camera
+from holo_core.optics.raster import bin_rays
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.mesh import Mesh
 

@@ -141,7 +141,7 @@ def test_damaged_sets_are_refused_naming_the_file(tmp_path, rng):
         tiles_io.read_tiles(path)
     (tmp_path / "p_r0_c0.png").write_bytes(b"not a png")
     path.write_text(json.dumps(layout))
-    with pytest.raises(InputError, match="p_r0_c0.png: not a readable"):
+    with pytest.raises(InputError, match=r"p_r0_c0\.png: not a readable"):
         tiles_io.read_tiles(path)
 
 

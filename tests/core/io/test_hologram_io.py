@@ -117,7 +117,7 @@ def test_truncated_file(tmp_path, hologram):
     path = write_hologram(tmp_path / "h.exr", hologram)
     data = path.read_bytes()
     path.write_bytes(data[: len(data) // 2])
-    with pytest.raises(HologramFileError, match="h.exr"):
+    with pytest.raises(HologramFileError, match=r"h\.exr"):
         read_hologram(path)
 
 

@@ -112,7 +112,7 @@ def test_a_bias_pattern_gives_back_the_wave(tmp_path, rng):
     screen = slm.Display(name="film", resolution=(512, 512), pitch=4e-6, kind="amplitude",
                          bit_depth=16)
     path, t = slm.export(h, screen, tmp_path / "film.json", distance=DEPTH, fmt="tiff")
-    assert 0 <= t.min() and t.max() <= 1
+    assert t.min() >= 0 and t.max() <= 1
     back, layout = tiles_io.read_tiles(path)
     assert layout["encoding"] == "bias" and np.abs(back - t).max() <= 0.5 / 65535 + 1e-12
     u = slm.display_field(h, screen)

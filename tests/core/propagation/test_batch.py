@@ -106,7 +106,7 @@ def test_the_memory_of_a_batch_is_checked_first(monkeypatch):
 
 
 def test_field_checks_and_summary(rt):
-    with pytest.raises(InputError, match="wavelength must be in .*633 looks like nanometres"):
+    with pytest.raises(InputError, match=r"wavelength must be in .*633 looks like nanometres"):
         Field(samples=np.ones((4, 4)), wavelength=633, pitch=PITCH)
     with pytest.raises(InputError, match="wavelength must be a number"):
         Field(samples=np.ones((2, 4, 4)), wavelength=[LAM] * 3, pitch=PITCH)

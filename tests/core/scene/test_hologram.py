@@ -50,7 +50,7 @@ def test_a_hologram_reads_its_description_and_its_samples_give_the_shape():
     assert not h.info.keeps_object_wave
     wider = dataclasses.replace(h, intensity=np.ones((1, 4, 8), np.float32), band=0.25)
     assert wider.shape == (4, 8) and wider.band == 0.25 and h.band == 0.0
-    with pytest.raises(InputError, match="intensity must be .C, H, W. with C = 1"):
+    with pytest.raises(InputError, match=r"intensity must be \(C, H, W\) with C = 1"):
         Hologram(info=h.info, intensity=np.ones((2, 4, 6), np.float32))
 
 
@@ -72,7 +72,7 @@ def test_the_recorder_checks_the_description_before_it_records(monkeypatch):
     """A channel list that no hologram may hold is refused before any wave is summed."""
     summed = []
     monkeypatch.setattr("holo_core.plate.record.point_wave", lambda *a, **k: summed.append(1))
-    with pytest.raises(InputError, match="^channels must name each"):
+    with pytest.raises(InputError, match=r"^channels must name each"):
         record_points([[0, 0, -3e-3]], [[1.0]], shape=(32, 32), pitch=1e-6,
                       wavelengths=(633e-9,), channels=("R", "G"))
     assert summed == []
