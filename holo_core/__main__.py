@@ -65,7 +65,7 @@ def record(args) -> int:
                      "the hologram --resolution and --pitch give"))
     tiled = _is_store(args.output)
     if tiled:  # before the work: the store's path or URL, made absolute for the workers
-        from .io.tiles import check_output
+        from .io.files import check_output
         out = check_output(args.output).url
     else:
         out = _output(args.output, args.mesh, "")
@@ -163,7 +163,7 @@ def _is_store(path) -> bool:
 def _read(path):
     from .io.hologram import read_hologram
     if _is_store(path):
-        from .io.tiles import open_plate
+        from .io.tiled_wave import open_plate
         return open_plate(path)
     return read_hologram(path)
 

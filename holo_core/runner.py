@@ -35,7 +35,8 @@ from . import jobs, memory
 from .camera.render import render_camera
 from .io.hologram import write_hologram
 from .io.image import check_room, check_writable, read_exr
-from .io.tiles import TiledWave, read_plate, store_of
+from .io.plate_paths import read_plate, store_of
+from .io.tiled_wave import TiledWave
 from .io.view import write_view
 from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result
 from .plate.plan import CHANNELS

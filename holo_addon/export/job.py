@@ -22,7 +22,7 @@ import numpy as np
 
 from holo_core import __version__
 from holo_core.io.hologram import FORMAT_VERSION
-from holo_core.io.tiles import plate_current
+from holo_core.io.plate_paths import plate_current
 from holo_core.job import CameraRoute, Job, Output, PlateRoute, Radiance
 from holo_core.scene.camera import Camera
 from holo_core.scene.mesh import Mesh
