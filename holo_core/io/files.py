@@ -14,13 +14,18 @@ import json
 import os
 import shutil
 import socket
+import re
 import stat
+import time
 from pathlib import Path
 
 from .hologram import HologramFileError
 
 LOCK = "holo.lock"      # the recording lock's file (:mod:`holo_core.io.store_lock`)
 MAX_JSON = 2**20        # bytes of a zarr.json: the metadata is a few kB
+STALE_TEMPORARY = 3600  # [s] unchanged, another host's temporary file is a dead writer's
+# a temporary file as Files.write names it: .NAME.HOST.PID.N.tmp (NAME and HOST may hold dots)
+_TEMPORARY = re.compile(r"^\.(?P<name_host>.+)\.(?P<pid>\d+)\.\d+\.tmp$")
 _count = itertools.count()
 
 
@@ -41,6 +46,8 @@ class Files:
         if "://" in text:
             self.fs, self.root = _filesystem(text)
             self.local = None
+            if {"file", "local"} & set(_protocols(self.fs)):  # local://: a local folder
+                self.fs, self.local = None, Path(os.path.abspath(self.root))
         else:
             self.fs, self.root = None, text
             self.local = Path(os.path.abspath(text))
@@ -136,10 +143,19 @@ class Files:
         if limit is not None and actual > limit:
             raise self.fail(f"holds {actual} bytes, more than the {limit} it may", key)
 
-    def write(self, key, data: bytes) -> None:
+    def write(self, key, data: bytes, what: str = "") -> None:
         """``data`` as ``key``: on a local path a temporary file renamed into place (a rename
-        replaces a link there, never writes through it)."""
+        replaces a link there, never writes through it). A write that fails (a full disk, a
+        lost share) is :class:`StoreError` naming the store, ``what`` is written (a tile) and
+        ``key``, never the temporary file."""
+        try:
+            self._write(key, data)
+        except OSError as e:
+            raise self.fail(f"{what}cannot be written ({e.strerror or e})", key) from None
+
+    def _write(self, key, data: bytes) -> None:
         if self.local is None:
+            self.make_folders(key.rpartition("/")[0])
             self.fs.pipe_file(f"{self.root.rstrip('/')}/{key}", data)
             return
         path = self.local / key
@@ -156,6 +172,40 @@ class Files:
         except BaseException:
             tmp.unlink(missing_ok=True)
             raise
+
+    def make_folders(self, *keys) -> None:
+        """Make the folders ``keys`` of a store at a URL whose file system has folders (one
+        that has none, an object store, makes nothing): a file is put only into a folder that
+        exists there, as on a local path."""
+        if self.local is None:
+            for key in keys:
+                self.fs.makedirs(f"{self.root.rstrip('/')}/{key}".rstrip("/"), exist_ok=True)
+
+    def remove_dead_temporaries(self) -> int:
+        """Remove the temporary files of writers that died inside a write (a worker killed
+        mid-chunk), and return how many: those of a process of this host that is gone, and
+        those of another host unchanged for ``STALE_TEMPORARY`` seconds (a live writer's
+        file grows as it writes). Called under the store's lock, when a recording resumes."""
+        if self.local is None:
+            return 0  # written whole by the file system's client: no temporary files
+        host, now, removed = socket.gethostname(), time.time(), 0
+        for folder, _, names in os.walk(self.local):
+            for name in names:
+                found = _TEMPORARY.match(name)
+                if found is None:
+                    continue
+                path = os.path.join(folder, name)
+                try:
+                    if found["name_host"].endswith(f".{host}"):
+                        dead = not _alive(int(found["pid"]))
+                    else:
+                        dead = now - os.lstat(path).st_mtime > STALE_TEMPORARY
+                    if dead:
+                        os.unlink(path)
+                        removed += 1
+                except FileNotFoundError:  # renamed into place meanwhile
+                    continue
+        return removed
 
     def json(self, key) -> dict:
         """A ``zarr.json`` document: a JSON object of at most MAX_JSON bytes."""
@@ -195,6 +245,22 @@ def _kind(mode) -> str:
         if test(mode):
             return name
     return "an unknown kind of file"
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` of this host is running."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's: alive
+        return True
+    return True
+
+
+def _protocols(fs) -> tuple:
+    protocol = getattr(fs, "protocol", ())
+    return (protocol,) if isinstance(protocol, str) else tuple(protocol)
 
 
 def _filesystem(url):

@@ -35,16 +35,21 @@ plate :mod:`holo_core.io.tiled_wave`'s.
 from __future__ import annotations
 
 import json
+import logging
 import math
 from contextlib import contextmanager
 
 import numpy as np
 
 from ..scene.hologram import HologramInfo
+from ..validate import InputError
 from .digests import DONE, WAVE, chunk_sum, record_id, record_key, wave_key
 from .files import LOCK, Files, StoreError
 from .hologram import HologramFileError, info_of, metadata
+from .image import check_room
 from .store_lock import locked
+
+log = logging.getLogger(__name__)
 
 MIN_TILE, MAX_TILE = 64, 16384
 STORE_FORMAT = 2
@@ -143,9 +148,10 @@ class PlateStore:
             chunk = np.zeros((self.tile, self.tile), SAMPLE)
             chunk[:samples.shape[1], :samples.shape[2]] = samples[c]
             data = chunk.tobytes()
-            self.files.write(wave_key(c, i, j), data)
+            self.files.write(wave_key(c, i, j), data, what=f"tile ({i}, {j}) ")
             sums.append(chunk_sum(data))
-        self.files.write(record_key(i, j), np.array(sums, RECORD).tobytes())
+        self.files.write(record_key(i, j), np.array(sums, RECORD).tobytes(),
+                         what=f"tile ({i}, {j})'s record ")
 
 
 def read_store(url, *, files: Files | None = None, records=True) -> PlateStore:
@@ -209,15 +215,20 @@ def create_plate(files: Files, info: HologramInfo, tile: int, recording: dict) -
     recording ``recording``."""
     zarr = _zarr()
     shape, count = info.shape, len(info.wavelengths)
-    group = zarr.open_group(store=files.url, mode="a")
-    group.create_array(WAVE, shape=(count, *shape), chunks=(1, tile, tile), dtype="complex64",
-                       fill_value=0, compressors=None, dimension_names=("channel", "y", "x"))
-    group.create_array(DONE, shape=(*tile_grid(shape, tile), 1 + count),
-                       chunks=(1, 1, 1 + count), dtype="uint64", fill_value=0,
-                       compressors=None, dimension_names=("tile_row", "tile_col", "record"))
-    # last: a group without them is not a plate (and is removed by the call that made it)
-    group.attrs.update({"holo": metadata(info), "tile": tile, "store_format": STORE_FORMAT,
-                        "recording": recording})
+    try:
+        files.make_folders("", WAVE, DONE)  # Zarr puts its metadata there, as into a bucket
+        group = zarr.open_group(store=files.url, mode="a")
+        group.create_array(WAVE, shape=(count, *shape), chunks=(1, tile, tile),
+                           dtype="complex64", fill_value=0, compressors=None,
+                           dimension_names=("channel", "y", "x"))
+        group.create_array(DONE, shape=(*tile_grid(shape, tile), 1 + count),
+                           chunks=(1, 1, 1 + count), dtype="uint64", fill_value=0,
+                           compressors=None, dimension_names=("tile_row", "tile_col", "record"))
+        # last: a group without them is not a plate (and is removed by the call that made it)
+        group.attrs.update({"holo": metadata(info), "tile": tile,
+                            "store_format": STORE_FORMAT, "recording": recording})
+    except OSError as e:  # a full disk, a lost share: said as the store, not as Zarr's file
+        raise files.fail(f"its metadata cannot be written ({e.strerror or e})") from None
     return read_store(files.name, files=files)
 
 
@@ -252,21 +263,50 @@ def recording_into(files: Files, info: HologramInfo, tile: int, recording: dict,
     another recording's Holo store. Never another program's data: a folder or Zarr group that
     is not a Holo store is refused, even with ``overwrite``. If the block fails before a tile
     was written into a store this call made, the store is removed again: a recording that
-    never started leaves nothing behind."""
+    never started leaves nothing behind.
+
+    The store is judged under its lock: a recording that finds another writing it is told so
+    (never that the half-made store is another program's, to be removed). Resuming removes
+    the temporary files of writers killed inside a chunk, and checks the disk's room for the
+    tiles still to write before any is."""
     folder = files.exists()
-    existed = folder and not files.is_empty()
-    if existed:  # before the lock: the lock file is ours to add
-        files.check_tree()
-        _check_holo(files)
-    with locked(files, recording):
-        store, made = _open_or_make(files, info, tile, recording, overwrite)
+    with locked(files, recording) as made_lock:
         try:
+            if not files.is_empty():
+                files.check_tree()
+                _check_holo(files)
+        except StoreError:
+            if made_lock:  # nothing of ours is left in what is not a Holo store
+                _remove_folder(files, folder)
+            raise
+        store, made = _open_or_make(files, info, tile, recording, overwrite)
+        if not made:
+            removed = files.remove_dead_temporaries()
+            if removed:
+                log.info("%s: removed %d temporary file(s) of writers that died inside a "
+                         "write", files.name, removed)
+        try:
+            _check_room(store)
             yield store
         except BaseException:
             if made and _nothing_written(files):
                 files.remove_all()
                 _remove_folder(files, folder)
             raise
+
+
+def _check_room(store: PlateStore) -> None:
+    """:class:`StoreError` naming the store unless its disk holds the tiles still to write
+    (a store at a URL: its service says, when it is full)."""
+    if store.files.local is None:
+        return
+    missing = int((~store.written()).sum())
+    need = missing * (store.count * store.chunk_bytes + RECORD.itemsize * (1 + store.count))
+    try:
+        check_room([store.files.local / WAVE], need,
+                   f"the {missing} tiles still to write")
+    except InputError as e:
+        raise store.files.fail(str(e)) from None
 
 
 def _nothing_written(files: Files) -> bool:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import socket
@@ -18,7 +19,8 @@ def locked(files: Files, recording: dict):
     killed: a lock whose holder died is free, with no stale lock to remove. On a URL (no
     shared locks there): ``holo.lock`` is created when absent and removed at the end; one left
     by a killed recording is refused by name, to be removed by hand once that recording is
-    known to have stopped."""
+    known to have stopped. Yields whether this call made the lock file (a store refused under
+    the lock then leaves no file of ours behind)."""
     holder = json.dumps({"host": socket.gethostname(), "pid": os.getpid(),
                          "since": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
                          "recording": recording["digest"][:12]})
@@ -29,13 +31,20 @@ def locked(files: Files, recording: dict):
                              f"one is not running, remove {files.name}/{LOCK}", LOCK)
         files.write(LOCK, holder.encode())
         try:
-            yield
+            yield True
         finally:
             files.fs.rm(f"{files.root.rstrip('/')}/{LOCK}")
         return
     import fcntl
-    files.local.mkdir(parents=True, exist_ok=True)
-    fd = os.open(files.local / LOCK, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o666)
+    try:
+        files.local.mkdir(parents=True, exist_ok=True)
+        made = not os.path.lexists(files.local / LOCK)
+        fd = os.open(files.local / LOCK, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o666)
+    except OSError as e:
+        if e.errno == errno.ELOOP:
+            raise files.fail("is a symbolic link; a store's files are read, never followed",
+                             LOCK) from None
+        raise files.fail(f"cannot be locked ({e.strerror or e})", LOCK) from None
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -46,7 +55,7 @@ def locked(files: Files, recording: dict):
         os.ftruncate(fd, 0)
         os.pwrite(fd, holder.encode(), 0)
         try:
-            yield
+            yield made
         finally:
             os.ftruncate(fd, 0)  # free: no holder named
     finally:

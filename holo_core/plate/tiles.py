@@ -37,7 +37,7 @@ import numpy as np
 
 from .. import jobs, validate
 from ..io import digests, store
-from ..io.files import check_output
+from ..io.files import StoreError, check_output
 from ..io.tiled_wave import open_plate
 from ..opencl import get_runtime
 from ..scene.hologram import Hologram, HologramInfo
@@ -202,7 +202,19 @@ def _record_tiles(files, info, tile, recordings, *, overwrite, address, task, sh
                 futures = [client.submit(task, data, {**spec, "looks": [
                     k for k, missing in enumerate(lacking) if (i, j) in missing]},
                     int(i), int(j), pure=False) for i, j in todo]
-                _wait(client, futures, progress)
+                _wait(client, futures, progress, lost=lambda: _kept(files))
+
+
+def _kept(files) -> str:
+    """Each store's tiles written so far, as a recording that stops says them."""
+    said = []
+    for f in files:
+        try:
+            done = store.read_store(f.name, files=f).written()
+            said.append(f"{f.name} keeps {int(done.sum())} of {done.size} tiles")
+        except StoreError as e:
+            said.append(f"{f.name} cannot be read now ({str(e).split(': ', 1)[-1]})")
+    return "; ".join(said)
 
 
 def _recording(pos, colours, phases, seed, **sampling) -> dict:
@@ -334,7 +346,8 @@ def _still_ours(spec: dict, i: int, j: int) -> dict:
 def client_for(scheduler=None):
     """A Dask client: of the scheduler at ``scheduler`` (or ``DASK_SCHEDULER_ADDRESS``), else
     of a local cluster with one single-threaded worker process per core (each worker holds
-    its own OpenCL context); its dashboard's address is logged."""
+    its own OpenCL context), listening on 127.0.0.1 alone (``HOLO_DASK_HOST``: the host or
+    interface address to listen on instead); its dashboard's address is logged."""
     try:
         from distributed import Client, LocalCluster
     except ImportError:
@@ -345,8 +358,12 @@ def client_for(scheduler=None):
             log.info("Dask scheduler %s, dashboard %s", address, client.dashboard_link)
             yield client
         return
+    # the scheduler, the workers and the dashboard (a recording's tasks, logs and profiles)
+    # listen on loopback only, unless HOLO_DASK_HOST names the interface to publish them on
+    host = os.environ.get("HOLO_DASK_HOST", "").strip() or "127.0.0.1"
     with LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                      dashboard_address=":0") as cluster, Client(cluster) as client:
+                      host=host, dashboard_address=f"[{host}]:0" if ":" in host else
+                      f"{host}:0") as cluster, Client(cluster) as client:
         log.info("local Dask cluster, dashboard %s", client.dashboard_link)
         yield client
 
@@ -414,14 +431,31 @@ def _receive(sock, n) -> bytes | None:
     return data
 
 
-def _wait(client, futures, progress) -> None:
+class TasksLost(RuntimeError):
+    """A recording's tasks lost with the Dask workers or the scheduler that ran them; the
+    message says what was kept and how to go on."""
+
+
+def _wait(client, futures, progress, lost=None) -> None:
     """Each task's result as it finishes, with the fraction done to ``progress``; on a
-    cancellation or a failed task the rest are cancelled."""
-    from distributed import as_completed
+    cancellation or a failed task the rest are cancelled. Tasks lost with their workers or
+    the scheduler (Dask's ``CancelledError``, ``KilledWorker``, a closed connection) are
+    :class:`TasksLost` in ``lost()``'s words (the stores and the tiles they keep)."""
+    from concurrent.futures import CancelledError
+
+    from distributed import KilledWorker, as_completed
+    from distributed.comm import CommClosedError
     try:
         for n, future in enumerate(as_completed(futures), 1):
             future.result()  # a failed tile raises its error here
             jobs.report(progress, n, len(futures))
+    except (CancelledError, KilledWorker, CommClosedError) as e:
+        with contextlib.suppress(Exception):  # the scheduler may be gone with them
+            client.cancel(futures)
+        why = f"{type(e).__name__}: {e}".splitlines()[0][:200]
+        raise TasksLost(f"the Dask cluster running the recording was lost ({why}); "
+                        f"{lost() if lost else 'the tiles written are kept'}; run the same "
+                        f"recording again to resume it") from None
     except BaseException:
         client.cancel(futures)
         raise

@@ -20,10 +20,10 @@ from stores import cancel_after, settled  # noqa: E402
 
 from holo_core import jobs  # noqa: E402
 from holo_core.io import store  # noqa: E402
-from holo_core.io.tiled_wave import open_plate, tiles_done  # noqa: E402
 from holo_core.io.hologram import HologramFileError, metadata  # noqa: E402
+from holo_core.io.tiled_wave import open_plate, tiles_done  # noqa: E402
 from holo_core.plate.record import record_points  # noqa: E402
-from holo_core.plate.tiles import record_tiled  # noqa: E402
+from holo_core.plate.tiles import TasksLost, client_for, record_tiled  # noqa: E402
 from holo_core.plate.to_pupil import window_of  # noqa: E402
 from holo_core.validate import InputError  # noqa: E402
 
@@ -297,3 +297,55 @@ def test_the_command_line_says_each_in_one_line_before_the_work(tmp_path, endpoi
                                "--distance", 0.02)
     assert status == 2 and err.count("\n") == 1 and re.search(problem, err), (status, err)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file.zarr", "tri.obj"]
+
+
+# --- the cluster: lost in the project's words, listening on loopback alone -------------------
+
+def test_a_recording_whose_cluster_is_lost_names_the_store_the_tiles_kept_and_the_way_on(
+        scene, in_memory, scheduler, tmp_path):
+    """The scheduler gone after the first tile ended in Dask's ``FutureCancelledError``
+    alone; it is said with the store, the tiles it keeps and how to go on, and the same call
+    on another cluster resumes it."""
+    url = tmp_path / "p.zarr"
+    cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                       dashboard_address=None)
+    with cluster, pytest.raises(TasksLost) as lost:
+        _record(scene, url, cluster.scheduler_address, progress=lambda f: cluster.close())
+    kept = int(tiles_done(url).sum())
+    assert re.fullmatch(rf"the Dask cluster running the recording was lost \(.+\); {url} "
+                        rf"keeps {kept} of 16 tiles; run the same recording again to resume "
+                        rf"it", str(lost.value)), str(lost.value)
+    assert 1 <= kept < 16, kept
+    h = _record(scene, url, scheduler)
+    assert np.abs(h.object_wave[...] - in_memory.object_wave).max() <= \
+        1e-6 * np.abs(in_memory.object_wave).max()
+
+
+def _listening(process) -> set:
+    """The (address, port) pairs ``process`` and its children listen on (TCP)."""
+    psutil = pytest.importorskip("psutil")
+    return {tuple(c.laddr) for p in (process, *process.children(recursive=True))
+            for c in p.net_connections("tcp") if c.status == psutil.CONN_LISTEN}
+
+
+def _new_addresses(process, before) -> set:
+    return {ip for ip, _ in _listening(process) - before}
+
+
+def test_the_local_cluster_listens_on_loopback_alone(monkeypatch):
+    """The default cluster's dashboard listened on every interface (``:0``): anyone on the
+    studio's network could watch a recording's tasks, logs and profiles. Its scheduler,
+    workers and dashboard listen on 127.0.0.1 only, unless ``HOLO_DASK_HOST`` names
+    another."""
+    psutil = pytest.importorskip("psutil")
+    monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)
+    monkeypatch.delenv("HOLO_DASK_HOST", raising=False)
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    me = psutil.Process()
+    before = _listening(me)
+    with client_for() as client:
+        assert client.dashboard_link.startswith("http://127.0.0.1:"), client.dashboard_link
+        assert _new_addresses(me, before) == {"127.0.0.1"}, _listening(me) - before
+    monkeypatch.setenv("HOLO_DASK_HOST", "0.0.0.0")  # named: published as asked
+    with client_for():
+        assert "0.0.0.0" in _new_addresses(me, before), _listening(me) - before
