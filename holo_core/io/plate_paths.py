@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..scene.hologram import Hologram
-from .hologram import HologramFileError, read_hologram
+from .hologram import HologramFileError, read_hologram, recording_of
 from .store import read_store
 from .tiled_wave import open_plate
 
@@ -30,16 +30,20 @@ def plate_files(path) -> Path:
     return store_of(path) if not path.is_file() and store_of(path).is_dir() else path
 
 
-def plate_current(path) -> bool:
+def plate_current(path, recording: str = "") -> bool:
     """Whether the plate file at ``path``, or the tiled store beside it, is there whole (a
-    store's every tile written by its recording; a cancelled one resumes)."""
+    store's every tile written by its recording; a cancelled one resumes) and, given the
+    ``recording`` it must be, names that one: another recording's plate under its name (a
+    folder synced from another shot, a file copied by hand) is not current, it is recorded
+    again."""
     path = Path(path)
     if path.is_file():
-        return True
+        return not recording or recording_of(path) == recording
     if not store_of(path).is_dir():
         return False
     try:
         store = read_store(str(store_of(path)))
     except HologramFileError:  # a StoreError too
         return False
-    return not store.bad and bool(store.written().all()) and not store.foreign().any()
+    return not store.bad and bool(store.written().all()) and not store.foreign().any() and \
+        (not recording or store.info.recording == recording)

@@ -114,7 +114,7 @@ def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
                        zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
                        encoding="complex", tile=None, scheduler=None, overwrite=False,
                        progress: jobs.Progress = None, dashboard=None,
-                       budget=(None, None)) -> list[Hologram]:
+                       budget=(None, None), recording="") -> list[Hologram]:
     """The looks ``codes`` of one plate of ``meshes`` (with occlusion, against the carrier
     converging on its zone: :func:`holo_core.plate.record.record_plate`, whose other
     arguments these are; look l coded by codes[l], or where that is None of seed + l), each
@@ -131,7 +131,8 @@ def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
     amplitudes, the tile and the emitters found (their positions and visibility): only the
     same recording resumes into it, and a look recorded alone resumes into a store made with
     others and the other way round.
-    ``scheduler``, ``overwrite``, ``progress``, ``dashboard``: as for :func:`record_tiled`.
+    ``scheduler``, ``overwrite``, ``progress``, ``dashboard``: as for :func:`record_tiled`;
+    ``recording``: the digest the stores' plates carry (the name the caller knows them by).
     """
     if tile is None:
         tile = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
@@ -146,7 +147,8 @@ def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
                         wavelength=wavelength, depth=depth, seed=seed, codes=codes,
                         encoding=encoding, tile=tile, budget=budget)
     recordings = [_plate_recording(job, tile, look) for look in range(job.looks)]
-    _record_tiles(files, job.info, tile, recordings, overwrite=overwrite, address=address,
+    info = replace(job.info, recording=validate.digest("recording", recording))
+    _record_tiles(files, info, tile, recordings, overwrite=overwrite, address=address,
                   task=record_plate_tile, shared=replace(job, meshes=()), progress=progress,
                   dashboard=dashboard)
     return [open_plate(f.name) for f in files]
