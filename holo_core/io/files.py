@@ -20,6 +20,7 @@ import time
 from pathlib import Path
 
 from .hologram import HologramFileError
+from .image import check_writable, process_alive
 
 LOCK = "holo.lock"      # the recording lock's file (:mod:`holo_core.io.store_lock`)
 MAX_JSON = 2**20        # bytes of a zarr.json: the metadata is a few kB
@@ -197,7 +198,7 @@ class Files:
                 path = os.path.join(folder, name)
                 try:
                     if found["name_host"].endswith(f".{host}"):
-                        dead = not _alive(int(found["pid"]))
+                        dead = not process_alive(int(found["pid"]))
                     else:
                         dead = now - os.lstat(path).st_mtime > STALE_TEMPORARY
                     if dead:
@@ -247,17 +248,6 @@ def _kind(mode) -> str:
     return "an unknown kind of file"
 
 
-def _alive(pid: int) -> bool:
-    """Whether process ``pid`` of this host is running."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # another user's: alive
-        return True
-    return True
-
-
 def _protocols(fs) -> tuple:
     protocol = getattr(fs, "protocol", ())
     return (protocol,) if isinstance(protocol, str) else tuple(protocol)
@@ -279,7 +269,6 @@ def check_output(url) -> Files:
     absolute, since workers elsewhere resolve a relative one in their own folder) whose folder
     takes new files, or a URL whose protocol is installed and reachable from other processes
     (not ``memory://``, which lives in one process). :class:`StoreError` naming it."""
-    from .image import check_writable
     files = Files(url)
     if files.local is None:
         if files.name.split("://", 1)[0] == "memory":

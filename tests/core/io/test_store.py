@@ -16,6 +16,7 @@ import time
 
 import numpy as np
 import pytest
+from disks import fill
 
 zarr = pytest.importorskip("zarr")
 
@@ -128,20 +129,6 @@ def test_another_hosts_temporary_file_is_removed_once_stale(tmp_path):
     assert list(url.rglob("*.tmp")) == [fresh]
 
 
-@pytest.fixture
-def small_disk(tmp_path):
-    """A 1 MiB file system of its own (a tmpfs: the test must run as root)."""
-    mount = tmp_path / "disk"
-    mount.mkdir()
-    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs",
-                                            str(mount)], capture_output=True).returncode:
-        pytest.skip("mounting a small file system needs root")
-    try:
-        yield mount
-    finally:
-        subprocess.run(["umount", str(mount)], check=True)
-
-
 def test_a_store_beyond_the_disks_room_is_refused_before_the_first_tile(small_disk):
     """2 x 3 tiles of 64² complex64 need 192 KiB: a disk with less free is said before any
     tile, naming the store, and the store this call made is removed again."""
@@ -160,14 +147,7 @@ def test_a_disk_that_fills_mid_way_names_the_store_and_the_tile(small_disk):
 
     def fill_then_write(plate, i, j, part):  # another program takes the room left
         if (i, j) == (1, 1):
-            fd = os.open(small_disk / "filler", os.O_WRONLY | os.O_CREAT)
-            try:
-                while os.write(fd, b"\0" * 4096):
-                    pass
-            except OSError:  # the disk is full
-                pass
-            finally:
-                os.close(fd)
+            fill(small_disk)
         real(plate, i, j, part)
     with pytest.MonkeyPatch.context() as m:
         m.setattr(store.PlateStore, "write_tile", fill_then_write)
