@@ -268,12 +268,19 @@ def check_output(url) -> Files:
     """The store ``url`` a recording will write, checked before the work: a path (made
     absolute, since workers elsewhere resolve a relative one in their own folder) whose folder
     takes new files, or a URL whose protocol is installed and reachable from other processes
-    (not ``memory://``, which lives in one process). :class:`StoreError` naming it."""
+    (not ``memory://``, which lives in one process) and whose file system answers now (its
+    store folder made where it has folders). :class:`StoreError` naming it."""
     files = Files(url)
     if files.local is None:
         if files.name.split("://", 1)[0] == "memory":
             raise files.fail("a memory:// store lives in one process; the recording's "
                              "workers cannot reach it: record to a path or a shared URL")
+        try:
+            files.make_folders("")
+            files.fs.exists(files.root)
+        except Exception as e:  # noqa: BLE001 -- each file system fails its own way
+            raise files.fail(f"cannot be reached or written ({type(e).__name__}: "
+                             f"{e})"[:300]) from None
         return files
     if os.path.lexists(files.local) and not files.local.is_dir():
         raise files.fail("is a file, not a store folder: record to another path")

@@ -12,7 +12,7 @@ from fsspec.implementations.local import LocalFileSystem  # noqa: E402
 
 from holo_core.io import store  # noqa: E402
 from holo_core.io.digests import digest_of  # noqa: E402
-from holo_core.io.files import Files, check_output  # noqa: E402
+from holo_core.io.files import Files, StoreError, check_output  # noqa: E402
 from holo_core.io.tiled_wave import open_plate  # noqa: E402
 from holo_core.scene.hologram import HologramInfo  # noqa: E402
 
@@ -51,7 +51,7 @@ class _Folders(LocalFileSystem):
 
     @classmethod
     def _strip_protocol(cls, path):
-        return LocalFileSystem._strip_protocol(str(path).replace("holo-folders://", "", 1))
+        return LocalFileSystem._strip_protocol(str(path).replace(f"{cls.protocol[0]}://", "", 1))
 
 
 def test_a_file_system_with_folders_is_recorded_into(tmp_path):
@@ -61,3 +61,18 @@ def test_a_file_system_with_folders_is_recorded_into(tmp_path):
     record(url)
     assert not (tmp_path / "p.zarr" / "holo.lock").exists()  # a URL's lock: gone at the end
     assert np.array_equal(open_plate(url).object_wave[...], WAVE)
+
+
+class _Unreachable(_Folders):
+    protocol = ("holo-unreachable",)
+
+    def makedirs(self, path, exist_ok=False):
+        raise ConnectionRefusedError(111, "Connection refused")
+
+
+def test_a_file_system_that_does_not_answer_is_refused_before_the_work(tmp_path):
+    fsspec.register_implementation("holo-unreachable", _Unreachable, clobber=True)
+    url = f"holo-unreachable://{tmp_path}/p.zarr"
+    with pytest.raises(StoreError, match=rf"^{url}: cannot be reached or written "
+                                         rf"\(ConnectionRefusedError: .*Connection refused"):
+        check_output(url)
