@@ -12,9 +12,9 @@ import errno
 import itertools
 import json
 import os
+import re
 import shutil
 import socket
-import re
 import stat
 import time
 from pathlib import Path

@@ -455,7 +455,7 @@ def _wait(client, futures, progress, lost=None) -> None:
         with contextlib.suppress(Exception):  # the scheduler may be gone with them
             client.cancel(futures)
         why = f"{type(e).__name__}: {e}".splitlines()[0][:200]
-        raise TasksLost(f"the Dask cluster running the recording was lost ({why}); "
+        raise TasksLost(f"the recording lost its Dask workers or scheduler ({why}); "
                         f"{lost() if lost else 'the tiles written are kept'}; run the same "
                         f"recording again to resume it") from None
     except BaseException:
