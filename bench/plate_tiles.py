@@ -32,7 +32,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "bench")]
 from gigapixel import timed  # noqa: E402
 from shot import PLATE, camera, cpu, scene  # noqa: E402
 
-from holo_core.io.tiles import open_plate  # noqa: E402
+from holo_core.io.tiled_wave import open_plate  # noqa: E402
 from holo_core.plate.record import record_plate  # noqa: E402
 from holo_core.scene.plate import Plate, ViewingZone  # noqa: E402
 

@@ -42,7 +42,7 @@ from plate_scene import cube, sphere  # noqa: E402
 from holo_core import worker  # noqa: E402
 from holo_core.camera.render import render_camera  # noqa: E402
 from holo_core.io.image import write_png  # noqa: E402
-from holo_core.io.tiles import read_plate  # noqa: E402
+from holo_core.io.plate_paths import read_plate  # noqa: E402
 from holo_core.job import CameraRoute, Job, Output, PlateRoute  # noqa: E402
 from holo_core.plate.plan import plan, plan_view  # noqa: E402
 from holo_core.plate.record import record_looks  # noqa: E402

@@ -65,7 +65,7 @@ def record(args) -> int:
                      "the hologram --resolution and --pitch give"))
     tiled = _is_store(args.output)
     if tiled:  # before the work: the store's path or URL, made absolute for the workers
-        from .io.tiles import check_output
+        from .io.files import check_output
         out = check_output(args.output).url
     else:
         out = _output(args.output, args.mesh, "")
@@ -105,6 +105,8 @@ def _record_zone(args, mesh, out, tiled) -> int:
     plate = Plate(matrix_world=np.eye(4), width=size[0], height=size[1], zone=zone)
     p = plan_plate(size, bounds, zone=zone, pixel_angle=zone.pixel, looks=1)
     print(f"plate of {p.describe()}")
+    if not tiled:  # a store checks its own room, for the tiles it still lacks
+        _check_room(out, p.disk_bytes(), p.shape)
     code = look_code(*args.look) if args.look else None
     common = {"plate": plate, "camera": cam, "code": code, "progress": _progress_bar()}
     if tiled:
@@ -137,6 +139,8 @@ def _record_points(args, mesh, out, tiled) -> int:
     print(f"{len(pos)} point emitters ({spacing:.3g} m apart) -> {shape[1]}x{shape[0]} "
           f"hologram, pitch {pitch:.3g} m, wavelengths "
           f"{[round(w * 1e9, 3) for w in wavelengths]} nm")
+    if not tiled:  # float32 H beside the complex64 object wave, per wavelength
+        _check_room(out, (4 + 8) * len(wavelengths) * shape[0] * shape[1], shape)
     if tiled:  # a complex plate in tiles, on Dask (the object wave: no reference)
         from .plate.tiles import DEFAULT_TILE, record_tiled
         method = "direct" if args.method == "auto" else args.method
@@ -155,6 +159,12 @@ def _record_points(args, mesh, out, tiled) -> int:
     return 0
 
 
+def _check_room(out, nbytes, shape) -> None:
+    """Refuse, before the recording, a hologram file the disk has no room for."""
+    from .io.image import check_room
+    check_room([out], nbytes, f"the hologram ({shape[1]} x {shape[0]} samples) would")
+
+
 def _is_store(path) -> bool:
     """A tiled plate's store (a Zarr folder or an fsspec URL), not an EXR file."""
     return str(path).rstrip("/").endswith(".zarr") or "://" in str(path)
@@ -163,7 +173,7 @@ def _is_store(path) -> bool:
 def _read(path):
     from .io.hologram import read_hologram
     if _is_store(path):
-        from .io.tiles import open_plate
+        from .io.tiled_wave import open_plate
         return open_plate(path)
     return read_hologram(path)
 

@@ -101,6 +101,10 @@ class PlateRoute(_Route):
     wavelength : the recording's wavelength [m], or None (chosen by the planner)
     composition : 'mean' or 'max' of the iterations' views
     opacity_threshold : the view's coverage taken as opaque, in [0, 1]
+    recording : the digest of the recording the holograms are (the name the caller knows
+        them by), written into them when they are recorded and checked when they are read:
+        another recording's plate under their names is refused, never viewed; '' (none: an
+        imported plate, read as it is)
     supersample, exposure, seed : as every route (the seed: the recording's random phases; a
         supersampling below the view's speckle Nyquist rate is said in the log, not raised)
     """
@@ -114,6 +118,7 @@ class PlateRoute(_Route):
     wavelength: float | None = None
     composition: str = "mean"
     opacity_threshold: float = 0.5
+    recording: str = ""
 
     def __post_init__(self):
         _Route.__post_init__(self)
@@ -141,6 +146,7 @@ class PlateRoute(_Route):
             raise InputError(f"opacity_threshold must be in [0, 1]; got "
                              f"{self.opacity_threshold!r}")
         _set(self, "opacity_threshold", threshold)
+        validate.digest("recording", self.recording)
 
 
 ROUTES = {"camera": CameraRoute, "plate": PlateRoute}

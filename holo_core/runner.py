@@ -33,9 +33,10 @@ import numpy as np
 
 from . import jobs, memory
 from .camera.render import render_camera
-from .io.hologram import write_hologram
+from .io.hologram import HologramFileError, write_hologram
 from .io.image import check_room, check_writable, read_exr
-from .io.tiles import TiledWave, read_plate, store_of
+from .io.plate_paths import plate_files, read_plate, store_of
+from .io.tiled_wave import TiledWave
 from .io.view import write_view
 from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result
 from .plate.plan import CHANNELS
@@ -111,13 +112,14 @@ def _plate(job: Job, progress, kept: KeptPlates):
             holos = record_looks(meshes, looks=n, plate=route.plate, camera=job.camera,
                                  wavelength=route.wavelength, seed=route.seed,
                                  budget=(route.memory_budget, route.disk_budget), urls=urls,
-                                 scheduler=route.scheduler,
+                                 scheduler=route.scheduler, recording=route.recording,
                                  progress=jobs.scaled(progress, 0, record_share))
         else:  # bare points: independent seeds
             holos = [_record_look(job, i, jobs.scaled(
                 progress, record_share * i / n, record_share * (i + 1) / n)) for i in range(n)]
     else:
         holos = kept.read(route.holograms)
+        _check_recording(route, holos)
     view = None
     if job.output.render:
         _note_supersampling(route.supersample, nyquist_supersample(holos[0], job.camera))
@@ -135,6 +137,18 @@ def _plate(job: Job, progress, kept: KeptPlates):
             write_hologram(path, h)
     kept.hold(route.holograms, holos)
     return view, route.holograms
+
+
+def _check_recording(route: PlateRoute, holos) -> None:
+    """:class:`HologramFileError` naming the file unless each plate read is the recording the
+    route names: a plate replaced by another recording's valid plate (a folder synced from
+    another shot, a file copied by hand, a restored backup) is refused, never viewed."""
+    for path, h in zip(route.holograms, holos):
+        if route.recording and h.recording != route.recording:
+            held = f"recording {h.recording}" if h.recording else "no named recording"
+            raise HologramFileError(f"{plate_files(path)}: holds {held}, not {route.recording} "
+                                    f"(this scene's): another recording's plate under this "
+                                    f"name is never rendered; record the plate again")
 
 
 class KeptPlates:

@@ -209,6 +209,14 @@ def integer(name: str, value, minimum: int | None = None, maximum: int | None = 
     return v
 
 
+def digest(name: str, value) -> str:
+    """A recording's digest: up to 64 lowercase hexadecimal digits, or '' (none known)."""
+    if not isinstance(value, str) or len(value) > 64 or value.strip("0123456789abcdef"):
+        raise InputError(f"{name} must be the recording's digest (up to 64 hexadecimal digits) "
+                         f"or ''; got {value!r}"[:200])
+    return value
+
+
 def choice(name: str, value, options: tuple) -> str:
     """One of the strings ``options``."""
     if not isinstance(value, str) or value not in options:

@@ -6,7 +6,7 @@ import time
 import numpy as np
 
 from holo_core import jobs
-from holo_core.io import tiles as store
+from holo_core.io.tiled_wave import tiles_done
 
 
 def cancel_after(n):
@@ -23,8 +23,8 @@ def cancel_after(n):
 def settled(url) -> np.ndarray:
     """The store's written tiles once they stop changing (the tasks running when a recording
     was cancelled end their write)."""
-    done, before = store.tiles_done(url), None
+    done, before = tiles_done(url), None
     while before is None or not np.array_equal(done, before):
         time.sleep(1.0)
-        before, done = done, store.tiles_done(url)
+        before, done = done, tiles_done(url)
     return done

@@ -279,7 +279,8 @@ def _pristine_store(folder):
     """A valid tiled store of 2 x 3 tiles of 64² (two channels, the last column of tiles cut
     short) written through the store's own functions, and the samples it holds."""
     if "store" not in _CACHE:
-        from holo_core.io import tiles as store
+        from holo_core.io import store
+        from holo_core.io.files import Files
         from holo_core.plate.record import record_points
         from holo_core.plate.tiles import _recording
         from holo_core.scene.hologram import HologramInfo
@@ -293,7 +294,7 @@ def _pristine_store(folder):
                             bounds=h.bounds)
         recording = _recording(pos, cols, None, 0, method="direct", shape=shape, pitch=8e-6,
                                band=None, wavelengths=lams, tile=tile)
-        with store.recording_into(store.Files(url), info, tile, recording) as plate:
+        with store.recording_into(Files(url), info, tile, recording) as plate:
             for i, j in np.ndindex(*store.tile_grid(shape, tile)):
                 r0, r1, c0, c1 = store.tile_window(shape, tile, i, j)
                 plate.write_tile(i, j, h.object_wave[:, r0:r1, c0:c1])
@@ -369,7 +370,7 @@ def store_case(rng, case, folder, hostile=True):
             STORE_MUTATIONS[int(rng.integers(len(STORE_MUTATIONS)))](target, rng)
 
     def call():
-        from holo_core.io.tiles import open_plate
+        from holo_core.io.tiled_wave import open_plate
         back = named(url, lambda u: open_plate(u).object_wave[...])
         assert np.array_equal(back, wave), "a damaged store read back other samples"
     call.label = f"case {case}"

@@ -22,7 +22,7 @@ import numpy as np
 
 from holo_core import __version__
 from holo_core.io.hologram import FORMAT_VERSION
-from holo_core.io.tiles import plate_current
+from holo_core.io.plate_paths import plate_current
 from holo_core.job import CameraRoute, Job, Output, PlateRoute, Radiance
 from holo_core.scene.camera import Camera
 from holo_core.scene.mesh import Mesh
@@ -77,8 +77,8 @@ class Settings:
                            supersample=self.supersample, exposure=self.exposure,
                            seed=self.seed)
 
-    def plate_route(self, plate, holograms, record: bool) -> PlateRoute:
-        return PlateRoute(plate=plate, holograms=holograms, record=record,
+    def plate_route(self, plate, holograms, record: bool, recording: str = "") -> PlateRoute:
+        return PlateRoute(plate=plate, holograms=holograms, record=record, recording=recording,
                           memory_budget=self.memory_budget, disk_budget=self.disk_budget,
                           wavelength=self.wavelength,
                           supersample=self.supersample, composition=self.composition,
@@ -158,8 +158,11 @@ def read(scene, depsgraph, *, render=True, preview=1) -> Prepared:
         # a plate is a scene asset: its digest leaves the camera out (its zone is in it)
         fingerprint = digest(data, *settings.recording(), lighting, camera=False)
         paths = hologram_paths(out, data.plate_name, settings.iterations, fingerprint)
-        route = settings.plate_route(data.plate, paths,
-                                     record=not all(plate_current(p) for p in paths))
+        # a file there under this name but of another recording is recorded again, never
+        # rendered as this scene's
+        route = settings.plate_route(data.plate, paths, recording=fingerprint,
+                                     record=not all(plate_current(p, fingerprint)
+                                                    for p in paths))
     frame, region, unit = scene.frame_current, data.region, data.unit
     animated = lit and getattr(scene.cycles, "use_animated_seed", False)
     kinds = mode != "CAMERA"  # a camera hologram renders points and triangles alike

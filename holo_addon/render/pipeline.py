@@ -22,7 +22,7 @@ import numpy as np
 
 from holo_core import jobs, worker
 from holo_core.io.image import exr_attribute
-from holo_core.io.tiles import read_plate, store_of
+from holo_core.io.plate_paths import read_plate, store_of
 from holo_core.io.view import copy_view, write_view
 from holo_core.job import PlateRoute, Result, pass_file
 from holo_core.view import BACKGROUND_DEPTH, RenderResult

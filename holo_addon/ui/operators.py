@@ -15,7 +15,7 @@ import logging
 import bpy
 
 from holo_core.io.hologram import HologramFileError
-from holo_core.io.tiles import plate_files
+from holo_core.io.plate_paths import plate_files
 from holo_core.job import Report, Result
 from holo_core.worker import WorkerError
 

@@ -27,7 +27,7 @@ from .. import __version__, memory, validate
 from ..scene.hologram import Hologram, HologramInfo
 from ..scene.plate import Carrier, ViewingZone
 from ..validate import InputError
-from .image import read_exr, write_exr
+from .image import exr_attribute, read_exr, write_exr
 
 FORMAT = "holo-hologram"
 FORMAT_VERSION = 5  # 5: a complex hologram's samples as (real, imaginary) pairs, ``c<c>.O``
@@ -46,7 +46,8 @@ FILE_KEYS = {"wavelengths": "wavelengths_m", "pitch": "pitch_m", "shape": "size_
              "reference_azimuth": "reference.azimuth_rad",
              "reference_amplitudes": "reference.amplitudes", "bounds": "bounds_m",
              "band": "band_sin", "point_density": "point_density_per_m2",
-             "zone": "viewing_zone", "keeps_object_wave": "object_wave", "carrier": "carrier"}
+             "zone": "viewing_zone", "keeps_object_wave": "object_wave", "carrier": "carrier",
+             "recording": "recording"}
 
 
 def metadata(h: Hologram | HologramInfo) -> dict:
@@ -68,6 +69,7 @@ def metadata(h: Hologram | HologramInfo) -> dict:
         "carrier": None if info.carrier is None else {
             "centre_m": list(info.carrier.centre), "origin_m": list(info.carrier.origin),
             "row_pitch_m": info.carrier.row_pitch},
+        "recording": info.recording,
     }
 
 
@@ -168,6 +170,20 @@ def _complex(parts) -> np.ndarray:
 ROWS_A_BLOCK = 512
 
 
+def recording_of(path) -> str | None:
+    """The recording the hologram file at ``path`` names in its header ('' where it names
+    none: an earlier or imported file), read without the EXR library and without its
+    samples; None when the file or its metadata cannot be read."""
+    header = exr_attribute(path, "holo")
+    try:
+        meta = json.loads(header.decode("utf-8")) if header is not None else None
+    except (UnicodeDecodeError, ValueError, RecursionError):
+        return None
+    if not isinstance(meta, dict) or not isinstance(meta.get("recording", ""), str):
+        return None
+    return meta.get("recording", "")
+
+
 def info_of(path, text: str) -> HologramInfo:
     """The description of the hologram at ``path`` from the JSON ``text`` of its ``holo``
     metadata, checked (:class:`HologramFileError` naming the file and the field)."""
@@ -206,7 +222,8 @@ def _described(path: Path, header) -> HologramInfo:
                                 f"is holo {__version__}, which reads versions "
                                 f"{', '.join(map(str, READS))})"[:400])
     meta = {"band_sin": 0.0, "channels": [], "point_density_per_m2": 0.0,
-            "encoding": "intensity", "viewing_zone": None, "carrier": None, **meta}
+            "encoding": "intensity", "viewing_zone": None, "carrier": None, "recording": "",
+            **meta}
     schema = _Schema(path, meta)
     ref = meta.get("reference")
     if not isinstance(ref, dict):
@@ -231,6 +248,7 @@ def _described(path: Path, header) -> HologramInfo:
         "keeps_object_wave": schema.kind("object_wave", bool, "true or false"),
         "zone": _zone(path, meta["viewing_zone"]),
         "carrier": _carrier(path, meta["carrier"]),
+        "recording": schema.kind("recording", str, "the recording's digest (a string)"),
     }
     fields["shape"] = tuple(int(n) for n in fields["shape"])
     try:

@@ -12,6 +12,7 @@ that folder.
 
 from __future__ import annotations
 
+import errno
 import fcntl
 import itertools
 import os
@@ -59,10 +60,32 @@ def atomic_paths(*paths):
                 for tmp, t in zip(temps, targets):
                     os.replace(tmp, t)
             _flush_folder(targets[0].parent)
-    except BaseException:
+    except BaseException as e:
         for tmp in temps:
             tmp.unlink(missing_ok=True)
+        failed = _failed_write(e, temps, targets)
+        if failed is not None:
+            raise failed from None
         raise
+
+
+def _failed_write(e: BaseException, temps, targets) -> InputError | None:
+    """The project's error for a write into ``temps`` that failed (a full disk, a quota, a
+    lost share), naming the target the user asked for, never the hidden temporary file; None
+    for another failure (the caller's own error, a cancellation)."""
+    named = [t for tmp, t in zip(temps, targets) if str(tmp) in str(e) or
+             str(tmp) == getattr(e, "filename", None)]
+    disk = isinstance(e, OSError) and e.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG,
+                                                   errno.EROFS, errno.EIO)
+    if not named and not disk:
+        return None
+    why = e.strerror if isinstance(e, OSError) and e.strerror else str(e)
+    for tmp, t in zip(temps, targets):
+        why = why.replace(str(tmp), str(t))
+    full = " (the disk is full: free some room there, or write to another folder)" if \
+        "No space left" in why or (isinstance(e, OSError) and e.errno == errno.ENOSPC) else ""
+    return InputError(f"{', '.join(map(str, named or targets))}: cannot be written "
+                      f"({why.rstrip('.')}){full}"[:600])
 
 
 @contextmanager
@@ -89,7 +112,7 @@ def remove_stale_temps(folder) -> list[Path]:
             pid = int(tmp.name.split(TEMP_TAG, 1)[1].split(".")[1])
         except (IndexError, ValueError):
             continue
-        if pid != os.getpid() and not _alive(pid):
+        if pid != os.getpid() and not process_alive(pid):
             tmp.unlink(missing_ok=True)
             removed.append(tmp)
     return removed
@@ -233,7 +256,8 @@ def _folder_lock(folder: Path):
         os.close(fd)
 
 
-def _alive(pid: int) -> bool:
+def process_alive(pid: int) -> bool:
+    """Whether process ``pid`` of this host is running (another user's counts)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:

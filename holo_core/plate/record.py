@@ -473,7 +473,7 @@ def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
                  zone: ViewingZone | None = None, zone_margin=DEFAULT_ZONE_MARGIN,
                  wavelength=None, depth=True, seed=0, budget=(None, None), urls=None,
                  tile=None, scheduler=None, overwrite=False, progress: jobs.Progress = None,
-                 dashboard=None) -> list[Hologram]:
+                 dashboard=None, recording="") -> list[Hologram]:
     """``looks`` looks of one plate (:func:`record_plate`'s arguments), recorded in memory in
     one pass: the coded looks of ``seed`` (:func:`look_code`) where ``looks`` allows, else
     seeds ``seed``, ``seed`` + 1, …. The looks differ only in their emitters' phases, so one
@@ -482,25 +482,29 @@ def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
     one after the other took 53 s). ``budget`` covers all the looks held together. ``urls``
     (one a look): each look tile by tile into its own store, every tile's looks summed at
     once (:func:`holo_core.plate.tiles.record_looks_tiled`; ``tile``, ``scheduler``,
-    ``overwrite``, ``dashboard`` as for :func:`record_plate`)."""
+    ``overwrite``, ``dashboard`` as for :func:`record_plate`). ``recording``: the digest the
+    looks carry in their description and their stores (the name the caller knows them by:
+    :attr:`holo_core.scene.hologram.HologramInfo.recording`)."""
     looks = validate.integer("looks", looks, 1)
     return _record_codes(meshes, codes=tuple(look_code(k, looks) for k in range(looks)),
                          urls=urls, plate=plate, camera=camera, zone=zone,
                          zone_margin=zone_margin, wavelength=wavelength, depth=depth, seed=seed,
                          budget=budget, tile=tile, scheduler=scheduler, overwrite=overwrite,
-                         progress=progress, dashboard=dashboard)
+                         progress=progress, dashboard=dashboard, recording=recording)
 
 
 def _record_codes(meshes, *, codes, urls, tile, scheduler, overwrite, dashboard, progress,
-                  **settings) -> list[Hologram]:
+                  recording="", **settings) -> list[Hologram]:
     """The looks ``codes`` of a plate (``settings``: :func:`prepare_plate`'s other arguments)
     in one pass: in memory, or with ``urls`` tile by tile, a store a look."""
     if urls is not None:
         from .tiles import record_looks_tiled
         return record_looks_tiled(meshes, urls=list(urls), codes=codes, tile=tile,
                                   scheduler=scheduler, overwrite=overwrite, progress=progress,
-                                  dashboard=dashboard, **settings)
-    return prepare_plate(meshes, codes=codes, **settings).record(progress)
+                                  dashboard=dashboard, recording=recording, **settings)
+    holos = prepare_plate(meshes, codes=codes, **settings).record(progress)
+    return [Hologram(info=h.info, intensity=h.intensity, object_wave=h.object_wave,
+                     recording=recording) for h in holos] if recording else holos
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)

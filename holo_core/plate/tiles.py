@@ -1,6 +1,6 @@
 """Gigapixel plates: recorded tile by tile, out of core, as Dask tasks.
 
-The plate's samples are written tile by tile into a tiled store (:mod:`holo_core.io.tiles`),
+The plate's samples are written tile by tile into a tiled store (:mod:`holo_core.io.store`),
 so no process ever holds the whole plate: a task computes one tile, writes it and its record.
 Every tile is the whole plate's recording cut to its rows and columns (the same sums, the same
 sample positions, the same phases), so a tiled plate equals the plate recorded in memory.
@@ -36,7 +36,9 @@ from dataclasses import replace
 import numpy as np
 
 from .. import jobs, validate
-from ..io import tiles as store
+from ..io import digests, store
+from ..io.files import StoreError, check_output
+from ..io.tiled_wave import open_plate
 from ..opencl import get_runtime
 from ..scene.hologram import Hologram, HologramInfo
 from ..scene.plate import DEFAULT_ZONE_MARGIN
@@ -58,7 +60,7 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
                  channels=(), zone=None, method="direct", scheduler=None, overwrite=False,
                  progress: jobs.Progress = None, dashboard=None) -> Hologram:
     """Record the complex plate of point emitters into the tiled store at ``url`` and return
-    it opened (:func:`holo_core.io.tiles.open_plate`).
+    it opened (:func:`holo_core.io.tiled_wave.open_plate`).
 
     positions, colours, wavelengths, phases, seed, band, method
         As for :func:`holo_core.plate.record.record_points` (positions [m] in the plate's
@@ -105,19 +107,19 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
                            pitch=pitch, band=band, wavelengths=wavelengths, tile=tile)
     _record_tiles(files, info, tile, [recording], overwrite=overwrite, address=address,
                   task=record_tile, shared=(pos, amp), progress=progress, dashboard=dashboard)
-    return store.open_plate(files[0].name)
+    return open_plate(files[0].name)
 
 
 def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
                        zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
                        encoding="complex", tile=None, scheduler=None, overwrite=False,
                        progress: jobs.Progress = None, dashboard=None,
-                       budget=(None, None)) -> list[Hologram]:
+                       budget=(None, None), recording="") -> list[Hologram]:
     """The looks ``codes`` of one plate of ``meshes`` (with occlusion, against the carrier
     converging on its zone: :func:`holo_core.plate.record.record_plate`, whose other
     arguments these are; look l coded by codes[l], or where that is None of seed + l), each
     into its own tiled store at ``urls`` [l], returned opened
-    (:func:`holo_core.io.tiles.open_plate`).
+    (:func:`holo_core.io.tiled_wave.open_plate`).
 
     The emitters and their visibility tables are found once, here, and scattered once to the
     workers; each task sums one tile (``tile`` samples a side, a multiple of 256: the
@@ -129,7 +131,8 @@ def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
     amplitudes, the tile and the emitters found (their positions and visibility): only the
     same recording resumes into it, and a look recorded alone resumes into a store made with
     others and the other way round.
-    ``scheduler``, ``overwrite``, ``progress``, ``dashboard``: as for :func:`record_tiled`.
+    ``scheduler``, ``overwrite``, ``progress``, ``dashboard``: as for :func:`record_tiled`;
+    ``recording``: the digest the stores' plates carry (the name the caller knows them by).
     """
     if tile is None:
         tile = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
@@ -144,10 +147,11 @@ def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
                         wavelength=wavelength, depth=depth, seed=seed, codes=codes,
                         encoding=encoding, tile=tile, budget=budget)
     recordings = [_plate_recording(job, tile, look) for look in range(job.looks)]
-    _record_tiles(files, job.info, tile, recordings, overwrite=overwrite, address=address,
+    info = replace(job.info, recording=validate.digest("recording", recording))
+    _record_tiles(files, info, tile, recordings, overwrite=overwrite, address=address,
                   task=record_plate_tile, shared=replace(job, meshes=()), progress=progress,
                   dashboard=dashboard)
-    return [store.open_plate(f.name) for f in files]
+    return [open_plate(f.name) for f in files]
 
 
 def _tile(tile, step) -> int:
@@ -168,7 +172,7 @@ def _output_and_scheduler(urls, scheduler):
     """(the stores' files, the scheduler's address or None), each checked before the work:
     the outputs' problems first, then a scheduler that cannot serve (before a store is
     touched)."""
-    files = [store.check_output(url) for url in urls]
+    files = [check_output(url) for url in urls]
     if len({f.name for f in files}) != len(files):
         raise InputError(f"each look needs a store of its own; got {[f.name for f in files]}")
     address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
@@ -200,49 +204,61 @@ def _record_tiles(files, info, tile, recordings, *, overwrite, address, task, sh
                 futures = [client.submit(task, data, {**spec, "looks": [
                     k for k, missing in enumerate(lacking) if (i, j) in missing]},
                     int(i), int(j), pure=False) for i, j in todo]
-                _wait(client, futures, progress)
+                _wait(client, futures, progress, lost=lambda: _kept(files))
+
+
+def _kept(files) -> str:
+    """Each store's tiles written so far, as a recording that stops says them."""
+    said = []
+    for f in files:
+        try:
+            done = store.read_store(f.name, files=f).written()
+            said.append(f"{f.name} keeps {int(done.sum())} of {done.size} tiles")
+        except StoreError as e:
+            said.append(f"{f.name} cannot be read now ({str(e).split(': ', 1)[-1]})")
+    return "; ".join(said)
 
 
 def _recording(pos, colours, phases, seed, **sampling) -> dict:
     """What a store records, its digest and the parts a message names when two differ."""
     cols = np.asarray(colours, np.float64).reshape(len(pos), -1)
-    parts = {"emitters": len(pos), "geometry": store.array_digest(pos),
-             "colours": store.array_digest(cols),
+    parts = {"emitters": len(pos), "geometry": digests.array_digest(pos),
+             "colours": digests.array_digest(cols),
              "phases": "from the seed" if phases is None
-             else store.array_digest(np.asarray(phases, np.float64)),
+             else digests.array_digest(np.asarray(phases, np.float64)),
              "seed": int(seed) if phases is None else None, "method": sampling.pop("method"),
-             "sampling": store.array_digest(np.array(
+             "sampling": digests.array_digest(np.array(
                  [*sampling["shape"], sampling["pitch"], sampling["band"] or 0.0,
                   sampling["tile"], *sampling["wavelengths"]], np.float64)),
              "encoding": "complex"}
-    return {"digest": store.digest_of(parts), "parts": parts}
+    return {"digest": digests.digest_of(parts), "parts": parts}
 
 
 def _plate_recording(job: PlateRecording, tile: int, look: int = 0) -> dict:
     """What the store of look ``look`` of a plate of meshes records: its digest and the parts
     a message names when two differ (the look's own seed, code and amplitudes: the same
     whether it is recorded alone or with other looks)."""
-    meshes = store.digest_of({str(n): [None if a is None else store.array_digest(a)
+    meshes = digests.digest_of({str(n): [None if a is None else digests.array_digest(a)
                                        for a in (m.vertices, m.triangles, m.colours, m.uvs,
                                                  m.texture)]
                               for n, m in enumerate(job.meshes)})
     z, p = job.info.zone, job.plan
-    emitters = [store.array_digest(np.ascontiguousarray(a))  # the look's own amplitudes
+    emitters = [digests.array_digest(np.ascontiguousarray(a))  # the look's own amplitudes
                 for (_, em), columns in zip(job.groups, job.look_columns(look))
                 for a in (em.position, em.amplitude[:, columns], em.visibility, em.table,
                           em.grid)]
     parts = {"method": "zone", "meshes": meshes[:16],
-             "zone": store.array_digest(np.array([*z.centre, *z.half_extents, z.pupil,
+             "zone": digests.array_digest(np.array([*z.centre, *z.half_extents, z.pupil,
                                                   z.pixel], np.float64)),
-             "plan": store.array_digest(np.array(
+             "plan": digests.array_digest(np.array(
                  [*p.shape, p.pitch, p.row_pitch, *p.origin, *job.info.wavelengths, *p.band,
                   p.spacing, tile], np.float64)),
              "seed": job.look_seed(look),
              "code": None if job.codes[look] is None else list(job.codes[look]),
              "emitters": len(job.groups[0][1].position),
-             "emitters_found": store.digest_of({"groups": emitters})[:16],
+             "emitters_found": digests.digest_of({"groups": emitters})[:16],
              "encoding": "complex"}
-    return {"digest": store.digest_of(parts), "parts": parts}
+    return {"digest": digests.digest_of(parts), "parts": parts}
 
 
 def _to_record(plate) -> list[tuple[int, int]]:
@@ -332,7 +348,8 @@ def _still_ours(spec: dict, i: int, j: int) -> dict:
 def client_for(scheduler=None):
     """A Dask client: of the scheduler at ``scheduler`` (or ``DASK_SCHEDULER_ADDRESS``), else
     of a local cluster with one single-threaded worker process per core (each worker holds
-    its own OpenCL context); its dashboard's address is logged."""
+    its own OpenCL context), listening on 127.0.0.1 alone (``HOLO_DASK_HOST``: the host or
+    interface address to listen on instead); its dashboard's address is logged."""
     try:
         from distributed import Client, LocalCluster
     except ImportError:
@@ -343,8 +360,12 @@ def client_for(scheduler=None):
             log.info("Dask scheduler %s, dashboard %s", address, client.dashboard_link)
             yield client
         return
+    # the scheduler, the workers and the dashboard (a recording's tasks, logs and profiles)
+    # listen on loopback only, unless HOLO_DASK_HOST names the interface to publish them on
+    host = os.environ.get("HOLO_DASK_HOST", "").strip() or "127.0.0.1"
     with LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                      dashboard_address=":0") as cluster, Client(cluster) as client:
+                      host=host, dashboard_address=f"[{host}]:0" if ":" in host else
+                      f"{host}:0") as cluster, Client(cluster) as client:
         log.info("local Dask cluster, dashboard %s", client.dashboard_link)
         yield client
 
@@ -412,14 +433,31 @@ def _receive(sock, n) -> bytes | None:
     return data
 
 
-def _wait(client, futures, progress) -> None:
+class TasksLost(RuntimeError):
+    """A recording's tasks lost with the Dask workers or the scheduler that ran them; the
+    message says what was kept and how to go on."""
+
+
+def _wait(client, futures, progress, lost=None) -> None:
     """Each task's result as it finishes, with the fraction done to ``progress``; on a
-    cancellation or a failed task the rest are cancelled."""
-    from distributed import as_completed
+    cancellation or a failed task the rest are cancelled. Tasks lost with their workers or
+    the scheduler (Dask's ``CancelledError``, ``KilledWorker``, a closed connection) are
+    :class:`TasksLost` in ``lost()``'s words (the stores and the tiles they keep)."""
+    from concurrent.futures import CancelledError
+
+    from distributed import KilledWorker, as_completed
+    from distributed.comm import CommClosedError
     try:
         for n, future in enumerate(as_completed(futures), 1):
             future.result()  # a failed tile raises its error here
             jobs.report(progress, n, len(futures))
+    except (CancelledError, KilledWorker, CommClosedError) as e:
+        with contextlib.suppress(Exception):  # the scheduler may be gone with them
+            client.cancel(futures)
+        why = f"{type(e).__name__}: {e}".splitlines()[0][:200]
+        raise TasksLost(f"the recording lost its Dask workers or scheduler ({why}); "
+                        f"{lost() if lost else 'the tiles written are kept'}; run the same "
+                        f"recording again to resume it") from None
     except BaseException:
         client.cancel(futures)
         raise

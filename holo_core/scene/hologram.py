@@ -45,6 +45,10 @@ class HologramInfo:
         against (the object wave is samples·exp(−ik|x − carrier.centre|), sample (0, 0) at
         carrier.origin; ``band`` is then the samples' band around it), or None (the samples
         are the object wave, centred on the plate)
+    recording : the digest of the recording the samples are (what they were recorded from:
+        the emitters, the plate, its zone and looks; the name a plate file is known by), so
+        that a reader expecting one recording refuses another's under its name; '' (unknown:
+        an acquired, imported or earlier hologram)
     """
 
     wavelengths: tuple
@@ -62,6 +66,7 @@ class HologramInfo:
     point_density: float = 0.0
     zone: ViewingZone | None = None
     carrier: Carrier | None = None
+    recording: str = ""
 
     def __post_init__(self):
         wavelengths = self.wavelengths
@@ -86,6 +91,7 @@ class HologramInfo:
                              f"{self.keeps_object_wave!r}")
         self._set("keeps_object_wave", bool(kept))
         self._check_channels()
+        validate.digest("recording", self.recording)
         self._set("plate", validate.rigid_pose("plate", self.plate))
         self._check_optics()
         if self.zone is not None and not isinstance(self.zone, ViewingZone):
@@ -173,7 +179,7 @@ class HologramInfo:
 # the fields a hologram's description holds beside its shape (which its samples give)
 DESCRIPTION = ("wavelengths", "pitch", "encoding", "reference_angle", "reference_azimuth",
                "reference_amplitudes", "plate", "bounds", "band", "channels", "point_density",
-               "zone", "carrier")
+               "zone", "carrier", "recording")
 
 
 def _described(name):
@@ -250,6 +256,7 @@ class Hologram:
     point_density = _described("point_density")
     zone = _described("zone")
     carrier = _described("carrier")
+    recording = _described("recording")
     row_pitch = _described("row_pitch")
     shape = _described("shape")
     size = _described("size")

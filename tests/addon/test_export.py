@@ -262,3 +262,28 @@ def test_a_state_recorded_before_is_not_recorded_again(empty_scene, monkeypatch)
     scene.render.resolution_percentage = 50
     assert bpy.ops.holo.record_hologram() == {"FINISHED"}
     assert recorded[-1] is False, recorded
+
+
+def test_a_plate_file_replaced_by_another_scenes_is_recorded_again(empty_scene):
+    """A plate file replaced by another scene's valid plate under its name (a farm folder
+    synced from another shot) was rendered as this scene's. The file carries the recording
+    it is: one that names another is not current, so the job records the plate again, and
+    the job names the recording the worker must find."""
+    import json
+
+    from holo_core.io.hologram import recording_of
+    from holo_core.io.image import read_exr, write_exr
+    scene = empty_scene
+    _plate_camera_cube(scene)
+    scene.holo.mode = "PLATE"
+    scene.render.resolution_x, scene.render.resolution_y = 32, 24
+    assert bpy.ops.holo.record_hologram() == {"FINISHED"}
+    prepared = _prepare(scene)
+    path = prepared.holograms[0]
+    assert not prepared.records and recording_of(path) == prepared.fingerprint
+    assert prepared.job.route.recording == prepared.fingerprint
+    header, channels = read_exr(path)
+    other = "f" * 16 if prepared.fingerprint != "f" * 16 else "e" * 16
+    write_exr(path, channels, holo=json.dumps({**json.loads(header["holo"]),
+                                               "recording": other}))
+    assert _prepare(scene).records, "another recording's plate under this name was current"

@@ -112,3 +112,25 @@ def test_cli_output_is_checked_before_the_work(tmp_path, point_hologram, capsys,
                                  "--resolution", 16, 16)
     assert status == 2 and re.search(problem, err) and err.count("\n") == 1, err
     assert out == "" and sorted(tmp_path.iterdir()) == before
+
+
+@pytest.mark.parametrize("method", ["zone", "direct"])
+def test_a_hologram_beyond_the_disks_room_is_refused_before_the_recording(
+        small_disk, capsys, monkeypatch, method):
+    """The command line checked the output folder's writability, not its room: a full disk
+    was found after the whole recording. A file the disk cannot hold is one line, before the
+    work, with the room it needs and the room there is."""
+    import holo_core.plate.record
+    (small_disk / "q.obj").write_text(CUBE_OBJ)
+
+    def never(*_, **__):
+        raise AssertionError("the recording ran before the disk's room was checked")
+    monkeypatch.setattr(holo_core.plate.record, "record_plate", never)
+    monkeypatch.setattr(holo_core.plate.record, "record_points", never)
+    status, _, err = run_cli(capsys, "record", small_disk / "q.obj", "-o", small_disk / "h.exr",
+                             "--method", method, "--distance", "0.02",
+                             *(["--resolution", "1024", "1024"] if method == "direct" else []))
+    assert status == 2, err
+    assert re.search(rf"the hologram \(\d+ x \d+ samples\) would need [\d.e-]+ GiB on disk, and "
+                     rf"{small_disk} has [\d.e-]+ GiB free", err), err
+    assert not (small_disk / "h.exr").exists()

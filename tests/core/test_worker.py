@@ -341,3 +341,34 @@ def test_the_core_s_warnings_reach_the_report(tmp_path):
                                   route=dataclasses.replace(made.route, record=False))
     said = [w for w in runner.run(stopped).report.warnings if "resolves" in w]
     assert len(said) == 1 and "where a sharp view resolves 0.5" in said[0], said
+
+
+def test_a_plate_replaced_by_another_scenes_valid_plate_is_refused_never_rendered(tmp_path):
+    """A plate file replaced by another scene's valid plate under its name (a farm folder
+    synced from another shot, a file copied by hand, a restored backup) was rendered as this
+    scene's, exit 0. A plate carries the digest of the recording it is; the worker reading it
+    for another recording refuses it, naming the file, and writes no pass."""
+    from holo_core.io.hologram import recording_of
+    ours, theirs = "a1" * 8, "b2" * 8
+
+    def named(j, recording, **route):
+        return dataclasses.replace(j, route=dataclasses.replace(j.route, recording=recording,
+                                                                **route))
+    mine = named(job(tmp_path / "mine", render=False), ours)
+    other = named(dataclasses.replace(job(tmp_path / "other", render=False),
+                                      points=(cube(0.25),)), theirs)
+    for j in (mine, other):
+        runner.run(j)
+    plate = mine.route.holograms[0]
+    assert recording_of(plate) == ours and recording_of(other.route.holograms[0]) == theirs
+    again = named(mine, ours, record=False)
+    again = dataclasses.replace(again, output=dataclasses.replace(again.output, render=True))
+    assert runner.run(again).pass_path.is_file()  # its own plate: rendered
+    plate.write_bytes(other.route.holograms[0].read_bytes())
+    frame2 = dataclasses.replace(again, output=dataclasses.replace(again.output, frame=2))
+    with pytest.raises(worker.WorkerError, match=rf"{plate}: holds recording {theirs}, not "
+                                                 rf"{ours} \(this scene's\): another "
+                                                 rf"recording's plate under this name is never "
+                                                 rf"rendered"):
+        worker.run(frame2)
+    assert not frame2.output.pass_path.exists()

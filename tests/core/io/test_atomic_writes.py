@@ -10,10 +10,12 @@ import time
 
 import numpy as np
 import pytest
+from disks import fill
 
 from holo_core.io import image as image_files
 from holo_core.io.hologram import read_hologram, write_hologram
-from holo_core.io.image import TEMP_TAG, check_writable, remove_stale_temps, write_atomic, write_png
+from holo_core.io.image import (TEMP_TAG, check_writable, remove_stale_temps, write_atomic,
+                                write_exr, write_png)
 from holo_core.io.view import write_view
 from holo_core.scene.hologram import Hologram
 from holo_core.validate import InputError
@@ -197,3 +199,19 @@ def test_a_views_png_preview_shows_what_its_exr_shows_over_black(tmp_path):
     expect = image_files.srgb(rgb * alpha[..., None])
     assert np.abs(shown - expect).max() <= 0.5 / 255 + 1e-9, (shown, expect)
     assert not shown[alpha == 0].any()
+
+
+def test_a_disk_that_fills_mid_write_names_the_file_asked_for_not_the_temporary(small_disk):
+    """A full disk met inside a write was OpenEXR's or the system's error naming the hidden
+    temporary file; it is the project's error naming the file asked for, and nothing of the
+    write is left."""
+    fill(small_disk)
+    rng = np.random.default_rng(0)
+    for path, write in ((small_disk / "v.exr", lambda p: write_exr(p, {"R": rng.random(
+            (256, 256), np.float32)})), (small_disk / "v.png", lambda p: write_png(
+            p, rng.random((256, 256, 3))))):
+        with pytest.raises(InputError, match=rf"^{path}: cannot be written \(.*No space left "
+                                             rf"on device\) \(the disk is full") as e:
+            write(path)
+        assert "holo-tmp" not in str(e.value), str(e.value)
+    assert sorted(p.name for p in small_disk.iterdir()) == ["filler"]

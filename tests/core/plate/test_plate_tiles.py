@@ -24,8 +24,11 @@ zarr = pytest.importorskip("zarr")
 from stores import cancel_after, settled  # noqa: E402
 
 from holo_core import jobs  # noqa: E402
-from holo_core.io import tiles as store  # noqa: E402
+from holo_core.io import store  # noqa: E402
+from holo_core.io.files import LOCK, StoreError  # noqa: E402
 from holo_core.io.hologram import metadata, read_hologram  # noqa: E402
+from holo_core.io.plate_paths import plate_current, read_plate  # noqa: E402
+from holo_core.io.tiled_wave import open_plate, tiles_done  # noqa: E402
 from holo_core.plate.carrier import physical_field, window  # noqa: E402
 from holo_core.plate.record import record_plate  # noqa: E402
 from holo_core.plate.view import camera_in_plate, carrier_window, render_view  # noqa: E402
@@ -54,7 +57,7 @@ def recorded(scheduler, tmp_path_factory):
 def _files(url):
     """Each written file of the store and its modification time [ns]."""
     return {p: p.stat().st_mtime_ns for p in Path(url).rglob("*")
-            if p.is_file() and p.name != store.LOCK and "zarr.json" not in p.name}
+            if p.is_file() and p.name != LOCK and "zarr.json" not in p.name}
 
 
 def test_a_tiled_plate_of_meshes_equals_the_plate_recorded_in_memory(in_memory, recorded):
@@ -67,7 +70,7 @@ def test_a_tiled_plate_of_meshes_equals_the_plate_recorded_in_memory(in_memory, 
     assert h.carrier == in_memory.carrier and h.zone.centre == in_memory.zone.centre
     group = zarr.open_group(str(url), mode="r")
     assert group["object_wave"].chunks == (1, TILE, TILE)
-    assert store.tiles_done(url).shape == (2, 3) and store.tiles_done(url).all()
+    assert tiles_done(url).shape == (2, 3) and tiles_done(url).all()
     meta = dict(group.attrs["holo"])
     assert meta == metadata(in_memory), "one schema, the carrier included"
 
@@ -91,7 +94,7 @@ def test_a_view_of_the_store_reads_its_window_only_and_equals_the_view_in_memory
     url, _ = recorded
     reads = _Reads(monkeypatch)
     cam = camera("left", SCALE)
-    view = render_view(store.open_plate(url), cam, supersample=2)
+    view = render_view(open_plate(url), cam, supersample=2)
     rotation, position = camera_in_plate(in_memory, cam)
     r0, r1, c0, c1 = carrier_window(in_memory, cam, rotation, position, cam.aperture_diameter)
     overlapped = {(i, j) for i in range(r0 // TILE, (r1 - 1) // TILE + 1)
@@ -160,7 +163,7 @@ def test_a_killed_recording_resumes(in_memory, scheduler, tmp_path):
             os.killpg(proc.pid, signal.SIGKILL)
         proc.wait()
         proc.stderr.close()
-    done = store.tiles_done(url)
+    done = tiles_done(url)
     assert 1 <= done.sum() < done.size, done
     before = _files(url)
     h = _record(url, scheduler)
@@ -189,8 +192,8 @@ def _a_tile_written(url) -> bool:
     """Whether the store at ``url`` holds a written tile yet: a store still being made (its
     group there, its metadata not yet: not a plate) holds none."""
     try:
-        return bool(store.tiles_done(url).any())
-    except store.StoreError:
+        return bool(tiles_done(url).any())
+    except StoreError:
         return False
 
 
@@ -252,7 +255,7 @@ def test_the_command_line_records_a_mesh_as_a_carrier_plate(scheduler, tmp_path,
     status, _, err = run_cli(capsys, "record", tmp_path / "sq.obj", "-o", tmp_path / "p.exr",
                              *common)
     assert status == 0, err
-    tiled, whole = store.open_plate(tmp_path / "p.zarr"), read_hologram(tmp_path / "p.exr")
+    tiled, whole = open_plate(tmp_path / "p.zarr"), read_hologram(tmp_path / "p.exr")
     assert tiled.carrier is not None and tiled.carrier == whole.carrier
     assert np.array_equal(tiled.object_wave[...], whole.object_wave)
     status, _, err = run_cli(capsys, "render", tmp_path / "p.zarr", "-o", tmp_path / "v.exr",
@@ -283,7 +286,7 @@ def test_the_physical_field_of_a_store_reads_only_the_tiles_under_its_region(in_
     reads = _Reads(monkeypatch)
     x0, y0, x1, y1 = window(in_memory)
     region = (x0, y0, x0 + 0.2 * (x1 - x0), y0 + 0.2 * (y1 - y0))
-    tiled = physical_field(store.open_plate(url), 2, region=region)
+    tiled = physical_field(open_plate(url), 2, region=region)
     assert reads.tiles == {(0, 0)}
     assert np.array_equal(tiled.samples, physical_field(in_memory, 2, region=region).samples)
 
@@ -333,8 +336,8 @@ def test_the_pipeline_records_a_plate_beyond_memory_in_tiles(scheduler, tmp_path
     whole = runner.run(job(tmp_path / "a"))
     monkeypatch.setattr(runner, "needs_tiles", lambda job, planned=None: True)
     tiled = runner.run(job(tmp_path / "b"))
-    assert not (tmp_path / "b" / "h.exr").exists() and store.plate_current(tmp_path / "b" / "h.exr")
-    assert np.array_equal(store.read_plate(tmp_path / "b" / "h.exr").object_wave[...],
+    assert not (tmp_path / "b" / "h.exr").exists() and plate_current(tmp_path / "b" / "h.exr")
+    assert np.array_equal(read_plate(tmp_path / "b" / "h.exr").object_wave[...],
                           read_hologram(tmp_path / "a" / "h.exr").object_wave)
     assert np.array_equal(tiled.view.rgb, whole.view.rgb)
     again = runner.run(job(tmp_path / "b", record=False))

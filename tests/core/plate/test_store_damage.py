@@ -18,8 +18,10 @@ import pytest
 
 zarr = pytest.importorskip("zarr")
 
-from holo_core.io import tiles as store  # noqa: E402
+from holo_core.io import store  # noqa: E402
+from holo_core.io.files import LOCK, Files, check_output  # noqa: E402
 from holo_core.io.hologram import HologramFileError  # noqa: E402
+from holo_core.io.tiled_wave import open_plate  # noqa: E402
 from holo_core.plate import tiles as recorder  # noqa: E402
 from holo_core.plate.record import record_points  # noqa: E402
 from holo_core.scene.hologram import HologramInfo  # noqa: E402
@@ -38,10 +40,10 @@ def scene(seed=3):
     return positions, rng.uniform(0.2, 1, (n, len(WAVELENGTHS)))
 
 
-def write_store(url, positions, colours, *, seed=0, overwrite=False):
+def write_store(url, positions, colours, *, seed=0, overwrite=False, checked=check_output):
     """The plate of ``positions`` and ``colours`` written tile by tile into the store ``url``
-    as the recording's tasks write it."""
-    files = store.check_output(url)
+    (its files as ``checked`` gives them) as the recording's tasks write it."""
+    files = checked(url)
     h = record_points(positions, colours, shape=SHAPE, pitch=PITCH, wavelengths=WAVELENGTHS,
                       method="direct", seed=seed)
     info = HologramInfo(shape=SHAPE, encoding="complex", wavelengths=WAVELENGTHS, pitch=PITCH,
@@ -75,14 +77,14 @@ def read_all(url):
 
 
 def open_plate_read(url):
-    h = store.open_plate(url)
+    h = open_plate(url)
     return h.object_wave[...]
 
 
 def test_a_whole_store_reads_back_as_recorded(pristine):
     url, h = pristine
     assert np.array_equal(open_plate_read(url), h.object_wave)
-    back = store.open_plate(url).object_wave
+    back = open_plate(url).object_wave
     assert np.array_equal(back[1, 70:140, -90:], h.object_wave[1, 70:140, -90:])
     assert np.array_equal(back[0, 5], h.object_wave[0, 5])
     assert np.array_equal(back[:, ::7, 3], h.object_wave[:, ::7, 3])
@@ -357,7 +359,7 @@ def test_a_second_recording_into_a_locked_store_is_refused_naming_the_first(copy
     0. The first holds the store's lock (an flock, released by the system when its holder
     ends, killed or not); the second is refused, naming the holder."""
     import fcntl
-    fd = os.open(copy / store.LOCK, os.O_RDWR)
+    fd = os.open(copy / LOCK, os.O_RDWR)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)
         os.pwrite(fd, json.dumps({"host": "h1", "pid": 4242, "since": "now",
@@ -373,10 +375,10 @@ def test_a_second_recording_into_a_locked_store_is_refused_naming_the_first(copy
 def test_a_lock_left_by_a_killed_recording_is_free(copy):
     """A holder killed with SIGKILL leaves its lock file naming it, but no lock: the next
     recording takes it."""
-    (copy / store.LOCK).write_text(json.dumps({"host": "h1", "pid": 999999, "since": "then",
-                                               "recording": "abc"}))
+    (copy / LOCK).write_text(json.dumps({"host": "h1", "pid": 999999, "since": "then",
+                                         "recording": "abc"}))
     write_store(copy, *scene())
-    assert (copy / store.LOCK).read_text() == ""
+    assert (copy / LOCK).read_text() == ""
 
 
 def test_what_the_lock_and_the_store_hold_are_plain_files(pristine):
@@ -409,9 +411,9 @@ def test_a_store_at_a_url_is_written_read_and_locked_as_a_folder_is():
     positions, colours = scene()
     try:
         h = _write_at_url(url, positions, colours)
-        assert np.array_equal(store.open_plate(url).object_wave[...], h.object_wave)
-        files = store.Files(url)
-        files.write(store.LOCK, b'{"host": "h2", "pid": 7, "since": "now", "recording": "x"}')
+        assert np.array_equal(open_plate(url).object_wave[...], h.object_wave)
+        files = Files(url)
+        files.write(LOCK, b'{"host": "h2", "pid": 7, "since": "now", "recording": "x"}')
         with pytest.raises(HologramFileError, match=r"another recording holds its lock \(host "
                                                     r"h2, process 7.*remove "
                                                     r"memory://holo-test/p.zarr/holo.lock"):
@@ -426,12 +428,7 @@ def test_a_store_at_a_url_is_written_read_and_locked_as_a_folder_is():
 def _write_at_url(url, positions, colours):
     """:func:`write_store` past the output check (which refuses memory:// for a recording's
     workers in other processes)."""
-    real = store.check_output
-    try:
-        store.check_output = store.Files
-        return write_store(url, positions, colours)
-    finally:
-        store.check_output = real
+    return write_store(url, positions, colours, checked=Files)
 
 
 @pytest.mark.parametrize("key", [CHUNK, "zarr.json"])

@@ -19,10 +19,11 @@ zarr = pytest.importorskip("zarr")
 from stores import cancel_after, settled  # noqa: E402
 
 from holo_core import jobs  # noqa: E402
-from holo_core.io import tiles as store  # noqa: E402
+from holo_core.io import store  # noqa: E402
 from holo_core.io.hologram import HologramFileError, metadata  # noqa: E402
+from holo_core.io.tiled_wave import open_plate, tiles_done  # noqa: E402
 from holo_core.plate.record import record_points  # noqa: E402
-from holo_core.plate.tiles import record_tiled  # noqa: E402
+from holo_core.plate.tiles import TasksLost, client_for, record_tiled  # noqa: E402
 from holo_core.plate.to_pupil import window_of  # noqa: E402
 from holo_core.validate import InputError  # noqa: E402
 
@@ -58,7 +59,7 @@ def test_a_tiled_plate_equals_the_plate_recorded_in_memory(scene, in_memory, sch
     assert err <= 1e-6, err
     group = zarr.open_group(str(tmp_path / "p.zarr"), mode="r")
     assert group["object_wave"].chunks == (1, TILE, TILE)
-    assert store.tiles_done(tmp_path / "p.zarr").all()
+    assert tiles_done(tmp_path / "p.zarr").all()
     meta = dict(group.attrs["holo"])
     assert meta["encoding"] == "complex" and meta["size_px"] == list(SHAPE)
     assert set(meta) == set(metadata(in_memory)), "one schema for both stores"
@@ -82,7 +83,7 @@ def test_a_cancelled_recording_resumes_and_a_half_written_tile_is_written_again(
     assert 4 <= done.sum() < done.size, done.sum()
     with pytest.raises(HologramFileError, match=r"tiles are not written yet \(tile \(\d, \d\) "
                                                 r"first\); resume"):
-        store.open_plate(url)
+        open_plate(url)
     # a tile killed mid-write: samples partly there, its flag unset
     i, j = map(int, np.argwhere(~done)[0])
     r0, r1, c0, c1 = store.tile_window(SHAPE, TILE, i, j)
@@ -137,7 +138,7 @@ def test_another_plate_in_the_store_is_refused_and_bad_tiles_are_named(scene, sc
         **json.loads(json.dumps(dict(zarr.open_group(str(url), mode="r").attrs["holo"]))),
         "pitch_m": -1}
     with pytest.raises(HologramFileError, match="pitch_m"):
-        store.open_plate(url)
+        open_plate(url)
 
 
 def test_the_command_line_records_a_tiled_plate_on_the_scheduler_and_reads_it(
@@ -152,7 +153,7 @@ def test_the_command_line_records_a_tiled_plate_on_the_scheduler_and_reads_it(
                  "--resolution", "512",
                  "512", "--wavelengths", "633", "--distance", "0.02", "--tile", "256",
                  "--scheduler", scheduler, "--max-points", "2000"]) == 0
-    assert store.tiles_done(url).shape == (2, 2) and store.tiles_done(url).all()
+    assert tiles_done(url).shape == (2, 2) and tiles_done(url).all()
     assert "Dask dashboard: http" in capsys.readouterr().out
     assert main(["info", str(url)]) == 0
     assert json.loads(capsys.readouterr().out)["encoding"] == "complex"
@@ -169,9 +170,9 @@ def test_a_damaged_tile_is_written_again_when_the_recording_resumes(scene, in_me
     chunk.write_bytes(chunk.read_bytes()[:-8] + b"\0" * 8)
     with pytest.raises(HologramFileError, match=r"tile \(2, 3\) channel 1: its samples do not "
                                                 r"match their checksum"):
-        store.open_plate(url).object_wave[...]
+        open_plate(url).object_wave[...]
     h = _record(scene, url, scheduler)  # the same call: resumes, writes tile (2, 3) again
-    assert np.array_equal(h.object_wave[...], store.open_plate(url).object_wave[...])
+    assert np.array_equal(h.object_wave[...], open_plate(url).object_wave[...])
     assert np.abs(h.object_wave[...] - in_memory.object_wave).max() <= \
         1e-6 * np.abs(in_memory.object_wave).max()
 
@@ -241,7 +242,7 @@ def test_a_relative_store_is_written_where_the_user_is_not_where_the_workers_are
                  "--resolution", "256", "256",
                  "--wavelengths", "633", "--distance", "0.02", "--tile", "128", "--scheduler",
                  scheduler, "--max-points", "500"]) == 0, capsys.readouterr().err
-    assert store.tiles_done(tmp_path / "rel.zarr").all()
+    assert tiles_done(tmp_path / "rel.zarr").all()
     assert not os.path.exists(os.path.join(workers, "rel.zarr"))
 
 
@@ -296,3 +297,55 @@ def test_the_command_line_says_each_in_one_line_before_the_work(tmp_path, endpoi
                                "--distance", 0.02)
     assert status == 2 and err.count("\n") == 1 and re.search(problem, err), (status, err)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file.zarr", "tri.obj"]
+
+
+# --- the cluster: lost in the project's words, listening on loopback alone -------------------
+
+def test_a_recording_whose_cluster_is_lost_names_the_store_the_tiles_kept_and_the_way_on(
+        scene, in_memory, scheduler, tmp_path):
+    """The scheduler gone after the first tile ended in Dask's ``FutureCancelledError``
+    alone; it is said with the store, the tiles it keeps and how to go on, and the same call
+    on another cluster resumes it."""
+    url = tmp_path / "p.zarr"
+    cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                       dashboard_address=None)
+    with cluster, pytest.raises(TasksLost) as lost:
+        _record(scene, url, cluster.scheduler_address, progress=lambda f: cluster.close())
+    said = re.fullmatch(rf"the recording lost its Dask workers or scheduler \(.+\); {url} "
+                        rf"keeps (\d+) of 16 tiles; run the same recording again to resume "
+                        rf"it", str(lost.value))
+    assert said, str(lost.value)
+    assert 1 <= int(said[1]) <= tiles_done(url).sum() < 16, (said[1], tiles_done(url).sum())
+    h = _record(scene, url, scheduler)
+    assert np.abs(h.object_wave[...] - in_memory.object_wave).max() <= \
+        1e-6 * np.abs(in_memory.object_wave).max()
+
+
+def _listening(process) -> set:
+    """The (address, port) pairs ``process`` and its children listen on (TCP)."""
+    psutil = pytest.importorskip("psutil")
+    return {tuple(c.laddr) for p in (process, *process.children(recursive=True))
+            for c in p.net_connections("tcp") if c.status == psutil.CONN_LISTEN}
+
+
+def _new_addresses(process, before) -> set:
+    return {ip for ip, _ in _listening(process) - before}
+
+
+def test_the_local_cluster_listens_on_loopback_alone(monkeypatch):
+    """The default cluster's dashboard listened on every interface (``:0``): anyone on the
+    studio's network could watch a recording's tasks, logs and profiles. Its scheduler,
+    workers and dashboard listen on 127.0.0.1 only, unless ``HOLO_DASK_HOST`` names
+    another."""
+    psutil = pytest.importorskip("psutil")
+    monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)
+    monkeypatch.delenv("HOLO_DASK_HOST", raising=False)
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
+    me = psutil.Process()
+    before = _listening(me)
+    with client_for() as client:
+        assert client.dashboard_link.startswith("http://127.0.0.1:"), client.dashboard_link
+        assert _new_addresses(me, before) == {"127.0.0.1"}, _listening(me) - before
+    monkeypatch.setenv("HOLO_DASK_HOST", "0.0.0.0")  # named: published as asked
+    with client_for():
+        assert "0.0.0.0" in _new_addresses(me, before), _listening(me) - before

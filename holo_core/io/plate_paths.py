@@ -1,0 +1,49 @@
+"""Where a plate file's samples are: the file, or the tiled store beside it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..scene.hologram import Hologram
+from .hologram import HologramFileError, read_hologram, recording_of
+from .store import read_store
+from .tiled_wave import open_plate
+
+
+def store_of(path) -> Path:
+    """The tiled store that holds a plate file's samples when its plate is recorded tile by
+    tile (:func:`holo_core.runner.needs_tiles`): NAME.zarr beside NAME.exr."""
+    return Path(path).with_suffix(".zarr")
+
+
+def read_plate(path) -> Hologram:
+    """The hologram file at ``path``, or the complete tiled store beside it
+    (:func:`store_of`)."""
+    found = plate_files(path)
+    return open_plate(str(found)) if found.suffix == ".zarr" else read_hologram(found)
+
+
+def plate_files(path) -> Path:
+    """Where the plate of file ``path`` is: the file, or the tiled store beside it when only
+    that was written (:func:`store_of`)."""
+    path = Path(path)
+    return store_of(path) if not path.is_file() and store_of(path).is_dir() else path
+
+
+def plate_current(path, recording: str = "") -> bool:
+    """Whether the plate file at ``path``, or the tiled store beside it, is there whole (a
+    store's every tile written by its recording; a cancelled one resumes) and, given the
+    ``recording`` it must be, names that one: another recording's plate under its name (a
+    folder synced from another shot, a file copied by hand) is not current, it is recorded
+    again."""
+    path = Path(path)
+    if path.is_file():
+        return not recording or recording_of(path) == recording
+    if not store_of(path).is_dir():
+        return False
+    try:
+        store = read_store(str(store_of(path)))
+    except HologramFileError:  # a StoreError too
+        return False
+    return not store.bad and bool(store.written().all()) and not store.foreign().any() and \
+        (not recording or store.info.recording == recording)
