@@ -27,15 +27,11 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import os
-import socket
-import struct
-from contextlib import contextmanager
 from dataclasses import replace
 
 import numpy as np
 
-from .. import jobs, validate
+from .. import cluster, jobs, validate
 from ..io import tiles as store
 from ..opencl import get_runtime
 from ..scene.hologram import Hologram, HologramInfo
@@ -49,8 +45,6 @@ log = logging.getLogger(__name__)
 DEFAULT_TILE = 2048
 TILE_STEP = 64  # point tiles are multiples of this: the kernel's column segments (<= 32) align
 ZONE_TILE_STEP = BLOCK  # a plate of meshes' tiles: multiples of its emitters' block lists
-CONNECT_TIMEOUT = 10.0  # [s] to reach a scheduler and hear its first message
-MAX_HANDSHAKE = 2**20   # bytes a Dask scheduler's first message may claim (a few hundred)
 
 
 def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_WAVELENGTHS,
@@ -171,10 +165,7 @@ def _output_and_scheduler(urls, scheduler):
     files = [store.check_output(url) for url in urls]
     if len({f.name for f in files}) != len(files):
         raise InputError(f"each look needs a store of its own; got {[f.name for f in files]}")
-    address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
-    if address:
-        _probe(address)
-    return files, address
+    return files, cluster.scheduler_address(scheduler)
 
 
 def _record_tiles(files, info, tile, recordings, *, overwrite, address, task, shared,
@@ -192,15 +183,10 @@ def _record_tiles(files, info, tile, recordings, *, overwrite, address, task, sh
         if todo:
             spec = {"urls": [f.url for f in files],
                     "recordings": [r["digest"] for r in recordings]}
-            with client_for(address) as client:
-                if dashboard is not None:
-                    dashboard(client.dashboard_link)
-                data = client.scatter(shared, broadcast=True)
-                # a tile is written only into the stores that lack it (the others keep theirs)
-                futures = [client.submit(task, data, {**spec, "looks": [
-                    k for k, missing in enumerate(lacking) if (i, j) in missing]},
-                    int(i), int(j), pure=False) for i, j in todo]
-                _wait(client, futures, progress)
+            # a tile is written only into the stores that lack it (the others keep theirs)
+            cluster.run_tasks(task, shared, [({**spec, "looks": [
+                k for k, missing in enumerate(lacking) if (i, j) in missing]}, int(i), int(j))
+                for i, j in todo], address=address, progress=progress, dashboard=dashboard)
 
 
 def _recording(pos, colours, phases, seed, **sampling) -> dict:
@@ -326,100 +312,3 @@ def _still_ours(spec: dict, i: int, j: int) -> dict:
                              f"recording {digest[:12]} is not written")
         plates[look] = plate
     return plates
-
-
-@contextmanager
-def client_for(scheduler=None):
-    """A Dask client: of the scheduler at ``scheduler`` (or ``DASK_SCHEDULER_ADDRESS``), else
-    of a local cluster with one single-threaded worker process per core (each worker holds
-    its own OpenCL context); its dashboard's address is logged."""
-    try:
-        from distributed import Client, LocalCluster
-    except ImportError:
-        raise InputError("tiled plates need Dask: pip install 'holo[tiles]'") from None
-    address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
-    if address:
-        with _connected(Client, address) as client:
-            log.info("Dask scheduler %s, dashboard %s", address, client.dashboard_link)
-            yield client
-        return
-    with LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                      dashboard_address=":0") as cluster, Client(cluster) as client:
-        log.info("local Dask cluster, dashboard %s", client.dashboard_link)
-        yield client
-
-
-@contextmanager
-def _connected(Client, address):
-    """A client of the scheduler at ``address``, or :class:`InputError` naming it within
-    ``CONNECT_TIMEOUT`` seconds: an address that is not one, an unknown host, a refused
-    connection, a port that never answers or answers other than a scheduler."""
-    _probe(address)
-    try:
-        client = Client(address, timeout=CONNECT_TIMEOUT)
-    except Exception as e:  # noqa: BLE001 -- Dask's failures to connect vary; all mean one thing
-        raise InputError(f"scheduler {address}: cannot connect ({type(e).__name__}: "
-                         f"{e})"[:400]) from None
-    with client:
-        yield client
-
-
-def _probe(address) -> None:
-    """Reach a TCP scheduler and read the length of its first message (a Dask scheduler
-    speaks first, a few hundred bytes) within ``CONNECT_TIMEOUT`` seconds, so that a wrong
-    endpoint fails fast and by name instead of hanging or allocating what garbage claims."""
-    from distributed.comm.addressing import parse_address, parse_host_port
-    what = f"scheduler {address}"
-    try:
-        scheme, location = parse_address(address)
-        if scheme not in ("tcp", "tls"):
-            return  # another transport (inproc://, ucx://): Dask's own timeout applies
-        host, port = parse_host_port(location)
-    except (ValueError, TypeError) as e:
-        raise InputError(f"{what}: not a scheduler address (tcp://host:port; {e})"[:300]) \
-            from None
-    try:
-        with socket.create_connection((host, port), timeout=CONNECT_TIMEOUT) as s:
-            if scheme == "tls":
-                return  # its messages are encrypted: reaching it is what can be checked
-            header = _receive(s, 8)
-    except socket.gaierror as e:
-        raise InputError(f"{what}: unknown host {host!r} ({e.strerror})") from None
-    except ConnectionRefusedError:
-        raise InputError(f"{what}: refuses connections (is a scheduler running there?)") \
-            from None
-    except (socket.timeout, TimeoutError):
-        raise InputError(f"{what}: no answer within {CONNECT_TIMEOUT:g} s (is it a Dask "
-                         f"scheduler?)") from None
-    except OSError as e:
-        raise InputError(f"{what}: cannot connect ({e.strerror or e})") from None
-    if header is None:
-        raise InputError(f"{what}: closed the connection without a word; not a Dask "
-                         f"scheduler")
-    (claimed,) = struct.unpack("<Q", header)
-    if not 0 < claimed <= MAX_HANDSHAKE:
-        raise InputError(f"{what}: answers, but not as a Dask scheduler (its first message "
-                         f"claims {claimed} bytes)")
-
-
-def _receive(sock, n) -> bytes | None:
-    data = b""
-    while len(data) < n:
-        part = sock.recv(n - len(data))
-        if not part:
-            return None
-        data += part
-    return data
-
-
-def _wait(client, futures, progress) -> None:
-    """Each task's result as it finishes, with the fraction done to ``progress``; on a
-    cancellation or a failed task the rest are cancelled."""
-    from distributed import as_completed
-    try:
-        for n, future in enumerate(as_completed(futures), 1):
-            future.result()  # a failed tile raises its error here
-            jobs.report(progress, n, len(futures))
-    except BaseException:
-        client.cancel(futures)
-        raise
