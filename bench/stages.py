@@ -251,7 +251,7 @@ def plate(samples: int, rt, rounds) -> list:
 
     from holo_core.plate import slabs
     from holo_core.plate import view as plate_view
-    from holo_core.plate.record import record_plate
+    from holo_core.plate.looks import record_plate
     from holo_core.plate.view import render_view
     centre = camera("centre", 1.0)
     # warm: programs built, the FFT plans of these grids read (or measured, once per machine)

@@ -86,7 +86,8 @@ def _record_zone(args, mesh, out, tiled) -> int:
     from .io.hologram import write_hologram
     from .plate.plan import plan as plan_plate
     from .plate.plan import window_on_plate
-    from .plate.record import look_code, record_plate
+    from .plate.looks import record_plate
+    from .plate.recording import look_code
     from .scene.plate import Plate
     v = mesh.vertices
     bounds = np.array([v.min(0), v.max(0)])
@@ -124,7 +125,8 @@ def _record_points(args, mesh, out, tiled) -> int:
     import numpy as np
 
     from .io.hologram import write_hologram
-    from .plate.record import Reference, record_points
+    from .plate.points import record_points
+    from .plate.reference import Reference
     from .scene.mesh import default_spacing, sample_points
     shape = tuple(reversed(args.resolution or (1024, 1024)))
     pitch = args.pitch or 8e-6

@@ -280,7 +280,7 @@ def _pristine_store(folder):
     short) written through the store's own functions, and the samples it holds."""
     if "store" not in _CACHE:
         from holo_core.io import tiles as store
-        from holo_core.plate.record import record_points
+        from holo_core.plate.points import record_points
         from holo_core.plate.tiles import _recording
         from holo_core.scene.hologram import HologramInfo
         shape, tile, lams = (96, 160), 64, (633e-9, 532e-9)
@@ -524,7 +524,7 @@ def api_calls():
     from holo_core.camera import render_camera
     from holo_core.plate.plan import plan
     from holo_core.plate.reconstruction import reconstruct
-    from holo_core.plate.record import record_points
+    from holo_core.plate.points import record_points
     from holo_core.plate.sampling import choose
     from holo_core.plate.view import render_view
     from holo_core.scene import Camera, Hologram, Mesh, look_at, sample_points

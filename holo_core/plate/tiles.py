@@ -9,7 +9,7 @@ sample positions, the same phases), so a tiled plate equals the plate recorded i
   (``point_sources``: a point lights only the disc its pitch samples alias-free).
 - Plates of meshes (:func:`record_looks_tiled`), with occlusion, against the carrier
   converging on their zone: the emitters the zone sees and their visibility tables are found
-  once, on the client (:func:`holo_core.plate.record.prepare_plate`); a tile is
+  once, on the client (:func:`holo_core.plate.recording.prepare_plate`); a tile is
   :meth:`ZoneSum.region <holo_core.plate.zone_sum.ZoneSum.region>` of its block, from the
   emitters whose footprint reaches it.
 
@@ -35,10 +35,10 @@ from .. import cluster, jobs, validate
 from ..io import tiles as store
 from ..opencl import get_runtime
 from ..scene.hologram import Hologram, HologramInfo
-from ..scene.plate import DEFAULT_ZONE_MARGIN
 from ..validate import InputError
 from .point_sources import check_distance, point_wave, sampling_grid
-from .record import DEFAULT_WAVELENGTHS, PlateRecording, plate_plan, point_amplitudes, prepare_plate
+from .points import DEFAULT_WAVELENGTHS, point_amplitudes
+from .recording import PlannedPlate, PlateRecording, prepare_plate
 from .zone_sum import BLOCK
 
 log = logging.getLogger(__name__)
@@ -55,7 +55,7 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
     it opened (:func:`holo_core.io.tiles.open_plate`).
 
     positions, colours, wavelengths, phases, seed, band, method
-        As for :func:`holo_core.plate.record.record_points` (positions [m] in the plate's
+        As for :func:`holo_core.plate.points.record_points` (positions [m] in the plate's
         frame, z < 0; colours: intensities, one column per wavelength [m]).
     url : str or path
         The store: a folder (made absolute before the workers see it), or an fsspec URL the
@@ -102,21 +102,20 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
     return store.open_plate(files[0].name)
 
 
-def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
-                       zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
+def record_looks_tiled(planned: PlannedPlate, *, urls, codes, depth=True, seed=0,
                        encoding="complex", tile=None, scheduler=None, overwrite=False,
                        progress: jobs.Progress = None, dashboard=None,
                        budget=(None, None)) -> list[Hologram]:
-    """The looks ``codes`` of one plate of ``meshes`` (with occlusion, against the carrier
-    converging on its zone: :func:`holo_core.plate.record.record_plate`, whose other
-    arguments these are; look l coded by codes[l], or where that is None of seed + l), each
-    into its own tiled store at ``urls`` [l], returned opened
-    (:func:`holo_core.io.tiles.open_plate`).
+    """The looks ``codes`` of the plate of meshes ``planned`` (with occlusion, against the
+    carrier converging on its zone: :func:`holo_core.plate.recording.plate_plan`; the other
+    arguments as :func:`holo_core.plate.looks.record_plate` takes them; look l coded by
+    codes[l], or where that is None of seed + l), each into its own tiled store at ``urls``
+    [l], returned opened (:func:`holo_core.io.tiles.open_plate`).
 
     The emitters and their visibility tables are found once, here, and scattered once to the
     workers; each task sums one tile (``tile`` samples a side, a multiple of 256: the
     emitters' block lists; by default the plan's, fitted to the plate) for every look at
-    once (as :func:`holo_core.plate.record.record_looks` does in memory) and writes each
+    once (as :func:`holo_core.plate.looks.record_looks` does in memory) and writes each
     look with its record into the stores that lack it. A store's digest covers the meshes
     in the plate's frame (vertices, triangles, colours, UVs, texture: the plate's pose too),
     the zone, the plan (samples, pitches, origin, wavelengths), its look's seed, code and
@@ -125,18 +124,15 @@ def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
     others and the other way round.
     ``scheduler``, ``overwrite``, ``progress``, ``dashboard``: as for :func:`record_tiled`.
     """
-    if tile is None:
-        tile = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
-                          zone_margin=zone_margin, wavelength=wavelength)[0].tile
-    tile = _tile(tile, ZONE_TILE_STEP)
+    tile = _tile(planned.plan.tile if tile is None else tile, ZONE_TILE_STEP)
     _flag("overwrite", overwrite)
     if len(urls) != len(codes) or not urls:
         raise InputError(f"urls must name one store per look; got {len(urls)} for "
                          f"{len(codes)} look(s)")
     files, address = _output_and_scheduler(urls, scheduler)
-    job = prepare_plate(meshes, plate=plate, camera=camera, zone=zone, zone_margin=zone_margin,
-                        wavelength=wavelength, depth=depth, seed=seed, codes=codes,
-                        encoding=encoding, tile=tile, budget=budget)
+    planned = replace(planned, plan=replace(planned.plan, tile=tile))
+    job = prepare_plate(planned, codes=codes, depth=depth, seed=seed, encoding=encoding,
+                        tiled=True, budget=budget)
     recordings = [_plate_recording(job, tile, look) for look in range(job.looks)]
     _record_tiles(files, job.info, tile, recordings, overwrite=overwrite, address=address,
                   task=record_plate_tile, shared=replace(job, meshes=()), progress=progress,

@@ -7,7 +7,7 @@ import pytest
 from cli import run_cli as cli
 
 from holo_core.io.image import read_exr
-from holo_core.plate.record import record_points
+from holo_core.plate.points import record_points
 from holo_core.plate.view import render_view
 from holo_core.scene.camera import Camera, look_at
 from holo_core.validate import InputError
@@ -122,11 +122,11 @@ def test_a_ten_million_vertex_mesh_is_refused_by_render_camera(monkeypatch):
 
 
 def test_ten_million_triangles_are_refused_by_the_plate_recording(monkeypatch):
-    import holo_core.plate.record as record
-    from holo_core.plate.record import record_plate
+    import holo_core.plate.recording as recording
+    from holo_core.plate.looks import record_plate
     from holo_core.scene.plate import Plate
     monkeypatch.setenv("HOLO_MEMORY_LIMIT", "2G")
-    monkeypatch.setattr(record, "zone_emitters", _never)
+    monkeypatch.setattr(recording, "zone_emitters", _never)
     with pytest.raises(InputError, match=r"moving 10000000 triangles onto the plate needs "
                                          r"\d\.\d+ GiB"):
         record_plate(_huge_mesh(5 * 10**6), plate=Plate(matrix_world=np.eye(4), width=0.05,
@@ -136,9 +136,9 @@ def test_ten_million_triangles_are_refused_by_the_plate_recording(monkeypatch):
 def test_a_hundred_million_point_sum_is_refused_before_its_amplitudes(monkeypatch):
     """10^8 points of three colours: (200 + 3·96) bytes each, 45.4 GiB, counted before their
     amplitudes and random phases are drawn."""
-    import holo_core.plate.record as record
+    import holo_core.plate.points as points
     monkeypatch.setenv("HOLO_MEMORY_LIMIT", "8G")
-    monkeypatch.setattr(record, "point_wave", _never)
+    monkeypatch.setattr(points, "point_wave", _never)
     n = 10**8
     with pytest.raises(InputError, match=r"100000000 point emitters of 3 wavelengths needs "
                                          r"45.4 GiB of memory"):

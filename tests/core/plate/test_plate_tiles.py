@@ -27,7 +27,7 @@ from holo_core import jobs  # noqa: E402
 from holo_core.io import tiles as store  # noqa: E402
 from holo_core.io.hologram import metadata, read_hologram  # noqa: E402
 from holo_core.plate.carrier import physical_field, window  # noqa: E402
-from holo_core.plate.record import record_plate  # noqa: E402
+from holo_core.plate.looks import record_plate  # noqa: E402
 from holo_core.plate.view import camera_in_plate, carrier_window, render_view  # noqa: E402
 from holo_core.validate import InputError  # noqa: E402
 
@@ -122,20 +122,20 @@ KILLED = textwrap.dedent("""
     sys.path[:0] = [{tests!r}]
     import distributed
     from plate_scene import PLATE, camera, meshes
-    from holo_core.plate import record
-    region = record.PlateRecording.region
+    from holo_core.plate import looks, recording
+    region = recording.PlateRecording.region
 
     def slow(self, *args):  # a tile a second: the kill lands mid-recording
         time.sleep(1.0)
         return region(self, *args)
 
     if __name__ == "__main__":
-        record.PlateRecording.region = slow  # the workers share this process
+        recording.PlateRecording.region = slow  # the workers share this process
         with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                                       dashboard_address=":0") as cluster:
-            record.record_plate(meshes(), plate=PLATE, camera=camera("centre", {scale}),
-                                zone_margin=0.025, url={url!r}, tile={tile},
-                                scheduler=cluster.scheduler_address)
+            looks.record_plate(meshes(), plate=PLATE, camera=camera("centre", {scale}),
+                               zone_margin=0.025, url={url!r}, tile={tile},
+                               scheduler=cluster.scheduler_address)
 """)
 
 
@@ -295,7 +295,8 @@ def test_looks_recorded_together_in_tiles_equal_them_in_memory(scheduler, tmp_pa
     pair's, fill the two new stores and leave the pair's as they were, each new look within
     float32 rounding (1e-5 of the largest sample) of the look recorded alone (the looks
     together are summed by classes of equal code shifts and mixed)."""
-    from holo_core.plate.record import look_code, record_looks
+    from holo_core.plate.looks import record_looks
+    from holo_core.plate.recording import look_code
     urls = [tmp_path / f"look{k}.zarr" for k in range(2)]
     tiled = record_looks(meshes(), looks=2, urls=urls, tile=TILE, scheduler=scheduler, **SCENE)
     for h, want in zip(tiled, record_looks(meshes(), looks=2, **SCENE)):

@@ -21,7 +21,7 @@ zarr = pytest.importorskip("zarr")
 from holo_core.io import tiles as store  # noqa: E402
 from holo_core.io.hologram import HologramFileError  # noqa: E402
 from holo_core.plate import tiles as recorder  # noqa: E402
-from holo_core.plate.record import record_points  # noqa: E402
+from holo_core.plate.points import record_points  # noqa: E402
 from holo_core.scene.hologram import HologramInfo  # noqa: E402
 from holo_core.validate import InputError  # noqa: E402
 

@@ -21,7 +21,7 @@ from stores import cancel_after, settled  # noqa: E402
 from holo_core import jobs  # noqa: E402
 from holo_core.io import tiles as store  # noqa: E402
 from holo_core.io.hologram import HologramFileError, metadata  # noqa: E402
-from holo_core.plate.record import record_points  # noqa: E402
+from holo_core.plate.points import record_points  # noqa: E402
 from holo_core.plate.tiles import record_tiled  # noqa: E402
 from holo_core.plate.to_pupil import window_of  # noqa: E402
 from holo_core.validate import InputError  # noqa: E402
