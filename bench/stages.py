@@ -250,7 +250,7 @@ def plate(samples: int, rt, rounds) -> list:
     from plate_scene import PLATE, camera, meshes
 
     from holo_core.plate import slabs
-    from holo_core.plate import view as plate_view
+    from holo_core.plate import composition, pupil_images
     from holo_core.plate.looks import record_plate
     from holo_core.plate.view import render_view
     centre = camera("centre", 1.0)
@@ -267,11 +267,11 @@ def plate(samples: int, rt, rounds) -> list:
                f"convolutions)", stages, total, {}, {"slab recording (host: emitters, masks)"})]
     stages, total = measured(
         lambda: render_view(h, centre),
-        lambda st: [st.wrap(plate_view, "field_at_pupil",
+        lambda st: [st.wrap(pupil_images, "field_at_pupil",
                             "window to the pupil (propagation, rotation)"),
-                    st.wrap(plate_view.PupilImage, "image", "pupil to image (window, read "
+                    st.wrap(pupil_images.PupilImage, "image", "pupil to image (window, read "
                             "pixels)"),
-                    st.wrap(plate_view, "_compose", "compose the looks (host)")]
+                    st.wrap(composition, "compose", "compose the looks (host)")]
         + fft_stages(st), rounds, rt.queue.finish)
     return tables + [(f"plate view, {centre.resolution[0]}x{centre.resolution[1]} from the "
                       f"{h.shape[1]}x{h.shape[0]} plate", stages, total, {},

@@ -295,7 +295,7 @@ def _camera(args, h):
     import numpy as np
 
     from .acquired import default_camera
-    from .plate.view import stated_plane
+    from .acquired.framing import stated_plane
     from .scene.camera import Camera, look_at
     resolution = tuple(args.resolution) if args.resolution else None
     if not args.camera and stated_plane(h) is not None:

@@ -304,13 +304,18 @@ def fitted_tile(shape, largest=TILE, step=256) -> int:
     return min(range(step, largest + 1, step), key=cost)
 
 
-def pinhole_pupil(box, eye, bin_angle) -> tuple[float, float]:
+def pinhole_pupil(box, eye, bin_angle, rotation=None) -> tuple[float, float]:
     """(diameter [m], focus [m]) of a pinhole view's pupil from ``eye`` (3,) [m] of the box
     ``box`` (2, 3) [m]: the widest whose defocus over the box's depths stays within a fine bin
-    ``bin_angle`` [rad], focused on their middle in 1/z (the camera hologram's rule)."""
+    ``bin_angle`` [rad], focused on their middle in 1/z (the camera hologram's rule). The
+    depths lie along the view axis of the camera's axes ``rotation`` (3, 3; a plate's view),
+    or without them along the line towards the box's centre (the plan's reference view)."""
     corners = box_corners(box) - np.asarray(eye, np.float64)
-    axis = -corners.mean(0) / np.linalg.norm(corners.mean(0))
-    depth = np.clip(corners @ -axis, 1e-9, None)
+    if rotation is None:
+        axis = -corners.mean(0) / np.linalg.norm(corners.mean(0))
+        depth = np.clip(corners @ -axis, 1e-9, None)
+    else:
+        depth = -(corners @ rotation)[:, 2]
     return defocus_limited_diameter(bin_angle, float(depth.min()), float(depth.max()))
 
 

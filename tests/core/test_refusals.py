@@ -159,12 +159,13 @@ def _pupil_view(h, diameter, monkeypatch, *, crop=True):
     """(rgb at exposure 1, the pupil grid's samples per side) of a pinhole-less view through
     a pupil of ``diameter`` [m]."""
     from holo_core.optics.pupil import Pupil
-    from holo_core.plate import view
+    from holo_core.plate import pupil_images
     grids = []
-    real = view.pupil_grid
-    monkeypatch.setattr(view, "pupil_grid", lambda *a: grids.append(real(*a)) or grids[-1])
+    real = pupil_images.pupil_grid
+    monkeypatch.setattr(pupil_images, "pupil_grid",
+                        lambda *a: grids.append(real(*a)) or grids[-1])
     if not crop:
-        monkeypatch.setattr(view, "lit_diameter", lambda h, p, r, d: d)
+        monkeypatch.setattr(pupil_images, "lit_diameter", lambda h, p, r, d: d)
     cam = Camera(matrix_world=look_at((0, 0, 0.02), (0, 0, -0.03)), lens=50, sensor_width=2,
                  resolution=(16, 16))
     with pytest.warns(UserWarning, match="no depth channel"):

@@ -28,7 +28,8 @@ from holo_core.io import tiles as store  # noqa: E402
 from holo_core.io.hologram import metadata, read_hologram  # noqa: E402
 from holo_core.plate.carrier import physical_field, window  # noqa: E402
 from holo_core.plate.looks import record_plate  # noqa: E402
-from holo_core.plate.view import camera_in_plate, carrier_window, render_view  # noqa: E402
+from holo_core.plate.view import render_view  # noqa: E402
+from holo_core.plate.window import camera_in_plate, carrier_window, image_corners  # noqa: E402
 from holo_core.validate import InputError  # noqa: E402
 
 SCALE, TILE = 0.25, 256  # a plate of 504 x 559 samples: 2 x 3 tiles
@@ -93,7 +94,8 @@ def test_a_view_of_the_store_reads_its_window_only_and_equals_the_view_in_memory
     cam = camera("left", SCALE)
     view = render_view(store.open_plate(url), cam, supersample=2)
     rotation, position = camera_in_plate(in_memory, cam)
-    r0, r1, c0, c1 = carrier_window(in_memory, cam, rotation, position, cam.aperture_diameter)
+    r0, r1, c0, c1 = carrier_window(in_memory, position, rotation, cam.aperture_diameter,
+                                    image_corners(cam, rotation))
     overlapped = {(i, j) for i in range(r0 // TILE, (r1 - 1) // TILE + 1)
                   for j in range(c0 // TILE, (c1 - 1) // TILE + 1)}
     assert reads.tiles == overlapped and len(overlapped) == 4, (reads.tiles, (r0, r1, c0, c1))

@@ -23,7 +23,7 @@ from holo_core.io import tiles as store  # noqa: E402
 from holo_core.io.hologram import HologramFileError, metadata  # noqa: E402
 from holo_core.plate.points import record_points  # noqa: E402
 from holo_core.plate.tiles import record_tiled  # noqa: E402
-from holo_core.plate.to_pupil import window_of  # noqa: E402
+from holo_core.plate.window import window_of  # noqa: E402
 from holo_core.validate import InputError  # noqa: E402
 
 SHAPE, PITCH, TILE, WAVELENGTHS = (1024, 1024), 8e-6, 256, (633e-9, 532e-9)
