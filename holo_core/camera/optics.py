@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .. import validate
-from ..optics.depth import partner_wavelength
+from ..optics.depth import DEPTH_MARGIN, partner_wavelength
 from ..optics.imaging import iris_weights
 from ..optics.pupil import Pupil, defocus_limited_diameter
 from ..propagation import grid
@@ -29,7 +29,6 @@ SUPERSAMPLE = 2        # fine pixels per pixel (per axis): the pupil resolves on
 LAYER_PHASE = math.pi / 2  # a layer's largest curvature error at the pupil's rim [rad]: a
                            # quarter wave, Rayleigh's depth of focus
 MAX_LAYERS = 512
-DEPTH_MARGIN = 1.25    # the depth pair's unambiguous range over the scene's depth extent
 EDGE_BINS = 8  # bins beyond the field of view and its blur: the read's taps and a guard
 
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import memory as memory_mod
 from .. import validate
-from ..optics.depth import partner_wavelength
+from ..optics.depth import DEPTH_MARGIN, partner_wavelength
 from ..optics.pupil import defocus_limited_diameter
 from ..scene.plate import ViewingZone, box_corners
 from ..validate import InputError
@@ -33,7 +33,6 @@ SHARP_SLACK = 1e-6     # of a spot: a zone's pixel and pupil kept in float32 (a 
                        # them by 6e-8
 RIM = 0.15             # the zone's soft rim, a fraction of its half widths
 LAYERS = 3             # surfaces an emitter ray may cross and still be recorded (depth peeling)
-DEPTH_MARGIN = 1.25    # the depth pair's unambiguous range over the objects' extent
 TILE = 2048            # samples a side of a tiled recording's tile, at most (fitted_tile)
 TILE_COST = 2**17      # samples a tile costs beyond its own: its task, its emitters' lists
 LOOKS = 2              # coded looks recorded by default (the checkerboard pair)
