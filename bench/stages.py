@@ -202,6 +202,7 @@ def report(title, stages: Stages, total, bounds: Measured, memory_bytes, host):
 def camera_pass(job_path: Path, rt, rounds) -> list:
     from holo_core import runner
     from holo_core.camera import incoherent
+    from holo_core.camera import raster as camera_raster
     from holo_core.camera import render as camera_render
     from holo_core.job import Job
     with open(job_path, "rb") as f:
@@ -212,7 +213,7 @@ def camera_pass(job_path: Path, rt, rounds) -> list:
     views = []
 
     def wrap(stages):
-        undo = [stages.wrap(camera_render, name, "emitters (host)")
+        undo = [stages.wrap(camera_raster, name, "emitters (host)")
                 for name in ("choose_optics", "rasterize", "point_emitters", "merged")]
         undo += [stages.wrap(incoherent.IncoherentImages, "__init__", "device setup and uploads"),
                  stages.wrap(incoherent.IncoherentImages, "_transfer_functions",

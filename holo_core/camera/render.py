@@ -27,8 +27,8 @@ from ..scene.mesh import Mesh
 from ..validate import InputError, shown
 from ..view import RenderResult
 from .incoherent import IncoherentImages, grid_bytes
-from .optics import SUPERSAMPLE, PupilOptics, choose_optics
-from .raster import across_shutter, depth_range, merged, point_emitters, raster_bytes
+from .optics import SUPERSAMPLE, PupilOptics
+from .raster import camera_emitters
 from .recording import PupilFields, intensity_hologram, reconstruct_object_wave
 
 log = logging.getLogger(__name__)
@@ -79,18 +79,8 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     w, h = camera.resolution
     memory.check_host(f"a {w}x{h} camera view at supersample {supersample}",
                       FINE_PIXEL_BYTES * w * h * supersample**2)
-    meshes = _meshes(meshes)
-    if meshes:  # before the meshes are projected: a 10^7-vertex mesh took 8 GB and more
-        memory.check_host(f"rasterizing {sum(len(m.triangles) for m in meshes)} triangles",
-                          raster_bytes(meshes))
-    pos, colours = (None, None) if points is None else _points(points)
-    optics = choose_optics(camera, depth_range(meshes, camera, pos), supersample=supersample,
-                           pupil_diameter=pupil_diameter)
-    em = across_shutter(meshes, camera, optics) if meshes else None
-    if pos is not None:
-        em = merged(em, point_emitters(pos, colours, camera, optics), optics)
-    if em is None or not len(em.index):
-        raise InputError("no emitter is visible to the camera")
+    optics, em = camera_emitters(_meshes(meshes), None if points is None else _points(points),
+                                 camera, supersample=supersample, pupil_diameter=pupil_diameter)
     fine = replace(camera, resolution=tuple(r * supersample for r in camera.resolution))
     rt = get_runtime()
     if via == "incoherent":

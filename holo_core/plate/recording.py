@@ -162,7 +162,7 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
     if bounds[1, 2] >= 0:
         raise InputError(f"the objects must lie behind the plate (z < 0 in its frame); they "
                          f"reach z = {bounds[1, 2]:.4g} m")
-    zone = resolve_zone(plate, zone, camera, zone_margin, bounds)
+    zone = plate.recording_zone(zone, camera, zone_margin, bounds)
     pixel = zone.pixel or (camera.pixel_angle() if camera is not None else None)
     if pixel is None and wavelength is None:
         raise InputError("a plate needs the sharpness of its views: a camera, a zone with its "
@@ -278,22 +278,3 @@ def look_code(k: int, n: int):
     if n == 2:
         return (3 * k, 2)
     return (k, m) if m > 1 and m * m == n else None
-
-
-def resolve_zone(plate: Plate, zone, camera, margin, bounds) -> ViewingZone:
-    """The viewing zone of a recording: ``zone``, else the plate's own, else one around
-    ``camera``'s pupil (``margin`` [m]), else the plate's extent mirrored at the objects'
-    distance in front of it (``bounds`` (2, 3) [m], the plate's frame)."""
-    if zone is not None:
-        if not isinstance(zone, ViewingZone):
-            raise InputError(f"zone must be a ViewingZone or None; got {type(zone).__name__}")
-        return zone
-    if plate.zone is not None:
-        return plate.zone
-    if camera is not None:
-        return plate.zone_for(camera, margin)
-    distance = -float(bounds[1, 2])
-    zone = ViewingZone(centre=(0.0, 0.0, distance),
-                       half_extents=(plate.width / 2, plate.height / 2, distance / 4))
-    log.info("plate: no camera and no viewing zone given: %s", zone.describe())
-    return zone

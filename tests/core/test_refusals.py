@@ -112,13 +112,14 @@ def _never(*_, **__):
 def test_a_ten_million_vertex_mesh_is_refused_by_render_camera(monkeypatch):
     """It passed 8 GB in 16 s; rasterizing takes about 1000 bytes per triangle (measured 920
     at 10^6): 18.6 GiB for 2·10^7 triangles against an 8 GiB budget."""
-    import holo_core.camera.render as render
+    import holo_core.camera.raster as raster
+    from holo_core.camera.render import render_camera
     monkeypatch.setenv("HOLO_MEMORY_LIMIT", "8G")
-    monkeypatch.setattr(render, "across_shutter", _never)
+    monkeypatch.setattr(raster, "across_shutter", _never)
     cam = Camera(matrix_world=look_at((0, 0, 0.5), (0, 0, -1)), resolution=(64, 64))
     with pytest.raises(InputError, match=r"rasterizing 20000000 triangles needs 1\d\.\d GiB of "
                                          r"memory; 6.4 GiB is available"):
-        render.render_camera(_huge_mesh(10**7), cam, via="incoherent", supersample=1)
+        render_camera(_huge_mesh(10**7), cam, via="incoherent", supersample=1)
 
 
 def test_ten_million_triangles_are_refused_by_the_plate_recording(monkeypatch):
