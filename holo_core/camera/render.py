@@ -79,8 +79,9 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     w, h = camera.resolution
     memory.check_host(f"a {w}x{h} camera view at supersample {supersample}",
                       FINE_PIXEL_BYTES * w * h * supersample**2)
-    optics, em = camera_emitters(_meshes(meshes), None if points is None else _points(points),
-                                 camera, supersample=supersample, pupil_diameter=pupil_diameter)
+    meshes, points = _meshes(meshes), None if points is None else _points(points)
+    optics, em = camera_emitters(meshes, points, camera, supersample=supersample,
+                                 pupil_diameter=pupil_diameter)
     fine = replace(camera, resolution=tuple(r * supersample for r in camera.resolution))
     rt = get_runtime()
     if via == "incoherent":

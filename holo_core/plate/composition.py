@@ -24,7 +24,7 @@ from ..scene.hologram import Hologram
 from ..validate import InputError, shown
 from ..view import BACKGROUND_DEPTH, RenderResult, as_rgb
 from .plan import SHARP_SLACK, SUPERSAMPLE
-from .window import camera_in_plate
+from .window import plane_depth
 
 log = logging.getLogger(__name__)
 
@@ -173,18 +173,6 @@ def _depth(looks, cross, *, same, partner, estimate, wavelengths, centre, camera
         [np.abs(u) for u in first])
     return speckle.pick_brightest(planar(ray, supersampled(camera, supersample)), bright,
                                   supersample)
-
-
-def plane_depth(h: Hologram, camera: Camera, z: float) -> np.ndarray:
-    """The planar depth [m] (along the view axis, as Blender's Depth pass) at which each
-    pixel's ray meets the plane ``z`` [m] of the hologram's frame; the background's where it
-    never does."""
-    rotation, position = camera_in_plate(h, camera)
-    tx, ty = camera.pixel_tangents()
-    direction = np.stack([tx, ty, -np.ones_like(tx)], -1) @ np.asarray(rotation).T
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (z - position[2]) / direction[..., 2]
-    return np.where(np.isfinite(t) & (t > 0), t, BACKGROUND_DEPTH)
 
 
 def supersampled(camera: Camera, s: int) -> Camera:

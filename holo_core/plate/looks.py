@@ -9,7 +9,7 @@ from __future__ import annotations
 from .. import jobs, validate
 from ..scene.hologram import Hologram
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Plate, ViewingZone
-from .recording import PlannedPlate, look_code, plate_plan, prepare_plate
+from .recording import PlannedPlate, plate_plan, prepare_plate
 from .tiles import record_looks_tiled
 
 
@@ -80,7 +80,7 @@ def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
                  tile=None, scheduler=None, overwrite=False, progress: jobs.Progress = None,
                  dashboard=None) -> list[Hologram]:
     """``looks`` looks of one plate (:func:`record_plate`'s arguments), recorded in memory in
-    one pass: the coded looks of ``seed`` (:func:`look_code`) where ``looks`` allows, else
+    one pass: the coded looks of ``seed`` (:func:`~holo_core.plate.recording.look_code`) where ``looks`` allows, else
     seeds ``seed``, ``seed`` + 1, …. The looks differ only in their emitters' phases, so one
     sum carries them all as further channels: each emitter's distance, phase and visibility
     at a sample are found once for every look (on the shot's plate, two looks in 36 s where
@@ -103,10 +103,8 @@ def record_planned(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
                    dashboard=None) -> list[Hologram]:
     """The looks of the plate ``planned`` (:func:`~holo_core.plate.recording.plate_plan`,
     made once a job) in one pass: ``codes`` one a look (default: the coded looks of its
-    plan's looks, :func:`~holo_core.plate.recording.look_code`), in memory, or with ``urls``
+    plan's looks, :func:`~holo_core.plate.recording.prepare_plate`), in memory, or with ``urls``
     tile by tile, a store a look (the other arguments as for :func:`record_looks`)."""
-    looks = planned.plan.looks
-    codes = tuple(look_code(k, looks) for k in range(looks)) if codes is None else tuple(codes)
     if urls is not None:
         return record_looks_tiled(planned, urls=list(urls), codes=codes, tile=tile,
                                   scheduler=scheduler, overwrite=overwrite, progress=progress,

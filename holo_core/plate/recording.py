@@ -172,20 +172,22 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
     return PlannedPlate(plan=p, meshes=local, plate=plate)
 
 
-def prepare_plate(planned: PlannedPlate, *, codes=(None,), depth=True, seed=0,
+def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
                   encoding="complex", tiled=False, budget=(None, None)) -> PlateRecording:
     """The emitters, visibility tables and sampling of the plate ``planned``, before any
     sum: the emitters the zone sees with their amplitudes, for the looks ``codes`` summed at
     once (:func:`holo_core.plate.looks.record_looks`), look l's phases coded by codes[l], or
-    where that is None drawn from ``seed`` + l. The host's memory and the ``budget`` are
+    where that is None drawn from ``seed`` + l (default: the plan's looks, coded where their
+    count allows, :func:`look_code`). The host's memory and the ``budget`` are
     checked for the whole plate, or where ``tiled`` for one tile of the plan's."""
     if encoding != "complex":
         raise InputError(f"encoding must be 'complex' for a plate of meshes (a display's "
                          f"intensity pattern is made from it: holo_core.phase.display); got "
                          f"{encoding!r}"[:200])
     seed = validate.seed(seed)
-    codes = tuple(codes)
     p, local, zone = planned.plan, planned.meshes, planned.plan.zone
+    codes = tuple(look_code(k, p.looks) for k in range(p.looks)) if codes is None else \
+        tuple(codes)
     bounds = p.bounds
     log.info("sampling: %s", p.describe())
     channels = ["R", "G", "B"] + (["Z"] if depth else [])

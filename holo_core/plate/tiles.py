@@ -102,14 +102,14 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
     return store.open_plate(files[0].name)
 
 
-def record_looks_tiled(planned: PlannedPlate, *, urls, codes, depth=True, seed=0,
+def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, depth=True, seed=0,
                        encoding="complex", tile=None, scheduler=None, overwrite=False,
                        progress: jobs.Progress = None, dashboard=None,
                        budget=(None, None)) -> list[Hologram]:
     """The looks ``codes`` of the plate of meshes ``planned`` (with occlusion, against the
     carrier converging on its zone: :func:`holo_core.plate.recording.plate_plan`; the other
     arguments as :func:`holo_core.plate.looks.record_plate` takes them; look l coded by
-    codes[l], or where that is None of seed + l), each into its own tiled store at ``urls``
+    codes[l], or where that is None of seed + l; default: the plan's looks), each into its own tiled store at ``urls``
     [l], returned opened (:func:`holo_core.io.tiles.open_plate`).
 
     The emitters and their visibility tables are found once, here, and scattered once to the
@@ -126,9 +126,10 @@ def record_looks_tiled(planned: PlannedPlate, *, urls, codes, depth=True, seed=0
     """
     tile = _tile(planned.plan.tile if tile is None else tile, ZONE_TILE_STEP)
     _flag("overwrite", overwrite)
-    if len(urls) != len(codes) or not urls:
+    looks = planned.plan.looks if codes is None else len(codes)
+    if len(urls) != looks or not urls:
         raise InputError(f"urls must name one store per look; got {len(urls)} for "
-                         f"{len(codes)} look(s)")
+                         f"{looks} look(s)")
     files, address = _output_and_scheduler(urls, scheduler)
     planned = replace(planned, plan=replace(planned.plan, tile=tile))
     job = prepare_plate(planned, codes=codes, depth=depth, seed=seed, encoding=encoding,

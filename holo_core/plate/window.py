@@ -1,7 +1,8 @@
 """The part of a plate a camera's pupil sees the objects through, and the pupil's grid: the
 geometry a view reads before any light is carried (:mod:`.to_pupil`).
 
-- The camera in the plate's frame (:func:`camera_in_plate`).
+- The camera in the plate's frame (:func:`camera_in_plate`), and where its pixels' rays meet
+  a plane (:func:`plane_depth`).
 - The window (:func:`plate_window`, a carrier plate's :func:`carrier_window`): only the part
   of the plate inside the cone from the pupil to the objects (:func:`seen_on_plate`), cut to
   the camera's field of view (:func:`image_corners`), is read, rows and columns of its
@@ -23,6 +24,7 @@ from ..scene.camera import Camera
 from ..scene.hologram import Hologram
 from ..scene.plate import box_corners
 from ..validate import InputError
+from ..view import BACKGROUND_DEPTH
 
 WINDOW_MARGIN = 0.1   # the window reaches this fraction of its size beyond the cone ...
 WINDOW_SAMPLES = 8    # ... and at least this many samples
@@ -46,6 +48,18 @@ def camera_in_plate(hologram: Hologram, camera: Camera) -> tuple[np.ndarray, np.
         raise InputError("the camera must look towards the hologram (its view axis has to "
                          "point to −z of the plate)")
     return rotation, position
+
+
+def plane_depth(h: Hologram, camera: Camera, z: float) -> np.ndarray:
+    """The planar depth [m] (along the view axis, as Blender's Depth pass) at which each
+    pixel's ray meets the plane ``z`` [m] of the hologram's frame; the background's where it
+    never does."""
+    rotation, position = camera_in_plate(h, camera)
+    tx, ty = camera.pixel_tangents()
+    direction = np.stack([tx, ty, -np.ones_like(tx)], -1) @ np.asarray(rotation).T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (z - position[2]) / direction[..., 2]
+    return np.where(np.isfinite(t) & (t > 0), t, BACKGROUND_DEPTH)
 
 
 def odd_fast_len(n: int) -> int:
