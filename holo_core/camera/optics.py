@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -106,8 +106,7 @@ def choose_optics(camera: Camera, depth_range, *, supersample=SUPERSAMPLE,
     lam = diameter * b
     blur = diameter * max(abs(1 / near - 1 / focus), abs(1 / far - 1 / focus))
     margin = math.ceil(blur / b) + EDGE_BINS
-    alpha, beta, gamma = replace(camera, resolution=tuple(r * s for r in camera.resolution)
-                                 ).direction_cosines()
+    alpha, beta, gamma = camera.supersampled(s).direction_cosines()
     shape = tuple(grid.next_fast_len(2 * (math.ceil(np.abs(a).max() / b) + margin))
                   for a in (beta, alpha))
     step = 16 * LAYER_PHASE * lam / (2 * math.pi * diameter**2)  # layer spacing in 1/z

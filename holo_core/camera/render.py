@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import replace
 
 import numpy as np
 
@@ -76,13 +75,13 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     seed = validate.seed(seed)
     if not 0 < validate.finite("exposure", exposure) <= MAX_EXPOSURE:
         raise InputError(f"exposure must be in (0, {MAX_EXPOSURE:g}]; got {shown(exposure)}")
+    meshes, points = _meshes(meshes), None if points is None else _points(points)
     w, h = camera.resolution
     memory.check_host(f"a {w}x{h} camera view at supersample {supersample}",
                       FINE_PIXEL_BYTES * w * h * supersample**2)
-    meshes, points = _meshes(meshes), None if points is None else _points(points)
     optics, em = camera_emitters(meshes, points, camera, supersample=supersample,
                                  pupil_diameter=pupil_diameter)
-    fine = replace(camera, resolution=tuple(r * supersample for r in camera.resolution))
+    fine = camera.supersampled(supersample)
     rt = get_runtime()
     if via == "incoherent":
         return _incoherent(rt, em, optics, camera, fine, exposure, progress, on_sample)

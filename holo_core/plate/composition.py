@@ -11,7 +11,6 @@ from __future__ import annotations
 import logging
 import math
 import warnings
-from dataclasses import replace
 
 import numpy as np
 
@@ -171,15 +170,8 @@ def _depth(looks, cross, *, same, partner, estimate, wavelengths, centre, camera
     ray, bright = depth_mod.keep_brightest(
         [ranges(u * np.conj(look.fine[partner])) for u, look in zip(first, looks)],
         [np.abs(u) for u in first])
-    return speckle.pick_brightest(planar(ray, supersampled(camera, supersample)), bright,
+    return speckle.pick_brightest(planar(ray, camera.supersampled(supersample)), bright,
                                   supersample)
-
-
-def supersampled(camera: Camera, s: int) -> Camera:
-    if s == 1:
-        return camera
-    w, h = camera.resolution
-    return replace(camera, resolution=(w * s, h * s))
 
 
 def _finish(radiance, ray, coverage, h: Hologram, camera, pupil, exposure, threshold, lam0):

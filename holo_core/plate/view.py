@@ -26,7 +26,7 @@ from ..scene.camera import Camera
 from ..scene.hologram import Hologram
 from ..validate import InputError, shown
 from ..view import BACKGROUND_DEPTH, RenderResult
-from .composition import black_view, compose, supersampled
+from .composition import black_view, compose
 from .plan import pinhole_pupil
 from .pupil_images import HOLOGRAM_SAMPLE_BYTES, carrier_looks, full_band_looks
 from .window import camera_in_plate
@@ -94,7 +94,7 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
         supersample = nyquist_supersample(first, camera)
     supersample = validate.integer("supersample", supersample, 1, MAX_SUPERSAMPLE)
     _check_settings(holos, camera, supersample, exposure, opacity_threshold)
-    fine = supersampled(camera, supersample)
+    fine = camera.supersampled(supersample)
     colours, z_ch = first.colour_channels(), first.depth_channel()
     keep_fine = composition == "max" or depth_estimate == "brightest"  # else the pixels' means
     if z_ch is None and stated_plane(first) is None:
