@@ -38,13 +38,13 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
 
 from plate_scene import cube, sphere  # noqa: E402
 
+from holo_core import worker  # noqa: E402
 from holo_core.camera.render import render_camera  # noqa: E402
 from holo_core.io.image import write_png  # noqa: E402
-from holo_core import worker  # noqa: E402
 from holo_core.io.tiles import read_plate  # noqa: E402
 from holo_core.job import CameraRoute, Job, Output, PlateRoute  # noqa: E402
-from holo_core.plate.plan import plan, plan_view  # noqa: E402
 from holo_core.plate.looks import record_looks  # noqa: E402
+from holo_core.plate.plan import plan, plan_view  # noqa: E402
 from holo_core.plate.view import render_view  # noqa: E402
 from holo_core.scene.camera import Camera, look_at  # noqa: E402
 from holo_core.scene.plate import Plate, ViewingZone  # noqa: E402

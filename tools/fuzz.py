@@ -523,8 +523,8 @@ def api_calls():
     from holo_core import propagation as prop
     from holo_core.camera import render_camera
     from holo_core.plate.plan import plan
-    from holo_core.plate.reconstruction import reconstruct
     from holo_core.plate.points import record_points
+    from holo_core.plate.reconstruction import reconstruct
     from holo_core.plate.sampling import choose
     from holo_core.plate.view import render_view
     from holo_core.scene import Camera, Hologram, Mesh, look_at, sample_points

@@ -319,9 +319,12 @@ def test_looks_recorded_together_in_tiles_equal_them_in_memory(scheduler, tmp_pa
 def test_the_pipeline_records_a_plate_beyond_memory_in_tiles(scheduler, tmp_path, monkeypatch):
     """A job's plate whose one look exceeds the memory budget is recorded tile by tile on Dask
     (the route's scheduler) into NAME.zarr beside each NAME.exr, no EXR written; its pass is
-    the in-memory route's bit for bit; the next job finds the store whole and reads it."""
+    the in-memory route's bit for bit; the next job finds the store whole and reads it. Either
+    route plans the plate once: the runner's checks, the recording and its tiles read that
+    plan."""
     from holo_core import runner
     from holo_core.job import Job, Output, PlateRoute
+    from holo_core.plate import recording
 
     cam = camera("centre", SCALE)
 
@@ -333,9 +336,13 @@ def test_the_pipeline_records_a_plate_beyond_memory_in_tiles(scheduler, tmp_path
 
     assert not runner.needs_tiles(job(tmp_path / "a"))
     assert runner.needs_tiles(job(tmp_path / "a", memory_budget=1e6))
+    plans, planner = [], recording.plan
+    monkeypatch.setattr(recording, "plan", lambda *a, **k: plans.append(1) or planner(*a, **k))
     whole = runner.run(job(tmp_path / "a"))
+    assert len(plans) == 1, f"the job in memory planned its plate {len(plans)} times"
     monkeypatch.setattr(runner, "needs_tiles", lambda job, planned=None: True)
     tiled = runner.run(job(tmp_path / "b"))
+    assert len(plans) == 2, f"the tiled job planned its plate {len(plans) - 1} times"
     assert not (tmp_path / "b" / "h.exr").exists() and store.plate_current(tmp_path / "b" / "h.exr")
     assert np.array_equal(store.read_plate(tmp_path / "b" / "h.exr").object_wave[...],
                           read_hologram(tmp_path / "a" / "h.exr").object_wave)

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from accuracy import POINT_SUM, PRIMITIVE_VS_POINTS, WRP_VS_DIRECT, rel_err
 
-from holo_core.plate.point_sources import Grid, cone_weight, point_wave
 from holo_core.io.hologram import read_hologram, write_hologram
-from holo_core.plate.reconstruction import reconstruct
+from holo_core.plate.point_sources import Grid, cone_weight, point_wave
 from holo_core.plate.points import record_points
+from holo_core.plate.reconstruction import reconstruct
 from holo_core.plate.record import record_hologram
 from holo_core.plate.reference import Reference, reference_wave
 from holo_core.plate.sampling import choose
