@@ -21,9 +21,14 @@ viewed by any camera in that zone.
   textured triangles
 - ``record.py``: a scene onto a plate, as a plate of meshes or a point sum (researchers')
 - ``reconstruction.py``: R'·H with the DC term suppressed (Sect. VI)
+- ``window.py``: the camera in the plate's frame, the part of the plate its pupil sees the
+  objects through, and the pupil's grid
 - ``to_pupil.py``: the plate's light carried to a camera's entrance pupil (a carrier plate's
   by demodulation, decimation and a non-uniform FFT; a full-band one by the angular spectrum)
-- ``view.py``: a camera's image of it, by the camera hologram's own pupil stage (Sect. VII)
+- ``pupil_images.py``: each look's images at the pixels, by the camera hologram's own pupil
+  stage: the carrier plate's route and the full-band plate's
+- ``composition.py``: the looks' images composed into the view: radiance, alpha, depth
+- ``view.py``: a camera's image of the plate (Sect. VII), dispatching on its route
 """
 
 import sys

@@ -1,4 +1,5 @@
-"""Recording and reconstruction against analytic waves and float64 NumPy (Sect. V-VI)."""
+"""The point-sum recorder (holo_core.plate.points: point sources, textured triangles, the
+reference wave) and the reconstruction, against analytic waves and float64 NumPy (Sect. V-VI)."""
 
 import math
 
