@@ -34,7 +34,7 @@ sys.path[:0] = [str(ROOT)]
 import psutil  # noqa: E402  (Dask's own dependency)
 
 from holo_core.io.image import write_png  # noqa: E402
-from holo_core.plate.record import record_points  # noqa: E402
+from holo_core.plate.points import record_points  # noqa: E402
 from holo_core.plate.tiles import record_tiled  # noqa: E402
 from holo_core.plate.view import render_view  # noqa: E402
 from holo_core.scene.camera import Camera, look_at  # noqa: E402

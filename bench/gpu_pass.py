@@ -120,6 +120,7 @@ def child(job_path: Path, backend: str, runs: int, result_path: Path) -> None:
     t0 = time.perf_counter()
     from holo_core import runner
     from holo_core.camera import incoherent, recording
+    from holo_core.camera import raster as camera_raster
     from holo_core.camera import render as camera_render
     from holo_core.job import Job
     from holo_core.opencl import get_runtime
@@ -131,7 +132,7 @@ def child(job_path: Path, backend: str, runs: int, result_path: Path) -> None:
 
     stages = Stages()
     for name in ("choose_optics", "rasterize", "point_emitters", "merged"):
-        stages.wrap(camera_render, name, "emitters (host)")
+        stages.wrap(camera_raster, name, "emitters (host)")
     stages.wrap(recording.PupilFields, "__init__", "device setup and uploads", sync=True)
     stages.wrap(recording.PupilFields, "object_wave", "object wave kernels", sync=True)
     stages.wrap(recording.PupilFields, "image", "image kernels and readback", sync=True)

@@ -33,7 +33,7 @@ from gigapixel import timed  # noqa: E402
 from shot import PLATE, camera, cpu, scene  # noqa: E402
 
 from holo_core.io.tiled_wave import open_plate  # noqa: E402
-from holo_core.plate.record import record_plate  # noqa: E402
+from holo_core.plate.looks import record_plate  # noqa: E402
 from holo_core.scene.plate import Plate, ViewingZone  # noqa: E402
 
 

@@ -44,8 +44,8 @@ from holo_core.camera.render import render_camera  # noqa: E402
 from holo_core.io.image import write_png  # noqa: E402
 from holo_core.io.plate_paths import read_plate  # noqa: E402
 from holo_core.job import CameraRoute, Job, Output, PlateRoute  # noqa: E402
+from holo_core.plate.looks import record_looks  # noqa: E402
 from holo_core.plate.plan import plan, plan_view  # noqa: E402
-from holo_core.plate.record import record_looks  # noqa: E402
 from holo_core.plate.view import render_view  # noqa: E402
 from holo_core.scene.camera import Camera, look_at  # noqa: E402
 from holo_core.scene.plate import Plate, ViewingZone  # noqa: E402

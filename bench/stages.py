@@ -211,6 +211,7 @@ def report(title, stages: Stages, total, bounds: Measured, memory_bytes, host):
 def camera_pass(job_path: Path, rt, rounds) -> list:
     from holo_core import runner
     from holo_core.camera import incoherent
+    from holo_core.camera import raster as camera_raster
     from holo_core.camera import render as camera_render
     from holo_core.job import Job
     with open(job_path, "rb") as f:
@@ -221,7 +222,7 @@ def camera_pass(job_path: Path, rt, rounds) -> list:
     views = []
 
     def wrap(stages):
-        undo = [stages.wrap(camera_render, name, "emitters (host)")
+        undo = [stages.wrap(camera_raster, name, "emitters (host)")
                 for name in ("choose_optics", "rasterize", "point_emitters", "merged")]
         undo += [stages.wrap(incoherent.IncoherentImages, "__init__", "device setup and uploads"),
                  stages.wrap(incoherent.IncoherentImages, "_transfer_functions",
@@ -259,8 +260,8 @@ def plate(samples: int, rt, rounds) -> list:
     from plate_scene import PLATE, camera, meshes
 
     from holo_core.plate import slabs
-    from holo_core.plate import view as plate_view
-    from holo_core.plate.record import record_plate
+    from holo_core.plate import composition, pupil_images
+    from holo_core.plate.looks import record_plate
     from holo_core.plate.view import render_view
     centre = camera("centre", 1.0)
     # warm: programs built, the FFT plans of these grids read (or measured, once per machine)
@@ -276,11 +277,11 @@ def plate(samples: int, rt, rounds) -> list:
                f"convolutions)", stages, total, {}, {"slab recording (host: emitters, masks)"})]
     stages, total = measured(
         lambda: render_view(h, centre),
-        lambda st: [st.wrap(plate_view, "field_at_pupil",
+        lambda st: [st.wrap(pupil_images, "field_at_pupil",
                             "window to the pupil (propagation, rotation)"),
-                    st.wrap(plate_view.PupilImage, "image", "pupil to image (window, read "
+                    st.wrap(pupil_images.PupilImage, "image", "pupil to image (window, read "
                             "pixels)"),
-                    st.wrap(plate_view, "_compose", "compose the looks (host)")]
+                    st.wrap(composition, "compose", "compose the looks (host)")]
         + fft_stages(st), rounds, rt.queue.finish)
     return tables + [(f"plate view, {centre.resolution[0]}x{centre.resolution[1]} from the "
                       f"{h.shape[1]}x{h.shape[0]} plate", stages, total, {},

@@ -86,7 +86,8 @@ def _record_zone(args, mesh, out, tiled) -> int:
     from .io.hologram import write_hologram
     from .plate.plan import plan as plan_plate
     from .plate.plan import window_on_plate
-    from .plate.record import look_code, record_plate
+    from .plate.looks import record_plate
+    from .plate.recording import look_code
     from .scene.plate import Plate
     v = mesh.vertices
     bounds = np.array([v.min(0), v.max(0)])
@@ -126,7 +127,8 @@ def _record_points(args, mesh, out, tiled) -> int:
     import numpy as np
 
     from .io.hologram import write_hologram
-    from .plate.record import Reference, record_points
+    from .plate.points import record_points
+    from .plate.reference import Reference
     from .scene.mesh import default_spacing, sample_points
     shape = tuple(reversed(args.resolution or (1024, 1024)))
     pitch = args.pitch or 8e-6
@@ -303,7 +305,7 @@ def _camera(args, h):
     import numpy as np
 
     from .acquired import default_camera
-    from .plate.view import stated_plane
+    from .acquired.framing import stated_plane
     from .scene.camera import Camera, look_at
     resolution = tuple(args.resolution) if args.resolution else None
     if not args.camera and stated_plane(h) is not None:

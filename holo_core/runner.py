@@ -39,11 +39,11 @@ from .io.plate_paths import plate_files, read_plate, store_of
 from .io.tiled_wave import TiledWave
 from .io.view import write_view
 from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result
-from .plate.plan import CHANNELS
-from .plate.record import plate_plan, record_hologram, record_looks
+from .plate.looks import record_planned
+from .plate.plan import CHANNELS, PlatePlan
+from .plate.recording import PlannedPlate, plate_plan
 from .plate.view import OutsideZoneWarning, nyquist_supersample, render_view
 from .scene.hologram import Hologram
-from .scene.mesh import Mesh
 from .scene.radiance import projected
 from .view import BACKGROUND_DEPTH
 
@@ -92,7 +92,7 @@ def run(job: Job, progress: jobs.Progress = None, on_partial=None, *,
 def _plate(job: Job, progress, kept: KeptPlates):
     """The plate's holograms, recorded (or read when current, or ``kept`` from a job
     before), and their view."""
-    route, n = job.route, len(job.route.holograms)
+    route = job.route
     record_share = 0.0 if not route.record else (0.85 if job.output.render else 1.0)
     if route.record:
         kept.clear()  # a new plate: the one held is not held beside it
@@ -100,23 +100,18 @@ def _plate(job: Job, progress, kept: KeptPlates):
         # samples follow the zone and the views it is made for; the camera gives only the
         # pixel angle a zone of an earlier file lacks), so moving or refocusing the camera
         # never records again
-        # the iterations are coded looks of one seed where n allows (look_code), else seeds
-        meshes = list(job.points) + list(job.triangles)
-        if meshes and all(isinstance(m, Mesh) for m in meshes):  # every look in one pass
-            planned = _plan(job)
-            tiled = needs_tiles(job, planned)
-            _check_room(route, planned, tiled)  # before the recording: a full disk is said now
-            # beyond memory: tile by tile on Dask, each look into store_of its path (a
-            # cancelled recording resumes there, its tiles kept)
-            urls = [str(store_of(p)) for p in route.holograms] if tiled else None
-            holos = record_looks(meshes, looks=n, plate=route.plate, camera=job.camera,
-                                 wavelength=route.wavelength, seed=route.seed,
-                                 budget=(route.memory_budget, route.disk_budget), urls=urls,
-                                 scheduler=route.scheduler, recording=route.recording,
-                                 progress=jobs.scaled(progress, 0, record_share))
-        else:  # bare points: independent seeds
-            holos = [_record_look(job, i, jobs.scaled(
-                progress, record_share * i / n, record_share * (i + 1) / n)) for i in range(n)]
+        # the iterations are coded looks of one seed where n allows (look_code), else seeds,
+        # every look in one pass; the plan is made once, here, and read by every stage
+        planned = _plan(job)
+        tiled = needs_tiles(job, planned.plan)
+        _check_room(route, planned.plan, tiled)  # before the recording: a full disk is said now
+        # beyond memory: tile by tile on Dask, each look into store_of its path (a cancelled
+        # recording resumes there, its tiles kept)
+        urls = [str(store_of(p)) for p in route.holograms] if tiled else None
+        holos = record_planned(planned, seed=route.seed,
+                               budget=(route.memory_budget, route.disk_budget), urls=urls,
+                               scheduler=route.scheduler, recording=route.recording,
+                               progress=jobs.scaled(progress, 0, record_share))
     else:
         holos = kept.read(route.holograms)
         _check_recording(route, holos)
@@ -209,13 +204,13 @@ def _note_supersampling(chosen: int, nyquist: int) -> None:
                  "would average it a little further, at more time a frame", chosen, nyquist)
 
 
-def _plan(job: Job):
-    """The plan of the job's plate of meshes (:func:`plate_plan`) and its looks, before any
-    emitter is found."""
+def _plan(job: Job) -> PlannedPlate:
+    """The plan of the job's plate of meshes and its looks (:func:`plate_plan`), before any
+    emitter is found: made once a job."""
     route = job.route
-    p, _, _ = plate_plan(list(job.points) + list(job.triangles), plate=route.plate,
-                         camera=job.camera, wavelength=route.wavelength)
-    return replace(p, looks=len(route.holograms))
+    return plate_plan(list(job.points) + list(job.triangles), plate=route.plate,
+                      camera=job.camera, wavelength=route.wavelength,
+                      looks=len(route.holograms))
 
 
 def _check_room(route: PlateRoute, p, tiled: bool) -> None:
@@ -227,16 +222,12 @@ def _check_room(route: PlateRoute, p, tiled: bool) -> None:
                f"channels{', in tiles' if tiled else ''})")
 
 
-def needs_tiles(job: Job, planned=None) -> bool:
+def needs_tiles(job: Job, planned: PlatePlan | None = None) -> bool:
     """Whether the job's plate of meshes must be recorded tile by tile: its looks' whole plates,
-    recorded in memory together (:func:`record_looks`), exceed the route's memory budget or
-    the host's share of its memory. Bare points are recorded in memory (their point sums are
-    planned by their own rule). ``planned``: the plate's plan where the caller has it."""
+    recorded in memory together (:func:`record_planned`), exceed the route's memory budget or
+    the host's share of its memory. ``planned``: the plate's plan where the caller has it."""
     route = job.route
-    meshes = list(job.points) + list(job.triangles)
-    if not meshes or not all(isinstance(m, Mesh) for m in meshes):
-        return False
-    p = planned or _plan(job)
+    p = planned or _plan(job).plan
     limit = memory.host_share(route.memory_budget)
     if p.needs_tiles(limit):
         log.info("the plate's %d look(s) need %s in one piece, more than %s: recording them "
@@ -244,15 +235,6 @@ def needs_tiles(job: Job, planned=None) -> bool:
                  memory.gib(limit), store_of(route.holograms[0]).name)
         return True
     return False
-
-
-def _record_look(job: Job, i: int, progress) -> Hologram:
-    """Look ``i`` of a hologram of bare points (their point sum, seed + i), in memory."""
-    route = job.route
-    return record_hologram(list(job.points), triangles=list(job.triangles), plate=route.plate,
-                           camera=job.camera, wavelength=route.wavelength,
-                           budget=(route.memory_budget, route.disk_budget),
-                           seed=route.seed + i, progress=progress)
 
 
 def _check_outputs(job: Job) -> None:

@@ -2,7 +2,7 @@
 4 mm in front of the plate that sees it: the hologram the readers', the renderer's and the
 command line's refusals are tried on."""
 
-from holo_core.plate.record import record_points
+from holo_core.plate.points import record_points
 from holo_core.scene.camera import Camera, look_at
 
 

@@ -281,7 +281,7 @@ def _pristine_store(folder):
     if "store" not in _CACHE:
         from holo_core.io import store
         from holo_core.io.files import Files
-        from holo_core.plate.record import record_points
+        from holo_core.plate.points import record_points
         from holo_core.plate.tiles import _recording
         from holo_core.scene.hologram import HologramInfo
         shape, tile, lams = (96, 160), 64, (633e-9, 532e-9)
@@ -524,8 +524,8 @@ def api_calls():
     from holo_core import propagation as prop
     from holo_core.camera import render_camera
     from holo_core.plate.plan import plan
+    from holo_core.plate.points import record_points
     from holo_core.plate.reconstruction import reconstruct
-    from holo_core.plate.record import record_points
     from holo_core.plate.sampling import choose
     from holo_core.plate.view import render_view
     from holo_core.scene import Camera, Hologram, Mesh, look_at, sample_points

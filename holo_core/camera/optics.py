@@ -13,12 +13,12 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from .. import validate
-from ..optics.depth import partner_wavelength
+from ..optics.depth import DEPTH_MARGIN, partner_wavelength
 from ..optics.imaging import iris_weights
 from ..optics.pupil import Pupil, defocus_limited_diameter
 from ..propagation import grid
@@ -29,7 +29,6 @@ SUPERSAMPLE = 2        # fine pixels per pixel (per axis): the pupil resolves on
 LAYER_PHASE = math.pi / 2  # a layer's largest curvature error at the pupil's rim [rad]: a
                            # quarter wave, Rayleigh's depth of focus
 MAX_LAYERS = 512
-DEPTH_MARGIN = 1.25    # the depth pair's unambiguous range over the scene's depth extent
 EDGE_BINS = 8  # bins beyond the field of view and its blur: the read's taps and a guard
 
 
@@ -107,8 +106,7 @@ def choose_optics(camera: Camera, depth_range, *, supersample=SUPERSAMPLE,
     lam = diameter * b
     blur = diameter * max(abs(1 / near - 1 / focus), abs(1 / far - 1 / focus))
     margin = math.ceil(blur / b) + EDGE_BINS
-    alpha, beta, gamma = replace(camera, resolution=tuple(r * s for r in camera.resolution)
-                                 ).direction_cosines()
+    alpha, beta, gamma = camera.supersampled(s).direction_cosines()
     shape = tuple(grid.next_fast_len(2 * (math.ceil(np.abs(a).max() / b) + margin))
                   for a in (beta, alpha))
     step = 16 * LAYER_PHASE * lam / (2 * math.pi * diameter**2)  # layer spacing in 1/z

@@ -4,6 +4,8 @@
   ray meets the nearest triangle (a depth buffer, perspective-correct attributes), which
   emits its colour from the hit point, at distance R, with a random phase per look (speckle
   is averaged over looks, Sect. VII-E). Bare points go to their nearest bin.
+- The stage's entry (:func:`camera_emitters`): the optics chosen for the emitters' depths,
+  then the emitters of the meshes and of bare points.
 - Motion blur (:func:`across_shutter`). Meshes that move (``Mesh.motion``) are rasterized at
   times spread over the shutter, close enough that no vertex moves more than a bin (a fine
   pixel) from one to the next, and each time's emitters weigh 1/N: the image, its coverage
@@ -18,12 +20,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import validate
+from .. import memory, validate
 from ..optics.raster import bin_rays, crossing_chunks
 from ..scene.camera import Camera
 from ..scene.mesh import surface_colour
 from ..validate import InputError
-from .optics import PupilOptics
+from .optics import PupilOptics, choose_optics
 
 
 @dataclass(frozen=True, eq=False)
@@ -216,6 +218,27 @@ def across_shutter(meshes, camera: Camera, optics: PupilOptics) -> Emitters | No
     weight = np.maximum(cover, 1e-300)
     return _sorted_emitters(keys % size, sums[1] / weight, sums[2] / weight, sums[3:].T,
                             cover, optics, layer=keys // size)
+
+
+def camera_emitters(meshes, points, camera: Camera, *, supersample, pupil_diameter=None
+                    ) -> tuple[PupilOptics, Emitters]:
+    """(the optics, the emitters) of ``meshes`` (a list of Mesh, across the shutter where they
+    move) and bare ``points`` ((positions (N, 3) [m], colours (N, 3)) or None) seen by
+    ``camera``: the optics chosen for their depths (:func:`.optics.choose_optics`, at
+    ``supersample`` fine pixels per pixel, ``pupil_diameter`` [m] or the camera's), then one
+    emitter per bin. The meshes' rasterization is counted against the host's memory first."""
+    if meshes:  # before the meshes are projected: a 10^7-vertex mesh took 8 GB and more
+        memory.check_host(f"rasterizing {sum(len(m.triangles) for m in meshes)} triangles",
+                          raster_bytes(meshes))
+    pos, colours = (None, None) if points is None else points
+    optics = choose_optics(camera, depth_range(meshes, camera, pos), supersample=supersample,
+                           pupil_diameter=pupil_diameter)
+    em = across_shutter(meshes, camera, optics) if meshes else None
+    if pos is not None:
+        em = merged(em, point_emitters(pos, colours, camera, optics), optics)
+    if em is None or not len(em.index):
+        raise InputError("no emitter is visible to the camera")
+    return optics, em
 
 
 def depth_range(meshes, camera: Camera, points=None) -> tuple[float, float]:

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import replace
 
 import numpy as np
 
@@ -27,8 +26,8 @@ from ..scene.mesh import Mesh
 from ..validate import MAX_SUPERSAMPLE, InputError, shown
 from ..view import RenderResult
 from .incoherent import IncoherentImages, grid_bytes
-from .optics import SUPERSAMPLE, PupilOptics, choose_optics
-from .raster import across_shutter, depth_range, merged, point_emitters, raster_bytes
+from .optics import SUPERSAMPLE, PupilOptics
+from .raster import camera_emitters
 from .recording import PupilFields, intensity_hologram, reconstruct_object_wave
 
 log = logging.getLogger(__name__)
@@ -76,22 +75,13 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     seed = validate.seed(seed)
     if not 0 < validate.finite("exposure", exposure) <= MAX_EXPOSURE:
         raise InputError(f"exposure must be in (0, {MAX_EXPOSURE:g}]; got {shown(exposure)}")
+    meshes, points = _meshes(meshes), None if points is None else _points(points)
     w, h = camera.resolution
     memory.check_host(f"a {w}x{h} camera view at supersample {supersample}",
                       FINE_PIXEL_BYTES * w * h * supersample**2)
-    meshes = _meshes(meshes)
-    if meshes:  # before the meshes are projected: a 10^7-vertex mesh took 8 GB and more
-        memory.check_host(f"rasterizing {sum(len(m.triangles) for m in meshes)} triangles",
-                          raster_bytes(meshes))
-    pos, colours = (None, None) if points is None else _points(points)
-    optics = choose_optics(camera, depth_range(meshes, camera, pos), supersample=supersample,
-                           pupil_diameter=pupil_diameter)
-    em = across_shutter(meshes, camera, optics) if meshes else None
-    if pos is not None:
-        em = merged(em, point_emitters(pos, colours, camera, optics), optics)
-    if em is None or not len(em.index):
-        raise InputError("no emitter is visible to the camera")
-    fine = replace(camera, resolution=tuple(r * supersample for r in camera.resolution))
+    optics, em = camera_emitters(meshes, points, camera, supersample=supersample,
+                                 pupil_diameter=pupil_diameter)
+    fine = camera.supersampled(supersample)
     rt = get_runtime()
     if via == "incoherent":
         return _incoherent(rt, em, optics, camera, fine, exposure, progress, on_sample)

@@ -15,6 +15,8 @@ import numpy as np
 from .. import validate
 from ..validate import InputError
 
+DEPTH_MARGIN = 1.25  # the depth pair's unambiguous range over the objects' depth extent
+
 
 def partner_wavelength(wavelength, half_range) -> float:
     """λ2 = ε_l·λ1 with ε_l = 1 / (1 + λ1 / (2·d_max)) (Eq. 30): depths within ± ``half_range``

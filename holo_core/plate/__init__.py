@@ -8,17 +8,27 @@ viewed by any camera in that zone.
 - ``emitters.py``: the surfaces the zone sees, one emitter per resolved spot, and the zone
   points each is seen from (depth buffers over the zone)
 - ``zone_sum.py``: the samples as a sum of the emitters' waves towards the zone (Eq. 3)
+- ``recording.py``: a plate of meshes planned once, its emitters and amplitudes prepared for
+  the sums, its coded looks
+- ``looks.py``: the looks of a plate of meshes recorded in one pass, in memory or into stores
+- ``tiles.py``: plates larger than memory, recorded tile by tile as Dask tasks into a tiled
+  store (plates of meshes against their carrier; point sums)
+- ``reference.py``: the plane reference wave and H = |O + R|² (Eq. 4, 16)
 - ``sampling.py``: the point sums' pitch, wavelengths and band (Sect. V)
 - ``point_sources.py``: the object wave of point emitters on the plate (Eq. 16-18)
 - ``triangles.py``: the object wave of textured triangles, by spectrum rotation (Sect. IV-C)
-- ``record.py``: the plate of meshes against its carrier; point sums (complex, or
-  H = |O + R|² with its reference, Eq. 4, 19)
+- ``points.py``: point sums (complex, or against their reference, Eq. 19) of points and
+  textured triangles
+- ``record.py``: a scene onto a plate, as a plate of meshes or a point sum (researchers')
 - ``reconstruction.py``: R'·H with the DC term suppressed (Sect. VI)
-- ``tiles.py``: plates larger than memory, recorded tile by tile as Dask tasks into a tiled
-  store (plates of meshes against their carrier; point sums)
+- ``window.py``: the camera in the plate's frame, the part of the plate its pupil sees the
+  objects through, and the pupil's grid
 - ``to_pupil.py``: the plate's light carried to a camera's entrance pupil (a carrier plate's
   by demodulation, decimation and a non-uniform FFT; a full-band one by the angular spectrum)
-- ``view.py``: a camera's image of it, by the camera hologram's own pupil stage (Sect. VII)
+- ``pupil_images.py``: each look's images at the pixels, by the camera hologram's own pupil
+  stage: the carrier plate's route and the full-band plate's
+- ``composition.py``: the looks' images composed into the view: radiance, alpha, depth
+- ``view.py``: a camera's image of the plate (Sect. VII), dispatching on its route
 """
 
 import sys
@@ -27,10 +37,9 @@ from importlib import import_module
 
 # the names below import their modules on first use: the planner (plan.py) is pure arithmetic,
 # and Blender's process imports it without the OpenCL driver the recorder and the viewer load
-_API = {"Reference": ".record", "record_hologram": ".record", "record_plate": ".record",
-        "record_looks": ".record",
-        "record_points": ".record", "reconstruct": ".reconstruction", "render_view": ".view",
-        "physical_field": ".carrier",
+_API = {"Reference": ".reference", "record_hologram": ".record", "record_plate": ".looks",
+        "record_looks": ".looks", "record_points": ".points", "reconstruct": ".reconstruction",
+        "render_view": ".view", "physical_field": ".carrier",
         "find_carrier": "..acquired", "sideband": "..acquired"}  # their home: acquired/
 __all__ = sorted(_API)
 

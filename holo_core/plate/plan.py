@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import memory as memory_mod
 from .. import validate
-from ..optics.depth import partner_wavelength
+from ..optics.depth import DEPTH_MARGIN, partner_wavelength
 from ..optics.pupil import defocus_limited_diameter
 from ..scene.plate import ViewingZone, box_corners
 from ..validate import InputError
@@ -33,7 +33,6 @@ SHARP_SLACK = 1e-6     # of a spot: a zone's pixel and pupil kept in float32 (a 
                        # them by 6e-8
 RIM = 0.15             # the zone's soft rim, a fraction of its half widths
 LAYERS = 3             # surfaces an emitter ray may cross and still be recorded (depth peeling)
-DEPTH_MARGIN = 1.25    # the depth pair's unambiguous range over the objects' extent
 TILE = 2048            # samples a side of a tiled recording's tile, at most (fitted_tile)
 TILE_COST = 2**17      # samples a tile costs beyond its own: its task, its emitters' lists
 LOOKS = 2              # coded looks recorded by default (the checkerboard pair)
@@ -304,13 +303,18 @@ def fitted_tile(shape, largest=TILE, step=256) -> int:
     return min(range(step, largest + 1, step), key=cost)
 
 
-def pinhole_pupil(box, eye, bin_angle) -> tuple[float, float]:
+def pinhole_pupil(box, eye, bin_angle, rotation=None) -> tuple[float, float]:
     """(diameter [m], focus [m]) of a pinhole view's pupil from ``eye`` (3,) [m] of the box
     ``box`` (2, 3) [m]: the widest whose defocus over the box's depths stays within a fine bin
-    ``bin_angle`` [rad], focused on their middle in 1/z (the camera hologram's rule)."""
+    ``bin_angle`` [rad], focused on their middle in 1/z (the camera hologram's rule). The
+    depths lie along the view axis of the camera's axes ``rotation`` (3, 3; a plate's view),
+    or without them along the line towards the box's centre (the plan's reference view)."""
     corners = box_corners(box) - np.asarray(eye, np.float64)
-    axis = -corners.mean(0) / np.linalg.norm(corners.mean(0))
-    depth = np.clip(corners @ -axis, 1e-9, None)
+    if rotation is None:
+        axis = -corners.mean(0) / np.linalg.norm(corners.mean(0))
+        depth = np.clip(corners @ -axis, 1e-9, None)
+    else:
+        depth = -(corners @ rotation)[:, 2]
     return defocus_limited_diameter(bin_angle, float(depth.min()), float(depth.max()))
 
 

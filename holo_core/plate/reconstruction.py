@@ -14,7 +14,8 @@ import numpy as np
 from .. import validate
 from ..scene.hologram import Hologram
 from ..validate import InputError
-from .record import Reference, reference_wave
+from .carrier import physical_field
+from .reference import Reference, reference_wave
 
 
 @validate.scale_free()
@@ -32,7 +33,6 @@ def reconstruct(hologram: Hologram, colour: int = 0, *, dc_suppression=True) -> 
         raise InputError(f"hologram must be a Hologram; got {type(hologram).__name__}")
     colour = validate.index("colour", colour, len(hologram.wavelengths))
     if hologram.encoding == "complex":
-        from .carrier import physical_field
         return np.asarray(physical_field(hologram, colour).samples, np.complex64)
     h = hologram.intensity[colour].astype(np.float64)
     if dc_suppression:

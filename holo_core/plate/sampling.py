@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import validate
-from ..optics.depth import partner_wavelength
+from ..optics.depth import DEPTH_MARGIN, partner_wavelength
 from ..optics.pupil import pinhole_wavelength
 from ..validate import InputError
 from .point_sources import CONE_RIM
@@ -34,7 +34,6 @@ log = logging.getLogger(__name__)
 DEFAULT_BAND = 0.25      # sin θ of the viewing zone without a camera
 MAX_BAND = 0.9           # the widest cone chosen, sin θ (64°), with a camera or without
 MARGIN = 0.95            # the cone stays this fraction inside the off-axis sampling limit
-DEPTH_MARGIN = 1.25      # the depth pair's unambiguous range over the scene's extent
 MIN_RESOLUTION, DEFAULT_RESOLUTION = 256, 1024
 
 

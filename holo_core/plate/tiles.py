@@ -9,7 +9,7 @@ sample positions, the same phases), so a tiled plate equals the plate recorded i
   (``point_sources``: a point lights only the disc its pitch samples alias-free).
 - Plates of meshes (:func:`record_looks_tiled`), with occlusion, against the carrier
   converging on their zone: the emitters the zone sees and their visibility tables are found
-  once, on the client (:func:`holo_core.plate.record.prepare_plate`); a tile is
+  once, on the client (:func:`holo_core.plate.recording.prepare_plate`); a tile is
   :meth:`ZoneSum.region <holo_core.plate.zone_sum.ZoneSum.region>` of its block, from the
   emitters whose footprint reaches it.
 
@@ -27,32 +27,26 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import os
-import socket
-import struct
-from contextlib import contextmanager
 from dataclasses import replace
 
 import numpy as np
 
-from .. import jobs, validate
+from .. import cluster, jobs, validate
 from ..io import digests, store
 from ..io.files import StoreError, check_output
 from ..io.tiled_wave import open_plate
 from ..opencl import get_runtime
 from ..scene.hologram import Hologram, HologramInfo
-from ..scene.plate import DEFAULT_ZONE_MARGIN
 from ..validate import InputError
 from .point_sources import check_distance, point_wave, sampling_grid
-from .record import DEFAULT_WAVELENGTHS, PlateRecording, plate_plan, point_amplitudes, prepare_plate
+from .points import DEFAULT_WAVELENGTHS, point_amplitudes
+from .recording import PlannedPlate, PlateRecording, prepare_plate
 from .zone_sum import BLOCK
 
 log = logging.getLogger(__name__)
 DEFAULT_TILE = 2048
 TILE_STEP = 64  # point tiles are multiples of this: the kernel's column segments (<= 32) align
 ZONE_TILE_STEP = BLOCK  # a plate of meshes' tiles: multiples of its emitters' block lists
-CONNECT_TIMEOUT = 10.0  # [s] to reach a scheduler and hear its first message
-MAX_HANDSHAKE = 2**20   # bytes a Dask scheduler's first message may claim (a few hundred)
 
 
 def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_WAVELENGTHS,
@@ -63,7 +57,7 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
     it opened (:func:`holo_core.io.tiled_wave.open_plate`).
 
     positions, colours, wavelengths, phases, seed, band, method
-        As for :func:`holo_core.plate.record.record_points` (positions [m] in the plate's
+        As for :func:`holo_core.plate.points.record_points` (positions [m] in the plate's
         frame, z < 0; colours: intensities, one column per wavelength [m]).
     url : str or path
         The store: a folder (made absolute before the workers see it), or an fsspec URL the
@@ -110,21 +104,21 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
     return open_plate(files[0].name)
 
 
-def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
-                       zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
+def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, depth=True, seed=0,
                        encoding="complex", tile=None, scheduler=None, overwrite=False,
                        progress: jobs.Progress = None, dashboard=None,
                        budget=(None, None), recording="") -> list[Hologram]:
-    """The looks ``codes`` of one plate of ``meshes`` (with occlusion, against the carrier
-    converging on its zone: :func:`holo_core.plate.record.record_plate`, whose other
-    arguments these are; look l coded by codes[l], or where that is None of seed + l), each
-    into its own tiled store at ``urls`` [l], returned opened
+    """The looks ``codes`` of the plate of meshes ``planned`` (with occlusion, against the
+    carrier converging on its zone: :func:`holo_core.plate.recording.plate_plan`; the other
+    arguments as :func:`holo_core.plate.looks.record_plate` takes them; look l coded by
+    codes[l], or where that is None of seed + l; default: the plan's looks), each into its
+    own tiled store at ``urls`` [l], returned opened
     (:func:`holo_core.io.tiled_wave.open_plate`).
 
     The emitters and their visibility tables are found once, here, and scattered once to the
     workers; each task sums one tile (``tile`` samples a side, a multiple of 256: the
     emitters' block lists; by default the plan's, fitted to the plate) for every look at
-    once (as :func:`holo_core.plate.record.record_looks` does in memory) and writes each
+    once (as :func:`holo_core.plate.looks.record_looks` does in memory) and writes each
     look with its record into the stores that lack it. A store's digest covers the meshes
     in the plate's frame (vertices, triangles, colours, UVs, texture: the plate's pose too),
     the zone, the plan (samples, pitches, origin, wavelengths), its look's seed, code and
@@ -134,18 +128,16 @@ def record_looks_tiled(meshes, *, urls, codes, plate, camera=None, zone=None,
     ``scheduler``, ``overwrite``, ``progress``, ``dashboard``: as for :func:`record_tiled`;
     ``recording``: the digest the stores' plates carry (the name the caller knows them by).
     """
-    if tile is None:
-        tile = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
-                          zone_margin=zone_margin, wavelength=wavelength)[0].tile
-    tile = _tile(tile, ZONE_TILE_STEP)
+    tile = _tile(planned.plan.tile if tile is None else tile, ZONE_TILE_STEP)
     _flag("overwrite", overwrite)
-    if len(urls) != len(codes) or not urls:
+    looks = planned.plan.looks if codes is None else len(codes)
+    if len(urls) != looks or not urls:
         raise InputError(f"urls must name one store per look; got {len(urls)} for "
-                         f"{len(codes)} look(s)")
+                         f"{looks} look(s)")
     files, address = _output_and_scheduler(urls, scheduler)
-    job = prepare_plate(meshes, plate=plate, camera=camera, zone=zone, zone_margin=zone_margin,
-                        wavelength=wavelength, depth=depth, seed=seed, codes=codes,
-                        encoding=encoding, tile=tile, budget=budget)
+    planned = replace(planned, plan=replace(planned.plan, tile=tile))
+    job = prepare_plate(planned, codes=codes, depth=depth, seed=seed, encoding=encoding,
+                        tiled=True, budget=budget)
     recordings = [_plate_recording(job, tile, look) for look in range(job.looks)]
     info = replace(job.info, recording=validate.digest("recording", recording))
     _record_tiles(files, info, tile, recordings, overwrite=overwrite, address=address,
@@ -175,10 +167,7 @@ def _output_and_scheduler(urls, scheduler):
     files = [check_output(url) for url in urls]
     if len({f.name for f in files}) != len(files):
         raise InputError(f"each look needs a store of its own; got {[f.name for f in files]}")
-    address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
-    if address:
-        _probe(address)
-    return files, address
+    return files, cluster.scheduler_address(scheduler)
 
 
 def _record_tiles(files, info, tile, recordings, *, overwrite, address, task, shared,
@@ -196,15 +185,11 @@ def _record_tiles(files, info, tile, recordings, *, overwrite, address, task, sh
         if todo:
             spec = {"urls": [f.url for f in files],
                     "recordings": [r["digest"] for r in recordings]}
-            with client_for(address) as client:
-                if dashboard is not None:
-                    dashboard(client.dashboard_link)
-                data = client.scatter(shared, broadcast=True)
-                # a tile is written only into the stores that lack it (the others keep theirs)
-                futures = [client.submit(task, data, {**spec, "looks": [
-                    k for k, missing in enumerate(lacking) if (i, j) in missing]},
-                    int(i), int(j), pure=False) for i, j in todo]
-                _wait(client, futures, progress, lost=lambda: _kept(files))
+            # a tile is written only into the stores that lack it (the others keep theirs)
+            cluster.run_tasks(task, shared, [({**spec, "looks": [
+                k for k, missing in enumerate(lacking) if (i, j) in missing]}, int(i), int(j))
+                for i, j in todo], address=address, progress=progress, dashboard=dashboard,
+                lost=lambda: _kept(files))
 
 
 def _kept(files) -> str:
@@ -342,122 +327,3 @@ def _still_ours(spec: dict, i: int, j: int) -> dict:
                              f"recording {digest[:12]} is not written")
         plates[look] = plate
     return plates
-
-
-@contextmanager
-def client_for(scheduler=None):
-    """A Dask client: of the scheduler at ``scheduler`` (or ``DASK_SCHEDULER_ADDRESS``), else
-    of a local cluster with one single-threaded worker process per core (each worker holds
-    its own OpenCL context), listening on 127.0.0.1 alone (``HOLO_DASK_HOST``: the host or
-    interface address to listen on instead); its dashboard's address is logged."""
-    try:
-        from distributed import Client, LocalCluster
-    except ImportError:
-        raise InputError("tiled plates need Dask: pip install 'holo[tiles]'") from None
-    address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
-    if address:
-        with _connected(Client, address) as client:
-            log.info("Dask scheduler %s, dashboard %s", address, client.dashboard_link)
-            yield client
-        return
-    # the scheduler, the workers and the dashboard (a recording's tasks, logs and profiles)
-    # listen on loopback only, unless HOLO_DASK_HOST names the interface to publish them on
-    host = os.environ.get("HOLO_DASK_HOST", "").strip() or "127.0.0.1"
-    with LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                      host=host, dashboard_address=f"[{host}]:0" if ":" in host else
-                      f"{host}:0") as cluster, Client(cluster) as client:
-        log.info("local Dask cluster, dashboard %s", client.dashboard_link)
-        yield client
-
-
-@contextmanager
-def _connected(Client, address):
-    """A client of the scheduler at ``address``, or :class:`InputError` naming it within
-    ``CONNECT_TIMEOUT`` seconds: an address that is not one, an unknown host, a refused
-    connection, a port that never answers or answers other than a scheduler."""
-    _probe(address)
-    try:
-        client = Client(address, timeout=CONNECT_TIMEOUT)
-    except Exception as e:  # noqa: BLE001 -- Dask's failures to connect vary; all mean one thing
-        raise InputError(f"scheduler {address}: cannot connect ({type(e).__name__}: "
-                         f"{e})"[:400]) from None
-    with client:
-        yield client
-
-
-def _probe(address) -> None:
-    """Reach a TCP scheduler and read the length of its first message (a Dask scheduler
-    speaks first, a few hundred bytes) within ``CONNECT_TIMEOUT`` seconds, so that a wrong
-    endpoint fails fast and by name instead of hanging or allocating what garbage claims."""
-    from distributed.comm.addressing import parse_address, parse_host_port
-    what = f"scheduler {address}"
-    try:
-        scheme, location = parse_address(address)
-        if scheme not in ("tcp", "tls"):
-            return  # another transport (inproc://, ucx://): Dask's own timeout applies
-        host, port = parse_host_port(location)
-    except (ValueError, TypeError) as e:
-        raise InputError(f"{what}: not a scheduler address (tcp://host:port; {e})"[:300]) \
-            from None
-    try:
-        with socket.create_connection((host, port), timeout=CONNECT_TIMEOUT) as s:
-            if scheme == "tls":
-                return  # its messages are encrypted: reaching it is what can be checked
-            header = _receive(s, 8)
-    except socket.gaierror as e:
-        raise InputError(f"{what}: unknown host {host!r} ({e.strerror})") from None
-    except ConnectionRefusedError:
-        raise InputError(f"{what}: refuses connections (is a scheduler running there?)") \
-            from None
-    except (socket.timeout, TimeoutError):
-        raise InputError(f"{what}: no answer within {CONNECT_TIMEOUT:g} s (is it a Dask "
-                         f"scheduler?)") from None
-    except OSError as e:
-        raise InputError(f"{what}: cannot connect ({e.strerror or e})") from None
-    if header is None:
-        raise InputError(f"{what}: closed the connection without a word; not a Dask "
-                         f"scheduler")
-    (claimed,) = struct.unpack("<Q", header)
-    if not 0 < claimed <= MAX_HANDSHAKE:
-        raise InputError(f"{what}: answers, but not as a Dask scheduler (its first message "
-                         f"claims {claimed} bytes)")
-
-
-def _receive(sock, n) -> bytes | None:
-    data = b""
-    while len(data) < n:
-        part = sock.recv(n - len(data))
-        if not part:
-            return None
-        data += part
-    return data
-
-
-class TasksLost(RuntimeError):
-    """A recording's tasks lost with the Dask workers or the scheduler that ran them; the
-    message says what was kept and how to go on."""
-
-
-def _wait(client, futures, progress, lost=None) -> None:
-    """Each task's result as it finishes, with the fraction done to ``progress``; on a
-    cancellation or a failed task the rest are cancelled. Tasks lost with their workers or
-    the scheduler (Dask's ``CancelledError``, ``KilledWorker``, a closed connection) are
-    :class:`TasksLost` in ``lost()``'s words (the stores and the tiles they keep)."""
-    from concurrent.futures import CancelledError
-
-    from distributed import KilledWorker, as_completed
-    from distributed.comm import CommClosedError
-    try:
-        for n, future in enumerate(as_completed(futures), 1):
-            future.result()  # a failed tile raises its error here
-            jobs.report(progress, n, len(futures))
-    except (CancelledError, KilledWorker, CommClosedError) as e:
-        with contextlib.suppress(Exception):  # the scheduler may be gone with them
-            client.cancel(futures)
-        why = f"{type(e).__name__}: {e}".splitlines()[0][:200]
-        raise TasksLost(f"the recording lost its Dask workers or scheduler ({why}); "
-                        f"{lost() if lost else 'the tiles written are kept'}; run the same "
-                        f"recording again to resume it") from None
-    except BaseException:
-        client.cancel(futures)
-        raise

@@ -104,6 +104,13 @@ class Camera:
         viewfac = w if fit == "HORIZONTAL" else ycor * h
         return self.lens / sensor * viewfac, self.shift_x * viewfac, self.shift_y * viewfac, ycor
 
+    def supersampled(self, s: int) -> Camera:
+        """This camera with s × s fine pixels in each of its pixels (the same field of view)."""
+        if s == 1:
+            return self
+        w, h = self.resolution
+        return replace(self, resolution=(w * s, h * s))
+
     def cropped(self, left: int, top: int, width: int, height: int) -> Camera:
         """The camera of a region of this one's image, ``width`` x ``height`` pixels from
         (``left``, ``top``) [px, from the top-left corner]: each pixel keeps its ray (a

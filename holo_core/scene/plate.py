@@ -10,6 +10,7 @@ calls for a new recording.
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 
@@ -18,6 +19,7 @@ import numpy as np
 from .. import validate
 from ..validate import InputError, shown
 
+log = logging.getLogger(__name__)
 DEFAULT_ZONE_MARGIN = 0.05  # [m] the default zone reaches this far beyond the camera's pupil
 
 
@@ -194,6 +196,25 @@ class Plate:
                              f"define its viewing zone; it is at z = {position[2]:.4g} m")
         return ViewingZone.around(position, camera.aperture_diameter or 0.0, margin,
                                   camera.pixel_angle())
+
+    def recording_zone(self, zone, camera, margin, bounds) -> ViewingZone:
+        """The viewing zone of a recording: ``zone``, else the plate's own, else one around
+        ``camera``'s pupil (``margin`` [m]), else the plate's extent mirrored at the objects'
+        distance in front of it (``bounds`` (2, 3) [m], the plate's frame)."""
+        if zone is not None:
+            if not isinstance(zone, ViewingZone):
+                raise InputError(f"zone must be a ViewingZone or None; got "
+                                 f"{type(zone).__name__}")
+            return zone
+        if self.zone is not None:
+            return self.zone
+        if camera is not None:
+            return self.zone_for(camera, margin)
+        distance = -float(bounds[1, 2])
+        zone = ViewingZone(centre=(0.0, 0.0, distance),
+                           half_extents=(self.width / 2, self.height / 2, distance / 4))
+        log.info("plate: no camera and no viewing zone given: %s", zone.describe())
+        return zone
 
 
 def box_corners(bounds) -> np.ndarray:

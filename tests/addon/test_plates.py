@@ -110,7 +110,7 @@ def test_the_plan_samples_the_plate_the_recording_samples(empty_scene):
     46 Mpx and 2.7 GB)."""
     from holo_addon.render import pipeline
     from holo_addon.ui import plates
-    from holo_core.plate.record import plate_plan
+    from holo_core.plate.recording import plate_plan
     scene = empty_scene
     cube, _, plate = _plate_scene(scene)
     bpy.data.objects.remove(cube)
@@ -120,8 +120,8 @@ def test_the_plan_samples_the_plate_the_recording_samples(empty_scene):
     bpy.context.view_layer.objects.active = plate
     assert bpy.ops.holo.plan_plate() == {"FINISHED"}
     job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False).job
-    p, _, _ = plate_plan(list(job.points) + list(job.triangles), plate=job.route.plate,
-                         camera=job.camera, wavelength=job.route.wavelength)
+    p = plate_plan(list(job.points) + list(job.triangles), plate=job.route.plate,
+                   camera=job.camera, wavelength=job.route.wavelength).plan
     rows, cols = p.shape
     text = "\n".join(plates.plan_lines(plate))
     assert f": {cols} x {rows} samples" in text, (p.shape, text)

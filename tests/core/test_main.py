@@ -96,12 +96,12 @@ def test_cli_output_is_checked_before_the_work(tmp_path, point_hologram, capsys,
                                               output, problem, command):
     """Findings 11 and 12: a read-only folder was found only after the whole recording, and
     -o r.png wrote EXR bytes under a .png name."""
-    import holo_core.plate.record
+    import holo_core.plate.points
     import holo_core.plate.view
 
     def never(*_, **__):
         raise AssertionError("the work started before the output was checked")
-    monkeypatch.setattr(holo_core.plate.record, "record_points", never)
+    monkeypatch.setattr(holo_core.plate.points, "record_points", never)
     monkeypatch.setattr(holo_core.plate.view, "render_view", never)
     (tmp_path / "q.obj").write_text(CUBE_OBJ)
     (tmp_path / "a_file").write_text("a file")

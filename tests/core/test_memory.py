@@ -6,7 +6,7 @@ import pinhole
 import pytest
 
 from holo_core.io.hologram import HologramFileError, read_hologram, write_hologram
-from holo_core.plate.record import record_points
+from holo_core.plate.points import record_points
 from holo_core.plate.view import render_view
 from holo_core.validate import InputError
 

@@ -7,7 +7,7 @@ import pytest
 from cli import run_cli as cli
 
 from holo_core.io.image import read_exr
-from holo_core.plate.record import record_points
+from holo_core.plate.points import record_points
 from holo_core.plate.view import render_view
 from holo_core.scene.camera import Camera, look_at
 from holo_core.validate import InputError
@@ -112,21 +112,22 @@ def _never(*_, **__):
 def test_a_ten_million_vertex_mesh_is_refused_by_render_camera(monkeypatch):
     """It passed 8 GB in 16 s; rasterizing takes about 1000 bytes per triangle (measured 920
     at 10^6): 18.6 GiB for 2·10^7 triangles against an 8 GiB budget."""
-    import holo_core.camera.render as render
+    import holo_core.camera.raster as raster
+    from holo_core.camera.render import render_camera
     monkeypatch.setenv("HOLO_MEMORY_LIMIT", "8G")
-    monkeypatch.setattr(render, "across_shutter", _never)
+    monkeypatch.setattr(raster, "across_shutter", _never)
     cam = Camera(matrix_world=look_at((0, 0, 0.5), (0, 0, -1)), resolution=(64, 64))
     with pytest.raises(InputError, match=r"rasterizing 20000000 triangles needs 1\d\.\d GiB of "
                                          r"memory; 6.4 GiB is available"):
-        render.render_camera(_huge_mesh(10**7), cam, via="incoherent", supersample=1)
+        render_camera(_huge_mesh(10**7), cam, via="incoherent", supersample=1)
 
 
 def test_ten_million_triangles_are_refused_by_the_plate_recording(monkeypatch):
-    import holo_core.plate.record as record
-    from holo_core.plate.record import record_plate
+    import holo_core.plate.recording as recording
+    from holo_core.plate.looks import record_plate
     from holo_core.scene.plate import Plate
     monkeypatch.setenv("HOLO_MEMORY_LIMIT", "2G")
-    monkeypatch.setattr(record, "zone_emitters", _never)
+    monkeypatch.setattr(recording, "zone_emitters", _never)
     with pytest.raises(InputError, match=r"moving 10000000 triangles onto the plate needs "
                                          r"\d\.\d+ GiB"):
         record_plate(_huge_mesh(5 * 10**6), plate=Plate(matrix_world=np.eye(4), width=0.05,
@@ -136,9 +137,9 @@ def test_ten_million_triangles_are_refused_by_the_plate_recording(monkeypatch):
 def test_a_hundred_million_point_sum_is_refused_before_its_amplitudes(monkeypatch):
     """10^8 points of three colours: (200 + 3·96) bytes each, 45.4 GiB, counted before their
     amplitudes and random phases are drawn."""
-    import holo_core.plate.record as record
+    import holo_core.plate.points as points
     monkeypatch.setenv("HOLO_MEMORY_LIMIT", "8G")
-    monkeypatch.setattr(record, "point_wave", _never)
+    monkeypatch.setattr(points, "point_wave", _never)
     n = 10**8
     with pytest.raises(InputError, match=r"100000000 point emitters of 3 wavelengths needs "
                                          r"45.4 GiB of memory"):
@@ -159,12 +160,13 @@ def _pupil_view(h, diameter, monkeypatch, *, crop=True):
     """(rgb at exposure 1, the pupil grid's samples per side) of a pinhole-less view through
     a pupil of ``diameter`` [m]."""
     from holo_core.optics.pupil import Pupil
-    from holo_core.plate import view
+    from holo_core.plate import pupil_images
     grids = []
-    real = view.pupil_grid
-    monkeypatch.setattr(view, "pupil_grid", lambda *a: grids.append(real(*a)) or grids[-1])
+    real = pupil_images.pupil_grid
+    monkeypatch.setattr(pupil_images, "pupil_grid",
+                        lambda *a: grids.append(real(*a)) or grids[-1])
     if not crop:
-        monkeypatch.setattr(view, "lit_diameter", lambda h, p, r, d: d)
+        monkeypatch.setattr(pupil_images, "lit_diameter", lambda h, p, r, d: d)
     cam = Camera(matrix_world=look_at((0, 0, 0.02), (0, 0, -0.03)), lens=50, sensor_width=2,
                  resolution=(16, 16))
     with pytest.warns(UserWarning, match="no depth channel"):

@@ -10,7 +10,7 @@ from holo_core import validate
 from holo_core.io.acquired import read_acquired
 from holo_core.plate import Reference, record_points
 from holo_core.plate.point_sources import point_wave
-from holo_core.plate.record import reference_wave
+from holo_core.plate.reference import reference_wave
 from holo_core.plate.sampling import choose
 from holo_core.propagation import (
     angular_spectrum,

@@ -179,7 +179,7 @@ def test_an_unwritable_output_folder_is_refused_before_the_recording(tmp_path, m
     """The audit's finding 11 for the add-on's worker: a pass or hologram that cannot be
     written is an InputError before anything is recorded (/sys is read-only even for root)."""
     recorded = []
-    monkeypatch.setattr(runner, "record_hologram", lambda *a, **k: recorded.append(1))
+    monkeypatch.setattr(runner, "record_planned", lambda *a, **k: recorded.append(1))
     j = job(tmp_path)
     j = dataclasses.replace(j, output=Output(folder=Path("/sys/holo")), route=dataclasses.replace(
         j.route, holograms=(Path("/sys/holo/h0.exr"),)))
@@ -197,9 +197,9 @@ def test_a_plate_larger_than_the_disks_room_is_refused_before_the_recording(tmp_
 
     from holo_core.io import image
     recorded = []
-    monkeypatch.setattr(runner, "record_looks", lambda *a, **k: recorded.append(1))
+    monkeypatch.setattr(runner, "record_planned", lambda *a, **k: recorded.append(1))
     j = job(tmp_path, iterations=2)
-    p, _, _ = runner.plate_plan(list(j.points), plate=j.route.plate, camera=j.camera)
+    p = runner.plate_plan(list(j.points), plate=j.route.plate, camera=j.camera).plan
     need = 2 * p.disk_bytes() / p.looks  # two looks
     usage = shutil.disk_usage(tmp_path)
     monkeypatch.setattr(image.shutil, "disk_usage",

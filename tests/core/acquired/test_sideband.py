@@ -9,7 +9,7 @@ from accuracy import SIDEBAND, SIDEBAND_FOUND, rel_err
 
 from holo_core.acquired import Aperture, InlineHologramError, find_carrier, sideband
 from holo_core.plate import Reference, reconstruct
-from holo_core.plate.record import interfere, reference_wave
+from holo_core.plate.reference import interfere, reference_wave
 from holo_core.propagation import grid
 from holo_core.scene import Hologram
 from holo_core.validate import InputError, SamplingWarning

@@ -5,7 +5,7 @@ import pytest
 
 from holo_core.io.hologram import read_hologram, write_hologram
 from holo_core.io.view import write_view
-from holo_core.plate.record import record_points
+from holo_core.plate.points import record_points
 from holo_core.validate import InputError
 from holo_core.view import RenderResult
 

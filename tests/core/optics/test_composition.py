@@ -11,7 +11,7 @@ from accuracy import rel_err
 from holo_core.optics.depth import from_cross_spectrum
 from holo_core.optics.imaging import COVERAGE_EDGE, COVERAGE_FLOOR, Folded, assemble
 from holo_core.optics.speckle import box_mean
-from holo_core.plate.view import _radiance, _spread
+from holo_core.plate.composition import _radiance, _spread
 from holo_core.scene.camera import Camera, look_at
 from holo_core.view import BACKGROUND_DEPTH
 

@@ -10,7 +10,7 @@ import pytest
 
 from holo_core.io import display as tiles_io
 from holo_core.phase import display as slm
-from holo_core.plate.record import record_points
+from holo_core.plate.points import record_points
 from holo_core.propagation import angular_spectrum, resample
 from holo_core.scene.hologram import Hologram
 from holo_core.validate import InputError

@@ -21,8 +21,9 @@ from plate_scene import PLATE, camera, meshes
 from zone_reference import carrier_plate, object_wave
 
 from holo_core.plate.carrier import demodulate, modulate, physical_field, physical_pitch, window
+from holo_core.plate.looks import record_looks, record_plate
 from holo_core.plate.reconstruction import reconstruct
-from holo_core.plate.record import look_code, record_looks, record_plate
+from holo_core.plate.recording import look_code
 from holo_core.plate.view import render_view
 from holo_core.plate.zone_sum import ZoneEmitters
 from holo_core.scene.hologram import Hologram

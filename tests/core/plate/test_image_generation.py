@@ -18,7 +18,9 @@ from accuracy import (
 from holo_core.optics import speckle
 from holo_core.optics.depth import partner_wavelength
 from holo_core.optics.pupil import Pupil
-from holo_core.plate.record import Reference, record_hologram, record_points
+from holo_core.plate.points import record_points
+from holo_core.plate.record import record_hologram
+from holo_core.plate.reference import Reference
 from holo_core.plate.view import render_view
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.mesh import Mesh

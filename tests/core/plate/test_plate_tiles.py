@@ -30,8 +30,9 @@ from holo_core.io.hologram import metadata, read_hologram  # noqa: E402
 from holo_core.io.plate_paths import plate_current, read_plate  # noqa: E402
 from holo_core.io.tiled_wave import open_plate, tiles_done  # noqa: E402
 from holo_core.plate.carrier import physical_field, window  # noqa: E402
-from holo_core.plate.record import record_plate  # noqa: E402
-from holo_core.plate.view import camera_in_plate, carrier_window, render_view  # noqa: E402
+from holo_core.plate.looks import record_plate  # noqa: E402
+from holo_core.plate.view import render_view  # noqa: E402
+from holo_core.plate.window import camera_in_plate, carrier_window, image_corners  # noqa: E402
 from holo_core.validate import InputError  # noqa: E402
 
 SCALE, TILE = 0.25, 256  # a plate of 504 x 559 samples: 2 x 3 tiles
@@ -96,7 +97,8 @@ def test_a_view_of_the_store_reads_its_window_only_and_equals_the_view_in_memory
     cam = camera("left", SCALE)
     view = render_view(open_plate(url), cam, supersample=2)
     rotation, position = camera_in_plate(in_memory, cam)
-    r0, r1, c0, c1 = carrier_window(in_memory, cam, rotation, position, cam.aperture_diameter)
+    r0, r1, c0, c1 = carrier_window(in_memory, position, rotation, cam.aperture_diameter,
+                                    image_corners(cam, rotation))
     overlapped = {(i, j) for i in range(r0 // TILE, (r1 - 1) // TILE + 1)
                   for j in range(c0 // TILE, (c1 - 1) // TILE + 1)}
     assert reads.tiles == overlapped and len(overlapped) == 4, (reads.tiles, (r0, r1, c0, c1))
@@ -125,20 +127,20 @@ KILLED = textwrap.dedent("""
     sys.path[:0] = [{tests!r}]
     import distributed
     from plate_scene import PLATE, camera, meshes
-    from holo_core.plate import record
-    region = record.PlateRecording.region
+    from holo_core.plate import looks, recording
+    region = recording.PlateRecording.region
 
     def slow(self, *args):  # a tile a second: the kill lands mid-recording
         time.sleep(1.0)
         return region(self, *args)
 
     if __name__ == "__main__":
-        record.PlateRecording.region = slow  # the workers share this process
+        recording.PlateRecording.region = slow  # the workers share this process
         with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                                       dashboard_address=":0") as cluster:
-            record.record_plate(meshes(), plate=PLATE, camera=camera("centre", {scale}),
-                                zone_margin=0.025, url={url!r}, tile={tile},
-                                scheduler=cluster.scheduler_address)
+            looks.record_plate(meshes(), plate=PLATE, camera=camera("centre", {scale}),
+                               zone_margin=0.025, url={url!r}, tile={tile},
+                               scheduler=cluster.scheduler_address)
 """)
 
 
@@ -298,7 +300,8 @@ def test_looks_recorded_together_in_tiles_equal_them_in_memory(scheduler, tmp_pa
     pair's, fill the two new stores and leave the pair's as they were, each new look within
     float32 rounding (1e-5 of the largest sample) of the look recorded alone (the looks
     together are summed by classes of equal code shifts and mixed)."""
-    from holo_core.plate.record import look_code, record_looks
+    from holo_core.plate.looks import record_looks
+    from holo_core.plate.recording import look_code
     urls = [tmp_path / f"look{k}.zarr" for k in range(2)]
     tiled = record_looks(meshes(), looks=2, urls=urls, tile=TILE, scheduler=scheduler, **SCENE)
     for h, want in zip(tiled, record_looks(meshes(), looks=2, **SCENE)):
@@ -319,9 +322,12 @@ def test_looks_recorded_together_in_tiles_equal_them_in_memory(scheduler, tmp_pa
 def test_the_pipeline_records_a_plate_beyond_memory_in_tiles(scheduler, tmp_path, monkeypatch):
     """A job's plate whose one look exceeds the memory budget is recorded tile by tile on Dask
     (the route's scheduler) into NAME.zarr beside each NAME.exr, no EXR written; its pass is
-    the in-memory route's bit for bit; the next job finds the store whole and reads it."""
+    the in-memory route's bit for bit; the next job finds the store whole and reads it. Either
+    route plans the plate once: the runner's checks, the recording and its tiles read that
+    plan."""
     from holo_core import runner
     from holo_core.job import Job, Output, PlateRoute
+    from holo_core.plate import recording
 
     cam = camera("centre", SCALE)
 
@@ -333,9 +339,13 @@ def test_the_pipeline_records_a_plate_beyond_memory_in_tiles(scheduler, tmp_path
 
     assert not runner.needs_tiles(job(tmp_path / "a"))
     assert runner.needs_tiles(job(tmp_path / "a", memory_budget=1e6))
+    plans, planner = [], recording.plan
+    monkeypatch.setattr(recording, "plan", lambda *a, **k: plans.append(1) or planner(*a, **k))
     whole = runner.run(job(tmp_path / "a"))
+    assert len(plans) == 1, f"the job in memory planned its plate {len(plans)} times"
     monkeypatch.setattr(runner, "needs_tiles", lambda job, planned=None: True)
     tiled = runner.run(job(tmp_path / "b"))
+    assert len(plans) == 2, f"the tiled job planned its plate {len(plans) - 1} times"
     assert not (tmp_path / "b" / "h.exr").exists() and plate_current(tmp_path / "b" / "h.exr")
     assert np.array_equal(read_plate(tmp_path / "b" / "h.exr").object_wave[...],
                           read_hologram(tmp_path / "a" / "h.exr").object_wave)

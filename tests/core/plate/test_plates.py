@@ -17,8 +17,11 @@ import pytest
 from plate_scene import camera, meshes
 
 from holo_core.camera.render import render_camera
-from holo_core.plate.record import look_code, record_hologram, record_plate
-from holo_core.plate.view import EmptyViewWarning, OutsideZoneWarning, SoftViewWarning, render_view
+from holo_core.plate.composition import SoftViewWarning
+from holo_core.plate.looks import record_plate
+from holo_core.plate.record import record_hologram
+from holo_core.plate.recording import look_code
+from holo_core.plate.view import EmptyViewWarning, OutsideZoneWarning, render_view
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.hologram import Hologram
 from holo_core.scene.mesh import Mesh

@@ -23,7 +23,7 @@ from holo_core.io.files import LOCK, Files, check_output  # noqa: E402
 from holo_core.io.hologram import HologramFileError  # noqa: E402
 from holo_core.io.tiled_wave import open_plate  # noqa: E402
 from holo_core.plate import tiles as recorder  # noqa: E402
-from holo_core.plate.record import record_points  # noqa: E402
+from holo_core.plate.points import record_points  # noqa: E402
 from holo_core.scene.hologram import HologramInfo  # noqa: E402
 from holo_core.validate import InputError  # noqa: E402
 

@@ -21,10 +21,11 @@ from stores import cancel_after, settled  # noqa: E402
 from holo_core import jobs  # noqa: E402
 from holo_core.io import store  # noqa: E402
 from holo_core.io.hologram import HologramFileError, metadata  # noqa: E402
+from holo_core.cluster import TasksLost, client_for  # noqa: E402
 from holo_core.io.tiled_wave import open_plate, tiles_done  # noqa: E402
-from holo_core.plate.record import record_points  # noqa: E402
-from holo_core.plate.tiles import TasksLost, client_for, record_tiled  # noqa: E402
-from holo_core.plate.to_pupil import window_of  # noqa: E402
+from holo_core.plate.points import record_points  # noqa: E402
+from holo_core.plate.tiles import record_tiled  # noqa: E402
+from holo_core.plate.window import window_of  # noqa: E402
 from holo_core.validate import InputError  # noqa: E402
 
 SHAPE, PITCH, TILE, WAVELENGTHS = (1024, 1024), 8e-6, 256, (633e-9, 532e-9)
@@ -220,8 +221,8 @@ def test_a_scheduler_that_cannot_serve_fails_fast_by_name_and_leaves_no_store(
     ended in MemoryError (3.07 EiB), each leaving a store behind; an unknown host and an
     address that is not one are named too. The timeout is 10 s
     (CONNECT_TIMEOUT); 0.5 s here."""
-    from holo_core.plate import tiles
-    monkeypatch.setattr(tiles, "CONNECT_TIMEOUT", 0.5)
+    from holo_core import cluster
+    monkeypatch.setattr(cluster, "CONNECT_TIMEOUT", 0.5)
     address = {"address": "tcp://127.0.0.1:not-a-port",
                "unknown": "tcp://no-such-host.invalid:8786"}.get(kind) or endpoint(kind)
     with pytest.raises(InputError, match=rf"scheduler {address}: {problem}"):
@@ -256,11 +257,11 @@ def test_a_relative_store_is_written_where_the_user_is_not_where_the_workers_are
 def test_the_output_is_checked_before_the_work(scene, tmp_path, monkeypatch, output, problem):
     """A regular file in the way, a read-only folder, memory:// and an unknown protocol ended
     in five exception types after the cluster started; each is one InputError naming it."""
-    from holo_core.plate import tiles
+    from holo_core import cluster
 
     def never(*_, **__):
         raise AssertionError("the work started before the output was checked")
-    monkeypatch.setattr(tiles, "client_for", never)
+    monkeypatch.setattr(cluster, "client_for", never)
     (tmp_path / "a_file").write_text("mine")
     with pytest.raises(InputError, match=problem):
         _record(scene, output.format(tmp=tmp_path), None)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from holo_core.io.hologram import HologramFileError, metadata, read_hologram, write_hologram
-from holo_core.plate.record import record_points
+from holo_core.plate.points import record_points
 from holo_core.scene.hologram import Hologram, HologramInfo
 from holo_core.scene.plate import ViewingZone
 from holo_core.validate import InputError
@@ -71,7 +71,7 @@ def test_a_file_is_checked_once_and_read_as_written(tmp_path, monkeypatch):
 def test_the_recorder_checks_the_description_before_it_records(monkeypatch):
     """A channel list that no hologram may hold is refused before any wave is summed."""
     summed = []
-    monkeypatch.setattr("holo_core.plate.record.point_wave", lambda *a, **k: summed.append(1))
+    monkeypatch.setattr("holo_core.plate.points.point_wave", lambda *a, **k: summed.append(1))
     with pytest.raises(InputError, match=r"^channels must name each"):
         record_points([[0, 0, -3e-3]], [[1.0]], shape=(32, 32), pitch=1e-6,
                       wavelengths=(633e-9,), channels=("R", "G"))

@@ -1,4 +1,5 @@
-"""Recording and reconstruction against analytic waves and float64 NumPy (Sect. V-VI)."""
+"""The point-sum recorder (holo_core.plate.points: point sources, textured triangles, the
+reference wave) and the reconstruction, against analytic waves and float64 NumPy (Sect. V-VI)."""
 
 import math
 
@@ -8,8 +9,10 @@ from accuracy import POINT_SUM, PRIMITIVE_VS_POINTS, WRP_VS_DIRECT, rel_err
 
 from holo_core.io.hologram import read_hologram, write_hologram
 from holo_core.plate.point_sources import Grid, cone_weight, point_wave
+from holo_core.plate.points import record_points
 from holo_core.plate.reconstruction import reconstruct
-from holo_core.plate.record import Reference, record_hologram, record_points, reference_wave
+from holo_core.plate.record import record_hologram
+from holo_core.plate.reference import Reference, reference_wave
 from holo_core.plate.sampling import choose
 from holo_core.plate.triangles import Primitive, primitive_wave, surface_field, surface_pitch
 from holo_core.propagation import angular_spectrum, grid

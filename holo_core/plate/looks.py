@@ -1,0 +1,118 @@
+"""The recording of a plate of meshes' looks, its public entry (:func:`record_looks`;
+:func:`record_plate` for one look): the plate planned once (:mod:`.recording`), then every
+look summed in one pass, whole in memory (:class:`~holo_core.plate.recording.PlateRecording`)
+or tile by tile into a store a look (:mod:`.tiles`).
+"""
+
+from __future__ import annotations
+
+from .. import jobs, validate
+from ..scene.hologram import Hologram
+from ..scene.plate import DEFAULT_ZONE_MARGIN, Plate, ViewingZone
+from .recording import PlannedPlate, plate_plan, prepare_plate
+from .tiles import record_looks_tiled
+
+
+def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
+                 zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
+                 code=None, encoding="complex", budget=(None, None), url=None, tile=None,
+                 scheduler=None, overwrite=False, progress: jobs.Progress = None,
+                 dashboard=None) -> Hologram:
+    """A plate hologram of ``meshes`` (world metres), independent of any camera: what it
+    records depends on the meshes, the plate's placement and size, the viewing zone and the
+    views' sharpness (:mod:`holo_core.plate.plan`). Its samples are the object wave against
+    the carrier converging on the zone's centre (:mod:`.carrier`), as many as the zone can
+    see; every emitter is seen from the zone points it is seen from (:mod:`.emitters`:
+    occlusion by depth buffers over the zone), its light summed onto its footprint
+    (:mod:`.zone_sum`).
+
+    Parameters
+    ----------
+    meshes : Mesh or sequence of Mesh
+        World-space surfaces; colours are linear RGB intensities.
+    plate : Plate
+    camera : Camera, optional
+        The zone's reference view where the zone does not say: its pupil and pixel angle
+        set the wavelength (λ = D·Δ/2: its views resolve a fine pixel); and where no zone is
+        given, the zone covers its pupil with ``zone_margin`` [m] around it.
+    zone : ViewingZone, optional
+        The region [m, the plate's frame] the plate will be looked at from; default
+        ``plate.zone``, else from ``camera``.
+    wavelength : float, optional
+        λ1 [m] instead of the planned one.
+    depth : bool
+        Also record the depth partner λ2 (Sect. VII-C).
+    seed : int
+        Seeds the emitters' random phases.
+    code : (k, m), optional
+        Look k of m² with the emitters' phases shifted by 2π·(k1·i + k2·j)/m on the lattice
+        cells (i, j) they lie in (k = k1·m + k2): the mean intensity of the m² looks has no
+        cross terms between emitters of neighbouring cells (the looks' speckle cancels
+        where random looks would only average it down).
+    encoding : 'complex'
+        The object wave (against its carrier); a display's or a print's intensity pattern is
+        made from it (:mod:`holo_core.phase.display`).
+    budget : (memory, disk) [bytes]
+        What the recording may hold in memory and the plate take on disk (None: no limit);
+        a plate that needs more is refused before any work, with its sizes (in memory, the
+        whole plate; tiled, one tile).
+    url : str or path, optional
+        Record tile by tile into the tiled store there, on Dask, and return it opened
+        (:func:`holo_core.plate.tiles.record_looks_tiled`: ``tile`` samples a side, a
+        multiple of 256, by default fitted to the plate (:func:`holo_core.plate.plan.
+        fitted_tile`); ``scheduler``, ``overwrite``, ``dashboard`` as there). Default: the
+        whole plate in memory.
+    progress : callable, optional
+        Called with the fraction done (rows in memory, tiles in a store).
+    """
+    planned = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
+                         zone_margin=zone_margin, wavelength=wavelength, looks=1)
+    return record_planned(planned, codes=(code,), urls=None if url is None else [url],
+                          depth=depth, seed=seed, encoding=encoding, budget=budget, tile=tile,
+                          scheduler=scheduler, overwrite=overwrite, progress=progress,
+                          dashboard=dashboard)[0]
+
+
+@validate.scale_free()  # as record_hologram: the renderer's jobs come this way
+def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
+                 zone: ViewingZone | None = None, zone_margin=DEFAULT_ZONE_MARGIN,
+                 wavelength=None, depth=True, seed=0, budget=(None, None), urls=None,
+                 tile=None, scheduler=None, overwrite=False, progress: jobs.Progress = None,
+                 dashboard=None, recording="") -> list[Hologram]:
+    """``looks`` looks of one plate (:func:`record_plate`'s arguments), recorded in memory in
+    one pass: the coded looks of ``seed`` (:func:`~holo_core.plate.recording.look_code`) where ``looks`` allows, else
+    seeds ``seed``, ``seed`` + 1, …. The looks differ only in their emitters' phases, so one
+    sum carries them all as further channels: each emitter's distance, phase and visibility
+    at a sample are found once for every look (on the shot's plate, two looks in 36 s where
+    one after the other took 53 s). ``budget`` covers all the looks held together. ``urls``
+    (one a look): each look tile by tile into its own store, every tile's looks summed at
+    once (:func:`holo_core.plate.tiles.record_looks_tiled`; ``tile``, ``scheduler``,
+    ``overwrite``, ``dashboard`` as for :func:`record_plate`). ``recording``: the digest the
+    looks carry in their description and their stores (the name the caller knows them by:
+    :attr:`holo_core.scene.hologram.HologramInfo.recording`)."""
+    looks = validate.integer("looks", looks, 1)
+    planned = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
+                         zone_margin=zone_margin, wavelength=wavelength, looks=looks)
+    return record_planned(planned, depth=depth, seed=seed, budget=budget, urls=urls,
+                          tile=tile, scheduler=scheduler, overwrite=overwrite,
+                          progress=progress, dashboard=dashboard, recording=recording)
+
+
+@validate.scale_free()
+def record_planned(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
+                   encoding="complex", budget=(None, None), urls=None, tile=None,
+                   scheduler=None, overwrite=False, progress: jobs.Progress = None,
+                   dashboard=None, recording="") -> list[Hologram]:
+    """The looks of the plate ``planned`` (:func:`~holo_core.plate.recording.plate_plan`,
+    made once a job) in one pass: ``codes`` one a look (default: the coded looks of its
+    plan's looks, :func:`~holo_core.plate.recording.prepare_plate`), in memory, or with ``urls``
+    tile by tile, a store a look (the other arguments as for :func:`record_looks`)."""
+    if urls is not None:
+        return record_looks_tiled(planned, urls=list(urls), codes=codes, tile=tile,
+                                  scheduler=scheduler, overwrite=overwrite, progress=progress,
+                                  dashboard=dashboard, depth=depth, seed=seed,
+                                  encoding=encoding, budget=budget, recording=recording)
+    holos = prepare_plate(planned, codes=codes, depth=depth, seed=seed, encoding=encoding,
+                          budget=budget).record(progress)
+    return [Hologram(info=h.info, intensity=h.intensity, object_wave=h.object_wave,
+                     recording=recording) for h in holos] if recording else holos

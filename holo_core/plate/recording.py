@@ -1,0 +1,282 @@
+"""A plate of meshes prepared for its sums: planned once (:func:`plate_plan`), then its
+emitters, their amplitudes and visibility tables found (:func:`prepare_plate`), from which any
+block of the plate is summed alike (:class:`PlateRecording`): whole in memory here, or tile by
+tile into stores (:mod:`.tiles`). Its samples are the object wave against the carrier
+converging on the zone's centre (:mod:`.carrier`), from the emitters the zone sees
+(:mod:`.emitters`) summed onto their footprints (:mod:`.zone_sum`). Its looks differ only in
+their emitters' phases: coded looks of one seed (:func:`look_code`) or seeds of their own.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .. import jobs, memory, validate
+from ..opencl.arrays import nonfinite_count, read
+from ..scene.hologram import Hologram, HologramInfo
+from ..scene.mesh import Mesh
+from ..scene.plate import DEFAULT_ZONE_MARGIN, Carrier, Plate, ViewingZone
+from ..validate import InputError
+from .emitters import zone_emitters
+from .plan import LAYERS, LOOKS, RIM, PlatePlan, plan
+from .zone_sum import ZoneEmitters, ZoneSum, ZoneWindow
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True, eq=False)
+class PlateRecording:
+    """A plate of meshes ready to be summed (:func:`prepare_plate`): what it will be
+    (``info``, its carrier included), where its samples lie (``window``), its emitters per
+    wavelength (``groups``: (λ [m], :class:`ZoneEmitters`) in channel order) and what it was
+    made from (``plan``, ``meshes`` in the plate's frame, ``seed``, ``codes``: each look's
+    code, or None for the look of seed + its index). Any block of it is the same sum computed
+    alone (:meth:`sums`): recorded whole in memory (:meth:`record`) or tile by tile
+    (:mod:`.tiles`), its samples are the same. Every look is summed in one pass
+    (:func:`~holo_core.plate.looks.record_looks`): the groups' channels are the looks' channels, look after look
+    within each wavelength, so a block's samples are (R₀ G₀ B₀ R₁ G₁ B₁ … Z₀ Z₁ …)
+    (:meth:`look_channels`)."""
+
+    info: HologramInfo
+    window: ZoneWindow
+    groups: tuple
+    plan: PlatePlan
+    meshes: tuple
+    seed: int
+    codes: tuple
+
+    @property
+    def looks(self) -> int:
+        return len(self.codes)
+
+    def look_columns(self, look: int) -> list[slice]:
+        """Per group, the columns of its emitters' amplitudes that are look ``look``'s."""
+        return [slice(look * n, (look + 1) * n)
+                for n in (em.amplitude.shape[1] // self.looks for _, em in self.groups)]
+
+    def look_channels(self, look: int) -> list[int]:
+        """The channels of a block's samples (:meth:`region`) that are look ``look``'s, in the
+        hologram's channel order."""
+        out, first = [], 0
+        for (_, em), columns in zip(self.groups, self.look_columns(look)):
+            out += range(first + columns.start, first + columns.stop)
+            first += em.amplitude.shape[1]
+        return out
+
+    def look_seed(self, look: int) -> int:
+        """The seed of look ``look``'s random phases (its code shifts them, where it has one)."""
+        return _look_seed(self.seed, self.codes, look)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.window.shape
+
+    def sums(self, rt=None) -> list[ZoneSum]:
+        """The :class:`ZoneSum` of the wavelengths, its emitters on the device: the depth
+        pair's partner summed with the colours in one pass where their channels an emitter
+        fit the kernel's accumulators (FUSED_CHANNELS), else one a wavelength."""
+        (lam, em), *rest = self.groups
+        per_emitter = sum(e.amplitude.shape[1] // (1 if e.mixing is None else len(e.mixing))
+                          for _, e in self.groups)
+        if len(rest) == 1 and per_emitter <= FUSED_CHANNELS:
+            return [ZoneSum(em, self.window, lam, rt, partner=rest[0])]
+        return [ZoneSum(e, self.window, lam, rt) for lam, e in self.groups]
+
+    def region(self, sums, row0: int, col0: int, rows: int, cols: int) -> np.ndarray:
+        """The samples (C, rows, cols) complex64 of a block (row0, col0 multiples of 256),
+        every channel; :class:`RuntimeError` if any is not finite (never written)."""
+        samples = np.concatenate([s.region(row0, col0, rows, cols) for s in sums])
+        if not np.isfinite(samples).all():  # never a hologram of NaN: it would be written
+            _not_finite(row0, col0, rows, cols)
+        return samples
+
+    def record(self, progress: jobs.Progress = None) -> list[Hologram]:
+        """Each look's whole plate in memory, summed in bands of rows, each channel read from
+        the device into its look's plane (no block on the host: its copies cost 2.3 s of the
+        shot's 28 s)."""
+        rows, cols = self.shape
+        channels = len(self.info.wavelengths)
+        waves = [memory.aligned_zeros((channels, rows, cols)) for _ in range(self.looks)]
+        # each sum's channel c goes to plane i of look l
+        where, first = [], 0
+        for s in self.sums():
+            where.append((s, [(look, i, b - first) for look in range(self.looks)
+                              for i, b in enumerate(self.look_channels(look))
+                              if first <= b < first + s.channels]))
+            first += s.channels
+        for r0 in range(0, rows, SUM_ROWS):
+            here = min(SUM_ROWS, rows - r0)
+            for s, planes in where:
+                block = s.on_device(r0, 0, here, cols)
+                if nonfinite_count(s.rt, block):  # never a hologram of NaN
+                    _not_finite(r0, 0, here, cols)
+                for look, i, c in planes:
+                    read(block[c], out=waves[look][i, r0:r0 + here])
+            jobs.report(progress, r0 + here, rows)
+        return [Hologram(info=self.info, object_wave=w) for w in waves]
+
+
+def _not_finite(row0, col0, rows, cols):
+    raise RuntimeError(f"the object wave holds non-finite samples in rows {row0}-"
+                       f"{row0 + rows - 1}, columns {col0}-{col0 + cols - 1} (the OpenCL "
+                       f"device's arithmetic failed); nothing was recorded")
+
+
+SUM_ROWS = 256  # rows of the plate summed at once in memory (a multiple of the block lists')
+FUSED_CHANNELS = 8  # channels an emitter the zone sum carries in one pass at most: its
+                    # accumulators (32 columns x 16 lanes x re, im) stay within a core's L1
+
+
+@dataclass(frozen=True, slots=True, kw_only=True, eq=False)
+class PlannedPlate:
+    """A plate of meshes planned (:func:`plate_plan`), before any emitter is found: its
+    ``plan`` (:class:`~holo_core.plate.plan.PlatePlan`: the zone, the samples, the
+    wavelengths, the looks, the tile, the costs), its ``meshes`` in the plate's frame and the
+    ``plate``. Made once a job; the runner's checks, the recording and its tiles read it."""
+
+    plan: PlatePlan
+    meshes: tuple
+    plate: Plate
+
+
+def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
+               zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, looks=LOOKS) -> PlannedPlate:
+    """The plan of a plate of ``meshes`` and its ``looks`` (the other arguments as
+    :func:`holo_core.plate.looks.record_plate` takes them): what its recording will hold and
+    cost, before any emitter is found."""
+    if not isinstance(plate, Plate):
+        raise InputError(f"plate must be a Plate; got {type(plate).__name__}")
+    meshes = [meshes] if isinstance(meshes, Mesh) else list(meshes)
+    if not meshes or not all(isinstance(m, Mesh) for m in meshes):
+        raise InputError("meshes must be a Mesh or a non-empty sequence of Mesh")
+    memory.check_host(f"moving {sum(len(m.triangles) for m in meshes)} triangles onto the "
+                      f"plate", sum(320.0 * len(m.triangles) + 96.0 * len(m.vertices)
+                                    for m in meshes))
+    local = [replace(m, vertices=plate.to_plate(m.vertices)) for m in meshes]
+    every = np.concatenate([m.vertices for m in local])
+    bounds = np.array([every.min(0), every.max(0)])
+    if bounds[1, 2] >= 0:
+        raise InputError(f"the objects must lie behind the plate (z < 0 in its frame); they "
+                         f"reach z = {bounds[1, 2]:.4g} m")
+    zone = plate.recording_zone(zone, camera, zone_margin, bounds)
+    pixel = zone.pixel or (camera.pixel_angle() if camera is not None else None)
+    if pixel is None and wavelength is None:
+        raise InputError("a plate needs the sharpness of its views: a camera, a zone with its "
+                         "pixel angle, or a wavelength")
+    p = plan((plate.width, plate.height), bounds, zone=zone, pixel_angle=pixel or 1.0,
+             wavelength=wavelength, looks=looks)
+    return PlannedPlate(plan=p, meshes=local, plate=plate)
+
+
+def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
+                  encoding="complex", tiled=False, budget=(None, None)) -> PlateRecording:
+    """The emitters, visibility tables and sampling of the plate ``planned``, before any
+    sum: the emitters the zone sees with their amplitudes, for the looks ``codes`` summed at
+    once (:func:`holo_core.plate.looks.record_looks`), look l's phases coded by codes[l], or
+    where that is None drawn from ``seed`` + l (default: the plan's looks, coded where their
+    count allows, :func:`look_code`). The host's memory and the ``budget`` are
+    checked for the whole plate, or where ``tiled`` for one tile of the plan's."""
+    if encoding != "complex":
+        raise InputError(f"encoding must be 'complex' for a plate of meshes (a display's "
+                         f"intensity pattern is made from it: holo_core.phase.display); got "
+                         f"{encoding!r}"[:200])
+    seed = validate.seed(seed)
+    p, local, zone = planned.plan, planned.meshes, planned.plan.zone
+    codes = tuple(look_code(k, p.looks) for k in range(p.looks)) if codes is None else \
+        tuple(codes)
+    bounds = p.bounds
+    log.info("sampling: %s", p.describe())
+    channels = ["R", "G", "B"] + (["Z"] if depth else [])
+    held_channels = len(channels) * len(codes)  # every look's, in one pass
+    p.check_budget(memory=budget[0], disk=budget[1], channels=len(channels),
+                   tiled=tiled, held=len(codes))
+    held = f"a {p.tile}x{p.tile} tile" if tiled else f"a {p.shape[1]}x{p.shape[0]} plate"
+    memory.check_host(f"{held} of {held_channels} channels",
+                      p.memory_bytes(held_channels, tiled=tiled))
+    em = zone_emitters(local, zone, p.spacing, layers=LAYERS)
+    if not len(em):
+        raise InputError(f"no surface of the meshes is seen from the viewing zone "
+                         f"({zone.describe()})")
+    # |a| = √I·|p − Z|: each emitter's light reaches the zone's centre with its own amplitude
+    reach = np.linalg.norm(em.position - np.asarray(zone.centre), axis=1)
+    waves = [np.exp(1j * _phases(em, _look_seed(seed, codes, look), c)) * reach
+             for look, c in enumerate(codes)]
+    partial = em.visibility.reshape(len(em), -1).min(1) < 1
+    rows = np.where(partial, np.cumsum(partial) - 1, -1).astype(np.int32)
+    table = np.round(em.visibility[partial] * 255).astype(np.uint8)
+    window = ZoneWindow(origin=p.origin, pitch=p.pitch, row_pitch=p.row_pitch, shape=p.shape,
+                        centre=zone.centre, half_extents=zone.half_extents, rim=RIM)
+    amplitudes = [(p.wavelength, np.concatenate([np.sqrt(em.colour) * wave[:, None]
+                                                 for wave in waves], 1))]
+    if depth:
+        amplitudes.append((p.depth_wavelength, np.stack(waves, 1)))
+    classes, mixing = _code_classes(em, codes)
+    groups = tuple((lam, ZoneEmitters(position=em.position, amplitude=a, visibility=rows,
+                                      table=table, grid=em.grid, classes=classes,
+                                      mixing=mixing)) for lam, a in amplitudes)
+    distance = float(np.linalg.norm(bounds.mean(0) - np.asarray(zone.centre)))
+    wavelengths = (p.wavelength,) * 3 + ((p.depth_wavelength,) if depth else ())
+    info = HologramInfo(shape=p.shape, encoding="complex", wavelengths=wavelengths,
+                        pitch=p.pitch, band=max(p.band), channels=tuple(channels),
+                        point_density=1 / (p.spacing * distance) ** 2, zone=zone,
+                        bounds=bounds, plate=planned.plate.matrix_world,
+                        carrier=Carrier(centre=zone.centre, origin=p.origin,
+                                        row_pitch=p.row_pitch))
+    return PlateRecording(info=info, window=window, groups=groups, plan=p, meshes=local,
+                          seed=seed, codes=tuple(None if c is None else tuple(c) for c in codes))
+
+
+def _code_classes(em, codes) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(each emitter's class, the looks' factors (looks, classes)) where the looks are coded
+    looks of one seed (:func:`_phases`): look l's phases are look 0's plus 2π·s_l/m, s_l
+    taking m values over the lattice cells, so the emitters fall in the classes of equal
+    shifts and each look is the classes' sums times exp(2πi·(s_l − s_0)/m)
+    (:class:`ZoneEmitters`). (None, None) for a single look or independent ones."""
+    if len(codes) < 2 or any(c is None for c in codes) or len({c[1] for c in codes}) > 1:
+        return None, None
+    m = codes[0][1]
+    shifts = np.stack([_code_steps(em, code) % m for code in codes], 1)
+    kinds, classes = np.unique(shifts, axis=0, return_inverse=True)
+    mixing = np.exp(2j * np.pi * (kinds - kinds[:, :1]).T / m)
+    return classes.reshape(-1).astype(np.int32), mixing
+
+
+def _look_seed(seed: int, codes, look: int) -> int:
+    """The seed of look ``look``'s phases: the plate's, shifted by the look's code where it
+    has one, else seed + look (independent looks)."""
+    return seed + (0 if codes[look] else look)
+
+
+def _phases(em, seed: int, code) -> np.ndarray:
+    """The emitters' random phases [rad] of ``seed``, shifted by ``code`` (k, m): 2π·(k1·i +
+    k2·j)/m on the lattice cells (i, j) they lie in (k = k1·m + k2; :func:`~holo_core.plate.looks.record_plate`)."""
+    phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, len(em))
+    if code is not None:
+        phases = phases + 2 * np.pi * _code_steps(em, code) / code[1]
+    return phases
+
+
+def _code_steps(em, code) -> np.ndarray:
+    """k1·i + k2·j (int) for the emitters' lattice cells (i, j) and code (k1·m + k2, m): their
+    phases are shifted by 2π/m times it."""
+    k1, k2 = divmod(code[0], code[1])
+    return k1 * em.cell[:, 1] + k2 * em.cell[:, 0]
+
+
+def look_code(k: int, n: int):
+    """``code`` of look ``k`` of ``n`` looks of one plate (:func:`~holo_core.plate.looks.record_plate`, one seed for
+    all): n = m² gives the m² looks whose mean has no cross terms between emitters of
+    neighbouring lattice cells, n = 2 the checkerboard pair (looks 0 and 3 of m = 2), whose
+    mean has none between the four nearest cells (on the plate scene: 28.0–28.5 dB against
+    29.3–30.0 for four and 25.6–26.1 for one). Other n: None (independent random phases, one
+    seed per look)."""
+    n = validate.integer("looks", n, 1)
+    k = validate.integer("look", k, 0, n - 1)
+    m = math.isqrt(n)
+    if n == 2:
+        return (3 * k, 2)
+    return (k, m) if m > 1 and m * m == n else None
