@@ -31,9 +31,10 @@ log = logging.getLogger(__name__)
 @persistent
 def render_init(scene, *_):
     """A render begins (F12, ``-f``, ``-a``: once): the holographic layers follow the render
-    output's path, the passes the .blend's output folder."""
+    output's path, the blend the film, the passes the .blend's output folder."""
     session.render_started()
     tree.follow_render_output(scene)
+    tree.follow_film(scene)
     if tree.uses_pass(scene):  # a frame of the render (F12's) gets a clear pass where it has
         # none before Blender's copy of the image looks for it (found missing then, it stays
         # missing for the render: the Image node's grey)
