@@ -188,12 +188,12 @@ def _frame_pass(scene, frame: int, job) -> None:
     finally:
         session.pass_ended()
     log.info("Holo: frame %d: %s", frame, made(result, time.perf_counter() - started,
-                                                session.warnings["texts"]))
+                                                session.warnings["texts"], job.made_by))
 
 
-def made(result, seconds: float, warnings=()) -> str:
-    """One line of what a frame's pass was: made or reused, its time and file, its
-    warnings."""
+def made(result, seconds: float, warnings=(), route="") -> str:
+    """One line of what a frame's pass was: made or reused, its time, the ``route`` that
+    made it (:attr:`holo_addon.export.job.Prepared.made_by`), its file and its warnings."""
     if result.reused == result.pass_path:
         verb = "reused (up to date)"
     elif result.reused is not None:
@@ -202,7 +202,7 @@ def made(result, seconds: float, warnings=()) -> str:
         verb = f"made in {seconds:.1f} s" + (" (hologram recorded)" if result.recorded else "")
     said = f"; {len(warnings)} warning{'s' * (len(warnings) != 1)}: " + " | ".join(
         warnings) if warnings else "; no warnings"
-    return f"holographic pass {verb}: {result.pass_path}{said}"
+    return f"holographic pass {verb}{' ' * bool(route)}{route}: {result.pass_path}{said}"
 
 
 def _listed(names, most=3) -> str:
