@@ -67,8 +67,17 @@ def render_post(scene, *_):
         try:
             if path.is_file() and path.stat().st_mtime >= session.started - 1:
                 tree.name_depths_z(path)
+                _say_holes(scene, tree.holes(path))
         except (OSError, RuntimeError) as e:  # the library's read and write errors
             log.error("Holo: the holographic layers %s could not be renamed: %s", path, e)
+
+
+def _say_holes(scene, count: int) -> None:
+    """An opaque scene's frame with transparent pixels is said, with their count."""
+    if count and not scene.render.film_transparent:
+        warn(f"Holo: frame {scene.frame_current}: {count} pixels of the composite are "
+             f"transparent (alpha below 0.99): neither Blender's render nor the holographic "
+             f"pass covers them")
 
 
 ENGINES_WITH_SHUTTER = ("CYCLES", "BLENDER_EEVEE", "BLENDER_EEVEE_NEXT")  # evaluate sub-frames

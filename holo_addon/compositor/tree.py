@@ -301,6 +301,17 @@ def name_depths_z(path: Path) -> bool:
     return renamed
 
 
+def holes(path: Path) -> int:
+    """The pixels of the layers file ``path`` whose composite's alpha is below 0.99."""
+    import OpenEXR
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        for part in f.parts:
+            alpha = part.channels.get("Composite.A")
+            if alpha is not None:
+                return int((alpha.pixels < 0.99).sum())
+    return 0
+
+
 def beside_render(scene) -> str:
     """Where the frame's holographic layers go: the render output's folder, under the output's
     file name prefixed by ``holo_`` (its ``#`` frame digits and image extension dropped:

@@ -80,7 +80,8 @@ def test_a_frame_beyond_the_zone_renders_whole_as_a_camera_hologram(empty_scene,
     Camera Hologram) the frame's job is a camera hologram of that frame, which names the
     distance and the plate, and its render composites opaque (no pixel with alpha < 0.99)
     with a log line naming the route; with Warn the plate's view is kept, with a warning that
-    what it cannot send is left transparent."""
+    what it cannot send is left transparent, and the frame's log counts its transparent
+    pixels."""
     import logging
 
     from holo_addon.blender import compat
@@ -117,6 +118,16 @@ def test_a_frame_beyond_the_zone_renders_whole_as_a_camera_hologram(empty_scene,
     assert (alpha < 0.99).sum() == 0, f"{(alpha < 0.99).sum()} pixels with alpha < 0.99"
     said = [r.getMessage() for r in caplog.records if "frame 1:" in r.getMessage()]
     assert any("as a camera hologram (the camera's pupil reaches" in m for m in said), said
+    assert not [m for m in said if "transparent" in m], said
+    scene.holo.outside_zone = "WARN"
+    caplog.clear()
+    with caplog.at_level(logging.INFO, logger="holo_addon.compositor.handlers"):
+        bpy.ops.render.render(write_still=True)
+    holes = int((_read_exr(tmp_path / "frame.exr")["A"] < 0.99).sum())
+    said = [r.getMessage() for r in caplog.records if "frame 1:" in r.getMessage()]
+    assert holes > 0, "the plate's view beyond its zone left nothing out"
+    assert any(f"{holes} pixels of the composite are transparent" in m for m in said), said
+    assert any("from plate 'Plane'" in m for m in said), said
 
 
 def test_the_zone_is_drawn_as_its_box(empty_scene):
