@@ -200,13 +200,19 @@ def test_an_opaque_scene_composites_opaque_with_edges_as_cycles_frame(empty_scen
 def test_a_transparent_film_keeps_cycles_alpha(empty_scene, tmp_path):
     """Film ▸ Transparent, no wall: the composite's alpha is Cycles' alpha of the same card
     (mean difference at most 0.01), and the world 4 px or more from the card stays clear
-    (alpha below 0.01): the hole is not filled where the world is transparent."""
+    (alpha below 0.01): the hole is not filled where the world is transparent. The
+    compositing was set up while the film was opaque: the render follows the film as it is."""
     scene = empty_scene
     green = _cards(scene, 2.8)
     bpy.data.objects["blue"].hide_render = True
     scene.render.film_transparent = True
     cycles = _render(scene, tmp_path / "cycles.exr")
-    mine = _composite(scene, green, tmp_path, "holo")
+    scene.render.film_transparent = False
+    green.holo.emitter = "POINTS"
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    scene.render.film_transparent = True
+    mine = _render(scene, tmp_path / "holo.exr")
     off = float(np.abs(mine[..., 3] - cycles[..., 3]).mean())
     from scipy import ndimage
     world = ~ndimage.binary_dilation(cycles[..., 3] > 0.01, iterations=4)
