@@ -31,9 +31,10 @@ log = logging.getLogger(__name__)
 @persistent
 def render_init(scene, *_):
     """A render begins (F12, ``-f``, ``-a``: once): the holographic layers follow the render
-    output's path, the passes the .blend's output folder."""
+    output's path, the blend the film, the passes the .blend's output folder."""
     session.render_started()
     tree.follow_render_output(scene)
+    tree.follow_film(scene)
     if tree.uses_pass(scene):  # a frame of the render (F12's) gets a clear pass where it has
         # none before Blender's copy of the image looks for it (found missing then, it stays
         # missing for the render: the Image node's grey)
@@ -66,8 +67,17 @@ def render_post(scene, *_):
         try:
             if path.is_file() and path.stat().st_mtime >= session.started - 1:
                 tree.name_depths_z(path)
+                _say_holes(scene, tree.holes(path))
         except (OSError, RuntimeError) as e:  # the library's read and write errors
             log.error("Holo: the holographic layers %s could not be renamed: %s", path, e)
+
+
+def _say_holes(scene, count: int) -> None:
+    """An opaque scene's frame with transparent pixels is said, with their count."""
+    if count and not scene.render.film_transparent:
+        warn(f"Holo: frame {scene.frame_current}: {count} pixels of the composite are "
+             f"transparent (alpha below 0.99): neither Blender's render nor the holographic "
+             f"pass covers them")
 
 
 ENGINES_WITH_SHUTTER = ("CYCLES", "BLENDER_EEVEE", "BLENDER_EEVEE_NEXT")  # evaluate sub-frames
@@ -187,12 +197,12 @@ def _frame_pass(scene, frame: int, job) -> None:
     finally:
         session.pass_ended()
     log.info("Holo: frame %d: %s", frame, made(result, time.perf_counter() - started,
-                                                session.warnings["texts"]))
+                                                session.warnings["texts"], job.made_by))
 
 
-def made(result, seconds: float, warnings=()) -> str:
-    """One line of what a frame's pass was: made or reused, its time and file, its
-    warnings."""
+def made(result, seconds: float, warnings=(), route="") -> str:
+    """One line of what a frame's pass was: made or reused, its time, the ``route`` that
+    made it (:attr:`holo_addon.export.job.Prepared.made_by`), its file and its warnings."""
     if result.reused == result.pass_path:
         verb = "reused (up to date)"
     elif result.reused is not None:
@@ -201,7 +211,7 @@ def made(result, seconds: float, warnings=()) -> str:
         verb = f"made in {seconds:.1f} s" + (" (hologram recorded)" if result.recorded else "")
     said = f"; {len(warnings)} warning{'s' * (len(warnings) != 1)}: " + " | ".join(
         warnings) if warnings else "; no warnings"
-    return f"holographic pass {verb}: {result.pass_path}{said}"
+    return f"holographic pass {verb}{' ' * bool(route)}{route}: {result.pass_path}{said}"
 
 
 def _listed(names, most=3) -> str:

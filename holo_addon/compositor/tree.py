@@ -6,12 +6,19 @@ own depth of field and motion blur, so a defocused raster object in front spills
 hole and one behind is covered. The pass P (premultiplied, its alpha the pupil's blurred
 coverage) fills that hole: with R the raster (premultiplied) and a its alpha,
 
-    composite = R + k·P,   k = min(1, (1 − a) / P.alpha),
+    composite = R + k·P,   k = (1 − a) / max(P.alpha, MIN_COVERAGE),
 
-per channel, alpha included: where the hole is as large as the pass's coverage, the pass shows
-as it is; where a raster object covers part of the hole's rays, the pass shows that share of
-its colour. A Depth output keeps the nearer of the two depths. A File Output node writes the
-composite, the pass and both depths as a multilayer EXR beside each rendered frame
+per channel, alpha included. The hole is Blender's matte of the holographic object, so the
+pass's colour fills it whole and a soft edge (anti-aliasing, depth of field, motion blur)
+blends with what Blender's render sees beside and behind it, as Blender's own frame of the
+object does; where a raster object covers part of the hole's rays, the pass shows that share
+of its colour. Where the pass is too faint to fill the hole (its alpha below
+``MIN_COVERAGE``), the rest shows the raster's own colour in that pixel, R·(1 + rest/a): an
+opaque scene composites opaque wherever either covers the pixel. With Film ▸ Transparent the
+hole cannot be told from the transparent world, so k = min(1, (1 − a)/P.alpha) and nothing
+is filled: the pass as it is over the alpha Blender gives (:func:`follow_film` keeps the
+blend to the film). A Depth output keeps the nearer of the two depths. A File Output node
+writes the composite, the pass and both depths as a multilayer EXR beside each rendered frame
 (:func:`beside_render`). The pass is read as an image sequence, so every frame composites its
 own, from the .blend's current output folder (:func:`point_passes`).
 """
@@ -37,6 +44,8 @@ BEFORE = "holo_compositor_before"  # on the scene: its compositing before the fi
 MAX_FRAME = 1048574  # Blender's last frame
 RASTER = NODE_PREFIX + "Raster"  # what fed the compositor's output, split into channels
 LEGACY = NODE_PREFIX + "Depth Combine"  # the tree of earlier versions (its input 2: the user's)
+OPAQUE = ("Opaque", "Opaque Beside")  # the nodes whose input 0 is the film's opacity
+MIN_COVERAGE = 1e-3  # an alpha below which a colour is too faint to fill a hole
 
 
 def _output(node, *names):
@@ -115,10 +124,23 @@ def setup(scene, folder: Path):
     tree.links.new(_output(holo, "Combined", "Image"), split.inputs[0])
     clear = math("Clear", "SUBTRACT", (-250, 100), 1.0, raster.outputs[3])
     share = math("Share", "DIVIDE", (-100, 100), clear, split.outputs[3], clamp=True)
+    coverage = math("Coverage", "MAXIMUM", (-250, -50), split.outputs[3], MIN_COVERAGE)
+    matte = math("Matte", "DIVIDE", (-100, -50), clear, coverage)
+    share = math("Opaque", "MULTIPLY_ADD", (-100, 0), opacity(scene),
+                 math("Fill", "SUBTRACT", (-100, -100), matte, share), share)
+    # the hole's share the pass is too faint to fill (its coverage below MIN_COVERAGE) shows
+    # the raster's own colour in the pixel: R scaled by 1 + rest / a
+    left = math("Rest", "SUBTRACT", (-250, -200), clear,
+                math("Filled", "MULTIPLY", (-400, -300), share, split.outputs[3]))
+    beside = math("Beside", "DIVIDE", (-100, -200), left,
+                  math("Seen", "MAXIMUM", (-250, -300), raster.outputs[3], MIN_COVERAGE))
+    scale = math("Opaque Beside", "MULTIPLY_ADD", (-100, -300), opacity(scene), beside, 1.0)
     combine = new("CompositorNodeCombineColor", "Composite", (250, 100))
     for c in range(4):
-        tree.links.new(math("RGBA"[c], "MULTIPLY_ADD", (50, 250 - 100 * c), share,
-                            split.outputs[c], raster.outputs[c]), combine.inputs[c])
+        seen = math("Raster " + "RGBA"[c], "MULTIPLY", (50, 200 - 100 * c), scale,
+                    raster.outputs[c])
+        tree.links.new(math("RGBA"[c], "MULTIPLY_ADD", (150, 250 - 100 * c), share,
+                            split.outputs[c], seen), combine.inputs[c])
     depth = math("Depth", "MINIMUM", (50, -250), _output(layers, "Depth", "Z"),
                  _output(holo, "Depth", "Z"))
     tree.links.new(combine.outputs[0], compat.output_socket(tree))
@@ -129,6 +151,22 @@ def setup(scene, folder: Path):
                               _output(holo, "Depth", "Z"), depth), files.inputs):
         tree.links.new(socket, layer)
     return combine
+
+
+def opacity(scene) -> float:
+    """1 where Blender's raster is opaque but for its holes (the world drawn), 0 where its
+    alpha is the film's (Film ▸ Transparent): which share of the hole the pass fills."""
+    return 0.0 if scene.render.film_transparent else 1.0
+
+
+def follow_film(scene) -> None:
+    """The blend follows the film as it is now (Film ▸ Transparent turned on or off since the
+    setup)."""
+    tree = compat.existing_compositor_tree(scene)
+    for name in OPAQUE:
+        node = tree.nodes.get(NODE_PREFIX + name) if tree is not None else None
+        if node is not None:
+            node.inputs[0].default_value = opacity(scene)
 
 
 def pass_image(path: Path):
@@ -261,6 +299,17 @@ def name_depths_z(path: Path) -> bool:
         with atomic_path(path) as tmp:
             OpenEXR.File(parts).write(tmp)
     return renamed
+
+
+def holes(path: Path) -> int:
+    """The pixels of the layers file ``path`` whose composite's alpha is below 0.99."""
+    import OpenEXR
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        for part in f.parts:
+            alpha = part.channels.get("Composite.A")
+            if alpha is not None:
+                return int((alpha.pixels < 0.99).sum())
+    return 0
 
 
 def beside_render(scene) -> str:

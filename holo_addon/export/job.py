@@ -30,7 +30,7 @@ from holo_core.scene.plate import ViewingZone
 
 from . import radiance
 from .motion import with_motion
-from .plates import export_imported, scene_plate, with_plate
+from .plates import beyond_zone, export_imported, scene_plate, with_plate
 from .scene import ExportError, SceneData, export_scene
 
 log = logging.getLogger(__name__)
@@ -101,12 +101,21 @@ class Prepared:
     warnings: tuple = ()
     zone: ViewingZone | None = None
     lighting: Callable[[], Radiance | None] | None = field(default=None, repr=False)
+    instead: str = ""  # why a Plate-mode frame is a camera hologram ("": it is not)
 
     @property
     def records(self) -> bool:
         """Whether the worker records (a camera hologram always does)."""
         route = self.job.route
         return isinstance(route, CameraRoute) or route.record
+
+    @property
+    def made_by(self) -> str:
+        """Which route makes the frame's pass, in words for its log line."""
+        if isinstance(self.job.route, PlateRoute):
+            return f"from plate '{self.plate_name}'"
+        return f"as a camera hologram ({self.instead})" if self.instead else \
+            "as a camera hologram"
 
     @property
     def holograms(self) -> tuple:
@@ -129,7 +138,7 @@ def read(scene, depsgraph, *, render=True, preview=1) -> Prepared:
     and the pass's digests, so a changed light renders again and an unchanged scene is
     reused. ``preview`` > 1 (Camera mode): the viewport's preview, at 1/``preview`` of the
     render's resolution (the same frame), into the output folder's ``preview/``."""
-    mode = scene.holo.mode
+    mode, instead = scene.holo.mode, ""
     out = output_dir(scene) / "preview" if preview > 1 else output_dir(scene)
     plate = scene_plate(scene, required=mode == "PLATE")
     imported = plate if mode == "PLATE" and plate.holo.imported else None
@@ -139,13 +148,20 @@ def read(scene, depsgraph, *, render=True, preview=1) -> Prepared:
     else:
         data = export_scene(scene, depsgraph, lit=lit)
         if mode == "PLATE":  # a render's frame beyond the zone fails where the user says so
+            at_camera = data
             data = with_plate(data, plate, depsgraph,
                               strict=preview <= 1 and scene.holo.outside_zone == "FAIL")
+            beyond = beyond_zone(data.plate, data.camera)
+            if render and preview <= 1 and beyond and scene.holo.outside_zone == "CAMERA":
+                # the plate cannot serve this frame whole: a camera hologram of it can
+                data, mode = at_camera, "CAMERA"
+                instead = (f"the camera's pupil reaches {beyond:.3g} m beyond the viewing "
+                           f"zone of plate '{plate.name}' (Outside Zone: Camera Hologram)")
     if preview > 1:
         data = replace(data, camera=coarser(data.camera, preview),
                        view=coarser(data.view, preview), region=None)
     lighting = radiance.digest(scene, depsgraph) if lit else ""
-    settings = Settings.from_scene(scene, data.unit)
+    settings = replace(Settings.from_scene(scene, data.unit), mode=mode)
     if mode == "CAMERA":  # recorded for this view at every render: no plate file
         fingerprint = digest(data, mode, settings.speckle, settings.samples, lighting,
                              kinds=False)
@@ -177,7 +193,7 @@ def read(scene, depsgraph, *, render=True, preview=1) -> Prepared:
                     data.points + data.triangles, data.names,
                     samples=settings.lighting_samples) if lit else None
     return Prepared(job=job, fingerprint=fingerprint, plate_name=data.plate_name,
-                    warnings=data.warnings, zone=data.zone, lighting=light)
+                    warnings=data.warnings, zone=data.zone, lighting=light, instead=instead)
 
 
 def digest(data: SceneData, *settings, camera=True, kinds=True) -> str:

@@ -120,18 +120,26 @@ def zone_around(plate: Plate, camera: Camera, margin: float) -> ViewingZone:
         raise ExportError(str(e)) from None
 
 
-def outside_zone(plate: Plate, name: str, camera: Camera) -> str | None:
-    """A warning naming the zone when the camera's pupil reaches beyond it, else None."""
+def beyond_zone(plate: Plate, camera: Camera) -> float:
+    """How far [m] the camera's pupil reaches beyond the plate's viewing zone (0: inside it,
+    or no zone yet)."""
     if plate.zone is None:
-        return None
+        return 0.0
     position = plate.to_plate(camera.position[None])[0]
     beyond = plate.zone.distance_outside(position, (camera.aperture_diameter or 0.0) / 2)
-    if beyond <= 1e-9:
+    return beyond if beyond > 1e-9 else 0.0
+
+
+def outside_zone(plate: Plate, name: str, camera: Camera) -> str | None:
+    """A warning naming the zone when the camera's pupil reaches beyond it, else None."""
+    beyond = beyond_zone(plate, camera)
+    if not beyond:
         return None
     return (f"the camera's pupil reaches {beyond:.3g} m beyond the viewing zone of plate "
-            f"'{name}' ({plate.zone.describe()}): its view may be cut off or soft; use Fit Zone "
-            f"to Shot (Object ▸ Holo) to record the plate for every frame of the camera's move, "
-            f"or Fit Zone to Camera for where it is now")
+            f"'{name}' ({plate.zone.describe()}): what the plate cannot send there is left "
+            f"out of its view, transparent in the composite, and its view may be soft; use "
+            f"Fit Zone to Shot (Object ▸ Holo) to record the plate for every frame of the "
+            f"camera's move, or Fit Zone to Camera for where it is now")
 
 
 def export_imported(scene, depsgraph, plate_object) -> SceneData:

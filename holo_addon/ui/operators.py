@@ -225,7 +225,8 @@ class HOLO_OT_render_pass(_PipelineOperator, bpy.types.Operator):
 
 
 class HOLO_OT_setup_compositing(bpy.types.Operator):
-    """Add the holographic pass to the compositor, depth-combined with Blender's render"""
+    """Add the holographic pass to the compositor: it fills the holes Blender's render leaves
+    where holographic objects are the nearest surface"""
 
     bl_idname = "holo.setup_compositing"
     bl_label = "Set Up Compositing"
@@ -237,7 +238,8 @@ class HOLO_OT_setup_compositing(bpy.types.Operator):
         except USER_ERRORS as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        self.report({"INFO"}, "compositor: holographic pass depth-combined with the render")
+        self.report({"INFO"}, "compositor: the holographic pass fills the holes Blender's "
+                              "render leaves for holographic objects")
         return {"FINISHED"}
 
 

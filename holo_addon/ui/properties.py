@@ -134,9 +134,14 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                                           "iteration: a plate that needs more is refused "
                                           "before any work, with its size")
     outside_zone: EnumProperty(
-        name="Outside Zone", default="WARN",
-        items=[("WARN", "Warn", ("A frame whose camera reaches beyond the plate's viewing "
-                                 "zone renders, cut off or soft, with a warning")),
+        name="Outside Zone", default="CAMERA",
+        items=[("CAMERA", "Camera Hologram", ("A frame whose camera reaches beyond the plate's "
+                                              "viewing zone renders whole as a camera "
+                                              "hologram of that frame (as Camera mode does); "
+                                              "its log line says so")),
+               ("WARN", "Warn", ("A frame whose camera reaches beyond the plate's viewing "
+                                 "zone renders from the plate with a warning: what the plate "
+                                 "cannot send there is left out, transparent")),
                ("FAIL", "Fail", ("A frame whose camera reaches beyond the plate's viewing "
                                  "zone fails (a background render, a farm's, exits with "
                                  "status 1)"))],

@@ -156,8 +156,9 @@ class Wisdom:
             self.load()  # another process may have measured it meanwhile
             if self._known(scratch, axis, direction, flags):
                 return
-            log.info("FFTW: measuring a plan for %s transforms of %d along axis %d (once per "
-                     "machine)", view.shape[1 - axis], view.shape[axis], axis)
+            log.info("FFTW: measuring a plan for %s transforms of %d along axis %d (kept for "
+                     "later processes on this machine)", view.shape[1 - axis], view.shape[axis],
+                     axis)
             self.fftw.FFTW(scratch, scratch, axes=(axis,), direction=direction, flags=flags,
                            threads=1)
             self._save()

@@ -1,7 +1,8 @@
 """Plates as scene assets in Blender: the viewing zone (set around the camera's pupil at the
 first recording, drawn in the viewport), a cache key without the camera (moving, aiming or
 refocusing it, its f-stop or the render's size never record again inside the zone; outside,
-a warning names the zone), the planner in the panel, and File ▸ Import ▸ Hologram."""
+a frame renders whole as a camera hologram, or with Warn a warning names the zone), the
+planner in the panel, and File ▸ Import ▸ Hologram."""
 
 import numpy as np
 import pytest
@@ -71,6 +72,62 @@ def test_camera_moves_inside_the_zone_never_record_again(empty_scene):
     plate.holo.zone_margin = 0.3
     assert not plate.holo.zone_set
     assert job().fingerprint != first.fingerprint
+
+
+def test_a_frame_beyond_the_zone_renders_whole_as_a_camera_hologram(empty_scene, tmp_path,
+                                                                    caplog):
+    """The plate recorded, the camera moved 0.5 m beyond its zone: by default (Outside Zone:
+    Camera Hologram) the frame's job is a camera hologram of that frame, which names the
+    distance and the plate, and its render composites opaque (no pixel with alpha < 0.99)
+    with a log line naming the route; with Warn the plate's view is kept, with a warning that
+    what it cannot send is left transparent, and the frame's log counts its transparent
+    pixels."""
+    import logging
+
+    from holo_addon.blender import compat
+    from holo_addon.render import pipeline
+    from holo_core.job import CameraRoute, PlateRoute
+    scene = empty_scene
+    _, cam, _ = _plate_scene(scene)
+    assert bpy.ops.holo.record_hologram() == {"FINISHED"}
+    cam.location.x += 0.5
+    bpy.context.view_layer.update()
+
+    def job():
+        return pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
+
+    assert scene.holo.outside_zone == "CAMERA"
+    whole = job()
+    assert isinstance(whole.job.route, CameraRoute), whole.job.route
+    assert "beyond the viewing zone of plate 'Plane'" in whole.instead, whole.instead
+    assert whole.plate_name is None and not whole.holograms
+    scene.holo.outside_zone = "WARN"
+    cut = job()
+    assert isinstance(cut.job.route, PlateRoute)
+    assert any("left out of its view, transparent" in w for w in cut.warnings), cut.warnings
+    scene.holo.outside_zone = "CAMERA"
+    scene.render.engine = "CYCLES"
+    scene.cycles.samples = 4
+    scene.render.film_transparent = False
+    assert bpy.ops.holo.setup_compositing() == {"FINISHED"}
+    compat.set_exr_output(scene, multilayer=False)
+    scene.render.filepath = str(tmp_path / "frame.exr")
+    with caplog.at_level(logging.INFO, logger="holo_addon.compositor.handlers"):
+        bpy.ops.render.render(write_still=True)
+    alpha = _read_exr(tmp_path / "frame.exr")["A"]
+    assert (alpha < 0.99).sum() == 0, f"{(alpha < 0.99).sum()} pixels with alpha < 0.99"
+    said = [r.getMessage() for r in caplog.records if "frame 1:" in r.getMessage()]
+    assert any("as a camera hologram (the camera's pupil reaches" in m for m in said), said
+    assert not [m for m in said if "transparent" in m], said
+    scene.holo.outside_zone = "WARN"
+    caplog.clear()
+    with caplog.at_level(logging.INFO, logger="holo_addon.compositor.handlers"):
+        bpy.ops.render.render(write_still=True)
+    holes = int((_read_exr(tmp_path / "frame.exr")["A"] < 0.99).sum())
+    said = [r.getMessage() for r in caplog.records if "frame 1:" in r.getMessage()]
+    assert holes > 0, "the plate's view beyond its zone left nothing out"
+    assert any(f"{holes} pixels of the composite are transparent" in m for m in said), said
+    assert any("from plate 'Plane'" in m for m in said), said
 
 
 def test_the_zone_is_drawn_as_its_box(empty_scene):

@@ -287,20 +287,20 @@ os._exit(0)  # bpy 4.2.0's teardown after a render crashes, 4.5.15's never retur
 
 def test_a_background_render_logs_what_each_frames_pass_was(tmp_path):
     """``blender -b ... -a`` (Set Up Compositing before any pass) of a still cube: the log
-    says per frame what its pass was, its file and its warnings (none here): frame 1's made,
-    in how many seconds; frame 2's the static shot's (frame 1's, only the frame changed);
-    rendered again, frame 2's up to date."""
+    says per frame what its pass was, the route that made it, its file and its warnings (none
+    here): frame 1's made, in how many seconds; frame 2's the static shot's (frame 1's, only
+    the frame changed); rendered again, frame 2's up to date."""
     import re
     run = in_background(FARM_LOG, tmp_path)
     lines = [ln for ln in run.stderr.splitlines() if "Holo: frame" in ln]
     print("\n".join(lines))
     assert run.returncode == 0, run.stderr[-2000:]
     assert len(lines) == 3, lines
-    assert re.search(r"^INFO Holo: frame 1: holographic pass made in [0-9.]+ s: .*"
-                     r"holo_pass_0001\.exr; no warnings$", lines[0]), lines[0]
+    assert re.search(r"^INFO Holo: frame 1: holographic pass made in [0-9.]+ s as a camera "
+                     r"hologram: .*holo_pass_0001\.exr; no warnings$", lines[0]), lines[0]
     assert re.search(r"^INFO Holo: frame 2: holographic pass reused from holo_pass_0001\.exr "
-                     r"\(a static shot: only the frame changed\): .*holo_pass_0002\.exr; no "
-                     r"warnings$", lines[1]), lines[1]
+                     r"\(a static shot: only the frame changed\) as a camera hologram: "
+                     r".*holo_pass_0002\.exr; no warnings$", lines[1]), lines[1]
     assert re.search(r"^INFO Holo: frame 2: holographic pass reused \(up to date\)", lines[2])
 
 

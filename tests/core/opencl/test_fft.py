@@ -91,13 +91,31 @@ print(hashlib.sha256(a.tobytes() + f.tobytes()).hexdigest())
 """
 
 
-def _digest(cache, threads, planner="measure"):
+def _run(cache, threads, planner="measure"):
+    """RUN in a process of its own with ``cache`` as its cache folder: (stdout, stderr, where
+    its INFO log goes)."""
     env = {**os.environ, "XDG_CACHE_HOME": str(cache), "HOLO_FFT_THREADS": str(threads),
            "HOLO_FFTW_PLANNER": planner, "HOLO_FFT": "fftw"}
-    r = subprocess.run([sys.executable, "-c", RUN], cwd=ROOT, env=env, capture_output=True,
+    code = "import logging; logging.basicConfig(level=logging.INFO)\n" + RUN
+    r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
                        text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-3000:]
-    return r.stdout.split()[-1]
+    return r.stdout, r.stderr
+
+
+def _digest(cache, threads, planner="measure"):
+    return _run(cache, threads, planner)[0].split()[-1]
+
+
+def test_plans_measured_once_are_found_by_a_later_process(tmp_path, rt):
+    """Two processes sharing a fresh cache: the first says it measures its plans, the second
+    finds every one of them and measures nothing."""
+    if rt.fft.name != "fftw":
+        pytest.skip(f"FFTW passes only: this device's FFTs are {rt.fft.name}")
+    first = _run(tmp_path, 1)[1].count("measuring a plan")
+    again = [line for line in _run(tmp_path, 1)[1].splitlines() if "measuring a plan" in line]
+    assert first > 0, "the first process measured no plan: nothing to find again"
+    assert not again, f"a later process measured {len(again)} plans again: {again[:2]}"
 
 
 @pytest.mark.slow
