@@ -19,6 +19,10 @@ viewed by any camera in that zone.
 - ``to_pupil.py``: the plate's light carried to a camera's entrance pupil (a carrier plate's
   by demodulation, decimation and a non-uniform FFT; a full-band one by the angular spectrum)
 - ``view.py``: a camera's image of it, by the camera hologram's own pupil stage (Sect. VII)
+- ``path.py``: a plate's parts along a camera path (a long dolly, an orbit), each facing its
+  stretch (pure arithmetic: no driver)
+- ``parts.py``: the parts recorded from one set of emitters, each frame viewed from the part
+  that holds its pupil
 """
 
 import sys
@@ -30,7 +34,8 @@ from importlib import import_module
 _API = {"Reference": ".record", "record_hologram": ".record", "record_plate": ".record",
         "record_looks": ".record",
         "record_points": ".record", "reconstruct": ".reconstruction", "render_view": ".view",
-        "physical_field": ".carrier",
+        "physical_field": ".carrier", "parts_along": ".path", "record_set": ".parts",
+        "render_set_view": ".parts",
         "find_carrier": "..acquired", "sideband": "..acquired"}  # their home: acquired/
 __all__ = sorted(_API)
 

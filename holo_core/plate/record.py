@@ -19,7 +19,7 @@ from ..scene.hologram import ENCODINGS, Hologram, HologramInfo
 from ..scene.mesh import Mesh, facing, sample_points, visible_from
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Carrier, Plate, ViewingZone
 from ..validate import InputError, shown
-from .emitters import zone_emitters
+from .emitters import Emitters, zone_emitters
 from .plan import LAYERS, RIM, PlatePlan, plan
 from .point_sources import cone_filter, point_bytes, point_wave
 from .triangles import depth_texture, mesh_primitives, primitive_wave, surface_pitch
@@ -639,13 +639,15 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
 def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
                   zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
                   code=None, encoding="complex", tile=None, budget=(None, None),
-                  codes=None) -> PlateRecording:
+                  codes=None, emitters: Emitters | None = None) -> PlateRecording:
     """The emitters, visibility tables and sampling of a plate of ``meshes`` (the arguments
     as :func:`record_plate` takes them), before any sum: the plan, the emitters the zone sees
     with their amplitudes. The host's memory and the ``budget`` are checked for the whole
     plate, or with ``tile`` (samples a side) for one tile of it. ``codes`` (in place of
     ``code``): several looks summed at once (:func:`record_looks`), look l's phases coded
-    by codes[l], or where that is None drawn from ``seed`` + l."""
+    by codes[l], or where that is None drawn from ``seed`` + l. ``emitters`` (the plate's
+    frame, their visibility from this zone): found elsewhere, once for several plates that
+    share them (:mod:`.parts`), in place of the zone's own."""
     if encoding != "complex":
         raise InputError(f"encoding must be 'complex' for a plate of meshes (a display's "
                          f"intensity pattern is made from it: holo_core.phase.display); got "
@@ -666,7 +668,8 @@ def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None
     held = f"a {p.tile}x{p.tile} tile" if tile is not None else f"a {p.shape[1]}x{p.shape[0]} plate"
     memory.check_host(f"{held} of {held_channels} channels",
                       p.memory_bytes(held_channels, tiled=tile is not None))
-    em = zone_emitters(local, zone, p.spacing, layers=LAYERS)
+    em = emitters if emitters is not None else zone_emitters(local, zone, p.spacing,
+                                                             layers=LAYERS)
     if not len(em):
         raise InputError(f"no surface of the meshes is seen from the viewing zone "
                          f"({zone.describe()})")
@@ -723,7 +726,9 @@ def _look_seed(seed: int, codes, look: int) -> int:
 def _phases(em, seed: int, code) -> np.ndarray:
     """The emitters' random phases [rad] of ``seed``, shifted by ``code`` (k, m): 2π·(k1·i +
     k2·j)/m on the lattice cells (i, j) they lie in (k = k1·m + k2; :func:`record_plate`)."""
-    phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, len(em))
+    phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, em.count or len(em))
+    if em.ids is not None:  # drawn from a set several plates share: the set's phases
+        phases = phases[em.ids]
     if code is not None:
         phases = phases + 2 * np.pi * _code_steps(em, code) / code[1]
     return phases

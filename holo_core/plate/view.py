@@ -37,6 +37,7 @@ from ..propagation.tilt import tilt_reach
 from ..scene.camera import Camera
 from ..scene.hologram import Hologram
 from ..scene.plate import box_corners
+from ..scene.plate_set import PlateSet
 from ..validate import InputError, shown
 from ..view import BACKGROUND_DEPTH, RenderResult, as_rgb
 from .plan import SHARP_SLACK, SUPERSAMPLE
@@ -142,7 +143,17 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
         Depth from the phase of u1·conj(u2) summed over iterations and supersamples (the
         intensity-weighted consensus), or per pixel from the brightest iteration (Fig. 11c).
         Either way the depth pair is imaged through :func:`depth_aperture`.
+
+    A :class:`holo_core.scene.plate_set.PlateSet` (a plate's parts along a path) is viewed
+    from the part whose zone holds the pupil (:func:`holo_core.plate.parts.render_set_view`).
     """
+    if isinstance(holograms, PlateSet):
+        from .parts import render_set_view
+        return render_set_view(holograms, camera, aperture=aperture, apodize=apodize,
+                               chromatic=chromatic, composition=composition,
+                               supersample=supersample, exposure=exposure,
+                               opacity_threshold=opacity_threshold, source=source,
+                               depth_estimate=depth_estimate, progress=progress)
     try:
         holos = [holograms] if isinstance(holograms, Hologram) else list(holograms)
     except TypeError:

@@ -1,0 +1,200 @@
+"""A plate set recorded and viewed: the parts of one plate along a camera path
+(:func:`holo_core.plate.path.parts_along`), recorded from the same emitters, each frame viewed
+from the part whose zone holds its pupil.
+
+- One set of emitters (:func:`set_emitters`). Each part's zone centre casts its rays (one per
+  resolved spot, the spacing every part shares) and finds its crossings with the surfaces, up
+  to three deep; a surface point is kept from the part that sees it most face-on, so every
+  surface holds emitters of one lattice, one resolved spot apart. Every part reads the same
+  emitters, their phases drawn once from the seed and shifted by the same looks' codes, so a
+  pupil in the overlap of two parts receives the same wave from either.
+- Visibility per part: each part's zone rasters its own depth buffers
+  (:func:`holo_core.plate.emitters.visibility`), and a part sums only the emitters its zone
+  sees.
+- Each part is then a plate of its own (:func:`holo_core.plate.record.prepare_plate`): its
+  plan, its carrier converging on its zone's centre, its window, its looks summed in one pass.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import math
+import warnings
+from dataclasses import replace
+
+import numpy as np
+
+from .. import jobs, validate
+from ..scene.camera import Camera
+from ..scene.mesh import Mesh
+from ..scene.plate_set import PathPart, PlateSet
+from ..validate import InputError
+from .emitters import Emitters, grid_points, surface_points, visibility, zone_frame
+from .plan import LAYERS
+from .record import look_code, plate_plan, prepare_plate
+from .view import OutsideZoneWarning, render_view
+
+log = logging.getLogger(__name__)
+
+
+@validate.scale_free()  # each part's wavelength is the plan's (as record_looks)
+def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = True,
+               budget=(None, None), progress: jobs.Progress = None) -> PlateSet:
+    """The looks of every part of ``parts`` (PathPart, from
+    :func:`holo_core.plate.path.parts_along`) of ``meshes`` (world metres), in memory.
+
+    ``looks`` coded looks of ``seed`` (:func:`holo_core.plate.record.look_code`) per part,
+    all parts from one set of emitters (module docstring). ``budget`` (memory, disk) [bytes]:
+    the memory one part holds while recorded and the whole set's disk, checked for every part
+    before any emitter is found."""
+    parts = tuple(parts)
+    if not parts or not all(isinstance(p, PathPart) for p in parts):
+        raise InputError("parts must be a non-empty sequence of PathPart (parts_along)")
+    looks = validate.integer("looks", looks, 1)
+    seed = validate.seed(seed)
+    channels = 4 if depth else 3
+    plans = [plate_plan(meshes, plate=part.plate) for part in parts]
+    spacing = plans[0][0].spacing
+    for k, (p, _, _) in enumerate(plans):
+        if not math.isclose(p.spacing, spacing, rel_tol=1e-9):
+            raise InputError(f"part {k}'s emitters would lie {p.spacing:.4g} apart in direction "
+                             f"cosine, part 0's {spacing:.4g}: a set's parts share one pupil "
+                             f"and pixel angle (parts_along gives them that)")
+    stored = 0.0
+    for k, (p, _, _) in enumerate(plans):
+        p = replace(p, looks=looks)
+        try:
+            p.check_budget(memory=budget[0], channels=channels, held=looks)
+        except InputError as e:
+            raise InputError(f"part {k}: {e}") from None
+        stored += p.disk_bytes(channels)
+    if budget[1] is not None and stored > budget[1]:
+        raise InputError(f"the set of {len(parts)} parts needs {stored / 2**30:.2f} GiB on disk "
+                         f"({looks} look(s) each); the disk budget is "
+                         f"{budget[1] / 2**30:.2f} GiB: longer stretches share more, a "
+                         f"smaller pupil or coarser views need less")
+    shared = set_emitters(meshes, parts, plans, spacing)
+    codes = tuple(look_code(k, looks) for k in range(looks))
+    recorded = []
+    for k, (part, em) in enumerate(zip(parts, shared)):
+        done = jobs.scaled(progress, k / len(parts), (k + 1) / len(parts))
+        recording = prepare_plate(meshes, plate=part.plate, depth=depth, seed=seed,
+                                  codes=codes, emitters=em, budget=(budget[0], None))
+        recorded.append(tuple(recording.record(done)))
+        log.info("part %d of %d: %d emitters of the set's %d, %s", k + 1, len(parts), len(em),
+                 em.count, recording.plan.describe())
+    return PlateSet(parts=parts, looks=tuple(recorded), seed=seed,
+                    recording=set_digest(meshes, parts, seed=seed, looks=looks, depth=depth))
+
+
+def set_emitters(meshes, parts, plans, spacing: float) -> list[Emitters]:
+    """Each part's emitters (its plate's frame, its visibility) drawn from one set found for
+    all (module docstring): ``plans`` the parts' (plan, meshes in the plate's frame, zone)
+    (:func:`holo_core.plate.record.plate_plan`), ``spacing`` their shared spacing in direction
+    cosine."""
+    world = [meshes] if isinstance(meshes, Mesh) else list(meshes)
+    centres, found = [], []
+    for part, (_, local, zone) in zip(parts, plans):
+        m = part.plate.matrix_world
+        every = np.concatenate([x.vertices for x in local])
+        rotation = m[:3, :3] @ zone_frame(zone, np.array([every.min(0), every.max(0)]))
+        centre = m[:3, :3] @ np.asarray(zone.centre) + m[:3, 3]
+        centres.append(centre)
+        found.append(surface_points(world, centre, rotation, spacing, layers=LAYERS))
+    centres = np.array(centres)
+    points = []
+    for k, (position, colour, normal, cell) in enumerate(found):
+        towards = centres[None, :, :] - position[:, None, :]
+        facing = np.abs(np.einsum("nj,npj->np", normal, towards)) / np.linalg.norm(towards,
+                                                                                   axis=2)
+        own = facing.argmax(1) == k  # each surface point from the part seeing it most face-on
+        points.append((position[own], colour[own], normal[own], cell[own]))
+    position, colour, normal, cell = (np.concatenate(a) for a in zip(*points))
+    seen = []
+    for part, (_, local, zone) in zip(parts, plans):
+        m = part.plate.matrix_world
+        every = np.concatenate([x.vertices for x in local])
+        rotation = zone_frame(zone, np.array([every.min(0), every.max(0)]))
+        here = part.plate.to_plate(position)
+        offsets, table = visibility(local, here, normal @ m[:3, :3], zone, rotation, spacing,
+                                    grid_points(zone))
+        seen.append((here, offsets, table))
+    kept = np.zeros(len(position), bool)
+    for _, _, table in seen:
+        kept |= table.reshape(len(table), -1).max(1) > 0
+    ids = np.cumsum(kept) - 1  # the set's emitters: those some part sees, numbered once
+    count = int(kept.sum())
+    out = []
+    for here, offsets, table in seen:
+        keep = table.reshape(len(table), -1).max(1) > 0
+        out.append(Emitters(position=here[keep], colour=colour[keep], cell=cell[keep],
+                            visibility=table[keep], grid=offsets, ids=ids[keep], count=count))
+    return out
+
+
+def set_digest(meshes, parts, *, seed: int, looks: int, depth: bool) -> str:
+    """The digest (hex) of a set's recording: the meshes (world), each part's plate (pose,
+    size, zone), the seed, the looks and the depth partner."""
+    h = hashlib.sha256(f"holo plate set {seed} {looks} {bool(depth)}".encode())
+    for m in [meshes] if isinstance(meshes, Mesh) else meshes:
+        for name in ("vertices", "triangles", "colours", "uvs", "texture", "motion"):
+            a = getattr(m, name)
+            a = np.ascontiguousarray(a if a is not None else np.zeros(0))
+            h.update(f"{name}{a.dtype.str}{a.shape}".encode())
+            h.update(a.tobytes())
+    for part in parts:
+        z = part.plate.zone
+        h.update(np.asarray(part.plate.matrix_world, np.float64).tobytes())
+        h.update(repr((part.plate.width, part.plate.height, z.centre, z.half_extents, z.pupil,
+                       z.pixel)).encode())
+    return h.hexdigest()
+
+
+def part_for(plates: PlateSet, camera: Camera) -> tuple[int, float]:
+    """(the part whose zone holds ``camera``'s pupil with the most room, 0) or, where none
+    holds it, (the nearest part, how far [m] the pupil reaches beyond its zone)."""
+    pupil = camera.aperture_diameter or 0.0
+    reach = [part.reach(camera.position, pupil) for part in plates.parts]
+    inside = [k for k, r in enumerate(reach) if r <= 1e-9]
+    if not inside:
+        k = int(np.argmin(reach))
+        return k, reach[k]
+    return max(inside, key=lambda k: _room(plates.parts[k], camera.position, pupil)), 0.0
+
+
+def _room(part: PathPart, position, pupil) -> float:
+    """How far [m] the pupil's edge lies inside the part's zone, across the plate."""
+    z = part.plate.zone
+    local = part.plate.to_plate(np.asarray(position, np.float64)[None])[0]
+    return float((np.asarray(z.half_extents[:2]) - np.abs(local[:2] - z.centre[:2])).min()
+                 - pupil / 2)
+
+
+def render_set_view(plates: PlateSet, camera: Camera, *, frame: int | None = None,
+                    outside: str = "warn", **settings):
+    """The view of ``camera`` from the part of ``plates`` whose zone holds its pupil
+    (:func:`part_for`), by :func:`holo_core.plate.view.render_view` (``settings`` as there).
+    A pupil outside every part's zone warns (:class:`OutsideZoneWarning`, naming ``frame``
+    where given, and the nearest part) and is viewed from that part, or with ``outside``
+    'fail' is refused (:class:`InputError`)."""
+    if not isinstance(plates, PlateSet):
+        raise InputError(f"plates must be a PlateSet; got {type(plates).__name__}")
+    if not isinstance(camera, Camera):
+        raise InputError(f"camera must be a Camera; got {type(camera).__name__}")
+    validate.choice("outside", outside, ("warn", "fail"))
+    k, beyond = part_for(plates, camera)
+    if beyond > 0:
+        p = camera.position
+        what = (f"{'frame ' + str(frame) + ': ' if frame is not None else ''}the camera's pupil "
+                f"at ({p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g}) m lies outside every part of the "
+                f"plate set; it reaches {beyond:.3g} m beyond the nearest, part {k} "
+                f"({plates.parts[k].plate.zone.describe()})")
+        if outside == "fail":
+            raise InputError(f"{what}: record the set for a path that holds the camera")
+        warnings.warn(f"{what}: viewed from that part, the view may be cut off or soft",
+                      OutsideZoneWarning, stacklevel=2)
+        with warnings.catch_warnings():  # said once, for the set
+            warnings.simplefilter("ignore", OutsideZoneWarning)
+            return render_view(list(plates.looks[k]), camera, **settings)
+    return render_view(list(plates.looks[k]), camera, **settings)
