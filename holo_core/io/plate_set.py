@@ -15,11 +15,12 @@ from __future__ import annotations
 
 import hashlib
 import json
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
-from ..scene.plate import Plate
+from ..scene.plate import Plate, ViewingZone
 from ..scene.plate_set import PathPart, PlateSet
 from ..validate import InputError
 from . import jsonfile
@@ -41,25 +42,47 @@ def write_plate_set(folder, plates: PlateSet) -> Path:
     naming them with their digests. Returns the manifest's path."""
     if not isinstance(plates, PlateSet):
         raise InputError(f"plates must be a PlateSet; got {type(plates).__name__}")
+    folder = set_folder(folder)
+    entries = [write_part(folder, k, plates.part_looks(k)) for k in range(len(plates))]
+    return write_manifest(folder, plates.parts, entries, seed=plates.seed,
+                          recording=plates.recording)
+
+
+def set_folder(folder) -> Path:
+    """``folder`` made if absent, checked to take the set's files (before any work)."""
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
         raise InputError(f"{folder}: a plate set is a folder; a file is in the way")
     folder.mkdir(parents=True, exist_ok=True)
     check_writable(folder / MANIFEST)
-    parts = []
-    for k, (part, looks) in enumerate(zip(plates.parts, plates.looks)):
-        files = []
-        for look, h in enumerate(looks):
-            path = write_hologram(folder / part_file(k, look), h)
-            files.append({"name": path.name, "bytes": path.stat().st_size,
-                          "blake2b": file_digest(path), "metadata": metadata_digest(h)})
+    return folder
+
+
+def write_part(folder: Path, k: int, looks) -> list:
+    """Write part ``k``'s ``looks`` (Hologram) into ``folder``; their manifest entries."""
+    files = []
+    for look, h in enumerate(looks):
+        path = write_hologram(folder / part_file(k, look), h)
+        files.append({"name": path.name, "bytes": path.stat().st_size,
+                      "blake2b": file_digest(path), "metadata": metadata_digest(h)})
+    return files
+
+
+def write_manifest(folder: Path, parts, entries, *, seed: int, recording: str) -> Path:
+    """The manifest of ``parts`` (PathPart) whose files ``entries`` (:func:`write_part`, one a
+    part) lie in ``folder``, written last: until then the folder holds no set."""
+    listed = []
+    for part, files in zip(parts, entries):
         p = part.plate
-        parts.append({"plate_to_world": np.asarray(p.matrix_world).tolist(),
-                      "width_m": p.width, "height_m": p.height,
-                      "stretch_m": list(part.stretch), "frames": list(part.frames),
-                      "files": files})
-    manifest = {"kind": KIND, "version": VERSION, "recording": plates.recording,
-                "seed": plates.seed, "looks": len(plates.looks[0]), "parts": parts}
+        listed.append({"plate_to_world": np.asarray(p.matrix_world).tolist(),
+                       "width_m": p.width, "height_m": p.height,
+                       "zone": {"centre_m": list(p.zone.centre),
+                                "half_extents_m": list(p.zone.half_extents),
+                                "pupil_m": p.zone.pupil, "pixel_rad": p.zone.pixel},
+                       "stretch_m": list(part.stretch), "frames": list(part.frames),
+                       "files": files})
+    manifest = {"kind": KIND, "version": VERSION, "recording": recording, "seed": seed,
+                "looks": len(entries[0]), "parts": listed}
     return write_atomic(folder / MANIFEST, json.dumps(manifest, indent=1).encode())
 
 
@@ -114,34 +137,29 @@ def read_plate_set(folder) -> PlateSet:
             frames = tuple(entry.get("frames"))
         except (TypeError, ValueError):
             field.fail(f"{at}plate_to_world", "a 4x4 pose, its stretch_m and frames")
-        part_looks = tuple(_part_look(folder, k, look, f, field, at)
-                           for look, f in enumerate(files))
-        first = part_looks[0]
-        if not np.allclose(np.asarray(first.plate), pose, atol=1e-12) or first.zone is None:
-            raise HologramFileError(f"{folder}: part {k} ({files[0]['name']}) is foreign: it "
-                                    f"holds a plate at another pose or without a zone than "
-                                    f"the manifest's part {k}")
+        for look, f in enumerate(files):
+            _check_file(folder, k, look, f, field, at)
+        z = field.check(entry, "zone", dict, "the part's viewing zone", at)
         try:
+            zone = ViewingZone(centre=z.get("centre_m"), half_extents=z.get("half_extents_m"),
+                               pupil=z.get("pupil_m"), pixel=z.get("pixel_rad"))
             plate = Plate(matrix_world=pose, width=entry.get("width_m"),
-                          height=entry.get("height_m"), zone=first.zone)
+                          height=entry.get("height_m"), zone=zone)
             parts.append(PathPart(plate=plate, stretch=stretch, frames=frames))
         except InputError as e:
             raise HologramFileError(f"{name}: {at[:-1]}: {e}") from None
-        for look, h in enumerate(part_looks[1:], 1):
-            if not np.array_equal(np.asarray(h.plate), np.asarray(first.plate)) or \
-                    h.zone.centre != first.zone.centre or h.shape != first.shape:
-                raise HologramFileError(f"{folder}: part {k} ({files[look]['name']}) is "
-                                        f"foreign: its plate is not its part's")
-        held.append(part_looks)
+        held.append(files)
+    load = partial(_load_part, folder, tuple(parts), tuple(held))
     try:
-        return PlateSet(parts=tuple(parts), looks=tuple(held), seed=seed, recording=recording)
+        return PlateSet(parts=tuple(parts), looks=(None,) * len(parts), seed=seed,
+                        recording=recording, load=load)
     except InputError as e:
         raise HologramFileError(f"{name}: {e}") from None
 
 
-def _part_look(folder: Path, k: int, look: int, entry, field, at):
-    """Part ``k``'s look ``look`` as its manifest ``entry`` names it, refused by name when
-    missing, damaged or foreign."""
+def _check_file(folder: Path, k: int, look: int, entry, field, at) -> None:
+    """Part ``k``'s look ``look`` as its manifest ``entry`` names it: refused by name when
+    missing, damaged or foreign (its bytes read once, for their digest)."""
     where = f"{at}files[{look}]."
     field.value(entry, dict, "an object", where[:-1])
     name = field.check(entry, "name", str, "a file name", where)
@@ -167,7 +185,25 @@ def _part_look(folder: Path, k: int, look: int, entry, field, at):
                                     f"from the manifest's); record the set again")
         raise HologramFileError(f"{folder}: part {k} ({name}) is damaged: its bytes do not "
                                 f"match the manifest's digest; record the set again")
-    return read_hologram(path)
+
+
+def _load_part(folder: Path, parts, files, k: int) -> tuple:
+    """Part ``k``'s looks read from ``folder``, each checked to be the hologram the manifest
+    names (its size and description; its bytes were checked when the set was opened) and
+    to lie on its part's plate."""
+    looks = []
+    for entry in files[k]:
+        path = folder / entry["name"]
+        if not path.is_file() or path.stat().st_size != entry["bytes"]:
+            raise HologramFileError(f"{folder}: part {k} ({entry['name']}) changed or went "
+                                    f"missing since the set was opened")
+        h = read_hologram(path)
+        if metadata_digest(h) != entry["metadata"] or not np.allclose(
+                np.asarray(h.plate), parts[k].plate.matrix_world, atol=1e-12):
+            raise HologramFileError(f"{folder}: part {k} ({entry['name']}) is foreign: its "
+                                    f"plate is not the manifest's part {k}")
+        looks.append(h)
+    return tuple(looks)
 
 
 class _Fields:

@@ -45,7 +45,9 @@ class Emitters:
     [0, 1] from the zone's grid points, ``grid`` the points' offsets from the zone's centre
     ((x0, step_x), (y0, step_y)) [m]; ``ids`` (n,) where they are drawn from a larger set
     shared by several plates (:mod:`.parts`), their indices in it, ``count`` its size: their
-    random phases are the set's, so every plate of it sends one pupil the same wave."""
+    random phases are the set's, so every plate of it sends one pupil the same wave;
+    ``weight`` (n,), where given, scales their amplitudes (a set's lattice seen from this
+    zone: :func:`holo_core.plate.parts.set_emitters`)."""
 
     position: np.ndarray
     colour: np.ndarray
@@ -54,6 +56,7 @@ class Emitters:
     grid: tuple
     ids: np.ndarray | None = None
     count: int = 0
+    weight: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.position)

@@ -2,12 +2,18 @@
 (:func:`holo_core.plate.path.parts_along`), recorded from the same emitters, each frame viewed
 from the part whose zone holds its pupil.
 
-- One set of emitters (:func:`set_emitters`). Each part's zone centre casts its rays (one per
-  resolved spot, the spacing every part shares) and finds its crossings with the surfaces, up
-  to three deep; a surface point is kept from the part that sees it most face-on, so every
-  surface holds emitters of one lattice, one resolved spot apart. Every part reads the same
-  emitters, their phases drawn once from the seed and shifted by the same looks' codes, so a
-  pupil in the overlap of two parts receives the same wave from either.
+- One set of emitters (:func:`set_emitters`). The zone centre of one part in each run of the
+  path turning by at most 5° about the objects (:func:`lattice_parts`) casts its rays (one
+  per resolved spot, the spacing every part shares) and finds their crossings with the
+  surfaces, up to three deep; a surface point is kept from the lattice that sees it most
+  face-on, so every surface holds emitters of one lattice, one resolved spot apart as seen
+  from there. From another zone a surface then holds cos(slant from the lattice)/cos(slant
+  from the zone) emitters a resolved spot; each part weighs their amplitudes by the root of
+  its inverse, so that the surfaces' coverage (the views' alpha) stays one (without it the
+  silhouettes of a 30° orbit's frames swelled: IoU 0.956-0.967 against 0.975-0.980).
+- Every part reads the same emitters, their phases drawn once from the seed and shifted by
+  the same looks' codes, so a pupil in the overlap of two parts receives the same wave from
+  either (but for the weights, which differ little between neighbouring parts).
 - Visibility per part: each part's zone rasters its own depth buffers
   (:func:`holo_core.plate.emitters.visibility`), and a part sums only the emitters its zone
   sees.
@@ -30,6 +36,7 @@ from ..scene.camera import Camera
 from ..scene.mesh import Mesh
 from ..scene.plate_set import PathPart, PlateSet
 from ..validate import InputError
+from ..io.plate_set import read_plate_set, set_folder, write_manifest, write_part
 from .emitters import Emitters, grid_points, surface_points, visibility, zone_frame
 from .plan import LAYERS
 from .record import look_code, plate_plan, prepare_plate
@@ -37,12 +44,18 @@ from .view import OutsideZoneWarning, render_view
 
 log = logging.getLogger(__name__)
 
+LATTICE_TURN = math.radians(5)  # [rad] of the path's turn about the objects a lattice serves
+MIN_SLANT = 0.05  # cos of the most grazing view a lattice's density is weighted for (87°)
+
 
 @validate.scale_free()  # each part's wavelength is the plan's (as record_looks)
 def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = True,
-               budget=(None, None), progress: jobs.Progress = None) -> PlateSet:
+               budget=(None, None), folder=None, progress: jobs.Progress = None) -> PlateSet:
     """The looks of every part of ``parts`` (PathPart, from
-    :func:`holo_core.plate.path.parts_along`) of ``meshes`` (world metres), in memory.
+    :func:`holo_core.plate.path.parts_along`) of ``meshes`` (world metres): in memory, or with
+    ``folder`` each part written there as soon as it is recorded and its samples let go (the
+    memory that of one part), the manifest last (:mod:`holo_core.io.plate_set`), and the set
+    returned as read from there.
 
     ``looks`` coded looks of ``seed`` (:func:`holo_core.plate.record.look_code`) per part,
     all parts from one set of emitters (module docstring). ``budget`` (memory, disk) [bytes]:
@@ -74,6 +87,8 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
                          f"({looks} look(s) each); the disk budget is "
                          f"{budget[1] / 2**30:.2f} GiB: longer stretches share more, a "
                          f"smaller pupil or coarser views need less")
+    if folder is not None:
+        folder = set_folder(folder)
     shared = set_emitters(meshes, parts, plans, spacing)
     codes = tuple(look_code(k, looks) for k in range(looks))
     recorded = []
@@ -81,11 +96,15 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
         done = jobs.scaled(progress, k / len(parts), (k + 1) / len(parts))
         recording = prepare_plate(meshes, plate=part.plate, depth=depth, seed=seed,
                                   codes=codes, emitters=em, budget=(budget[0], None))
-        recorded.append(tuple(recording.record(done)))
+        held = tuple(recording.record(done))
+        recorded.append(held if folder is None else write_part(folder, k, held))
         log.info("part %d of %d: %d emitters of the set's %d, %s", k + 1, len(parts), len(em),
                  em.count, recording.plan.describe())
-    return PlateSet(parts=parts, looks=tuple(recorded), seed=seed,
-                    recording=set_digest(meshes, parts, seed=seed, looks=looks, depth=depth))
+    digest = set_digest(meshes, parts, seed=seed, looks=looks, depth=depth)
+    if folder is None:
+        return PlateSet(parts=parts, looks=tuple(recorded), seed=seed, recording=digest)
+    write_manifest(folder, parts, recorded, seed=seed, recording=digest)
+    return read_plate_set(folder)
 
 
 def set_emitters(meshes, parts, plans, spacing: float) -> list[Emitters]:
@@ -94,43 +113,73 @@ def set_emitters(meshes, parts, plans, spacing: float) -> list[Emitters]:
     (:func:`holo_core.plate.record.plate_plan`), ``spacing`` their shared spacing in direction
     cosine."""
     world = [meshes] if isinstance(meshes, Mesh) else list(meshes)
-    centres, found = [], []
+    poses = []  # each part's zone centre and its pupil's axes, in the world
     for part, (_, local, zone) in zip(parts, plans):
         m = part.plate.matrix_world
         every = np.concatenate([x.vertices for x in local])
-        rotation = m[:3, :3] @ zone_frame(zone, np.array([every.min(0), every.max(0)]))
-        centre = m[:3, :3] @ np.asarray(zone.centre) + m[:3, 3]
-        centres.append(centre)
-        found.append(surface_points(world, centre, rotation, spacing, layers=LAYERS))
-    centres = np.array(centres)
+        poses.append((m[:3, :3] @ np.asarray(zone.centre) + m[:3, 3],
+                      m[:3, :3] @ zone_frame(zone, np.array([every.min(0), every.max(0)]))))
+    every = np.concatenate([x.vertices for x in world])
+    lattices = [poses[k] for k in lattice_parts([c for c, _ in poses], every.mean(0))]
+    centres = np.array([c for c, _ in lattices])
     points = []
-    for k, (position, colour, normal, cell) in enumerate(found):
+    for k, (centre, rotation) in enumerate(lattices):
+        position, colour, normal, cell = surface_points(world, centre, rotation, spacing,
+                                                        layers=LAYERS)
         towards = centres[None, :, :] - position[:, None, :]
         facing = np.abs(np.einsum("nj,npj->np", normal, towards)) / np.linalg.norm(towards,
                                                                                    axis=2)
-        own = facing.argmax(1) == k  # each surface point from the part seeing it most face-on
-        points.append((position[own], colour[own], normal[own], cell[own]))
-    position, colour, normal, cell = (np.concatenate(a) for a in zip(*points))
+        own = facing.argmax(1) == k  # each surface point from the lattice seeing it most face-on
+        points.append((position[own], colour[own], normal[own], cell[own], facing[own, k]))
+    position, colour, normal, cell, slant = (np.concatenate(a) for a in zip(*points))
     seen = []
-    for part, (_, local, zone) in zip(parts, plans):
+    for part, (_, local, zone), (centre, _) in zip(parts, plans, poses):
         m = part.plate.matrix_world
         every = np.concatenate([x.vertices for x in local])
         rotation = zone_frame(zone, np.array([every.min(0), every.max(0)]))
         here = part.plate.to_plate(position)
         offsets, table = visibility(local, here, normal @ m[:3, :3], zone, rotation, spacing,
                                     grid_points(zone))
-        seen.append((here, offsets, table))
+        towards = centre - position
+        facing = np.abs(np.einsum("nj,nj->n", normal, towards)) / np.linalg.norm(towards, axis=1)
+        # a lattice seen from this zone holds cos(its slant)/cos(this zone's) emitters a
+        # resolved spot: their light scaled to one's, so that the surfaces' coverage is one
+        weight = np.sqrt(np.maximum(facing, MIN_SLANT) / np.maximum(slant, MIN_SLANT))
+        seen.append((here, offsets, table, weight))
     kept = np.zeros(len(position), bool)
-    for _, _, table in seen:
+    for _, _, table, _ in seen:
         kept |= table.reshape(len(table), -1).max(1) > 0
     ids = np.cumsum(kept) - 1  # the set's emitters: those some part sees, numbered once
     count = int(kept.sum())
     out = []
-    for here, offsets, table in seen:
+    for here, offsets, table, weight in seen:
         keep = table.reshape(len(table), -1).max(1) > 0
         out.append(Emitters(position=here[keep], colour=colour[keep], cell=cell[keep],
-                            visibility=table[keep], grid=offsets, ids=ids[keep], count=count))
+                            visibility=table[keep], grid=offsets, ids=ids[keep], count=count,
+                            weight=weight[keep]))
     return out
+
+
+def lattice_parts(centres, target, turn: float = LATTICE_TURN) -> list[int]:
+    """The parts whose zone centres cast the set's lattices of emitters: the path's parts
+    (``centres`` (P, 3) [m], in order) cut into runs that turn at most ``turn`` [rad] about
+    ``target`` (3,) [m] (the objects' middle), the middle part of each run. A lattice serves
+    every part of its run, weighted for each (:func:`set_emitters`); a lattice a part would
+    leave a seam between lattices across the surfaces wherever two parts meet (the shot's
+    1 m dolly at 320x180, 12 lattices, unweighted: silhouettes' IoU 0.964-0.968 against
+    0.975-0.980 for one), and too few serve the ends of their runs from far off (a 30° orbit
+    in 22 parts, its middle and end frames: runs of 15°, 28.7 and 27.5 dB, IoU 0.980 and
+    0.975; of 5°, 28.6 and 28.6 dB, IoU 0.976 and 0.979; each part recorded alone, 29.3 and
+    29.5 dB, IoU 0.980 and 0.979)."""
+    d = np.asarray(centres, np.float64) - np.asarray(target, np.float64)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    runs, start = [], 0
+    for k in range(1, len(d)):
+        if math.acos(min(1.0, float(d[start] @ d[k]))) > turn:
+            runs.append((start, k - 1))
+            start = k
+    runs.append((start, len(d) - 1))
+    return [(a + b) // 2 for a, b in runs]
 
 
 def set_digest(meshes, parts, *, seed: int, looks: int, depth: bool) -> str:
@@ -196,5 +245,5 @@ def render_set_view(plates: PlateSet, camera: Camera, *, frame: int | None = Non
                       OutsideZoneWarning, stacklevel=2)
         with warnings.catch_warnings():  # said once, for the set
             warnings.simplefilter("ignore", OutsideZoneWarning)
-            return render_view(list(plates.looks[k]), camera, **settings)
-    return render_view(list(plates.looks[k]), camera, **settings)
+            return render_view(list(plates.part_looks(k)), camera, **settings)
+    return render_view(list(plates.part_looks(k)), camera, **settings)

@@ -675,6 +675,8 @@ def prepare_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None
                          f"({zone.describe()})")
     # |a| = √I·|p − Z|: each emitter's light reaches the zone's centre with its own amplitude
     reach = np.linalg.norm(em.position - np.asarray(zone.centre), axis=1)
+    if em.weight is not None:  # a shared set's emitters, weighted for this zone
+        reach = reach * em.weight
     waves = [np.exp(1j * _phases(em, _look_seed(seed, codes, look), c)) * reach
              for look, c in enumerate(codes)]
     partial = em.visibility.reshape(len(em), -1).min(1) < 1

@@ -5,7 +5,7 @@ the path with that stretch's viewing zone, recorded together from the same emitt
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -56,33 +56,56 @@ class PlateSet:
     """The parts of a plate along a path, recorded.
 
     parts : tuple of PathPart
-    looks : per part, its looks (a tuple of Hologram, the same count for every part)
+    looks : per part, its looks (a tuple of Hologram, the same count for every part), or None
+        where ``load`` reads them when a view needs them (a set on disk: one part held at a
+        time, so the memory stays that of a part however long the path)
     seed : the emitters' random phases' seed, shared by every part
     recording : the digest (hex) of what it was recorded from: the meshes, the parts, the seed
         and the looks (a set's files name it; a part of another recording is refused)
+    load : callable(k) -> tuple of Hologram, part k's looks, where ``looks`` holds None
     """
 
     parts: tuple
     looks: tuple
     seed: int = 0
     recording: str = ""
+    load: object = None
+    _held: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        parts, looks = tuple(self.parts), tuple(tuple(part) for part in self.looks)
+        parts = tuple(self.parts)
+        looks = tuple(None if part is None else tuple(part) for part in self.looks)
         if not parts or not all(isinstance(p, PathPart) for p in parts):
             raise InputError("a plate set's parts must be a non-empty sequence of PathPart")
         if len(looks) != len(parts):
             raise InputError(f"a plate set needs the looks of each of its {len(parts)} parts; "
                              f"got {len(looks)}")
+        counts = {len(held) for held in looks if held is not None}
         for k, held in enumerate(looks):
+            if held is None:
+                if not callable(self.load):
+                    raise InputError(f"part {k}'s looks are None: the set needs load, a "
+                                     f"callable reading a part's looks")
+                continue
             if not held or not all(isinstance(h, Hologram) for h in held):
                 raise InputError(f"part {k}'s looks must be a non-empty sequence of Hologram")
-            if len(held) != len(looks[0]):
-                raise InputError(f"part {k} holds {len(held)} looks, part 0 {len(looks[0])}: "
-                                 f"the parts of a set share their looks")
+        if len(counts) > 1:
+            raise InputError(f"the parts hold {sorted(counts)} looks: the parts of a set share "
+                             f"their looks")
         object.__setattr__(self, "parts", parts)
         object.__setattr__(self, "looks", looks)
         object.__setattr__(self, "seed", validate.seed(self.seed))
 
     def __len__(self) -> int:
         return len(self.parts)
+
+    def part_looks(self, k: int) -> tuple:
+        """Part ``k``'s looks (tuple of Hologram): held, or read by ``load``, the last part
+        read kept until another is asked for."""
+        k = validate.index("part", k, len(self.parts))
+        if self.looks[k] is not None:
+            return self.looks[k]
+        if k not in self._held:
+            self._held.clear()  # one part in memory at a time
+            self._held[k] = tuple(self.load(k))
+        return self._held[k]

@@ -63,19 +63,18 @@ def test_each_frame_is_viewed_from_the_part_that_holds_its_pupil(dolly_set):
         assert beyond == 0 and dolly_set.parts[k].reach(cam.position,
                                                          cam.aperture_diameter) == 0
         ours = render_view(dolly_set, cam)
-        theirs = render_view(list(dolly_set.looks[k]), cam)
+        theirs = render_view(list(dolly_set.part_looks(k)), cam)
         assert np.array_equal(ours.rgb, theirs.rgb) and np.array_equal(ours.depth,
                                                                       theirs.depth)
 
 
 def test_one_pupil_sees_the_same_wave_from_either_part(dolly_set):
     """The middle frame's pupil lies in all four parts: their views agree within 36 dB
-    (measured 39.2-41.4 dB; 42.0-43.6 at 320x180, where each is 25.0-25.2 dB from the
-    camera hologram), where the outer two parts recorded each with its own emitters (other
-    positions and phases: another speckle) agree within 24.1 dB only: no jump where the
-    frames change part. Their silhouettes agree within 2e-4 of a pixel's alpha on average."""
+    (measured 37.9-40.2 dB), where the outer two parts recorded each with its own emitters
+    (other positions and phases: another speckle) agree within 24.1 dB only: no jump where
+    the frames change part. Their silhouettes agree (IoU 0.993-1 measured)."""
     cam = cameras()[3]
-    views = [render_view(list(looks), cam) for looks in dolly_set.looks]
+    views = [render_view(list(dolly_set.part_looks(k)), cam) for k in range(len(dolly_set))]
     agree = [psnr(views[a], views[b]) for a, b in ((0, 1), (1, 2), (2, 3), (0, 3))]
     own = [record_looks(ps.meshes(), looks=2, plate=dolly_set.parts[k].plate, seed=3)
            for k in (0, 3)]
@@ -83,8 +82,22 @@ def test_one_pupil_sees_the_same_wave_from_either_part(dolly_set):
     print(f"parts against each other {np.round(agree, 1)} dB; with their own emitters "
           f"{apart:.1f} dB")
     assert min(agree) > 36 and apart < min(agree) - 6, (agree, apart)
-    for v in views[1:]:
-        assert np.abs(v.alpha - views[0].alpha).mean() < 2e-4
+    solid = [v.alpha > 0.5 for v in views]
+    overlap = [(a & solid[0]).sum() / (a | solid[0]).sum() for a in solid[1:]]
+    print(f"silhouettes' IoU against part 0's: {np.round(overlap, 4)}")
+    assert min(overlap) > 0.99, overlap
+
+
+def test_a_set_recorded_into_a_folder_is_the_set_recorded_in_memory(dolly_set, tmp_path):
+    """Each part written as it is recorded (one part in memory at a time), read back part by
+    part: the same samples bit for bit, the same parts."""
+    parts = parts_along(cameras(), box(), distance=0.32, stretch=0.03, margin=0.005)
+    stored = record_set(ps.meshes(), parts, looks=2, seed=3, folder=tmp_path / "set")
+    assert stored.recording == dolly_set.recording and len(stored) == len(dolly_set)
+    for k in range(len(stored)):
+        for a, b in zip(stored.part_looks(k), dolly_set.part_looks(k)):
+            assert np.array_equal(a.object_wave, b.object_wave)
+        assert stored.parts[k].frames == dolly_set.parts[k].frames
 
 
 def test_a_frame_outside_every_part_warns_once_or_fails(dolly_set):
