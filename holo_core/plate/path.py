@@ -76,6 +76,11 @@ def parts_along(cameras, bounds, *, distance: float, stretch: float = DEFAULT_ST
             raise InputError(f"frame {f}: the camera at ({p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g}) m "
                              f"lies inside the objects' box {box.tolist()}: a plate can only "
                              f"be looked at from outside the objects")
+    for f, (p, q) in enumerate(zip(positions, positions[1:])):
+        if _crosses(p, q, box):
+            raise InputError(f"frame {f}: the path from its camera to frame {f + 1}'s passes "
+                             f"through the objects' box {box.tolist()}: a plate can only be "
+                             f"looked at from outside the objects")
     s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(positions, axis=0), axis=1))]
     length = float(s[-1])
     count = 1 if length <= stretch else math.ceil((length - pupil) / (stretch - pupil))
@@ -97,6 +102,19 @@ def parts_along(cameras, bounds, *, distance: float, stretch: float = DEFAULT_ST
             raise InputError(f"frame {f}: no part's zone holds the camera's pupil at "
                              f"({p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g}) m")
     return tuple(parts)
+
+
+def _crosses(p, q, box) -> bool:
+    """Whether the segment from ``p`` to ``q`` (3,) [m] meets the box ``box`` (2, 3) [m]
+    (slabs)."""
+    d = q - p
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t0, t1 = (box[0] - p) / d, (box[1] - p) / d
+    lo = np.where(d == 0, np.where((p >= box[0]) & (p <= box[1]), -np.inf, np.inf),
+                  np.minimum(t0, t1))
+    hi = np.where(d == 0, np.where((p >= box[0]) & (p <= box[1]), np.inf, -np.inf),
+                  np.maximum(t0, t1))
+    return bool(max(lo.max(), 0.0) <= min(hi.min(), 1.0))
 
 
 def _path_between(positions, s, s0, s1, step) -> np.ndarray:

@@ -146,6 +146,11 @@ def test_a_path_through_the_objects_or_behind_a_part_is_refused_naming_the_frame
     through = dolly(0.2) + [shot_camera((0.05, 0.0, -1.7))]  # the last frame inside the box
     with pytest.raises(InputError, match=r"frame 5: the camera .* inside the objects' box"):
         parts_along(through, box, distance=DISTANCE)
+    # two frames either side of the objects: the path between them goes through
+    across = [shot_camera((0.0, 0.0, 1.75)), shot_camera((0.0, 0.0, -4.0))]
+    with pytest.raises(InputError, match=r"frame 0: the path from its camera to frame 1's "
+                                         r"passes through the objects' box"):
+        parts_along(across, box, distance=DISTANCE)
     # frames walking towards the objects until they pass the plates (1.75 m from them)
     walk = [shot_camera((0.0, 0.0, z)) for z in (1.75, 0.8, 0.2, -0.1)]
     with pytest.raises(InputError, match=r"frame \d: the camera is .* behind its part's plate"):
