@@ -68,9 +68,12 @@ def write_part(folder: Path, k: int, looks) -> list:
     return files
 
 
-def write_manifest(folder: Path, parts, entries, *, seed: int, recording: str) -> Path:
+def write_manifest(folder: Path, parts, entries, *, seed: int, recording: str,
+                   looks: int | None = None) -> Path:
     """The manifest of ``parts`` (PathPart) whose files ``entries`` (:func:`write_part`, one a
-    part) lie in ``folder``, written last: until then the folder holds no set."""
+    part, None for a part not recorded yet) lie in ``folder``: rewritten after each part a
+    recording finishes, so that a recording stopped resumes from the parts it wrote
+    (:func:`recorded_parts`); a set with a part not recorded is refused by the reader."""
     listed = []
     for part, files in zip(parts, entries):
         p = part.plate
@@ -81,8 +84,9 @@ def write_manifest(folder: Path, parts, entries, *, seed: int, recording: str) -
                                 "pupil_m": p.zone.pupil, "pixel_rad": p.zone.pixel},
                        "stretch_m": list(part.stretch), "frames": list(part.frames),
                        "files": files})
+    looks = looks or len(next(e for e in entries if e is not None))
     manifest = {"kind": KIND, "version": VERSION, "recording": recording, "seed": seed,
-                "looks": len(entries[0]), "parts": listed}
+                "looks": looks, "parts": listed}
     return write_atomic(folder / MANIFEST, json.dumps(manifest, indent=1).encode())
 
 
@@ -100,6 +104,37 @@ def metadata_digest(h) -> str:
     what tells a damaged part (its samples changed) from a foreign one (another hologram)."""
     text = json.dumps(metadata(h), sort_keys=True).encode()
     return hashlib.blake2b(text, digest_size=16).hexdigest()
+
+
+def recorded_parts(folder, recording: str, count: int, *, overwrite=False) -> dict:
+    """The parts already recorded in ``folder`` for the recording ``recording`` of ``count``
+    parts, {index: their manifest entries}, each checked (a damaged one is left out, to be
+    recorded again): empty where the folder holds no set. A set of another recording (an
+    edited scene, other parts or looks) is refused naming both, unless ``overwrite``."""
+    folder = Path(folder)
+    if not (folder / MANIFEST).exists():
+        return {}
+    m = jsonfile.load(folder / MANIFEST, error=HologramFileError, max_chars=MANIFEST_CHARS)
+    held = m.get("recording") if isinstance(m, dict) else None
+    if held != recording or m.get("kind") != KIND:
+        if overwrite:
+            return {}
+        raise InputError(f"{folder}: holds another plate set (recording {str(held)[:12]}; this "
+                         f"one is {recording[:12]}: the scene, the path or the looks "
+                         f"differ); record to a new folder, or replace it (overwrite=True)")
+    field, done = _Fields(folder / MANIFEST), {}
+    listed = m.get("parts") if isinstance(m.get("parts"), list) else []
+    for k, entry in enumerate(listed[:count]):
+        files = entry.get("files") if isinstance(entry, dict) else None
+        if not files:
+            continue
+        try:
+            for look, f in enumerate(files):
+                _check_file(folder, k, look, f, field, f"parts[{k}].")
+        except HologramFileError:
+            continue  # recorded again
+        done[k] = files
+    return done
 
 
 def read_plate_set(folder) -> PlateSet:
@@ -128,6 +163,9 @@ def read_plate_set(folder) -> PlateSet:
     for k, entry in enumerate(listed):
         at = f"parts[{k}]."
         field.value(entry, dict, "an object", f"parts[{k}]")
+        if entry.get("files") is None:
+            raise HologramFileError(f"{folder}: part {k} was not recorded (the recording "
+                                    f"stopped before it); recording the set again resumes it")
         files = field.check(entry, "files", list, f"{looks} files", at)
         if len(files) != looks:
             field.fail(f"{at}files", f"{looks} files (one a look); it lists {len(files)}")

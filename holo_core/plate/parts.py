@@ -36,7 +36,8 @@ from ..scene.camera import Camera
 from ..scene.mesh import Mesh
 from ..scene.plate_set import PathPart, PlateSet
 from ..validate import InputError
-from ..io.plate_set import read_plate_set, set_folder, write_manifest, write_part
+from ..io.plate_set import (read_plate_set, recorded_parts, set_folder, write_manifest,
+                             write_part)
 from .emitters import Emitters, grid_points, surface_points, visibility, zone_frame
 from .plan import LAYERS
 from .record import look_code, plate_plan, prepare_plate
@@ -50,12 +51,16 @@ MIN_SLANT = 0.05  # cos of the most grazing view a lattice's density is weighted
 
 @validate.scale_free()  # each part's wavelength is the plan's (as record_looks)
 def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = True,
-               budget=(None, None), folder=None, progress: jobs.Progress = None) -> PlateSet:
+               budget=(None, None), folder=None, overwrite=False,
+               progress: jobs.Progress = None) -> PlateSet:
     """The looks of every part of ``parts`` (PathPart, from
     :func:`holo_core.plate.path.parts_along`) of ``meshes`` (world metres): in memory, or with
     ``folder`` each part written there as soon as it is recorded and its samples let go (the
-    memory that of one part), the manifest last (:mod:`holo_core.io.plate_set`), and the set
-    returned as read from there.
+    memory that of one part) and named in its manifest (:mod:`holo_core.io.plate_set`), the
+    set returned as read from there. A folder that holds this recording already (the same
+    meshes, parts, seed and looks) records only the parts it lacks: nothing, for a second
+    render of the shot; the rest of a recording stopped. One of another recording is refused
+    naming both, unless ``overwrite``.
 
     ``looks`` coded looks of ``seed`` (:func:`holo_core.plate.record.look_code`) per part,
     all parts from one set of emitters (module docstring). ``budget`` (memory, disk) [bytes]:
@@ -87,23 +92,35 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
                          f"({looks} look(s) each); the disk budget is "
                          f"{budget[1] / 2**30:.2f} GiB: longer stretches share more, a "
                          f"smaller pupil or coarser views need less")
+    digest = set_digest(meshes, parts, seed=seed, looks=looks, depth=depth)
+    recorded = [None] * len(parts)
     if folder is not None:
         folder = set_folder(folder)
+        for k, files in recorded_parts(folder, digest, len(parts),
+                                       overwrite=overwrite).items():
+            recorded[k] = files
+        if all(r is not None for r in recorded):
+            log.info("plate set: %s holds its %d parts already; nothing recorded", folder,
+                     len(parts))
+            return read_plate_set(folder)
     shared = set_emitters(meshes, parts, plans, spacing)
     codes = tuple(look_code(k, looks) for k in range(looks))
-    recorded = []
     for k, (part, em) in enumerate(zip(parts, shared)):
+        if recorded[k] is not None:
+            continue  # written by a recording that stopped
         done = jobs.scaled(progress, k / len(parts), (k + 1) / len(parts))
         recording = prepare_plate(meshes, plate=part.plate, depth=depth, seed=seed,
                                   codes=codes, emitters=em, budget=(budget[0], None))
         held = tuple(recording.record(done))
-        recorded.append(held if folder is None else write_part(folder, k, held))
         log.info("part %d of %d: %d emitters of the set's %d, %s", k + 1, len(parts), len(em),
                  em.count, recording.plan.describe())
-    digest = set_digest(meshes, parts, seed=seed, looks=looks, depth=depth)
+        if folder is None:
+            recorded[k] = held
+            continue
+        recorded[k] = write_part(folder, k, held)
+        write_manifest(folder, parts, recorded, seed=seed, recording=digest, looks=looks)
     if folder is None:
         return PlateSet(parts=parts, looks=tuple(recorded), seed=seed, recording=digest)
-    write_manifest(folder, parts, recorded, seed=seed, recording=digest)
     return read_plate_set(folder)
 
 

@@ -2,12 +2,15 @@
 that holds the pupil: the plate scene (tests/plate_scene.py) at 160x90, a 6 cm dolly served
 by parts of 3 cm."""
 
+import json
 import warnings
 
 import numpy as np
 import pytest
 
 import plate_scene as ps
+from holo_core.io.hologram import HologramFileError
+from holo_core.io.plate_set import MANIFEST, read_plate_set
 from holo_core.plate.parts import part_for, record_set, render_set_view
 from holo_core.plate.path import parts_along
 from holo_core.plate.record import record_looks
@@ -98,6 +101,38 @@ def test_a_set_recorded_into_a_folder_is_the_set_recorded_in_memory(dolly_set, t
         for a, b in zip(stored.part_looks(k), dolly_set.part_looks(k)):
             assert np.array_equal(a.object_wave, b.object_wave)
         assert stored.parts[k].frames == dolly_set.parts[k].frames
+
+
+def test_a_second_recording_records_nothing_and_a_stopped_one_resumes(dolly_set, tmp_path):
+    """Into a folder holding the set: nothing recorded (its files untouched). A recording
+    stopped after some parts (part 2's files and entry gone, as the manifest is rewritten
+    after each part): the set refused naming the part, then recording again writes only that
+    part, the set then equal to the one recorded in memory. Another recording (another seed)
+    is refused naming both unless overwrite."""
+    parts = parts_along(cameras(), box(), distance=0.32, stretch=0.03, margin=0.005)
+    folder = tmp_path / "set"
+    record_set(ps.meshes(), parts, looks=2, seed=3, folder=folder)
+    stamps = {f.name: f.stat().st_mtime_ns for f in folder.glob("*.exr")}
+    record_set(ps.meshes(), parts, looks=2, seed=3, folder=folder)
+    assert {f.name: f.stat().st_mtime_ns for f in folder.glob("*.exr")} == stamps
+    manifest = json.loads((folder / MANIFEST).read_text())
+    for f in manifest["parts"][2]["files"]:
+        (folder / f["name"]).unlink()
+    manifest["parts"][2]["files"] = None
+    (folder / MANIFEST).write_text(json.dumps(manifest))
+    with pytest.raises(HologramFileError, match="part 2 was not recorded"):
+        read_plate_set(folder)
+    resumed = record_set(ps.meshes(), parts, looks=2, seed=3, folder=folder)
+    after = {f.name: f.stat().st_mtime_ns for f in folder.glob("*.exr")}
+    assert {n for n in after if after[n] != stamps.get(n)} == {"part002.look0.exr",
+                                                                "part002.look1.exr"}
+    for k in range(len(resumed)):
+        for a, b in zip(resumed.part_looks(k), dolly_set.part_looks(k)):
+            assert np.array_equal(a.object_wave, b.object_wave)
+    with pytest.raises(InputError, match="holds another plate set"):
+        record_set(ps.meshes(), parts, looks=2, seed=4, folder=folder)
+    other = record_set(ps.meshes(), parts, looks=2, seed=4, folder=folder, overwrite=True)
+    assert other.recording != dolly_set.recording
 
 
 def test_a_frame_outside_every_part_warns_once_or_fails(dolly_set):
