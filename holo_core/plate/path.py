@@ -17,13 +17,17 @@ the objects' light reaches its zone.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+
 import numpy as np
 
 from .. import validate
+from ..memory import gib
 from ..scene.camera import Camera
 from ..scene.plate import Plate, ViewingZone, box_corners
 from ..scene.plate_set import PathPart, reach_beyond
 from ..validate import InputError, shown
+from .plan import CHANNELS, LOOKS, plan
 
 DEFAULT_STRETCH = 0.1   # [m] of path a part holds (the 10 cm dolly one plate serves well)
 DEFAULT_MARGIN = 0.01   # [m] each part's zone reaches beyond the pupils of its stretch
@@ -176,3 +180,60 @@ def _facing(path, frames: dict, up, box, centre, distance, pupil, margin, pixel)
                        pixel=pixel)
     return Plate(matrix_world=pose, width=float(hi[0] - lo[0]), height=float(hi[1] - lo[1]),
                  zone=zone)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class SetPlan:
+    """The plans of a set's parts (``plans``, a :class:`holo_core.plate.plan.PlatePlan` a
+    part, each of ``looks`` looks) along a path of ``length`` [m]: what the set holds and
+    costs, before any emitter is found."""
+
+    plans: tuple
+    length: float
+
+    @property
+    def samples(self) -> int:
+        return sum(p.samples for p in self.plans)
+
+    def disk_bytes(self, channels=CHANNELS) -> float:
+        """Bytes of every part's looks on disk."""
+        return sum(p.disk_bytes(channels) for p in self.plans)
+
+    def memory_bytes(self, channels=CHANNELS) -> float:
+        """Host bytes while recording: one part at a time, every look."""
+        return max(p.memory_bytes(channels * p.looks) for p in self.plans)
+
+    def record_seconds(self, channels=CHANNELS) -> float:
+        """Estimated seconds to record every part on the development machine (the parts'
+        sums; the emitters' search and visibility are not counted)."""
+        return sum(p.record_seconds(channels) for p in self.plans)
+
+    def describe(self) -> str:
+        """The set in plain words: parts, samples, disk, memory, time, what a view reads."""
+        widest = max(self.plans, key=lambda p: p.samples)
+        return (f"{len(self.plans)} part(s) along {self.length:.3g} m of path, "
+                f"{self.samples / 1e6:.3g} Mpx in all (the largest {widest.shape[1]} x "
+                f"{widest.shape[0]}), {self.plans[0].looks} look(s): "
+                f"{gib(self.disk_bytes())} on disk, {gib(self.memory_bytes())} of memory "
+                f"while recording (a part at a time), about {self.record_seconds():.0f} s to "
+                f"record here; a view reads one part")
+
+
+def plan_parts(parts, points, *, looks: int = LOOKS) -> SetPlan:
+    """The :class:`SetPlan` of ``parts`` (:func:`parts_along`) for objects at ``points``
+    (N, 3) [m] (the world: their vertices, or their box's corners), ``looks`` looks a part
+    (pure arithmetic, as :func:`holo_core.plate.plan.plan`)."""
+    parts = tuple(parts)
+    if not parts or not all(isinstance(p, PathPart) for p in parts):
+        raise InputError("parts must be a non-empty sequence of PathPart (parts_along)")
+    world = validate.array("points", points, "(N, 3) object points [m]")
+    if world.ndim != 2 or world.shape[1] != 3 or not len(world):
+        raise InputError(f"points must be (N, 3) object points [m]; got shape {world.shape}")
+    plans = []
+    for part in parts:
+        local = part.plate.to_plate(world)
+        zone = part.plate.zone
+        plans.append(plan((part.plate.width, part.plate.height),
+                          np.array([local.min(0), local.max(0)]), zone=zone,
+                          pixel_angle=zone.pixel, looks=looks))
+    return SetPlan(plans=tuple(plans), length=float(parts[-1].stretch[1] - parts[0].stretch[0]))

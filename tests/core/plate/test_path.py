@@ -4,7 +4,7 @@ placement and the planner only: no device)."""
 import numpy as np
 import pytest
 
-from holo_core.plate.path import parts_along
+from holo_core.plate.path import parts_along, plan_parts
 from holo_core.plate.record import plate_plan
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.plate import Plate, ViewingZone
@@ -159,3 +159,20 @@ def test_a_path_through_the_objects_or_behind_a_part_is_refused_naming_the_frame
         parts_along(dolly(0.2), box, distance=DISTANCE, stretch=0.01)
     with pytest.raises(InputError, match="cuts the objects"):
         parts_along(dolly(0.2), box, distance=0.2)
+
+
+def test_the_set_is_planned_in_plain_words_from_the_parts_alone():
+    """plan_parts (pure arithmetic) plans each part as the recording will (plate_plan of its
+    meshes): the same samples a part; the set's words name the parts, samples, disk, memory
+    a part at a time and time. The 1 m dolly at 1280x720: 12 parts, 363 Mpx, 21.6 GiB for
+    two looks (the issue's target: at most 24 GiB)."""
+    meshes = shot_meshes()
+    parts = parts_along(dolly(1.0), shot_box(), distance=DISTANCE)
+    planned = plan_parts(parts, np.concatenate([m.vertices for m in meshes]), looks=2)
+    assert [p.shape for p in planned.plans] == [plate_plan(meshes, plate=p.plate)[0].shape
+                                                for p in parts]
+    words = planned.describe()
+    print(words)
+    assert words.startswith("12 part(s) along 1 m of path") and "GiB on disk" in words
+    assert planned.disk_bytes() / 2**30 == pytest.approx(21.6, abs=0.1)
+    assert planned.memory_bytes() < planned.disk_bytes() / 5  # one part at a time
