@@ -49,12 +49,26 @@ def normal(part):
     return part.plate.matrix_world[:3, 2]
 
 
+def crane(height=1.0, step=0.05):
+    """The camera rising ``height`` [m] and closing in, looking at the objects."""
+    t = np.linspace(0, 1, round(height / step) + 1)
+    return [shot_camera((0.0, height * u, DISTANCE - 0.3 * u)) for u in t]
+
+
+def hand_held(length=0.4, step=0.02, seed=1):
+    """A dolly with the hand's wobble: 5 mm at random each frame, every axis."""
+    jitter = np.random.default_rng(seed).normal(0, 0.005, (round(length / step) + 1, 3))
+    xs = np.linspace(-length / 2, length / 2, len(jitter))
+    return [shot_camera(np.array([x, 0.0, DISTANCE]) + j) for x, j in zip(xs, jitter)]
+
+
 def test_every_pupil_of_the_path_lies_wholly_inside_a_part():
-    """A 1 m dolly and a 90° orbit: each frame's pupil lies wholly inside the zone of every
-    part that lists it, and of at least one; consecutive parts' stretches overlap by at least
-    a pupil, so a pupil between frames is held too."""
+    """A 1 m dolly, a 90° orbit, a 1 m crane and a hand-held 40 cm dolly: each frame's pupil
+    lies wholly inside the zone of every part that lists it, and of at least one;
+    consecutive parts' stretches overlap by at least a pupil, so a pupil between frames is
+    held too."""
     box = shot_box()
-    for cams in (dolly(1.0), orbit(90)):
+    for cams in (dolly(1.0), orbit(90), crane(), hand_held()):
         parts = parts_along(cams, box, distance=DISTANCE)
         pupil = cams[0].aperture_diameter
         for f, cam in enumerate(cams):
