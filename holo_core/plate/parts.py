@@ -27,6 +27,7 @@ import hashlib
 import logging
 import math
 import warnings
+from collections.abc import Iterator
 from dataclasses import replace
 
 import numpy as np
@@ -124,9 +125,9 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
     return read_plate_set(folder)
 
 
-def set_emitters(meshes, parts, plans, spacing: float) -> list[Emitters]:
-    """Each part's emitters (its plate's frame, its visibility) drawn from one set found for
-    all (module docstring): ``plans`` the parts' (plan, meshes in the plate's frame, zone)
+def set_emitters(meshes, parts, plans, spacing: float) -> Iterator[Emitters]:
+    """Each part's emitters (its plate's frame, its visibility), made as the recording asks
+    for them, drawn from one set found for all (module docstring): ``plans`` the parts' (plan, meshes in the plate's frame, zone)
     (:func:`holo_core.plate.record.plate_plan`), ``spacing`` their shared spacing in direction
     cosine."""
     world = [meshes] if isinstance(meshes, Mesh) else list(meshes)
@@ -162,19 +163,20 @@ def set_emitters(meshes, parts, plans, spacing: float) -> list[Emitters]:
         # a lattice seen from this zone holds cos(its slant)/cos(this zone's) emitters a
         # resolved spot: their light scaled to one's, so that the surfaces' coverage is one
         weight = np.sqrt(np.maximum(facing, MIN_SLANT) / np.maximum(slant, MIN_SLANT))
-        seen.append((here, offsets, table, weight))
+        keep = np.flatnonzero(table.reshape(len(table), -1).max(1) > 0)
+        # held as the recording's own 8-bit table (prepare_plate rounds it so), not float32:
+        # a long path's parts hold every one of their emitters' tables at once here
+        seen.append((keep, offsets, np.round(table[keep] * 255).astype(np.uint8),
+                     weight[keep]))
     kept = np.zeros(len(position), bool)
-    for _, _, table, _ in seen:
-        kept |= table.reshape(len(table), -1).max(1) > 0
+    for keep, *_ in seen:
+        kept[keep] = True
     ids = np.cumsum(kept) - 1  # the set's emitters: those some part sees, numbered once
     count = int(kept.sum())
-    out = []
-    for here, offsets, table, weight in seen:
-        keep = table.reshape(len(table), -1).max(1) > 0
-        out.append(Emitters(position=here[keep], colour=colour[keep], cell=cell[keep],
-                            visibility=table[keep], grid=offsets, ids=ids[keep], count=count,
-                            weight=weight[keep]))
-    return out
+    return (Emitters(position=part.plate.to_plate(position[keep]), colour=colour[keep],
+                     cell=cell[keep], visibility=table / np.float32(255), grid=offsets,
+                     ids=ids[keep], count=count, weight=weight)
+            for part, (keep, offsets, table, weight) in zip(parts, seen))
 
 
 def lattice_parts(centres, target, turn: float = LATTICE_TURN) -> list[int]:
