@@ -16,6 +16,13 @@ the plate costs less than a pass per frame.
 
     python bench/shot.py [--scale 1.0] [--looks 2] [--dolly 0.1] [--supersample 2] [--repeat 3]
                           [--out DIR] [--in-process] [--stages]
+    python bench/shot.py --set [--dolly 1.0 | --orbit 90] [--frames 5] [--stretch 0.1] ...
+
+With ``--set`` (and always with ``--orbit DEG``: an orbit of DEG degrees at 3.5 m around the
+objects' middle) the plate is a set of parts along the path (:mod:`holo_core.plate.path`),
+the plates 1.75 m from the objects: it prints the part count, the recording's time, the set's
+size on disk (its folder written and removed), and for ``--frames`` frames along the move the
+part that serves it, its view against the camera pass, PSNR and IoU.
 """
 
 import argparse
@@ -45,7 +52,10 @@ from holo_core.io.image import write_png  # noqa: E402
 from holo_core.io.plate_paths import read_plate  # noqa: E402
 from holo_core.job import CameraRoute, Job, Output, PlateRoute  # noqa: E402
 from holo_core.plate.looks import record_looks  # noqa: E402
+from holo_core.plate.parts import record_set  # noqa: E402
+from holo_core.plate.path import part_for, parts_along  # noqa: E402
 from holo_core.plate.plan import plan, plan_view  # noqa: E402
+from holo_core.plate.recording import plate_plan  # noqa: E402
 from holo_core.plate.view import render_view  # noqa: E402
 from holo_core.scene.camera import Camera, look_at  # noqa: E402
 from holo_core.scene.plate import Plate, ViewingZone  # noqa: E402
@@ -61,8 +71,8 @@ def scene():
             sphere(centre=np.array([0.22, 0.1, -1.95]), radius=0.3, n=96)]
 
 
-def camera(x: float, scale: float) -> Camera:
-    eye = np.array([x, 0.0, DISTANCE])
+def camera(x: float, scale: float, eye=None) -> Camera:
+    eye = np.array([x, 0.0, DISTANCE]) if eye is None else np.asarray(eye, float)
     size = (round(1280 * scale), round(720 * scale))
     return Camera(matrix_world=look_at(eye, TARGET, up=(0, 1, 0)), lens=40, sensor_width=36,
                   resolution=size, fstop=2.8,
@@ -161,7 +171,17 @@ def main():
     p.add_argument("--stages", action="store_true",
                    help="also one view of the middle frame with the device synchronised "
                         "around each kernel and transform: where its time goes")
+    p.add_argument("--orbit", type=float, default=None, metavar="DEG",
+                   help="an orbit of DEG degrees at 3.5 m around the objects' middle, in "
+                        "place of the dolly (a plate set)")
+    p.add_argument("--set", action="store_true",
+                   help="a set of parts along the path in place of one plate")
+    p.add_argument("--frames", type=int, default=3, help="frames along the move (3)")
+    p.add_argument("--stretch", type=float, default=0.1,
+                   help="[m] of path a part of the set serves (0.1)")
     args = p.parse_args()
+    if args.set or args.orbit is not None:
+        return set_route(args)
     xs = np.linspace(-args.dolly / 2, args.dolly / 2, 3)
     cams = [camera(x, args.scale) for x in xs]
     meshes = scene()
@@ -189,12 +209,7 @@ def main():
           f"{memory.peak / 2**30:.2f} GiB")
     rows = []
     for i, cam in enumerate(cams):
-        passes, views = [], []
-        for _ in range(args.repeat):  # alternated, so that a slow spell of the host hits both
-            ref, t = timed(render_camera, meshes, cam, via="incoherent")
-            passes.append(t)
-            view, t = timed(render_view, plates, cam, supersample=args.supersample)
-            views.append(t)
+        view, ref, views, passes = against_pass(plates, cam, meshes, args)
         cam_s, view_s = float(np.median(passes)), float(np.median(views))
         inside = (ref.alpha >= 1) & (view.alpha >= 1)
         rows.append((xs[i], psnr(view, ref, inside), iou(view.alpha > 0.5, ref.alpha > 0.5),
@@ -228,6 +243,95 @@ def main():
         "PSNR [dB]": p, "IoU": q, "view [s]": v, "camera pass [s]": c}
         for x, p, q, v, c in rows})
     results.write("shot", figures)
+
+
+def set_route(args) -> None:
+    """The shot's move served by a set of parts along it: placed, recorded, written, and each
+    frame viewed from its part against its camera pass."""
+    # the path the parts are placed along: the move 5 cm (or 5°) a step, the frames among them
+    span = args.orbit / 5 if args.orbit is not None else args.dolly / 0.05
+    at = np.unique(np.r_[np.linspace(-0.5, 0.5, max(2, round(span) + 1)),
+                         np.linspace(-0.5, 0.5, args.frames)])
+    if args.orbit is not None:
+        def eye(t):
+            a = math.radians(args.orbit * t)
+            return TARGET + 2 * DISTANCE * np.array([math.sin(a), 0.0, math.cos(a)])
+        labels = [f"at {args.orbit * t:+.1f}°" for t in np.linspace(-0.5, 0.5, args.frames)]
+        move = f"a {args.orbit:g}° orbit at {2 * DISTANCE:g} m"
+    else:
+        def eye(t):
+            return np.array([args.dolly * t, 0.0, DISTANCE])
+        labels = [f"at x = {args.dolly * t * 100:+.1f} cm"
+                  for t in np.linspace(-0.5, 0.5, args.frames)]
+        move = f"a {args.dolly * 100:g} cm dolly"
+    cams = [camera(0.0, args.scale, eye(t)) for t in np.linspace(-0.5, 0.5, args.frames)]
+    path = [camera(0.0, args.scale, eye(t)) for t in at]
+    meshes = scene()
+    every = np.concatenate([m.vertices for m in meshes])
+    print(f"CPU: {cpu()}; load {os.getloadavg()[0]:.1f} (1 min) at the start")
+    parts = parts_along(path, [every.min(0), every.max(0)], distance=DISTANCE,
+                        stretch=args.stretch)
+    plans = [plate_plan(meshes, plate=part.plate).plan for part in parts]
+    samples = sum(q.samples for q in plans)
+    print(f"{move}, {cams[0].resolution[0]}x{cams[0].resolution[1]}: {len(parts)} parts of "
+          f"{args.stretch * 100:g} cm of path, {samples / 1e6:.1f} Mpx in all (a part "
+          f"{plans[0].shape[1]}x{plans[0].shape[0]}); planned "
+          f"{sum(q.record_seconds() for q in plans):.1f} s")
+    with tempfile.TemporaryDirectory() as folder:  # each part written as it is recorded
+        with PeakMemory() as memory:
+            plates, record_s = timed(record_set, meshes, parts, looks=args.looks, seed=0,
+                                     folder=Path(folder) / "set")
+        disk = sum(f.stat().st_size for f in (Path(folder) / "set").iterdir())
+        print(f"recording: {len(parts)} parts x {args.looks} looks in {record_s:.1f} s "
+              f"({record_s / len(parts):.2f} s a part), each written as recorded; peak memory "
+              f"of all processes {memory.peak / 2**30:.2f} GiB; on disk {disk / 2**30:.3f} GiB "
+              f"(load {os.getloadavg()[0]:.1f})", flush=True)
+        summary(set_frames(args, plates, cams, labels, meshes))
+
+
+def set_frames(args, plates, cams, labels, meshes) -> list:
+    """Each frame from its part against its camera pass: (PSNR, IoU, view s, pass s)."""
+    render_camera(meshes, cams[0], via="incoherent")  # both renderers warm
+    render_view(plates, cams[0], supersample=args.supersample)
+    rows = []
+    for i, cam in enumerate(cams):
+        k, _ = part_for(plates, cam)
+        _, read_s = timed(plates.part_looks, k)  # its files read when the part changes
+        view, ref, views, passes = against_pass(plates, cam, meshes, args)
+        cam_s, view_s = float(np.median(passes)), float(np.median(views))
+        inside = (ref.alpha >= 1) & (view.alpha >= 1)
+        rows.append((psnr(view, ref, inside), iou(view.alpha > 0.5, ref.alpha > 0.5), view_s,
+                     cam_s))
+        print(f"frame {labels[i]} (part {k}, read in {read_s:.2f} s): PSNR {rows[-1][0]:.2f} "
+              f"dB, IoU {rows[-1][1]:.4f}; view {view_s:.2f} s, camera pass {cam_s:.2f} s "
+              f"(view / pass {view_s / cam_s:.2f}) (load {os.getloadavg()[0]:.1f})",
+              flush=True)
+        if args.out is not None:
+            args.out.mkdir(parents=True, exist_ok=True)
+            for name, v in (("set", view), ("camera", ref)):
+                write_png(args.out / f"frame{i}_{name}.png",
+                          np.clip(v.rgb * v.alpha[..., None], 0, 1) ** (1 / 2.2))
+    return rows
+
+
+def against_pass(plates, cam, meshes, args):
+    """(the view, the camera pass, the view's seconds, the pass's seconds), each timed
+    ``--repeat`` times, alternated, so that a slow spell of the host hits both."""
+    passes, views = [], []
+    for _ in range(args.repeat):
+        ref, t = timed(render_camera, meshes, cam, via="incoherent")
+        passes.append(t)
+        view, t = timed(render_view, plates, cam, supersample=args.supersample)
+        views.append(t)
+    return view, ref, views, passes
+
+
+def summary(rows) -> None:
+    r = np.array(rows)
+    view_s, cam_s = r[:, 2].mean(), r[:, 3].mean()
+    print(f"\nPSNR {r[:, 0].min():.2f}-{r[:, 0].max():.2f} dB, IoU {r[:, 1].min():.4f}-"
+          f"{r[:, 1].max():.4f}; a view {view_s:.2f} s = {view_s / cam_s:.2f} x the camera "
+          f"pass ({cam_s:.2f} s); load at the end {os.getloadavg()[0]:.1f}")
 
 
 def view_stages(plates, cam, supersample) -> None:

@@ -46,7 +46,8 @@ def _formats():
     for key, module, names in (("hologram", "holo_core.io.hologram", ("FORMAT", "FORMAT_VERSION",
                                                                       "READS")),
                                ("display", "holo_core.io.display", ("FORMAT", "VERSION")),
-                               ("store", "holo_core.io.store", ("STORE_FORMAT",))):
+                               ("store", "holo_core.io.store", ("STORE_FORMAT",)),
+                               ("plate_set", "holo_core.io.plate_set", ("KIND", "VERSION"))):
         try:
             m = importlib.import_module(module)
         except ImportError:  # a module moved: the page says so rather than a stale number

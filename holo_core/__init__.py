@@ -26,7 +26,9 @@ _API = {"Camera": ".scene", "look_at": ".scene", "Plate": ".scene", "ViewingZone
         "resample": ".propagation", "to_device": ".opencl", "Field": ".scene",
         "thin_lens": ".optics", "psnr": ".optics", "ssim": ".optics",
         "adjoint": ".propagation.adjoint", "gerchberg_saxton": ".phase",
-        "optimise_phase": ".phase", "double_phase": ".phase"}
+        "optimise_phase": ".phase", "double_phase": ".phase",
+        "parts_along": ".plate", "record_set": ".plate", "read_plate_set": ".io.plate_set",
+        "write_plate_set": ".io.plate_set"}
 # the packages, imported on first use too (plot needs matplotlib: pip install 'holo[plot]')
 _PACKAGES = ("acquired", "camera", "io", "opencl", "optics", "phase", "plate", "plot",
              "propagation", "scene", "units", "validate")
@@ -34,11 +36,12 @@ _PACKAGES = ("acquired", "camera", "io", "opencl", "optics", "phase", "plate", "
 __all__ = ["Camera", "Field", "Hologram", "InputError", "Mesh", "Plate", "Pupil", "RenderResult",
            "ViewingZone", "adjoint", "angular_spectrum", "autofocus", "double_phase",
            "find_carrier", "fraunhofer", "fresnel", "gerchberg_saxton", "import_acquired",
-           "look_at", "object_hologram", "optimise_phase", "physical_field", "propagate_to_plane",
-           "psnr", "rayleigh_sommerfeld", "read_acquired", "read_hologram", "read_mesh",
-           "reconstruct", "record_hologram", "record_points", "render_camera", "render_view",
-           "resample", "sideband", "ssim", "thin_lens", "tilt", "to_device", "unwrap",
-           "write_acquired", "write_hologram", "write_view"]
+           "look_at", "object_hologram", "optimise_phase", "parts_along", "physical_field",
+           "propagate_to_plane", "psnr", "rayleigh_sommerfeld", "read_acquired",
+           "read_hologram", "read_mesh", "read_plate_set", "reconstruct", "record_hologram",
+           "record_points", "record_set", "render_camera", "render_view", "resample",
+           "sideband", "ssim", "thin_lens", "tilt", "to_device", "unwrap", "write_acquired",
+           "write_hologram", "write_plate_set", "write_view"]
 
 
 __getattr__, __dir__ = lazy_names(__name__, _API, _PACKAGES)

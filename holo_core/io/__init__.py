@@ -2,6 +2,8 @@
 
 - ``image.py``: atomic writes, PNG and OpenEXR images
 - ``hologram.py``: hologram files (EXR with their metadata)
+- ``plate_set.py``: a plate's parts along a path as one folder, its manifest naming each
+  part's files and their digests
 - ``acquired.py``: acquired scans and laboratory arrays in and out (PNG, TIFF, EXR, .npy, HDF5,
   MATLAB v7.3), nothing read from outside the file named
 - ``jsonfile.py``: JSON metadata bounded (size, nesting depth) before it is parsed

@@ -28,7 +28,11 @@ viewed by any camera in that zone.
 - ``pupil_images.py``: each look's images at the pixels, by the camera hologram's own pupil
   stage: the carrier plate's route and the full-band plate's
 - ``composition.py``: the looks' images composed into the view: radiance, alpha, depth
-- ``view.py``: a camera's image of the plate (Sect. VII), dispatching on its route
+- ``view.py``: a camera's image of the plate (Sect. VII), dispatching on its route; a plate
+  set's from the part that holds its pupil
+- ``path.py``: a plate's parts along a camera path (a long dolly, an orbit), each facing its
+  stretch, and the part that holds a pupil (pure arithmetic: no driver)
+- ``parts.py``: the parts recorded from one set of emitters
 """
 
 import sys
@@ -39,7 +43,8 @@ from importlib import import_module
 # and Blender's process imports it without the OpenCL driver the recorder and the viewer load
 _API = {"Reference": ".reference", "record_hologram": ".record", "record_plate": ".looks",
         "record_looks": ".looks", "record_points": ".points", "reconstruct": ".reconstruction",
-        "render_view": ".view", "physical_field": ".carrier",
+        "render_view": ".view", "physical_field": ".carrier", "parts_along": ".path",
+        "record_set": ".parts", "render_set_view": ".view",
         "find_carrier": "..acquired", "sideband": "..acquired"}  # their home: acquired/
 __all__ = sorted(_API)
 

@@ -51,13 +51,20 @@ class Emitters:
     """Emitters in the plate's frame: ``position`` (n, 3) [m], linear ``colour`` (n, 3),
     ``cell`` (n, 2) their bin (kx, ky) from the zone's centre, ``visibility`` (n, G, G) in
     [0, 1] from the zone's grid points, ``grid`` the points' offsets from the zone's centre
-    ((x0, step_x), (y0, step_y)) [m]."""
+    ((x0, step_x), (y0, step_y)) [m]; ``ids`` (n,) where they are drawn from a larger set
+    shared by several plates (:mod:`.parts`), their indices in it, ``count`` its size: their
+    random phases are the set's, so every plate of it sends one pupil the same wave;
+    ``weight`` (n,), where given, scales their amplitudes (a set's lattice seen from this
+    zone: :func:`holo_core.plate.parts.set_emitters`)."""
 
     position: np.ndarray
     colour: np.ndarray
     cell: np.ndarray
     visibility: np.ndarray
     grid: tuple
+    ids: np.ndarray | None = None
+    count: int = 0
+    weight: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.position)
@@ -95,9 +102,23 @@ def zone_emitters(meshes, zone: ViewingZone, spacing: float, *, layers=3,
     if not meshes:
         raise InputError("a plate needs at least one mesh to record")
     every = np.concatenate([m.vertices for m in meshes])
-    bounds = np.array([every.min(0), every.max(0)])
-    rotation = zone_frame(zone, bounds)
-    centre = np.asarray(zone.centre, np.float64)
+    rotation = zone_frame(zone, np.array([every.min(0), every.max(0)]))
+    position, colour, normal, cell = surface_points(meshes, zone.centre, rotation, spacing,
+                                                    layers=layers)
+    g = grid or grid_points(zone)
+    offsets, seen = visibility(meshes, position, normal, zone, rotation, spacing, g)
+    keep = seen.reshape(len(seen), -1).max(1) > 0
+    return Emitters(position=position[keep], colour=colour[keep], cell=cell[keep],
+                    visibility=seen[keep], grid=offsets)
+
+
+def surface_points(meshes, centre, rotation, spacing: float, *, layers=3):
+    """(position (n, 3) [m], linear colour (n, 3) >= 0, unit normal (n, 3), bin (kx, ky) (n, 2))
+    of the crossings of the rays of a pupil at ``centre`` (3,) [m] with axes ``rotation``,
+    bins ``spacing`` apart in direction cosine, with ``meshes``, up to ``layers`` deep (all in
+    one frame, the meshes')."""
+    every = np.concatenate([m.vertices for m in meshes])
+    centre = np.asarray(centre, np.float64)
     shape = bins_covering(every, centre, rotation, spacing)
     hits = crossings(meshes, centre, rotation, spacing, shape, layers=layers)
     position = _points(hits, centre, rotation, spacing)
@@ -113,12 +134,7 @@ def zone_emitters(meshes, zone: ViewingZone, spacing: float, *, layers=3,
         v = np.asarray(mesh.vertices, np.float64)[corners]
         n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
         normal[sel] = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-    g = grid or grid_points(zone)
-    offsets, seen = visibility(meshes, position, normal, zone, rotation, spacing, g)
-    keep = seen.reshape(len(seen), -1).max(1) > 0
-    return Emitters(position=position[keep], colour=np.clip(colour[keep], 0, None),
-                    cell=np.stack([hits.kx, hits.ky], 1)[keep], visibility=seen[keep],
-                    grid=offsets)
+    return position, np.clip(colour, 0, None), normal, np.stack([hits.kx, hits.ky], 1)
 
 
 def _points(hits, centre, rotation, spacing) -> np.ndarray:

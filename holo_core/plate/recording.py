@@ -21,7 +21,7 @@ from ..scene.hologram import Hologram, HologramInfo
 from ..scene.mesh import Mesh
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Carrier, Plate, ViewingZone
 from ..validate import InputError
-from .emitters import zone_emitters
+from .emitters import Emitters, zone_emitters
 from .plan import LAYERS, LOOKS, RIM, PlatePlan, plan
 from .zone_sum import ZoneEmitters, ZoneSum, ZoneWindow
 
@@ -173,13 +173,16 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
 
 
 def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
-                  encoding="complex", tiled=False, budget=(None, None)) -> PlateRecording:
+                  encoding="complex", tiled=False, budget=(None, None),
+                  emitters: Emitters | None = None) -> PlateRecording:
     """The emitters, visibility tables and sampling of the plate ``planned``, before any
     sum: the emitters the zone sees with their amplitudes, for the looks ``codes`` summed at
     once (:func:`holo_core.plate.looks.record_looks`), look l's phases coded by codes[l], or
     where that is None drawn from ``seed`` + l (default: the plan's looks, coded where their
     count allows, :func:`look_code`). The host's memory and the ``budget`` are
-    checked for the whole plate, or where ``tiled`` for one tile of the plan's."""
+    checked for the whole plate, or where ``tiled`` for one tile of the plan's. ``emitters``
+    (the plate's frame, their visibility from this zone): found elsewhere, once for several
+    plates that share them (:mod:`.parts`), in place of the zone's own."""
     if encoding != "complex":
         raise InputError(f"encoding must be 'complex' for a plate of meshes (a display's "
                          f"intensity pattern is made from it: holo_core.phase.display); got "
@@ -197,12 +200,15 @@ def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
     held = f"a {p.tile}x{p.tile} tile" if tiled else f"a {p.shape[1]}x{p.shape[0]} plate"
     memory.check_host(f"{held} of {held_channels} channels",
                       p.memory_bytes(held_channels, tiled=tiled))
-    em = zone_emitters(local, zone, p.spacing, layers=LAYERS)
+    em = emitters if emitters is not None else zone_emitters(local, zone, p.spacing,
+                                                             layers=LAYERS)
     if not len(em):
         raise InputError(f"no surface of the meshes is seen from the viewing zone "
                          f"({zone.describe()})")
     # |a| = √I·|p − Z|: each emitter's light reaches the zone's centre with its own amplitude
     reach = np.linalg.norm(em.position - np.asarray(zone.centre), axis=1)
+    if em.weight is not None:  # a shared set's emitters, weighted for this zone
+        reach = reach * em.weight
     waves = [np.exp(1j * _phases(em, _look_seed(seed, codes, look), c)) * reach
              for look, c in enumerate(codes)]
     partial = em.visibility.reshape(len(em), -1).min(1) < 1
@@ -254,7 +260,9 @@ def _look_seed(seed: int, codes, look: int) -> int:
 def _phases(em, seed: int, code) -> np.ndarray:
     """The emitters' random phases [rad] of ``seed``, shifted by ``code`` (k, m): 2π·(k1·i +
     k2·j)/m on the lattice cells (i, j) they lie in (k = k1·m + k2; :func:`~holo_core.plate.looks.record_plate`)."""
-    phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, len(em))
+    phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, em.count or len(em))
+    if em.ids is not None:  # drawn from a set several plates share: the set's phases
+        phases = phases[em.ids]
     if code is not None:
         phases = phases + 2 * np.pi * _code_steps(em, code) / code[1]
     return phases

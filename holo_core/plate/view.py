@@ -8,7 +8,8 @@ plate's route gives each look's images at the pixels (:mod:`.pupil_images`, thro
 :mod:`.composition` makes the view of them: radiance, alpha from the depth partner's
 coverage, and the depth from the two-wavelength phase (Eq. 26–30). An intensity hologram is
 reconstructed first (R'·H, the DC term suppressed, the twin and |O|² terms filtered off with
-the band outside the recorded cone, Sect. VI).
+the band outside the recorded cone, Sect. VI). A plate set (parts along a camera path) is
+viewed from the part whose zone holds the pupil (:func:`render_set_view`).
 """
 
 from __future__ import annotations
@@ -24,9 +25,11 @@ from ..optics.pupil import Pupil, camera_pupil, intensity_supersample
 from ..propagation.tilt import tilt_reach
 from ..scene.camera import Camera
 from ..scene.hologram import Hologram
+from ..scene.plate_set import PlateSet
 from ..validate import MAX_SUPERSAMPLE, InputError, shown
 from ..view import BACKGROUND_DEPTH, RenderResult
 from .composition import black_view, compose
+from .path import part_for
 from .plan import pinhole_pupil
 from .pupil_images import HOLOGRAM_SAMPLE_BYTES, carrier_looks, full_band_looks
 from .window import camera_in_plate
@@ -74,7 +77,16 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
         Depth from the phase of u1·conj(u2) summed over iterations and supersamples (the
         intensity-weighted consensus), or per pixel from the brightest iteration (Fig. 11c).
         Either way the depth pair is imaged through :func:`depth_aperture`.
+
+    A :class:`holo_core.scene.plate_set.PlateSet` (a plate's parts along a path) is viewed
+    from the part whose zone holds the pupil (:func:`render_set_view`).
     """
+    if isinstance(holograms, PlateSet):
+        return render_set_view(holograms, camera, aperture=aperture, apodize=apodize,
+                               chromatic=chromatic, composition=composition,
+                               supersample=supersample, exposure=exposure,
+                               opacity_threshold=opacity_threshold, source=source,
+                               depth_estimate=depth_estimate, progress=progress)
     try:
         holos = [holograms] if isinstance(holograms, Hologram) else list(holograms)
     except TypeError:
@@ -124,6 +136,35 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     return compose(looks, colours, z_ch, first, camera, pupil, supersample=supersample,
                    composition=composition, depth_estimate=depth_estimate, centre=centre,
                    exposure=exposure, threshold=opacity_threshold, n=n)
+
+
+def render_set_view(plates: PlateSet, camera: Camera, *, frame: int | None = None,
+                    outside: str = "warn", **settings):
+    """The view of ``camera`` from the part of ``plates`` whose zone holds its pupil
+    (:func:`holo_core.plate.path.part_for`), by :func:`render_view` (``settings`` as there).
+    A pupil outside every part's zone warns (:class:`OutsideZoneWarning`, naming ``frame``
+    where given, and the nearest part) and is viewed from that part, or with ``outside``
+    'fail' is refused (:class:`InputError`)."""
+    if not isinstance(plates, PlateSet):
+        raise InputError(f"plates must be a PlateSet; got {type(plates).__name__}")
+    if not isinstance(camera, Camera):
+        raise InputError(f"camera must be a Camera; got {type(camera).__name__}")
+    validate.choice("outside", outside, ("warn", "fail"))
+    k, beyond = part_for(plates, camera)
+    if beyond > 0:
+        p = camera.position
+        what = (f"{'frame ' + str(frame) + ': ' if frame is not None else ''}the camera's pupil "
+                f"at ({p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g}) m lies outside every part of the "
+                f"plate set; it reaches {beyond:.3g} m beyond the nearest, part {k} "
+                f"({plates.parts[k].plate.zone.describe()})")
+        if outside == "fail":
+            raise InputError(f"{what}: record the set for a path that holds the camera")
+        warnings.warn(f"{what}: viewed from that part, the view may be cut off or soft",
+                      OutsideZoneWarning, stacklevel=2)
+        with warnings.catch_warnings():  # said once, for the set
+            warnings.simplefilter("ignore", OutsideZoneWarning)
+            return render_view(list(plates.part_looks(k)), camera, **settings)
+    return render_view(list(plates.part_looks(k)), camera, **settings)
 
 
 BESIDE = "the camera sees the objects beside the plate, not through it"

@@ -1,0 +1,262 @@
+"""A plate set on disk: one folder, each part's looks as hologram files
+(:mod:`holo_core.io.hologram`, each naming its plate's pose and zone), and ``plate_set.json``,
+the manifest naming the recording, the parts (size, stretch, frames) and each file with its
+size and BLAKE2b digest.
+
+Every file is written through a temporary one and a rename, the manifest last, so a folder
+holds either the set before or the set after. Reading checks every part against the
+manifest before a sample is used: a part missing, damaged (its bytes not the digest's) or
+foreign (a valid hologram of another recording, or of another plate than the manifest's)
+is a :class:`~holo_core.io.hologram.HologramFileError` naming the part and its file; never
+read as zeros.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+
+from ..scene.plate import Plate, ViewingZone
+from ..scene.plate_set import PathPart, PlateSet
+from ..validate import InputError
+from . import jsonfile
+from .hologram import HologramFileError, metadata, read_hologram, write_hologram
+from .image import check_writable, write_atomic
+
+MANIFEST = "plate_set.json"
+KIND = "holo plate set"
+VERSION = 1          # the manifest's format
+MANIFEST_CHARS = 1 << 20  # a manifest names files and numbers: 1 Mi characters is far beyond
+
+
+def part_file(k: int, look: int) -> str:
+    return f"part{k:03d}.look{look}.exr"
+
+
+def write_plate_set(folder, plates: PlateSet) -> Path:
+    """Write ``plates`` into ``folder`` (made if absent): each part's looks, then the manifest
+    naming them with their digests. Returns the manifest's path."""
+    if not isinstance(plates, PlateSet):
+        raise InputError(f"plates must be a PlateSet; got {type(plates).__name__}")
+    folder = set_folder(folder)
+    entries = [write_part(folder, k, plates.part_looks(k)) for k in range(len(plates))]
+    return write_manifest(folder, plates.parts, entries, seed=plates.seed,
+                          recording=plates.recording)
+
+
+def set_folder(folder) -> Path:
+    """``folder`` made if absent, checked to take the set's files (before any work)."""
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"{folder}: a plate set is a folder; a file is in the way")
+    folder.mkdir(parents=True, exist_ok=True)
+    check_writable(folder / MANIFEST)
+    return folder
+
+
+def write_part(folder: Path, k: int, looks) -> list:
+    """Write part ``k``'s ``looks`` (Hologram) into ``folder``; their manifest entries."""
+    files = []
+    for look, h in enumerate(looks):
+        path = write_hologram(folder / part_file(k, look), h)
+        files.append({"name": path.name, "bytes": path.stat().st_size,
+                      "blake2b": file_digest(path), "metadata": metadata_digest(h)})
+    return files
+
+
+def write_manifest(folder: Path, parts, entries, *, seed: int, recording: str,
+                   looks: int | None = None) -> Path:
+    """The manifest of ``parts`` (PathPart) whose files ``entries`` (:func:`write_part`, one a
+    part, None for a part not recorded yet) lie in ``folder``: rewritten after each part a
+    recording finishes, so that a recording stopped resumes from the parts it wrote
+    (:func:`recorded_parts`); a set with a part not recorded is refused by the reader."""
+    listed = []
+    for part, files in zip(parts, entries):
+        p = part.plate
+        listed.append({"plate_to_world": np.asarray(p.matrix_world).tolist(),
+                       "width_m": p.width, "height_m": p.height,
+                       "zone": {"centre_m": list(p.zone.centre),
+                                "half_extents_m": list(p.zone.half_extents),
+                                "pupil_m": p.zone.pupil, "pixel_rad": p.zone.pixel},
+                       "stretch_m": list(part.stretch), "frames": list(part.frames),
+                       "files": files})
+    looks = looks or len(next(e for e in entries if e is not None))
+    manifest = {"kind": KIND, "version": VERSION, "recording": recording, "seed": seed,
+                "looks": looks, "parts": listed}
+    return write_atomic(folder / MANIFEST, json.dumps(manifest, indent=1).encode())
+
+
+def file_digest(path) -> str:
+    """The BLAKE2b digest (hex, 16 bytes) of the file's bytes, read in blocks."""
+    h = hashlib.blake2b(digest_size=16)
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 22), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def metadata_digest(h) -> str:
+    """The BLAKE2b digest (hex, 16 bytes) of a hologram's description (its file metadata):
+    what tells a damaged part (its samples changed) from a foreign one (another hologram)."""
+    text = json.dumps(metadata(h), sort_keys=True).encode()
+    return hashlib.blake2b(text, digest_size=16).hexdigest()
+
+
+def recorded_parts(folder, recording: str, count: int, *, overwrite=False) -> dict:
+    """The parts already recorded in ``folder`` for the recording ``recording`` of ``count``
+    parts, {index: their manifest entries}, each checked (a damaged one is left out, to be
+    recorded again): empty where the folder holds no set. A set of another recording (an
+    edited scene, other parts or looks) is refused naming both, unless ``overwrite``."""
+    folder = Path(folder)
+    if not (folder / MANIFEST).exists():
+        return {}
+    m = jsonfile.load(folder / MANIFEST, error=HologramFileError, max_chars=MANIFEST_CHARS)
+    held = m.get("recording") if isinstance(m, dict) else None
+    if held != recording or m.get("kind") != KIND:
+        if overwrite:
+            return {}
+        raise InputError(f"{folder}: holds another plate set (recording {str(held)[:12]}; this "
+                         f"one is {recording[:12]}: the scene, the path or the looks "
+                         f"differ); record to a new folder, or replace it (overwrite=True)")
+    field, done = _Fields(folder / MANIFEST), {}
+    listed = m.get("parts") if isinstance(m.get("parts"), list) else []
+    for k, entry in enumerate(listed[:count]):
+        files = entry.get("files") if isinstance(entry, dict) else None
+        if not files:
+            continue
+        try:
+            for look, f in enumerate(files):
+                _check_file(folder, k, look, f, field, f"parts[{k}].")
+        except HologramFileError:
+            continue  # recorded again
+        done[k] = files
+    return done
+
+
+def read_plate_set(folder) -> PlateSet:
+    """The plate set in ``folder`` (:func:`write_plate_set`), every part checked against the
+    manifest (module docstring)."""
+    folder = Path(folder)
+    name = folder / MANIFEST
+    if not folder.is_dir():
+        raise HologramFileError(f"{folder}: not a plate set's folder (no such folder)")
+    if not name.exists():
+        raise HologramFileError(f"{folder}: not a plate set (no {MANIFEST})")
+    m = jsonfile.load(name, error=HologramFileError, max_chars=MANIFEST_CHARS)
+    field = _Fields(name)
+    field.value(m, dict, "an object", "(the manifest)")
+    if m.get("kind") != KIND:
+        field.fail("kind", f"{KIND!r}")
+    if m.get("version") != VERSION:
+        field.fail("version", f"{VERSION} (this reader's; a newer Holo writes newer ones)")
+    recording = field.check(m, "recording", str, "the recording's digest (text)")
+    seed = field.check(m, "seed", int, "an integer >= 0")
+    looks = field.check(m, "looks", int, "an integer >= 1")
+    listed = field.check(m, "parts", list, "a non-empty list of parts")
+    if not listed or looks < 1:
+        field.fail("parts" if not listed else "looks", "at least one")
+    parts, held = [], []
+    for k, entry in enumerate(listed):
+        at = f"parts[{k}]."
+        field.value(entry, dict, "an object", f"parts[{k}]")
+        if entry.get("files") is None:
+            raise HologramFileError(f"{folder}: part {k} was not recorded (the recording "
+                                    f"stopped before it); recording the set again resumes it")
+        files = field.check(entry, "files", list, f"{looks} files", at)
+        if len(files) != looks:
+            field.fail(f"{at}files", f"{looks} files (one a look); it lists {len(files)}")
+        try:
+            pose = np.asarray(entry.get("plate_to_world"), np.float64)
+            stretch = tuple(entry.get("stretch_m"))
+            frames = tuple(entry.get("frames"))
+        except (TypeError, ValueError):
+            field.fail(f"{at}plate_to_world", "a 4x4 pose, its stretch_m and frames")
+        for look, f in enumerate(files):
+            _check_file(folder, k, look, f, field, at)
+        z = field.check(entry, "zone", dict, "the part's viewing zone", at)
+        try:
+            zone = ViewingZone(centre=z.get("centre_m"), half_extents=z.get("half_extents_m"),
+                               pupil=z.get("pupil_m"), pixel=z.get("pixel_rad"))
+            plate = Plate(matrix_world=pose, width=entry.get("width_m"),
+                          height=entry.get("height_m"), zone=zone)
+            parts.append(PathPart(plate=plate, stretch=stretch, frames=frames))
+        except InputError as e:
+            raise HologramFileError(f"{name}: {at[:-1]}: {e}") from None
+        held.append(files)
+    load = partial(_load_part, folder, tuple(parts), tuple(held))
+    try:
+        return PlateSet(parts=tuple(parts), looks=(None,) * len(parts), seed=seed,
+                        recording=recording, load=load)
+    except InputError as e:
+        raise HologramFileError(f"{name}: {e}") from None
+
+
+def _check_file(folder: Path, k: int, look: int, entry, field, at) -> None:
+    """Part ``k``'s look ``look`` as its manifest ``entry`` names it: refused by name when
+    missing, damaged or foreign (its bytes read once, for their digest)."""
+    where = f"{at}files[{look}]."
+    field.value(entry, dict, "an object", where[:-1])
+    name = field.check(entry, "name", str, "a file name", where)
+    size = field.check(entry, "bytes", int, "the file's size", where)
+    digest = field.check(entry, "blake2b", str, "the file's digest", where)
+    described = field.check(entry, "metadata", str, "its metadata's digest", where)
+    if Path(name).name != name or name in ("", ".", ".."):
+        field.fail(f"{where}name", "a file name inside the set's folder")
+    path = folder / name
+    if path.is_symlink() or (path.exists() and not path.is_file()):
+        raise HologramFileError(f"{folder}: part {k} ({name}) is not a regular file")
+    if not path.exists():
+        raise HologramFileError(f"{folder}: part {k} ({name}) is missing: the set is "
+                                f"incomplete; record it again")
+    if path.stat().st_size != size or file_digest(path) != digest:
+        try:
+            h = read_hologram(path)
+        except HologramFileError:
+            h = None
+        if h is not None and metadata_digest(h) != described:
+            raise HologramFileError(f"{folder}: part {k} ({name}) is foreign: a hologram, but "
+                                    f"not the one this set recorded (its description differs "
+                                    f"from the manifest's); record the set again")
+        raise HologramFileError(f"{folder}: part {k} ({name}) is damaged: its bytes do not "
+                                f"match the manifest's digest; record the set again")
+
+
+def _load_part(folder: Path, parts, files, k: int) -> tuple:
+    """Part ``k``'s looks read from ``folder``, each checked to be the hologram the manifest
+    names (its size and description; its bytes were checked when the set was opened) and
+    to lie on its part's plate."""
+    looks = []
+    for entry in files[k]:
+        path = folder / entry["name"]
+        if not path.is_file() or path.stat().st_size != entry["bytes"]:
+            raise HologramFileError(f"{folder}: part {k} ({entry['name']}) changed or went "
+                                    f"missing since the set was opened")
+        h = read_hologram(path)
+        if metadata_digest(h) != entry["metadata"] or not np.allclose(
+                np.asarray(h.plate), parts[k].plate.matrix_world, atol=1e-12):
+            raise HologramFileError(f"{folder}: part {k} ({entry['name']}) is foreign: its "
+                                    f"plate is not the manifest's part {k}")
+        looks.append(h)
+    return tuple(looks)
+
+
+class _Fields:
+    """The manifest's fields checked by name."""
+
+    def __init__(self, path: Path):
+        self.path = path
+
+    def fail(self, key, allowed):
+        raise HologramFileError(f"{self.path}: manifest field {key} must be {allowed}")
+
+    def value(self, value, kind, allowed, name):
+        if not isinstance(value, kind) or (kind is int and isinstance(value, bool)):
+            self.fail(name, allowed)
+        return value
+
+    def check(self, obj, key, kind, allowed, prefix=""):
+        return self.value(obj.get(key), kind, allowed, f"{prefix}{key}")

@@ -1,0 +1,214 @@
+"""A plate set recorded: the parts of one plate along a camera path
+(:func:`holo_core.plate.path.parts_along`), recorded from the same emitters (each frame is
+viewed from the part whose zone holds its pupil: :func:`holo_core.plate.view.render_set_view`).
+
+- One set of emitters (:func:`set_emitters`). The zone centre of one part in each run of the
+  path turning by at most 5° about the objects (:func:`lattice_parts`) casts its rays (one
+  per resolved spot, the spacing every part shares) and finds their crossings with the
+  surfaces, up to three deep; a surface point is kept from the lattice that sees it most
+  face-on, so every surface holds emitters of one lattice, one resolved spot apart as seen
+  from there. From another zone a surface then holds cos(slant from the lattice)/cos(slant
+  from the zone) emitters a resolved spot; each part weighs their amplitudes by the root of
+  its inverse, so that the surfaces' coverage (the views' alpha) stays one (without it the
+  silhouettes of a 30° orbit's frames swelled: IoU 0.956-0.967 against 0.975-0.980).
+- Every part reads the same emitters, their phases drawn once from the seed and shifted by
+  the same looks' codes, so a pupil in the overlap of two parts receives the same wave from
+  either (but for the weights, which differ little between neighbouring parts).
+- Visibility per part: each part's zone rasters its own depth buffers
+  (:func:`holo_core.plate.emitters.visibility`), and a part sums only the emitters its zone
+  sees.
+- Each part is then a plate of its own (:func:`holo_core.plate.recording.prepare_plate`): its
+  plan, its carrier converging on its zone's centre, its window, its looks summed in one pass.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import math
+from collections.abc import Iterator
+
+import numpy as np
+
+from .. import jobs, validate
+from ..io.plate_set import read_plate_set, recorded_parts, set_folder, write_manifest, write_part
+from ..scene.mesh import Mesh
+from ..scene.plate_set import PathPart, PlateSet
+from ..validate import InputError
+from .emitters import Emitters, grid_points, surface_points, visibility, zone_frame
+from .plan import LAYERS
+from .recording import look_code, plate_plan, prepare_plate
+
+log = logging.getLogger(__name__)
+
+LATTICE_TURN = math.radians(5)  # [rad] of the path's turn about the objects a lattice serves
+MIN_SLANT = 0.05  # cos of the most grazing view a lattice's density is weighted for (87°)
+
+
+@validate.scale_free()  # each part's wavelength is the plan's (as record_looks)
+def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = True,
+               budget=(None, None), folder=None, overwrite=False,
+               progress: jobs.Progress = None) -> PlateSet:
+    """The looks of every part of ``parts`` (PathPart, from
+    :func:`holo_core.plate.path.parts_along`) of ``meshes`` (world metres): in memory, or with
+    ``folder`` each part written there as soon as it is recorded and its samples let go (the
+    memory that of one part) and named in its manifest (:mod:`holo_core.io.plate_set`), the
+    set returned as read from there. A folder that holds this recording already (the same
+    meshes, parts, seed and looks) records only the parts it lacks: nothing, for a second
+    render of the shot; the rest of a recording stopped. One of another recording is refused
+    naming both, unless ``overwrite``.
+
+    ``looks`` coded looks of ``seed`` (:func:`holo_core.plate.recording.look_code`) per part,
+    all parts from one set of emitters (module docstring). ``budget`` (memory, disk) [bytes]:
+    the memory one part holds while recorded and the whole set's disk, checked for every part
+    before any emitter is found."""
+    parts = tuple(parts)
+    if not parts or not all(isinstance(p, PathPart) for p in parts):
+        raise InputError("parts must be a non-empty sequence of PathPart (parts_along)")
+    looks = validate.integer("looks", looks, 1)
+    seed = validate.seed(seed)
+    channels = 4 if depth else 3
+    plans = [plate_plan(meshes, plate=part.plate, looks=looks) for part in parts]
+    spacing = plans[0].plan.spacing
+    for k, p in enumerate(planned.plan for planned in plans):
+        if not math.isclose(p.spacing, spacing, rel_tol=1e-9):
+            raise InputError(f"part {k}'s emitters would lie {p.spacing:.4g} apart in direction "
+                             f"cosine, part 0's {spacing:.4g}: a set's parts share one pupil "
+                             f"and pixel angle (parts_along gives them that)")
+    stored = 0.0
+    for k, p in enumerate(planned.plan for planned in plans):
+        try:
+            p.check_budget(memory=budget[0], channels=channels, held=looks)
+        except InputError as e:
+            raise InputError(f"part {k}: {e}") from None
+        stored += p.disk_bytes(channels)
+    if budget[1] is not None and stored > budget[1]:
+        raise InputError(f"the set of {len(parts)} parts needs {stored / 2**30:.2f} GiB on disk "
+                         f"({looks} look(s) each); the disk budget is "
+                         f"{budget[1] / 2**30:.2f} GiB: longer stretches share more, a "
+                         f"smaller pupil or coarser views need less")
+    digest = set_digest(meshes, parts, seed=seed, looks=looks, depth=depth)
+    recorded = [None] * len(parts)
+    if folder is not None:
+        folder = set_folder(folder)
+        for k, files in recorded_parts(folder, digest, len(parts),
+                                       overwrite=overwrite).items():
+            recorded[k] = files
+        if all(r is not None for r in recorded):
+            log.info("plate set: %s holds its %d parts already; nothing recorded", folder,
+                     len(parts))
+            return read_plate_set(folder)
+    shared = set_emitters(meshes, parts, plans, spacing)
+    codes = tuple(look_code(k, looks) for k in range(looks))
+    for k, (part, em) in enumerate(zip(parts, shared)):
+        if recorded[k] is not None:
+            continue  # written by a recording that stopped
+        done = jobs.scaled(progress, k / len(parts), (k + 1) / len(parts))
+        recording = prepare_plate(plans[k], codes=codes, depth=depth, seed=seed, emitters=em,
+                                  budget=(budget[0], None))
+        held = tuple(recording.record(done))
+        log.info("part %d of %d: %d emitters of the set's %d, %s", k + 1, len(parts), len(em),
+                 em.count, recording.plan.describe())
+        if folder is None:
+            recorded[k] = held
+            continue
+        recorded[k] = write_part(folder, k, held)
+        write_manifest(folder, parts, recorded, seed=seed, recording=digest, looks=looks)
+    if folder is None:
+        return PlateSet(parts=parts, looks=tuple(recorded), seed=seed, recording=digest)
+    return read_plate_set(folder)
+
+
+def set_emitters(meshes, parts, plans, spacing: float) -> Iterator[Emitters]:
+    """Each part's emitters (its plate's frame, its visibility), made as the recording asks
+    for them, drawn from one set found for all (module docstring): ``plans`` the parts'
+    :class:`~holo_core.plate.recording.PlannedPlate` (their plan and zone, the meshes in the
+    plate's frame), ``spacing`` their shared spacing in direction cosine."""
+    world = [meshes] if isinstance(meshes, Mesh) else list(meshes)
+    poses = []  # each part's zone centre and its pupil's axes, in the world
+    for part, planned in zip(parts, plans):
+        m, zone = part.plate.matrix_world, planned.plan.zone
+        every = np.concatenate([x.vertices for x in planned.meshes])
+        poses.append((m[:3, :3] @ np.asarray(zone.centre) + m[:3, 3],
+                      m[:3, :3] @ zone_frame(zone, np.array([every.min(0), every.max(0)]))))
+    every = np.concatenate([x.vertices for x in world])
+    lattices = [poses[k] for k in lattice_parts([c for c, _ in poses], every.mean(0))]
+    centres = np.array([c for c, _ in lattices])
+    points = []
+    for k, (centre, rotation) in enumerate(lattices):
+        position, colour, normal, cell = surface_points(world, centre, rotation, spacing,
+                                                        layers=LAYERS)
+        towards = centres[None, :, :] - position[:, None, :]
+        facing = np.abs(np.einsum("nj,npj->np", normal, towards)) / np.linalg.norm(towards,
+                                                                                   axis=2)
+        own = facing.argmax(1) == k  # each surface point from the lattice seeing it most face-on
+        points.append((position[own], colour[own], normal[own], cell[own], facing[own, k]))
+    position, colour, normal, cell, slant = (np.concatenate(a) for a in zip(*points))
+    seen = []
+    for part, planned, (centre, _) in zip(parts, plans, poses):
+        local, zone = planned.meshes, planned.plan.zone
+        m = part.plate.matrix_world
+        every = np.concatenate([x.vertices for x in local])
+        rotation = zone_frame(zone, np.array([every.min(0), every.max(0)]))
+        here = part.plate.to_plate(position)
+        offsets, table = visibility(local, here, normal @ m[:3, :3], zone, rotation, spacing,
+                                    grid_points(zone))
+        towards = centre - position
+        facing = np.abs(np.einsum("nj,nj->n", normal, towards)) / np.linalg.norm(towards, axis=1)
+        # a lattice seen from this zone holds cos(its slant)/cos(this zone's) emitters a
+        # resolved spot: their light scaled to one's, so that the surfaces' coverage is one
+        weight = np.sqrt(np.maximum(facing, MIN_SLANT) / np.maximum(slant, MIN_SLANT))
+        keep = np.flatnonzero(table.reshape(len(table), -1).max(1) > 0)
+        # held as the recording's own 8-bit table (prepare_plate rounds it so), not float32:
+        # a long path's parts hold every one of their emitters' tables at once here
+        seen.append((keep, offsets, np.round(table[keep] * 255).astype(np.uint8),
+                     weight[keep]))
+    kept = np.zeros(len(position), bool)
+    for keep, *_ in seen:
+        kept[keep] = True
+    ids = np.cumsum(kept) - 1  # the set's emitters: those some part sees, numbered once
+    count = int(kept.sum())
+    return (Emitters(position=part.plate.to_plate(position[keep]), colour=colour[keep],
+                     cell=cell[keep], visibility=table / np.float32(255), grid=offsets,
+                     ids=ids[keep], count=count, weight=weight)
+            for part, (keep, offsets, table, weight) in zip(parts, seen))
+
+
+def lattice_parts(centres, target, turn: float = LATTICE_TURN) -> list[int]:
+    """The parts whose zone centres cast the set's lattices of emitters: the path's parts
+    (``centres`` (P, 3) [m], in order) cut into runs that turn at most ``turn`` [rad] about
+    ``target`` (3,) [m] (the objects' middle), the middle part of each run. A lattice serves
+    every part of its run, weighted for each (:func:`set_emitters`); a lattice a part would
+    leave a seam between lattices across the surfaces wherever two parts meet (the shot's
+    1 m dolly at 320x180, 12 lattices, unweighted: silhouettes' IoU 0.964-0.968 against
+    0.975-0.980 for one), and too few serve the ends of their runs from far off (a 30° orbit
+    in 22 parts, its middle and end frames: runs of 15°, 28.7 and 27.5 dB, IoU 0.980 and
+    0.975; of 5°, 28.6 and 28.6 dB, IoU 0.976 and 0.979; each part recorded alone, 29.3 and
+    29.5 dB, IoU 0.980 and 0.979)."""
+    d = np.asarray(centres, np.float64) - np.asarray(target, np.float64)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    runs, start = [], 0
+    for k in range(1, len(d)):
+        if math.acos(min(1.0, float(d[start] @ d[k]))) > turn:
+            runs.append((start, k - 1))
+            start = k
+    runs.append((start, len(d) - 1))
+    return [(a + b) // 2 for a, b in runs]
+
+
+def set_digest(meshes, parts, *, seed: int, looks: int, depth: bool) -> str:
+    """The digest (hex) of a set's recording: the meshes (world), each part's plate (pose,
+    size, zone), the seed, the looks and the depth partner."""
+    h = hashlib.sha256(f"holo plate set {seed} {looks} {bool(depth)}".encode())
+    for m in [meshes] if isinstance(meshes, Mesh) else meshes:
+        for name in ("vertices", "triangles", "colours", "uvs", "texture", "motion"):
+            a = getattr(m, name)
+            a = np.ascontiguousarray(a if a is not None else np.zeros(0))
+            h.update(f"{name}{a.dtype.str}{a.shape}".encode())
+            h.update(a.tobytes())
+    for part in parts:
+        z = part.plate.zone
+        h.update(np.asarray(part.plate.matrix_world, np.float64).tobytes())
+        h.update(repr((part.plate.width, part.plate.height, z.centre, z.half_extents, z.pupil,
+                       z.pixel)).encode())
+    return h.hexdigest()
