@@ -117,16 +117,16 @@ def test_cli_output_is_checked_before_the_work(tmp_path, point_hologram, capsys,
 @pytest.mark.parametrize("method", ["zone", "direct"])
 def test_a_hologram_beyond_the_disks_room_is_refused_before_the_recording(
         small_disk, capsys, monkeypatch, method):
-    """The command line checked the output folder's writability, not its room: a full disk
-    was found after the whole recording. A file the disk cannot hold is one line, before the
-    work, with the room it needs and the room there is."""
-    import holo_core.plate.record
+    """A hologram the output's disk cannot hold is refused in one line before the work (no
+    recording runs), with the room it needs and the room there is."""
+    import holo_core.plate.looks
+    import holo_core.plate.points
     (small_disk / "q.obj").write_text(CUBE_OBJ)
 
     def never(*_, **__):
         raise AssertionError("the recording ran before the disk's room was checked")
-    monkeypatch.setattr(holo_core.plate.record, "record_plate", never)
-    monkeypatch.setattr(holo_core.plate.record, "record_points", never)
+    monkeypatch.setattr(holo_core.plate.looks, "record_plate", never)
+    monkeypatch.setattr(holo_core.plate.points, "record_points", never)
     status, _, err = run_cli(capsys, "record", small_disk / "q.obj", "-o", small_disk / "h.exr",
                              "--method", method, "--distance", "0.02",
                              *(["--resolution", "1024", "1024"] if method == "direct" else []))
