@@ -14,12 +14,13 @@ import numpy as np
 
 from .. import jobs, memory, validate
 from ..opencl.arrays import nonfinite_count, read
+from ..optics.raster import CROSSING_BYTES, crossing_count
 from ..propagation import grid
 from ..scene.hologram import ENCODINGS, Hologram, HologramInfo
 from ..scene.mesh import Mesh, facing, sample_points, visible_from
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Carrier, Plate, ViewingZone
 from ..validate import InputError, shown
-from .emitters import zone_emitters
+from .emitters import zone_emitters, zone_frame
 from .plan import LAYERS, RIM, PlatePlan, plan
 from .point_sources import cone_filter, point_bytes, point_wave
 from .triangles import depth_texture, mesh_primitives, primitive_wave, surface_pitch
@@ -633,6 +634,11 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
                          "pixel angle, or a wavelength")
     p = plan((plate.width, plate.height), bounds, zone=zone, pixel_angle=pixel or 1.0,
              wavelength=wavelength, **({} if tile is None else {"tile": tile}))
+    count = crossing_count(local, np.asarray(zone.centre, np.float64), zone_frame(zone, bounds),
+                           p.spacing)  # what finding the emitters holds, before it starts
+    memory.check_host(f"finding the emitters of {sum(len(m.triangles) for m in local)} "
+                      f"triangles ({count:.3g} crossings of the zone's rays: many large "
+                      f"triangles through each other cross many)", CROSSING_BYTES * count)
     return p, local, zone
 
 
