@@ -35,17 +35,18 @@ def check(settings, scene) -> None:
     for prop in rna.properties:
         if prop.identifier == "rna_type":
             continue
-        value = getattr(settings, prop.identifier)
         if prop.type in ("INT", "FLOAT"):
+            value = getattr(settings, prop.identifier)
             for v in (tuple(value) if prop.is_array else (value,)):
                 if not (math.isfinite(v) and prop.hard_min <= v <= prop.hard_max):
                     raise ExportError(f"{prop.name} ({where}) must be "
                                       f"{_range(prop, scene)}; got {_shown(prop, v, scene)}")
         elif prop.type == "ENUM" and not prop.is_enum_flag:
-            items = [item.name for item in prop.enum_items]
-            if value not in {item.identifier for item in prop.enum_items}:
-                raise ExportError(f"{prop.name} ({where}) must be one of {', '.join(items)}; "
-                                  f"the file holds none of them")
+            stored = settings.get(prop.identifier)  # the file's number (None: the default)
+            if stored is not None and stored not in {item.value for item in prop.enum_items}:
+                items = ", ".join(item.name for item in prop.enum_items)
+                raise ExportError(f"{prop.name} ({where}) must be one of {items}; the file "
+                                  f"holds none of them ({stored!r})")
 
 
 def _range(prop, scene) -> str:
