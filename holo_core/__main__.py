@@ -70,31 +70,35 @@ def record(args) -> int:
     else:
         out = _output(args.output, args.mesh, "")
     mesh = read_mesh(args.mesh)
-    if args.distance is not None:  # place the mesh's nearest point at -distance, centred
-        vertices = mesh.vertices.copy()
-        lo, hi = vertices.min(0), vertices.max(0)
-        vertices -= [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, hi[2] + args.distance]
-        mesh = dataclasses.replace(mesh, vertices=vertices)
+    if args.distance is not None:
+        mesh = dataclasses.replace(mesh, vertices=_placed(mesh.vertices, args.distance))
     return (_record_zone if zone else _record_points)(args, mesh, out, tiled)
 
 
-def _record_zone(args, mesh, out, tiled) -> int:
-    """The plate of meshes: its zone and reference view from the camera options, the plate
-    (z = 0 of the world, the mesh behind it) as large as the light to the zone needs."""
+def _placed(vertices, distance: float):
+    """``vertices`` (N, 3) [m] moved so that their nearest point is ``distance`` [m] behind
+    the plate (z = 0), their box centred on its axis: ``--distance`` of ``plan`` and
+    ``record`` alike."""
+    lo, hi = vertices.min(0), vertices.max(0)
+    return vertices - [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, hi[2] + distance]
+
+
+def _plate_for(args, bounds):
+    """(the plate, its reference camera, its plan of one look) for objects in ``bounds``
+    (2, 3) [m], as ``record`` makes it and ``plan`` states it: the plate z = 0 of the
+    world, the objects behind it, the camera (``--camera``, default on the objects' axis as
+    far in front as their nearest point is behind) and zone options, the plate
+    ``--plate-size`` or as wide as the light from the objects to the zone needs."""
     import numpy as np
 
-    from .io.hologram import write_hologram
     from .plate.plan import plan as plan_plate
     from .plate.plan import window_on_plate
-    from .plate.looks import record_plate
-    from .plate.recording import look_code
     from .scene.plate import Plate
-    v = mesh.vertices
-    bounds = np.array([v.min(0), v.max(0)])
+    bounds = np.asarray(bounds, np.float64)
     if bounds[1, 2] >= 0:
-        raise ValueError(f"the mesh must lie behind the plate (z < 0; the plate is z = 0, the "
-                         f"camera in front): it reaches z = {bounds[1, 2]:.4g} m; give "
-                         f"--distance to place it")
+        raise ValueError(f"the objects must lie behind the plate (z < 0; the plate is z = 0, "
+                         f"the camera in front): they reach z = {bounds[1, 2]:.4g} m; give "
+                         f"--distance to place them")
     centre = bounds.mean(0)
     cam, zone = _camera_and_zone(args, bounds, (centre[0], centre[1], -bounds[1, 2]),
                                  tuple(args.resolution or (640, 360)))
@@ -104,9 +108,19 @@ def _record_zone(args, mesh, out, tiled) -> int:
         lo, hi = window_on_plate(bounds, zone, math.inf, math.inf)
         size = tuple(2 * np.maximum(np.abs(lo), np.abs(hi)))
     plate = Plate(matrix_world=np.eye(4), width=size[0], height=size[1], zone=zone)
-    p = plan_plate(size, bounds, zone=zone, pixel_angle=zone.pixel, looks=1)
+    return plate, cam, plan_plate(size, bounds, zone=zone, pixel_angle=zone.pixel, looks=1)
+
+
+def _record_zone(args, mesh, out, tiled) -> int:
+    """The plate of meshes: its zone and reference view from the camera options, the plate
+    (z = 0 of the world, the mesh behind it) as large as the light to the zone needs."""
+    from .io.hologram import write_hologram
+    from .plate.looks import record_plate
+    from .plate.recording import look_code
+    v = mesh.vertices
+    plate, cam, p = _plate_for(args, [v.min(0), v.max(0)])
     print(f"plate of {p.describe()}")
-    if not tiled:  # a store checks its own room, for the tiles it still lacks
+    if not tiled:  # before the work: a full disk is said now (a store checks its own room)
         _check_room(out, p.disk_bytes(), p.shape)
     code = look_code(*args.look) if args.look else None
     common = {"plate": plate, "camera": cam, "code": code, "progress": _progress_bar()}
@@ -141,8 +155,8 @@ def _record_points(args, mesh, out, tiled) -> int:
     print(f"{len(pos)} point emitters ({spacing:.3g} m apart) -> {shape[1]}x{shape[0]} "
           f"hologram, pitch {pitch:.3g} m, wavelengths "
           f"{[round(w * 1e9, 3) for w in wavelengths]} nm")
-    if not tiled:  # float32 H beside the complex64 object wave, per wavelength
-        _check_room(out, (4 + 8) * len(wavelengths) * shape[0] * shape[1], shape)
+    if not tiled:
+        _check_room(out, FILE_SAMPLE_BYTES * len(wavelengths) * shape[0] * shape[1], shape)
     if tiled:  # a complex plate in tiles, on Dask (the object wave: no reference)
         from .plate.tiles import DEFAULT_TILE, record_tiled
         method = "direct" if args.method == "auto" else args.method
@@ -161,10 +175,22 @@ def _record_points(args, mesh, out, tiled) -> int:
     return 0
 
 
+FILE_SAMPLE_BYTES = 12  # a hologram file's sample of one channel: intensity and object wave
+VIEW_PIXEL_BYTES = 20  # a view file's pixel: colour, alpha and depth, float32
+
+
 def _check_room(out, nbytes, shape) -> None:
     """Refuse, before the recording, a hologram file the disk has no room for."""
     from .io.image import check_room
     check_room([out], nbytes, f"the hologram ({shape[1]} x {shape[0]} samples) would")
+
+
+def _view_room(paths, camera) -> None:
+    """:class:`InputError` where the disk cannot take the view files ``paths`` of
+    ``camera``'s resolution, before the view is rendered."""
+    from .io.image import check_room
+    w, h = camera.resolution
+    check_room(paths, VIEW_PIXEL_BYTES * w * h, f"the {w}x{h} view's {{n}} file(s)")
 
 
 def _is_store(path) -> bool:
@@ -185,35 +211,50 @@ def plan(args) -> int:
     z = 0, the objects behind it, the camera in front), in plain words, the verdict first."""
     import numpy as np
 
-    from .plate.plan import plan as plan_plate
+    from dataclasses import replace
+
     from .plate.plan import plan_view, summary
     if args.bounds is not None:  # where they are: no move
         bounds = np.reshape(args.bounds, (2, 3))
+    elif args.mesh is not None:  # where it is, or at --distance: as record places it
+        from .io.mesh import read_mesh
+        v = read_mesh(args.mesh).vertices
+        v = v if args.distance is None else _placed(v, args.distance)
+        bounds = np.array([v.min(0), v.max(0)])
+    elif args.box is not None:
+        half = np.array(args.box) / 2
+        bounds = _placed(np.array([-half, half]), args.distance or BOX_DISTANCE)
     else:
-        if args.mesh is not None:
-            from .io.mesh import read_mesh
-            v = read_mesh(args.mesh).vertices
-            lo, hi = v.min(0), v.max(0)
-        elif args.box is not None:
-            hi = np.array(args.box) / 2
-            lo = -hi
-        else:
-            raise ValueError("plan needs the objects: a mesh file, --box W H D or --bounds [m]")
-        shift = np.array([-(lo[0] + hi[0]) / 2, -(lo[1] + hi[1]) / 2, -hi[2] - args.distance])
-        bounds = np.array([lo + shift, hi + shift])
-    cam, zone = _camera_and_zone(args, bounds, (0.0, 0.0, args.distance),
-                                 tuple(args.resolution))
+        raise ValueError("plan needs the objects: a mesh file, --box W H D or --bounds [m]")
+    plate, cam, p = _plate_for(args, bounds)
+    p = replace(p, looks=args.looks)
     eye, pixel = np.asarray(cam.position), cam.pixel_angle()
-    pupil = cam.aperture_diameter or 0.0
-    p = plan_plate(tuple(args.plate_size), bounds, zone=zone, pixel_angle=pixel,
-                   looks=args.looks)
-    v = plan_view(p, position=eye, pixel_angle=pixel, pupil=pupil or None,
+    v = plan_view(p, position=eye, pixel_angle=pixel, pupil=cam.aperture_diameter or None,
                   resolution=cam.resolution)
     lens = f"{cam.lens:g} mm f/{cam.fstop:g}" if cam.fstop else f"a {cam.lens:g} mm pinhole"
-    for line in summary(p, v, lens=lens, resolution=cam.resolution,
-                        plate_size=tuple(args.plate_size), camera=eye):
-        print(line)
-    return 0
+    lines = summary(p, v, lens=lens, resolution=cam.resolution,
+                    plate_size=(plate.width, plate.height), camera=eye)
+    refused = _refusal(p)
+    if refused:
+        lines.insert(1, f"refused     {refused}")
+    print("\n".join(lines))
+    return 2 if refused else 0
+
+
+BOX_DISTANCE = 0.3  # [m] plan --box: the box's nearest face behind the plate, by default
+
+
+def _refusal(p) -> str:
+    """Why the plan ``p`` cannot be recorded on this machine ("" where it can): its looks,
+    in one piece where they fit the host's share of memory, else tile by tile, need more."""
+    from . import memory
+    from .validate import InputError
+    limit = memory.host_share()
+    try:
+        p.check_budget(memory=limit, tiled=p.needs_tiles(limit), held=p.looks)
+    except InputError as e:
+        return str(e)
+    return ""
 
 
 def _camera_and_zone(args, bounds, eye, resolution):
@@ -290,7 +331,9 @@ def render(args) -> int:
     from .plate.view import render_view
     out = _output(args.output, args.hologram, "_view", preview=True)
     h = _scan_or_hologram(args)
-    view = render_view(h, _camera(args, h), supersample=args.supersample or "auto",
+    camera = _camera(args, h)
+    _view_room([out, out.with_suffix(".png")], camera)
+    view = render_view(h, camera, supersample=args.supersample or "auto",
                        composition=args.composition, source=args.source,
                        progress=_progress_bar())
     print()
@@ -397,9 +440,15 @@ def import_(args) -> int:
         _output(args.output if _is_folder(args.output) else out.with_name(
             f"{out.stem}_view.exr"), args.hologram, "_view", preview=True)
     h, _ = import_scan(args)
+    camera = None if view_out is None else _camera(args, h)
+    from .io.image import check_room
+    check_room([out], FILE_SAMPLE_BYTES * h.shape[0] * h.shape[1] * len(h.wavelengths),
+               f"the {h.shape[1]}x{h.shape[0]} hologram")
+    if camera is not None:
+        _view_room([view_out, view_out.with_suffix(".png")], camera)
     print(write_hologram(out, h))
     if view_out is not None:
-        view = render_view(h, _camera(args, h), supersample="auto", progress=_progress_bar())
+        view = render_view(h, camera, supersample="auto", progress=_progress_bar())
         print()
         for path in write_view(view, view_out):
             print(path)
@@ -604,11 +653,15 @@ def main(argv=None) -> int:
                    help="the objects' box [m] instead of a mesh")
     p.add_argument("--bounds", type=FINITE, nargs=6, metavar=("X0", "Y0", "Z0", "X1", "Y1", "Z1"),
                    help="the objects' box [m] in the plate's frame, where it is (no --distance)")
-    p.add_argument("--distance", type=POSITIVE, default=0.3,
-                   help="the objects' nearest point behind the plate [m] (0.3)")
-    p.add_argument("--looks", type=PIXELS, default=2, help="coded looks to record (2)")
+    p.add_argument("--distance", type=POSITIVE, default=None,
+                   help="move the objects so their nearest point is this far behind the "
+                        "plate, centred on its axis [m], as record --distance does (default: "
+                        f"a mesh where it is, a --box {BOX_DISTANCE:g})")
+    p.add_argument("--looks", type=PIXELS, default=1,
+                   help="looks to record (1, what one record makes; N coded looks are N "
+                        "records, --look K N)")
     p.add_argument("--resolution", type=PIXELS, nargs=2, default=(640, 360), metavar=("W", "H"))
-    _view_options(p, plate_size=(0.1, 0.1))
+    _view_options(p)
     p = sub.add_parser("info", help="print a hologram file's metadata")
     p.add_argument("hologram")
     p = sub.add_parser("render", help="render a view of a hologram to EXR (+ PNG preview)")

@@ -1,6 +1,4 @@
 
-import os
-import subprocess
 
 import numpy as np
 import pytest
@@ -26,14 +24,8 @@ def point_hologram():
 
 @pytest.fixture
 def small_disk(tmp_path):
-    """A 1 MiB file system of its own, a folder on it (a tmpfs: the test must run as root)."""
-    mount = tmp_path / "disk"
-    mount.mkdir()
-    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs",
-                                            str(mount)], capture_output=True).returncode:
-        pytest.skip("mounting a small file system needs root")
-    try:
-        yield mount
-    finally:
-        subprocess.run(["umount", str(mount)], check=True)
+    """A 1 MiB file system of its own (a tmpfs: the test must run as root, else it is skipped)."""
+    from mounts import small_disk
+    with small_disk(tmp_path / "disk") as disk:
+        yield disk
 

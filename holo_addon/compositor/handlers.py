@@ -11,6 +11,7 @@ import os
 import sys
 import tempfile
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import bpy
@@ -33,8 +34,9 @@ def render_init(scene, *_):
     """A render begins (F12, ``-f``, ``-a``: once): the holographic layers follow the render
     output's path, the blend the film, the passes the .blend's output folder."""
     session.render_started()
-    tree.follow_render_output(scene)
-    tree.follow_film(scene)
+    with _failing(scene, scene.frame_current):
+        tree.follow_render_output(scene)
+        tree.follow_film(scene)
     if tree.uses_pass(scene):  # a frame of the render (F12's) gets a clear pass where it has
         # none before Blender's copy of the image looks for it (found missing then, it stays
         # missing for the render: the Image node's grey)
@@ -54,12 +56,15 @@ def render_ended(*_):
 @persistent
 def render_post(scene, *_):
     """A frame is composited: its holographic layers' depth channels named ``.Z``. A shutter
-    the render did not evaluate whole leaves the frame without its pass: said here."""
+    the render did not evaluate whole has left the frame without its pass, and layers that
+    cannot be rewritten are not what the frame delivers: either fails the render (status 1
+    in the background, the error in the interface's reports), though Blender has composited
+    the frame by now."""
     if session.shutter is not None:
-        log.error("Holo: frame %d: the render never evaluated its shutter's closing, so its "
-                  "holographic pass was not made (turn motion blur off for this frame)",
-                  session.shutter.frame)
-        session.shutter = None
+        frame, session.shutter = session.shutter.frame, None
+        _delivered_wrong(f"Holo: frame {frame}: the render never evaluated its shutter's "
+                         f"closing, so its holographic pass was not made (turn motion blur "
+                         f"off for this frame)")
     session.frame_done = None
     if not tree.uses_pass(scene):
         return
@@ -68,8 +73,10 @@ def render_post(scene, *_):
             if path.is_file() and path.stat().st_mtime >= session.started - 1:
                 tree.name_depths_z(path)
                 _say_holes(scene, tree.holes(path))
-        except (OSError, RuntimeError) as e:  # the library's read and write errors
-            log.error("Holo: the holographic layers %s could not be renamed: %s", path, e)
+        except Exception as e:  # noqa: BLE001 -- the library's errors, whatever their class
+            _delivered_wrong(f"Holo: the holographic layers {path} of frame "
+                             f"{scene.frame_current} could not be rewritten with their depth "
+                             f"channels named .Z: {e}")
 
 
 def _say_holes(scene, count: int) -> None:
@@ -95,6 +102,12 @@ def render_frame(scene, depsgraph=None):
     another state's pass in the composite (see :func:`failed`)."""
     if depsgraph is None or depsgraph.mode != "RENDER":
         return
+    frame = session.shutter.frame if session.shutter is not None else scene.frame_current
+    with _failing(scene, frame):
+        _render_frame(scene, depsgraph)
+
+
+def _render_frame(scene, depsgraph) -> None:
     frame, pending = scene.frame_current, session.shutter
     if pending is not None:  # the frame's shutter, as the render evaluates it
         pending.add(motion.sample(scene, depsgraph))
@@ -147,8 +160,7 @@ def render_frame(scene, depsgraph=None):
         if not scene.holo.pass_on_render:  # the scene cannot be read: say so, render on
             warn(f"Holo: the holographic pass of frame {frame} could not be checked: {e}")
             return
-        failed(scene, f"Holo: the holographic pass of frame {frame} failed: {e}")
-        return
+        raise
     for warning in job.warnings:
         _log(logging.WARNING, warning)
     if blur:
@@ -159,20 +171,37 @@ def render_frame(scene, depsgraph=None):
     _frame_pass(scene, frame, job)
 
 
+@contextmanager
+def _failing(scene, frame: int):
+    """Whatever fails inside, of whatever class, fails frame ``frame`` (:func:`failed`): a
+    handler's exception would only print a traceback, and Blender would render on and write
+    the frame without its pass."""
+    try:
+        yield
+    except Exception as e:  # noqa: BLE001 -- any failure must stop the frame, not pass by
+        failed(scene, f"Holo: the holographic pass of frame {frame} failed: {e}")
+
+
 def _point_passes(scene, frame: int, *, rendering: bool) -> bool:
     """The compositor reads frame ``frame``'s pass from the output folder
-    (:func:`tree.point_passes`); a folder that cannot be written fails the frame (a farm's
-    render exits with status 1), where Blender would render on and write the frame without
-    its pass. Returns whether it could."""
+    (:func:`tree.point_passes`); a folder that cannot be written (under a file, read-only, a
+    link to either) fails the frame, naming the setting and the folder. Returns whether it
+    could."""
     try:
         tree.point_passes(scene, frame, rendering=rendering)
-    except OSError as e:
-        where = e.filename or scene.holo.output_dir
+    except Exception as e:  # noqa: BLE001 -- the OS's errors and the writer's InputError
+        reason = e.strerror if isinstance(e, OSError) and e.strerror else e
         failed(scene, f"Holo: the holographic pass of frame {frame} cannot be written: the "
-                      f"Output Folder (Render Properties ▸ Holo) {where}: "
-                      f"{e.strerror or e}")
+                      f"Output Folder (Render Properties ▸ Holo) "
+                      f"{_folder_of(scene)}: {reason}")
         return False
     return True
+
+
+def _folder_of(scene) -> str:
+    """The Output Folder as the user set it, made absolute (a link not followed: the reason
+    names the folder it leads to)."""
+    return bpy.path.abspath(scene.holo.output_dir or "//holo/")
 
 
 def _frame_pass(scene, frame: int, job) -> None:
@@ -190,9 +219,6 @@ def _frame_pass(scene, frame: int, job) -> None:
         tree.pass_made(scene, result)
     except jobs.Cancelled:
         failed(scene, f"Holo: the holographic pass of frame {frame} was cancelled")
-        return
-    except Exception as e:  # noqa: BLE001 -- any failure must stop the frame, not pass by
-        failed(scene, f"Holo: the holographic pass of frame {frame} failed: {e}")
         return
     finally:
         session.pass_ended()
@@ -319,12 +345,7 @@ def failed(scene, message: str) -> None:
     composite shows the raster alone (the holographic objects' holes empty), never a pass of
     another state, folder or file; the error goes to Blender's reports and a popup. (Muting
     the node would not do: the render has already evaluated its copy of the compositor.)"""
-    exit_now = bpy.app.background if session.exit_on_failure is None else \
-        session.exit_on_failure
-    if exit_now:  # said once, on stderr whatever the log's handlers (the farm's output)
-        sys.stderr.write(message + "\n")
-        sys.stderr.flush()
-        os._exit(1)
+    _exit_in_background(message)
     log.error(message)
     try:
         stale = pipeline.pass_file(pipeline.output_dir(scene), scene.frame_current)
@@ -333,11 +354,35 @@ def failed(scene, message: str) -> None:
         if not stale.is_file():
             pipeline.clear_pass(scene, scene.frame_current)
         tree.point_passes(scene)
-    except (OSError, ValueError) as e:
+    except Exception as e:  # noqa: BLE001 -- the OS's errors and the writer's InputError
         log.error("the stale pass could not be set aside: %s", e)
         _raster_alone(scene)
+    _report(message)
+
+
+def _exit_in_background(message: str) -> None:
+    """In a background Blender (unless :attr:`Session.exit_on_failure` says otherwise), the
+    process ends here with status 1, ``message`` said once on stderr whatever the log's
+    handlers (the farm's output)."""
+    exit_now = bpy.app.background if session.exit_on_failure is None else \
+        session.exit_on_failure
+    if exit_now:
+        sys.stderr.write(message + "\n")
+        sys.stderr.flush()
+        os._exit(1)
+
+
+def _report(message: str) -> None:
     if not bpy.app.background:
         bpy.app.timers.register(lambda: _show_error(message), first_interval=0.0)
+
+
+def _delivered_wrong(message: str) -> None:
+    """The frame Blender has composited is not what was asked (it is written or about to
+    be): status 1 in the background, the error in the interface's reports."""
+    _exit_in_background(message)
+    log.error(message)
+    _report(message)
 
 
 def _raster_alone(scene) -> None:
@@ -347,7 +392,7 @@ def _raster_alone(scene) -> None:
     folder = Path(tempfile.gettempdir()) / f"holo-clear-{os.getpid()}"
     try:
         tree.read_passes_from(pipeline.clear_pass(scene, scene.frame_current, folder))
-    except OSError as e:
+    except Exception as e:  # noqa: BLE001 -- the OS's errors and the writer's InputError
         log.error("no clear pass could be written for the failed frame: %s", e)
 
 

@@ -28,7 +28,7 @@ from holo_core.scene.camera import Camera
 from holo_core.scene.mesh import Mesh
 from holo_core.scene.plate import ViewingZone
 
-from . import radiance
+from . import radiance, ranges
 from .motion import with_motion
 from .plates import beyond_zone, export_imported, scene_plate, with_plate
 from .scene import ExportError, SceneData, export_scene
@@ -64,7 +64,7 @@ class Settings:
                    disk_budget=h.plate_disk * gb,
                    wavelength=h.wavelength * unit if h.wavelength > 0 else None,
                    iterations=h.iterations, supersample=h.supersample,
-                   composition=h.composition, exposure=2.0 ** _stops(h.exposure),
+                   composition=h.composition, exposure=2.0 ** h.exposure,
                    opacity_threshold=h.opacity_threshold, seed=h.seed, lighting=h.lighting,
                    lighting_samples=h.lighting_samples, speckle=h.speckle)
 
@@ -140,7 +140,10 @@ def read(scene, depsgraph, *, render=True, preview=1) -> Prepared:
     render's resolution (the same frame), into the output folder's ``preview/``."""
     mode, instead = scene.holo.mode, ""
     out = output_dir(scene) / "preview" if preview > 1 else output_dir(scene)
+    ranges.check(scene.holo, scene)  # before any work: a script may set what the panel cannot
     plate = scene_plate(scene, required=mode == "PLATE")
+    if plate is not None:
+        ranges.check(plate.holo, scene)
     imported = plate if mode == "PLATE" and plate.holo.imported else None
     lit = scene.holo.lighting == "SCENE" and not imported
     if imported:  # viewed as it is, never recorded: no emitters needed
@@ -263,13 +266,6 @@ def coarser(camera: Camera, factor: int) -> Camera:
     w, h = camera.resolution
     return replace(camera, resolution=(max(1, round(w / factor)), max(1, round(h / factor))))
 
-
-def _stops(exposure: float) -> float:
-    """Scene.holo.exposure [stops], checked: a script may set what the panel cannot."""
-    if not -EXPOSURE_STOPS <= exposure <= EXPOSURE_STOPS:
-        raise ExportError(f"Exposure (Render Properties ▸ Holo) must be within "
-                          f"±{EXPOSURE_STOPS:g} stops; got {exposure:g}")
-    return exposure
 
 
 def output_dir(scene) -> Path:

@@ -31,6 +31,7 @@ from holo_core.worker import environment
 
 from ..blender.objects import raster_visibility
 from ..compositor.session import session
+from ..export import ranges
 from ..export.plates import plate_from_object, zone_around
 from ..export.scene import (ExportError, camera_from_object, corner_positions,
                             emitter_instances, scale)
@@ -127,6 +128,8 @@ def plan_summary(context) -> list[str]:
     selected plate, the holographic objects, the scene camera and the recording settings,
     in the plate's frame; the planner runs here, in Blender's process (pure arithmetic)."""
     scene, obj, unit = context.scene, plate_object(context), scale(context.scene)
+    ranges.check(scene.holo, scene)
+    ranges.check(obj.holo, scene)
     plate = plate_from_object(obj, unit)
     camera = camera_from_object(scene, scene.camera, unit)
     # the triangles' corners, as the recording takes them: an object's bounding box turned

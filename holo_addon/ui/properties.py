@@ -166,7 +166,7 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                                           "is smoother, the maximum brighter")
     exposure: FloatProperty(name="Exposure", default=0.0, soft_min=-10.0, soft_max=10.0,
                             min=-EXPOSURE_STOPS, max=EXPOSURE_STOPS,
-                            description="Brightness of the holographic objects in stops, as "
+                            description="Brightness of the holographic objects [stops], as "
                                         "Blender's Film Exposure: +1 doubles it")
     opacity_threshold: FloatProperty(name="Opacity Threshold", default=0.5, min=0.0, max=1.0,
                                      description="Alpha is 1 where the holographic surfaces "

@@ -89,6 +89,7 @@ def _probe(device: cl.Device) -> str:
     try:
         ctx = cl.Context([device])
         queue = cl.CommandQueue(ctx)
+        clear_stale_cache_lock()  # a process's first build: a killed worker's lock goes first
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             prg = cl.Program(ctx, _PROBE).build(
@@ -323,20 +324,59 @@ def set_device(spec: str | None) -> Runtime:
 
 
 STALE_LOCK = 10.0  # [s] pyopencl holds its program cache's lock for milliseconds
+UNLINK_WINDOW = 0.05  # [s] a holder closes the lock, then removes it at once
 
 
 def clear_stale_cache_lock() -> None:
     """Remove pyopencl's program-cache lock where a killed process left it (a cancelled
     worker killed while it read the cache): the next process would otherwise wait a minute
-    for it and then fail. A lock older than STALE_LOCK seconds has no living holder."""
+    for it and then fail. A living holder keeps the lock open: where the system lists open
+    files (Linux's /proc), a lock that no process has open, twice UNLINK_WINDOW apart, is
+    stale however recent; elsewhere, one older than STALE_LOCK."""
+    lock = cache_lock()
+    try:
+        found = lock.stat()
+    except FileNotFoundError:
+        return
+    held = _held_open(lock)
+    if held is None:
+        stale = time.time() - found.st_mtime > STALE_LOCK
+    else:
+        if not held:
+            time.sleep(UNLINK_WINDOW)
+        stale = not held and not _held_open(lock) and _same_file(lock, found)
+    if stale:
+        lock.unlink(missing_ok=True)
+        log.warning("removed a stale OpenCL program-cache lock %s", lock)
+
+
+def _same_file(path: Path, found: os.stat_result) -> bool:
+    try:
+        return os.path.samestat(path.stat(), found)
+    except FileNotFoundError:
+        return False
+
+
+def cache_lock() -> Path:
+    """The lock file of pyopencl's program cache (where pyopencl puts it)."""
     base = os.getenv("XDG_CACHE_HOME") if sys.platform == "darwin" else None
     base = os.path.join(base, "pyopencl") if base else \
         platformdirs.user_cache_dir("pyopencl", "pyopencl")
     version = ".".join(str(i) for i in sys.version_info)
-    lock = Path(base) / f"pyopencl-compiler-cache-v2-py{version}" / "lock"
-    try:
-        if time.time() - lock.stat().st_mtime > STALE_LOCK:
-            lock.unlink()
-            log.warning("removed a stale OpenCL program-cache lock %s", lock)
-    except FileNotFoundError:
-        pass
+    return Path(base) / f"pyopencl-compiler-cache-v2-py{version}" / "lock"
+
+
+def _held_open(path: Path) -> bool | None:
+    """Whether a process this user may see has ``path`` open (None: the system does not
+    say). Another user's processes cannot hold a lock in this user's cache."""
+    proc = Path("/proc")
+    if not (proc / "self" / "fd").is_dir():
+        return None
+    target = os.path.realpath(path)
+    for fds in proc.glob("[0-9]*/fd"):
+        try:
+            if any(os.readlink(fd) == target for fd in fds.iterdir()):
+                return True
+        except OSError:  # a process gone, or another user's
+            continue
+    return False

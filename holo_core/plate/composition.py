@@ -49,7 +49,7 @@ def compose(looks, colours, z_ch, first: Hologram, camera, pupil, *, supersample
         return _finish(radiance, _depth(looks, cross, **depth_of), None, first, camera, pupil,
                        exposure, threshold, lam0)
     exposure = 1.0 if exposure is None else exposure
-    colour, alpha, depth, shown, cover = assemble(
+    colour, alpha, depth, seen, cover = assemble(
         as_rgb(radiance), coverage, cross, camera=camera, supersample=1, wavelengths=pair,
         centre=centre, exposure=exposure)
     if depth_estimate == "brightest":
@@ -70,7 +70,7 @@ def compose(looks, colours, z_ch, first: Hologram, camera, pupil, *, supersample
              pupil.diameter, limit, info["resolution_limit_px"])
     _check_sharp(first, camera, pupil.diameter, info["resolution_limit_px"])
     return RenderResult(rgb=colour, alpha=alpha, depth=depth, info=info, coverage=cover,
-                        radiance=shown)
+                        radiance=seen)
 
 
 def black_view(first: Hologram, camera: Camera, pupil, colours, exposure, threshold

@@ -17,11 +17,12 @@ import numpy as np
 
 from .. import jobs, memory, validate
 from ..opencl.arrays import nonfinite_count, read
+from ..optics.raster import CROSSING_BYTES, crossing_count
 from ..scene.hologram import Hologram, HologramInfo
 from ..scene.mesh import Mesh
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Carrier, Plate, ViewingZone
 from ..validate import InputError
-from .emitters import Emitters, zone_emitters
+from .emitters import Emitters, zone_emitters, zone_frame
 from .plan import LAYERS, LOOKS, RIM, PlatePlan, plan
 from .zone_sum import ZoneEmitters, ZoneSum, ZoneWindow
 
@@ -169,6 +170,11 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
                          "pixel angle, or a wavelength")
     p = plan((plate.width, plate.height), bounds, zone=zone, pixel_angle=pixel or 1.0,
              wavelength=wavelength, looks=looks)
+    count = crossing_count(local, np.asarray(zone.centre, np.float64), zone_frame(zone, bounds),
+                           p.spacing)  # what finding the emitters holds, before it starts
+    memory.check_host(f"finding the emitters of {sum(len(m.triangles) for m in local)} "
+                      f"triangles ({count:.3g} crossings of the zone's rays: many large "
+                      f"triangles through each other cross many)", CROSSING_BYTES * count)
     return PlannedPlate(plan=p, meshes=local, plate=plate)
 
 

@@ -43,7 +43,10 @@ class Mesh:
         if t.ndim != 2 or t.shape[1] != 3 or (t.size and t.dtype.kind not in "iu"):
             raise InputError(f"triangles must be a (T, 3) array of integer vertex indices; got "
                              f"shape {t.shape}, dtype {t.dtype}")
-        if t.size and (t.min() < 0 or t.max() >= len(v)):
+        if not len(t):  # a stage would end in NumPy's reduction of an empty array
+            raise InputError(f"triangles must hold at least one triangle (a Mesh is a "
+                             f"surface); got none, with {len(v)} vertices")
+        if t.min() < 0 or t.max() >= len(v):
             bad = t[(t < 0) | (t >= len(v))][0]
             raise InputError(f"triangles must index vertices in [0, {len(v) - 1}]; got {bad}")
         object.__setattr__(self, "vertices", v.astype(np.float64, copy=False))

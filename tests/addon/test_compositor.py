@@ -309,13 +309,13 @@ test_compositor._scene_with_pass(scene, None)
 """
 
 
-def in_background(script: str, tmp_path):
+def in_background(script: str, tmp_path, *args):
     """``script`` (:data:`BACKGROUND` and what follows) run by a Python of its own, on
-    ``tmp_path``: the ended process."""
+    ``tmp_path`` (its ``sys.argv[3]``; ``args`` follow): the ended process."""
     here = Path(__file__).resolve()
     return subprocess.run([sys.executable, "-c", script, str(here.parents[2]), str(here.parent),
-                           str(tmp_path)], capture_output=True, text=True, timeout=600,
-                          check=False)
+                           str(tmp_path), *map(str, args)], capture_output=True, text=True,
+                          timeout=600, check=False)
 FAILING_FARM_RENDER = BACKGROUND_SCENE + """from holo_addon.render import pipeline
 def broken(job, progress=None, on_log=None, **_):
     raise RuntimeError("the worker failed")
@@ -350,6 +350,34 @@ def test_an_unwritable_output_folder_fails_a_background_animation(tmp_path):
     run = in_background(UNWRITABLE_FARM_RENDER, tmp_path)
     assert run.returncode == 1, run.stdout[-2000:] + run.stderr[-2000:]
     assert "cannot be written: the Output Folder" in run.stderr, run.stderr[-2000:]
+    assert "rendered" not in run.stdout and not list(tmp_path.glob("frame_*"))
+
+
+READ_ONLY_FARM_RENDER = BACKGROUND_SCENE + """scene.holo.output_dir = sys.argv[4] + "/"
+scene.render.filepath = sys.argv[3] + "/frame_"
+bpy.ops.render.render(animation=True)
+print("rendered")
+"""
+
+
+@pytest.mark.parametrize("linked", [False, True], ids=["share", "link to it"])
+def test_a_read_only_output_folder_fails_a_background_animation(tmp_path, linked):
+    """``blender -b ... -a`` with an Output Folder that exists but takes no file (a read-only
+    share on a farm node, or a link to one): status 1 and one error naming the setting and
+    the folder, before any frame is written (it printed two tracebacks, rendered on and wrote
+    the frames without their pass, status 0)."""
+    from mounts import read_only_folder
+    with read_only_folder(tmp_path / "share") as share:
+        folder = share
+        if linked:
+            folder = tmp_path / "link"
+            folder.symlink_to(share)
+        run = in_background(READ_ONLY_FARM_RENDER, tmp_path, folder)
+    assert run.returncode == 1, run.stdout[-2000:] + run.stderr[-2000:]
+    said = [line for line in run.stderr.splitlines() if "Holo:" in line]
+    assert len(said) == 1 and "cannot be written: the Output Folder (Render Properties ▸ " \
+        f"Holo) {folder}" in said[0] and "not writable" in said[0], run.stderr[-2000:]
+    assert "Traceback" not in run.stderr, run.stderr[-2000:]
     assert "rendered" not in run.stdout and not list(tmp_path.glob("frame_*"))
 
 

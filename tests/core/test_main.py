@@ -134,3 +134,63 @@ def test_a_hologram_beyond_the_disks_room_is_refused_before_the_recording(
     assert re.search(rf"the hologram \(\d+ x \d+ samples\) would need [\d.e-]+ GiB on disk, and "
                      rf"{small_disk} has [\d.e-]+ GiB free", err), err
     assert not (small_disk / "h.exr").exists()
+
+
+# a 6 cm cube whose nearest face is 5 cm behind the plate, off its axis
+NEAR_CUBE_OBJ = "".join(f"v {x + 0.01:g} {y:g} {z:g}\n" for x in (0, 0.06) for y in (0, 0.06)
+                        for z in (-0.11, -0.05)) + \
+    "f 1 2 4 3\nf 5 7 8 6\nf 1 5 6 2\nf 3 4 8 7\nf 1 3 7 5\nf 2 6 8 4\n"
+
+
+@pytest.mark.parametrize("placement", [(), ("--distance", 0.3)], ids=["where it is", "moved"])
+def test_plan_states_the_plate_record_makes(tmp_path, capsys, placement):
+    """``plan MESH`` and ``record MESH`` with the same options place the mesh alike and plan
+    one plate: the samples plan states are the recorded file's (plan moved a mesh 0.3 m
+    behind the plate where record kept it where it was: 491² samples planned, 3597²
+    recorded)."""
+    from holo_core.io.hologram import read_hologram
+    (tmp_path / "cube.obj").write_text(NEAR_CUBE_OBJ)
+    common = (tmp_path / "cube.obj", "--resolution", 64, 36, *placement)
+    status, out, err = run_cli(capsys, "plan", *common)
+    assert status == 0, err
+    planned = re.search(r"plate .*: (\d+) x (\d+) samples", out)
+    status, _, err = run_cli(capsys, "record", *common, "-o", tmp_path / "h.exr")
+    assert status == 0, err
+    rows, cols = read_hologram(tmp_path / "h.exr").shape
+    assert planned and (int(planned[1]), int(planned[2])) == (cols, rows), (out, rows, cols)
+
+
+def test_plan_of_a_plate_no_machine_can_record_fails(tmp_path, capsys):
+    """Objects a micrometre behind the plate need a plate beyond any memory: plan states its
+    figures with the refusal second, and exits 2 (it said "sharp … about 1.5e+09 h", 0)."""
+    (tmp_path / "cube.obj").write_text(NEAR_CUBE_OBJ)
+    status, out, _ = run_cli(capsys, "plan", tmp_path / "cube.obj", "--distance", 1e-6)
+    lines = out.splitlines()
+    assert status == 2 and lines[0].startswith("verdict"), out
+    assert re.match(r"refused +recording the plate needs .* of memory a tile at a time; the "
+                    r"memory budget is", lines[1]), out
+
+
+@pytest.mark.parametrize("command", ["record", "render"])
+def test_cli_output_without_room_is_refused_before_the_work(tmp_path, point_hologram, capsys,
+                                                           monkeypatch, command):
+    """An output folder on a disk too small for the file (a 1 MiB file system): one line
+    naming the folder and both sizes, before any recording or view (a full disk was found
+    after the whole recording, named by a hidden temporary file)."""
+    import holo_core.plate.looks
+    import holo_core.plate.view
+    from mounts import small_disk
+
+    def never(*_, **__):
+        raise AssertionError("the work started before the room was checked")
+    monkeypatch.setattr(holo_core.plate.looks, "record_plate", never)
+    monkeypatch.setattr(holo_core.plate.view, "render_view", never)
+    (tmp_path / "cube.obj").write_text(NEAR_CUBE_OBJ)
+    source, size = (tmp_path / "cube.obj", (160, 90)) if command == "record" else \
+        (write_hologram(tmp_path / "h.exr", point_hologram), (400, 400))
+    with small_disk(tmp_path / "disk") as disk:
+        status, out, err = run_cli(capsys, command, source, "-o", disk / "out.exr",
+                                   "--resolution", *size)
+        assert status == 2 and err.count("\n") == 1, err
+        assert re.search(rf"need [\d.]+ GiB on disk, and {disk} has 0.000977 GiB free", err), err
+        assert not list(disk.iterdir())

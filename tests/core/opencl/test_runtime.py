@@ -137,23 +137,79 @@ def test_fft_backend_round_trip(rt, rng):
     assert np.allclose(dev.get() / a.size, a, atol=1e-5)
 
 
-def test_a_killed_process_s_cache_lock_is_cleared(tmp_path, monkeypatch):
-    """pyopencl's program-cache lock left by a killed worker would stall the next build a
-    minute and fail it: one older than STALE_LOCK goes, a fresh one (a living holder) stays."""
+HOLD_LOCK = """
+import os, sys, time
+fd = os.open(sys.argv[1], os.O_CREAT | os.O_WRONLY | os.O_EXCL)  # as pyopencl takes it
+print("held", flush=True)
+time.sleep(600)
+"""
+NEVER_WAIT = """
+import sys, time
+class Waited(BaseException):
+    pass
+sleep = time.sleep
+def never(seconds):  # pyopencl waits on its cache lock in steps of 50 ms
+    if sys._getframe(1).f_globals["__name__"].startswith("pyopencl"):
+        raise Waited(f"pyopencl waited {seconds} s on its cache lock")
+    sleep(seconds)
+time.sleep = never
+from holo_core.opencl import get_runtime
+print("device", get_runtime().device.name)
+"""
+
+
+@pytest.fixture
+def cache_lock(tmp_path, monkeypatch):
+    """pyopencl's program-cache lock in a cache of the test's own (XDG_CACHE_HOME)."""
     if sys.platform != "linux":
         pytest.skip("the XDG cache folder is Linux's")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
-    folder = tmp_path / "pyopencl" / ("pyopencl-compiler-cache-v2-py"
-                                      + ".".join(str(i) for i in sys.version_info))
-    folder.mkdir(parents=True)
-    lock = folder / "lock"
-    lock.touch()
+    lock = runtime.cache_lock()
+    lock.parent.mkdir(parents=True)
+    return lock
+
+
+def _holder(lock):
+    """A process holding ``lock`` as pyopencl does, until it is killed."""
+    holder = subprocess.Popen([sys.executable, "-c", HOLD_LOCK, str(lock)],
+                              stdout=subprocess.PIPE, text=True)
+    assert holder.stdout.readline().strip() == "held"
+    return holder
+
+
+def _killed(holder):
+    holder.kill()
+    holder.wait()
+    holder.stdout.close()
+
+
+def test_a_killed_workers_cache_lock_costs_the_next_process_no_wait(cache_lock):
+    """A worker killed while it held pyopencl's program-cache lock (a cancelled pass): the
+    next process's first build (the device probe) finds the lock gone and never waits on
+    it, however recent the kill (pyopencl waited a minute, then failed the build)."""
+    _killed(_holder(cache_lock))
+    assert cache_lock.exists()
+    run = subprocess.run([sys.executable, "-c", NEVER_WAIT], capture_output=True, text=True,
+                         timeout=300, check=False, cwd=ROOT,
+                         env={**os.environ, "HOLO_DEVICE": ""})
+    assert run.returncode == 0 and "device" in run.stdout, run.stderr[-2000:]
+    assert "stale OpenCL program-cache lock" in run.stderr, run.stderr[-2000:]
+    assert not cache_lock.exists()
+
+
+def test_a_living_holders_cache_lock_stays_however_old(cache_lock):
+    """A lock a living process holds open stays, even older than STALE_LOCK (a long build);
+    once its holder is killed, it goes."""
+    holder = _holder(cache_lock)
+    try:
+        old = time.time() - 2 * runtime.STALE_LOCK
+        os.utime(cache_lock, (old, old))
+        runtime.clear_stale_cache_lock()
+        assert cache_lock.exists(), "a living holder's lock was removed"
+    finally:
+        _killed(holder)
     runtime.clear_stale_cache_lock()
-    assert lock.exists()
-    old = time.time() - 2 * runtime.STALE_LOCK
-    os.utime(lock, (old, old))
-    runtime.clear_stale_cache_lock()
-    assert not lock.exists()
+    assert not cache_lock.exists()
 
 
 def test_a_gpu_keeps_one_copy_of_an_array_it_reads_while_the_array_lives(monkeypatch):

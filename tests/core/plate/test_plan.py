@@ -122,7 +122,7 @@ def test_planner_on_the_command_line(capsys):
     the views are sharp, the time, the samples, the disk and the memory."""
     assert main(["plan", "--box", "1.0", "0.8", "0.6", "--distance", "1.45", "--plate-size",
                  "1", "1", "--camera", "0", "0", "1.75", "--lens", "40", "--resolution", "1280",
-                 "720", "--dolly", "0.1"]) == 0
+                 "720", "--dolly", "0.1", "--looks", "2"]) == 0
     out = capsys.readouterr().out
     print(out)
     assert out.startswith("verdict     views of 1280 x 720 px through 40 mm f/2.8 are sharp")

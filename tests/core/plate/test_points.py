@@ -295,3 +295,28 @@ def test_a_long_wavelength_hologram_is_written_and_read_back(tmp_path):
     assert 0 < h.band < 1, f"band sin θ = {h.band}"
     back = read_hologram(write_hologram(tmp_path / "h.exr", h))
     assert back.band == h.band and back.wavelengths == h.wavelengths
+
+
+def test_a_mesh_whose_emitters_cannot_be_found_in_memory_is_refused_first(rng, monkeypatch):
+    """Random triangles through each other cross every ray of the zone many times over (10⁷
+    vertices held 4.75 GB and ran past 150 s after the memory estimate passed them): counted
+    before the work, they are refused by their crossings; a cube in the same memory is
+    not."""
+    from holo_core.plate.recording import plate_plan
+    from holo_core.scene.camera import Camera, look_at
+    plate = Plate(matrix_world=np.eye(4), width=0.1, height=0.1)
+    camera = Camera(matrix_world=look_at((0, 0, 0.3), (0, 0, -0.33)), resolution=(160, 90),
+                    fstop=2.8, focus_distance=0.63)
+    v = rng.uniform([-0.03, -0.03, -0.36], [0.03, 0.03, -0.3], (30_000, 3))
+    noise = Mesh(vertices=v, triangles=rng.integers(0, len(v), (10_000, 3)))
+    corners = np.array([[x, y, z] for x in (-0.03, 0.03) for y in (-0.03, 0.03)
+                        for z in (-0.36, -0.3)])
+    cube = Mesh(vertices=corners, triangles=[[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5],
+                                             [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],
+                                             [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    monkeypatch.setenv("HOLO_MEMORY_LIMIT", "200M")  # a step may take memory.SHARE of it
+    plate_plan(cube, plate=plate, camera=camera)
+    with pytest.raises(InputError, match=r"finding the emitters of 10000 triangles \(1\.\d+e\+06 "
+                                         r"crossings of the zone's rays.* needs 0\.\d+ GiB of "
+                                         r"memory"):
+        plate_plan(noise, plate=plate, camera=camera)

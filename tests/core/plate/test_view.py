@@ -50,3 +50,17 @@ def test_a_view_that_overflows_is_refused_not_nan(point_hologram):
     hot[0, 5, 7] = 3e38
     with pytest.raises(InputError, match=r"intensity must stay within float32 .* reaches 3e\+38"):
         render_view(dataclasses.replace(point_hologram, intensity=hot), pinhole.camera())
+
+
+def test_an_exposure_that_overflows_the_view_is_refused_by_name():
+    """A plate of emitters with a known density and a depth partner, seen at an exposure that
+    takes its pixels past float32's largest number: the project's error naming the exposure
+    (it once ended in a TypeError of the view's own variables)."""
+    from holo_core.plate.points import record_points
+    h = record_points([[0, 0, -3e-3]], [[1.0, 1.0]], shape=(128, 128), pitch=1e-6,
+                      wavelengths=(633e-9, 0.98 * 633e-9), channels=("R", "Z"),
+                      point_density=1e6)
+    assert h.depth_channel() == 1 and h.point_density
+    with pytest.raises(InputError, match=r"exposure must keep the view's pixels within "
+                                         r"float32 \(finite\); got 1e\+38"):
+        render_view(h, pinhole.camera(), exposure=1e38)
