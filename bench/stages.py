@@ -259,8 +259,7 @@ def camera_pass(job_path: Path, rt, rounds) -> list:
 def plate(samples: int, rt, rounds) -> list:
     from plate_scene import PLATE, camera, meshes
 
-    from holo_core.plate import slabs
-    from holo_core.plate import composition, pupil_images
+    from holo_core.plate import composition, pupil_images, slabs
     from holo_core.plate.looks import record_plate
     from holo_core.plate.view import render_view
     centre = camera("centre", 1.0)

@@ -209,9 +209,9 @@ def _read(path):
 def plan(args) -> int:
     """What a plate will take and give, before any recording (the plate's frame: the plate is
     z = 0, the objects behind it, the camera in front), in plain words, the verdict first."""
-    import numpy as np
-
     from dataclasses import replace
+
+    import numpy as np
 
     from .plate.plan import plan_view, summary
     if args.bounds is not None:  # where they are: no move

@@ -108,7 +108,7 @@ def _probe(address) -> None:
     except ConnectionRefusedError:
         raise InputError(f"{what}: refuses connections (is a scheduler running there?)") \
             from None
-    except (socket.timeout, TimeoutError):
+    except TimeoutError:
         raise InputError(f"{what}: no answer within {CONNECT_TIMEOUT:g} s (is it a Dask "
                          f"scheduler?)") from None
     except OSError as e:

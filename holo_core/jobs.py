@@ -6,7 +6,8 @@ To cancel, the callable raises :class:`Cancelled`; the stage stops there and wri
 
 from __future__ import annotations
 
-from typing import Callable, Optional
+from collections.abc import Callable
+from typing import Optional
 
 Progress = Optional[Callable[[float], None]]
 

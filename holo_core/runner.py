@@ -391,7 +391,7 @@ def _job(folder: Path, send, kept: KeptPlates | None) -> bool:
         os.replace(tmp, folder / "result.pickle")
         send({"done": True})
         return True
-    except Exception as e:
+    except Exception as e:  # noqa: BLE001 -- whatever failed, the parent hears it as the job's error
         traceback.print_exc()
         kind = "" if isinstance(e, (ValueError, OSError)) else f"{type(e).__name__}: "
         send({"error": f"{kind}{e}"})

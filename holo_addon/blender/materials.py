@@ -27,7 +27,7 @@ def unhonoured(material, *, lit=False) -> str | None:
     found = [name for name, off in UNHONOURED if name in node.inputs and (
         not lit or name in OPAQUE) and (
         node.inputs[name].is_linked or
-        off is not None and node.inputs[name].default_value != off)]
+        (off is not None and node.inputs[name].default_value != off))]
     if not found:
         return None
     if lit:

@@ -156,7 +156,7 @@ def _render_frame(scene, depsgraph) -> None:
                  f"emitter is left, and it is composited as it is (Pass on Every Render is "
                  f"off)")
         return
-    except Exception as e:  # noqa: BLE001 -- any failure must stop the frame, not pass by
+    except Exception as e:
         if not scene.holo.pass_on_render:  # the scene cannot be read: say so, render on
             warn(f"Holo: the holographic pass of frame {frame} could not be checked: {e}")
             return

@@ -33,8 +33,13 @@ from ..blender.objects import raster_visibility
 from ..compositor.session import session
 from ..export import ranges
 from ..export.plates import plate_from_object, zone_around
-from ..export.scene import (ExportError, camera_from_object, corner_positions,
-                            emitter_instances, scale)
+from ..export.scene import (
+    ExportError,
+    camera_from_object,
+    corner_positions,
+    emitter_instances,
+    scale,
+)
 from ..render.options import device, runtime_paths
 
 

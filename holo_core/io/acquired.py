@@ -259,7 +259,7 @@ def _read_exr(path: Path, page) -> _Scan:
     else:
         raise HologramFileError(f"{path}: an EXR scan needs a Y channel, R/G/B channels or a "
                                 f"single channel; it has {', '.join(sorted(chans))[:200]}")
-    return _Scan({i: grey for i in _wanted(str(path), 1, page)}, 1, {})
+    return _Scan(dict.fromkeys(_wanted(str(path), 1, page), grey), 1, {})
 
 
 def _read_image(path: Path, page) -> _Scan:

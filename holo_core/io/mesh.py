@@ -83,7 +83,7 @@ def _check_indices(path, faces, count, first) -> None:
         offender = int(bad.flat[0]) if bad.size else None
     else:
         offender = next((int(i) for f in faces if len(f) and not (
-            0 <= min(f) and max(f) < count) for i in f if not 0 <= i < count), None)
+            min(f) >= 0 and max(f) < count) for i in f if not 0 <= i < count), None)
     if offender is not None:
         raise MeshFileError(f"{path}: face vertex index {offender + first} is out of range "
                             f"(the file has {count} vertices, numbered from {first})")

@@ -98,7 +98,7 @@ def _probe(device: cl.Device) -> str:
         yd = cla.empty(queue, x.shape, np.complex64)
         cl.Kernel(prg, "probe")(queue, x.shape, None, xd.data, yd.data)
         got = yd.get()
-    except Exception as e:  # any driver failure makes the device unusable, nothing more
+    except Exception as e:  # noqa: BLE001 -- any driver failure makes the device unusable, nothing more
         first_line = (str(e).strip().splitlines() or [repr(e)])[0]
         return f"{type(e).__name__}: {first_line}"
     err = float(np.max(np.abs(got - want)) / np.max(np.abs(want)))

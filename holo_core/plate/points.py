@@ -35,7 +35,7 @@ log = logging.getLogger(__name__)
 
 
 def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVELENGTHS,
-                  phases=None, seed=0, reference=Reference(), obliquity=False,
+                  phases=None, seed=0, reference=Reference(), obliquity=False,  # noqa: B008 -- frozen
                   keep_object_wave=True, plate=None, method="auto", band=None,
                   channels=(), point_density=0.0, extra_wave=None, bounds=None,
                   progress: jobs.Progress = None) -> Hologram:

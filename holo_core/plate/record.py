@@ -10,8 +10,8 @@ from ..scene.hologram import ENCODINGS, Hologram
 from ..scene.mesh import Mesh
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Plate
 from ..validate import InputError
-from .points import record_scene_points
 from .looks import record_plate
+from .points import record_scene_points
 
 PLATE_METHODS = ("zone", "auto", "direct", "wrp")
 

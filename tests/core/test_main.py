@@ -177,9 +177,10 @@ def test_cli_output_without_room_is_refused_before_the_work(tmp_path, point_holo
     """An output folder on a disk too small for the file (a 1 MiB file system): one line
     naming the folder and both sizes, before any recording or view (a full disk was found
     after the whole recording, named by a hidden temporary file)."""
+    from mounts import small_disk
+
     import holo_core.plate.looks
     import holo_core.plate.view
-    from mounts import small_disk
 
     def never(*_, **__):
         raise AssertionError("the work started before the room was checked")

@@ -14,8 +14,14 @@ from disks import fill
 
 from holo_core.io import image as image_files
 from holo_core.io.hologram import read_hologram, write_hologram
-from holo_core.io.image import (TEMP_TAG, check_writable, remove_stale_temps, write_atomic,
-                                write_exr, write_png)
+from holo_core.io.image import (
+    TEMP_TAG,
+    check_writable,
+    remove_stale_temps,
+    write_atomic,
+    write_exr,
+    write_png,
+)
 from holo_core.io.view import write_view
 from holo_core.scene.hologram import Hologram
 from holo_core.validate import InputError

@@ -9,8 +9,7 @@ import pytest
 
 from holo_core.io.digests import digest_of
 from holo_core.io.files import Files
-from holo_core.io.hologram import (HologramFileError, read_hologram, recording_of,
-                                   write_hologram)
+from holo_core.io.hologram import HologramFileError, read_hologram, recording_of, write_hologram
 from holo_core.io.image import exr_attribute, read_exr, write_exr
 from holo_core.io.plate_paths import plate_current, store_of
 from holo_core.scene.hologram import Hologram

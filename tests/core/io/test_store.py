@@ -104,7 +104,7 @@ def test_a_writer_killed_inside_a_chunk_leaves_no_temporary_file_after_the_resum
         proc.send_signal(signal.SIGKILL)
         proc.wait()
         proc.stdout.close()
-    left = [p for p in url.rglob("*.tmp")]
+    left = list(url.rglob("*.tmp"))
     assert len(left) == 1 and str(proc.pid) in left[0].name, left
     folder = url / "object_wave" / "c" / "0" / "1"
     live = folder / f".2.{socket.gethostname()}.{os.getpid()}.0.tmp"

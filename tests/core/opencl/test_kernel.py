@@ -72,7 +72,7 @@ def test_a_missing_argument_is_named(rt, axpy):
 def test_a_signature_of_the_wrong_count_fails_at_its_first_launch(rt, axpy):
     short = Kernel(axpy.program, "axpy", axpy.args[:-1])
     buf = rt.to_device(np.zeros(4, np.float32))
-    with pytest.raises(InputError, match="kernel axpy takes 5 arguments in axpy.cl; its "
+    with pytest.raises(InputError, match=r"kernel axpy takes 5 arguments in axpy\.cl; its "
                                          "signature names 4"):
         short.launch(rt, (4,), options=rt.real_options, y=buf, x=buf, a=1.5, n=4)
 

@@ -19,9 +19,9 @@ zarr = pytest.importorskip("zarr")
 from stores import cancel_after, settled  # noqa: E402
 
 from holo_core import jobs  # noqa: E402
+from holo_core.cluster import TasksLost, client_for  # noqa: E402
 from holo_core.io import store  # noqa: E402
 from holo_core.io.hologram import HologramFileError, metadata  # noqa: E402
-from holo_core.cluster import TasksLost, client_for  # noqa: E402
 from holo_core.io.tiled_wave import open_plate, tiles_done  # noqa: E402
 from holo_core.plate.points import record_points  # noqa: E402
 from holo_core.plate.tiles import record_tiled  # noqa: E402
