@@ -10,7 +10,7 @@ from point_sums import LAM, PITCH, cloud
 
 from holo_core.plate.points import record_points
 from holo_core.plate.reconstruction import reconstruct
-from holo_core.plate.reference import Reference, reference_wave
+from holo_core.plate.reference import Reference, interfere, reference_wave
 from holo_core.propagation import grid
 from holo_core.validate import SamplingWarning
 
@@ -65,3 +65,23 @@ def test_reference_angle_sampling_condition():
     Reference(angle=0.9 * safe).check(LAM, PITCH)
     with pytest.raises(ValueError, match=r"reference angle must be in \[0, π/2\)"):
         Reference(angle=2.0)
+
+
+def test_the_reference_wave_is_its_plane_wave():
+    """R = A·exp(ik(x sin ϑ cos φ + y sin ϑ sin φ)) at the pixel centres ((j − (n − 1)/2)·p),
+    against float64 NumPy to complex64 rounding, also 10 cm from the centre (over 10^5 rad of
+    phase, reduced in float64 before the cast); and H = |O + R|² is the interference of Eq. 16."""
+    shape, lam, pitch = (96, 160), 633e-9, 1e-6
+    ref = Reference(angle=0.3, azimuth=1.1, beam_ratio=4.0)
+    r = reference_wave(shape, wavelength=lam, pitch=pitch, reference=ref, amplitude=2.0)
+    y = (np.arange(shape[0]) - (shape[0] - 1) / 2)[:, None] * pitch
+    x = (np.arange(shape[1]) - (shape[1] - 1) / 2)[None, :] * pitch
+    phase = 2 * np.pi / lam * math.sin(0.3) * (x * math.cos(1.1) + y * math.sin(1.1))
+    assert r.dtype == np.complex64 and r.shape == shape
+    assert np.abs(r - 2.0 * np.exp(1j * phase)).max() <= 2.0 * 1e-6
+    far = reference_wave((1, 21), wavelength=lam, pitch=0.01, reference=ref)  # x = ±0.1 m
+    want = np.exp(1j * np.remainder(2 * np.pi / lam * math.sin(0.3) * math.cos(1.1) * 0.1,
+                                    2 * np.pi))
+    assert abs(far[0, 20] - want) <= 1e-6 and abs(far[0, 0] - np.conj(want)) <= 1e-6
+    o = np.exp(1j * np.linspace(0, 5, shape[1]))[None, :] * np.ones(shape)
+    assert np.allclose(interfere(o, r), np.abs(o + r.astype(np.complex128)) ** 2, rtol=1e-5)
