@@ -6,11 +6,13 @@ import re
 import subprocess
 import sys
 
+import numpy as np
 import pinhole
 import pytest
 from cli import CUBE_OBJ, run_cli, run_process
 
 from holo_core.io.hologram import write_hologram
+from holo_core.io.image import read_exr
 
 
 def test_max_points_0_is_refused_on_one_line(tmp_path):
@@ -134,3 +136,33 @@ def test_a_hologram_beyond_the_disks_room_is_refused_before_the_recording(
     assert re.search(rf"the hologram \(\d+ x \d+ samples\) would need [\d.e-]+ GiB on disk, and "
                      rf"{small_disk} has [\d.e-]+ GiB free", err), err
     assert not (small_disk / "h.exr").exists()
+
+
+TRIANGLE_OBJ = "v -0.002 -0.002 0\nv 0.002 -0.002 0\nv 0 0.002 0\nf 1 2 3\n"
+
+
+@pytest.mark.parametrize("wavelengths", [["633", "532"], ["633", "532", "473", "450"]])
+def test_record_any_number_of_wavelengths_then_render(tmp_path, capsys, wavelengths):
+    """``record --wavelengths 633 532`` wrote a file whose render failed with IndexError, and
+    four wavelengths gave a 4-channel rgb the view writer refused; both render now."""
+    (tmp_path / "tri.obj").write_text(TRIANGLE_OBJ)
+    status, _, err = run_cli(capsys, "record", tmp_path / "tri.obj", "-o", tmp_path / "h.exr",
+                             "--method", "auto", "--resolution", 256, 256, "--wavelengths",
+                             *wavelengths,
+                             "--distance", 0.02, "--max-points", 500)
+    assert status == 0, err
+    status, out, err = run_cli(capsys, "render", tmp_path / "h.exr", "-o", tmp_path / "v.exr",
+                               "--resolution", 32, 32)
+    assert status == 0, err
+    _, channels = read_exr(tmp_path / "v.exr")
+    rgb = np.stack([channels[f"ViewLayer.Combined.{c}"] for c in "RGB"], -1)
+    assert rgb.shape == (32, 32, 3) and rgb.max() > 0, rgb.shape
+
+
+@pytest.mark.parametrize("y", ["-1e-3", "-1E-3", "-1.0e-3", "-.001", "-0.001", "-1e-03"])
+def test_the_command_line_takes_negative_numbers_in_any_notation(capsys, y):
+    """``--camera 0.01 -1e-3 0.3`` was refused as "expected 3 arguments": argparse took the
+    exponent notation for an option."""
+    status, out, err = run_cli(capsys, "plan", "--box", 0.01, 0.01, 0.01, "--camera", 0.01, y, 0.3)
+    assert status == 0, err
+    assert "for the camera at (0.01, -0.001, 0.3) m" in out, out

@@ -4,6 +4,7 @@ name."""
 
 import numpy as np
 import pytest
+from huge import never
 from point_sums import square
 
 from holo_core.plate.point_sources import Grid, cone_weight
@@ -46,3 +47,17 @@ def test_no_points_are_refused():
     with pytest.raises(InputError, match="nothing to record"):
         record_points(np.zeros((0, 3)), np.zeros((0, 1)), shape=(8, 8), pitch=8e-6,
                       wavelengths=(633e-9,))
+
+
+def test_a_hundred_million_point_sum_is_refused_before_its_amplitudes(monkeypatch):
+    """10^8 points of three colours: (200 + 3·96) bytes each, 45.4 GiB, counted before their
+    amplitudes and random phases are drawn."""
+    import holo_core.plate.points as points
+    monkeypatch.setenv("HOLO_MEMORY_LIMIT", "8G")
+    monkeypatch.setattr(points, "point_wave", never)
+    n = 10**8
+    with pytest.raises(InputError, match=r"100000000 point emitters of 3 wavelengths needs "
+                                         r"45.4 GiB of memory"):
+        record_points(np.broadcast_to(np.array([0.0, 0.0, -0.01]), (n, 3)),
+                      np.broadcast_to(np.ones(3), (n, 3)), shape=(64, 64), pitch=8e-6,
+                      wavelengths=(633e-9, 532e-9, 473e-9))

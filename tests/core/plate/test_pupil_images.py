@@ -14,6 +14,7 @@ from accuracy import (
 from point_views import EYE, LAM, camera, point_hologram
 
 from holo_core.optics.pupil import Pupil
+from holo_core.plate.points import record_points
 from holo_core.plate.record import record_hologram
 from holo_core.plate.view import render_view
 from holo_core.scene.camera import Camera, look_at
@@ -171,3 +172,54 @@ def test_lower_resolution_is_served_by_the_wavelength():
     wave = render_view(h, fine, aperture=pinhole).rgb.mean(-1)
     ratio = high_energy(wave, 4) / high_energy(raster(board, fine), 4)
     assert ratio <= ALIAS_ENERGY, ratio
+
+
+@pytest.fixture(scope="module")
+def small_plate():
+    """A point 3 cm behind a 0.5 mm plate of 64² at 8 µm, seen from 2 cm: the plate's light
+    reaches 2.2 mm across on the pupil's plane."""
+    return record_points([[0, 0, -0.03]], [[1.0]], shape=(64, 64), pitch=8e-6,
+                         wavelengths=(633e-9,))
+
+
+def _pupil_view(h, diameter, monkeypatch, *, crop=True):
+    """(rgb at exposure 1, the pupil grid's samples per side) of a pinhole-less view through
+    a pupil of ``diameter`` [m]."""
+    from holo_core.plate import pupil_images
+    grids = []
+    real = pupil_images.pupil_grid
+    monkeypatch.setattr(pupil_images, "pupil_grid",
+                        lambda *a: grids.append(real(*a)) or grids[-1])
+    if not crop:
+        monkeypatch.setattr(pupil_images, "lit_diameter", lambda h, p, r, d: d)
+    cam = Camera(matrix_world=look_at((0, 0, 0.02), (0, 0, -0.03)), lens=50, sensor_width=2,
+                 resolution=(16, 16))
+    with pytest.warns(UserWarning, match="no depth channel"):
+        rgb = render_view(h, cam, aperture=Pupil(diameter=diameter), supersample=1,
+                          exposure=1.0).rgb
+    monkeypatch.undo()
+    return rgb, grids[-1][0]
+
+
+def test_a_pupil_larger_than_the_plates_light_is_read_where_light_arrives(small_plate,
+                                                                         monkeypatch):
+    """A 4 mm pupil before the plate's 2.2 mm of light: its grid cut to the light (675
+    samples a side instead of 1215) gives the same view (measured 1.8e-3 of the peak: the
+    spectrum read on another bin spacing)."""
+    cut, n_cut = _pupil_view(small_plate, 4e-3, monkeypatch)
+    whole, n_whole = _pupil_view(small_plate, 4e-3, monkeypatch, crop=False)
+    assert n_cut < 0.6 * n_whole, (n_cut, n_whole)
+    err = np.abs(cut - whole).max() / whole.max()
+    assert err <= 5e-3, err
+
+
+def test_a_10_m_aperture_reads_only_the_light_and_dims_by_its_area(small_plate, monkeypatch):
+    """render_view with a 10 m aperture took over 150 s and 5 GB: its pupil grid and window
+    spanned 10 m. They now span the plate's light (the same 675 samples as a 4 mm pupil), and
+    the view is the 4 mm one dimmed by the ratio of the irises' areas, (4 mm / 10 m)², the
+    light the larger lens spreads over its whole iris."""
+    small, n_small = _pupil_view(small_plate, 4e-3, monkeypatch)
+    large, n_large = _pupil_view(small_plate, 10.0, monkeypatch)
+    assert n_large == n_small, (n_large, n_small)
+    err = np.abs(large * (10.0 / 4e-3) ** 2 - small).max() / small.max()
+    assert err <= 1e-4, err

@@ -5,6 +5,7 @@ nothing."""
 
 import numpy as np
 import pytest
+from huge import huge_mesh, never
 from plate_scene import PLATE, camera, meshes
 
 from holo_core.plate.looks import record_looks, record_plate
@@ -73,3 +74,13 @@ def test_a_zone_sum_that_comes_back_not_finite_records_nothing(monkeypatch):
     kw = {"plate": PLATE, "camera": camera("centre", SCALE), "zone_margin": 0.025}
     with pytest.raises(RuntimeError, match="non-finite samples in rows 256-"):
         record_looks(meshes(), looks=2, seed=4, **kw)
+
+
+def test_ten_million_triangles_are_refused_by_the_plate_recording(monkeypatch):
+    import holo_core.plate.recording as recording
+    monkeypatch.setenv("HOLO_MEMORY_LIMIT", "2G")
+    monkeypatch.setattr(recording, "zone_emitters", never)
+    with pytest.raises(InputError, match=r"moving 10000000 triangles onto the plate needs "
+                                         r"\d\.\d+ GiB"):
+        record_plate(huge_mesh(5 * 10**6), plate=Plate(matrix_world=np.eye(4), width=0.05,
+                                                          height=0.05))

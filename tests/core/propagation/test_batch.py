@@ -117,3 +117,11 @@ def test_field_checks_and_summary(rt):
     assert text.startswith("Field(batch 2 of 4x6, λ 532/633 nm, pitch 2 µm x 3 µm, device "), text
     assert f.to_numpy().samples.shape == (2, 4, 6) and not f.to_numpy().on_device
     assert f[1].wavelength == 532e-9 and f.size == (6 * PITCH, 12e-6)
+
+
+def test_a_batch_over_an_empty_field_is_the_projects_error():
+    """Found by the fuzz suite's calls: two wavelengths over a 0x0 field failed reshaping."""
+    with pytest.raises(InputError, match=r"field must be \(\.\.\., H, W\) with H, W >= 1; got "
+                                         r"shape \(0, 0\)"):
+        angular_spectrum(np.zeros((0, 0), np.complex64), wavelength=[633e-9, 532e-9],
+                         pitch=1e-6, distance=1e-4)
