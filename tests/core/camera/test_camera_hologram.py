@@ -265,8 +265,9 @@ def test_camera_hologram_equals_the_plate_hologram_carried_to_the_pupil():
 
 
 def test_a_ten_million_vertex_mesh_is_refused_by_render_camera(monkeypatch):
-    """It passed 8 GB in 16 s; rasterizing takes about 1000 bytes per triangle (measured 920
-    at 10^6): 18.6 GiB for 2·10^7 triangles against an 8 GiB budget."""
+    """The camera hologram counts its raster's memory before rasterizing: about 1000 bytes
+    per triangle (measured 920 at 10^6), 18.6 GiB for 2·10^7 triangles, refused against an
+    8 GiB budget with both sizes named."""
     import holo_core.camera.raster as raster
     monkeypatch.setenv("HOLO_MEMORY_LIMIT", "8G")
     monkeypatch.setattr(raster, "across_shutter", never)

@@ -214,10 +214,9 @@ def test_a_pupil_larger_than_the_plates_light_is_read_where_light_arrives(small_
 
 
 def test_a_10_m_aperture_reads_only_the_light_and_dims_by_its_area(small_plate, monkeypatch):
-    """render_view with a 10 m aperture took over 150 s and 5 GB: its pupil grid and window
-    spanned 10 m. They now span the plate's light (the same 675 samples as a 4 mm pupil), and
-    the view is the 4 mm one dimmed by the ratio of the irises' areas, (4 mm / 10 m)², the
-    light the larger lens spreads over its whole iris."""
+    """A 10 m aperture's pupil grid and window span the plate's light, not the 10 m (the same
+    675 samples as a 4 mm pupil), and its view is the 4 mm one dimmed by the ratio of the
+    irises' areas, (4 mm / 10 m)², the light the larger lens spreads over its whole iris."""
     small, n_small = _pupil_view(small_plate, 4e-3, monkeypatch)
     large, n_large = _pupil_view(small_plate, 10.0, monkeypatch)
     assert n_large == n_small, (n_large, n_small)

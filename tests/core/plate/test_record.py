@@ -10,8 +10,8 @@ from holo_core.scene.plate import Plate
 
 
 def test_a_long_wavelength_hologram_is_written_and_read_back(tmp_path):
-    """Finding 2: λ long against the pitch chose a cone of sin θ >= 1, which the reader refuses
-    (here λ = 1 mm on a 39 µm pitch: 0.95·λ2/8p = 1.69 before the cone was capped)."""
+    """A wavelength long against the pitch (λ = 1 mm on a 39 µm pitch, where 0.95·λ2/8p
+    = 1.69) gets a cone of sin θ < 1, which the file holds: written and read back alike."""
     plate = Plate(matrix_world=np.eye(4), width=0.0025, height=0.0025)
     h = record_hologram(([[0.0, 0.0, -0.05]], [[1.0, 1.0, 1.0]]), plate=plate, resolution=64,
                         wavelength=1e-3)

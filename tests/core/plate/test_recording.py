@@ -77,6 +77,8 @@ def test_a_zone_sum_that_comes_back_not_finite_records_nothing(monkeypatch):
 
 
 def test_ten_million_triangles_are_refused_by_the_plate_recording(monkeypatch):
+    """Moving a mesh onto the plate is counted before the emitters are found: ten million
+    triangles against a 2 GiB budget are refused with the memory they need."""
     import holo_core.plate.recording as recording
     monkeypatch.setenv("HOLO_MEMORY_LIMIT", "2G")
     monkeypatch.setattr(recording, "zone_emitters", never)

@@ -198,8 +198,9 @@ def test_render_settings_are_checked(point_hologram):
 
 
 def test_a_camera_outside_the_viewing_zone_warns_that_the_view_is_black(point_hologram):
-    """Finding 9: a camera far off the plate's axis rendered black without a word. The light
-    of this hologram (pitch 1 µm, λ 633 nm) leaves within asin(λ/2p) = 18.5° of the normal."""
+    """A camera far off the plate's axis sees no light: its view is black, and says why. The
+    light of this hologram (pitch 1 µm, λ 633 nm) leaves within asin(λ/2p) = 18.5° of the
+    normal."""
     for degrees in (30, 60, 89):
         a = math.radians(degrees)
         eye = 8e-3 * np.array([math.sin(a), 0, math.cos(a)])
@@ -213,8 +214,8 @@ def test_a_camera_outside_the_viewing_zone_warns_that_the_view_is_black(point_ho
 
 
 def test_a_view_that_overflows_is_refused_not_nan(point_hologram):
-    """Found by the fuzz suite: one pixel at 3e38 (finite, so the file reads) overflowed the
-    view's float32 arithmetic and rendered NaN."""
+    """A pixel at 3e38 (finite, so the file reads) would overflow the view's float32
+    arithmetic: the view is refused, naming the intensity and its value, not rendered NaN."""
     hot = point_hologram.intensity.copy()
     hot[0, 5, 7] = 3e38
     with pytest.raises(InputError, match=r"intensity must stay within float32 .* reaches 3e\+38"):

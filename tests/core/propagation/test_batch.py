@@ -1,6 +1,5 @@
-"""Fields and batches through the propagations (issue 28, item 1): a Field carries its optics
-in and out, stays on the device, and batches over distances and wavelengths equal the planes
-computed one by one."""
+"""Fields and batches through the propagations: a Field carries its optics in and out, stays on
+the device, and batches over distances and wavelengths equal the planes computed one by one."""
 
 import math
 
@@ -120,7 +119,8 @@ def test_field_checks_and_summary(rt):
 
 
 def test_a_batch_over_an_empty_field_is_the_projects_error():
-    """Found by the fuzz suite's calls: two wavelengths over a 0x0 field failed reshaping."""
+    """A batch of two wavelengths over a 0x0 field is the project's error naming the field's
+    shape, not a failed reshape."""
     with pytest.raises(InputError, match=r"field must be \(\.\.\., H, W\) with H, W >= 1; got "
                                          r"shape \(0, 0\)"):
         angular_spectrum(np.zeros((0, 0), np.complex64), wavelength=[633e-9, 532e-9],
