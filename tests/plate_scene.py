@@ -1,9 +1,8 @@
-"""The plate test scene (issue "plates as the scene representation"): a textured cube partly
-hiding a textured sphere behind it, a 10 cm plate halfway between them and the cameras, and
-cameras a few centimetres apart, 50 mm at f/2.8. World = the plate's frame: the plate is z = 0,
-the objects about 0.3 m behind it, the cameras 0.3 m in front. ``scale`` shrinks the image
-(160x90 at 0.25 against the full 640x360); ``crop`` renders only the pixels around the
-objects (each pixel keeps its ray).
+"""The plate test scene: a textured cube partly hiding a textured sphere behind it, a 10 cm
+plate halfway between them and the cameras, and cameras a few centimetres apart, 50 mm at f/2.8.
+World = the plate's frame: the plate is z = 0, the objects about 0.3 m behind it, the cameras
+0.3 m in front. ``scale`` shrinks the image (160x90 at 0.25 against the full 640x360); ``crop``
+renders only the pixels around the objects (each pixel keeps its ray).
 """
 
 import numpy as np

@@ -219,7 +219,7 @@ def test_import_a_hologram_and_keep_its_link(empty_scene, tmp_path, rng):
 def test_import_a_scan_and_composite_its_letter(empty_scene, tmp_path):
     """File ▸ Import ▸ Hologram of a peer's off-axis scan (tests/scans.py: a letter F with a
     dot on its right, 5 cm behind a 2048² sensor of 3.45 µm at 633 nm, a 16-bit PNG) with its
-    pitch, wavelength and distance alone (issue 38, item 5): the carrier found (reported), the
+    pitch, wavelength and distance alone: the carrier found (reported), the
     object wave written as a Holo hologram and linked to a plate, a camera added that frames
     it, focused at the distance; Render with Hologram composites the pass over the raster,
     and the final frame shows the letter where the truth has it through the plate's window

@@ -96,9 +96,9 @@ def _set(*keys, value):
 DROP = object()
 NAN = math.nan
 
-# The worker's malformed jobs (the audit of issue 40 found 11 of 46 ending in raw exceptions,
-# and five accepted: exposure -1, depth unit -1, an unknown mode, supersample 0, frame -1);
-# each must end in the project's error naming its field.
+# Malformed jobs as the worker receives them: each must end in the project's error naming
+# its field, never in another exception or a job accepted (exposure -1, depth unit -1, an
+# unknown mode, supersample 0 and frame -1 once ran).
 CAMERA = [
     ("exposure -1 (a negative pass)", _set("route", "exposure", value=-1.0), "exposure"),
     ("exposure 0", _set("route", "exposure", value=0.0), "exposure"),
@@ -177,8 +177,16 @@ def test_a_malformed_job_is_refused_naming_its_field(tmp_path, what, edit, field
         Job.from_dict(plain)
 
 
-def test_the_cases_are_the_audits_46_and_more():
-    assert len(CAMERA + PLATE) >= 46
+def test_each_case_edits_a_job_that_is_accepted_unedited(tmp_path):
+    """Each refusal above is its edit's own: the job unedited is accepted, and every edit
+    changes its plain data."""
+    for what, edit, field in CAMERA + PLATE:
+        job = plate_job(tmp_path) if (what, edit, field) in PLATE else camera_job(tmp_path)
+        plain = job.to_dict()
+        Job.from_dict(plain)
+        edited = copy.deepcopy(plain)
+        edit(edited)
+        assert repr(edited) != repr(plain), what
 
 
 def test_the_same_refusals_hold_for_a_job_made_in_python(tmp_path):

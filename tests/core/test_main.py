@@ -6,11 +6,13 @@ import re
 import subprocess
 import sys
 
+import numpy as np
 import pinhole
 import pytest
 from cli import CUBE_OBJ, run_cli, run_process
 
 from holo_core.io.hologram import write_hologram
+from holo_core.io.image import read_exr
 
 
 def test_max_points_0_is_refused_on_one_line(tmp_path):
@@ -94,8 +96,8 @@ def test_cli_wavelengths_below_1_are_refused_as_nanometres(tmp_path, capsys):
 @pytest.mark.parametrize("command", ["record", "render"])
 def test_cli_output_is_checked_before_the_work(tmp_path, point_hologram, capsys, monkeypatch,
                                               output, problem, command):
-    """Findings 11 and 12: a read-only folder was found only after the whole recording, and
-    -o r.png wrote EXR bytes under a .png name."""
+    """An output the command cannot write is refused before the work, naming it: a read-only
+    folder before the recording, and an EXR view asked for under a .png name."""
     import holo_core.plate.points
     import holo_core.plate.view
 
@@ -195,3 +197,33 @@ def test_cli_output_without_room_is_refused_before_the_work(tmp_path, point_holo
         assert status == 2 and err.count("\n") == 1, err
         assert re.search(rf"need [\d.]+ GiB on disk, and {disk} has 0.000977 GiB free", err), err
         assert not list(disk.iterdir())
+
+
+TRIANGLE_OBJ = "v -0.002 -0.002 0\nv 0.002 -0.002 0\nv 0 0.002 0\nf 1 2 3\n"
+
+
+@pytest.mark.parametrize("wavelengths", [["633", "532"], ["633", "532", "473", "450"]])
+def test_record_any_number_of_wavelengths_then_render(tmp_path, capsys, wavelengths):
+    """``record --wavelengths`` with two or four wavelengths writes a hologram whose render
+    gives a three-channel view with light in it."""
+    (tmp_path / "tri.obj").write_text(TRIANGLE_OBJ)
+    status, _, err = run_cli(capsys, "record", tmp_path / "tri.obj", "-o", tmp_path / "h.exr",
+                             "--method", "auto", "--resolution", 256, 256, "--wavelengths",
+                             *wavelengths,
+                             "--distance", 0.02, "--max-points", 500)
+    assert status == 0, err
+    status, out, err = run_cli(capsys, "render", tmp_path / "h.exr", "-o", tmp_path / "v.exr",
+                               "--resolution", 32, 32)
+    assert status == 0, err
+    _, channels = read_exr(tmp_path / "v.exr")
+    rgb = np.stack([channels[f"ViewLayer.Combined.{c}"] for c in "RGB"], -1)
+    assert rgb.shape == (32, 32, 3) and rgb.max() > 0, rgb.shape
+
+
+@pytest.mark.parametrize("y", ["-1e-3", "-1E-3", "-1.0e-3", "-.001", "-0.001", "-1e-03"])
+def test_the_command_line_takes_negative_numbers_in_any_notation(capsys, y):
+    """``--camera 0.01 -1e-3 0.3`` takes the negative coordinate in every notation (argparse
+    would read the exponent notation as an option)."""
+    status, out, err = run_cli(capsys, "plan", "--box", 0.01, 0.01, 0.01, "--camera", 0.01, y, 0.3)
+    assert status == 0, err
+    assert "for the camera at (0.01, -0.001, 0.3) m" in out, out

@@ -1,4 +1,4 @@
-"""Notebooks (issue 28, item 8): the API listed, one-line summaries, pictures."""
+"""Notebooks: the API listed, one-line summaries, pictures."""
 
 import struct
 import zlib

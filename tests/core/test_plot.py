@@ -1,4 +1,4 @@
-"""holo_core.plot (issue 28, item 8): physical axes that put a feature where it is."""
+"""holo_core.plot: physical axes that put a feature where it is."""
 
 import math
 

@@ -1,7 +1,7 @@
-"""Units guarded (issue 28, item 3; issue 38, item 3): a wavelength outside [1e-13, 1e-2] m
-(MeV electrons to microwaves) or a pitch outside [1e-12, 1e-2] m is refused at every public
-entry, with the unit the number most likely is in; the waves of electron and X-ray
-holography pass, and a scan's pitch that looks like millimetres is warned."""
+"""Units guarded: a wavelength outside [1e-13, 1e-2] m (MeV electrons to microwaves) or a pitch
+outside [1e-12, 1e-2] m is refused at every public entry, with the unit the number most likely
+is in; the waves of electron and X-ray holography pass, and a scan's pitch that looks like
+millimetres is warned."""
 
 import numpy as np
 import pytest

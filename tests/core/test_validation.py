@@ -1,9 +1,9 @@
 """Bad input gets an InputError naming the argument and its allowed range.
 
-The tables enumerate the reliability audit's classes (issue 26) across the public API:
-unclean exception types (ZeroDivisionError, TypeError, IndexError, a plain ValueError naming
-no field), results that were silently empty, NaN or rounded, and misleading messages. Each bad
-call must raise :class:`InputError` whose message names the field.
+The tables cover, across the public API, the ways bad input goes wrong: unclean exception
+types (ZeroDivisionError, TypeError, IndexError, a plain ValueError naming no field), results
+silently empty, NaN or rounded, and misleading messages. Each bad call must raise
+:class:`InputError` whose message names the field.
 """
 
 import math

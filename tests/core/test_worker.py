@@ -176,8 +176,8 @@ def test_the_cache_folder_reaches_the_worker(tmp_path):
 
 
 def test_an_unwritable_output_folder_is_refused_before_the_recording(tmp_path, monkeypatch):
-    """The audit's finding 11 for the add-on's worker: a pass or hologram that cannot be
-    written is an InputError before anything is recorded (/sys is read-only even for root)."""
+    """The add-on's worker refuses a pass or hologram it cannot write with an InputError
+    before anything is recorded (/sys is read-only even for root)."""
     recorded = []
     monkeypatch.setattr(runner, "record_planned", lambda *a, **k: recorded.append(1))
     j = job(tmp_path)

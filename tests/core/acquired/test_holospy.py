@@ -1,7 +1,7 @@
-"""holospy's reconstruction of its own off-axis electron hologram (the Fe needle and its
-vacuum reference, shipped with holospy: 512², 0.92 nm pitch, 300 kV) reproduced by Holo's
-filter (issue 38, item 2). The reference is holospy's own ``reconstruct_phase`` with its
-defaults, built here where holospy installs (the ``peers`` extra, in ``make test``)."""
+"""holospy's reconstruction of its own off-axis electron hologram (the Fe needle and its vacuum
+reference, shipped with holospy: 512², 0.92 nm pitch, 300 kV) reproduced by Holo's filter. The
+reference is holospy's own ``reconstruct_phase`` with its defaults, built here where holospy
+installs (the ``peers`` extra, in ``make test``)."""
 
 import math
 from pathlib import Path

@@ -1,5 +1,5 @@
-"""The workflow around the sideband filter (issue 38, item 6), against analytic phases and a
-float64 NumPy wave: unwrapping, tilt and background removal, refocus and autofocus."""
+"""The workflow around the sideband filter, against analytic phases and a float64 NumPy wave:
+unwrapping, tilt and background removal, refocus and autofocus."""
 
 import numpy as np
 import pytest

@@ -1,6 +1,6 @@
-"""A scan to a view in one step (issue 38, items 1, 3, 4): a peer's off-axis optical hologram
-(tests/scans.py: float64 NumPy, no code of Holo's recorder) imported on the command line with
-its pitch, wavelength and distance alone, its view measured against the ground truth."""
+"""A scan to a view in one step: a peer's off-axis optical hologram (tests/scans.py: float64
+NumPy, no code of Holo's recorder) imported on the command line with its pitch, wavelength and
+distance alone, its view measured against the ground truth."""
 
 import contextlib
 import io

@@ -1,5 +1,5 @@
-"""The sideband filter of acquired off-axis holograms (issue 28, item 4), against the known
-object wave of synthetic holograms H = |O + R|² recorded in float64 and stored as float32."""
+"""The sideband filter of acquired off-axis holograms, against the known object wave of
+synthetic holograms H = |O + R|² recorded in float64 and stored as float32."""
 
 import math
 

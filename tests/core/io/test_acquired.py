@@ -1,6 +1,6 @@
-"""Acquired holograms in and out (issue 28, item 6): multi-page TIFF, 16-bit PNG, .npy, HDF5,
-.mat v7.3 and arrays, each with its optics given or read from its metadata; writes in the
-format the suffix names, or an error."""
+"""Acquired holograms in and out: multi-page TIFF, 16-bit PNG, .npy, HDF5, .mat v7.3 and
+arrays, each with its optics given or read from its metadata; writes in the format the suffix
+names, or an error."""
 
 import io
 import json

@@ -200,8 +200,8 @@ def test_hologram_metadata_and_pixels_are_checked(tmp_path, point_hologram, edit
 
 
 def test_the_writer_refuses_what_the_reader_would(tmp_path, point_hologram):
-    """Finding 2: the writer applies the reader's schema; a description bent after
-    construction is refused with the file and the field named, and nothing is written."""
+    """The writer applies the reader's schema: a description bent after construction is
+    refused with the file and the field named, and nothing is written."""
     for field, value, problem in [("band", 1.5, r"band_sin must be in \[0, 1\)"),
                                   ("pitch", 1e-300, r"pitch_m must be in \[1e-13, 1000\]"),
                                   ("reference_amplitudes", (0.0,), "amplitudes.*> 0")]:
@@ -221,8 +221,9 @@ def test_the_writer_refuses_what_the_reader_would(tmp_path, point_hologram):
 ])
 def test_a_file_of_absurd_optics_is_refused_by_the_reader_and_the_cli(tmp_path, point_hologram,
                                                                       capsys, edit, problem):
-    """Findings 3 and 4: pitch 1e-300 passed the schema and rendered NaN (the CLI died with
-    ZeroDivisionError); a zero reference amplitude was accepted and failed later, unnamed."""
+    """A file of absurd optics (pitch 1e-300, a wavelength of 1e300 m, a zero reference
+    amplitude) is refused on reading, naming the file and the field, by the API and by the
+    command line (one line, exit 2, no view written)."""
     path = write_hologram(tmp_path / "h.exr", point_hologram)
     _with_meta(path, lambda m, c: edit(m))
     with pytest.raises(HologramFileError, match=f"{path}: metadata {problem}"):
@@ -233,8 +234,8 @@ def test_a_file_of_absurd_optics_is_refused_by_the_reader_and_the_cli(tmp_path, 
 
 
 def test_write_hologram_and_write_view_refuse_other_suffixes(tmp_path, point_hologram):
-    """Finding 12 at the API: the EXR writers name the suffix instead of writing EXR bytes
-    under another name (or silently under another one)."""
+    """The EXR writers refuse another suffix, naming it, instead of writing EXR bytes under
+    that name or another."""
     with pytest.raises(InputError, match=r"r.png: the file is written as OpenEXR"):
         write_hologram(tmp_path / "r.png", point_hologram)
     view = RenderResult(rgb=np.ones((2, 2, 3)), alpha=np.ones((2, 2)), depth=np.ones((2, 2)))

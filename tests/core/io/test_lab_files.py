@@ -1,6 +1,6 @@
-"""Lab files that cannot be turned against their user (issue 40, items 1 and 8) and scans read
-by their layout (issue 38, item 7), rebuilt from the audit's reproducers: nothing read from
-outside the file named, what cannot be bounded refused up front, every damage named."""
+"""Lab files that cannot be turned against their user, and scans read by their layout:
+nothing read from outside the file named, what cannot be bounded refused up front, every
+damage named."""
 
 import json
 import struct
@@ -37,8 +37,8 @@ def outside(tmp_path, h5py):
 
 
 def test_external_storage_is_refused_naming_the_file(tmp_path, h5py, outside):
-    """The audit's first finding: a dataset whose bytes live in another file (/etc/passwd in
-    the reproducer) imported those bytes as the hologram."""
+    """A dataset whose bytes live in another file (external storage, here a file beside it)
+    is refused naming the dataset and that file; its bytes are never read as the hologram."""
     raw, _ = outside
     path = tmp_path / "lab.h5"
     with h5py.File(path, "w") as f:
@@ -88,8 +88,8 @@ def test_virtual_datasets_are_refused_naming_their_sources(tmp_path, h5py, outsi
 
 
 def test_a_damaged_hdf5_file_is_named(tmp_path, h5py, rng):
-    """Damaged HDF5 and .mat files gave RuntimeError or KeyError without the file (38 of
-    1,000 in the audit): every damage here ends in a hologram or an error naming the file."""
+    """Every damage to an HDF5 or .mat file here ends in a hologram or in an error naming the
+    file, never a RuntimeError or KeyError without it."""
     good = tmp_path / "good.mat"
     write_acquired(good, Hologram(intensity=rng.random((1, 16, 16)).astype(np.float32),
                                   wavelengths=(633e-9,), pitch=3.45e-6))

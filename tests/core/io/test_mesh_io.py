@@ -74,7 +74,8 @@ def test_bad_obj_names_the_file_and_the_problem(tmp_path, text, problem):
 
 
 def test_a_ply_with_a_scalar_face_property_names_it(tmp_path):
-    """Finding 5: a scalar vertex_indices raised TypeError."""
+    """A PLY whose face property vertex_indices is a scalar, not a list, is refused naming
+    the property (not a TypeError)."""
     ply = PLY.format(faces="element face 1\nproperty int vertex_indices\n", body="0\n")
     (tmp_path / "m.ply").write_text(ply)
     with pytest.raises(MeshFileError, match="face property vertex_indices must be a list"):
@@ -86,7 +87,8 @@ def test_a_ply_with_a_scalar_face_property_names_it(tmp_path):
     ("f 1 2 9\n", "9"),                                                # OBJ's own numbering
 ])
 def test_an_obj_index_out_of_range_is_reported_as_the_file_has_it(tmp_path, text, index):
-    """Finding 10: a huge OBJ index was reported as "-1", others one less than in the file."""
+    """An OBJ index out of range is reported as the file writes it, numbered from 1, also one
+    beyond int64."""
     (tmp_path / "m.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n" + text)
     with pytest.raises(MeshFileError, match=f"index {index} is out of range .*3 vertices, "
                                             f"numbered from 1"):

@@ -1,5 +1,5 @@
-"""PSNR and SSIM (issue 28, item 5) against their definitions: an analytic PSNR and a
-brute-force float64 SSIM, window by window."""
+"""PSNR and SSIM against their definitions: an analytic PSNR and a brute-force float64 SSIM,
+window by window."""
 
 import math
 

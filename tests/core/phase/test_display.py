@@ -1,6 +1,6 @@
-"""A complex plate exported for real displays (issue "Gigapixel plates", part 4): phase-only
-patterns (double-phase, error diffusion) and an amplitude pattern at an SLM's pitch, written
-as tiles, read back and viewed through the core against the plate's own view."""
+"""A complex plate exported for real displays: phase-only patterns (double-phase, error
+diffusion) and an amplitude pattern at an SLM's pitch, written as tiles, read back and viewed
+through the core against the plate's own view."""
 
 import logging
 import math

@@ -1,5 +1,5 @@
-"""Double-phase encoding (issue 28, item 5): the mean of each checkerboard pair is the complex
-sample, and a low-pass of the phase-only pattern gives back a smooth field."""
+"""Double-phase encoding: the mean of each checkerboard pair is the complex sample, and a
+low-pass of the phase-only pattern gives back a smooth field."""
 
 import numpy as np
 import pytest

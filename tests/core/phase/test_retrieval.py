@@ -1,5 +1,5 @@
-"""Phase retrieval (issue 28, item 5): Gerchberg–Saxton's error never grows in the far field,
-the descent's gradient is the loss's derivative, and both shape one or two planes."""
+"""Phase retrieval: Gerchberg–Saxton's error never grows in the far field, the descent's
+gradient is the loss's derivative, and both shape one or two planes."""
 
 import numpy as np
 import pytest

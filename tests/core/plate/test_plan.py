@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli import run_cli as cli
 
 from holo_core.__main__ import main
 from holo_core.io.hologram import read_hologram, write_hologram
@@ -180,3 +181,24 @@ def test_a_tiled_recordings_tiles_fit_the_plate():
     assert fitted_tile((4096, 4096)) == TILE
     p = plan((0.1, 0.1), BOX, zone=ZONE, pixel_angle=1e-3)
     assert p.tile == fitted_tile(p.shape)
+
+
+@pytest.mark.parametrize("args, message", [
+    # zero-size objects said "wavelength must be > 0; got -1.25e-09"
+    (["--bounds", 0, 0, -0.3, 0, 0, -0.3],
+     r"error: bounds: the objects' box \(0 x 0 x 0 m\) has no size"),
+    (["--box", 1e-7, 1e-7, 1e-7],
+     r"the objects' box \(1e-07 x 1e-07 x 1e-07 m\) is smaller than the wavelength its views "
+     r"need \(λ = 1e-05 m\)"),
+    # a camera behind the plate said "zone half_extents must be >= 0"
+    (["--box", 0.01, 0.01, 0.01, "--camera", 0, 0, -0.1],
+     r"--camera must be in front of the plate \(z > 0 .*got \(0, 0, -0.1\) m, behind the plate"),
+    # a plate too small to sample printed 4.83e12 GiB with exit 0
+    (["--box", 0.01, 0.01, 0.01, "--plate-size", 1e-9, 1e-9],
+     r"plate_size 1e-09 x 1e-09 m: where the objects' light crosses it, it is narrower than one "
+     r"sample"),
+])
+def test_the_planner_names_what_the_user_gave(capsys, args, message):
+    status, out, err = cli(capsys, "plan", *args)
+    assert status == 2 and out == "" and err.count("\n") == 1, (status, out, err)
+    assert __import__("re").search(message, err), err

@@ -1,5 +1,5 @@
 """Each propagation's adjoint passes the dot-product test <A·x, y> = <x, Aᴴ·y> to float32
-precision (issue 28, item 5), on the host and on the device."""
+precision, on the host and on the device."""
 
 import numpy as np
 import pytest

@@ -1,6 +1,5 @@
-"""Fields and batches through the propagations (issue 28, item 1): a Field carries its optics
-in and out, stays on the device, and batches over distances and wavelengths equal the planes
-computed one by one."""
+"""Fields and batches through the propagations: a Field carries its optics in and out, stays on
+the device, and batches over distances and wavelengths equal the planes computed one by one."""
 
 import math
 
@@ -117,3 +116,12 @@ def test_field_checks_and_summary(rt):
     assert text.startswith("Field(batch 2 of 4x6, λ 532/633 nm, pitch 2 µm x 3 µm, device "), text
     assert f.to_numpy().samples.shape == (2, 4, 6) and not f.to_numpy().on_device
     assert f[1].wavelength == 532e-9 and f.size == (6 * PITCH, 12e-6)
+
+
+def test_a_batch_over_an_empty_field_is_the_projects_error():
+    """A batch of two wavelengths over a 0x0 field is the project's error naming the field's
+    shape, not a failed reshape."""
+    with pytest.raises(InputError, match=r"field must be \(\.\.\., H, W\) with H, W >= 1; got "
+                                         r"shape \(0, 0\)"):
+        angular_spectrum(np.zeros((0, 0), np.complex64), wavelength=[633e-9, 532e-9],
+                         pitch=1e-6, distance=1e-4)

@@ -1,6 +1,6 @@
-"""Propagation onto another pitch and size (issue 28, item 7): the angular spectrum's
-``out_pitch`` against direct Rayleigh–Sommerfeld on the same output grid, and both it and
-Fresnel against the analytic Gaussian beam."""
+"""Propagation onto another pitch and size: the angular spectrum's ``out_pitch`` against direct
+Rayleigh–Sommerfeld on the same output grid, and both it and Fresnel against the analytic
+Gaussian beam."""
 
 import numpy as np
 import pytest

@@ -1,6 +1,6 @@
-"""Transfer functions made on the device (issue 28, item 2) against the float64 host
-reference ``transfer_function``, on both routes: float64 on the device, and the split into
-float32 terms for devices without it."""
+"""Transfer functions made on the device against the float64 host reference
+``transfer_function``, on both routes: float64 on the device, and the split into float32 terms
+for devices without it."""
 
 import numpy as np
 import pytest

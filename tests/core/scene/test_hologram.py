@@ -91,7 +91,8 @@ def test_a_file_names_the_field_as_the_file_does(tmp_path):
 
 
 def test_holograms_in_memory_are_held_to_the_file_schema():
-    """Findings 3 and 4 at the API: the same fields are refused when a Hologram is made."""
+    """A Hologram made in memory is held to the file's schema: the fields a file may not hold
+    are refused when it is made."""
     good = {"intensity": np.ones((1, 4, 4), np.float32), "wavelengths": (633e-9,),
             "pitch": 8e-6}
     for change, field in [({"pitch": 1e-300}, "pitch"), ({"wavelengths": (1e9,)}, "wavelengths"),

@@ -1,7 +1,8 @@
-"""A tiled store is verified, not trusted: the audit's damage cases rebuilt, each ending in the
-project's error naming the store (and the tile, where the damage is a tile's), never in
-another exception, a hang on a FIFO or a read of /dev/zero; damage to a tile's samples is
-found on resuming and written again; a store that is not Holo's is never written into.
+"""A tiled store is verified, not trusted: each damage to its tiles, their records or its
+metadata ends in the project's error naming the store (and the tile, where the damage is a
+tile's), never in another exception, a hang on a FIFO or a read of /dev/zero; damage to a
+tile's samples is found on resuming and written again; a store that is not Holo's is never
+written into.
 
 The stores here are written through the store's own functions from a plate recorded in
 memory (no Dask cluster): 4 x 5 tiles of 64² (the last row and column of tiles cut short),
@@ -12,6 +13,7 @@ import json
 import os
 import shutil
 import stat
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -279,8 +281,29 @@ def test_every_damage_is_the_projects_error_naming_the_store(copy, case):
     assert __import__("re").search(message, str(e.value)), str(e.value)
 
 
-def test_there_are_the_audits_48_cases():
-    assert len(CASES) >= 48, len(CASES)
+def held(url):
+    """What the store at ``url`` holds, without following a link or opening a FIFO: each
+    path's kind, and a regular file's bytes or a link's target."""
+    out = {}
+    for folder, dirs, files in os.walk(url):
+        for name in dirs + files:
+            path = os.path.join(folder, name)
+            mode = os.lstat(path).st_mode
+            content = (Path(path).read_bytes() if stat.S_ISREG(mode) else
+                       os.readlink(path) if stat.S_ISLNK(mode) else None)
+            out[os.path.relpath(path, url)] = stat.S_IFMT(mode), content
+    return out
+
+
+def test_each_damage_changes_a_store_that_reads_back_unchanged(pristine, tmp_path):
+    """Each refusal above is its damage's own: the store undamaged reads back as recorded
+    (test_a_whole_store_reads_back_as_recorded), and every damage changes what it holds."""
+    for k, (case, (damage, _)) in enumerate(CASES.items()):
+        url = tmp_path / str(k) / "p.zarr"
+        shutil.copytree(pristine[0], url, symlinks=True)
+        before = held(url)
+        damage(url)
+        assert held(url) != before, case
 
 
 @pytest.mark.parametrize("case", [c for c in CASES if c.startswith(("chunk", "edge", "record"))

@@ -1,8 +1,7 @@
-"""Image generation against geometric and wave optics (Sect. VII): pixel positions, Airy spot,
-defocus blur, two-wavelength depth, anti-aliasing, speckle composition."""
-
-import dataclasses
-import math
+"""A view's images formed at the camera's pupil (holo_core.plate.pupil_images) against geometric
+and wave optics (Sect. VII): the camera's projection and direction cosines as Blender's, a point
+seen through a pinhole on its pixel, the Airy disc in focus, the geometric blur out of focus,
+and a lower resolution served by the wavelength (no aliasing)."""
 
 import numpy as np
 import pytest
@@ -10,43 +9,17 @@ from accuracy import (
     AIRY_RADIUS,
     ALIAS_ENERGY,
     DEFOCUS_DIAMETER,
-    DEPTH_SINGLE_POINT,
     PIXEL_POSITION,
-    SPECKLE_SQRT_N,
 )
+from point_views import EYE, LAM, camera, point_hologram
 
-from holo_core.optics import speckle
-from holo_core.optics.depth import partner_wavelength
 from holo_core.optics.pupil import Pupil
 from holo_core.plate.points import record_points
 from holo_core.plate.record import record_hologram
-from holo_core.plate.reference import Reference
 from holo_core.plate.view import render_view
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.mesh import Mesh
 from holo_core.scene.plate import Plate
-
-LAM, PITCH, N = 633e-9, 1e-6, 512
-EYE = np.array([0.0, 0.0, 4e-3])
-
-
-def off_axis(lam2=LAM, pitch=PITCH):
-    """The off-axis recording of holo_core.plate.sampling: cone b = λ/(8d), reference sin ϑ = 3b."""
-    return dict(band=0.95 * lam2 / (8 * pitch),
-                reference=Reference(angle=math.asin(3 * lam2 / (8 * pitch))))
-
-
-def point_hologram(points, wavelengths=(LAM,), channels=(), n=N, seeds=(0,), pitch=PITCH):
-    pts = np.asarray(points, np.float64)
-    return [record_points(pts, np.ones((len(pts), len(wavelengths))), shape=(n, n),
-                          pitch=pitch, wavelengths=wavelengths, channels=channels, seed=s,
-                          **off_axis(min(wavelengths), pitch)) for s in seeds]
-
-
-def camera(pixel_angle, size, **kw):
-    """A camera at EYE looking at the plate centre with the given pixel angle [rad]."""
-    kw.setdefault("matrix_world", look_at(EYE, (0, 0, 0), up=(0, 1, 0)))
-    return Camera(lens=50, sensor_width=50 * size * pixel_angle, resolution=(size, size), **kw)
 
 
 def radial_profile(img, centre, step):
@@ -57,8 +30,6 @@ def radial_profile(img, centre, step):
     counts = np.bincount(ring.ravel())
     return sums / np.maximum(counts, 1), counts
 
-
-# --- camera model ------------------------------------------------------------------------------
 
 def test_projection_follows_blenders_view_plane():
     """Blender's default camera (50 mm, 36 mm sensor, AUTO fit): a point at tangent
@@ -90,8 +61,6 @@ def test_direction_cosines_invert_the_projection(rng):
     rows, cols = np.mgrid[0:48, 0:64] + 0.5
     assert np.allclose(xy[:, 0], cols.ravel()) and np.allclose(xy[:, 1], rows.ravel())
 
-
-# --- pinhole, lens ---------------------------------------------------------------------------
 
 def test_point_through_pinhole_lands_on_its_pixel():
     """A point recorded, reconstructed and seen through an off-axis, rotated pinhole camera
@@ -151,42 +120,6 @@ def test_defocused_point_blurs_to_the_geometric_disc(two_depths):
     assert abs(diameter / expected - 1) <= DEFOCUS_DIAMETER, (diameter, expected)
 
 
-# --- depth -------------------------------------------------------------------------------------
-
-def depth_pair(half_range):
-    lam2 = partner_wavelength(LAM, half_range)
-    return (LAM, lam2), ("Y", "Z")
-
-
-def test_two_wavelength_depth_of_a_point():
-    """Eq. 26-30: the depth from the phase difference equals the true planar depth."""
-    p = np.array([[0.05e-3, -0.03e-3, -3e-3]])
-    lams, names = depth_pair(1e-3)
-    cam = camera(2e-3, 48, matrix_world=look_at(EYE + [0.3e-3, 0, 0], (0, 0, -3e-3),
-                                                 up=(0, 1, 0)))
-    for focus in (None, 6.5e-3):
-        kw = {} if focus is None else dict(fstop=50e-3 / 0.1e-3, focus_distance=focus)
-        cam_k = dataclasses.replace(cam, **kw)
-        r = render_view(point_hologram(p, lams, names), cam_k)
-        i, j = np.unravel_index(np.argmax(r.rgb[..., 0]), r.alpha.shape)
-        true = cam_k.project(p)[1][0]
-        assert abs(r.depth[i, j] / true - 1) <= DEPTH_SINGLE_POINT, (focus, r.depth[i, j], true)
-
-
-def test_interfering_points_get_a_depth_between_them():
-    """Two points on one pixel's ray interfere; keeping the brightest of several random-phase
-    iterations puts the depth between them (Fig. 11)."""
-    p = np.array([[0.05e-3, -0.03e-3, -3e-3], [0.05e-3, -0.03e-3, -3.4e-3]])
-    lams, names = depth_pair(1e-3)
-    cam = camera(2e-3, 32, matrix_world=look_at(EYE, p[0], up=(0, 1, 0)))
-    r = render_view(point_hologram(p, lams, names, seeds=range(6)), cam)
-    i, j = np.unravel_index(np.argmax(r.rgb[..., 0]), r.alpha.shape)
-    near, far = sorted(cam.project(p)[1])
-    assert near - 1e-6 <= r.depth[i, j] <= far + 1e-6, (r.depth[i, j], near, far)
-
-
-# --- anti-aliasing and speckle (a scene in metres, optics chosen automatically) -----------------
-
 def checkerboard(squares=24):
     tex = (np.add.outer(np.arange(squares), np.arange(squares)) % 2).astype(float)
     tex = np.repeat(0.1 + 0.8 * tex[..., None], 3, -1)
@@ -241,20 +174,51 @@ def test_lower_resolution_is_served_by_the_wavelength():
     assert ratio <= ALIAS_ENERGY, ratio
 
 
-def test_temporal_composition_lowers_speckle_as_one_over_sqrt_n(rng):
-    """N renders of a diffuse patch (dense points, independent random phases per render),
-    averaged: the speckle contrast falls as 1/√N (Sect. VII-E). The lens (0.3 mm) resolves
-    spots holding some 5 points each, so that the points' placement, the same in every
-    render, adds little contrast of its own (measured 1/N^0.41 against 1/√N: 17 %)."""
-    n_pts, half = 3000, 0.15e-3
-    p = np.column_stack([rng.uniform(-half, half, (n_pts, 2)), np.full(n_pts, -3e-3)])
-    holos = point_hologram(p, n=1024, seeds=range(8))
-    f = float(np.linalg.norm(EYE - [0, 0, -3e-3]))
-    cam = camera(5e-4, 100, fstop=50e-3 / 0.3e-3, focus_distance=f)
-    corners = cam.project([[-half, -half, -3e-3], [half, half, -3e-3]])[0]
-    (c0, r1), (c1, r0) = corners + [[4, -4], [-4, 4]]
-    inner = np.zeros((100, 100), bool)
-    inner[int(r0):int(r1), int(c0):int(c1)] = True
-    one = np.mean([speckle.contrast(render_view(h, cam).rgb[..., 0], inner) for h in holos[:3]])
-    eight = speckle.contrast(render_view(holos, cam).rgb[..., 0], inner)
-    assert abs(one / eight / math.sqrt(8) - 1) <= SPECKLE_SQRT_N, (one, eight)
+@pytest.fixture(scope="module")
+def small_plate():
+    """A point 3 cm behind a 0.5 mm plate of 64² at 8 µm, seen from 2 cm: the plate's light
+    reaches 2.2 mm across on the pupil's plane."""
+    return record_points([[0, 0, -0.03]], [[1.0]], shape=(64, 64), pitch=8e-6,
+                         wavelengths=(633e-9,))
+
+
+def _pupil_view(h, diameter, monkeypatch, *, crop=True):
+    """(rgb at exposure 1, the pupil grid's samples per side) of a pinhole-less view through
+    a pupil of ``diameter`` [m]."""
+    from holo_core.plate import pupil_images
+    grids = []
+    real = pupil_images.pupil_grid
+    monkeypatch.setattr(pupil_images, "pupil_grid",
+                        lambda *a: grids.append(real(*a)) or grids[-1])
+    if not crop:
+        monkeypatch.setattr(pupil_images, "lit_diameter", lambda h, p, r, d: d)
+    cam = Camera(matrix_world=look_at((0, 0, 0.02), (0, 0, -0.03)), lens=50, sensor_width=2,
+                 resolution=(16, 16))
+    with pytest.warns(UserWarning, match="no depth channel"):
+        rgb = render_view(h, cam, aperture=Pupil(diameter=diameter), supersample=1,
+                          exposure=1.0).rgb
+    monkeypatch.undo()
+    return rgb, grids[-1][0]
+
+
+def test_a_pupil_larger_than_the_plates_light_is_read_where_light_arrives(small_plate,
+                                                                         monkeypatch):
+    """A 4 mm pupil before the plate's 2.2 mm of light: its grid cut to the light (675
+    samples a side instead of 1215) gives the same view (measured 1.8e-3 of the peak: the
+    spectrum read on another bin spacing)."""
+    cut, n_cut = _pupil_view(small_plate, 4e-3, monkeypatch)
+    whole, n_whole = _pupil_view(small_plate, 4e-3, monkeypatch, crop=False)
+    assert n_cut < 0.6 * n_whole, (n_cut, n_whole)
+    err = np.abs(cut - whole).max() / whole.max()
+    assert err <= 5e-3, err
+
+
+def test_a_10_m_aperture_reads_only_the_light_and_dims_by_its_area(small_plate, monkeypatch):
+    """A 10 m aperture's pupil grid and window span the plate's light, not the 10 m (the same
+    675 samples as a 4 mm pupil), and its view is the 4 mm one dimmed by the ratio of the
+    irises' areas, (4 mm / 10 m)², the light the larger lens spreads over its whole iris."""
+    small, n_small = _pupil_view(small_plate, 4e-3, monkeypatch)
+    large, n_large = _pupil_view(small_plate, 10.0, monkeypatch)
+    assert n_large == n_small, (n_large, n_small)
+    err = np.abs(large * (10.0 / 4e-3) ** 2 - small).max() / small.max()
+    assert err <= 1e-4, err
