@@ -134,15 +134,30 @@ def test_a_view_of_the_store_reads_its_window_only_and_equals_the_view_in_memory
         assert np.array_equal(getattr(view, name), getattr(ref, name)), name
 
 
-def test_a_cancelled_recording_resumes_keeping_the_tiles_written(in_memory, scheduler,
-                                                                 tmp_path):
+def test_a_cancelled_recording_resumes_keeping_the_tiles_written(in_memory, tmp_path,
+                                                                 monkeypatch):
+    """A recording cancelled after its second tile keeps the tiles written; the same call
+    writes only the others, and the plate equals the plate in memory. One worker thread in
+    this process, each tile slowed to 0.3 s, so that the cancel lands before the last tiles
+    whatever the machine's load."""
+    import distributed
+
+    from holo_core.plate import recording
+    region = recording.PlateRecording.region
+
+    def slow(self, *args):
+        time.sleep(0.3)
+        return region(self, *args)
+    monkeypatch.setattr(recording.PlateRecording, "region", slow)
     url = tmp_path / "p.zarr"
-    with pytest.raises(jobs.Cancelled):
-        _record(url, scheduler, progress=cancel_after(2))
-    done = settled(url)  # the tiles already running when cancelled end their write
-    assert 2 <= done.sum() < done.size, done.sum()
-    before = _files(url)
-    h = _record(url, scheduler)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address="127.0.0.1:0") as cluster:
+        with pytest.raises(jobs.Cancelled):
+            _record(url, cluster.scheduler_address, progress=cancel_after(2))
+        done = settled(url)  # the tiles already running when cancelled end their write
+        assert 2 <= done.sum() < done.size, done.sum()
+        before = _files(url)
+        h = _record(url, cluster.scheduler_address)
     assert np.array_equal(h.object_wave[...], in_memory.object_wave)
     after = _files(url)
     assert all(after[p] == t for p, t in before.items()), "a tile written was written again"
