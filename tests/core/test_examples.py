@@ -1,8 +1,8 @@
 """The Examples section of every public name's docstring runs and prints what it says.
 
-Collected from ``holo_core.__all__`` rather than by ``--doctest-modules``: several public
-functions are wrapped (batching, progress, input checks), and doctest's module walk skips a
-wrapper whose globals are another module's.
+Collected from ``holo_core.__all__``, the names the API reference renders, so that the suite
+runs them where it runs (``tests/core``, NumPy 1 and 2) and holds every public name to having
+an example; ``pytest --doctest-modules`` on a module runs the same examples.
 """
 
 import contextlib
