@@ -31,6 +31,7 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, zon
     emitters : Mesh, sequence of Mesh, or (positions (N, 3) [m], colours (N, 3))
         World-space surfaces, or bare point emitters. Colours are linear RGB intensities.
     plate : Plate
+        The plate recorded onto (its pose and size [m], and its zone if it has one).
     triangles : sequence of Mesh
         World-space meshes recorded as textured triangles (their texture, else the mean of
         their corners' colours): with ``method='zone'`` as the other meshes; with a point
@@ -41,13 +42,14 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, zon
         this view (:func:`holo_core.plate.sampling.choose`).
     zone, zone_margin, code, budget
         As for :func:`~holo_core.plate.looks.record_plate` (the budget applies to plates of meshes).
-    encoding
-        A point sum's: 'complex' (the object wave, the default) or 'intensity' (|O + R|²); a
-        plate of meshes is complex (:func:`~holo_core.plate.looks.record_plate`).
-    resolution, max_resolution
+    encoding : {'complex', 'intensity'}
+        A point sum's: 'complex' (the object wave, the default) or 'intensity'
+        (``|O + R|²``); a plate of meshes is complex
+        (:func:`~holo_core.plate.looks.record_plate`).
+    resolution, max_resolution : int, optional
         A point sum's samples (:func:`holo_core.plate.sampling.choose`); a plate of meshes
         takes what its zone asks (:mod:`holo_core.plate.plan`).
-    wavelength
+    wavelength : float, optional
         λ1 [m] instead of the chosen one.
     depth : bool
         Also record the depth partner λ2 (Sect. VII-C).
@@ -62,6 +64,8 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, zon
         For a point sum with a camera, keep only the points and triangles it sees
         (:func:`holo_core.scene.mesh.visible_from`): a hologram shows surfaces hidden from its
         recording viewpoint through the ones in front, as light does not occlude itself.
+    progress : callable, optional
+        Given the fraction done in [0, 1] between units of work.
 
     Returns
     -------
