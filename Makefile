@@ -25,6 +25,7 @@ figures: $(STAMP)
 
 # Two processes: Blender's native libraries (its TBB, its LLVM) must never meet an OpenCL
 # driver's, so the core's tests run where bpy is never imported (as the add-on's worker does).
+# tests/core holds test_examples.py: every public name's docstring Examples, run as doctests.
 test: $(STAMP)
 	$(PY) -m pytest tests/core
 	$(PY) -m pytest tests/addon

@@ -21,9 +21,20 @@ MAX_SUPERSAMPLE = 16  # fine pixels per pixel per axis, at most (either renderer
 
 
 class InputError(ValueError):
-    """Bad input: a setting, an argument or a file the project cannot use. The message names
-    the argument or the file, the problem and what is allowed; the command line prints it as
-    one line and exits with status 2."""
+    """Bad input: a setting, an argument or a file the project cannot use.
+
+    A subclass of ``ValueError``. The message names the argument or the file, the problem and
+    what is allowed; the command line prints it as one line and exits with status 2.
+
+    Examples
+    --------
+    >>> from holo_core import InputError, Pupil
+    >>> try:
+    ...     Pupil(diameter=-1.0)
+    ... except InputError as e:
+    ...     print(e)
+    aperture diameter must be > 0 [m]; got -1.0
+    """
 
 
 class SamplingWarning(UserWarning):

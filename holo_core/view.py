@@ -37,9 +37,31 @@ def as_rgb(radiance: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class RenderResult:
-    """A rendered view: ``rgb`` (H, W, 3) radiance, ``alpha`` (H, W) opacity, ``depth``
-    (H, W) planar camera-space depth [m] (BACKGROUND_DEPTH where empty); row 0 at the top.
-    ``info`` holds the optics used (aperture, resolution limit, wavelengths)."""
+    """A rendered view: radiance, opacity and depth, with the optics used.
+
+    Parameters
+    ----------
+    rgb : (H, W, 3) float array
+        Radiance; row 0 at the top.
+    alpha : (H, W) float array
+        Opacity.
+    depth : (H, W) float array
+        Planar camera-space depth [m] (BACKGROUND_DEPTH where empty).
+    info : dict
+        The optics used (aperture, resolution limit, wavelengths).
+    coverage : (H, W) float array, optional
+        The surfaces' share of each pixel (camera holograms).
+    radiance : (H, W, 3) float array, optional
+        The radiance before the division by ``coverage`` (camera holograms).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import RenderResult
+    >>> r = RenderResult(rgb=np.zeros((4, 6, 3)), alpha=np.ones((4, 6)), depth=np.ones((4, 6)))
+    >>> r.rgb.shape, r.info
+    ((4, 6, 3), {})
+    """
 
     rgb: np.ndarray
     alpha: np.ndarray

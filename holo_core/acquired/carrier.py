@@ -113,8 +113,9 @@ class Carrier:
 @validate.public
 def find_carrier(hologram, colour: int = 0, *, pitch=None, sideband="lower", near=None,
                  refine=True) -> Carrier:
-    """The reference wave's carrier of an off-axis intensity hologram, by the rule of this
-    module's docstring.
+    """Find the reference wave's carrier of an off-axis intensity hologram.
+
+    The rule is the one of this module's docstring.
 
     Parameters
     ----------
@@ -141,6 +142,23 @@ def find_carrier(hologram, colour: int = 0, *, pitch=None, sideband="lower", nea
     ------
     InlineHologramError
         Where the found peak is no sideband (an in-line hologram).
+
+    Notes
+    -----
+    The hologram H = ``|O|² + |R|² + O·R̄ + Ō·R`` (Eq. 20) holds the virtual image's order O·R̄
+    around −f_R and the twin around +f_R; the carrier f_R is the sideband's peak.
+
+    Examples
+    --------
+    Fringes of 62.5 mm⁻¹ (8 samples a period at 2 µm):
+
+    >>> import numpy as np
+    >>> from holo_core import find_carrier
+    >>> x = (np.arange(64) - 31.5) * 2e-6
+    >>> fringes = np.tile(2 + 2 * np.cos(2 * np.pi * 62500 * x), (64, 1))
+    >>> c = find_carrier(fringes, pitch=2e-6)
+    >>> round(c.fx, -2), round(c.fy, -2)
+    (62500.0, 0.0)
     """
     h, pitch, wavelength = intensity_of(hologram, colour, pitch)
     validate.choice("sideband", sideband, SIDEBANDS)

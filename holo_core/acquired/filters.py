@@ -134,7 +134,7 @@ def _window(name: str, u: np.ndarray) -> np.ndarray:
 def sideband(hologram, colour: int = 0, *, pitch=None, carrier="auto", sideband="lower",
              aperture: Aperture | None = None, radius=None, reference_hologram=None,
              subtract=(), reference_amplitude=None, iterations=ITERATIONS) -> np.ndarray:
-    """The object wave of an off-axis intensity hologram, its +1 order shifted to baseband.
+    """Filter the object wave out of an off-axis intensity hologram, its +1 order at baseband.
 
     Parameters
     ----------
@@ -185,6 +185,23 @@ def sideband(hologram, colour: int = 0, *, pitch=None, carrier="auto", sideband=
     ------
     InlineHologramError
         Where no sideband lies at the carrier (an in-line hologram).
+
+    Notes
+    -----
+    Of the four terms of H = ``|O|² + |R|² + O·R̄ + Ō·R`` (Eq. 20) the filter keeps O·R̄ (the
+    virtual image, Eq. 18) and shifts it to baseband.
+
+    Examples
+    --------
+    Pure fringes hold a plane object wave of amplitude 1:
+
+    >>> import numpy as np
+    >>> from holo_core import sideband
+    >>> x = (np.arange(64) - 31.5) * 2e-6
+    >>> fringes = np.tile(2 + 2 * np.cos(2 * np.pi * 62500 * x), (64, 1))
+    >>> o = sideband(fringes, pitch=2e-6, carrier=(62500.0, 0.0), radius=20000.0)
+    >>> o.shape, round(float(abs(o[32, 32])), 3)
+    ((64, 64), 1.0)
     """
     h, pitch, wavelength = intensity_of(hologram, colour, pitch)
     h = h - _intensities(subtract, h.shape)

@@ -28,8 +28,34 @@ def wrap(phase):
 
 @validate.public
 def unwrap(phase) -> np.ndarray:
-    """The unwrapped (H, W) float64 phase [rad] of a wrapped ``phase`` (or of a complex
-    wave's angle): least squares, then whole turns added to the wrapped phase."""
+    """Unwrap a wrapped (H, W) phase, or a complex wave's angle.
+
+    Parameters
+    ----------
+    phase : (H, W) real or complex array
+        The wrapped phase [rad], or a complex wave whose angle is unwrapped; at least 2 × 2.
+
+    Returns
+    -------
+    (H, W) float64 ndarray
+        The unwrapped phase [rad]: least squares, then whole turns added to the wrapped phase.
+
+    Raises
+    ------
+    InputError
+        Where ``phase`` is not 2-D of at least 2 × 2, or not finite.
+
+    Examples
+    --------
+    A ramp of 20 rad across the columns, wrapped, comes back whole:
+
+    >>> import numpy as np
+    >>> from holo_core import unwrap
+    >>> wrapped = np.angle(np.exp(1j * np.tile(np.linspace(0, 20, 64), (64, 1))))
+    >>> u = unwrap(wrapped)
+    >>> round(float(u[0, -1] - u[0, 0]), 3)
+    20.0
+    """
     p = np.asarray(phase)
     p = np.angle(p) if np.iscomplexobj(p) else validate.host_field("phase", p).astype(np.float64)
     if p.ndim != 2 or min(p.shape) < 2:

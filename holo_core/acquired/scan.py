@@ -52,7 +52,9 @@ class OrderWarning(UserWarning):
 def import_acquired(source, *, pitch=None, wavelength=None, reference_angle=None,
                     reference_azimuth=None, page=None, dataset=None, distance=None,
                     sideband="auto", find_carrier=True):
-    """An acquired intensity hologram, its carrier found (:mod:`holo_core.acquired.carrier`).
+    """Import an acquired intensity hologram and find its carrier.
+
+    The carrier is found as :mod:`holo_core.acquired.carrier` describes.
 
     Parameters
     ----------
@@ -72,6 +74,24 @@ def import_acquired(source, *, pitch=None, wavelength=None, reference_angle=None
     -------
     Hologram (with ``reference_angle`` and ``reference_azimuth`` of the carrier), or a list for
     ``page='all'``. An in-line hologram (no sideband) is returned with angle 0 and logged.
+
+    Raises
+    ------
+    InputError
+        Where the source cannot be read (:func:`~holo_core.io.acquired.read_acquired`) or an
+        argument is out of range, naming it.
+
+    Examples
+    --------
+    Fringes of 62.5 mm⁻¹ at 633 nm: the reference angle is arcsin(λ·f) = 0.0396 rad.
+
+    >>> import numpy as np
+    >>> from holo_core import import_acquired
+    >>> x = (np.arange(64) - 31.5) * 2e-6
+    >>> fringes = np.tile(2 + 2 * np.cos(2 * np.pi * 62500 * x), (64, 1))
+    >>> h = import_acquired(fringes, pitch=2e-6, wavelength=633e-9)
+    >>> round(h.reference_angle, 4), h.intensity.shape
+    (0.0396, (1, 64, 64))
     """
     validate.choice("sideband", sideband, ("auto", "lower", "upper"))
     read = read_acquired(source, pitch=pitch, wavelength=wavelength,
@@ -146,10 +166,53 @@ def _baseband(h: Hologram, carrier: Carrier) -> tuple[np.ndarray, float]:
 @validate.public
 def object_hologram(hologram: Hologram, *, distance=None, aperture: Aperture | None = None,
                     reference_hologram=None, subtract=(), iterations=ITERATIONS) -> Hologram:
-    """The complex hologram of ``hologram``'s object wave (:func:`~holo_core.acquired.sideband`
-    with its stated carrier, ``aperture``, reference hologram and subtracted intensities), its
-    band the aperture's and its objects on the plane ``distance`` [m] behind it (default: its
-    bounds, as :func:`import_acquired` set them)."""
+    """Turn an acquired intensity hologram into the complex hologram of its object wave.
+
+    Parameters
+    ----------
+    hologram : Hologram
+        An intensity Hologram (:func:`import_acquired`'s) with its carrier stated.
+    distance : float, optional
+        How far behind the hologram its objects lie [m]; default its bounds, as
+        :func:`import_acquired` set them.
+    aperture : Aperture, optional
+        The sideband filter (:func:`~holo_core.acquired.sideband`); its band is the result's.
+    reference_hologram : Hologram or (H, W) array, optional
+        A reference (vacuum) hologram the wave is divided by.
+    subtract : sequence of (H, W) arrays or Holograms
+        Intensities taken from the hologram before filtering.
+    iterations : int
+        Passes that take the zero order and the twin away (as for
+        :func:`~holo_core.acquired.sideband`).
+
+    Returns
+    -------
+    Hologram
+        The complex hologram: its object wave (:func:`~holo_core.acquired.sideband` with the
+        stated carrier), its band the aperture's, its objects on the plane ``distance`` behind
+        it.
+
+    Raises
+    ------
+    InputError
+        Where ``hologram`` is not an intensity Hologram, or no ``distance`` is given and the
+        hologram does not state one.
+
+    Notes
+    -----
+    The object wave is the virtual image's order O·R̄ of Eq. 20, at baseband.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import import_acquired, object_hologram
+    >>> x = (np.arange(64) - 31.5) * 2e-6
+    >>> fringes = np.tile(2 + 2 * np.cos(2 * np.pi * 62500 * x), (64, 1))
+    >>> h = object_hologram(import_acquired(fringes, pitch=2e-6, wavelength=633e-9),
+    ...                     distance=2e-3)
+    >>> h.object_wave.shape, round(float(abs(h.object_wave[0, 32, 32])), 3)
+    ((1, 64, 64), 1.0)
+    """
     if not isinstance(hologram, Hologram) or hologram.intensity is None:
         raise InputError(f"hologram must be an intensity Hologram (import_acquired's); got "
                          f"{type(hologram).__name__}")

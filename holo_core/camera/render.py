@@ -48,23 +48,72 @@ DEVICE_FIELDS = 6      # complex pupil-sized buffers on the device: the layers' 
 def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
                   supersample=SUPERSAMPLE, pupil_diameter=None, exposure=1.0, seed=0,
                   via="object_wave", progress: jobs.Progress = None, on_sample=None):
-    """Render ``meshes`` (and bare ``points``: (positions (N, 3) [m], colours (N, 3))) as
-    ``camera`` sees them through its camera hologram (module docstring); meshes that move
-    (``Mesh.motion``) are averaged over the shutter (motion blur, :func:`.raster.across_shutter`).
+    """Render meshes (and bare points) as a camera sees them through its camera hologram.
 
-    samples : looks with independent random emitter phases, averaged progressively
-        (speckle; the 'object_wave' and 'hologram' routes); ``on_sample(result, n)`` gets the
-        running result after 1, 2, 4, 8 … looks (once, n = 1, for 'incoherent').
-    supersample : fine pixels per pixel per axis (the pupil resolves one fine pixel).
-    pupil_diameter : [m], default the camera's (lens/f-stop) or, without a lens, the
-        widest whose defocus stays within a fine pixel.
-    exposure : radiance to pixel value (1: a surface shows its own colour, as an emission
-        shader of strength 1 in Cycles).
-    via : 'object_wave' (looks of the object wave with random phases, the ideal
+    The camera hologram is the module docstring's; meshes that move (``Mesh.motion``) are
+    averaged over the shutter (motion blur, :func:`.raster.across_shutter`).
+
+    Parameters
+    ----------
+    meshes : sequence of Mesh
+        The scene, in world metres.
+    camera : Camera
+        The camera; its lens and f-stop set the pupil.
+    points : (positions (N, 3) [m], colours (N, 3)), optional
+        Bare point emitters.
+    samples : int
+        Looks with independent random emitter phases, averaged progressively (speckle; the
+        'object_wave' and 'hologram' routes).
+    supersample : int
+        Fine pixels per pixel per axis (the pupil resolves one fine pixel).
+    pupil_diameter : float, optional
+        [m], default the camera's (lens/f-stop) or, without a lens, the widest whose defocus
+        stays within a fine pixel.
+    exposure : float
+        Radiance to pixel value (1: a surface shows its own colour, as an emission shader of
+        strength 1 in Cycles).
+    seed : int
+        Seeds the emitters' random phases.
+    via : {'object_wave', 'incoherent', 'hologram'}
+        'object_wave' (looks of the object wave with random phases, the ideal
         reconstruction), 'incoherent' (what those looks converge to, computed exactly by each
         layer's intensity PSF, :mod:`.incoherent`: no speckle, one pass) or 'hologram' (each
         look's object wave recorded as an intensity hologram with an off-axis reference and
         reconstructed).
+    progress : callable, optional
+        Given the fraction done in [0, 1] between units of work.
+    on_sample : callable, optional
+        ``on_sample(result, n)`` gets the running result after 1, 2, 4, 8 … looks (once,
+        n = 1, for 'incoherent').
+
+    Returns
+    -------
+    RenderResult
+        The view: radiance, alpha and planar depth [m], with ``coverage`` and the optics used.
+
+    Raises
+    ------
+    InputError
+        Where a setting is out of range or the scene is empty, naming what.
+
+    Notes
+    -----
+    Each emitter is a spherical wave (Eq. 3) through the camera's thin lens (Eq. 24) onto its
+    sensor; the 'hologram' route records H = ``|O + R|²`` (Eq. 16) and reconstructs it
+    (Eq. 18).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import Camera, Mesh, look_at, render_camera
+    >>> camera = Camera(matrix_world=look_at((0, 0, 0.3), (0, 0, -0.01), up=(0, 1, 0)),
+    ...                 resolution=(32, 24), fstop=8.0, focus_distance=0.31)
+    >>> triangle = Mesh(vertices=np.array([[-0.01, -0.01, -0.01], [0.01, -0.01, -0.01],
+    ...                                    [0.0, 0.01, -0.01]]),
+    ...                 triangles=np.array([[0, 1, 2]]), colours=np.ones((3, 3)))
+    >>> view = render_camera([triangle], camera, samples=1)
+    >>> view.rgb.shape, round(float(view.depth.min()), 2)
+    ((24, 32, 3), 0.31)
     """
     if not isinstance(camera, Camera):
         raise InputError(f"camera must be a Camera (render_camera needs one); got "

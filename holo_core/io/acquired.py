@@ -89,7 +89,7 @@ class _Scan:
 @validate.public
 def read_acquired(source, *, pitch=None, wavelength=None, reference_angle=None,
                     reference_azimuth=None, page=None, dataset=None):
-    """An acquired (real) intensity hologram from a file or an array.
+    """Read an acquired (real) intensity hologram from a file or an array.
 
     Parameters
     ----------
@@ -116,6 +116,26 @@ def read_acquired(source, *, pitch=None, wavelength=None, reference_angle=None,
     Returns
     -------
     Hologram, or a list of them for ``page='all'``.
+
+    Raises
+    ------
+    InputError
+        Where the file cannot be read or holds no usable intensities, or an optic is missing
+        or out of range (a :class:`~holo_core.io.hologram.HologramFileError`, a subclass, for
+        a damaged file), naming the file or the argument.
+
+    Warns
+    -----
+    UnitWarning
+        Where ``pitch`` is 1 mm or more (it looks like millimetres).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import read_acquired
+    >>> h = read_acquired(np.ones((64, 64)), pitch=3.45e-6, wavelength=633e-9)
+    >>> h.intensity.shape, h.pitch, h.wavelengths
+    ((1, 64, 64), 3.45e-06, (6.33e-07,))
     """
     settings = {"pitch_m": pitch, "wavelength_m": wavelength,
                 "reference_angle_rad": reference_angle, "reference_azimuth_rad": reference_azimuth}
@@ -148,13 +168,46 @@ def read_acquired(source, *, pitch=None, wavelength=None, reference_angle=None,
 
 
 def write_acquired(path, hologram: Hologram, *, colour: int = 0) -> Path:
-    """Write one colour of ``hologram``'s intensity in the format ``path``'s suffix asks for,
-    with its pitch, wavelength and reference angles as the metadata :func:`read_acquired`
-    reads: ``.npy`` (and ``<name>.json``), ``.h5``/``.hdf5`` (dataset ``intensity``, attributes),
-    ``.mat`` v7.3 (variable ``intensity`` and scalar ones), ``.tif``/``.tiff`` (float32),
-    ``.png`` (16-bit of intensity/max, the max as ``intensity_scale``: 1/65535 of the peak),
-    ``.exr`` (the hologram file, :func:`~holo_core.io.hologram.write_hologram`: every colour).
-    Any other suffix is an :class:`InputError`; the file is written atomically."""
+    """Write one colour of an intensity hologram in the format the path's suffix asks for.
+
+    The hologram's pitch, wavelength and reference angles are written as the metadata
+    :func:`read_acquired` reads.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``.npy`` (and ``<name>.json``), ``.h5``/``.hdf5`` (dataset ``intensity``,
+        attributes), ``.mat`` v7.3 (variable ``intensity`` and scalar ones), ``.tif``/``.tiff``
+        (float32), ``.png`` (16-bit of intensity/max, the max as ``intensity_scale``: 1/65535
+        of the peak), ``.exr`` (the hologram file,
+        :func:`~holo_core.io.hologram.write_hologram`: every colour).
+    hologram : Hologram
+        An intensity hologram.
+    colour : int
+        Index into its wavelengths.
+
+    Returns
+    -------
+    Path
+        The path written; the file is written atomically.
+
+    Raises
+    ------
+    InputError
+        For any other suffix, or where ``hologram`` is not an intensity Hologram.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from holo_core import Hologram, read_acquired, write_acquired
+    >>> h = Hologram(intensity=np.ones((1, 64, 64), np.float32), wavelengths=(633e-9,),
+    ...              pitch=2e-6)
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     back = read_acquired(write_acquired(os.path.join(folder, "scan.npy"), h))
+    >>> back.pitch, back.wavelengths
+    (2e-06, (6.33e-07,))
+    """
     if not isinstance(hologram, Hologram) or getattr(hologram, "intensity", None) is None:
         raise InputError(f"hologram must be an intensity Hologram; got "
                          f"{type(hologram).__name__}")

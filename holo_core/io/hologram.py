@@ -74,9 +74,39 @@ def metadata(h: Hologram | HologramInfo) -> dict:
 
 
 def write_hologram(path, h: Hologram) -> Path:
-    """Write ``h`` to ``path`` (.exr) through a temporary file and a rename. What the reader
-    would refuse is refused here, never written: an empty or non-finite hologram, or
-    metadata outside the reader's schema (:func:`_described`)."""
+    """Write a hologram to an EXR file, through a temporary file and a rename.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.exr`` file to write.
+    h : Hologram
+        The hologram (intensity, object wave, or both) and its description.
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    HologramFileError
+        (an :class:`InputError`) What the reader would refuse is refused here, never
+        written: an empty or non-finite hologram, or metadata outside the reader's schema
+        (:func:`_described`).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from holo_core import Hologram, read_hologram, write_hologram
+    >>> h = Hologram(intensity=np.ones((1, 64, 64), np.float32), wavelengths=(633e-9,),
+    ...              pitch=2e-6)
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     back = read_hologram(write_hologram(os.path.join(folder, "h.exr"), h))
+    >>> back.intensity.shape, back.pitch
+    ((1, 64, 64), 2e-06)
+    """
     check_pixels(str(path), h)
     header = json.dumps(metadata(h))
     _described(path, {"holo": header})  # the reader's schema, on the very text written
@@ -111,10 +141,35 @@ def check_pixels(name: str, h: Hologram) -> None:
 
 @validate.scale_free()  # a file holds what the renderer made, at the wavelength it chose
 def read_hologram(path) -> Hologram:
-    """Read a hologram written by :func:`write_hologram`; :class:`HologramFileError` naming the
-    file and the problem if it is missing, not an EXR, damaged, too large for the memory, of
-    an unknown format version, lacks a channel, or its metadata or pixels are out of range
-    (every metadata field is checked, see :func:`_meta`)."""
+    """Read a hologram written by :func:`write_hologram`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.exr`` file.
+
+    Returns
+    -------
+    Hologram
+        Its samples and description (wavelengths and pitch [m], ...).
+
+    Raises
+    ------
+    HologramFileError
+        (an :class:`InputError`) Naming the file and the problem if it is missing, not an EXR,
+        damaged, too large for the memory, of an unknown format version, lacks a channel, or
+        its metadata or pixels are out of range (every metadata field is checked, see
+        :func:`_meta`).
+
+    Examples
+    --------
+    >>> from holo_core import InputError, read_hologram
+    >>> try:
+    ...     read_hologram("no-such-file.exr")
+    ... except InputError:
+    ...     print("refused")
+    refused
+    """
     path = Path(path)
     header, names = _read(path)
     info = _described(path, header)

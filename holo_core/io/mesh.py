@@ -21,12 +21,39 @@ TEXT_BYTES = 40  # host bytes a text mesh's parse takes per byte of file (Python
 
 
 def read_mesh(path) -> Mesh:
-    """A triangle mesh from an OBJ (``v x y z [r g b]``, ``f``; UTF-8 with or without a
-    byte-order mark, or Latin-1) or PLY (ASCII, binary little- or big-endian; vertex x y z
-    [red green blue], face vertex_indices) file, in the file's units taken as metres. Polygons
-    are fanned into triangles; faces of fewer than three vertices are skipped with a warning.
-    :class:`MeshFileError` names the file and the problem: damaged or truncated data, counts
-    the file cannot hold, indices out of range, non-finite coordinates, no faces."""
+    """Read a triangle mesh from an OBJ or PLY file, in the file's units taken as metres.
+
+    Parameters
+    ----------
+    path : str or Path
+        An OBJ (``v x y z [r g b]``, ``f``; UTF-8 with or without a byte-order mark, or
+        Latin-1) or PLY (ASCII, binary little- or big-endian; vertex x y z [red green blue],
+        face vertex_indices) file.
+
+    Returns
+    -------
+    Mesh
+        Vertices [m] and triangles: polygons are fanned into triangles; faces of fewer than
+        three vertices are skipped with a warning.
+
+    Raises
+    ------
+    MeshFileError
+        (an :class:`InputError`) Naming the file and the problem: damaged or truncated data,
+        counts the file cannot hold, indices out of range, non-finite coordinates, no faces.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from holo_core import read_mesh
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = os.path.join(folder, "quad.obj")
+    ...     with open(path, "w") as f:
+    ...         _ = f.write("v 0 0 0\\nv 1 0 0\\nv 1 1 0\\nv 0 1 0\\nf 1 2 3 4\\n")
+    ...     mesh = read_mesh(path)
+    >>> mesh.triangles.shape
+    (2, 3)
+    """
     path = Path(path)
     if not path.is_file():
         raise MeshFileError(f"{path}: no such mesh file")

@@ -38,8 +38,44 @@ def part_file(k: int, look: int) -> str:
 
 
 def write_plate_set(folder, plates: PlateSet) -> Path:
-    """Write ``plates`` into ``folder`` (made if absent): each part's looks, then the manifest
-    naming them with their digests. Returns the manifest's path."""
+    """Write a plate set into a folder: each part's looks, then the manifest naming them.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Made if absent.
+    plates : PlateSet
+        The set (:func:`~holo_core.plate.parts.record_set`'s).
+
+    Returns
+    -------
+    Path
+        The manifest's path; it names every part's files with their digests.
+
+    Raises
+    ------
+    InputError
+        Where ``plates`` is not a PlateSet, or ``folder`` is a file or cannot be written.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import Camera, Mesh, look_at, parts_along, record_set
+    >>> cameras = [Camera(matrix_world=look_at((x, -0.5, 0.0), (0, 0, 0)), resolution=(32, 24),
+    ...                   fstop=8.0, focus_distance=0.5) for x in (-0.01, 0.01)]
+    >>> bounds = np.array([[-0.01, -0.01, -0.01], [0.01, 0.01, 0.01]])
+    >>> parts = parts_along(cameras, bounds, distance=0.1)
+    >>> import tempfile
+    >>> from holo_core import read_plate_set, write_plate_set
+    >>> triangle = Mesh(vertices=np.array([[-0.01, 0, -0.01], [0.01, 0, -0.01], [0, 0, 0.01]]),
+    ...                 triangles=np.array([[0, 1, 2]]), colours=np.ones((3, 3)))
+    >>> plates = record_set([triangle], parts, looks=1, depth=False)
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     manifest = write_plate_set(folder, plates)
+    ...     back = read_plate_set(folder)
+    >>> manifest.name, len(back), back.recording == plates.recording
+    ('plate_set.json', 1, True)
+    """
     if not isinstance(plates, PlateSet):
         raise InputError(f"plates must be a PlateSet; got {type(plates).__name__}")
     folder = set_folder(folder)
@@ -138,8 +174,36 @@ def recorded_parts(folder, recording: str, count: int, *, overwrite=False) -> di
 
 
 def read_plate_set(folder) -> PlateSet:
-    """The plate set in ``folder`` (:func:`write_plate_set`), every part checked against the
-    manifest (module docstring)."""
+    """Read the plate set in a folder, every part checked against the manifest.
+
+    Parameters
+    ----------
+    folder : str or Path
+        A folder written by :func:`write_plate_set`.
+
+    Returns
+    -------
+    PlateSet
+        The parts and their looks (read when a view needs them), as the manifest names them
+        (module docstring).
+
+    Raises
+    ------
+    HologramFileError
+        (an :class:`InputError`) Where ``folder`` is no plate set's folder, the manifest is
+        damaged, or a part's file does not match it.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from holo_core import InputError, read_plate_set
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     try:
+    ...         read_plate_set(folder)
+    ...     except InputError as e:
+    ...         print(str(e).endswith("(no plate_set.json)"))
+    True
+    """
     folder = Path(folder)
     name = folder / MANIFEST
     if not folder.is_dir():

@@ -13,10 +13,41 @@ from .image import read_exr, srgb, write_exr
 
 
 def write_view(result: RenderResult, path, *, layer="ViewLayer") -> tuple[Path, Path]:
-    """Write ``path`` (.exr, multilayer: ``<layer>.Combined.R/G/B/A`` premultiplied float32 and
-    ``<layer>.Depth.Z``, as Blender's Image node reads them) and a PNG preview beside it, as
-    one unit: both are renamed into place together, or neither is. A view with NaN or
-    infinite values, or no pixels, or a ``path`` not ending in .exr, is refused."""
+    """Write a rendered view as a multilayer EXR and a PNG preview beside it, as one unit.
+
+    Parameters
+    ----------
+    result : RenderResult
+        The view.
+    path : str or Path
+        The ``.exr`` file: ``<layer>.Combined.R/G/B/A`` premultiplied float32 and
+        ``<layer>.Depth.Z`` [m], as Blender's Image node reads them.
+    layer : str
+        The view layer's name in the channels.
+
+    Returns
+    -------
+    (Path, Path)
+        The EXR and the PNG; both are renamed into place together, or neither is.
+
+    Raises
+    ------
+    InputError
+        Where the view holds NaN or infinite values, or no pixels, or ``path`` does not end in
+        .exr.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import numpy as np
+    >>> from holo_core import RenderResult, write_view
+    >>> view = RenderResult(rgb=np.full((4, 6, 3), 0.5), alpha=np.ones((4, 6)),
+    ...                     depth=np.ones((4, 6)))
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     exr, png = write_view(view, os.path.join(folder, "view.exr"))
+    ...     print(exr.name, png.suffix)
+    view.exr .png
+    """
     path = Path(path)
     planes = {"rgb": result.rgb, "alpha": result.alpha, "depth": result.depth}
     for name, a in planes.items():

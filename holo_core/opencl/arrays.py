@@ -50,12 +50,37 @@ def as_device(field, name: str = "field", runtime: Runtime | None = None, check:
 
 
 def to_device(array, runtime: Runtime | None = None):
-    """``array`` on the OpenCL device: a finite (H, W) field, or a batch (..., H, W), as a
-    C-contiguous complex64 device array of the runtime's context (default: the process's); a
-    :class:`~holo_core.scene.field.Field` comes back as a Field whose samples are there.
+    """Put a field on the OpenCL device, for propagations that stay there.
 
-    Every propagation takes it and returns one with no copy to the host; ``.get()`` (a Field's
-    ``to_numpy()``) brings a result back to NumPy. What is on the device already stays."""
+    Parameters
+    ----------
+    array : (H, W) or (..., H, W) complex array, or Field
+        A finite field, or a batch; a :class:`~holo_core.scene.field.Field` comes back as a
+        Field whose samples are on the device. What is on the device already stays.
+    runtime : Runtime, optional
+        Whose context to use; default the process's.
+
+    Returns
+    -------
+    pyopencl.array.Array or Field
+        A C-contiguous complex64 device array. Every propagation takes it and returns one with
+        no copy to the host; ``.get()`` (a Field's ``to_numpy()``) brings a result back to
+        NumPy.
+
+    Raises
+    ------
+    InputError
+        Where ``array`` is not a finite (..., H, W) array.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import angular_spectrum, to_device
+    >>> d = to_device(np.ones((64, 64)))
+    >>> v = angular_spectrum(d, wavelength=633e-9, pitch=4e-6, distance=1e-3)
+    >>> v.shape, str(v.dtype), round(float(abs(v.get()[32, 32])), 3)
+    ((64, 64), 'complex64', 1.0)
+    """
     rt = runtime or get_runtime()
     if hasattr(array, "samples") and hasattr(array, "pose"):  # a Field (scene/field.py)
         return replace(array, samples=to_device(array.samples, rt))

@@ -56,9 +56,43 @@ def _thin_lens_adjoint(field, *, wavelength, pitch, focal_length, centre=(0.0, 0
 
 thin_lens = batched(_thin_lens)
 thin_lens.adjoint = batched(_thin_lens_adjoint)
-thin_lens.__doc__ = """The field just behind a thin lens of focal length ``focal_length`` [m]
-(f < 0 diverges) centred at ``centre`` (x, y) [m]: U·exp(−ik(√(ρ² + f²) − f)).
+thin_lens.__doc__ = """Multiply a field by a thin lens's phase: the field just behind the lens.
 
-``field`` is an (H, W) or (..., H, W) array (NumPy or device) with ``wavelength`` [m] and
-``pitch`` [m] (or (x, y)), or a :class:`~holo_core.scene.field.Field`, which brings its own and
-gets a Field back on the same plane. Complex64, like the input."""
+Parameters
+----------
+field : (H, W) or (..., H, W) complex array, NumPy or device, or Field
+    The field just before the lens. A :class:`~holo_core.scene.field.Field` brings its own
+    wavelength and pitch and gets a Field back on the same plane.
+wavelength : float
+    Wavelength λ [m].
+pitch : float or (float, float)
+    Sample spacing [m], or (x, y).
+focal_length : float
+    Focal length f [m], non-zero; f < 0 diverges.
+centre : (float, float)
+    The lens's centre (x, y) [m] on the grid.
+
+Returns
+-------
+ndarray, pyopencl.array.Array or Field
+    U·exp(−ik(√(ρ² + f²) − f)), complex64, like the input.
+
+Raises
+------
+InputError
+    Where ``focal_length`` is zero or not finite, or ``centre`` is not finite.
+
+Notes
+-----
+The thin lens of Eq. 24, L(x, y) = exp(−ikr), r = √(x² + y² + f²), with the constant
+phase exp(ikf) taken out.
+
+Examples
+--------
+>>> import numpy as np
+>>> from holo_core import thin_lens
+>>> v = thin_lens(np.ones((64, 64), complex), wavelength=633e-9, pitch=4e-6,
+...               focal_length=0.1)
+>>> v.shape, round(float(abs(v[0, 0])), 3)
+((64, 64), 1.0)
+"""

@@ -22,7 +22,32 @@ SSIM_SIGMA, SSIM_TAPS, K1, K2 = 1.5, 11, 0.01, 0.03
 
 
 def psnr(image, reference, *, data_range) -> float:
-    """10·log10(data_range² / MSE) [dB] of ``image`` against ``reference``; inf when equal."""
+    """Peak signal-to-noise ratio of ``image`` against ``reference``.
+
+    Parameters
+    ----------
+    image, reference : (H, W) or (H, W, C) real array
+        The images compared, of one shape.
+    data_range : float
+        The span of the pixel values (1 for images in [0, 1]).
+
+    Returns
+    -------
+    float
+        10·log10(data_range² / MSE) [dB]; inf when equal.
+
+    Raises
+    ------
+    InputError
+        Where an image is not a real (H, W) or (H, W, C) array, or the shapes differ.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import psnr
+    >>> round(psnr(np.zeros((4, 4)), np.full((4, 4), 0.1), data_range=1.0), 3)
+    20.0
+    """
     a, b = _pair(image, reference)
     r = validate.positive("data_range", data_range)
     mse = float(np.mean((a - b) ** 2))
@@ -30,7 +55,33 @@ def psnr(image, reference, *, data_range) -> float:
 
 
 def ssim(image, reference, *, data_range) -> float:
-    """The mean structural similarity of ``image`` to ``reference``, in [-1, 1] (1: equal)."""
+    """Mean structural similarity of ``image`` to ``reference``.
+
+    Parameters
+    ----------
+    image, reference : (H, W) or (H, W, C) real array
+        The images compared, of one shape, at least 11 × 11 (SSIM's window).
+    data_range : float
+        The span of the pixel values (1 for images in [0, 1]).
+
+    Returns
+    -------
+    float
+        The mean SSIM, in [-1, 1] (1: equal).
+
+    Raises
+    ------
+    InputError
+        Where an image is not a real (H, W) or (H, W, C) array, the shapes differ, or an image
+        is smaller than SSIM's window.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import ssim
+    >>> round(ssim(np.ones((16, 16)), np.ones((16, 16)), data_range=1.0), 3)
+    1.0
+    """
     a, b = _pair(image, reference)
     r = validate.positive("data_range", data_range)
     if min(a.shape[:2]) < SSIM_TAPS:

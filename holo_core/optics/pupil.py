@@ -27,11 +27,28 @@ PINHOLE_SAMPLES = 2         # a pinhole's resolution λ/D spans this many pixels
 class Pupil:
     """The camera's entrance pupil.
 
-    diameter : [m]
-    focus : distance [m] of the plane in focus (thin lens, Eq. 24), or None for a pinhole
-    apodize : the cosine window of Fig. 9 (1 at the centre, 0 at the rim) instead of a hard edge
-    lens_wavelength : λ [m] the lens is designed for; other wavelengths focus at
-        focus·λ_lens/λ (chromatic aberration, Sect. VII-B). None: no aberration.
+    Parameters
+    ----------
+    diameter : float
+        Pupil diameter [m].
+    focus : float, optional
+        Distance [m] of the plane in focus (thin lens, Eq. 24), or None for a pinhole.
+    apodize : bool
+        The cosine window of Fig. 9 (1 at the centre, 0 at the rim) instead of a hard edge.
+    lens_wavelength : float, optional
+        λ [m] the lens is designed for; other wavelengths focus at focus·λ_lens/λ (chromatic
+        aberration, Sect. VII-B). None: no aberration.
+
+    Raises
+    ------
+    InputError
+        Where a length is not finite and > 0.
+
+    Examples
+    --------
+    >>> from holo_core import Pupil
+    >>> Pupil(diameter=5e-3, focus=0.5)
+    Pupil(diameter=0.005, focus=0.5, apodize=True, lens_wavelength=None)
     """
 
     diameter: float

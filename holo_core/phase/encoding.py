@@ -17,12 +17,36 @@ from ..validate import InputError
 
 
 def double_phase(field, *, max_amplitude=None) -> np.ndarray:
-    """The checkerboarded double-phase pattern of ``field`` (H, W) complex, as phases [rad] in
-    (−π, π], float64: φ + α where row + column is even, φ − α where odd, α = arccos(|c|/m).
+    """Encode a complex field as the checkerboarded double-phase pattern of a phase-only SLM.
 
-    ``max_amplitude`` m (field units) normalises the amplitudes (default: the largest |c|); a
-    sample above it is refused, so the encoding never clips silently. Device arrays are read
-    back; the result is on the host (an SLM's image)."""
+    Parameters
+    ----------
+    field : (H, W) complex array, NumPy or device array
+        The field to encode; device arrays are read back.
+    max_amplitude : float, optional
+        m [field units], normalising the amplitudes (default: the largest ``|c|``).
+
+    Returns
+    -------
+    (H, W) float64 ndarray
+        Phases [rad] in (−π, π], on the host (an SLM's image): φ + α where row + column is
+        even, φ − α where odd, α = arccos(``|c|``/m).
+
+    Raises
+    ------
+    InputError
+        Where a sample's amplitude is above ``max_amplitude``: the encoding never clips
+        silently.
+
+    Examples
+    --------
+    Amplitude 0.5 of m = 1 gives ± arccos(0.5) = ± π/3:
+
+    >>> import numpy as np
+    >>> from holo_core import double_phase
+    >>> double_phase(np.full((2, 2), 0.5 + 0j), max_amplitude=1.0).round(4).tolist()
+    [[1.0472, -1.0472], [-1.0472, 1.0472]]
+    """
     c = normalised(field, max_amplitude)
     alpha = np.arccos(np.clip(np.abs(c), 0, 1))
     rows, cols = np.indices(c.shape)

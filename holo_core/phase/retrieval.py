@@ -41,24 +41,48 @@ class Retrieval(NamedTuple):
 
 def gerchberg_saxton(targets, *, wavelength, pitch, distances, propagation="angular_spectrum",
                      source=1.0, iterations=50, seed=0, **settings) -> Retrieval:
-    """Gerchberg–Saxton over the planes at ``distances`` [m].
+    """Retrieve an SLM phase by Gerchberg–Saxton over the planes at ``distances``.
 
     Parameters
     ----------
     targets : (H, W) or sequence of (H, W) real arrays
-        Target amplitudes |U| (not intensities), one per distance.
-    wavelength, pitch : float
-        λ [m] and the SLM's pitch [m].
+        Target amplitudes ``|U|`` (not intensities), one per distance.
+    wavelength : float
+        λ [m].
+    pitch : float
+        The SLM's pitch [m].
     distances : float or sequence of float
         Distance [m] of each target plane (> 0 for the far field).
-    propagation : 'angular_spectrum', 'fresnel' or 'fraunhofer'
+    propagation : {'angular_spectrum', 'fresnel', 'fraunhofer'}
+        The propagation between the SLM and the planes.
     source : float or (H, W) array
         The illumination's amplitude on the SLM.
     iterations : int
+        Iterations, in [0, 100000].
     seed : int
         Seed of the random starting phase.
-    settings
+    **settings
         Passed to the propagation (``padding``, ...).
+
+    Returns
+    -------
+    Retrieval
+        ``phase`` (H, W) float64 [rad] in (−π, π], and ``errors``: the normalised amplitude
+        error over all planes before each iteration and after the last.
+
+    Raises
+    ------
+    InputError
+        Where a target, distance or setting is out of range, naming it.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import gerchberg_saxton
+    >>> r = gerchberg_saxton(np.ones((32, 32)), wavelength=633e-9, pitch=8e-6, distances=0.1,
+    ...                      iterations=5)
+    >>> r.phase.shape, len(r.errors)
+    ((32, 32), 6)
     """
     p = _Problem(targets, wavelength, pitch, distances, propagation, source, settings)
     iterations = validate.integer("iterations", iterations, 0, 100_000)
@@ -79,10 +103,37 @@ def gerchberg_saxton(targets, *, wavelength, pitch, distances, propagation="angu
 def optimise_phase(targets, *, wavelength, pitch, distances, propagation="angular_spectrum",
                    source=1.0, iterations=100, learning_rate=0.05, seed=0, phase=None,
                    **settings) -> Retrieval:
-    """Gradient descent (Adam) of the phase for the planes at ``distances`` [m].
+    """Retrieve an SLM phase by gradient descent (Adam) for the planes at ``distances``.
 
-    Parameters as :func:`gerchberg_saxton`, and ``learning_rate`` [rad] (Adam's step),
-    ``phase`` a starting phase [rad] (e.g. Gerchberg–Saxton's; default random from ``seed``).
+    Parameters
+    ----------
+    targets, wavelength, pitch, distances, propagation, source, iterations, seed, **settings
+        As for :func:`gerchberg_saxton` (``wavelength``, ``pitch``, ``distances`` [m]).
+    learning_rate : float
+        Adam's step [rad], > 0.
+    phase : (H, W) float array, optional
+        A starting phase [rad] (e.g. Gerchberg–Saxton's); default random from ``seed``.
+
+    Returns
+    -------
+    Retrieval
+        ``phase`` (H, W) float64 [rad] in (−π, π], and ``errors`` as for
+        :func:`gerchberg_saxton`.
+
+    Raises
+    ------
+    InputError
+        Where ``learning_rate`` is not > 0, ``phase`` is not of the targets' shape, or another
+        argument is out of range.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import optimise_phase
+    >>> r = optimise_phase(np.ones((32, 32)), wavelength=633e-9, pitch=8e-6, distances=0.1,
+    ...                    iterations=5)
+    >>> r.phase.shape
+    (32, 32)
     """
     p = _Problem(targets, wavelength, pitch, distances, propagation, source, settings)
     iterations = validate.integer("iterations", iterations, 0, 100_000)

@@ -99,16 +99,55 @@ def physical_pitch(h: Hologram, channel=0, region=None) -> float:
 
 @validate.scale_free()
 def physical_field(h: Hologram, channel=0, *, pitch=None, region=None) -> Field:
-    """The physical object wave O of ``channel`` of a complex plate, as a :class:`Field`
-    (complex64 samples, its wavelength, ``pitch`` and the pose of its grid's centre).
+    """Return the physical object wave of one channel of a complex plate, as a Field.
 
-    A carrier plate's samples B are interpolated band-limited onto a grid of ``pitch`` [m]
-    (default: :func:`physical_pitch`, the largest that holds O over the region) centred on
-    ``region`` (x0, y0, x1, y1) [m] in the plate's frame (default: the carrier's
-    :func:`window`), and re-modulated: O = B·exp(−ik|x − c|), the phase in float64 (module
-    docstring). Beyond the window O is zero: no light the zone sees crosses the plate there.
-    Only the samples the grid needs are read (a tiled plate's tiles). A plate without a
-    carrier holds O: its samples cut to the region, at its own pitch.
+    Parameters
+    ----------
+    h : Hologram
+        A complex plate.
+    channel : int
+        Index into its channels.
+    pitch : float, optional
+        The output grid's pitch [m]; default :func:`physical_pitch`, the largest that holds O
+        over the region.
+    region : (x0, y0, x1, y1), optional
+        The window [m] in the plate's frame the grid is centred on; default the carrier's
+        :func:`window`.
+
+    Returns
+    -------
+    Field
+        Complex64 samples of O, its wavelength, ``pitch`` and the pose of its grid's centre.
+
+    Raises
+    ------
+    InputError
+        Where ``h`` is not a complex plate, or ``channel``, ``pitch`` or ``region`` is out of
+        range.
+
+    Notes
+    -----
+    A carrier plate's samples B are interpolated band-limited onto the grid and re-modulated:
+    O = B·exp(−ik``|x − c|``), the phase in float64 (module docstring). Beyond the window O is
+    zero: no light the zone sees crosses the plate there. Only the samples the grid needs are
+    read (a tiled plate's tiles). A plate without a carrier holds O: its samples cut to the
+    region, at its own pitch.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import Camera, Mesh, Plate, look_at, record_hologram
+    >>> camera = Camera(matrix_world=look_at((0, 0, 0.3), (0, 0, -0.01), up=(0, 1, 0)),
+    ...                 resolution=(32, 24), fstop=8.0, focus_distance=0.31)
+    >>> triangle = Mesh(vertices=np.array([[-0.01, -0.01, -0.01], [0.01, -0.01, -0.01],
+    ...                                    [0.0, 0.01, -0.01]]),
+    ...                 triangles=np.array([[0, 1, 2]]), colours=np.ones((3, 3)))
+    >>> plate = Plate(matrix_world=np.eye(4), width=0.03, height=0.03)
+    >>> h = record_hologram([triangle], plate=plate, camera=camera)
+    >>> from holo_core import physical_field
+    >>> f = physical_field(h)
+    >>> f.samples.ndim, f.pitch[0] < h.pitch
+    (2, True)
     """
     if not isinstance(h, Hologram):
         raise InputError(f"hologram must be a Hologram; got {type(h).__name__}")

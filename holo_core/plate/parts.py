@@ -49,19 +49,60 @@ MIN_SLANT = 0.05  # cos of the most grazing view a lattice's density is weighted
 def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = True,
                budget=(None, None), folder=None, overwrite=False,
                progress: jobs.Progress = None) -> PlateSet:
-    """The looks of every part of ``parts`` (PathPart, from
-    :func:`holo_core.plate.path.parts_along`) of ``meshes`` (world metres): in memory, or with
-    ``folder`` each part written there as soon as it is recorded and its samples let go (the
-    memory that of one part) and named in its manifest (:mod:`holo_core.io.plate_set`), the
-    set returned as read from there. A folder that holds this recording already (the same
-    meshes, parts, seed and looks) records only the parts it lacks: nothing, for a second
-    render of the shot; the rest of a recording stopped. One of another recording is refused
-    naming both, unless ``overwrite``.
+    """Record the looks of every part of a plate along a path, in memory or into a folder.
 
-    ``looks`` coded looks of ``seed`` (:func:`holo_core.plate.recording.look_code`) per part,
-    all parts from one set of emitters (module docstring). ``budget`` (memory, disk) [bytes]:
-    the memory one part holds while recorded and the whole set's disk, checked for every part
-    before any emitter is found."""
+    Parameters
+    ----------
+    meshes : sequence of Mesh
+        The scene, in world metres.
+    parts : sequence of PathPart
+        The parts, from :func:`holo_core.plate.path.parts_along`.
+    looks : int
+        Coded looks of ``seed`` (:func:`holo_core.plate.recording.look_code`) per part, all
+        parts from one set of emitters (module docstring).
+    seed : int
+        The emitters' random phases' seed.
+    depth : bool
+        Also record the depth partner.
+    budget : (int or None, int or None)
+        (memory, disk) [bytes]: the memory one part holds while recorded and the whole set's
+        disk, checked for every part before any emitter is found.
+    folder : str or Path, optional
+        Each part written there as soon as it is recorded and its samples let go (the memory
+        that of one part) and named in its manifest (:mod:`holo_core.io.plate_set`), the set
+        returned as read from there. A folder that holds this recording already (the same
+        meshes, parts, seed and looks) records only the parts it lacks: nothing, for a second
+        render of the shot; the rest of a recording stopped.
+    overwrite : bool
+        Replace a folder's set of another recording (refused naming both otherwise).
+    progress : callable, optional
+        Given the fraction done in [0, 1] between units of work.
+
+    Returns
+    -------
+    PlateSet
+        The parts and their looks.
+
+    Raises
+    ------
+    InputError
+        Where a budget would be exceeded, ``folder`` holds another recording and not
+        ``overwrite``, or a setting is out of range.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import Camera, Mesh, look_at, parts_along, record_set
+    >>> cameras = [Camera(matrix_world=look_at((x, -0.5, 0.0), (0, 0, 0)), resolution=(32, 24),
+    ...                   fstop=8.0, focus_distance=0.5) for x in (-0.01, 0.01)]
+    >>> bounds = np.array([[-0.01, -0.01, -0.01], [0.01, 0.01, 0.01]])
+    >>> parts = parts_along(cameras, bounds, distance=0.1)
+    >>> triangle = Mesh(vertices=np.array([[-0.01, 0, -0.01], [0.01, 0, -0.01], [0, 0, 0.01]]),
+    ...                 triangles=np.array([[0, 1, 2]]), colours=np.ones((3, 3)))
+    >>> plates = record_set([triangle], parts, looks=1, depth=False)
+    >>> len(plates), len(plates.part_looks(0))
+    (1, 1)
+    """
     parts = tuple(parts)
     if not parts or not all(isinstance(p, PathPart) for p in parts):
         raise InputError("parts must be a non-empty sequence of PathPart (parts_along)")

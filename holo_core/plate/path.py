@@ -37,7 +37,7 @@ WINDOW_PAD = 0.02       # fraction of the window added on each side of a part's 
 
 def parts_along(cameras, bounds, *, distance: float, stretch: float = DEFAULT_STRETCH,
                 margin: float = DEFAULT_MARGIN) -> tuple[PathPart, ...]:
-    """The parts of a plate serving ``cameras`` (one a frame, in order along the path).
+    """Plan the parts of a plate serving ``cameras`` (one a frame, in order along the path).
 
     Parameters
     ----------
@@ -54,9 +54,35 @@ def parts_along(cameras, bounds, *, distance: float, stretch: float = DEFAULT_ST
     margin : float
         [m] each zone reaches beyond its pupils.
 
-    Every part shares the views' pupil (the largest aperture of the path) and pixel angle
-    (the finest), so that their emitters' spacing is one. A camera inside the objects' box,
-    or at or behind its part's plate, is refused naming its frame.
+    Returns
+    -------
+    tuple of PathPart
+        Each part's plate (its pose and size [m], and the zone it is recorded for), the
+        stretch of path [m] it serves and its frames.
+
+    Raises
+    ------
+    InputError
+        Where a camera lies inside the objects' box, or at or behind its part's plate (naming
+        its frame), or a length is out of range.
+
+    Notes
+    -----
+    Every part shares the views' pupil (the largest aperture of the path) and pixel angle (the
+    finest), so that their emitters' spacing is one.
+
+    Examples
+    --------
+    Two frames 2 cm apart, served by one part 10 cm from the objects:
+
+    >>> import numpy as np
+    >>> from holo_core import Camera, Mesh, look_at, parts_along, record_set
+    >>> cameras = [Camera(matrix_world=look_at((x, -0.5, 0.0), (0, 0, 0)), resolution=(32, 24),
+    ...                   fstop=8.0, focus_distance=0.5) for x in (-0.01, 0.01)]
+    >>> bounds = np.array([[-0.01, -0.01, -0.01], [0.01, 0.01, 0.01]])
+    >>> parts = parts_along(cameras, bounds, distance=0.1)
+    >>> len(parts), parts[0].frames, round(parts[0].plate.zone.centre[2], 3)
+    (1, (0, 1), 0.4)
     """
     cams = list(cameras) if not isinstance(cameras, Camera) else [cameras]
     if not cams or not all(isinstance(c, Camera) for c in cams):

@@ -39,7 +39,7 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
                   keep_object_wave=True, plate=None, method="auto", band=None,
                   channels=(), point_density=0.0, extra_wave=None, bounds=None,
                   progress: jobs.Progress = None) -> Hologram:
-    """Holograms of point emitters, one per wavelength.
+    """Record the holograms of point emitters, one per wavelength.
 
     Parameters
     ----------
@@ -68,6 +68,39 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
         Further object wave on the hologram from other emitters (textured primitives).
     bounds : (2, 3) array, optional
         The objects' bounding box [m] in the hologram frame; default: the points'.
+
+    seed : int
+        Seeds the random phases.
+    keep_object_wave : bool
+        Keep the object wave O with the intensity.
+    progress : callable, optional
+        Given the fraction done in [0, 1] between units of work.
+
+    Returns
+    -------
+    Hologram
+        One channel per wavelength: the intensity H = ``|O + R|²`` and (``keep_object_wave``)
+        the object wave O.
+
+    Raises
+    ------
+    InputError
+        Where a point is not at z < 0, a colour is negative,
+        or a setting is out of range.
+
+    Notes
+    -----
+    Each point is a spherical wave A0·exp(i(kr + φ0))/r (Eq. 3); the hologram is
+    H = ``|O + R|²`` (Eq. 16).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import record_points
+    >>> h = record_points(np.array([[0.0, 0.0, -2e-3]]), np.array([[1.0]]), shape=(64, 64),
+    ...                   pitch=2e-6, wavelengths=(633e-9,))
+    >>> h.intensity.shape, h.object_wave.shape
+    ((1, 64, 64), (1, 64, 64))
     """
     pos, wavelengths, amplitude = point_amplitudes(positions, colours, wavelengths, phases,
                                                    seed, empty_ok=extra_wave is not None)

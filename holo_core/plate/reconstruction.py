@@ -20,14 +20,44 @@ from .reference import Reference, reference_wave
 
 @validate.scale_free()
 def reconstruct(hologram: Hologram, colour: int = 0, *, dc_suppression=True) -> np.ndarray:
-    """The virtual image's wave on z = 0 for one colour, complex64 (H, W) (Eq. 18).
+    """Reconstruct the virtual image's wave on z = 0 for one colour of a hologram.
 
-    ``colour`` indexes ``hologram.wavelengths``; ``dc_suppression`` subtracts the mean
-    intensity first (Eq. 20-21). A complex hologram holds the object wave itself: its samples
-    (a plate without a carrier), or for a plate stored against its zone's carrier the physical
-    field re-modulated from them (:func:`holo_core.plate.carrier.physical_field` with its
-    defaults: the carrier's window at the finest pitch the field needs there; that function
-    returns it as a Field, with its pitch and pose, and takes a region and a pitch).
+    Parameters
+    ----------
+    hologram : Hologram
+        An intensity or complex hologram.
+    colour : int
+        Index into ``hologram.wavelengths``.
+    dc_suppression : bool
+        Subtract the mean intensity first (Eq. 20-21).
+
+    Returns
+    -------
+    (H, W) complex64 ndarray
+        The wave on the plate. A complex hologram holds the object wave itself: its samples (a
+        plate without a carrier), or for a plate stored against its zone's carrier the physical
+        field re-modulated from them (:func:`holo_core.plate.carrier.physical_field` with its
+        defaults: the carrier's window at the finest pitch the field needs there; that function
+        returns it as a Field, with its pitch and pose, and takes a region and a pitch).
+
+    Raises
+    ------
+    InputError
+        Where ``colour`` is out of range.
+
+    Notes
+    -----
+    The reconstruction U = R'·H of Eq. 18, of which the virtual image O·``|R|²`` is kept.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import reconstruct, record_points
+    >>> h = record_points(np.array([[0.0, 0.0, -2e-3]]), np.array([[1.0]]), shape=(64, 64),
+    ...                   pitch=2e-6, wavelengths=(633e-9,))
+    >>> u = reconstruct(h)
+    >>> u.shape, str(u.dtype)
+    ((64, 64), 'complex64')
     """
     if not isinstance(hologram, Hologram):
         raise InputError(f"hologram must be a Hologram; got {type(hologram).__name__}")

@@ -22,14 +22,16 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, zon
                     wavelength=None, encoding="complex", depth=True, seed=0, method="zone",
                     cull=True, code=None, budget=(None, None),
                     progress: jobs.Progress = None) -> Hologram:
-    """Record a scene in world metres onto ``plate``, choosing the optics automatically
-    (:mod:`holo_core.plate.sampling`; the choice is logged and stored in the hologram).
+    """Record a scene in world metres onto ``plate``, choosing the optics automatically.
+
+    The choice (:mod:`holo_core.plate.sampling`) is logged and stored in the hologram.
 
     Parameters
     ----------
     emitters : Mesh, sequence of Mesh, or (positions (N, 3) [m], colours (N, 3))
         World-space surfaces, or bare point emitters. Colours are linear RGB intensities.
     plate : Plate
+        The plate recorded onto (its pose and size [m], and its zone if it has one).
     triangles : sequence of Mesh
         World-space meshes recorded as textured triangles (their texture, else the mean of
         their corners' colours): with ``method='zone'`` as the other meshes; with a point
@@ -40,13 +42,14 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, zon
         this view (:func:`holo_core.plate.sampling.choose`).
     zone, zone_margin, code, budget
         As for :func:`~holo_core.plate.looks.record_plate` (the budget applies to plates of meshes).
-    encoding
-        A point sum's: 'complex' (the object wave, the default) or 'intensity' (|O + R|²); a
-        plate of meshes is complex (:func:`~holo_core.plate.looks.record_plate`).
-    resolution, max_resolution
+    encoding : {'complex', 'intensity'}
+        A point sum's: 'complex' (the object wave, the default) or 'intensity'
+        (``|O + R|²``); a plate of meshes is complex
+        (:func:`~holo_core.plate.looks.record_plate`).
+    resolution, max_resolution : int, optional
         A point sum's samples (:func:`holo_core.plate.sampling.choose`); a plate of meshes
         takes what its zone asks (:mod:`holo_core.plate.plan`).
-    wavelength
+    wavelength : float, optional
         λ1 [m] instead of the chosen one.
     depth : bool
         Also record the depth partner λ2 (Sect. VII-C).
@@ -61,6 +64,43 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, zon
         For a point sum with a camera, keep only the points and triangles it sees
         (:func:`holo_core.scene.mesh.visible_from`): a hologram shows surfaces hidden from its
         recording viewpoint through the ones in front, as light does not occlude itself.
+    progress : callable, optional
+        Given the fraction done in [0, 1] between units of work.
+
+    Returns
+    -------
+    Hologram
+        The plate's hologram: complex (the object wave, against the zone's carrier for
+        ``method='zone'``) or intensity, one channel per colour (and the depth partner's),
+        with its optics and pose.
+
+    Raises
+    ------
+    InputError
+        Where the scene, the plate or a setting is out of range, or the recording would exceed
+        ``budget``, naming what.
+
+    Notes
+    -----
+    The object wave O is the sum of the emitters' spherical waves (Eq. 3) on the plate; an
+    intensity hologram is H = ``|O + R|²`` (Eq. 16), sampled finely enough for its reference
+    angle (Eq. 19).
+
+    Examples
+    --------
+    A triangle 1 cm behind a 3 cm plate, for a camera 30 cm in front:
+
+    >>> import numpy as np
+    >>> from holo_core import Camera, Mesh, Plate, look_at, record_hologram
+    >>> camera = Camera(matrix_world=look_at((0, 0, 0.3), (0, 0, -0.01), up=(0, 1, 0)),
+    ...                 resolution=(32, 24), fstop=8.0, focus_distance=0.31)
+    >>> triangle = Mesh(vertices=np.array([[-0.01, -0.01, -0.01], [0.01, -0.01, -0.01],
+    ...                                    [0.0, 0.01, -0.01]]),
+    ...                 triangles=np.array([[0, 1, 2]]), colours=np.ones((3, 3)))
+    >>> plate = Plate(matrix_world=np.eye(4), width=0.03, height=0.03)
+    >>> h = record_hologram([triangle], plate=plate, camera=camera)
+    >>> len(h.wavelengths), h.carrier is not None
+    (4, True)
     """
     seed = validate.seed(seed)
     if not isinstance(plate, Plate):

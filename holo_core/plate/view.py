@@ -41,8 +41,10 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
                 chromatic=True, composition="mean", supersample="auto", exposure=None,
                 opacity_threshold=0.5, source="hologram", depth_estimate="consensus",
                 progress: jobs.Progress = None) -> RenderResult:
-    """Render a view of one hologram, or several of the same scene recorded with independent
-    random phases (temporal composition, Sect. VII-C and VII-E).
+    """Render a view of one hologram, or of several of one scene with independent phases.
+
+    Several holograms recorded with independent random phases are composed in time
+    (Sect. VII-C and VII-E).
 
     Parameters
     ----------
@@ -78,8 +80,41 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
         intensity-weighted consensus), or per pixel from the brightest iteration (Fig. 11c).
         Either way the depth pair is imaged through :func:`depth_aperture`.
 
+    Returns
+    -------
+    RenderResult
+        The view: radiance, alpha and planar depth [m], and the optics used in ``info``.
+
+    Raises
+    ------
+    InputError
+        Where a setting is out of range, the holograms differ in wavelengths, pitch or pose, or
+        the view would not fit in the device's memory.
+
+    Notes
+    -----
+    The camera's pupil is placed in the reconstructed wave (Eq. 18); a pixel's direction is
+    Eq. 22, the lens Eq. 24, and depth comes from the phase difference of the two wavelengths
+    (Eq. 29).
+
     A :class:`holo_core.scene.plate_set.PlateSet` (a plate's parts along a path) is viewed
     from the part whose zone holds the pupil (:func:`render_set_view`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import Camera, Mesh, Plate, look_at, record_hologram
+    >>> camera = Camera(matrix_world=look_at((0, 0, 0.3), (0, 0, -0.01), up=(0, 1, 0)),
+    ...                 resolution=(32, 24), fstop=8.0, focus_distance=0.31)
+    >>> triangle = Mesh(vertices=np.array([[-0.01, -0.01, -0.01], [0.01, -0.01, -0.01],
+    ...                                    [0.0, 0.01, -0.01]]),
+    ...                 triangles=np.array([[0, 1, 2]]), colours=np.ones((3, 3)))
+    >>> plate = Plate(matrix_world=np.eye(4), width=0.03, height=0.03)
+    >>> h = record_hologram([triangle], plate=plate, camera=camera)
+    >>> from holo_core import render_view
+    >>> view = render_view(h, camera, supersample=1)
+    >>> view.rgb.shape, round(float(view.depth.min()), 2)
+    ((24, 32, 3), 0.31)
     """
     if isinstance(holograms, PlateSet):
         return render_set_view(holograms, camera, aperture=aperture, apodize=apodize,

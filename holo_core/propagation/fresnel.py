@@ -25,11 +25,51 @@ from .transfer import fresnel_transfer, fresnel_transfer_host, quadrant_shape
 
 def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
             out_pitch=None, out_shape=None):
-    """The paraxial (Fresnel) field on the parallel plane at ``distance``.
+    """Propagate a field paraxially (Fresnel) to the parallel plane at ``distance``.
 
-    Same parameters and result as :func:`~holo_core.propagation.angular_spectrum` (``wavelength``,
-    ``pitch`` (a number or (x, y)), ``distance``, ``offset``, ``out_pitch`` in metres,
-    ``out_shape``); accurate only where the paraxial approximation holds.
+    Parameters
+    ----------
+    field : (H, W) complex array, NumPy or OpenCL device array
+        Field on the source plane, [row, col] = [y, x].
+    wavelength : float
+        Wavelength λ [m].
+    pitch : float or (float, float)
+        Sample spacing [m], a number or (x, y).
+    distance : float
+        Signed distance z to the target plane [m].
+    offset : (float, float)
+        Lateral position (x0, y0) [m] of the target plane's centre relative to the source's.
+    padding : float
+        Zero-padding factor per axis, >= 1.
+    out_pitch : float or (float, float), optional
+        Output sample spacing [m] (chirp-z transform, as for
+        :func:`~holo_core.propagation.angular_spectrum`).
+    out_shape : (int, int), optional
+        Output (rows, cols).
+
+    Returns
+    -------
+    ndarray or pyopencl.array.Array
+        Same result as :func:`~holo_core.propagation.angular_spectrum`: complex64, like the
+        input.
+
+    Raises
+    ------
+    InputError
+        Where ``wavelength`` or ``pitch`` is not finite and > 0, or ``distance`` is not finite.
+
+    Notes
+    -----
+    The transfer function is exp(ikz)·exp(−iπλz(fx² + fy²)), the paraxial approximation of
+    the angular spectrum's (Eq. 10); accurate only where the paraxial approximation holds.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import fresnel
+    >>> v = fresnel(np.ones((64, 64), complex), wavelength=633e-9, pitch=4e-6, distance=1e-3)
+    >>> v.shape, round(float(abs(v[32, 32])), 3)
+    ((64, 64), 1.0)
     """
     if out_pitch is not None or out_shape is not None:
         return scaled(field, transfer=fresnel_transfer_host, name="fresnel",
@@ -85,17 +125,51 @@ def far_factor(shape, wavelength, pitch, z) -> np.ndarray:
 
 
 def fraunhofer(field, *, wavelength, pitch, distance):
-    """The far field at ``distance`` > 0 and the pitch of its grid.
+    """Propagate a field to the far field at ``distance`` > 0; return it and its grid's pitch.
 
-    U(x', y') = exp(ikz)·exp(ik(x'² + y'²)/(2z))/(iλz) · pitch² · Σ U(x, y)·exp(-i2π(x x' + y y')/(λz))
-    on the centred grid of the input's shape with pitch λz/(W·pitch) along x and λz/(H·pitch)
-    along y. ``wavelength``, ``pitch``, ``distance`` in metres. Warns when ``distance`` is
-    short of the Fraunhofer distance 2·D²/λ of the field's non-zero extent D.
+    Parameters
+    ----------
+    field : (H, W) complex array, NumPy or OpenCL device array
+        Field on the source plane, [row, col] = [y, x].
+    wavelength : float
+        Wavelength λ [m].
+    pitch : float
+        Source sample spacing [m].
+    distance : float
+        Distance z to the far-field plane [m], > 0.
 
     Returns
     -------
-    (field, (x pitch, y pitch)): complex64 like the input, pitches in metres (x along the
-    columns, y along the rows: every pitch pair in the project is (x, y)).
+    field : ndarray or pyopencl.array.Array
+        Complex64 like the input, on the centred grid of the input's shape.
+    pitch : (float, float)
+        The output's (x pitch, y pitch) [m]: λz/(W·pitch) along x (the columns) and
+        λz/(H·pitch) along y (the rows); every pitch pair in the project is (x, y).
+
+    Raises
+    ------
+    InputError
+        Where ``distance`` is not finite and > 0, or ``wavelength`` or ``pitch`` is not.
+
+    Warns
+    -----
+    SamplingWarning
+        When ``distance`` is short of the Fraunhofer distance 2·D²/λ of the field's non-zero
+        extent D.
+
+    Notes
+    -----
+    U(x', y') = exp(ikz)·exp(ik(x'² + y'²)/(2z))/(iλz) · pitch² · Σ U(x, y)·exp(−i2π(x x' + y y')/(λz)),
+    the far-field limit of the Rayleigh–Sommerfeld integral (Eq. 7).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import fraunhofer
+    >>> u = np.ones((64, 64), complex)
+    >>> far, (px, py) = fraunhofer(u, wavelength=633e-9, pitch=4e-6, distance=1.0)
+    >>> far.shape, round(px * 1e3, 4)
+    ((64, 64), 2.4727)
     """
     wavelength, pitch = grid.wave(wavelength, pitch)
     z = validate.positive("distance", validate.within("distance", distance, validate.MAX_LENGTH),

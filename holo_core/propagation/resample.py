@@ -28,7 +28,7 @@ APPLY_AXIS0, APPLY_AXIS1 = (kernel(PROGRAM, name, out=BUFFER, K=BUFFER, src=BUFF
 
 
 def resample(field, *, pitch, out_shape, out_pitch):
-    """The field on a centred grid of ``out_shape`` at ``out_pitch``.
+    """Resample a field onto a centred grid of ``out_shape`` at ``out_pitch``.
 
     Parameters
     ----------
@@ -44,7 +44,27 @@ def resample(field, *, pitch, out_shape, out_pitch):
 
     Returns
     -------
-    Complex64 array of ``out_shape``, like the input.
+    ndarray or pyopencl.array.Array
+        Complex64 array of ``out_shape``, like the input.
+
+    Raises
+    ------
+    InputError
+        Where ``pitch`` or ``out_pitch`` is not finite and > 0, or ``out_shape`` is not two
+        positive integers.
+
+    Notes
+    -----
+    The re-sampling step of the paper's pipeline (Sect. IV-D, Fig. 4), where source and target
+    apertures differ in size or resolution.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import resample
+    >>> v = resample(np.ones((64, 64), complex), pitch=4e-6, out_shape=(32, 32), out_pitch=8e-6)
+    >>> v.shape, round(float(abs(v[16, 16])), 3)
+    ((32, 32), 1.0)
     """
     pitch = validate.pitch("pitch", pitch)
     out_pitch = validate.pitch("out_pitch", out_pitch)

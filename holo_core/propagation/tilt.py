@@ -41,7 +41,7 @@ ES_TABLE = 4096         # kernel samples, linearly interpolated (error ~1e-6)
 
 def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_pitch=None,
          out_padding=None):
-    """The field on the plane through the source centre with orientation ``rotation``.
+    """Propagate a field to the plane through the source centre with orientation ``rotation``.
 
     Parameters
     ----------
@@ -67,8 +67,31 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
 
     Returns
     -------
-    Complex64 field on the target plane, like the input. Components travelling backwards in
-    either frame are dropped, so only light that reaches the target from the source side stays.
+    ndarray or pyopencl.array.Array
+        Complex64 field on the target plane, like the input. Components travelling backwards in
+        either frame are dropped, so only light that reaches the target from the source side
+        stays.
+
+    Raises
+    ------
+    InputError
+        Where ``rotation`` is not a (3, 3) rotation, or ``wavelength``, ``pitch`` or a padding
+        is out of range.
+
+    Notes
+    -----
+    The rotation of the angular spectrum, Eq. 11: target frequencies map to source ones by
+    f = M·f', read between the source's bins by a non-uniform FFT's kernel (module docstring).
+
+    Examples
+    --------
+    The identity rotation leaves a plane wave as it is:
+
+    >>> import numpy as np
+    >>> from holo_core import tilt
+    >>> v = tilt(np.ones((64, 64), complex), wavelength=633e-9, pitch=4e-6, rotation=np.eye(3))
+    >>> v.shape, round(float(abs(v[32, 32])), 3)
+    ((64, 64), 1.0)
     """
     wavelength, pitch = grid.wave(wavelength, pitch)
     m = validate.rotation("rotation", rotation)
@@ -167,20 +190,47 @@ def _corner(shape, padded):
 
 def propagate_to_plane(field, *, wavelength, pitch, rotation, position, padding=2,
                        out_shape=None, out_pitch=None):
-    """The field on a placed plane: tilt first, then propagate with offset (Sect. IV-D).
+    """Propagate a field to a placed plane: tilt first, then propagate with offset.
 
     Parameters
     ----------
-    field, wavelength, pitch, padding, out_shape, out_pitch
-        As for :func:`tilt`.
+    field : (H, W) complex array, NumPy or OpenCL device array
+        Source field on z = 0, as for :func:`tilt`.
+    wavelength : float
+        Wavelength λ [m].
+    pitch : float
+        Source sample spacing [m].
     rotation : (3, 3) array
         Orientation of the target plane (columns: its axes in source coordinates).
     position : (float, float, float)
         Centre of the target plane [m] in source coordinates.
+    padding, out_shape, out_pitch
+        As for :func:`tilt` (``out_pitch`` [m]).
 
     Returns
     -------
-    Complex64 field on the target grid, like the input.
+    ndarray or pyopencl.array.Array
+        Complex64 field on the target grid, like the input.
+
+    Raises
+    ------
+    InputError
+        Where an argument is out of range, as for :func:`tilt` and
+        :func:`~holo_core.propagation.angular_spectrum`.
+
+    Notes
+    -----
+    The paper's discrete propagation pipeline (Sect. IV-D): the rotation of Eq. 11, then the
+    propagation to a parallel plane with offset of Eq. 14-15.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import propagate_to_plane
+    >>> v = propagate_to_plane(np.ones((64, 64), complex), wavelength=633e-9, pitch=4e-6,
+    ...                        rotation=np.eye(3), position=(0.0, 0.0, 1e-3))
+    >>> v.shape, round(float(abs(v[32, 32])), 3)
+    ((64, 64), 1.0)
     """
     m = validate.rotation("rotation", rotation)
     p = validate.vector("position", position, 3, "m")

@@ -23,17 +23,46 @@ SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
 class Camera:
-    """A Blender camera.
+    """A Blender camera: its pose, lens, sensor and image.
 
-    matrix_world : (4, 4) camera-to-world [m] (looks down local −Z, +Y up)
-    lens : focal length [mm]
-    sensor_width, sensor_height : [mm]
-    sensor_fit : 'AUTO' (sensor_width spans the larger image side), 'HORIZONTAL', 'VERTICAL'
-    shift_x, shift_y : lens shift, in units of the fitted image side
-    resolution : (W, H) [px]
-    pixel_aspect : (x, y) Blender's pixel aspect ratio
-    focus_distance : [m] the plane in focus (a thin lens, Eq. 24); needs ``fstop``
-    fstop : f-number N; the aperture diameter is lens/N. None is a pinhole.
+    Parameters
+    ----------
+    matrix_world : (4, 4) array
+        Camera-to-world pose [m] (looks down local −Z, +Y up); default the identity.
+    lens : float
+        Focal length [mm] (Blender's unit for it).
+    sensor_width, sensor_height : float
+        Sensor size [mm].
+    sensor_fit : {'AUTO', 'HORIZONTAL', 'VERTICAL'}
+        'AUTO': ``sensor_width`` spans the larger image side.
+    shift_x, shift_y : float
+        Lens shift, in units of the fitted image side.
+    resolution : (int, int)
+        (W, H) [px].
+    pixel_aspect : (float, float)
+        (x, y) Blender's pixel aspect ratio.
+    focus_distance : float, optional
+        The plane in focus [m] (a thin lens, Eq. 24); needs ``fstop``.
+    fstop : float, optional
+        f-number N; the aperture diameter is lens/N. None is a pinhole.
+
+    Raises
+    ------
+    InputError
+        Where a field is out of its range (a length not finite and > 0, an unknown
+        ``sensor_fit``), naming it.
+
+    Notes
+    -----
+    A pixel's direction through the pinhole is the paper's Eq. 22 (directional cosines from
+    the image coordinates and the field of view).
+
+    Examples
+    --------
+    >>> from holo_core import Camera, look_at
+    >>> cam = Camera(matrix_world=look_at((0, -1, 0), (0, 0, 0)), resolution=(64, 48))
+    >>> [round(a, 4) for a in cam.field_of_view()]
+    [0.6911, 0.5274]
     """
 
     matrix_world: np.ndarray = field(default_factory=lambda: np.eye(4))
@@ -196,7 +225,34 @@ class Camera:
 
 
 def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
-    """A camera-to-world matrix at ``eye`` [m] looking at ``target`` [m], ``up`` kept up."""
+    """Build a camera-to-world matrix at ``eye`` looking at ``target``, ``up`` kept up.
+
+    Parameters
+    ----------
+    eye : (3,) array_like
+        The camera's position [m].
+    target : (3,) array_like
+        The point it looks at [m].
+    up : (3,) array_like
+        The world direction kept up in the image (any non-zero length).
+
+    Returns
+    -------
+    (4, 4) ndarray
+        Camera-to-world pose [m]: the camera looks down its local −Z, +Y up.
+
+    Raises
+    ------
+    InputError
+        Where ``up`` is zero or ``target`` equals ``eye``.
+
+    Examples
+    --------
+    >>> from holo_core import look_at
+    >>> m = look_at((0, -1, 0), (0, 0, 0))
+    >>> m[:3, 3].tolist(), m[:3, 2].round(3).tolist()
+    ([0.0, -1.0, 0.0], [0.0, -1.0, 0.0])
+    """
     eye, target = validate.vector("eye", eye, 3, "m"), validate.vector("target", target, 3, "m")
     up = validate.vector("up", up, 3)
     if not np.linalg.norm(up) > 0:

@@ -26,15 +26,33 @@ from ..validate import InputError, shown
 class Field:
     """Complex samples with their wavelength(s), pitch and plane pose.
 
+    Parameters
+    ----------
     samples : (..., H, W) complex array, NumPy or OpenCL device array
         The field on the plane's pixel centres, [row, col] = [y, x]; leading axes a batch.
-    wavelength : float or array [m]
-        λ; an array broadcast against the batch shape gives each entry its own.
-    pitch : float or (x, y) [m]
-        Sample spacing along x (columns) and y (rows).
-    pose : (4, 4) or (..., 4, 4) array [m]
-        Plane-to-world pose (rotation and translation; the samples lie on its z = 0 plane),
+    wavelength : float or array
+        λ [m]; an array broadcast against the batch shape gives each entry its own.
+    pitch : float or (float, float)
+        Sample spacing [m] along x (columns) and y (rows).
+    pose : (4, 4) or (..., 4, 4) array
+        Plane-to-world pose [m] (rotation and translation; the samples lie on its z = 0 plane),
         one per batch entry where they differ. Default: the identity, the plane z = 0.
+
+    Raises
+    ------
+    InputError
+        Where ``samples`` is not (..., H, W), or the wavelength, pitch or pose is out of range.
+
+    Examples
+    --------
+    A propagation takes a Field and returns one on the target plane:
+
+    >>> import numpy as np
+    >>> from holo_core import Field, angular_spectrum
+    >>> f = Field(samples=np.ones((64, 64), complex), wavelength=633e-9, pitch=4e-6)
+    >>> g = angular_spectrum(f, distance=1e-3)
+    >>> g.samples.shape, round(float(g.pose[2, 3]), 6)
+    ((64, 64), 0.001)
     """
 
     samples: object

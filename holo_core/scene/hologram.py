@@ -189,21 +189,44 @@ def _described(name):
 
 @dataclass(frozen=True, eq=False, init=False)
 class Hologram:
-    """Recorded holograms of one scene, one per wavelength: their description
-    (:class:`HologramInfo`, ``info``; its fields read as the hologram's own: ``h.pitch``) and
-    their samples.
+    """Recorded holograms of one scene, one per wavelength: their description and samples.
 
-    intensity : (C, H, W) float32, H = |O + R|² per colour, [row, col] = [y, x]; None for a
-        complex hologram
-    object_wave : (C, H, W) complex64, the object wave O on the plate; None for an intensity
-        hologram that does not keep it
+    The description (:class:`HologramInfo`, ``info``) has its fields read as the hologram's
+    own: ``h.pitch``.
 
-    Made as ``Hologram(intensity=..., wavelengths=..., pitch=..., ...)`` (the description's
-    fields as keywords, checked by :class:`HologramInfo`), or ``Hologram(info=..., ...)`` from a
-    description checked already (a file's, a store's), whose samples are then checked
-    against it alone. The samples are arrays indexed [channel, row, col]; nothing here assumes
-    they are held in memory at once (a view reads the window of rows and columns it needs, so
-    chunked arrays of a tiled store serve as well).
+    Parameters
+    ----------
+    intensity : (C, H, W) float32 array, optional
+        H = ``|O + R|²`` per colour (Eq. 16), [row, col] = [y, x]; None for a complex
+        hologram.
+    object_wave : (C, H, W) complex64 array, optional
+        The object wave O on the plate; None for an intensity hologram that does not keep it.
+    info : HologramInfo, optional
+        A description checked already (a file's, a store's), whose samples are then checked
+        against it alone.
+    **description
+        Otherwise the description's fields as keywords (``wavelengths`` [m], ``pitch`` [m],
+        ...), checked by :class:`HologramInfo`.
+
+    Raises
+    ------
+    InputError
+        Where a description field is unknown or out of range, or the samples do not match it.
+
+    Notes
+    -----
+    The samples are arrays indexed [channel, row, col]; nothing here assumes they are held in
+    memory at once (a view reads the window of rows and columns it needs, so chunked arrays of
+    a tiled store serve as well).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import Hologram
+    >>> h = Hologram(intensity=np.ones((1, 64, 64), np.float32), wavelengths=(633e-9,),
+    ...              pitch=2e-6)
+    >>> h.intensity.shape, h.pitch
+    ((1, 64, 64), 2e-06)
     """
 
     intensity: np.ndarray | None

@@ -20,13 +20,38 @@ SAMPLING_STREAM = 0x5A4D  # seeds mesh sampling apart from the phases (see surfa
 
 @dataclass(frozen=True, eq=False, kw_only=True)
 class Mesh:
-    """A triangle mesh: ``vertices`` (V, 3) [m], ``triangles`` (T, 3) int, optional
-    ``colours`` (V, C) linear intensities, ``uvs`` (V, 2) and ``texture`` (h, w, C).
+    """A triangle mesh, optionally coloured, textured and moving over the shutter.
 
-    ``motion``, optional: (K, V, 3) [m] the vertices at K >= 2 equally spaced times from the
-    shutter's opening to its closing, between which the mesh moves linearly (as Cycles
-    interpolates its motion steps); a render averages the image over the shutter (motion
-    blur). ``vertices`` stay the frame's own time, where colours and textures are found."""
+    Parameters
+    ----------
+    vertices : (V, 3) float array
+        Vertex positions [m]; the frame's own time, where colours and textures are found.
+    triangles : (T, 3) int array
+        Vertex indices of each triangle.
+    colours : (V, C) float array, optional
+        Linear intensities per vertex and colour.
+    uvs : (V, 2) float array, optional
+        Texture coordinates.
+    texture : (h, w, C) float array, optional
+        The texture the ``uvs`` index.
+    motion : (K, V, 3) float array, optional
+        The vertices [m] at K >= 2 equally spaced times from the shutter's opening to its
+        closing, between which the mesh moves linearly (as Cycles interpolates its motion
+        steps); a render averages the image over the shutter (motion blur).
+
+    Raises
+    ------
+    InputError
+        Where an array has the wrong shape, is not finite, or an index is out of range.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import Mesh
+    >>> Mesh(vertices=np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]]),
+    ...      triangles=np.array([[0, 1, 2]]))
+    Mesh(1 triangle, 3 vertices, extent 1 m x 1 m x 0 m, no colours)
+    """
 
     vertices: np.ndarray
     triangles: np.ndarray

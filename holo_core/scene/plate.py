@@ -27,13 +27,30 @@ DEFAULT_ZONE_MARGIN = 0.05  # [m] the default zone reaches this far beyond the c
 class ViewingZone:
     """The region a plate is looked at from: an axis-aligned box in the plate's frame.
 
-    centre : (3,) [m] the box's centre in the plate's frame (z > 0: in front of the plate)
-    half_extents : (3,) [m] its half widths along the plate's x, y and z axes, each >= 0
-    pupil : [m] the entrance pupil the zone is made for (the camera's aperture diameter; it
-        sets how far apart the plate's emitters may lie, one resolved spot seen from there);
-        0 when unknown
-    pixel : [rad] the pixel angle of the views the zone is made for (with the pupil, it sets
-        the wavelength: views resolve a fine pixel); 0 when unknown
+    Parameters
+    ----------
+    centre : (3,) tuple of float
+        The box's centre [m] in the plate's frame (z > 0: in front of the plate).
+    half_extents : (3,) tuple of float
+        Its half widths [m] along the plate's x, y and z axes, each >= 0.
+    pupil : float
+        The entrance pupil [m] the zone is made for (the camera's aperture diameter; it sets
+        how far apart the plate's emitters may lie, one resolved spot seen from there); 0 when
+        unknown.
+    pixel : float
+        The pixel angle [rad] of the views the zone is made for (with the pupil, it sets the
+        wavelength: views resolve a fine pixel); 0 when unknown.
+
+    Raises
+    ------
+    InputError
+        Where a field is not finite or out of its range (a negative half extent), naming it.
+
+    Examples
+    --------
+    >>> from holo_core import ViewingZone
+    >>> ViewingZone(centre=(0, 0, 0.5), half_extents=(0.1, 0.1, 0.1))
+    ViewingZone(centre=(0.0, 0.0, 0.5), half_extents=(0.1, 0.1, 0.1), pupil=0.0, pixel=0.0)
     """
 
     centre: tuple
@@ -164,10 +181,32 @@ class Carrier:
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
 class Plate:
-    """The holographic plate in the world: ``matrix_world`` (4, 4) plate-to-world pose [m]
-    (rotation and translation; the hologram is its z = 0 plane, viewers at z > 0), its
-    physical ``width``, ``height`` [m], and the ``zone`` it is recorded for
-    (:class:`ViewingZone`, or None: chosen when recording, from a camera if one is given)."""
+    """The holographic plate in the world.
+
+    Parameters
+    ----------
+    matrix_world : (4, 4) array
+        Plate-to-world pose [m] (rotation and translation; the hologram is its z = 0 plane,
+        viewers at z > 0).
+    width, height : float
+        The plate's physical size [m], > 0.
+    zone : ViewingZone, optional
+        The zone it is recorded for, or None: chosen when recording, from a camera if one is
+        given.
+
+    Raises
+    ------
+    InputError
+        Where the pose is not a rigid (4, 4) transform or a size is not finite and > 0.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import Plate
+    >>> plate = Plate(matrix_world=np.eye(4), width=0.01, height=0.01)
+    >>> plate.width, plate.zone
+    (0.01, None)
+    """
 
     matrix_world: np.ndarray
     width: float
