@@ -35,10 +35,12 @@ def plate_current(path, recording: str = "") -> bool:
     store's every tile written by its recording; a cancelled one resumes) and, given the
     ``recording`` it must be, names that one: another recording's plate under its name (a
     folder synced from another shot, a file copied by hand) is not current, it is recorded
-    again."""
+    again. A file whose description cannot be read is left to the reader, which refuses it
+    naming the file (a damaged or half-copied plate is said, never silently replaced)."""
     path = Path(path)
     if path.is_file():
-        return not recording or recording_of(path) == recording
+        held = recording_of(path)
+        return not recording or held is None or held == recording
     if not store_of(path).is_dir():
         return False
     try:

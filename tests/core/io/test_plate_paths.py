@@ -33,6 +33,16 @@ def test_a_plate_file_carries_its_recording_and_is_current_only_as_it(tmp_path):
     assert recording_of(path) == "" and not plate_current(path, OURS)
 
 
+def test_a_damaged_plate_file_is_left_to_the_reader_which_names_it(tmp_path):
+    """A file whose description cannot be read is not recorded over (a half-copied plate
+    would vanish unsaid): it counts as current, and reading it is refused naming the file."""
+    path = tmp_path / "p_hologram_0123.exr"
+    path.write_bytes(b"not an exr")
+    assert recording_of(path) is None and plate_current(path, OURS)
+    with pytest.raises(HologramFileError, match=r"p_hologram_0123\.exr: not an OpenEXR file"):
+        read_hologram(path)
+
+
 def test_a_tiled_store_carries_its_recording_and_is_current_only_as_it(tmp_path):
     pytest.importorskip("zarr")
     from holo_core.io import store
