@@ -112,7 +112,5 @@ def record_planned(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
                                   scheduler=scheduler, overwrite=overwrite, progress=progress,
                                   dashboard=dashboard, depth=depth, seed=seed,
                                   encoding=encoding, budget=budget, recording=recording)
-    holos = prepare_plate(planned, codes=codes, depth=depth, seed=seed, encoding=encoding,
-                          budget=budget).record(progress)
-    return [Hologram(info=h.info, intensity=h.intensity, object_wave=h.object_wave,
-                     recording=recording) for h in holos] if recording else holos
+    return prepare_plate(planned, codes=codes, depth=depth, seed=seed, encoding=encoding,
+                         budget=budget, recording=recording).record(progress)

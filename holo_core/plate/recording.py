@@ -180,7 +180,7 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
 
 def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
                   encoding="complex", tiled=False, budget=(None, None),
-                  emitters: Emitters | None = None) -> PlateRecording:
+                  emitters: Emitters | None = None, recording: str = "") -> PlateRecording:
     """The emitters, visibility tables and sampling of the plate ``planned``, before any
     sum: the emitters the zone sees with their amplitudes, for the looks ``codes`` summed at
     once (:func:`holo_core.plate.looks.record_looks`), look l's phases coded by codes[l], or
@@ -188,7 +188,9 @@ def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
     count allows, :func:`look_code`). The host's memory and the ``budget`` are
     checked for the whole plate, or where ``tiled`` for one tile of the plan's. ``emitters``
     (the plate's frame, their visibility from this zone): found elsewhere, once for several
-    plates that share them (:mod:`.parts`), in place of the zone's own."""
+    plates that share them (:mod:`.parts`), in place of the zone's own. ``recording``: the
+    digest the looks' description carries (:attr:`holo_core.scene.hologram.HologramInfo.
+    recording`), in memory and in their stores alike."""
     if encoding != "complex":
         raise InputError(f"encoding must be 'complex' for a plate of meshes (a display's "
                          f"intensity pattern is made from it: holo_core.phase.display); got "
@@ -237,7 +239,8 @@ def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
                         point_density=1 / (p.spacing * distance) ** 2, zone=zone,
                         bounds=bounds, plate=planned.plate.matrix_world,
                         carrier=Carrier(centre=zone.centre, origin=p.origin,
-                                        row_pitch=p.row_pitch))
+                                        row_pitch=p.row_pitch),
+                        recording=validate.digest("recording", recording))
     return PlateRecording(info=info, window=window, groups=groups, plan=p, meshes=local,
                           seed=seed, codes=tuple(None if c is None else tuple(c) for c in codes))
 

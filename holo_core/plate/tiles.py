@@ -137,10 +137,9 @@ def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, depth=True, s
     files, address = _output_and_scheduler(urls, scheduler)
     planned = replace(planned, plan=replace(planned.plan, tile=tile))
     job = prepare_plate(planned, codes=codes, depth=depth, seed=seed, encoding=encoding,
-                        tiled=True, budget=budget)
+                        tiled=True, budget=budget, recording=recording)
     recordings = [_plate_recording(job, tile, look) for look in range(job.looks)]
-    info = replace(job.info, recording=validate.digest("recording", recording))
-    _record_tiles(files, info, tile, recordings, overwrite=overwrite, address=address,
+    _record_tiles(files, job.info, tile, recordings, overwrite=overwrite, address=address,
                   task=record_plate_tile, shared=replace(job, meshes=()), progress=progress,
                   dashboard=dashboard)
     return [open_plate(f.name) for f in files]
