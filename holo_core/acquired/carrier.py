@@ -46,19 +46,64 @@ SIDEBANDS = ("lower", "upper")
 
 
 class InlineHologramError(InputError):
-    """A hologram whose spectrum has no sideband apart from the zero order: it is in-line (or
-    its fringes are lost in noise); no sideband filter separates its orders."""
+    """A hologram whose spectrum has no sideband apart from the zero order.
+
+    It is in-line (or its fringes are lost in noise): no sideband filter separates its orders.
+    A subclass of :class:`~holo_core.InputError`, raised by :func:`find_carrier` and
+    :func:`~holo_core.acquired.sideband` where the disc around the strongest peak holds less
+    than ``OFF_AXIS_CONTRAST`` (4) times the energy of the same disc turned by 90°.
+
+    Examples
+    --------
+    A hologram without fringes (a constant with a little noise) has no carrier:
+
+    >>> import numpy as np
+    >>> from holo_core.acquired import InlineHologramError, find_carrier
+    >>> flat = 1 + 1e-3 * np.random.default_rng(0).standard_normal((64, 64))
+    >>> try:
+    ...     find_carrier(flat, pitch=2e-6)
+    ... except InlineHologramError:
+    ...     print("in-line")
+    in-line
+    """
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Carrier:
     """The reference wave's carrier f_R of an off-axis hologram and how it was found.
 
-    fx, fy : [1/m]; the +1 order O·R̄ lies at −(fx, fy)
-    wavelength : [m], for the angles (None: unknown)
-    rule : how it was found ('the spectrum's peak, lower sideband', 'given', ...)
-    contrast : the sideband's energy over the same disc turned by 90° (NaN: not measured)
-    half : the half of the spectrum it was found in ('lower', 'upper'; None: by its sign)
+    Parameters
+    ----------
+    fx, fy : float
+        The carrier's spatial frequency [1/m]; the +1 order O·R̄ lies at −(fx, fy).
+    wavelength : float, optional
+        Wavelength λ [m], for the angles (None: unknown, and ``angle`` is None).
+    rule : str
+        How it was found ('the spectrum's peak, lower sideband', 'given', ...).
+    contrast : float
+        The sideband's energy over the same disc turned by 90° (NaN: not measured).
+    half : {'lower', 'upper'}, optional
+        The half of the spectrum it was found in (None: by the sign of its components).
+
+    Notes
+    -----
+    Its properties: ``frequency`` (fx, fy) [1/m]; ``norm`` |f_R| [1/m]; ``sideband``, 'lower'
+    (f_y > 0, or f_y = 0 and f_x >= 0) or 'upper', as holospy names them; ``angle``, the
+    reference's angle ϑ [rad] to the hologram's normal, asin(λ·|f_R|) (Eq. 4), None without a
+    wavelength or where λ·|f_R| >= 1; ``azimuth``, φ [rad] from +x towards +y, atan2(fy, fx).
+
+    See Also
+    --------
+    find_carrier : the carrier found in a hologram's spectrum.
+
+    Examples
+    --------
+    >>> from holo_core.acquired import Carrier
+    >>> c = Carrier(fx=3e4, fy=4e4, wavelength=633e-9)
+    >>> c.norm, c.sideband, round(c.angle, 5)
+    (50000.0, 'lower', 0.03166)
+    >>> c.describe()
+    'carrier (30000, 40000) 1/m, reference at 1.814° (31.66 mrad), azimuth 53.13°, ...'
     """
 
     fx: float
@@ -99,7 +144,12 @@ class Carrier:
         return math.atan2(self.fy, self.fx)
 
     def describe(self) -> str:
-        """One line: the carrier, the angles, the sideband and the rule."""
+        """One line: the carrier [1/m], the angles [°, mrad], the sideband and the rule.
+
+        Returns
+        -------
+        str
+        """
         angle = self.angle
         tilt = "" if angle is None else (f", reference at {math.degrees(angle):.4g}° "
                                          f"({angle * 1e3:.4g} mrad)")

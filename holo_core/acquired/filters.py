@@ -44,18 +44,51 @@ VANISHING = 1e-9  # a reference hologram's wave below this fraction of its rms c
 class Aperture:
     """The sideband filter: which frequencies around the +1 order are kept, and how.
 
-    radius : the aperture's radius in ``unit``; None: the hologram's recorded band where it
+    Parameters
+    ----------
+    radius : float, optional
+        The aperture's radius R in ``unit``, > 0; None: the hologram's recorded band where it
         states one, else a third of |f_R| (the widest band whose zero order, twice as wide,
-        does not reach it)
-    unit : 'carrier' (a fraction of |f_R|: holospy's 0.5 for strong phase objects, 1/3 for
-        weak ones), '1/m', '1/mm', '1/um', '1/nm' (spatial frequency), 'mrad' or 'rad' (the
-        scattering angle θ: f = sin θ / λ)
-    shape : 'disc' (|f| <= radius) or 'square' (max(|fx|, |fy|) <= radius)
-    edge : 'hard'; 'tanh' (holospy's: ½·(1 − tanh((r − R)/(w/2)))); 'cosine' (a raised
-        cosine from R − w/2 to R + w/2, Tukey's)
-    width : the edge's width w as a fraction of the radius (holospy's default: 0.05)
-    window : an apodisation across the aperture, r/R from 0 to 1: 'none', 'hann', 'hamming',
-        'blackman', 'gaussian' (σ = R/2) or 'butterworth' (order 4: 1/(1 + (r/R)⁸))
+        does not reach it).
+    unit : {'carrier', '1/m', '1/mm', '1/um', '1/nm', 'mrad', 'rad'}
+        'carrier': a fraction of |f_R| (holospy's 0.5 for strong phase objects, 1/3 for weak
+        ones); '1/m' … '1/nm': a spatial frequency; 'mrad', 'rad': the scattering angle θ,
+        f = sin θ / λ (needs the wavelength).
+    shape : {'disc', 'square'}
+        'disc' keeps |f| <= R, 'square' max(|fx|, |fy|) <= R.
+    edge : {'hard', 'tanh', 'cosine'}
+        'tanh' is holospy's, ½·(1 − tanh((r − R)/(w/2))); 'cosine' a raised cosine from
+        R − w/2 to R + w/2 (Tukey's).
+    width : float
+        The edge's width w as a fraction of the radius, in (0, 1] (holospy's default 0.05).
+    window : {'none', 'hann', 'hamming', 'blackman', 'gaussian', 'butterworth'}
+        An apodisation across the aperture, r/R from 0 to 1: 'gaussian' has σ = R/2,
+        'butterworth' is of order 4, 1/(1 + (r/R)⁸).
+
+    Raises
+    ------
+    InputError
+        Where ``radius`` or ``width`` is not > 0 (``width`` above 1), or a choice is unknown.
+
+    See Also
+    --------
+    holo_core.sideband : the filter applied to a hologram.
+
+    Notes
+    -----
+    ``Aperture.holospy()`` is holospy's default filter (a disc of half the distance to the zero
+    order, a tanh edge over 5 % of the radius); ``radius_per_m(carrier, wavelength, band)``
+    the radius [1/m] for a carrier |f_R| [1/m]; ``weights(fx, fy, radius)`` the filter's
+    weights at frequencies [1/m] around the order.
+
+    Examples
+    --------
+    >>> from holo_core.acquired import Aperture
+    >>> a = Aperture.holospy()
+    >>> a.edge, a.radius_per_m(1e5, 633e-9)
+    ('tanh', 50000.0)
+    >>> Aperture(radius=2, unit="mrad").radius_per_m(1e5, 633e-9)
+    3159.5...
     """
 
     radius: float | None = None
@@ -80,12 +113,36 @@ class Aperture:
     @classmethod
     def holospy(cls) -> Aperture:
         """holospy's default filter (``reconstruct_phase``): a disc of half the distance to
-        the zero order, its edge a tanh over 5 % of the radius."""
+        the zero order, its edge a tanh over 5 % of the radius.
+
+        Returns
+        -------
+        Aperture
+        """
         return cls(radius=0.5, unit="carrier", edge="tanh", width=0.05)
 
     def radius_per_m(self, carrier: float, wavelength: float | None, band: float = 0.0) -> float:
-        """The radius [1/m] for a carrier of |f_R| = ``carrier`` [1/m] at ``wavelength`` [m]
-        (needed for angles), or the recorded ``band`` (sin θ) where no radius is set."""
+        """The aperture's radius in spatial frequency.
+
+        Parameters
+        ----------
+        carrier : float
+            |f_R| [1/m].
+        wavelength : float or None
+            Wavelength λ [m]; needed for a radius in 'mrad' or 'rad', and for ``band``.
+        band : float
+            The hologram's recorded band, sin θ, used where no radius is set (0: none).
+
+        Returns
+        -------
+        float
+            The radius [1/m].
+
+        Raises
+        ------
+        InputError
+            Where an angle needs a wavelength that is None, or is not below π/2.
+        """
         if self.radius is None:
             return band / wavelength if band and wavelength else carrier / 3
         if self.unit == "carrier":
@@ -102,8 +159,20 @@ class Aperture:
         return self.radius * RADIUS_UNITS[self.unit]
 
     def weights(self, fx: np.ndarray, fy: np.ndarray, radius: float) -> np.ndarray:
-        """The filter's weights at frequencies (fx, fy) [1/m] around the order (at 0), for a
-        ``radius`` [1/m]."""
+        """The filter's weights at frequencies around the order (at 0).
+
+        Parameters
+        ----------
+        fx, fy : ndarray
+            Spatial frequencies [1/m], relative to the order; broadcast together.
+        radius : float
+            The radius R [1/m] (:meth:`radius_per_m`'s).
+
+        Returns
+        -------
+        ndarray
+            The weights in [0, 1], float64, of the broadcast shape.
+        """
         r = np.hypot(fx, fy) if self.shape == "disc" else np.maximum(np.abs(fx), np.abs(fy))
         w = self.width * radius
         if self.edge == "hard":

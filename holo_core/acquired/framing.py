@@ -39,15 +39,63 @@ def checked_distance(distance, h: Hologram) -> float:
 
 
 def plane_bounds(h: Hologram, distance: float) -> np.ndarray:
-    """The bounds of objects on the plane ``distance`` [m] behind ``h``, its size wide: a
-    flat box, the one plane the view's depth lies on."""
+    """The bounds of objects on one plane behind a hologram, the hologram's size wide.
+
+    A flat box: the one plane the view's depth lies on.
+
+    Parameters
+    ----------
+    h : Hologram
+        The hologram (its ``size`` [m] is read).
+    distance : float
+        How far behind it the plane lies [m], > 0.
+
+    Returns
+    -------
+    (2, 3) float64 ndarray
+        [[x0, y0, z], [x1, y1, z]] [m] in the plate's frame, z = −``distance``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import Hologram
+    >>> from holo_core.acquired import plane_bounds
+    >>> h = Hologram(intensity=np.ones((1, 256, 256), np.float32), wavelengths=(633e-9,),
+    ...              pitch=2e-6)
+    >>> plane_bounds(h, 0.01)
+    array([[-0.000256, -0.000256, -0.01    ],
+           [ 0.000256,  0.000256, -0.01    ]])
+    """
     w, ht = h.size
     return np.array([[-w / 2, -ht / 2, -distance], [w / 2, ht / 2, -distance]])
 
 
 def stated_plane(h: Hologram) -> float | None:
-    """z [m] of the one plane behind the hologram its objects lie on, where its bounds are a
-    flat box there, wide in x and y (an acquired hologram's stated distance), else None."""
+    """The one plane behind a hologram its objects lie on, where its bounds state one.
+
+    Parameters
+    ----------
+    h : Hologram
+        The hologram (its ``bounds`` [m] are read).
+
+    Returns
+    -------
+    float or None
+        z [m] (negative: behind the plate) where the bounds are a flat box there, wide in x
+        and y (an acquired hologram's stated distance, :func:`plane_bounds`'s), else None.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import Hologram
+    >>> from holo_core.acquired import plane_bounds, stated_plane
+    >>> h = Hologram(intensity=np.ones((1, 64, 64), np.float32), wavelengths=(633e-9,),
+    ...              pitch=2e-6)
+    >>> h = Hologram(intensity=h.intensity, wavelengths=(633e-9,), pitch=2e-6,
+    ...              bounds=plane_bounds(h, 0.01))
+    >>> stated_plane(h)
+    -0.01
+    """
     bounds = np.asarray(h.bounds)
     z = float(bounds[0, 2])
     wide = bool((bounds[1, :2] > bounds[0, :2]).all())
@@ -56,15 +104,46 @@ def stated_plane(h: Hologram) -> float | None:
 
 @validate.public
 def default_camera(hologram: Hologram, *, distance=None, resolution=None) -> Camera:
-    """A camera that frames ``hologram`` and is focused on its objects' plane ``distance``
-    [m] behind it (default: its bounds').
+    """A camera that frames a hologram and is focused on its objects' plane.
 
-    It stands on the hologram's axis :data:`VIEW_DISTANCE` times the distance in front, so
-    the frustum through the plate's edges takes in an object plane only 10 % wider than the
-    plate; its field of view is the plate's width and :data:`FRAME_MARGIN`; its pupil takes
-    in the whole cone of the hologram's band (sin θ) from the object plane, so it resolves
-    what the hologram recorded; ``resolution`` (W, H) [px] defaults to the band's Nyquist
-    sampling of the framed plane (within :data:`VIEW_PIXELS`)."""
+    Parameters
+    ----------
+    hologram : Hologram
+        The hologram to frame.
+    distance : float, optional
+        How far behind the plate the objects' plane lies [m], > 0 (default: the middle of
+        the hologram's bounds in z). One beyond ``FAR`` (1000) plate widths warns
+        (:class:`~holo_core.validate.UnitWarning`: millimetres given for metres?).
+    resolution : (int, int), optional
+        The image's (W, H) [px]; default the band's Nyquist sampling of the framed plane,
+        within ``VIEW_PIXELS`` (256 to 2048 on its larger side).
+
+    Returns
+    -------
+    Camera
+        On the hologram's axis, ``VIEW_DISTANCE`` (2) times the distance in front, so the
+        frustum through the plate's edges takes in an object plane only 10 % wider than the
+        plate; its field of view the plate's width and ``FRAME_MARGIN`` (5 %); focused on the
+        objects' plane, its pupil taking in the whole cone of the hologram's band (sin θ)
+        from there, so that it resolves what the hologram recorded.
+
+    Raises
+    ------
+    InputError
+        Where ``hologram`` is not a Hologram, or no ``distance`` is given and its bounds put
+        no objects behind it.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import Hologram
+    >>> from holo_core.acquired import default_camera
+    >>> h = Hologram(intensity=np.ones((1, 256, 256), np.float32), wavelengths=(633e-9,),
+    ...              pitch=2e-6)
+    >>> cam = default_camera(h, distance=0.01)
+    >>> cam.resolution, cam.focus_distance
+    ((416, 416), 0.03)
+    """
     if not isinstance(hologram, Hologram):
         raise InputError(f"hologram must be a Hologram; got {type(hologram).__name__}")
     bounds = np.asarray(hologram.bounds)

@@ -88,9 +88,41 @@ def _poisson_neumann(rho: np.ndarray) -> np.ndarray:
 
 @validate.public
 def fit_phase(wave, *, order: int = 1, mask=None) -> np.ndarray:
-    """The least-squares polynomial in x, y (pixels, centred) of ``order`` (1: a plane, a
-    tilt; 2: with a curvature) fitted to ``wave``'s unwrapped phase where ``mask`` is True
-    (default: everywhere), evaluated on the whole (H, W) grid [rad]."""
+    """The least-squares polynomial fitted to a wave's unwrapped phase.
+
+    Parameters
+    ----------
+    wave : (H, W) complex or real array
+        A complex wave, or its phase [rad]; unwrapped by :func:`~holo_core.acquired.unwrap`.
+    order : int
+        The polynomial's order in x, y (pixel coordinates, centred and scaled by the grid's
+        size), 1 to 4: 1 a plane (a tilt), 2 a tilt and a curvature (a residual spherical
+        wave).
+    mask : (H, W) bool array, optional
+        Where to fit (the object-free region); default everywhere.
+
+    Returns
+    -------
+    (H, W) float64 ndarray
+        The fitted phase [rad], evaluated on the whole grid.
+
+    Raises
+    ------
+    InputError
+        Where ``order`` is out of 1 to 4, or ``mask`` is not (H, W) with at least as many True
+        samples as the polynomial has terms.
+
+    Examples
+    --------
+    A tilt of 0.3 rad a column and 0.1 rad a row:
+
+    >>> import numpy as np
+    >>> from holo_core.acquired import fit_phase
+    >>> y, x = np.mgrid[:64, :64]
+    >>> p = fit_phase(np.exp(1j * (0.3 * x + 0.1 * y)))
+    >>> round(float(p[0, 1] - p[0, 0]), 6), round(float(p[1, 0] - p[0, 0]), 6)
+    (0.3, 0.1)
+    """
     u = validate.host_field("wave", wave)
     order = validate.integer("order", order, 1, 4)
     phase = unwrap(u if np.iscomplexobj(u) else np.exp(1j * u))
@@ -109,17 +141,77 @@ def fit_phase(wave, *, order: int = 1, mask=None) -> np.ndarray:
 
 @validate.public
 def remove_tilt(wave, *, mask=None) -> np.ndarray:
-    """``wave`` with the phase ramp (the plane fitted to its phase over ``mask``) taken away,
-    complex64: a residual carrier, or the object's own tilt."""
+    """A wave with its phase ramp taken away: a residual carrier, or the object's own tilt.
+
+    Parameters
+    ----------
+    wave : (H, W) complex array
+        The object wave.
+    mask : (H, W) bool array, optional
+        Where the plane is fitted to its phase (:func:`fit_phase`, order 1); default
+        everywhere.
+
+    Returns
+    -------
+    (H, W) complex64 ndarray
+        ``wave`` times exp(−i·plane).
+
+    Raises
+    ------
+    InputError
+        As :func:`fit_phase`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core.acquired import remove_tilt
+    >>> y, x = np.mgrid[:64, :64]
+    >>> flat = remove_tilt(np.exp(1j * (0.3 * x + 0.1 * y)))
+    >>> bool(np.abs(np.angle(flat)).max() < 1e-6)
+    True
+    """
     u = validate.host_field("wave", wave)
     return (u * np.exp(-1j * fit_phase(u, order=1, mask=mask))).astype(np.complex64)
 
 
 @validate.public
 def remove_background(wave, background=None, *, order: int = 2, mask=None) -> np.ndarray:
-    """``wave`` with its background taken away, complex64: divided by ``background`` (the
-    same optics' wave without the object, filtered alike), or, without one, by the phase
-    polynomial of ``order`` fitted over ``mask`` (the object-free region)."""
+    """A wave with its background taken away.
+
+    Parameters
+    ----------
+    wave : (H, W) complex array
+        The object wave.
+    background : (H, W) complex array, optional
+        The same optics' wave without the object, filtered alike; the wave is divided by it.
+        None: divided by exp(i·p) instead, p the phase polynomial of ``order`` fitted over
+        ``mask``.
+    order : int
+        The polynomial's order, 1 to 4 (without ``background``).
+    mask : (H, W) bool array, optional
+        The object-free region the polynomial is fitted over (without ``background``).
+
+    Returns
+    -------
+    (H, W) complex64 ndarray
+
+    Raises
+    ------
+    InputError
+        Where ``background``'s shape differs from the wave's, or it vanishes (below 1e-9 of
+        its rms) anywhere; as :func:`fit_phase` without one.
+
+    Examples
+    --------
+    A curvature and a tilt (a residual spherical wave) taken away by the order-2 fit:
+
+    >>> import numpy as np
+    >>> from holo_core.acquired import remove_background
+    >>> y, x = np.mgrid[:64, :64] / 64
+    >>> wave = np.exp(1j * (3 * x + 8 * (x - 0.5) ** 2 + 8 * (y - 0.5) ** 2))
+    >>> bool(np.abs(np.angle(remove_background(wave))).max() < 1e-5)
+    True
+    """
     u = validate.host_field("wave", wave)
     if background is None:
         return (u * np.exp(-1j * fit_phase(u, order=order, mask=mask))).astype(np.complex64)

@@ -44,8 +44,13 @@ ORDER_MARGIN = 0.05   # the orders' Tamura coefficients closer than this (relati
 
 
 class OrderWarning(UserWarning):
-    """The two orders of an off-axis hologram focus alike at the stated distance (a phase
-    object, or a wrong distance): the order taken may be the twin."""
+    """The two orders of an off-axis hologram focus alike at the stated distance.
+
+    Warned by :func:`~holo_core.acquired.import_acquired` and
+    :func:`~holo_core.acquired.object_hologram` where the order that should come into focus
+    behind the hologram does not focus measurably better than its twin (a phase object, or a
+    wrong distance): the order taken may be the twin. A subclass of ``UserWarning``.
+    """
 
 
 @validate.public

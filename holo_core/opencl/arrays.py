@@ -20,15 +20,64 @@ from .runtime import Runtime, get_runtime
 
 
 def is_device_array(a) -> bool:
+    """Whether ``a`` is an OpenCL device array (a ``pyopencl.array.Array``).
+
+    Parameters
+    ----------
+    a : object
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import to_device
+    >>> from holo_core.opencl import is_device_array
+    >>> is_device_array(np.ones((2, 2))), is_device_array(to_device(np.ones((2, 2))))
+    (False, True)
+    """
     return isinstance(a, cla.Array)
 
 
 def as_device(field, name: str = "field", runtime: Runtime | None = None, check: bool = True):
-    """``(runtime, device array, came_from_host)`` for a 2-D finite field.
+    """A 2-D finite field on the device, checked, for a stage that runs there.
 
-    NumPy input is checked on the host and uploaded as complex64; a device array must be 2-D,
-    C-contiguous and belong to the runtime's context, and is checked for NaN/Inf on the device
-    unless ``check`` is false (the caller then checks, e.g. in a DC term it computes anyway).
+    Parameters
+    ----------
+    field : (H, W) array or pyopencl.array.Array
+        NumPy input is checked on the host and uploaded as complex64; a device array must be
+        2-D, C-contiguous and of the runtime's context (converted to complex64 if it is not).
+    name : str
+        The argument's name in error messages.
+    runtime : Runtime, optional
+        Default the process's (:func:`get_runtime`).
+    check : bool
+        Count a device array's NaN and infinite values on the device; False where the caller
+        checks (e.g. in a DC term it computes anyway).
+
+    Returns
+    -------
+    runtime : Runtime
+    array : pyopencl.array.Array
+        The field, complex64 (H, W).
+    from_host : bool
+        Whether it came from the host (:func:`like_input` sends the result back).
+
+    Raises
+    ------
+    InputError
+        Where the field is not 2-D, empty, of another context, not C-contiguous or not
+        finite, naming ``name``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core.opencl import as_device
+    >>> rt, d, from_host = as_device(np.ones((4, 4)))
+    >>> d.dtype, d.shape, from_host
+    (dtype('complex64'), (4, 4), True)
     """
     rt = runtime or get_runtime()
     if not is_device_array(field):
@@ -133,8 +182,29 @@ def read_first(rt: Runtime, a: cla.Array) -> np.ndarray:
 
 
 def like_input(result, from_host: bool):
-    """Back to the caller's kind of array: NumPy if the input was NumPy (a NumPy result, from
-    a stage that ran on the host, stays as it is)."""
+    """A result back in the caller's kind of array.
+
+    Parameters
+    ----------
+    result : ndarray or pyopencl.array.Array
+        A stage's result.
+    from_host : bool
+        Whether the input was NumPy (:func:`as_device`'s third value).
+
+    Returns
+    -------
+    ndarray or pyopencl.array.Array
+        ``result`` copied to NumPy where the input was NumPy and it is on the device; as it is
+        otherwise (a NumPy result, from a stage that ran on the host, stays NumPy).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core.opencl import as_device, like_input
+    >>> rt, d, from_host = as_device(np.ones((4, 4)))
+    >>> type(like_input(d, from_host)).__name__
+    'ndarray'
+    """
     return result.get() if from_host and is_device_array(result) else result
 
 

@@ -55,7 +55,26 @@ AVX512_TARGETS = {"skylake-avx512", "cascadelake", "cooperlake", "cannonlake", "
 
 
 def all_devices() -> list[tuple[int, int, cl.Device]]:
-    """Every (platform index, device index, device) OpenCL sees."""
+    """Every device OpenCL sees, usable or not.
+
+    Returns
+    -------
+    list of (int, int, pyopencl.Device)
+        (platform index, device index, device), in listing order (the ``P:D`` that
+        ``HOLO_DEVICE`` and ``python -m holo_core devices`` use).
+
+    See Also
+    --------
+    device_table : the same devices with their status.
+
+    Examples
+    --------
+    >>> from holo_core.opencl import all_devices
+    >>> for p, d, device in all_devices():   # doctest: +SKIP
+    ...     print(f"{p}:{d} {device.name.strip()}")
+    0:0 AMD EPYC
+    1:0 pthread-AMD EPYC
+    """
     found = []
     for p, platform in enumerate(cl.get_platforms()):
         try:
@@ -106,7 +125,27 @@ def _probe(device: cl.Device) -> str:
 
 
 def device_problem(device: cl.Device) -> str:
-    """Why ``device`` is unusable, or "" when it passes the probe (probed once per process)."""
+    """Why a device is unusable, or "" when it passes the probe.
+
+    The probe (the module docstring's) runs once per device and process; a failure is logged
+    as a warning the first time.
+
+    Parameters
+    ----------
+    device : pyopencl.Device
+
+    Returns
+    -------
+    str
+        "" (usable) or the reason: the exception's type and first line, or a wrong result
+        with its relative error.
+
+    Examples
+    --------
+    >>> from holo_core.opencl import choose_device, device_problem
+    >>> device_problem(choose_device())
+    ''
+    """
     key = device.int_ptr
     if key not in _probed:
         _probed[key] = _probe(device)
@@ -143,10 +182,39 @@ def _matching(spec: str, devices):
 
 
 def choose_device(spec: str | None = None) -> cl.Device:
-    """The best usable device ``spec`` names (see the module docstring), or the default one.
+    """The best usable device a choice names, or the default one.
 
-    Raises ``ValueError`` naming ``HOLO_DEVICE``, what it matched and the usable devices when
-    nothing it names works, and ``RuntimeError`` when no device works at all."""
+    Parameters
+    ----------
+    spec : str, optional
+        'gpu', 'cpu', 'accelerator', 'P:D' (platform P, device D) or part of a device's or a
+        platform's name (case-insensitive); None reads ``HOLO_DEVICE``, and an empty choice
+        takes the first usable device in the order of the module docstring (GPUs, Intel's CPU
+        runtime, PoCL, anything else).
+
+    Returns
+    -------
+    pyopencl.Device
+        The first matching device that passes the probe (:func:`device_problem`).
+
+    Raises
+    ------
+    InputError
+        Where ``spec`` names no usable device: the message names ``HOLO_DEVICE``, what it
+        matched, why each failed, and the usable devices.
+    RuntimeError
+        Where no device works at all.
+
+    Examples
+    --------
+    >>> from holo_core import InputError
+    >>> from holo_core.opencl import choose_device
+    >>> try:
+    ...     choose_device("no-such-device")
+    ... except InputError as e:
+    ...     print(str(e)[:53])
+    HOLO_DEVICE='no-such-device' names no usable device;
+    """
     spec = (spec if spec is not None else os.environ.get("HOLO_DEVICE", "")).strip()
     devices = sorted(all_devices(), key=lambda t: _rank(t[2]))
     for p, d, dev in _matching(spec, devices):
@@ -165,8 +233,25 @@ def choose_device(spec: str | None = None) -> cl.Device:
 
 
 def device_table(spec: str | None = None) -> list[tuple[str, str, bool]]:
-    """(description, status, chosen) for every device, in listing order: the
-    ``python -m holo_core devices`` table."""
+    """Every device with its status: the ``python -m holo_core devices`` table.
+
+    Parameters
+    ----------
+    spec : str, optional
+        The choice the ``chosen`` column follows (:func:`choose_device`'s).
+
+    Returns
+    -------
+    list of (str, str, bool)
+        (description 'P:D name (platform)', 'usable' or why not, chosen), in listing order;
+        nothing is chosen where ``spec`` names no usable device.
+
+    Examples
+    --------
+    >>> from holo_core.opencl import device_table
+    >>> sum(chosen for _, _, chosen in device_table())   # one device is the default
+    1
+    """
     try:
         chosen = choose_device(spec).int_ptr
     except (ValueError, RuntimeError):
@@ -187,7 +272,29 @@ def is_cpu(device: cl.Device) -> bool:
 class Runtime:
     """One OpenCL context and in-order queue, with cached programs, kernels and scratch buffers.
 
-    Not thread-safe: use one runtime per thread (the default runtime is per process).
+    Not thread-safe: use one runtime per thread (the default runtime, :func:`get_runtime`'s,
+    is per process).
+
+    Parameters
+    ----------
+    device : pyopencl.Device
+        The device (:func:`choose_device`'s); the context and queue are made on it.
+
+    Notes
+    -----
+    ``program(source, options)`` builds a ``.cl`` file (:func:`associated`'s) once per option
+    set, ``kernel(program, name, options)`` makes a kernel object once; ``fft`` is the
+    device's FFT backend (:mod:`holo_core.opencl.fft`); ``scratch(tag, shape, dtype)`` and
+    ``workspace(tag, shape, dtype)`` are reusable work arrays (one per shape, or one growing
+    buffer per tag); ``real`` is the kernels' coordinate type, float64 where the device has
+    it.
+
+    Examples
+    --------
+    >>> from holo_core.opencl import Runtime, choose_device
+    >>> rt = Runtime(choose_device())
+    >>> rt.to_device([[1 + 2j]], "complex64").get()
+    array([[1.+2.j]], dtype=complex64)
     """
 
     device: cl.Device
@@ -297,8 +404,25 @@ class Runtime:
 
 
 def associated(module_file: str) -> Path:
-    """The kernels' file beside a host module: ``camera/recording.py`` launches the kernels of
-    ``camera/recording.cl`` (call with the module's ``__file__``)."""
+    """The kernels' file beside a host module.
+
+    Parameters
+    ----------
+    module_file : str
+        The module's ``__file__``.
+
+    Returns
+    -------
+    pathlib.Path
+        The same path with the suffix ``.cl``: ``camera/recording.py`` launches the kernels
+        of ``camera/recording.cl``.
+
+    Examples
+    --------
+    >>> from holo_core.opencl import associated
+    >>> associated("holo_core/camera/recording.py").as_posix()
+    'holo_core/camera/recording.cl'
+    """
     return Path(module_file).with_suffix(".cl")
 
 
@@ -307,7 +431,27 @@ _lock = threading.Lock()
 
 
 def get_runtime() -> Runtime:
-    """The process-wide runtime on the default device (``HOLO_DEVICE`` or auto)."""
+    """The process-wide runtime on the default device (``HOLO_DEVICE`` or auto).
+
+    Made on first use, then the same one (thread-safe; the runtime itself is not).
+
+    Returns
+    -------
+    Runtime
+
+    Raises
+    ------
+    InputError
+        Where ``HOLO_DEVICE`` names no usable device.
+    RuntimeError
+        Where no device works.
+
+    Examples
+    --------
+    >>> from holo_core.opencl import get_runtime
+    >>> get_runtime() is get_runtime()
+    True
+    """
     global _default
     with _lock:
         if _default is None:
@@ -316,7 +460,37 @@ def get_runtime() -> Runtime:
 
 
 def set_device(spec: str | None) -> Runtime:
-    """Replace the process-wide runtime with one on the device ``spec`` names."""
+    """Replace the process-wide runtime with one on the device a choice names.
+
+    Parameters
+    ----------
+    spec : str or None
+        :func:`choose_device`'s choice (None: ``HOLO_DEVICE`` or auto).
+
+    Returns
+    -------
+    Runtime
+        The new process-wide runtime (:func:`get_runtime` returns it from then on).
+
+    Raises
+    ------
+    InputError
+        Where ``spec`` names no usable device (the runtime is left as it was).
+
+    Examples
+    --------
+    A choice that names no device leaves the process-wide runtime as it was:
+
+    >>> from holo_core import InputError
+    >>> from holo_core.opencl import get_runtime, set_device
+    >>> before = get_runtime()
+    >>> try:
+    ...     set_device("no-such-device")
+    ... except InputError:
+    ...     pass
+    >>> get_runtime() is before
+    True
+    """
     global _default
     with _lock:
         _default = Runtime(choose_device(spec))
