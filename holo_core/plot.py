@@ -33,20 +33,123 @@ _UNITS = (("m", 1.0), ("mm", 1e-3), ("µm", 1e-6), ("nm", 1e-9))
 
 
 def amplitude(field, pitch=None, *, ax=None, colorbar=True, **imshow):
-    """|U| of ``field`` against x, y; ``pitch`` [m] for an array."""
+    """The amplitude |U| of a field against x, y.
+
+    Parameters
+    ----------
+    field : (H, W) array, device array or Field
+        A complex field (NumPy, or an OpenCL device array read back), or a
+        :class:`~holo_core.Field` that carries its pitch.
+    pitch : float, optional
+        Sample spacing [m] of an array (a Field carries its own).
+    ax : matplotlib Axes, optional
+        Where to draw (default: a new figure's axes).
+    colorbar : bool
+        Add a colour bar with the quantity's name.
+    **imshow
+        Further keywords for ``imshow`` (``cmap``, ``vmin``, …).
+
+    Returns
+    -------
+    matplotlib.image.AxesImage
+
+    Raises
+    ------
+    InputError
+        Where an array comes without ``pitch``, a Field with one, or the field is not 2-D.
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import numpy as np
+    >>> from holo_core.plot import amplitude
+    >>> image = amplitude(np.ones((64, 64), complex), pitch=2e-6)
+    >>> image.axes.get_xlabel(), [float(v) for v in image.get_extent()]   # ±32 pitches
+    ('x [µm]', [-64.0, 64.0, -64.0, 64.0])
+    """
     u, p, _ = _field(field, pitch)
     return _plane(np.abs(u), p, ax, "amplitude |U|", colorbar, imshow)
 
 
 def intensity(field, pitch=None, *, ax=None, colorbar=True, **imshow):
-    """|U|² of a complex ``field`` (or a real intensity) against x, y; ``pitch`` [m]."""
+    """The intensity |U|² of a complex field (or a real intensity) against x, y.
+
+    Parameters
+    ----------
+    field : (H, W) array, device array or Field
+        A complex field (NumPy, or an OpenCL device array read back), or a
+        :class:`~holo_core.Field` that carries its pitch.
+    pitch : float, optional
+        Sample spacing [m] of an array (a Field carries its own).
+    ax : matplotlib Axes, optional
+        Where to draw (default: a new figure's axes).
+    colorbar : bool
+        Add a colour bar with the quantity's name.
+    **imshow
+        Further keywords for ``imshow`` (``cmap``, ``vmin``, …).
+
+    Returns
+    -------
+    matplotlib.image.AxesImage
+
+    Raises
+    ------
+    InputError
+        Where an array comes without ``pitch``, a Field with one, or the field is not 2-D.
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import numpy as np
+    >>> from holo_core.plot import intensity
+    >>> image = intensity(np.ones((64, 64), complex), pitch=2e-6)
+    >>> image.axes.get_xlabel(), [float(v) for v in image.get_extent()]   # ±32 pitches
+    ('x [µm]', [-64.0, 64.0, -64.0, 64.0])
+    """
     u, p, _ = _field(field, pitch)
     return _plane(np.abs(u) ** 2, p, ax, "intensity |U|²", colorbar, imshow)
 
 
 def phase(field, pitch=None, *, ax=None, threshold=1e-3, colorbar=True, **imshow):
-    """arg U [rad] in (−π, π] against x, y, blank where |U| < ``threshold``·max |U| (the
-    phase of nothing is noise); ``pitch`` [m]."""
+    """The phase arg U [rad] in (−π, π] against x, y.
+
+    Parameters
+    ----------
+    field : (H, W) array, device array or Field
+        A complex field (NumPy, or an OpenCL device array read back), or a
+        :class:`~holo_core.Field` that carries its pitch.
+    pitch : float, optional
+        Sample spacing [m] of an array (a Field carries its own).
+    threshold : float
+        Blank (NaN) where |U| < ``threshold``·max |U|: the phase of nothing is noise.
+    ax : matplotlib Axes, optional
+        Where to draw (default: a new figure's axes).
+    colorbar : bool
+        Add a colour bar with the quantity's name.
+    **imshow
+        Further keywords for ``imshow`` (``cmap``, ``vmin``, …).
+
+    Returns
+    -------
+    matplotlib.image.AxesImage
+
+    Raises
+    ------
+    InputError
+        Where an array comes without ``pitch``, a Field with one, or the field is not 2-D.
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import numpy as np
+    >>> from holo_core.plot import phase
+    >>> image = phase(np.ones((64, 64), complex), pitch=2e-6)
+    >>> image.axes.get_xlabel(), [float(v) for v in image.get_extent()]   # ±32 pitches
+    ('x [µm]', [-64.0, 64.0, -64.0, 64.0])
+    """
     u, p, _ = _field(field, pitch)
     a = np.abs(u)
     ph = np.where(a >= threshold * a.max(), np.angle(u), np.nan) if a.size else np.angle(u)
@@ -55,8 +158,45 @@ def phase(field, pitch=None, *, ax=None, threshold=1e-3, colorbar=True, **imshow
 
 
 def spectrum(field, pitch=None, *, ax=None, log=True, colorbar=True, **imshow):
-    """|FFT U|² against fx, fy [1/mm] (zero frequency at the centre), in dB of its peak when
-    ``log``; ``pitch`` [m]."""
+    """The power spectrum |FFT U|² against the spatial frequencies fx, fy [1/mm].
+
+    Zero frequency at the centre (``numpy.fft.fftfreq`` of the grid, shifted).
+
+    Parameters
+    ----------
+    field : (H, W) array, device array or Field
+        A complex field (NumPy, or an OpenCL device array read back), or a
+        :class:`~holo_core.Field` that carries its pitch.
+    pitch : float, optional
+        Sample spacing [m] of an array (a Field carries its own).
+    log : bool
+        In dB of the peak (floored at −120 dB), else linear power.
+    ax : matplotlib Axes, optional
+        Where to draw (default: a new figure's axes).
+    colorbar : bool
+        Add a colour bar with the quantity's name.
+    **imshow
+        Further keywords for ``imshow`` (``cmap``, ``vmin``, …).
+
+    Returns
+    -------
+    matplotlib.image.AxesImage
+
+    Raises
+    ------
+    InputError
+        Where an array comes without ``pitch``, a Field with one, or the field is not 2-D.
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import numpy as np
+    >>> from holo_core.plot import spectrum
+    >>> image = spectrum(np.ones((64, 64), complex), pitch=2e-6)
+    >>> image.axes.get_xlabel(), round(image.get_extent()[0], 1)   # −1/(2·pitch), a bin wide
+    ('fx [1/mm]', -253.9)
+    """
     u, p, _ = _field(field, pitch)
     s = np.abs(np.fft.fftshift(np.fft.fft2(u))) ** 2
     if log:
@@ -76,7 +216,42 @@ def spectrum(field, pitch=None, *, ax=None, log=True, colorbar=True, **imshow):
 
 
 def hologram(h, colour: int = 0, *, ax=None, colorbar=True, **imshow):
-    """The recorded intensity of one colour of a Hologram (|O|² for a complex hologram)."""
+    """The recorded intensity of one colour of a Hologram against x, y.
+
+    Parameters
+    ----------
+    h : Hologram
+        An intensity hologram, or a complex one (|O|² is drawn).
+    colour : int
+        Index into its wavelengths; the title names the channel and the wavelength.
+    ax : matplotlib Axes, optional
+        Where to draw (default: a new figure's axes).
+    colorbar : bool
+        Add a colour bar with the quantity's name.
+    **imshow
+        Further keywords for ``imshow`` (``cmap``, ``vmin``, …).
+
+    Returns
+    -------
+    matplotlib.image.AxesImage
+
+    Raises
+    ------
+    InputError
+        Where ``h`` is not a Hologram or ``colour`` is out of range.
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import numpy as np
+    >>> from holo_core import Hologram
+    >>> from holo_core.plot import hologram
+    >>> h = Hologram(intensity=np.ones((1, 64, 64), np.float32), wavelengths=(633e-9,),
+    ...              pitch=2e-6)
+    >>> hologram(h).axes.get_title()
+    'Y at 633 nm'
+    """
     if not isinstance(h, Hologram):
         raise InputError(f"h must be a Hologram; got {type(h).__name__}")
     c = validate.index("colour", colour, len(h.wavelengths))
@@ -88,8 +263,42 @@ def hologram(h, colour: int = 0, *, ax=None, colorbar=True, **imshow):
 
 
 def view(result, *, camera=None, ax=None, **imshow):
-    """A RenderResult's radiance in sRGB, row 0 at the top; with its ``camera``, the axes are
-    field angles [°] (atan of the view tangents at the image's edges), else pixels."""
+    """A rendered view's radiance in sRGB, row 0 at the top.
+
+    Parameters
+    ----------
+    result : RenderResult
+        A view (:func:`holo_core.render_view`'s, :func:`holo_core.render_camera`'s).
+    camera : Camera, optional
+        Its camera: the axes are then field angles [°] (atan of the view tangents at the
+        image's edges), else pixels.
+    ax : matplotlib Axes, optional
+        Where to draw (default: a new figure's axes).
+    **imshow
+        Further keywords for ``imshow``.
+
+    Returns
+    -------
+    matplotlib.image.AxesImage
+
+    Raises
+    ------
+    InputError
+        Where the camera's resolution differs from the view's.
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import numpy as np
+    >>> from holo_core import Camera, RenderResult, look_at
+    >>> from holo_core.plot import view
+    >>> cam = Camera(matrix_world=look_at((0, -1, 0), (0, 0, 0)), resolution=(64, 48))
+    >>> black = RenderResult(rgb=np.zeros((48, 64, 3)), alpha=np.zeros((48, 64)),
+    ...                      depth=np.full((48, 64), np.inf))
+    >>> view(black, camera=cam).axes.get_xlabel()
+    'x field angle [°]'
+    """
     rgb = preview.srgb(np.asarray(result.rgb, np.float64))
     h, w = rgb.shape[:2]
     ax = ax or plt.figure().add_subplot()

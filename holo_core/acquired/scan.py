@@ -50,6 +50,10 @@ class OrderWarning(UserWarning):
     :func:`~holo_core.acquired.object_hologram` where the order that should come into focus
     behind the hologram does not focus measurably better than its twin (a phase object, or a
     wrong distance): the order taken may be the twin. A subclass of ``UserWarning``.
+
+    See Also
+    --------
+    holo_core.find_carrier : the carrier by the spectrum's rule (``sideband``) instead.
     """
 
 

@@ -64,6 +64,23 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
         whole plate in memory.
     progress : callable, optional
         Called with the fraction done (rows in memory, tiles in a store).
+
+    Returns
+    -------
+    Hologram
+        The plate: its object wave against the carrier (λ1, and λ2 with ``depth``), in
+        memory, or the tiled store at ``url`` opened.
+
+    Raises
+    ------
+    InputError
+        Where an argument is out of range, naming it, or the plate needs more than
+        ``budget`` (with its sizes).
+
+    See Also
+    --------
+    record_looks : several looks of one plate in one pass.
+    holo_core.render_view : a camera's view of the plate.
     """
     planned = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
                          zone_margin=zone_margin, wavelength=wavelength, looks=1)
@@ -79,17 +96,46 @@ def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
                  wavelength=None, depth=True, seed=0, budget=(None, None), urls=None,
                  tile=None, scheduler=None, overwrite=False, progress: jobs.Progress = None,
                  dashboard=None, recording="") -> list[Hologram]:
-    """``looks`` looks of one plate (:func:`record_plate`'s arguments), recorded in memory in
-    one pass: the coded looks of ``seed`` (:func:`~holo_core.plate.recording.look_code`) where ``looks`` allows, else
-    seeds ``seed``, ``seed`` + 1, …. The looks differ only in their emitters' phases, so one
-    sum carries them all as further channels: each emitter's distance, phase and visibility
-    at a sample are found once for every look (on the shot's plate, two looks in 36 s where
-    one after the other took 53 s). ``budget`` covers all the looks held together. ``urls``
-    (one a look): each look tile by tile into its own store, every tile's looks summed at
-    once (:func:`holo_core.plate.tiles.record_looks_tiled`; ``tile``, ``scheduler``,
-    ``overwrite``, ``dashboard`` as for :func:`record_plate`). ``recording``: the digest the
-    looks carry in their description and their stores (the name the caller knows them by:
-    :attr:`holo_core.scene.hologram.HologramInfo.recording`)."""
+    """Several looks of one plate, recorded in one pass.
+
+    The looks differ only in their emitters' phases, so one sum carries them all as further
+    channels: each emitter's distance, phase and visibility at a sample are found once for
+    every look, which costs less than recording them one after the other
+    (``bench/record.py``; the docs' Performance page).
+
+    Parameters
+    ----------
+    meshes : Mesh or sequence of Mesh
+        World-space surfaces [m]; colours are linear RGB intensities.
+    looks : int
+        How many looks, >= 1: the coded looks of ``seed``
+        (:func:`~holo_core.plate.recording.look_code`) where ``looks`` allows (a square
+        number), else seeds ``seed``, ``seed`` + 1, ….
+    plate, camera, zone, zone_margin, wavelength, depth, seed
+        As for :func:`record_plate` (lengths [m]).
+    budget : (memory, disk) [bytes]
+        What all the looks held together may take (None: no limit).
+    urls : sequence of str or path, optional
+        One a look: each look tile by tile into its own store, every tile's looks summed at
+        once (:func:`holo_core.plate.tiles.record_looks_tiled`). Default: in memory.
+    tile, scheduler, overwrite, dashboard
+        As for :func:`record_plate`, with ``urls``.
+    progress : callable, optional
+        Called with the fraction done.
+    recording : str
+        The digest the looks carry in their description and their stores (the name the
+        caller knows them by: ``HologramInfo.recording``).
+
+    Returns
+    -------
+    list of Hologram
+        One a look, in memory or the stores at ``urls`` opened.
+
+    Raises
+    ------
+    InputError
+        Where ``looks`` is not an integer >= 1, or as :func:`record_plate`.
+    """
     looks = validate.integer("looks", looks, 1)
     planned = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
                          zone_margin=zone_margin, wavelength=wavelength, looks=looks)

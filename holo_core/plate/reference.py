@@ -18,6 +18,8 @@ from ..validate import InputError, shown
 class Reference:
     """The plane reference wave of Eq. 4 on z = 0.
 
+    Parameters
+    ----------
     angle : float
         ϑ [rad], between the reference's direction and the hologram normal (+z), in [0, π/2).
     azimuth : float
@@ -25,7 +27,34 @@ class Reference:
     beam_ratio : float
         |R|² / mean |O|², > 0: the reference's intensity against the object wave's.
     allow_aliasing : bool
-        Record even when the pitch violates Eq. 19 (the message names the largest safe angle).
+        Record even when the pitch violates Eq. 19 (warned; the message names the largest
+        safe angle).
+
+    Raises
+    ------
+    InputError
+        Where ``angle`` is outside [0, π/2), ``azimuth`` is not finite or ``beam_ratio`` is
+        not > 0.
+
+    Notes
+    -----
+    R = A·exp(ik(α·x + β·y)) (Eq. 4), (α, β, γ) = (sin ϑ cos φ, sin ϑ sin φ, cos ϑ) the
+    direction ``direction()`` returns. ``check(wavelength, pitch)`` holds the carrier's
+    fringes to Eq. 19, pitch <= λ / (2 sin ϑ): it raises :class:`~holo_core.InputError`
+    (or, with ``allow_aliasing``, warns) naming the largest safe angle.
+
+    Examples
+    --------
+    >>> from holo_core import InputError
+    >>> from holo_core.plate import Reference
+    >>> r = Reference(angle=0.1)
+    >>> r.direction().round(4)
+    array([0.0998, 0.    , 0.995 ])
+    >>> try:
+    ...     r.check(633e-9, 4e-6)
+    ... except InputError as e:
+    ...     print(str(e)[:60])
+    reference angle 0.1 rad needs a pitch <= 3.17e-06 m at λ = 6
     """
 
     angle: float = 0.0
@@ -41,13 +70,32 @@ class Reference:
         validate.positive("reference beam_ratio", self.beam_ratio)
 
     def direction(self) -> np.ndarray:
-        """Unit propagation direction (α, β, γ) (direction cosines of Eq. 4)."""
+        """The unit propagation direction (α, β, γ): the direction cosines of Eq. 4.
+
+        Returns
+        -------
+        (3,) float64 ndarray
+        """
         s = math.sin(self.angle)
         return np.array([s * math.cos(self.azimuth), s * math.sin(self.azimuth),
                          math.cos(self.angle)])
 
     def check(self, wavelength: float, pitch: float) -> None:
-        """Eq. 19: the carrier fringes need pitch <= λ / (2 sin ϑ)."""
+        """Eq. 19: the carrier fringes need pitch <= λ / (2 sin ϑ).
+
+        Parameters
+        ----------
+        wavelength : float
+            λ [m].
+        pitch : float
+            The hologram's sample spacing [m].
+
+        Raises
+        ------
+        InputError
+            Where the pitch is too coarse for the angle (warned instead with
+            ``allow_aliasing``), naming the largest safe angle.
+        """
         if self.angle == 0:
             return
         limit = wavelength / (2 * math.sin(self.angle))

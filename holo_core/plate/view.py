@@ -175,11 +175,40 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
 
 def render_set_view(plates: PlateSet, camera: Camera, *, frame: int | None = None,
                     outside: str = "warn", **settings):
-    """The view of ``camera`` from the part of ``plates`` whose zone holds its pupil
-    (:func:`holo_core.plate.path.part_for`), by :func:`render_view` (``settings`` as there).
-    A pupil outside every part's zone warns (:class:`OutsideZoneWarning`, naming ``frame``
-    where given, and the nearest part) and is viewed from that part, or with ``outside``
-    'fail' is refused (:class:`InputError`)."""
+    """A camera's view of a plate set, from the part whose zone holds its pupil.
+
+    Parameters
+    ----------
+    plates : PlateSet
+        The parts along a camera path (:func:`holo_core.record_set`,
+        :func:`holo_core.read_plate_set`).
+    camera : Camera
+        The view's camera; the part is the one whose zone holds its pupil
+        (:func:`holo_core.plate.path.part_for`).
+    frame : int, optional
+        The frame number, named in the warning or the error.
+    outside : {'warn', 'fail'}
+        A pupil outside every part's zone: 'warn' (:class:`OutsideZoneWarning`, naming the
+        nearest part and how far beyond it [m] the pupil reaches) and view it from that part;
+        'fail' refuses it.
+    **settings
+        As for :func:`holo_core.render_view` (supersample, exposure, …).
+
+    Returns
+    -------
+    RenderResult
+        :func:`holo_core.render_view`'s, from the part's looks.
+
+    Raises
+    ------
+    InputError
+        Where ``plates`` is not a PlateSet, ``camera`` not a Camera, ``outside`` unknown, or
+        with ``outside='fail'`` the pupil lies outside every part's zone.
+
+    See Also
+    --------
+    holo_core.parts_along : the parts a camera path needs.
+    """
     if not isinstance(plates, PlateSet):
         raise InputError(f"plates must be a PlateSet; got {type(plates).__name__}")
     if not isinstance(camera, Camera):

@@ -137,11 +137,38 @@ def _transfer(shape, wavelength, pitch, distance, offset, band_limit) -> np.ndar
 
 
 def alias_free_distance(shape, pitch, wavelength, offset=(0.0, 0.0)) -> float:
-    """The largest |z| [m] for which the unlimited transfer function is alias-free on ``shape``.
+    """The largest distance for which the unlimited transfer function is alias-free on a grid.
 
     The ray slope fx/fz is largest at the grid's highest frequencies; beyond this distance the
-    band limit removes frequencies the grid holds (without it, they alias). Zero when the grid
-    reaches the evanescent cut-off.
+    band limit removes frequencies the grid holds (without it, they alias).
+
+    Parameters
+    ----------
+    shape : (int, int)
+        The (padded) grid (H, W).
+    pitch : float or (float, float)
+        Sample spacing [m], or (x, y).
+    wavelength : float
+        λ [m].
+    offset : (float, float)
+        The output plane's lateral offset (x0, y0) [m].
+
+    Returns
+    -------
+    float
+        The largest |z| [m]; 0 where the grid's corner frequency reaches the evanescent
+        cut-off (a square pitch <= λ/√2) or the offset is half the window or more.
+
+    Notes
+    -----
+    A ray of frequency (fx, fy) moves by z·fx/fz across the plane (Eq. 12-13): it stays in
+    the half window n·pitch/2 − |x0| up to this z.
+
+    Examples
+    --------
+    >>> from holo_core.propagation import alias_free_distance
+    >>> round(alias_free_distance((256, 256), 2e-6, 633e-9) * 1e3, 3)   # mm
+    1.577
     """
     px, py = grid.pitch_pair(pitch)
     fmax = [np.abs(grid.freqs(n, p)).max() for n, p in zip(shape, (py, px))]  # (fy, fx)

@@ -34,11 +34,45 @@ VARYING = ("wavelength", "distance")  # settings that may be arrays over the bat
 
 
 def batched(plane, *, moves=None, grid_of=None, returns_pitch=False):
-    """``plane`` (field, *, [wavelength,] pitch, ...) taking Fields and batches.
+    """A plane function that takes Fields and batches too (this module's docstring).
 
-    moves(settings) -> (4, 4): where the output plane lies in the input plane's frame;
-    grid_of(settings, shape, pitch) -> (out shape, out pitch (x, y)); returns_pitch: the plane
-    function returns (field, (x pitch, y pitch)) (the far field)."""
+    Parameters
+    ----------
+    plane : callable
+        ``plane(field, *, [wavelength,] pitch, ...)``: one (H, W) field and scalar settings
+        (SI units) to one output plane.
+    moves : callable, optional
+        ``moves(settings)`` → (4, 4) array: where the output plane lies in the input plane's
+        frame [m] (a Field's pose follows it); default the identity.
+    grid_of : callable, optional
+        ``grid_of(settings, shape, pitch)`` → (out shape, out pitch (x, y) [m]); default the
+        input's grid.
+    returns_pitch : bool
+        The plane function returns (field, (x pitch, y pitch) [m]) (the far field's).
+
+    Returns
+    -------
+    callable
+        ``call(field, **settings)``: a single (H, W) array with scalar settings goes straight
+        to ``plane``; a :class:`~holo_core.Field` gives a Field (its wavelength and pitch
+        taken from it), a batch (..., H, W) and array-valued ``wavelength`` or ``distance``
+        are broadcast together, the whole result's memory checked first.
+
+    Raises
+    ------
+    InputError
+        (from the call) Where a keyword is unknown, a Field comes with its own wavelength or
+        pitch, or the batch shapes do not broadcast.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core.propagation import batched
+    >>> def doubled(field, *, pitch):
+    ...     return 2 * np.asarray(field)
+    >>> batched(doubled)(np.ones((3, 4, 4)), pitch=1e-6).shape
+    (3, 4, 4)
+    """
 
     # the keywords it takes, checked before any work; a plane that passes **settings on (an
     # adjoint) leaves them to the function it calls

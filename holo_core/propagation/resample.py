@@ -81,9 +81,39 @@ def resample(field, *, pitch, out_shape, out_pitch):
 
 
 def interpolation_matrix(n: int, pitch: float, n_out: int, out_pitch: float) -> np.ndarray:
-    """The (n_out, n) float64 matrix of one axis (see the module docstring).
+    """The band-limited interpolation matrix of one axis (the module docstring's K).
 
-    ``pitch``, ``out_pitch`` [m] are the input and output sample spacings.
+    Parameters
+    ----------
+    n : int
+        Input samples.
+    pitch : float
+        Input sample spacing [m].
+    n_out : int
+        Output samples.
+    out_pitch : float
+        Output sample spacing [m].
+
+    Returns
+    -------
+    (n_out, n) float64 ndarray
+        K with out = K·in, both grids centred; rows of output samples outside the input
+        window are zero.
+
+    Notes
+    -----
+    K[j, i] = (1/n)·Σ_m w_m·cos(2π f_m (x'_j − x_i)) over the input's DFT frequencies, cut at
+    the lower of the two Nyquist frequencies, in closed form (a Dirichlet kernel); bins that
+    fall on the cut get half weight, which makes K real and the identity between equal grids.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core.propagation import interpolation_matrix
+    >>> bool(np.allclose(interpolation_matrix(8, 1e-6, 8, 1e-6), np.eye(8)))
+    True
+    >>> interpolation_matrix(16, 1e-6, 8, 2e-6).shape
+    (8, 16)
     """
     df = 1.0 / (n * pitch)
     cut = min(1 / (2 * pitch), 1 / (2 * out_pitch)) / df  # the band's edge, in bins

@@ -154,11 +154,47 @@ def _ramp(n, pitch, x0) -> np.ndarray:
 # --- on the host, in float64 ------------------------------------------------------------------
 
 def transfer_function(shape, *, wavelength, pitch, distance, offset=(0.0, 0.0), band_limit=True):
-    """The transfer function exp(i2πz·fz)·exp(i2π(fx·x0 + fy·y0)) (Eq. 12-13), complex128.
+    """The angular spectrum's transfer function on a grid, float64 on the host.
 
-    ``shape`` is the (padded) grid in FFT order, ``wavelength`` [m], ``pitch`` [m] (or (x, y)),
-    ``distance`` [m], ``offset`` (x0, y0) [m]. The phase is formed as k·z (reduced mod 2π) plus
-    -2πz·f²/(1/λ + fz), which keeps float64 precision for large k·z.
+    Parameters
+    ----------
+    shape : (int, int)
+        The (padded) grid (H, W), in FFT order.
+    wavelength : float
+        λ [m].
+    pitch : float or (float, float)
+        Sample spacing [m], or (x, y).
+    distance : float
+        Propagation distance z [m].
+    offset : (float, float)
+        The output plane's lateral offset (x0, y0) [m].
+    band_limit : bool
+        Weight each frequency by the band limit (1 where its ray lands well inside half the
+        padded window, rolling off to 0 at its edge); False: the unlimited function.
+
+    Returns
+    -------
+    (H, W) complex128 ndarray
+        exp(i2πz·fz)·exp(i2π(fx·x0 + fy·y0)), zero for evanescent frequencies (f >= 1/λ).
+
+    Notes
+    -----
+    Eq. 12-13. The phase is formed as k·z (reduced mod 2π) plus −2πz·f²/(1/λ + fz), which
+    keeps float64 precision for large k·z. It is the float64 reference of the transfer
+    function :func:`holo_core.angular_spectrum` computes on the device, and the one it applies
+    where ``out_pitch`` or ``out_shape`` is given.
+
+    Examples
+    --------
+    At zero frequency the phase is k·z, reduced mod 2π:
+
+    >>> import numpy as np
+    >>> from holo_core.propagation import transfer_function
+    >>> H = transfer_function((64, 64), wavelength=633e-9, pitch=2e-6, distance=1e-3)
+    >>> H.dtype, round(float(np.angle(H[0, 0])), 6)
+    (dtype('complex128'), -1.389646)
+    >>> round(float(np.angle(np.exp(2j * np.pi * 1e-3 / 633e-9))), 6)
+    -1.389646
     """
     px, py = grid.pitch_pair(pitch)
     fy, fx = grid.freqs(shape[0], py)[:, None], grid.freqs(shape[1], px)[None, :]

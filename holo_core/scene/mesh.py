@@ -155,11 +155,51 @@ def _numbers(name, value, allowed) -> np.ndarray:
 
 def sample_points(mesh: Mesh, spacing: float, *, channels=3, seed=0, max_points=2_000_000,
                   normals=False):
-    """Area-uniform random points on ``mesh``, one per ``spacing``² [m] of surface on average.
+    """Area-uniform random points on a mesh, one per ``spacing``² of surface on average.
 
-    Returns (positions (N, 3) [m], colours (N, C)) with colours interpolated from the vertex
-    colours, looked up in the texture through the UVs, or white; with ``normals``, also each
-    point's unit surface normal (N, 3).
+    Parameters
+    ----------
+    mesh : Mesh
+        The surface [m].
+    spacing : float
+        The points' mean spacing [m]: N = area / spacing², at least 1.
+    channels : int
+        Colour channels C of the result.
+    seed : int
+        Seeds the sampling (a random stream of its own, apart from the emitters' phases).
+    max_points : int
+        At most this many points, >= 1.
+    normals : bool
+        Also return each point's unit surface normal.
+
+    Returns
+    -------
+    positions : (N, 3) float64 ndarray
+        The points [m].
+    colours : (N, C) ndarray
+        Interpolated from the vertex colours, looked up in the texture through the UVs, or
+        white.
+    normals : (N, 3) ndarray
+        Only with ``normals``: each point's triangle's unit normal.
+
+    Raises
+    ------
+    InputError
+        Where ``mesh`` is not a Mesh or has no surface area, ``spacing`` is not a length
+        > 0 or ``max_points`` < 1.
+
+    Examples
+    --------
+    A triangle of 0.5 mm² at 10 µm spacing:
+
+    >>> import numpy as np
+    >>> from holo_core import Mesh
+    >>> from holo_core.scene import sample_points
+    >>> tri = Mesh(vertices=np.array([[0, 0, 0], [1e-3, 0, 0], [0, 1e-3, 0.0]]),
+    ...            triangles=np.array([[0, 1, 2]]))
+    >>> positions, colours = sample_points(tri, 1e-5)
+    >>> positions.shape, colours[0]
+    ((5000, 3), array([1., 1., 1.]))
     """
     tri, bary, pos = surface_samples(mesh, spacing, seed, max_points)
     colours = surface_colour(mesh, mesh.triangles[tri], bary, channels)
