@@ -2,7 +2,7 @@
 
 The panel clamps what a user types, but a script that sets the stored value (``scene.holo[
 "iterations"] = 10**9``), a file of another version or a damaged one hands the add-on numbers
-outside them (an Iterations of 10⁹ asked for 10 GB before anything refused it). The ranges
+outside them (an Iterations of 10⁹ would ask for 10 GB before anything refused it). The ranges
 are the properties' own (``min``/``max`` in :mod:`holo_addon.ui.properties`), read from
 Blender's description of them, so they are written once; a setting outside is named as the
 panel names it, with the panel's units.

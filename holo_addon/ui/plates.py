@@ -138,8 +138,8 @@ def plan_summary(context) -> list[str]:
     plate = plate_from_object(obj, unit)
     camera = camera_from_object(scene, scene.camera, unit)
     # the triangles' corners, as the recording takes them: an object's bounding box turned
-    # into the plate's frame is up to √3 times wider than the object (the demo's sphere
-    # planned 74 Mpx and 4.4 GB for a plate that recorded 46 Mpx and 2.7 GB)
+    # into the plate's frame is up to √3 times wider than the object, and a plate planned
+    # from it overstates its samples and memory by as much (docs, Performance)
     depsgraph = context.evaluated_depsgraph_get()
     corners = [corner_positions(inst.object, depsgraph, unit, inst.matrix_world)
                for inst, _ in emitter_instances(depsgraph)]

@@ -50,9 +50,9 @@ def camera_space(camera: Camera, points) -> np.ndarray:
 
 RASTER_CHUNK = 4_000_000  # bin-triangle pairs tested at once
 TRIANGLE_BYTES = 1000  # host bytes per triangle of the largest mesh while rasterizing (its
-                       # projected corners and bin boxes: measured 920 at 10^6 triangles)
+                       # projected corners and bin boxes), above the peak (docs, Performance)
 VERTEX_BYTES = 64      # per vertex: camera-space positions, depths, tangents
-PAIR_BYTES = 100       # per bin-triangle pair of a chunk (measured: 270-330 MB a chunk)
+PAIR_BYTES = 100       # per bin-triangle pair of a chunk, above the peak (docs, Performance)
 
 
 def raster_bytes(meshes, chunk=RASTER_CHUNK) -> float:
@@ -227,7 +227,7 @@ def camera_emitters(meshes, points, camera: Camera, *, supersample, pupil_diamet
     ``camera``: the optics chosen for their depths (:func:`.optics.choose_optics`, at
     ``supersample`` fine pixels per pixel, ``pupil_diameter`` [m] or the camera's), then one
     emitter per bin. The meshes' rasterization is counted against the host's memory first."""
-    if meshes:  # before the meshes are projected: a 10^7-vertex mesh took 8 GB and more
+    if meshes:  # before the meshes are projected: a 10^7-vertex mesh needs 8 GB and more
         memory.check_host(f"rasterizing {sum(len(m.triangles) for m in meshes)} triangles",
                           raster_bytes(meshes))
     pos, colours = (None, None) if points is None else points

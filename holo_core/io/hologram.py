@@ -119,8 +119,8 @@ def write_hologram(path, h: Hologram) -> Path:
             channels[f"c{c}.O.im"] = h.object_wave[c].imag
         elif h.object_wave is not None:  # pairs: the samples as they lie, not split in copies
             channels[f"c{c}.O"] = np.ascontiguousarray(h.object_wave[c]).view(np.float32)
-    # a plate's object wave is speckle, which ZIP barely shrinks (the shot's look: 1.14 GB
-    # against 1.46 GB) at 15 s to write and 5 s to read it, where a frame reads it each time
+    # a plate's object wave is speckle, which ZIP barely shrinks (by about a fifth) at seconds
+    # to write and to read it, where a frame reads it each time (docs, Performance)
     write_exr(path, channels, holo=header,
               compression="none" if h.carrier is not None else "zip")
     return path
@@ -203,8 +203,7 @@ def read_hologram(path) -> Hologram:
 def _complex(parts) -> np.ndarray:
     """(C, H, W) complex64 of each channel's float32 planes ``parts``: (real, imaginary), or
     the pairs (H, 2W) alone; page-aligned (a CPU device's views read it in place), copied in
-    blocks of rows over the cores: a frame of an animation reads its plate this way (a look
-    of 6754 × 6761 samples: 0.33 s against 0.63 s in one thread)."""
+    blocks of rows over the cores: a frame of an animation reads its plate this way."""
     h, w = parts[0][0].shape
     wave = memory.aligned_zeros((len(parts), h, w if len(parts[0]) == 2 else w // 2))
 

@@ -15,8 +15,8 @@ def read(a: cla.Array, out: np.ndarray | None = None) -> np.ndarray:
     """A new host array of the device array ``a``'s samples (C-contiguous ``a``), or ``out``
     (C-contiguous, ``a``'s shape and type) filled with them, waited for.
     pyopencl's ``get`` keeps each read's event on ``a``, and with it the host array it filled
-    (up to 12 of them), so reading a reused array (a scratch buffer, an imager's pixels) held
-    a dozen copies alive: 1.6 GB a worker for the tiles of a plate."""
+    (up to 12 of them), so reading a reused array (a scratch buffer, an imager's pixels) that
+    way keeps a dozen copies alive (gigabytes a worker for the tiles of a plate)."""
     if out is None:
         out = np.empty(a.shape, a.dtype)
     elif out.shape != a.shape or out.dtype != a.dtype or not out.flags.c_contiguous:

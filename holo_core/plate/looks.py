@@ -100,8 +100,8 @@ def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
 
     The looks differ only in their emitters' phases, so one sum carries them all as further
     channels: each emitter's distance, phase and visibility at a sample are found once for
-    every look, which costs less than recording them one after the other
-    (``bench/record.py``; the docs' Performance page).
+    every look, which costs less than recording them one after the other (``bench/shot.py``
+    times the pass; the docs' Performance page).
 
     Parameters
     ----------

@@ -220,12 +220,10 @@ def lattice_parts(centres, target, turn: float = LATTICE_TURN) -> list[int]:
     (``centres`` (P, 3) [m], in order) cut into runs that turn at most ``turn`` [rad] about
     ``target`` (3,) [m] (the objects' middle), the middle part of each run. A lattice serves
     every part of its run, weighted for each (:func:`set_emitters`); a lattice a part would
-    leave a seam between lattices across the surfaces wherever two parts meet (the shot's
-    1 m dolly at 320x180, 12 lattices, unweighted: silhouettes' IoU 0.964-0.968 against
-    0.975-0.980 for one), and too few serve the ends of their runs from far off (a 30° orbit
-    in 22 parts, its middle and end frames: runs of 15°, 28.7 and 27.5 dB, IoU 0.980 and
-    0.975; of 5°, 28.6 and 28.6 dB, IoU 0.976 and 0.979; each part recorded alone, 29.3 and
-    29.5 dB, IoU 0.980 and 0.979)."""
+    leave a seam between lattices across the surfaces wherever two parts meet (the
+    silhouettes' IoU falls), and too few serve the ends of their runs from far off (at runs
+    of 15° an orbit's end frame is about 1 dB below its middle, at 5° level with it: docs,
+    Performance)."""
     d = np.asarray(centres, np.float64) - np.asarray(target, np.float64)
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     runs, start = [], 0

@@ -65,8 +65,8 @@ class Grid(NamedTuple):
 
 
 POINT_BYTES = 200         # host bytes per point emitter while recording, plus ...
-POINT_CHANNEL_BYTES = 96  # ... per point and channel (measured with the recording planes:
-                          # 201 B at one channel, 367 at four, and the amplitudes before)
+POINT_CHANNEL_BYTES = 96  # ... per point and channel: the recording planes' peak, above what
+                          # one to four channels hold (docs, Performance)
 
 
 def point_bytes(points: int, channels: int) -> float:

@@ -27,7 +27,7 @@ from .triangles import depth_texture, mesh_primitives, primitive_wave, surface_p
 DEFAULT_WAVELENGTHS = (633e-9, 532e-9, 473e-9)  # HeNe red, Nd:YAG green, DPSS blue [m]
 MIN_OBLIQUITY = 0.1  # a primitive seen more edge-on than this (cos) gets no brighter
 ROTATION_SECONDS = 2e-7  # a primitive's rotation and propagation per padded hologram sample
-                         # and wavelength (2-core CPU: 0.4-0.9 s at 1024²) ...
+                         # and wavelength, a 2-core CPU's (docs, Performance) ...
 SLOW_TRIANGLES = 60.0    # ... and the estimate [s] above which the user is warned
 MAX_INTENSITY = 1e12  # a point's colour, at most: the float32 hologram holds sums of millions
 HOST_BYTES = 40  # per sample and wavelength: object and reference waves, H, the stored copy

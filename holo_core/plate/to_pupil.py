@@ -50,8 +50,8 @@ def output_padding(shape, near: int) -> float:
     """The angular spectrum's padding when only ``near`` samples around the pupil's foot are
     read. A ray from the window (``shape``) to them moves at most (window + near)/2, and the
     band limit passes rays whole up to (1 − BAND_EDGE) of half the padded grid, so that grid
-    need only span (window + near)/(1 − BAND_EDGE), not twice the window (measured on the
-    plate scene: 1.77 instead of 2 changes the pupil's field by 2e-3 of its norm)."""
+    need only span (window + near)/(1 − BAND_EDGE), not twice the window (the pupil's field
+    changes by about 2e-3 of its norm: the Performance page's figures behind the constants)."""
     need = max((size + near) / (size * (1 - BAND_EDGE)) for size in shape)
     return float(min(2.0, need))
 
@@ -90,8 +90,8 @@ TRANSITION = 0.35        # ... and falls to its stop band over this fraction of 
 BAND_ROWS = 512          # samples read and filtered per band of rows
 DEMODULATE_SEGMENT = 32  # columns per exact phase (to_pupil.cl's SEGMENT)
 DECIMATE_GROUPS = (256, 64, 16)  # outputs of a row decimated by one work group: the largest
-                                 # whose inputs fit the device's local memory (256 against
-                                 # 64: 0.67 s against 0.80 s on the shot's view, a 2-core CPU)
+                                 # whose inputs fit the device's local memory (the larger,
+                                 # the faster: docs, Performance)
 
 # the kernels of to_pupil.cl, their arguments in its order
 _GEOMETRY = dict(pitch=REAL, row_pitch=REAL, x0=REAL, y0=REAL)  # of a band's first sample
@@ -201,7 +201,7 @@ class CarrierPupil:
         r0:r1, c0:c1] (a store's); the planes in the parts' order, ``amplitude`` scaling them
         (the emitters' density). The parts that thin out alike share one gather onto the
         bins: every look and channel is spread in one pass, which finds each sample's bins
-        once (a view of two looks of four channels: 0.63 s of gathers become 0.13 s)."""
+        once for all of them, not once a plane."""
         designs = [self._design(wavelength) for _, _, wavelength in parts]
         planes = sum(len(channels) for _, channels, _ in parts)
         out = self.rt.workspace("carrier-pupils", (planes,) + self.shape)
@@ -317,7 +317,7 @@ class _Gather:
         self.count = count = rows * cols
         real = rt.real
         # the samples' places on the grid, weights and depths: made on the device, as the
-        # list below (on the host they were 0.25-0.35 s of the shot's 1.1 s view)
+        # list below (a pass over every sample on the host costs a quarter of a view)
         gy, gx, wt, inv = (rt.workspace(f"gather-{name}", (count,), np.float32)
                            for name in ("gy", "gx", "weight", "inverse-depth"))
         rot = rt.to_device(np.asarray(view.rotation), real)
@@ -435,9 +435,9 @@ class _Gather:
 SPREAD_TAPS = 4  # the gather's ES kernel taps per axis: 1e-4 at 2x oversampling, as the
                  # image's read (optics/imaging.py TAPS); 6 cost twice as much for 1e-5
 ES_TAPS = SPREAD_TAPS
-SPREAD_CELL = 1  # grid units a side of the cells the samples are listed by for the gather
-                 # (1 against 2: 0.13 s against 0.16 s on the shot's view, each grid point
-                 # reading a row of cells as one run of the list)
+SPREAD_CELL = 1  # grid units a side of the cells the samples are listed by for the gather,
+                 # each grid point reading a row of cells as one run of the list (1 is faster
+                 # than 2: docs, Performance)
 LAYER_PHASE = math.pi / 2  # a layer's largest curvature error at the pupil's rim [rad]
 
 

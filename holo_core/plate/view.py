@@ -251,8 +251,8 @@ def _pinhole_pupil(h: Hologram, camera: Camera, rotation, position, supersample,
 def nyquist_supersample(h: Hologram, camera: Camera) -> int:
     """The supersampling at which a view of ``h`` through ``camera``'s lens samples its
     intensity at the Nyquist rate (:func:`holo_core.optics.pupil.intensity_supersample`;
-    measured on the plate scene: 2 → 4 raises the PSNR by 1.6 dB at one look, 0.8 dB at
-    four). A pinhole's pupil is sized to that already (λ/D is two fine pixels): 1."""
+    below it the view is measurably softer: docs, Performance). A pinhole's pupil is sized to
+    that already (λ/D is two fine pixels): 1."""
     if camera.fstop is None:
         return 1
     return intensity_supersample(camera.aperture_diameter, camera.pixel_angle(),

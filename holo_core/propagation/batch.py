@@ -124,8 +124,8 @@ class _Run:
     """One batched call: the broadcast batch, its memory checked, then plane by plane."""
 
     def __init__(self, plane, samples, pose, settings, moves, grid_of, returns_pitch):
-        if samples.ndim < 2 or 0 in samples.shape[-2:]:  # found by the fuzz suite: a batch of
-            # wavelengths over an empty field failed reshaping it
+        if samples.ndim < 2 or 0 in samples.shape[-2:]:  # a batch of wavelengths over an
+            # empty field would fail reshaping it, with no word of the field (tools/fuzz.py)
             raise InputError(f"field must be (..., H, W) with H, W >= 1; got shape "
                              f"{tuple(samples.shape)}")
         self.plane, self.samples, self.settings = plane, samples, settings
