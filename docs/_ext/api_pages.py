@@ -6,7 +6,11 @@ Nothing is listed by hand, so a module that moves inside a package moves on the 
 
 import importlib
 import inspect
+import sys
 from pathlib import Path
+
+from docstrings import escaped
+from sphinx.pycode import ModuleAnalyzer, PycodeError
 
 import holo_core
 
@@ -21,9 +25,28 @@ def _kind(obj):
     return "data"
 
 
-def _options(obj):
-    """A table's value is its docstring's business, not a repr of its functions."""
-    return ["   :no-value:"] if _kind(obj) == "data" else []
+def _options(obj, path=""):
+    """A table's value is its docstring's business, not a repr of its functions; its
+    docstring (the string after its assignment) is read where it is assigned, which for a
+    package's name is one of the package's modules, not the package autodoc reads."""
+    if _kind(obj) != "data":
+        return []
+    return ["   :no-value:", "", *("   " + escaped(line) if line else ""
+                                   for line in _attribute_doc(path))]
+
+
+def _attribute_doc(path):
+    """The lines of the docstring after ``path``'s assignment, in the module or one of the
+    package's modules that assigns it (empty where none has one)."""
+    package, _, name = path.rpartition(".")
+    for module in sorted(m for m in sys.modules if m == package or m.startswith(package + ".")):
+        try:
+            docs = ModuleAnalyzer.for_module(module).find_attr_docs()
+        except PycodeError:  # a module without source (a C extension)
+            continue
+        if ("", name) in docs:
+            return list(docs[("", name)])
+    return []
 
 
 def _packages():
@@ -61,7 +84,7 @@ def write(app):
     for package in sorted(groups):
         lines += _heading(f"From ``{package}``", "-")
         for name, obj, home in groups[package]:
-            lines += [f".. auto{_kind(obj)}:: holo_core.{name}", *_options(obj), "",
+            lines += [f".. auto{_kind(obj)}:: holo_core.{name}", *_options(obj, f"holo_core.{name}"), "",
                       f"   *Defined in* ``{home}``.", ""]
     _write(out / "names.rst", lines)
     lines = [*_heading("The packages", "="),
@@ -78,7 +101,8 @@ def write(app):
             if id(obj) in top:  # documented once, under its top-level name
                 again.append(f":py:obj:`holo_core.{top[id(obj)]}`")
             elif not inspect.ismodule(obj):
-                lines += [f".. auto{_kind(obj)}:: holo_core.{name}.{member}", *_options(obj), ""]
+                lines += [f".. auto{_kind(obj)}:: holo_core.{name}.{member}",
+                          *_options(obj, f"holo_core.{name}.{member}"), ""]
         if again:
             lines += ["Also here: " + ", ".join(again) + ".", ""]
     _write(out / "packages.rst", lines)

@@ -33,7 +33,7 @@ def _text(part):
     return STAR.sub(r"\*", part.replace("|", r"\|"))
 
 
-def _pipes(line):
+def escaped(line):
     """Escape ``|`` and lone ``*`` outside literals and roles (a table row keeps its bars),
     and set a break between a literal and a letter glued to it."""
     stripped = line.strip()
@@ -55,7 +55,7 @@ def tidy(app, what, name, obj, options, lines):
     for line in lines:
         if ITEM.match(line) and out and out[-1].strip():
             out.append("")
-        out.append(_pipes(line))
+        out.append(escaped(line))
     lines[:] = out
 
 

@@ -58,9 +58,11 @@ METRICS = {
     "peak": lambda a: float(np.max(a) ** 2),
 }
 """The focus metrics by name, each a function of the amplitude A = |u| (a float64 (H, W)
-array) to a float: 'brenner', 'sobel_variance', 'gradient', 'variance', 'tamura', 'peak' (the
-module's list says what each measures). :func:`focus_metric` and :func:`autofocus` take a
-name from it."""
+array) to a float, larger where sharper for an object that shows in amplitude: 'brenner'
+Σ (A(x+2) − A(x))² along rows and columns; 'sobel_variance' the variance of the Sobel
+gradient's magnitude; 'gradient' Σ |∇A|² (Tenengrad); 'variance' var(A)/mean(A); 'tamura'
+√(std(A)/mean(A)); 'peak' max |u|². :func:`focus_metric` and :func:`autofocus` take a name
+from it."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -195,7 +197,7 @@ def autofocus(wave, *, wavelength, pitch, distances, metric="brenner", extremum=
     distances : sequence of float
         Propagation distances [m] to try, one plane at a time (memory: one plane).
     metric : str
-        One of :data:`METRICS`.
+        One of :data:`~holo_core.acquired.METRICS`.
     extremum : 'max' or 'min'
         Sharpest at the largest score (objects that show in amplitude) or the smallest
         (pure phase objects).

@@ -113,7 +113,7 @@ def default_camera(hologram: Hologram, *, distance=None, resolution=None) -> Cam
     distance : float, optional
         How far behind the plate the objects' plane lies [m], > 0 (default: the middle of
         the hologram's bounds in z). One beyond ``FAR`` (1000) plate widths warns
-        (:class:`~holo_core.validate.UnitWarning`: millimetres given for metres?).
+        (``UnitWarning``: millimetres given for metres?).
     resolution : (int, int), optional
         The image's (W, H) [px]; default the band's Nyquist sampling of the framed plane,
         within ``VIEW_PIXELS`` (256 to 2048 on its larger side).

@@ -284,7 +284,7 @@ class Runtime:
     -----
     ``program(source, options)`` builds a ``.cl`` file (:func:`associated`'s) once per option
     set, ``kernel(program, name, options)`` makes a kernel object once; ``fft`` is the
-    device's FFT backend (:mod:`holo_core.opencl.fft`); ``scratch(tag, shape, dtype)`` and
+    device's FFT backend (``holo_core/opencl/fft.py``); ``scratch(tag, shape, dtype)`` and
     ``workspace(tag, shape, dtype)`` are reusable work arrays (one per shape, or one growing
     buffer per tag); ``real`` is the kernels' coordinate type, float64 where the device has
     it.

@@ -188,7 +188,7 @@ def render_set_view(plates: PlateSet, camera: Camera, *, frame: int | None = Non
     frame : int, optional
         The frame number, named in the warning or the error.
     outside : {'warn', 'fail'}
-        A pupil outside every part's zone: 'warn' (:class:`OutsideZoneWarning`, naming the
+        A pupil outside every part's zone: 'warn' (``OutsideZoneWarning``, naming the
         nearest part and how far beyond it [m] the pupil reaches) and view it from that part;
         'fail' refuses it.
     **settings
