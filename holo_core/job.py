@@ -170,7 +170,8 @@ class SetRoute(_Route):
     composition, opacity_threshold : as :class:`PlateRoute`'s
     outside : a camera whose pupil lies outside every part: 'warn' (viewed from the nearest
         part) or 'fail'
-    recording : the digest the caller names the set by ('' none), said in the log
+    recording : the digest the caller names the set by, written into its manifest when it is
+        recorded and checked when it is read ('' none: the digest of its inputs)
     supersample, exposure, seed : as every route (the seed: the set's random phases)
     """
 

@@ -151,10 +151,16 @@ def _plate_set(job: Job, progress, kept: KeptPlates):
         plates = record_set(list(job.points) + list(job.triangles), route.parts,
                             looks=route.looks, seed=route.seed, folder=route.folder,
                             budget=(route.memory_budget, route.disk_budget),
+                            recording=route.recording,
                             progress=jobs.scaled(progress, 0, record_share))
         kept.hold_set(route.folder, plates)
     else:
         plates = kept.read_set(route.folder)
+    if route.recording and plates.recording != route.recording:
+        raise HologramFileError(f"{route.folder}: holds the plate set of recording "
+                                f"{plates.recording[:16]}, not {route.recording} (this "
+                                f"scene's): another recording's set under this name is never "
+                                f"rendered; record the set again")
     if len(plates) != len(route.parts) or not all(
             np.allclose(a.plate.matrix_world, b.plate.matrix_world, atol=1e-9)
             for a, b in zip(plates.parts, route.parts)):

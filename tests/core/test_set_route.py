@@ -94,7 +94,8 @@ def test_each_frame_is_made_from_the_part_that_holds_its_pupil_and_recorded_once
 
 def test_a_damaged_part_is_refused_by_name_and_a_foreign_set_is_never_viewed(tmp_path):
     """A part's file changed on disk: the job fails naming the part and its file, never
-    viewing zeros. A folder holding a set of other parts under the job's name: refused."""
+    viewing zeros. A folder holding a set of other parts, or of another recording, under the
+    job's name: refused."""
     cams = cameras()
     runner.run(job(tmp_path, cams[0], 1))
     manifest = json.loads((tmp_path / "set" / MANIFEST).read_text())
@@ -111,3 +112,21 @@ def test_a_damaged_part_is_refused_by_name_and_a_foreign_set_is_never_viewed(tmp
     path.write_bytes(bytes(data))
     with pytest.raises(HologramFileError, match="not this job's 1"):
         runner.run(Job(camera=cams[0], output=other.output, route=fewer))
+    named = job(tmp_path, cams[0], 1, record=False, recording="cd34")
+    with pytest.raises(HologramFileError, match="not cd34"):
+        runner.run(named)
+
+
+def test_a_set_recorded_under_the_callers_name_is_read_under_it(tmp_path):
+    """A route's recording names the set in its manifest (set_current tells it whole), and
+    resuming or reading matches that name, not the digest of the emitters."""
+    from holo_core.io.plate_set import set_current
+    cams = cameras()
+    assert not set_current(tmp_path / "set", "ab12", 2)
+    runner.run(job(tmp_path, cams[0], 1, recording="ab12"))
+    assert set_current(tmp_path / "set", "ab12", 2)
+    assert not set_current(tmp_path / "set", "ab12", 3)
+    assert not set_current(tmp_path / "set", "cd34", 2)
+    assert read_plate_set(tmp_path / "set").recording == "ab12"
+    view = runner.run(job(tmp_path, cams[2], 3, record=False, recording="ab12")).view
+    assert view.alpha.max() == 1
