@@ -14,9 +14,11 @@ from dataclasses import replace
 import numpy as np
 
 from holo_core.io.plate_set import parts_from_json
+from holo_core.plate.path import part_for
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.mesh import Mesh, sample_points
 from holo_core.scene.plate import Plate, ViewingZone
+from holo_core.scene.plate_set import PlateSet
 from holo_core.validate import InputError
 
 from .scene import (
@@ -82,18 +84,14 @@ def plate_parts(obj) -> tuple | None:
 def nearest_part(parts, camera: Camera) -> tuple[int, float]:
     """(the part whose zone holds ``camera``'s pupil with the most room, 0) or, where none
     holds it, (the nearest part, how far [m] the pupil reaches beyond its zone): the part the
-    worker views the frame from (:func:`holo_core.plate.path.part_for`)."""
-    pupil = camera.aperture_diameter or 0.0
-    reach = [part.reach(camera.position, pupil) for part in parts]
-    inside = [k for k, r in enumerate(reach) if r <= 1e-9]
-    if not inside:
-        k = int(np.argmin(reach))
-        return k, reach[k]
+    worker views the frame from (:func:`holo_core.plate.path.part_for`, which reads no
+    samples)."""
+    placed = PlateSet(parts=tuple(parts), looks=(None,) * len(parts), load=_unrecorded)
+    return part_for(placed, camera)
 
-    def room(k):
-        z, local = parts[k].plate.zone, parts[k].plate.to_plate(camera.position[None])[0]
-        return float((np.asarray(z.half_extents[:2]) - np.abs(local[:2] - z.centre[:2])).min())
-    return max(inside, key=room), 0.0
+
+def _unrecorded(k):
+    raise ExportError(f"part {k} of the plate set is not recorded here")  # never asked for
 
 
 def with_set(data: SceneData, plate_object, parts, strict=False) -> SceneData:
