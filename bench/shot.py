@@ -286,7 +286,22 @@ def set_route(args) -> None:
               f"({record_s / len(parts):.2f} s a part), each written as recorded; peak memory "
               f"of all processes {memory.peak / 2**30:.2f} GiB; on disk {disk / 2**30:.3f} GiB "
               f"(load {os.getloadavg()[0]:.1f})", flush=True)
-        summary(set_frames(args, plates, cams, labels, meshes))
+        rows = set_frames(args, plates, cams, labels, meshes)
+        summary(rows)
+    # one file a move, so that the dollies and the orbit sit side by side
+    name = (f"shot_set_orbit{args.orbit:g}" if args.orbit is not None else
+            f"shot_set_dolly{args.dolly * 100:g}cm")
+    figures = {"move": f"{move}, {cams[0].resolution[0]}x{cams[0].resolution[1]}, "
+                       f"{args.looks} looks, supersample {args.supersample}",
+               "parts": len(parts), "samples [Mpx]": samples / 1e6,
+               "recording [s]": record_s, "disk [GiB]": disk / 2**30,
+               "recording's peak memory [GiB]": memory.peak / 2**30,
+               "a view / the camera pass (goal <= 0.5)":
+                   float(np.mean([r[2] for r in rows]) / np.mean([r[3] for r in rows]))}
+    figures.update({f"frame {label}": {"PSNR [dB] (goal >= 30)": q, "IoU (goal >= 0.98)": u,
+                                       "view [s]": v, "camera pass [s]": c}
+                    for label, (q, u, v, c) in zip(labels, rows)})
+    results.write(name, figures)
 
 
 def set_frames(args, plates, cams, labels, meshes) -> list:

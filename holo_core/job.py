@@ -3,7 +3,8 @@
 A :class:`Job` is what Blender's side (or a script, a bench, a test) asks of the pipeline: the
 scene's nouns (emitter meshes in world metres, the camera), a route with its settings
 (:class:`CameraRoute`: a camera hologram made for this view; :class:`PlateRoute`: the plate's
-holograms recorded, or read when current, and viewed), the :class:`Output` (the frame's pass)
+holograms recorded, or read when current, and viewed; :class:`SetRoute`: a plate set's parts
+along the camera's path, likewise), the :class:`Output` (the frame's pass)
 and, with Lighting: Scene, the renderer that colours the emitters (:class:`Radiance`). A
 :class:`Result` is what comes back: the view, the files written and a :class:`Report` of
 what the renderer said. Each is a frozen dataclass checked when it is made
@@ -28,6 +29,7 @@ from . import validate
 from .scene.camera import Camera
 from .scene.mesh import Mesh
 from .scene.plate import Plate, ViewingZone
+from .scene.plate_set import PathPart
 from .validate import MAX_SUPERSAMPLE, InputError, shown
 from .view import RenderResult
 
@@ -149,7 +151,67 @@ class PlateRoute(_Route):
         validate.digest("recording", self.recording)
 
 
-ROUTES = {"camera": CameraRoute, "plate": PlateRoute}
+@dataclass(frozen=True, slots=True, kw_only=True)
+class SetRoute(_Route):
+    """A plate set along the camera's path (:mod:`holo_core.plate.parts`): its parts recorded
+    into one folder unless they are there, and the view of the job's camera from the part
+    whose zone holds its pupil (:func:`holo_core.plate.view.render_set_view`).
+
+    parts : the set's :class:`~holo_core.scene.plate_set.PathPart` (each a plate with its
+        zone, its stretch of path [m] and frames; :func:`holo_core.plate.path.parts_along`)
+    folder : the set's folder (:mod:`holo_core.io.plate_set`: ``plate_set.json`` and each
+        part's looks); a recording that stopped resumes there, and a folder of another
+        recording is refused
+    looks : coded looks a part (the iterations)
+    record : record the parts the folder lacks (False: they are all there, and are read)
+    memory_budget, disk_budget : [bytes] what one part's recording may hold in memory and the
+        whole set on disk, or None (no limit): a set that needs more is refused before any
+        work, with its sizes
+    composition, opacity_threshold : as :class:`PlateRoute`'s
+    outside : a camera whose pupil lies outside every part: 'warn' (viewed from the nearest
+        part) or 'fail'
+    recording : the digest the caller names the set by, written into its manifest when it is
+        recorded and checked when it is read ('' none: the digest of its inputs)
+    supersample, exposure, seed : as every route (the seed: the set's random phases)
+    """
+
+    parts: tuple
+    folder: Path
+    looks: int = 2
+    record: bool = True
+    memory_budget: float | None = None
+    disk_budget: float | None = None
+    composition: str = "mean"
+    opacity_threshold: float = 0.5
+    outside: str = "warn"
+    recording: str = ""
+
+    def __post_init__(self):
+        _Route.__post_init__(self)
+        parts = self.parts
+        if isinstance(parts, PathPart) or not isinstance(parts, (list, tuple)) or not parts \
+                or not all(isinstance(p, PathPart) for p in parts):
+            raise InputError("parts must be a non-empty list of PathPart (parts_along)")
+        _set(self, "parts", tuple(parts))
+        _set(self, "folder", _path("folder", self.folder))
+        _set(self, "looks", validate.integer("looks", self.looks, 1, MAX_SAMPLES))
+        _set(self, "record", _flag("record", self.record))
+        for name in ("memory_budget", "disk_budget"):
+            value = getattr(self, name)
+            if value is not None and not validate.finite(name, _real(name, value), "bytes") > 0:
+                raise InputError(f"{name} must be > 0 [bytes] or None; got {shown(value)}")
+        validate.choice("composition", self.composition, ("mean", "max"))
+        threshold = validate.finite("opacity_threshold",
+                                    _real("opacity_threshold", self.opacity_threshold))
+        if not 0 <= threshold <= 1:
+            raise InputError(f"opacity_threshold must be in [0, 1]; got "
+                             f"{self.opacity_threshold!r}")
+        _set(self, "opacity_threshold", threshold)
+        validate.choice("outside", self.outside, ("warn", "fail"))
+        validate.digest("recording", self.recording)
+
+
+ROUTES = {"camera": CameraRoute, "plate": PlateRoute, "set": SetRoute}
 
 
 # --- what is written, and who colours the emitters --------------------------------------------
@@ -239,7 +301,7 @@ class Job:
     the ``radiance`` that colours the emitters (only where something is recorded)."""
 
     camera: Camera
-    route: CameraRoute | PlateRoute
+    route: CameraRoute | PlateRoute | SetRoute
     output: Output
     points: tuple = ()
     triangles: tuple = ()
@@ -249,7 +311,7 @@ class Job:
         if not isinstance(self.camera, Camera):
             raise InputError(f"camera must be a Camera; got {type(self.camera).__name__}")
         if not isinstance(self.route, tuple(ROUTES.values())):
-            raise InputError(f"route must be a CameraRoute or a PlateRoute; got "
+            raise InputError(f"route must be a CameraRoute, a PlateRoute or a SetRoute; got "
                              f"{type(self.route).__name__}")
         if not isinstance(self.output, Output):
             raise InputError(f"output must be an Output; got {type(self.output).__name__}")
@@ -296,6 +358,9 @@ class Job:
         kind = validate.choice("route kind", route.pop("kind", None), tuple(ROUTES))
         if "plate" in route:
             route["plate"] = _noun(Plate, route["plate"], "plate")
+        if kind == "set" and isinstance(route.get("parts"), list):
+            route["parts"] = tuple(_noun(PathPart, p, f"parts[{i}]")
+                                   for i, p in enumerate(route["parts"]))
         radiance = d.get("radiance")
         if radiance is not None:
             radiance = _noun(Radiance, radiance, "radiance")
@@ -400,7 +465,8 @@ class Result:
 
 
 # the nouns inside nouns that from_dict makes of their dicts: (owner, field) -> type
-NESTED = {(Plate, "zone"): ViewingZone, (Radiance, "camera"): Camera, (Report, "plan"): Plan}
+NESTED = {(Plate, "zone"): ViewingZone, (Radiance, "camera"): Camera, (Report, "plan"): Plan,
+          (PathPart, "plate"): Plate}
 
 
 # --- plain data -------------------------------------------------------------------------------

@@ -36,13 +36,16 @@ from .camera.render import render_camera
 from .io.hologram import HologramFileError, write_hologram
 from .io.image import check_room, check_writable, read_exr
 from .io.plate_paths import plate_files, read_plate, store_of
+from .io.plate_set import MANIFEST, read_plate_set
 from .io.tiled_wave import TiledWave
 from .io.view import write_view
-from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result
+from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result, SetRoute
 from .plate.looks import record_planned
+from .plate.parts import record_set
+from .plate.path import part_for
 from .plate.plan import CHANNELS, PlatePlan
 from .plate.recording import PlannedPlate, plate_plan
-from .plate.view import OutsideZoneWarning, nyquist_supersample, render_view
+from .plate.view import OutsideZoneWarning, nyquist_supersample, render_set_view, render_view
 from .scene.hologram import Hologram
 from .scene.radiance import projected
 from .view import BACKGROUND_DEPTH
@@ -80,6 +83,9 @@ def run(job: Job, progress: jobs.Progress = None, on_partial=None, *,
                                  supersample=route.supersample, exposure=route.exposure,
                                  seed=route.seed, progress=progress,
                                  via=SPECKLE[route.speckle], on_sample=sample)
+        elif isinstance(route, SetRoute):
+            view, recorded = _plate_set(job, progress,
+                                        KeptPlates(hold=False) if kept is None else kept)
         else:
             view, recorded = _plate(job, progress,
                                     KeptPlates(hold=False) if kept is None else kept)
@@ -134,6 +140,51 @@ def _plate(job: Job, progress, kept: KeptPlates):
     return view, route.holograms
 
 
+def _plate_set(job: Job, progress, kept: KeptPlates):
+    """A plate set's parts recorded into its folder (those it lacks: a stopped recording
+    resumes, a complete one records nothing), or read (or ``kept`` from a job before), and
+    the view of the job's camera from the part that holds its pupil."""
+    route = job.route
+    record_share = 0.0 if not route.record else (0.85 if job.output.render else 1.0)
+    if route.record:
+        kept.clear()  # a new set: the one held is not held beside it
+        plates = record_set(list(job.points) + list(job.triangles), route.parts,
+                            looks=route.looks, seed=route.seed, folder=route.folder,
+                            budget=(route.memory_budget, route.disk_budget),
+                            recording=route.recording,
+                            progress=jobs.scaled(progress, 0, record_share))
+        kept.hold_set(route.folder, plates)
+    else:
+        plates = kept.read_set(route.folder)
+    if route.recording and plates.recording != route.recording:
+        raise HologramFileError(f"{route.folder}: holds the plate set of recording "
+                                f"{plates.recording[:16]}, not {route.recording} (this "
+                                f"scene's): another recording's set under this name is never "
+                                f"rendered; record the set again")
+    if len(plates) != len(route.parts) or not all(
+            np.allclose(a.plate.matrix_world, b.plate.matrix_world, atol=1e-9)
+            for a, b in zip(plates.parts, route.parts)):
+        raise HologramFileError(f"{route.folder}: holds a set of {len(plates)} part(s) that "
+                                f"are not this job's {len(route.parts)}: another shot's set "
+                                f"under this name is never rendered; record the set again")
+    view = None
+    if job.output.render:
+        k, _ = part_for(plates, job.camera)
+        _note_supersampling(route.supersample,
+                            nyquist_supersample(plates.part_looks(k)[0], job.camera))
+        view = render_set_view(plates, job.camera, frame=job.output.frame,
+                               outside=route.outside, supersample=route.supersample,
+                               composition=route.composition,
+                               opacity_threshold=route.opacity_threshold,
+                               progress=jobs.scaled(progress, record_share, 1.0))
+        view.rgb[...] *= route.exposure
+        view.info["part"] = k
+        if route.recording:
+            log.info("frame %d from part %d of %d of the plate set %s", job.output.frame,
+                     k + 1, len(plates), route.recording)
+    return view, ((route.folder / MANIFEST,) if route.record else ())
+
+
 def _check_recording(route: PlateRoute, holos) -> None:
     """:class:`HologramFileError` naming the file unless each plate read is the recording the
     route names: a plate replaced by another recording's valid plate (a folder synced from
@@ -156,12 +207,14 @@ class KeptPlates:
 
     def __init__(self, hold: bool = True):
         self._held: dict = {}
+        self._set: tuple = (None, None)  # (its manifest's identity, the PlateSet)
         self._hold = hold
 
     def read(self, paths) -> list[Hologram]:
         """The holograms of ``paths``: held where their files are unchanged, else read."""
         names = [_identity(p) for p in paths]
         self._held = {k: h for k, h in self._held.items() if k in names}  # freed before reads
+        self._set = (None, None)
         holos = [self._held[k] if k in self._held else read_plate(p)
                  for k, p in zip(names, paths)]
         if self._held:
@@ -179,8 +232,28 @@ class KeptPlates:
             self._held = {k: h for k, h in zip(names, holos)
                           if k is not None and not isinstance(h.object_wave, TiledWave)}
 
+    def read_set(self, folder):
+        """The plate set in ``folder`` (:func:`read_plate_set`, every file's digest checked):
+        held where its manifest is unchanged since, else read (the part it held kept
+        with it)."""
+        name = _identity(Path(folder) / MANIFEST)
+        if name is not None and self._set[0] == name:
+            log.info("the plate set held in memory from the job before: not read again")
+            return self._set[1]
+        self._held = {}  # a plate's holograms are not held beside a set
+        plates = read_plate_set(folder)
+        if self._hold:
+            self._set = (name, plates)
+        return plates
+
+    def hold_set(self, folder, plates) -> None:
+        """Hold ``plates``, just recorded into ``folder`` (its manifest's identity now)."""
+        if self._hold:
+            self._set = (_identity(Path(folder) / MANIFEST), plates)
+
     def clear(self) -> None:
         self._held = {}
+        self._set = (None, None)
 
 
 def _identity(path) -> tuple | None:
@@ -242,6 +315,8 @@ def _check_outputs(job: Job) -> None:
     (a read-only output folder is found at once, not after the recording)."""
     route = job.route
     outputs = list(route.holograms) if isinstance(route, PlateRoute) and route.record else []
+    if isinstance(route, SetRoute) and route.record:
+        check_writable(route.folder / MANIFEST, ".json")
     if job.output.render:
         outputs.append(job.output.pass_path)
     for path in outputs:

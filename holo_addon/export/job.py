@@ -23,14 +23,15 @@ import numpy as np
 from holo_core import __version__
 from holo_core.io.hologram import FORMAT_VERSION
 from holo_core.io.plate_paths import plate_current
-from holo_core.job import CameraRoute, Job, Output, PlateRoute, Radiance
+from holo_core.io.plate_set import MANIFEST, set_current
+from holo_core.job import CameraRoute, Job, Output, PlateRoute, Radiance, SetRoute
 from holo_core.scene.camera import Camera
 from holo_core.scene.mesh import Mesh
 from holo_core.scene.plate import ViewingZone
 
 from . import radiance, ranges
 from .motion import with_motion
-from .plates import beyond_zone, export_imported, scene_plate, with_plate
+from .plates import beyond_zone, export_imported, plate_parts, scene_plate, with_plate, with_set
 from .scene import ExportError, SceneData, export_scene
 
 log = logging.getLogger(__name__)
@@ -77,6 +78,14 @@ class Settings:
                            supersample=self.supersample, exposure=self.exposure,
                            seed=self.seed)
 
+    def set_route(self, parts, folder, record: bool, recording: str, outside: str) -> SetRoute:
+        return SetRoute(parts=parts, folder=folder, looks=self.iterations, record=record,
+                        recording=recording, memory_budget=self.memory_budget,
+                        disk_budget=self.disk_budget, supersample=self.supersample,
+                        composition=self.composition, exposure=self.exposure,
+                        opacity_threshold=self.opacity_threshold, seed=self.seed,
+                        outside=outside)
+
     def plate_route(self, plate, holograms, record: bool, recording: str = "") -> PlateRoute:
         return PlateRoute(plate=plate, holograms=holograms, record=record, recording=recording,
                           memory_budget=self.memory_budget, disk_budget=self.disk_budget,
@@ -112,6 +121,8 @@ class Prepared:
     @property
     def made_by(self) -> str:
         """Which route makes the frame's pass, in words for its log line."""
+        if isinstance(self.job.route, SetRoute):
+            return f"from plate '{self.plate_name}' (a set of {len(self.job.route.parts)} parts)"
         if isinstance(self.job.route, PlateRoute):
             return f"from plate '{self.plate_name}'"
         return f"as a camera hologram ({self.instead})" if self.instead else \
@@ -121,6 +132,8 @@ class Prepared:
     def holograms(self) -> tuple:
         """The plate's hologram files (none for a camera hologram)."""
         route = self.job.route
+        if isinstance(route, SetRoute):  # the set's manifest names its every file
+            return (route.folder / MANIFEST,)
         return route.holograms if isinstance(route, PlateRoute) else ()
 
     def lit(self) -> Job:
@@ -145,6 +158,7 @@ def read(scene, depsgraph, *, render=True, preview=1) -> Prepared:
     if plate is not None:
         ranges.check(plate.holo, scene)
     imported = plate if mode == "PLATE" and plate.holo.imported else None
+    parts = plate_parts(plate) if mode == "PLATE" and not imported else None
     lit = scene.holo.lighting == "SCENE" and not imported
     if imported:  # viewed as it is, never recorded: no emitters needed
         data = export_imported(scene, depsgraph, imported)
@@ -152,12 +166,13 @@ def read(scene, depsgraph, *, render=True, preview=1) -> Prepared:
         data = export_scene(scene, depsgraph, lit=lit)
         if mode == "PLATE":  # a render's frame beyond the zone fails where the user says so
             at_camera = data
-            data = with_plate(data, plate, depsgraph,
-                              strict=preview <= 1 and scene.holo.outside_zone == "FAIL")
+            strict = preview <= 1 and scene.holo.outside_zone == "FAIL"
+            data = with_set(data, plate, parts, strict=strict) if parts else \
+                with_plate(data, plate, depsgraph, strict=strict)
             beyond = beyond_zone(data.plate, data.camera)
             if render and preview <= 1 and beyond and scene.holo.outside_zone == "CAMERA":
                 # the plate cannot serve this frame whole: a camera hologram of it can
-                data, mode = at_camera, "CAMERA"
+                data, mode, parts = at_camera, "CAMERA", None
                 instead = (f"the camera's pupil reaches {beyond:.3g} m beyond the viewing "
                            f"zone of plate '{plate.name}' (Outside Zone: Camera Hologram)")
     if preview > 1:
@@ -169,6 +184,20 @@ def read(scene, depsgraph, *, render=True, preview=1) -> Prepared:
         fingerprint = digest(data, mode, settings.speckle, settings.samples, lighting,
                              kinds=False)
         route = settings.camera_route()
+    elif parts:
+        # the set is a scene asset: its digest holds its parts and leaves the camera and the
+        # part that holds it out
+        fingerprint = digest(replace(data, plate=None), *settings.recording(), lighting,
+                             plate.holo.parts, camera=False)
+        folder = out / f"{bpy.path.clean_name(data.plate_name)}_set_{fingerprint}"
+        route = settings.set_route(parts, folder, recording=fingerprint,
+                                   record=not set_current(folder, fingerprint, len(parts)),
+                                   outside="fail" if scene.holo.outside_zone == "FAIL"
+                                   else "warn")
+        if settings.wavelength is not None:
+            data = replace(data, warnings=data.warnings + (
+                "a plate set's parts are recorded at the planner's wavelength: the scene's "
+                "Wavelength is not used for them",))
     elif imported:
         paths = (Path(bpy.path.abspath(imported.holo.hologram)),)
         fingerprint = imported.holo.fingerprint or paths[0].name
@@ -185,11 +214,12 @@ def read(scene, depsgraph, *, render=True, preview=1) -> Prepared:
     frame, region, unit = scene.frame_current, data.region, data.unit
     animated = lit and getattr(scene.cycles, "use_animated_seed", False)
     kinds = mode != "CAMERA"  # a camera hologram renders points and triangles alike
+    asset = (fingerprint,) if parts else ()  # a set's passes change with any of its parts
     output = Output(folder=out, frame=frame, render=render, depth_unit=unit, border=region,
                     pass_key=digest(data, *astuple(settings), frame, region, unit, lighting,
-                                    kinds=kinds),
+                                    *asset, kinds=kinds),
                     shot_key=digest(data, *astuple(settings), region, unit, lighting, "shot",
-                                    frame if animated else None, kinds=kinds))
+                                    frame if animated else None, *asset, kinds=kinds))
     job = Job(camera=data.camera, points=tuple(data.points), triangles=tuple(data.triangles),
               route=route, output=output)
     light = partial(radiance.request, scene, depsgraph.view_layer.name, data.view,

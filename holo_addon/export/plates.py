@@ -1,7 +1,9 @@
 """The plate (Blender → :class:`holo_core.scene.plate.Plate`), checked against what the
 camera sees of the holographic objects: the lines of sight through it, the share of the
-objects it covers, whether the camera's pupil stays inside its viewing zone; and a plate
-imported from a hologram file (File ▸ Import ▸ Hologram), viewed as it is.
+objects it covers, whether the camera's pupil stays inside its viewing zone; a plate made a
+set of parts along the camera's path (Fit Zone to Shot over a long move: the part that holds
+the frame's camera); and a plate imported from a hologram file (File ▸ Import ▸ Hologram),
+viewed as it is.
 """
 
 from __future__ import annotations
@@ -11,9 +13,12 @@ from dataclasses import replace
 
 import numpy as np
 
+from holo_core.io.plate_set import parts_from_json
+from holo_core.plate.path import part_for
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.mesh import Mesh, sample_points
 from holo_core.scene.plate import Plate, ViewingZone
+from holo_core.scene.plate_set import PlateSet
 from holo_core.validate import InputError
 
 from .scene import (
@@ -60,6 +65,55 @@ def with_plate(data: SceneData, plate_object, depsgraph, strict=False) -> SceneD
         beyond, plate_coverage(plate, name, camera, data.points + data.triangles))))
     data = replace(data, plate=replace(plate, zone=plate.zone or zone), plate_name=name,
                    warnings=warnings, zone=zone)
+    return replace(data, view=zone_view(data))
+
+
+def plate_parts(obj) -> tuple | None:
+    """The plate's parts along the camera's path (Fit Zone to Shot keeps them on its settings,
+    world metres), or None for one plate. Read from the original object, as its zone."""
+    holo = (obj.original if obj.is_evaluated else obj).holo
+    if not holo.parts:
+        return None
+    try:
+        return parts_from_json(holo.parts)
+    except InputError as e:
+        raise ExportError(f"plate '{obj.name}': its parts along the path: {e}; run Fit Zone "
+                          f"to Shot again") from None
+
+
+def nearest_part(parts, camera: Camera) -> tuple[int, float]:
+    """(the part whose zone holds ``camera``'s pupil with the most room, 0) or, where none
+    holds it, (the nearest part, how far [m] the pupil reaches beyond its zone): the part the
+    worker views the frame from (:func:`holo_core.plate.path.part_for`, which reads no
+    samples)."""
+    placed = PlateSet(parts=tuple(parts), looks=(None,) * len(parts), load=_unrecorded)
+    return part_for(placed, camera)
+
+
+def _unrecorded(k):
+    raise ExportError(f"part {k} of the plate set is not recorded here")  # never asked for
+
+
+def with_set(data: SceneData, plate_object, parts, strict=False) -> SceneData:
+    """``data`` with the plate's set of ``parts``: its ``plate`` the part that holds the
+    camera's pupil (:func:`nearest_part`), checked as :func:`with_plate` checks a plate (in
+    front of the camera, covering what it sees; a pupil outside every part warns, or with
+    ``strict`` is an :class:`ExportError`), its ``view`` that part's zone centre."""
+    name, camera = plate_object.name, data.camera
+    k, beyond = nearest_part(parts, camera)
+    plate = parts[k].plate
+    _in_front(plate, f"{name} (part {k + 1} of {len(parts)})", camera)
+    outside = None
+    if beyond > 1e-9:
+        outside = (f"the camera's pupil reaches {beyond:.3g} m beyond every part of plate "
+                   f"'{name}' (the nearest, part {k + 1} of {len(parts)}: "
+                   f"{plate.zone.describe()}): what the set cannot send there is left out of "
+                   f"its view; run Fit Zone to Shot for this camera's path")
+        if strict:
+            raise ExportError(f"{outside} (Outside Zone: Fail)")
+    warnings = data.warnings + tuple(filter(None, (
+        outside, plate_coverage(plate, name, camera, data.points + data.triangles))))
+    data = replace(data, plate=plate, plate_name=name, warnings=warnings, zone=None)
     return replace(data, view=zone_view(data))
 
 

@@ -2,7 +2,8 @@
 scene camera through the plate's four corners, out to the farthest holographic object, and
 the plate's outline; green when the plate covers every holographic object the camera looks at
 through it, orange when it covers part (the rest is cut from the pass), red when none. The
-plate's viewing zone is drawn as its box, in blue.
+plate's viewing zone is drawn as its box, in blue; a plate made a set of parts along the
+camera's path (Fit Zone to Shot) draws each part's outline in violet and its zone in blue.
 
 The objects are judged by their bounding boxes' corners, so the overlay is quick to update on
 every change; recording checks the surfaces themselves
@@ -19,12 +20,13 @@ import bpy
 import numpy as np
 from bpy.app.handlers import persistent
 
-from ..export.plates import plate_from_object, through_plate
+from ..export.plates import plate_from_object, plate_parts, through_plate
 from ..export.scene import ExportError, emitter_instances
 
 COLOURS = {"ALL": (0.3, 0.9, 0.4, 0.9), "PART": (1.0, 0.6, 0.1, 0.9),
            "NONE": (1.0, 0.25, 0.2, 0.9)}
 ZONE_COLOUR = (0.3, 0.75, 1.0, 0.9)
+PART_COLOUR = (0.7, 0.45, 1.0, 0.9)
 CORNERS = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1)]) / 2  # around the plate, in its sizes
 
 
@@ -36,6 +38,7 @@ class Coverage:
     lines: np.ndarray
     state: str
     zone: np.ndarray | None = None  # the viewing zone's box edges (24, 3), world units
+    parts: np.ndarray | None = None  # a set's parts' outlines (8P, 3), world units
 
 
 def coverage(scene, depsgraph) -> Coverage | None:
@@ -54,9 +57,18 @@ def coverage(scene, depsgraph) -> Coverage | None:
     outline = np.stack([corners, np.roll(corners, -1, 0)], 1).reshape(-1, 3)
     eye_z = plate.to_plate(eye[None])[0, 2]
     boxes = _emitter_boxes(depsgraph)
-    zone = zone_edges(plate, scene.unit_settings.scale_length or 1.0)
+    unit = scene.unit_settings.scale_length or 1.0
+    zone = zone_edges(plate, unit)
+    try:
+        parts = plate_parts(plates[0])
+    except ExportError:
+        parts = None
+    edges = None
+    if parts:  # the set replaces the plate object: its parts and their zones are drawn
+        edges = part_edges(parts, unit)
+        zone = np.concatenate([part_zone_edges(part, unit) for part in parts])
     if eye_z <= 0 or not len(boxes):  # a camera behind the plate sees nothing through it
-        return Coverage(outline, "NONE" if eye_z <= 0 else "ALL", zone)
+        return Coverage(outline, "NONE" if eye_z <= 0 else "ALL", zone, edges)
     inside, _ = through_plate(plate, eye, boxes)
     state = "ALL" if inside.all() else "PART" if inside.any() else "NONE"
     depth = plate.to_plate(boxes)[:, 2]
@@ -64,7 +76,28 @@ def coverage(scene, depsgraph) -> Coverage | None:
     far = eye + reach * (corners - eye)
     sight = np.stack([np.broadcast_to(eye, far.shape), far], 1).reshape(-1, 3)
     end = np.stack([far, np.roll(far, -1, 0)], 1).reshape(-1, 3)
-    return Coverage(np.concatenate([outline, sight, end]), state, zone)
+    return Coverage(np.concatenate([outline, sight, end]), state, zone, edges)
+
+
+def part_edges(parts, unit: float) -> np.ndarray:
+    """The outlines of a set's parts (PathPart, metres) as segments (8P, 3), world Blender
+    units (``unit`` metres per Blender unit)."""
+    lines = []
+    for part in parts:
+        p, m = part.plate, part.plate.matrix_world
+        corners = ((CORNERS * (p.width, p.height)) @ m[:3, :2].T + m[:3, 3]) / unit
+        lines.append(np.stack([corners, np.roll(corners, -1, 0)], 1).reshape(-1, 3))
+    return np.concatenate(lines)
+
+
+def part_zone_edges(part, unit: float) -> np.ndarray:
+    """A part's viewing zone (metres, its plate's frame) as its box's 12 edges (24, 3), world
+    Blender units."""
+    corners = part.plate.zone.corners()
+    edges = [(a, b) for a in range(8) for b in range(a + 1, 8) if (a ^ b).bit_count() == 1]
+    m = part.plate.matrix_world
+    world = (corners @ m[:3, :3].T + m[:3, 3]) / unit
+    return world[np.array(edges).ravel()]
 
 
 def zone_edges(plate, unit: float) -> np.ndarray | None:
@@ -127,6 +160,9 @@ def _draw():
     if found.zone is not None:
         shader.uniform_float("color", ZONE_COLOUR)
         batch_for_shader(shader, "LINES", {"pos": found.zone.tolist()}).draw(shader)
+    if found.parts is not None:
+        shader.uniform_float("color", PART_COLOUR)
+        batch_for_shader(shader, "LINES", {"pos": found.parts.tolist()}).draw(shader)
     gpu.state.blend_set("NONE")
 
 

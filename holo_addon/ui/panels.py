@@ -106,7 +106,12 @@ def draw_plate(layout, context, h) -> None:
     if h.imported:
         return
     layout.prop(h, "zone_margin")
-    if h.zone_set:
+    layout.prop(h, "part_length")
+    if h.parts:
+        layout.label(text=f"A set of {plates.part_count(h)} parts along the camera's path "
+                          f"(Fit Zone to Shot): each frame renders from the part that holds "
+                          f"its camera")
+    elif h.zone_set:
         (x, y, z), (hx, hy, hz) = h.zone_centre, h.zone_half
         layout.label(text=f"Viewing zone: ({x:.3g}, {y:.3g}, {z:.3g}) m "
                           f"±({hx:.3g}, {hy:.3g}, {hz:.3g}) m, plate's frame")

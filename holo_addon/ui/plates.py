@@ -1,5 +1,6 @@
 """The plate as a scene asset: its viewing zone (Fit Zone to Camera, Fit Zone to Shot: the
-camera's pupil over the frame range), the planner (Plan Plate: what a plate will take and give
+camera's pupil over the frame range, or over a move longer than the plate's Part Length a set
+of parts along the camera's path), the planner (Plan Plate: what a plate will take and give
 before any recording) and File ▸ Import ▸ Hologram.
 
 The planner is pure arithmetic (:mod:`holo_core.plate.plan`, no OpenCL, nor the core's
@@ -11,6 +12,7 @@ is: it is never recorded.
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -23,6 +25,8 @@ from mathutils import Matrix
 from holo_core import memory
 from holo_core.acquired.framing import default_camera, stated_plane
 from holo_core.io.hologram import HologramFileError, read_hologram
+from holo_core.io.plate_set import parts_from_json, parts_to_json
+from holo_core.plate.path import parts_along, plan_parts
 from holo_core.plate.plan import plan, plan_view, summary
 from holo_core.scene.hologram import Hologram
 from holo_core.scene.plate import ViewingZone
@@ -32,7 +36,7 @@ from holo_core.worker import environment
 from ..blender.objects import raster_visibility
 from ..compositor.session import session
 from ..export import ranges
-from ..export.plates import plate_from_object, zone_around
+from ..export.plates import nearest_part, plate_from_object, plate_parts, zone_around
 from ..export.scene import (
     ExportError,
     camera_from_object,
@@ -41,6 +45,7 @@ from ..export.scene import (
     scale,
 )
 from ..render.options import device, runtime_paths
+from . import overlay
 
 
 def plate_object(context):
@@ -49,10 +54,19 @@ def plate_object(context):
 
 
 def _keep(obj, zone) -> None:
-    """The zone on the plate's settings (what the next recording is for)."""
+    """The zone on the plate's settings (what the next recording is for): one plate."""
     obj.holo.zone_centre, obj.holo.zone_half = zone.centre, zone.half_extents
     obj.holo.zone_pupil, obj.holo.zone_pixel = zone.pupil, zone.pixel
     obj.holo.zone_set = True
+    obj.holo.parts = ""
+
+
+def part_count(holo) -> int:
+    """How many parts the plate's settings hold (0: one plate)."""
+    try:
+        return len(parts_from_json(holo.parts)) if holo.parts else 0
+    except InputError:
+        return 0
 
 
 class HOLO_OT_fit_zone(bpy.types.Operator):
@@ -79,6 +93,7 @@ class HOLO_OT_fit_zone(bpy.types.Operator):
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
         _keep(obj, zone)
+        overlay.refresh(context)
         self.report({"INFO"}, f"plate '{obj.name}': viewing zone {zone.describe()}")
         return {"FINISHED"}
 
@@ -97,14 +112,83 @@ class HOLO_OT_fit_zone_to_shot(bpy.types.Operator):
     def execute(self, context):
         scene, obj, unit = context.scene, plate_object(context), scale(context.scene)
         try:
-            zone, frames = shot_zone(scene, obj, unit)
+            parts, frames, distance = shot_parts(scene, obj, unit,
+                                                 context.evaluated_depsgraph_get())
+            if len(parts) == 1:  # one plate serves the move: the plate as the user placed it
+                zone, frames = shot_zone(scene, obj, unit)
         except (ExportError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
+        if len(parts) > 1:
+            obj.holo.parts = parts_to_json(parts)
+            obj.holo.zone_set = False
+            length = parts[-1].stretch[1]
+            self.report({"INFO"}, f"plate '{obj.name}': a set of {len(parts)} parts along "
+                                  f"{length / unit:.3g} units of the camera's path over "
+                                  f"frames {frames[0]}-{frames[-1]}, each facing its stretch "
+                                  f"{distance / unit:.3g} units from the "
+                                  f"objects: every frame renders from the part that holds its "
+                                  f"camera")
+            overlay.refresh(context)
+            return {"FINISHED"}
         _keep(obj, zone)
         self.report({"INFO"}, f"plate '{obj.name}': viewing zone {zone.describe()}, the "
                               f"camera's pupil over frames {frames[0]}-{frames[-1]}")
         return {"FINISHED"}
+
+
+def shot_cameras(scene, unit):
+    """(the frames of the scene's range, the scene camera at each, world metres); the
+    timeline is put back where it was."""
+    frames = list(range(scene.frame_start, scene.frame_end + 1, max(1, scene.frame_step)))
+    current, cameras = scene.frame_current, []
+    try:
+        for frame in frames:
+            scene.frame_set(frame)
+            cameras.append(camera_from_object(scene, scene.camera, unit))
+    finally:
+        scene.frame_set(current)
+    return frames, cameras
+
+
+def emitter_box(depsgraph, unit) -> np.ndarray:
+    """The holographic objects' box (2, 3) [m, world]: their triangles' corners, as the
+    recording takes them."""
+    corners = [corner_positions(inst.object, depsgraph, unit, inst.matrix_world)
+               for inst, _ in emitter_instances(depsgraph)]
+    if not corners:
+        raise ExportError("no holographic emitters to plan for")
+    every = np.concatenate(corners)
+    return np.array([every.min(0), every.max(0)])
+
+
+def shot_parts(scene, obj, unit, depsgraph):
+    """(the parts of a plate serving the scene camera's path over the frame range
+    (:func:`holo_core.plate.path.parts_along`): each part's Part Length of path, the Zone
+    Margin around its pupils, the plates as far from the objects' centre as the plate object
+    is; the frames; that distance [m]). One part: one plate serves the move."""
+    frames, cameras = shot_cameras(scene, unit)
+    box = emitter_box(depsgraph, unit)
+    plate = plate_from_object(obj, unit)
+    distance = float(np.linalg.norm(plate.matrix_world[:3, 3] - box.mean(0)))
+    try:
+        parts = parts_along(cameras, box, distance=distance,
+                            stretch=obj.holo.part_length * unit,
+                            margin=obj.holo.zone_margin * unit)
+    except InputError as e:
+        raise ExportError(f"plate '{obj.name}': {_frames_named(str(e), frames)}") from None
+    return parts, frames, distance
+
+
+def _frames_named(text: str, frames) -> str:
+    """The core's message, its frames (indices along the path) named by their numbers on the
+    timeline."""
+    def number(m):
+        first = frames[min(int(m.group(2)), len(frames) - 1)]
+        if m.group(4) is None:
+            return f"{m.group(1)} {first}"
+        return f"{m.group(1)} {first}-{frames[min(int(m.group(4)), len(frames) - 1)]}"
+    return re.sub(r"\b(frames?) (\d+)(-(\d+))?", number, text)
 
 
 def shot_zone(scene, obj, unit):
@@ -128,13 +212,51 @@ def shot_zone(scene, obj, unit):
     return zone, frames
 
 
+def set_summary(context, obj, parts) -> list[str]:
+    """The planner's lines for a plate set (:meth:`holo_core.plate.path.SetPlan.describe`):
+    the verdict, the set, what the scene camera's frame reads, each part, and a budget it
+    exceeds first where it does."""
+    scene, unit, h = context.scene, scale(context.scene), context.scene.holo
+    box = emitter_box(context.evaluated_depsgraph_get(), unit)
+    corners = np.array([[box[i][0], box[j][1], box[k][2]] for i in (0, 1) for j in (0, 1)
+                        for k in (0, 1)])
+    p = plan_parts(parts, corners, looks=h.iterations)
+    camera = camera_from_object(scene, scene.camera, unit)
+    k, beyond = nearest_part(parts, camera)
+    here = (f"part {k + 1} holds the camera's pupil" if not beyond else
+            f"the camera's pupil reaches {beyond:.3g} m beyond every part (part {k + 1} is "
+            f"the nearest)")
+    widest = max(p.plans, key=lambda q: q.samples)
+    lines = [f"verdict     a set of {len(parts)} parts along the camera's path; each frame "
+             f"renders from the part that holds its camera ({here})",
+             f"set         {p.describe()}",
+             f"a view      reads one part, at most {widest.samples / 1e6:.3g} Mpx"]
+    for n, (part, q) in enumerate(zip(parts, p.plans), 1):
+        lines.append(f"part {n:<6d} {part.plate.width / unit:.3g} x "
+                     f"{part.plate.height / unit:.3g} units, {q.samples / 1e6:.3g} Mpx, path "
+                     f"{part.stretch[0] / unit:.3g}-{part.stretch[1] / unit:.3g} units")
+    gb = 2.0**30
+    if p.disk_bytes() > h.plate_disk * gb:
+        lines.insert(1, f"refused     the set needs {memory.gib(p.disk_bytes())} on disk; the "
+                        f"Disk Budget is {h.plate_disk:g} GiB (a longer Part Length shares "
+                        f"more, a smaller aperture or coarser views need less)")
+    elif p.memory_bytes() > h.plate_memory * gb:
+        lines.insert(1, f"refused     a part needs {memory.gib(p.memory_bytes())} of memory "
+                        f"while recorded; the Memory Budget is {h.plate_memory:g} GiB (a "
+                        f"shorter Part Length needs less)")
+    return lines
+
+
 def plan_summary(context) -> list[str]:
     """The planner's verdict and figures (:func:`holo_core.plate.plan.summary`) for the
     selected plate, the holographic objects, the scene camera and the recording settings,
-    in the plate's frame; the planner runs here, in Blender's process (pure arithmetic)."""
+    in the plate's frame; the planner runs here, in Blender's process (pure arithmetic). A
+    plate made a set of parts: :func:`set_summary`."""
     scene, obj, unit = context.scene, plate_object(context), scale(context.scene)
     ranges.check(scene.holo, scene)
     ranges.check(obj.holo, scene)
+    if obj.holo.parts:
+        return set_summary(context, obj, plate_parts(obj))
     plate = plate_from_object(obj, unit)
     camera = camera_from_object(scene, scene.camera, unit)
     # the triangles' corners, as the recording takes them: an object's bounding box turned

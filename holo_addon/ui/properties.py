@@ -64,6 +64,17 @@ class HoloObjectSettings(bpy.types.PropertyGroup):
                                description="How far the viewing zone reaches beyond the "
                                            "camera's pupil: cameras inside it see the plate "
                                            "sharp and complete, and never record it again")
+    part_length: FloatProperty(name="Part Length", default=0.1, min=0.001, soft_max=1.0,
+                               subtype="DISTANCE",
+                               description="How much of the camera's path one part of the "
+                                           "plate serves: Fit Zone to Shot makes a set of "
+                                           "parts along a path longer than this (each part's "
+                                           "recording grows as the square of its length, the "
+                                           "set's as the path's length)")
+    parts: StringProperty(name="Parts", default="", options={"HIDDEN"},
+                          description="The plate's parts along the camera's path (Fit Zone to "
+                                      "Shot), each a plate facing its stretch of the path "
+                                      "[m, world] (JSON); empty: one plate")
     zone_set: BoolProperty(name="Zone Set", default=False, options={"HIDDEN"},
                            description="The viewing zone below is the plate's (else it is "
                                        "set around the scene camera when the plate is "

@@ -110,20 +110,76 @@ def write_manifest(folder: Path, parts, entries, *, seed: int, recording: str,
     part, None for a part not recorded yet) lie in ``folder``: rewritten after each part a
     recording finishes, so that a recording stopped resumes from the parts it wrote
     (:func:`recorded_parts`); a set with a part not recorded is refused by the reader."""
-    listed = []
-    for part, files in zip(parts, entries):
-        p = part.plate
-        listed.append({"plate_to_world": np.asarray(p.matrix_world).tolist(),
-                       "width_m": p.width, "height_m": p.height,
-                       "zone": {"centre_m": list(p.zone.centre),
-                                "half_extents_m": list(p.zone.half_extents),
-                                "pupil_m": p.zone.pupil, "pixel_rad": p.zone.pixel},
-                       "stretch_m": list(part.stretch), "frames": list(part.frames),
-                       "files": files})
+    listed = [{**part_entry(part), "files": files} for part, files in zip(parts, entries)]
     looks = looks or len(next(e for e in entries if e is not None))
     manifest = {"kind": KIND, "version": VERSION, "recording": recording, "seed": seed,
                 "looks": looks, "parts": listed}
     return write_atomic(folder / MANIFEST, json.dumps(manifest, indent=1).encode())
+
+
+def part_entry(part: PathPart) -> dict:
+    """A part as the manifest names it: its plate's pose, size and zone, its stretch [m] and
+    frames (plain data, JSON's)."""
+    p = part.plate
+    return {"plate_to_world": np.asarray(p.matrix_world).tolist(),
+            "width_m": p.width, "height_m": p.height,
+            "zone": {"centre_m": list(p.zone.centre),
+                     "half_extents_m": list(p.zone.half_extents),
+                     "pupil_m": p.zone.pupil, "pixel_rad": p.zone.pixel},
+            "stretch_m": list(part.stretch), "frames": list(part.frames)}
+
+
+def part_of(entry, name: str = "part") -> PathPart:
+    """The :class:`PathPart` of a :func:`part_entry` (an :class:`InputError` naming ``name``
+    where it is malformed)."""
+    try:
+        z = entry["zone"]
+        zone = ViewingZone(centre=z["centre_m"], half_extents=z["half_extents_m"],
+                           pupil=z["pupil_m"], pixel=z["pixel_rad"])
+        plate = Plate(matrix_world=np.asarray(entry["plate_to_world"], np.float64),
+                      width=entry["width_m"], height=entry["height_m"], zone=zone)
+        return PathPart(plate=plate, stretch=tuple(entry["stretch_m"]),
+                        frames=tuple(entry["frames"]))
+    except (KeyError, TypeError, ValueError) as e:
+        raise InputError(f"{name}: not a plate set's part ({type(e).__name__}: {e})"[:300]) \
+            from None
+    except InputError as e:
+        raise InputError(f"{name}: {e}") from None
+
+
+def parts_to_json(parts) -> str:
+    """``parts`` (PathPart) as JSON text (:func:`part_entry` each; :func:`parts_from_json`
+    reads it): what a scene keeps of the parts it placed, before any is recorded."""
+    return json.dumps([part_entry(p) for p in parts])
+
+
+def parts_from_json(text: str) -> tuple:
+    """The parts of :func:`parts_to_json`'s text; an :class:`InputError` naming the part
+    that is malformed."""
+    try:
+        listed = json.loads(text)
+    except (TypeError, ValueError) as e:
+        raise InputError(f"plate set parts: not JSON ({e})"[:300]) from None
+    if not isinstance(listed, list) or not listed:
+        raise InputError("plate set parts: a non-empty list of parts")
+    return tuple(part_of(entry, f"part {k}") for k, entry in enumerate(listed))
+
+
+def set_current(folder, recording: str, count: int) -> bool:
+    """Whether ``folder`` holds a whole set of ``count`` parts recorded as ``recording`` (its
+    manifest names it, and files for every part): what tells a caller to record or to read.
+    Only the manifest is read; the reader checks every file."""
+    name = Path(folder) / MANIFEST
+    if not name.is_file():
+        return False
+    try:
+        m = jsonfile.load(name, error=HologramFileError, max_chars=MANIFEST_CHARS)
+    except HologramFileError:
+        return False  # damaged: the recording replaces it, or the reader names it
+    listed = m.get("parts") if isinstance(m, dict) else None
+    return (m.get("kind") == KIND and m.get("recording") == recording and
+            isinstance(listed, list) and len(listed) == count and
+            all(isinstance(e, dict) and e.get("files") for e in listed))
 
 
 def file_digest(path) -> str:

@@ -47,7 +47,7 @@ MIN_SLANT = 0.05  # cos of the most grazing view a lattice's density is weighted
 
 @validate.scale_free()  # each part's wavelength is the plan's (as record_looks)
 def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = True,
-               budget=(None, None), folder=None, overwrite=False,
+               budget=(None, None), folder=None, overwrite=False, recording: str = "",
                progress: jobs.Progress = None) -> PlateSet:
     """Record the looks of every part of a plate along a path, in memory or into a folder.
 
@@ -75,6 +75,11 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
         render of the shot; the rest of a recording stopped.
     overwrite : bool
         Replace a folder's set of another recording (refused naming both otherwise).
+    recording : str
+        The name (a hex digest) the caller knows this recording by, written into the
+        manifest and matched when a folder's set is resumed (the add-on's digest of the scene
+        and its settings: emitters lit by a renderer differ in their noise from one render to
+        the next); '' (default): :func:`set_digest` of the meshes, parts, seed and looks.
     progress : callable, optional
         Given the fraction done in [0, 1] between units of work.
 
@@ -128,7 +133,8 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
                          f"({looks} look(s) each); the disk budget is "
                          f"{budget[1] / 2**30:.2f} GiB: longer stretches share more, a "
                          f"smaller pupil or coarser views need less")
-    digest = set_digest(meshes, parts, seed=seed, looks=looks, depth=depth)
+    digest = validate.digest("recording", recording) or set_digest(
+        meshes, parts, seed=seed, looks=looks, depth=depth)
     recorded = [None] * len(parts)
     if folder is not None:
         folder = set_folder(folder)

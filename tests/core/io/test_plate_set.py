@@ -93,3 +93,29 @@ def test_a_missing_damaged_or_foreign_part_is_refused_by_name(tmp_path, rng):
         read_plate_set(folder)
     with pytest.raises(HologramFileError, match="not a plate set"):
         read_plate_set(tmp_path)
+
+
+def test_parts_kept_as_text_are_the_parts(rng):
+    """A scene keeps the parts it placed as JSON (parts_to_json): read back, each part's pose,
+    size, zone, stretch and frames are the same; a part malformed is refused naming it."""
+    from holo_core.io.plate_set import parts_from_json, parts_to_json
+    from holo_core.validate import InputError
+    parts = small_set(rng).parts
+    back = parts_from_json(parts_to_json(parts))
+    for a, b in zip(back, parts, strict=True):
+        assert np.array_equal(a.plate.matrix_world, b.plate.matrix_world)
+        assert (a.plate.width, a.plate.height, a.stretch, a.frames) == \
+            (b.plate.width, b.plate.height, b.stretch, b.frames)
+        za, zb = a.plate.zone, b.plate.zone
+        assert (za.centre, za.half_extents, za.pupil, za.pixel) == \
+            (zb.centre, zb.half_extents, zb.pupil, zb.pixel)
+    listed = json.loads(parts_to_json(parts))
+    del listed[1]["zone"]
+    with pytest.raises(InputError, match="part 1: not a plate set's part"):
+        parts_from_json(json.dumps(listed))
+    listed = json.loads(parts_to_json(parts))
+    listed[0]["width_m"] = -1.0
+    with pytest.raises(InputError, match=r"part 0: .*width"):
+        parts_from_json(json.dumps(listed))
+    with pytest.raises(InputError, match="a non-empty list"):
+        parts_from_json("[]")
