@@ -23,7 +23,7 @@ from ..optics.imaging import COVERAGE_FLOOR, assemble
 from ..optics.speckle import downsample
 from ..scene.camera import Camera
 from ..scene.mesh import Mesh
-from ..validate import MAX_SUPERSAMPLE, InputError, shown
+from ..validate import MAX_SAMPLES, MAX_SUPERSAMPLE, InputError
 from ..view import RenderResult
 from .incoherent import IncoherentImages, grid_bytes
 from .optics import SUPERSAMPLE, PupilOptics
@@ -122,8 +122,7 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     samples = validate.integer("samples", samples, 1, MAX_SAMPLES)
     supersample = validate.integer("supersample", supersample, 1, MAX_SUPERSAMPLE)
     seed = validate.seed(seed)
-    if not 0 < validate.finite("exposure", exposure) <= MAX_EXPOSURE:
-        raise InputError(f"exposure must be in (0, {MAX_EXPOSURE:g}]; got {shown(exposure)}")
+    exposure = validate.exposure(exposure)
     meshes, points = _meshes(meshes), None if points is None else _points(points)
     w, h = camera.resolution
     memory.check_host(f"a {w}x{h} camera view at supersample {supersample}",
@@ -172,10 +171,6 @@ def _incoherent(rt, em, optics: PupilOptics, camera: Camera, fine: Camera, expos
         on_sample(result, 1)
     log.info("camera hologram: the looks' limit (incoherent emitters)")
     return result
-
-
-MAX_SAMPLES = 1 << 16  # looks, at most
-MAX_EXPOSURE = 1e20    # with colours up to 1e12 the float32 view stays finite
 
 
 def _meshes(meshes) -> list:
