@@ -38,6 +38,7 @@ from .window import camera_in_plate
 
 log = logging.getLogger(__name__)
 
+
 @validate.scale_free()
 @np.errstate(over="ignore", invalid="ignore")  # an overflow is refused at the end (_finish)
 def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apodize=True,
