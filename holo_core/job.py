@@ -30,11 +30,9 @@ from .scene.camera import Camera
 from .scene.mesh import Mesh
 from .scene.plate import Plate, ViewingZone
 from .scene.plate_set import PathPart
-from .validate import MAX_SUPERSAMPLE, InputError, shown
+from .validate import MAX_SAMPLES, MAX_SUPERSAMPLE, InputError, shown
 from .view import RenderResult
 
-MAX_SAMPLES = 1 << 16      # a camera hologram's looks, at most
-MAX_EXPOSURE = 1e20        # linear; with colours up to 1e12 the float32 view stays finite
 MAX_FRAME = 1048574        # Blender's last frame
 SPECKLE = {"EXACT": "incoherent", "LOOKS": "object_wave"}  # the camera hologram's way per setting
 
@@ -59,7 +57,7 @@ class _Route:
     def __post_init__(self):
         _set(self, "supersample", validate.integer("supersample", self.supersample, 1,
                                                    MAX_SUPERSAMPLE))
-        _set(self, "exposure", _exposure(self.exposure))
+        _set(self, "exposure", validate.exposure(_real("exposure", self.exposure)))
         _set(self, "seed", validate.seed(self.seed))
 
 
@@ -565,14 +563,6 @@ def _real(name: str, value):
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
         raise InputError(f"{name} must be a number; got {shown(value)}"[:300])
     return value
-
-
-def _exposure(value) -> float:
-    v = validate.finite("exposure", _real("exposure", value))
-    if not 0 < v <= MAX_EXPOSURE:
-        raise InputError(f"exposure must be in (0, {MAX_EXPOSURE:g}] (a linear factor); got "
-                         f"{shown(value)}")
-    return v
 
 
 def _number(value) -> float | None:

@@ -43,9 +43,9 @@ from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result, SetRoute
 from .plate.looks import record_planned
 from .plate.parts import record_set
 from .plate.path import part_for
-from .plate.plan import CHANNELS, PlatePlan
+from .plate.plan import CHANNELS
 from .plate.recording import PlannedPlate, plate_plan
-from .plate.view import OutsideZoneWarning, nyquist_supersample, render_set_view, render_view
+from .plate.view import OutsideZoneWarning, render_set_view, render_view
 from .scene.hologram import Hologram
 from .scene.radiance import projected
 from .view import BACKGROUND_DEPTH
@@ -97,9 +97,11 @@ def run(job: Job, progress: jobs.Progress = None, on_partial=None, *,
 
 def _plate(job: Job, progress, kept: KeptPlates):
     """The plate's holograms, recorded (or read when current, or ``kept`` from a job
-    before), and their view."""
+    before), and their view: the stages in order, each called once from here."""
     route = job.route
     record_share = 0.0 if not route.record else (0.85 if job.output.render else 1.0)
+    recording, viewing = (jobs.scaled(progress, 0, record_share),
+                          jobs.scaled(progress, record_share, 1.0))
     if route.record:
         kept.clear()  # a new plate: the one held is not held beside it
         # a plate with its viewing zone is a scene asset: the camera sizes nothing of it (its
@@ -108,36 +110,26 @@ def _plate(job: Job, progress, kept: KeptPlates):
         # never records again
         # the iterations are coded looks of one seed where n allows (look_code), else seeds,
         # every look in one pass; the plan is made once, here, and read by every stage
-        planned = _plan(job)
-        tiled = needs_tiles(job, planned.plan)
-        _check_room(route, planned.plan, tiled)  # before the recording: a full disk is said now
-        # beyond memory: tile by tile on Dask, each look into store_of its path (a cancelled
-        # recording resumes there, its tiles kept)
-        urls = [str(store_of(p)) for p in route.holograms] if tiled else None
+        planned, urls = _plan(job)
         holos = record_planned(planned, seed=route.seed,
                                budget=(route.memory_budget, route.disk_budget), urls=urls,
                                scheduler=route.scheduler, recording=route.recording,
-                               progress=jobs.scaled(progress, 0, record_share))
+                               progress=recording)
     else:
-        holos = kept.read(route.holograms)
-        _check_recording(route, holos)
+        holos = kept.read(route.holograms, route.recording)
     view = None
     if job.output.render:
-        _note_supersampling(route.supersample, nyquist_supersample(holos[0], job.camera))
         view = render_view(holos, job.camera, supersample=route.supersample,
                            composition=route.composition,
-                           opacity_threshold=route.opacity_threshold,
-                           progress=jobs.scaled(progress, record_share, 1.0))
+                           opacity_threshold=route.opacity_threshold, progress=viewing)
         view.rgb[...] *= route.exposure
-    if not route.record:
-        return view, ()
-    # every stage has finished: only now are files replaced (each one atomically)
-    job.output.folder.mkdir(parents=True, exist_ok=True)
-    for path, h in zip(route.holograms, holos):
-        if not isinstance(h.object_wave, TiledWave):  # a store is written as it is recorded
-            write_hologram(path, h)
+    if route.record:  # every stage has finished: only now are files replaced (each atomically)
+        job.output.folder.mkdir(parents=True, exist_ok=True)
+        for path, h in zip(route.holograms, holos):
+            if not isinstance(h.object_wave, TiledWave):  # a store is written as it is recorded
+                write_hologram(path, h)
     kept.hold(route.holograms, holos)
-    return view, route.holograms
+    return view, route.holograms if route.record else ()
 
 
 def _plate_set(job: Job, progress, kept: KeptPlates):
@@ -170,8 +162,6 @@ def _plate_set(job: Job, progress, kept: KeptPlates):
     view = None
     if job.output.render:
         k, _ = part_for(plates, job.camera)
-        _note_supersampling(route.supersample,
-                            nyquist_supersample(plates.part_looks(k)[0], job.camera))
         view = render_set_view(plates, job.camera, frame=job.output.frame,
                                outside=route.outside, supersample=route.supersample,
                                composition=route.composition,
@@ -183,18 +173,6 @@ def _plate_set(job: Job, progress, kept: KeptPlates):
             log.info("frame %d from part %d of %d of the plate set %s", job.output.frame,
                      k + 1, len(plates), route.recording)
     return view, ((route.folder / MANIFEST,) if route.record else ())
-
-
-def _check_recording(route: PlateRoute, holos) -> None:
-    """:class:`HologramFileError` naming the file unless each plate read is the recording the
-    route names: a plate replaced by another recording's valid plate (a folder synced from
-    another shot, a file copied by hand, a restored backup) is refused, never viewed."""
-    for path, h in zip(route.holograms, holos):
-        if route.recording and h.recording != route.recording:
-            held = f"recording {h.recording}" if h.recording else "no named recording"
-            raise HologramFileError(f"{plate_files(path)}: holds {held}, not {route.recording} "
-                                    f"(this scene's): another recording's plate under this "
-                                    f"name is never rendered; record the plate again")
 
 
 class KeptPlates:
@@ -210,8 +188,12 @@ class KeptPlates:
         self._set: tuple = (None, None)  # (its manifest's identity, the PlateSet)
         self._hold = hold
 
-    def read(self, paths) -> list[Hologram]:
-        """The holograms of ``paths``: held where their files are unchanged, else read."""
+    def read(self, paths, recording: str = "") -> list[Hologram]:
+        """The holograms of ``paths``: held where their files are unchanged, else read.
+        :class:`HologramFileError` naming the file unless each is the ``recording`` named
+        (where one is): a plate replaced by another recording's valid plate (a folder synced
+        from another shot, a file copied by hand, a restored backup) is refused, never
+        viewed."""
         names = [_identity(p) for p in paths]
         self._held = {k: h for k, h in self._held.items() if k in names}  # freed before reads
         self._set = (None, None)
@@ -220,16 +202,19 @@ class KeptPlates:
         if self._held:
             log.info("the plate's holograms held in memory from the job before: %d of %d "
                      "not read again", len(self._held), len(paths))
-        self._keep(names, holos)
+        for path, h in zip(paths, holos):
+            if recording and h.recording != recording:
+                held = f"recording {h.recording}" if h.recording else "no named recording"
+                raise HologramFileError(f"{plate_files(path)}: holds {held}, not {recording} "
+                                        f"(this scene's): another recording's plate under "
+                                        f"this name is never rendered; record the plate again")
         return holos
 
     def hold(self, paths, holos) -> None:
-        """Hold ``holos``, just written to ``paths`` (their files' identities now)."""
-        self._keep([_identity(p) for p in paths], holos)
-
-    def _keep(self, names, holos) -> None:
+        """Hold ``holos``, the plates of ``paths`` as their files are now (their identities),
+        in place of those held before."""
         if self._hold:
-            self._held = {k: h for k, h in zip(names, holos)
+            self._held = {k: h for k, h in zip(map(_identity, paths), holos)
                           if k is not None and not isinstance(h.object_wave, TiledWave)}
 
     def read_set(self, folder):
@@ -267,47 +252,27 @@ def _identity(path) -> tuple | None:
     return (str(Path(path).resolve()), st.st_size, st.st_mtime_ns, st.st_ino)
 
 
-def _note_supersampling(chosen: int, nyquist: int) -> None:
-    """Say where the route's supersampling leaves the view's speckle below its Nyquist rate.
-    The route's value is kept, not raised: on the shot of ``bench/shot.py`` (two coded looks,
-    f/2.8) 2 → 4 gains 0.7 dB of PSNR (32.7 → 33.4) for 2.4× the view's time, and no
-    difference shows at 1:1, so the artist's Supersample decides."""
-    if chosen < nyquist:
-        log.info("Supersample %d samples the view's speckle below its Nyquist rate: %d "
-                 "would average it a little further, at more time a frame", chosen, nyquist)
-
-
-def _plan(job: Job) -> PlannedPlate:
-    """The plan of the job's plate of meshes and its looks (:func:`plate_plan`), before any
-    emitter is found: made once a job."""
+def _plan(job: Job) -> tuple[PlannedPlate, list[str] | None]:
+    """The plan of the job's plate of meshes and its looks (:func:`plate_plan`), made once a
+    job before any emitter is found, and where the looks go: ``None`` (recorded in memory
+    together), or where in one piece they exceed the route's memory budget or the host's
+    share of its memory, the tiled stores beside their files (:func:`store_of`: recorded tile
+    by tile on Dask, a cancelled recording resuming there). The disk that takes them is
+    checked for their room now, before the recording."""
     route = job.route
-    return plate_plan(list(job.points) + list(job.triangles), plate=route.plate,
-                      camera=job.camera, wavelength=route.wavelength,
-                      looks=len(route.holograms))
-
-
-def _check_room(route: PlateRoute, p, tiled: bool) -> None:
-    """:class:`InputError` where the disk that takes the plate's files has less room than
-    the plan ``p`` says they need (each look's samples as written, or ``tiled``, its tiled
-    store's whole tiles)."""
-    check_room(route.holograms, p.disk_bytes(CHANNELS, tiled=tiled) / p.looks,
-               f"the plate's {{n}} look(s) ({p.shape[1]} x {p.shape[0]} samples, {CHANNELS} "
-               f"channels{', in tiles' if tiled else ''})")
-
-
-def needs_tiles(job: Job, planned: PlatePlan | None = None) -> bool:
-    """Whether the job's plate of meshes must be recorded tile by tile: its looks' whole plates,
-    recorded in memory together (:func:`record_planned`), exceed the route's memory budget or
-    the host's share of its memory. ``planned``: the plate's plan where the caller has it."""
-    route = job.route
-    p = planned or _plan(job).plan
-    limit = memory.host_share(route.memory_budget)
-    if p.needs_tiles(limit):
+    planned = plate_plan(list(job.points) + list(job.triangles), plate=route.plate,
+                         camera=job.camera, wavelength=route.wavelength,
+                         looks=len(route.holograms))
+    p, limit = planned.plan, memory.host_share(route.memory_budget)
+    tiled = p.needs_tiles(limit)
+    if tiled:
         log.info("the plate's %d look(s) need %s in one piece, more than %s: recording them "
                  "tile by tile into %s", p.looks, memory.gib(p.memory_bytes(CHANNELS * p.looks)),
                  memory.gib(limit), store_of(route.holograms[0]).name)
-        return True
-    return False
+    check_room(route.holograms, p.disk_bytes(CHANNELS, tiled=tiled) / p.looks,
+               f"the plate's {{n}} look(s) ({p.shape[1]} x {p.shape[0]} samples, {CHANNELS} "
+               f"channels{', in tiles' if tiled else ''})")
+    return planned, [str(store_of(path)) for path in route.holograms] if tiled else None
 
 
 def _check_outputs(job: Job) -> None:

@@ -18,6 +18,8 @@ import numpy as np
 # enough from float underflow that squares and ratios stay normal (1e-26 in float32's 1e-38)
 MIN_LENGTH, MAX_LENGTH = 1e-13, 1e3
 MAX_SUPERSAMPLE = 16  # fine pixels per pixel per axis, at most (either renderer, a job, the CLI)
+MAX_SAMPLES = 1 << 16  # a camera hologram's looks, at most (the renderer, a job)
+MAX_EXPOSURE = 1e20    # linear; with colours up to 1e12 the float32 view stays finite
 
 
 class InputError(ValueError):
@@ -234,6 +236,15 @@ def choice(name: str, value, options: tuple) -> str:
         raise InputError(f"{name} must be one of {', '.join(map(repr, options))}; got "
                          f"{shown(value)}"[:300])
     return value
+
+
+def exposure(value, name: str = "exposure") -> float:
+    """A linear factor on the radiance, as a float: in (0, MAX_EXPOSURE]."""
+    v = _finite(name, value, "")
+    if not 0 < v <= MAX_EXPOSURE:
+        raise InputError(f"{name} must be in (0, {MAX_EXPOSURE:g}] (a linear factor); got "
+                         f"{shown(value)}")
+    return v
 
 
 def seed(value, name: str = "seed") -> int:

@@ -45,19 +45,6 @@ def output_socket(tree):
     return node.inputs[0]
 
 
-def depth_combine(tree):
-    """A Depth Combine node that blends by alpha; inputs by index: 0 image A, 1 depth A,
-    2 image B, 3 depth B; output 0 the result, 1 the depth."""
-    node = tree.nodes.new("CompositorNodeZcombine")
-    if "Use Alpha" in node.inputs:
-        node.inputs["Use Alpha"].default_value = True
-        node.inputs["Anti-Alias"].default_value = False
-    else:
-        node.use_alpha = True
-        node.use_antialias_z = False
-    return node
-
-
 def math_node(tree, operation: str, *, clamp=False):
     """A compositor Math node (4.x ``CompositorNodeMath``, 5.x the shader nodes' Math)."""
     idname = "CompositorNodeMath" if hasattr(bpy.types, "CompositorNodeMath") \
@@ -166,10 +153,6 @@ def set_png_output(scene):
         s.media_type = "IMAGE"
     s.file_format = "PNG"
     s.color_depth = "8"
-
-
-def eevee_engine() -> str:
-    return "BLENDER_EEVEE" if bpy.app.version >= (5, 0, 0) else "BLENDER_EEVEE_NEXT"
 
 
 def uses_nodes(material) -> bool:

@@ -41,12 +41,6 @@ def raster_visibility(obj) -> None:
     setattr(obj, HOLDOUT, not plate or window)
 
 
-def is_holdout_emitter(obj) -> bool:
-    """Whether an emitter's raster visibility is the holdout above (files from before it hid
-    emitters from camera rays instead, which leaves no hole for the pass)."""
-    return obj.is_holdout and obj.visible_camera
-
-
 def show_as_raster(obj) -> None:
     """``obj`` an ordinary object of the raster: seen by every ray, no holdout."""
     for name in RAY_VISIBILITY:

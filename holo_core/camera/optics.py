@@ -96,6 +96,7 @@ def choose_optics(camera: Camera, depth_range, *, supersample=SUPERSAMPLE,
     near, far = (validate.positive("depth_range", d, "m") for d in depth_range)
     near, far = min(near, far), max(near, far)
     b = camera.pixel_angle() / s
+    alpha, beta, gamma = camera.supersampled(s).direction_cosines()
     if camera.fstop is not None:
         focus, diameter = camera.focus_distance, camera.aperture_diameter
     else:  # a pinhole: the largest pupil defocused by one fine pixel, at most f/1
@@ -106,7 +107,6 @@ def choose_optics(camera: Camera, depth_range, *, supersample=SUPERSAMPLE,
     lam = diameter * b
     blur = diameter * max(abs(1 / near - 1 / focus), abs(1 / far - 1 / focus))
     margin = math.ceil(blur / b) + EDGE_BINS
-    alpha, beta, gamma = camera.supersampled(s).direction_cosines()
     shape = tuple(grid.next_fast_len(2 * (math.ceil(np.abs(a).max() / b) + margin))
                   for a in (beta, alpha))
     step = 16 * LAYER_PHASE * lam / (2 * math.pi * diameter**2)  # layer spacing in 1/z

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import memory, validate
+from .. import validate
 from ..optics.raster import bin_rays, crossing_chunks
 from ..scene.camera import Camera
 from ..scene.mesh import surface_colour
@@ -226,10 +226,8 @@ def camera_emitters(meshes, points, camera: Camera, *, supersample, pupil_diamet
     move) and bare ``points`` ((positions (N, 3) [m], colours (N, 3)) or None) seen by
     ``camera``: the optics chosen for their depths (:func:`.optics.choose_optics`, at
     ``supersample`` fine pixels per pixel, ``pupil_diameter`` [m] or the camera's), then one
-    emitter per bin. The meshes' rasterization is counted against the host's memory first."""
-    if meshes:  # before the meshes are projected: a 10^7-vertex mesh needs 8 GB and more
-        memory.check_host(f"rasterizing {sum(len(m.triangles) for m in meshes)} triangles",
-                          raster_bytes(meshes))
+    emitter per bin. The host's memory for the meshes' rasterization (:func:`raster_bytes`)
+    is the caller's to check first (:func:`holo_core.camera.render.render_camera` does)."""
     pos, colours = (None, None) if points is None else points
     optics = choose_optics(camera, depth_range(meshes, camera, pos), supersample=supersample,
                            pupil_diameter=pupil_diameter)

@@ -23,11 +23,11 @@ from ..optics.imaging import COVERAGE_FLOOR, assemble
 from ..optics.speckle import downsample
 from ..scene.camera import Camera
 from ..scene.mesh import Mesh
-from ..validate import MAX_SUPERSAMPLE, InputError, shown
+from ..validate import MAX_SAMPLES, MAX_SUPERSAMPLE, InputError
 from ..view import RenderResult
 from .incoherent import IncoherentImages, grid_bytes
 from .optics import SUPERSAMPLE, PupilOptics
-from .raster import camera_emitters
+from .raster import camera_emitters, raster_bytes
 from .recording import PupilFields, intensity_hologram, reconstruct_object_wave
 
 log = logging.getLogger(__name__)
@@ -122,23 +122,28 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     samples = validate.integer("samples", samples, 1, MAX_SAMPLES)
     supersample = validate.integer("supersample", supersample, 1, MAX_SUPERSAMPLE)
     seed = validate.seed(seed)
-    if not 0 < validate.finite("exposure", exposure) <= MAX_EXPOSURE:
-        raise InputError(f"exposure must be in (0, {MAX_EXPOSURE:g}]; got {shown(exposure)}")
+    exposure = validate.exposure(exposure)
     meshes, points = _meshes(meshes), None if points is None else _points(points)
     w, h = camera.resolution
-    memory.check_host(f"a {w}x{h} camera view at supersample {supersample}",
-                      FINE_PIXEL_BYTES * w * h * supersample**2)
+    view = FINE_PIXEL_BYTES * w * h * supersample**2
+    # the host's memory before the meshes are projected (a 10^7-vertex mesh took 8 GB and more)
+    memory.check_host(f"a {w}x{h} camera view at supersample {supersample}", view)
+    if meshes:
+        memory.check_host(f"rasterizing {sum(len(m.triangles) for m in meshes)} triangles",
+                          raster_bytes(meshes))
     optics, em = camera_emitters(meshes, points, camera, supersample=supersample,
                                  pupil_diameter=pupil_diameter)
     fine = camera.supersampled(supersample)
     rt = get_runtime()
-    if via == "incoherent":
-        return _incoherent(rt, em, optics, camera, fine, exposure, progress, on_sample)
-    pupil = 8.0 * math.prod(optics.shape)
-    memory.check_device(rt, f"the {optics.shape[1]}x{optics.shape[0]} pupil's fields",
-                        DEVICE_FIELDS * pupil + FINE_PIXEL_BYTES * w * h * supersample**2, pupil)
-    fields = PupilFields(rt, em, optics, fine)
     acc = _Accumulator(camera, optics, exposure)
+    pupil = 8.0 * math.prod(optics.shape)
+    if via == "incoherent":  # the layers' padded images, else the pupil's fields
+        memory.check_device(rt, f"the {optics.shape[1]}x{optics.shape[0]} pupil's padded "
+                            f"images", grid_bytes(optics) + view, 4 * pupil)
+        return _incoherent(rt, em, optics, fine, acc, progress, on_sample)
+    memory.check_device(rt, f"the {optics.shape[1]}x{optics.shape[0]} pupil's fields",
+                        DEVICE_FIELDS * pupil + view, pupil)
+    fields = PupilFields(rt, em, optics, fine)
     rng = np.random.default_rng(seed)
     for n in range(1, samples + 1):
         phases = rt.to_device(rng.uniform(0, 2 * np.pi, len(em.index)), np.float32)
@@ -159,23 +164,14 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     return result
 
 
-def _incoherent(rt, em, optics: PupilOptics, camera: Camera, fine: Camera, exposure, progress,
+def _incoherent(rt, em, optics: PupilOptics, fine: Camera, acc: _Accumulator, progress,
                 on_sample) -> RenderResult:
-    w, h = fine.resolution
-    memory.check_device(rt, f"the {optics.shape[1]}x{optics.shape[0]} pupil's padded images",
-                        grid_bytes(optics) + FINE_PIXEL_BYTES * w * h, 32.0 * math.prod(
-                            optics.shape))
-    acc = _Accumulator(camera, optics, exposure)
     acc.add_expected(*IncoherentImages(rt, em, optics, fine).images(progress))
     result = acc.result()
     if on_sample is not None:
         on_sample(result, 1)
     log.info("camera hologram: the looks' limit (incoherent emitters)")
     return result
-
-
-MAX_SAMPLES = 1 << 16  # looks, at most
-MAX_EXPOSURE = 1e20    # with colours up to 1e12 the float32 view stays finite
 
 
 def _meshes(meshes) -> list:

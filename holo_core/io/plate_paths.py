@@ -12,7 +12,7 @@ from .tiled_wave import open_plate
 
 def store_of(path) -> Path:
     """The tiled store that holds a plate file's samples when its plate is recorded tile by
-    tile (:func:`holo_core.runner.needs_tiles`): NAME.zarr beside NAME.exr."""
+    tile (:meth:`holo_core.plate.plan.PlatePlan.needs_tiles`): NAME.zarr beside NAME.exr."""
     return Path(path).with_suffix(".zarr")
 
 

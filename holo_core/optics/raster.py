@@ -54,10 +54,6 @@ class Crossings:
     def __len__(self) -> int:
         return len(self.depth)
 
-    def select(self, keep) -> Crossings:
-        return Crossings(*(a[keep] for a in (self.kx, self.ky, self.depth, self.mesh,
-                                              self.triangle, self.bary, self.layer)))
-
 
 def crossings(meshes, position, rotation, b, shape, *, layers=1, chunk=2_000_000,
               coincident=1e-6) -> Crossings:

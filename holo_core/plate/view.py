@@ -14,6 +14,8 @@ viewed from the part whose zone holds the pupil (:func:`render_set_view`).
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import math
 import warnings
 
@@ -33,6 +35,8 @@ from .path import part_for
 from .plan import pinhole_pupil
 from .pupil_images import HOLOGRAM_SAMPLE_BYTES, carrier_looks, full_band_looks
 from .window import camera_in_plate
+
+log = logging.getLogger(__name__)
 
 
 @validate.scale_free()
@@ -64,7 +68,8 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     supersample : int or 'auto'
         Render at this many times the resolution, then average blocks (speckle reduction by
         spatial low-pass and downsampling, Sect. VII-E). 'auto' (:func:`nyquist_supersample`):
-        the fine pixels sample the image's intensity at its Nyquist rate.
+        the fine pixels sample the image's intensity at its Nyquist rate; fewer are said in
+        the log, not raised.
     exposure : float, optional
         Radiance to pixel value [m²: 1/(emitters per m²)]; default 1/point density (a surface shows its emitters'
         colour), or when that is unknown, the 99.5th percentile maps to 1.
@@ -129,6 +134,8 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     if not holos:
         raise InputError(f"holograms must be a Hologram or a non-empty list of them; got "
                          f"{type(holograms).__name__}")
+    if not all(isinstance(h, Hologram) for h in holos):
+        raise InputError("holograms must be Hologram objects (read_hologram, record_points)")
     if not isinstance(camera, Camera):
         raise InputError(f"camera must be a Camera; got {type(camera).__name__}")
     if aperture is not None and not isinstance(aperture, Pupil):
@@ -137,9 +144,15 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     validate.choice("composition", composition, ("mean", "max"))
     validate.choice("depth_estimate", depth_estimate, ("consensus", "brightest"))
     validate.choice("source", source, ("hologram", "object_wave"))
+    nyquist = nyquist_supersample(first, camera)
     if isinstance(supersample, str) and supersample == "auto":
-        supersample = nyquist_supersample(first, camera)
+        supersample = nyquist
     supersample = validate.integer("supersample", supersample, 1, MAX_SUPERSAMPLE)
+    if supersample < nyquist:  # kept, not raised: on the shot of bench/shot.py (two coded
+        # looks, f/2.8) 2 -> 4 gains 0.7 dB of PSNR (32.7 -> 33.4) for 2.4x the view's time,
+        # and no difference shows at 1:1, so the artist's Supersample decides
+        log.info("Supersample %d samples the view's speckle below its Nyquist rate: %d "
+                 "would average it a little further, at more time a frame", supersample, nyquist)
     _check_settings(holos, camera, supersample, exposure, opacity_threshold)
     fine = camera.supersampled(supersample)
     colours, z_ch = first.colour_channels(), first.depth_channel()
@@ -225,10 +238,10 @@ def render_set_view(plates: PlateSet, camera: Camera, *, frame: int | None = Non
             raise InputError(f"{what}: record the set for a path that holds the camera")
         warnings.warn(f"{what}: viewed from that part, the view may be cut off or soft",
                       OutsideZoneWarning, stacklevel=2)
-        with warnings.catch_warnings():  # said once, for the set
+    with warnings.catch_warnings() if beyond > 0 else contextlib.nullcontext():
+        if beyond > 0:  # said once, for the set
             warnings.simplefilter("ignore", OutsideZoneWarning)
-            return render_view(list(plates.part_looks(k)), camera, **settings)
-    return render_view(list(plates.part_looks(k)), camera, **settings)
+        return render_view(list(plates.part_looks(k)), camera, **settings)
 
 
 BESIDE = "the camera sees the objects beside the plate, not through it"
@@ -316,10 +329,8 @@ PIXEL_BYTES = 96  # host bytes per fine pixel and iteration while rendering (fie
 
 
 def _check_settings(holos, camera: Camera, supersample, exposure, threshold) -> None:
-    """:class:`InputError` for settings out of range, holograms that are not of one scene, or
-    a view too large for the memory."""
-    if not all(isinstance(h, Hologram) for h in holos):
-        raise InputError("holograms must be Hologram objects (read_hologram, record_points)")
+    """:class:`InputError` for settings out of range, holograms (each a Hologram) that are
+    not of one scene, or a view too large for the memory."""
     if exposure is not None:
         validate.positive("exposure", exposure)
     threshold = validate.finite("opacity_threshold", threshold)

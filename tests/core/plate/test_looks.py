@@ -370,6 +370,7 @@ def test_the_pipeline_records_a_plate_beyond_memory_in_tiles(scheduler, tmp_path
     from holo_core import runner
     from holo_core.job import Job, Output, PlateRoute
     from holo_core.plate import recording
+    from holo_core.plate.plan import PlatePlan
 
     cam = camera("centre", SCALE)
 
@@ -379,13 +380,14 @@ def test_the_pipeline_records_a_plate_beyond_memory_in_tiles(scheduler, tmp_path
                    route=PlateRoute(plate=PLATE, holograms=holograms, supersample=2,
                                     scheduler=scheduler, **route))
 
-    assert not runner.needs_tiles(job(tmp_path / "a"))
-    assert runner.needs_tiles(job(tmp_path / "a", memory_budget=1e6))
+    assert runner._plan(job(tmp_path / "a"))[1] is None
+    assert runner._plan(job(tmp_path / "a", memory_budget=1e6))[1] == [
+        str(tmp_path / "a" / "h.zarr")]
     plans, planner = [], recording.plan
     monkeypatch.setattr(recording, "plan", lambda *a, **k: plans.append(1) or planner(*a, **k))
     whole = runner.run(job(tmp_path / "a"))
     assert len(plans) == 1, f"the job in memory planned its plate {len(plans)} times"
-    monkeypatch.setattr(runner, "needs_tiles", lambda job, planned=None: True)
+    monkeypatch.setattr(PlatePlan, "needs_tiles", lambda plan, limit: True)
     tiled = runner.run(job(tmp_path / "b"))
     assert len(plans) == 2, f"the tiled job planned its plate {len(plans) - 1} times"
     assert not (tmp_path / "b" / "h.exr").exists() and plate_current(tmp_path / "b" / "h.exr")
