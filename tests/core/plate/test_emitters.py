@@ -36,3 +36,32 @@ def test_emitters_lie_on_the_surface_on_a_lattice_of_directions():
     assert np.all(np.abs(side - 0.04 / 0.6 / SPACING) <= 2), side
     assert np.allclose(e.colour, (0.2, 0.5, 0.8))
 
+
+
+def test_random_phases_follow_the_emitters_not_their_count():
+    """A plate's random phases are drawn per emitter from its key (holo_core.plate.emitters.
+    emitter_keys: its mesh, triangle and bin), not by its place in the list: with one triangle
+    of a 2 cm square before an 8 cm one removed (its last: the others keep their indices),
+    the emitters it hid appear and its own go, yet every emitter found both times (the same point, to 1e-12 m) keeps its phase exactly,
+    for plain and coded looks. Drawn in list order instead (the earlier rule, here as the
+    reference that the case moves emitters), most of them would change. The keys are
+    distinct, and the phases uniform on [0, 2π): their mean phasor is within 4/√n of 0."""
+    from holo_core.plate.recording import _phases, look_code
+    back, front = square(0.08, -0.3, (1.0, 1.0, 1.0)), square(0.02, -0.25, (1.0, 0.0, 0.0))
+    half = Mesh(vertices=front.vertices, triangles=front.triangles[:1], colours=front.colours)
+    whole, cut = (zone_emitters([front_, back], ZONE, SPACING) for front_ in (front, half))
+    where = {tuple(np.round(p, 12)): n for n, p in enumerate(cut.position)}
+    i, j = np.array([(n, where[tuple(np.round(p, 12))]) for n, p in enumerate(whole.position)
+                     if tuple(np.round(p, 12)) in where]).T
+    assert len(whole) != len(cut) and len(i) > 0.5 * len(whole), (len(whole), len(cut), len(i))
+    for code in (None, look_code(1, 2)):
+        a, b = _phases(whole, 7, code), _phases(cut, 7, code)
+        assert np.array_equal(a[i], b[j]), np.abs(a[i] - b[j]).max()
+    by_order = [np.random.default_rng(7).uniform(0, 2 * np.pi, len(e)) for e in (whole, cut)]
+    moved = np.mean(by_order[0][i] != by_order[1][j])
+    assert moved > 0.5, moved
+    assert len(np.unique(whole.key)) == len(whole)
+    p = _phases(whole, 7, None)
+    assert p.min() >= 0 and p.max() < 2 * np.pi
+    assert abs(np.exp(1j * p).mean()) < 4 / np.sqrt(len(p)), abs(np.exp(1j * p).mean())
+    assert not np.array_equal(p, _phases(whole, 8, None))  # another seed, other phases
