@@ -5,7 +5,9 @@ on one distance, and defocus then blurs by D·|1/z − 1/focus| (the camera's de
 Without a lens a pinhole also blurs geometrically by D/r at distance r, so each renderer picks
 the pinhole that balances the two for its own sampling:
 
-- :func:`camera_pupil` (plate views): λ/D spans ``PINHOLE_SAMPLES`` pixels, D ≤ √(λ·r);
+- :func:`camera_pupil` (full-band plates' views): λ/D spans ``PINHOLE_SAMPLES`` pixels,
+  D ≤ √(λ·r); a carrier plate's views take the smallest pupil as sharp as the plate's own,
+  λ/D a fine pixel (:func:`holo_core.plate.view.pinhole_view_pupil`);
 - :func:`pinhole_wavelength` (plate sampling): the λ at which both blurs reach two pixels,
   λ = 4Δ²r;
 - :func:`defocus_limited_diameter` (camera holograms): the widest pupil, focused in the middle

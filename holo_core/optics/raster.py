@@ -60,7 +60,8 @@ def crossings(meshes, position, rotation, b, shape, *, layers=1, chunk=2_000_000
     """The first ``layers`` surfaces each bin's ray crosses (nearest first) for a pupil at
     ``position`` [m] with axes ``rotation`` (columns X right, Y up, Z back, world frame) and
     bins ``b`` apart on a grid of ``shape`` (h, w); crossings within ``coincident``·depth of
-    the previous one (a ray through an edge two triangles share) count once."""
+    the previous one (two surfaces that meet, a face listed twice; a ray through an edge two
+    triangles share already crosses one of them, :func:`_inside`) count once."""
     h, w = shape
     parts = list(crossing_chunks(meshes, position, rotation, b, shape, chunk))
     if not parts:
@@ -105,6 +106,8 @@ def crossing_count(meshes, position, rotation, b) -> float:
         total += 0.5 * float(np.abs((p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1])
                                     - (p2[:, 0] - p0[:, 0]) * (p1[:, 1] - p0[:, 1])).sum())
     return total / b**2
+
+
 def crossing_chunks(meshes, position, rotation, b, shape, chunk):
     """Every crossing of the bins' rays with the meshes' triangles, a chunk of at most
     ``chunk`` bin-triangle pairs at a time: tuples (kx, ky, planar depth [m], mesh index,
@@ -146,12 +149,7 @@ def _chunk(ids, box, sizes, tri, t, d, b, m):
     tx, ty = bin_rays(kx, ky, b)
     corners = tri[ids][which]
     p0, p1, p2 = (t[corners[:, i]] for i in range(3))
-    area = (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p2[:, 0] - p0[:, 0]) * \
-        (p1[:, 1] - p0[:, 1])
-    l1 = ((tx - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p2[:, 0] - p0[:, 0]) * (ty - p0[:, 1]))
-    l2 = ((p1[:, 0] - p0[:, 0]) * (ty - p0[:, 1]) - (tx - p0[:, 0]) * (p1[:, 1] - p0[:, 1]))
-    l1, l2 = l1 / area, l2 / area
-    inside = (l1 >= 0) & (l2 >= 0) & (l1 + l2 <= 1)
+    l1, l2, inside = _inside(p0, p1, p2, tx, ty)
     if not inside.any():
         return None
     l1, l2, corners, which = l1[inside], l2[inside], corners[inside], which[inside]
@@ -160,3 +158,38 @@ def _chunk(ids, box, sizes, tri, t, d, b, m):
     w2 = l2 / d[corners[:, 2]] / inv
     bary = np.stack([1 - w1 - w2, w1, w2], -1)
     return (kx[inside], ky[inside], 1 / inv, np.full(len(inv), m), ids[which], bary)
+
+
+def _edge(p, q, tx, ty):
+    """The edge function of the edge p–q (n, 2) at the rays (tx, ty): twice the signed area of
+    (p, q, ray), evaluated from the endpoint that comes first in (x, y) order, so that the
+    two triangles sharing the edge get the same number, one with each sign."""
+    swap = (p[:, 0] > q[:, 0]) | ((p[:, 0] == q[:, 0]) & (p[:, 1] > q[:, 1]))
+    u = np.where(swap[:, None], q, p)
+    v = np.where(swap[:, None], p, q)
+    e = (v[:, 0] - u[:, 0]) * (ty - u[:, 1]) - (v[:, 1] - u[:, 1]) * (tx - u[:, 0])
+    return np.where(swap, -e, e)
+
+
+def _inside(p0, p1, p2, tx, ty):
+    """(barycentrics l1, l2 (n,) in view tangents, inside (n,) bool) of the rays (tx, ty) in
+    the projected triangles (p0, p1, p2) (n, 2) each. Watertight: a ray through an edge two
+    triangles share is inside exactly one of them. Each edge's function is evaluated the
+    same way by both triangles (:func:`_edge`), and a ray exactly on an edge belongs to the
+    triangle on whose top or left side it lies (counter-clockwise: the edge runs down, or
+    runs left level); ``emitters.cl``'s depth raster keeps the same rule. Testing
+    barycentrics divided by each triangle's own area instead lets rounding put a ray on a
+    shared edge outside both: a crack that light leaks through."""
+    area = (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - \
+        (p2[:, 0] - p0[:, 0]) * (p1[:, 1] - p0[:, 1])
+    s = np.sign(area)
+    inside = area != 0
+    weights = []
+    for a, b in ((p1, p2), (p2, p0), (p0, p1)):  # the edges facing p0, p1, p2
+        w = s * _edge(a, b, tx, ty)
+        dx, dy = s * (b[:, 0] - a[:, 0]), s * (b[:, 1] - a[:, 1])
+        top_left = (dy < 0) | ((dy == 0) & (dx < 0))
+        inside &= (w > 0) | ((w == 0) & top_left)
+        weights.append(w)
+    total = np.where(inside, weights[0] + weights[1] + weights[2], 1)
+    return weights[1] / total, weights[2] / total, inside

@@ -13,6 +13,30 @@
  *     (rotation's columns), so the host hands the emitters over once for every pupil.
  */
 
+/* Watertight, as optics/raster.py's crossings: a ray through an edge two triangles share
+ * fills the buffer from exactly one of them, never from neither (a crack in the occluder that
+ * the surfaces behind it show through, along every shared edge that runs through bins' rays).
+ * Each edge's function is evaluated from the endpoint that comes first in (x, y) order, so
+ * both triangles get the same number with opposite signs, and without contraction into fused
+ * multiply-adds, which OpenCL C allows by default and which round a*b - c*d differently from
+ * c*d - a*b; a ray exactly on the edge belongs to the triangle whose top or left edge it is. */
+#pragma OPENCL FP_CONTRACT OFF
+
+/* The edge function of p-q at r (twice the signed area of p, q, r), the same for q-p negated. */
+static float edge_function(float px, float py, float qx, float qy, float rx, float ry)
+{
+    if (px > qx || (px == qx && py > qy))
+        return -((px - qx) * (ry - qy) - (py - qy) * (rx - qx));
+    return (qx - px) * (ry - py) - (qy - py) * (rx - px);
+}
+
+/* Whether a ray at edge function w (its sign made positive inside) of an edge running
+ * (dx, dy) counter-clockwise is on the triangle's side: inside, or on a top or left edge. */
+static bool covers(float w, float dx, float dy)
+{
+    return w > 0 || (w == 0 && (dy < 0 || (dy == 0 && dx < 0)));
+}
+
 __kernel void depth_raster(__global int *zbuf, int h, int w, float b,
                            __global const float *tx, __global const float *ty,
                            __global const float *d, __global const int *tri, int triangles)
@@ -38,16 +62,19 @@ __kernel void depth_raster(__global int *zbuf, int h, int w, float b,
     }
     int c0 = max((int)floor(kx0) - 1, -(w / 2)), c1 = min((int)ceil(kx1) + 1, (w - 1) / 2);
     int r0 = max((int)floor(ky0) - 1, -(h / 2)), r1 = min((int)ceil(ky1) + 1, (h - 1) / 2);
-    float inv_area = 1 / area;
+    float s = area > 0 ? 1.0f : -1.0f;  /* counter-clockwise whichever way it is wound */
     for (int ky = r0; ky <= r1; ky++)
     for (int kx = c0; kx <= c1; kx++) {
         float alpha = kx * b, beta = ky * b;
         float gamma = sqrt(fmax(1 - alpha * alpha - beta * beta, 1e-12f));
         float rx = -alpha / gamma, ry = -beta / gamma;
-        float l1 = ((rx - ax) * (cy - ay) - (cx - ax) * (ry - ay)) * inv_area;
-        float l2 = ((bx - ax) * (ry - ay) - (rx - ax) * (by - ay)) * inv_area;
-        if (l1 < 0 || l2 < 0 || l1 + l2 > 1)
+        float w0 = s * edge_function(bx, by, cx, cy, rx, ry);  /* the edges facing a, b, c */
+        float w1 = s * edge_function(cx, cy, ax, ay, rx, ry);
+        float w2 = s * edge_function(ax, ay, bx, by, rx, ry);
+        if (!(covers(w0, s * (cx - bx), s * (cy - by)) && covers(w1, s * (ax - cx), s * (ay - cy))
+              && covers(w2, s * (bx - ax), s * (by - ay))))
             continue;
+        float l1 = w1 / (w0 + w1 + w2), l2 = w2 / (w0 + w1 + w2);
         float inv = (1 - l1 - l2) / d0 + l1 / d1 + l2 / d2;
         int flat = (ky < 0 ? ky + h : ky) * w + (kx < 0 ? kx + w : kx);
         atomic_min(zbuf + flat, as_int(1 / inv));

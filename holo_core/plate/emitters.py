@@ -11,6 +11,10 @@ zone's reference pupil resolves, with the zone points each is seen from.
   where it is no farther than that buffer (bilinear between the four bins around its
   direction, with a bias for its surface's slope). A ray from an emitter through the plate
   reaches the zone between grid points: the plate's sum interpolates there.
+- Who (:func:`emitter_keys`, :func:`random_phases`). Each emitter is named by what it is, the
+  crossing of one bin's ray with one triangle, hashed to a 64-bit key; its random phase is a
+  hash of that key and the look's seed, so an emitter gained or lost elsewhere (an occluder's
+  edge rastered differently) leaves every other emitter's phase as it was.
 """
 
 from __future__ import annotations
@@ -55,7 +59,9 @@ class Emitters:
     shared by several plates (:mod:`.parts`), their indices in it, ``count`` its size: their
     random phases are the set's, so every plate of it sends one pupil the same wave;
     ``weight`` (n,), where given, scales their amplitudes (a set's lattice seen from this
-    zone: :func:`holo_core.plate.parts.set_emitters`)."""
+    zone: :func:`holo_core.plate.parts.set_emitters`); ``key`` (n,) uint64 each one's
+    identity (:func:`emitter_keys`), which its random phases are drawn from
+    (:func:`random_phases`)."""
 
     position: np.ndarray
     colour: np.ndarray
@@ -65,6 +71,7 @@ class Emitters:
     ids: np.ndarray | None = None
     count: int = 0
     weight: np.ndarray | None = None
+    key: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.position)
@@ -103,20 +110,21 @@ def zone_emitters(meshes, zone: ViewingZone, spacing: float, *, layers=3,
         raise InputError("a plate needs at least one mesh to record")
     every = np.concatenate([m.vertices for m in meshes])
     rotation = zone_frame(zone, np.array([every.min(0), every.max(0)]))
-    position, colour, normal, cell = surface_points(meshes, zone.centre, rotation, spacing,
-                                                    layers=layers)
+    position, colour, normal, cell, key = surface_points(meshes, zone.centre, rotation,
+                                                         spacing, layers=layers)
     g = grid or grid_points(zone)
     offsets, seen = visibility(meshes, position, normal, zone, rotation, spacing, g)
     keep = seen.reshape(len(seen), -1).max(1) > 0
     return Emitters(position=position[keep], colour=colour[keep], cell=cell[keep],
-                    visibility=seen[keep], grid=offsets)
+                    visibility=seen[keep], grid=offsets, key=key[keep])
 
 
-def surface_points(meshes, centre, rotation, spacing: float, *, layers=3):
-    """(position (n, 3) [m], linear colour (n, 3) >= 0, unit normal (n, 3), bin (kx, ky) (n, 2))
-    of the crossings of the rays of a pupil at ``centre`` (3,) [m] with axes ``rotation``,
-    bins ``spacing`` apart in direction cosine, with ``meshes``, up to ``layers`` deep (all in
-    one frame, the meshes')."""
+def surface_points(meshes, centre, rotation, spacing: float, *, layers=3, lattice=0):
+    """(position (n, 3) [m], linear colour (n, 3) >= 0, unit normal (n, 3), bin (kx, ky) (n, 2),
+    key (n,) uint64) of the crossings of the rays of a pupil at ``centre`` (3,) [m] with axes
+    ``rotation``, bins ``spacing`` apart in direction cosine, with ``meshes``, up to ``layers``
+    deep (all in one frame, the meshes'); ``key`` names each crossing (:func:`emitter_keys`,
+    of the ``lattice``-th pupil where several find one set)."""
     every = np.concatenate([m.vertices for m in meshes])
     centre = np.asarray(centre, np.float64)
     shape = bins_covering(every, centre, rotation, spacing)
@@ -134,7 +142,42 @@ def surface_points(meshes, centre, rotation, spacing: float, *, layers=3):
         v = np.asarray(mesh.vertices, np.float64)[corners]
         n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
         normal[sel] = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-    return position, np.clip(colour, 0, None), normal, np.stack([hits.kx, hits.ky], 1)
+    key = emitter_keys(hits.mesh, hits.triangle, hits.kx, hits.ky, lattice)
+    return position, np.clip(colour, 0, None), normal, np.stack([hits.kx, hits.ky], 1), key
+
+
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)  # SplitMix64's increment (2⁶⁴/φ)
+
+
+def _mix(x: np.ndarray) -> np.ndarray:
+    """SplitMix64's finaliser (Steele, Lea and Flood 2014), uint64 → uint64: a bijection
+    whose every output bit depends on every input bit. Held as an array (NumPy's uint64
+    arrays wrap modulo 2⁶⁴ as it needs; its scalars warn that they overflow)."""
+    x = np.array(x, np.uint64, ndmin=1)
+    x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return x ^ (x >> np.uint64(31))
+
+
+def emitter_keys(mesh, triangle, kx, ky, lattice: int = 0) -> np.ndarray:
+    """(n,) uint64 keys naming emitters by what they are: the crossing of the bin (``kx``,
+    ``ky``)'s ray (signed ints) with triangle ``triangle`` of mesh ``mesh`` (ints, each (n,)),
+    found from pupil ``lattice`` (:mod:`.parts`: several pupils find one set). Each field is
+    folded in through :func:`_mix`, so the keys of distinct crossings differ but by a 64-bit
+    hash collision (about n²/2⁶⁵: 3e-8 for a million emitters)."""
+    key = np.full(np.shape(kx), _mix(np.uint64(lattice))[0], np.uint64)
+    for field in (mesh, triangle, kx, ky):
+        key = _mix(key ^ (np.asarray(field, np.int64).view(np.uint64) + _GOLDEN))
+    return key
+
+
+def random_phases(key, seed: int) -> np.ndarray:
+    """Random phases [rad] in [0, 2π) (n,) float64 of the emitters ``key`` (n,) uint64
+    (:func:`emitter_keys`) for ``seed``: a counter-based draw, each a hash of its own key and
+    the seed alone (SplitMix64), uniform to 2⁻⁵³, so an emitter's phase does not depend on
+    which other emitters there are or in what order they come."""
+    mixed = _mix(np.asarray(key, np.uint64) ^ _mix(_mix(np.uint64(seed % 2**64)) + _GOLDEN)[0])
+    return (mixed >> np.uint64(11)).astype(np.float64) * (2 * math.pi / 2.0**53)
 
 
 def _points(hits, centre, rotation, spacing) -> np.ndarray:

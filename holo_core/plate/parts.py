@@ -183,14 +183,15 @@ def set_emitters(meshes, parts, plans, spacing: float) -> Iterator[Emitters]:
     centres = np.array([c for c, _ in lattices])
     points = []
     for k, (centre, rotation) in enumerate(lattices):
-        position, colour, normal, cell = surface_points(world, centre, rotation, spacing,
-                                                        layers=LAYERS)
+        position, colour, normal, cell, key = surface_points(world, centre, rotation, spacing,
+                                                             layers=LAYERS, lattice=k)
         towards = centres[None, :, :] - position[:, None, :]
         facing = np.abs(np.einsum("nj,npj->np", normal, towards)) / np.linalg.norm(towards,
                                                                                    axis=2)
         own = facing.argmax(1) == k  # each surface point from the lattice seeing it most face-on
-        points.append((position[own], colour[own], normal[own], cell[own], facing[own, k]))
-    position, colour, normal, cell, slant = (np.concatenate(a) for a in zip(*points))
+        points.append((position[own], colour[own], normal[own], cell[own], facing[own, k],
+                       key[own]))
+    position, colour, normal, cell, slant, key = (np.concatenate(a) for a in zip(*points))
     seen = []
     for part, planned, (centre, _) in zip(parts, plans, poses):
         local, zone = planned.meshes, planned.plan.zone
@@ -217,7 +218,7 @@ def set_emitters(meshes, parts, plans, spacing: float) -> Iterator[Emitters]:
     count = int(kept.sum())
     return (Emitters(position=part.plate.to_plate(position[keep]), colour=colour[keep],
                      cell=cell[keep], visibility=table / np.float32(255), grid=offsets,
-                     ids=ids[keep], count=count, weight=weight)
+                     ids=ids[keep], count=count, weight=weight, key=key[keep])
             for part, (keep, offsets, table, weight) in zip(parts, seen))
 
 

@@ -22,7 +22,7 @@ from ..scene.hologram import Hologram, HologramInfo
 from ..scene.mesh import Mesh
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Carrier, Plate, ViewingZone
 from ..validate import InputError
-from .emitters import Emitters, zone_emitters, zone_frame
+from .emitters import Emitters, random_phases, zone_emitters, zone_frame
 from .plan import LAYERS, LOOKS, RIM, PlatePlan, plan
 from .zone_sum import ZoneEmitters, ZoneSum, ZoneWindow
 
@@ -268,10 +268,16 @@ def _look_seed(seed: int, codes, look: int) -> int:
 
 def _phases(em, seed: int, code) -> np.ndarray:
     """The emitters' random phases [rad] of ``seed``, shifted by ``code`` (k, m): 2π·(k1·i +
-    k2·j)/m on the lattice cells (i, j) they lie in (k = k1·m + k2; :func:`~holo_core.plate.looks.record_plate`)."""
-    phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, em.count or len(em))
-    if em.ids is not None:  # drawn from a set several plates share: the set's phases
-        phases = phases[em.ids]
+    k2·j)/m on the lattice cells (i, j) they lie in (k = k1·m + k2; :func:`~holo_core.plate.looks.record_plate`).
+    Each emitter's is drawn from its own key (:func:`~holo_core.plate.emitters.random_phases`),
+    so emitters gained or lost near a silhouette leave the others' phases, and a set several
+    plates share sends each pupil the same wave from every plate."""
+    if em.key is not None:
+        phases = random_phases(em.key, seed)
+    else:  # emitters made without keys: drawn in their order
+        phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, em.count or len(em))
+        if em.ids is not None:  # drawn from a set several plates share: the set's phases
+            phases = phases[em.ids]
     if code is not None:
         phases = phases + 2 * np.pi * _code_steps(em, code) / code[1]
     return phases

@@ -3,6 +3,7 @@ lie on the surfaces, on a lattice of directions from the zone's centre ``spacing
 direction cosine, with their surface's colour."""
 
 import numpy as np
+import pytest
 
 from holo_core.plate.emitters import zone_emitters
 from holo_core.scene.mesh import Mesh
@@ -36,3 +37,67 @@ def test_emitters_lie_on_the_surface_on_a_lattice_of_directions():
     assert np.all(np.abs(side - 0.04 / 0.6 / SPACING) <= 2), side
     assert np.allclose(e.colour, (0.2, 0.5, 0.8))
 
+
+@pytest.mark.parametrize("turn", [0.0, 30.0])
+def test_no_emitter_shows_through_an_occluder(turn):
+    """A 2 cm square at z = −0.25 m in front of an 8 cm square at −0.3 m, turned by ``turn``
+    degrees about the axis (0° lays its diagonal, where its two triangles meet, along bins'
+    rays). From each grid point of the zone, an emitter of the back square whose ray crosses
+    the front square's plane inside it, farther from its edges than the diagonal of the bin
+    cell around the emitter's direction there (the visibility mixes that cell's four bins), is
+    not seen; one whose ray clears the square by as much is. Reference: the ray's crossing of
+    the square in float64, in the square's own frame."""
+    c, s = np.cos(np.radians(turn)), np.sin(np.radians(turn))
+    spin = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # row vectors: v @ spin
+    front = square(0.02, -0.25, (1.0, 0.0, 0.0))
+    front = Mesh(vertices=front.vertices @ spin, triangles=front.triangles,
+                 colours=front.colours)
+    e = zone_emitters([square(0.08, -0.3, (1.0, 1.0, 1.0)), front], ZONE, SPACING)
+    assert not (np.linalg.norm(e.position - (0.0, 0.0, -0.3), axis=1) < 1e-9).any(), \
+        "the back square's centre, hidden from the whole zone, is kept"
+    back = np.isclose(e.position[:, 2], -0.3, atol=1e-9)
+    (x0, dx), (y0, dy) = e.grid
+    gy, gx = e.visibility.shape[1:]
+    eyes = np.stack(np.meshgrid(x0 + dx * np.arange(gx), y0 + dy * np.arange(gy)), -1)
+    eyes = np.concatenate([eyes, np.zeros((gy, gx, 1))], -1) + ZONE.centre  # (gy, gx, 3)
+    p = e.position[back][:, None, None]
+    along = (-0.25 - eyes[..., 2]) / (p[..., 2] - eyes[..., 2])
+    cross = eyes + along[..., None] * (p - eyes)  # in the front square's plane
+    local = cross[..., :2] @ spin[:2, :2].T  # in the square's own axes
+    inset = 0.01 - np.abs(local).max(-1)  # > 0 inside, the distance to the nearer edge
+    # a bin cell's diagonal in that plane: √2 · the spacing in direction cosine · the distance
+    margin = np.sqrt(2) * SPACING * np.linalg.norm(cross - eyes, axis=-1)
+    seen = e.visibility[back]
+    hidden, clear = inset > margin, -inset > margin
+    assert hidden.sum() > 1000 and clear.sum() > 1000, (hidden.sum(), clear.sum())
+    assert seen[hidden].max() == 0, (seen[hidden].max(), (seen[hidden] > 0).sum())
+    assert seen[clear].min() > 1 - 1e-6, seen[clear].min()  # float32 weights' sum
+
+
+def test_random_phases_follow_the_emitters_not_their_count():
+    """A plate's random phases are drawn per emitter from its key (holo_core.plate.emitters.
+    emitter_keys: its mesh, triangle and bin), not by its place in the list: with one triangle
+    of a 2 cm square before an 8 cm one removed (its last: the others keep their indices),
+    the emitters it hid appear and its own go, yet every emitter found both times (the same point, to 1e-12 m) keeps its phase exactly,
+    for plain and coded looks. Drawn in list order instead (the earlier rule, here as the
+    reference that the case moves emitters), most of them would change. The keys are
+    distinct, and the phases uniform on [0, 2π): their mean phasor is within 4/√n of 0."""
+    from holo_core.plate.recording import _phases, look_code
+    back, front = square(0.08, -0.3, (1.0, 1.0, 1.0)), square(0.02, -0.25, (1.0, 0.0, 0.0))
+    half = Mesh(vertices=front.vertices, triangles=front.triangles[:1], colours=front.colours)
+    whole, cut = (zone_emitters([front_, back], ZONE, SPACING) for front_ in (front, half))
+    where = {tuple(np.round(p, 12)): n for n, p in enumerate(cut.position)}
+    i, j = np.array([(n, where[tuple(np.round(p, 12))]) for n, p in enumerate(whole.position)
+                     if tuple(np.round(p, 12)) in where]).T
+    assert len(whole) != len(cut) and len(i) > 0.5 * len(whole), (len(whole), len(cut), len(i))
+    for code in (None, look_code(1, 2)):
+        a, b = _phases(whole, 7, code), _phases(cut, 7, code)
+        assert np.array_equal(a[i], b[j]), np.abs(a[i] - b[j]).max()
+    by_order = [np.random.default_rng(7).uniform(0, 2 * np.pi, len(e)) for e in (whole, cut)]
+    moved = np.mean(by_order[0][i] != by_order[1][j])
+    assert moved > 0.5, moved
+    assert len(np.unique(whole.key)) == len(whole)
+    p = _phases(whole, 7, None)
+    assert p.min() >= 0 and p.max() < 2 * np.pi
+    assert abs(np.exp(1j * p).mean()) < 4 / np.sqrt(len(p)), abs(np.exp(1j * p).mean())
+    assert not np.array_equal(p, _phases(whole, 8, None))  # another seed, other phases

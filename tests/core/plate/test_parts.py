@@ -72,10 +72,13 @@ def test_each_frame_is_viewed_from_the_part_that_holds_its_pupil(dolly_set):
 
 
 def test_one_pupil_sees_the_same_wave_from_either_part(dolly_set):
-    """The middle frame's pupil lies in all four parts: their views agree within 36 dB
-    (measured 37.9-40.2 dB), where the outer two parts recorded each with its own emitters
-    (other positions and phases: another speckle) agree within 24.1 dB only: no jump where
-    the frames change part. Their silhouettes agree (IoU 0.993-1 measured)."""
+    """The middle frame's pupil lies in all four parts: their views agree within 35 dB
+    (measured 37.3-38.2 dB at seed 3; 35.0-41.1 over seeds 3-5 whether the phases are drawn
+    from the emitters' keys or in their order), where the outer two parts recorded each with
+    its own emitters (other positions and phases: another speckle) agree within 23.8 dB only:
+    no jump where the frames change part. Their silhouettes agree: IoU above 0.98 (0.9884 at
+    seed 3, 0.9859-1 over seeds 3-5 under either draw; one pixel of the 425 in the union is
+    0.0024), the two parts' speckle deciding a few edge pixels either way."""
     cam = cameras()[3]
     views = [render_view(list(dolly_set.part_looks(k)), cam) for k in range(len(dolly_set))]
     agree = [psnr(views[a], views[b]) for a, b in ((0, 1), (1, 2), (2, 3), (0, 3))]
@@ -84,11 +87,11 @@ def test_one_pupil_sees_the_same_wave_from_either_part(dolly_set):
     apart = psnr(render_view(own[0], cam), render_view(own[1], cam))
     print(f"parts against each other {np.round(agree, 1)} dB; with their own emitters "
           f"{apart:.1f} dB")
-    assert min(agree) > 36 and apart < min(agree) - 6, (agree, apart)
+    assert min(agree) > 35 and apart < min(agree) - 6, (agree, apart)
     solid = [v.alpha > 0.5 for v in views]
     overlap = [(a & solid[0]).sum() / (a | solid[0]).sum() for a in solid[1:]]
     print(f"silhouettes' IoU against part 0's: {np.round(overlap, 4)}")
-    assert min(overlap) > 0.99, overlap
+    assert min(overlap) > 0.98, overlap
 
 
 def test_a_set_recorded_into_a_folder_is_the_set_recorded_in_memory(dolly_set, tmp_path):
