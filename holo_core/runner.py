@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import jobs, memory
+from . import estimate, jobs, memory
 from .camera.render import render_camera
 from .io.hologram import HologramFileError, write_hologram
 from .io.image import check_room, check_writable, read_exr
@@ -40,7 +40,7 @@ from .io.tiled_wave import TiledWave
 from .io.view import write_view
 from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result
 from .plate.looks import record_planned
-from .plate.plan import CHANNELS, PlatePlan
+from .plate.plan import CHANNELS, PlatePlan, plan_view
 from .plate.recording import PlannedPlate, plate_plan
 from .plate.view import OutsideZoneWarning, nyquist_supersample, render_view
 from .scene.hologram import Hologram
@@ -71,6 +71,7 @@ def run(job: Job, progress: jobs.Progress = None, on_partial=None, *,
             lit = time.perf_counter() - t
         route, recorded = job.route, ()
         if isinstance(route, CameraRoute):  # made for this view: no plate, no hologram file
+            _say_estimate(job)
 
             def sample(view, n):
                 if on_partial is not None and n < route.samples and not n & (n - 1):
@@ -84,6 +85,7 @@ def run(job: Job, progress: jobs.Progress = None, on_partial=None, *,
             view, recorded = _plate(job, progress,
                                     KeptPlates(hold=False) if kept is None else kept)
         path = None if view is None else _write_pass(job, view, lit)
+    estimate.mark_warm("camera" if isinstance(job.route, CameraRoute) else "plate")
     report = Report.of(view, warnings=tuple(dict.fromkeys(heard.texts)),
                        seconds=time.perf_counter() - start, radiance_seconds=lit)
     return Result(recorded=recorded, pass_path=path, report=report, view=view)
@@ -103,6 +105,7 @@ def _plate(job: Job, progress, kept: KeptPlates):
         # the iterations are coded looks of one seed where n allows (look_code), else seeds,
         # every look in one pass; the plan is made once, here, and read by every stage
         planned = _plan(job)
+        _say_estimate(job, planned.plan)
         tiled = needs_tiles(job, planned.plan)
         _check_room(route, planned.plan, tiled)  # before the recording: a full disk is said now
         # beyond memory: tile by tile on Dask, each look into store_of its path (a cancelled
@@ -132,6 +135,20 @@ def _plate(job: Job, progress, kept: KeptPlates):
             write_hologram(path, h)
     kept.hold(route.holograms, holos)
     return view, route.holograms
+
+
+def _say_estimate(job: Job, p: PlatePlan | None = None) -> None:
+    """Log the job's estimate (:func:`holo_core.estimate.job`) in this running worker: its
+    work, and what a cold kernel cache adds (the worker's own start is behind it)."""
+    view = None
+    if p is not None and job.output.render:
+        eye = job.route.plate.to_plate(np.asarray(job.camera.position)[None])[0]
+        view = plan_view(p, position=eye, pixel_angle=job.camera.pixel_angle(),
+                         pupil=job.camera.aperture_diameter or None,
+                         resolution=job.camera.resolution)
+    est = replace(estimate.job(job, plan=p, view=view), process=0.0)
+    log.info("estimate: the %s %s", "plate's recording and view" if p is not None else
+             "camera pass", est.words())
 
 
 def _check_recording(route: PlateRoute, holos) -> None:

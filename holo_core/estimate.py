@@ -1,0 +1,308 @@
+"""How long a job takes on this machine, before it runs: each stage's cost is a rate of this
+machine times its work, plus the set-up a worker process pays once and the set-up a machine
+pays the first time (a fresh cache). Pure arithmetic and small files: it imports no OpenCL
+or FFT driver, so Blender's process and the planner call it.
+
+- Work. A plate's recording: its emitters found (``emitter_seconds`` each) and the zone sum's
+  pairs (emitter, sample) at ``pairs_per_second``; its files written at ``write_bytes_per_second``;
+  a view: the plan's window samples and fine pixels (:func:`holo_core.plate.plan.plan_view`)
+  times ``view_factor``. A camera pass: its fine pixels (W·H·s²), once (``camera_pixel_seconds``)
+  and for each look (``camera_look_seconds``). The renderer's radiance (Lighting: Scene):
+  Cycles' start and its pixels. Every job: ``job_seconds`` (handing it over, the pass written).
+- A worker process's set-up (``process_plate_seconds``, ``process_camera_seconds``): Python, the core, the OpenCL context, the
+  programs read from the kernel cache, the FFT plans read from their wisdom. Paid by every
+  new worker: a render's first frame, each frame of a farm; a render's later frames share
+  the worker that made the first.
+- The first time on this machine (``first_plate_seconds``, ``first_camera_seconds``): the programs compiled and the FFT plans
+  measured, where the kernel cache is cold. Whether it is warm is known from the cache:
+  a worker leaves a stamp (this version, this device, the route) beside the FFT wisdom once a
+  job of the route has run, and the stamp counts while the kernel cache it filled is there.
+  An image size the FFT wisdom has not seen measures its plans once more, on a warm cache
+  too: that is not counted (seconds for a new size, once).
+
+The rates are a :class:`Calibration`: measured on this machine by ``python -m holo_core
+calibrate`` and kept in the user cache directory (``holo/estimates.json``, beside the FFT
+wisdom; the worker's cache folder when the add-on names one), for this version of Holo and
+this device; without one, or with one of another version or device, :data:`DEFAULT` (measured
+on the development machine, the slow side of its runs under load). A file that cannot be read
+is refused with a warning naming it, and :data:`DEFAULT` taken.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import os
+from dataclasses import asdict, dataclass, fields, replace
+from pathlib import Path
+
+log = logging.getLogger(__name__)
+
+FILE = "estimates.json"
+STAMP = "warm-{kind}-{key}.stamp"
+KINDS = ("plate", "camera")
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Calibration:
+    """A machine's rates and set-up times (module docstring); seconds unless named."""
+
+    pairs_per_second: float
+    emitter_seconds: float
+    view_factor: float
+    write_bytes_per_second: float
+    camera_pixel_seconds: float
+    camera_look_seconds: float
+    radiance_seconds: float
+    radiance_pixel_seconds: float
+    job_seconds: float
+    process_plate_seconds: float
+    process_camera_seconds: float
+    first_plate_seconds: float
+    first_camera_seconds: float
+
+    def __post_init__(self):
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+                    not math.isfinite(value) or value < 0 or \
+                    (f.name == "pairs_per_second" and value == 0):
+                raise ValueError(f"calibration {f.name} must be a finite number >= 0 "
+                                 f"({'> 0' if f.name == 'pairs_per_second' else 'seconds'}); "
+                                 f"got {value!r}")
+
+    def process_seconds(self, kind: str) -> float:
+        """A new worker's set-up before a ``kind`` ('plate' or 'camera') job's work."""
+        return self.process_plate_seconds if kind == "plate" else self.process_camera_seconds
+
+    def first_seconds(self, kind: str) -> float:
+        """The set-up a cold kernel cache adds to a ``kind`` ('plate' or 'camera') job."""
+        return self.first_plate_seconds if kind == "plate" else self.first_camera_seconds
+
+
+# bench/estimates.py on the development machine (2-core EPYC, PoCL, load 3-7 from other
+# work): the slower of its runs. The zone sum's 1e10 pairs/s idle (plan.PAIRS_PER_SECOND)
+# halves under that load.
+DEFAULT = Calibration(
+    pairs_per_second=5.0e9, emitter_seconds=2.0e-5, view_factor=2.0,
+    write_bytes_per_second=2.0e8, camera_pixel_seconds=4.0e-6, camera_look_seconds=1.2e-6,
+    radiance_seconds=4.0, radiance_pixel_seconds=2.0e-6, job_seconds=0.3,
+    process_plate_seconds=5.0, process_camera_seconds=6.0, first_plate_seconds=20.0,
+    first_camera_seconds=10.0)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Estimate:
+    """A job's time in parts: ``work`` (stage, seconds) that every run pays, ``process`` the
+    set-up of a new worker process, ``first`` what a cold kernel cache adds (0 when warm);
+    ``calibrated``: whether the rates were measured on this machine."""
+
+    work: tuple = ()
+    process: float = 0.0
+    first: float = 0.0
+    calibrated: bool = False
+
+    @property
+    def seconds(self) -> float:
+        """Everything: the work, a new worker's set-up and the first time's."""
+        return sum(s for _, s in self.work) + self.process + self.first
+
+    def __add__(self, other: Estimate) -> Estimate:
+        return Estimate(work=self.work + other.work, process=max(self.process, other.process),
+                        first=max(self.first, other.first),
+                        calibrated=self.calibrated and other.calibrated)
+
+    def words(self) -> str:
+        """In plain words, the set-up said apart: 'about 9 s (of which 4 s set-up on a first
+        run on this machine, 2 s starting the worker)'."""
+        parts = []
+        if self.first > 0:
+            parts.append(f"{duration(self.first)} the first time on this machine")
+        if self.process > 0:
+            parts.append(f"{duration(self.process)} starting the worker")
+        text = f"about {duration(self.seconds)}"
+        if parts:
+            text += f" (of which {', '.join(parts)})"
+        if not self.calibrated:
+            text += " by default rates (python -m holo_core calibrate measures this machine's)"
+        return text
+
+
+def duration(seconds: float) -> str:
+    """``seconds`` as a person reads it: 0.3 s, 40 s, 3 min, 2.5 h."""
+    if seconds < 9.5:
+        return f"{max(seconds, 0.1):.1g} s"
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.2g} h"
+
+
+# --- the cache: the calibration and the stamps --------------------------------------------------
+
+def cache_folder(cache_dir=None) -> Path:
+    """Holo's folder in the user cache directory (the FFT wisdom's), or in ``cache_dir`` (the
+    worker's ``XDG_CACHE_HOME`` when the add-on names one)."""
+    if cache_dir:
+        return Path(cache_dir) / "holo"
+    from platformdirs import user_cache_dir
+    return Path(user_cache_dir("holo"))
+
+
+def kernel_cache(cache_dir=None) -> Path:
+    """pyopencl's program cache folder (where it puts it; :func:`holo_core.opencl.runtime.
+    cache_lock`'s folder's parent)."""
+    if cache_dir:
+        return Path(cache_dir) / "pyopencl"
+    from platformdirs import user_cache_dir
+    return Path(user_cache_dir("pyopencl", "pyopencl"))
+
+
+def device_key(device: str | None = None) -> str:
+    """The device a calibration holds for: the choice (``HOLO_DEVICE`` or the add-on's),
+    '' for automatic."""
+    return (os.environ.get("HOLO_DEVICE", "") if device is None else device).strip()
+
+
+def _version() -> str:
+    from . import __version__
+    return __version__
+
+
+def _slug(text: str) -> str:
+    return "".join(c if c.isalnum() else "_" for c in text) or "auto"
+
+
+def load(*, device: str | None = None, cache_dir=None) -> tuple[Calibration, bool]:
+    """(the calibration, whether it was measured here): the file's where it is this version's
+    and this ``device``'s, else :data:`DEFAULT` (a file that cannot be read: with a warning
+    naming it)."""
+    path = cache_folder(cache_dir) / FILE
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return DEFAULT, False
+    except (OSError, UnicodeDecodeError) as e:
+        log.warning("estimates: the calibration %s cannot be read (%s): default rates taken; "
+                    "python -m holo_core calibrate measures it again", path, e)
+        return DEFAULT, False
+    try:
+        data = json.loads(text)
+        version, dev = data["version"], data["device"]
+        rates = data["rates"]
+        if not isinstance(rates, dict) or set(rates) != {f.name for f in fields(Calibration)}:
+            raise ValueError("its rates are not the calibration's fields")
+        cal = Calibration(**rates)
+    except (ValueError, KeyError, TypeError) as e:
+        log.warning("estimates: the calibration %s is refused (%s): default rates taken; "
+                    "python -m holo_core calibrate measures it again", path, str(e)[:200])
+        return DEFAULT, False
+    if version != _version() or dev != device_key(device):
+        log.info("estimates: the calibration %s is of Holo %s on device %r, not %s on %r: "
+                 "default rates taken", path, version, dev, _version(), device_key(device))
+        return DEFAULT, False
+    return cal, True
+
+
+def save(cal: Calibration, *, device: str | None = None, cache_dir=None) -> Path:
+    """Keep ``cal`` as this version's and ``device``'s calibration (atomically)."""
+    folder = cache_folder(cache_dir)
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / FILE
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(json.dumps({"version": _version(), "device": device_key(device),
+                               "rates": asdict(cal)}, indent=1), encoding="utf-8")
+    os.replace(tmp, path)
+    return path
+
+
+def _stamp(kind: str, device, cache_dir) -> Path:
+    key = _slug(f"{_version()}-{device_key(device)}")
+    return cache_folder(cache_dir) / STAMP.format(kind=kind, key=key)
+
+
+def is_warm(kind: str, *, device: str | None = None, cache_dir=None) -> bool:
+    """Whether a ``kind`` ('plate', 'camera') job of this version on ``device`` has run with
+    this cache, and the kernel cache it filled is still there."""
+    cache = kernel_cache(cache_dir)
+    return _stamp(kind, device, cache_dir).is_file() and cache.is_dir() and \
+        any(cache.iterdir())
+
+
+def mark_warm(kind: str, *, device: str | None = None, cache_dir=None) -> None:
+    """A ``kind`` job has run: its programs are in the kernel cache and its FFT plans in
+    the wisdom (the worker calls this after each job; an unwritable cache is left as it is)."""
+    path = _stamp(kind, device, cache_dir)
+    if path.is_file():
+        return
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.touch()
+    except OSError as e:
+        log.debug("estimates: stamp %s not written (%s)", path, e)
+
+
+# --- the stages ------------------------------------------------------------------------------
+
+def _setup(kind, cal, calibrated, device, cache_dir, warm) -> Estimate:
+    warm = is_warm(kind, device=device, cache_dir=cache_dir) if warm is None else warm
+    return Estimate(process=cal.process_seconds(kind), first=0.0 if warm else cal.first_seconds(kind),
+                    calibrated=calibrated)
+
+
+def plate(p, view=None, *, record=True, channels=4, device=None, cache_dir=None,
+          warm=None, calibration=None) -> Estimate:
+    """The estimate of a plate's job from its plan ``p`` (:class:`~holo_core.plate.plan.
+    PlatePlan`): the recording when ``record`` (its emitters, the zone sum, its files) and
+    the view ``view`` (a :class:`~holo_core.plate.plan.ViewPlan`, None: no view), in a new
+    worker. ``warm``: whether the kernel cache is warm (None: as the cache says);
+    ``calibration``: (Calibration, measured) (None: :func:`load`'s)."""
+    cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
+    work = [("job", cal.job_seconds)]
+    if record:
+        work += [("emitters", p.emitters * cal.emitter_seconds),
+                 ("zone sum", p.pairs(channels) / cal.pairs_per_second),
+                 ("files", p.disk_bytes(channels) / cal.write_bytes_per_second)]
+    if view is not None:
+        work.append(("view", view.seconds * cal.view_factor))
+    return replace(_setup("plate", cal, calibrated, device, cache_dir, warm), work=tuple(work))
+
+
+def camera(resolution, *, samples, supersample, device=None, cache_dir=None, warm=None,
+           calibration=None) -> Estimate:
+    """The estimate of a camera pass of ``resolution`` (W, H) pixels, ``samples`` looks and
+    ``supersample`` fine pixels a pixel, in a new worker (``warm``, ``calibration``: as
+    :func:`plate`'s)."""
+    cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
+    fine = resolution[0] * resolution[1] * supersample ** 2
+    work = (("job", cal.job_seconds),
+            ("camera pass", fine * (cal.camera_pixel_seconds + samples * cal.camera_look_seconds)))
+    return replace(_setup("camera", cal, calibrated, device, cache_dir, warm), work=work)
+
+
+def radiance(pixels: int, *, device=None, cache_dir=None, calibration=None) -> Estimate:
+    """Cycles' radiance of the emitters over ``pixels`` pixels: its process's start and its
+    render (the same each run: Blender's own caches are not Holo's)."""
+    cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
+    return Estimate(work=(("radiance", cal.radiance_seconds
+                           + pixels * cal.radiance_pixel_seconds),), calibrated=calibrated)
+
+
+def job(j, *, plan=None, view=None, device=None, cache_dir=None, warm=None,
+        calibration=None) -> Estimate:
+    """The estimate of a :class:`holo_core.job.Job` in a new worker: its renderer's radiance,
+    then its route's; a plate's from its ``plan`` and ``view`` (:func:`plate`'s, which the
+    caller makes: the planner is theirs)."""
+    from .job import CameraRoute
+    calibration = calibration or load(device=device, cache_dir=cache_dir)
+    common = {"device": device, "cache_dir": cache_dir, "calibration": calibration,
+              "warm": warm}
+    if isinstance(j.route, CameraRoute):
+        est = camera(j.camera.resolution, samples=j.route.samples,
+                     supersample=j.route.supersample, **common)
+    else:
+        est = plate(plan, view if j.output.render else None, record=j.route.record, **common)
+    if j.radiance is not None:
+        w, h = j.radiance.camera.resolution
+        est = radiance(w * h, calibration=calibration) + est
+    return est
