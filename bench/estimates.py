@@ -123,9 +123,12 @@ def run_case(name, make, calibration_file: Path, tmp: Path) -> dict:
                                calibration=(estimate.DEFAULT, False))
         load = os.getloadavg()[0]
         t = time.perf_counter()
-        worker.run(job, cache_dir=str(cache))
+        report = worker.run(job, cache_dir=str(cache)).report
         measured = time.perf_counter() - t
         parts = ", ".join(f"{k} {s:.1f}" for k, s in said.work)
+        lit = report.radiance_seconds or 0.0
+        print(f"  measured: in the worker {report.seconds:.1f} s (the radiance {lit:.1f} s), "
+              f"its start and the hand-over {measured - report.seconds:.1f} s")
         print(f"{name}, {state}: estimated {said.seconds:.1f} s ({said.words()}; work: "
               f"{parts}), measured {measured:.1f} s: ratio {said.seconds / measured:.2f}, "
               f"{'within' if within(said.seconds, measured) else 'NOT within'} the target; "
@@ -137,6 +140,7 @@ def run_case(name, make, calibration_file: Path, tmp: Path) -> dict:
             "estimate / measured": round(said.seconds / measured, 3),
             "within 25 % or 2 s": within(said.seconds, measured),
             "default rates' estimate [s]": round(default.seconds, 2),
+            "in the worker [s]": round(report.seconds, 2), "radiance [s]": round(lit, 2),
             "load (1 min)": round(load, 1)}
     return rows
 

@@ -9,15 +9,23 @@ pass of it, each run as the add-on runs them, in worker processes:
 2. in a new worker with that cache now warm;
 3. twice in one worker (the second run: the work alone).
 
-1 − 2 is the first time's set-up, 2 − 3 a worker's start, and 3 against the default rates'
-prediction scales the plate's and the camera's rates (the stages' proportions stay the
-defaults'). Cycles' radiance is not measured here (no Blender): its default stays. About a
-minute on a 2-core CPU; the user's own caches are left as they were.
+1 − 2 is the first time's set-up, 2 − 3 a worker's start. Then the stages, each timed on its
+own in a process with that warm cache (:func:`stage_rates`), on the small reference and on
+one with twice its pixels a side and a five times wider zone: the emitters found, the zone
+sum, the files, the view, camera passes of 2 and 10 looks, each fitted as a fixed cost and
+a rate; 3 less the camera pass's stages is a job's own cost. Everything is taken as on an idle machine: divided by the load's
+slowdown as the calibration began (:func:`holo_core.estimate.slowdown`), which the estimates
+multiply back by the load of their time. Cycles' radiance is not measured here (no
+Blender): its default stays. About two minutes on a 2-core CPU; the user's own caches are
+left as they were.
 """
 
 from __future__ import annotations
 
+import json
 import logging
+import subprocess
+import sys
 import tempfile
 import time
 from dataclasses import replace
@@ -35,9 +43,11 @@ log = logging.getLogger(__name__)
 RESOLUTION = (320, 180)  # the reference views: small, and large enough that work shows
 
 
-def reference_scene() -> tuple[list[Mesh], Camera, Plate]:
+def reference_scene(scale: float = 1.0, margin: float = 0.002
+                    ) -> tuple[list[Mesh], Camera, Plate]:
     """A vertex-coloured sphere of 3 cm radius 0.35 m behind a 10 cm plate, a 50 mm f/2.8
-    camera 0.3 m in front of it, the plate's zone fitted around its pupil."""
+    camera of RESOLUTION × ``scale`` pixels 0.3 m in front of it, the plate's zone fitted
+    ``margin`` [m] around its pupil."""
     n = 32
     th, ph = np.meshgrid(np.linspace(0, np.pi, n + 1), np.linspace(0, 2 * np.pi, 2 * n + 1),
                          indexing="ij")
@@ -51,9 +61,9 @@ def reference_scene() -> tuple[list[Mesh], Camera, Plate]:
                   colours=np.clip(0.55 + 0.45 * v, 0.05, 1.0))
     cam = Camera(matrix_world=look_at(np.array([0.0, 0.0, 0.3]), np.array([0.0, 0.0, -0.35]),
                                       up=(0, 1, 0)),
-                 lens=50, sensor_width=36, resolution=RESOLUTION, fstop=2.8,
-                 focus_distance=0.62)
-    zone = ViewingZone.fit([cam.position], pupil=cam.aperture_diameter, margin=0.002,
+                 lens=50, sensor_width=36, fstop=2.8, focus_distance=0.62,
+                 resolution=(round(RESOLUTION[0] * scale), round(RESOLUTION[1] * scale)))
+    zone = ViewingZone.fit([cam.position], pupil=cam.aperture_diameter, margin=margin,
                            pixel=cam.pixel_angle())
     plate = Plate(matrix_world=np.eye(4), width=0.1, height=0.1, zone=zone)
     return [sphere], cam, plate
@@ -75,10 +85,83 @@ def _timed(job: Job, **options) -> float:
     return time.perf_counter() - t
 
 
-def measure(*, device: str | None = None, say=log.info) -> estimate.Calibration:
-    """The calibration of this machine (module docstring); ``say`` gets a line a step."""
+def _stages(meshes, cam, plate, folder: Path) -> tuple[dict, dict]:
+    """(work, seconds) of each stage of a plate of ``meshes`` recorded, written and viewed
+    from ``cam``, and camera passes of 2 and 10 looks: the second of two runs (the first
+    builds the programs and plans the FFTs; its camera pass of 2 looks is enough for that)."""
+    from .camera.render import render_camera
+    from .io.hologram import write_hologram
     from .plate.plan import plan_view
-    from .plate.recording import plate_plan
+    from .plate.recording import plate_plan, prepare_plate
+    from .plate.view import render_view
+    planned = plate_plan(meshes, plate=plate, camera=cam, looks=2)
+    p = planned.plan
+    eye = plate.to_plate(np.asarray(cam.position)[None])[0]
+    v = plan_view(p, position=eye, pixel_angle=cam.pixel_angle(), pupil=cam.aperture_diameter,
+                  resolution=cam.resolution)
+    for run in range(2):
+        t = [time.perf_counter()]
+        holos = prepare_plate(planned)
+        t.append(time.perf_counter())
+        holos = holos.record()
+        t.append(time.perf_counter())
+        for k, h in enumerate(holos):
+            write_hologram(folder / f"look{k}.exr", h)
+        t.append(time.perf_counter())
+        render_view(holos, cam)
+        t.append(time.perf_counter())
+        for samples in (2, 10) if run else (2,):  # the first builds and plans: one is enough
+            render_camera(meshes, cam, samples=samples)
+            t.append(time.perf_counter())
+    d = np.diff(t)
+    fine = cam.resolution[0] * cam.resolution[1] * 2 ** 2  # the default supersampling
+    names = ("emitters", "zone sum", "files", "view", "camera 2", "camera 10")
+    work = dict(zip(names, (p.emitters, p.pairs(), p.disk_bytes(), v.seconds, fine, fine)))
+    return work, dict(zip(names, d))
+
+
+def _fit(small, large, default_rate) -> tuple[float, float]:
+    """(seconds a unit, fixed seconds) through two (work, seconds); the default's rate where
+    the larger did not take longer (noise from other work)."""
+    (u0, t0), (u1, t1) = small, large
+    rate = (t1 - t0) / (u1 - u0) if u1 > u0 and t1 > t0 else default_rate
+    return rate, max(t0 - rate * u0, 0.0)
+
+
+def stage_rates(*, say=log.info) -> dict:
+    """This process's rates of the plate's stages and the camera pass, each fitted through a
+    small and a larger reference (:func:`reference_scene`: the larger has twice the pixels a
+    side and a five times wider zone): a dict of :class:`~holo_core.estimate.Calibration`'s
+    fields."""
+    d = estimate.DEFAULT
+    with tempfile.TemporaryDirectory(prefix="holo-calibration-") as tmp:
+        small = _stages(*reference_scene(), Path(tmp))
+        large = _stages(*reference_scene(2.0, 0.01), Path(tmp))
+    for (work, secs), size in ((small, "small"), (large, "larger")):
+        say(f"{size}: " + ", ".join(f"{k} {secs[k]:.2f} s" for k in secs))
+    fits = {k: _fit((small[0][k], small[1][k]), (large[0][k], large[1][k]), default)
+            for k, default in (("emitters", d.emitter_seconds),
+                               ("zone sum", 1 / d.pairs_per_second),
+                               ("files", 1 / d.write_bytes_per_second),
+                               ("view", d.view_factor),
+                               ("camera 2", d.camera_pixel_seconds
+                                + 2 * d.camera_look_seconds))}
+    (work, secs) = small
+    look = max(secs["camera 10"] - secs["camera 2"], 0.0) / 8 / work["camera 2"]
+    pixel = max(fits["camera 2"][0] - 2 * look, 0.0)
+    return {"emitter_seconds": fits["emitters"][0], "emitters_fixed": fits["emitters"][1],
+            "pairs_per_second": 1 / fits["zone sum"][0], "zone_sum_fixed": fits["zone sum"][1],
+            "write_bytes_per_second": 1 / fits["files"][0],
+            "view_factor": fits["view"][0], "view_fixed": fits["view"][1],
+            "camera_pixel_seconds": pixel, "camera_look_seconds": look,
+            "camera_fixed": fits["camera 2"][1]}
+
+
+def measure(*, device: str | None = None, say=log.info) -> estimate.Calibration:
+    """The calibration of this machine (module docstring), as on an idle machine (the times
+    measured divided by the load's :func:`~holo_core.estimate.slowdown` as it began); ``say``
+    gets a line a step."""
+    factor = estimate.slowdown()
     with tempfile.TemporaryDirectory(prefix="holo-calibration-") as tmp:
         tmp = Path(tmp)
         jobs = reference_jobs(tmp / "out")
@@ -99,30 +182,32 @@ def measure(*, device: str | None = None, say=log.info) -> estimate.Calibration:
         finally:
             worker.release()
         say(f"the same worker again: plate {work['plate']:.1f} s, camera {work['camera']:.1f} s")
-    j = jobs["plate"]
-    p = plate_plan(list(j.triangles), plate=j.route.plate, camera=j.camera,
-                   looks=len(j.route.holograms)).plan
-    eye = j.route.plate.to_plate(np.asarray(j.camera.position)[None])[0]
-    v = plan_view(p, position=eye, pixel_angle=j.camera.pixel_angle(),
-                  pupil=j.camera.aperture_diameter, resolution=j.camera.resolution)
-    ref = (estimate.DEFAULT, False)
-    default_work = {k: sum(s for _, s in estimate.job(jobs[k], plan=p, view=v, warm=True,
-                                                       calibration=ref).work) for k in jobs}
-    # floors: a run faster than a tenth of the default's work is taken as noise
-    scale = {k: max(work[k] / default_work[k], 0.1) for k in jobs}
+        # the stages' rates in a process of its own, on the plate's warm cache (the user's
+        # caches are not this calibration's to fill)
+        out = subprocess.run(
+            [sys.executable, "-c", "import json; from holo_core.calibration import "
+             "stage_rates; print(json.dumps(stage_rates(say=print)))"],
+            env=worker.environment(**opts["plate"]), capture_output=True, text=True,
+            check=True)
+        lines = out.stdout.strip().splitlines()
+        for line in lines[:-1]:
+            say(line)
+        rates = json.loads(lines[-1])
+    cam = jobs["camera"]
+    fine = cam.camera.resolution[0] * cam.camera.resolution[1] * cam.route.supersample ** 2
+    passed = rates["camera_fixed"] + fine * (rates["camera_pixel_seconds"]
+                                             + cam.route.samples * rates["camera_look_seconds"])
     d = estimate.DEFAULT
-    return replace(
-        d, pairs_per_second=d.pairs_per_second / scale["plate"],
-        emitter_seconds=d.emitter_seconds * scale["plate"],
-        view_factor=d.view_factor * scale["plate"],
-        write_bytes_per_second=d.write_bytes_per_second / scale["plate"],
-        camera_pixel_seconds=d.camera_pixel_seconds * scale["camera"],
-        camera_look_seconds=d.camera_look_seconds * scale["camera"],
-        job_seconds=d.job_seconds * min(scale.values()),
+    measured = replace(
+        d, **rates, job_seconds=max(work["camera"] - passed, 0.05),
         process_plate_seconds=max(0.0, warm["plate"] - work["plate"]),
         process_camera_seconds=max(0.0, warm["camera"] - work["camera"]),
         first_plate_seconds=max(0.0, cold["plate"] - warm["plate"]),
         first_camera_seconds=max(0.0, cold["camera"] - warm["camera"]))
+    say(f"the load's slowdown as the calibration began: {factor:.2f} (taken out)")
+    # Cycles' radiance is not measured here: the default's (idle) rates stay
+    return replace(estimate.at_idle(measured, factor), radiance_seconds=d.radiance_seconds,
+                   radiance_pixel_seconds=d.radiance_pixel_seconds)
 
 
 def calibrate(*, device: str | None = None, cache_dir=None, say=log.info) -> Path:

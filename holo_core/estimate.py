@@ -3,11 +3,13 @@ machine times its work, plus the set-up a worker process pays once and the set-u
 pays the first time (a fresh cache). Pure arithmetic and small files: it imports no OpenCL
 or FFT driver, so Blender's process and the planner call it.
 
-- Work. A plate's recording: its emitters found (``emitter_seconds`` each) and the zone sum's
-  pairs (emitter, sample) at ``pairs_per_second``; its files written at ``write_bytes_per_second``;
-  a view: the plan's window samples and fine pixels (:func:`holo_core.plate.plan.plan_view`)
-  times ``view_factor``. A camera pass: its fine pixels (W·H·s²), once (``camera_pixel_seconds``)
-  and for each look (``camera_look_seconds``). The renderer's radiance (Lighting: Scene):
+- Work, each stage a fixed cost (``*_fixed``: its launches, its buffers) and a rate. A
+  plate's recording: its emitters found (``emitter_seconds`` each) and the zone sum's pairs
+  (emitter, sample) at ``pairs_per_second``; its files written at ``write_bytes_per_second``;
+  a view: the plan's view seconds (:func:`holo_core.plate.plan.plan_view`, its window
+  samples and fine pixels at the development machine's rates) times ``view_factor``. A camera
+  pass: its fine pixels (W·H·s²), once (``camera_pixel_seconds``) and for each look
+  (``camera_look_seconds``). The renderer's radiance (Lighting: Scene):
   Cycles' start and its pixels. Every job: ``job_seconds`` (handing it over, the pass written).
 - A worker process's set-up (``process_plate_seconds``, ``process_camera_seconds``): Python, the core, the OpenCL context, the
   programs read from the kernel cache, the FFT plans read from their wisdom. Paid by every
@@ -49,11 +51,15 @@ class Calibration:
     """A machine's rates and set-up times (module docstring); seconds unless named."""
 
     pairs_per_second: float
+    zone_sum_fixed: float
     emitter_seconds: float
+    emitters_fixed: float
     view_factor: float
+    view_fixed: float
     write_bytes_per_second: float
     camera_pixel_seconds: float
     camera_look_seconds: float
+    camera_fixed: float
     radiance_seconds: float
     radiance_pixel_seconds: float
     job_seconds: float
@@ -81,27 +87,30 @@ class Calibration:
         return self.first_plate_seconds if kind == "plate" else self.first_camera_seconds
 
 
-# bench/estimates.py on the development machine (2-core EPYC, PoCL, load 3-7 from other
-# work): the slower of its runs. The zone sum's 1e10 pairs/s idle (plan.PAIRS_PER_SECOND)
-# halves under that load.
+# as on an idle machine: the development machine's (2-core EPYC, PoCL) calibrations under
+# load 5-15, their load taken out (at_idle), rounded to the slow side; the zone sum's rate is
+# plan.PAIRS_PER_SECOND, measured idle; Cycles' radiance from bench/estimates.py's demo
 DEFAULT = Calibration(
-    pairs_per_second=5.0e9, emitter_seconds=2.0e-5, view_factor=2.0,
-    write_bytes_per_second=2.0e8, camera_pixel_seconds=4.0e-6, camera_look_seconds=1.2e-6,
-    radiance_seconds=4.0, radiance_pixel_seconds=2.0e-6, job_seconds=0.3,
-    process_plate_seconds=5.0, process_camera_seconds=6.0, first_plate_seconds=20.0,
-    first_camera_seconds=10.0)
+    pairs_per_second=1.0e10, zone_sum_fixed=0.1, emitter_seconds=5.0e-6, emitters_fixed=0.05,
+    view_factor=3.0, view_fixed=0.2, write_bytes_per_second=3.0e8,
+    camera_pixel_seconds=1.0e-7, camera_look_seconds=3.0e-7, camera_fixed=0.2,
+    radiance_seconds=1.5, radiance_pixel_seconds=5.0e-7, job_seconds=0.1,
+    process_plate_seconds=1.5, process_camera_seconds=1.8, first_plate_seconds=8.0,
+    first_camera_seconds=2.0)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Estimate:
     """A job's time in parts: ``work`` (stage, seconds) that every run pays, ``process`` the
     set-up of a new worker process, ``first`` what a cold kernel cache adds (0 when warm);
-    ``calibrated``: whether the rates were measured on this machine."""
+    ``calibrated``: whether the rates were measured on this machine; ``slowdown``: the
+    factor the machine's present load puts on every part (1: idle; :func:`slowdown`)."""
 
     work: tuple = ()
     process: float = 0.0
     first: float = 0.0
     calibrated: bool = False
+    slowdown: float = 1.0
 
     @property
     def seconds(self) -> float:
@@ -111,7 +120,8 @@ class Estimate:
     def __add__(self, other: Estimate) -> Estimate:
         return Estimate(work=self.work + other.work, process=max(self.process, other.process),
                         first=max(self.first, other.first),
-                        calibrated=self.calibrated and other.calibrated)
+                        calibrated=self.calibrated and other.calibrated,
+                        slowdown=max(self.slowdown, other.slowdown))
 
     def words(self) -> str:
         """In plain words, the set-up said apart: 'about 9 s (of which 4 s set-up on a first
@@ -124,6 +134,9 @@ class Estimate:
         text = f"about {duration(self.seconds)}"
         if parts:
             text += f" (of which {', '.join(parts)})"
+        if self.slowdown >= 1.2:
+            text += (f", {self.slowdown:.2g} times an idle machine's time at its present "
+                     f"load")
         if not self.calibrated:
             text += " by default rates (python -m holo_core calibrate measures this machine's)"
         return text
@@ -136,6 +149,29 @@ def duration(seconds: float) -> str:
     if seconds < 90:
         return f"{seconds:.0f} s"
     return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.2g} h"
+
+
+def slowdown(load: float | None = None, cpus: int | None = None) -> float:
+    """The factor other work puts on a job's time: 1 + ``load`` / ``cpus`` (the 1-minute
+    load average before the job, default the system's now, over the CPUs this process may
+    use): a job that would use every CPU gets a fair share of them."""
+    if load is None:
+        try:
+            load = os.getloadavg()[0]
+        except OSError:  # no load average (Windows): taken as idle
+            load = 0.0
+    if cpus is None:
+        cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
+            (os.cpu_count() or 1)
+    return 1.0 + max(float(load), 0.0) / max(cpus, 1)
+
+
+def at_idle(cal: Calibration, factor: float) -> Calibration:
+    """``cal``, measured ``factor`` (:func:`slowdown`) times slower than idle, as on an idle
+    machine: its times divided by it, its rates multiplied."""
+    rates = {"pairs_per_second", "write_bytes_per_second"}
+    return Calibration(**{f.name: getattr(cal, f.name) * factor if f.name in rates else
+                          getattr(cal, f.name) / factor for f in fields(Calibration)})
 
 
 # --- the cache: the calibration and the stamps --------------------------------------------------
@@ -244,59 +280,72 @@ def mark_warm(kind: str, *, device: str | None = None, cache_dir=None) -> None:
 
 # --- the stages ------------------------------------------------------------------------------
 
+def _loaded(est: Estimate, load_average) -> Estimate:
+    """``est`` (idle seconds) at the machine's ``load_average`` (:func:`slowdown`'s)."""
+    k = slowdown(load_average)
+    return replace(est, work=tuple((n, s * k) for n, s in est.work), process=est.process * k,
+                   first=est.first * k, slowdown=k)
+
+
 def _setup(kind, cal, calibrated, device, cache_dir, warm) -> Estimate:
     warm = is_warm(kind, device=device, cache_dir=cache_dir) if warm is None else warm
-    return Estimate(process=cal.process_seconds(kind), first=0.0 if warm else cal.first_seconds(kind),
-                    calibrated=calibrated)
+    return Estimate(process=cal.process_seconds(kind),
+                    first=0.0 if warm else cal.first_seconds(kind), calibrated=calibrated)
 
 
 def plate(p, view=None, *, record=True, channels=4, device=None, cache_dir=None,
-          warm=None, calibration=None) -> Estimate:
+          warm=None, calibration=None, load_average=None) -> Estimate:
     """The estimate of a plate's job from its plan ``p`` (:class:`~holo_core.plate.plan.
     PlatePlan`): the recording when ``record`` (its emitters, the zone sum, its files) and
     the view ``view`` (a :class:`~holo_core.plate.plan.ViewPlan`, None: no view), in a new
     worker. ``warm``: whether the kernel cache is warm (None: as the cache says);
-    ``calibration``: (Calibration, measured) (None: :func:`load`'s)."""
+    ``calibration``: (Calibration, measured) (None: :func:`load`'s); ``load_average``: the
+    load the job will share the machine with (None: now's; 0: idle; :func:`slowdown`)."""
     cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
     work = [("job", cal.job_seconds)]
     if record:
-        work += [("emitters", p.emitters * cal.emitter_seconds),
-                 ("zone sum", p.pairs(channels) / cal.pairs_per_second),
+        work += [("emitters", cal.emitters_fixed + p.emitters * cal.emitter_seconds),
+                 ("zone sum", cal.zone_sum_fixed + p.pairs(channels) / cal.pairs_per_second),
                  ("files", p.disk_bytes(channels) / cal.write_bytes_per_second)]
     if view is not None:
-        work.append(("view", view.seconds * cal.view_factor))
-    return replace(_setup("plate", cal, calibrated, device, cache_dir, warm), work=tuple(work))
+        work.append(("view", cal.view_fixed + view.seconds * cal.view_factor))
+    return _loaded(replace(_setup("plate", cal, calibrated, device, cache_dir, warm),
+                           work=tuple(work)), load_average)
 
 
 def camera(resolution, *, samples, supersample, device=None, cache_dir=None, warm=None,
-           calibration=None) -> Estimate:
+           calibration=None, load_average=None) -> Estimate:
     """The estimate of a camera pass of ``resolution`` (W, H) pixels, ``samples`` looks and
     ``supersample`` fine pixels a pixel, in a new worker (``warm``, ``calibration``: as
-    :func:`plate`'s)."""
+      :func:`plate`'s, ``load_average`` too)."""
     cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
     fine = resolution[0] * resolution[1] * supersample ** 2
     work = (("job", cal.job_seconds),
-            ("camera pass", fine * (cal.camera_pixel_seconds + samples * cal.camera_look_seconds)))
-    return replace(_setup("camera", cal, calibrated, device, cache_dir, warm), work=work)
+            ("camera pass", cal.camera_fixed
+             + fine * (cal.camera_pixel_seconds + samples * cal.camera_look_seconds)))
+    return _loaded(replace(_setup("camera", cal, calibrated, device, cache_dir, warm),
+                           work=work), load_average)
 
 
-def radiance(pixels: int, *, device=None, cache_dir=None, calibration=None) -> Estimate:
+def radiance(pixels: int, *, device=None, cache_dir=None, calibration=None,
+             load_average=None) -> Estimate:
     """Cycles' radiance of the emitters over ``pixels`` pixels: its process's start and its
     render (the same each run: Blender's own caches are not Holo's)."""
     cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
-    return Estimate(work=(("radiance", cal.radiance_seconds
-                           + pixels * cal.radiance_pixel_seconds),), calibrated=calibrated)
+    return _loaded(Estimate(work=(("radiance", cal.radiance_seconds
+                                   + pixels * cal.radiance_pixel_seconds),),
+                            calibrated=calibrated), load_average)
 
 
 def job(j, *, plan=None, view=None, device=None, cache_dir=None, warm=None,
-        calibration=None) -> Estimate:
+        calibration=None, load_average=None) -> Estimate:
     """The estimate of a :class:`holo_core.job.Job` in a new worker: its renderer's radiance,
     then its route's; a plate's from its ``plan`` and ``view`` (:func:`plate`'s, which the
     caller makes: the planner is theirs)."""
     from .job import CameraRoute
     calibration = calibration or load(device=device, cache_dir=cache_dir)
     common = {"device": device, "cache_dir": cache_dir, "calibration": calibration,
-              "warm": warm}
+              "warm": warm, "load_average": load_average}
     if isinstance(j.route, CameraRoute):
         est = camera(j.camera.resolution, samples=j.route.samples,
                      supersample=j.route.supersample, **common)
@@ -304,5 +353,5 @@ def job(j, *, plan=None, view=None, device=None, cache_dir=None, warm=None,
         est = plate(plan, view if j.output.render else None, record=j.route.record, **common)
     if j.radiance is not None:
         w, h = j.radiance.camera.resolution
-        est = radiance(w * h, calibration=calibration) + est
+        est = radiance(w * h, calibration=calibration, load_average=load_average) + est
     return est

@@ -70,7 +70,7 @@ def start(prepared: Prepared, *, resident: bool = False) -> worker.Worker:
     options = worker_options()
     if isinstance(job.route, CameraRoute):  # a plate's is the worker's to say: it plans it
         # a new worker's start is counted: a render's later frames in its kept worker skip it
-        said = estimate.job(job, device=options["device"] or "", cache_dir=options["cache_dir"])
+        said = estimate.job(job, device=options["device"], cache_dir=options["cache_dir"])
         log.info("holographic pass of frame %d: %s", job.output.frame, said.words())
     return worker.Worker(job, resident=resident, **options)
 

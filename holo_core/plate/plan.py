@@ -190,18 +190,20 @@ class ViewPlan:
 
 
 def summary(p: PlatePlan, v: ViewPlan, *, lens: str, resolution, plate_size,
-            camera, device=None, cache_dir=None) -> list[str]:
+            camera, device=None, cache_dir=None, load_average=None) -> list[str]:
     """The plan in plain words, the verdict first: whether ``v``'s views (``resolution``
     (W, H) through ``lens``, e.g. '40 mm f/2.8', from ``camera`` (3,) [m]) are sharp, how
     long the first frame (the recording, its files and its view, in a new worker, the set-up
     said apart) and a later view take on this machine (:func:`holo_core.estimate.plate`, for
-    ``device`` with the cache in ``cache_dir``), then the samples, the zone, the wavelength,
+    ``device`` with the cache in ``cache_dir``, at ``load_average``, None: the machine's
+    now), then the samples, the zone, the wavelength,
     the emitters, disk and memory (mm, µm, seconds, GiB)."""
     rows, cols = p.shape
     calibration = estimate_mod.load(device=device, cache_dir=cache_dir)
     first = estimate_mod.plate(p, v, device=device, cache_dir=cache_dir,
-                               calibration=calibration)
-    later = estimate_mod.plate(p, v, record=False, calibration=calibration, warm=True)
+                               calibration=calibration, load_average=load_average)
+    later = estimate_mod.plate(p, v, record=False, calibration=calibration, warm=True,
+                               load_average=load_average)
     later_view = sum(s for name, s in later.work if name == "view")
     verdict = ("sharp" if v.sharp else f"blurred: they resolve {v.spot_px:.2g} px where a sharp "
                f"view resolves half a pixel; a longer lens, a wider aperture or Camera mode "

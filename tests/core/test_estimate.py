@@ -48,17 +48,18 @@ def test_parts_are_rates_times_work_and_add_up(cache):
     """Each stage is its rate times the plan's work, counted here from the plan's own figures;
     the total is the stages, a new worker's set-up and a first run's."""
     p, v = planned()
-    est = estimate.plate(p, v, cache_dir=cache, calibration=(MEASURED, True))
+    est = estimate.plate(p, v, cache_dir=cache, calibration=(MEASURED, True), load_average=0)
     work = dict(est.work)
     assert work == pytest.approx({
         "job": MEASURED.job_seconds,
-        "emitters": p.emitters * 5e-5,
-        "zone sum": p.pairs() / 3e9,
+        "emitters": MEASURED.emitters_fixed + p.emitters * 5e-5,
+        "zone sum": MEASURED.zone_sum_fixed + p.pairs() / 3e9,
         "files": 8 * 4 * p.looks * p.samples / 1e8,
-        "view": 1.5 * v.seconds}, rel=1e-12), work
+        "view": MEASURED.view_fixed + 1.5 * v.seconds}, rel=1e-12), work
     assert est.process == 2.5 and est.first == 11.0
     assert est.seconds == pytest.approx(sum(work.values()) + 2.5 + 11.0, rel=1e-12)
-    viewed = estimate.plate(p, v, record=False, cache_dir=cache, calibration=(MEASURED, True))
+    viewed = estimate.plate(p, v, record=False, cache_dir=cache, calibration=(MEASURED, True),
+                            load_average=0)
     assert [k for k, _ in viewed.work] == ["job", "view"], viewed.work
 
 
@@ -67,17 +68,17 @@ def test_a_warm_kernel_cache_removes_the_first_runs_set_up(cache):
     job of the route has run with this cache, it is not, and the totals differ by exactly it."""
     p, v = planned()
     cal = (MEASURED, True)
-    cold = estimate.plate(p, v, cache_dir=cache, calibration=cal)
+    cold = estimate.plate(p, v, cache_dir=cache, calibration=cal, load_average=0)
     warm_up(cache)
     assert estimate.is_warm("plate", cache_dir=cache)
     assert not estimate.is_warm("camera", cache_dir=cache)  # its programs are not the plate's
-    warm = estimate.plate(p, v, cache_dir=cache, calibration=cal)
+    warm = estimate.plate(p, v, cache_dir=cache, calibration=cal, load_average=0)
     assert (cold.first, warm.first) == (11.0, 0.0)
     assert cold.seconds - warm.seconds == pytest.approx(11.0, rel=1e-12)
     assert "first time" in cold.words() and "first time" not in warm.words(), warm.words()
     for f in estimate.kernel_cache(cache).iterdir():  # the kernel cache emptied: cold again
         f.unlink()
-    assert estimate.plate(p, v, cache_dir=cache, calibration=cal).first == 11.0
+    assert estimate.plate(p, v, cache_dir=cache, calibration=cal, load_average=0).first == 11.0
 
 
 def test_the_stamp_is_this_devices(cache, monkeypatch):
@@ -140,6 +141,28 @@ def test_a_calibration_refuses_what_is_not_a_rate(field, value):
         Calibration(**{**asdict(DEFAULT), field: value})
 
 
+def test_other_work_on_the_machine_scales_every_part_by_its_fair_share(cache):
+    """A load of L other runnable processes on C CPUs leaves a job that would use them all
+    C / (C + L) of them: every part takes 1 + L / C times as long, and the words say so; a
+    calibration measured under load is kept as on an idle machine (its times divided, its
+    rates multiplied)."""
+    assert estimate.slowdown(0.0, 2) == 1.0 and estimate.slowdown(3.0, 2) == 2.5
+    p, v = planned()
+    idle = estimate.plate(p, v, cache_dir=cache, calibration=(MEASURED, True), load_average=0)
+    busy = estimate.plate(p, v, cache_dir=cache, calibration=(MEASURED, True), load_average=3.0)
+    k = busy.slowdown
+    assert k == pytest.approx(estimate.slowdown(3.0)) and k > 1
+    assert busy.seconds == pytest.approx(k * idle.seconds, rel=1e-12)
+    assert [s for _, s in busy.work] == pytest.approx([k * s for _, s in idle.work], rel=1e-12)
+    assert "times an idle machine's time" in busy.words(), busy.words()
+    assert "idle" not in idle.words(), idle.words()
+    idle_cal = estimate.at_idle(MEASURED, 2.5)  # measured 2.5 times slower than idle
+    assert idle_cal.pairs_per_second == pytest.approx(MEASURED.pairs_per_second * 2.5)
+    assert idle_cal.write_bytes_per_second == pytest.approx(MEASURED.write_bytes_per_second * 2.5)
+    assert idle_cal.first_plate_seconds == pytest.approx(MEASURED.first_plate_seconds / 2.5)
+    assert idle_cal.view_factor == pytest.approx(MEASURED.view_factor / 2.5)
+
+
 def test_the_words_say_the_set_up_apart():
     est = Estimate(work=(("a", 3.0), ("b", 1.6)), process=2.4, first=4.0, calibrated=True)
     assert est.words() == ("about 11 s (of which 4 s the first time on this machine, 2 s "
@@ -153,7 +176,7 @@ def test_the_plan_states_the_first_frames_time_with_its_set_up(cache):
     estimate.save(MEASURED, cache_dir=cache)
     p, v = planned()
     lines = summary(p, v, lens="50 mm f/2.8", resolution=(640, 360), plate_size=(0.1, 0.1),
-                    camera=(0.01, -0.005, 0.3), cache_dir=cache)
-    said = estimate.plate(p, v, cache_dir=cache).words()
+                    camera=(0.01, -0.005, 0.3), cache_dir=cache, load_average=0)
+    said = estimate.plate(p, v, cache_dir=cache, load_average=0).words()
     time = next(line for line in lines if line.startswith("time"))
     assert said in time and "11 s the first time on this machine" in time, time
