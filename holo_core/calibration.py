@@ -13,8 +13,8 @@ pass of it, each run as the add-on runs them, in worker processes:
 own in a process with that warm cache (:func:`stage_rates`), on the small reference and on
 one with twice its pixels a side and a five times wider zone: the emitters found, the zone
 sum, the files, the view, camera passes of 2 and 10 looks, each fitted as a fixed cost and
-a rate; 3 less the camera pass's stages is a job's own cost. Everything is taken as on an idle machine: divided by the load's
-slowdown as the calibration began (:func:`holo_core.estimate.slowdown`), which the estimates
+a rate; 3 less the camera pass's stages is a job's own cost. Everything is taken as on an idle machine: each time divided by the
+load's slowdown as it began (:func:`holo_core.estimate.slowdown`), which the estimates
 multiply back by the load of their time. Cycles' radiance is not measured here (no
 Blender): its default stays. About two minutes on a 2-core CPU; the user's own caches are
 left as they were.
@@ -80,9 +80,11 @@ def reference_jobs(folder: Path) -> dict[str, Job]:
 
 
 def _timed(job: Job, **options) -> float:
-    t = time.perf_counter()
+    """The job's seconds in a worker, as on an idle machine (the load's slowdown as it began
+    taken out)."""
+    k, t = estimate.slowdown(), time.perf_counter()
     worker.run(job, **options)
-    return time.perf_counter() - t
+    return (time.perf_counter() - t) / k
 
 
 def _stages(meshes, cam, plate, folder: Path) -> tuple[dict, dict]:
@@ -99,24 +101,28 @@ def _stages(meshes, cam, plate, folder: Path) -> tuple[dict, dict]:
     eye = plate.to_plate(np.asarray(cam.position)[None])[0]
     v = plan_view(p, position=eye, pixel_angle=cam.pixel_angle(), pupil=cam.aperture_diameter,
                   resolution=cam.resolution)
-    for run in range(2):
-        t = [time.perf_counter()]
-        holos = prepare_plate(planned)
-        t.append(time.perf_counter())
-        holos = holos.record()
-        t.append(time.perf_counter())
+    def timed(f, *args, **kw):  # as on an idle machine: the load's slowdown taken out
+        k, t = estimate.slowdown(), time.perf_counter()
+        out = f(*args, **kw)
+        d.append((time.perf_counter() - t) / k)
+        return out
+
+    def write(holos):
         for k, h in enumerate(holos):
             write_hologram(folder / f"look{k}.exr", h)
-        t.append(time.perf_counter())
-        render_view(holos, cam)
-        t.append(time.perf_counter())
+
+    for run in range(2):
+        d = []
+        holos = timed(prepare_plate, planned)
+        holos = timed(holos.record)
+        timed(write, holos)
+        timed(render_view, holos, cam)
         for samples in (2, 10) if run else (2,):  # the first builds and plans: one is enough
-            render_camera(meshes, cam, samples=samples)
-            t.append(time.perf_counter())
-    d = np.diff(t)
+            timed(render_camera, meshes, cam, samples=samples)
     fine = cam.resolution[0] * cam.resolution[1] * 2 ** 2  # the default supersampling
     names = ("emitters", "zone sum", "files", "view", "camera 2", "camera 10")
     work = dict(zip(names, (p.emitters, p.pairs(), p.disk_bytes(), v.seconds, fine, fine)))
+    work["camera emitters"] = estimate.camera_emitters(cam, triangles=meshes)
     return work, dict(zip(names, d))
 
 
@@ -143,31 +149,33 @@ def stage_rates(*, say=log.info) -> dict:
             for k, default in (("emitters", d.emitter_seconds),
                                ("zone sum", 1 / d.pairs_per_second),
                                ("files", 1 / d.write_bytes_per_second),
-                               ("view", d.view_factor),
-                               ("camera 2", d.camera_pixel_seconds
-                                + 2 * d.camera_look_seconds))}
-    (work, secs) = small
-    look = max(secs["camera 10"] - secs["camera 2"], 0.0) / 8 / work["camera 2"]
-    pixel = max(fits["camera 2"][0] - 2 * look, 0.0)
+                               ("view", d.view_factor))}
+    # the camera pass: each look's emitters from 2 against 10 looks (the larger, more of
+    # them), then its fine pixels' rate and fixed cost from the two sizes' passes of 2 looks
+    work, secs = large
+    emitter = max(secs["camera 10"] - secs["camera 2"], 0.0) / 8 / work["camera emitters"]
+    once = [(w["camera 2"], t["camera 2"] - 2 * emitter * w["camera emitters"])
+            for w, t in (small, large)]
+    fits["camera 2"] = _fit(*once, d.camera_pixel_seconds)
     return {"emitter_seconds": fits["emitters"][0], "emitters_fixed": fits["emitters"][1],
             "pairs_per_second": 1 / fits["zone sum"][0], "zone_sum_fixed": fits["zone sum"][1],
             "write_bytes_per_second": 1 / fits["files"][0],
             "view_factor": fits["view"][0], "view_fixed": fits["view"][1],
-            "camera_pixel_seconds": pixel, "camera_look_seconds": look,
+            "camera_pixel_seconds": fits["camera 2"][0], "camera_emitter_seconds": emitter,
             "camera_fixed": fits["camera 2"][1]}
 
 
 def measure(*, device: str | None = None, say=log.info) -> estimate.Calibration:
-    """The calibration of this machine (module docstring), as on an idle machine (the times
+    """The calibration of this machine (module docstring), as on an idle machine (each time
     measured divided by the load's :func:`~holo_core.estimate.slowdown` as it began); ``say``
     gets a line a step."""
-    factor = estimate.slowdown()
     with tempfile.TemporaryDirectory(prefix="holo-calibration-") as tmp:
         tmp = Path(tmp)
         jobs = reference_jobs(tmp / "out")
         # a cache for each: neither job's programs or FFT plans warm the other's
         opts = {k: {"device": device, "cache_dir": str(tmp / f"cache-{k}")} for k in jobs}
         cold = {k: _timed(j, **opts[k]) for k, j in jobs.items()}
+        say("as on an idle machine (each time over the load's slowdown as it began):")
         say(f"a new worker, a fresh cache: plate {cold['plate']:.1f} s, camera "
             f"{cold['camera']:.1f} s")
         warm = {k: _timed(j, **opts[k]) for k, j in jobs.items()}
@@ -195,8 +203,10 @@ def measure(*, device: str | None = None, say=log.info) -> estimate.Calibration:
         rates = json.loads(lines[-1])
     cam = jobs["camera"]
     fine = cam.camera.resolution[0] * cam.camera.resolution[1] * cam.route.supersample ** 2
-    passed = rates["camera_fixed"] + fine * (rates["camera_pixel_seconds"]
-                                             + cam.route.samples * rates["camera_look_seconds"])
+    emitters = estimate.camera_emitters(cam.camera, triangles=cam.triangles,
+                                        supersample=cam.route.supersample)
+    passed = rates["camera_fixed"] + fine * rates["camera_pixel_seconds"] \
+        + cam.route.samples * emitters * rates["camera_emitter_seconds"]
     d = estimate.DEFAULT
     measured = replace(
         d, **rates, job_seconds=max(work["camera"] - passed, 0.05),
@@ -204,10 +214,7 @@ def measure(*, device: str | None = None, say=log.info) -> estimate.Calibration:
         process_camera_seconds=max(0.0, warm["camera"] - work["camera"]),
         first_plate_seconds=max(0.0, cold["plate"] - warm["plate"]),
         first_camera_seconds=max(0.0, cold["camera"] - warm["camera"]))
-    say(f"the load's slowdown as the calibration began: {factor:.2f} (taken out)")
-    # Cycles' radiance is not measured here: the default's (idle) rates stay
-    return replace(estimate.at_idle(measured, factor), radiance_seconds=d.radiance_seconds,
-                   radiance_pixel_seconds=d.radiance_pixel_seconds)
+    return measured  # Cycles' radiance is not measured here: the default's (idle) rates stay
 
 
 def calibrate(*, device: str | None = None, cache_dir=None, say=log.info) -> Path:

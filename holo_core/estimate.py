@@ -8,8 +8,9 @@ or FFT driver, so Blender's process and the planner call it.
   (emitter, sample) at ``pairs_per_second``; its files written at ``write_bytes_per_second``;
   a view: the plan's view seconds (:func:`holo_core.plate.plan.plan_view`, its window
   samples and fine pixels at the development machine's rates) times ``view_factor``. A camera
-  pass: its fine pixels (W·H·s²), once (``camera_pixel_seconds``) and for each look
-  (``camera_look_seconds``). The renderer's radiance (Lighting: Scene):
+  pass: its fine pixels (W·H·s²) once (``camera_pixel_seconds``), and its emitters for each
+  look (``camera_emitter_seconds``; :func:`camera_emitters`: a point mesh's points in the
+  frame, a triangle mesh's fine pixels inside its outline's box, times π/4). The renderer's radiance (Lighting: Scene):
   Cycles' start and its pixels. Every job: ``job_seconds`` (handing it over, the pass written).
 - A worker process's set-up (``process_plate_seconds``, ``process_camera_seconds``): Python, the core, the OpenCL context, the
   programs read from the kernel cache, the FFT plans read from their wisdom. Paid by every
@@ -21,6 +22,10 @@ or FFT driver, so Blender's process and the planner call it.
   job of the route has run, and the stamp counts while the kernel cache it filled is there.
   An image size the FFT wisdom has not seen measures its plans once more, on a warm cache
   too: that is not counted (seconds for a new size, once).
+
+- The load. Every part is as on an idle machine, times :func:`slowdown`: 1 + the load
+  average over the CPUs, as the estimate is made (a job that would use every CPU gets its
+  fair share beside other work); the words give the factor where it is 1.2 or more.
 
 The rates are a :class:`Calibration`: measured on this machine by ``python -m holo_core
 calibrate`` and kept in the user cache directory (``holo/estimates.json``, beside the FFT
@@ -38,6 +43,8 @@ import math
 import os
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
+
+import numpy as np
 
 log = logging.getLogger(__name__)
 
@@ -58,7 +65,7 @@ class Calibration:
     view_fixed: float
     write_bytes_per_second: float
     camera_pixel_seconds: float
-    camera_look_seconds: float
+    camera_emitter_seconds: float
     camera_fixed: float
     radiance_seconds: float
     radiance_pixel_seconds: float
@@ -88,12 +95,12 @@ class Calibration:
 
 
 # as on an idle machine: the development machine's (2-core EPYC, PoCL) calibrations under
-# load 5-15, their load taken out (at_idle), rounded to the slow side; the zone sum's rate is
-# plan.PAIRS_PER_SECOND, measured idle; Cycles' radiance from bench/estimates.py's demo
+# load 8-25, each time over its load's slowdown, rounded to the slow side; Cycles' radiance
+# from bench/estimates.py's demo (its radiance seconds over the slowdown)
 DEFAULT = Calibration(
     pairs_per_second=1.0e10, zone_sum_fixed=0.1, emitter_seconds=5.0e-6, emitters_fixed=0.05,
     view_factor=3.0, view_fixed=0.2, write_bytes_per_second=3.0e8,
-    camera_pixel_seconds=1.0e-7, camera_look_seconds=3.0e-7, camera_fixed=0.2,
+    camera_pixel_seconds=1.0e-7, camera_emitter_seconds=3.0e-6, camera_fixed=0.2,
     radiance_seconds=1.5, radiance_pixel_seconds=5.0e-7, job_seconds=0.1,
     process_plate_seconds=1.5, process_camera_seconds=1.8, first_plate_seconds=8.0,
     first_camera_seconds=2.0)
@@ -124,8 +131,8 @@ class Estimate:
                         slowdown=max(self.slowdown, other.slowdown))
 
     def words(self) -> str:
-        """In plain words, the set-up said apart: 'about 9 s (of which 4 s set-up on a first
-        run on this machine, 2 s starting the worker)'."""
+        """In plain words, the set-up said apart: 'about 11 s (of which 4 s the first time on
+        this machine, 2 s starting the worker)', the load's factor and default rates said."""
         parts = []
         if self.first > 0:
             parts.append(f"{duration(self.first)} the first time on this machine")
@@ -164,14 +171,6 @@ def slowdown(load: float | None = None, cpus: int | None = None) -> float:
         cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
             (os.cpu_count() or 1)
     return 1.0 + max(float(load), 0.0) / max(cpus, 1)
-
-
-def at_idle(cal: Calibration, factor: float) -> Calibration:
-    """``cal``, measured ``factor`` (:func:`slowdown`) times slower than idle, as on an idle
-    machine: its times divided by it, its rates multiplied."""
-    rates = {"pairs_per_second", "write_bytes_per_second"}
-    return Calibration(**{f.name: getattr(cal, f.name) * factor if f.name in rates else
-                          getattr(cal, f.name) / factor for f in fields(Calibration)})
 
 
 # --- the cache: the calibration and the stamps --------------------------------------------------
@@ -313,16 +312,35 @@ def plate(p, view=None, *, record=True, channels=4, device=None, cache_dir=None,
                            work=tuple(work)), load_average)
 
 
-def camera(resolution, *, samples, supersample, device=None, cache_dir=None, warm=None,
-           calibration=None, load_average=None) -> Estimate:
-    """The estimate of a camera pass of ``resolution`` (W, H) pixels, ``samples`` looks and
-    ``supersample`` fine pixels a pixel, in a new worker (``warm``, ``calibration``: as
-      :func:`plate`'s, ``load_average`` too)."""
+def camera_emitters(cam, *, points=(), triangles=(), supersample=2) -> float:
+    """About how many emitters a camera pass of ``cam`` has (its cost a look): each point
+    mesh's vertices in the frame, and for each triangle mesh the fine pixels of its projected
+    box cut to the frame, times π/4 (a rounded outline's share of its box)."""
+    w, h = cam.resolution
+    n = 0.0
+    for m in points:
+        xy, _ = cam.project(m.vertices)
+        inside = (xy[:, 0] >= 0) & (xy[:, 0] <= w) & (xy[:, 1] >= 0) & (xy[:, 1] <= h)
+        n += float(np.count_nonzero(inside))
+    for m in triangles:
+        xy, _ = cam.project(m.vertices)
+        xy = xy[np.isfinite(xy).all(1)]
+        if len(xy):
+            lo, hi = np.clip(xy.min(0), 0, (w, h)), np.clip(xy.max(0), 0, (w, h))
+            n += float(np.prod(hi - lo)) * supersample ** 2 * math.pi / 4
+    return n
+
+
+def camera(resolution, *, samples, supersample, emitters, device=None, cache_dir=None,
+           warm=None, calibration=None, load_average=None) -> Estimate:
+    """The estimate of a camera pass of ``resolution`` (W, H) pixels, ``samples`` looks,
+    ``supersample`` fine pixels a pixel and ``emitters`` (:func:`camera_emitters`), in a new
+    worker (``warm``, ``calibration``, ``load_average``: as :func:`plate`'s)."""
     cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
     fine = resolution[0] * resolution[1] * supersample ** 2
     work = (("job", cal.job_seconds),
-            ("camera pass", cal.camera_fixed
-             + fine * (cal.camera_pixel_seconds + samples * cal.camera_look_seconds)))
+            ("camera pass", cal.camera_fixed + fine * cal.camera_pixel_seconds
+             + samples * emitters * cal.camera_emitter_seconds))
     return _loaded(replace(_setup("camera", cal, calibrated, device, cache_dir, warm),
                            work=work), load_average)
 
@@ -348,7 +366,9 @@ def job(j, *, plan=None, view=None, device=None, cache_dir=None, warm=None,
               "warm": warm, "load_average": load_average}
     if isinstance(j.route, CameraRoute):
         est = camera(j.camera.resolution, samples=j.route.samples,
-                     supersample=j.route.supersample, **common)
+                     supersample=j.route.supersample,
+                     emitters=camera_emitters(j.camera, points=j.points, triangles=j.triangles,
+                                              supersample=j.route.supersample), **common)
     else:
         est = plate(plan, view if j.output.render else None, record=j.route.record, **common)
     if j.radiance is not None:
