@@ -12,7 +12,7 @@ pass of it, each run as the add-on runs them, in worker processes:
 1 − 2 is the first time's set-up, 2 − 3 a worker's start. Then the stages, each timed on its
 own in a process with that warm cache (:func:`stage_rates`), on the small reference and on
 one with twice its pixels a side and a five times wider zone: the emitters found, the zone
-sum, the files, the view, camera passes of 2 and 10 looks, each fitted as a fixed cost and
+sum, the files, the view, a camera pass with Speckle: Exact and with 2 and 10 looks, each fitted as a fixed cost and
 a rate; 3 less the camera pass's stages is a job's own cost. Everything is taken as on an idle machine: each time divided by the
 load's slowdown as it began (:func:`holo_core.estimate.slowdown`), which the estimates
 multiply back by the load of their time. Cycles' radiance is not measured here (no
@@ -117,12 +117,13 @@ def _stages(meshes, cam, plate, folder: Path) -> tuple[dict, dict]:
         holos = timed(holos.record)
         timed(write, holos)
         timed(render_view, holos, cam)
+        timed(render_camera, meshes, cam, via="incoherent")  # Speckle: Exact
         for samples in (2, 10) if run else (2,):  # the first builds and plans: one is enough
             timed(render_camera, meshes, cam, samples=samples)
     fine = cam.resolution[0] * cam.resolution[1] * 2 ** 2  # the default supersampling
-    names = ("emitters", "zone sum", "files", "view", "camera 2", "camera 10")
-    work = dict(zip(names, (p.emitters, p.pairs(), p.disk_bytes(), v.seconds, fine, fine)))
-    work["camera emitters"] = estimate.camera_emitters(cam, triangles=meshes)
+    names = ("emitters", "zone sum", "files", "view", "exact", "camera 2", "camera 10")
+    work = dict(zip(names, (p.emitters, p.pairs(), p.disk_bytes(), v.seconds, fine, fine,
+                            fine)))
     return work, dict(zip(names, d))
 
 
@@ -149,20 +150,21 @@ def stage_rates(*, say=log.info) -> dict:
             for k, default in (("emitters", d.emitter_seconds),
                                ("zone sum", 1 / d.pairs_per_second),
                                ("files", 1 / d.write_bytes_per_second),
-                               ("view", d.view_factor))}
-    # the camera pass: each look's emitters from 2 against 10 looks (the larger, more of
-    # them), then its fine pixels' rate and fixed cost from the two sizes' passes of 2 looks
+                               ("view", d.view_factor),
+                               ("exact", d.exact_pixel_seconds))}
+    # the camera pass: a look's fine pixels from 2 against 10 looks (the larger: more of
+    # them), then the pass's own rate and fixed cost from the two sizes' passes of 2 looks
     work, secs = large
-    emitter = max(secs["camera 10"] - secs["camera 2"], 0.0) / 8 / work["camera emitters"]
-    once = [(w["camera 2"], t["camera 2"] - 2 * emitter * w["camera emitters"])
-            for w, t in (small, large)]
+    look = max(secs["camera 10"] - secs["camera 2"], 0.0) / 8 / work["camera 2"]
+    once = [(w["camera 2"], t["camera 2"] - 2 * look * w["camera 2"]) for w, t in (small, large)]
     fits["camera 2"] = _fit(*once, d.camera_pixel_seconds)
     return {"emitter_seconds": fits["emitters"][0], "emitters_fixed": fits["emitters"][1],
             "pairs_per_second": 1 / fits["zone sum"][0], "zone_sum_fixed": fits["zone sum"][1],
             "write_bytes_per_second": 1 / fits["files"][0],
             "view_factor": fits["view"][0], "view_fixed": fits["view"][1],
-            "camera_pixel_seconds": fits["camera 2"][0], "camera_emitter_seconds": emitter,
-            "camera_fixed": fits["camera 2"][1]}
+            "camera_pixel_seconds": fits["camera 2"][0], "camera_look_seconds": look,
+            "camera_fixed": fits["camera 2"][1], "exact_pixel_seconds": fits["exact"][0],
+            "exact_fixed": fits["exact"][1]}
 
 
 def measure(*, device: str | None = None, say=log.info) -> estimate.Calibration:
@@ -203,10 +205,7 @@ def measure(*, device: str | None = None, say=log.info) -> estimate.Calibration:
         rates = json.loads(lines[-1])
     cam = jobs["camera"]
     fine = cam.camera.resolution[0] * cam.camera.resolution[1] * cam.route.supersample ** 2
-    emitters = estimate.camera_emitters(cam.camera, triangles=cam.triangles,
-                                        supersample=cam.route.supersample)
-    passed = rates["camera_fixed"] + fine * rates["camera_pixel_seconds"] \
-        + cam.route.samples * emitters * rates["camera_emitter_seconds"]
+    passed = rates["exact_fixed"] + fine * rates["exact_pixel_seconds"]  # Speckle: Exact
     d = estimate.DEFAULT
     measured = replace(
         d, **rates, job_seconds=max(work["camera"] - passed, 0.05),

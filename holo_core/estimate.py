@@ -8,9 +8,10 @@ or FFT driver, so Blender's process and the planner call it.
   (emitter, sample) at ``pairs_per_second``; its files written at ``write_bytes_per_second``;
   a view: the plan's view seconds (:func:`holo_core.plate.plan.plan_view`, its window
   samples and fine pixels at the development machine's rates) times ``view_factor``. A camera
-  pass: its fine pixels (W·H·s²) once (``camera_pixel_seconds``), and its emitters for each
-  look (``camera_emitter_seconds``; :func:`camera_emitters`: a point mesh's points in the
-  frame, a triangle mesh's fine pixels inside its outline's box, times π/4). The renderer's radiance (Lighting: Scene):
+  pass with Speckle: Exact (one incoherent pass): its fine pixels (W·H·s²) at
+  ``exact_pixel_seconds``; with Looks: its fine pixels once (``camera_pixel_seconds``) and
+  for each look (``camera_look_seconds``: a look's pupil fields and transforms are the
+  grid's, whatever the emitters; the calibration's two sizes agree within 10 %). The renderer's radiance (Lighting: Scene):
   Cycles' start and its pixels. Every job: ``job_seconds`` (handing it over, the pass written).
 - A worker process's set-up (``process_plate_seconds``, ``process_camera_seconds``): Python, the core, the OpenCL context, the
   programs read from the kernel cache, the FFT plans read from their wisdom. Paid by every
@@ -44,8 +45,6 @@ import os
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 
-import numpy as np
-
 log = logging.getLogger(__name__)
 
 FILE = "estimates.json"
@@ -65,8 +64,10 @@ class Calibration:
     view_fixed: float
     write_bytes_per_second: float
     camera_pixel_seconds: float
-    camera_emitter_seconds: float
+    camera_look_seconds: float
     camera_fixed: float
+    exact_pixel_seconds: float
+    exact_fixed: float
     radiance_seconds: float
     radiance_pixel_seconds: float
     job_seconds: float
@@ -94,16 +95,17 @@ class Calibration:
         return self.first_plate_seconds if kind == "plate" else self.first_camera_seconds
 
 
-# as on an idle machine: the development machine's (2-core EPYC, PoCL) calibrations under
-# load 8-25, each time over its load's slowdown, rounded to the slow side; Cycles' radiance
-# from bench/estimates.py's demo (its radiance seconds over the slowdown)
+# as on an idle machine: the development machine's calibration (2-core EPYC, PoCL; under
+# load 17-22, each time over its load's slowdown) rounded to the slow side; Cycles' radiance
+# from bench/estimates.py's demo at 640x360 (5.9-7.1 s at load 16-17: 0.6-0.8 s idle)
 DEFAULT = Calibration(
-    pairs_per_second=1.0e10, zone_sum_fixed=0.1, emitter_seconds=5.0e-6, emitters_fixed=0.05,
-    view_factor=3.0, view_fixed=0.2, write_bytes_per_second=3.0e8,
-    camera_pixel_seconds=1.0e-7, camera_emitter_seconds=3.0e-6, camera_fixed=0.2,
-    radiance_seconds=1.5, radiance_pixel_seconds=5.0e-7, job_seconds=0.1,
-    process_plate_seconds=1.5, process_camera_seconds=1.8, first_plate_seconds=8.0,
-    first_camera_seconds=2.0)
+    pairs_per_second=1.5e9, zone_sum_fixed=0.05, emitter_seconds=3.0e-6, emitters_fixed=0.05,
+    view_factor=5.0, view_fixed=0.1, write_bytes_per_second=1.0e8,
+    camera_pixel_seconds=2.0e-7, camera_look_seconds=4.0e-7, camera_fixed=0.1,
+    exact_pixel_seconds=2.0e-6, exact_fixed=0.2,
+    radiance_seconds=0.7, radiance_pixel_seconds=5.0e-7, job_seconds=0.1,
+    process_plate_seconds=1.0, process_camera_seconds=1.0, first_plate_seconds=6.0,
+    first_camera_seconds=1.0)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -312,35 +314,17 @@ def plate(p, view=None, *, record=True, channels=4, device=None, cache_dir=None,
                            work=tuple(work)), load_average)
 
 
-def camera_emitters(cam, *, points=(), triangles=(), supersample=2) -> float:
-    """About how many emitters a camera pass of ``cam`` has (its cost a look): each point
-    mesh's vertices in the frame, and for each triangle mesh the fine pixels of its projected
-    box cut to the frame, times π/4 (a rounded outline's share of its box)."""
-    w, h = cam.resolution
-    n = 0.0
-    for m in points:
-        xy, _ = cam.project(m.vertices)
-        inside = (xy[:, 0] >= 0) & (xy[:, 0] <= w) & (xy[:, 1] >= 0) & (xy[:, 1] <= h)
-        n += float(np.count_nonzero(inside))
-    for m in triangles:
-        xy, _ = cam.project(m.vertices)
-        xy = xy[np.isfinite(xy).all(1)]
-        if len(xy):
-            lo, hi = np.clip(xy.min(0), 0, (w, h)), np.clip(xy.max(0), 0, (w, h))
-            n += float(np.prod(hi - lo)) * supersample ** 2 * math.pi / 4
-    return n
-
-
-def camera(resolution, *, samples, supersample, emitters, device=None, cache_dir=None,
+def camera(resolution, *, samples, supersample, speckle="EXACT", device=None, cache_dir=None,
            warm=None, calibration=None, load_average=None) -> Estimate:
-    """The estimate of a camera pass of ``resolution`` (W, H) pixels, ``samples`` looks,
-    ``supersample`` fine pixels a pixel and ``emitters`` (:func:`camera_emitters`), in a new
-    worker (``warm``, ``calibration``, ``load_average``: as :func:`plate`'s)."""
+    """The estimate of a camera pass of ``resolution`` (W, H) pixels and ``supersample``
+    fine pixels a pixel, with ``speckle`` 'EXACT' (one incoherent pass) or 'LOOKS'
+    (``samples`` looks), in a new worker (``warm``, ``calibration``, ``load_average``: as
+    :func:`plate`'s)."""
     cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
     fine = resolution[0] * resolution[1] * supersample ** 2
-    work = (("job", cal.job_seconds),
-            ("camera pass", cal.camera_fixed + fine * cal.camera_pixel_seconds
-             + samples * emitters * cal.camera_emitter_seconds))
+    passed = cal.exact_fixed + fine * cal.exact_pixel_seconds if speckle == "EXACT" else \
+        cal.camera_fixed + fine * (cal.camera_pixel_seconds + samples * cal.camera_look_seconds)
+    work = (("job", cal.job_seconds), ("camera pass", passed))
     return _loaded(replace(_setup("camera", cal, calibrated, device, cache_dir, warm),
                            work=work), load_average)
 
@@ -366,9 +350,7 @@ def job(j, *, plan=None, view=None, device=None, cache_dir=None, warm=None,
               "warm": warm, "load_average": load_average}
     if isinstance(j.route, CameraRoute):
         est = camera(j.camera.resolution, samples=j.route.samples,
-                     supersample=j.route.supersample,
-                     emitters=camera_emitters(j.camera, points=j.points, triangles=j.triangles,
-                                              supersample=j.route.supersample), **common)
+                     supersample=j.route.supersample, speckle=j.route.speckle, **common)
     else:
         est = plate(plan, view if j.output.render else None, record=j.route.record, **common)
     if j.radiance is not None:

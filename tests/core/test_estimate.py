@@ -175,25 +175,16 @@ def test_the_plan_states_the_first_frames_time_with_its_set_up(cache):
     assert said in time and "11 s the first time on this machine" in time, time
 
 
-def test_a_camera_pass_counts_its_emitters_a_look():
-    """A point mesh's emitters are its points in the frame; a triangle mesh's, the fine
-    pixels of its outline's box times π/4: a 0.1 m square 2 m before a 50 mm lens on a 36 mm
-    sensor spans 0.1 · 50 / 2000 m, i.e. 2.5 mm / (36 mm / 640) = 44.4 px a side."""
-    from holo_core.scene.camera import Camera, look_at
-    from holo_core.scene.mesh import Mesh
-    cam = Camera(matrix_world=look_at((0, 0, 2.0), (0, 0, 0), up=(0, 1, 0)), lens=50,
-                 sensor_width=36, resolution=(640, 360))
-    square = Mesh(vertices=np.array([[-0.05, -0.05, 0], [0.05, -0.05, 0], [0.05, 0.05, 0],
-                                     [-0.05, 0.05, 0]]), triangles=np.array([[0, 1, 2],
-                                                                             [0, 2, 3]]))
-    side = 0.1 * 50 / 2.0 / (36 / 640)  # [mm on the sensor] / [mm a pixel]
-    assert estimate.camera_emitters(cam, triangles=[square], supersample=2) == \
-        pytest.approx(side ** 2 * 4 * np.pi / 4, rel=1e-9)
-    cloud = Mesh(vertices=np.array([[0, 0, 0], [0.1, 0, 0], [5.0, 0, 0], [0, 0, 3.0]]),
-                 triangles=np.array([[0, 1, 2], [1, 2, 3]]))
-    assert estimate.camera_emitters(cam, points=[cloud]) == 2  # one beside, one behind
-    est = estimate.camera((640, 360), samples=16, supersample=2, emitters=1000.0,
-                          warm=True, calibration=(MEASURED, True), load_average=0)
+def test_a_camera_pass_costs_its_fine_pixels_once_and_each_look():
+    """Speckle: Looks costs the fine pixels once and each look; Exact, one pass of them."""
+    exact = estimate.camera((640, 360), samples=16, supersample=2, warm=True,
+                            calibration=(MEASURED, True), load_average=0)
+    assert dict(exact.work)["camera pass"] == pytest.approx(
+        MEASURED.exact_fixed + 640 * 360 * 4 * MEASURED.exact_pixel_seconds, rel=1e-12)
+    est = estimate.camera((640, 360), samples=16, supersample=2, speckle="LOOKS", warm=True,
+                          calibration=(MEASURED, True), load_average=0)
     assert dict(est.work)["camera pass"] == pytest.approx(
-        MEASURED.camera_fixed + 640 * 360 * 4 * MEASURED.camera_pixel_seconds
-        + 16 * 1000 * MEASURED.camera_emitter_seconds, rel=1e-12)
+        MEASURED.camera_fixed + 640 * 360 * 4 * (MEASURED.camera_pixel_seconds
+                                                 + 16 * MEASURED.camera_look_seconds),
+        rel=1e-12)
+    assert est.process == MEASURED.process_camera_seconds and est.first == 0.0
