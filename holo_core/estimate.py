@@ -96,16 +96,16 @@ class Calibration:
 
 
 # as on an idle machine: the development machine's calibration (2-core EPYC, PoCL; under
-# load 17-22, each time over its load's slowdown) rounded to the slow side; Cycles' radiance
+# load 1.6-11, each time over its load's slowdown) rounded to the slow side; Cycles' radiance
 # from bench/estimates.py's demo at 640x360 (5.9-7.1 s at load 16-17: 0.6-0.8 s idle)
 DEFAULT = Calibration(
-    pairs_per_second=1.5e9, zone_sum_fixed=0.05, emitter_seconds=3.0e-6, emitters_fixed=0.05,
-    view_factor=5.0, view_fixed=0.1, write_bytes_per_second=1.0e8,
-    camera_pixel_seconds=2.0e-7, camera_look_seconds=4.0e-7, camera_fixed=0.1,
-    exact_pixel_seconds=2.0e-6, exact_fixed=0.2,
-    radiance_seconds=0.7, radiance_pixel_seconds=5.0e-7, job_seconds=0.1,
-    process_plate_seconds=1.0, process_camera_seconds=1.0, first_plate_seconds=6.0,
-    first_camera_seconds=1.0)
+    pairs_per_second=1.0e9, zone_sum_fixed=0.05, emitter_seconds=4.0e-6, emitters_fixed=0.05,
+    view_factor=7.0, view_fixed=0.1, write_bytes_per_second=3.0e8,
+    camera_pixel_seconds=2.0e-7, camera_look_seconds=7.0e-7, camera_fixed=0.1,
+    exact_pixel_seconds=1.6e-6, exact_fixed=0.1,
+    radiance_seconds=0.7, radiance_pixel_seconds=5.0e-7, job_seconds=0.2,
+    process_plate_seconds=1.5, process_camera_seconds=1.2, first_plate_seconds=8.0,
+    first_camera_seconds=1.5)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -147,7 +147,7 @@ class Estimate:
             text += (f", {self.slowdown:.2g} times an idle machine's time at its present "
                      f"load")
         if not self.calibrated:
-            text += " by default rates (python -m holo_core calibrate measures this machine's)"
+            text += "; by default rates (python -m holo_core calibrate measures this machine's)"
         return text
 
 

@@ -161,7 +161,7 @@ def test_the_words_say_the_set_up_apart():
     assert est.words() == ("about 11 s (of which 4 s the first time on this machine, 2 s "
                            "starting the worker)")
     bare = Estimate(work=(("a", 3.0),), calibrated=False)
-    assert bare.words().startswith("about 3 s by default rates"), bare.words()
+    assert bare.words().startswith("about 3 s; by default rates"), bare.words()
 
 
 def test_the_plan_states_the_first_frames_time_with_its_set_up(cache):
