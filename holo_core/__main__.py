@@ -1,5 +1,5 @@
 """Command line: ``python -m holo_core devices | demo | plan | record | info | render |
-import``."""
+import | calibrate``."""
 
 from __future__ import annotations
 
@@ -30,6 +30,14 @@ def devices(_args) -> int:
         print("would use: nothing usable (see the reasons above)")
         return 1
     print("choose with HOLO_DEVICE=gpu|cpu|P:D|part of a device or platform name")
+    return 0
+
+
+def calibrate(args) -> int:
+    """Measure this machine's rates for the estimates and keep them (:mod:`.calibration`)."""
+    from .calibration import calibrate as measure
+    path = measure(device=args.device, say=print)
+    print(f"kept in {path}")
     return 0
 
 
@@ -603,6 +611,11 @@ def main(argv=None) -> int:
     sub.add_parser("devices", help="list OpenCL devices and the one Holo would use")
     p = sub.add_parser("demo", help="render the built-in demo to image files")
     p.add_argument("-o", "--output", default="out", help="output folder (default: out)")
+    p = sub.add_parser("calibrate", help="measure this machine's rates for the estimates "
+                       "(about a minute) and keep them in the user cache")
+    p.add_argument("--device", default=None,
+                   help="the device to measure (as HOLO_DEVICE; default: its value, or "
+                        "automatic)")
     p = sub.add_parser("record", help="record a hologram of a PLY or OBJ mesh")
     p.add_argument("mesh", help="mesh file (.ply or .obj), units taken as metres")
     p.add_argument("-o", "--output", required=True,
@@ -705,7 +718,7 @@ def main(argv=None) -> int:
         f"warning: {message} ({category.__name__})\n"
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
-    command = {"devices": devices, "demo": demo, "plan": plan, "record": record, "info": info,
+    command = {"devices": devices, "calibrate": calibrate, "demo": demo, "plan": plan, "record": record, "info": info,
                "render": render, "import": import_}[args.command]
     try:
         return command(args)

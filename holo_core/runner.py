@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import jobs, memory
+from . import estimate, jobs, memory
 from .camera.render import render_camera
 from .io.hologram import HologramFileError, write_hologram
 from .io.image import check_room, check_writable, read_exr
@@ -43,7 +43,7 @@ from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result, SetRoute
 from .plate.looks import record_planned
 from .plate.parts import record_set
 from .plate.path import part_for
-from .plate.plan import CHANNELS
+from .plate.plan import CHANNELS, PlatePlan, plan_view
 from .plate.recording import PlannedPlate, plate_plan
 from .plate.view import OutsideZoneWarning, render_set_view, render_view
 from .scene.hologram import Hologram
@@ -74,6 +74,7 @@ def run(job: Job, progress: jobs.Progress = None, on_partial=None, *,
             lit = time.perf_counter() - t
         route, recorded = job.route, ()
         if isinstance(route, CameraRoute):  # made for this view: no plate, no hologram file
+            _say_estimate(job)
 
             def sample(view, n):
                 if on_partial is not None and n < route.samples and not n & (n - 1):
@@ -90,6 +91,7 @@ def run(job: Job, progress: jobs.Progress = None, on_partial=None, *,
             view, recorded = _plate(job, progress,
                                     KeptPlates(hold=False) if kept is None else kept)
         path = None if view is None else _write_pass(job, view, lit)
+    estimate.mark_warm("camera" if isinstance(job.route, CameraRoute) else "plate")
     report = Report.of(view, warnings=tuple(dict.fromkeys(heard.texts)),
                        seconds=time.perf_counter() - start, radiance_seconds=lit)
     return Result(recorded=recorded, pass_path=path, report=report, view=view)
@@ -111,6 +113,7 @@ def _plate(job: Job, progress, kept: KeptPlates):
         # the iterations are coded looks of one seed where n allows (look_code), else seeds,
         # every look in one pass; the plan is made once, here, and read by every stage
         planned, urls = _plan(job)
+        _say_estimate(job, planned.plan)
         holos = record_planned(planned, seed=route.seed,
                                budget=(route.memory_budget, route.disk_budget), urls=urls,
                                scheduler=route.scheduler, recording=route.recording,
@@ -173,6 +176,22 @@ def _plate_set(job: Job, progress, kept: KeptPlates):
             log.info("frame %d from part %d of %d of the plate set %s", job.output.frame,
                      k + 1, len(plates), route.recording)
     return view, ((route.folder / MANIFEST,) if route.record else ())
+
+
+def _say_estimate(job: Job, p: PlatePlan | None = None) -> None:
+    """Log the job's estimate (:func:`holo_core.estimate.job`) in this running worker: its
+    work, and what a cold kernel cache adds (the worker's own start is behind it)."""
+    view = None
+    if p is not None and job.output.render:
+        eye = job.route.plate.to_plate(np.asarray(job.camera.position)[None])[0]
+        view = plan_view(p, position=eye, pixel_angle=job.camera.pixel_angle(),
+                         pupil=job.camera.aperture_diameter or None,
+                         resolution=job.camera.resolution)
+    est = replace(estimate.job(job, plan=p, view=view), process=0.0)
+    log.info("estimate: the %s %s", "plate's recording and view" if p is not None else
+             "camera pass", est.words())
+
+
 
 
 class KeptPlates:

@@ -20,11 +20,11 @@ from pathlib import Path
 import bpy
 import numpy as np
 
-from holo_core import jobs, worker
+from holo_core import estimate, jobs, worker
 from holo_core.io.image import exr_attribute
 from holo_core.io.plate_paths import read_plate, store_of
 from holo_core.io.view import copy_view, write_view
-from holo_core.job import PlateRoute, Result, pass_file
+from holo_core.job import CameraRoute, PlateRoute, Result, pass_file
 from holo_core.view import BACKGROUND_DEPTH, RenderResult
 
 from ..export import bake
@@ -67,7 +67,12 @@ def start(prepared: Prepared, *, resident: bool = False) -> worker.Worker:
     job = prepared.lit()
     if isinstance(job.route, PlateRoute):  # a plate too large for memory records on Dask
         job = replace(job, route=replace(job.route, scheduler=scheduler()))
-    return worker.Worker(job, resident=resident, **worker_options())
+    options = worker_options()
+    if isinstance(job.route, CameraRoute):  # a plate's is the worker's to say: it plans it
+        # a new worker's start is counted: a render's later frames in its kept worker skip it
+        said = estimate.job(job, device=options["device"], cache_dir=options["cache_dir"])
+        log.info("holographic pass of frame %d: %s", job.output.frame, said.words())
+    return worker.Worker(job, resident=resident, **options)
 
 
 def release() -> None:

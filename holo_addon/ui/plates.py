@@ -44,7 +44,7 @@ from ..export.scene import (
     emitter_instances,
     scale,
 )
-from ..render.options import device, runtime_paths
+from ..render.options import device, runtime_paths, worker_options
 from . import overlay
 
 
@@ -278,8 +278,10 @@ def plan_summary(context) -> list[str]:
                   pupil=camera.aperture_diameter, resolution=camera.resolution)
     lens = f"{camera.lens:g} mm f/{camera.fstop:g}" if camera.fstop else \
         f"a {camera.lens:g} mm pinhole"
+    options = worker_options()  # the estimate of this machine for the worker's device and cache
     lines = summary(p, v, lens=lens, resolution=camera.resolution,
-                    plate_size=(plate.width, plate.height), camera=eye)
+                    plate_size=(plate.width, plate.height), camera=eye,
+                    device=options["device"], cache_dir=options["cache_dir"])
     gb = 2.0**30
     # as the recording decides: tile by tile where the looks exceed the memory in one piece
     tiled = p.needs_tiles(memory.host_share(h.plate_memory * gb))

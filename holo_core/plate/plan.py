@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import estimate as estimate_mod
 from .. import memory as memory_mod
 from .. import validate
 from ..optics.depth import DEPTH_MARGIN, partner_wavelength
@@ -115,12 +116,19 @@ class PlatePlan:
         held = self.tile ** 2 if tiled else self.samples
         return 2 * SAMPLE_BYTES * channels * held + per_emitter * self.emitters
 
-    def record_seconds(self, channels=CHANNELS) -> float:
-        """Estimated seconds to record every look in one pass on the development machine."""
+    def pairs(self, channels=CHANNELS) -> float:
+        """The zone sum's work, every look in one pass: pairs (emitter, sample) of one look
+        with its channels, the further looks counted at their share of one."""
         coded = self.looks == 2 or math.isqrt(self.looks) ** 2 == self.looks
         further = FURTHER_CODED if coded else FURTHER_LOOK
         pairs = self.emitters * self.footprint * (1.0 if channels > 3 else COLOURS_ONLY)
-        return (1 + further * (self.looks - 1)) * pairs / PAIRS_PER_SECOND
+        return (1 + further * (self.looks - 1)) * pairs
+
+    def record_seconds(self, channels=CHANNELS) -> float:
+        """The zone sum's seconds, every look in one pass, at the development machine's idle
+        rate: the sum alone, without the emitters, the files or any set-up
+        (:func:`holo_core.estimate.plate` counts those on this machine)."""
+        return self.pairs(channels) / PAIRS_PER_SECOND
 
     def check_budget(self, *, memory=None, disk=None, channels=CHANNELS, tiled=False,
                      held=1) -> None:
@@ -147,14 +155,14 @@ class PlatePlan:
                              f"{'' if tiled else 'record it tile by tile, or '}{advice}")
 
     def describe(self) -> str:
-        """The plan in plain words: samples, spacing, size on disk, time."""
+        """The plan in plain words: samples, spacing, size on disk (its time:
+        :func:`holo_core.estimate.plate`)."""
         mpx = self.samples / 1e6
         return (f"{self.shape[1]} x {self.shape[0]} samples ({mpx:.3g} Mpx, "
                 f"{self.pitch * 1e6:.3g} µm apart, {self.size[0] * 1e3:.4g} x "
                 f"{self.size[1] * 1e3:.4g} mm of the plate) for the zone {self.zone.describe()}; "
                 f"about {self.emitters:,} emitters; {self.looks} look(s): "
-                f"{memory_mod.gib(self.disk_bytes())}, about {self.record_seconds():.0f} s to "
-                f"record here")
+                f"{memory_mod.gib(self.disk_bytes())}")
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -182,19 +190,29 @@ class ViewPlan:
 
 
 def summary(p: PlatePlan, v: ViewPlan, *, lens: str, resolution, plate_size,
-            camera) -> list[str]:
+            camera, device=None, cache_dir=None, load_average=None) -> list[str]:
     """The plan in plain words, the verdict first: whether ``v``'s views (``resolution``
     (W, H) through ``lens``, e.g. '40 mm f/2.8', from ``camera`` (3,) [m]) are sharp, how
-    long the recording and a view take, then the samples, the zone, the wavelength, the
-    emitters, disk and memory (mm, µm, seconds, GiB)."""
+    long the first frame (the recording, its files and its view, in a new worker, the set-up
+    said apart) and a later view take on this machine (:func:`holo_core.estimate.plate`, for
+    ``device`` with the cache in ``cache_dir``, at ``load_average``, None: the machine's
+    now), then the samples, the zone, the wavelength,
+    the emitters, disk and memory (mm, µm, seconds, GiB)."""
     rows, cols = p.shape
+    calibration = estimate_mod.load(device=device, cache_dir=cache_dir)
+    first = estimate_mod.plate(p, v, device=device, cache_dir=cache_dir,
+                               calibration=calibration, load_average=load_average)
+    later = estimate_mod.plate(p, v, record=False, calibration=calibration, warm=True,
+                               load_average=load_average)
+    later_view = sum(s for name, s in later.work if name == "view")
     verdict = ("sharp" if v.sharp else f"blurred: they resolve {v.spot_px:.2g} px where a sharp "
                f"view resolves half a pixel; a longer lens, a wider aperture or Camera mode "
                f"makes them sharp")
     lines = [
         f"verdict     views of {resolution[0]} x {resolution[1]} px through {lens} are "
-        f"{verdict}; the plate records in about {duration(p.record_seconds())} here, each "
-        f"view about {duration(v.seconds)}",
+        f"{verdict}",
+        f"time        the first frame (the plate recorded, its files written, its view) "
+        f"{first.words()}; each later view about {duration(later_view)} in the same worker",
         f"plate       {p.size[0] * 1e3:.4g} x {p.size[1] * 1e3:.4g} mm of the {plate_size[0]:g} "
         f"x {plate_size[1]:g} m plate (where the objects' light reaches the zone): {cols} x "
         f"{rows} samples ({rows * cols / 1e6:.3g} Mpx), {p.pitch * 1e6:.3g} x "
@@ -209,21 +227,14 @@ def summary(p: PlatePlan, v: ViewPlan, *, lens: str, resolution, plate_size,
         f"recording {memory_mod.gib(p.memory_bytes(CHANNELS * p.looks))} in one piece (the "
         f"looks together), {memory_mod.gib(p.memory_bytes(CHANNELS * p.looks, tiled=True))} "
         f"tile by tile",
-        f"per view    reads {v.window / 1e6:.3g} Mpx of the plate, about "
-        f"{duration(v.seconds)} for {p.looks} look(s)"]
+        f"per view    reads {v.window / 1e6:.3g} Mpx of the plate for {p.looks} look(s)"]
     if v.outside_zone > 0:
         lines.append(f"warning     the camera's pupil reaches {v.outside_zone * 1e3:.3g} mm "
                      f"beyond the zone: its views will be cut off or soft")
     return lines
 
 
-def duration(seconds: float) -> str:
-    """``seconds`` as a person reads it: 0.3 s, 40 s, 3 min, 2.5 h."""
-    if seconds < 9.5:
-        return f"{max(seconds, 0.1):.1g} s"
-    if seconds < 90:
-        return f"{seconds:.0f} s"
-    return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.2g} h"
+duration = estimate_mod.duration
 
 
 def plan(plate_size, bounds, *, zone: ViewingZone, pixel_angle: float,

@@ -1,0 +1,359 @@
+"""How long a job takes on this machine, before it runs: each stage's cost is a rate of this
+machine times its work, plus the set-up a worker process pays once and the set-up a machine
+pays the first time (a fresh cache). Pure arithmetic and small files: it imports no OpenCL
+or FFT driver, so Blender's process and the planner call it.
+
+- Work, each stage a fixed cost (``*_fixed``: its launches, its buffers) and a rate. A
+  plate's recording: its emitters found (``emitter_seconds`` each) and the zone sum's pairs
+  (emitter, sample) at ``pairs_per_second``; its files written at ``write_bytes_per_second``;
+  a view: the plan's view seconds (:func:`holo_core.plate.plan.plan_view`, its window
+  samples and fine pixels at the development machine's rates) times ``view_factor``. A camera
+  pass with Speckle: Exact (one incoherent pass): its fine pixels (W·H·s²) at
+  ``exact_pixel_seconds``; with Looks: its fine pixels once (``camera_pixel_seconds``) and
+  for each look (``camera_look_seconds``: a look's pupil fields and transforms are the
+  grid's, whatever the emitters; the calibration's two sizes agree within 10 %). The renderer's radiance (Lighting: Scene):
+  Cycles' start and its pixels. Every job: ``job_seconds`` (handing it over, the pass written).
+- A worker process's set-up (``process_plate_seconds``, ``process_camera_seconds``): Python, the core, the OpenCL context, the
+  programs read from the kernel cache, the FFT plans read from their wisdom. Paid by every
+  new worker: a render's first frame, each frame of a farm; a render's later frames share
+  the worker that made the first.
+- The first time on this machine (``first_plate_seconds``, ``first_camera_seconds``): the programs compiled and the FFT plans
+  measured, where the kernel cache is cold. Whether it is warm is known from the cache:
+  a worker leaves a stamp (this version, this device, the route) beside the FFT wisdom once a
+  job of the route has run, and the stamp counts while the kernel cache it filled is there.
+  An image size the FFT wisdom has not seen measures its plans once more, on a warm cache
+  too: that is not counted (seconds for a new size, once).
+
+- The load. Every part is as on an idle machine, times :func:`slowdown`: 1 + the load
+  average over the CPUs, as the estimate is made (a job that would use every CPU gets its
+  fair share beside other work); the words give the factor where it is 1.2 or more.
+
+The rates are a :class:`Calibration`: measured on this machine by ``python -m holo_core
+calibrate`` and kept in the user cache directory (``holo/estimates.json``, beside the FFT
+wisdom; the worker's cache folder when the add-on names one), for this version of Holo and
+this device; without one, or with one of another version or device, :data:`DEFAULT` (measured
+on the development machine, the slow side of its runs under load). A file that cannot be read
+is refused with a warning naming it, and :data:`DEFAULT` taken.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import os
+from dataclasses import asdict, dataclass, fields, replace
+from pathlib import Path
+
+log = logging.getLogger(__name__)
+
+FILE = "estimates.json"
+STAMP = "warm-{kind}-{key}.stamp"
+KINDS = ("plate", "camera")
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Calibration:
+    """A machine's rates and set-up times (module docstring); seconds unless named."""
+
+    pairs_per_second: float
+    zone_sum_fixed: float
+    emitter_seconds: float
+    emitters_fixed: float
+    view_factor: float
+    view_fixed: float
+    write_bytes_per_second: float
+    camera_pixel_seconds: float
+    camera_look_seconds: float
+    camera_fixed: float
+    exact_pixel_seconds: float
+    exact_fixed: float
+    radiance_seconds: float
+    radiance_pixel_seconds: float
+    job_seconds: float
+    process_plate_seconds: float
+    process_camera_seconds: float
+    first_plate_seconds: float
+    first_camera_seconds: float
+
+    def __post_init__(self):
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+                    not math.isfinite(value) or value < 0 or \
+                    (f.name == "pairs_per_second" and value == 0):
+                raise ValueError(f"calibration {f.name} must be a finite number >= 0 "
+                                 f"({'> 0' if f.name == 'pairs_per_second' else 'seconds'}); "
+                                 f"got {value!r}")
+
+    def process_seconds(self, kind: str) -> float:
+        """A new worker's set-up before a ``kind`` ('plate' or 'camera') job's work."""
+        return self.process_plate_seconds if kind == "plate" else self.process_camera_seconds
+
+    def first_seconds(self, kind: str) -> float:
+        """The set-up a cold kernel cache adds to a ``kind`` ('plate' or 'camera') job."""
+        return self.first_plate_seconds if kind == "plate" else self.first_camera_seconds
+
+
+# as on an idle machine: the development machine's calibration (2-core EPYC, PoCL; under
+# load 1.6-11, each time over its load's slowdown) rounded to the slow side; Cycles' radiance
+# from bench/estimates.py's demo at 640x360 (5.9-7.1 s at load 16-17: 0.6-0.8 s idle)
+DEFAULT = Calibration(
+    pairs_per_second=1.0e9, zone_sum_fixed=0.05, emitter_seconds=4.0e-6, emitters_fixed=0.05,
+    view_factor=7.0, view_fixed=0.1, write_bytes_per_second=3.0e8,
+    camera_pixel_seconds=2.0e-7, camera_look_seconds=7.0e-7, camera_fixed=0.1,
+    exact_pixel_seconds=1.6e-6, exact_fixed=0.1,
+    radiance_seconds=0.7, radiance_pixel_seconds=5.0e-7, job_seconds=0.2,
+    process_plate_seconds=1.5, process_camera_seconds=1.2, first_plate_seconds=8.0,
+    first_camera_seconds=1.5)
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Estimate:
+    """A job's time in parts: ``work`` (stage, seconds) that every run pays, ``process`` the
+    set-up of a new worker process, ``first`` what a cold kernel cache adds (0 when warm);
+    ``calibrated``: whether the rates were measured on this machine; ``slowdown``: the
+    factor the machine's present load puts on every part (1: idle; :func:`slowdown`)."""
+
+    work: tuple = ()
+    process: float = 0.0
+    first: float = 0.0
+    calibrated: bool = False
+    slowdown: float = 1.0
+
+    @property
+    def seconds(self) -> float:
+        """Everything: the work, a new worker's set-up and the first time's."""
+        return sum(s for _, s in self.work) + self.process + self.first
+
+    def __add__(self, other: Estimate) -> Estimate:
+        return Estimate(work=self.work + other.work, process=max(self.process, other.process),
+                        first=max(self.first, other.first),
+                        calibrated=self.calibrated and other.calibrated,
+                        slowdown=max(self.slowdown, other.slowdown))
+
+    def words(self) -> str:
+        """In plain words, the set-up said apart: 'about 11 s (of which 4 s the first time on
+        this machine, 2 s starting the worker)', the load's factor and default rates said."""
+        parts = []
+        if self.first > 0:
+            parts.append(f"{duration(self.first)} the first time on this machine")
+        if self.process > 0:
+            parts.append(f"{duration(self.process)} starting the worker")
+        text = f"about {duration(self.seconds)}"
+        if parts:
+            text += f" (of which {', '.join(parts)})"
+        if self.slowdown >= 1.2:
+            text += (f", {self.slowdown:.2g} times an idle machine's time at its present "
+                     f"load")
+        if not self.calibrated:
+            text += "; by default rates (python -m holo_core calibrate measures this machine's)"
+        return text
+
+
+def duration(seconds: float) -> str:
+    """``seconds`` as a person reads it: 0.3 s, 40 s, 3 min, 2.5 h."""
+    if seconds < 9.5:
+        return f"{max(seconds, 0.1):.1g} s"
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.2g} h"
+
+
+def slowdown(load: float | None = None, cpus: int | None = None) -> float:
+    """The factor other work puts on a job's time: 1 + ``load`` / ``cpus`` (the 1-minute
+    load average before the job, default the system's now, over the CPUs this process may
+    use): a job that would use every CPU gets a fair share of them."""
+    if load is None:
+        try:
+            load = os.getloadavg()[0]
+        except OSError:  # no load average (Windows): taken as idle
+            load = 0.0
+    if cpus is None:
+        cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
+            (os.cpu_count() or 1)
+    return 1.0 + max(float(load), 0.0) / max(cpus, 1)
+
+
+# --- the cache: the calibration and the stamps --------------------------------------------------
+
+def cache_folder(cache_dir=None) -> Path:
+    """Holo's folder in the user cache directory (the FFT wisdom's), or in ``cache_dir`` (the
+    worker's ``XDG_CACHE_HOME`` when the add-on names one)."""
+    if cache_dir:
+        return Path(cache_dir) / "holo"
+    from platformdirs import user_cache_dir
+    return Path(user_cache_dir("holo"))
+
+
+def kernel_cache(cache_dir=None) -> Path:
+    """pyopencl's program cache folder (where it puts it; :func:`holo_core.opencl.runtime.
+    cache_lock`'s folder's parent)."""
+    if cache_dir:
+        return Path(cache_dir) / "pyopencl"
+    from platformdirs import user_cache_dir
+    return Path(user_cache_dir("pyopencl", "pyopencl"))
+
+
+def device_key(device: str | None = None) -> str:
+    """The device a calibration holds for: the choice (``HOLO_DEVICE`` or the add-on's),
+    '' for automatic."""
+    return (os.environ.get("HOLO_DEVICE", "") if device is None else device).strip()
+
+
+def _version() -> str:
+    from . import __version__
+    return __version__
+
+
+def _slug(text: str) -> str:
+    return "".join(c if c.isalnum() else "_" for c in text) or "auto"
+
+
+def load(*, device: str | None = None, cache_dir=None) -> tuple[Calibration, bool]:
+    """(the calibration, whether it was measured here): the file's where it is this version's
+    and this ``device``'s, else :data:`DEFAULT` (a file that cannot be read: with a warning
+    naming it)."""
+    path = cache_folder(cache_dir) / FILE
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return DEFAULT, False
+    except (OSError, UnicodeDecodeError) as e:
+        log.warning("estimates: the calibration %s cannot be read (%s): default rates taken; "
+                    "python -m holo_core calibrate measures it again", path, e)
+        return DEFAULT, False
+    try:
+        data = json.loads(text)
+        version, dev = data["version"], data["device"]
+        rates = data["rates"]
+        if not isinstance(rates, dict) or set(rates) != {f.name for f in fields(Calibration)}:
+            raise ValueError("its rates are not the calibration's fields")
+        cal = Calibration(**rates)
+    except (ValueError, KeyError, TypeError) as e:
+        log.warning("estimates: the calibration %s is refused (%s): default rates taken; "
+                    "python -m holo_core calibrate measures it again", path, str(e)[:200])
+        return DEFAULT, False
+    if version != _version() or dev != device_key(device):
+        log.info("estimates: the calibration %s is of Holo %s on device %r, not %s on %r: "
+                 "default rates taken", path, version, dev, _version(), device_key(device))
+        return DEFAULT, False
+    return cal, True
+
+
+def save(cal: Calibration, *, device: str | None = None, cache_dir=None) -> Path:
+    """Keep ``cal`` as this version's and ``device``'s calibration (atomically)."""
+    folder = cache_folder(cache_dir)
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / FILE
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(json.dumps({"version": _version(), "device": device_key(device),
+                               "rates": asdict(cal)}, indent=1), encoding="utf-8")
+    os.replace(tmp, path)
+    return path
+
+
+def _stamp(kind: str, device, cache_dir) -> Path:
+    key = _slug(f"{_version()}-{device_key(device)}")
+    return cache_folder(cache_dir) / STAMP.format(kind=kind, key=key)
+
+
+def is_warm(kind: str, *, device: str | None = None, cache_dir=None) -> bool:
+    """Whether a ``kind`` ('plate', 'camera') job of this version on ``device`` has run with
+    this cache, and the kernel cache it filled is still there."""
+    cache = kernel_cache(cache_dir)
+    return _stamp(kind, device, cache_dir).is_file() and cache.is_dir() and \
+        any(cache.iterdir())
+
+
+def mark_warm(kind: str, *, device: str | None = None, cache_dir=None) -> None:
+    """A ``kind`` job has run: its programs are in the kernel cache and its FFT plans in
+    the wisdom (the worker calls this after each job; an unwritable cache is left as it is)."""
+    path = _stamp(kind, device, cache_dir)
+    if path.is_file():
+        return
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.touch()
+    except OSError as e:
+        log.debug("estimates: stamp %s not written (%s)", path, e)
+
+
+# --- the stages ------------------------------------------------------------------------------
+
+def _loaded(est: Estimate, load_average) -> Estimate:
+    """``est`` (idle seconds) at the machine's ``load_average`` (:func:`slowdown`'s)."""
+    k = slowdown(load_average)
+    return replace(est, work=tuple((n, s * k) for n, s in est.work), process=est.process * k,
+                   first=est.first * k, slowdown=k)
+
+
+def _setup(kind, cal, calibrated, device, cache_dir, warm) -> Estimate:
+    warm = is_warm(kind, device=device, cache_dir=cache_dir) if warm is None else warm
+    return Estimate(process=cal.process_seconds(kind),
+                    first=0.0 if warm else cal.first_seconds(kind), calibrated=calibrated)
+
+
+def plate(p, view=None, *, record=True, channels=4, device=None, cache_dir=None,
+          warm=None, calibration=None, load_average=None) -> Estimate:
+    """The estimate of a plate's job from its plan ``p`` (:class:`~holo_core.plate.plan.
+    PlatePlan`): the recording when ``record`` (its emitters, the zone sum, its files) and
+    the view ``view`` (a :class:`~holo_core.plate.plan.ViewPlan`, None: no view), in a new
+    worker. ``warm``: whether the kernel cache is warm (None: as the cache says);
+    ``calibration``: (Calibration, measured) (None: :func:`load`'s); ``load_average``: the
+    load the job will share the machine with (None: now's; 0: idle; :func:`slowdown`)."""
+    cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
+    work = [("job", cal.job_seconds)]
+    if record:
+        work += [("emitters", cal.emitters_fixed + p.emitters * cal.emitter_seconds),
+                 ("zone sum", cal.zone_sum_fixed + p.pairs(channels) / cal.pairs_per_second),
+                 ("files", p.disk_bytes(channels) / cal.write_bytes_per_second)]
+    if view is not None:
+        work.append(("view", cal.view_fixed + view.seconds * cal.view_factor))
+    return _loaded(replace(_setup("plate", cal, calibrated, device, cache_dir, warm),
+                           work=tuple(work)), load_average)
+
+
+def camera(resolution, *, samples, supersample, speckle="EXACT", device=None, cache_dir=None,
+           warm=None, calibration=None, load_average=None) -> Estimate:
+    """The estimate of a camera pass of ``resolution`` (W, H) pixels and ``supersample``
+    fine pixels a pixel, with ``speckle`` 'EXACT' (one incoherent pass) or 'LOOKS'
+    (``samples`` looks), in a new worker (``warm``, ``calibration``, ``load_average``: as
+    :func:`plate`'s)."""
+    cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
+    fine = resolution[0] * resolution[1] * supersample ** 2
+    passed = cal.exact_fixed + fine * cal.exact_pixel_seconds if speckle == "EXACT" else \
+        cal.camera_fixed + fine * (cal.camera_pixel_seconds + samples * cal.camera_look_seconds)
+    work = (("job", cal.job_seconds), ("camera pass", passed))
+    return _loaded(replace(_setup("camera", cal, calibrated, device, cache_dir, warm),
+                           work=work), load_average)
+
+
+def radiance(pixels: int, *, device=None, cache_dir=None, calibration=None,
+             load_average=None) -> Estimate:
+    """Cycles' radiance of the emitters over ``pixels`` pixels: its process's start and its
+    render (the same each run: Blender's own caches are not Holo's)."""
+    cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
+    return _loaded(Estimate(work=(("radiance", cal.radiance_seconds
+                                   + pixels * cal.radiance_pixel_seconds),),
+                            calibrated=calibrated), load_average)
+
+
+def job(j, *, plan=None, view=None, device=None, cache_dir=None, warm=None,
+        calibration=None, load_average=None) -> Estimate:
+    """The estimate of a :class:`holo_core.job.Job` in a new worker: its renderer's radiance,
+    then its route's; a plate's from its ``plan`` and ``view`` (:func:`plate`'s, which the
+    caller makes: the planner is theirs)."""
+    from .job import CameraRoute
+    calibration = calibration or load(device=device, cache_dir=cache_dir)
+    common = {"device": device, "cache_dir": cache_dir, "calibration": calibration,
+              "warm": warm, "load_average": load_average}
+    if isinstance(j.route, CameraRoute):
+        est = camera(j.camera.resolution, samples=j.route.samples,
+                     supersample=j.route.supersample, speckle=j.route.speckle, **common)
+    else:
+        est = plate(plan, view if j.output.render else None, record=j.route.record, **common)
+    if j.radiance is not None:
+        w, h = j.radiance.camera.resolution
+        est = radiance(w * h, calibration=calibration, load_average=load_average) + est
+    return est

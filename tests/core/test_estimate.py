@@ -1,0 +1,190 @@
+"""The estimates: each stage a rate times its work plus the set-up said apart; the set-up of a
+first run counted only where the kernel cache is cold; a calibration kept for its version and
+device alone, a damaged one refused naming its file. (How close the estimates come to the
+measured times is bench/estimates.py's: no timed test.)"""
+
+import json
+import logging
+from dataclasses import asdict, replace
+
+import numpy as np
+import pytest
+
+from holo_core import estimate
+from holo_core.estimate import DEFAULT, Calibration, Estimate
+from holo_core.plate.plan import plan, plan_view, summary
+from holo_core.scene.plate import ViewingZone
+
+BOX = np.array([[-0.02, -0.015, -0.33], [0.025, 0.02, -0.28]])
+ZONE = ViewingZone(centre=(0.01, -0.005, 0.3), half_extents=(0.04, 0.03, 0.02), pupil=0.05 / 2.8)
+MEASURED = replace(DEFAULT, pairs_per_second=3e9, emitter_seconds=5e-5, view_factor=1.5,
+                   write_bytes_per_second=1e8, process_plate_seconds=2.5,
+                   first_plate_seconds=11.0)
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    """A cache folder of its own, the device automatic."""
+    monkeypatch.delenv("HOLO_DEVICE", raising=False)
+    return tmp_path / "cache"
+
+
+def planned():
+    p = plan((0.1, 0.1), BOX, zone=ZONE, pixel_angle=0.036 / 640 / 0.05)
+    v = plan_view(p, position=(0.01, -0.005, 0.3), pixel_angle=0.036 / 640 / 0.05,
+                  pupil=0.05 / 2.8, resolution=(640, 360))
+    return p, v
+
+
+def warm_up(cache):
+    """The kernel cache filled and the plate route's stamp left, as a worker leaves them."""
+    kernels = estimate.kernel_cache(cache)
+    kernels.mkdir(parents=True)
+    (kernels / "a-program").write_bytes(b"\0")
+    estimate.mark_warm("plate", cache_dir=cache)
+
+
+def test_parts_are_rates_times_work_and_add_up(cache):
+    """Each stage is its rate times the plan's work, counted here from the plan's own figures;
+    the total is the stages, a new worker's set-up and a first run's."""
+    p, v = planned()
+    est = estimate.plate(p, v, cache_dir=cache, calibration=(MEASURED, True), load_average=0)
+    work = dict(est.work)
+    assert work == pytest.approx({
+        "job": MEASURED.job_seconds,
+        "emitters": MEASURED.emitters_fixed + p.emitters * 5e-5,
+        "zone sum": MEASURED.zone_sum_fixed + p.pairs() / 3e9,
+        "files": 8 * 4 * p.looks * p.samples / 1e8,
+        "view": MEASURED.view_fixed + 1.5 * v.seconds}, rel=1e-12), work
+    assert est.process == 2.5 and est.first == 11.0
+    assert est.seconds == pytest.approx(sum(work.values()) + 2.5 + 11.0, rel=1e-12)
+    viewed = estimate.plate(p, v, record=False, cache_dir=cache, calibration=(MEASURED, True),
+                            load_average=0)
+    assert [k for k, _ in viewed.work] == ["job", "view"], viewed.work
+
+
+def test_a_warm_kernel_cache_removes_the_first_runs_set_up(cache):
+    """Cold (no stamp, or the kernel cache gone): the first run's set-up is counted; once a
+    job of the route has run with this cache, it is not, and the totals differ by exactly it."""
+    p, v = planned()
+    cal = (MEASURED, True)
+    cold = estimate.plate(p, v, cache_dir=cache, calibration=cal, load_average=0)
+    warm_up(cache)
+    assert estimate.is_warm("plate", cache_dir=cache)
+    assert not estimate.is_warm("camera", cache_dir=cache)  # its programs are not the plate's
+    warm = estimate.plate(p, v, cache_dir=cache, calibration=cal, load_average=0)
+    assert (cold.first, warm.first) == (11.0, 0.0)
+    assert cold.seconds - warm.seconds == pytest.approx(11.0, rel=1e-12)
+    assert "first time" in cold.words() and "first time" not in warm.words(), warm.words()
+    for f in estimate.kernel_cache(cache).iterdir():  # the kernel cache emptied: cold again
+        f.unlink()
+    assert estimate.plate(p, v, cache_dir=cache, calibration=cal, load_average=0).first == 11.0
+
+
+def test_the_stamp_is_this_devices(cache, monkeypatch):
+    """A stamp left on another device does not make this one warm."""
+    warm_up(cache)
+    monkeypatch.setenv("HOLO_DEVICE", "gpu")
+    assert not estimate.is_warm("plate", cache_dir=cache)
+    assert estimate.is_warm("plate", device="", cache_dir=cache)
+
+
+def test_a_calibration_is_kept_and_read_back_for_its_version_and_device(cache):
+    path = estimate.save(MEASURED, cache_dir=cache)
+    assert path == cache / "holo" / estimate.FILE
+    assert estimate.load(cache_dir=cache) == (MEASURED, True)
+    assert estimate.load(device="gpu", cache_dir=cache) == (DEFAULT, False)
+
+
+@pytest.mark.parametrize("field, value", [("version", "0.0.1"), ("device", "gpu")])
+def test_a_calibration_of_another_version_or_device_is_ignored(cache, field, value, caplog):
+    path = estimate.save(MEASURED, cache_dir=cache)
+    data = json.loads(path.read_text())
+    data[field] = value
+    path.write_text(json.dumps(data))
+    with caplog.at_level(logging.INFO, "holo_core.estimate"):
+        assert estimate.load(cache_dir=cache) == (DEFAULT, False)
+    assert not [r for r in caplog.records if r.levelno >= logging.WARNING], caplog.text
+    assert str(path) in caplog.text and value in caplog.text, caplog.text
+
+
+@pytest.mark.parametrize("text", [
+    "{not json",
+    json.dumps({"version": "x", "device": ""}),
+    "BAD_RATE",
+    "MISSING_RATE",
+    "\udcff"])
+def test_a_bad_calibration_is_refused_with_a_warning_naming_it(cache, text, caplog):
+    path = estimate.save(MEASURED, cache_dir=cache)
+    data = json.loads(path.read_text())
+    if text == "BAD_RATE":
+        data["rates"]["pairs_per_second"] = -1.0
+        text = json.dumps(data)
+    elif text == "MISSING_RATE":
+        del data["rates"]["view_factor"]
+        text = json.dumps(data)
+    if text == "\udcff":
+        path.write_bytes(b"\xff\xfe{")
+    else:
+        path.write_text(text)
+    with caplog.at_level(logging.WARNING, "holo_core.estimate"):
+        assert estimate.load(cache_dir=cache) == (DEFAULT, False)
+    warned = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert len(warned) == 1 and str(path) in warned[0], warned
+
+
+@pytest.mark.parametrize("field, value", [("pairs_per_second", 0.0), ("job_seconds", -1.0),
+                                          ("view_factor", float("nan")),
+                                          ("process_camera_seconds", True)])
+def test_a_calibration_refuses_what_is_not_a_rate(field, value):
+    with pytest.raises(ValueError, match=field):
+        Calibration(**{**asdict(DEFAULT), field: value})
+
+
+def test_other_work_on_the_machine_scales_every_part_by_its_fair_share(cache):
+    """A load of L other runnable processes on C CPUs leaves a job that would use them all
+    C / (C + L) of them: every part takes 1 + L / C times as long, and the words say so."""
+    assert estimate.slowdown(0.0, 2) == 1.0 and estimate.slowdown(3.0, 2) == 2.5
+    p, v = planned()
+    idle = estimate.plate(p, v, cache_dir=cache, calibration=(MEASURED, True), load_average=0)
+    busy = estimate.plate(p, v, cache_dir=cache, calibration=(MEASURED, True), load_average=3.0)
+    k = busy.slowdown
+    assert k == pytest.approx(estimate.slowdown(3.0)) and k > 1
+    assert busy.seconds == pytest.approx(k * idle.seconds, rel=1e-12)
+    assert [s for _, s in busy.work] == pytest.approx([k * s for _, s in idle.work], rel=1e-12)
+    assert "times an idle machine's time" in busy.words(), busy.words()
+    assert "idle" not in idle.words(), idle.words()
+
+
+def test_the_words_say_the_set_up_apart():
+    est = Estimate(work=(("a", 3.0), ("b", 1.6)), process=2.4, first=4.0, calibrated=True)
+    assert est.words() == ("about 11 s (of which 4 s the first time on this machine, 2 s "
+                           "starting the worker)")
+    bare = Estimate(work=(("a", 3.0),), calibrated=False)
+    assert bare.words().startswith("about 3 s; by default rates"), bare.words()
+
+
+def test_the_plan_states_the_first_frames_time_with_its_set_up(cache):
+    """The planner's time line is the estimate's words (a cold cache: the first time said)."""
+    estimate.save(MEASURED, cache_dir=cache)
+    p, v = planned()
+    lines = summary(p, v, lens="50 mm f/2.8", resolution=(640, 360), plate_size=(0.1, 0.1),
+                    camera=(0.01, -0.005, 0.3), cache_dir=cache, load_average=0)
+    said = estimate.plate(p, v, cache_dir=cache, load_average=0).words()
+    time = next(line for line in lines if line.startswith("time"))
+    assert said in time and "11 s the first time on this machine" in time, time
+
+
+def test_a_camera_pass_costs_its_fine_pixels_once_and_each_look():
+    """Speckle: Looks costs the fine pixels once and each look; Exact, one pass of them."""
+    exact = estimate.camera((640, 360), samples=16, supersample=2, warm=True,
+                            calibration=(MEASURED, True), load_average=0)
+    assert dict(exact.work)["camera pass"] == pytest.approx(
+        MEASURED.exact_fixed + 640 * 360 * 4 * MEASURED.exact_pixel_seconds, rel=1e-12)
+    est = estimate.camera((640, 360), samples=16, supersample=2, speckle="LOOKS", warm=True,
+                          calibration=(MEASURED, True), load_average=0)
+    assert dict(est.work)["camera pass"] == pytest.approx(
+        MEASURED.camera_fixed + 640 * 360 * 4 * (MEASURED.camera_pixel_seconds
+                                                 + 16 * MEASURED.camera_look_seconds),
+        rel=1e-12)
+    assert est.process == MEASURED.process_camera_seconds and est.first == 0.0
