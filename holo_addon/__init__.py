@@ -15,16 +15,18 @@ below it (ui → compositor → render → export → blender):
   holdouts filled by the pass), the frame ``handlers`` (a pass per rendered frame) and the
   ``session`` (runtime state the panels read)
 - ``ui/``: ``properties`` (Object.holo, Scene.holo), ``preferences``, ``operators``, ``plates``
-  (the viewing zone, the planner, File ▸ Import ▸ Hologram), ``panels``, the plate's
+  (the viewing zone, the planner, File ▸ Import ▸ Hologram), ``display`` (the holographic
+  display's panel and Export Display Frame), ``panels``, the plate's
   coverage and viewing zone ``overlay`` in the viewport, and the holographic ``preview`` in
   the camera's view
 - ``demo`` (the built-in scene) and ``build`` (the extension's zip), run as modules
 """
 
 from .compositor import handlers
-from .ui import operators, overlay, panels, plates, preferences, preview, properties
+from .ui import display, operators, overlay, panels, plates, preferences, preview, properties
 
-MODULES = (properties, preferences, operators, plates, panels, handlers, overlay, preview)
+MODULES = (properties, preferences, operators, plates, display, panels, handlers, overlay,
+           preview)
 
 
 def register():
