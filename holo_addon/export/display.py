@@ -300,7 +300,7 @@ def read(scene, depsgraph, obj=None) -> DisplayPrepared:
     reach = front * sin_t / math.sqrt(1 - sin_t**2)
     w, h = spec.size
     zone = ViewingZone(centre=(0.0, 0.0, (spec.eye_distance - front) / s),
-                       half_extents=(spec.eye_box / 2 / s, spec.eye_box / 2 / s, 0.0),
+                       half_extents=(spec.eye_box / 2 / s, spec.eye_box / 2 / s, spec.eye_box / 2 / s),
                        pupil=spec.pupil / s)
     plate = Plate(matrix_world=plate_m, width=(w + 2 * reach) / s,
                   height=(h + 2 * reach) / s, zone=zone)
@@ -331,7 +331,8 @@ def read(scene, depsgraph, obj=None) -> DisplayPrepared:
                   triangles=tuple(kinds["TRIANGLES"]), route=route, output=output)
         light = (lambda v=view: radiance.request(scene, depsgraph.view_layer.name, v, meshes,
                                                  tuple(names),
-                                                 samples=settings.lighting_samples)) \
+                                                 samples=settings.lighting_samples,
+                                                 own_lens=True)) \
             if lit else None
         colours.append((laser, Prepared(job=job, fingerprint=fingerprint,
                                         plate_name=obj.name, warnings=data.warnings,
