@@ -5,7 +5,7 @@ The scene: a checkered card (triangle emitters, its image texture) turning 1.2 m
 the display, a colour-wheel sphere (point emitters) rising beside it 0.7 m behind, under a
 sun; shown on a holographic display (a 1080p
 phase SLM at 8 µm by default, or ``--display W H PITCH_UM``) at Scene
-Scale 0.01 (12 and 7 mm), seen from a 2 mm eye box 300 mm away. Render Animation writes, per frame, the
+Scale 0.01 (12 and 7 mm), seen from a 2 mm eye box 700 mm away. Render Animation writes, per frame, the
 red, green and blue patterns as 8-bit grey PNGs, their layout, and the focal stack the
 display shows (EXR and contact sheet), into ``OUT/holo/display/Display/``; the .blend is
 saved as ``OUT/display.blend`` (``blender -b OUT/display.blend -a`` renders it again).
@@ -109,7 +109,7 @@ def build_scene(bpy, *, frames: int = 24, display=None, lighting: str = "SCENE",
         d.pitch = display[2]
     d.scene_scale = SCALE
     d.behind, d.front = 20.0, 0.0
-    d.eye_distance, d.eye_box, d.pupil = 300.0, 2.0, 2.0
+    d.eye_distance, d.eye_box, d.pupil = 700.0, 2.0, 2.0
     d.slices = slices
     shown.holo.is_display = True
     bpy.context.view_layer.update()

@@ -4,19 +4,19 @@ or custom panel, its lasers, the volume the scene is shown in and its eye box
 each laser's recording as a plate job (:func:`read`).
 
 Scale. The scene is shown in the display's volume scaled by ``scale`` (display metres per
-scene metre). Wave optics is invariant when every length, the wavelength included, is scaled
-alike, so the scene's wave at the display is recorded in the scene's own metres: a plate of
-the display's size / scale, its eye box at distance / scale, at wavelength λ / scale. Its
-samples, resampled to pitch / scale, are the display's field at pitch p and wavelength λ
-(:mod:`holo_core.phase.display_frame`). The lit radiance (Cycles) is then rendered from the
-scene as it stands, from the eye box's centre.
+scene metre) about the display's origin: the emitters are scaled so, and their wave is
+recorded in the display's own metres, at its wavelengths, on a plate of its size seen from
+its eye box. The lit radiance (Cycles) is rendered from the eye box in the scene as it
+stands (the eye box's place scaled by 1 / scale: a pinhole sees the same image of a scene
+scaled about a point when its own place is scaled alike).
 
 Geometry (the display's frame, physical metres: the pattern in z = 0, viewers on +Z, the
 eye box centred at (0, 0, D)): objects sit behind the display (z < 0) down to ``behind``, or
 in front of it up to ``front``; in front, the wave is recorded on a plane at z = front and
 carried back to the display by the angular spectrum (the plate planner needs its objects
 behind its plate). The display is lit by a plane wave along its normal: a sample diffracts
-light within sin θ = λ / 2p of it.
+light within sin θ = λ / 2p of it, and the display's 4f filter passes band·λ / 2p of that
+(:data:`BAND`).
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from __future__ import annotations
 import hashlib
 import math
 from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 
 import bpy
@@ -52,6 +53,9 @@ PHASE_RANGES = {"2PI": 2 * math.pi, "3PI": 3 * math.pi}
 # are at least this many across (Nyquist): fewer, and the eye sees one sample's blur at the
 # display's plane, whatever depth the wave was recorded for
 MIN_FOOTPRINT_SAMPLES = 2
+# The fraction of the Nyquist frequency the display's Fourier filter passes: the 4f filter
+# double-phase needs (holo_core.phase.slm.SLMSetup's band)
+BAND = 0.5
 # Samples of the radiance's image across (Lighting: Scene): a texture's detail finer than
 # the display's pupil resolves is not needed
 RADIANCE_PIXELS = 512
@@ -61,12 +65,14 @@ RADIANCE_PIXELS = 512
 class Laser:
     """One colour of a field-sequential display: ``name`` (red, green, blue), ``wavelength``
     [m], ``power`` [W] (written into the layout; the contact sheet is mixed by it) and
-    ``channel``: which of the recording's colour channels (R, G, B) it shows."""
+    ``channel``: which of the recording's colour channels (R, G, B) it shows; ``table``: its
+    phase table's file ('' for the display's linear response)."""
 
     name: str
     wavelength: float
     power: float
     channel: int
+    table: str = ""
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -89,7 +95,8 @@ class DisplaySpec:
     eye_distance : [m] the eye box's centre from the display, along its normal
     eye_box : [m] the eye box's width and height (square)
     pupil : [m] the eye's or camera's pupil in the eye box (the focal stack is seen through it)
-    method : the encoding ('double-phase')
+    method : the encoding ('double-phase', 'gradient-descent', 'gerchberg-saxton');
+        iterations : the iterative ones' steps
     slices : focal slices simulated over the volume's depth
     """
 
@@ -109,6 +116,7 @@ class DisplaySpec:
     eye_box: float
     pupil: float
     method: str = "double-phase"
+    iterations: int = 100
     slices: int = 5
 
     @property
@@ -119,6 +127,10 @@ class DisplaySpec:
     def sin_diffraction(self, wavelength: float) -> float:
         """sin θ of the widest angle a sample diffracts ``wavelength`` [m] to: λ / 2p."""
         return wavelength / (2 * self.pitch)
+
+    def sin_passed(self, wavelength: float) -> float:
+        """sin θ of the widest angle the display's Fourier filter passes: band·λ / 2p."""
+        return BAND * self.sin_diffraction(wavelength)
 
     def recorded_at(self) -> float:
         """Where [m, the display's frame] the wave is recorded: the volume's front, or the
@@ -163,9 +175,17 @@ def display_from_object(obj) -> DisplaySpec:
         resolution, pitch, bits = tuple(d.resolution), _given(d.pitch, 1e-6), int(d.bit_depth)
     else:
         _, resolution, pitch, bits = PRESETS[d.preset]
-    lasers = tuple(Laser(name=n, wavelength=_given(w, 1e-9), power=_given(p, 1e-3), channel=i)
-                   for i, (n, w, p) in enumerate(zip(COLOURS, d.wavelengths, d.powers))
+    tables = (d.table_red, d.table_green, d.table_blue)
+    lasers = tuple(Laser(name=n, wavelength=_given(w, 1e-9), power=_given(p, 1e-3), channel=i,
+                         table=bpy.path.abspath(t) if t else "")
+                   for i, (n, w, p, t) in enumerate(zip(COLOURS, d.wavelengths, d.powers,
+                                                        tables))
                    if d.colours[i])
+    if any(x.table for x in lasers) and not all(x.table for x in lasers):
+        bare = ", ".join(x.name for x in lasers if not x.table)
+        raise ExportError(f"display '{obj.name}': phase tables are given for some lasers but "
+                          f"not for {bare}: give one per laser, or none (the display's "
+                          f"linear response)")
     if not lasers:
         raise ExportError(f"display '{obj.name}': no laser is on (Lasers: tick red, green or "
                           f"blue)")
@@ -180,8 +200,7 @@ def display_from_object(obj) -> DisplaySpec:
                        behind=_given(d.behind, 1e-3), scale=_given(d.scene_scale),
                        eye_distance=_given(d.eye_distance, 1e-3),
                        eye_box=_given(d.eye_box, 1e-3), pupil=_given(d.pupil, 1e-3),
-                       method=d.method,
-                       slices=d.slices)
+                       method=d.method, iterations=d.iterations, slices=d.slices)
 
 
 def display_matrix(obj, unit: float) -> np.ndarray:
@@ -194,9 +213,11 @@ def check(spec: DisplaySpec, depths: np.ndarray) -> None:
     to change (:class:`ExportError`): ``depths`` [m, physical] are the emitters' surface
     points' signed distances from the display along its normal (negative: behind it).
 
-    - the eye box beyond the diffraction angle: the steepest ray from the display's area to
-      the eye box's far edge, tan α = (W/2 + E/2) / D, needs sin α <= λ / 2p for the shortest
-      wavelength;
+    - the eye box beyond the diffraction angle: the steepest ray from the display's corner
+      to the eye box's far corner, tan α = hypot(W/2 + E/2, H/2 + E/2) / D, needs
+      sin α <= band·λ / 2p for the shortest wavelength (the light the display's filter
+      passes; as :func:`holo_core.phase.slm.check_scene` holds it, which the frame's stage
+      runs again);
     - the scene outside the volume: the depths must lie in [−behind, front];
     - too close for the pitch: a point at depth z is formed, through the pupil a at D, by the
       samples within a·|z| / (D − z) of its line of sight; they must be
@@ -207,25 +228,28 @@ def check(spec: DisplaySpec, depths: np.ndarray) -> None:
         raise ExportError(f"display '{name}': the eye box ({d_eye * 1e3:.4g} mm away) must lie "
                           f"beyond the volume's front ({spec.front * 1e3:.4g} mm): move it "
                           f"farther or bring the front in")
-    half = max(spec.size) / 2
+    hx, hy = (v / 2 for v in spec.size)
     lam = min(laser.wavelength for laser in spec.lasers)
-    sin_limit = spec.sin_diffraction(lam)
-    tan_needed = (half + eye / 2) / d_eye
+    sin_limit = spec.sin_passed(lam)
+    lateral = math.hypot(hx + eye / 2, hy + eye / 2)  # the display's corner to the far edge
+    tan_needed = lateral / d_eye
     sin_needed = tan_needed / math.hypot(1, tan_needed)
     if sin_needed > sin_limit:
-        tan_limit = sin_limit / math.sqrt(1 - sin_limit**2)
-        widest = 2 * (d_eye * tan_limit - half)
-        nearest = (half + eye / 2) / tan_limit
-        finest = lam / (2 * sin_needed)
-        shrink = (f"an eye box of at most {widest * 1e3:.3g} mm, " if widest > 0 else "")
+        reach = d_eye * sin_limit / math.sqrt(1 - sin_limit**2)  # lateral reach allowed
+        b = hx + hy  # hypot(hx + e, hy + e) = reach, e the eye box's half width
+        root = b * b - 2 * (hx * hx + hy * hy - reach * reach)
+        widest = 2 * (-b + math.sqrt(root)) / 2 if root >= 0 else 0.0
+        nearest = lateral * math.sqrt(1 - sin_limit**2) / sin_limit
+        finest = BAND * lam / (2 * sin_needed)
+        shrink = f"an eye box of at most {widest * 1e3:.3g} mm, " if widest > 0 else ""
         raise ExportError(
             f"display '{name}': its eye box ({eye * 1e3:.3g} mm wide, {d_eye * 1e3:.4g} mm "
-            f"away) is beyond the display's diffraction angle: seen from its far edge the "
-            f"display's edge is {math.degrees(math.asin(sin_needed)):.3g}° off its normal, and "
-            f"a {p * 1e6:.3g} µm sample sends {lam * 1e9:.4g} nm light at most "
-            f"{math.degrees(math.asin(sin_limit)):.3g}° (sin θ = λ/2p); use {shrink}an eye "
-            f"distance of at least {nearest * 1e3:.4g} mm, or a pitch of at most "
-            f"{finest * 1e6:.3g} µm")
+            f"away) is beyond the display's diffraction angle: seen from its far corner the "
+            f"display's corner is {math.degrees(math.asin(sin_needed)):.3g}° off its normal, "
+            f"and a {p * 1e6:.3g} µm sample sends {lam * 1e9:.4g} nm light through the "
+            f"display's filter at most {math.degrees(math.asin(sin_limit)):.3g}° off it "
+            f"(sin θ = band·λ/2p, band {BAND:g}); use {shrink}an eye distance of at least "
+            f"{nearest * 1e3:.4g} mm, or a pitch of at most {finest * 1e6:.3g} µm")
     if not len(depths):
         return
     deepest, nearest_front = float(depths.min()), float(depths.max())
@@ -289,51 +313,58 @@ def read(scene, depsgraph, obj=None) -> DisplayPrepared:
     m = display_matrix(evaluated(obj, depsgraph), unit)
     depths = depths_of(meshes, m, spec.scale)
     check(spec, depths)
-    s = spec.scale
+    s, origin = spec.scale, m[:3, 3]
+
+    def shown(points):  # the scene as the display shows it: scaled by s about its origin
+        return origin + s * (np.asarray(points, np.float64) - origin)
+
+    physical = {kind: [replace(mesh, vertices=shown(mesh.vertices),
+                               motion=None if mesh.motion is None else shown(mesh.motion))
+                       for mesh in kinds[kind]] for kind in ("POINTS", "TRIANGLES")}
     # the plane the wave is recorded on: the display, or the volume's front (then carried
     # back), wide enough for the light the display's samples send to the eye box
     front = spec.recorded_at()
     plate_m = m.copy()
-    plate_m[:3, 3] = m[:3, 3] + m[:3, 2] * front / s
+    plate_m[:3, 3] = origin + m[:3, 2] * front
     lam_max = max(laser.wavelength for laser in spec.lasers)
     sin_t = min(spec.sin_diffraction(lam_max), 0.99)
     reach = front * sin_t / math.sqrt(1 - sin_t**2)
     w, h = spec.size
-    zone = ViewingZone(centre=(0.0, 0.0, (spec.eye_distance - front) / s),
-                       half_extents=(spec.eye_box / 2 / s, spec.eye_box / 2 / s, spec.eye_box / 2 / s),
-                       pupil=spec.pupil / s)
-    plate = Plate(matrix_world=plate_m, width=(w + 2 * reach) / s,
-                  height=(h + 2 * reach) / s, zone=zone)
-    eye = plate_m[:3, :3] @ np.asarray(zone.centre) + plate_m[:3, 3]
+    eye = plate_m[:3, :3] @ np.array([0.0, 0.0, spec.eye_distance - front]) + plate_m[:3, 3]
     every = np.concatenate([mesh.vertices for mesh in meshes])
-    target = (every.min(0) + every.max(0)) / 2
-    view = _eye_camera(eye, target, m[:3, 1], every)
-    data = SceneData(points=kinds["POINTS"], triangles=kinds["TRIANGLES"], plate=plate,
-                     plate_name=obj.name, camera=view, warnings=tuple(dict.fromkeys(notes)),
-                     names=tuple(names), view=view, unit=unit)
+    # the radiance is rendered from the eye box in the scene as it stands (its scale 1/s):
+    # a pinhole sees a scene scaled about a point alike from that point scaled alike
+    view = _eye_camera(origin + (eye - origin) / s, (every.min(0) + every.max(0)) / 2,
+                       m[:3, 1], every)
+    eye_view = replace(view, matrix_world=_scaled_pose(view.matrix_world, origin, s))
+    data = SceneData(points=physical["POINTS"], triangles=physical["TRIANGLES"], plate=None,
+                     plate_name=obj.name, camera=eye_view,
+                     warnings=tuple(dict.fromkeys(notes)), names=tuple(names), view=eye_view,
+                     unit=unit)
     lighting = radiance.digest(scene, depsgraph) if lit else ""
     settings = Settings.from_scene(scene, unit)
     folder = frame_folder(scene, obj.name)
     colours, keys = [], []
     for laser in spec.lasers:
-        lam = laser.wavelength / s
-        fingerprint = digest(data, lam, 1, settings.seed, scene.holo.lighting, lighting,
-                             camera=False)
+        zone = recording_zone(spec, laser.wavelength)
+        plate = Plate(matrix_world=plate_m, width=w + 2 * reach, height=h + 2 * reach,
+                      zone=zone)
+        data = replace(data, plate=plate)
+        fingerprint = digest(data, laser.wavelength, 1, settings.seed, scene.holo.lighting,
+                             lighting, camera=False)
         path = folder / "waves" / f"{bpy.path.clean_name(obj.name)}_{laser.name}_{fingerprint}.exr"
         # a file there of another recording is recorded again, never shown as this scene's
         route = PlateRoute(plate=plate, holograms=(path,),
                            record=not plate_current(path, fingerprint),
                            recording=fingerprint, memory_budget=settings.memory_budget,
-                           disk_budget=settings.disk_budget, wavelength=lam, seed=settings.seed)
+                           disk_budget=settings.disk_budget, wavelength=laser.wavelength,
+                           seed=settings.seed)
         output = Output(folder=path.parent, frame=scene.frame_current, render=False,
                         depth_unit=unit)
-        job = Job(camera=view, points=tuple(kinds["POINTS"]),
-                  triangles=tuple(kinds["TRIANGLES"]), route=route, output=output)
-        light = (lambda v=view: radiance.request(scene, depsgraph.view_layer.name, v, meshes,
-                                                 tuple(names),
-                                                 samples=settings.lighting_samples,
-                                                 own_lens=True)) \
-            if lit else None
+        job = Job(camera=eye_view, points=tuple(physical["POINTS"]),
+                  triangles=tuple(physical["TRIANGLES"]), route=route, output=output)
+        light = partial(_radiance, scene, depsgraph.view_layer.name, view, meshes,
+                        tuple(names), settings.lighting_samples, origin, s) if lit else None
         colours.append((laser, Prepared(job=job, fingerprint=fingerprint,
                                         plate_name=obj.name, warnings=data.warnings,
                                         lighting=light)))
@@ -342,6 +373,40 @@ def read(scene, depsgraph, obj=None) -> DisplayPrepared:
     return DisplayPrepared(spec=spec, colours=tuple(colours), frame=scene.frame_current,
                            folder=folder, distance=float(np.mean(depths)), digest=key,
                            warnings=data.warnings)
+
+
+def recording_zone(spec: DisplaySpec, wavelength: float) -> ViewingZone:
+    """The zone the wave is recorded for [m, the recording plane's frame]: centred on the
+    eye box, as wide as the display's filter lets light reach there at ``wavelength``
+    (2·D·tan θ − W across, the eye box at least: the eye box is a part of it, and an
+    emitter's footprint on the plate then spans several of its samples) and as deep as
+    the eye box is wide (the eye may sit nearer or farther)."""
+    d = spec.eye_distance - spec.front
+    sin_t = spec.sin_passed(wavelength)
+    tan_t = sin_t / math.sqrt(1 - sin_t**2)
+    w, h = spec.size
+    half = [max(spec.eye_box, 2 * spec.eye_distance * tan_t - size) / 2 for size in (w, h)]
+    return ViewingZone(centre=(0.0, 0.0, d), half_extents=(*half, spec.eye_box / 2),
+                       pupil=spec.pupil)
+
+
+def _scaled_pose(matrix, origin, s: float) -> np.ndarray:
+    """A camera's pose in the scene scaled by ``s`` about ``origin``: its place scaled, its
+    axes kept (what it sees is the same image)."""
+    m = np.array(matrix, np.float64)
+    m[:3, 3] = origin + s * (m[:3, 3] - origin)
+    return m
+
+
+def _radiance(scene, view_layer, view, meshes, names, samples, origin, s):
+    """The emitters' radiance rendered by Cycles from the eye box in the scene as it stands
+    (``view``, ``meshes``), its camera then placed in the scene as the display shows it."""
+    r = radiance.request(scene, view_layer, view, meshes, names, samples=samples,
+                         own_lens=True)
+    if r is None:
+        return None
+    return replace(r, camera=replace(r.camera, matrix_world=_scaled_pose(
+        r.camera.matrix_world, origin, s)))
 
 
 def _eye_camera(eye, target, up, points) -> Camera:

@@ -18,10 +18,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from holo_core import jobs
-from holo_core.phase.display_frame import DisplayFrame, FrameLaser
+from holo_core.job import DisplayFrame, FrameLaser
 from holo_core.worker import WorkerError, environment
 
 from ..export.display import DisplayPrepared
@@ -29,6 +27,7 @@ from . import pipeline
 from .options import device, runtime_paths
 
 log = logging.getLogger(__name__)
+PACKINGS = {"PNG8": "grey8", "PNG16": "grey16", "PACKED10": "packed10"}  # holo_core.io.slm's
 RECORD_SHARE = 0.7  # of a frame's progress: the waves' recordings, before the frame stage
 
 
@@ -53,29 +52,39 @@ class FrameResult:
 def frame_of(prepared: DisplayPrepared) -> DisplayFrame:
     """The core's description of the frame's stage."""
     spec = prepared.spec
-    depths = tuple(np.linspace(-spec.behind, spec.front, spec.slices)) if spec.slices > 1 \
-        else (prepared.distance,)
     lasers = tuple(FrameLaser(name=laser.name, wavelength=laser.wavelength, power=laser.power,
-                              hologram=str(p.holograms[0]), channel=laser.channel)
+                              hologram=str(p.holograms[0]), channel=laser.channel,
+                              table=laser.table)
                    for laser, p in prepared.colours)
     return DisplayFrame(name=spec.name, frame=prepared.frame, folder=str(prepared.folder),
                         resolution=spec.resolution, pitch=spec.pitch, bit_depth=spec.bit_depth,
                         phase_range=spec.phase_range, inverted=spec.inverted,
-                        pattern_format=spec.pattern_format, lasers=lasers, scale=spec.scale,
-                        front=spec.front, distance=prepared.distance, method=spec.method,
-                        depths=depths, digest=prepared.digest)
+                        packing=PACKINGS[spec.pattern_format], lasers=lasers,
+                        scale=spec.scale, front=spec.front, behind=spec.behind,
+                        eye_distance=spec.eye_distance, eye_box=spec.eye_box,
+                        pupil=spec.pupil, distance=prepared.distance, method=spec.method,
+                        iterations=spec.iterations, slices=spec.slices,
+                        digest=prepared.digest)
+
+
+def layout_path(frame: DisplayFrame) -> Path:
+    """The frame's layout: ``frame_NNNN.json`` in its folder (it names the frame's files)."""
+    return Path(frame.folder) / f"{frame.stem()}.json"
 
 
 def current(frame: DisplayFrame) -> dict | None:
-    """The frame's layout when its files are there and made from this digest, else None."""
-    paths = frame.paths()
+    """The frame's layout when it and the files it names are there and it was made from
+    this digest, else None."""
+    path = layout_path(frame)
     try:
-        layout = json.loads(paths["layout"].read_text())
-    except (OSError, ValueError):
+        layout = json.loads(path.read_text())
+        names = [x[key] for x in layout["lasers"] for key in ("pattern", "layout")] + \
+            [layout["stack"]["file"], layout["stack"]["sheet"]]
+    except (OSError, ValueError, KeyError, TypeError):
         return None
-    if not isinstance(layout, dict) or layout.get("digest") != frame.digest:
+    if layout.get("digest") != frame.digest or not frame.digest:
         return None
-    return layout if all(p.is_file() for p in paths.values()) else None
+    return layout if all((path.parent / str(n)).is_file() for n in names) else None
 
 
 def run(prepared: DisplayPrepared, progress: jobs.Progress = None, on_log=None, *,
@@ -87,7 +96,7 @@ def run(prepared: DisplayPrepared, progress: jobs.Progress = None, on_log=None, 
     frame = frame_of(prepared)
     layout = current(frame)
     if layout is not None:
-        return FrameResult(layout=layout, path=frame.paths()["layout"], made=False,
+        return FrameResult(layout=layout, path=layout_path(frame), made=False,
                            recorded=(), seconds=time.perf_counter() - started)
     todo = [(laser, p) for laser, p in prepared.colours if p.records]
     recorded = []
@@ -97,7 +106,7 @@ def run(prepared: DisplayPrepared, progress: jobs.Progress = None, on_log=None, 
         pipeline.start(p, resident=resident).wait(share, on_log)
         recorded.append(laser.name)
     layout = _stage(frame, jobs.scaled(progress, RECORD_SHARE if todo else 0.0, 1.0))
-    return FrameResult(layout=layout, path=frame.paths()["layout"], made=True,
+    return FrameResult(layout=layout, path=layout_path(frame), made=True,
                        recorded=tuple(recorded), seconds=time.perf_counter() - started)
 
 

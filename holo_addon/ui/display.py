@@ -66,7 +66,12 @@ def draw_display(layout, context, obj) -> None:
     col.prop(d, "eye_distance")
     col.prop(d, "eye_box")
     col.prop(d, "pupil")
+    col = layout.column(heading="Phase Tables")
+    for name in ("table_red", "table_green", "table_blue"):
+        col.prop(d, name)
     layout.prop(d, "method")
+    if d.method != "double-phase":
+        layout.prop(d, "iterations")
     layout.prop(d, "slices")
     col = layout.column(align=True)
     for line in lines(obj):

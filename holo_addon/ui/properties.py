@@ -149,11 +149,27 @@ class HoloDisplaySettings(bpy.types.PropertyGroup):
     pupil: FloatProperty(name="Pupil (mm)", default=1.0, min=0.01, soft_max=10.0,
                          description="The eye's or camera's pupil in the eye box, millimetres "
                                      "(the focal stack is seen through it)")
-    method: EnumProperty(name="Encoding", default="double-phase",
-                         items=[("double-phase", "Double-Phase",
-                                 "Two phases a sample pair, for a 4f filter that keeps half "
-                                 "the band")],
-                         description="How the complex wave becomes the SLM's phase")
+    table_red: StringProperty(name="Red Table", subtype="FILE_PATH", default="",
+                              options=BLEND_RELATIVE,
+                              description="The red laser's measured phase per code (a "
+                                          "look-up table file; empty: the display's line)")
+    table_green: StringProperty(name="Green Table", subtype="FILE_PATH", default="",
+                                options=BLEND_RELATIVE,
+                                description="The green laser's measured phase per code")
+    table_blue: StringProperty(name="Blue Table", subtype="FILE_PATH", default="",
+                               options=BLEND_RELATIVE,
+                               description="The blue laser's measured phase per code")
+    method: EnumProperty(
+        name="Encoding", default="double-phase",
+        items=[("double-phase", "Double-Phase", "Two phases a sample pair, for a 4f filter "
+                                                "that keeps half the band"),
+               ("gradient-descent", "Gradient Descent", "Adam over the focal stack, from "
+                                                        "double-phase (Iterations)"),
+               ("gerchberg-saxton", "Gerchberg–Saxton", "Projections between the display and "
+                                                        "the stack's planes (Iterations)")],
+        description="How the complex wave becomes the SLM's phase")
+    iterations: IntProperty(name="Iterations", default=100, min=1, max=100000,
+                            description="Steps of the iterative encodings")
     slices: IntProperty(name="Focal Slices", default=5, min=1, max=64,
                         description="Slices of the simulated focal stack, over the volume's "
                                     "depth")

@@ -12,6 +12,7 @@ import pytest
 bpy = pytest.importorskip("bpy")
 
 from holo_core.io.image import read_exr  # noqa: E402
+from holo_core.io.slm import read_pattern  # noqa: E402
 
 FRAMES = (1, 2, 3)
 
@@ -19,7 +20,7 @@ FRAMES = (1, 2, 3)
 def _display_scene(scene, *, depth=1.0, colours=(True, True, False)):
     """A 0.2 m textured quad ``depth`` m behind a 256 x 256 custom display at 8 µm (Scene
     Scale 0.01: 10 mm behind it, 2 mm across), moving 2 cm a frame across it; the eye box
-    1 mm wide at 100 mm."""
+    1 mm wide at 200 mm."""
     scene.holo.lighting = "ALBEDO"
     scene.render.engine = "BLENDER_WORKBENCH"
     scene.render.resolution_x = scene.render.resolution_y = 16
@@ -48,7 +49,7 @@ def _display_scene(scene, *, depth=1.0, colours=(True, True, False)):
     d.colours = colours
     d.scene_scale = 0.01
     d.behind, d.front = 20.0, 0.0
-    d.eye_distance, d.eye_box, d.pupil = 100.0, 1.0, 1.0
+    d.eye_distance, d.eye_box, d.pupil = 200.0, 1.0, 1.0
     d.slices = 3
     shown.holo.is_display = True
     bpy.context.view_layer.update()
@@ -77,22 +78,26 @@ def test_render_animation_writes_every_frame_and_a_frame_alone_is_the_same(empty
     for frame in FRAMES:
         names = [p.name for p in _files(folder, frame)]
         stem = f"frame_{frame:04d}"
-        assert names == [f"{stem}.json", f"{stem}_green.png", f"{stem}_red.png",
-                         f"{stem}_stack.exr", f"{stem}_stack.png"], names
+        assert names == [f"{stem}.json", f"{stem}_520nm.json", f"{stem}_520nm.png",
+                         f"{stem}_638nm.json", f"{stem}_638nm.png", f"{stem}_stack.exr",
+                         f"{stem}_stack.png"], names
         layout = json.loads((folder / f"{stem}.json").read_text())
         assert layout["frame"] == frame and [laser["name"] for laser in layout["lasers"]] == \
             ["red", "green"]
         for laser in layout["lasers"]:
             assert len(laser["psnr_db"]) == 3 and all(math.isfinite(v) for v in laser["psnr_db"])
-        image = bpy.data.images.load(str(folder / f"{stem}_red.png"))
+        codes, pattern = read_pattern(folder / f"{stem}_638nm.json")
+        assert codes.shape == (256, 256) and codes.max() < 256 and \
+            pattern["laser"]["wavelength"] == pytest.approx(638e-9)
+        image = bpy.data.images.load(str(folder / f"{stem}_638nm.png"))
         assert tuple(image.size) == (256, 256) and image.channels in (1, 4), image.channels
         bpy.data.images.remove(image)
     assert handlers.SHEET_IMAGE in bpy.data.images
     _, stack = read_exr(folder / "frame_0003_stack.exr")
-    assert {"shown.00.R", "wave.02.G"} <= set(stack), sorted(stack)[:6]
+    assert {"z00.R", "ref.z02.G"} <= set(stack), sorted(stack)[:6]
     # the quad moves: its frames differ
-    assert (folder / "frame_0001_red.png").read_bytes() != \
-        (folder / "frame_0003_red.png").read_bytes()
+    assert (folder / "frame_0001_638nm.png").read_bytes() != \
+        (folder / "frame_0003_638nm.png").read_bytes()
     sequence = {p.name: p.read_bytes() for p in _files(folder, 3)}
 
     scene.holo.output_dir = str(tmp_path / "alone") + "/"
@@ -123,9 +128,10 @@ def test_render_animation_writes_every_frame_and_a_frame_alone_is_the_same(empty
 
 def test_a_scene_too_close_for_the_pitch_is_refused_with_its_numbers(empty_scene):
     """The quad 5 cm (scene) behind the display, 0.5 mm at Scene Scale 0.01: through the
-    1 mm pupil 100 mm away a point there is formed by 0.62 samples of 8 µm across, fewer
-    than 2: refused before any work, naming the depth, the pitch and the nearest depth it
-    can show (2·8 µm·100 mm / (1 mm + 16 µm) = 1.57 mm). Export Display Frame reports it."""
+    1 mm pupil 200 mm away a point there is formed by 1 mm·0.5 / 200.5 / 8 µm = 0.31
+    samples across, fewer than 2: refused before any work, naming the depth, the pitch and
+    the nearest depth it can show (2·8 µm·200 mm / (1 mm + 16 µm) = 3.15 mm). Export Display
+    Frame reports it."""
     from holo_addon.export.display import read
     from holo_addon.export.scene import ExportError
     scene = empty_scene
@@ -133,17 +139,18 @@ def test_a_scene_too_close_for_the_pitch_is_refused_with_its_numbers(empty_scene
     with pytest.raises(ExportError) as refused:
         read(scene, bpy.context.evaluated_depsgraph_get())
     text = str(refused.value)
-    for number in ("0.5 mm behind", "8 µm pitch", "0.62 samples", "at least 1.57 mm"):
+    for number in ("0.5 mm behind", "8 µm pitch", "0.31 samples", "at least 3.15 mm"):
         assert number in text, text
     with pytest.raises(RuntimeError, match="too close for its 8 µm pitch"):
         bpy.ops.holo.export_display()  # an operator's error report, raised to a script
 
 
 def test_an_eye_box_beyond_the_diffraction_angle_is_refused_with_what_to_change(empty_scene):
-    """A 20 mm eye box 100 mm from the 2.048 mm display: its far edge sees the display's
-    edge at atan(11.024/100) = 6.29°, beyond the ±1.91° of 8 µm at 520 nm (λ/2p): refused,
-    with the largest eye box there (2·100·tan 1.91° − 2.048 = 4.61 mm) and the nearest eye
-    distance for this one (11.024 / tan 1.91° = 339 mm)."""
+    """A 20 mm eye box 200 mm from the 2.048 mm display: its far corner sees the display's
+    corner at atan(√2·11.024/200) = 4.46°, beyond the 0.931° the display's filter passes of
+    8 µm at 520 nm (asin(0.5·λ/2p)): refused, with the largest eye box there
+    (2·(200·tan 0.931°/√2 − 1.024) = 2.55 mm) and the nearest eye distance for this one
+    (√2·11.024 / tan 0.931° = 959 mm)."""
     from holo_addon.export.display import read
     from holo_addon.export.scene import ExportError
     scene = empty_scene
@@ -152,10 +159,10 @@ def test_an_eye_box_beyond_the_diffraction_angle_is_refused_with_what_to_change(
     with pytest.raises(ExportError) as refused:
         read(scene, bpy.context.evaluated_depsgraph_get())
     text = str(refused.value)
-    tan_limit = math.tan(math.asin(520e-9 / 16e-6))
-    widest = 2 * (100 * tan_limit - 1.024)
-    nearest = 11.024 / tan_limit
-    for said in ("6.29°", "1.86°", f"at most {widest:.3g} mm", f"at least {nearest:.4g} mm"):
+    tan_limit = math.tan(math.asin(0.5 * 520e-9 / 16e-6))
+    widest = 2 * (200 * tan_limit / math.sqrt(2) - 1.024)
+    nearest = math.sqrt(2) * 11.024 / tan_limit
+    for said in ("4.46°", "0.931°", f"at most {widest:.3g} mm", f"at least {nearest:.4g} mm"):
         assert said in text, (said, text)
 
 
