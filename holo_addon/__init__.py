@@ -5,10 +5,12 @@ below it (ui → compositor → render → export → blender):
 - ``blender/``: Blender helpers shared by the rest (4.x/5.x ``compat``, ``materials``, ``objects``)
 - ``export/``: the scene as the render sees it → holo_core's nouns in metres (``scene``), the
   plate checked against the camera's view (``plates``), the whole typed job read in one visit
-  with its digests (``job``), the emitters across the shutter (``motion``), what Cycles needs
+  with its digests (``job``), the holographic display and its per-laser plate jobs
+  (``display``), the emitters across the shutter (``motion``), what Cycles needs
   to render the emitters' lit radiance and its digest (``radiance``), and procedural Base
   Colours baked by Cycles (``bake``, Lighting: Albedo)
-- ``render/``: the job made in a worker process or its pass reused (``pipeline``), with the
+- ``render/``: the job made in a worker process or its pass reused (``pipeline``), a
+  display's frame (``display``: its waves recorded, then the core's frame stage), with the
   preferences' ``options``; the Cycles script that renders the emitters' radiance
   (``cycles_radiance``)
 - ``compositor/``: the render's life: the pass in the compositor's ``tree`` (the emitters'
@@ -19,7 +21,8 @@ below it (ui → compositor → render → export → blender):
   display's panel and Export Display Frame), ``panels``, the plate's
   coverage and viewing zone ``overlay`` in the viewport, and the holographic ``preview`` in
   the camera's view
-- ``demo`` (the built-in scene) and ``build`` (the extension's zip), run as modules
+- ``demo`` (the built-in scene), ``display_demo`` (an animation on a holographic display) and
+  ``build`` (the extension's zip), run as modules
 """
 
 from .compositor import handlers

@@ -387,7 +387,7 @@ def recording_zone(spec: DisplaySpec, wavelength: float) -> ViewingZone:
     w, h = spec.size
     half = [max(spec.eye_box, 2 * spec.eye_distance * tan_t - size) / 2 for size in (w, h)]
     return ViewingZone(centre=(0.0, 0.0, d), half_extents=(*half, spec.eye_box / 2),
-                       pupil=spec.pupil)
+                       pupil=2 * min(half))
 
 
 def _scaled_pose(matrix, origin, s: float) -> np.ndarray:

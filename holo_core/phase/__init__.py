@@ -8,6 +8,8 @@
 - ``levels.py``: the phase each code shows and the code nearest a wanted phase
 - ``encode.py``: a complex wave encoded for a phase SLM (double-phase, gradient descent over
   the focal stack, Gerchberg–Saxton), quantised through its table
+- ``display_frame.py``: one frame of a display's animation: the recorded waves encoded, its
+  patterns, layouts and focal stack written as one set (the add-on's Render Animation)
 - ``stack.py``: the display's focal stack (filter, pupil, band-limited angular spectrum) and
   its PSNR and SSIM against the complex wave's
 """
