@@ -615,6 +615,18 @@ class DisplayFrame:
                              f"{[x.name for x in self.lasers]}")
         _set(self, "frame", validate.integer("frame", self.frame, 0, MAX_FRAME))
         _set(self, "folder", str(_path("folder", self.folder)))
+        try:
+            cols, rows = self.resolution
+        except (TypeError, ValueError):
+            raise InputError(f"resolution must be (cols, rows); got "
+                             f"{shown(self.resolution)}") from None
+        rows, cols = validate.shape2d("resolution", (rows, cols))
+        _set(self, "resolution", (cols, rows))
+        _set(self, "pitch", validate.pitch("pitch", _real("pitch", self.pitch)))
+        _set(self, "bit_depth", validate.integer("bit_depth", self.bit_depth, 1, 16))
+        _set(self, "phase_range", validate.finite("phase_range",
+                                                  _real("phase_range", self.phase_range),
+                                                  "rad"))
         validate.choice("packing", self.packing, PATTERN_PACKINGS)
         validate.choice("method", self.method, DISPLAY_METHODS)
         _set(self, "iterations", validate.integer("iterations", self.iterations, 0, 100000))
