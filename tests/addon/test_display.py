@@ -177,3 +177,30 @@ def test_a_scene_outside_the_volume_names_the_scale_that_fits(empty_scene):
     with pytest.raises(ExportError) as refused:
         read(scene, bpy.context.evaluated_depsgraph_get())
     assert "Scene Scale of at most 0.005" in str(refused.value), str(refused.value)
+
+
+def test_the_display_panel_draws_its_controls_and_sizes_the_plane(empty_scene):
+    """Object ▸ Holo on a display: its preset, lasers, volume, eye box and Export Display
+    Frame (each drawn control exists), the custom fields only for Custom, Iterations only
+    for an iterative encoding, and its lines: 256 x 256 at 8 µm is 2.05 x 2.05 mm, 0.205 m
+    in the scene at Scene Scale 0.01, the plane drawn that size."""
+    from types import SimpleNamespace
+
+    from test_interface import _draw
+
+    from holo_addon.ui import panels as ui
+    _, shown = _display_scene(empty_scene)
+    context = SimpleNamespace(scene=empty_scene, object=shown)
+    drawn = _draw(ui.HOLO_PT_object, context)
+    for name in ("preset", "resolution", "pitch", "wavelengths", "powers", "scene_scale",
+                 "behind", "front", "eye_distance", "eye_box", "pupil", "table_red"):
+        assert ("prop", name) in drawn, name
+    assert ("operator", "holo.export_display") in drawn and ("prop", "iterations") not in drawn
+    assert ("label", "256 x 256 at 8 µm: 2.05 x 2.05 mm, 8-bit") in drawn, drawn
+    assert tuple(round(v, 4) for v in shown.dimensions[:2]) == (0.2048, 0.2048)
+    shown.holo.display.preset = "FHD_8"
+    shown.holo.display.method = "gradient-descent"
+    drawn = _draw(ui.HOLO_PT_object, context)
+    assert ("prop", "resolution") not in drawn and ("prop", "iterations") in drawn
+    bpy.context.view_layer.update()
+    assert tuple(round(v, 4) for v in shown.dimensions[:2]) == (1.536, 0.864)
