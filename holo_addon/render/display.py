@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import subprocess
 import sys
 import tempfile
@@ -24,7 +25,7 @@ from holo_core.worker import WorkerError, environment
 
 from ..export.display import DisplayPrepared
 from . import pipeline
-from .options import device, runtime_paths
+from .options import worker_options
 
 log = logging.getLogger(__name__)
 PACKINGS = {"PNG8": "grey8", "PNG16": "grey16", "PACKED10": "packed10"}  # holo_core.io.slm's
@@ -117,8 +118,11 @@ def _stage(frame: DisplayFrame, progress: jobs.Progress) -> dict:
         (Path(folder) / "frame.json").write_text(json.dumps(frame.to_dict()))
         command = [sys.executable, "-m", "holo_core.phase.display_frame", folder]
         with tempfile.TemporaryFile("w+") as errors:
+            # the worker's environment (the preferences' device, memory limit, kernel cache);
+            # its own session, so that a kill reaches what it started too
             child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=errors, text=True,
-                                     env=environment(runtime_paths(), device() or None))
+                                     env=environment(**worker_options()),
+                                     start_new_session=os.name == "posix")
             last = ""
             try:
                 for line in child.stdout:
