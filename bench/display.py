@@ -23,6 +23,8 @@ double-phase, and 100 steps of gradient descent per laser, at 1920×1080 (the de
 padded to it).
 
     python bench/display.py [--quick] [--out DIR] [--iterations 100]
+    python bench/display.py --scenes demo --skip-1080p --part /tmp/a.json   # one part ...
+    python bench/display.py --merge /tmp/a.json /tmp/b.json /tmp/c.json     # ... and all
 
 ``--quick``: a 256×384 window, 10 slices, 40 steps (a minute here). ``--out DIR`` keeps each
 scene and encoding's patterns with their layouts and both focal stacks (EXR, PNG sheet).
@@ -30,6 +32,7 @@ Figures go to ``bench/results/display.json`` (``display-quick.json`` with ``--qu
 """
 
 import argparse
+import json
 import logging
 import os
 import sys
@@ -127,17 +130,29 @@ def main(argv=None):
     parser.add_argument("--out", type=Path)
     parser.add_argument("--iterations", type=int)
     parser.add_argument("--gs-iterations", type=int)
-    parser.add_argument("--slices-per-step", type=int, default=4,
+    parser.add_argument("--slices-per-step", type=int, default=1,
                         help="planes of the stack drawn a gradient-descent step")
     parser.add_argument("--clip", type=float, default=0.05,
                         help="clip_fraction of the double-phase (and the warm starts)")
     parser.add_argument("--skip-1080p", action="store_true")
+    parser.add_argument("--scenes", nargs="*", default=["demo", "textured"],
+                        help="scenes to run (none: the 1080p timings alone)")
+    parser.add_argument("--part", type=Path,
+                        help="write this run's figures to PART (JSON) for --merge, not results")
+    parser.add_argument("--merge", nargs="+", type=Path,
+                        help="write the figures of these parts to bench/results")
     args = parser.parse_args(argv)
+    if args.merge:
+        figures = {}
+        for part in args.merge:
+            figures.update(json.loads(part.read_text()))
+        results.write("display-quick" if args.quick else "display", figures)
+        return
     logging.basicConfig(level=logging.WARNING)
     shape = (256, 384) if args.quick else (1024, 1536)
     slices = 10 if args.quick else 30
     iterations = args.iterations or (40 if args.quick else 100)
-    gs_iterations = args.gs_iterations or (20 if args.quick else 60)
+    gs_iterations = args.gs_iterations or (20 if args.quick else 30)
     display = Display(name="slm-1080p-8um-window", resolution=shape[::-1], pitch=PITCH,
                       bit_depth=8)
     setup = SLMSetup(display=display, lasers=[Laser(wavelength=w) for w in WAVELENGTHS],
@@ -152,7 +167,10 @@ def main(argv=None):
     out = args.out or Path(tempfile.mkdtemp(prefix="holo-display-"))
     figures = {}
     width = min(shape) * PITCH  # the scenes fit the display's shorter side
-    for scene, meshes in (("demo", demo_meshes(width)), ("textured", chart_meshes(width))):
+    scenes = {"demo": demo_meshes, "textured": chart_meshes}
+    waves = None
+    for scene in args.scenes:
+        meshes = scenes[scene](width)
         start = time.perf_counter()
         waves, count = scene_wave(meshes, shape, WAVELENGTHS)
         print(f"{scene}: {count} points, waves recorded in {time.perf_counter() - start:.1f} s")
@@ -160,7 +178,7 @@ def main(argv=None):
             folder = out / scene / method
             folder.mkdir(parents=True, exist_ok=True)
             frame = export_frame(waves, setup, folder, stem="frame_0001", distance=CENTRE,
-                                 method=method, **settings[method])
+                                 method=method, stack_compression="none", **settings[method])
             psnr = float(np.mean([c.mean_psnr_db for c in frame.comparisons]))
             ssim = float(np.mean([c.mean_ssim for c in frame.comparisons]))
             figures[f"{scene} {method}"] = {
@@ -172,6 +190,8 @@ def main(argv=None):
             print(f"{scene} {method}: {psnr:.2f} dB, SSIM {ssim:.3f}, {frame.seconds:.1f} s a "
                   f"colour frame (load {load()[0]})", flush=True)
     if not args.skip_1080p:
+        if waves is None:
+            waves = scene_wave(demo_meshes(width), shape, WAVELENGTHS)[0]
         figures.update(hd_times(waves, iterations=100, clip=args.clip))
     figures["protocol"] = (f"{PITCH * 1e6:g} um, {'/'.join(f'{w * 1e9:.0f}' for w in WAVELENGTHS)}"
                            f" nm, {shape[1]}x{shape[0]} computed at 2x and cropped, {slices} "
@@ -179,7 +199,11 @@ def main(argv=None):
                            f"{iterations} steps of {args.slices_per_step} slices, GS "
                            f"{gs_iterations} plane visits, clip_fraction {args.clip:g}")
     figures["out"] = str(out)
-    results.write("display-quick" if args.quick else "display", figures)
+    if args.part:
+        args.part.write_text(json.dumps(figures, indent=1) + "\n")
+        print(f"figures of this part written to {args.part}")
+    else:
+        results.write("display-quick" if args.quick else "display", figures)
 
 
 def hd_times(waves, *, iterations, clip):

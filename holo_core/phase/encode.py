@@ -68,7 +68,7 @@ class Pattern(NamedTuple):
 
 def encode(field, display, *, wavelength, method="double-phase", tables=(), band=None,
            distances=None, pupil=None, iterations=100, learning_rate=LEARNING_RATE,
-           slices_per_step=None, quantised_steps=10, seed=0, clip_fraction=0.0,
+           slices_per_step=None, quantised_steps=None, seed=0, clip_fraction=0.0,
            optics=None, targets=None) -> Pattern:
     """Encode the complex ``field`` at the display as the codes a phase SLM shows.
 
@@ -97,8 +97,9 @@ def encode(field, display, *, wavelength, method="double-phase", tables=(), band
         Adam's step [rad].
     slices_per_step : int, optional
         Planes drawn at random per descent step (None: all).
-    quantised_steps : int
-        The descent's last steps that see the quantised phase.
+    quantised_steps : int, optional
+        The descent's last steps that see the quantised phase (default 10, or every step
+        when fewer).
     seed : int
         The generator drawing the planes.
     clip_fraction : float
@@ -167,7 +168,9 @@ def encode(field, display, *, wavelength, method="double-phase", tables=(), band
             phase, losses = _descend(phase, a, optics, curve, quantise, iterations,
                                      validate.positive("learning_rate", learning_rate, "rad"),
                                      slices_per_step, validate.integer(
-                                         "quantised_steps", quantised_steps, 0, iterations),
+                                         "quantised_steps", min(10, iterations) if
+                                         quantised_steps is None else quantised_steps, 0,
+                                         iterations),
                                      validate.seed(seed))
         else:
             phase, losses = _projections(phase, a, optics, iterations)
