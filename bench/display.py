@@ -26,8 +26,9 @@ padded to it).
     python bench/display.py --scenes demo --skip-1080p --part /tmp/a.json   # one part ...
     python bench/display.py --merge /tmp/a.json /tmp/b.json /tmp/c.json     # ... and all
 
-``--quick``: a 256×384 window, 10 slices, 40 steps (a minute here). ``--out DIR`` keeps each
-scene and encoding's patterns with their layouts and both focal stacks (EXR, PNG sheet).
+``--quick``: a 256×384 window, 10 slices, 40 steps, no 1080p timings (minutes here).
+``--out DIR`` keeps each scene and encoding's patterns with their layouts and both focal
+stacks (EXR, PNG sheet).
 Figures go to ``bench/results/display.json`` (``display-quick.json`` with ``--quick``).
 """
 
@@ -189,7 +190,7 @@ def main(argv=None):
                 "load": load()}
             print(f"{scene} {method}: {psnr:.2f} dB, SSIM {ssim:.3f}, {frame.seconds:.1f} s a "
                   f"colour frame (load {load()[0]})", flush=True)
-    if not args.skip_1080p:
+    if not (args.skip_1080p or args.quick):
         if waves is None:
             waves = scene_wave(demo_meshes(width), shape, WAVELENGTHS)[0]
         figures.update(hd_times(waves, iterations=100, clip=args.clip))
