@@ -51,7 +51,7 @@ def laser_name(wavelength: float) -> str:
 
 def export_frame(fields, setup: SLMSetup, folder, *, stem="frame", distance=0.0,
                  method="double-phase", simulate=True, pupil=None, frame=None, extent=None,
-                 **settings) -> Frame:
+                 stack_compression="zip", **settings) -> Frame:
     """Encode, write and (``simulate``) judge one frame.
 
     Parameters
@@ -77,6 +77,8 @@ def export_frame(fields, setup: SLMSetup, folder, *, stem="frame", distance=0.0,
         The animation's frame, written into the layouts.
     extent : (x, y), optional
         The scene's half-size [m] for :func:`~holo_core.phase.slm.check_scene`.
+    stack_compression : {'zip', 'none'}
+        The stack's EXR compression (:func:`holo_core.io.slm.write_stack`).
     **settings
         For :func:`~holo_core.phase.encode.encode` (iterations, learning_rate, ...).
     """
@@ -151,6 +153,6 @@ def export_frame(fields, setup: SLMSetup, folder, *, stem="frame", distance=0.0,
                    for x, c in zip(setup.lasers, comparisons)}
         files += slm_io.write_stack(folder / f"{stem}_stack.exr", sim, reference=ref_stack,
                                     distances=setup.distances(), metrics=metrics,
-                                    labels=labels)
+                                    labels=labels, compression=stack_compression)
     return Frame(patterns, comparisons, files, seconds)
 

@@ -5,10 +5,9 @@ Without a table, code k of a ``b``-bit display shows k·R/2^b, R its ``phase_ran
 2^b levels fill one wave, code 2^b being code 0 again; 3π: the top codes repeat the bottom
 ones a wave higher), negated when the display is ``inverted``. A
 :class:`~holo_core.phase.slm.PhaseTable` replaces that line with the measured phase of each
-code. A wanted phase θ (any real number) becomes the code whose phase is nearest θ modulo 2π;
-where several are equally near (a 3π range), the code nearest θ itself, so that a pattern
-whose phases already lie inside the range (double-phase's φ ± α offset into [0, 3π)) keeps
-them unwrapped.
+code. A wanted phase θ (any real number) inside the codes' span takes the code nearest θ
+itself, so that a pattern whose phases lie inside a 3π range (double-phase's φ ± α) keeps
+them unwrapped; one outside it, the code nearest θ modulo 2π.
 """
 
 from __future__ import annotations
@@ -37,19 +36,22 @@ def response(display, table=None) -> np.ndarray:
 class Quantiser:
     """The code nearest each wanted phase on a given response (module docstring).
 
-    ``curve``: (2^b,) phases [rad] of the codes. The candidates are the codes' phases and the
-    same a wave below and above, sorted: a wanted phase brought into the curve's span (or
-    into [min, min + 2π) when outside it) has its nearest candidate found by bisection."""
+    ``curve``: (2^b,) phases [rad] of the codes. A wanted phase inside the curve's span takes
+    the code nearest it among the codes themselves (within half a step on a line); one
+    outside is brought into [min, min + 2π) and takes the nearest among the codes and their
+    copies a wave below and above (a 2π line's top code is a step from its bottom one). Both
+    are found by bisection in the sorted phases."""
 
     def __init__(self, curve):
         c = np.asarray(curve, np.float64)
         self.curve = c
         self.low, self.high = float(c.min()), float(c.max())
+        order = np.argsort(c, kind="stable")
+        self.inside = (c[order], order)
         shifted = np.concatenate([c - 2 * math.pi, c, c + 2 * math.pi])
         codes = np.tile(np.arange(c.size), 3)
-        # among equal phases the lower copy index wins: the unshifted code before its images
-        order = np.lexsort((np.repeat([1, 0, 2], c.size), shifted))
-        self.values, self.codes = shifted[order], codes[order]
+        order = np.argsort(shifted, kind="stable")
+        self.around = (shifted[order], codes[order])
 
     def __call__(self, phase) -> np.ndarray:
         """uint16 codes of ``phase`` [rad] (finite, any shape)."""
@@ -57,11 +59,21 @@ class Quantiser:
         if not np.isfinite(t).all():
             raise InputError("phase must be finite; it holds NaN or infinite values")
         inside = (t >= self.low) & (t <= self.high)
-        t = np.where(inside, t, self.low + np.mod(t - self.low, 2 * math.pi))
-        i = np.clip(np.searchsorted(self.values, t), 1, self.values.size - 1)
-        lower, upper = self.values[i - 1], self.values[i]
-        pick = np.where(t - lower <= upper - t, i - 1, i)
-        return self.codes[pick].astype(np.uint16)
+        out = np.empty(t.shape, np.uint16)
+        out[inside] = _nearest(t[inside], *self.inside)
+        outside = ~inside
+        out[outside] = _nearest(self.low + np.mod(t[outside] - self.low, 2 * math.pi),
+                                *self.around)
+        return out
+
+
+def _nearest(t, values, codes) -> np.ndarray:
+    """The code of the value nearest each of ``t`` among sorted ``values``."""
+    if not t.size:
+        return np.zeros(0, np.uint16)
+    i = np.clip(np.searchsorted(values, t), 1, values.size - 1)
+    pick = np.where(t - values[i - 1] <= values[i] - t, i - 1, i)
+    return codes[pick].astype(np.uint16)
 
 
 def quantise(phase, display, table=None) -> np.ndarray:

@@ -267,9 +267,8 @@ class SLMSetup:
         return tuple(x.wavelength for x in self.lasers)
 
     def table_for(self, wavelength) -> PhaseTable | None:
-        """The table for ``wavelength`` [m] (within 0.5 nm... relative 1e-6), None when the
-        setup has no tables; InputError naming the wavelength when tables are given but none
-        is for it."""
+        """The table for ``wavelength`` [m] (to a relative 1e-6), None when the setup has no
+        tables; InputError naming the wavelength when tables are given but none is for it."""
         return table_for(self.tables, wavelength)
 
     def distances(self) -> np.ndarray:
@@ -323,6 +322,9 @@ def check_scene(setup: SLMSetup, *, extent=None, depth_range=None) -> list[str]:
           in front of the display nearing the eye, or far off the axis), with the depth that
           fits;
         - a scene at or beyond the eye box.
+
+        Without an eye box (a camera behind the display's filter takes every direction it
+        passes) there is nothing to check.
     """
     if not isinstance(setup, SLMSetup):
         raise InputError(f"setup must be an SLMSetup; got {type(setup).__name__}")

@@ -43,16 +43,24 @@ except ImportError:  # pragma: no cover -- SciPy is optional
 MARGIN = 16  # padding samples beyond the widest spread of the band over the deepest plane
 
 
-def fft2(a: np.ndarray) -> np.ndarray:
+def fft(a: np.ndarray, axis: int) -> np.ndarray:
     if _sfft is not None:
-        return _sfft.fft2(a, workers=os.cpu_count() or 1, overwrite_x=False)
-    return np.fft.fft2(a).astype(np.complex64)
+        return _sfft.fft(a, axis=axis, workers=os.cpu_count() or 1)
+    return np.fft.fft(a, axis=axis).astype(np.complex64)
+
+
+def ifft(a: np.ndarray, axis: int) -> np.ndarray:
+    if _sfft is not None:
+        return _sfft.ifft(a, axis=axis, workers=os.cpu_count() or 1)
+    return np.fft.ifft(a, axis=axis).astype(np.complex64)
+
+
+def fft2(a: np.ndarray) -> np.ndarray:
+    return fft(fft(a, axis=0), axis=1)
 
 
 def ifft2(a: np.ndarray) -> np.ndarray:
-    if _sfft is not None:
-        return _sfft.ifft2(a, workers=os.cpu_count() or 1, overwrite_x=False)
-    return np.fft.ifft2(a).astype(np.complex64)
+    return ifft(ifft(a, axis=0), axis=1)
 
 
 def next_fast(n: int) -> int:
@@ -140,28 +148,42 @@ class Optics:
         return v[r:r + h, c:c + w]
 
     def spectrum(self, u) -> np.ndarray:
-        """The filter's block of the padded field's spectrum, complex64."""
-        return fft2(self.pad(np.asarray(u, np.complex64)))[self.block]
+        """The filter's block of the padded field's spectrum, complex64: fft2 of the padded
+        field, pruned (columns of zeros are not transformed, rows outside the filter not
+        kept), the same values at about 3/4 of the work."""
+        (r, c), (h, w) = self.top, self.shape
+        cols = np.zeros((self.padded[0], w), np.complex64)
+        cols[r:r + h] = u
+        cols = fft(cols, axis=0)[self.rows]
+        rows = np.zeros((self.rows.size, self.padded[1]), np.complex64)
+        rows[:, c:c + w] = cols
+        return fft(rows, axis=1)[:, self.cols]
+
+    def window(self, block: np.ndarray) -> np.ndarray:
+        """ifft2 of a spectrum that is zero outside the filter's block, on the display's
+        window (complex64), pruned like :meth:`spectrum`."""
+        (r, c), (h, w) = self.top, self.shape
+        rows = np.zeros((self.rows.size, self.padded[1]), np.complex64)
+        rows[:, self.cols] = block
+        rows = ifft(rows, axis=1)[:, c:c + w]
+        cols = np.zeros((self.padded[0], w), np.complex64)
+        cols[self.rows] = rows
+        return ifft(cols, axis=0)[r:r + h]
 
     def to_plane(self, spectrum_block: np.ndarray, k: int) -> np.ndarray:
         """The field (display's window, complex64) on plane ``k`` of a spectrum's block."""
-        full = np.zeros(self.padded, np.complex64)
-        full[self.block] = spectrum_block * self.transfer(k)
-        return self.crop(ifft2(full))
+        return self.window(spectrum_block * self.transfer(k))
 
     def from_plane(self, v: np.ndarray, k: int) -> np.ndarray:
         """The adjoint of :meth:`to_plane`: a field on plane ``k``'s window back to a spectrum
         block (conj of the transfer; FFT then ifft's 1/N, as NumPy's pair is adjoint)."""
         n = self.padded[0] * self.padded[1]
-        return fft2(self.pad(v))[self.block] * np.conj(self.transfer(k)) / n
+        return self.spectrum(v) * (np.conj(self.transfer(k)) / n)
 
     def back(self, spectrum_block: np.ndarray) -> np.ndarray:
         """A spectrum block back to the display's window (the adjoint of :meth:`spectrum`
         up to NumPy's 1/N, which :meth:`from_plane` has taken)."""
-        full = np.zeros(self.padded, np.complex64)
-        full[self.block] = spectrum_block
-        n = self.padded[0] * self.padded[1]
-        return self.crop(ifft2(full)) * n
+        return self.window(spectrum_block) * (self.padded[0] * self.padded[1])
 
     def stack(self, u) -> np.ndarray:
         """The amplitude |U| on every plane, float32 (N, rows, cols)."""
