@@ -46,6 +46,7 @@ def _formats():
     for key, module, names in (("hologram", "holo_core.io.hologram", ("FORMAT", "FORMAT_VERSION",
                                                                       "READS")),
                                ("display", "holo_core.io.display", ("FORMAT", "VERSION")),
+                               ("slm", "holo_core.io.slm", ("FORMAT", "VERSION")),
                                ("store", "holo_core.io.store", ("STORE_FORMAT",)),
                                ("plate_set", "holo_core.io.plate_set", ("KIND", "VERSION"))):
         try:

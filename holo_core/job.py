@@ -511,6 +511,16 @@ def _noun(cls, data, name: str):
     return _made(cls, name, **fields)
 
 
+def _named(cls, data, what: str):
+    """``cls`` of the dict ``data`` whose fields include ``name`` (which :func:`_made`'s own
+    parameter would take)."""
+    fields = _fields(cls, data, what)
+    try:
+        return cls(**fields)
+    except TypeError as e:
+        raise InputError(f"{what}: {e}"[:300]) from None
+
+
 def _needed(data: dict, key: str, name: str):
     if key not in data:
         raise InputError(f"{name} lacks '{key}'")
@@ -567,3 +577,139 @@ def _real(name: str, value):
 
 def _number(value) -> float | None:
     return None if value is None or not math.isfinite(float(value)) else float(value)
+
+
+# --- a holographic display's frame ------------------------------------------------------------
+
+PATTERN_PACKINGS = ("grey8", "grey16", "packed10")  # holo_core.io.slm's, as the driver reads
+DISPLAY_METHODS = ("double-phase", "gradient-descent", "gerchberg-saxton")
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class FrameLaser:
+    """One laser of a display's frame: ``name`` (a word: red, green, blue), ``wavelength``
+    [m], ``power`` [W], the plate ``hologram`` recorded for it [path], the ``channel`` of it
+    that holds its colour (R, G, B: 0, 1, 2) and its phase ``table`` [path] ('' for the
+    display's linear response)."""
+
+    name: str
+    wavelength: float
+    power: float
+    hologram: str
+    channel: int
+    table: str = ""
+
+    def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name.isidentifier():
+            raise InputError(f"laser name must be a word (red, green, blue); got {self.name!r}"
+                             [:200])
+        _set(self, "wavelength", validate.length("laser wavelength",
+                                                 _real("laser wavelength", self.wavelength)))
+        power = validate.finite("laser power", _real("laser power", self.power), "W")
+        if not power > 0:
+            raise InputError(f"laser power must be > 0 [W]; got {shown(self.power)}")
+        _set(self, "power", power)
+        _set(self, "hologram", str(_path("laser hologram", self.hologram)))
+        _set(self, "channel", validate.integer("laser channel", self.channel, 0, 2))
+        if not isinstance(self.table, str):
+            raise InputError(f"laser table must be a path or ''; got {shown(self.table)}")
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class DisplayFrame:
+    """Frame ``frame`` of the display ``name`` (:mod:`holo_core.phase.display_frame` makes
+    it), its files written into ``folder``.
+
+    resolution : (cols, rows) samples; pitch [m]; bit_depth; phase_range [rad] in [2π, 4π];
+        inverted : the display (:class:`holo_core.phase.display.Display`)
+    packing : one of :data:`PATTERN_PACKINGS`: the pattern image as the driver reads it
+    lasers : (:class:`FrameLaser`, ...), one pattern each (field-sequential colour)
+    scale : display metres per scene metre the scene is shown at (for the layouts: the
+        waves are recorded as the display shows the scene, in its metres)
+    front : [m] where in front of the display the waves were recorded (0: on it); carried
+        back to it by the angular spectrum
+    behind : [m] how far behind the display the volume reaches
+    eye_distance, eye_box, pupil : [m] the eye box's distance, width (square) and the pupil
+    distance : [m] the scene's mean signed depth (negative: behind), for the layouts
+    method : one of :data:`DISPLAY_METHODS`; iterations : the iterative methods' steps
+    slices : the focal stack's planes over the volume, from −behind to front
+    digest : what the frame is made from (written into its layout: a frame whose layout
+        holds it is up to date)
+    """
+
+    name: str
+    frame: int
+    folder: str
+    resolution: tuple
+    pitch: float
+    bit_depth: int
+    phase_range: float
+    inverted: bool
+    packing: str
+    lasers: tuple
+    scale: float
+    front: float
+    behind: float
+    eye_distance: float
+    eye_box: float
+    pupil: float
+    distance: float
+    method: str = "double-phase"
+    iterations: int = 100
+    slices: int = 5
+    digest: str = ""
+
+    def __post_init__(self):
+        lasers = self.lasers
+        if isinstance(lasers, (FrameLaser, dict)) or not isinstance(lasers, (list, tuple)) \
+                or not lasers:
+            raise InputError("lasers must be one or more FrameLaser")
+        _set(self, "lasers", tuple(x if isinstance(x, FrameLaser)
+                                   else _named(FrameLaser, x, "laser") for x in lasers))
+        if len({x.name for x in self.lasers}) != len(self.lasers):
+            raise InputError(f"lasers must have distinct names; got "
+                             f"{[x.name for x in self.lasers]}")
+        _set(self, "frame", validate.integer("frame", self.frame, 0, MAX_FRAME))
+        _set(self, "folder", str(_path("folder", self.folder)))
+        try:
+            cols, rows = self.resolution
+        except (TypeError, ValueError):
+            raise InputError(f"resolution must be (cols, rows); got "
+                             f"{shown(self.resolution)}") from None
+        rows, cols = validate.shape2d("resolution", (rows, cols))
+        _set(self, "resolution", (cols, rows))
+        _set(self, "pitch", validate.pitch("pitch", _real("pitch", self.pitch)))
+        _set(self, "bit_depth", validate.integer("bit_depth", self.bit_depth, 1, 16))
+        _set(self, "phase_range", validate.finite("phase_range",
+                                                  _real("phase_range", self.phase_range),
+                                                  "rad"))
+        validate.choice("packing", self.packing, PATTERN_PACKINGS)
+        validate.choice("method", self.method, DISPLAY_METHODS)
+        _set(self, "iterations", validate.integer("iterations", self.iterations, 0, 100000))
+        _set(self, "slices", validate.integer("slices", self.slices, 1, 1000))
+        _set(self, "inverted", _flag("inverted", self.inverted))
+        for name in ("scale", "eye_distance", "eye_box", "pupil"):
+            value = validate.finite(name, _real(name, getattr(self, name)))
+            if not value > 0:
+                raise InputError(f"{name} must be > 0; got {shown(getattr(self, name))}")
+            _set(self, name, value)
+        for name in ("front", "behind"):
+            value = validate.finite(name, _real(name, getattr(self, name)), "m")
+            if value < 0:
+                raise InputError(f"{name} must be >= 0 [m]; got {shown(getattr(self, name))}")
+            _set(self, name, value)
+        _set(self, "distance", validate.finite("distance", _real("distance", self.distance),
+                                               "m"))
+        validate.digest("digest", self.digest)
+
+    def to_dict(self) -> dict:
+        return _plain(self)
+
+    @classmethod
+    def from_dict(cls, data) -> DisplayFrame:
+        """The frame of :meth:`to_dict`'s plain data, every field checked."""
+        return _named(cls, data, "display frame")
+
+    def stem(self) -> str:
+        """The frame's files' common name: ``frame_NNNN``."""
+        return f"frame_{self.frame:04d}"

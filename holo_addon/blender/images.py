@@ -22,3 +22,22 @@ def save_as_displayed(scene, exr: Path, png: Path) -> Path:
     finally:
         bpy.data.images.remove(image)
     return png
+
+
+def show_image(path: Path, name: str):
+    """The image file ``path`` as the image datablock ``name`` (loaded, or reloaded when it
+    is there: the file changes frame by frame), shown in every open Image Editor."""
+    image = bpy.data.images.get(name)
+    if image is not None and bpy.path.abspath(image.filepath) != str(path):
+        image.filepath = str(path)
+    if image is None:
+        image = bpy.data.images.load(str(path), check_existing=False)
+        image.name = name
+    image.reload()
+    wm = getattr(bpy.context, "window_manager", None)
+    for window in (wm.windows if wm is not None else ()):
+        for area in window.screen.areas:
+            if area.type == "IMAGE_EDITOR":
+                area.spaces.active.image = image
+                area.tag_redraw()
+    return image

@@ -24,8 +24,10 @@ def raster_visibility(obj) -> None:
     is the window its recorded objects are seen through, so it is a holdout for camera rays
     alone, the hole the pass fills. The user's own visibility is kept on the object and
     restored when it is neither again. *Disable in Renders* stays the user's: it leaves the
-    object out of the hologram too."""
-    emitter, plate = obj.holo.emitter != "NONE", obj.holo.is_plate
+    object out of the hologram too. A holographic display's plane is a construction plane,
+    as a plate is."""
+    emitter = obj.holo.emitter != "NONE"
+    plate = obj.holo.is_plate or obj.holo.is_display
     window = plate and obj.holo.imported
     if not (emitter or plate):
         kept = obj.get(KEPT)

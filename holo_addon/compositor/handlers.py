@@ -20,9 +20,12 @@ from bpy.app.handlers import persistent
 from holo_core import jobs
 from holo_core.io.image import exr_attribute
 
+from ..blender.images import show_image
 from ..export import motion
+from ..export.display import read as read_display
+from ..export.display import scene_display
 from ..export.scene import NoEmitters, emitter_instances
-from ..render import pipeline
+from ..render import display, pipeline
 from . import tree
 from .session import session
 
@@ -121,9 +124,12 @@ def _render_frame(scene, depsgraph) -> None:
         return  # a sub-frame, or the frame's own time again, of a frame already seen
     session.frame_started(frame)
     session.frame_done = (scene.name, frame)
+    shown = scene_display(scene)
+    if shown is not None:
+        display_frame(scene, depsgraph, shown, resident=True)
     names = [inst.object.original.name for inst, _ in emitter_instances(depsgraph)]
     if not tree.uses_pass(scene):
-        if names:  # never a silent vanish: the camera sees emitters through the pass only
+        if names and shown is None:  # never a silent vanish: the camera sees emitters through the pass only
             _warn_once("setup", f"Holo: the holographic objects ({_listed(names)}) are not "
                                 f"in this render: the compositor has no holographic pass "
                                 f"(Render ▸ Holo ▸ Set Up Compositing, or Render with "
@@ -169,6 +175,29 @@ def _render_frame(scene, depsgraph) -> None:
         session.shutter = pending
         return
     _frame_pass(scene, frame, job)
+
+
+SHEET_IMAGE = "Holo Display Focal Stack"
+
+
+def display_frame(scene, depsgraph, obj, *, resident=False, progress=None):
+    """The display's frame of the scene as ``depsgraph`` evaluates it (a render's: the frame
+    rendered): its patterns, layout and focal stack written together (or found up to date),
+    the stack's contact sheet shown in the Image Editor, and one log line with each laser's
+    PSNR and SSIM per focal slice. A scene the display cannot show is refused before any
+    work (:class:`holo_addon.export.scene.ExportError`). Returns the
+    :class:`holo_addon.render.display.FrameResult`."""
+    prepared = read_display(scene, depsgraph, obj)
+    for warning in prepared.warnings:
+        _log(logging.WARNING, warning)
+    session.pass_started(prepared.frame)
+    try:
+        result = display.run(prepared, progress or _progress, _log, resident=resident)
+    finally:
+        session.pass_ended()
+    show_image(result.sheet, SHEET_IMAGE)
+    log.info("Holo: %s", display.summary(obj.name, result))
+    return result
 
 
 @contextmanager

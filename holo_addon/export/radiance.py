@@ -156,14 +156,15 @@ def border(box, size) -> tuple[float, float, float, float]:
 
 
 def request(scene, view_layer: str, camera: Camera, meshes, emitter_names, *,
-            samples: int = 8) -> Radiance | None:
+            samples: int = 8, own_lens: bool = False) -> Radiance | None:
     """The job's :class:`holo_core.job.Radiance` (see :func:`holo_core.runner.lit_emitters`):
     the scene written to a scratch folder as it is now (unsaved changes included), the
     command that renders its view layer ``view_layer`` with Cycles, and the camera of the
     cropped image.
     ``camera``: the render's camera uncropped, as a pinhole; ``meshes``: the emitters (world
-    metres), ``emitter_names`` their objects; ``samples``: Cycles' samples (denoised). None
-    when no emitter is in view."""
+    metres), ``emitter_names`` their objects; ``samples``: Cycles' samples (denoised);
+    ``own_lens``: Cycles renders with ``camera``'s lens and frame, not the scene camera's (a
+    holographic display's eye box). None when no emitter is in view."""
     box = region(camera, meshes)
     if box is None:
         return None
@@ -174,7 +175,10 @@ def request(scene, view_layer: str, camera: Camera, meshes, emitter_names, *,
     args = {"blend": str(blend), "scene": scene.name, "view_layer": view_layer,
             "frame": scene.frame_current, "emitters": sorted(set(emitter_names)),
             "border": border(box, camera.resolution), "image": str(image), "samples": samples,
-            "compat": compat.__file__, "view": view_matrix(camera, scale(scene))}
+            "compat": compat.__file__, "view": view_matrix(camera, scale(scene)),
+            "lens": {"lens": camera.lens, "sensor_width": camera.sensor_width,
+                     "sensor_height": camera.sensor_height, "sensor_fit": camera.sensor_fit,
+                     "resolution": list(camera.resolution)} if own_lens else None}
     script = str(Path(__file__).resolve().parents[1] / "render" / "cycles_radiance.py")
     if bpy.app.binary_path:  # Blender: a background Blender without the user's add-ons
         command = [bpy.app.binary_path, "-b", "--factory-startup", "-noaudio", str(blend),

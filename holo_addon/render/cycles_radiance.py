@@ -17,7 +17,10 @@ are off. The result is a float RGBA OpenEXR (premultiplied).
 JSON: ``blend``, ``scene``, ``view_layer``, ``frame``, ``emitters`` (object names),
 ``border`` (min x, max x, min y, max y as Blender's render region), ``image`` (the output
 path), ``samples``, ``compat`` (the path of :mod:`holo_addon.blender.compat`, loaded on its
-own), ``view`` (the pose [Blender units] the radiance is seen from).
+own), ``view`` (the pose [Blender units] the radiance is seen from) and ``lens`` (None:
+the scene camera's lens and the render's frame; else a view of its own, a holographic
+display's eye box: ``lens`` and ``sensor_width``, ``sensor_height`` [mm], ``sensor_fit`` and
+``resolution`` [px]).
 It imports nothing of the add-on's package, which the process does not have.
 """
 
@@ -43,10 +46,24 @@ def instancers_of(depsgraph, emitters: set) -> set:
             and inst.parent.original.name not in emitters}
 
 
-def view_from(scene, matrix) -> None:
+def view_from(scene, matrix, lens=None) -> None:
     """Render from the pose ``matrix`` (4×4, Blender units) where the scene's camera stands
     elsewhere (a plate's radiance is seen from its zone's centre): a stand-in object with the
-    camera's own lens and frame, free of its parents, constraints and animation."""
+    camera's own lens and frame, free of its parents, constraints and animation; with
+    ``lens``, with that lens and frame (a display's eye box has no camera of the scene's)."""
+    if lens is not None:
+        data = bpy.data.cameras.new("Holo radiance lens")
+        data.lens, data.sensor_fit = lens["lens"], lens["sensor_fit"]
+        data.sensor_width, data.sensor_height = lens["sensor_width"], lens["sensor_height"]
+        stand_in = bpy.data.objects.new("Holo radiance view", data)
+        scene.collection.objects.link(stand_in)
+        stand_in.matrix_world = Matrix(matrix)
+        scene.camera = stand_in
+        r = scene.render
+        r.resolution_x, r.resolution_y = lens["resolution"]
+        r.resolution_percentage = 100
+        r.pixel_aspect_x = r.pixel_aspect_y = 1.0
+        return
     camera = scene.camera
     if camera is None or camera.type != "CAMERA":
         return
@@ -84,7 +101,7 @@ def main(args: dict) -> None:
             obj.show_instancer_for_render = False  # its own geometry: not an emitter
         else:
             obj.visible_camera = False
-    view_from(scene, args["view"])
+    view_from(scene, args["view"], args.get("lens"))
     r = scene.render
     r.engine = "CYCLES"
     r.film_transparent = True

@@ -6,7 +6,7 @@ import bpy
 
 from ..compositor.session import session
 from ..compositor.tree import uses_pass
-from . import plates, preview
+from . import display, plates, preview
 
 
 class HOLO_PT_scene(bpy.types.Panel):
@@ -87,6 +87,11 @@ class HOLO_PT_object(bpy.types.Panel):
         h = context.object.holo
         layout = self.layout
         layout.use_property_split = True
+        if not h.is_plate:
+            layout.prop(h, "is_display")
+            if h.is_display:
+                display.draw_display(layout, context, context.object)
+                return
         if context.scene.holo.mode == "PLATE":
             layout.prop(h, "is_plate")
             if h.is_plate:

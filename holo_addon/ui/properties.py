@@ -5,16 +5,20 @@ from __future__ import annotations
 import bpy
 from bpy.props import (
     BoolProperty,
+    BoolVectorProperty,
     EnumProperty,
     FloatProperty,
     FloatVectorProperty,
     IntProperty,
+    IntVectorProperty,
     PointerProperty,
     StringProperty,
 )
 
 from ..blender.objects import raster_visibility
+from ..export.display import display_from_object
 from ..export.job import EXPOSURE_STOPS
+from ..export.scene import ExportError
 from . import overlay
 
 # 4.5+ ask a path property to declare that it takes "//" (relative to the .blend); 4.2 has no
@@ -43,6 +47,134 @@ def _plate_changed(self, context):
         obj.display_type = "WIRE"
 
 
+def _display_marked(self, context):
+    obj = self.id_data
+    raster_visibility(obj)
+    if self.is_display:
+        obj.display_type = "WIRE"
+        shape_display(obj)
+
+
+def _display_changed(self, context):
+    obj = self.id_data
+    if obj.holo.is_display:
+        shape_display(obj)
+
+
+def shape_display(obj) -> None:
+    """The display's plane drawn at its size in the scene: the active area (resolution ×
+    pitch) over the Scene Scale, in Blender units, centred on the object's origin."""
+    if obj.type != "MESH" or obj.library is not None:
+        return
+    try:
+        spec = display_from_object(obj)
+    except ExportError:
+        return  # said when the display is exported; the plane keeps its last size
+    unit = float(bpy.context.scene.unit_settings.scale_length) or 1.0
+    w, h = (v / spec.scale / unit for v in spec.size)
+    mesh = obj.data
+    if len(mesh.vertices) != 4:
+        mesh.clear_geometry()
+        mesh.from_pydata([(0, 0, 0)] * 4, [], [(0, 1, 2, 3)])
+    for v, (x, y) in zip(mesh.vertices, ((-1, -1), (1, -1), (1, 1), (-1, 1))):
+        v.co = (x * w / 2, y * h / 2, 0.0)
+    mesh.update()
+
+
+DISPLAY_PRESETS = [("FHD_8", "1920 × 1080, 8 µm", "A 1080p phase SLM at 8 µm (the splatting "
+                                                 "and Tensor Holography protocols)"),
+                   ("FHD_6_4", "1920 × 1080, 6.4 µm", "A 1080p phase SLM at 6.4 µm (Neural "
+                                                     "Holography's)"),
+                   ("UHD_3_74", "3840 × 2160, 3.74 µm", "A 4K phase SLM at 3.74 µm"),
+                   ("UHD_3_6", "3840 × 2160, 3.6 µm", "A 4K phase SLM at 3.6 µm"),
+                   ("CUSTOM", "Custom", "Resolution, pitch and bit depth given here")]
+
+
+class HoloDisplaySettings(bpy.types.PropertyGroup):
+    """A holographic display's settings (``Object.holo.display``); lengths in the unit their
+    name gives (µm, nm, mm: as data sheets give them), metres inside."""
+
+    preset: EnumProperty(name="Display", items=DISPLAY_PRESETS, default="FHD_8",
+                         update=_display_changed,
+                         description="The phase SLM the patterns are made for")
+    resolution: IntVectorProperty(name="Resolution", size=2, default=(256, 256), min=16,
+                                  max=16384, update=_display_changed,
+                                  description="Samples across and down (Custom)")
+    pitch: FloatProperty(name="Pitch (µm)", default=8.0, min=0.5, max=100.0,
+                         update=_display_changed,
+                         description="The SLM's sample spacing in micrometres (Custom)")
+    bit_depth: IntProperty(name="Bit Depth", default=8, min=1, max=16,
+                           description="Phase levels 2^bits the SLM resolves (Custom)")
+    pattern_format: EnumProperty(
+        name="Pattern File", default="PNG8",
+        items=[("PNG8", "8-bit Grey PNG", "One grey level a code"),
+               ("PNG16", "16-bit Grey PNG", "One 16-bit grey level a code"),
+               ("PACKED10", "10-bit Packed", "10 bits in an 8-bit RGB PNG: the 8 high in "
+                                              "red, the 2 low in blue (some SLMs' drivers)")],
+        description="How the SLM's driver takes each pattern")
+    phase_range: EnumProperty(
+        name="Phase Range", default="2PI",
+        items=[("2PI", "2π", "The codes span one wave"),
+               ("3PI", "3π", "The codes span 1.5 waves (SLMs driven beyond a wave)")],
+        description="The phase the SLM's code range spans")
+    inverted: BoolProperty(name="Inverted", default=False,
+                           description="The SLM's phase falls as its code rises")
+    colours: BoolVectorProperty(name="Lasers", size=3, default=(True, True, True),
+                                description="Red, green and blue lasers: one pattern each, "
+                                            "shown in turn (field-sequential colour)")
+    wavelengths: FloatVectorProperty(name="Wavelengths (nm)", size=3,
+                                     default=(638.0, 520.0, 488.0), min=200.0, max=2000.0,
+                                     description="The lasers' wavelengths, nanometres")
+    powers: FloatVectorProperty(name="Powers (mW)", size=3, default=(10.0, 10.0, 10.0),
+                                min=0.0, soft_max=1000.0,
+                                description="The lasers' powers, milliwatts (in the layout; "
+                                            "the focal stack's colours are mixed by them)")
+    front: FloatProperty(name="In Front (mm)", default=0.0, min=0.0, soft_max=50.0,
+                         description="How far in front of the display (towards the viewer) "
+                                     "the scene may reach, millimetres")
+    behind: FloatProperty(name="Behind (mm)", default=10.0, min=0.0, soft_max=500.0,
+                          description="How far behind the display the scene may reach, "
+                                      "millimetres")
+    scene_scale: FloatProperty(name="Scene Scale", default=0.01, min=1e-6, max=1e3,
+                               precision=5, update=_display_changed,
+                               description="Display metres per scene metre: the scene is "
+                                           "shown scaled by this about the display")
+    eye_distance: FloatProperty(name="Eye Distance (mm)", default=100.0, min=1.0,
+                                soft_max=2000.0,
+                                description="The eye box's centre from the display, "
+                                            "millimetres, along its normal")
+    eye_box: FloatProperty(name="Eye Box (mm)", default=1.0, min=0.01, soft_max=50.0,
+                           description="The eye box's width and height, millimetres: where "
+                                       "an eye sees the scene whole")
+    pupil: FloatProperty(name="Pupil (mm)", default=1.0, min=0.01, soft_max=10.0,
+                         description="The eye's or camera's pupil in the eye box, millimetres "
+                                     "(the focal stack is seen through it)")
+    table_red: StringProperty(name="Red Table", subtype="FILE_PATH", default="",
+                              options=BLEND_RELATIVE,
+                              description="The red laser's measured phase per code (a "
+                                          "look-up table file; empty: the display's line)")
+    table_green: StringProperty(name="Green Table", subtype="FILE_PATH", default="",
+                                options=BLEND_RELATIVE,
+                                description="The green laser's measured phase per code")
+    table_blue: StringProperty(name="Blue Table", subtype="FILE_PATH", default="",
+                               options=BLEND_RELATIVE,
+                               description="The blue laser's measured phase per code")
+    method: EnumProperty(
+        name="Encoding", default="double-phase",
+        items=[("double-phase", "Double-Phase", "Two phases a sample pair, for a 4f filter "
+                                                "that keeps half the band"),
+               ("gradient-descent", "Gradient Descent", "Adam over the focal stack, from "
+                                                        "double-phase (Iterations)"),
+               ("gerchberg-saxton", "Gerchberg–Saxton", "Projections between the display and "
+                                                        "the stack's planes (Iterations)")],
+        description="How the complex wave becomes the SLM's phase")
+    iterations: IntProperty(name="Iterations", default=100, min=1, max=100000,
+                            description="Steps of the iterative encodings")
+    slices: IntProperty(name="Focal Slices", default=5, min=1, max=64,
+                        description="Slices of the simulated focal stack, over the volume's "
+                                    "depth")
+
+
 class HoloObjectSettings(bpy.types.PropertyGroup):
     emitter: EnumProperty(name="Emitter", items=EMITTERS, default="NONE",
                           update=_emitter_changed,
@@ -50,6 +182,12 @@ class HoloObjectSettings(bpy.types.PropertyGroup):
     is_plate: BoolProperty(name="Hologram Plate", default=False, update=_plate_changed,
                            description="This plane is the holographic plate: its local z = 0 "
                                        "plane, viewed from its +Z side")
+    is_display: BoolProperty(name="Holographic Display", default=False,
+                             update=_display_marked,
+                             description="This plane is a holographic display (a phase SLM): "
+                                         "its local z = 0 plane, viewed from its +Z side; "
+                                         "Render Animation writes its patterns per frame")
+    display: PointerProperty(type=HoloDisplaySettings)
     hologram: StringProperty(name="Hologram", default="", subtype="FILE_PATH",
                              options={"HIDDEN"} | BLEND_RELATIVE,
                              description="The plate's hologram file (first iteration), "
@@ -200,7 +338,7 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                                              "when the scene changed)")
 
 
-CLASSES = (HoloObjectSettings, HoloSceneSettings)
+CLASSES = (HoloDisplaySettings, HoloObjectSettings, HoloSceneSettings)
 
 
 _register_classes, _unregister_classes = bpy.utils.register_classes_factory(CLASSES)

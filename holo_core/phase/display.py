@@ -18,6 +18,7 @@ logged. Files are written by :mod:`holo_core.io.display`.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from dataclasses import dataclass
@@ -54,7 +55,14 @@ class Display:
     pitch : sample spacing [m]
     kind : 'phase' (a phase-only SLM: the pattern is a phase [rad]) or 'amplitude' (an
         amplitude SLM, a film or a print: a transmittance in [0, 1])
-    bit_depth : the levels it resolves, 2^bit_depth (1 to 16)
+    bit_depth : the levels it resolves, 2^bit_depth (1 to 16; phase SLMs' drivers take 8,
+        10 or 16)
+    phase_range : the phase [rad] its codes span without a look-up table, in [2π, 4π]:
+        code k shows k·phase_range/2^bit_depth (2π: the levels fill one wave; 3π: the
+        range double-phase's φ ± α spans unwrapped). A measured table
+        (:class:`holo_core.phase.slm.PhaseTable`) replaces this line.
+    inverted : the phase falls as the code rises (code k shows −k·phase_range/2^bit_depth),
+        as on SLMs whose driver maps grey to voltage the other way round
     """
 
     name: str
@@ -62,6 +70,8 @@ class Display:
     pitch: float
     kind: str = "phase"
     bit_depth: int = 8
+    phase_range: float = 2 * math.pi
+    inverted: bool = False
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not 1 <= len(self.name) <= 100:
@@ -78,6 +88,15 @@ class Display:
         validate.choice("display kind", self.kind, KINDS)
         object.__setattr__(self, "bit_depth", validate.integer(
             "display bit_depth", self.bit_depth, 1, display_io.CODE_BITS))
+        r = validate.finite("display phase_range", self.phase_range, "rad")
+        if not 2 * math.pi * (1 - 1e-9) <= r <= 4 * math.pi * (1 + 1e-9):
+            raise InputError(f"display phase_range must be in [2π, 4π] rad (6.283 to 12.57; "
+                             f"2π or 3π on common SLMs); got {shown(self.phase_range)}")
+        object.__setattr__(self, "phase_range", r)
+        if not isinstance(self.inverted, (bool, np.bool_)):
+            raise InputError(f"display inverted must be True or False; got "
+                             f"{shown(self.inverted)}")
+        object.__setattr__(self, "inverted", bool(self.inverted))
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -85,7 +104,15 @@ class Display:
         return self.resolution[1], self.resolution[0]
 
 
+# The common phase SLMs by resolution and pitch (facts.md section 11): 1080p at 8 µm (the
+# splatting and Tensor Holography protocols) and 6.4 µm (Neural Holography), 4K at 3.74 µm
+# (GAEA class) and 3.6 µm (OpenHolo's default); 8-bit over 2π unless a table says otherwise
+PHASE_PRESETS = ("slm-1080p-8um", "slm-1080p-6.4um", "slm-4k-3.74um", "slm-4k-3.6um")
 DISPLAYS = {d.name: d for d in (
+    Display(name="slm-1080p-8um", resolution=(1920, 1080), pitch=8.0e-6),
+    Display(name="slm-1080p-6.4um", resolution=(1920, 1080), pitch=6.4e-6),
+    Display(name="slm-4k-3.74um", resolution=(3840, 2160), pitch=3.74e-6),
+    Display(name="slm-4k-3.6um", resolution=(3840, 2160), pitch=3.6e-6),
     Display(name="holoeye-gaea-4k", resolution=(3840, 2160), pitch=3.74e-6, kind="phase",
             bit_depth=8),
     Display(name="holoeye-pluto-2", resolution=(1920, 1080), pitch=8.0e-6, kind="phase",
@@ -96,9 +123,16 @@ DISPLAYS = {d.name: d for d in (
 )}
 
 
-def display_preset(name: str) -> Display:
-    """The preset display called ``name`` (one of :data:`DISPLAYS`)."""
-    return DISPLAYS[validate.choice("display", name, tuple(DISPLAYS))]
+def display_preset(name: str, **changes) -> Display:
+    """The preset display called ``name`` (one of :data:`DISPLAYS`), with ``changes`` to its
+    fields (``bit_depth=10``, ``phase_range=3 * math.pi``, ``inverted=True``, ...): a custom
+    display is a :class:`Display` made directly."""
+    preset = DISPLAYS[validate.choice("display", name, tuple(DISPLAYS))]
+    unknown = set(changes) - {f.name for f in dataclasses.fields(Display)}
+    if unknown:
+        raise InputError(f"display_preset takes the fields of Display; got "
+                         f"{', '.join(sorted(unknown))}")
+    return dataclasses.replace(preset, **changes) if changes else preset
 
 
 def error_diffusion(field, *, max_amplitude=None) -> np.ndarray:

@@ -58,3 +58,12 @@ def test_bad_images_are_refused():
         ssim(np.ones((8, 8)), np.ones((8, 8)), data_range=1)
     with pytest.raises(InputError, match="real"):
         ssim(np.ones((16, 16)) + 0j, np.ones((16, 16)), data_range=1)
+
+
+@pytest.mark.parametrize("a, b", [(0.2, 0.8), (0.5, 0.5), (1.0, 0.0)])
+def test_ssim_of_two_flat_images_is_its_luminance_term(a, b):
+    """Flat images have no variance: SSIM = (2ab + C1)/(a² + b² + C1), C1 = (K1·L)², the
+    contrast-structure term C2/C2 = 1 (analytic)."""
+    c1 = (K1 * 1.0) ** 2
+    got = ssim(np.full((16, 20), a), np.full((16, 20), b), data_range=1.0)
+    assert got == pytest.approx((2 * a * b + c1) / (a * a + b * b + c1), abs=1e-12)

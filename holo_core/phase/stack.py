@@ -1,0 +1,247 @@
+"""What a phase display shows: its light carried to the planes of a focal stack, and how
+close that stack is to the one the unencoded complex wave would give.
+
+The model (:class:`Optics`), per laser: the display's field u (exp(i·phase) of the shown
+codes, or a complex wave) is zero-padded, Fourier transformed, passed through the display's
+Fourier filter (a rectangle keeping |fx|, |fy| <= band/(2p): the 4f system's iris; 0.5 is the
+half-Nyquist filter double-phase needs), through the eye's pupil where one is given (a disc
+in the eye box, whose position x is the frequency x/(λ·D)), multiplied by the exact
+band-limited angular spectrum transfer function to each plane
+(:func:`holo_core.propagation.transfer.transfer_function`'s formula, Matsushima & Shimobaba's limit on
+the padded window), transformed back and cropped to the display's window. The same optics
+applied to the complex wave itself is the reference: the stacks differ only by what the
+encoding and the quantisation lose.
+
+:func:`compare` gives PSNR and SSIM (:mod:`holo_core.optics.metrics`) of each slice's
+amplitude ``|U|``, the simulated stack scaled by the one factor that best fits the whole
+reference stack (a display's brightness is its laser's power and the lab's gain), the data
+range the reference stack's largest amplitude.
+
+FFTs: scipy.fft in complex64 on all the CPUs when SciPy is installed, else NumPy's pocketfft
+(complex128, cast back); float32 fields, transfer functions made in float64.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from typing import NamedTuple
+
+import numpy as np
+
+from .. import validate
+from ..optics.metrics import psnr, ssim
+from ..propagation import grid
+from ..propagation.transfer import BAND_EDGE
+from ..validate import InputError
+
+try:  # complex64 transforms on every CPU: ~3x NumPy 1's complex128 pocketfft here
+    import scipy.fft as _sfft
+except ImportError:  # pragma: no cover -- SciPy is optional
+    _sfft = None
+
+MARGIN = 16  # padding samples beyond the widest spread of the band over the deepest plane
+
+
+def fft(a: np.ndarray, axis: int) -> np.ndarray:
+    if _sfft is not None:
+        return _sfft.fft(a, axis=axis, workers=os.cpu_count() or 1)
+    return np.fft.fft(a, axis=axis).astype(np.complex64)
+
+
+def ifft(a: np.ndarray, axis: int) -> np.ndarray:
+    if _sfft is not None:
+        return _sfft.ifft(a, axis=axis, workers=os.cpu_count() or 1)
+    return np.fft.ifft(a, axis=axis).astype(np.complex64)
+
+
+def fft2(a: np.ndarray) -> np.ndarray:
+    return fft(fft(a, axis=0), axis=1)
+
+
+def ifft2(a: np.ndarray) -> np.ndarray:
+    return ifft(ifft(a, axis=0), axis=1)
+
+
+def next_fast(n: int) -> int:
+    return _sfft.next_fast_len(n) if _sfft is not None else grid.next_fast_len(n)
+
+
+class Optics:
+    """The display's light from its plane to the focal stack's planes (module docstring).
+
+    Parameters
+    ----------
+    shape : (rows, cols)
+        The display's samples.
+    pitch : float
+        [m].
+    wavelength : float
+        [m].
+    distances : sequence of float
+        The planes [m] (signed: negative behind the display).
+    band : float
+        The Fourier filter's half-width as a fraction of the Nyquist frequency, in (0, 1].
+    pupil : (x, y, diameter, distance), optional
+        The eye's pupil: its centre (x, y) [m] in the eye box, its diameter [m] and the eye
+        box's distance D [m]; None: every frequency the filter passes.
+    """
+
+    def __init__(self, shape, *, pitch, wavelength, distances, band=0.5, pupil=None):
+        self.shape = validate.shape2d("shape", shape)
+        self.pitch = validate.pitch("pitch", pitch)
+        self.wavelength = validate.wavelength("wavelength", wavelength)
+        z = np.atleast_1d(np.asarray(distances, np.float64))
+        if z.ndim != 1 or not z.size or not np.isfinite(z).all():
+            raise InputError(f"distances must be finite distances [m]; got {distances!r}"[:200])
+        self.distances = z
+        self.band = validate.positive("band", band)
+        if self.band > 1:
+            raise InputError(f"band must be in (0, 1]; got {band!r}")
+        angle = math.asin(min(1.0, self.band * self.wavelength / (2 * self.pitch)))
+        spread = math.ceil(float(np.abs(z).max()) * math.tan(angle) / self.pitch) + MARGIN
+        self.padded = tuple(next_fast(n + 2 * spread) for n in self.shape)
+        fy = grid.freqs(self.padded[0], self.pitch)
+        fx = grid.freqs(self.padded[1], self.pitch)
+        cut = self.band / (2 * self.pitch) * (1 + 1e-9)
+        self.rows = np.flatnonzero(np.abs(fy) <= cut)  # the filter's rows and columns
+        self.cols = np.flatnonzero(np.abs(fx) <= cut)
+        self.block = np.ix_(self.rows, self.cols)
+        keep = np.ones((self.rows.size, self.cols.size))
+        if pupil is not None:
+            x, y, diameter, eye = (validate.finite("pupil", v, "m") for v in pupil)
+            lam_d = self.wavelength * validate.positive("pupil distance", eye, "m")
+            r = validate.positive("pupil diameter", diameter, "m") / (2 * lam_d)
+            keep = ((fy[self.rows][:, None] - y / lam_d) ** 2
+                    + (fx[self.cols][None, :] - x / lam_d) ** 2 <= r * r).astype(np.float64)
+            if not keep.any():
+                raise InputError(f"pupil: a {diameter * 1e3:.3g} mm pupil at ({x * 1e3:.3g}, "
+                                 f"{y * 1e3:.3g}) mm lies outside the band the display's "
+                                 f"filter passes")
+        self.keep = keep
+        self.top = tuple((p - n) // 2 for p, n in zip(self.padded, self.shape))
+        self._transfer = {}
+
+    def transfer(self, k: int) -> np.ndarray:
+        """The filter, pupil and transfer function to plane ``k`` on the filter's block,
+        complex64 (cached)."""
+        t = self._transfer.get(k)
+        if t is None:
+            full_rows = grid.freqs(self.padded[0], self.pitch)[self.rows]
+            full_cols = grid.freqs(self.padded[1], self.pitch)[self.cols]
+            # the transfer function's formula on the block's frequencies only: the same
+            # values as transfer_function on the padded grid, at band² of its cost
+            h = _block_transfer(self.padded, full_rows, full_cols, self.wavelength, self.pitch,
+                                float(self.distances[k]))
+            t = (h * self.keep).astype(np.complex64)
+            self._transfer[k] = t
+        return t
+
+    def pad(self, u: np.ndarray) -> np.ndarray:
+        out = np.zeros(self.padded, np.complex64)
+        (r, c), (h, w) = self.top, self.shape
+        out[r:r + h, c:c + w] = u
+        return out
+
+    def crop(self, v: np.ndarray) -> np.ndarray:
+        (r, c), (h, w) = self.top, self.shape
+        return v[r:r + h, c:c + w]
+
+    def spectrum(self, u) -> np.ndarray:
+        """The filter's block of the padded field's spectrum, complex64: fft2 of the padded
+        field, pruned (columns of zeros are not transformed, rows outside the filter not
+        kept), the same values at about 3/4 of the work."""
+        (r, c), (h, w) = self.top, self.shape
+        cols = np.zeros((self.padded[0], w), np.complex64)
+        cols[r:r + h] = u
+        cols = fft(cols, axis=0)[self.rows]
+        rows = np.zeros((self.rows.size, self.padded[1]), np.complex64)
+        rows[:, c:c + w] = cols
+        return fft(rows, axis=1)[:, self.cols]
+
+    def window(self, block: np.ndarray) -> np.ndarray:
+        """ifft2 of a spectrum that is zero outside the filter's block, on the display's
+        window (complex64), pruned like :meth:`spectrum`."""
+        (r, c), (h, w) = self.top, self.shape
+        rows = np.zeros((self.rows.size, self.padded[1]), np.complex64)
+        rows[:, self.cols] = block
+        rows = ifft(rows, axis=1)[:, c:c + w]
+        cols = np.zeros((self.padded[0], w), np.complex64)
+        cols[self.rows] = rows
+        return ifft(cols, axis=0)[r:r + h]
+
+    def to_plane(self, spectrum_block: np.ndarray, k: int) -> np.ndarray:
+        """The field (display's window, complex64) on plane ``k`` of a spectrum's block."""
+        return self.window(spectrum_block * self.transfer(k))
+
+    def from_plane(self, v: np.ndarray, k: int) -> np.ndarray:
+        """The adjoint of :meth:`to_plane`: a field on plane ``k``'s window back to a spectrum
+        block (conj of the transfer; FFT then ifft's 1/N, as NumPy's pair is adjoint)."""
+        n = self.padded[0] * self.padded[1]
+        return self.spectrum(v) * (np.conj(self.transfer(k)) / n)
+
+    def back(self, spectrum_block: np.ndarray) -> np.ndarray:
+        """A spectrum block back to the display's window (the adjoint of :meth:`spectrum`
+        up to NumPy's 1/N, which :meth:`from_plane` has taken)."""
+        return self.window(spectrum_block) * (self.padded[0] * self.padded[1])
+
+    def stack(self, u) -> np.ndarray:
+        """The amplitude |U| on every plane, float32 (N, rows, cols)."""
+        s = self.spectrum(u)
+        return np.stack([np.abs(self.to_plane(s, k)) for k in range(self.distances.size)])
+
+
+def _block_transfer(padded, fy, fx, wavelength, pitch, distance) -> np.ndarray:
+    """transfer_function's values (band limit included) at the frequencies fy × fx of the
+    padded grid."""
+    f2 = fx[None, :] ** 2 + fy[:, None] ** 2
+    fz2 = 1.0 / wavelength**2 - f2
+    keep = fz2 > 0
+    fz = np.sqrt(np.where(keep, fz2, 1.0))
+    carrier = math.remainder(2 * math.pi * distance / wavelength, 2 * math.pi)
+    phase = carrier - 2 * np.pi * distance * f2 / (1.0 / wavelength + fz)
+    weight = np.ones_like(f2)
+    for n, f in ((padded[1], fx[None, :]), (padded[0], fy[:, None])):
+        u = np.abs(distance * f / fz) / (n * pitch / 2)
+        t = np.clip((u - (1 - BAND_EDGE)) / BAND_EDGE, 0, 1)
+        weight = weight * np.where(u <= 1, np.cos(np.pi / 2 * t) ** 2, 0)
+    return keep * weight * np.exp(1j * phase)
+
+
+class Comparison(NamedTuple):
+    """Per slice: ``psnr_db`` and ``ssim`` of the amplitudes (module docstring), and the
+    ``scale`` fitted to the whole stack; ``mean_psnr_db``, ``mean_ssim`` over the slices."""
+
+    psnr_db: list
+    ssim: list
+    scale: float
+
+    @property
+    def mean_psnr_db(self) -> float:
+        return float(np.mean(self.psnr_db))
+
+    @property
+    def mean_ssim(self) -> float:
+        return float(np.mean(self.ssim))
+
+
+def fitted(stack, reference) -> tuple[np.ndarray, float]:
+    """``stack`` scaled by the least-squares factor onto ``reference`` (one for all slices)."""
+    s = np.asarray(stack, np.float64)
+    r = np.asarray(reference, np.float64)
+    den = float(np.sum(s * s))
+    scale = float(np.sum(s * r)) / den if den > 0 else 0.0
+    return s * scale, scale
+
+
+def compare(stack, reference) -> Comparison:
+    """PSNR [dB] and SSIM of each slice of the amplitude ``stack`` (N, H, W) against
+    ``reference`` (module docstring)."""
+    s, scale = fitted(stack, reference)
+    r = np.asarray(reference, np.float64)
+    peak = float(r.max())
+    if not peak > 0:
+        raise InputError("reference stack is dark: nothing to compare against")
+    return Comparison([psnr(a / peak, b / peak, data_range=1.0) for a, b in zip(s, r)],
+                      [ssim(a / peak, b / peak, data_range=1.0) for a, b in zip(s, r)], scale)
+
