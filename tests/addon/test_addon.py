@@ -264,7 +264,7 @@ def test_animation_renders_a_pass_per_frame(empty_scene, tmp_path):
     scene.render.resolution_percentage = 100
     scene.render.engine = "BLENDER_WORKBENCH"
     scene.holo.mode = "PLATE"  # the plate's hologram is kept between frames
-    scene.holo.iterations = 1
+    scene.holo.iterations = 2  # two coded looks: a silhouette not set by one speckle draw
     for frame, x in ((1, -0.15), (2, 0.15), (3, 0.15)):
         cube.location.x = x
         cube.keyframe_insert("location", frame=frame)
