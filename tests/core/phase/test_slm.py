@@ -43,9 +43,9 @@ def test_a_table_file_reads_back(tmp_path, suffix):
     if suffix == ".npy":
         np.save(path, phases)
     elif suffix == ".csv":
-        path.write_text("code,phase\n" + "".join(f"{k},{p!r}\n" for k, p in enumerate(phases)))
+        path.write_text("code,phase\n" + "".join(f"{k},{float(p)!r}\n" for k, p in enumerate(phases)))
     else:
-        path.write_text("".join(f"{p!r}\n" for p in phases))
+        path.write_text("".join(f"{float(p)!r}\n" for p in phases))
     t = read_phase_table(path, wavelength=638e-9, bit_depth=8)
     assert np.array_equal(t.phases, phases) and t.source == path.name and t.bit_depth == 8
 
