@@ -139,13 +139,7 @@ class PlateRoute(_Route):
         if self.wavelength is not None:
             _set(self, "wavelength", validate.length("wavelength",
                                                      _real("wavelength", self.wavelength)))
-        validate.choice("composition", self.composition, ("mean", "max"))
-        threshold = validate.finite("opacity_threshold",
-                                    _real("opacity_threshold", self.opacity_threshold))
-        if not 0 <= threshold <= 1:
-            raise InputError(f"opacity_threshold must be in [0, 1]; got "
-                             f"{self.opacity_threshold!r}")
-        _set(self, "opacity_threshold", threshold)
+        _check_composition(self)
         validate.digest("recording", self.recording)
 
 
@@ -198,13 +192,7 @@ class SetRoute(_Route):
             value = getattr(self, name)
             if value is not None and not validate.finite(name, _real(name, value), "bytes") > 0:
                 raise InputError(f"{name} must be > 0 [bytes] or None; got {shown(value)}")
-        validate.choice("composition", self.composition, ("mean", "max"))
-        threshold = validate.finite("opacity_threshold",
-                                    _real("opacity_threshold", self.opacity_threshold))
-        if not 0 <= threshold <= 1:
-            raise InputError(f"opacity_threshold must be in [0, 1]; got "
-                             f"{self.opacity_threshold!r}")
-        _set(self, "opacity_threshold", threshold)
+        _check_composition(self)
         validate.choice("outside", self.outside, ("warn", "fail"))
         validate.digest("recording", self.recording)
 
@@ -542,6 +530,18 @@ def _meshes(data, name: str) -> tuple:
     if not isinstance(data, (list, tuple)):
         raise InputError(f"{name} must be a list of meshes; got {type(data).__name__}")
     return tuple(_noun(Mesh, m, f"{name}[{i}]") for i, m in enumerate(data))
+
+
+def _check_composition(route) -> None:
+    """A plate or set route's composition of its looks ('mean' or 'max') and its opacity
+    threshold (a fraction in [0, 1]), checked and the threshold kept as a float."""
+    validate.choice("composition", route.composition, ("mean", "max"))
+    threshold = validate.finite("opacity_threshold",
+                                _real("opacity_threshold", route.opacity_threshold))
+    if not 0 <= threshold <= 1:
+        raise InputError(f"opacity_threshold must be in [0, 1]; got "
+                         f"{route.opacity_threshold!r}")
+    _set(route, "opacity_threshold", threshold)
 
 
 def _set(obj, name: str, value) -> None:
