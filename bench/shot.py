@@ -359,7 +359,7 @@ def view_stages(plates, cam, supersample) -> None:
     rt = get_runtime()
     seconds = defaultdict(float)
 
-    def synced(name, f, *a, **kw):
+    def synced(name, f, /, *a, **kw):
         rt.queue.finish()
         t = time.perf_counter()
         out = f(*a, **kw)
