@@ -1,17 +1,18 @@
 """Looking around a held plate: views a second and each view's latency from the camera's change
 to its picture, full and coarse, of a camera wandering inside the plate's zone, against the
-camera pass of the same frame, in one run.
+camera pass of the same frame and render_view unplanned, in one run.
 
 The scene is ``bench/shot.py``'s (a textured cube partly hiding a sphere 3.5 m from the camera,
 a 1 m plate halfway, 40 mm f/2.8, its zone fitted to a 10 cm dolly), recorded once with
-``--looks`` coded looks a ``--scale`` (0.5: 640×360; 1: 1280×720) and held by a
+``--looks`` coded looks at each ``--scales`` (0.5: 640×360; 1: 1280×720) and held by a
 :class:`holo_core.PlateViewer`. The camera wanders inside the zone: sideways over most of its
 width, up and down, nearer and farther, its aim turning by a few degrees; its ``--poses``
-poses are visited once (first visits: every size met for the first time plans its transforms
-and builds its kernels) and again (revisits). For each: the full view's seconds (the picture
+poses are viewed by render_view alone (each view sized exactly and planned afresh), then by
+the viewer once (first visits: every size met for the first time plans its transforms and
+builds its kernels) and again (revisits). For each: the full view's seconds (the picture
 render_view gives, planned with the viewer's slack) and the coarse view's (one look, one sample
 a pixel, at most 320×180 pixels upsampled). The latency in the core is the view's own time: a
-call returns its picture. Then one full view of the middle pose stage by stage, the device
+call returns its picture. Then one full view of the first pose stage by stage, the device
 synchronised around each kernel and transform, each against the bound the issue sets: the
 bytes of the window's samples the view reads over this machine's memory bandwidth, measured
 here (a NumPy copy of 256 MiB).
@@ -112,12 +113,19 @@ def one_scale(args, scale: float, rate: float) -> dict:
     outside = [i for i, c in enumerate(cams) if not viewer.contains(c)]
     if outside:
         raise SystemExit(f"poses {outside} lie outside the zone: {viewer.where(cams[outside[0]])}")
-    middle = cams[0]
+    middle = cams[0]  # the loop starts across the zone's middle
     render_camera(shot.scene(), middle, via="incoherent")  # warm: programs built
     passes = [timed(render_camera, shot.scene(), middle, via="incoherent")[1] for _ in range(2)]
     cam_s = statistics.median(passes)
     print(f"{size}: the camera pass {cam_s:.2f} s (load {load()})", flush=True)
-    runs = {}
+    # the same path by render_view alone, each view planned afresh at its exact sizes (the
+    # reference the viewer's plans are measured against)
+    from holo_core.plate.view import render_view
+    runs = {"render_view, unplanned (first visits)": [
+        timed(render_view, holos, c, supersample=args.supersample)[1] for c in cams]}
+    key = "render_view, unplanned (first visits)"
+    print(f"  {key}: median {statistics.median(runs[key]):.3f} s, {min(runs[key]):.3f}-"
+          f"{max(runs[key]):.3f} (load {load()})", flush=True)
     for visit in ("first", "again"):
         for coarse in (False, True):
             key = f"{'coarse' if coarse else 'full'} ({visit} visits)"

@@ -85,8 +85,8 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
         intensity-weighted consensus), or per pixel from the brightest iteration (Fig. 11c).
         Either way the depth pair is imaged through :func:`depth_aperture`.
     plans : ViewPlans, optional
-        What a moving camera's views share (:class:`holo_core.plate.view_plans.ViewPlans`,
-        held by :class:`holo_core.PlateViewer`): sizes rounded up with slack, so that nearby
+        What a moving camera's views share (``holo_core.plate.view_plans.ViewPlans``, held
+        by :class:`holo_core.PlateViewer`): sizes rounded up with slack, so that nearby
         cameras reuse the transforms' plans and the kernels' builds, and the pupil's plans
         kept for a camera seen again. None: each view sized exactly, planned afresh.
 
