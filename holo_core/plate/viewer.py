@@ -243,7 +243,8 @@ class PlateViewer:
         camera : Camera
             The camera the sliders start from (inside the zone).
         coarse : bool
-            Draw coarse views while a slider moves (:meth:`view`), the full view on release.
+            Draw coarse views while a slider moves (:meth:`view`); the widget's button draws
+            the full view (and so does every move with ``coarse=False``).
 
         Returns
         -------
