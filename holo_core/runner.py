@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import estimate, jobs, memory
+from . import estimate, jobs
 from .camera.render import render_camera
 from .io.hologram import HologramFileError, write_hologram
 from .io.image import check_room, check_writable, read_exr
@@ -283,11 +283,6 @@ def _plan(job: Job) -> tuple[PlannedPlate, list[str] | None]:
                          looks=len(route.holograms),
                          budget=(route.memory_budget, route.disk_budget), tiled=None)
     p, channels = planned.plan, len(planned.channels)
-    if planned.tiled:
-        log.info("the plate's %d look(s) need %s in one piece, more than %s: recording them "
-                 "tile by tile into %s", p.looks, memory.gib(p.memory_bytes(channels * p.looks)),
-                 memory.gib(memory.host_share(route.memory_budget)),
-                 store_of(route.holograms[0]).name)
     check_room(route.holograms, p.disk_bytes(channels, tiled=planned.tiled) / p.looks,
                f"the plate's {{n}} look(s) ({p.shape[1]} x {p.shape[0]} samples, {channels} "
                f"channels{', in tiles' if planned.tiled else ''})")

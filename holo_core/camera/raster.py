@@ -114,9 +114,18 @@ def grid_indices(flat, shape):
     return np.where(r > (h - 1) // 2, r - h, r), np.where(c > (w - 1) // 2, c - w, c)
 
 
+def layer_of(optics: PupilOptics, depth) -> np.ndarray:
+    """Index of the depth layer of ``optics`` each planar ``depth`` [m] belongs to (nearest
+    in 1/z)."""
+    if not len(depth):
+        return np.zeros(0, np.int64)
+    inv = 1 / np.asarray(optics.layers)
+    return np.argmin(np.abs(1 / np.asarray(depth)[:, None] - inv[None, :]), axis=1)
+
+
 def _sorted_emitters(index, depth, distance, colour, coverage, optics, layer=None):
     if layer is None:
-        layer = optics.layer_of(depth) if len(depth) else np.zeros(0, np.int64)
+        layer = layer_of(optics, depth)
     order = np.argsort(layer, kind="stable")
     starts = np.searchsorted(layer[order], np.arange(len(optics.layers) + 1))
     return Emitters(index=index[order], depth=depth[order], distance=distance[order],
@@ -229,7 +238,8 @@ def camera_emitters(meshes, points, camera: Camera, *, supersample, pupil_diamet
     emitter per bin. The host's memory for the meshes' rasterization (:func:`raster_bytes`)
     is the caller's to check first (:func:`holo_core.camera.render.render_camera` does)."""
     pos, colours = (None, None) if points is None else points
-    optics = choose_optics(camera, depth_range(meshes, camera, pos), supersample=supersample,
+    near_far = depth_range(meshes, camera, pos)
+    optics = choose_optics(camera, near_far, supersample=supersample,
                            pupil_diameter=pupil_diameter)
     em = across_shutter(meshes, camera, optics) if meshes else None
     if pos is not None:

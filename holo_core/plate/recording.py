@@ -191,9 +191,13 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
     memory.check_host(f"finding the emitters of {sum(len(m.triangles) for m in local)} "
                       f"triangles ({count:.3g} crossings of the zone's rays: many large "
                       f"triangles through each other cross many)", CROSSING_BYTES * count)
-    depth = _flag("depth", depth)
+    depth, decided = _flag("depth", depth), tiled is None
     tiled = p.check_recording(memory=budget[0], disk=budget[1], channels=3 + depth,
                               tiled=tiled)
+    if decided and tiled:
+        log.info("the plate's %d look(s) need %s in one piece, more than %s: recording them "
+                 "tile by tile", p.looks, memory.gib(p.memory_bytes((3 + depth) * p.looks)),
+                 memory.gib(memory.host_share(budget[0])))
     return PlannedPlate(plan=p, meshes=local, plate=plate, depth=depth, tiled=tiled)
 
 
