@@ -102,9 +102,14 @@ def _emitters(meshes, covered, owner, bary, depth, optics: PupilOptics) -> Emitt
         c = surface_colour(mesh, corners, weights, 3)
         colour[sel] = c if c.shape[1] == 3 else np.repeat(c.mean(1, keepdims=True), 3, 1)
     ky, kx = grid_indices(covered, optics.shape)
+    return _sorted_emitters(covered, depth, _ray_distance(kx, ky, depth, optics), colour,
+                            np.ones(len(covered)), optics)
+
+
+def _ray_distance(kx, ky, depth, optics: PupilOptics) -> np.ndarray:
+    """The distance R [m] along the ray of bin (kx, ky) to its planar ``depth`` [m]."""
     tx, ty = bin_rays(kx, ky, optics.bin)
-    distance = depth * np.sqrt(1 + tx * tx + ty * ty)
-    return _sorted_emitters(covered, depth, distance, colour, np.ones(len(covered)), optics)
+    return depth * np.sqrt(1 + tx * tx + ty * ty)
 
 
 def grid_indices(flat, shape):
@@ -146,8 +151,7 @@ def point_emitters(positions, colours, camera: Camera, optics: PupilOptics) -> E
     h, w = optics.shape
     inside = (np.abs(kx) <= (w - 1) // 2) & (np.abs(ky) <= (h - 1) // 2)
     kx, ky, col, depth = kx[inside], ky[inside], col[inside], -local[inside, 2]
-    tx, ty = bin_rays(kx, ky, optics.bin)
-    dist = depth * np.sqrt(1 + tx * tx + ty * ty)
+    dist = _ray_distance(kx, ky, depth, optics)
     index, inverse = np.unique((ky % h) * w + kx % w, return_inverse=True)
     weight = col.sum(1) + 1e-30
     summed = np.stack([np.bincount(inverse, col[:, c]) for c in range(3)], -1)
