@@ -259,7 +259,7 @@ def _refusal(p) -> str:
     from .validate import InputError
     limit = memory.host_share()
     try:
-        p.check_budget(memory=limit, tiled=p.needs_tiles(limit), held=p.looks)
+        p.check_recording(memory=limit, tiled=None)
     except InputError as e:
         return str(e)
     return ""

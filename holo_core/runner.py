@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import estimate, jobs, memory
+from . import estimate, jobs
 from .camera.render import render_camera
 from .io.hologram import HologramFileError, write_hologram
 from .io.image import check_room, check_writable, read_exr
@@ -43,7 +43,7 @@ from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result, SetRoute
 from .plate.looks import record_planned
 from .plate.parts import record_set
 from .plate.path import part_for
-from .plate.plan import CHANNELS, PlatePlan, plan_view
+from .plate.plan import PlatePlan, plan_view
 from .plate.recording import PlannedPlate, plate_plan
 from .plate.view import OutsideZoneWarning, render_set_view, render_view
 from .scene.hologram import Hologram
@@ -114,10 +114,8 @@ def _plate(job: Job, progress, kept: KeptPlates):
         # every look in one pass; the plan is made once, here, and read by every stage
         planned, urls = _plan(job)
         _say_estimate(job, planned.plan)
-        holos = record_planned(planned, seed=route.seed,
-                               budget=(route.memory_budget, route.disk_budget), urls=urls,
-                               scheduler=route.scheduler, recording=route.recording,
-                               progress=recording)
+        holos = record_planned(planned, seed=route.seed, urls=urls, scheduler=route.scheduler,
+                               recording=route.recording, progress=recording)
     else:
         holos = kept.read(route.holograms, route.recording)
     view = None
@@ -262,25 +260,22 @@ class KeptPlates:
 
 def _plan(job: Job) -> tuple[PlannedPlate, list[str] | None]:
     """The plan of the job's plate of meshes and its looks (:func:`plate_plan`), made once a
-    job before any emitter is found, and where the looks go: ``None`` (recorded in memory
-    together), or where in one piece they exceed the route's memory budget or the host's
-    share of its memory, the tiled stores beside their files (:func:`store_of`: recorded tile
-    by tile on Dask, a cancelled recording resuming there). The disk that takes them is
-    checked for their room now, before the recording."""
+    job before any emitter is found and checked there against the route's budgets, and where
+    the looks go: ``None`` (recorded in memory together), or where in one piece they exceed
+    the route's memory budget or the host's share of its memory, the tiled stores beside
+    their files (:func:`store_of`: recorded tile by tile on Dask, a cancelled recording
+    resuming there). The disk that takes them is checked for their room now, before the
+    recording."""
     route = job.route
     planned = plate_plan(list(job.points) + list(job.triangles), plate=route.plate,
                          camera=job.camera, wavelength=route.wavelength,
-                         looks=len(route.holograms))
-    p, limit = planned.plan, memory.host_share(route.memory_budget)
-    tiled = p.needs_tiles(limit)
-    if tiled:
-        log.info("the plate's %d look(s) need %s in one piece, more than %s: recording them "
-                 "tile by tile into %s", p.looks, memory.gib(p.memory_bytes(CHANNELS * p.looks)),
-                 memory.gib(limit), store_of(route.holograms[0]).name)
-    check_room(route.holograms, p.disk_bytes(CHANNELS, tiled=tiled) / p.looks,
-               f"the plate's {{n}} look(s) ({p.shape[1]} x {p.shape[0]} samples, {CHANNELS} "
-               f"channels{', in tiles' if tiled else ''})")
-    return planned, [str(store_of(path)) for path in route.holograms] if tiled else None
+                         looks=len(route.holograms),
+                         budget=(route.memory_budget, route.disk_budget), tiled=None)
+    p, channels = planned.plan, len(planned.channels)
+    check_room(route.holograms, p.disk_bytes(channels, tiled=planned.tiled) / p.looks,
+               f"the plate's {{n}} look(s) ({p.shape[1]} x {p.shape[0]} samples, {channels} "
+               f"channels{', in tiles' if planned.tiled else ''})")
+    return planned, [str(store_of(path)) for path in route.holograms] if planned.tiled else None
 
 
 def _check_outputs(job: Job) -> None:

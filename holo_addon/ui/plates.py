@@ -283,11 +283,9 @@ def plan_summary(context) -> list[str]:
                     plate_size=(plate.width, plate.height), camera=eye,
                     device=options["device"], cache_dir=options["cache_dir"])
     gb = 2.0**30
-    # as the recording decides: tile by tile where the looks exceed the memory in one piece
-    tiled = p.needs_tiles(memory.host_share(h.plate_memory * gb))
-    try:
-        p.check_budget(memory=h.plate_memory * gb, disk=h.plate_disk * gb, tiled=tiled,
-                       held=p.looks)
+    try:  # as the recording's plan decides: tile by tile where the looks exceed the memory
+        tiled = p.check_recording(memory=h.plate_memory * gb, disk=h.plate_disk * gb,
+                                  tiled=None)
     except InputError as e:
         lines.insert(1, f"refused     {e}")
     else:

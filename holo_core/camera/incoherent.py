@@ -38,7 +38,7 @@ from ..propagation.grid import embedded, next_fast_len
 from ..propagation.tilt import cached_array, es_table, es_transform
 from ..scene.camera import Camera
 from . import recording
-from .optics import PupilOptics, iris
+from .optics import PupilOptics
 from .raster import Emitters
 
 PROGRAM = associated(__file__)
@@ -85,7 +85,8 @@ class IncoherentImages:
         self.pixels = empty(rt, alpha.shape)
         # E|A|² in the looks' normalisation (|A|² / (N·Σw²), recording.py), and the 1/N of
         # the unnormalised inverse FFT
-        self.scale = 1 / (h * w * float(np.sum(iris(optics, h, w) ** 2)) * math.prod(self.shape))
+        iris = imaging.iris_weights((h, w), optics.pitch(), optics.diameter)
+        self.scale = 1 / (h * w * float(np.sum(iris ** 2)) * math.prod(self.shape))
 
     def images(self, progress: jobs.Progress = None) -> list[np.ndarray]:
         """(R + iG, B + i·coverage, cross) at the fine pixels: complex64 (H, W) each."""

@@ -19,7 +19,6 @@ import numpy as np
 
 from .. import validate
 from ..optics.depth import DEPTH_MARGIN, partner_wavelength
-from ..optics.imaging import iris_weights
 from ..optics.pupil import Pupil, defocus_limited_diameter
 from ..propagation import grid
 from ..scene.camera import Camera
@@ -75,11 +74,6 @@ class PupilOptics:
         h, w = self.shape
         return lam / (h * self.bin), lam / (w * self.bin)
 
-    def layer_of(self, depth) -> np.ndarray:
-        """Index of the layer each planar ``depth`` [m] belongs to (nearest in 1/z)."""
-        inv = 1 / np.asarray(self.layers)
-        return np.argmin(np.abs(1 / np.asarray(depth)[:, None] - inv[None, :]), axis=1)
-
     def describe(self) -> str:
         h, w = self.shape
         lens = f"focus {self.focus:.4g} m" if self.focus else "no lens"
@@ -125,8 +119,3 @@ def choose_optics(camera: Camera, depth_range, *, supersample=SUPERSAMPLE,
                          depth_range=(near, far), centre=(near + farthest) / 2)
     log.info("optics: %s", optics.describe())
     return optics
-
-
-def iris(optics: PupilOptics, h, w) -> np.ndarray:
-    """The iris's transmission on the pupil's samples (what pupil_window applies)."""
-    return iris_weights((h, w), optics.pitch(), optics.diameter)

@@ -102,9 +102,14 @@ def _emitters(meshes, covered, owner, bary, depth, optics: PupilOptics) -> Emitt
         c = surface_colour(mesh, corners, weights, 3)
         colour[sel] = c if c.shape[1] == 3 else np.repeat(c.mean(1, keepdims=True), 3, 1)
     ky, kx = grid_indices(covered, optics.shape)
+    return _sorted_emitters(covered, depth, _ray_distance(kx, ky, depth, optics), colour,
+                            np.ones(len(covered)), optics)
+
+
+def _ray_distance(kx, ky, depth, optics: PupilOptics) -> np.ndarray:
+    """The distance R [m] along the ray of bin (kx, ky) to its planar ``depth`` [m]."""
     tx, ty = bin_rays(kx, ky, optics.bin)
-    distance = depth * np.sqrt(1 + tx * tx + ty * ty)
-    return _sorted_emitters(covered, depth, distance, colour, np.ones(len(covered)), optics)
+    return depth * np.sqrt(1 + tx * tx + ty * ty)
 
 
 def grid_indices(flat, shape):
@@ -114,9 +119,18 @@ def grid_indices(flat, shape):
     return np.where(r > (h - 1) // 2, r - h, r), np.where(c > (w - 1) // 2, c - w, c)
 
 
+def layer_of(optics: PupilOptics, depth) -> np.ndarray:
+    """Index of the depth layer of ``optics`` each planar ``depth`` [m] belongs to (nearest
+    in 1/z)."""
+    if not len(depth):
+        return np.zeros(0, np.int64)
+    inv = 1 / np.asarray(optics.layers)
+    return np.argmin(np.abs(1 / np.asarray(depth)[:, None] - inv[None, :]), axis=1)
+
+
 def _sorted_emitters(index, depth, distance, colour, coverage, optics, layer=None):
     if layer is None:
-        layer = optics.layer_of(depth) if len(depth) else np.zeros(0, np.int64)
+        layer = layer_of(optics, depth)
     order = np.argsort(layer, kind="stable")
     starts = np.searchsorted(layer[order], np.arange(len(optics.layers) + 1))
     return Emitters(index=index[order], depth=depth[order], distance=distance[order],
@@ -137,8 +151,7 @@ def point_emitters(positions, colours, camera: Camera, optics: PupilOptics) -> E
     h, w = optics.shape
     inside = (np.abs(kx) <= (w - 1) // 2) & (np.abs(ky) <= (h - 1) // 2)
     kx, ky, col, depth = kx[inside], ky[inside], col[inside], -local[inside, 2]
-    tx, ty = bin_rays(kx, ky, optics.bin)
-    dist = depth * np.sqrt(1 + tx * tx + ty * ty)
+    dist = _ray_distance(kx, ky, depth, optics)
     index, inverse = np.unique((ky % h) * w + kx % w, return_inverse=True)
     weight = col.sum(1) + 1e-30
     summed = np.stack([np.bincount(inverse, col[:, c]) for c in range(3)], -1)
@@ -229,7 +242,8 @@ def camera_emitters(meshes, points, camera: Camera, *, supersample, pupil_diamet
     emitter per bin. The host's memory for the meshes' rasterization (:func:`raster_bytes`)
     is the caller's to check first (:func:`holo_core.camera.render.render_camera` does)."""
     pos, colours = (None, None) if points is None else points
-    optics = choose_optics(camera, depth_range(meshes, camera, pos), supersample=supersample,
+    near_far = depth_range(meshes, camera, pos)
+    optics = choose_optics(camera, near_far, supersample=supersample,
                            pupil_diameter=pupil_diameter)
     em = across_shutter(meshes, camera, optics) if meshes else None
     if pos is not None:

@@ -22,9 +22,9 @@ from numpy import float32, int32
 from ..opencl import associated, get_runtime
 from ..opencl.arrays import by_rows, empty, fill
 from ..opencl.kernel import BUFFER, kernel
-from ..optics.imaging import ES_TABLE, TAPS, PupilImage
+from ..optics.imaging import ES_TABLE, TAPS, PupilImage, iris_weights
 from ..scene.camera import Camera
-from .optics import PupilOptics, iris
+from .optics import PupilOptics
 from .raster import Emitters
 
 PROGRAM = associated(__file__)
@@ -42,6 +42,7 @@ class PupilFields:
         h, w = optics.shape
         self.index = rt.to_device(em.index.astype(np.int32))
         self.wavelengths = (optics.wavelength, optics.depth_wavelength)
+        self.pitches = [optics.pitch(lam) for lam in self.wavelengths]  # (dy, dx) [m] each
         self.phase0 = [rt.to_device(np.remainder(2 * np.pi / lam * em.distance, 2 * np.pi),
                                     np.float32) for lam in self.wavelengths]
         self.amps = [rt.to_device(np.sqrt(em.colour[:, c]), np.float32) for c in range(3)]
@@ -49,15 +50,15 @@ class PupilFields:
         self.spectrum, self.pupil = empty(rt, (h, w)), empty(rt, (h, w))
         self.imager = PupilImage(rt, (h, w), bin=optics.bin, camera=camera_fine)
         # |A|² / (N·Σw²) is the emitters' intensity (Parseval), w the iris on the samples
-        self.scale = 1 / math.sqrt(h * w * float(np.sum(iris(optics, h, w) ** 2)))
+        iris = iris_weights((h, w), self.pitches[0], optics.diameter)
+        self.scale = 1 / math.sqrt(h * w * float(np.sum(iris ** 2)))
         self.options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
 
     def object_wave(self, field: int, phases):
         """The pupil's object wave (device, (h, w) FFT order) of colour channel ``field``
         (0-2) or the depth partner (3), emitter phases ``phases`` (device float32)."""
         rt, em, optics = self.rt, self.em, self.optics
-        lam = self.wavelengths[field == 3]
-        dy, dx = optics.pitch(lam)
+        lam, (dy, dx) = self.wavelengths[field == 3], self.pitches[field == 3]
         h, w = optics.shape
         fill(rt, self.pupil, 0)
         for layer, z in enumerate(optics.layers):
@@ -78,7 +79,7 @@ class PupilFields:
         E|A|² is the emitters' intensity."""
         optics = self.optics
         lam = self.wavelengths[field == 3]
-        return self.imager.image(self.pupil, pitch=optics.pitch(lam),
+        return self.imager.image(self.pupil, pitch=self.pitches[field == 3],
                                  diameter=optics.diameter * lam / optics.wavelength,
                                  focus=optics.focus, lens_k=2 * np.pi / lam, scale=self.scale)
 

@@ -124,7 +124,7 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     seed = validate.seed(seed)
     exposure = validate.exposure(exposure)
     meshes, points = _meshes(meshes), None if points is None else _points(points)
-    w, h = camera.resolution
+    fine, (w, h) = camera.supersampled(supersample), camera.resolution
     view = FINE_PIXEL_BYTES * w * h * supersample**2
     # the host's memory before the meshes are projected (a 10^7-vertex mesh took 8 GB and more)
     memory.check_host(f"a {w}x{h} camera view at supersample {supersample}", view)
@@ -133,16 +133,16 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
                           raster_bytes(meshes))
     optics, em = camera_emitters(meshes, points, camera, supersample=supersample,
                                  pupil_diameter=pupil_diameter)
-    fine = camera.supersampled(supersample)
-    rt = get_runtime()
+    rt, pupil = get_runtime(), 8.0 * math.prod(optics.shape)
+    # the layers' padded images, else the pupil's fields
+    what, held, largest = (("padded images", grid_bytes(optics) + view, 4 * pupil)
+                           if via == "incoherent" else
+                           ("fields", DEVICE_FIELDS * pupil + view, pupil))
+    memory.check_device(rt, f"the {optics.shape[1]}x{optics.shape[0]} pupil's {what}", held,
+                        largest)
     acc = _Accumulator(camera, optics, exposure)
-    pupil = 8.0 * math.prod(optics.shape)
-    if via == "incoherent":  # the layers' padded images, else the pupil's fields
-        memory.check_device(rt, f"the {optics.shape[1]}x{optics.shape[0]} pupil's padded "
-                            f"images", grid_bytes(optics) + view, 4 * pupil)
+    if via == "incoherent":
         return _incoherent(rt, em, optics, fine, acc, progress, on_sample)
-    memory.check_device(rt, f"the {optics.shape[1]}x{optics.shape[0]} pupil's fields",
-                        DEVICE_FIELDS * pupil + view, pupil)
     fields = PupilFields(rt, em, optics, fine)
     rng = np.random.default_rng(seed)
     for n in range(1, samples + 1):

@@ -9,6 +9,7 @@ from __future__ import annotations
 from .. import jobs, validate
 from ..scene.hologram import Hologram
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Plate, ViewingZone
+from ..validate import InputError
 from .recording import PlannedPlate, plate_plan, prepare_plate
 from .tiles import record_looks_tiled
 
@@ -83,11 +84,11 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
     holo_core.render_view : a camera's view of the plate.
     """
     planned = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
-                         zone_margin=zone_margin, wavelength=wavelength, looks=1)
+                         zone_margin=zone_margin, wavelength=wavelength, looks=1, depth=depth,
+                         budget=budget, tiled=url is not None, tile=tile)
     return record_planned(planned, codes=(code,), urls=None if url is None else [url],
-                          depth=depth, seed=seed, encoding=encoding, budget=budget, tile=tile,
-                          scheduler=scheduler, overwrite=overwrite, progress=progress,
-                          dashboard=dashboard)[0]
+                          seed=seed, encoding=encoding, scheduler=scheduler,
+                          overwrite=overwrite, progress=progress, dashboard=dashboard)[0]
 
 
 @validate.scale_free()  # as record_hologram: the renderer's jobs come this way
@@ -138,25 +139,29 @@ def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
     """
     looks = validate.integer("looks", looks, 1)
     planned = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
-                         zone_margin=zone_margin, wavelength=wavelength, looks=looks)
-    return record_planned(planned, depth=depth, seed=seed, budget=budget, urls=urls,
-                          tile=tile, scheduler=scheduler, overwrite=overwrite,
-                          progress=progress, dashboard=dashboard, recording=recording)
+                         zone_margin=zone_margin, wavelength=wavelength, looks=looks,
+                         depth=depth, budget=budget, tiled=urls is not None, tile=tile)
+    return record_planned(planned, seed=seed, urls=urls, scheduler=scheduler,
+                          overwrite=overwrite, progress=progress, dashboard=dashboard,
+                          recording=recording)
 
 
 @validate.scale_free()
-def record_planned(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
-                   encoding="complex", budget=(None, None), urls=None, tile=None,
-                   scheduler=None, overwrite=False, progress: jobs.Progress = None,
+def record_planned(planned: PlannedPlate, *, codes=None, seed=0, encoding="complex",
+                   urls=None, scheduler=None, overwrite=False, progress: jobs.Progress = None,
                    dashboard=None, recording="") -> list[Hologram]:
     """The looks of the plate ``planned`` (:func:`~holo_core.plate.recording.plate_plan`,
-    made once a job) in one pass: ``codes`` one a look (default: the coded looks of its
-    plan's looks, :func:`~holo_core.plate.recording.prepare_plate`), in memory, or with ``urls``
-    tile by tile, a store a look (the other arguments as for :func:`record_looks`)."""
+    made once a job, its budget checked there) in one pass: ``codes`` one a look (default:
+    the coded looks of its plan's looks, :func:`~holo_core.plate.recording.prepare_plate`),
+    in memory, or where the plan is tiled into ``urls``, a store a look (the other arguments
+    as for :func:`record_looks`)."""
+    if planned.tiled != (urls is not None):
+        raise InputError("urls must name the stores of a plate planned tile by tile, and only "
+                         f"of one; this plate is planned {'in tiles' if planned.tiled else 'in memory'}"
+                         f" and urls is {'None' if urls is None else 'given'}")
     if urls is not None:
-        return record_looks_tiled(planned, urls=list(urls), codes=codes, tile=tile,
-                                  scheduler=scheduler, overwrite=overwrite, progress=progress,
-                                  dashboard=dashboard, depth=depth, seed=seed,
-                                  encoding=encoding, budget=budget, recording=recording)
-    return prepare_plate(planned, codes=codes, depth=depth, seed=seed, encoding=encoding,
-                         budget=budget, recording=recording).record(progress)
+        return record_looks_tiled(planned, urls=list(urls), codes=codes, scheduler=scheduler,
+                                  overwrite=overwrite, progress=progress, dashboard=dashboard,
+                                  seed=seed, encoding=encoding, recording=recording)
+    return prepare_plate(planned, codes=codes, seed=seed, encoding=encoding,
+                         recording=recording).record(progress)

@@ -37,7 +37,7 @@ from ..scene.plate_set import PathPart, PlateSet
 from ..validate import InputError
 from .emitters import Emitters, grid_points, surface_points, visibility, zone_frame
 from .plan import LAYERS
-from .recording import look_code, plate_plan, prepare_plate
+from .recording import PlannedPlate, look_code, plate_plan, prepare_plate
 
 log = logging.getLogger(__name__)
 
@@ -113,21 +113,15 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
         raise InputError("parts must be a non-empty sequence of PathPart (parts_along)")
     looks = validate.integer("looks", looks, 1)
     seed = validate.seed(seed)
-    channels = 4 if depth else 3
-    plans = [plate_plan(meshes, plate=part.plate, looks=looks) for part in parts]
+    plans = [_part_plan(meshes, k, part, looks=looks, depth=depth, memory=budget[0])
+             for k, part in enumerate(parts)]
     spacing = plans[0].plan.spacing
     for k, p in enumerate(planned.plan for planned in plans):
         if not math.isclose(p.spacing, spacing, rel_tol=1e-9):
             raise InputError(f"part {k}'s emitters would lie {p.spacing:.4g} apart in direction "
                              f"cosine, part 0's {spacing:.4g}: a set's parts share one pupil "
                              f"and pixel angle (parts_along gives them that)")
-    stored = 0.0
-    for k, p in enumerate(planned.plan for planned in plans):
-        try:
-            p.check_budget(memory=budget[0], channels=channels, held=looks)
-        except InputError as e:
-            raise InputError(f"part {k}: {e}") from None
-        stored += p.disk_bytes(channels)
+    stored = sum(planned.plan.disk_bytes(len(planned.channels)) for planned in plans)
     if budget[1] is not None and stored > budget[1]:
         raise InputError(f"the set of {len(parts)} parts needs {stored / 2**30:.2f} GiB on disk "
                          f"({looks} look(s) each); the disk budget is "
@@ -151,8 +145,7 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
         if recorded[k] is not None:
             continue  # written by a recording that stopped
         done = jobs.scaled(progress, k / len(parts), (k + 1) / len(parts))
-        recording = prepare_plate(plans[k], codes=codes, depth=depth, seed=seed, emitters=em,
-                                  budget=(budget[0], None))
+        recording = prepare_plate(plans[k], codes=codes, seed=seed, emitters=em)
         held = tuple(recording.record(done))
         log.info("part %d of %d: %d emitters of the set's %d, %s", k + 1, len(parts), len(em),
                  em.count, recording.plan.describe())
@@ -164,6 +157,16 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
     if folder is None:
         return PlateSet(parts=parts, looks=tuple(recorded), seed=seed, recording=digest)
     return read_plate_set(folder)
+
+
+def _part_plan(meshes, k: int, part: PathPart, *, looks, depth, memory) -> PlannedPlate:
+    """Part ``k``'s plan (:func:`~holo_core.plate.recording.plate_plan`, its looks held
+    together within ``memory`` [bytes]); its refusal names the part."""
+    try:
+        return plate_plan(meshes, plate=part.plate, looks=looks, depth=depth,
+                          budget=(memory, None))
+    except InputError as e:
+        raise InputError(f"part {k}: {e}") from None
 
 
 def set_emitters(meshes, parts, plans, spacing: float) -> Iterator[Emitters]:

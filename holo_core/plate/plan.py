@@ -154,6 +154,23 @@ class PlatePlan:
                              f"{memory_mod.gib(memory)}: "
                              f"{'' if tiled else 'record it tile by tile, or '}{advice}")
 
+    def check_recording(self, *, memory=None, disk=None, channels=CHANNELS,
+                        tiled: bool | None = False) -> bool:
+        """Whether the looks are recorded tile by tile, checked before any work: ``tiled``
+        None decides it (:meth:`needs_tiles` against the host's share of its memory, at
+        most ``memory``); :class:`InputError` where the recording of every look together
+        needs more than the budget ``memory`` or ``disk`` [bytes] (None: no limit,
+        :meth:`check_budget`) or the host's share of its memory."""
+        if tiled is None:
+            tiled = self.needs_tiles(memory_mod.host_share(memory))
+        self.check_budget(memory=memory, disk=disk, channels=channels, tiled=tiled,
+                          held=self.looks)
+        held = f"a {self.tile}x{self.tile} tile" if tiled else \
+            f"a {self.shape[1]}x{self.shape[0]} plate"
+        memory_mod.check_host(f"{held} of {channels * self.looks} channels",
+                              self.memory_bytes(channels * self.looks, tiled=tiled))
+        return bool(tiled)
+
     def describe(self) -> str:
         """The plan in plain words: samples, spacing, size on disk (its time:
         :func:`holo_core.estimate.plate`)."""

@@ -136,19 +136,35 @@ FUSED_CHANNELS = 8  # channels an emitter the zone sum carries in one pass at mo
 class PlannedPlate:
     """A plate of meshes planned (:func:`plate_plan`), before any emitter is found: its
     ``plan`` (:class:`~holo_core.plate.plan.PlatePlan`: the zone, the samples, the
-    wavelengths, the looks, the tile, the costs), its ``meshes`` in the plate's frame and the
-    ``plate``. Made once a job; the runner's checks, the recording and its tiles read it."""
+    wavelengths, the looks, the tile, the costs), its ``meshes`` in the plate's frame, the
+    ``plate``, whether it records the depth partner (``depth``) and whether tile by tile
+    (``tiled``), its budget checked for that. Made once a job; the runner's checks, the
+    recording and its tiles read it, and the view reads what it made (the looks' zone,
+    bounds and carrier)."""
 
     plan: PlatePlan
     meshes: tuple
     plate: Plate
+    depth: bool = True
+    tiled: bool = False
+
+    @property
+    def channels(self) -> list[str]:
+        """The channels of a look: R, G, B and, with ``depth``, the partner Z."""
+        return ["R", "G", "B"] + (["Z"] if self.depth else [])
 
 
 def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
-               zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, looks=LOOKS) -> PlannedPlate:
+               zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, looks=LOOKS, depth=True,
+               budget=(None, None), tiled: bool | None = False,
+               tile: int | None = None) -> PlannedPlate:
     """The plan of a plate of ``meshes`` and its ``looks`` (the other arguments as
     :func:`holo_core.plate.looks.record_plate` takes them): what its recording will hold and
-    cost, before any emitter is found."""
+    cost, before any emitter is found, checked against the host's memory and the ``budget``
+    (memory, disk) [bytes] of the looks recorded together: the whole plate, or where
+    ``tiled``, one tile of ``tile`` samples a side (None: fitted to the plate). ``tiled``
+    None: tile by tile where the looks in one piece need more than the memory budget or the
+    host's share of its memory (:func:`holo_core.memory.host_share`)."""
     if not isinstance(plate, Plate):
         raise InputError(f"plate must be a Plate; got {type(plate).__name__}")
     meshes = [meshes] if isinstance(meshes, Mesh) else list(meshes)
@@ -169,25 +185,36 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
         raise InputError("a plate needs the sharpness of its views: a camera, a zone with its "
                          "pixel angle, or a wavelength")
     p = plan((plate.width, plate.height), bounds, zone=zone, pixel_angle=pixel or 1.0,
-             wavelength=wavelength, looks=looks)
+             wavelength=wavelength, looks=looks, tile=tile)
     count = crossing_count(local, np.asarray(zone.centre, np.float64), zone_frame(zone, bounds),
                            p.spacing)  # what finding the emitters holds, before it starts
     memory.check_host(f"finding the emitters of {sum(len(m.triangles) for m in local)} "
                       f"triangles ({count:.3g} crossings of the zone's rays: many large "
                       f"triangles through each other cross many)", CROSSING_BYTES * count)
-    return PlannedPlate(plan=p, meshes=local, plate=plate)
+    depth, decided = _flag("depth", depth), tiled is None
+    tiled = p.check_recording(memory=budget[0], disk=budget[1], channels=3 + depth,
+                              tiled=tiled)
+    if decided and tiled:
+        log.info("the plate's %d look(s) need %s in one piece, more than %s: recording them "
+                 "tile by tile", p.looks, memory.gib(p.memory_bytes((3 + depth) * p.looks)),
+                 memory.gib(memory.host_share(budget[0])))
+    return PlannedPlate(plan=p, meshes=local, plate=plate, depth=depth, tiled=tiled)
 
 
-def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
-                  encoding="complex", tiled=False, budget=(None, None),
+def _flag(name, value) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise InputError(f"{name} must be True or False; got {value!r}"[:200])
+    return bool(value)
+
+
+def prepare_plate(planned: PlannedPlate, *, codes=None, seed=0, encoding="complex",
                   emitters: Emitters | None = None, recording: str = "") -> PlateRecording:
-    """The emitters, visibility tables and sampling of the plate ``planned``, before any
-    sum: the emitters the zone sees with their amplitudes, for the looks ``codes`` summed at
-    once (:func:`holo_core.plate.looks.record_looks`), look l's phases coded by codes[l], or
-    where that is None drawn from ``seed`` + l (default: the plan's looks, coded where their
-    count allows, :func:`look_code`). The host's memory and the ``budget`` are
-    checked for the whole plate, or where ``tiled`` for one tile of the plan's. ``emitters``
-    (the plate's frame, their visibility from this zone): found elsewhere, once for several
+    """The emitters, visibility tables and sampling of the plate ``planned`` (its budget
+    checked as it was planned), before any sum: the emitters the zone sees with their amplitudes, for
+    the looks ``codes`` summed at once (:func:`holo_core.plate.looks.record_looks`), look
+    l's phases coded by codes[l], or where that is None drawn from ``seed`` + l (default:
+    the plan's looks, coded where their count allows, :func:`look_code`). ``emitters`` (the
+    plate's frame, their visibility from this zone): found elsewhere, once for several
     plates that share them (:mod:`.parts`), in place of the zone's own. ``recording``: the
     digest the looks' description carries (:attr:`holo_core.scene.hologram.HologramInfo.
     recording`), in memory and in their stores alike."""
@@ -199,15 +226,11 @@ def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
     p, local, zone = planned.plan, planned.meshes, planned.plan.zone
     codes = tuple(look_code(k, p.looks) for k in range(p.looks)) if codes is None else \
         tuple(codes)
-    bounds = p.bounds
+    if len(codes) != p.looks:  # the plan's budget counts its looks
+        raise InputError(f"codes must give one code per look of the plan ({p.looks}); got "
+                         f"{len(codes)}")
+    bounds, depth, channels = p.bounds, planned.depth, planned.channels
     log.info("sampling: %s", p.describe())
-    channels = ["R", "G", "B"] + (["Z"] if depth else [])
-    held_channels = len(channels) * len(codes)  # every look's, in one pass
-    p.check_budget(memory=budget[0], disk=budget[1], channels=len(channels),
-                   tiled=tiled, held=len(codes))
-    held = f"a {p.tile}x{p.tile} tile" if tiled else f"a {p.shape[1]}x{p.shape[0]} plate"
-    memory.check_host(f"{held} of {held_channels} channels",
-                      p.memory_bytes(held_channels, tiled=tiled))
     em = emitters if emitters is not None else zone_emitters(local, zone, p.spacing,
                                                              layers=LAYERS)
     if not len(em):

@@ -104,10 +104,10 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
     return open_plate(files[0].name)
 
 
-def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, depth=True, seed=0,
-                       encoding="complex", tile=None, scheduler=None, overwrite=False,
+def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, seed=0,
+                       encoding="complex", scheduler=None, overwrite=False,
                        progress: jobs.Progress = None, dashboard=None,
-                       budget=(None, None), recording="") -> list[Hologram]:
+                       recording="") -> list[Hologram]:
     """The looks ``codes`` of the plate of meshes ``planned`` (with occlusion, against the
     carrier converging on its zone: :func:`holo_core.plate.recording.plate_plan`; the other
     arguments as :func:`holo_core.plate.looks.record_plate` takes them; look l coded by
@@ -116,8 +116,8 @@ def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, depth=True, s
     (:func:`holo_core.io.tiled_wave.open_plate`).
 
     The emitters and their visibility tables are found once, here, and scattered once to the
-    workers; each task sums one tile (``tile`` samples a side, a multiple of 256: the
-    emitters' block lists; by default the plan's, fitted to the plate) for every look at
+    workers; each task sums one tile (the plan's ``tile`` samples a side, a multiple of
+    256: the emitters' block lists; its budget checked as it was planned) for every look at
     once (as :func:`holo_core.plate.looks.record_looks` does in memory) and writes each
     look with its record into the stores that lack it. A store's digest covers the meshes
     in the plate's frame (vertices, triangles, colours, UVs, texture: the plate's pose too),
@@ -128,16 +128,15 @@ def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, depth=True, s
     ``scheduler``, ``overwrite``, ``progress``, ``dashboard``: as for :func:`record_tiled`;
     ``recording``: the digest the stores' plates carry (the name the caller knows them by).
     """
-    tile = _tile(planned.plan.tile if tile is None else tile, ZONE_TILE_STEP)
+    tile = _tile(planned.plan.tile, ZONE_TILE_STEP)
     _flag("overwrite", overwrite)
     looks = planned.plan.looks if codes is None else len(codes)
     if len(urls) != looks or not urls:
         raise InputError(f"urls must name one store per look; got {len(urls)} for "
                          f"{looks} look(s)")
     files, address = _output_and_scheduler(urls, scheduler)
-    planned = replace(planned, plan=replace(planned.plan, tile=tile))
-    job = prepare_plate(planned, codes=codes, depth=depth, seed=seed, encoding=encoding,
-                        tiled=True, budget=budget, recording=recording)
+    job = prepare_plate(planned, codes=codes, seed=seed, encoding=encoding,
+                        recording=recording)
     recordings = [_plate_recording(job, tile, look) for look in range(job.looks)]
     _record_tiles(files, job.info, tile, recordings, overwrite=overwrite, address=address,
                   task=record_plate_tile, shared=replace(job, meshes=()), progress=progress,

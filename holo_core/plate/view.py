@@ -150,7 +150,12 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     validate.choice("composition", composition, ("mean", "max"))
     validate.choice("depth_estimate", depth_estimate, ("consensus", "brightest"))
     validate.choice("source", source, ("hologram", "object_wave"))
-    nyquist = nyquist_supersample(first, camera)
+    rotation, position = camera_in_plate(first, camera)
+    # a pinhole on a carrier plate: the smallest sharp pupil, made once for its supersampling
+    # and its view
+    pinhole = (pinhole_view_pupil(first, camera, rotation, position, apodize=apodize)
+               if first.carrier is not None and camera.fstop is None else None)
+    nyquist = nyquist_supersample(first, camera, pinhole)
     if isinstance(supersample, str) and supersample == "auto":
         supersample = nyquist
     supersample = validate.integer("supersample", supersample, 1, MAX_SUPERSAMPLE)
@@ -170,15 +175,14 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     lam0 = first.wavelengths[colours[0]]
     centre = _centre_distance(first, camera)
     pupil = aperture or camera_pupil(fine, lam0, centre, apodize=apodize)
-    rotation, position = camera_in_plate(first, camera)
     _check_zone(first, camera, position, pupil.diameter)
     route = {"camera": camera, "fine": fine, "rotation": rotation, "position": position,
              "colours": colours, "z_ch": z_ch, "supersample": supersample,
              "chromatic": chromatic, "keep_fine": keep_fine, "progress": progress}
     unseen = None
     if first.carrier is not None:
-        if aperture is None and camera.fstop is None:  # a pinhole: the smallest sharp pupil
-            pupil = pinhole_view_pupil(first, camera, rotation, position, apodize=apodize)
+        if aperture is None and pinhole is not None:
+            pupil = pinhole
         looks, n = carrier_looks(holos, pupil=pupil, plans=plans, **route)
     else:
         unseen = unseen_light(first, rotation, position)
@@ -299,16 +303,18 @@ def pinhole_view_pupil(h: Hologram, camera: Camera, rotation, position, *, apodi
     return Pupil(diameter=diameter, focus=focus, apodize=apodize)
 
 
-def nyquist_supersample(h: Hologram, camera: Camera) -> int:
+def nyquist_supersample(h: Hologram, camera: Camera, pinhole: Pupil | None = None) -> int:
     """The supersampling at which a view of ``h`` through ``camera``'s pupil samples its
     intensity at the Nyquist rate (:func:`holo_core.optics.pupil.intensity_supersample`;
     below it the view is measurably softer: docs, Performance): the camera's lens, or a
-    pinhole's on a carrier plate (:func:`pinhole_view_pupil`). A pinhole's on a full-band
-    plate is sized to that already (λ/D is two fine pixels, :func:`camera_pupil`): 1."""
+    pinhole's on a carrier plate (``pinhole``, where the caller made it already, else
+    :func:`pinhole_view_pupil`). A pinhole's on a full-band plate is sized to that already
+    (λ/D is two fine pixels, :func:`camera_pupil`): 1."""
     if camera.fstop is not None:
         diameter = camera.aperture_diameter
     elif h.carrier is not None:
-        diameter = pinhole_view_pupil(h, camera, *camera_in_plate(h, camera)).diameter
+        diameter = (pinhole or pinhole_view_pupil(h, camera, *camera_in_plate(h, camera))
+                    ).diameter
     else:
         return 1
     return intensity_supersample(diameter, camera.pixel_angle(), min(h.wavelengths))

@@ -363,13 +363,14 @@ def test_looks_recorded_together_in_tiles_equal_them_in_memory(scheduler, tmp_pa
 
 def test_the_pipeline_records_a_plate_beyond_memory_in_tiles(scheduler, tmp_path, monkeypatch):
     """A job's plate whose one look exceeds the memory budget is recorded tile by tile on Dask
-    (the route's scheduler) into NAME.zarr beside each NAME.exr, no EXR written; its pass is
-    the in-memory route's bit for bit; the next job finds the store whole and reads it. Either
-    route plans the plate once: the runner's checks, the recording and its tiles read that
-    plan."""
+    (the route's scheduler) into NAME.zarr beside each NAME.exr, no EXR written (one whose
+    tiles exceed it too is refused as it is planned); its pass is the in-memory route's bit
+    for bit; the next job finds the store whole and reads it. Either route makes one plan a
+    job, checked once against the budget: the runner's checks, the recording and its tiles
+    read that very plan."""
     from holo_core import runner
     from holo_core.job import Job, Output, PlateRoute
-    from holo_core.plate import recording
+    from holo_core.plate import looks, tiles
     from holo_core.plate.plan import PlatePlan
 
     cam = camera("centre", SCALE)
@@ -381,15 +382,31 @@ def test_the_pipeline_records_a_plate_beyond_memory_in_tiles(scheduler, tmp_path
                                     scheduler=scheduler, **route))
 
     assert runner._plan(job(tmp_path / "a"))[1] is None
-    assert runner._plan(job(tmp_path / "a", memory_budget=1e6))[1] == [
-        str(tmp_path / "a" / "h.zarr")]
-    plans, planner = [], recording.plan
-    monkeypatch.setattr(recording, "plan", lambda *a, **k: plans.append(1) or planner(*a, **k))
+    with pytest.raises(InputError, match=r"needs 0\.\d+ GiB of memory a tile at a time; the "
+                                         r"memory budget is 0\.000931 GiB"):
+        runner._plan(job(tmp_path / "a", memory_budget=1e6))  # its tiles exceed it too
+    made, checked, planned, read = [], [], [], []
+    init, check, plan_job = PlatePlan.__init__, PlatePlan.check_recording, runner._plan
+    monkeypatch.setattr(PlatePlan, "__init__",
+                        lambda p, *a, **k: made.append(1) or init(p, *a, **k))
+    monkeypatch.setattr(PlatePlan, "check_recording",
+                        lambda p, *a, **k: checked.append(1) or check(p, *a, **k))
+    monkeypatch.setattr(runner, "_plan", lambda j: planned.append(plan_job(j)) or planned[-1])
+    for module in (looks, tiles):
+        prepare = module.prepare_plate
+        monkeypatch.setattr(module, "prepare_plate", lambda pl, _f=prepare, **k:
+                            read.append(pl.plan) or _f(pl, **k))
     whole = runner.run(job(tmp_path / "a"))
-    assert len(plans) == 1, f"the job in memory planned its plate {len(plans)} times"
+    assert (len(made), len(checked)) == (1, 1), \
+        f"the job in memory made {len(made)} plans and checked {len(checked)}"
     monkeypatch.setattr(PlatePlan, "needs_tiles", lambda plan, limit: True)
     tiled = runner.run(job(tmp_path / "b"))
-    assert len(plans) == 2, f"the tiled job planned its plate {len(plans) - 1} times"
+    assert (len(made), len(checked)) == (2, 2), \
+        f"the tiled job made {len(made) - 1} plans and checked {len(checked) - 1}"
+    assert [p for p, _ in planned] and all(
+        got is p.plan for got, (p, _) in zip(read, planned, strict=True)), \
+        "the recording read another plan than the runner's"
+    assert planned[-1][1] == [str(tmp_path / "b" / "h.zarr")]
     assert not (tmp_path / "b" / "h.exr").exists() and plate_current(tmp_path / "b" / "h.exr")
     assert np.array_equal(read_plate(tmp_path / "b" / "h.exr").object_wave[...],
                           read_hologram(tmp_path / "a" / "h.exr").object_wave)
