@@ -28,13 +28,13 @@ _API = {"Camera": ".scene", "look_at": ".scene", "Plate": ".scene", "ViewingZone
         "adjoint": ".propagation.adjoint", "gerchberg_saxton": ".phase",
         "optimise_phase": ".phase", "double_phase": ".phase",
         "parts_along": ".plate", "record_set": ".plate", "read_plate_set": ".io.plate_set",
-        "write_plate_set": ".io.plate_set"}
+        "write_plate_set": ".io.plate_set", "PlateViewer": ".plate.viewer"}
 # the packages, imported on first use too (plot needs matplotlib: pip install 'holo[plot]')
 _PACKAGES = ("acquired", "camera", "io", "opencl", "optics", "phase", "plate", "plot",
              "propagation", "scene", "units", "validate")
 # the names `from holo_core import *` gives (every _API name; test_notebook holds them equal)
-__all__ = ["Camera", "Field", "Hologram", "InputError", "Mesh", "Plate", "Pupil", "RenderResult",
-           "ViewingZone", "adjoint", "angular_spectrum", "autofocus", "double_phase",
+__all__ = ["Camera", "Field", "Hologram", "InputError", "Mesh", "Plate", "PlateViewer", "Pupil",
+           "RenderResult", "ViewingZone", "adjoint", "angular_spectrum", "autofocus", "double_phase",
            "find_carrier", "fraunhofer", "fresnel", "gerchberg_saxton", "import_acquired",
            "look_at", "object_hologram", "optimise_phase", "parts_along", "physical_field",
            "propagate_to_plane", "psnr", "rayleigh_sommerfeld", "read_acquired",

@@ -33,6 +33,10 @@ viewed by any camera in that zone.
 - ``path.py``: a plate's parts along a camera path (a long dolly, an orbit), each facing its
   stretch, and the part that holds a pupil (pure arithmetic: no driver)
 - ``parts.py``: the parts recorded from one set of emitters
+- ``viewer.py``: a plate (or set, or their files) held for the views of a moving camera:
+  full, coarse, and whether the pupil lies inside the zone
+- ``view_plans.py``: what a held plate's views share, planned once and reused as the camera
+  moves
 """
 
 import sys
@@ -44,7 +48,7 @@ from importlib import import_module
 _API = {"Reference": ".reference", "record_hologram": ".record", "record_plate": ".looks",
         "record_looks": ".looks", "record_points": ".points", "reconstruct": ".reconstruction",
         "render_view": ".view", "physical_field": ".carrier", "parts_along": ".path",
-        "record_set": ".parts", "render_set_view": ".view",
+        "record_set": ".parts", "render_set_view": ".view", "PlateViewer": ".viewer",
         "find_carrier": "..acquired", "sideband": "..acquired"}  # their home: acquired/
 __all__ = sorted(_API)
 

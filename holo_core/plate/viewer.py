@@ -1,0 +1,435 @@
+"""A recorded plate held for views as a camera moves: :class:`PlateViewer` holds a plate (its
+coded looks, a plate set, or their files) and the plans of its views, says whether a camera's
+pupil lies inside the zone the plate serves (:meth:`PlateViewer.where`), and returns views,
+full (:func:`~holo_core.plate.view.render_view`'s picture) or coarse (one look, no
+supersampling, fewer pixels upsampled: a preview while the camera moves).
+
+What does not change while the camera moves is planned once and reused: the device buffers,
+the FFT plans and the pupil's designs, at sizes rounded up with slack so that nearby cameras
+reuse them (:class:`~holo_core.plate.view_plans.ViewPlans`). Files are named by their
+identity (path, size, modification time, inode) and read again when it changes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from ..io.plate_set import MANIFEST
+from ..scene.camera import Camera
+from ..scene.hologram import Hologram
+from ..scene.plate_set import PlateSet
+from ..validate import InputError
+from ..view import RenderResult
+from .path import part_for
+from .view_plans import ViewPlans
+
+# render_view's settings a viewer keeps for every view
+RENDER_OPTIONS = ("aperture", "apodize", "chromatic", "composition", "supersample", "exposure",
+                  "opacity_threshold", "source", "depth_estimate")
+COARSE_PIXELS = 320 * 180  # a coarse view's pixels at most, upsampled to the camera's
+INSIDE = 1e-9  # [m] a pupil reaching less than this beyond the zone lies inside it
+
+
+class OutsideZoneError(InputError):
+    """A view asked of a camera whose pupil lies outside every zone the plate serves (the
+    message says how far, which way, and what to do); never a cut-off picture."""
+
+
+class PlateViewer:
+    """A recorded plate (or plate set) held with the plans of its views, for views of a
+    moving camera.
+
+    Parameters
+    ----------
+    plate : Hologram, sequence of Hologram, PlateSet, path or sequence of paths
+        The plate's coded looks (one Hologram a look, all of one recording), a plate set
+        (:func:`holo_core.record_set`), the plate files of its looks (``.exr``, or the tiled
+        store beside one), or a plate set's folder (its ``plate_set.json``). Files are read
+        as the worker reads them (:class:`holo_core.runner.KeptPlates`) and read again when
+        they change.
+    scene : str, optional
+        The recording digest the plate must be (the scene's): a plate of another recording,
+        or of none, is refused naming its file.
+    **render_options
+        :func:`holo_core.render_view`'s settings, kept for every view: ``composition``,
+        ``supersample``, ``exposure``, ``opacity_threshold``, ``aperture``, ``apodize``,
+        ``chromatic``, ``source``, ``depth_estimate``.
+
+    Raises
+    ------
+    InputError
+        Where ``plate`` is none of the above, a setting is unknown, the looks are not of one
+        recording, or the plate is not ``scene``'s (:class:`HologramFileError` naming the file
+        for files).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core import Camera, Mesh, Plate, PlateViewer, look_at, record_hologram
+    >>> camera = Camera(matrix_world=look_at((0, 0, 0.3), (0, 0, -0.01), up=(0, 1, 0)),
+    ...                 resolution=(32, 24), fstop=8.0, focus_distance=0.31)
+    >>> triangle = Mesh(vertices=np.array([[-0.01, -0.01, -0.01], [0.01, -0.01, -0.01],
+    ...                                    [0.0, 0.01, -0.01]]),
+    ...                 triangles=np.array([[0, 1, 2]]), colours=np.ones((3, 3)))
+    >>> plate = Plate(matrix_world=np.eye(4), width=0.03, height=0.03)
+    >>> h = record_hologram([triangle], plate=plate, camera=camera)
+    >>> with PlateViewer(h, supersample=1) as viewer:
+    ...     inside = viewer.contains(camera)
+    ...     view = viewer.view(camera)
+    >>> inside, view.rgb.shape
+    (True, (24, 32, 3))
+    """
+
+    def __init__(self, plate, *, scene: str | None = None, **render_options):
+        unknown = sorted(set(render_options) - set(RENDER_OPTIONS))
+        if unknown:
+            raise InputError(f"PlateViewer has no setting {', '.join(map(repr, unknown))}; "
+                             f"render settings are {', '.join(RENDER_OPTIONS)}")
+        if scene is not None and not isinstance(scene, str):
+            raise InputError(f"scene must be a recording digest (text) or None; got "
+                             f"{type(scene).__name__}")
+        self.scene = scene
+        self.options = dict(render_options)
+        self._source = _source_of(plate, scene)
+        self._plans = ViewPlans()
+        self._closed = False
+        self._source.current()  # read now: a missing or foreign file is said at once
+
+    # -- the plate ---------------------------------------------------------------------------
+    @property
+    def recording(self) -> str:
+        """The digest (hex) of the recording the plate is ('' where its looks name none)."""
+        return self._source.current().recording
+
+    def where(self, camera: Camera) -> str | None:
+        """Why ``camera``'s pupil lies outside every zone the plate serves, or None where it
+        lies inside one.
+
+        Parameters
+        ----------
+        camera : Camera
+            The camera; its pupil is its aperture (``lens / fstop``), a point for a pinhole.
+
+        Returns
+        -------
+        str or None
+            A sentence: how far [m] the pupil reaches beyond the nearest zone, which way
+            (along the plate's axes), and the zone; None inside.
+
+        Examples
+        --------
+        See :class:`PlateViewer`.
+        """
+        self._check_open()
+        if not isinstance(camera, Camera):
+            raise InputError(f"camera must be a Camera; got {type(camera).__name__}")
+        return self._source.current().where(camera)
+
+    def contains(self, camera: Camera) -> bool:
+        """Whether ``camera``'s pupil lies inside a zone the plate serves
+        (:meth:`where` is None)."""
+        return self.where(camera) is None
+
+    # -- views -------------------------------------------------------------------------------
+    def view(self, camera: Camera, *, coarse: bool = False) -> RenderResult:
+        """``camera``'s view of the plate.
+
+        Parameters
+        ----------
+        camera : Camera
+            Its pose, lens (``fstop``, ``focus_distance`` [m]) and resolution [px]; its pupil
+            must lie inside a zone the plate serves (:meth:`where`).
+        coarse : bool
+            A quick preview: the first look alone, one sample a pixel, at most
+            ``COARSE_PIXELS`` pixels upsampled (bilinear) to the camera's resolution; its
+            ``info['coarse']`` is True. Else the full view: the picture
+            :func:`holo_core.render_view` gives of the same looks with the same settings.
+
+        Returns
+        -------
+        RenderResult
+            Radiance, alpha, planar depth [m] at ``camera.resolution``.
+
+        Raises
+        ------
+        OutsideZoneError
+            (an :class:`InputError`) Where the pupil lies outside every zone (the sentence of
+            :meth:`where`).
+        InputError
+            Where a setting is out of range, or a file changed into another recording's or
+            vanished (naming it).
+        """
+        self._check_open()
+        if not isinstance(camera, Camera):
+            raise InputError(f"camera must be a Camera; got {type(camera).__name__}")
+        held = self._source.current()
+        why = held.where(camera)
+        if why is not None:
+            raise OutsideZoneError(f"{why}: no view is made from there")
+        looks = held.looks_for(camera)
+        if not coarse:
+            return self._plans.render(looks, camera, **self.options)
+        return self._coarse(looks, camera)
+
+    def _coarse(self, looks, camera: Camera) -> RenderResult:
+        w, h = camera.resolution
+        factor = max(1, math.ceil(math.sqrt(w * h / COARSE_PIXELS)))
+        small = coarser(camera, factor)
+        options = {**self.options, "supersample": 1}
+        if options.get("composition") == "max" or options.get("depth_estimate") == "brightest":
+            options.pop("composition", None)  # one look: mean and max are the same
+            options.pop("depth_estimate", None)
+        view = self._plans.render(looks[:1], small, **options)
+        rgb, alpha = (upsampled(a, factor, (h, w)) for a in (view.rgb, view.alpha))
+        # depth by the pixel that holds it: a surface's beside the background's is no mean
+        rows, cols = (np.minimum(np.arange(n) // factor, m - 1)
+                      for n, m in zip((h, w), view.depth.shape))
+        depth = view.depth[np.ix_(rows, cols)]
+        return RenderResult(rgb=rgb, alpha=alpha, depth=depth,
+                            info={**view.info, "coarse": True, "coarse_factor": factor})
+
+    # -- the end -----------------------------------------------------------------------------
+    def close(self) -> None:
+        """Let go of the plate and its plans (device buffers, transforms); a closed viewer
+        refuses views."""
+        self._plans.clear()
+        self._source.clear()
+        self._closed = True
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def _check_open(self):
+        if self._closed:
+            raise InputError("the PlateViewer is closed: make a new one for more views")
+
+    def widget(self, camera: Camera, *, coarse: bool = True):
+        """A notebook widget: sliders move ``camera`` (its position [m] across, up and along
+        the view, its aim [°]) and its focus [m]; the view is drawn on each change.
+
+        Parameters
+        ----------
+        camera : Camera
+            The camera the sliders start from (inside the zone).
+        coarse : bool
+            Draw coarse views while a slider moves (:meth:`view`), the full view on release.
+
+        Returns
+        -------
+        ipywidgets.VBox
+            The sliders and the picture.
+
+        Raises
+        ------
+        InputError
+            Where ipywidgets is not installed (``pip install ipywidgets``).
+        """
+        from .viewer_widget import widget
+        return widget(self, camera, coarse=coarse)
+
+
+class _Looks:
+    """One plate's looks, held: the zone check and the looks a camera is viewed from."""
+
+    def __init__(self, holos, name: str):
+        self.holos, self.name = list(holos), name
+        first = self.holos[0]
+        self.recording = first.recording
+        for i, h in enumerate(self.holos[1:], 1):
+            if h.recording != first.recording:
+                raise InputError(f"{name}: look {i} is of recording {h.recording or '(none)'}, "
+                                 f"look 0 of {first.recording or '(none)'}: a plate's looks "
+                                 f"are of one recording")
+
+    def where(self, camera: Camera) -> str | None:
+        return zone_sentence(self.holos[0], camera)
+
+    def looks_for(self, camera: Camera):
+        return self.holos
+
+
+class _Set:
+    """A plate set, held: the part whose zone holds a pupil, and its looks."""
+
+    def __init__(self, plates: PlateSet, name: str):
+        self.plates, self.name, self.recording = plates, name, plates.recording
+
+    def where(self, camera: Camera) -> str | None:
+        k, beyond = part_for(self.plates, camera)
+        if beyond <= INSIDE:
+            return None
+        part = self.plates.parts[k]
+        local = part.plate.to_plate(np.asarray(camera.position, np.float64)[None])[0]
+        return (f"the camera's pupil lies outside every part of the plate set; "
+                f"{beyond_words(part.plate.zone, local, camera.aperture_diameter or 0.0)} of "
+                f"the nearest, part {k} ({part.plate.zone.describe()})")
+
+    def looks_for(self, camera: Camera):
+        k, _ = part_for(self.plates, camera)
+        return list(self.plates.part_looks(k))
+
+
+class _Held:
+    """A plate given in memory: always current."""
+
+    def __init__(self, held):
+        self.held = held
+
+    def current(self):
+        if self.held is None:
+            raise InputError("the PlateViewer is closed: make a new one for more views")
+        return self.held
+
+    def clear(self):
+        self.held = None
+
+
+class _Files:
+    """A plate's files (its looks, or a set's folder): read again whenever a file's identity
+    changes, refused by name where it vanished or holds another recording."""
+
+    def __init__(self, paths, scene: str | None, folder: bool):
+        from ..runner import KeptPlates
+        self.paths, self.scene, self.folder = paths, scene, folder
+        self._kept = KeptPlates()
+        self._held, self._names = None, None
+
+    def _identities(self):
+        from ..runner import _identity
+        listed = [self.paths / MANIFEST] if self.folder else self.paths
+        return [_identity(p) for p in listed]
+
+    def current(self):
+        names = self._identities()
+        if self._held is not None and names == self._names and None not in names:
+            return self._held
+        from ..io.hologram import HologramFileError
+        if self.folder:
+            plates = self._kept.read_set(self.paths)
+            if self.scene is not None and plates.recording != self.scene:
+                raise HologramFileError(
+                    f"{self.paths}: holds the plate set of recording "
+                    f"{plates.recording or '(none)'}, not {self.scene} (this scene's): another "
+                    f"recording's set is never viewed; record the set again")
+            held = _Set(plates, str(self.paths))
+        else:
+            holos = self._kept.read(self.paths, self.scene or "")
+            self._kept.hold(self.paths, holos)
+            held = _Looks(holos, ", ".join(map(str, self.paths)))
+        self._held, self._names = held, names
+        return held
+
+    def clear(self):
+        self._kept.clear()
+        self._held = self._names = None
+
+
+def _source_of(plate, scene: str | None):
+    """The held plate behind a viewer: in memory (checked against ``scene`` here) or files."""
+    if isinstance(plate, (str, Path)):
+        path = Path(plate)
+        return _Files(path, scene, True) if path.is_dir() else _Files([path], scene, False)
+    if isinstance(plate, PlateSet):
+        _check_scene(plate.recording, scene, "the plate set")
+        return _Held(_Set(plate, "the plate set"))
+    if isinstance(plate, Hologram):
+        plate = [plate]
+    try:
+        items = list(plate)
+    except TypeError:
+        items = []
+    if items and all(isinstance(h, Hologram) for h in items):
+        looks = _Looks(items, "the plate")
+        _check_scene(looks.recording, scene, "the plate")
+        return _Held(looks)
+    if items and all(isinstance(p, (str, Path)) for p in items):
+        return _Files([Path(p) for p in items], scene, False)
+    raise InputError(f"plate must be a Hologram, a sequence of Hologram (its looks), a "
+                     f"PlateSet, or the path(s) of its files; got {type(plate).__name__}")
+
+
+def _check_scene(recording: str, scene: str | None, name: str) -> None:
+    if scene is not None and recording != scene:
+        raise InputError(f"{name} is of recording {recording or '(none named)'}, not {scene} "
+                         f"(this scene's): another recording's plate is never viewed; record "
+                         f"the plate again")
+
+
+def zone_sentence(h: Hologram, camera: Camera) -> str | None:
+    """Why ``camera``'s pupil lies outside ``h``'s viewing zone (a sentence), or None inside
+    it (or where ``h`` has no zone and its light reaches the camera)."""
+    from .view import _unseen
+    from .window import camera_in_plate
+    try:
+        rotation, position = camera_in_plate(h, camera)
+    except InputError as e:
+        return str(e)
+    if h.zone is None:
+        return _unseen(h, rotation, position)
+    pupil = camera.aperture_diameter or 0.0
+    if h.zone.distance_outside(position, pupil / 2) <= INSIDE:
+        return None
+    return (f"the camera's pupil lies outside the plate's viewing zone: "
+            f"{beyond_words(h.zone, position, pupil)} ({h.zone.describe()}); move the camera "
+            f"inside it or record the plate for a zone that holds it")
+
+
+def beyond_words(zone, position, pupil: float) -> str:
+    """How far and which way a pupil of diameter ``pupil`` [m] at ``position`` (3,) [m] (the
+    plate's frame) reaches beyond ``zone``, in words."""
+    d = np.asarray(position, np.float64) - zone.centre
+    over = np.abs(d) - zone.half_extents + np.array([pupil / 2, pupil / 2, 0.0])
+    sides = (("+x (right)", "-x (left)"), ("+y (up)", "-y (down)"),
+             ("farther from the plate", "nearer the plate"))
+    ways = [f"{_length(over[i])} {'past its ' if i < 2 else ''}"
+            f"{sides[i][0] if d[i] > 0 else sides[i][1]}{' side' if i < 2 else ''}"
+            for i in range(3) if over[i] > INSIDE]
+    total = zone.distance_outside(position, pupil / 2)
+    return f"it reaches {_length(total)} beyond the zone, {' and '.join(ways)}"
+
+
+def _length(metres: float) -> str:
+    return f"{metres * 1e3:.3g} mm" if metres < 0.1 else f"{metres:.3g} m"
+
+
+def coarser(camera: Camera, factor: int) -> Camera:
+    """``camera`` with pixels ``factor`` times larger each way: ⌈W/factor⌉ × ⌈H/factor⌉ of
+    them, pixel (i, j) spanning the camera's pixels factor·i … factor·(i + 1) − 1 (the same
+    rays; the last row and column may reach beyond the image)."""
+    if factor == 1:
+        return camera
+    w, h = camera.resolution
+    s, dx, dy, ycor = camera._plane()
+    ws, hs = -(-w // factor), -(-h // factor)
+    # the same pixel centres' tangents at factor times the pixel: sensor, then shifts, fitted
+    # horizontally (tangent = (col − W/2 + dx)/s; Camera._plane)
+    sx = ws / 2 + (dx - w / 2) / factor
+    sy = (0.5 * ycor * h + dy) / factor - 0.5 * ycor * hs
+    return replace(camera, resolution=(ws, hs), sensor_fit="HORIZONTAL",
+                   sensor_width=camera.lens * ws * factor / s, shift_x=sx / ws,
+                   shift_y=sy / ws)
+
+
+def upsampled(a: np.ndarray, factor: int, shape) -> np.ndarray:
+    """``a`` (h, w, ...) of pixels ``factor`` times larger (:func:`coarser`) resampled
+    bilinearly at the (H, W) = ``shape`` pixels' centres, the edges held."""
+    if factor == 1:
+        return a
+    out = a
+    for axis, n in enumerate(shape):
+        at = (np.arange(n) + 0.5) / factor - 0.5
+        at = np.clip(at, 0, a.shape[axis] - 1)
+        i0 = np.floor(at).astype(int)
+        i1 = np.minimum(i0 + 1, a.shape[axis] - 1)
+        t = (at - i0).astype(a.dtype)
+        t = t.reshape((-1,) + (1,) * (out.ndim - axis - 1))
+        lo, hi = np.take(out, i0, axis=axis), np.take(out, i1, axis=axis)
+        out = lo + (hi - lo) * t
+    return out
