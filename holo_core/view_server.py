@@ -6,16 +6,15 @@ makes a :class:`holo_core.PlateViewer` of the plate (held until the next open, i
 reused by every view), ``{"view": ViewRequest}`` renders one view into the request's
 :class:`~holo_core.io.shared_view.SharedView` and answers with a
 :class:`~holo_core.job.ViewReply` line (``{"view": ...}``) on stdout. A camera outside the
-plate's zone is answered with the viewer's sentence saying why, and no picture. The plate's
-files are looked at (their size, time and inode: no read) before each view; a file written
-again since is read again, one gone is named in the reply.
+plate's zone is answered with the viewer's sentence saying why, and no picture. The viewer
+looks at the plate's files before each view: a file written again since is read again, one
+gone or of another recording is named in the reply.
 """
 
 from __future__ import annotations
 
 import logging
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -35,16 +34,13 @@ class ViewServer:
     def __init__(self):
         self.settings: ViewOpen | None = None
         self.viewer = None
-        self.files: tuple = ()
-        self.failed = ""  # why the plate is not held ("" : it is, or none was asked)
         self._shared: dict[str, SharedView] = {}
 
     def open(self, settings: ViewOpen) -> None:
         """Hold the plate of ``settings`` (the one held before is closed first)."""
         from .plate.viewer import PlateViewer  # loads the OpenCL driver: the worker's alone
         self.close_viewer()
-        self.settings, self.failed = settings, ""
-        self.files = _identities(settings.plates)
+        self.settings = settings
         plates = list(settings.plates)
         self.viewer = PlateViewer(plates if len(plates) > 1 else plates[0],
                                   scene=settings.recording or None, **settings.options())
@@ -56,13 +52,7 @@ class ViewServer:
         start = time.perf_counter()
         if self.settings is None:
             return ViewReply(id=request.id, error="no plate is held: open one first")
-        if self.viewer is None or _identities(self.settings.plates) != self.files:
-            missing = [p for p in self.settings.plates if not Path(p).exists()]
-            if missing:
-                return ViewReply(id=request.id, error=f"the plate's file {missing[0]} is gone; "
-                                 f"record the plate again")
-            if self.viewer is not None:
-                log.info("the plate's files changed since they were read: read again")
+        if self.viewer is None:  # its opening failed: tried again, its error said again
             self.open(self.settings)
         where = self.viewer.where(request.camera)
         if where:
@@ -132,14 +122,3 @@ def handle(server: ViewServer, message: dict, send) -> bool:
     send({"view": reply.to_dict()})
     return True
 
-
-def _identities(paths) -> tuple:
-    """The plate files' identities (path, size, modification time, inode; None: gone)."""
-    out = []
-    for p in paths:
-        try:
-            st = Path(p).stat()
-            out.append((str(p), st.st_size, st.st_mtime_ns, st.st_ino))
-        except OSError:
-            out.append(None)
-    return tuple(out)

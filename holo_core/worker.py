@@ -422,6 +422,7 @@ class Views:
         self.opened = ""         # the recording the worker holds ('' : not yet)
         self.error = ""          # why the worker holds no plate, or why it ended
         self.starts = 0          # worker processes started (a crash starts another)
+        self.answered = 0        # replies received (a skipped request gets none)
         self._closed = False
 
     def ask(self, camera: Camera, *, coarse: bool = False) -> int:
@@ -459,8 +460,8 @@ class Views:
                 self._drain()  # it died: say how before the next
 
     def _start(self) -> None:
+        self._drain()  # how the one before ended, where it did
         if self._process is not None:
-            self._drain()
             self._process.close()
         self._process = _Process(self._env)
         self.starts += 1
@@ -493,6 +494,7 @@ class Views:
                 self.opened, self.error = msg["opened"]["recording"], msg["opened"]["error"]
             elif "view" in msg:
                 reply = ViewReply.from_dict(msg["view"])
+                self.answered += 1
                 self._replies = {k: v for k, v in self._replies.items()
                                  if k >= reply.id - 8}  # a few kept for their pictures
                 self._replies[reply.id] = reply
@@ -537,6 +539,12 @@ class Views:
             if time.monotonic() > end:
                 raise WorkerError(f"no answer to view {request} within {timeout:g} s")
             time.sleep(0.002)
+
+    @property
+    def shared_name(self) -> str:
+        """The name of the shared view the pictures come through ('' before the first
+        request)."""
+        return "" if self._shared is None else self._shared.name
 
     @property
     def process(self) -> subprocess.Popen | None:
