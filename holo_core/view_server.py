@@ -1,7 +1,9 @@
 """The worker process's side of live views: a plate held with its plans, views served as
 they are asked for, pictures written into shared memory.
 
-:func:`holo_core.runner.serve` hands each JSON line of its stdin here: ``{"open": ViewOpen}``
+A view-serving worker is ``python -m holo_core.view_server IDLE`` (:func:`main`): the
+serving loop of :func:`holo_core.runner.serve` (job folders run as ever), which hands each
+JSON line of its stdin here: ``{"open": ViewOpen}``
 makes a :class:`holo_core.PlateViewer` of the plate (held until the next open, its plans
 reused by every view), ``{"view": ViewRequest}`` renders one view into the request's
 :class:`~holo_core.io.shared_view.SharedView` and answers with a
@@ -14,10 +16,12 @@ gone or of another recording is named in the reply.
 from __future__ import annotations
 
 import logging
+import sys
 import time
 
 import numpy as np
 
+from . import runner
 from .io.shared_view import SharedView
 from .job import ViewOpen, ViewReply, ViewRequest
 from .validate import InputError
@@ -122,3 +126,19 @@ def handle(server: ViewServer, message: dict, send) -> bool:
     send({"view": reply.to_dict()})
     return True
 
+
+
+def main(idle: float) -> int:
+    """The view-serving worker (``python -m holo_core.view_server IDLE``): jobs and live
+    views, until stdin closes or no line comes for ``idle`` seconds."""
+    server = ViewServer()
+    try:
+        return runner.serve(idle, on_message=lambda message, send: handle(server, message,
+                                                                          send))
+    finally:
+        server.close()
+
+
+if __name__ == "__main__":  # run as the package's module, so that its log records are the
+    from holo_core import view_server  # core's and reach the parent
+    sys.exit(view_server.main(float(sys.argv[1])))

@@ -92,12 +92,12 @@ class _Process:
     closes, when it is left idle (``IDLE_SECONDS``) or after a failed job. Its
     stderr goes to a file of its own folder (the last line explains a death)."""
 
-    def __init__(self, env: dict):
+    def __init__(self, env: dict, command=("holo_core.runner", "--serve")):
         self.env = env
         self.folder = Path(tempfile.mkdtemp(prefix="holo-process-"))
         self.stderr = open(self.folder / "stderr.txt", "w+b")
         self.popen = subprocess.Popen(
-            [sys.executable, "-m", "holo_core.runner", "--serve", str(IDLE_SECONDS)],
+            [sys.executable, "-m", *command, str(IDLE_SECONDS)],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.stderr,
             env=env, cwd=self.folder,
             start_new_session=os.name == "posix")  # its group: the renderer it runs dies too
@@ -374,10 +374,13 @@ class ViewPicture:
     error: str = ""
 
 
+VIEW_SERVER = ("holo_core.view_server",)  # the view-serving worker's module
+
+
 class Views:
     """Views of a plate held by a worker process of its own, pictures through shared memory.
 
-    The worker (``python -m holo_core.runner --serve``) holds the plate with its plans
+    The worker (``python -m holo_core.view_server``, :mod:`holo_core.view_server`) holds the plate with its plans
     (:class:`holo_core.PlateViewer`, on the device where there is one) and renders each view
     as it is asked for; a view asked while newer ones wait behind it is skipped. Its pictures
     come back through a :class:`holo_core.io.shared_view.SharedView` this process owns. A
@@ -463,7 +466,7 @@ class Views:
         self._drain()  # how the one before ended, where it did
         if self._process is not None:
             self._process.close()
-        self._process = _Process(self._env)
+        self._process = _Process(self._env, VIEW_SERVER)
         self.starts += 1
         self.opened = ""
         line = json.dumps({"open": self.settings.to_dict()}) + "\n"
