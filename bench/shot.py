@@ -349,9 +349,28 @@ def summary(rows) -> None:
           f"pass ({cam_s:.2f} s); load at the end {os.getloadavg()[0]:.1f}")
 
 
-def view_stages(plates, cam, supersample) -> None:
-    """One view with the device synchronised around each kernel launch and each transform:
-    the seconds of each, and what is left for the host (and the launches' own cost)."""
+def bandwidth() -> float:
+    """Bytes a second this machine reads and writes in a NumPy copy of 256 MiB (best of 5)."""
+    src = np.ones(2**25, np.complex64)
+    dst = np.empty_like(src)
+    best = min(timed(np.copyto, dst, src)[1] for _ in range(5))
+    return 2 * src.nbytes / best
+
+
+def window_bytes(holos, cam) -> int:
+    """The bytes of the samples a view of ``cam`` must read: its window (the carrier
+    route's, :func:`holo_core.plate.window.carrier_window`) of every channel of every look."""
+    from holo_core.plate.window import camera_in_plate, carrier_window, image_corners
+    h = holos[0]
+    rotation, position = camera_in_plate(h, cam)
+    r0, r1, c0, c1 = carrier_window(h, position, rotation, cam.aperture_diameter,
+                                    image_corners(cam, rotation))
+    return (r1 - r0) * (c1 - c0) * len(h.channels) * len(holos) * 8
+
+
+def synced_stages(view) -> tuple[dict, float]:
+    """One call of ``view()`` with the device synchronised around each kernel launch and each
+    transform: ({stage: seconds}, total seconds), the rest as 'host and launches'."""
     from functools import partial
 
     from holo_core.opencl import get_runtime
@@ -359,7 +378,7 @@ def view_stages(plates, cam, supersample) -> None:
     rt = get_runtime()
     seconds = defaultdict(float)
 
-    def synced(name, f, *a, **kw):
+    def synced(name, f, /, *a, **kw):
         rt.queue.finish()
         t = time.perf_counter()
         out = f(*a, **kw)
@@ -367,25 +386,39 @@ def view_stages(plates, cam, supersample) -> None:
         seconds[name] += time.perf_counter() - t
         return out
 
-    launch = Kernel.launch
+    launch, fft = Kernel.launch, rt.fft
 
     def launched(self, *a, **kw):
         return synced(self.name, launch, self, *a, **kw)
 
-    fft = rt.fft
     Kernel.launch = launched  # every launch, until put back
     fft.forward, fft.backward = (partial(synced, f"FFT {n}", getattr(fft, n))
                                  for n in ("forward", "backward"))
     try:
-        _, total = timed(render_view, plates, cam, supersample=supersample)
+        _, total = timed(view)
     finally:
         Kernel.launch = launch
         del fft.forward, fft.backward
-    print(f"a view's stages, each synchronised ({rt.device.name.strip()}, FFT {fft.name}): "
-          f"{total:.3f} s in all")
+    seconds["host and launches"] = total - sum(seconds.values())
+    return dict(seconds), total
+
+
+def view_stages(plates, cam, supersample) -> None:
+    """One view with the device synchronised around each kernel launch and each transform:
+    the seconds of each, and what is left for the host (and the launches' own cost), each
+    against the view's bound: the bytes of its window's samples over this machine's memory
+    bandwidth (measured here)."""
+    from holo_core.opencl import get_runtime
+    rt = get_runtime()
+    seconds, total = synced_stages(lambda: render_view(plates, cam, supersample=supersample))
+    nbytes, rate = window_bytes(list(plates), cam), bandwidth()
+    bound = nbytes / rate
+    print(f"a view's stages, each synchronised ({rt.device.name.strip()}, FFT {rt.fft.name}): "
+          f"{total:.3f} s in all; its window's samples {nbytes / 1e9:.2f} GB, read once at "
+          f"{rate / 1e9:.1f} GB/s (a NumPy copy): {bound * 1e3:.0f} ms, the bound "
+          f"({total / bound:.0f}x it)")
     for name, s in sorted(seconds.items(), key=lambda kv: -kv[1]):
-        print(f"  {name:28s} {s:.4f} s")
-    print(f"  {'host and launches':28s} {total - sum(seconds.values()):.4f} s")
+        print(f"  {name:28s} {s:.4f} s  {s / bound:6.1f}x the bound")
     import cProfile
     import pstats
     profile = cProfile.Profile()

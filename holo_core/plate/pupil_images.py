@@ -78,11 +78,13 @@ def plate_wave(hologram: Hologram, channel: int, *, source="hologram"):
 
 def carrier_looks(holos, camera: Camera, fine: Camera, pupil: Pupil, rotation, position,
                   colours, z_ch, *, supersample, chromatic=True, keep_fine=False,
-                  progress=None):
+                  progress=None, plans=None):
     """(each look's images at the pixels (:meth:`~holo_core.optics.imaging.PupilImage.fold`),
     the pupil's samples (h, w)) of plates stored against their zone's carrier
     (:class:`~holo_core.plate.to_pupil.CarrierPupil`); (None, None) where the pupil sees the
-    objects beside the plate."""
+    objects beside the plate. ``plans`` (a :class:`~holo_core.plate.view_plans.ViewPlans`):
+    the spectrum's size and the decimation's taps rounded up with its slack, the pupil's
+    plans kept for a camera seen again."""
     first = holos[0]
     window = carrier_window(first, position, rotation, pupil.diameter,
                             image_corners(camera, rotation))
@@ -90,7 +92,9 @@ def carrier_looks(holos, camera: Camera, fine: Camera, pupil: Pupil, rotation, p
         return None, None
     lam0 = first.wavelengths[colours[0]]
     bin_ = min(camera.pixel_angle() / supersample, lam0 / pupil.diameter)
-    shape, middle = _spectrum_box(first, fine, rotation, position, pupil, bin_, window)
+    shape, middle = _spectrum_box(first, fine, rotation, position, pupil, bin_, window,
+                                  fast_len=grid.next_fast_len if plans is None
+                                  else plans.spectrum_len)
     rt = get_runtime()
     channels = len(colours) + (z_ch is not None)
     batch = max(1, SPREAD_PLANES // channels)  # looks spread onto the bins in one pass
@@ -99,9 +103,10 @@ def carrier_looks(holos, camera: Camera, fine: Camera, pupil: Pupil, rotation, p
     fine_bytes = 8.0 * planes * math.prod(fine.resolution) if keep_fine else 0.0
     memory.check_device(rt, f"the {shape[1]}x{shape[0]} pupil's spectra of {planes} planes",
                         72.0 * planes * bins + fine_bytes, 32.0 * planes * bins)
-    view = CarrierPupil(rt, first, position=position, rotation=rotation,
-                        diameter=pupil.diameter, bin=bin_, shape=shape, window=window,
-                        centre=middle)
+    geometry = dict(position=position, rotation=rotation, diameter=pupil.diameter, bin=bin_,
+                    shape=shape, window=window, centre=middle)
+    view = CarrierPupil(rt, first, **geometry) if plans is None else \
+        plans.carrier_pupil(rt, first, geometry)
     hh, ww = shape
     taper = IRIS_TAPER if pupil.apodize else 0.0
     scale = 1 / math.sqrt(hh * ww * iris_power(
@@ -135,10 +140,11 @@ def carrier_looks(holos, camera: Camera, fine: Camera, pupil: Pupil, rotation, p
     return looks, shape
 
 
-def _spectrum_box(h: Hologram, fine: Camera, rotation, position, pupil: Pupil, bin_, window):
+def _spectrum_box(h: Hologram, fine: Camera, rotation, position, pupil: Pupil, bin_, window,
+                  fast_len=grid.next_fast_len):
     """((h, w) bins, (α, β) centre) of the pupil's spectrum: the directions the window's light
     arrives from, within the fine pixels' field of view, widened by the defocus blur of the
-    objects' depths and EDGE_BINS."""
+    objects' depths and EDGE_BINS; each side ``fast_len`` of the bins it needs."""
     least, greatest = fine.direction_range()
     r0, r1, c0, c1 = window
     x, y = h.carrier.coords(h.pitch, [r0, r1], [c0, c1])
@@ -151,7 +157,7 @@ def _spectrum_box(h: Hologram, fine: Camera, rotation, position, pupil: Pupil, b
         pupil.diameter * float(np.max(np.abs(1 / depth - 1 / pupil.focus)))
     margin = blur + EDGE_BINS * bin_
     lo, hi = lo - margin, hi + margin
-    shape = tuple(grid.next_fast_len(math.ceil((hi[i] - lo[i]) / bin_) + 1) for i in (1, 0))
+    shape = tuple(fast_len(math.ceil((hi[i] - lo[i]) / bin_) + 1) for i in (1, 0))
     return shape, tuple(map(float, (lo + hi) / 2))
 
 

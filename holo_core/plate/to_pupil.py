@@ -127,13 +127,16 @@ LAYER_WEIGHTS = kernel(PROGRAM, "layer_weights", out=BUFFER, wt=BUFFER, inv_at=B
                        lo=float32, step=float32, layers=int32, layer=int32)
 
 
-def kaiser_lowpass(cutoff: float, transition: float) -> np.ndarray:
+def kaiser_lowpass(cutoff: float, transition: float, taps_len=None) -> np.ndarray:
     """A linear-phase low-pass FIR (odd taps, unit DC gain) with its −6 dB point at ``cutoff``
     and ``transition`` wide (both in cycles per sample), its stop band DECIMATION_STOP below
-    (Kaiser's window and formulas)."""
+    (Kaiser's window and formulas). ``taps_len``: the taps made from the count the
+    transition needs (odd; more taps narrow the transition, the stop band the same)."""
     a = DECIMATION_STOP
     beta = 0.1102 * (a - 8.7)
     taps = int(math.ceil((a - 8) / (2.285 * 2 * math.pi * transition))) | 1
+    if taps_len is not None:
+        taps = taps_len(taps) | 1
     n = np.arange(taps) - (taps - 1) / 2
     h = 2 * cutoff * np.sinc(2 * cutoff * n) * np.kaiser(taps, beta)
     return (h / h.sum()).astype(np.float32)
@@ -162,11 +165,14 @@ class CarrierPupil:
         demodulated by exp(−ik(α·x + β·y)) (the spectrum holds the directions the samples'
         light arrives from, not the whole field of view)
     window : (row0, row1, col0, col1) of the plate's samples that can reach the pupil
+    taps_len : callable(n) -> int >= n, optional: the decimation's taps made from the count
+        it needs (a moving camera's views share the kernels built for a few counts)
     """
 
     def __init__(self, rt, h, *, position, rotation, diameter, bin, shape, window,
-                 centre=(0.0, 0.0)):
-        self.rt, self.h, self.centre = rt, h, centre
+                 centre=(0.0, 0.0), taps_len=None):
+        self.rt, self.h, self.centre, self.taps_len = rt, h, centre, taps_len
+        self._designs, self._taps = {}, {}
         self._gathers = {}
         self.position = np.asarray(position, np.float64)
         self.rotation = np.asarray(rotation, np.float64)
@@ -178,7 +184,13 @@ class CarrierPupil:
         ``wavelength`` [m]: the pass band the pupil's light needs (its width seen from the
         window's nearest point, PASS_MARGIN beyond), the stop band TRANSITION beyond it, and
         every q-th sample while the stop band's edge plus the pupil's own band stay below the
-        rate (the Riemann sum onto the pupil then has no alias)."""
+        rate (the Riemann sum onto the pupil then has no alias). Made once a wavelength."""
+        key = round(wavelength, 15)
+        if key not in self._designs:
+            self._designs[key] = self._designed(wavelength)
+        return self._designs[key]
+
+    def _designed(self, wavelength):
         h = self.h
         r0, r1, c0, c1 = self.window
         x, y = h.carrier.coords(h.pitch, [r0, r1], [c0, c1])
@@ -191,7 +203,7 @@ class CarrierPupil:
             q = max(1, int(1 / (pitch * band * (1 + TRANSITION + 1 / PASS_MARGIN))))
             out.append((1, np.ones(1, np.float32)) if q == 1 else
                        (q, kaiser_lowpass((1 + TRANSITION / 2) * band * pitch,
-                                          TRANSITION * band * pitch)))
+                                          TRANSITION * band * pitch, self.taps_len)))
         return out
 
     def fields(self, parts, *, amplitude=1.0, progress=None):
@@ -227,6 +239,13 @@ class CarrierPupil:
             gather.pupil(stack, runs, out, amplitude)
         return out
 
+    def _device_taps(self, taps: np.ndarray):
+        """``taps`` on the device, copied there once."""
+        key = taps.tobytes()
+        if key not in self._taps:
+            self._taps[key] = self.rt.to_device(taps)
+        return self._taps[key]
+
     def _decimated(self, samples, channels, wavelength, along_rows, along_cols, *, out, at,
                    slot):
         """The window's samples turned onto the pupil's carrier, filtered and thinned to every
@@ -244,7 +263,7 @@ class CarrierPupil:
         planes = len(channels)
         rowpass = rt.workspace("plate-rowpass", (planes, rr1 - rr0, out_cols))
         k = 2 * math.pi / wavelength
-        taps = [rt.to_device(t) for t in (taps_x, taps_y)]
+        taps = [self._device_taps(t) for t in (taps_x, taps_y)]
         group = _decimate_group(rt, planes, qx, len(taps_x))
         options = rt.real_options + (f"-DTAPS={len(taps_x)}", f"-DQ={qx}",
                                      f"-DPLANES={planes}", f"-DGROUP={group}")

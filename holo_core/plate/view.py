@@ -44,7 +44,7 @@ log = logging.getLogger(__name__)
 def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apodize=True,
                 chromatic=True, composition="mean", supersample="auto", exposure=None,
                 opacity_threshold=0.5, source="hologram", depth_estimate="consensus",
-                progress: jobs.Progress = None) -> RenderResult:
+                progress: jobs.Progress = None, plans=None) -> RenderResult:
     """Render a view of one hologram, or of several of one scene with independent phases.
 
     Several holograms recorded with independent random phases are composed in time
@@ -84,6 +84,11 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
         Depth from the phase of u1·conj(u2) summed over iterations and supersamples (the
         intensity-weighted consensus), or per pixel from the brightest iteration (Fig. 11c).
         Either way the depth pair is imaged through :func:`depth_aperture`.
+    plans : ViewPlans, optional
+        What a moving camera's views share (``holo_core.plate.view_plans.ViewPlans``, held
+        by :class:`holo_core.PlateViewer`): sizes rounded up with slack, so that nearby
+        cameras reuse the transforms' plans and the kernels' builds, and the pupil's plans
+        kept for a camera seen again. None: each view sized exactly, planned afresh.
 
     Returns
     -------
@@ -126,7 +131,8 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
                                chromatic=chromatic, composition=composition,
                                supersample=supersample, exposure=exposure,
                                opacity_threshold=opacity_threshold, source=source,
-                               depth_estimate=depth_estimate, progress=progress)
+                               depth_estimate=depth_estimate, progress=progress,
+                               plans=plans)
     try:
         holos = [holograms] if isinstance(holograms, Hologram) else list(holograms)
     except TypeError:
@@ -173,7 +179,7 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     if first.carrier is not None:
         if aperture is None and camera.fstop is None:  # a pinhole: the smallest sharp pupil
             pupil = pinhole_view_pupil(first, camera, rotation, position, apodize=apodize)
-        looks, n = carrier_looks(holos, pupil=pupil, **route)
+        looks, n = carrier_looks(holos, pupil=pupil, plans=plans, **route)
     else:
         unseen = _unseen(first, rotation, position)
         looks, n = (None, None) if unseen else full_band_looks(holos, pupil=pupil,

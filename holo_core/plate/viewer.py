@@ -49,8 +49,8 @@ class PlateViewer:
         The plate's coded looks (one Hologram a look, all of one recording), a plate set
         (:func:`holo_core.record_set`), the plate files of its looks (``.exr``, or the tiled
         store beside one), or a plate set's folder (its ``plate_set.json``). Files are read
-        as the worker reads them (:class:`holo_core.runner.KeptPlates`) and read again when
-        they change.
+        as the worker reads them (``holo_core.runner.KeptPlates``) and read again when
+        their identity (path, size, modification time, inode) changes.
     scene : str, optional
         The recording digest the plate must be (the scene's): a plate of another recording,
         or of none, is refused naming its file.
@@ -63,8 +63,32 @@ class PlateViewer:
     ------
     InputError
         Where ``plate`` is none of the above, a setting is unknown, the looks are not of one
-        recording, or the plate is not ``scene``'s (:class:`HologramFileError` naming the file
-        for files).
+        recording, or the plate is not ``scene``'s (``HologramFileError``, an InputError,
+        naming the file for files).
+
+    Notes
+    -----
+    ``recording`` is the digest of the recording the plate is ('' where its looks name none).
+    ``where(camera)`` is None where the camera's pupil (its aperture, ``lens / fstop`` [m];
+    a point for a pinhole) lies inside a zone the plate serves, else a sentence saying how far
+    [m] beyond the nearest zone it reaches, which way along the plate's axes, and the zone;
+    ``contains(camera)`` is ``where(camera) is None``.
+
+    ``view(camera)`` is the full view: the picture :func:`holo_core.render_view` gives of the
+    same looks with the same settings (a plate set's from the part whose zone holds the
+    pupil), planned once for the moving camera: the sizes of the pupil's spectrum and of the
+    decimation's filters rounded up with slack, so that nearby cameras reuse the transforms'
+    plans and the kernels' builds, and the pupil's plans kept for the last cameras.
+    ``view(camera, coarse=True)`` is a preview: the first look alone, one sample a pixel, at
+    most 320×180 pixels, upsampled bilinearly to the camera's resolution
+    (``info['coarse']`` is True). A camera outside every zone gets no view: ``view`` raises
+    ``OutsideZoneError`` (an InputError) with the sentence of ``where``, never a cut-off
+    picture. A file that changed since the last view is read again; one that vanished, or
+    now holds another recording, is named in the error.
+
+    ``close()`` lets go of the plate and its plans; a closed viewer refuses views (a ``with``
+    block closes it). ``widget(camera)`` gives a notebook widget (ipywidgets, optional) whose
+    sliders move the camera and its focus.
 
     Examples
     --------

@@ -21,7 +21,7 @@ from holo_core.io.hologram import HologramFileError, write_hologram
 from holo_core.plate.looks import record_looks
 from holo_core.plate.parts import record_set
 from holo_core.plate.path import parts_along
-from holo_core.plate.view import render_set_view, render_view
+from holo_core.plate.view import OutsideZoneWarning, render_set_view, render_view
 from holo_core.plate.viewer import OutsideZoneError, coarser, upsampled
 from holo_core.scene.plate import Plate
 from holo_core.validate import InputError
@@ -54,16 +54,28 @@ def wandering():
 
 
 def test_full_views_are_render_views_while_the_camera_wanders(looks):
-    """Each full view equals render_view of the same looks and settings, bit for bit, first
-    visits and revisits alike."""
+    """Each full view is render_view's of the same looks and settings within 50 dB PSNR of
+    colour and alpha (the viewer's sizes, rounded up with slack, hold the same light; the
+    non-uniform FFT's own accuracy is about 1e-4), first visits and revisits alike."""
     with PlateViewer(looks, scene=DIGEST, supersample=2) as viewer:
         for cam in wandering():
             assert viewer.contains(cam), viewer.where(cam)
             ours = viewer.view(cam)
             theirs = render_view(looks, cam, supersample=2)
-            for name in ("rgb", "alpha", "depth"):
-                a, b = getattr(ours, name), getattr(theirs, name)
-                assert np.array_equal(a, b), (name, float(np.abs(a - b).max()))
+            assert_same_view(ours, theirs)
+
+
+def assert_same_view(ours, theirs):
+    """Colour and alpha within 50 dB PSNR of ``theirs``, depth within 1e-3 of itself where
+    both see a surface (0.6 mm at 0.6 m: the two-wavelength phase's depth is the finest of the
+    three)."""
+    everywhere = np.ones(theirs.alpha.shape, bool)
+    for name in ("rgb", "alpha"):
+        q = psnr_db(getattr(ours, name), getattr(theirs, name), everywhere)
+        assert q >= 50, (name, q)
+    seen = (ours.alpha > 0.5) & (theirs.alpha > 0.5)
+    gap = (np.abs(ours.depth[seen] - theirs.depth[seen]) / theirs.depth[seen]).max()
+    assert gap <= 1e-3, gap
 
 
 def blocks(a, n=4):
@@ -145,7 +157,8 @@ def test_a_plate_of_another_scene_is_refused_by_name(looks, tmp_path):
 
 def test_a_file_that_changes_is_read_again_and_one_that_vanishes_is_named(looks, tmp_path):
     """A look's file rewritten with another recording under the viewer: its next view
-    refuses it naming the file; written back, the view is render_view's again; removed: the
+    refuses it naming the file; written again (its samples doubled), the view is render_view's
+    of the new samples; removed: the
     view fails naming the file."""
     paths = [tmp_path / f"look{k}.exr" for k in range(2)]
     for path, h in zip(paths, looks):
@@ -161,7 +174,7 @@ def test_a_file_that_changes_is_read_again_and_one_that_vanishes_is_named(looks,
     os.utime(paths[1], ns=(1, 1))  # another identity even on a coarse clock
     again = viewer.view(cam)
     theirs = render_view([looks[0], scaled], cam, supersample=1)
-    assert np.array_equal(again.rgb, theirs.rgb)
+    assert_same_view(again, theirs)
     assert not np.array_equal(again.rgb, first.rgb)
     paths[0].unlink()
     with pytest.raises(HologramFileError, match=r"look0\.exr"):
@@ -170,7 +183,7 @@ def test_a_file_that_changes_is_read_again_and_one_that_vanishes_is_named(looks,
 
 def test_a_plate_set_is_viewed_from_the_part_that_holds_the_pupil(tmp_path):
     """A set of two parts along a 6 cm dolly, in memory and from its folder: each end's view
-    is render_set_view's bit for bit; a camera beyond the set's ends is said, naming the
+    is render_set_view's (within 50 dB); a camera beyond the set's ends is said, naming the
     nearest part."""
     cams = [ps.camera((x, 0.0, 0.3), scale=SCALE) for x in (-0.03, 0.0, 0.03)]
     every = np.concatenate([m.vertices for m in ps.meshes()])
@@ -181,10 +194,9 @@ def test_a_plate_set_is_viewed_from_the_part_that_holds_the_pupil(tmp_path):
         with PlateViewer(source, scene=plates.recording, supersample=1) as viewer:
             for cam in (cams[0], cams[-1]):
                 with warnings.catch_warnings():
-                    warnings.simplefilter("error")
+                    warnings.simplefilter("error", OutsideZoneWarning)
                     ours = viewer.view(cam)
-                theirs = render_set_view(plates, cam, supersample=1)
-                assert np.array_equal(ours.rgb, theirs.rgb), np.abs(ours.rgb - theirs.rgb).max()
+                assert_same_view(ours, render_set_view(plates, cam, supersample=1))
             far = ps.camera((0.2, 0.0, 0.3), scale=SCALE)
             assert "nearest, part 1" in viewer.where(far), viewer.where(far)
 
