@@ -180,12 +180,15 @@ def main():
             rows = {}
             for kind in there:
                 med, own = statistics.median(there[kind]), statistics.median(worker_s[kind])
+                path = statistics.median(a - b for a, b in zip(there[kind], worker_s[kind]))
+                print(f"  {kind}: each [s] " + ", ".join(
+                    f"{a:.3f} ({b:.3f})" for a, b in zip(there[kind], worker_s[kind])))
                 rows[kind] = {"camera change to picture [s]": med, "worker's view [s]": own,
-                              "path's overhead [s]": med - own,
+                              "path's overhead [s]": path,
                               "in this process [s]": statistics.median(here[kind]),
                               "ratio to in this process": med / statistics.median(here[kind])}
                 print(f"  {kind}: {med:.3f} s from the change to the picture in shared memory; "
-                      f"the worker's view {own:.3f} s, the path {1e3 * (med - own):.1f} ms; "
+                      f"the worker's view {own:.3f} s, the path {1e3 * path:.1f} ms; "
                       f"{med / statistics.median(here[kind]):.2f}x this process's view "
                       f"(load {load()})")
             moving = navigate(views, cams, args.seconds)

@@ -69,7 +69,8 @@ class ViewServer:
                              "nothing is shown")
         h, w = np.shape(result.alpha)[:2]
         shared = self._attached(request.shared)
-        with shared.writing(w, h, 5, request=request.id, coarse=request.coarse) as out:
+        with shared.writing(w, h, 5, request=request.id, coarse=request.coarse,
+                            started=start) as out:
             np.multiply(result.rgb, self.settings.exposure, out=out[..., :3],
                         casting="unsafe")
             out[..., 3] = result.alpha

@@ -518,16 +518,12 @@ class Views:
                 (newest is None or picture.request > newest.id):
             self._shown = ViewPicture(request=picture.request, rgba=picture.rgba,
                                       depth=picture.depth, coarse=picture.coarse,
-                                      seconds=self._seconds(picture))
+                                      seconds=picture.seconds)
         elif newest is not None and newest.id > shown:
             self._shown = ViewPicture(request=newest.id, coarse=newest.coarse,
                                       seconds=newest.seconds, where=newest.where,
                                       error=newest.error)
         return self._shown
-
-    def _seconds(self, picture) -> float:
-        reply = self._replies.get(picture.request)
-        return reply.seconds if reply is not None else picture.seconds
 
     def wait(self, request: int, timeout: float = 60.0) -> ViewPicture:
         """Wait for the answer to ``request`` (or a newer one) [s at most]; raises

@@ -148,11 +148,13 @@ class SharedView:
 
     @contextlib.contextmanager
     def writing(self, width: int, height: int, channels: int, *, request: int,
-                coarse: bool = False):
+                coarse: bool = False, started: float | None = None):
         """A slot's (``height``, ``width``, ``channels``) float32 array to fill, published
         when the block ends without an error; a block that raises (or a writer that dies
         in it) leaves the slot's lock odd and the published picture as it was. The slot is
-        the one not published, so a reader of the published one is not disturbed."""
+        the one not published, so a reader of the published one is not disturbed. The
+        picture's seconds are those since ``started`` (a ``time.perf_counter()`` of this
+        process: when its view began), else the block's own."""
         channels = validate_channels(channels)
         need = slot_bytes(width, height, channels)
         if need > self.capacity:
@@ -166,7 +168,7 @@ class SharedView:
         # where a write before was left unfinished, so a reader that saw it sees a change)
         words[REQUEST], words[WIDTH], words[HEIGHT], words[CHANNELS], words[COARSE] = \
             request, width, height, channels, bool(coarse)
-        start = float(time.perf_counter())
+        start = float(time.perf_counter() if started is None else started)
         yield self._data[s][:need // 4].reshape(height, width, channels)
         number = int(self._header[3]) + 1
         words[NUMBER] = number
