@@ -14,6 +14,7 @@ blue box of the coverage overlay) and shows no picture. The state is the session
 
 from __future__ import annotations
 
+import atexit
 import logging
 import textwrap
 import time
@@ -58,7 +59,8 @@ class Source:
 @dataclass
 class Live:
     """What the live view shows and asks: the plate's ``source`` and its ``views``; the 3D
-    view's ``region`` it serves (``as_pointer``), the ``camera`` asked last and its ``key``,
+    view's ``region`` it serves (``as_pointer``: the one that moved last; ``keys``, each
+    view's camera as it was asked), the ``camera`` asked last and its ``key``,
     when it ``moved`` [s, ``time.perf_counter``], the request of its full view (``full``; 0:
     not asked yet); the picture ``shown`` (:class:`holo_core.worker.ViewPicture`) and its GPU
     ``texture``; the latencies [s] from the last move to its first picture (``coarse``) and to
@@ -78,6 +80,7 @@ class Live:
     latency: float | None = None
     why: str = ""
     seen: list = field(default_factory=list)  # when pictures arrived [s], the latest 32
+    keys: dict = field(default_factory=dict)
 
 
 def state() -> Live:
@@ -135,6 +138,7 @@ def close() -> None:
         p.views.close()
     p.views, p.shown, p.texture, p.key, p.camera, p.full, p.first = \
         None, None, None, (), None, 0, 0
+    p.keys = {}
 
 
 # -- asking and taking views -----------------------------------------------------------------
@@ -148,13 +152,15 @@ def camera_key(camera) -> tuple:
 
 def look(region: int, camera, now: float | None = None) -> int:
     """The 3D view ``region`` looks through ``camera`` now: a coarse view is asked when it
-    differs from the one asked last (a move); returns that request, or 0 (no change, or no
+    differs from the one this view asked last (a move: the moving view is the one served,
+    so two views open at once do not take turns); returns that request, or 0 (no move, or no
     plate). Never waits."""
     p = state()
     key = camera_key(camera)
-    if p.views is None or (key == p.key and region == p.region):
+    if p.views is None or key == p.keys.get(region):
         return 0
     now = time.perf_counter() if now is None else now
+    p.keys[region] = key
     p.region, p.camera, p.key, p.moved, p.full = region, camera, key, now, 0
     try:
         p.first = p.views.ask(camera, coarse=True)
@@ -315,15 +321,16 @@ def _draw():
         return
     scene, rv3d, region = context.scene, context.region_data, context.region
     p = state()
-    if p.source is None:
-        refresh(scene, context.evaluated_depsgraph_get())
+    if p.source is None:  # looked up from a timer: a drawing evaluates nothing
+        if not bpy.app.timers.is_registered(_reread):
+            bpy.app.timers.register(_reread, first_interval=0.0)
+        return
     if p.why:
         _text(region, [p.why])
         return
-    try:
+    try:  # the objects as the viewport shows them (their matrices are the evaluated ones)
         camera = viewport_camera(scene, context.space_data, rv3d, (region.width,
-                                 region.height), scene.holo.live_pixels,
-                                 context.evaluated_depsgraph_get())
+                                 region.height), scene.holo.live_pixels)
     except (ExportError, ValueError) as e:
         _text(region, [str(e)])
         return
@@ -369,6 +376,7 @@ def _text(region, lines, *, dim=False) -> None:
 
 HANDLERS = (("depsgraph_update_post", _changed), ("load_post", _forget))
 _handle = []
+atexit.register(close)  # Blender's end: the worker ended, the shared memory unlinked
 
 
 def register():
