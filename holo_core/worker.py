@@ -14,6 +14,10 @@ held in memory.
 
 :class:`Worker` is the parent's handle, as Cycles' ``engine.py`` is Blender's on its renderer;
 this module and what it imports load nothing of OpenCL.
+
+:class:`Views` is the handle on a view-serving worker (``python -m holo_core.view_server``,
+the same serving loop): it holds a recorded plate and answers views as a camera moves, each
+picture handed back through shared memory (:mod:`holo_core.io.shared_view`), never a file.
 """
 
 from __future__ import annotations
