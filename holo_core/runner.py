@@ -19,7 +19,6 @@ import os
 import pickle
 import queue
 import shutil
-import stat
 import subprocess
 import sys
 import threading
@@ -36,6 +35,7 @@ from . import estimate, jobs, memory
 from .camera.render import render_camera
 from .io.hologram import HologramFileError, write_hologram
 from .io.image import check_room, check_writable, read_exr
+from .io.plate_paths import file_identity as _identity
 from .io.plate_paths import plate_files, read_plate, store_of
 from .io.plate_set import MANIFEST, read_plate_set
 from .io.tiled_wave import TiledWave
@@ -259,17 +259,6 @@ class KeptPlates:
     def clear(self) -> None:
         self._held = {}
         self._set = (None, None)
-
-
-def _identity(path) -> tuple | None:
-    """A plate file's identity (None: no file, e.g. a tiled store)."""
-    try:
-        st = Path(path).stat()
-    except OSError:
-        return None
-    if not stat.S_ISREG(st.st_mode):
-        return None
-    return (str(Path(path).resolve()), st.st_size, st.st_mtime_ns, st.st_ino)
 
 
 def _plan(job: Job) -> tuple[PlannedPlate, list[str] | None]:

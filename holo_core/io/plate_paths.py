@@ -2,12 +2,26 @@
 
 from __future__ import annotations
 
+import stat
 from pathlib import Path
 
 from ..scene.hologram import Hologram
 from .hologram import HologramFileError, read_hologram, recording_of
 from .store import read_store
 from .tiled_wave import open_plate
+
+
+def file_identity(path) -> tuple | None:
+    """A plate file's identity: (resolved path, size [bytes], modification time [ns], inode),
+    which changes when the file is written again, by this process or another; None where
+    ``path`` is no regular file (none there, or a tiled store's folder)."""
+    try:
+        st = Path(path).stat()
+    except OSError:
+        return None
+    if not stat.S_ISREG(st.st_mode):
+        return None
+    return (str(Path(path).resolve()), st.st_size, st.st_mtime_ns, st.st_ino)
 
 
 def store_of(path) -> Path:

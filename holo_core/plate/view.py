@@ -181,7 +181,7 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
             pupil = pinhole_view_pupil(first, camera, rotation, position, apodize=apodize)
         looks, n = carrier_looks(holos, pupil=pupil, plans=plans, **route)
     else:
-        unseen = _unseen(first, rotation, position)
+        unseen = unseen_light(first, rotation, position)
         looks, n = (None, None) if unseen else full_band_looks(holos, pupil=pupil,
                                                                source=source, **route)
     if looks is None:  # a black view, said aloud (an animation's camera may pass out of the zone)
@@ -343,7 +343,7 @@ class EmptyViewWarning(UserWarning):
 
 
 
-def _unseen(h: Hologram, rotation, position) -> str | None:
+def unseen_light(h: Hologram, rotation, position) -> str | None:
     """Why no light of ``h`` can reach a camera at ``position`` [m] with axes ``rotation``
     (both in the plate's frame, :func:`camera_in_plate`), or None. The light leaves every
     plate point within the object wave's cone (sin θ = band, else the pitch's Nyquist

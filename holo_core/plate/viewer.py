@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.plate_paths import file_identity
 from ..io.plate_set import MANIFEST
 from ..scene.camera import Camera
 from ..scene.hologram import Hologram
@@ -243,7 +244,8 @@ class PlateViewer:
         camera : Camera
             The camera the sliders start from (inside the zone).
         coarse : bool
-            Draw coarse views while a slider moves (:meth:`view`), the full view on release.
+            Draw coarse views while a slider moves (:meth:`view`); the widget's button draws
+            the full view (and so does every move with ``coarse=False``).
 
         Returns
         -------
@@ -326,9 +328,8 @@ class _Files:
         self._held, self._names = None, None
 
     def _identities(self):
-        from ..runner import _identity
         listed = [self.paths / MANIFEST] if self.folder else self.paths
-        return [_identity(p) for p in listed]
+        return [file_identity(p) for p in listed]
 
     def current(self):
         names = self._identities()
@@ -389,14 +390,14 @@ def _check_scene(recording: str, scene: str | None, name: str) -> None:
 def zone_sentence(h: Hologram, camera: Camera) -> str | None:
     """Why ``camera``'s pupil lies outside ``h``'s viewing zone (a sentence), or None inside
     it (or where ``h`` has no zone and its light reaches the camera)."""
-    from .view import _unseen
+    from .view import unseen_light
     from .window import camera_in_plate
     try:
         rotation, position = camera_in_plate(h, camera)
     except InputError as e:
         return str(e)
     if h.zone is None:
-        return _unseen(h, rotation, position)
+        return unseen_light(h, rotation, position)
     pupil = camera.aperture_diameter or 0.0
     if h.zone.distance_outside(position, pupil / 2) <= INSIDE:
         return None

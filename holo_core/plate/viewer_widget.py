@@ -1,6 +1,6 @@
 """A notebook widget over a :class:`~holo_core.plate.viewer.PlateViewer`: sliders move the
 camera (across, up, along its view [m]; its aim [°]) and its focus [m], and the picture follows
-(coarse while a slider moves, the full view once it is let go). ipywidgets is optional:
+(coarse while a slider moves; its button draws the full view). ipywidgets is optional:
 without it, :func:`widget` says how to install it."""
 
 from __future__ import annotations
@@ -64,21 +64,23 @@ def widget(viewer, camera: Camera, *, coarse: bool = True):
         sliders["focus"] = slider("focus [m]", 0.5 * f, 2 * f, f)
     image = ipywidgets.Image(format="png")
     words = ipywidgets.Label()
+    full = ipywidgets.Button(description="full view")
 
-    def draw(change=None):
-        moving = change is not None and coarse and change.get("name") == "value"
+    def draw(quick: bool):
         cam = moved(camera, **{k: s.value for k, s in sliders.items()})
         why = viewer.where(cam)
-        if why is not None:
+        if why is not None:  # said, and no stale picture left as if it were this camera's
             words.value = why
+            image.value = b""
             return
-        words.value = ""
-        image.value = picture(viewer.view(cam, coarse=moving))
+        words.value = "coarse: the full view with the button" if quick else ""
+        image.value = picture(viewer.view(cam, coarse=quick))
 
     for s in sliders.values():
-        s.observe(draw, names="value")
-    draw()
-    return ipywidgets.VBox([*sliders.values(), words, image])
+        s.observe(lambda change: draw(coarse), names="value")
+    full.on_click(lambda button: draw(False))
+    draw(False)
+    return ipywidgets.VBox([*sliders.values(), full, words, image])
 
 
 def _zone_reach(viewer, camera: Camera) -> float:
