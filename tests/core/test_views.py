@@ -59,13 +59,20 @@ def expected(viewer, camera, coarse=False):
             view.depth.astype(np.float32))
 
 
+# the views are made in two processes: the same float32 arithmetic, but a process that loaded
+# other native libraries (bpy, when the add-on's tests share the session) may sum in another
+# order, a few ulps apart (9.5e-7 seen); a picture torn or misplaced differs by O(1)
+RTOL = 1e-5
+
+
 def assert_same(picture, want):
     rgba, depth = want
     assert picture.rgba is not None, picture.where or picture.error
     assert picture.rgba.shape == rgba.shape
     err = float(np.abs(picture.rgba - rgba).max())
-    assert err == 0.0, f"the picture differs from this process's view by {err}"
-    assert np.array_equal(picture.depth, depth), float(np.abs(picture.depth - depth).max())
+    assert err <= RTOL * float(np.abs(rgba).max()), \
+        f"the picture differs from this process's view by {err}"
+    np.testing.assert_allclose(picture.depth, depth, rtol=RTOL)
     assert np.asarray(rgba[..., 3]).max() == 1.0, "the objects are missing from the view"
 
 
@@ -76,7 +83,7 @@ def views(plate_files):
 
 
 def test_a_served_picture_is_the_view_made_in_this_process(views, here):
-    """Full and coarse: every RGBA value (exposure applied) and depth, exactly; latest()
+    """Full and coarse: every RGBA value (exposure applied) and depth, within RTOL; latest()
     never waits (None before the first answer)."""
     cam = cameras()[1]
     assert views.latest() is None
