@@ -265,6 +265,7 @@ def validate_capacity(capacity) -> int:
 
 
 def validate_channels(channels) -> int:
+    """A picture's planes: 4 (R, G, B, A) or 5 (and the depth [m])."""
     if channels not in (4, 5):
         raise InputError(f"channels must be 4 (RGBA) or 5 (RGBA and depth); got {channels!r}")
     return int(channels)
