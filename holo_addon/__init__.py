@@ -26,10 +26,20 @@ below it (ui → compositor → render → export → blender):
 """
 
 from .compositor import handlers
-from .ui import display, operators, overlay, panels, plates, preferences, preview, properties
+from .ui import (
+    display,
+    live,
+    operators,
+    overlay,
+    panels,
+    plates,
+    preferences,
+    preview,
+    properties,
+)
 
 MODULES = (properties, preferences, operators, plates, display, panels, handlers, overlay,
-           preview)
+           preview, live)
 
 
 def register():

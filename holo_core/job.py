@@ -713,3 +713,117 @@ class DisplayFrame:
     def stem(self) -> str:
         """The frame's files' common name: ``frame_NNNN``."""
         return f"frame_{self.frame:04d}"
+
+
+# --- views of a held plate (the live viewport's messages) -------------------------------------
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ViewOpen:
+    """The plate a view-serving worker holds, and how its views are rendered: the settings a
+    :class:`holo_core.worker.Views` keeps, so that a worker started again gets them again.
+
+    plates : the kept plate's files [paths]: its looks' hologram files, or a plate set's
+        manifest
+    recording : the digest of the recording they must be ('' : none checked); a plate of
+        another recording under these names is refused by name
+    supersample : fine pixels per pixel per axis (an integer >= 1), or 'auto'
+    composition : 'mean' or 'max' of the looks' views
+    opacity_threshold : the view's coverage taken as opaque, in [0, 1]
+    exposure : a linear factor on the radiance (> 0)
+    """
+
+    plates: tuple
+    recording: str = ""
+    supersample: int | str = "auto"
+    composition: str = "mean"
+    opacity_threshold: float = 0.5
+    exposure: float = 1.0
+
+    def __post_init__(self):
+        paths = self.plates
+        if isinstance(paths, (str, Path)):
+            paths = (paths,)
+        _set(self, "plates", tuple(str(p) for p in _paths("plates", paths)))
+        if not self.plates:
+            raise InputError("plates must name one or more plate files; got none")
+        if self.recording:
+            validate.digest("recording", self.recording)
+        if self.supersample != "auto":
+            _set(self, "supersample", validate.integer("supersample", self.supersample, 1,
+                                                       MAX_SUPERSAMPLE))
+        _check_composition(self)
+        _set(self, "exposure", validate.exposure(_real("exposure", self.exposure)))
+
+    def options(self) -> dict:
+        """The render options a viewer takes (:class:`holo_core.PlateViewer`'s keywords)."""
+        return {"supersample": self.supersample, "composition": self.composition,
+                "opacity_threshold": self.opacity_threshold}
+
+    def to_dict(self) -> dict:
+        return {"plates": list(self.plates), "recording": self.recording,
+                "supersample": self.supersample, "composition": self.composition,
+                "opacity_threshold": self.opacity_threshold, "exposure": self.exposure}
+
+    @classmethod
+    def from_dict(cls, data) -> ViewOpen:
+        """The settings of :meth:`to_dict`'s plain data, every field checked."""
+        return _made(cls, "view open", **_fields(cls, data, "view open"))
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ViewRequest:
+    """One view asked of a view-serving worker: request ``id`` (larger is newer: a newer
+    request supersedes older ones still queued), the ``camera``, ``coarse`` (a quick
+    picture while the camera moves) and ``shared`` (the name of the
+    :class:`holo_core.io.shared_view.SharedView` its picture goes to)."""
+
+    id: int
+    camera: Camera
+    shared: str
+    coarse: bool = False
+
+    def __post_init__(self):
+        _set(self, "id", validate.integer("id", self.id, 1))
+        if not isinstance(self.camera, Camera):
+            raise InputError(f"camera must be a Camera; got {type(self.camera).__name__}")
+        if not isinstance(self.shared, str) or not self.shared or len(self.shared) > 200:
+            raise InputError(f"shared must name a shared view; got {shown(self.shared)}")
+        _set(self, "coarse", _flag("coarse", self.coarse))
+
+    def to_dict(self) -> dict:
+        """Plain data that JSON holds (the camera's matrix as nested lists)."""
+        camera = _plain(self.camera)
+        camera["matrix_world"] = np.asarray(camera["matrix_world"]).tolist()
+        return {"id": self.id, "camera": camera, "shared": self.shared, "coarse": self.coarse}
+
+    @classmethod
+    def from_dict(cls, data) -> ViewRequest:
+        d = _fields(cls, data, "view request")
+        camera = d.get("camera")
+        if isinstance(camera, dict):
+            camera = _noun(Camera, {k: tuple(v) if k in ("resolution", "pixel_aspect")
+                                    and isinstance(v, list) else v for k, v in camera.items()},
+                           "camera")
+        return _made(cls, "view request", **{**d, "camera": camera})
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ViewReply:
+    """A view-serving worker's answer to request ``id``: how long it took [s]; ``where``,
+    why the camera is outside the plate's zone ('' inside: the picture is in the shared view
+    ``shared``); ``error``, what failed ('' : nothing); ``coarse`` as asked."""
+
+    id: int
+    seconds: float = 0.0
+    where: str = ""
+    shared: str = ""
+    coarse: bool = False
+    error: str = ""
+
+    def to_dict(self) -> dict:
+        return {"id": self.id, "seconds": self.seconds, "where": self.where,
+                "shared": self.shared, "coarse": self.coarse, "error": self.error}
+
+    @classmethod
+    def from_dict(cls, data) -> ViewReply:
+        return _made(cls, "view reply", **_fields(cls, data, "view reply"))

@@ -25,6 +25,7 @@ import threading
 import time
 import traceback
 import warnings
+from collections import deque
 from dataclasses import replace
 from pathlib import Path
 
@@ -446,14 +447,19 @@ def main(folder: str) -> int:
     return 0 if _job(Path(folder), _channel(), None) else 1
 
 
-def serve(idle: float) -> int:
+def serve(idle: float, on_message=None) -> int:
     """The worker of many jobs (``python -m holo_core.runner --serve IDLE``): each line of
     stdin names a job's folder, run in turn (as :func:`main` runs one), the plate's
-    holograms kept in memory between them (:class:`KeptPlates`). It ends when stdin closes
-    (the parent ended, or has no more), when no job came for ``idle`` seconds, or after a
-    job failed (a driver's state after an error is not trusted with the next)."""
+    holograms kept in memory between them (:class:`KeptPlates`), or is a JSON message,
+    handed to ``on_message(message, send)`` (:mod:`holo_core.view_server`'s live views),
+    which returns whether the worker goes on; a message of a kind (its first key) that
+    another of the same kind waits behind is skipped, the newest answered (a newer view
+    supersedes an older). It ends when stdin closes (the parent ended, or has no more), when
+    no line came for ``idle`` seconds, or after a job failed (a driver's state after an
+    error is not trusted with the next)."""
     send, kept = _channel(), KeptPlates()
     lines: queue.SimpleQueue = queue.SimpleQueue()
+    waiting: deque = deque()  # lines taken off the queue to look behind a message
 
     def listen():  # a thread, so that waiting for the next job can time out on any platform
         for line in sys.stdin:
@@ -463,13 +469,27 @@ def serve(idle: float) -> int:
     threading.Thread(target=listen, daemon=True, name="holo-jobs").start()
     while True:
         try:
-            folder = lines.get(timeout=idle)
+            line = waiting.popleft() if waiting else lines.get(timeout=idle)
         except queue.Empty:
             log.debug("no job for %.0f s: the worker ends", idle)
             return 0
-        if folder is None:
+        if line is None:
             return 0
-        if folder and not _job(Path(folder), send, kept):
+        if line.startswith("{"):
+            while True:  # whatever arrived since: a newer message of its kind supersedes it
+                try:
+                    waiting.append(lines.get_nowait())
+                except queue.Empty:
+                    break
+            message = json.loads(line)
+            kind = next(iter(message), "")
+            if any(w and w.startswith("{" + json.dumps(kind) + ":") for w in waiting):
+                continue
+            if on_message is None:
+                log.warning("a %r message, which this worker does not take", kind)
+            elif not on_message(message, send):
+                return 1
+        elif line and not _job(Path(line), send, kept):
             return 1
 
 

@@ -14,12 +14,17 @@ held in memory.
 
 :class:`Worker` is the parent's handle, as Cycles' ``engine.py`` is Blender's on its renderer;
 this module and what it imports load nothing of OpenCL.
+
+:class:`Views` is the handle on a view-serving worker (``python -m holo_core.view_server``,
+the same serving loop): it holds a recorded plate and answers views as a camera moves, each
+picture handed back through shared memory (:mod:`holo_core.io.shared_view`), never a file.
 """
 
 from __future__ import annotations
 
 import atexit
 import json
+import logging
 import os
 import pickle
 import queue
@@ -30,11 +35,18 @@ import sys
 import tempfile
 import threading
 import time
+from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 from . import jobs
 from .io.image import atomic_paths
-from .job import Job, Result
+from .io.shared_view import SharedView, slot_bytes
+from .job import Job, Result, ViewOpen, ViewReply, ViewRequest
+from .scene.camera import Camera
+
+_log = logging.getLogger(__name__)
 
 
 class WorkerError(RuntimeError):
@@ -84,12 +96,12 @@ class _Process:
     closes, when it is left idle (``IDLE_SECONDS``) or after a failed job. Its
     stderr goes to a file of its own folder (the last line explains a death)."""
 
-    def __init__(self, env: dict):
+    def __init__(self, env: dict, command=("holo_core.runner", "--serve")):
         self.env = env
         self.folder = Path(tempfile.mkdtemp(prefix="holo-process-"))
         self.stderr = open(self.folder / "stderr.txt", "w+b")
         self.popen = subprocess.Popen(
-            [sys.executable, "-m", "holo_core.runner", "--serve", str(IDLE_SECONDS)],
+            [sys.executable, "-m", *command, str(IDLE_SECONDS)],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.stderr,
             env=env, cwd=self.folder,
             start_new_session=os.name == "posix")  # its group: the renderer it runs dies too
@@ -330,3 +342,234 @@ def run(job: Job, progress: jobs.Progress = None, on_log=None, **options) -> Res
     """The job run in a worker process (:func:`holo_core.runner.run`; ``options``:
     :class:`Worker`'s), waiting for it."""
     return Worker(job, **options).wait(progress, on_log)
+
+
+# --- live views of a held plate ---------------------------------------------------------------
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class ViewPicture:
+    """The newest finished answer of a :class:`Views`.
+
+    Attributes
+    ----------
+    request : int
+        The request it answers (:meth:`Views.ask`'s number).
+    rgba : (H, W, 4) float32 array or None
+        Straight radiance (exposure applied) and opacity, row 0 at the top; None where the
+        camera was outside the zone or the view failed.
+    depth : (H, W) float32 array or None
+        Planar depth [m].
+    coarse : bool
+        A coarse view (a quick one while the camera moves).
+    seconds : float
+        The worker's time for it [s].
+    where : str
+        Why the camera is outside the plate's zone ('' inside).
+    error : str
+        What failed ('' : nothing).
+    """
+
+    request: int
+    rgba: np.ndarray | None = None
+    depth: np.ndarray | None = None
+    coarse: bool = False
+    seconds: float = 0.0
+    where: str = ""
+    error: str = ""
+
+
+VIEW_SERVER = ("holo_core.view_server",)  # the view-serving worker's module
+
+
+class Views:
+    """Views of a plate held by a worker process of its own, pictures through shared memory.
+
+    The worker (``python -m holo_core.view_server``, :mod:`holo_core.view_server`) holds the plate with its plans
+    (:class:`holo_core.PlateViewer`, on the device where there is one) and renders each view
+    as it is asked for; a view asked while newer ones wait behind it is skipped. Its pictures
+    come back through a :class:`holo_core.io.shared_view.SharedView` this process owns. A
+    worker that ended (a crash, its idle end, :meth:`close`) is started again at the next
+    :meth:`ask`, with the same plate and settings.
+
+    Parameters
+    ----------
+    plates : path or sequence of paths
+        The kept plate's files (its looks' hologram files, or a plate set's manifest).
+    recording : str
+        The digest of the recording they must be ('' : not checked).
+    supersample, composition, opacity_threshold, exposure
+        As :class:`holo_core.job.ViewOpen`'s.
+    paths, device, memory_limit, cache_dir
+        The worker's environment, as :class:`Worker`'s.
+
+    Examples
+    --------
+    >>> views = Views(["shot/plate_hologram.exr"])                     # doctest: +SKIP
+    >>> n = views.ask(camera, coarse=True)                             # doctest: +SKIP
+    >>> picture = views.wait(n, timeout=10.0)                          # doctest: +SKIP
+    >>> picture.rgba.shape if not picture.where else picture.where     # doctest: +SKIP
+    (360, 640, 4)
+    >>> views.close()                                                  # doctest: +SKIP
+    """
+
+    def __init__(self, plates, *, recording: str = "", supersample="auto",
+                 composition: str = "mean", opacity_threshold: float = 0.5,
+                 exposure: float = 1.0, paths=(), device: str | None = None,
+                 memory_limit: str | None = None, cache_dir: str | None = None):
+        self.settings = ViewOpen(plates=plates, recording=recording, supersample=supersample,
+                                 composition=composition, opacity_threshold=opacity_threshold,
+                                 exposure=exposure)
+        self._env = environment(paths, device, memory_limit, cache_dir)
+        self._process: _Process | None = None
+        self._shared: SharedView | None = None
+        self._asked = 0          # the newest request's number
+        self._shown = None       # the newest finished ViewPicture
+        self._number = 0         # the shared view's newest picture read
+        self._replies: dict = {}  # request -> ViewReply, newest kept
+        self.opened = ""         # the recording the worker holds ('' : not yet)
+        self.error = ""          # why the worker holds no plate, or why it ended
+        self.starts = 0          # worker processes started (a crash starts another)
+        self.answered = 0        # replies received (a skipped request gets none)
+        self._closed = False
+
+    def ask(self, camera: Camera, *, coarse: bool = False) -> int:
+        """Ask the view from ``camera`` (its resolution [px] sizes the picture); returns the
+        request's number at once. A newer request supersedes this one while it waits."""
+        if self._closed:
+            raise WorkerError("these views are closed")
+        w, h = camera.resolution
+        need = slot_bytes(w, h, 5)
+        if self._shared is None or self._shared.capacity < need:
+            old, self._shared, self._number = self._shared, SharedView.create(need), 0
+            if old is not None:
+                old.close()  # unlinked; a worker still writing into it keeps its mapping
+        self._asked += 1
+        request = ViewRequest(id=self._asked, camera=camera, shared=self._shared.name,
+                              coarse=coarse)
+        self._send({"view": request.to_dict()})
+        return self._asked
+
+    def _send(self, message: dict) -> None:
+        """One JSON line to the worker; one that ended is started again (the plate opened
+        first), once, before the line is sent again."""
+        line = (json.dumps(message) + "\n").encode()
+        for attempt in (0, 1):
+            if self._process is None or not self._process.ready():
+                self._start()
+            try:
+                self._process.popen.stdin.write(line)
+                self._process.popen.stdin.flush()
+                self._process.idle_since = time.monotonic()  # its idle end starts again
+                return
+            except OSError:
+                if attempt:
+                    raise WorkerError(f"the view worker did not start: {self.error}") from None
+                self._drain()  # it died: say how before the next
+
+    def _start(self) -> None:
+        self._drain()  # how the one before ended, where it did
+        if self._process is not None:
+            self._process.close()
+        self._process = _Process(self._env, VIEW_SERVER)
+        self.starts += 1
+        self.opened = ""
+        line = json.dumps({"open": self.settings.to_dict()}) + "\n"
+        self._process.popen.stdin.write(line.encode())
+        self._process.popen.stdin.flush()
+
+    def _drain(self) -> None:
+        """Take the worker's messages: its replies, its log records (logged here), its end."""
+        process = self._process
+        if process is None:
+            return
+        while True:
+            try:
+                msg = process.messages.get_nowait()
+            except queue.Empty:
+                return
+            if msg is None:
+                code = process.popen.wait()
+                self.error = f"the view worker ended with {_death(code)}" \
+                    f"{process.stderr_tail()}" if code else ""
+                process.close()
+                self._process = None
+                return
+            if "log" in msg:
+                level, text = msg["log"]
+                _log.log(level, "view worker: %s", text)
+            elif "opened" in msg:
+                self.opened, self.error = msg["opened"]["recording"], msg["opened"]["error"]
+            elif "view" in msg:
+                reply = ViewReply.from_dict(msg["view"])
+                self.answered += 1
+                self._replies = {k: v for k, v in self._replies.items()
+                                 if k >= reply.id - 8}  # a few kept for their pictures
+                self._replies[reply.id] = reply
+
+    def latest(self) -> ViewPicture | None:
+        """The newest finished answer (a picture, or why there is none), or None before the
+        first; never blocks. An answer to an older request than one shown is never shown
+        after it."""
+        self._drain()
+        replies = [r for r in self._replies.values()
+                   if r.where or r.error] if self._replies else []
+        newest = max(replies, key=lambda r: r.id, default=None)
+        picture = self._shared.read(after=self._number) if self._shared is not None else None
+        if picture is not None:
+            self._number = picture.number
+        shown = self._shown.request if self._shown is not None else 0
+        if picture is not None and picture.request > shown and \
+                (newest is None or picture.request > newest.id):
+            self._shown = ViewPicture(request=picture.request, rgba=picture.rgba,
+                                      depth=picture.depth, coarse=picture.coarse,
+                                      seconds=picture.seconds)
+        elif newest is not None and newest.id > shown:
+            self._shown = ViewPicture(request=newest.id, coarse=newest.coarse,
+                                      seconds=newest.seconds, where=newest.where,
+                                      error=newest.error)
+        return self._shown
+
+    def wait(self, request: int, timeout: float = 60.0) -> ViewPicture:
+        """Wait for the answer to ``request`` (or a newer one) [s at most]; raises
+        :class:`WorkerError` when the worker ends or the time runs out first."""
+        end = time.monotonic() + timeout
+        while True:
+            shown = self.latest()
+            if shown is not None and shown.request >= request:
+                return shown
+            if self._process is None:
+                raise WorkerError(self.error or "the view worker ended")
+            if time.monotonic() > end:
+                raise WorkerError(f"no answer to view {request} within {timeout:g} s")
+            time.sleep(0.002)
+
+    @property
+    def shared_name(self) -> str:
+        """The name of the shared view the pictures come through ('' before the first
+        request)."""
+        return "" if self._shared is None else self._shared.name
+
+    @property
+    def process(self) -> subprocess.Popen | None:
+        """The worker's process (None: none running)."""
+        return None if self._process is None else self._process.popen
+
+    def close(self) -> None:
+        """End the worker and unlink the shared view. Asking again raises."""
+        self._closed = True
+        if self._process is not None:
+            self._process.close()
+            self._process = None
+        if self._shared is not None:
+            self._shared.close()
+            self._shared = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        if not getattr(self, "_closed", True):
+            self.close()

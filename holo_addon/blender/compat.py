@@ -2,11 +2,14 @@
 
 5.0 made the compositor a node-group data-block with a Group Output instead of the Composite
 node, turned Depth Combine's options into input sockets and multilayer EXR output into a
-media type; 4.2-4.5 call EEVEE ``BLENDER_EEVEE_NEXT``.
+media type; 4.2-4.5 call EEVEE ``BLENDER_EEVEE_NEXT``. ``gpu_extras``' ``draw_texture_2d``
+takes scene-linear textures into the viewport's sRGB target only where it has
+``is_scene_linear_with_rec709_srgb_target``.
 """
 
 from __future__ import annotations
 
+import inspect
 import os
 from contextlib import contextmanager
 
@@ -163,3 +166,22 @@ def uses_nodes(material) -> bool:
 def enable_nodes(material) -> None:
     if bpy.app.version < (5, 0, 0):
         material.use_nodes = True
+
+
+LINEAR_TEXTURE = "is_scene_linear_with_rec709_srgb_target"
+
+
+def draws_linear_textures() -> bool:
+    """Whether ``draw_texture_2d`` converts a scene-linear texture for the viewport (else
+    the texture must hold display values)."""
+    from gpu_extras.presets import draw_texture_2d
+    return LINEAR_TEXTURE in inspect.signature(draw_texture_2d).parameters
+
+
+def draw_linear_texture(draw, texture, position, width, height, *, linear: bool) -> None:
+    """``draw`` (``draw_texture_2d``) of ``texture``, told it is scene linear where it can
+    be (``linear``: :func:`draws_linear_textures`)."""
+    if linear:
+        draw(texture, position, width, height, **{LINEAR_TEXTURE: True})
+    else:
+        draw(texture, position, width, height)

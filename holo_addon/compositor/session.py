@@ -41,6 +41,7 @@ class Session:
         need); True or False decide it (tests keep their process)
     shown : the status bar's text as it was last set
     preview : what the viewport's preview shows and makes (:class:`holo_addon.ui.preview.Preview`)
+    live : the plate's live view in the viewport (:class:`holo_addon.ui.live.Live`)
     """
 
     running: Running = field(default_factory=Running)
@@ -55,6 +56,7 @@ class Session:
     exit_on_failure: bool | None = None
     shown: str | None = None
     preview: object | None = None
+    live: object | None = None
 
     # -- a render ------------------------------------------------------------------------
     def render_started(self) -> None:

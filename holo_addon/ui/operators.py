@@ -3,7 +3,9 @@
 The work runs in a worker process (:mod:`holo_core.worker`; no OpenCL in Blender's process). In
 the interface a modal timer drains its messages (progress bar, status text, warnings as they
 arise) while every other event passes through, so Blender stays usable; Esc kills the worker,
-Enter stops a camera hologram's samples early and keeps the pass so far.
+Enter stops a camera hologram's samples early and keeps the pass so far. A recorded plate's
+pass runs in the worker kept between passes (:func:`_kept`), which holds the plate: the next
+click's pass reads no file again.
 ``execute()`` (``blender --background``, scripts) waits for the same worker. Errors, a crashed
 or killed worker included, reach the user through ``self.report``.
 """
@@ -31,6 +33,14 @@ USER_ERRORS = (ExportError, HologramFileError, ValueError, OSError, WorkerError)
 
 def _report_log(op, level, text):
     op.report({"WARNING"} if level >= logging.WARNING else {"INFO"}, text)
+
+
+def _kept(job) -> bool:
+    """Whether ``job`` (a Prepared) runs in the worker kept between passes: a view of a plate
+    whose holograms are current (the worker holds them for the next click, or a render's
+    frames, until a render ends or it is left idle); a recording or a camera hologram runs
+    in a worker of its own."""
+    return not job.records
 
 
 class _PipelineOperator:
@@ -77,7 +87,8 @@ class _PipelineOperator:
         wm.progress_begin(0, 1000)
         try:
             result = pipeline.run(job, lambda f: wm.progress_update(int(f * 1000)),
-                                  lambda level, text: _report_log(self, level, text))
+                                  lambda level, text: _report_log(self, level, text),
+                                  resident=_kept(job))
         except USER_ERRORS as e:
             self.report({"ERROR"}, f"{self.bl_label} failed: {e}")
             return {"CANCELLED"}
@@ -95,7 +106,7 @@ class _PipelineOperator:
         if cached is not None:
             return self._done(context, job, cached)
         try:
-            self._worker = pipeline.start(job)
+            self._worker = pipeline.start(job, resident=_kept(job))
         except OSError as e:
             self.report({"ERROR"}, f"{self.bl_label}: the worker process did not start: {e}")
             return {"CANCELLED"}

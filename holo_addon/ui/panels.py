@@ -6,7 +6,7 @@ import bpy
 
 from ..compositor.session import session
 from ..compositor.tree import uses_pass
-from . import display, plates, preview
+from . import display, live, plates, preview
 
 
 class HOLO_PT_scene(bpy.types.Panel):
@@ -43,6 +43,7 @@ class HOLO_PT_scene(bpy.types.Panel):
             col.prop(h, "composition")
             col.prop(h, "opacity_threshold")
             layout.prop(h, "show_coverage")
+            draw_live(layout, context)
         if h.mode == "CAMERA":
             layout.prop(h, "preview")
             shown = preview.state()
@@ -104,10 +105,23 @@ class HOLO_PT_object(bpy.types.Panel):
 
 
 
+def draw_live(layout, context) -> None:
+    """Live Plate View, its resolution and what it does now."""
+    h = context.scene.holo
+    row = layout.row(heading="Viewport")
+    row.prop(h, "live_plate")
+    if h.live_plate:
+        layout.prop(h, "live_pixels")
+        said = live.words(context.scene)
+        if said:
+            layout.label(text=said, icon="HIDE_OFF")
+
+
 def draw_plate(layout, context, h) -> None:
     """The plate's hologram, its viewing zone and the planner's lines."""
     imported = " (imported: viewed as it is)" if h.imported else ""
     layout.label(text=f"Hologram: {h.hologram or 'not recorded yet'}{imported}")
+    draw_live(layout, context)
     if h.imported:
         return
     layout.prop(h, "zone_margin")

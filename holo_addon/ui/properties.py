@@ -19,7 +19,7 @@ from ..blender.objects import raster_visibility
 from ..export.display import display_from_object
 from ..export.job import EXPOSURE_STOPS
 from ..export.scene import ExportError
-from . import overlay
+from . import live, overlay
 
 # 4.5+ ask a path property to declare that it takes "//" (relative to the .blend); 4.2 has no
 # such option and takes it anyway
@@ -235,6 +235,10 @@ def _show_coverage(_settings, context):
     overlay.refresh(context)
 
 
+def _live_plate(_settings, context):
+    live.toggled(context)
+
+
 class HoloSceneSettings(bpy.types.PropertyGroup):
     mode: EnumProperty(
         name="Hologram", default="CAMERA",
@@ -332,6 +336,15 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                                       "viewport: the latest pass, and a preview pass at a "
                                       "quarter of the render's resolution made again when the "
                                       "scene changes (Camera mode)")
+    live_plate: BoolProperty(name="Live Plate View", default=False, update=_live_plate,
+                             description="In Plate mode, a 3D view in Rendered shading shows "
+                                         "the recorded plate's view from the view's own camera "
+                                         "as you orbit, pan, zoom and refocus: a coarse picture "
+                                         "while it moves, the full one once it stops")
+    live_pixels: IntProperty(name="Live Resolution", default=640, min=64, max=4096,
+                             subtype="PIXEL",
+                             description="The live view's picture, its larger side [px] (the "
+                                         "view's aspect): fewer pixels come sooner")
     pass_on_render: BoolProperty(name="Pass on Every Render", default=True,
                                  description="Render the holographic pass before each Blender "
                                              "render or animation frame (recording again only "

@@ -9,6 +9,7 @@
 - ``jsonfile.py``: JSON metadata bounded (size, nesting depth) before it is parsed
 - ``mesh.py``: OBJ and PLY meshes
 - ``view.py``: a rendered view as a multilayer EXR and a PNG preview
+- ``shared_view.py``: rendered pictures handed between processes through shared memory
 - ``store.py``: a plate in tiles, a Zarr store for plates beyond memory; its parts:
   ``files.py`` (a store's files, read and written without following links), ``digests.py``
   (a recording's digest, the tiles' keys and checksums), ``store_lock.py`` (the lock a

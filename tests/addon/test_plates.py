@@ -74,6 +74,32 @@ def test_camera_moves_inside_the_zone_never_record_again(empty_scene):
     assert job().fingerprint != first.fingerprint
 
 
+def test_render_passes_of_a_recorded_plate_share_the_worker_that_holds_it(empty_scene):
+    """Recorded once, then Render Holographic Pass twice, the camera moved 5 cm between (a
+    new pass, the same plate): both passes are made by the one worker kept between them (the
+    plate it read held for the second); the pass differs, so it was made again; a render's
+    end ends that worker."""
+    from holo_addon.render import pipeline
+    from holo_core import worker
+    scene = empty_scene
+    _, cam, _ = _plate_scene(scene)
+    assert bpy.ops.holo.record_hologram() == {"FINISHED"}
+    assert worker._resident is None  # a recording runs in a worker of its own
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    kept = worker._resident
+    assert kept is not None and kept.popen.poll() is None
+    out = pipeline.pass_file(pipeline.output_dir(scene), scene.frame_current)
+    first = _read_exr(out)["ViewLayer.Combined.A"]
+    cam.location.x += 0.05
+    bpy.context.view_layer.update()
+    assert bpy.ops.holo.render_pass() == {"FINISHED"}
+    assert worker._resident is kept and kept.popen.poll() is None, "a pass started a worker"
+    second = _read_exr(out)["ViewLayer.Combined.A"]
+    assert second.max() == 1.0 and not np.array_equal(first, second)
+    pipeline.release()
+    assert worker._resident is None and kept.popen.poll() is not None
+
+
 def test_a_frame_beyond_the_zone_renders_whole_as_a_camera_hologram(empty_scene, tmp_path,
                                                                     caplog):
     """The plate recorded, the camera moved 0.5 m beyond its zone: by default (Outside Zone:
