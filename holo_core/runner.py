@@ -117,7 +117,7 @@ def _plate(job: Job, progress, kept: KeptPlates):
         holos = record_planned(planned, seed=route.seed,
                                budget=(route.memory_budget, route.disk_budget), urls=urls,
                                scheduler=route.scheduler, recording=route.recording,
-                               progress=recording)
+                               phases=route.phases, progress=recording)
     else:
         holos = kept.read(route.holograms, route.recording)
     view = None

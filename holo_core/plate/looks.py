@@ -148,15 +148,17 @@ def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
 def record_planned(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
                    encoding="complex", budget=(None, None), urls=None, tile=None,
                    scheduler=None, overwrite=False, progress: jobs.Progress = None,
-                   dashboard=None, recording="") -> list[Hologram]:
+                   dashboard=None, recording="", phases="random") -> list[Hologram]:
     """The looks of the plate ``planned`` (:func:`~holo_core.plate.recording.plate_plan`,
     made once a job) in one pass: ``codes`` one a look (default: the coded looks of its
     plan's looks, :func:`~holo_core.plate.recording.prepare_plate`), in memory, or with ``urls``
-    tile by tile, a store a look (the other arguments as for :func:`record_looks`)."""
+    tile by tile, a store a look (the other arguments as for :func:`record_looks`; ``phases``
+    as :func:`~holo_core.plate.recording.prepare_plate` takes it)."""
     if urls is not None:
         return record_looks_tiled(planned, urls=list(urls), codes=codes, tile=tile,
                                   scheduler=scheduler, overwrite=overwrite, progress=progress,
                                   dashboard=dashboard, depth=depth, seed=seed,
-                                  encoding=encoding, budget=budget, recording=recording)
+                                  encoding=encoding, budget=budget, recording=recording,
+                                  phases=phases)
     return prepare_plate(planned, codes=codes, depth=depth, seed=seed, encoding=encoding,
-                         budget=budget, recording=recording).record(progress)
+                         budget=budget, recording=recording, phases=phases).record(progress)

@@ -27,6 +27,7 @@ from .plan import LAYERS, LOOKS, RIM, PlatePlan, plan
 from .zone_sum import ZoneEmitters, ZoneSum, ZoneWindow
 
 log = logging.getLogger(__name__)
+PHASES = ("random", "smooth")  # the emitters' phases (prepare_plate)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
@@ -180,7 +181,8 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
 
 def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
                   encoding="complex", tiled=False, budget=(None, None),
-                  emitters: Emitters | None = None, recording: str = "") -> PlateRecording:
+                  emitters: Emitters | None = None, recording: str = "",
+                  phases: str = "random") -> PlateRecording:
     """The emitters, visibility tables and sampling of the plate ``planned``, before any
     sum: the emitters the zone sees with their amplitudes, for the looks ``codes`` summed at
     once (:func:`holo_core.plate.looks.record_looks`), look l's phases coded by codes[l], or
@@ -190,12 +192,17 @@ def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
     (the plate's frame, their visibility from this zone): found elsewhere, once for several
     plates that share them (:mod:`.parts`), in place of the zone's own. ``recording``: the
     digest the looks' description carries (:attr:`holo_core.scene.hologram.HologramInfo.
-    recording`), in memory and in their stores alike."""
+    recording`), in memory and in their stores alike. ``phases``: one of :data:`PHASES`:
+    'random' (each emitter's drawn from the seed, the looks' codes shifting them: a diffuse
+    surface, speckle through any pupil) or 'smooth' (every emitter's 0 before the codes: the
+    surface sends one phase, as display holograms are made so that an eye's pupil sees a
+    picture, not speckle)."""
     if encoding != "complex":
         raise InputError(f"encoding must be 'complex' for a plate of meshes (a display's "
                          f"intensity pattern is made from it: holo_core.phase.display); got "
                          f"{encoding!r}"[:200])
     seed = validate.seed(seed)
+    phases = validate.choice("phases", phases, PHASES)
     p, local, zone = planned.plan, planned.meshes, planned.plan.zone
     codes = tuple(look_code(k, p.looks) for k in range(p.looks)) if codes is None else \
         tuple(codes)
@@ -217,8 +224,8 @@ def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
     reach = np.linalg.norm(em.position - np.asarray(zone.centre), axis=1)
     if em.weight is not None:  # a shared set's emitters, weighted for this zone
         reach = reach * em.weight
-    waves = [np.exp(1j * _phases(em, _look_seed(seed, codes, look), c)) * reach
-             for look, c in enumerate(codes)]
+    waves = [np.exp(1j * _phases(em, _look_seed(seed, codes, look), c, phases == "smooth"))
+             * reach for look, c in enumerate(codes)]
     partial = em.visibility.reshape(len(em), -1).min(1) < 1
     rows = np.where(partial, np.cumsum(partial) - 1, -1).astype(np.int32)
     table = np.round(em.visibility[partial] * 255).astype(np.uint8)
@@ -266,13 +273,18 @@ def _look_seed(seed: int, codes, look: int) -> int:
     return seed + (0 if codes[look] else look)
 
 
-def _phases(em, seed: int, code) -> np.ndarray:
-    """The emitters' random phases [rad] of ``seed``, shifted by ``code`` (k, m): 2π·(k1·i +
+def _phases(em, seed: int, code, smooth: bool = False) -> np.ndarray:
+    """The emitters' random phases [rad] of ``seed`` (0 where ``smooth``), shifted by ``code``
+    (k, m): 2π·(k1·i +
     k2·j)/m on the lattice cells (i, j) they lie in (k = k1·m + k2; :func:`~holo_core.plate.looks.record_plate`).
     Each emitter's is drawn from its own key (:func:`~holo_core.plate.emitters.random_phases`),
     so emitters gained or lost near a silhouette leave the others' phases, and a set several
     plates share sends each pupil the same wave from every plate."""
-    if em.key is not None:
+    if smooth:
+        phases = np.zeros(em.count or len(em))
+        if em.ids is not None:
+            phases = phases[em.ids]
+    elif em.key is not None:
         phases = random_phases(em.key, seed)
     else:  # emitters made without keys: drawn in their order
         phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, em.count or len(em))

@@ -107,7 +107,8 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
 def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, depth=True, seed=0,
                        encoding="complex", tile=None, scheduler=None, overwrite=False,
                        progress: jobs.Progress = None, dashboard=None,
-                       budget=(None, None), recording="") -> list[Hologram]:
+                       budget=(None, None), recording="",
+                       phases="random") -> list[Hologram]:
     """The looks ``codes`` of the plate of meshes ``planned`` (with occlusion, against the
     carrier converging on its zone: :func:`holo_core.plate.recording.plate_plan`; the other
     arguments as :func:`holo_core.plate.looks.record_plate` takes them; look l coded by
@@ -126,7 +127,8 @@ def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, depth=True, s
     same recording resumes into it, and a look recorded alone resumes into a store made with
     others and the other way round.
     ``scheduler``, ``overwrite``, ``progress``, ``dashboard``: as for :func:`record_tiled`;
-    ``recording``: the digest the stores' plates carry (the name the caller knows them by).
+    ``recording``: the digest the stores' plates carry (the name the caller knows them by);
+    ``phases``: as :func:`holo_core.plate.recording.prepare_plate` takes it.
     """
     tile = _tile(planned.plan.tile if tile is None else tile, ZONE_TILE_STEP)
     _flag("overwrite", overwrite)
@@ -137,7 +139,7 @@ def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, depth=True, s
     files, address = _output_and_scheduler(urls, scheduler)
     planned = replace(planned, plan=replace(planned.plan, tile=tile))
     job = prepare_plate(planned, codes=codes, depth=depth, seed=seed, encoding=encoding,
-                        tiled=True, budget=budget, recording=recording)
+                        tiled=True, budget=budget, recording=recording, phases=phases)
     recordings = [_plate_recording(job, tile, look) for look in range(job.looks)]
     _record_tiles(files, job.info, tile, recordings, overwrite=overwrite, address=address,
                   task=record_plate_tile, shared=replace(job, meshes=()), progress=progress,
