@@ -194,9 +194,11 @@ def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
     digest the looks' description carries (:attr:`holo_core.scene.hologram.HologramInfo.
     recording`), in memory and in their stores alike. ``phases``: one of :data:`PHASES`:
     'random' (each emitter's drawn from the seed, the looks' codes shifting them: a diffuse
-    surface, speckle through any pupil) or 'smooth' (every emitter's 0 before the codes: the
-    surface sends one phase, as display holograms are made so that an eye's pupil sees a
-    picture, not speckle)."""
+    surface, speckle through any pupil) or 'smooth' (each emitter's −k·|p − Z| at each
+    channel's wavelength before the codes: every emitter's light reaches the zone's centre
+    Z in one phase, as display holograms are made so that an eye's pupil there sees a
+    picture, not speckle; one phase on the surface itself would send a tilted surface's
+    light along its normal, past the eye)."""
     if encoding != "complex":
         raise InputError(f"encoding must be 'complex' for a plate of meshes (a display's "
                          f"intensity pattern is made from it: holo_core.phase.display); got "
@@ -224,8 +226,10 @@ def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
     reach = np.linalg.norm(em.position - np.asarray(zone.centre), axis=1)
     if em.weight is not None:  # a shared set's emitters, weighted for this zone
         reach = reach * em.weight
-    waves = [np.exp(1j * _phases(em, _look_seed(seed, codes, look), c, phases == "smooth"))
-             * reach for look, c in enumerate(codes)]
+    smooth = phases == "smooth"
+    waves = [np.exp(1j * (_phases(em, _look_seed(seed, codes, look), c, smooth)
+                          + _in_phase_at_zone(reach, p.wavelength, smooth))) * reach
+             for look, c in enumerate(codes)]
     partial = em.visibility.reshape(len(em), -1).min(1) < 1
     rows = np.where(partial, np.cumsum(partial) - 1, -1).astype(np.int32)
     table = np.round(em.visibility[partial] * 255).astype(np.uint8)
@@ -233,8 +237,10 @@ def prepare_plate(planned: PlannedPlate, *, codes=None, depth=True, seed=0,
                         centre=zone.centre, half_extents=zone.half_extents, rim=RIM)
     amplitudes = [(p.wavelength, np.concatenate([np.sqrt(em.colour) * wave[:, None]
                                                  for wave in waves], 1))]
-    if depth:
-        amplitudes.append((p.depth_wavelength, np.stack(waves, 1)))
+    if depth:  # the depth channel's own wavelength: its light in phase at the zone too
+        turn = _in_phase_at_zone(reach, p.depth_wavelength, smooth) - _in_phase_at_zone(
+            reach, p.wavelength, smooth)
+        amplitudes.append((p.depth_wavelength, np.stack(waves, 1) * np.exp(1j * turn)[:, None]))
     classes, mixing = _code_classes(em, codes)
     groups = tuple((lam, ZoneEmitters(position=em.position, amplitude=a, visibility=rows,
                                       table=table, grid=em.grid, classes=classes,
@@ -293,6 +299,15 @@ def _phases(em, seed: int, code, smooth: bool = False) -> np.ndarray:
     if code is not None:
         phases = phases + 2 * np.pi * _code_steps(em, code) / code[1]
     return phases
+
+
+def _in_phase_at_zone(reach, wavelength: float, smooth: bool):
+    """−k·|p − Z| [rad] (reduced to ±π in float64) of emitters ``reach`` = |p − Z| [m] away
+    from the zone's centre: their light reaches it in one phase; 0 unless ``smooth``."""
+    if not smooth:
+        return np.zeros(np.shape(reach))
+    return np.remainder(-2 * np.pi / wavelength * np.asarray(reach, np.float64) + np.pi,
+                        2 * np.pi) - np.pi
 
 
 def _code_steps(em, code) -> np.ndarray:
