@@ -165,6 +165,9 @@ class Optics:
         self.rows = np.flatnonzero(np.abs(fy) <= cut)  # the filter's rows and columns
         self.cols = np.flatnonzero(np.abs(fx) <= cut)
         self.block = np.ix_(self.rows, self.cols)
+        # the filter's rows and columns as runs (FFT order: the low positive frequencies,
+        # then the negative ones): copied by slices, 3 times faster than by index arrays
+        self._row_runs, self._col_runs = _runs(self.rows), _runs(self.cols)
         keep = np.ones((self.rows.size, self.cols.size))
         if pupil is not None:
             x, y, diameter, focal = (validate.finite("pupil", v, "m") for v in pupil)
@@ -179,6 +182,7 @@ class Optics:
         self.keep = keep
         self.top = tuple((p - n) // 2 for p, n in zip(self.padded, self.shape))
         self._transfer = {}
+        self._adjoint = {}
         if eye is not None and not isinstance(eye, EyePupil):
             raise InputError(f"eye must be an EyePupil or None; got {type(eye).__name__}")
         self.eye = eye
@@ -292,26 +296,35 @@ class Optics:
 
     def spectrum(self, u) -> np.ndarray:
         """The filter's block of the padded field's spectrum, complex64: fft2 of the padded
-        field, pruned (columns of zeros are not transformed, rows outside the filter not
-        kept), the same values at about 3/4 of the work."""
+        field, pruned (rows of zeros are not transformed, columns outside the filter not
+        kept), the same values at about 3/4 of the work. The rows (contiguous) first: the
+        strided column pass then runs over the filter's columns alone (1080p: 20 % less
+        time than columns first)."""
         (r, c), (h, w) = self.top, self.shape
-        cols = np.zeros((self.padded[0], w), np.complex64)
-        cols[r:r + h] = u
-        cols = fft(cols, axis=0)[self.rows]
-        rows = np.zeros((self.rows.size, self.padded[1]), np.complex64)
-        rows[:, c:c + w] = cols
-        return fft(rows, axis=1)[:, self.cols]
+        rows = np.zeros((h, self.padded[1]), np.complex64)
+        rows[:, c:c + w] = u
+        rows = fft(rows, axis=1)
+        cols = np.zeros((self.padded[0], self.cols.size), np.complex64)
+        for full, part in self._col_runs:
+            cols[r:r + h, part] = rows[:, full]
+        cols = fft(cols, axis=0)
+        out = np.empty((self.rows.size, self.cols.size), np.complex64)
+        for full, part in self._row_runs:
+            out[part] = cols[full]
+        return out
 
     def window(self, block: np.ndarray) -> np.ndarray:
         """ifft2 of a spectrum that is zero outside the filter's block, on the display's
         window (complex64), pruned like :meth:`spectrum`."""
         (r, c), (h, w) = self.top, self.shape
-        rows = np.zeros((self.rows.size, self.padded[1]), np.complex64)
-        rows[:, self.cols] = block
-        rows = ifft(rows, axis=1)[:, c:c + w]
-        cols = np.zeros((self.padded[0], w), np.complex64)
-        cols[self.rows] = rows
-        return ifft(cols, axis=0)[r:r + h]
+        cols = np.zeros((self.padded[0], self.cols.size), np.complex64)
+        for full, part in self._row_runs:
+            cols[full] = block[part]
+        cols = ifft(cols, axis=0)
+        rows = np.zeros((h, self.padded[1]), np.complex64)
+        for full, part in self._col_runs:
+            rows[:, full] = cols[r:r + h, part]
+        return ifft(rows, axis=1)[:, c:c + w]
 
     def to_plane(self, spectrum_block: np.ndarray, k: int) -> np.ndarray:
         """The field (display's window, complex64) on plane ``k`` of a spectrum's block."""
@@ -320,8 +333,12 @@ class Optics:
     def from_plane(self, v: np.ndarray, k: int) -> np.ndarray:
         """The adjoint of :meth:`to_plane`: a field on plane ``k``'s window back to a spectrum
         block (conj of the transfer; FFT then ifft's 1/N, as NumPy's pair is adjoint)."""
-        n = self.padded[0] * self.padded[1]
-        return self.spectrum(v) * (np.conj(self.transfer(k)) / n)
+        t = self._adjoint.get(k)
+        if t is None:  # cached: the descent carries a plane back every step
+            t = (np.conj(self.transfer(k)) / (self.padded[0] * self.padded[1])).astype(
+                np.complex64)
+            self._adjoint[k] = t
+        return self.spectrum(v) * t
 
     def back(self, spectrum_block: np.ndarray) -> np.ndarray:
         """A spectrum block back to the display's window (the adjoint of :meth:`spectrum`
@@ -332,6 +349,16 @@ class Optics:
         """The amplitude |U| on every plane, float32 (N, rows, cols)."""
         s = self.spectrum(u)
         return np.stack([np.abs(self.to_plane(s, k)) for k in range(self.distances.size)])
+
+
+def _runs(index) -> list[tuple[slice, slice]]:
+    """(slice of the full axis, slice of the block) for each run of consecutive ``index``."""
+    breaks = np.flatnonzero(np.diff(index) != 1) + 1
+    out, first = [], 0
+    for run in np.split(index, breaks):
+        out.append((slice(int(run[0]), int(run[-1]) + 1), slice(first, first + run.size)))
+        first += run.size
+    return out
 
 
 def _block_transfer(padded, fy, fx, wavelength, pitch, distance) -> np.ndarray:
