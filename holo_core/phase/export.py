@@ -86,6 +86,19 @@ def export_frame(fields, setup: SLMSetup, folder, *, stem="frame", distance=0.0,
         The stack's EXR compression (:func:`holo_core.io.slm.write_stack`).
     **settings
         For :func:`~holo_core.phase.encode.encode` (iterations, learning_rate, ...).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from holo_core.phase import Display, Laser, SLMSetup, export_frame
+    >>> setup = SLMSetup(display=Display(name="lab", resolution=(64, 48), pitch=8e-6),
+    ...                  lasers=[Laser(wavelength=520e-9)], depth_range=(-2e-3, 0.0), slices=2)
+    >>> y, x = np.mgrid[:48, :64]
+    >>> wave = np.exp(-((x - 32) ** 2 + (y - 24) ** 2) / 200.0).astype(complex)
+    >>> frame = export_frame([wave], setup, tempfile.mkdtemp(), stem="frame_0001")
+    >>> sorted(p.name for p in frame.files)
+    ['frame_0001_520nm.json', 'frame_0001_520nm.png', 'frame_0001_stack.exr', 'frame_0001_stack.png']
     """
     if not isinstance(setup, SLMSetup):
         raise InputError(f"setup must be an SLMSetup; got {type(setup).__name__}")

@@ -22,7 +22,16 @@ from ..validate import InputError
 def response(display, table=None) -> np.ndarray:
     """The phase [rad] each code of ``display`` shows, float64 (2^bit_depth,): ``table``'s
     phases when given (a :class:`~holo_core.phase.slm.PhaseTable`), else the display's line
-    (module docstring)."""
+    (module docstring).
+
+    Examples
+    --------
+    >>> import math
+    >>> from holo_core.phase import Display, response
+    >>> slm = Display(name="lab", resolution=(4, 1), pitch=8e-6, bit_depth=2, inverted=True)
+    >>> response(slm) / math.pi
+    array([-0. , -0.5, -1. , -1.5])
+    """
     n = 2**display.bit_depth
     if table is not None:
         if table.phases.size != n:
@@ -114,7 +123,16 @@ def _nearest(t, values, codes) -> np.ndarray:
 
 def quantise(phase, display, table=None) -> np.ndarray:
     """The uint16 codes (0 .. 2^bit_depth − 1) of ``phase`` [rad] on ``display`` through
-    ``table`` (or its line): the nearest code modulo 2π."""
+    ``table`` (or its line): the nearest code modulo 2π.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core.phase import Display, quantise
+    >>> slm = Display(name="lab", resolution=(4, 1), pitch=8e-6, bit_depth=8)
+    >>> quantise(np.array([0.0, np.pi, -np.pi / 2, 2 * np.pi]), slm)
+    array([  0, 128, 192,   0], dtype=uint16)
+    """
     return Quantiser(response(display, table))(phase)
 
 
