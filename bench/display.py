@@ -22,6 +22,12 @@ recorded wave, the stack's simulation excluded). Then the 1080p targets: a colou
 double-phase, and 100 steps of gradient descent per laser, at 1920×1080 (the demo's wave
 padded to it).
 
+``--eye MM``: the stacks as an eye sees them, through a pupil MM millimetres wide at the
+eye box's centre (EYE in front), focused on each slice (:class:`holo_core.phase.stack.
+EyePupil`), and the points' phases such that their light reaches the pupil's centre in one
+phase (one phase at the points themselves would send a tilted surface's light along its
+normal, past the eye); the figures' names end in ``eye``.
+
     python bench/display.py [--quick] [--out DIR] [--iterations 100]
     python bench/display.py --scenes demo --skip-1080p --part /tmp/a.json   # one part ...
     python bench/display.py --merge /tmp/a.json /tmp/b.json /tmp/c.json     # ... and all
@@ -51,7 +57,7 @@ from holo_core.phase.display import Display
 from holo_core.phase.encode import METHODS, encode
 from holo_core.phase.export import export_frame
 from holo_core.phase.slm import Laser, SLMSetup
-from holo_core.phase.stack import Optics
+from holo_core.phase.stack import EyePupil, Optics
 from holo_core.plate.emitters import surface_points
 from holo_core.plate.point_sources import point_wave
 from holo_core.scene.mesh import Mesh
@@ -105,17 +111,21 @@ def chart_meshes(width, depth=9e-3):
                  uvs=np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]]), texture=chart())]
 
 
-def scene_wave(meshes, shape, wavelengths, spacing=SPOT):
+def scene_wave(meshes, shape, wavelengths, spacing=SPOT, at_eye=False):
     """The scene's wave at the display, per laser (complex64 (rows, cols)): its surface seen
-    from the eye box's centre, recorded on twice the display's grid and cropped."""
+    from the eye box's centre, recorded on twice the display's grid and cropped; ``at_eye``:
+    the points' light in one phase at the eye box's centre, else at the points."""
     centre = np.array([0.0, 0.0, EYE])
-    pos, colour, _, _ = surface_points(meshes, centre, np.eye(3), spacing / (EYE - CENTRE),
+    pos, colour, *_ = surface_points(meshes, centre, np.eye(3), spacing / (EYE - CENTRE),
                                        layers=1)
     big = (2 * shape[0], 2 * shape[1])
     r0, c0 = (big[0] - shape[0]) // 2, (big[1] - shape[1]) // 2
     waves = []
     for c, lam in enumerate(wavelengths):
         amp = np.sqrt(colour[:, c]).astype(np.complex64)
+        if at_eye:
+            reach = np.linalg.norm(pos - centre, axis=1)
+            amp = amp * np.exp(-2j * np.pi / lam * np.remainder(reach, lam)).astype(np.complex64)
         u = point_wave(pos, amp, wavelength=lam, pitch=PITCH, shape=big)
         waves.append(np.asarray(u)[r0:r0 + shape[0], c0:c0 + shape[1]])
     return waves, len(pos)
@@ -136,6 +146,8 @@ def main(argv=None):
     parser.add_argument("--clip", type=float, default=0.05,
                         help="clip_fraction of the double-phase (and the warm starts)")
     parser.add_argument("--skip-1080p", action="store_true")
+    parser.add_argument("--eye", type=float, metavar="MM",
+                        help="judge through an eye's pupil MM wide at the eye box (EYE)")
     parser.add_argument("--hd-steps", type=int,
                         help="gradient-descent steps run at 1080p (the rest of 100 extrapolated)")
     parser.add_argument("--scenes", nargs="*", default=["demo", "textured"],
@@ -168,6 +180,8 @@ def main(argv=None):
     for s in settings.values():
         s["clip_fraction"] = args.clip
     out = args.out or Path(tempfile.mkdtemp(prefix="holo-display-"))
+    eye = None if args.eye is None else EyePupil(diameter=args.eye * 1e-3, distance=EYE)
+    suffix = "" if eye is None else " eye"
     figures = {}
     width = min(shape) * PITCH  # the scenes fit the display's shorter side
     scenes = {"demo": demo_meshes, "textured": chart_meshes}
@@ -175,16 +189,17 @@ def main(argv=None):
     for scene in args.scenes:
         meshes = scenes[scene](width)
         start = time.perf_counter()
-        waves, count = scene_wave(meshes, shape, WAVELENGTHS)
+        waves, count = scene_wave(meshes, shape, WAVELENGTHS, at_eye=args.eye is not None)
         print(f"{scene}: {count} points, waves recorded in {time.perf_counter() - start:.1f} s")
         for method in METHODS:
             folder = out / scene / method
             folder.mkdir(parents=True, exist_ok=True)
             frame = export_frame(waves, setup, folder, stem="frame_0001", distance=CENTRE,
-                                 method=method, stack_compression="none", **settings[method])
+                                 method=method, stack_compression="none", eye=eye,
+                                 **settings[method])
             psnr = float(np.mean([c.mean_psnr_db for c in frame.comparisons]))
             ssim = float(np.mean([c.mean_ssim for c in frame.comparisons]))
-            figures[f"{scene} {method}"] = {
+            figures[f"{scene} {method}{suffix}"] = {
                 "psnr_db": round(psnr, 2), "ssim": round(ssim, 4),
                 "seconds_per_frame": round(frame.seconds, 2),
                 "psnr_db per laser": [round(c.mean_psnr_db, 2) for c in frame.comparisons],
@@ -202,7 +217,9 @@ def main(argv=None):
                            f" nm, {shape[1]}x{shape[0]} computed at 2x and cropped, {slices} "
                            f"slices over +-{HALF_DEPTH * 1e3:g} mm, 8-bit, band 0.5; GD "
                            f"{iterations} steps of {args.slices_per_step} slices, GS "
-                           f"{gs_iterations} plane visits, clip_fraction {args.clip:g}")
+                           f"{gs_iterations} plane visits, clip_fraction {args.clip:g}"
+                           + ("" if eye is None else f"; eye: a {args.eye:g} mm pupil "
+                              f"{EYE * 1e3:g} mm in front, the points in phase there"))
     figures["out"] = str(out)
     if args.part:
         args.part.write_text(json.dumps(figures, indent=1) + "\n")

@@ -2,10 +2,15 @@
 lit scene shown frame by frame on a phase SLM.
 
 The scene: a checkered card (triangle emitters, its image texture) turning 1.2 m behind
-the display, a colour-wheel sphere (point emitters) rising beside it 0.7 m behind, under a
+the display, a colour-wheel sphere (point emitters) rising beside it 0.8 m behind, under a
 sun; shown on a holographic display (a 1080p
 phase SLM at 8 µm by default, or ``--display W H PITCH_UM``) at Scene
-Scale 0.01 (12 and 7 mm), seen from a 2 mm eye box 700 mm away. Render Animation writes, per frame, the
+Scale 0.05 (60 and 40 mm: the focal stack's slices at −60 and −40 mm hold each in focus),
+in a volume 80 mm deep, with smooth phases, seen through a 4 mm pupil from a 2 mm eye box
+as near as the display's diffraction angle allows (:func:`eye_distance`: 700 mm for the
+1080p display, 300 mm for 512 × 512 at 8 µm; an eye's defocus blur a·Δz/L must exceed its
+Airy pattern 1.22·λL/a for depth to show, hence the deep volume).
+Render Animation writes, per frame, the
 red, green and blue patterns as 8-bit grey PNGs, their layout, and the focal stack the
 display shows (EXR and contact sheet), into ``OUT/holo/display/Display/``; the .blend is
 saved as ``OUT/display.blend`` (``blender -b OUT/display.blend -a`` renders it again).
@@ -28,7 +33,19 @@ import numpy as np
 from . import register
 from .blender import compat
 
-SCALE = 0.01  # display metres per scene metre: the scene's 1.2 m is 12 mm behind the display
+SCALE = 0.05  # display metres per scene metre: the scene's 1.2 m is 60 mm behind the display
+EYE_BOX, PUPIL = 2.0, 4.0  # [mm]
+
+
+def eye_distance(cols: int, rows: int, pitch: float, shortest=488e-9) -> float:
+    """The nearest eye distance [mm], in 50 mm steps, from which the eye box sees the whole
+    display inside the angle its half-band filter passes at the ``shortest`` wavelength
+    [m] (the add-on's check): hypot(W/2 + E/2, H/2 + E/2) / tan θ, sin θ = λ/(4p); ``pitch``
+    [µm]."""
+    w, h = cols * pitch * 1e-3, rows * pitch * 1e-3
+    sin_t = 0.5 * shortest / (2 * pitch * 1e-6)
+    reach = math.hypot(w / 2 + EYE_BOX / 2, h / 2 + EYE_BOX / 2)
+    return 50.0 * math.ceil(reach * math.sqrt(1 - sin_t**2) / sin_t / 50.0 * 1.02)
 
 
 def _checker_card(bpy, size: float, depth: float):
@@ -87,7 +104,7 @@ def build_scene(bpy, *, frames: int = 24, display=None, lighting: str = "SCENE",
     cols, rows, pitch = (1920, 1080, 8.0) if display is None else display
     width, height = cols * pitch * 1e-6 / SCALE, rows * pitch * 1e-6 / SCALE  # in the scene
     card = _checker_card(bpy, 0.6 * min(width, height), 1.2)
-    sphere = _sphere(bpy, 0.08 * width, (0.42 * width, 0.0, -0.7))
+    sphere = _sphere(bpy, 0.08 * width, (0.42 * width, 0.0, -0.8))
     for frame in (1, frames):
         t = (frame - 1) / max(1, frames - 1)
         card.rotation_euler = (0.0, math.radians(-20 + 40 * t), math.radians(30 * t))
@@ -108,8 +125,8 @@ def build_scene(bpy, *, frames: int = 24, display=None, lighting: str = "SCENE",
         d.resolution = display[:2]
         d.pitch = display[2]
     d.scene_scale = SCALE
-    d.behind, d.front = 20.0, 0.0
-    d.eye_distance, d.eye_box, d.pupil = 700.0, 2.0, 2.0
+    d.behind, d.front = 80.0, 0.0
+    d.eye_distance, d.eye_box, d.pupil = eye_distance(cols, rows, pitch), EYE_BOX, PUPIL
     d.slices = slices
     shown.holo.is_display = True
     bpy.context.view_layer.update()

@@ -105,6 +105,8 @@ class PlateRoute(_Route):
         them by), written into them when they are recorded and checked when they are read:
         another recording's plate under their names is refused, never viewed; '' (none: an
         imported plate, read as it is)
+    phases : 'random' or 'smooth': the emitters' phases
+        (:func:`holo_core.plate.recording.prepare_plate`; smooth: a display hologram's)
     supersample, exposure, seed : as every route (the seed: the recording's random phases; a
         supersampling below the view's speckle Nyquist rate is said in the log, not raised)
     """
@@ -119,9 +121,11 @@ class PlateRoute(_Route):
     composition: str = "mean"
     opacity_threshold: float = 0.5
     recording: str = ""
+    phases: str = "random"
 
     def __post_init__(self):
         _Route.__post_init__(self)
+        _set(self, "phases", validate.choice("phases", self.phases, ("random", "smooth")))
         if not isinstance(self.plate, Plate):
             raise InputError(f"plate must be a Plate; got {type(self.plate).__name__}")
         _set(self, "holograms", _paths("holograms", self.holograms))

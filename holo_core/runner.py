@@ -116,7 +116,8 @@ def _plate(job: Job, progress, kept: KeptPlates):
         planned, urls = _plan(job)
         _say_estimate(job, planned.plan)
         holos = record_planned(planned, seed=route.seed, urls=urls, scheduler=route.scheduler,
-                               recording=route.recording, progress=recording)
+                               recording=route.recording, phases=route.phases,
+                               progress=recording)
     else:
         holos = kept.read(route.holograms, route.recording)
     view = None

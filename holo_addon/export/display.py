@@ -98,6 +98,9 @@ class DisplaySpec:
     method : the encoding ('double-phase', 'gradient-descent', 'gerchberg-saxton');
         iterations : the iterative ones' steps
     slices : focal slices simulated over the volume's depth
+    phases : the emitters' phases in the recorded wave, 'smooth' (one phase: the eye's pupil
+        sees a picture, as display holograms are made) or 'random' (a diffuse surface:
+        speckle through the pupil)
     """
 
     name: str
@@ -118,6 +121,7 @@ class DisplaySpec:
     method: str = "double-phase"
     iterations: int = 100
     slices: int = 5
+    phases: str = "smooth"
 
     @property
     def size(self) -> tuple[float, float]:
@@ -200,7 +204,8 @@ def display_from_object(obj) -> DisplaySpec:
                        behind=_given(d.behind, 1e-3), scale=_given(d.scene_scale),
                        eye_distance=_given(d.eye_distance, 1e-3),
                        eye_box=_given(d.eye_box, 1e-3), pupil=_given(d.pupil, 1e-3),
-                       method=d.method, iterations=d.iterations, slices=d.slices)
+                       method=d.method, iterations=d.iterations, slices=d.slices,
+                       phases=d.phases.lower())
 
 
 def display_matrix(obj, unit: float) -> np.ndarray:
@@ -351,14 +356,14 @@ def read(scene, depsgraph, obj=None) -> DisplayPrepared:
                       zone=zone)
         data = replace(data, plate=plate)
         fingerprint = digest(data, laser.wavelength, 1, settings.seed, scene.holo.lighting,
-                             lighting, camera=False)
+                             lighting, spec.phases, camera=False)
         path = folder / "waves" / f"{bpy.path.clean_name(obj.name)}_{laser.name}_{fingerprint}.exr"
         # a file there of another recording is recorded again, never shown as this scene's
         route = PlateRoute(plate=plate, holograms=(path,),
                            record=not plate_current(path, fingerprint),
                            recording=fingerprint, memory_budget=settings.memory_budget,
                            disk_budget=settings.disk_budget, wavelength=laser.wavelength,
-                           seed=settings.seed)
+                           seed=settings.seed, phases=spec.phases)
         output = Output(folder=path.parent, frame=scene.frame_current, render=False,
                         depth_unit=unit)
         job = Job(camera=eye_view, points=tuple(physical["POINTS"]),

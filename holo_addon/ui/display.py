@@ -69,6 +69,7 @@ def draw_display(layout, context, obj) -> None:
     col = layout.column(heading="Phase Tables")
     for name in ("table_red", "table_green", "table_blue"):
         col.prop(d, name)
+    layout.prop(d, "phases")
     layout.prop(d, "method")
     if d.method != "double-phase":
         layout.prop(d, "iterations")

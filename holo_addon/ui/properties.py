@@ -170,6 +170,13 @@ class HoloDisplaySettings(bpy.types.PropertyGroup):
         description="How the complex wave becomes the SLM's phase")
     iterations: IntProperty(name="Iterations", default=100, min=1, max=100000,
                             description="Steps of the iterative encodings")
+    phases: EnumProperty(
+        name="Phase", default="SMOOTH",
+        items=[("SMOOTH", "Smooth", "One phase over the scene's surfaces: the eye's pupil sees a "
+                                    "picture (display holograms are made so)"),
+               ("RANDOM", "Random", "A random phase a surface point, as a diffuse surface: "
+                                    "speckle through the eye's pupil")],
+        description="The phase of the scene's light in the recorded wave")
     slices: IntProperty(name="Focal Slices", default=5, min=1, max=64,
                         description="Slices of the simulated focal stack, over the volume's "
                                     "depth")

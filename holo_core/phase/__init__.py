@@ -14,7 +14,16 @@
   its PSNR and SSIM against the complex wave's
 """
 
+from .display import Display, display_preset
+from .encode import Pattern, encode
 from .encoding import double_phase
+from .export import Frame, export_frame
+from .levels import quantise, response
 from .retrieval import Retrieval, gerchberg_saxton, optimise_phase
+from .slm import EyeBox, Laser, PhaseTable, SLMSetup, check_scene, read_phase_table
+from .stack import Comparison, EyePupil, Optics, compare
 
-__all__ = ["Retrieval", "double_phase", "gerchberg_saxton", "optimise_phase"]
+__all__ = ["Comparison", "Display", "EyeBox", "EyePupil", "Frame", "Laser", "Optics",
+           "Pattern", "PhaseTable", "Retrieval", "SLMSetup", "check_scene", "compare",
+           "display_preset", "double_phase", "encode", "export_frame", "gerchberg_saxton",
+           "optimise_phase", "quantise", "read_phase_table", "response"]

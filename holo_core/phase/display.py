@@ -63,6 +63,12 @@ class Display:
         (:class:`holo_core.phase.slm.PhaseTable`) replaces this line.
     inverted : the phase falls as the code rises (code k shows −k·phase_range/2^bit_depth),
         as on SLMs whose driver maps grey to voltage the other way round
+
+    Examples
+    --------
+    >>> from holo_core.phase import Display
+    >>> Display(name="lab", resolution=(1920, 1080), pitch=8e-6).shape
+    (1080, 1920)
     """
 
     name: str
@@ -126,7 +132,15 @@ DISPLAYS = {d.name: d for d in (
 def display_preset(name: str, **changes) -> Display:
     """The preset display called ``name`` (one of :data:`DISPLAYS`), with ``changes`` to its
     fields (``bit_depth=10``, ``phase_range=3 * math.pi``, ``inverted=True``, ...): a custom
-    display is a :class:`Display` made directly."""
+    display is a :class:`Display` made directly.
+
+    Examples
+    --------
+    >>> from holo_core.phase import display_preset
+    >>> slm = display_preset("slm-1080p-8um", bit_depth=10)
+    >>> slm.resolution, slm.pitch, slm.bit_depth
+    ((1920, 1080), 8e-06, 10)
+    """
     preset = DISPLAYS[validate.choice("display", name, tuple(DISPLAYS))]
     unknown = set(changes) - {f.name for f in dataclasses.fields(Display)}
     if unknown:

@@ -9,7 +9,8 @@ was recorded there), checks the setup (:func:`holo_core.phase.slm.check_scene`),
 through the laser's phase table (:func:`holo_core.phase.encode.encode`), simulates the focal
 stack the quantised pattern shows against the unencoded wave's
 (:class:`holo_core.phase.stack.Optics`: the display's 4f filter, the planes from the
-volume's back to its front; PSNR and SSIM per slice), then writes every file of the frame
+volume's back to its front, each seen by an eye at the eye box's centre focused there;
+PSNR and SSIM per slice), then writes every file of the frame
 as one set (:func:`holo_core.io.image.atomic_paths`): per laser the pattern as its driver
 reads it and its layout (:func:`holo_core.io.slm.pattern_files`), the focal stack (EXR) and
 its contact sheet (PNG) (:func:`holo_core.io.slm.write_stack`), and last the frame's layout
@@ -17,10 +18,14 @@ its contact sheet (PNG) (:func:`holo_core.io.slm.write_stack`), and last the fra
 cancelled frame leaves the earlier frames as they were.
 
 The display is lit by a plane wave along its normal, as the recorded wave's field is
-(:func:`holo_core.phase.display.display_field`). The focal stack is seen through the whole
-band the filter passes: the eye's pupil at the eye box is not a disc in this wave's
-spectrum (the frequency of the ray from a sample x to the eye at e is (e − x)/λD, which
-changes across a display wider than λD/p of the band), so it is not applied here.
+(:func:`holo_core.phase.display.display_field`). The focal stack is what an eye (or a
+camera) sees through its pupil (the frame's ``pupil``, at the eye box's centre
+``eye_distance`` in front), its lens focused on each slice in turn
+(:class:`holo_core.phase.stack.EyePupil`, :meth:`~holo_core.phase.stack.Optics.seen`): in
+focus the scene's parts at that depth are as sharp as the pupil resolves (λL/a), the rest
+blurred by the cone from them to the pupil. The iterative encodings fit the planes' own
+amplitudes (every direction the filter passes, the whole eye box); the stack and its PSNR
+and SSIM are the eye's, the pattern's against the unencoded wave's through the same pupil.
 
 Run as ``python -m holo_core.phase.display_frame FOLDER``: reads ``FOLDER/frame.json``,
 prints ``HOLO_PROGRESS <fraction>`` lines and the frame's layout (JSON) as its last line.
@@ -48,7 +53,7 @@ from .display import Display, display_field
 from .encode import encode
 from .export import laser_name
 from .slm import EyeBox, Laser, SLMSetup, check_scene, read_phase_table
-from .stack import Optics, compare, fitted
+from .stack import EyePupil, Optics, compare, fitted
 
 log = logging.getLogger(__name__)
 LAYOUT_FORMAT, LAYOUT_VERSION = "holo-display-frame", 1
@@ -135,10 +140,11 @@ def make_frame(frame: DisplayFrame, progress: jobs.Progress = None) -> dict:
         jobs.report(progress, i, n)
         u = wave_at_display(frame, x)
         optics = Optics(setup.display.shape, pitch=frame.pitch, wavelength=x.wavelength,
-                        distances=distances, band=setup.band)
-        ref = optics.stack(u)
+                        distances=distances, band=setup.band,
+                        eye=EyePupil(diameter=frame.pupil, distance=frame.eye_distance))
+        ref = optics.seen(u)
         pattern = encode(u, setup, wavelength=x.wavelength, method=frame.method,
-                         optics=optics, targets=ref, iterations=frame.iterations)
+                         optics=optics, iterations=frame.iterations)
         table = setup.table_for(x.wavelength)
         data, layout = slm_io.pattern_files(
             where[x.name].name, pattern.codes, response=levels.response(setup.display, table),
@@ -151,7 +157,7 @@ def make_frame(frame: DisplayFrame, progress: jobs.Progress = None) -> dict:
         log.info("display '%s' frame %d: %s encoded (%s) in %.2f s", frame.name, frame.frame,
                  x.name, frame.method, pattern.seconds)  # a time: never in a file
         jobs.report(progress, i + 0.6, n)
-        got = optics.stack(np.exp(1j * pattern.phase))
+        got = optics.seen(np.exp(1j * pattern.phase))
         c = compare(got, ref)
         shown.append((x.channel, fitted(got, ref)[0] ** 2))
         wanted.append((x.channel, np.asarray(ref, np.float64) ** 2))

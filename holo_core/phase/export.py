@@ -50,8 +50,8 @@ def laser_name(wavelength: float) -> str:
 
 
 def export_frame(fields, setup: SLMSetup, folder, *, stem="frame", distance=0.0,
-                 method="double-phase", simulate=True, pupil=None, frame=None, extent=None,
-                 stack_compression="zip", **settings) -> Frame:
+                 method="double-phase", simulate=True, pupil=None, eye=None, frame=None,
+                 extent=None, stack_compression="zip", **settings) -> Frame:
     """Encode, write and (``simulate``) judge one frame.
 
     Parameters
@@ -71,8 +71,13 @@ def export_frame(fields, setup: SLMSetup, folder, *, stem="frame", distance=0.0,
         Reconstruct the focal stack from the quantised patterns and compare it with the
         complex wave's.
     pupil : (x, y, diameter), optional
-        The eye's pupil in the eye box [m] for the simulation (and the fit); default the
-        whole band.
+        A pupil in the eye box as a Fourier plane [m] (a near-eye display's eyepiece,
+        :class:`~holo_core.phase.stack.Optics` ``pupil``) for the simulation and the fit;
+        default the whole band.
+    eye : EyePupil, optional
+        An eye looking straight at the display for the simulation (each slice as it sees
+        it focused there, :meth:`~holo_core.phase.stack.Optics.seen`); the iterative
+        encodings still fit the planes' own amplitudes.
     frame : int, optional
         The animation's frame, written into the layouts.
     extent : (x, y), optional
@@ -81,6 +86,19 @@ def export_frame(fields, setup: SLMSetup, folder, *, stem="frame", distance=0.0,
         The stack's EXR compression (:func:`holo_core.io.slm.write_stack`).
     **settings
         For :func:`~holo_core.phase.encode.encode` (iterations, learning_rate, ...).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import numpy as np
+    >>> from holo_core.phase import Display, Laser, SLMSetup, export_frame
+    >>> setup = SLMSetup(display=Display(name="lab", resolution=(64, 48), pitch=8e-6),
+    ...                  lasers=[Laser(wavelength=520e-9)], depth_range=(-2e-3, 0.0), slices=2)
+    >>> y, x = np.mgrid[:48, :64]
+    >>> wave = np.exp(-((x - 32) ** 2 + (y - 24) ** 2) / 200.0).astype(complex)
+    >>> frame = export_frame([wave], setup, tempfile.mkdtemp(), stem="frame_0001")
+    >>> sorted(p.name for p in frame.files)
+    ['frame_0001_520nm.json', 'frame_0001_520nm.png', 'frame_0001_stack.exr', 'frame_0001_stack.png']
     """
     if not isinstance(setup, SLMSetup):
         raise InputError(f"setup must be an SLMSetup; got {type(setup).__name__}")
@@ -106,10 +124,12 @@ def export_frame(fields, setup: SLMSetup, folder, *, stem="frame", distance=0.0,
     patterns, optics_list, refs, seconds = [], [], [], 0.0
     for laser, field in zip(setup.lasers, fields):
         optics = Optics(display.shape, pitch=display.pitch, wavelength=laser.wavelength,
-                        distances=setup.distances(), band=setup.band, pupil=pupil_at)
-        ref = optics.stack(field) if simulate or method != "double-phase" else None
+                        distances=setup.distances(), band=setup.band, pupil=pupil_at, eye=eye)
+        targets = optics.stack(field) if method != "double-phase" else None
+        ref = (targets if eye is None and targets is not None else optics.seen(field)) \
+            if simulate else None
         p = encode(field, setup, wavelength=laser.wavelength, method=method, optics=optics,
-                   targets=ref, **settings)
+                   targets=targets, **settings)
         seconds += p.seconds
         patterns.append(p)
         optics_list.append(optics)
@@ -133,7 +153,7 @@ def export_frame(fields, setup: SLMSetup, folder, *, stem="frame", distance=0.0,
     if simulate:
         shown, wanted = [], []
         for p, optics, ref in zip(patterns, optics_list, refs):
-            s = optics.stack(np.exp(1j * p.phase))
+            s = optics.seen(np.exp(1j * p.phase))
             c = compare(s, ref)
             comparisons.append(c)
             shown.append(fitted(s, ref)[0] ** 2)

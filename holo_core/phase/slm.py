@@ -42,7 +42,14 @@ MIN_TABLE_SPAN, MAX_TABLE_SPAN = 2 * math.pi, 4 * math.pi * (1 + 1e-6)
 class Laser:
     """One laser of a field-sequential display: ``wavelength`` [m] and ``power`` [W] (what
     its driver is set to; the patterns are encoded per laser and the powers written beside
-    them, so a colour balance is the lab's, not the encoding's)."""
+    them, so a colour balance is the lab's, not the encoding's).
+
+    Examples
+    --------
+    >>> from holo_core.phase import Laser
+    >>> Laser(wavelength=520e-9, power=0.02).power
+    0.02
+    """
 
     wavelength: float
     power: float = 1.0
@@ -61,6 +68,13 @@ class PhaseTable:
     phases : (2^bit_depth,) float64 [rad], phases[k] the phase code k shows (any order: an
         inverted or non-monotonic response is taken as measured)
     source : where it came from (a file's name), written into the layout
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from holo_core.phase import PhaseTable
+    >>> PhaseTable(wavelength=520e-9, phases=np.linspace(0, 2 * np.pi, 256)).bit_depth
+    8
     """
 
     wavelength: float
@@ -115,6 +129,17 @@ def read_phase_table(path, *, wavelength, bit_depth) -> PhaseTable:
     order; a first line of names is skipped). Refused, naming the file, when missing,
     unreadable, of the wrong size (not 2^bit_depth codes) or shape, or of the wrong range
     (not finite, spanning less than a wave or more than 4π: a table in waves or units of π).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> from holo_core.phase import read_phase_table
+    >>> path = Path(tempfile.mkdtemp()) / "green.npy"
+    >>> np.save(path, np.linspace(0, 2.2 * np.pi, 256))
+    >>> read_phase_table(path, wavelength=520e-9, bit_depth=8).source
+    'green.npy'
     """
     path = Path(path)
     wavelength = validate.wavelength("wavelength", wavelength)
@@ -179,6 +204,12 @@ class EyeBox:
     distance : [m] from the display (the eyepiece's focal length in a near-eye display)
     pupil : the eye's or camera's pupil diameter [m] (a focal stack is seen through it)
     centre : (x, y) [m] of the eye box's centre, from the display's axis
+
+    Examples
+    --------
+    >>> from holo_core.phase import EyeBox
+    >>> round(EyeBox(size=(4e-3, 4e-3), distance=0.3).half_angle(), 5)
+    0.00943
     """
 
     size: tuple
@@ -216,6 +247,14 @@ class SLMSetup:
     band : the fraction of the Nyquist frequency 1/(2p) the display's Fourier filter passes
         on each axis, in (0, 1]: 0.5 is the 4f filter double-phase needs
     slices : the focal stack's planes over ``depth_range`` (what the display is judged by)
+
+    Examples
+    --------
+    >>> from holo_core.phase import Laser, SLMSetup
+    >>> setup = SLMSetup(display="slm-1080p-8um", lasers=[Laser(wavelength=520e-9)],
+    ...                  depth_range=(-5e-3, 5e-3), slices=3)
+    >>> setup.distances()
+    array([-0.005,  0.   ,  0.005])
     """
 
     display: Display
@@ -325,6 +364,13 @@ def check_scene(setup: SLMSetup, *, extent=None, depth_range=None) -> list[str]:
 
         Without an eye box (a camera behind the display's filter takes every direction it
         passes) there is nothing to check.
+
+    Examples
+    --------
+    >>> from holo_core.phase import EyeBox, Laser, SLMSetup, check_scene
+    >>> check_scene(SLMSetup(display="slm-1080p-8um", lasers=[Laser(wavelength=520e-9)],
+    ...                      eye_box=EyeBox(size=(2e-3, 2e-3), distance=0.7)))
+    []
     """
     if not isinstance(setup, SLMSetup):
         raise InputError(f"setup must be an SLMSetup; got {type(setup).__name__}")

@@ -149,12 +149,13 @@ def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
 @validate.scale_free()
 def record_planned(planned: PlannedPlate, *, codes=None, seed=0, encoding="complex",
                    urls=None, scheduler=None, overwrite=False, progress: jobs.Progress = None,
-                   dashboard=None, recording="") -> list[Hologram]:
+                   dashboard=None, recording="", phases="random") -> list[Hologram]:
     """The looks of the plate ``planned`` (:func:`~holo_core.plate.recording.plate_plan`,
     made once a job, its budget checked there) in one pass: ``codes`` one a look (default:
     the coded looks of its plan's looks, :func:`~holo_core.plate.recording.prepare_plate`),
     in memory, or where the plan is tiled into ``urls``, a store a look (the other arguments
-    as for :func:`record_looks`)."""
+    as for :func:`record_looks`; ``phases`` as
+    :func:`~holo_core.plate.recording.prepare_plate` takes it)."""
     if planned.tiled != (urls is not None):
         raise InputError("urls must name the stores of a plate planned tile by tile, and only "
                          f"of one; this plate is planned {'in tiles' if planned.tiled else 'in memory'}"
@@ -162,6 +163,7 @@ def record_planned(planned: PlannedPlate, *, codes=None, seed=0, encoding="compl
     if urls is not None:
         return record_looks_tiled(planned, urls=list(urls), codes=codes, scheduler=scheduler,
                                   overwrite=overwrite, progress=progress, dashboard=dashboard,
-                                  seed=seed, encoding=encoding, recording=recording)
+                                  seed=seed, encoding=encoding, recording=recording,
+                                  phases=phases)
     return prepare_plate(planned, codes=codes, seed=seed, encoding=encoding,
-                         recording=recording).record(progress)
+                         recording=recording, phases=phases).record(progress)

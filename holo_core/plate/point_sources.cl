@@ -145,7 +145,7 @@ __kernel void point_wave(__global float2 *out, int h, int w, real pitch, real x0
         er = t;
 #endif
         CIS(wrap(d1i * p + d2i * ud), exp_small(d1r * p + d2r * ud), dr, di);
-        CIS(d2i * (p * p), exp_small(d2r * (p * p)), cr, ci);
+        CIS(wrap(d2i * (p * p)), exp_small(d2r * (p * p)), cr, ci);  /* CIS holds on ±π */
         /* the two chains: E1 = E0·D, F0 = D·(D·C), F1 = F0·C², both stepped by C⁴ */
         floatv e0r = er, e0i = ei, e1r, e1i, f0r, f0i, f1r, f1i, c2r, c2i, c4r, c4i;
         e1r = er * dr - ei * di;

@@ -27,6 +27,7 @@ from .plan import LAYERS, LOOKS, RIM, PlatePlan, plan
 from .zone_sum import ZoneEmitters, ZoneSum, ZoneWindow
 
 log = logging.getLogger(__name__)
+PHASES = ("random", "smooth")  # the emitters' phases (prepare_plate)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
@@ -208,7 +209,8 @@ def _flag(name, value) -> bool:
 
 
 def prepare_plate(planned: PlannedPlate, *, codes=None, seed=0, encoding="complex",
-                  emitters: Emitters | None = None, recording: str = "") -> PlateRecording:
+                  emitters: Emitters | None = None, recording: str = "",
+                  phases: str = "random") -> PlateRecording:
     """The emitters, visibility tables and sampling of the plate ``planned`` (its budget
     checked as it was planned), before any sum: the emitters the zone sees with their amplitudes, for
     the looks ``codes`` summed at once (:func:`holo_core.plate.looks.record_looks`), look
@@ -217,12 +219,19 @@ def prepare_plate(planned: PlannedPlate, *, codes=None, seed=0, encoding="comple
     plate's frame, their visibility from this zone): found elsewhere, once for several
     plates that share them (:mod:`.parts`), in place of the zone's own. ``recording``: the
     digest the looks' description carries (:attr:`holo_core.scene.hologram.HologramInfo.
-    recording`), in memory and in their stores alike."""
+    recording`), in memory and in their stores alike. ``phases``: one of :data:`PHASES`:
+    'random' (each emitter's drawn from the seed, the looks' codes shifting them: a diffuse
+    surface, speckle through any pupil) or 'smooth' (each emitter's −k·|p − Z| at each
+    channel's wavelength before the codes: every emitter's light reaches the zone's centre
+    Z in one phase, as display holograms are made so that an eye's pupil there sees a
+    picture, not speckle; one phase on the surface itself would send a tilted surface's
+    light along its normal, past the eye)."""
     if encoding != "complex":
         raise InputError(f"encoding must be 'complex' for a plate of meshes (a display's "
                          f"intensity pattern is made from it: holo_core.phase.display); got "
                          f"{encoding!r}"[:200])
     seed = validate.seed(seed)
+    phases = validate.choice("phases", phases, PHASES)
     p, local, zone = planned.plan, planned.meshes, planned.plan.zone
     codes = tuple(look_code(k, p.looks) for k in range(p.looks)) if codes is None else \
         tuple(codes)
@@ -240,7 +249,9 @@ def prepare_plate(planned: PlannedPlate, *, codes=None, seed=0, encoding="comple
     reach = np.linalg.norm(em.position - np.asarray(zone.centre), axis=1)
     if em.weight is not None:  # a shared set's emitters, weighted for this zone
         reach = reach * em.weight
-    waves = [np.exp(1j * _phases(em, _look_seed(seed, codes, look), c)) * reach
+    smooth = phases == "smooth"
+    waves = [np.exp(1j * (_phases(em, _look_seed(seed, codes, look), c, smooth)
+                          + _in_phase_at_zone(reach, p.wavelength, smooth))) * reach
              for look, c in enumerate(codes)]
     partial = em.visibility.reshape(len(em), -1).min(1) < 1
     rows = np.where(partial, np.cumsum(partial) - 1, -1).astype(np.int32)
@@ -249,8 +260,10 @@ def prepare_plate(planned: PlannedPlate, *, codes=None, seed=0, encoding="comple
                         centre=zone.centre, half_extents=zone.half_extents, rim=RIM)
     amplitudes = [(p.wavelength, np.concatenate([np.sqrt(em.colour) * wave[:, None]
                                                  for wave in waves], 1))]
-    if depth:
-        amplitudes.append((p.depth_wavelength, np.stack(waves, 1)))
+    if depth:  # the depth channel's own wavelength: its light in phase at the zone too
+        turn = _in_phase_at_zone(reach, p.depth_wavelength, smooth) - _in_phase_at_zone(
+            reach, p.wavelength, smooth)
+        amplitudes.append((p.depth_wavelength, np.stack(waves, 1) * np.exp(1j * turn)[:, None]))
     classes, mixing = _code_classes(em, codes)
     groups = tuple((lam, ZoneEmitters(position=em.position, amplitude=a, visibility=rows,
                                       table=table, grid=em.grid, classes=classes,
@@ -289,13 +302,18 @@ def _look_seed(seed: int, codes, look: int) -> int:
     return seed + (0 if codes[look] else look)
 
 
-def _phases(em, seed: int, code) -> np.ndarray:
-    """The emitters' random phases [rad] of ``seed``, shifted by ``code`` (k, m): 2π·(k1·i +
+def _phases(em, seed: int, code, smooth: bool = False) -> np.ndarray:
+    """The emitters' random phases [rad] of ``seed`` (0 where ``smooth``), shifted by ``code``
+    (k, m): 2π·(k1·i +
     k2·j)/m on the lattice cells (i, j) they lie in (k = k1·m + k2; :func:`~holo_core.plate.looks.record_plate`).
     Each emitter's is drawn from its own key (:func:`~holo_core.plate.emitters.random_phases`),
     so emitters gained or lost near a silhouette leave the others' phases, and a set several
     plates share sends each pupil the same wave from every plate."""
-    if em.key is not None:
+    if smooth:
+        phases = np.zeros(em.count or len(em))
+        if em.ids is not None:
+            phases = phases[em.ids]
+    elif em.key is not None:
         phases = random_phases(em.key, seed)
     else:  # emitters made without keys: drawn in their order
         phases = np.random.default_rng(seed).uniform(0, 2 * np.pi, em.count or len(em))
@@ -304,6 +322,15 @@ def _phases(em, seed: int, code) -> np.ndarray:
     if code is not None:
         phases = phases + 2 * np.pi * _code_steps(em, code) / code[1]
     return phases
+
+
+def _in_phase_at_zone(reach, wavelength: float, smooth: bool):
+    """−k·|p − Z| [rad] (reduced to ±π in float64) of emitters ``reach`` = |p − Z| [m] away
+    from the zone's centre: their light reaches it in one phase; 0 unless ``smooth``."""
+    if not smooth:
+        return np.zeros(np.shape(reach))
+    return np.remainder(-2 * np.pi / wavelength * np.asarray(reach, np.float64) + np.pi,
+                        2 * np.pi) - np.pi
 
 
 def _code_steps(em, code) -> np.ndarray:

@@ -107,7 +107,7 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
 def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, seed=0,
                        encoding="complex", scheduler=None, overwrite=False,
                        progress: jobs.Progress = None, dashboard=None,
-                       recording="") -> list[Hologram]:
+                       recording="", phases="random") -> list[Hologram]:
     """The looks ``codes`` of the plate of meshes ``planned`` (with occlusion, against the
     carrier converging on its zone: :func:`holo_core.plate.recording.plate_plan`; the other
     arguments as :func:`holo_core.plate.looks.record_plate` takes them; look l coded by
@@ -126,7 +126,8 @@ def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, seed=0,
     same recording resumes into it, and a look recorded alone resumes into a store made with
     others and the other way round.
     ``scheduler``, ``overwrite``, ``progress``, ``dashboard``: as for :func:`record_tiled`;
-    ``recording``: the digest the stores' plates carry (the name the caller knows them by).
+    ``recording``: the digest the stores' plates carry (the name the caller knows them by);
+    ``phases``: as :func:`holo_core.plate.recording.prepare_plate` takes it.
     """
     tile = _tile(planned.plan.tile, ZONE_TILE_STEP)
     _flag("overwrite", overwrite)
@@ -136,7 +137,7 @@ def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, seed=0,
                          f"{looks} look(s)")
     files, address = _output_and_scheduler(urls, scheduler)
     job = prepare_plate(planned, codes=codes, seed=seed, encoding=encoding,
-                        recording=recording)
+                        recording=recording, phases=phases)
     recordings = [_plate_recording(job, tile, look) for look in range(job.looks)]
     _record_tiles(files, job.info, tile, recordings, overwrite=overwrite, address=address,
                   task=record_plate_tile, shared=replace(job, meshes=()), progress=progress,

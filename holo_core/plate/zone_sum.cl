@@ -39,7 +39,10 @@
 #define ALL (CHANNELS + CHANNELS2)
 
 /* the recurrence's start at the segment's first column for the wave number K: E its value,
- * D its step, C the step's step (the geometry, t, step_m and curve_m, shared by both) */
+ * D its step, C the step's step (the geometry, t, step_m and curve_m, shared by both). Every
+ * phase CIS takes is wrapped: the curve's k·p²·ρ²/r³ passes π a sample where the samples lie
+ * farther apart than an emitter's footprint (an emitter near the plate, a narrow zone), and
+ * CIS's series holds on [-π, π] only (beyond, its terms overflow: non-finite samples) */
 #define SERIES(K, er, ei, dr, di, cr, ci) {                                                  \
         real pc_ = (K) * rho2 / (rc + az);                                                  \
         pc_ -= (real)(2 * M_PI) * rint(pc_ * (real)(0.5 / M_PI));                           \
@@ -48,7 +51,7 @@
         floatv d1i_ = kf_ * dx * inv_r, d2i_ = kf_ * c2f * inv_r2 * inv_r;                   \
         CIS(wrap(phase_ + d1i_ * u0 + d2i_ * (u0 * u0 / 2)), t, er, ei);                    \
         CIS(wrap(d1i_ * p + d2i_ * ud), step_m, dr, di);                                     \
-        CIS(d2i_ * (p * p), curve_m, cr, ci);                                                \
+        CIS(wrap(d2i_ * (p * p)), curve_m, cr, ci);                                          \
     }
 
 /* E <- E·D, D <- D·C: two complex multiplies a sample */

@@ -46,8 +46,8 @@ def _frame(tmp_path, hologram, **changes):
                   packing="grey8",
                   lasers=(FrameLaser(name="green", wavelength=LAM, power=0.01,
                                      hologram=str(hologram), channel=1),),
-                  scale=0.01, front=0.0, behind=8e-3, eye_distance=0.2, eye_box=1e-3,
-                  pupil=1e-3, distance=-4e-3, slices=3, digest="ab12")
+                  scale=0.01, front=0.0, behind=8e-3, eye_distance=0.1, eye_box=1e-3,
+                  pupil=4e-3, distance=-4e-3, slices=3, digest="ab12")
     fields.update(changes)
     return DisplayFrame(**fields)
 
@@ -55,9 +55,10 @@ def _frame(tmp_path, hologram, **changes):
 def test_a_point_behind_the_display_is_in_focus_at_its_depth(tmp_path):
     """A point 4 mm behind: the frame's files are the pattern (8-bit grey, 128 x 128, codes
     read back through its layout), its layout, the stack and its sheet and the frame's
-    layout naming them all; the stack's slice at −4 mm (of −8, −4, 0 mm) is the brightest
-    at the point, its peak within a sample of the point, in the pattern's stack and in the
-    wave's alike."""
+    layout naming them all; seen through a 4 mm pupil 100 mm in front (its Airy radius 2
+    samples, the point 4 mm out of focus a disc of 19), the stack's slice at −4 mm (of −8,
+    −4, 0 mm) is the brightest at the point, its peak within a sample of the point, in the
+    pattern's stack and in the wave's alike."""
     frame = _frame(tmp_path, _plate(tmp_path / "wave.exr", _point_wave(-4e-3)))
     layout = make_frame(frame)
     folder = tmp_path / "out"

@@ -74,3 +74,27 @@ def test_non_finite_phases_and_codes_beyond_the_depth_are_refused():
         Quantiser(response(display()))([0.0, np.nan])
     with pytest.raises(InputError, match=r"codes must be in 0\.\.255"):
         shown(np.array([0, 256]), display())
+
+
+@pytest.mark.parametrize("phase_range", [2 * np.pi, 3 * np.pi])
+@pytest.mark.parametrize("inverted", [False, True])
+def test_the_binned_codes_are_the_bisections(rng, phase_range, inverted):
+    """Quantiser's bins against bisection in the sorted phases (levels._nearest over the
+    codes, and their copies a wave below and above beyond the span): the same code for 2
+    million phases over ±5π, the codes' own phases and the midpoints between them (the ties)
+    included, on the line and on a measured-like table (a random monotone curve)."""
+    from holo_core.phase.levels import _nearest
+    curve = response(display(bit_depth=8, phase_range=phase_range, inverted=inverted))
+    table = np.sort(rng.uniform(0, phase_range, curve.size))
+    for c in (curve, table):
+        q = Quantiser(c)
+        mids = (np.sort(c)[1:] + np.sort(c)[:-1]) / 2
+        t = np.concatenate([rng.uniform(-5 * np.pi, 5 * np.pi, 2_000_000), c, mids,
+                            np.nextafter(mids, np.inf), np.nextafter(mids, -np.inf)])
+        inside = (t >= c.min()) & (t <= c.max())
+        want = np.empty(t.shape, np.uint16)
+        want[inside] = _nearest(t[inside], *q.inside)
+        low = c.min()
+        want[~inside] = _nearest(low + np.mod(t[~inside] - low, 2 * np.pi), *q.around)
+        got = q(t)
+        assert np.array_equal(got, want), int(np.sum(got != want))
