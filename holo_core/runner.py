@@ -2,7 +2,7 @@
 plate's holograms), dispatching on its route; :func:`serve` is the process
 (``python -m holo_core.runner --serve IDLE``, started by :class:`holo_core.worker.Worker`),
 which runs the job folders named on its stdin in turn, holding the plate between them
-(:class:`KeptPlates`), and :func:`main` runs one (``python -m holo_core.runner FOLDER``).
+(``KeptPlates``), and :func:`main` runs one (``python -m holo_core.runner FOLDER``).
 
 For each job the process reads its plain data from ``FOLDER/job.pickle`` (checked again as
 it becomes a Job: the child trusts nothing it is handed), reports progress and log records
@@ -35,9 +35,9 @@ from . import estimate, jobs
 from .camera.render import render_camera
 from .io.hologram import HologramFileError, write_hologram
 from .io.image import check_room, check_writable, read_exr
-from .io.plate_paths import file_identity as _identity
-from .io.plate_paths import plate_files, read_plate, store_of
-from .io.plate_set import MANIFEST, read_plate_set
+from .io.kept_plates import KeptPlates
+from .io.plate_paths import store_of
+from .io.plate_set import MANIFEST
 from .io.tiled_wave import TiledWave
 from .io.view import write_view
 from .job import SPECKLE, CameraRoute, Job, PlateRoute, Report, Result, SetRoute
@@ -47,7 +47,6 @@ from .plate.path import part_for
 from .plate.plan import PlatePlan, plan_view
 from .plate.recording import PlannedPlate, plate_plan
 from .plate.view import OutsideZoneWarning, render_set_view, render_view
-from .scene.hologram import Hologram
 from .scene.radiance import projected
 from .view import BACKGROUND_DEPTH
 
@@ -192,72 +191,6 @@ def _say_estimate(job: Job, p: PlatePlan | None = None) -> None:
              "camera pass", est.words())
 
 
-
-
-class KeptPlates:
-    """A plate's holograms held in memory from one job to the next (a serving worker's: the
-    frames of a shot render from the plate without reading its files again, 1.2 s for the
-    shot of ``bench/shot.py`` from the page cache). Each is named by its file's identity
-    (path, size, modification time, inode), so a file written again since, by this process
-    or another, is read again. Only the latest job's set is held; a tiled store is never
-    held (its tiles are read as a view needs them). ``hold=False``: nothing is held."""
-
-    def __init__(self, hold: bool = True):
-        self._held: dict = {}
-        self._set: tuple = (None, None)  # (its manifest's identity, the PlateSet)
-        self._hold = hold
-
-    def read(self, paths, recording: str = "") -> list[Hologram]:
-        """The holograms of ``paths``: held where their files are unchanged, else read.
-        :class:`HologramFileError` naming the file unless each is the ``recording`` named
-        (where one is): a plate replaced by another recording's valid plate (a folder synced
-        from another shot, a file copied by hand, a restored backup) is refused, never
-        viewed."""
-        names = [_identity(p) for p in paths]
-        self._held = {k: h for k, h in self._held.items() if k in names}  # freed before reads
-        self._set = (None, None)
-        holos = [self._held[k] if k in self._held else read_plate(p)
-                 for k, p in zip(names, paths)]
-        if self._held:
-            log.info("the plate's holograms held in memory from the job before: %d of %d "
-                     "not read again", len(self._held), len(paths))
-        for path, h in zip(paths, holos):
-            if recording and h.recording != recording:
-                held = f"recording {h.recording}" if h.recording else "no named recording"
-                raise HologramFileError(f"{plate_files(path)}: holds {held}, not {recording} "
-                                        f"(this scene's): another recording's plate under "
-                                        f"this name is never rendered; record the plate again")
-        return holos
-
-    def hold(self, paths, holos) -> None:
-        """Hold ``holos``, the plates of ``paths`` as their files are now (their identities),
-        in place of those held before."""
-        if self._hold:
-            self._held = {k: h for k, h in zip(map(_identity, paths), holos)
-                          if k is not None and not isinstance(h.object_wave, TiledWave)}
-
-    def read_set(self, folder):
-        """The plate set in ``folder`` (:func:`read_plate_set`, every file's digest checked):
-        held where its manifest is unchanged since, else read (the part it held kept
-        with it)."""
-        name = _identity(Path(folder) / MANIFEST)
-        if name is not None and self._set[0] == name:
-            log.info("the plate set held in memory from the job before: not read again")
-            return self._set[1]
-        self._held = {}  # a plate's holograms are not held beside a set
-        plates = read_plate_set(folder)
-        if self._hold:
-            self._set = (name, plates)
-        return plates
-
-    def hold_set(self, folder, plates) -> None:
-        """Hold ``plates``, just recorded into ``folder`` (its manifest's identity now)."""
-        if self._hold:
-            self._set = (_identity(Path(folder) / MANIFEST), plates)
-
-    def clear(self) -> None:
-        self._held = {}
-        self._set = (None, None)
 
 
 def _plan(job: Job) -> tuple[PlannedPlate, list[str] | None]:
@@ -451,7 +384,7 @@ def main(folder: str) -> int:
 def serve(idle: float, on_message=None) -> int:
     """The worker of many jobs (``python -m holo_core.runner --serve IDLE``): each line of
     stdin names a job's folder, run in turn (as :func:`main` runs one), the plate's
-    holograms kept in memory between them (:class:`KeptPlates`), or is a JSON message,
+    holograms kept in memory between them (``KeptPlates``), or is a JSON message,
     handed to ``on_message(message, send)`` (:mod:`holo_core.view_server`'s live views),
     which returns whether the worker goes on; a message of a kind (its first key) that
     another of the same kind waits behind is skipped, the newest answered (a newer view

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.kept_plates import KeptPlates
 from ..io.plate_paths import file_identity
 from ..io.plate_set import MANIFEST
 from ..scene.camera import Camera
@@ -50,7 +51,7 @@ class PlateViewer:
         The plate's coded looks (one Hologram a look, all of one recording), a plate set
         (:func:`holo_core.record_set`), the plate files of its looks (``.exr``, or the tiled
         store beside one), or a plate set's folder (its ``plate_set.json``). Files are read
-        as the worker reads them (``holo_core.runner.KeptPlates``) and read again when
+        as the worker reads them (``holo_core.io.kept_plates.KeptPlates``) and read again when
         their identity (path, size, modification time, inode) changes.
     scene : str, optional
         The recording digest the plate must be (the scene's): a plate of another recording,
@@ -322,7 +323,6 @@ class _Files:
     changes, refused by name where it vanished or holds another recording."""
 
     def __init__(self, paths, scene: str | None, folder: bool):
-        from ..runner import KeptPlates
         self.paths, self.scene, self.folder = paths, scene, folder
         self._kept = KeptPlates()
         self._held, self._names = None, None

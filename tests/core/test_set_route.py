@@ -12,6 +12,7 @@ import pytest
 
 from holo_core import runner
 from holo_core.io.hologram import HologramFileError
+from holo_core.io.kept_plates import KeptPlates
 from holo_core.io.plate_set import MANIFEST, read_plate_set
 from holo_core.job import Job, Output, SetRoute
 from holo_core.plate.path import part_for, parts_along
@@ -74,7 +75,7 @@ def test_each_frame_is_made_from_the_part_that_holds_its_pupil_and_recorded_once
     assert first.recorded == (tmp_path / "set" / MANIFEST,)
     stamps = {f.name: f.stat().st_mtime_ns for f in (tmp_path / "set").glob("*.exr")}
     plates = read_plate_set(tmp_path / "set")
-    kept = runner.KeptPlates()
+    kept = KeptPlates()
     chosen = []
     for frame, cam in enumerate(cams, 1):
         result = first if frame == 1 else runner.run(job(tmp_path, cam, frame, record=False),
