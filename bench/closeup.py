@@ -11,11 +11,11 @@ nyquist_supersample`) the views of three cameras (the centre and 2 cm either sid
 compared with their camera holograms (Speckle: Exact, the add-on's default camera pass):
 PSNR inside the objects, silhouette IoU, the speckle contrast on the cube's flat faces, and
 the view's seconds. With ``--out`` the views, the references and their error maps are
-written as PNGs. The plan's choice for the scene (:func:`holo_core.plate.plan.quality_choice`)
-is printed beside what was measured; with ``--seeds 2`` (the default) a second seed's looks split each error
+written as PNGs. The plan's choice for the scene (:func:`holo_core.plate.quality.choose`)
+and its prediction of each setting are printed beside what was measured; with ``--seeds 2`` (the default) a second seed's looks split each error
 into the speckle's part and the part no seed changes.
 
-    python bench/closeup.py [--scale 1.0] [--out DIR] [--repeat 1]
+    python bench/closeup.py [--scene closeup|shot] [--scale 1.0] [--seeds 2] [--out DIR]
 """
 
 from __future__ import annotations
@@ -37,6 +37,7 @@ from plate_scene import PLATE, camera, meshes  # noqa: E402
 from holo_core.camera.render import render_camera  # noqa: E402
 from holo_core.io.image import write_png  # noqa: E402
 from holo_core.plate.looks import record_planned  # noqa: E402
+from holo_core.plate.quality import choose  # noqa: E402
 from holo_core.plate.recording import look_code, plate_plan  # noqa: E402
 from holo_core.plate.view import nyquist_supersample, render_view  # noqa: E402
 from holo_core.scene.plate import Plate, ViewingZone  # noqa: E402
@@ -170,6 +171,8 @@ def main():
     print(f"load {os.getloadavg()[0]:.1f} at the start")
     planned = plate_plan(scene, plate=plate, looks=2)
     print(f"plan: {planned.plan.describe()}")
+    resolution = cams["centre"].resolution
+    print(f"the plan's choice: {choose(planned.plan, resolution=resolution).describe()}")
     refs = {}
     for eye, cam in cams.items():
         t = time.perf_counter()
@@ -191,6 +194,9 @@ def main():
                         f"margin {args.margin:g} m",
                "plate": f"{planned.plan.shape[1]} x {planned.plan.shape[0]} samples",
                "four looks recorded [s]": record_s, "Nyquist supersample": nyquist}
+    predicted = {name: choose(planned.plan, resolution=resolution, looks=len(which),
+                              supersample=ss).psnr
+                 for name, (which, ss) in settings(nyquist).items()}
     for name in settings(nyquist):
         rows = []
         for eye in cams:
@@ -200,7 +206,8 @@ def main():
             row = {"PSNR [dB]": psnr(view, ref, inside),
                    "IoU": iou(view.alpha > 0.5, ref.alpha > 0.5),
                    "speckle contrast": speckle_contrast(view, ref),
-                   "view [s]": seconds, **error_split(view, ref, inside)}
+                   "view [s]": seconds, **error_split(view, ref, inside),
+                   "predicted [dB]": predicted[name]}
             if args.seeds > 1:
                 row.update(seed_split(views[0, name, eye][0], views[1, name, eye][0], ref))
             rows.append(row)
@@ -221,7 +228,8 @@ def main():
                 write_png(args.out / f"{eye}_{tag}_error.png",
                           np.clip(err / max(float(ref.rgb.max()), 1e-12) * 8, 0, 1)[..., None]
                           .repeat(3, -1))
-        print(f"{name}: PSNR {min(r['PSNR [dB]'] for r in rows):.2f}-"
+        print(f"{name}: predicted {predicted[name]:.2f} dB; measured "
+              f"{min(r['PSNR [dB]'] for r in rows):.2f}-"
               f"{max(r['PSNR [dB]'] for r in rows):.2f} dB, IoU "
               f"{min(r['IoU'] for r in rows):.4f}-{max(r['IoU'] for r in rows):.4f} (load "
               f"{os.getloadavg()[0]:.1f})", flush=True)

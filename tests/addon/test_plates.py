@@ -310,3 +310,51 @@ def test_a_shot_records_once_and_every_frame_renders_from_it(empty_scene):
         assert not [w for w in job.warnings if "viewing zone" in w], job.warnings
         assert bpy.ops.holo.render_pass() == {"FINISHED"}
     assert records == [True, False, False], records
+
+
+def test_auto_iterations_and_supersample_take_the_plans_choice(empty_scene):
+    """Iterations and Supersample default to 0 (Auto): a plate's job records the looks and
+    views at the supersampling the plan chooses for the scene (holo_core.plate.quality), and
+    Plan Plate says what it chose and why; a Camera-mode job takes two fine pixels. A user's
+    Iterations 1 is kept, and both the job's warnings and Plan Plate say what it loses
+    against Auto, in dB."""
+    from holo_addon.render import pipeline
+    from holo_addon.ui import plates
+    from holo_core.plate.plan import plan
+    from holo_core.plate.quality import choose
+    scene = empty_scene
+    _, cam, plate = _plate_scene(scene)
+    scene.holo.property_unset("iterations")
+    scene.holo.property_unset("supersample")
+    assert (scene.holo.iterations, scene.holo.supersample) == (0, 0)
+    bpy.context.view_layer.objects.active = plate
+    prepared = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
+    route = prepared.job.route
+    local = route.plate.to_plate(np.concatenate([m.vertices for m in prepared.job.points
+                                                 + prepared.job.triangles]))
+    zone = route.plate.zone
+    expected = choose(plan((route.plate.width, route.plate.height),
+                           [local.min(0), local.max(0)], zone=zone, pixel_angle=zone.pixel or prepared.job.camera.pixel_angle()),
+                      resolution=prepared.job.camera.resolution)
+    print(expected.describe())
+    assert len(route.holograms) == expected.looks and route.supersample == expected.supersample
+    assert not [w for w in prepared.warnings if "set by hand" in w], prepared.warnings
+    assert bpy.ops.holo.plan_plate() == {"FINISHED"}
+    text = "\n".join(plates.plan_lines(plate))
+    assert f"quality     Auto chose {expected.looks} looks, supersample " \
+           f"{expected.supersample}: predicted {expected.psnr:.1f} dB" in text, text
+    scene.holo.iterations = 1
+    mine = choose(plan((route.plate.width, route.plate.height), [local.min(0), local.max(0)],
+                       zone=zone, pixel_angle=zone.pixel or prepared.job.camera.pixel_angle()),
+                  resolution=prepared.job.camera.resolution, looks=1)
+    assert mine.loss > 0.05, mine  # the scene's plan asks more than one look
+    prepared = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
+    assert len(prepared.job.route.holograms) == 1
+    said = [w for w in prepared.warnings if "Iterations 1 (set by hand) predict" in w]
+    assert said and f"{mine.loss:.1f} dB less than Auto's" in said[0], prepared.warnings
+    assert bpy.ops.holo.plan_plate() == {"FINISHED"}
+    text = "\n".join(plates.plan_lines(plate))
+    assert "warning     Iterations 1 (set by hand) predict" in text, text
+    scene.holo.mode = "CAMERA"
+    prepared = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
+    assert prepared.job.route.supersample == 2
