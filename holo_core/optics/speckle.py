@@ -1,5 +1,7 @@
 """Speckle reduction (Sect. VII-E): temporal composition of renders with independent random
-emitter phases (mean or maximum), and spatial low-pass plus downsampling."""
+emitter phases (mean or maximum), and spatial low-pass plus downsampling; the speckle a
+plate view of a uniform surface keeps (:func:`uniform_surface_variance`, the plan's model of
+how many looks and fine pixels a scene needs)."""
 
 from __future__ import annotations
 
