@@ -48,7 +48,9 @@ def test_camera_moves_inside_the_zone_never_record_again(empty_scene):
         return pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
 
     first = job()
-    assert not first.records and not first.warnings, first.warnings
+    # Iterations 1 by hand is said to lose against Auto (test_auto_iterations_...); nothing else
+    assert not first.records and not [w for w in first.warnings
+                                      if "set by hand" not in w], first.warnings
     cam.location.x += 0.1
     cam.rotation_euler.z += 0.02
     cam.data.dof.focus_distance = 2.5

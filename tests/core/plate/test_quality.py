@@ -79,16 +79,26 @@ def test_uniform_surface_variance_refuses_what_it_cannot_sample():
 
 def test_the_closeup_asks_more_than_the_shot():
     """The plan's choice on the two measured scenes (bench/closeup.py, bench/results/): the
-    shot at 640x360 keeps the coded pair at supersample 2 (predicted above 30 dB, measured
-    30.5-32.1 dB); the close-up, its back 4.4 px out of focus, asks more looks and the Nyquist
-    supersampling, and its prediction sits within 1.5 dB of what those settings measured."""
+    shot at 640x360 keeps the coded pair at supersample 2 (predicted 31.0 dB, measured
+    30.27-30.78); the close-up at 640x360, its back 4.4 px out of focus, asks more looks
+    (it cannot reach 30 dB: its seed-free edge error alone is predicted at 29.7 dB). Its
+    predictions of the four measured settings lie within 1.3 dB of the measured ranges (the
+    close-up at 640x360 was not among the scenes the constants were fitted to)."""
     shot = choose(shot_plan(), resolution=(640, 360))
     close = choose(closeup_plan(), resolution=(640, 360))
     print(f"shot: {shot.describe()}\nclose-up: {close.describe()}")
     assert (shot.looks, shot.supersample) == (2, 2), shot
     assert shot.psnr >= 30, shot
-    assert close.looks > 2 and close.supersample == 4, close
+    assert close.looks > 2 and close.psnr < 30, close
     assert close.blur > 2 > shot.blur, (close.blur, shot.blur)
+    measured = {(2, 2): (26.24, 26.56), (4, 2): (27.03, 27.55), (2, 4): (27.21, 27.45),
+                (4, 4): (27.85, 28.23)}  # bench/results/closeup.json, the three cameras
+    for (n, s), (lo, hi) in measured.items():
+        predicted = choose(closeup_plan(), resolution=(640, 360), looks=n, supersample=s).psnr
+        gap = max(lo - predicted, predicted - hi, 0.0)
+        print(f"close-up {n} looks, supersample {s}: predicted {predicted:.2f}, measured "
+              f"{lo}-{hi} dB")
+        assert gap <= 1.3, (n, s, predicted, lo, hi)
 
 
 def test_a_lower_setting_is_told_what_it_loses():
