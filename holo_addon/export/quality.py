@@ -4,7 +4,8 @@ user's lower setting loses said in the render's report and log.
 
 Pure arithmetic on the scene read (the plan runs in Blender's process). Camera mode, and a
 plate that cannot be planned (its recording then refuses with its own message), take the
-camera hologram's two fine pixels and the coded pair.
+camera hologram's two fine pixels and the coded pair. Auto's looks fit the Memory and Disk
+Budgets as the recording checks them; where a budget holds them down, the log says so.
 """
 
 from __future__ import annotations
@@ -44,8 +45,9 @@ def plate_choice(data, settings, parts=None) -> QualityChoice | None:
             plans = [plan((plate.width, plate.height), [local.min(0), local.max(0)],
                           zone=zone, pixel_angle=zone.pixel or data.camera.pixel_angle(),
                           wavelength=settings.wavelength)]
-        choices = [choose(p, resolution=resolution, looks=looks, supersample=supersample)
-                   for p in plans]
+        budget = (settings.memory_budget, settings.disk_budget)
+        choices = [choose(p, resolution=resolution, looks=looks, supersample=supersample,
+                          budget=budget, plans=plans) for p in plans]
     except InputError:
         return None
     return min(choices, key=lambda c: c.planned.psnr)  # the part that needs the most
@@ -63,6 +65,8 @@ def resolve(settings, data, parts=None):
         return replace(settings, iterations=settings.iterations or LOOKS,
                        supersample=settings.supersample or SUPERSAMPLE), ()
     log.info("plate '%s': %s", data.plate_name, choice.describe())
+    if choice.capped():
+        log.info("plate '%s': %s", data.plate_name, choice.capped())
     warning = choice.warning()
     if warning:
         log.warning("plate '%s': %s", data.plate_name, warning)

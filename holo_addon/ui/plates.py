@@ -223,8 +223,10 @@ def set_summary(context, obj, parts) -> list[str]:
     corners = np.array([[box[i][0], box[j][1], box[k][2]] for i in (0, 1) for j in (0, 1)
                         for k in (0, 1)])
     camera = camera_from_object(scene, scene.camera, unit)
+    plans = plan_parts(parts, corners).plans
     choices = [choose(q, resolution=camera.resolution, looks=h.iterations,
-                      supersample=h.supersample) for q in plan_parts(parts, corners).plans]
+                      supersample=h.supersample, budget=budget(h), plans=plans)
+               for q in plans]
     choice = min(choices, key=lambda c: c.planned.psnr)  # the part that needs the most
     p = plan_parts(parts, corners, looks=choice.looks)
     k, beyond = nearest_part(parts, camera)
@@ -263,10 +265,17 @@ def quality_lines(choice) -> list[str]:
                  f"supersample {p.supersample} ({p.psnr:.1f} dB)"]
     else:
         lines = [f"quality     Auto chose {choice.describe()}"]
+    if choice.capped():
+        lines.append(f"budget      {choice.capped()}")
     warning = choice.warning()
     if warning:
         lines.append(f"warning     {warning}")
     return lines
+
+
+def budget(h) -> tuple[float, float]:
+    """The scene's Memory and Disk Budgets [bytes], which Auto's looks fit."""
+    return h.plate_memory * 2.0**30, h.plate_disk * 2.0**30
 
 
 def plan_summary(context) -> list[str]:
@@ -297,7 +306,7 @@ def plan_summary(context) -> list[str]:
              pixel_angle=zone.pixel or camera.pixel_angle(),
              wavelength=h.wavelength * unit if h.wavelength > 0 else None)
     choice = choose(p, resolution=camera.resolution, looks=h.iterations,
-                    supersample=h.supersample)
+                    supersample=h.supersample, budget=budget(h))
     p = replace(p, looks=choice.looks)
     v = plan_view(p, position=eye, pixel_angle=camera.pixel_angle(),
                   pupil=camera.aperture_diameter, resolution=camera.resolution)

@@ -35,10 +35,11 @@ not fitted, is predicted within 1.3 dB of each measured setting (docs: Plates an
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .. import memory as memory_mod
 from .. import validate
 from ..scene.plate import box_corners
 from .plan import (
@@ -54,6 +55,8 @@ TARGET_DB = 30.0       # PSNR inside the objects against the camera hologram, th
 LOOK_CHOICES = (2, 4, 9)        # coded looks (the checkerboard pair, m² of m = 2, 3)
 SUPERSAMPLE_CHOICES = (2, 3, 4)  # fine pixels a pixel of the views (at most the Nyquist 4)
 FRAMES = 24            # a shot's frames, over which the recording's time is shared
+GAIN_PER_DOUBLING = 1.0  # [dB] the least a further look count must gain per doubling of the
+                         # looks for Auto to take it: its disk and memory grow as the looks
 # (σ/⟨I⟩)² [dB] of a uniform surface's pixels (uniform_surface_variance, 24 px, 2 draws) by
 # (blur [px], looks, supersample)
 SPECKLE_DB = {
@@ -103,6 +106,8 @@ class QualityChoice:
     blur : the largest defocus blur [px] of a view focused anywhere on the objects
     size : the objects' size [px] in the reference view
     user_looks, user_supersample : what the user set (0: Auto)
+    budget : what held Auto's looks down ("the Disk Budget of 8 GiB"), or "" where nothing
+        did; unbudgeted : Auto's choice without the budgets (None where they took nothing)
     """
 
     looks: int
@@ -114,6 +119,8 @@ class QualityChoice:
     size: float
     user_looks: int = 0
     user_supersample: int = 0
+    budget: str = ""
+    unbudgeted: Option | None = None
 
     @property
     def loss(self) -> float:
@@ -135,6 +142,14 @@ class QualityChoice:
                  f"edges of colours and silhouettes ({self.size:.0f} px objects) limit it "
                  f"whatever the looks; more pixels or Camera mode reach it")
         return f"{p.looks} looks, supersample {p.supersample}: {reach}; {why}"
+
+    def capped(self) -> str:
+        """What the budgets held Auto's looks to, in plain words ("" where they did not)."""
+        u = self.unbudgeted
+        if not self.budget or u is None:
+            return ""
+        return (f"Auto chose {self.planned.looks} looks, the most {self.budget} holds; "
+                f"{u.looks} would reach {u.psnr:.1f} dB")
 
     def warning(self) -> str | None:
         """What the user's Iterations or Supersample lose, or None."""
@@ -206,13 +221,69 @@ def options(p: PlatePlan, *, blurs, size: float, resolution) -> list[Option]:
     return out
 
 
+def looks_within(plans, budget=(None, None)) -> tuple[int, str]:
+    """(the most tabled looks whose recording fits ``budget`` (memory, disk) [bytes], None: no
+    limit; what refuses the next count, "" where none does), checked as the recording checks
+    it (:meth:`~holo_core.plate.plan.PlatePlan.check_budget`): one plan tile by tile where its
+    looks exceed the memory in one piece (:func:`holo_core.runner.plate_plan`); a set's
+    ``plans`` each in one piece, their disk summed (:mod:`holo_core.plate.parts`). Where not
+    even the coded pair fits, the pair (its recording refuses with its own message)."""
+    plans = list(plans)
+    memory, disk = budget
+    most, refused = LOOK_CHOICES[0], ""
+    for n in LOOK_CHOICES:
+        looked = [replace(p, looks=n) for p in plans]
+        if len(looked) == 1:
+            q = looked[0]
+            tiled = q.needs_tiles(memory_mod.host_share(memory))
+            stored, held = q.disk_bytes(tiled=tiled), [q.memory_bytes(CHANNELS * n, tiled=tiled)]
+        else:
+            stored = sum(q.disk_bytes() for q in looked)
+            held = [q.memory_bytes(CHANNELS * n) for q in looked]
+        if disk is not None and stored > disk:
+            refused = f"the Disk Budget of {memory_mod.gib(disk)}"
+        elif memory is not None and max(held) > memory:
+            refused = f"the Memory Budget of {memory_mod.gib(memory)}"
+        else:
+            most = n
+            continue
+        break
+    return most, refused
+
+
+def looks_ceiling(every: list[Option]) -> int:
+    """The most looks Auto takes: from the coded pair up, each further tabled count only
+    where its best PSNR over the supersamplings gains at least GAIN_PER_DOUBLING [dB] per
+    doubling of the looks over the count below. Tiny views (a 32x24 test camera, a preview)
+    are limited by their objects' few pixels, not by the speckle, and stay at the pair."""
+    best = {n: max(o.psnr for o in every if o.looks == n) for n in LOOK_CHOICES}
+    ceiling = LOOK_CHOICES[0]
+    for n in LOOK_CHOICES[1:]:
+        if best[n] - best[ceiling] < GAIN_PER_DOUBLING * math.log2(n / ceiling):
+            break
+        ceiling = n
+    return ceiling
+
+
 def choose(p: PlatePlan, *, resolution, looks: int = 0, supersample: int = 0,
-           target: float = TARGET_DB, focus: float | None = None) -> QualityChoice:
+           target: float = TARGET_DB, focus: float | None = None, budget=(None, None),
+           plans=None) -> QualityChoice:
     """The looks and supersampling for views of the plate planned as ``p`` (its reference
     view: the zone's pupil and pixel from the zone's centre) at ``resolution`` (W, H): the
-    cheapest setting predicted to reach ``target`` [dB], else the best; ``looks`` or
-    ``supersample`` > 0 are the user's and are kept (0: Auto). ``focus`` [m] from the zone's
-    centre (None: the objects' front, the worst a view focused on them meets).
+    cheapest setting predicted to reach ``target`` [dB], else the cheapest within NEAR_BEST
+    of the best; ``looks`` or ``supersample`` > 0 are the user's and are kept (0: Auto).
+    ``focus`` [m] from the zone's centre (None: the objects' front, the worst a view focused
+    on them meets).
+
+    Auto's looks are at most
+
+    - the most whose recording fits ``budget`` (memory, disk) [bytes] (None: no limit), as
+      the recording checks it (:func:`looks_within`; ``plans``: a set's parts sharing it,
+      default ``[p]``): the choice then says which budget held it and what the looks it
+      left out would reach (:meth:`QualityChoice.capped`);
+    - :func:`looks_ceiling`: a further count only where it gains at least
+      GAIN_PER_DOUBLING (1 dB) per doubling of the looks, so views too small for the speckle
+      to matter stay at the coded pair.
 
     Examples
     --------
@@ -224,9 +295,9 @@ def choose(p: PlatePlan, *, resolution, looks: int = 0, supersample: int = 0,
     ...                    pupil=0.0143, pixel=0.0014)
     >>> p = plan((1, 1), [[-0.4, -0.4, -2.3], [0.5, 0.4, -1.2]], zone=zone,
     ...          pixel_angle=0.0014)
-    >>> c = choose(p, resolution=(640, 360))
-    >>> c.looks, c.supersample, c.psnr >= 30
-    (2, 2, True)
+    >>> c = choose(p, resolution=(640, 360), budget=(8 * 2**30, 100 * 2**30))
+    >>> c.looks, c.supersample, c.psnr >= 30, c.budget
+    (2, 2, True, '')
     """
     looks = validate.integer("looks", looks, 0, 64)
     supersample = validate.integer("supersample", supersample, 0, validate.MAX_SUPERSAMPLE)
@@ -236,9 +307,14 @@ def choose(p: PlatePlan, *, resolution, looks: int = 0, supersample: int = 0,
     blurs = view_blurs(p.bounds, eye, pupil=p.pupil, pixel_angle=pixel, focus=focus)
     size = objects_size(p.bounds, eye, pixel)
     every = options(p, blurs=blurs, size=size, resolution=(w, h))
-    allowed = [o for o in every if (not looks or o.looks == looks)
+    ceiling = looks_ceiling(every)
+    most, refused = looks_within([p] if plans is None else plans, budget)
+    auto = [o for o in every if o.looks <= min(ceiling, most)]
+    planned = _cheapest(auto, target)
+    free = _cheapest([o for o in every if o.looks <= ceiling], target)
+    held = refused if free.looks > planned.looks else ""
+    allowed = [o for o in (every if looks else auto) if (not looks or o.looks == looks)
                and (not supersample or o.supersample == supersample)]
-    planned = _cheapest(every, target)
     if allowed:
         mine = _cheapest(allowed, target)
         n, s, psnr = mine.looks, mine.supersample, mine.psnr
@@ -251,7 +327,8 @@ def choose(p: PlatePlan, *, resolution, looks: int = 0, supersample: int = 0,
         psnr = predicted_psnr(n, s, blurs=blurs, size=size)
     return QualityChoice(looks=n, supersample=s, psnr=psnr, target=target, planned=planned,
                          blur=float(blurs.max()), size=size, user_looks=looks,
-                         user_supersample=supersample)
+                         user_supersample=supersample, budget=held,
+                         unbudgeted=free if held else None)
 
 
 NEAR_BEST = 0.5  # [dB] short of a target no setting reaches, the cheapest this near the best

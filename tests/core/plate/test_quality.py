@@ -5,6 +5,7 @@ close-up, whose back lies 4.4 px out of focus, asks more than the shot, within 1
 Pure arithmetic: no device."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -139,3 +140,64 @@ def test_blurs_follow_the_thin_lens():
     blurs = quality.view_blurs([[0, 0, -1.0], [0, 0, -1.0]], (0, 0, 0), pupil=0.01,
                                pixel_angle=1e-3, focus=0.5, count=3)
     assert np.allclose(blurs, 10.0), blurs
+
+
+GIB = 2.0**30
+
+
+def test_auto_fits_the_disk_budget():
+    """The close-up at Auto without budgets takes 9 looks (7.4 GiB on disk); a Disk Budget
+    of 4 GiB holds 4 looks (3.3 GiB) and not 9, as the recording's own check finds
+    (PlatePlan.check_budget), so Auto takes 4 and says why, with what 9 would reach."""
+    p = closeup_plan()
+    free = choose(p, resolution=(640, 360))
+    assert free.looks == 9 and free.budget == "" and free.capped() == "", free
+    budget = (8 * GIB, 4 * GIB)
+    held = choose(p, resolution=(640, 360), budget=budget)
+    print(held.capped())
+    assert held.looks == 4, held
+    replace(p, looks=4).check_budget(memory=budget[0], disk=budget[1], tiled=True, held=4)
+    with pytest.raises(InputError, match="disk budget"):
+        replace(p, looks=9).check_budget(memory=budget[0], disk=budget[1], held=9)
+    assert held.capped() == (f"Auto chose 4 looks, the most the Disk Budget of 4 GiB holds; "
+                             f"9 would reach {free.psnr:.1f} dB"), held.capped()
+    assert held.unbudgeted == free.planned
+    # a budget that holds 9 looks changes nothing
+    assert choose(p, resolution=(640, 360), budget=(8 * GIB, 100 * GIB)).looks == 9
+    # a look count set by hand is kept, whatever the budget (the recording refuses it)
+    assert choose(p, resolution=(640, 360), looks=9, budget=budget).looks == 9
+
+
+def test_auto_fits_a_sets_budgets():
+    """A set of two parts (the close-up's plan twice): their disk summed and each part's
+    memory in one piece, as holo_core.plate.parts checks them; budgets just above the
+    4 looks' hold 4 and name the budget that refused 9."""
+    p = closeup_plan()
+    four = replace(p, looks=4)
+    disk = 2 * four.disk_bytes() * 1.01
+    held = choose(p, resolution=(640, 360), budget=(None, disk), plans=[p, p])
+    assert held.looks == 4 and held.budget.startswith("the Disk Budget of"), held
+    memory = four.memory_bytes(4 * 4) * 1.01
+    held = choose(p, resolution=(640, 360), budget=(memory, None), plans=[p, p])
+    assert held.looks == 4 and held.budget.startswith("the Memory Budget of"), held
+
+
+def test_tiny_views_stay_at_the_coded_pair():
+    """The shot through a 32 px wide camera (a test's or a preview's): predicted short of
+    30 dB whatever the looks (its objects 12 px across), and 4 looks gain less than 1 dB
+    over the pair at their best supersampling, so Auto keeps the pair; the close-up's
+    further counts each gain at least 1 dB per doubling, so it goes to 9."""
+    tiny = shot_plan(32 / 1280)
+
+    def best(p, n):
+        return max(choose(p, resolution=(32, 24), looks=n, supersample=s).psnr
+                   for s in (2, 3, 4))
+
+    gain = best(tiny, 4) - best(tiny, 2)
+    c = choose(tiny, resolution=(32, 24))
+    print(f"tiny: {c.describe()}; 4 looks gain {gain:.2f} dB")
+    assert gain < 1.0 and c.looks == 2 and c.psnr < 30, (gain, c)
+    close = closeup_plan()
+    assert best(close, 4) - best(close, 2) >= 1.0
+    assert best(close, 9) - best(close, 4) >= math.log2(9 / 4)
+    assert choose(close, resolution=(32, 24)).looks == 9
