@@ -138,6 +138,8 @@ class QualityChoice:
         p = self.planned
         reach = (f"predicted {p.psnr:.1f} dB against the camera hologram (the target "
                  f"{self.target:g} dB)" if p.psnr >= self.target else
+                 f"predicted {p.psnr:.1f} dB, short of the target {self.target:g} dB: "
+                 f"{self.budget} holds no more looks" if self.budget else
                  f"predicted {p.psnr:.1f} dB, short of the target {self.target:g} dB: the "
                  f"edges of colours and silhouettes ({self.size:.0f} px objects) limit it "
                  f"whatever the looks; more pixels or Camera mode reach it")
