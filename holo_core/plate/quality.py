@@ -30,6 +30,10 @@ The two constants were fitted to the close-up at 320×180 and the shot at 640×3
 measured by bench/closeup.py, two seeds); fitted to the close-up alone they predict the
 shot's speckle within 0.5 dB and its seed-free part 1 dB high; the close-up at 640×360,
 not fitted, is predicted within 1.3 dB of each measured setting (docs: Plates and shots).
+
+Auto's looks (:func:`choose`) fit the Memory and Disk Budgets as the recording checks them
+(:func:`looks_within`), and go beyond the coded pair only where each further count gains
+at least GAIN_PER_DOUBLING (1 dB) per doubling of the looks (:func:`looks_ceiling`).
 """
 
 from __future__ import annotations
