@@ -29,7 +29,7 @@ from holo_core.scene.camera import Camera
 from holo_core.scene.mesh import Mesh
 from holo_core.scene.plate import ViewingZone
 
-from . import radiance, ranges
+from . import quality, radiance, ranges
 from .motion import with_motion
 from .plates import beyond_zone, export_imported, plate_parts, scene_plate, with_plate, with_set
 from .scene import ExportError, SceneData, export_scene
@@ -47,8 +47,8 @@ class Settings:
     memory_budget: float          # [bytes] a plate's recording, at most
     disk_budget: float            # [bytes] a plate's files, at most
     wavelength: float | None
-    iterations: int
-    supersample: int
+    iterations: int               # looks of a plate (0: Auto, the plan's choice)
+    supersample: int              # fine pixels a pixel (0: Auto)
     composition: str
     exposure: float               # linear factor (the scene stores stops)
     opacity_threshold: float
@@ -180,6 +180,10 @@ def read(scene, depsgraph, *, render=True, preview=1) -> Prepared:
                        view=coarser(data.view, preview), region=None)
     lighting = radiance.digest(scene, depsgraph) if lit else ""
     settings = replace(Settings.from_scene(scene, data.unit), mode=mode)
+    # Iterations and Supersample at Auto take the plan's choice for this plate; a lower
+    # setting of the user's is said with what it loses
+    settings, said = quality.resolve(settings, data, None if imported else parts)
+    data = replace(data, warnings=data.warnings + said)
     if mode == "CAMERA":  # recorded for this view at every render: no plate file
         fingerprint = digest(data, mode, settings.speckle, settings.samples, lighting,
                              kinds=False)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import bpy
@@ -28,6 +29,7 @@ from holo_core.io.hologram import HologramFileError, read_hologram
 from holo_core.io.plate_set import parts_from_json, parts_to_json
 from holo_core.plate.path import parts_along, plan_parts
 from holo_core.plate.plan import plan, plan_view, summary
+from holo_core.plate.quality import choose
 from holo_core.scene.hologram import Hologram
 from holo_core.scene.plate import ViewingZone
 from holo_core.validate import InputError
@@ -220,8 +222,13 @@ def set_summary(context, obj, parts) -> list[str]:
     box = emitter_box(context.evaluated_depsgraph_get(), unit)
     corners = np.array([[box[i][0], box[j][1], box[k][2]] for i in (0, 1) for j in (0, 1)
                         for k in (0, 1)])
-    p = plan_parts(parts, corners, looks=h.iterations)
     camera = camera_from_object(scene, scene.camera, unit)
+    plans = plan_parts(parts, corners).plans
+    choices = [choose(q, resolution=camera.resolution, looks=h.iterations,
+                      supersample=h.supersample, budget=budget(h), plans=plans)
+               for q in plans]
+    choice = min(choices, key=lambda c: c.planned.psnr)  # the part that needs the most
+    p = plan_parts(parts, corners, looks=choice.looks)
     k, beyond = nearest_part(parts, camera)
     here = (f"part {k + 1} holds the camera's pupil" if not beyond else
             f"the camera's pupil reaches {beyond:.3g} m beyond every part (part {k + 1} is "
@@ -230,7 +237,8 @@ def set_summary(context, obj, parts) -> list[str]:
     lines = [f"verdict     a set of {len(parts)} parts along the camera's path; each frame "
              f"renders from the part that holds its camera ({here})",
              f"set         {p.describe()}",
-             f"a view      reads one part, at most {widest.samples / 1e6:.3g} Mpx"]
+             f"a view      reads one part, at most {widest.samples / 1e6:.3g} Mpx",
+             *quality_lines(choice)]
     for n, (part, q) in enumerate(zip(parts, p.plans), 1):
         lines.append(f"part {n:<6d} {part.plate.width / unit:.3g} x "
                      f"{part.plate.height / unit:.3g} units, {q.samples / 1e6:.3g} Mpx, path "
@@ -245,6 +253,29 @@ def set_summary(context, obj, parts) -> list[str]:
                         f"while recorded; the Memory Budget is {h.plate_memory:g} GiB (a "
                         f"shorter Part Length needs less)")
     return lines
+
+
+def quality_lines(choice) -> list[str]:
+    """Plan Plate's lines on the looks and supersampling (:mod:`holo_core.plate.quality`):
+    what the views use and why, and what a user's lower setting loses."""
+    p = choice.planned
+    if choice.user_looks or choice.user_supersample:
+        lines = [f"quality     {choice.looks} looks at supersample {choice.supersample} "
+                 f"predict {choice.psnr:.1f} dB; Auto would choose {p.looks} looks at "
+                 f"supersample {p.supersample} ({p.psnr:.1f} dB)"]
+    else:
+        lines = [f"quality     Auto chose {choice.describe()}"]
+    if choice.capped():
+        lines.append(f"budget      {choice.capped()}")
+    warning = choice.warning()
+    if warning:
+        lines.append(f"warning     {warning}")
+    return lines
+
+
+def budget(h) -> tuple[float, float]:
+    """The scene's Memory and Disk Budgets [bytes], which Auto's looks fit."""
+    return h.plate_memory * 2.0**30, h.plate_disk * 2.0**30
 
 
 def plan_summary(context) -> list[str]:
@@ -272,8 +303,11 @@ def plan_summary(context) -> list[str]:
     zone = plate.zone or zone_around(plate, camera, obj.holo.zone_margin * unit)
     h = scene.holo
     p = plan((plate.width, plate.height), [local.min(0), local.max(0)], zone=zone,
-             pixel_angle=zone.pixel or camera.pixel_angle(), looks=h.iterations,
+             pixel_angle=zone.pixel or camera.pixel_angle(),
              wavelength=h.wavelength * unit if h.wavelength > 0 else None)
+    choice = choose(p, resolution=camera.resolution, looks=h.iterations,
+                    supersample=h.supersample, budget=budget(h))
+    p = replace(p, looks=choice.looks)
     v = plan_view(p, position=eye, pixel_angle=camera.pixel_angle(),
                   pupil=camera.aperture_diameter, resolution=camera.resolution)
     lens = f"{camera.lens:g} mm f/{camera.fstop:g}" if camera.fstop else \
@@ -282,6 +316,7 @@ def plan_summary(context) -> list[str]:
     lines = summary(p, v, lens=lens, resolution=camera.resolution,
                     plate_size=(plate.width, plate.height), camera=eye,
                     device=options["device"], cache_dir=options["cache_dir"])
+    lines[1:1] = quality_lines(choice)
     gb = 2.0**30
     try:  # as the recording's plan decides: tile by tile where the looks exceed the memory
         tiled = p.check_recording(memory=h.plate_memory * gb, disk=h.plate_disk * gb,

@@ -310,15 +310,18 @@ class HoloSceneSettings(bpy.types.PropertyGroup):
                               subtype="DISTANCE", unit="LENGTH",
                               description="Recording wavelength (0: chosen for the image's "
                                           "resolution)")
-    iterations: IntProperty(name="Iterations", default=2, min=1, max=64,
+    iterations: IntProperty(name="Iterations", default=0, min=0, max=64,
                             description="Looks of the plate, averaged against speckle "
-                                        "(Sect. VII-E): 2 or a square number are coded looks "
-                                        "whose neighbouring emitters' cross terms cancel; "
-                                        "others use independent random phases. Each look "
-                                        "adds to the recording and to every frame's view")
-    supersample: IntProperty(name="Supersample", default=2, min=1, max=4,
+                                        "(Sect. VII-E); 0: Auto, the looks Plan Plate chooses "
+                                        "for the scene's views to reach 30 dB. 2 or a square "
+                                        "number are coded looks whose neighbouring emitters' "
+                                        "cross terms cancel; others use independent random "
+                                        "phases. Each look adds to the recording and to every "
+                                        "frame's view")
+    supersample: IntProperty(name="Supersample", default=0, min=0, max=4,
                              description="Render at this multiple of the resolution, then "
-                                         "low-pass and downsample")
+                                         "low-pass and downsample; 0: Auto (a plate's views: "
+                                         "what Plan Plate chooses; camera holograms: 2)")
     composition: EnumProperty(name="Composition", default="mean",
                               items=[("mean", "Mean", "Average the iterations' intensities"),
                                      ("max", "Maximum", "Brightest iteration per pixel")],

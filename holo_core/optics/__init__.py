@@ -3,7 +3,8 @@
 - ``pupil.py``: :class:`Pupil`, the entrance pupil (diameter, thin-lens focus, apodization), and
   the pinhole rules side by side
 - ``depth.py``: depth from the two-wavelength phase difference (Eq. 26–30)
-- ``speckle.py``: averaging, downsampling and the speckle contrast (Sect. VII-E)
+- ``speckle.py``: averaging, downsampling and the speckle contrast (Sect. VII-E), and the
+  speckle a uniform surface keeps through a view's looks, fine pixels and defocus
 - ``imaging.py``: the pupil → image stage both renderers share (iris, thin lens, the spectrum
   read at the pixels), and a view assembled from colour, coverage and the depth pair
 - ``lens.py``: a thin lens's phase on a field or a Field (:func:`thin_lens`)

@@ -3,6 +3,8 @@ viewed by any camera in that zone.
 
 - ``plan.py``: a plate's samples, wavelengths, emitters and costs, from its zone and the views
   it serves (pure arithmetic: no driver)
+- ``quality.py``: the looks and supersampling its views need to reach a quality target,
+  predicted from their defocus and the objects' size in pixels (pure arithmetic: no driver)
 - ``carrier.py``: the spherical carrier converging on the zone that the samples are stored
   against, and the exact re-modulation to the physical object wave
 - ``emitters.py``: the surfaces the zone sees, one emitter per resolved spot, and the zone

@@ -4,6 +4,8 @@ refocusing it, its f-stop or the render's size never record again inside the zon
 a frame renders whole as a camera hologram, or with Warn a warning names the zone), the
 planner in the panel, and File ▸ Import ▸ Hologram."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -14,6 +16,9 @@ from test_addon import _plate_camera_cube, _read_exr  # noqa: E402
 from holo_core.io.hologram import read_hologram, write_hologram  # noqa: E402
 from holo_core.scene.hologram import Hologram  # noqa: E402
 from holo_core.scene.plate import ViewingZone  # noqa: E402
+
+RESOLUTION = (320, 240)  # with DEEP, a camera whose cube asks Auto more than the coded pair
+DEEP = 2.5  # the cube's scale: 1 m across at 3 m
 
 
 def _plate_scene(scene):
@@ -48,7 +53,9 @@ def test_camera_moves_inside_the_zone_never_record_again(empty_scene):
         return pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
 
     first = job()
-    assert not first.records and not first.warnings, first.warnings
+    # Iterations 1 by hand is said to lose against Auto (test_auto_iterations_...); nothing else
+    assert not first.records and not [w for w in first.warnings
+                                      if "set by hand" not in w], first.warnings
     cam.location.x += 0.1
     cam.rotation_euler.z += 0.02
     cam.data.dof.focus_distance = 2.5
@@ -336,3 +343,94 @@ def test_a_shot_records_once_and_every_frame_renders_from_it(empty_scene):
         assert not [w for w in job.warnings if "viewing zone" in w], job.warnings
         assert bpy.ops.holo.render_pass() == {"FINISHED"}
     assert records == [True, False, False], records
+
+
+def test_auto_iterations_and_supersample_take_the_plans_choice(empty_scene):
+    """Iterations and Supersample default to 0 (Auto): a plate's job records the looks and
+    views at the supersampling the plan chooses for the scene (holo_core.plate.quality), and
+    Plan Plate says what it chose and why; a Camera-mode job takes two fine pixels. A user's
+    Iterations 1 is kept, and both the job's warnings and Plan Plate say what it loses
+    against Auto, in dB."""
+    from holo_addon.render import pipeline
+    from holo_addon.ui import plates
+    from holo_core.plate.plan import plan
+    from holo_core.plate.quality import choose
+    scene = empty_scene
+    _, cam, plate = _plate_scene(scene)
+    scene.holo.property_unset("iterations")
+    scene.holo.property_unset("supersample")
+    assert (scene.holo.iterations, scene.holo.supersample) == (0, 0)
+    bpy.context.view_layer.objects.active = plate
+    prepared = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
+    route = prepared.job.route
+    local = route.plate.to_plate(np.concatenate([m.vertices for m in prepared.job.points
+                                                 + prepared.job.triangles]))
+    zone = route.plate.zone
+    expected = choose(plan((route.plate.width, route.plate.height),
+                           [local.min(0), local.max(0)], zone=zone, pixel_angle=zone.pixel or prepared.job.camera.pixel_angle()),
+                      resolution=prepared.job.camera.resolution)
+    print(expected.describe())
+    assert len(route.holograms) == expected.looks and route.supersample == expected.supersample
+    assert not [w for w in prepared.warnings if "set by hand" in w], prepared.warnings
+    assert bpy.ops.holo.plan_plate() == {"FINISHED"}
+    text = "\n".join(plates.plan_lines(plate))
+    assert f"quality     Auto chose {expected.looks} looks, supersample " \
+           f"{expected.supersample}: predicted {expected.psnr:.1f} dB" in text, text
+    scene.holo.iterations = 1
+    mine = choose(plan((route.plate.width, route.plate.height), [local.min(0), local.max(0)],
+                       zone=zone, pixel_angle=zone.pixel or prepared.job.camera.pixel_angle()),
+                  resolution=prepared.job.camera.resolution, looks=1)
+    assert mine.loss > 0.05, mine  # the scene's plan asks more than one look
+    prepared = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
+    assert len(prepared.job.route.holograms) == 1
+    said = [w for w in prepared.warnings if "Iterations 1 (set by hand) predict" in w]
+    assert said and f"{mine.loss:.1f} dB less than Auto's" in said[0], prepared.warnings
+    assert bpy.ops.holo.plan_plate() == {"FINISHED"}
+    text = "\n".join(plates.plan_lines(plate))
+    assert "warning     Iterations 1 (set by hand) predict" in text, text
+    scene.holo.mode = "CAMERA"
+    prepared = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
+    assert prepared.job.route.supersample == 2
+
+
+def test_auto_looks_fit_the_disk_budget(empty_scene):
+    """Auto's looks fit the Disk Budget as the recording checks it: a budget between the
+    plan's disk for fewer looks and for Auto's free choice holds the job's looks to the most
+    it holds, and Plan Plate's budget line says so with what the free choice would reach."""
+    from holo_addon.render import pipeline
+    from holo_addon.ui import plates
+    from holo_core.plate.plan import plan
+    from holo_core.plate.quality import choose
+    scene = empty_scene
+    cube, cam, plate = _plate_scene(scene)
+    cube.scale = (DEEP, DEEP, DEEP)  # its back out of focus when its front is sharp
+    cam.data.dof.aperture_fstop = 1.4
+    scene.render.resolution_x, scene.render.resolution_y = RESOLUTION
+    bpy.context.view_layer.update()
+    scene.holo.property_unset("iterations")
+    scene.holo.property_unset("supersample")
+    bpy.context.view_layer.objects.active = plate
+    prepared = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
+    route = prepared.job.route
+    local = route.plate.to_plate(np.concatenate([m.vertices for m in prepared.job.points
+                                                 + prepared.job.triangles]))
+    zone = route.plate.zone
+    p = plan((route.plate.width, route.plate.height), [local.min(0), local.max(0)], zone=zone,
+             pixel_angle=zone.pixel or prepared.job.camera.pixel_angle())
+    free = choose(p, resolution=RESOLUTION)
+    print(free.describe(), [replace(p, looks=n).disk_bytes() / 2**30 for n in (2, 4, 9)])
+    assert free.looks > 2, free
+    assert len(route.holograms) == free.looks
+    fewer = 2 if free.looks == 4 else 4
+    scene.holo.plate_disk = replace(p, looks=fewer).disk_bytes(tiled=True) / 2**30 * 1.02
+    held = choose(p, resolution=RESOLUTION, budget=(scene.holo.plate_memory * 2**30,
+                                                    scene.holo.plate_disk * 2**30))
+    assert held.looks == fewer and held.capped(), held
+    prepared = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
+    assert len(prepared.job.route.holograms) == fewer
+    assert bpy.ops.holo.plan_plate() == {"FINISHED"}
+    text = "\n".join(plates.plan_lines(plate))
+    assert f"budget      Auto chose {fewer} looks, the most the Disk Budget of " in text, text
+    assert f"; {free.looks} would reach {free.psnr:.1f} dB" in text, text
+    print(text)
+    assert "refused" not in text, text

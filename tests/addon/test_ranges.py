@@ -11,9 +11,9 @@ from test_compositor import BACKGROUND, in_background  # noqa: E402
 
 STORED = [  # (settings, property, value the file holds, what the refusal says)
     ("scene", "iterations", 10**9,
-     r"Iterations \(Render Properties ▸ Holo\) must be within 1 … 64; got 1000000000"),
+     r"Iterations \(Render Properties ▸ Holo\) must be within 0 … 64; got 1000000000"),
     ("scene", "supersample", 16,
-     r"Supersample \(Render Properties ▸ Holo\) must be within 1 … 4; got 16"),
+     r"Supersample \(Render Properties ▸ Holo\) must be within 0 … 4; got 16"),
     ("scene", "plate_memory", -1.0,
      r"Memory Budget \(Render Properties ▸ Holo\) must be at least 0.1 GiB; got -1 GiB"),
     ("scene", "wavelength", float("nan"),
@@ -64,7 +64,7 @@ def test_a_damaged_setting_fails_a_background_render_before_any_work(tmp_path):
     status 1 at once, the setting named as the panel names it, no frame and no hologram."""
     run = in_background(DAMAGED_FARM_RENDER, tmp_path)
     assert run.returncode == 1, run.stdout[-2000:] + run.stderr[-2000:]
-    assert "Iterations (Render Properties ▸ Holo) must be within 1 … 64; got 1000000000" in \
+    assert "Iterations (Render Properties ▸ Holo) must be within 0 … 64; got 1000000000" in \
         run.stderr, run.stderr[-2000:]
     assert "rendered" not in run.stdout and not list(tmp_path.glob("frame_*"))
     assert not list(tmp_path.glob("holo/*hologram*")), "a hologram was recorded"
