@@ -29,8 +29,7 @@ from holo_core.worker import Views, WorkerError
 
 from ..blender import compat
 from ..compositor.session import session
-from ..export.job import Settings
-from ..export.scene import ExportError, scale
+from ..export.scene import ExportError
 from ..export.viewport import viewport_camera
 from ..render import pipeline
 from ..render.options import worker_options
@@ -106,13 +105,14 @@ def plate_source(scene, depsgraph) -> Source:
     if route.record:
         return Source(why=f"plate '{prepared.plate_name}' is not recorded for the scene as it "
                           f"is: Record Hologram (Render ▸ Holo), then look through it")
-    s = Settings.from_scene(scene, scale(scene))
     plates = (str(route.folder),) if isinstance(route, SetRoute) else \
         tuple(map(str, route.holograms))
+    # the route's settings, Supersample at Auto resolved as the render resolves it
     return Source(plates=plates, recording=route.recording,
-                  options=(("supersample", s.supersample), ("composition", s.composition),
-                           ("opacity_threshold", s.opacity_threshold),
-                           ("exposure", s.exposure)))
+                  options=(("supersample", route.supersample),
+                           ("composition", route.composition),
+                           ("opacity_threshold", route.opacity_threshold),
+                           ("exposure", route.exposure)))
 
 
 def refresh(scene, depsgraph) -> Source:
