@@ -276,8 +276,10 @@ def choose(p: PlatePlan, *, resolution, looks: int = 0, supersample: int = 0,
            plans=None) -> QualityChoice:
     """The looks and supersampling for views of the plate planned as ``p`` (its reference
     view: the zone's pupil and pixel from the zone's centre) at ``resolution`` (W, H): the
-    cheapest setting predicted to reach ``target`` [dB], else the cheapest within NEAR_BEST
-    of the best; ``looks`` or ``supersample`` > 0 are the user's and are kept (0: Auto).
+    fewest looks predicted to reach ``target`` [dB] with some supersampling, else the fewest
+    within NEAR_BEST of the best, whatever the resolution (they are recorded once for every
+    view); the supersampling the cheapest for those looks at ``resolution``; ``looks`` or
+    ``supersample`` > 0 are the user's and are kept (0: Auto).
     ``focus`` [m] from the zone's centre (None: the objects' front, the worst a view focused
     on them meets).
 
@@ -316,13 +318,13 @@ def choose(p: PlatePlan, *, resolution, looks: int = 0, supersample: int = 0,
     ceiling = looks_ceiling(every)
     most, refused = looks_within([p] if plans is None else plans, budget)
     auto = [o for o in every if o.looks <= min(ceiling, most)]
-    planned = _cheapest(auto, target)
-    free = _cheapest([o for o in every if o.looks <= ceiling], target)
+    planned = _fewest_looks(auto, target)
+    free = _fewest_looks([o for o in every if o.looks <= ceiling], target)
     held = refused if free.looks > planned.looks else ""
     allowed = [o for o in (every if looks else auto) if (not looks or o.looks == looks)
                and (not supersample or o.supersample == supersample)]
     if allowed:
-        mine = _cheapest(allowed, target)
+        mine = _fewest_looks(allowed, target)
         n, s, psnr = mine.looks, mine.supersample, mine.psnr
     if looks and supersample:  # both the user's, whatever the table holds
         n, s = looks, supersample
@@ -338,6 +340,19 @@ def choose(p: PlatePlan, *, resolution, looks: int = 0, supersample: int = 0,
 
 
 NEAR_BEST = 0.5  # [dB] short of a target no setting reaches, the cheapest this near the best
+
+
+def _fewest_looks(candidates, target: float) -> Option:
+    """The fewest looks of ``candidates`` predicted to reach ``target`` [dB] with some
+    supersampling (where none does, to come within NEAR_BEST of the best), at their cheapest
+    supersampling (:func:`_cheapest`). The looks are recorded once for every view of the
+    plate, at any resolution, so they follow from the predictions alone: a view's cost, which
+    the render's resolution sets, chooses only the supersampling, and a smaller preview
+    never asks for another recording."""
+    best = max(o.psnr for o in candidates)
+    goal = target if best >= target else best - NEAR_BEST
+    n = min(o.looks for o in candidates if o.psnr >= goal)
+    return _cheapest([o for o in candidates if o.looks == n], target)
 
 
 def _cheapest(candidates, target: float) -> Option:

@@ -201,3 +201,15 @@ def test_tiny_views_stay_at_the_coded_pair():
     assert best(close, 4) - best(close, 2) >= 1.0
     assert best(close, 9) - best(close, 4) >= math.log2(9 / 4)
     assert choose(close, resolution=(32, 24)).looks == 9
+
+
+@pytest.mark.parametrize("target", [26.0, 30.0])
+@pytest.mark.parametrize("plan_of", [shot_plan, closeup_plan], ids=["shot", "close-up"])
+def test_autos_looks_do_not_follow_the_render_resolution(plan_of, target):
+    """The looks are recorded once for every view: a preview at a quarter of the size, or a
+    final frame at twice it, chooses the same looks (only the supersampling may differ), so a
+    change of the render's size never records the plate again."""
+    p = plan_of()
+    chosen = {choose(p, resolution=r, target=target).looks for r in ((320, 180), (640, 360), (1280, 720),
+                                                      (3840, 2160))}
+    assert len(chosen) == 1, chosen
