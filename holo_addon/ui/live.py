@@ -25,6 +25,7 @@ import numpy as np
 from bpy.app.handlers import persistent
 
 from holo_core.job import CameraRoute, SetRoute
+from holo_core.preview import srgb
 from holo_core.worker import Views, WorkerError
 
 from ..blender import compat
@@ -214,8 +215,7 @@ def texture_pixels(rgba, exposure: float = 0.0, *, linear: bool = True) -> np.nd
     rgb = out[..., :3]
     rgb *= np.float32(2.0 ** exposure)
     if not linear:
-        np.clip(rgb, 0.0, 1.0, out=rgb)
-        rgb[...] = np.where(rgb <= 0.0031308, rgb * 12.92, 1.055 * rgb ** (1 / 2.4) - 0.055)
+        rgb[...] = srgb(rgb)
     np.clip(out[..., 3], 0.0, 1.0, out=out[..., 3])
     return out.ravel()
 

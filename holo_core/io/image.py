@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import memory
+from ..preview import srgb as srgb  # the one transfer curve, named here for the writers
 from ..validate import InputError
 
 TEMP_TAG = ".holo-tmp."
@@ -398,9 +399,3 @@ def png_bytes(image: np.ndarray) -> bytes:
     header = struct.pack(">IIBBBBB", w, h, 8, colour, 0, 0, 0)
     return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw, 6)) \
         + chunk(b"IEND", b"")
-
-
-def srgb(linear: np.ndarray) -> np.ndarray:
-    """Linear [0, 1] to sRGB display values."""
-    a = np.clip(linear, 0, 1)
-    return np.where(a <= 0.0031308, 12.92 * a, 1.055 * a ** (1 / 2.4) - 0.055)
