@@ -353,7 +353,6 @@ def test_auto_iterations_and_supersample_take_the_plans_choice(empty_scene):
     against Auto, in dB."""
     from holo_addon.render import pipeline
     from holo_addon.ui import plates
-    from holo_core.plate.plan import plan
     from holo_core.plate.quality import choose
     scene = empty_scene
     _, cam, plate = _plate_scene(scene)
@@ -363,13 +362,7 @@ def test_auto_iterations_and_supersample_take_the_plans_choice(empty_scene):
     bpy.context.view_layer.objects.active = plate
     prepared = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
     route = prepared.job.route
-    local = route.plate.to_plate(np.concatenate([m.vertices for m in prepared.job.points
-                                                 + prepared.job.triangles]))
-    zone = route.plate.zone
-    expected = choose(plan((route.plate.width, route.plate.height),
-                           [local.min(0), local.max(0)], zone=zone, pixel_angle=zone.pixel or prepared.job.camera.pixel_angle()),
-                      resolution=prepared.job.camera.resolution)
-    print(expected.describe())
+    expected = choose(_route_plan(prepared), resolution=prepared.job.camera.resolution)
     assert len(route.holograms) == expected.looks and route.supersample == expected.supersample
     assert not [w for w in prepared.warnings if "set by hand" in w], prepared.warnings
     assert bpy.ops.holo.plan_plate() == {"FINISHED"}
@@ -377,9 +370,7 @@ def test_auto_iterations_and_supersample_take_the_plans_choice(empty_scene):
     assert f"quality     Auto chose {expected.looks} looks, supersample " \
            f"{expected.supersample}: predicted {expected.psnr:.1f} dB" in text, text
     scene.holo.iterations = 1
-    mine = choose(plan((route.plate.width, route.plate.height), [local.min(0), local.max(0)],
-                       zone=zone, pixel_angle=zone.pixel or prepared.job.camera.pixel_angle()),
-                  resolution=prepared.job.camera.resolution, looks=1)
+    mine = choose(_route_plan(prepared), resolution=prepared.job.camera.resolution, looks=1)
     assert mine.loss > 0.05, mine  # the scene's plan asks more than one look
     prepared = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
     assert len(prepared.job.route.holograms) == 1
@@ -399,7 +390,6 @@ def test_auto_looks_fit_the_disk_budget(empty_scene):
     it holds, and Plan Plate's budget line says so with what the free choice would reach."""
     from holo_addon.render import pipeline
     from holo_addon.ui import plates
-    from holo_core.plate.plan import plan
     from holo_core.plate.quality import choose
     scene = empty_scene
     cube, cam, plate = _plate_scene(scene)
@@ -412,11 +402,7 @@ def test_auto_looks_fit_the_disk_budget(empty_scene):
     bpy.context.view_layer.objects.active = plate
     prepared = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
     route = prepared.job.route
-    local = route.plate.to_plate(np.concatenate([m.vertices for m in prepared.job.points
-                                                 + prepared.job.triangles]))
-    zone = route.plate.zone
-    p = plan((route.plate.width, route.plate.height), [local.min(0), local.max(0)], zone=zone,
-             pixel_angle=zone.pixel or prepared.job.camera.pixel_angle())
+    p = _route_plan(prepared)
     free = choose(p, resolution=RESOLUTION)
     print(free.describe(), [replace(p, looks=n).disk_bytes() / 2**30 for n in (2, 4, 9)])
     assert free.looks > 2, free
@@ -434,3 +420,15 @@ def test_auto_looks_fit_the_disk_budget(empty_scene):
     assert f"; {free.looks} would reach {free.psnr:.1f} dB" in text, text
     print(text)
     assert "refused" not in text, text
+
+
+def _route_plan(prepared):
+    """The plan of the prepared job's plate for its meshes, as the add-on's Auto plans it."""
+    from holo_core.plate.plan import plan
+    job = prepared.job
+    route = job.route
+    local = route.plate.to_plate(np.concatenate([m.vertices for m in job.points
+                                                 + job.triangles]))
+    zone = route.plate.zone
+    return plan((route.plate.width, route.plate.height), [local.min(0), local.max(0)],
+                zone=zone, pixel_angle=zone.pixel or job.camera.pixel_angle())
