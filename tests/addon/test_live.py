@@ -132,11 +132,14 @@ def test_the_live_view_registers_and_unregisters_without_a_screen(empty_scene):
     live.register()
 
 
-def _wait(until, timeout=120.0):
+def _wait(until, timeout=120.0, clock=None):
+    """Poll the live view until ``until(state)``; ``clock`` [s] () -> the time poll sees
+    (a frozen clock keeps the full view from being asked, so a loaded machine's slow
+    coarse view is not superseded before it is seen)."""
     from holo_addon.ui import live
     end = time.monotonic() + timeout
     while time.monotonic() < end:
-        live.poll()
+        live.poll(None if clock is None else clock())
         if until(live.state()):
             return live.state()
         time.sleep(0.01)
@@ -171,8 +174,9 @@ def test_a_recorded_plate_is_seen_live_coarse_then_full_and_outside_its_zone_in_
         assert p.shown.rgba.shape == (24, 32, 4) and p.shown.rgba[..., 3].max() == 1.0
         assert p.latency >= live.STILL  # the worker started: a coarse view was superseded
         moved = dataclasses.replace(camera, matrix_world=camera.matrix_world @ _shift(0.01))
-        coarse = live.look(1, moved)
-        p = _wait(lambda s: s.shown.request >= coarse)
+        still = time.perf_counter()
+        coarse = live.look(1, moved, now=still)
+        p = _wait(lambda s: s.shown.request >= coarse, clock=lambda: still)
         assert p.shown.request == coarse and p.shown.coarse, p.shown
         assert p.shown.rgba[..., 3].max() == 1.0 and p.coarse is not None
         p = _wait(lambda s: s.full and s.shown.request >= s.full)
