@@ -110,8 +110,8 @@ def zone_emitters(meshes, zone: ViewingZone, spacing: float, *, layers=3,
         raise InputError("a plate needs at least one mesh to record")
     every = np.concatenate([m.vertices for m in meshes])
     rotation = zone_frame(zone, np.array([every.min(0), every.max(0)]))
-    position, colour, normal, cell, key = surface_points(meshes, zone.centre, rotation,
-                                                         spacing, layers=layers)
+    position, colour, normal, cell, key, _ = surface_points(meshes, zone.centre, rotation,
+                                                            spacing, layers=layers)
     g = grid or grid_points(zone)
     offsets, seen = visibility(meshes, position, normal, zone, rotation, spacing, g)
     keep = seen.reshape(len(seen), -1).max(1) > 0
@@ -121,10 +121,12 @@ def zone_emitters(meshes, zone: ViewingZone, spacing: float, *, layers=3,
 
 def surface_points(meshes, centre, rotation, spacing: float, *, layers=3, lattice=0):
     """(position (n, 3) [m], linear colour (n, 3) >= 0, unit normal (n, 3), bin (kx, ky) (n, 2),
-    key (n,) uint64) of the crossings of the rays of a pupil at ``centre`` (3,) [m] with axes
-    ``rotation``, bins ``spacing`` apart in direction cosine, with ``meshes``, up to ``layers``
-    deep (all in one frame, the meshes'); ``key`` names each crossing (:func:`emitter_keys`,
-    of the ``lattice``-th pupil where several find one set)."""
+    key (n,) uint64, closed (n,) bool) of the crossings of the rays of a pupil at ``centre``
+    (3,) [m] with axes ``rotation``, bins ``spacing`` apart in direction cosine, with
+    ``meshes``, up to ``layers`` deep (all in one frame, the meshes'); ``key`` names each
+    crossing (:func:`emitter_keys`, of the ``lattice``-th pupil where several find one set).
+    On a closed mesh (``closed``) the normal points out of it (:func:`outward`); elsewhere it
+    follows the triangle's winding, and either side may be the one a pupil sees."""
     every = np.concatenate([m.vertices for m in meshes])
     centre = np.asarray(centre, np.float64)
     shape = bins_covering(every, centre, rotation, spacing)
@@ -132,6 +134,7 @@ def surface_points(meshes, centre, rotation, spacing: float, *, layers=3, lattic
     position = _points(hits, centre, rotation, spacing)
     colour = np.ones((len(hits), 3))
     normal = np.zeros((len(hits), 3))
+    sides = np.array([outward(mesh) for mesh in meshes])
     for m, mesh in enumerate(meshes):
         sel = hits.mesh == m
         if not sel.any():
@@ -141,9 +144,34 @@ def surface_points(meshes, centre, rotation, spacing: float, *, layers=3, lattic
         colour[sel] = c if c.shape[1] == 3 else np.repeat(c.mean(1, keepdims=True), 3, 1)
         v = np.asarray(mesh.vertices, np.float64)[corners]
         n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
-        normal[sel] = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        normal[sel] = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300) * \
+            (sides[m] or 1.0)
     key = emitter_keys(hits.mesh, hits.triangle, hits.kx, hits.ky, lattice)
-    return position, np.clip(colour, 0, None), normal, np.stack([hits.kx, hits.ky], 1), key
+    return (position, np.clip(colour, 0, None), normal, np.stack([hits.kx, hits.ky], 1), key,
+            sides[hits.mesh] != 0 if len(hits) else np.zeros(0, bool))
+
+
+def outward(mesh) -> float:
+    """+1 where a closed ``mesh``'s triangles wind (counter-clockwise) with their normals out of
+    it, -1 where into it (the sign of its signed volume), 0 where it is not closed: an edge
+    not shared by exactly two triangles (vertices within 1e-9 of its size taken as one, the
+    triangles that leaves edgeless dropped), a card or an open shell, with no outside."""
+    v = np.asarray(mesh.vertices, np.float64)
+    tri = np.asarray(mesh.triangles, np.int64)
+    if len(tri) == 0:
+        return 0.0
+    # a seam's split vertices made one, and a pole's (within a billionth of the mesh's size)
+    tol = 1e-9 * max(float(np.ptp(v, axis=0).max()), 1e-300)
+    _, same = np.unique(np.round(v / tol), axis=0, return_inverse=True)
+    t = same.reshape(-1)[tri]
+    t = t[(t[:, 0] != t[:, 1]) & (t[:, 1] != t[:, 2]) & (t[:, 2] != t[:, 0])]  # a pole's slivers
+    edges = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
+    _, shared = np.unique(edges, axis=0, return_counts=True)
+    if (shared != 2).any():
+        return 0.0
+    a, b, c = (v[tri[:, i]] for i in range(3))
+    volume = np.einsum("ij,ij->", a, np.cross(b, c)) / 6
+    return float(np.sign(volume))
 
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)  # SplitMix64's increment (2⁶⁴/φ)

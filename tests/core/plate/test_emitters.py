@@ -3,9 +3,10 @@ lie on the surfaces, on a lattice of directions from the zone's centre ``spacing
 direction cosine, with their surface's colour."""
 
 import numpy as np
+import plate_scene as ps
 import pytest
 
-from holo_core.plate.emitters import zone_emitters
+from holo_core.plate.emitters import outward, zone_emitters
 from holo_core.scene.mesh import Mesh
 from holo_core.scene.plate import ViewingZone
 
@@ -101,3 +102,18 @@ def test_random_phases_follow_the_emitters_not_their_count():
     assert p.min() >= 0 and p.max() < 2 * np.pi
     assert abs(np.exp(1j * p).mean()) < 4 / np.sqrt(len(p)), abs(np.exp(1j * p).mean())
     assert not np.array_equal(p, _phases(whole, 8, None))  # another seed, other phases
+
+
+def test_a_closed_meshs_outside_is_found_from_its_winding_and_a_card_has_none():
+    """The cube and the UV sphere (split seams, a pole's slivers) are closed: +1 wound
+    outward, -1 with every triangle's winding reversed; a square card and the cube less one
+    face are not closed (0)."""
+    cube, sphere = ps.cube(), ps.sphere()
+    flipped = lambda m: Mesh(vertices=m.vertices, triangles=m.triangles[:, ::-1],  # noqa: E731
+                             colours=m.colours)
+    assert outward(cube) == -outward(flipped(cube)) != 0
+    assert outward(sphere) == -outward(flipped(sphere)) != 0
+    assert outward(square(0.04, -0.3, (1, 1, 1))) == 0
+    open_box = Mesh(vertices=cube.vertices, triangles=cube.triangles[2:],
+                    colours=cube.colours)
+    assert outward(open_box) == 0
