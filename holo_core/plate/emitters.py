@@ -119,14 +119,16 @@ def zone_emitters(meshes, zone: ViewingZone, spacing: float, *, layers=3,
                     visibility=seen[keep], grid=offsets, key=key[keep])
 
 
-def surface_points(meshes, centre, rotation, spacing: float, *, layers=3, lattice=0):
+def surface_points(meshes, centre, rotation, spacing: float, *, layers=3, lattice=0,
+                   sides=None):
     """(position (n, 3) [m], linear colour (n, 3) >= 0, unit normal (n, 3), bin (kx, ky) (n, 2),
     key (n,) uint64, closed (n,) bool) of the crossings of the rays of a pupil at ``centre``
     (3,) [m] with axes ``rotation``, bins ``spacing`` apart in direction cosine, with
     ``meshes``, up to ``layers`` deep (all in one frame, the meshes'); ``key`` names each
     crossing (:func:`emitter_keys`, of the ``lattice``-th pupil where several find one set).
-    On a closed mesh (``closed``) the normal points out of it (:func:`outward`); elsewhere it
-    follows the triangle's winding, and either side may be the one a pupil sees."""
+    ``sides``: each mesh's :func:`outward` (None: none taken as closed); on a closed mesh
+    (``closed``) the normal points out of it, elsewhere it follows the triangle's winding and
+    either side may be the one a pupil sees."""
     every = np.concatenate([m.vertices for m in meshes])
     centre = np.asarray(centre, np.float64)
     shape = bins_covering(every, centre, rotation, spacing)
@@ -134,7 +136,7 @@ def surface_points(meshes, centre, rotation, spacing: float, *, layers=3, lattic
     position = _points(hits, centre, rotation, spacing)
     colour = np.ones((len(hits), 3))
     normal = np.zeros((len(hits), 3))
-    sides = np.array([outward(mesh) for mesh in meshes])
+    sides = np.zeros(len(meshes)) if sides is None else np.asarray(sides, np.float64)
     for m, mesh in enumerate(meshes):
         sel = hits.mesh == m
         if not sel.any():

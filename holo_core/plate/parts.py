@@ -8,10 +8,11 @@ viewed from the part whose zone holds its pupil: :func:`holo_core.plate.view.ren
   surfaces, up to three deep; a surface point is kept from the lattice that sees it most
   face-on (a closed surface from its outside: one behind it finds it through the object, if
   its layers reach so far), so every surface holds emitters of one lattice, one resolved
-  spot apart as seen from there. From another zone a surface then holds cos(slant from the lattice)/cos(slant
-  from the zone) emitters a resolved spot; each part weighs their amplitudes by the root of
-  its inverse, so that the surfaces' coverage (the views' alpha) stays one (without it the
-  silhouettes of a 30° orbit's frames swelled: IoU 0.956-0.967 against 0.975-0.980).
+  spot apart as seen from there. From another zone a surface then holds cos(slant from the
+  lattice)/cos(slant from the zone) emitters a resolved spot; each part weighs their
+  amplitudes by the root of its inverse, so that the surfaces' coverage (the views' alpha)
+  stays one (without it the silhouettes of a 30° orbit's frames swelled: IoU 0.956-0.967
+  against 0.975-0.980).
 - Every part reads the same emitters, their phases drawn once from the seed and shifted by
   the same looks' codes, so a pupil in the overlap of two parts receives the same wave from
   either (but for the weights, which differ little between neighbouring parts).
@@ -36,7 +37,7 @@ from ..io.plate_set import read_plate_set, recorded_parts, set_folder, write_man
 from ..scene.mesh import Mesh
 from ..scene.plate_set import PathPart, PlateSet
 from ..validate import InputError
-from .emitters import Emitters, grid_points, surface_points, visibility, zone_frame
+from .emitters import Emitters, grid_points, outward, surface_points, visibility, zone_frame
 from .plan import LAYERS
 from .recording import PlannedPlate, look_code, plate_plan, prepare_plate
 
@@ -185,10 +186,10 @@ def set_emitters(meshes, parts, plans, spacing: float) -> Iterator[Emitters]:
     every = np.concatenate([x.vertices for x in world])
     lattices = [poses[k] for k in lattice_parts([c for c, _ in poses], every.mean(0))]
     centres = np.array([c for c, _ in lattices])
-    points = []
+    points, sides = [], [outward(m) for m in world]  # each mesh's outside, found once
     for k, (centre, rotation) in enumerate(lattices):
         position, colour, normal, cell, key, closed = surface_points(
-            world, centre, rotation, spacing, layers=LAYERS, lattice=k)
+            world, centre, rotation, spacing, layers=LAYERS, lattice=k, sides=sides)
         towards = centres[None, :, :] - position[:, None, :]
         cosine = np.einsum("nj,npj->np", normal, towards) / np.linalg.norm(towards, axis=2)
         facing = np.abs(cosine)
