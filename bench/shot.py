@@ -58,7 +58,7 @@ from holo_core.plate.plan import plan, plan_view  # noqa: E402
 from holo_core.plate.recording import plate_plan  # noqa: E402
 from holo_core.plate.view import render_view  # noqa: E402
 from holo_core.scene.camera import Camera, look_at  # noqa: E402
-from holo_core.scene.plate import Plate, ViewingZone  # noqa: E402
+from holo_core.scene.plate import SHOT_ZONE_MARGIN, Plate, ViewingZone  # noqa: E402
 
 DISTANCE = 1.75   # [m] camera to plate, plate to the objects' middle
 TARGET = np.array([0.0, 0.0, -DISTANCE])
@@ -160,7 +160,8 @@ def main():
     p.add_argument("--scale", type=float, default=1.0, help="image size, of 1280x720 (1)")
     p.add_argument("--looks", type=int, default=2, help="coded looks recorded (2)")
     p.add_argument("--dolly", type=float, default=0.1, help="the camera's move [m] (0.1)")
-    p.add_argument("--margin", type=float, default=0.01, help="zone margin [m] (0.01)")
+    p.add_argument("--margin", type=float, default=SHOT_ZONE_MARGIN,
+                   help=f"zone margin [m] ({SHOT_ZONE_MARGIN}: Fit Zone to Shot's)")
     p.add_argument("--supersample", type=int, default=2,
                    help="fine pixels per pixel of the views (2, the plan's reference view)")
     p.add_argument("--repeat", type=int, default=3,
@@ -270,7 +271,7 @@ def set_route(args) -> None:
     every = np.concatenate([m.vertices for m in meshes])
     print(f"CPU: {cpu()}; load {os.getloadavg()[0]:.1f} (1 min) at the start")
     parts = parts_along(path, [every.min(0), every.max(0)], distance=DISTANCE,
-                        stretch=args.stretch)
+                        stretch=args.stretch, margin=args.margin)
     plans = [plate_plan(meshes, plate=part.plate).plan for part in parts]
     samples = sum(q.samples for q in plans)
     print(f"{move}, {cams[0].resolution[0]}x{cams[0].resolution[1]}: {len(parts)} parts of "

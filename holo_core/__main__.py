@@ -273,7 +273,7 @@ def _camera_and_zone(args, bounds, eye, resolution):
     import numpy as np
 
     from .scene.camera import Camera, look_at
-    from .scene.plate import ViewingZone
+    from .scene.plate import SHOT_ZONE_MARGIN, ViewingZone
     eye = np.array(args.camera if args.camera else eye, np.float64)
     if eye[2] <= 0:
         raise ValueError(f"--camera must be in front of the plate (z > 0 in its frame: the plate "
@@ -290,7 +290,7 @@ def _camera_and_zone(args, bounds, eye, resolution):
                                 pixel=pixel)
     dolly = args.dolly or 0.0
     path = [eye + (x, 0.0, 0.0) for x in (-dolly / 2, dolly / 2)]
-    margin = 0.01 if args.zone_margin is None else args.zone_margin
+    margin = SHOT_ZONE_MARGIN if args.zone_margin is None else args.zone_margin
     return cam, ViewingZone.fit(path, pupil, margin, pixel)
 
 
@@ -308,7 +308,7 @@ def _view_options(p, *, plate_size=None, point_sums=False):
                                       "objects to the zone)" + only)
     p.add_argument("--zone-margin", type=metres, default=None,
                    help="the viewing zone reaches this far beyond the camera's pupil [m] "
-                        "(0.01)" + only)
+                        "(0.005)" + only)
     p.add_argument("--dolly", type=metres, default=None,
                    help="the camera moves this far along x, centred on --camera [m] (0)" + only)
     p.add_argument("--camera", type=FINITE, nargs=3, metavar=("X", "Y", "Z"),

@@ -15,6 +15,8 @@ from bpy.props import (
     StringProperty,
 )
 
+from holo_core.scene.plate import SHOT_ZONE_MARGIN
+
 from ..blender.objects import raster_visibility
 from ..export.display import display_from_object
 from ..export.job import EXPOSURE_STOPS
@@ -204,11 +206,13 @@ class HoloObjectSettings(bpy.types.PropertyGroup):
     imported: BoolProperty(name="Imported", default=False, options={"HIDDEN"},
                            description="The hologram was imported (File > Import > Hologram): "
                                        "it is viewed as it is, never recorded")
-    zone_margin: FloatProperty(name="Zone Margin", default=0.05, min=0.0, soft_max=1.0,
+    zone_margin: FloatProperty(name="Zone Margin", default=SHOT_ZONE_MARGIN, min=0.0, soft_max=1.0,
                                subtype="DISTANCE", update=_zone_changed,
                                description="How far the viewing zone reaches beyond the "
                                            "camera's pupil: cameras inside it see the plate "
-                                           "sharp and complete, and never record it again")
+                                           "sharp and complete, and never record it again. "
+                                           "The recording grows as the zone's width squared: "
+                                           "raise it to look around the shot, at that cost")
     part_length: FloatProperty(name="Part Length", default=0.1, min=0.001, soft_max=1.0,
                                subtype="DISTANCE",
                                description="How much of the camera's path one part of the "

@@ -59,7 +59,7 @@ class KeptPlates:
                           if k is not None and not isinstance(h.object_wave, TiledWave)}
 
     def read_set(self, folder):
-        """The plate set in ``folder`` (:func:`read_plate_set`, every file's digest checked):
+        """The plate set in ``folder`` (:func:`read_plate_set`: each part's digests checked when it is read):
         held where its manifest is unchanged since, else read (the part it held kept
         with it)."""
         name = _identity(Path(folder) / MANIFEST)

@@ -5,10 +5,13 @@ size and BLAKE2b digest.
 
 Every file is written through a temporary one and a rename, the manifest last, so a folder
 holds either the set before or the set after. Reading checks every part against the
-manifest before a sample is used: a part missing, damaged (its bytes not the digest's) or
-foreign (a valid hologram of another recording, or of another plate than the manifest's)
+manifest before a sample of it is used: a part missing, damaged (its bytes not the digest's)
+or foreign (a valid hologram of another recording, or of another plate than the manifest's)
 is a :class:`~holo_core.io.hologram.HologramFileError` naming the part and its file; never
-read as zeros.
+read as zeros. Opening a set checks what costs nothing (every file there, of the manifest's
+size); a part's bytes are checked against their digest when the part is first read, so a
+frame viewed from one part reads and hashes that part alone (hashing a 1 m dolly's 22 GiB
+took about 40 s a frame on two cores, its view 1-2 s).
 """
 
 from __future__ import annotations
@@ -230,7 +233,8 @@ def recorded_parts(folder, recording: str, count: int, *, overwrite=False) -> di
 
 
 def read_plate_set(folder) -> PlateSet:
-    """Read the plate set in a folder, every part checked against the manifest.
+    """Open the plate set in a folder: every part's files there as the manifest lists them,
+    each part's bytes checked against their digests when it is first read.
 
     Parameters
     ----------
@@ -247,7 +251,9 @@ def read_plate_set(folder) -> PlateSet:
     ------
     HologramFileError
         (an :class:`InputError`) Where ``folder`` is no plate set's folder, the manifest is
-        damaged, or a part's file does not match it.
+        damaged, or a part's file is missing or not of its listed size; when a part is read
+        (:meth:`~holo_core.scene.plate_set.PlateSet.part_looks`), where its bytes or its
+        plate are not the manifest's.
 
     Examples
     --------
@@ -295,8 +301,8 @@ def read_plate_set(folder) -> PlateSet:
             frames = tuple(entry.get("frames"))
         except (TypeError, ValueError):
             field.fail(f"{at}plate_to_world", "a 4x4 pose, its stretch_m and frames")
-        for look, f in enumerate(files):
-            _check_file(folder, k, look, f, field, at)
+        for look, f in enumerate(files):  # their bytes when the part is read (_load_part)
+            _listed_file(folder, k, look, f, field, at)
         z = field.check(entry, "zone", dict, "the part's viewing zone", at)
         try:
             zone = ViewingZone(centre=z.get("centre_m"), half_extents=z.get("half_extents_m"),
@@ -316,14 +322,22 @@ def read_plate_set(folder) -> PlateSet:
 
 
 def _check_file(folder: Path, k: int, look: int, entry, field, at) -> None:
-    """Part ``k``'s look ``look`` as its manifest ``entry`` names it: refused by name when
-    missing, damaged or foreign (its bytes read once, for their digest)."""
+    """Part ``k``'s look ``look`` as its manifest ``entry`` names it, its bytes included:
+    refused by name when missing, damaged or foreign (:func:`_listed_file`,
+    :func:`_check_bytes`)."""
+    _check_bytes(folder, k, entry, _listed_file(folder, k, look, entry, field, at))
+
+
+def _listed_file(folder: Path, k: int, look: int, entry, field, at) -> Path:
+    """The path of part ``k``'s look ``look`` as its manifest ``entry`` names it, its fields
+    checked and the file there with the manifest's size (no byte read); refused by name
+    otherwise."""
     where = f"{at}files[{look}]."
     field.value(entry, dict, "an object", where[:-1])
     name = field.check(entry, "name", str, "a file name", where)
-    size = field.check(entry, "bytes", int, "the file's size", where)
-    digest = field.check(entry, "blake2b", str, "the file's digest", where)
-    described = field.check(entry, "metadata", str, "its metadata's digest", where)
+    field.check(entry, "bytes", int, "the file's size", where)
+    field.check(entry, "blake2b", str, "the file's digest", where)
+    field.check(entry, "metadata", str, "its metadata's digest", where)
     if Path(name).name != name or name in ("", ".", ".."):
         field.fail(f"{where}name", "a file name inside the set's folder")
     path = folder / name
@@ -332,29 +346,45 @@ def _check_file(folder: Path, k: int, look: int, entry, field, at) -> None:
     if not path.exists():
         raise HologramFileError(f"{folder}: part {k} ({name}) is missing: the set is "
                                 f"incomplete; record it again")
-    if path.stat().st_size != size or file_digest(path) != digest:
-        try:
-            h = read_hologram(path)
-        except HologramFileError:
-            h = None
-        if h is not None and metadata_digest(h) != described:
-            raise HologramFileError(f"{folder}: part {k} ({name}) is foreign: a hologram, but "
-                                    f"not the one this set recorded (its description differs "
-                                    f"from the manifest's); record the set again")
-        raise HologramFileError(f"{folder}: part {k} ({name}) is damaged: its bytes do not "
-                                f"match the manifest's digest; record the set again")
+    if path.stat().st_size != entry["bytes"]:
+        _refuse(folder, k, entry, path)
+    return path
+
+
+def _check_bytes(folder: Path, k: int, entry, path: Path) -> None:
+    """Part ``k``'s file ``path`` (a checked manifest ``entry``'s) refused by name unless its
+    bytes are the manifest's digest (read once)."""
+    if file_digest(path) != entry["blake2b"]:
+        _refuse(folder, k, entry, path)
+
+
+def _refuse(folder: Path, k: int, entry, path: Path):
+    """The refusal of part ``k``'s file ``path``, which does not match its manifest ``entry``:
+    foreign where it is a hologram of another description, else damaged."""
+    try:
+        h = read_hologram(path)
+    except HologramFileError:
+        h = None
+    name = entry["name"]
+    if h is not None and metadata_digest(h) != entry["metadata"]:
+        raise HologramFileError(f"{folder}: part {k} ({name}) is foreign: a hologram, but "
+                                f"not the one this set recorded (its description differs "
+                                f"from the manifest's); record the set again")
+    raise HologramFileError(f"{folder}: part {k} ({name}) is damaged: its bytes do not "
+                            f"match the manifest's digest; record the set again")
 
 
 def _load_part(folder: Path, parts, files, k: int) -> tuple:
     """Part ``k``'s looks read from ``folder``, each checked to be the hologram the manifest
-    names (its size and description; its bytes were checked when the set was opened) and
-    to lie on its part's plate."""
+    names (its size, its bytes' digest and its description) and to lie on its part's
+    plate."""
     looks = []
     for entry in files[k]:
         path = folder / entry["name"]
         if not path.is_file() or path.stat().st_size != entry["bytes"]:
             raise HologramFileError(f"{folder}: part {k} ({entry['name']}) changed or went "
                                     f"missing since the set was opened")
+        _check_bytes(folder, k, entry, path)
         h = read_hologram(path)
         if metadata_digest(h) != entry["metadata"] or not np.allclose(
                 np.asarray(h.plate), parts[k].plate.matrix_world, atol=1e-12):

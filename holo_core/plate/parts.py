@@ -26,13 +26,16 @@ viewed from the part whose zone holds its pupil: :func:`holo_core.plate.view.ren
 from __future__ import annotations
 
 import hashlib
+import itertools
 import logging
 import math
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import nullcontext
 
 import numpy as np
 
-from .. import jobs, validate
+from .. import jobs, memory, validate
 from ..io.plate_set import read_plate_set, recorded_parts, set_folder, write_manifest, write_part
 from ..scene.mesh import Mesh
 from ..scene.plate_set import PathPart, PlateSet
@@ -143,22 +146,48 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
             return read_plate_set(folder)
     shared = set_emitters(meshes, parts, plans, spacing)
     codes = tuple(look_code(k, looks) for k in range(looks))
-    for k, (part, em) in enumerate(zip(parts, shared)):
-        if recorded[k] is not None:
-            continue  # written by a recording that stopped
-        done = jobs.scaled(progress, k / len(parts), (k + 1) / len(parts))
-        recording = prepare_plate(plans[k], codes=codes, seed=seed, emitters=em)
-        held = tuple(recording.record(done))
-        log.info("part %d of %d: %d emitters of the set's %d, %s", k + 1, len(parts), len(em),
-                 em.count, recording.plan.describe())
-        if folder is None:
-            recorded[k] = held
-            continue
+
+    def write(k, held):  # a part's files, then the manifest naming every part written so far
         recorded[k] = write_part(folder, k, held)
         write_manifest(folder, parts, recorded, seed=seed, recording=digest, looks=looks)
+
+    # a part is written while the next is recorded where both fit the memory: the writes wait
+    # on the disk (1 GiB a part took 3-6 s, a sixth of a part's time), the sum on the CPU
+    pending = None
+    with ThreadPoolExecutor(1, thread_name_prefix="holo-set-writer") if folder is not None \
+            and _overlap_fits(plans, budget[0]) else nullcontext() as writer:
+        for k, (part, em) in enumerate(zip(parts, shared)):
+            if recorded[k] is not None:
+                continue  # written by a recording that stopped
+            done = jobs.scaled(progress, k / len(parts), (k + 1) / len(parts))
+            recording = prepare_plate(plans[k], codes=codes, seed=seed, emitters=em)
+            held = tuple(recording.record(done))
+            log.info("part %d of %d: %d emitters of the set's %d, %s", k + 1, len(parts),
+                     len(em), em.count, recording.plan.describe())
+            if folder is None:
+                recorded[k] = held
+            elif writer is None:
+                write(k, held)
+            else:  # the part before written first: the manifest grows in order
+                if pending is not None:
+                    pending.result()
+                pending = writer.submit(write, k, held)
+            del held, recording  # a part's samples let go as soon as they are written
+        if pending is not None:  # a failed write raises here; a stopped recording's part
+            pending.result()      # being written finishes as the block ends
     if folder is None:
         return PlateSet(parts=parts, looks=tuple(recorded), seed=seed, recording=digest)
     return read_plate_set(folder)
+
+
+def _overlap_fits(plans, budget) -> bool:
+    """Whether a part's samples, held while they are written, and the next part's recording
+    fit the host's share of its memory and the memory ``budget`` [bytes] (None: no limit)."""
+    need = [(p.plan.memory_bytes(len(p.channels) * p.plan.looks),
+             p.plan.disk_bytes(len(p.channels))) for p in plans]
+    most = max((held + recording for (_, held), (recording, _) in itertools.pairwise(need)),
+               default=0.0)
+    return most <= memory.host_share(budget)
 
 
 def _part_plan(meshes, k: int, part: PathPart, *, looks, depth, memory) -> PlannedPlate:

@@ -25,18 +25,17 @@ import numpy as np
 from .. import validate
 from ..memory import gib
 from ..scene.camera import Camera
-from ..scene.plate import Plate, ViewingZone, box_corners
+from ..scene.plate import SHOT_ZONE_MARGIN, Plate, ViewingZone, box_corners
 from ..scene.plate_set import PathPart, PlateSet, reach_beyond
 from ..validate import InputError, shown
 from .plan import CHANNELS, LOOKS, plan
 
 DEFAULT_STRETCH = 0.1   # [m] of path a part holds (the 10 cm dolly one plate serves well)
-DEFAULT_MARGIN = 0.01   # [m] each part's zone reaches beyond the pupils of its stretch
 WINDOW_PAD = 0.02       # fraction of the window added on each side of a part's plate
 
 
 def parts_along(cameras, bounds, *, distance: float, stretch: float = DEFAULT_STRETCH,
-                margin: float = DEFAULT_MARGIN) -> tuple[PathPart, ...]:
+                margin: float = SHOT_ZONE_MARGIN) -> tuple[PathPart, ...]:
     """Plan the parts of a plate serving ``cameras`` (one a frame, in order along the path).
 
     Parameters
@@ -52,7 +51,8 @@ def parts_along(cameras, bounds, *, distance: float, stretch: float = DEFAULT_ST
         [m] of path length a part's zone is fitted to; parts overlap by a pupil, so a path
         of length L takes about (L − D)/(stretch − D) parts.
     margin : float
-        [m] each zone reaches beyond its pupils.
+        [m] each zone reaches beyond its pupils (the frames' own positions need none; each
+        millimetre widens the zone, whose recording grows as its width squared).
 
     Returns
     -------
@@ -231,8 +231,9 @@ class SetPlan:
         return max(p.memory_bytes(channels * p.looks) for p in self.plans)
 
     def record_seconds(self, channels=CHANNELS) -> float:
-        """Estimated seconds to record every part on the development machine (the parts'
-        sums; the emitters' search and visibility are not counted)."""
+        """Seconds of every part's zone sum at the development machine's idle rate (the
+        emitters' search and visibility, the files and this machine's speed not counted;
+        ``bench/results/shot_set_*.json`` holds what whole recordings took)."""
         return sum(p.record_seconds(channels) for p in self.plans)
 
     def describe(self) -> str:
@@ -242,8 +243,10 @@ class SetPlan:
                 f"{self.samples / 1e6:.3g} Mpx in all (the largest {widest.shape[1]} x "
                 f"{widest.shape[0]}), {self.plans[0].looks} look(s): "
                 f"{gib(self.disk_bytes())} on disk, {gib(self.memory_bytes())} of memory "
-                f"while recording (a part at a time), about {self.record_seconds():.0f} s to "
-                f"record here; a view reads one part")
+                f"while recording (a part at a time); its zone sums about "
+                f"{self.record_seconds():.0f} s at the development machine's rate (the "
+                f"emitters, the files and this machine's speed not counted); a view reads one "
+                f"part")
 
 
 def plan_parts(parts, points, *, looks: int = LOOKS) -> SetPlan:

@@ -63,20 +63,22 @@ def test_a_missing_damaged_or_foreign_part_is_refused_by_name(tmp_path, rng):
         read_plate_set(folder)
     fresh()
     data = bytearray((folder / "part000.look0.exr").read_bytes())
-    data[len(data) // 2] ^= 0xFF  # one sample's byte: the file still parses
+    data[len(data) // 2] ^= 0xFF  # one sample's byte: the file still parses, its size kept
     (folder / "part000.look0.exr").write_bytes(bytes(data))
+    opened = read_plate_set(folder)  # its bytes are checked when the part is read ...
+    assert len(opened.part_looks(1)) == 2  # ... and the other part serves its frames
     with pytest.raises(HologramFileError, match=r"part 0 \(part000.look0.exr\) is damaged"):
-        read_plate_set(folder)
+        opened.part_looks(0)
     fresh()
     (folder / "part000.look1.exr").write_bytes(b"\x76\x2f\x31\x01" + bytes(100))
     with pytest.raises(HologramFileError, match=r"part 0 \(part000.look1.exr\) is damaged"):
-        read_plate_set(folder)
+        read_plate_set(folder)  # not its listed size: refused as the set is opened
     fresh()
     other = tmp_path / "other"  # another set's part in its place
     write_plate_set(other, small_set(rng, shift=0.3))
     shutil.copy(other / "part001.look0.exr", folder / "part001.look0.exr")
     with pytest.raises(HologramFileError, match=r"part 1 \(part001.look0.exr\) is foreign"):
-        read_plate_set(folder)
+        read_plate_set(folder).part_looks(1)
     # ... and its digest written into this manifest: its plate is not the part's
     manifest = json.loads((folder / MANIFEST).read_text())
     manifest["parts"][1]["files"][0] = json.loads((other / MANIFEST).read_text())[

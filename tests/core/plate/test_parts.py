@@ -140,6 +140,34 @@ def test_a_second_recording_records_nothing_and_a_stopped_one_resumes(dolly_set,
     assert other.recording != dolly_set.recording
 
 
+def test_a_recording_stopped_while_a_part_is_written_keeps_that_part(tmp_path, dolly_set):
+    """Each part is written while the next is recorded: stopped during part 1's recording,
+    part 0's files (being written then) are finished and named in the manifest, and the next
+    recording records only the rest, the set then equal to the one recorded in memory."""
+    parts = parts_along(cameras(), box(), distance=0.32, stretch=0.03, margin=0.005)
+    folder = tmp_path / "set"
+
+    class Stopped(Exception):
+        pass
+
+    def stop(done):
+        if done > 1.5 / len(parts):
+            raise Stopped
+
+    with pytest.raises(Stopped):
+        record_set(ps.meshes(), parts, looks=2, seed=3, folder=folder, progress=stop)
+    listed = json.loads((folder / MANIFEST).read_text())["parts"]
+    assert [bool(e["files"]) for e in listed] == [True] + [False] * (len(parts) - 1)
+    assert sorted(f.name for f in folder.iterdir()) == sorted([
+        MANIFEST, "part000.look0.exr", "part000.look1.exr"])  # no temporary file left
+    written = {f.name: f.stat().st_mtime_ns for f in folder.glob("*.exr")}
+    resumed = record_set(ps.meshes(), parts, looks=2, seed=3, folder=folder)
+    assert all(folder.joinpath(n).stat().st_mtime_ns == t for n, t in written.items())
+    for k in range(len(resumed)):
+        for a, b in zip(resumed.part_looks(k), dolly_set.part_looks(k)):
+            assert np.array_equal(a.object_wave, b.object_wave)
+
+
 def test_a_frame_outside_every_part_warns_once_or_fails(dolly_set):
     """A camera beyond the path's end: one OutsideZoneWarning naming the frame and the
     nearest part (render_view's own is not repeated), or with outside='fail' an error."""
