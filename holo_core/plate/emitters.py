@@ -126,7 +126,7 @@ def surface_points(meshes, centre, rotation, spacing: float, *, layers=3, lattic
     (3,) [m] with axes ``rotation``, bins ``spacing`` apart in direction cosine, with
     ``meshes``, up to ``layers`` deep (all in one frame, the meshes'); ``key`` names each
     crossing (:func:`emitter_keys`, of the ``lattice``-th pupil where several find one set).
-    ``sides``: each mesh's :func:`outward` (None: none taken as closed); on a closed mesh
+    ``sides``: each mesh's :func:`~holo_core.scene.mesh.outward` (None: none taken as closed); on a closed mesh
     (``closed``) the normal points out of it, elsewhere it follows the triangle's winding and
     either side may be the one a pupil sees."""
     every = np.concatenate([m.vertices for m in meshes])
@@ -151,29 +151,6 @@ def surface_points(meshes, centre, rotation, spacing: float, *, layers=3, lattic
     key = emitter_keys(hits.mesh, hits.triangle, hits.kx, hits.ky, lattice)
     return (position, np.clip(colour, 0, None), normal, np.stack([hits.kx, hits.ky], 1), key,
             sides[hits.mesh] != 0 if len(hits) else np.zeros(0, bool))
-
-
-def outward(mesh) -> float:
-    """+1 where a closed ``mesh``'s triangles wind (counter-clockwise) with their normals out of
-    it, -1 where into it (the sign of its signed volume), 0 where it is not closed: an edge
-    not shared by exactly two triangles (vertices within 1e-9 of its size taken as one, the
-    triangles that leaves edgeless dropped), a card or an open shell, with no outside."""
-    v = np.asarray(mesh.vertices, np.float64)
-    tri = np.asarray(mesh.triangles, np.int64)
-    if len(tri) == 0:
-        return 0.0
-    # a seam's split vertices made one, and a pole's (within a billionth of the mesh's size)
-    tol = 1e-9 * max(float(np.ptp(v, axis=0).max()), 1e-300)
-    _, same = np.unique(np.round(v / tol), axis=0, return_inverse=True)
-    t = same.reshape(-1)[tri]
-    t = t[(t[:, 0] != t[:, 1]) & (t[:, 1] != t[:, 2]) & (t[:, 2] != t[:, 0])]  # a pole's slivers
-    edges = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
-    _, shared = np.unique(edges, axis=0, return_counts=True)
-    if (shared != 2).any():
-        return 0.0
-    a, b, c = (v[tri[:, i]] for i in range(3))
-    volume = np.einsum("ij,ij->", a, np.cross(b, c)) / 6
-    return float(np.sign(volume))
 
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)  # SplitMix64's increment (2⁶⁴/φ)

@@ -37,10 +37,10 @@ import numpy as np
 
 from .. import jobs, memory, validate
 from ..io.plate_set import read_plate_set, recorded_parts, set_folder, write_manifest, write_part
-from ..scene.mesh import Mesh
+from ..scene.mesh import Mesh, outward
 from ..scene.plate_set import PathPart, PlateSet
 from ..validate import InputError
-from .emitters import Emitters, grid_points, outward, surface_points, visibility, zone_frame
+from .emitters import Emitters, grid_points, surface_points, visibility, zone_frame
 from .plan import LAYERS
 from .recording import PlannedPlate, look_code, plate_plan, prepare_plate
 

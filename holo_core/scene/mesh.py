@@ -280,6 +280,29 @@ def facing(eye, positions, normals) -> np.ndarray:
     return np.abs(np.einsum("nd,nd->n", normals, ray)) / np.linalg.norm(ray, axis=1)
 
 
+def outward(mesh) -> float:
+    """+1 where a closed ``mesh``'s triangles wind (counter-clockwise) with their normals out of
+    it, -1 where into it (the sign of its signed volume), 0 where it is not closed: an edge
+    not shared by exactly two triangles (vertices within 1e-9 of its size taken as one, the
+    triangles that leaves edgeless dropped), a card or an open shell, with no outside."""
+    v = np.asarray(mesh.vertices, np.float64)
+    tri = np.asarray(mesh.triangles, np.int64)
+    if len(tri) == 0:
+        return 0.0
+    # a seam's split vertices made one, and a pole's (within a billionth of the mesh's size)
+    tol = 1e-9 * max(float(np.ptp(v, axis=0).max()), 1e-300)
+    _, same = np.unique(np.round(v / tol), axis=0, return_inverse=True)
+    t = same.reshape(-1)[tri]
+    t = t[(t[:, 0] != t[:, 1]) & (t[:, 1] != t[:, 2]) & (t[:, 2] != t[:, 0])]  # a pole's slivers
+    edges = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
+    _, shared = np.unique(edges, axis=0, return_counts=True)
+    if (shared != 2).any():
+        return 0.0
+    a, b, c = (v[tri[:, i]] for i in range(3))
+    volume = np.einsum("ij,ij->", a, np.cross(b, c)) / 6
+    return float(np.sign(volume))
+
+
 def surface_colour(mesh: Mesh, corners, bary, channels):
     if mesh.texture is not None and mesh.uvs is not None:
         uv = np.einsum("nk,nkd->nd", bary, mesh.uvs[corners])

@@ -6,8 +6,8 @@ import numpy as np
 import plate_scene as ps
 import pytest
 
-from holo_core.plate.emitters import outward, zone_emitters
-from holo_core.scene.mesh import Mesh
+from holo_core.plate.emitters import zone_emitters
+from holo_core.scene.mesh import Mesh, outward
 from holo_core.scene.plate import ViewingZone
 
 ZONE = ViewingZone(centre=(0.0, 0.0, 0.3), half_extents=(0.03, 0.03, 0.0), pupil=0.01)
