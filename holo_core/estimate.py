@@ -48,6 +48,10 @@ from pathlib import Path
 log = logging.getLogger(__name__)
 
 FILE = "estimates.json"
+DIGEST_BYTES_PER_SECOND = 6.0e8  # BLAKE2b on one core of the 2-core Zen 4 EPYC (623 MB/s): a
+                                 # set's files are hashed as written, beside the next part's sum
+PART_SECONDS = 1.5  # a set's part beyond its work: its plan, buffers and kernels' set-up, its
+                    # files' sync and the manifest rewritten (the 90° orbit's 64 small parts)
 STAMP = "warm-{kind}-{key}.stamp"
 KINDS = ("plate", "camera")
 
@@ -99,7 +103,7 @@ class Calibration:
 # load 1.6-11, each time over its load's slowdown) rounded to the slow side; Cycles' radiance
 # from bench/estimates.py's demo at 640x360 (5.9-7.1 s at load 16-17: 0.6-0.8 s idle)
 DEFAULT = Calibration(
-    pairs_per_second=1.0e9, zone_sum_fixed=0.05, emitter_seconds=4.0e-6, emitters_fixed=0.05,
+    pairs_per_second=2.0e9, zone_sum_fixed=0.05, emitter_seconds=6.0e-6, emitters_fixed=0.05,
     view_factor=7.0, view_fixed=0.1, write_bytes_per_second=3.0e8,
     camera_pixel_seconds=2.0e-7, camera_look_seconds=7.0e-7, camera_fixed=0.1,
     exact_pixel_seconds=1.6e-6, exact_fixed=0.1,
@@ -312,6 +316,27 @@ def plate(p, view=None, *, record=True, channels=4, device=None, cache_dir=None,
         work.append(("view", cal.view_fixed + view.seconds * cal.view_factor))
     return _loaded(replace(_setup("plate", cal, calibrated, device, cache_dir, warm),
                            work=tuple(work)), load_average)
+
+
+def plate_set(s, *, channels=4, device=None, cache_dir=None, warm=None, calibration=None,
+              load_average=None) -> Estimate:
+    """The estimate of recording a plate set from its plan ``s`` (:class:`~holo_core.plate.
+    path.SetPlan`) in a new worker (``warm``, ``calibration``, ``load_average``: as
+    :func:`plate`'s): the emitters found once a lattice (``s.lattices``), each part's own
+    set-up (``PART_SECONDS``), its emitters' visibility, zone sum and files, a part's files
+    written while the next part is summed (the part of the writing that outlasts the next sum
+    counted; the last part's whole), their digest on the CPU beside the sum."""
+    cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
+    found = [cal.emitters_fixed + p.emitters * cal.emitter_seconds for p in s.plans]
+    sums = [cal.zone_sum_fixed + p.pairs(channels) / cal.pairs_per_second for p in s.plans]
+    files = [p.disk_bytes(channels) / cal.write_bytes_per_second for p in s.plans]
+    digests = [p.disk_bytes(channels) / DIGEST_BYTES_PER_SECOND for p in s.plans]
+    waits = [max(f - z, 0.0) for f, z in zip(files, sums[1:])] + files[-1:]
+    work = (("job", cal.job_seconds), ("parts", PART_SECONDS * len(s.plans)),
+            ("emitters", s.lattices * max(found) + sum(found)),
+            ("zone sums", sum(sums) + sum(digests)), ("files", sum(waits)))
+    return _loaded(replace(_setup("plate", cal, calibrated, device, cache_dir, warm),
+                           work=work), load_average)
 
 
 def camera(resolution, *, samples, supersample, speckle="EXACT", device=None, cache_dir=None,

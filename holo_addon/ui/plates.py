@@ -23,7 +23,7 @@ import numpy as np
 from bpy_extras.io_utils import ImportHelper
 from mathutils import Matrix
 
-from holo_core import memory
+from holo_core import estimate, memory
 from holo_core.acquired.framing import default_camera, stated_plane
 from holo_core.io.hologram import HologramFileError, read_hologram
 from holo_core.io.plate_set import parts_from_json, parts_to_json
@@ -31,7 +31,8 @@ from holo_core.plate.path import parts_along, plan_parts
 from holo_core.plate.plan import plan, plan_view, summary
 from holo_core.plate.quality import choose
 from holo_core.scene.hologram import Hologram
-from holo_core.scene.plate import ViewingZone
+from holo_core.scene.mesh import Mesh
+from holo_core.scene.plate import ViewingZone, box_corners
 from holo_core.validate import InputError
 from holo_core.worker import environment
 
@@ -156,12 +157,25 @@ def shot_cameras(scene, unit):
 def emitter_box(depsgraph, unit) -> np.ndarray:
     """The holographic objects' box (2, 3) [m, world]: their triangles' corners, as the
     recording takes them."""
+    every = np.concatenate(emitter_corners(depsgraph, unit))
+    return np.array([every.min(0), every.max(0)])
+
+
+def emitter_corners(depsgraph, unit) -> list[np.ndarray]:
+    """Each holographic object's triangles' corners (3T, 3) [m, world], as the recording
+    takes them."""
     corners = [corner_positions(inst.object, depsgraph, unit, inst.matrix_world)
                for inst, _ in emitter_instances(depsgraph)]
     if not corners:
         raise ExportError("no holographic emitters to plan for")
-    every = np.concatenate(corners)
-    return np.array([every.min(0), every.max(0)])
+    return corners
+
+
+def corner_meshes(corners) -> list[Mesh]:
+    """The objects' triangles (each a ``corners`` array, three rows a triangle) as meshes, for
+    the planner's count of the surfaces a zone sees (a closed object's corners meet again:
+    :func:`holo_core.scene.mesh.outward` merges them)."""
+    return [Mesh(vertices=c, triangles=np.arange(len(c)).reshape(-1, 3)) for c in corners]
 
 
 def shot_parts(scene, obj, unit, depsgraph):
@@ -219,16 +233,18 @@ def set_summary(context, obj, parts) -> list[str]:
     the verdict, the set, what the scene camera's frame reads, each part, and a budget it
     exceeds first where it does."""
     scene, unit, h = context.scene, scale(context.scene), context.scene.holo
-    box = emitter_box(context.evaluated_depsgraph_get(), unit)
-    corners = np.array([[box[i][0], box[j][1], box[k][2]] for i in (0, 1) for j in (0, 1)
-                        for k in (0, 1)])
+    meshes = corner_meshes(emitter_corners(context.evaluated_depsgraph_get(), unit))
+    every = np.concatenate([m.vertices for m in meshes])
+    corners = box_corners(np.array([every.min(0), every.max(0)]))
     camera = camera_from_object(scene, scene.camera, unit)
-    plans = plan_parts(parts, corners).plans
+    plans = plan_parts(parts, corners, meshes=meshes).plans
     choices = [choose(q, resolution=camera.resolution, looks=h.iterations,
                       supersample=h.supersample, budget=budget(h), plans=plans)
                for q in plans]
     choice = min(choices, key=lambda c: c.planned.psnr)  # the part that needs the most
-    p = plan_parts(parts, corners, looks=choice.looks)
+    p = plan_parts(parts, corners, looks=choice.looks, meshes=meshes)
+    options = worker_options()  # the estimate of this machine for the worker's device and cache
+    took = estimate.plate_set(p, device=options["device"], cache_dir=options["cache_dir"])
     k, beyond = nearest_part(parts, camera)
     here = (f"part {k + 1} holds the camera's pupil" if not beyond else
             f"the camera's pupil reaches {beyond:.3g} m beyond every part (part {k + 1} is "
@@ -236,7 +252,7 @@ def set_summary(context, obj, parts) -> list[str]:
     widest = max(p.plans, key=lambda q: q.samples)
     lines = [f"verdict     a set of {len(parts)} parts along the camera's path; each frame "
              f"renders from the part that holds its camera ({here})",
-             f"set         {p.describe()}",
+             f"set         {p.describe(took)}",
              f"a view      reads one part, at most {widest.samples / 1e6:.3g} Mpx",
              *quality_lines(choice)]
     for n, (part, q) in enumerate(zip(parts, p.plans), 1):
@@ -293,18 +309,15 @@ def plan_summary(context) -> list[str]:
     # the triangles' corners, as the recording takes them: an object's bounding box turned
     # into the plate's frame is up to √3 times wider than the object, and a plate planned
     # from it overstates its samples and memory by as much (docs, Performance)
-    depsgraph = context.evaluated_depsgraph_get()
-    corners = [corner_positions(inst.object, depsgraph, unit, inst.matrix_world)
-               for inst, _ in emitter_instances(depsgraph)]
-    if not corners:
-        raise ExportError("no holographic emitters to plan for")
-    local = plate.to_plate(np.concatenate(corners))
+    meshes = [replace(m, vertices=plate.to_plate(m.vertices))
+              for m in corner_meshes(emitter_corners(context.evaluated_depsgraph_get(), unit))]
+    local = np.concatenate([m.vertices for m in meshes])
     eye = plate.to_plate(camera.position[None])[0]
     zone = plate.zone or zone_around(plate, camera, obj.holo.zone_margin * unit)
     h = scene.holo
     p = plan((plate.width, plate.height), [local.min(0), local.max(0)], zone=zone,
              pixel_angle=zone.pixel or camera.pixel_angle(),
-             wavelength=h.wavelength * unit if h.wavelength > 0 else None)
+             wavelength=h.wavelength * unit if h.wavelength > 0 else None, meshes=meshes)
     choice = choose(p, resolution=camera.resolution, looks=h.iterations,
                     supersample=h.supersample, budget=budget(h))
     p = replace(p, looks=choice.looks)

@@ -41,12 +41,12 @@ from ..scene.mesh import Mesh, outward
 from ..scene.plate_set import PathPart, PlateSet
 from ..validate import InputError
 from .emitters import Emitters, grid_points, surface_points, visibility, zone_frame
+from .path import lattice_parts
 from .plan import LAYERS
 from .recording import PlannedPlate, look_code, plate_plan, prepare_plate
 
 log = logging.getLogger(__name__)
 
-LATTICE_TURN = math.radians(5)  # [rad] of the path's turn about the objects a lattice serves
 MIN_SLANT = 0.05  # cos of the most grazing view a lattice's density is weighted for (87°)
 
 
@@ -259,26 +259,6 @@ def set_emitters(meshes, parts, plans, spacing: float) -> Iterator[Emitters]:
                      cell=cell[keep], visibility=table / np.float32(255), grid=offsets,
                      ids=ids[keep], count=count, weight=weight, key=key[keep])
             for part, (keep, offsets, table, weight) in zip(parts, seen))
-
-
-def lattice_parts(centres, target, turn: float = LATTICE_TURN) -> list[int]:
-    """The parts whose zone centres cast the set's lattices of emitters: the path's parts
-    (``centres`` (P, 3) [m], in order) cut into runs that turn at most ``turn`` [rad] about
-    ``target`` (3,) [m] (the objects' middle), the middle part of each run. A lattice serves
-    every part of its run, weighted for each (:func:`set_emitters`); a lattice a part would
-    leave a seam between lattices across the surfaces wherever two parts meet (the
-    silhouettes' IoU falls), and too few serve the ends of their runs from far off (at runs
-    of 15° an orbit's end frame is about 1 dB below its middle, at 5° level with it: docs,
-    Performance)."""
-    d = np.asarray(centres, np.float64) - np.asarray(target, np.float64)
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
-    runs, start = [], 0
-    for k in range(1, len(d)):
-        if math.acos(min(1.0, float(d[start] @ d[k]))) > turn:
-            runs.append((start, k - 1))
-            start = k
-    runs.append((start, len(d) - 1))
-    return [(a + b) // 2 for a, b in runs]
 
 
 def set_digest(meshes, parts, *, seed: int, looks: int, depth: bool) -> str:

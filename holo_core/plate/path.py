@@ -18,13 +18,14 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .. import validate
 from ..memory import gib
 from ..scene.camera import Camera
+from ..scene.mesh import Mesh
 from ..scene.plate import SHOT_ZONE_MARGIN, Plate, ViewingZone, box_corners
 from ..scene.plate_set import PathPart, PlateSet, reach_beyond
 from ..validate import InputError, shown
@@ -32,6 +33,7 @@ from .plan import CHANNELS, LOOKS, plan
 
 DEFAULT_STRETCH = 0.1   # [m] of path a part holds (the 10 cm dolly one plate serves well)
 WINDOW_PAD = 0.02       # fraction of the window added on each side of a part's plate
+LATTICE_TURN = math.radians(5)  # [rad] of the path's turn about the objects a lattice serves
 
 
 def parts_along(cameras, bounds, *, distance: float, stretch: float = DEFAULT_STRETCH,
@@ -212,11 +214,13 @@ def _facing(path, frames: dict, up, box, centre, distance, pupil, margin, pixel)
 @dataclass(frozen=True, slots=True, kw_only=True)
 class SetPlan:
     """The plans of a set's parts (``plans``, a :class:`holo_core.plate.plan.PlatePlan` a
-    part, each of ``looks`` looks) along a path of ``length`` [m]: what the set holds and
-    costs, before any emitter is found."""
+    part, each of ``looks`` looks) along a path of ``length`` [m], its emitters found from
+    ``lattices`` of its parts' zones (:func:`lattice_parts`): what the set holds and costs,
+    before any emitter is found."""
 
     plans: tuple
     length: float
+    lattices: int = 1
 
     @property
     def samples(self) -> int:
@@ -236,37 +240,69 @@ class SetPlan:
         ``bench/results/shot_set_*.json`` holds what whole recordings took)."""
         return sum(p.record_seconds(channels) for p in self.plans)
 
-    def describe(self) -> str:
-        """The set in plain words: parts, samples, disk, memory, time, what a view reads."""
+    def describe(self, estimate=None) -> str:
+        """The set in plain words: parts, samples, disk, memory, what a view reads, and its
+        recording's time: ``estimate``'s (an :class:`holo_core.estimate.Estimate`, this
+        machine's: :func:`holo_core.estimate.plate_set`), else the zone sums' at the
+        development machine's rate."""
         widest = max(self.plans, key=lambda p: p.samples)
+        time = f"records in {estimate.words()}" if estimate is not None else \
+            (f"its zone sums about {self.record_seconds():.0f} s at the development machine's "
+             f"rate (the emitters, the files and this machine's speed not counted)")
         return (f"{len(self.plans)} part(s) along {self.length:.3g} m of path, "
                 f"{self.samples / 1e6:.3g} Mpx in all (the largest {widest.shape[1]} x "
                 f"{widest.shape[0]}), {self.plans[0].looks} look(s): "
                 f"{gib(self.disk_bytes())} on disk, {gib(self.memory_bytes())} of memory "
-                f"while recording (a part at a time); its zone sums about "
-                f"{self.record_seconds():.0f} s at the development machine's rate (the "
-                f"emitters, the files and this machine's speed not counted); a view reads one "
-                f"part")
+                f"while recording (a part at a time); {time}; a view reads one part")
 
 
-def plan_parts(parts, points, *, looks: int = LOOKS) -> SetPlan:
+def plan_parts(parts, points, *, looks: int = LOOKS, meshes=None) -> SetPlan:
     """The :class:`SetPlan` of ``parts`` (:func:`parts_along`) for objects at ``points``
     (N, 3) [m] (the world: their vertices, or their box's corners), ``looks`` looks a part
-    (pure arithmetic, as :func:`holo_core.plate.plan.plan`)."""
+    (pure arithmetic, as :func:`holo_core.plate.plan.plan`); ``meshes`` (the world), where
+    known, count each part's emitters from the surfaces its zone sees, else its box does
+    (:func:`holo_core.plate.plan.seen_area`)."""
     parts = tuple(parts)
     if not parts or not all(isinstance(p, PathPart) for p in parts):
         raise InputError("parts must be a non-empty sequence of PathPart (parts_along)")
     world = validate.array("points", points, "(N, 3) object points [m]")
     if world.ndim != 2 or world.shape[1] != 3 or not len(world):
         raise InputError(f"points must be (N, 3) object points [m]; got shape {world.shape}")
+    world_meshes = None if meshes is None else \
+        [meshes] if isinstance(meshes, Mesh) else list(meshes)
     plans = []
     for part in parts:
         local = part.plate.to_plate(world)
         zone = part.plate.zone
+        seen = None if world_meshes is None else \
+            [replace(m, vertices=part.plate.to_plate(m.vertices)) for m in world_meshes]
         plans.append(plan((part.plate.width, part.plate.height),
                           np.array([local.min(0), local.max(0)]), zone=zone,
-                          pixel_angle=zone.pixel, looks=looks))
-    return SetPlan(plans=tuple(plans), length=float(parts[-1].stretch[1] - parts[0].stretch[0]))
+                          pixel_angle=zone.pixel, looks=looks, meshes=seen))
+    centres = [part.plate.matrix_world[:3, :3] @ np.asarray(part.plate.zone.centre)
+               + part.plate.matrix_world[:3, 3] for part in parts]
+    return SetPlan(plans=tuple(plans), length=float(parts[-1].stretch[1] - parts[0].stretch[0]),
+                   lattices=len(lattice_parts(centres, world.mean(0))))
+
+
+def lattice_parts(centres, target, turn: float = LATTICE_TURN) -> list[int]:
+    """The parts whose zone centres cast the set's lattices of emitters: the path's parts
+    (``centres`` (P, 3) [m], in order) cut into runs that turn at most ``turn`` [rad] about
+    ``target`` (3,) [m] (the objects' middle), the middle part of each run. A lattice serves
+    every part of its run, weighted for each (:func:`holo_core.plate.parts.set_emitters`); a lattice a part would
+    leave a seam between lattices across the surfaces wherever two parts meet (the
+    silhouettes' IoU falls), and too few serve the ends of their runs from far off (at runs
+    of 15° an orbit's end frame is about 1 dB below its middle, at 5° level with it: docs,
+    Performance)."""
+    d = np.asarray(centres, np.float64) - np.asarray(target, np.float64)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    runs, start = [], 0
+    for k in range(1, len(d)):
+        if math.acos(min(1.0, float(d[start] @ d[k]))) > turn:
+            runs.append((start, k - 1))
+            start = k
+    runs.append((start, len(d) - 1))
+    return [(a + b) // 2 for a, b in runs]
 
 
 def part_for(plates: PlateSet, camera: Camera) -> tuple[int, float]:

@@ -26,6 +26,7 @@ from .. import memory as memory_mod
 from .. import validate
 from ..optics.depth import DEPTH_MARGIN, partner_wavelength
 from ..optics.pupil import defocus_limited_diameter
+from ..scene.mesh import outward
 from ..scene.plate import ViewingZone, box_corners
 from ..validate import InputError
 
@@ -39,14 +40,13 @@ TILE_COST = 2**17      # samples a tile costs beyond its own: its task, its emit
 LOOKS = 2              # coded looks recorded by default (the checkerboard pair)
 CHANNELS = 4           # R, G, B at λ1 and the depth partner at λ2
 SAMPLE_BYTES = 8       # complex64
-# measured on the development machine (2-core EPYC Zen 5, Intel's CPU OpenCL, idle): the
+# measured on the development machine (2-core EPYC Zen 4, Intel's CPU OpenCL, alone): the
 # zone sum's pairs (emitter, sample) per second, per channel group (three colours cost one),
-# as this plan counts them (its footprints are the cones' whole; the sum skips their faded
-# rims): bench/shot.py's plate 58 s for 311 s at 2e9, the demo's plate about 270 s for 2760 s
-PAIRS_PER_SECOND = 1.0e10  # one look, its depth partner in the colours' pass, the colours
-                           # one amplitude an emitter: the shot's 16.2 s recorded (its two
-                           # looks 16.2-19.0 s with the partner on the colours' recurrence,
-                           # planned 17.4 s)
+# as this plan counts them (the emitters from the surfaces the zone sees, the footprints the
+# cones' whole: the sum skips their faded rims, and pays for the tiles they cut)
+PAIRS_PER_SECOND = 2.2e9  # one look, its depth partner in the colours' pass, the colours one
+                          # amplitude an emitter: the shot's part of a 10 cm dolly at the 5 mm
+                          # margin, 3.3e10 pairs (two coded looks) summed in 14.5 s
 FURTHER_LOOK = 0.35      # a further independent look in the same pass, of a look's time (its
                          # channels: on the shot's plate two looks took 34.6 s, apart 51.5 s)
 FURTHER_CODED = 0.12     # a further coded look (2 or m² looks): its classes' set-up and mixing
@@ -256,10 +256,12 @@ duration = estimate_mod.duration
 
 def plan(plate_size, bounds, *, zone: ViewingZone, pixel_angle: float,
          supersample: int = SUPERSAMPLE, looks: int = LOOKS, wavelength=None,
-         tile: int | None = None) -> PlatePlan:
+         tile: int | None = None, meshes=None) -> PlatePlan:
     """The plan of a plate of ``plate_size`` (width, height) [m] for objects in the box
     ``bounds`` (2, 3) [m] (the plate's frame, z < 0) seen from ``zone``, whose views have
-    pixels of ``pixel_angle`` [rad] (module docstring). ``wavelength`` [m] overrides λ1."""
+    pixels of ``pixel_angle`` [rad] (module docstring). ``wavelength`` [m] overrides λ1.
+    ``meshes`` (the plate's frame), where known, count the emitters from the surfaces the
+    zone's centre sees (:func:`seen_area`), else from the box."""
     width, height = validate.pair("plate_size", plate_size, "m")
     validate.positive("plate width", width, "m")
     validate.positive("plate height", height, "m")
@@ -312,7 +314,8 @@ def plan(plate_size, bounds, *, zone: ViewingZone, pixel_angle: float,
                          f"crosses it, it is narrower than one sample at the pitch the zone "
                          f"needs ({pitch:.3g} x {row_pitch:.3g} m): make it larger")
     spacing = lam / pupil
-    emitters, footprint = _emitters(box, zone, spacing, pitch * row_pitch)
+    seen = None if meshes is None else seen_area(meshes, zone.centre)
+    emitters, footprint = _emitters(box, zone, spacing, pitch * row_pitch, seen)
     return PlatePlan(zone=zone, bounds=box, pupil=pupil, wavelength=lam, depth_wavelength=lam2,
                      spacing=spacing, band=band, pitch=pitch, row_pitch=row_pitch,
                      origin=(float(lo[0]), float(lo[1])), shape=shape, emitters=emitters,
@@ -392,17 +395,39 @@ def zone_band(lo, hi, zone: ViewingZone) -> tuple[float, float]:
     return float(np.abs(d[..., 0]).max()), float(np.abs(d[..., 1]).max())
 
 
-def _emitters(box, zone: ViewingZone, spacing, area) -> tuple[int, float]:
-    """(the emitters' count, the samples an emitter's footprint holds), estimated: the box's
-    solid angle seen from the zone's centre over a spot, times the surfaces a ray meets (two,
-    the front one and, for some rays, what the zone sees behind an edge); the footprint is the
-    zone's box with its rim, scaled from the zone's plane onto the plate at the objects'
-    middle depth."""
+def seen_area(meshes, centre) -> float:
+    """The area of the surfaces of ``meshes`` (the plate's frame [m], in front of nothing: z
+    below ``centre``'s) seen from ``centre`` (3,) [m], in the direction tangents (x/−z, y/−z
+    about it) the emitters' lattice spaces them in: each closed mesh's faces turned towards it
+    (its outside from its winding, :func:`holo_core.scene.mesh.outward`), every face of an
+    open one (a card is seen from either side). Surfaces behind others are counted too: an
+    upper bound where objects hide each other."""
+    c = np.asarray(centre, np.float64)
+    total = 0.0
+    for mesh in meshes:
+        v = np.asarray(mesh.vertices, np.float64)[np.asarray(mesh.triangles, np.int64)] - c
+        t = v[..., :2] / -v[..., 2:3]
+        area = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]) / 2
+        side = outward(mesh)
+        if side:  # a face turned towards the centre: its outward normal against the ray
+            normal = side * np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+            area = area[np.einsum("ij,ij->i", normal, v.mean(1)) < 0]
+        total += float(np.abs(area).sum())
+    return total
+
+
+def _emitters(box, zone: ViewingZone, spacing, area, seen=None) -> tuple[int, float]:
+    """(the emitters' count, the samples an emitter's footprint holds), estimated: the
+    surfaces' area ``seen`` from the zone's centre (:func:`seen_area`) over a spot's, or
+    where the surfaces are not known the box's (its solid angle, times the two surfaces a ray
+    may meet, the front one and what the zone sees behind an edge: the shot's objects have a
+    third of that, a sphere half); the footprint is the zone's box with its rim, scaled from
+    the zone's plane onto the plate at the objects' middle depth."""
     centre = np.asarray(zone.centre)
     v = box_corners(box) - centre
     t = v[:, :2] / -v[:, 2:3]
-    solid = float(np.prod(t.max(0) - t.min(0)))
-    emitters = int(1.5 * solid / spacing**2) + 1
+    solid = 1.5 * float(np.prod(t.max(0) - t.min(0))) if seen is None else seen
+    emitters = int(solid / spacing**2) + 1
     depth = -float(box.mean(0)[2])
     scale = depth / (depth + centre[2])
     e = np.asarray(zone.half_extents) * (1 + RIM)

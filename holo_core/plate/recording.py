@@ -186,7 +186,7 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
         raise InputError("a plate needs the sharpness of its views: a camera, a zone with its "
                          "pixel angle, or a wavelength")
     p = plan((plate.width, plate.height), bounds, zone=zone, pixel_angle=pixel or 1.0,
-             wavelength=wavelength, looks=looks, tile=tile)
+             wavelength=wavelength, looks=looks, tile=tile, meshes=local)
     count = crossing_count(local, np.asarray(zone.centre, np.float64), zone_frame(zone, bounds),
                            p.spacing)  # what finding the emitters holds, before it starts
     memory.check_host(f"finding the emitters of {sum(len(m.triangles) for m in local)} "

@@ -188,3 +188,25 @@ def test_a_camera_pass_costs_its_fine_pixels_once_and_each_look():
                                                  + 16 * MEASURED.camera_look_seconds),
         rel=1e-12)
     assert est.process == MEASURED.process_camera_seconds and est.first == 0.0
+
+
+def test_a_sets_parts_add_up_and_each_parts_files_are_written_beside_the_next_sum(cache):
+    """estimate.plate_set: the emitters of each lattice and each part, every part's set-up and
+    zone sum (its files' digest beside it), and of the files only what outlasts the next
+    part's sum, the last part's whole; Plan Plate's set line says it in words."""
+    from holo_core.plate.path import SetPlan
+    p, _ = planned()
+    rates = replace(MEASURED, write_bytes_per_second=p.disk_bytes() / 4.0)  # 4 s a part
+    s = SetPlan(plans=(p, p, p), length=0.3, lattices=2)
+    est = estimate.plate_set(s, calibration=(rates, True), warm=True, load_average=0)
+    work = dict(est.work)
+    found = rates.emitters_fixed + p.emitters * rates.emitter_seconds
+    summed = rates.zone_sum_fixed + p.pairs() / rates.pairs_per_second
+    assert work["emitters"] == pytest.approx(5 * found)
+    assert work["parts"] == pytest.approx(3 * estimate.PART_SECONDS)
+    assert work["zone sums"] == pytest.approx(
+        3 * (summed + p.disk_bytes() / estimate.DIGEST_BYTES_PER_SECOND))
+    assert work["files"] == pytest.approx(2 * max(4.0 - summed, 0.0) + 4.0)
+    assert est.seconds == pytest.approx(sum(work.values()) + rates.process_plate_seconds)
+    assert "records in about" in s.describe(est)
+    assert "development machine" in s.describe()
