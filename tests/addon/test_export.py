@@ -16,7 +16,8 @@ def _fingerprint(scene):
 
 def test_the_fingerprint_covers_emitter_kind_material_and_lens(empty_scene):
     scene = empty_scene
-    cube, cam, _ = _plate_camera_cube(scene)
+    cube, cam, plate = _plate_camera_cube(scene)
+    plate.holo.zone_margin = 0.05  # a zone that holds the lens's pupil once depth of field is on
     scene.holo.mode = "PLATE"
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
     seen = [_fingerprint(scene)]

@@ -156,7 +156,8 @@ def test_a_recorded_plate_is_seen_live_coarse_then_full_and_outside_its_zone_in_
     from holo_addon.export.viewport import viewport_camera
     from holo_addon.ui import live
     scene = empty_scene
-    _, cam, _ = _plate_camera_cube(scene)
+    _, cam, plate = _plate_camera_cube(scene)
+    plate.holo.zone_margin = 0.05  # room to look around: the view moves 1 cm
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
     scene.holo.mode, scene.holo.iterations = "PLATE", 1
     assert bpy.ops.holo.record_hologram() == {"FINISHED"}
