@@ -18,6 +18,7 @@ import numpy as np
 import results  # the bench folder's own: the figures as data
 import shot  # the bench shot's scene, cameras and path
 
+from holo_core import estimate
 from holo_core.plate.path import parts_along, plan_parts
 from holo_core.plate.plan import plan_view
 
@@ -41,7 +42,7 @@ def planned(move: float, *, orbit: bool, scale: float, stretch: float, points) -
     path, middle = path_cameras(move, orbit=orbit, scale=scale)
     parts = parts_along(path, [points.min(0), points.max(0)], distance=shot.DISTANCE,
                         stretch=stretch)
-    sp = plan_parts(parts, points)
+    sp = plan_parts(parts, points, meshes=shot.scene())  # emitters from the surfaces seen
     k = min(range(len(parts)), key=lambda i: parts[i].reach(middle.position,
                                                             middle.aperture_diameter))
     local = parts[k].plate.to_plate(np.asarray(middle.position)[None])[0]
@@ -50,6 +51,8 @@ def planned(move: float, *, orbit: bool, scale: float, stretch: float, points) -
     return {"parts": len(parts), "path [m]": sp.length, "samples [Mpx]": sp.samples / 1e6,
             "disk [GiB]": sp.disk_bytes() / 2**30,
             "planned recording [s]": sp.record_seconds(),
+            "estimated recording, default rates [s]": estimate.plate_set(
+                sp, calibration=(estimate.DEFAULT, False), warm=True, load_average=0).seconds,
             "a view reads [Mpx]": view.window / 1e6}
 
 
@@ -66,7 +69,9 @@ def per_unit(rows: dict, unit: float) -> None:
                   for k in each}
         r.update(ratios)
         print(f"{label}: {r['parts']} parts, {r['samples [Mpx]']:.1f} Mpx, "
-              f"{r['disk [GiB]']:.2f} GiB, recording about {r['planned recording [s]']:.0f} s, "
+              f"{r['disk [GiB]']:.2f} GiB, recording about "
+              f"{r['estimated recording, default rates [s]']:.0f} s (its zone sums "
+              f"{r['planned recording [s]']:.0f} s), "
               f"a view reads {r['a view reads [Mpx]']:.1f} Mpx; per unit against the "
               f"shortest: " + ", ".join(f"{k.split(' per')[0]} {v:.2f}"
                                         for k, v in ratios.items()))
