@@ -407,7 +407,8 @@ def seen_area(meshes, centre) -> float:
     for mesh in meshes:
         v = np.asarray(mesh.vertices, np.float64)[np.asarray(mesh.triangles, np.int64)] - c
         t = v[..., :2] / -v[..., 2:3]
-        area = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]) / 2
+        a, b = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
+        area = (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]) / 2
         side = outward(mesh)
         if side:  # a face turned towards the centre: its outward normal against the ray
             normal = side * np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
