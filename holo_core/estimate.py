@@ -48,10 +48,10 @@ from pathlib import Path
 log = logging.getLogger(__name__)
 
 FILE = "estimates.json"
-DIGEST_BYTES_PER_SECOND = 6.0e8  # BLAKE2b on one core of the 2-core Zen 4 EPYC (623 MB/s): a
+DIGEST_BYTES_PER_SECOND = 6.0e8  # [B/s] BLAKE2b on one core of the 2-core Zen 4 EPYC (623 MB/s): a
                                  # set's files are hashed as written, beside the next part's sum
-PART_SECONDS = 1.5  # a set's part beyond its work: its plan, buffers and kernels' set-up, its
-                    # files' sync and the manifest rewritten (the 90° orbit's 64 small parts)
+PART_SECONDS = 1.5  # [s] a set's part beyond its work: its plan, buffers and kernels' set-up,
+                    # its files' sync, the manifest rewritten (the 90° orbit's 64 small parts)
 STAMP = "warm-{kind}-{key}.stamp"
 KINDS = ("plate", "camera")
 

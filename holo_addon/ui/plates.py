@@ -28,7 +28,7 @@ from holo_core.acquired.framing import default_camera, stated_plane
 from holo_core.io.hologram import HologramFileError, read_hologram
 from holo_core.io.plate_set import parts_from_json, parts_to_json
 from holo_core.plate.path import parts_along, plan_parts
-from holo_core.plate.plan import plan, plan_view, summary
+from holo_core.plate.plan import plan, plan_view, seen_area, summary
 from holo_core.plate.quality import choose
 from holo_core.scene.hologram import Hologram
 from holo_core.scene.mesh import Mesh
@@ -317,7 +317,8 @@ def plan_summary(context) -> list[str]:
     h = scene.holo
     p = plan((plate.width, plate.height), [local.min(0), local.max(0)], zone=zone,
              pixel_angle=zone.pixel or camera.pixel_angle(),
-             wavelength=h.wavelength * unit if h.wavelength > 0 else None, meshes=meshes)
+             wavelength=h.wavelength * unit if h.wavelength > 0 else None,
+             seen=seen_area(meshes, zone.centre))
     choice = choose(p, resolution=camera.resolution, looks=h.iterations,
                     supersample=h.supersample, budget=budget(h))
     p = replace(p, looks=choice.looks)

@@ -59,9 +59,9 @@ class KeptPlates:
                           if k is not None and not isinstance(h.object_wave, TiledWave)}
 
     def read_set(self, folder):
-        """The plate set in ``folder`` (:func:`read_plate_set`: each part's digests checked when it is read):
-        held where its manifest is unchanged since, else read (the part it held kept
-        with it)."""
+        """The plate set in ``folder`` (:func:`read_plate_set`: each part's digests checked
+        when it is read): held where its manifest is unchanged since, else read (the part it
+        held kept with it)."""
         name = _identity(Path(folder) / MANIFEST)
         if name is not None and self._set[0] == name:
             log.info("the plate set held in memory from the job before: not read again")

@@ -126,9 +126,9 @@ def surface_points(meshes, centre, rotation, spacing: float, *, layers=3, lattic
     (3,) [m] with axes ``rotation``, bins ``spacing`` apart in direction cosine, with
     ``meshes``, up to ``layers`` deep (all in one frame, the meshes'); ``key`` names each
     crossing (:func:`emitter_keys`, of the ``lattice``-th pupil where several find one set).
-    ``sides``: each mesh's :func:`~holo_core.scene.mesh.outward` (None: none taken as closed); on a closed mesh
-    (``closed``) the normal points out of it, elsewhere it follows the triangle's winding and
-    either side may be the one a pupil sees."""
+    ``sides``: each mesh's :func:`~holo_core.scene.mesh.outward` (None: none taken as
+    closed); on a closed mesh (``closed``) the normal points out of it, elsewhere it follows
+    the triangle's winding and either side may be the one a pupil sees."""
     every = np.concatenate([m.vertices for m in meshes])
     centre = np.asarray(centre, np.float64)
     shape = bins_covering(every, centre, rotation, spacing)

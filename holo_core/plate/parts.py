@@ -43,7 +43,7 @@ from ..validate import InputError
 from .emitters import Emitters, grid_points, surface_points, visibility, zone_frame
 from .path import lattice_parts
 from .plan import LAYERS
-from .recording import PlannedPlate, look_code, plate_plan, prepare_plate
+from .recording import PlannedPlate, look_code, mesh_list, plate_plan, prepare_plate
 
 log = logging.getLogger(__name__)
 
@@ -118,8 +118,10 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
         raise InputError("parts must be a non-empty sequence of PathPart (parts_along)")
     looks = validate.integer("looks", looks, 1)
     seed = validate.seed(seed)
-    plans = [_part_plan(meshes, k, part, looks=looks, depth=depth, memory=budget[0])
-             for k, part in enumerate(parts)]
+    world = mesh_list(meshes)
+    sides = [outward(m) for m in world]  # each mesh's outside, found once for every part
+    plans = [_part_plan(world, k, part, looks=looks, depth=depth, memory=budget[0],
+                        sides=sides) for k, part in enumerate(parts)]
     spacing = plans[0].plan.spacing
     for k, p in enumerate(planned.plan for planned in plans):
         if not math.isclose(p.spacing, spacing, rel_tol=1e-9):
@@ -144,7 +146,7 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
             log.info("plate set: %s holds its %d parts already; nothing recorded", folder,
                      len(parts))
             return read_plate_set(folder)
-    shared = set_emitters(meshes, parts, plans, spacing)
+    shared = set_emitters(world, parts, plans, spacing, sides)
     codes = tuple(look_code(k, looks) for k in range(looks))
 
     def write(k, held):  # a part's files, then the manifest naming every part written so far
@@ -190,21 +192,23 @@ def _overlap_fits(plans, budget) -> bool:
     return most <= memory.host_share(budget)
 
 
-def _part_plan(meshes, k: int, part: PathPart, *, looks, depth, memory) -> PlannedPlate:
+def _part_plan(meshes, k: int, part: PathPart, *, looks, depth, memory,
+               sides=None) -> PlannedPlate:
     """Part ``k``'s plan (:func:`~holo_core.plate.recording.plate_plan`, its looks held
     together within ``memory`` [bytes]); its refusal names the part."""
     try:
         return plate_plan(meshes, plate=part.plate, looks=looks, depth=depth,
-                          budget=(memory, None))
+                          budget=(memory, None), sides=sides)
     except InputError as e:
         raise InputError(f"part {k}: {e}") from None
 
 
-def set_emitters(meshes, parts, plans, spacing: float) -> Iterator[Emitters]:
+def set_emitters(meshes, parts, plans, spacing: float, sides=None) -> Iterator[Emitters]:
     """Each part's emitters (its plate's frame, its visibility), made as the recording asks
     for them, drawn from one set found for all (module docstring): ``plans`` the parts'
     :class:`~holo_core.plate.recording.PlannedPlate` (their plan and zone, the meshes in the
-    plate's frame), ``spacing`` their shared spacing in direction cosine."""
+    plate's frame), ``spacing`` their shared spacing in direction cosine, ``sides`` each
+    mesh's :func:`~holo_core.scene.mesh.outward` where the caller found it."""
     world = [meshes] if isinstance(meshes, Mesh) else list(meshes)
     poses = []  # each part's zone centre and its pupil's axes, in the world
     for part, planned in zip(parts, plans):
@@ -215,7 +219,8 @@ def set_emitters(meshes, parts, plans, spacing: float) -> Iterator[Emitters]:
     every = np.concatenate([x.vertices for x in world])
     lattices = [poses[k] for k in lattice_parts([c for c, _ in poses], every.mean(0))]
     centres = np.array([c for c, _ in lattices])
-    points, sides = [], [outward(m) for m in world]  # each mesh's outside, found once
+    points = []
+    sides = [outward(m) for m in world] if sides is None else sides  # found once a set
     for k, (centre, rotation) in enumerate(lattices):
         position, colour, normal, cell, key, closed = surface_points(
             world, centre, rotation, spacing, layers=LAYERS, lattice=k, sides=sides)

@@ -25,11 +25,11 @@ import numpy as np
 from .. import validate
 from ..memory import gib
 from ..scene.camera import Camera
-from ..scene.mesh import Mesh
+from ..scene.mesh import Mesh, outward
 from ..scene.plate import SHOT_ZONE_MARGIN, Plate, ViewingZone, box_corners
 from ..scene.plate_set import PathPart, PlateSet, reach_beyond
 from ..validate import InputError, shown
-from .plan import CHANNELS, LOOKS, plan
+from .plan import CHANNELS, LOOKS, plan, seen_area
 
 DEFAULT_STRETCH = 0.1   # [m] of path a part holds (the 10 cm dolly one plate serves well)
 WINDOW_PAD = 0.02       # fraction of the window added on each side of a part's plate
@@ -268,17 +268,18 @@ def plan_parts(parts, points, *, looks: int = LOOKS, meshes=None) -> SetPlan:
     world = validate.array("points", points, "(N, 3) object points [m]")
     if world.ndim != 2 or world.shape[1] != 3 or not len(world):
         raise InputError(f"points must be (N, 3) object points [m]; got shape {world.shape}")
-    world_meshes = None if meshes is None else \
-        [meshes] if isinstance(meshes, Mesh) else list(meshes)
+    shapes = None if meshes is None else [meshes] if isinstance(meshes, Mesh) else list(meshes)
+    sides = None if shapes is None else [outward(m) for m in shapes]  # in every part's frame
     plans = []
     for part in parts:
         local = part.plate.to_plate(world)
         zone = part.plate.zone
-        seen = None if world_meshes is None else \
-            [replace(m, vertices=part.plate.to_plate(m.vertices)) for m in world_meshes]
+        seen = None if shapes is None else seen_area(
+            [replace(m, vertices=part.plate.to_plate(m.vertices)) for m in shapes], zone.centre,
+            sides)
         plans.append(plan((part.plate.width, part.plate.height),
                           np.array([local.min(0), local.max(0)]), zone=zone,
-                          pixel_angle=zone.pixel, looks=looks, meshes=seen))
+                          pixel_angle=zone.pixel, looks=looks, seen=seen))
     centres = [part.plate.matrix_world[:3, :3] @ np.asarray(part.plate.zone.centre)
                + part.plate.matrix_world[:3, 3] for part in parts]
     return SetPlan(plans=tuple(plans), length=float(parts[-1].stretch[1] - parts[0].stretch[0]),
@@ -289,8 +290,8 @@ def lattice_parts(centres, target, turn: float = LATTICE_TURN) -> list[int]:
     """The parts whose zone centres cast the set's lattices of emitters: the path's parts
     (``centres`` (P, 3) [m], in order) cut into runs that turn at most ``turn`` [rad] about
     ``target`` (3,) [m] (the objects' middle), the middle part of each run. A lattice serves
-    every part of its run, weighted for each (:func:`holo_core.plate.parts.set_emitters`); a lattice a part would
-    leave a seam between lattices across the surfaces wherever two parts meet (the
+    every part of its run, weighted for each (:func:`holo_core.plate.parts.set_emitters`); a
+    lattice a part would leave a seam between lattices across the surfaces wherever two parts meet (the
     silhouettes' IoU falls), and too few serve the ends of their runs from far off (at runs
     of 15° an orbit's end frame is about 1 dB below its middle, at 5° level with it: docs,
     Performance)."""

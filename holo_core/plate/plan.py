@@ -256,12 +256,12 @@ duration = estimate_mod.duration
 
 def plan(plate_size, bounds, *, zone: ViewingZone, pixel_angle: float,
          supersample: int = SUPERSAMPLE, looks: int = LOOKS, wavelength=None,
-         tile: int | None = None, meshes=None) -> PlatePlan:
+         tile: int | None = None, seen: float | None = None) -> PlatePlan:
     """The plan of a plate of ``plate_size`` (width, height) [m] for objects in the box
     ``bounds`` (2, 3) [m] (the plate's frame, z < 0) seen from ``zone``, whose views have
     pixels of ``pixel_angle`` [rad] (module docstring). ``wavelength`` [m] overrides λ1.
-    ``meshes`` (the plate's frame), where known, count the emitters from the surfaces the
-    zone's centre sees (:func:`seen_area`), else from the box."""
+    ``seen``: the area of the surfaces the zone's centre sees (:func:`seen_area`, in squared
+    direction tangents), where the meshes are known, counts the emitters; else the box does."""
     width, height = validate.pair("plate_size", plate_size, "m")
     validate.positive("plate width", width, "m")
     validate.positive("plate height", height, "m")
@@ -314,7 +314,6 @@ def plan(plate_size, bounds, *, zone: ViewingZone, pixel_angle: float,
                          f"crosses it, it is narrower than one sample at the pitch the zone "
                          f"needs ({pitch:.3g} x {row_pitch:.3g} m): make it larger")
     spacing = lam / pupil
-    seen = None if meshes is None else seen_area(meshes, zone.centre)
     emitters, footprint = _emitters(box, zone, spacing, pitch * row_pitch, seen)
     return PlatePlan(zone=zone, bounds=box, pupil=pupil, wavelength=lam, depth_wavelength=lam2,
                      spacing=spacing, band=band, pitch=pitch, row_pitch=row_pitch,
@@ -395,21 +394,22 @@ def zone_band(lo, hi, zone: ViewingZone) -> tuple[float, float]:
     return float(np.abs(d[..., 0]).max()), float(np.abs(d[..., 1]).max())
 
 
-def seen_area(meshes, centre) -> float:
-    """The area of the surfaces of ``meshes`` (the plate's frame [m], in front of nothing: z
-    below ``centre``'s) seen from ``centre`` (3,) [m], in the direction tangents (x/−z, y/−z
-    about it) the emitters' lattice spaces them in: each closed mesh's faces turned towards it
-    (its outside from its winding, :func:`holo_core.scene.mesh.outward`), every face of an
-    open one (a card is seen from either side). Surfaces behind others are counted too: an
-    upper bound where objects hide each other."""
+def seen_area(meshes, centre, sides=None) -> float:
+    """The area (dimensionless: squared direction tangents x/−z, y/−z about ``centre``, the
+    measure the emitters' lattice spaces them in) of the surfaces of ``meshes`` (the plate's
+    frame [m], z below ``centre``'s) seen from ``centre`` (3,) [m]: each closed mesh's faces
+    turned towards it, every face of an open one (a card is seen from either side); ``sides``
+    each mesh's :func:`holo_core.scene.mesh.outward` where the caller found it (it holds in any
+    frame), else found here. Surfaces behind others are counted too: an upper bound where
+    objects hide each other."""
     c = np.asarray(centre, np.float64)
     total = 0.0
-    for mesh in meshes:
+    sides = [outward(m) for m in meshes] if sides is None else sides
+    for mesh, side in zip(meshes, sides, strict=True):
         v = np.asarray(mesh.vertices, np.float64)[np.asarray(mesh.triangles, np.int64)] - c
         t = v[..., :2] / -v[..., 2:3]
         a, b = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
         area = (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]) / 2
-        side = outward(mesh)
         if side:  # a face turned towards the centre: its outward normal against the ray
             normal = side * np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
             area = area[np.einsum("ij,ij->i", normal, v.mean(1)) < 0]

@@ -23,7 +23,7 @@ from ..scene.mesh import Mesh
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Carrier, Plate, ViewingZone
 from ..validate import InputError
 from .emitters import Emitters, random_phases, zone_emitters, zone_frame
-from .plan import LAYERS, LOOKS, RIM, PlatePlan, plan
+from .plan import LAYERS, LOOKS, RIM, PlatePlan, plan, seen_area
 from .zone_sum import ZoneEmitters, ZoneSum, ZoneWindow
 
 log = logging.getLogger(__name__)
@@ -155,11 +155,20 @@ class PlannedPlate:
         return ["R", "G", "B"] + (["Z"] if self.depth else [])
 
 
+def mesh_list(meshes) -> list[Mesh]:
+    """``meshes`` (a Mesh or a sequence of them) as a list; :class:`InputError` otherwise."""
+    meshes = [meshes] if isinstance(meshes, Mesh) else list(meshes)
+    if not meshes or not all(isinstance(m, Mesh) for m in meshes):
+        raise InputError("meshes must be a Mesh or a non-empty sequence of Mesh")
+    return meshes
+
+
 def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
                zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, looks=LOOKS, depth=True,
                budget=(None, None), tiled: bool | None = False,
-               tile: int | None = None) -> PlannedPlate:
-    """The plan of a plate of ``meshes`` and its ``looks`` (the other arguments as
+               tile: int | None = None, sides=None) -> PlannedPlate:
+    """The plan of a plate of ``meshes`` and its ``looks`` (``sides``: each mesh's
+    :func:`holo_core.scene.mesh.outward`, where the caller found it; the other arguments as
     :func:`holo_core.plate.looks.record_plate` takes them): what its recording will hold and
     cost, before any emitter is found, checked against the host's memory and the ``budget``
     (memory, disk) [bytes] of the looks recorded together: the whole plate, or where
@@ -168,9 +177,7 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
     host's share of its memory (:func:`holo_core.memory.host_share`)."""
     if not isinstance(plate, Plate):
         raise InputError(f"plate must be a Plate; got {type(plate).__name__}")
-    meshes = [meshes] if isinstance(meshes, Mesh) else list(meshes)
-    if not meshes or not all(isinstance(m, Mesh) for m in meshes):
-        raise InputError("meshes must be a Mesh or a non-empty sequence of Mesh")
+    meshes = mesh_list(meshes)
     memory.check_host(f"moving {sum(len(m.triangles) for m in meshes)} triangles onto the "
                       f"plate", sum(320.0 * len(m.triangles) + 96.0 * len(m.vertices)
                                     for m in meshes))
@@ -186,7 +193,8 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
         raise InputError("a plate needs the sharpness of its views: a camera, a zone with its "
                          "pixel angle, or a wavelength")
     p = plan((plate.width, plate.height), bounds, zone=zone, pixel_angle=pixel or 1.0,
-             wavelength=wavelength, looks=looks, tile=tile, meshes=local)
+             wavelength=wavelength, looks=looks, tile=tile,
+             seen=seen_area(local, zone.centre, sides))
     count = crossing_count(local, np.asarray(zone.centre, np.float64), zone_frame(zone, bounds),
                            p.spacing)  # what finding the emitters holds, before it starts
     memory.check_host(f"finding the emitters of {sum(len(m.triangles) for m in local)} "

@@ -216,8 +216,8 @@ def test_the_surfaces_a_zone_sees_are_a_spheres_silhouette_and_a_cards_one_face(
     assert seen_area([ball], (0.0, 0.0, 0.0)) == pytest.approx(exact, rel=0.01)
     flipped = Mesh(vertices=ball.vertices, triangles=ball.triangles[:, ::-1])
     assert seen_area([flipped], (0.0, 0.0, 0.0)) == pytest.approx(exact, rel=0.01)
-    card = Mesh(vertices=np.array([[-0.01, -0.01, -0.2], [0.01, -0.01, -0.2], [0.01, 0.01, -0.2],
-                                   [-0.01, 0.01, -0.2]]), triangles=np.array([[0, 1, 2], [0, 2, 3]]))
+    corners = [[-0.01, -0.01, -0.2], [0.01, -0.01, -0.2], [0.01, 0.01, -0.2], [-0.01, 0.01, -0.2]]
+    card = Mesh(vertices=np.array(corners), triangles=np.array([[0, 1, 2], [0, 2, 3]]))
     for tri in (card.triangles, card.triangles[:, ::-1]):
         assert seen_area([Mesh(vertices=card.vertices, triangles=tri)], (0.0, 0.0, 0.0)) == \
             pytest.approx(0.02**2 / 0.2**2)
