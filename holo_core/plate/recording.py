@@ -299,7 +299,12 @@ def _code_classes(em, codes) -> tuple[np.ndarray | None, np.ndarray | None]:
         return None, None
     m = codes[0][1]
     shifts = np.stack([_code_steps(em, code) % m for code in codes], 1)
-    kinds, classes = np.unique(shifts, axis=0, return_inverse=True)
+    # the rows of shifts as base-m numbers, the first look's digit the highest: their unique
+    # values in order are the rows' in lexicographic order, without sorting rows (a set's
+    # part of 450k emitters: 0.4 s for np.unique(axis=0), 0.02 s so)
+    number = shifts @ (m ** np.arange(len(codes) - 1, -1, -1))
+    values, classes = np.unique(number, return_inverse=True)
+    kinds = (values[:, None] // (m ** np.arange(len(codes) - 1, -1, -1))) % m
     mixing = np.exp(2j * np.pi * (kinds - kinds[:, :1]).T / m)
     return classes.reshape(-1).astype(np.int32), mixing
 

@@ -129,11 +129,18 @@ def footprints(position, window: ZoneWindow) -> np.ndarray:
     p = np.asarray(position, np.float64)
     c = np.asarray(window.centre)
     e = np.asarray(window.half_extents) * np.array([1 + window.rim, 1 + window.rim, 1.0])
-    corners = np.array([c + np.array([sx, sy, sz]) * e for sx in (-1, 1) for sy in (-1, 1)
-                        for sz in (-1, 1)])
-    t = -p[:, None, 2] / (corners[None, :, 2] - p[:, None, 2])
-    xy = p[:, None, :2] + t[..., None] * (corners[None, :, :2] - p[:, None, :2])
-    lo, hi = xy.min(1), xy.max(1)
+    # the cone's rays through the box's near and far faces (z = c_z ∓ e_z): on each face's
+    # plane the ray p -> q crosses the plate at p + t·(q - p), t = -p_z / (q_z - p_z) in
+    # (0, 1) (the emitters behind the plate, the zone before it), so the face's corners at
+    # -e and +e bound the footprint along x and y, each face's with its own t
+    px, py, pz = p.T
+    lo, hi = [np.full(len(p), np.inf)] * 2, [np.full(len(p), -np.inf)] * 2
+    for sz in (-1, 1):
+        t = -pz / (c[2] + sz * e[2] - pz)
+        for i, q in enumerate((px, py)):
+            lo[i] = np.minimum(lo[i], q + t * (c[i] - e[i] - q))
+            hi[i] = np.maximum(hi[i], q + t * (c[i] + e[i] - q))
+    lo, hi = np.stack(lo, 1), np.stack(hi, 1)
     o, dx, dy = np.asarray(window.origin), window.pitch, window.row_pitch
     h, w = window.shape
     c0 = np.maximum(np.floor((lo[:, 0] - o[0]) / dx), 0)
