@@ -7,7 +7,8 @@
  *     (tx, ty) and planar depth d, relative to the pupil.
  * seen_from: one work item per emitter: its direction and planar depth from the pupil, and the
  *     depth test against the buffer, bilinear between the four bins around its direction,
- *     with a slack for its surface's slope (bias_bins bins of it, plus bias_depth of the depth).
+ *     with a slack for its surface's slope (bias_bins bins of it, plus bias_depth of the depth);
+ *     an emitter of a closed surface (closed[e]) facing away from the pupil is not seen.
  *     The emitter comes as its offset from the zone's centre and its surface's normal; the
  *     pupil as its offset (ex, ey) from the centre in the zone's plane and the camera axes
  *     (rotation's columns), so the host hands the emitters over once for every pupil.
@@ -86,7 +87,7 @@ __kernel void seen_from(__global float *seen, int point, __global const float *z
                         __global const float *pz, __global const float *nx,
                         __global const float *ny, __global const float *nz, float ex, float ey,
                         __constant float *axes, float max_slope, float bias_bins,
-                        float bias_depth, int emitters)
+                        float bias_depth, __global const uchar *closed, int emitters)
 {
     int e = get_global_id(0);
     if (e >= emitters)
@@ -96,7 +97,15 @@ __kernel void seen_from(__global float *seen, int point, __global const float *z
     float y = p.x * axes[1] + p.y * axes[4] + p.z * axes[7];   /* (the rotation's columns) */
     float z = p.x * axes[2] + p.y * axes[5] + p.z * axes[8];
     float dist = sqrt(x * x + y * y + z * z), depth = -z;
-    float cosine = fabs(nx[e] * p.x + ny[e] * p.y + nz[e] * p.z) / dist;
+    float facing = (nx[e] * p.x + ny[e] * p.y + nz[e] * p.z) / dist;
+    /* a closed surface's point whose outward normal turns away from the pupil is its far
+     * side: never seen, though near a silhouette the depth test's slope slack (below) would
+     * pass it (the far side's light then swelled the silhouettes by half a pixel) */
+    if (closed[e] && facing > 0) {
+        seen[(long)point * emitters + e] = 0;
+        return;
+    }
+    float cosine = fabs(facing);
     float slope = fmin(sqrt(fmax(1 - cosine * cosine, 0.0f)) / fmax(cosine, 1e-9f), max_slope);
     float kx = -x / dist / b, ky = -y / dist / b;
     float bias = (bias_bins * b * slope + bias_depth) * depth;

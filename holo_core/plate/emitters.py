@@ -31,7 +31,7 @@ from ..opencl.kernel import BUFFER, kernel
 from ..opencl.runtime import associated
 from ..optics.raster import bin_rays, crossings
 from ..scene.camera import look_at
-from ..scene.mesh import surface_colour
+from ..scene.mesh import outward, surface_colour
 from ..scene.plate import ViewingZone
 from ..validate import InputError
 
@@ -41,7 +41,7 @@ DEPTH_RASTER = kernel(PROGRAM, "depth_raster", zbuf=BUFFER, h=int32, w=int32, b=
 SEEN_FROM = kernel(PROGRAM, "seen_from", seen=BUFFER, point=int32, zbuf=BUFFER, h=int32,
                    w=int32, b=float32, px=BUFFER, py=BUFFER, pz=BUFFER, nx=BUFFER, ny=BUFFER,
                    nz=BUFFER, ex=float32, ey=float32, axes=BUFFER, max_slope=float32,
-                   bias_bins=float32, bias_depth=float32, emitters=int32)
+                   bias_bins=float32, bias_depth=float32, closed=BUFFER, emitters=int32)
 
 EDGE_BINS = 4          # bins around the objects' directions
 BIAS_BINS = 1.5        # the depth test's slack: the surface's depth change over this many bins
@@ -110,10 +110,11 @@ def zone_emitters(meshes, zone: ViewingZone, spacing: float, *, layers=3,
         raise InputError("a plate needs at least one mesh to record")
     every = np.concatenate([m.vertices for m in meshes])
     rotation = zone_frame(zone, np.array([every.min(0), every.max(0)]))
-    position, colour, normal, cell, key, _ = surface_points(meshes, zone.centre, rotation,
-                                                            spacing, layers=layers)
+    position, colour, normal, cell, key, closed = surface_points(
+        meshes, zone.centre, rotation, spacing, layers=layers, sides=[outward(m) for m in meshes])
     g = grid or grid_points(zone)
-    offsets, seen = visibility(meshes, position, normal, zone, rotation, spacing, g)
+    offsets, seen = visibility(meshes, position, normal, zone, rotation, spacing, g,
+                               closed=closed)
     keep = seen.reshape(len(seen), -1).max(1) > 0
     return Emitters(position=position[keep], colour=colour[keep], cell=cell[keep],
                     visibility=seen[keep], grid=offsets, key=key[keep])
@@ -194,10 +195,13 @@ def _points(hits, centre, rotation, spacing) -> np.ndarray:
     return local @ rotation.T + centre
 
 
-def visibility(meshes, position, normal, zone: ViewingZone, rotation, spacing, g, rt=None):
+def visibility(meshes, position, normal, zone: ViewingZone, rotation, spacing, g, *,
+               closed=None, rt=None):
     """(grid offsets ((x0, step_x), (y0, step_y)) [m], (n, gy, gx) visibility in [0, 1]) of
     the points ``position`` (n, 3) on surfaces of ``normal`` from the g = (gy, gx) points of
-    the zone's centre plane (module docstring; ``visibility.cl``)."""
+    the zone's centre plane (module docstring; ``emitters.cl``). ``closed`` (n,) bool: the
+    points on a closed mesh, their normals outward (:func:`surface_points`), unseen from a
+    grid point they face away from (None: none)."""
     rt = rt or get_runtime()
     centre = np.asarray(zone.centre, np.float64)
     hx, hy = zone.half_extents[:2]
@@ -214,6 +218,10 @@ def visibility(meshes, position, normal, zone: ViewingZone, rotation, spacing, g
     normals = dict(zip(("nx", "ny", "nz"), (rt.to_device(a, np.float32)
                                             for a in np.asarray(normal, np.float64).T)))
     axes = rt.to_device(np.asarray(rotation, np.float64).ravel(), np.float32)  # its rows
+    flags = np.zeros(max(n, 1), np.uint8)
+    if closed is not None and n:
+        flags[:n] = np.asarray(closed, bool)
+    closed = rt.to_device(flags)
     for iy, y in enumerate(ys):
         for ix, x in enumerate(xs):
             eye = centre + (x, y, 0.0)
@@ -230,7 +238,7 @@ def visibility(meshes, position, normal, zone: ViewingZone, rotation, spacing, g
             SEEN_FROM.launch(rt, (max(n, 1),), seen=seen, point=iy * g[1] + ix, zbuf=zbuf, h=h,
                              w=w, b=spacing, **offsets, **normals, ex=x, ey=y, axes=axes,
                              max_slope=MAX_SLOPE, bias_bins=BIAS_BINS, bias_depth=BIAS_DEPTH,
-                             emitters=n)
+                             closed=closed, emitters=n)
     step = lambda a: float(a[1] - a[0]) if len(a) > 1 else 1.0  # noqa: E731
     table = read(seen)[:g[0] * g[1] * n].reshape(g[0], g[1], n).transpose(2, 0, 1)
     return ((float(xs[0]), step(xs)), (float(ys[0]), step(ys))), np.ascontiguousarray(table)

@@ -234,8 +234,9 @@ def set_emitters(meshes, parts, plans, spacing: float, sides=None) -> Iterator[E
         # the sphere, and gained a blur beyond it, to the far end's lattice)
         own = np.where(closed[:, None], cosine, facing).argmax(1) == k
         points.append((position[own], colour[own], normal[own], cell[own], facing[own, k],
-                       key[own]))
-    position, colour, normal, cell, slant, key = (np.concatenate(a) for a in zip(*points))
+                       key[own], closed[own]))
+    position, colour, normal, cell, slant, key, closed = (np.concatenate(a)
+                                                          for a in zip(*points))
     seen = []
     for part, planned, (centre, _) in zip(parts, plans, poses):
         local, zone = planned.meshes, planned.plan.zone
@@ -244,7 +245,7 @@ def set_emitters(meshes, parts, plans, spacing: float, sides=None) -> Iterator[E
         rotation = zone_frame(zone, np.array([every.min(0), every.max(0)]))
         here = part.plate.to_plate(position)
         offsets, table = visibility(local, here, normal @ m[:3, :3], zone, rotation, spacing,
-                                    grid_points(zone))
+                                    grid_points(zone), closed=closed)
         towards = centre - position
         facing = np.abs(np.einsum("nj,nj->n", normal, towards)) / np.linalg.norm(towards, axis=1)
         # a lattice seen from this zone holds cos(its slant)/cos(this zone's) emitters a

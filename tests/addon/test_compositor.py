@@ -36,9 +36,20 @@ def _moving_cube(scene, tmp_path, margin=0.01):
 
 
 def _middle(path):
-    alpha = _read_exr(path)["ViewLayer.Combined.A"]
-    cols = np.nonzero(alpha > 0.5)[1]
-    return (cols.min() + cols.max() + 1) / 2
+    """The middle [px, from the image's left edge] of the pass's silhouette across: between
+    the columns where its coverage (the alpha's greatest down each column) crosses 0.5, each
+    found between the pixel centres either side (a whole pixel's steps moved it by half a
+    pixel where a soft edge lay near 0.5)."""
+    cover = _read_exr(path)["ViewLayer.Combined.A"].max(0)
+    inside = np.nonzero(cover > 0.5)[0]
+    first, last = inside.min(), inside.max()
+
+    def crossing(a, b):  # from centre a (coverage <= 0.5) to centre b (> 0.5): where 0.5 lies
+        return a + (b - a) * (0.5 - cover[a]) / (cover[b] - cover[a]) + 0.5
+
+    left = crossing(first - 1, first) if first > 0 else 0.0
+    right = crossing(last + 1, last) if last + 1 < len(cover) else float(len(cover))
+    return (left + right) / 2
 
 
 def test_an_animation_started_away_from_the_timeline_frame_uses_each_frames_geometry(

@@ -9,6 +9,7 @@ import numpy as np
 import plate_scene as ps
 import pytest
 
+from holo_core.camera.render import render_camera
 from holo_core.io.hologram import HologramFileError
 from holo_core.io.plate_set import MANIFEST, read_plate_set
 from holo_core.plate.emitters import zone_emitters
@@ -78,9 +79,12 @@ def test_one_pupil_sees_the_same_wave_from_either_part(dolly_set):
     (measured 37.3-38.2 dB at seed 3; 35.0-41.1 over seeds 3-5 whether the phases are drawn
     from the emitters' keys or in their order), where the outer two parts recorded each with
     its own emitters (other positions and phases: another speckle) agree within 23.8 dB only:
-    no jump where the frames change part. Their silhouettes agree: IoU above 0.98 (0.9884 at
-    seed 3, 0.9859-1 over seeds 3-5 under either draw; one pixel of the 425 in the union is
-    0.0024), the two parts' speckle deciding a few edge pixels either way."""
+    no jump where the frames change part. Their silhouettes agree with each other and with the
+    camera hologram's: IoU above 0.97 (against part 0's 0.978-1, against the camera
+    hologram's 0.973-0.988 over seeds 3-5; one pixel of the 410 in the union is 0.0024), the
+    parts' speckle deciding a few edge pixels either way. (Where the far sides of the closed
+    meshes passed the visibility's depth slack near their silhouettes, the parts agreed as
+    well but each swelled past the camera hologram's: IoU 0.939-0.951.)"""
     cam = cameras()[3]
     views = [render_view(list(dolly_set.part_looks(k)), cam) for k in range(len(dolly_set))]
     agree = [psnr(views[a], views[b]) for a, b in ((0, 1), (1, 2), (2, 3), (0, 3))]
@@ -92,8 +96,11 @@ def test_one_pupil_sees_the_same_wave_from_either_part(dolly_set):
     assert min(agree) > 35 and apart < min(agree) - 6, (agree, apart)
     solid = [v.alpha > 0.5 for v in views]
     overlap = [(a & solid[0]).sum() / (a | solid[0]).sum() for a in solid[1:]]
-    print(f"silhouettes' IoU against part 0's: {np.round(overlap, 4)}")
-    assert min(overlap) > 0.98, overlap
+    camera = render_camera(ps.meshes(), cam, via="incoherent").alpha > 0.5
+    true = [(a & camera).sum() / (a | camera).sum() for a in solid]
+    print(f"silhouettes' IoU against part 0's: {np.round(overlap, 4)}; against the camera "
+          f"hologram's {np.round(true, 4)}")
+    assert min(overlap) > 0.97 and min(true) > 0.97, (overlap, true)
 
 
 def test_a_set_recorded_into_a_folder_is_the_set_recorded_in_memory(dolly_set, tmp_path):

@@ -139,7 +139,8 @@ def test_views_in_finer_depth_layers_converge(plate, monkeypatch):
     layers here), the default's one layer (a quarter wave at the rim for the samples farthest
     from it) is within 1e-2 and a three-hundredth's (11 layers)
     less than half as far (the error falls as the phase error, to first order: 3.2e-3 and
-    8.2e-4 here); the silhouettes are the same."""
+    8.2e-4 here); their alpha likewise (1.5e-2 and 2e-3 at most: a pixel whose alpha lies
+    that near 0.5 may cross it)."""
     from holo_core.plate import to_pupil
     cam = camera("left", SCALE)
     made, counts, views = to_pupil._Gather._layers, [], []
@@ -157,4 +158,7 @@ def test_views_in_finer_depth_layers_converge(plate, monkeypatch):
     one, fine, finer = views
     far = rel_err(one.radiance, finer.radiance)
     assert far < 1e-2 and rel_err(fine.radiance, finer.radiance) < 0.5 * far
-    assert all(np.array_equal(v.alpha > 0.5, finer.alpha > 0.5) for v in (one, fine))
+    edge = [np.abs(v.alpha - finer.alpha).max() for v in (one, fine)]
+    flips = [int(((v.alpha > 0.5) != (finer.alpha > 0.5)).sum()) for v in (one, fine)]
+    print(f"alpha apart at most {np.round(edge, 5)}, pixels across 0.5 {flips}")
+    assert edge[0] < 2e-2 and edge[1] < 0.5 * edge[0], edge
