@@ -26,10 +26,10 @@ sees fewer of a surface's emitters), so the prediction is
     PSNR = 10·log10(size / (EDGE_ERROR + SPECKLE_SCALE · (σ/⟨I⟩)²))
 
 with (σ/⟨I⟩)² the table's mean over the objects' depths for a view focused on their front.
-The two constants were fitted to the close-up at 320×180 and the shot at 640×360 (both
-measured by bench/closeup.py, two seeds); fitted to the close-up alone they predict the
-shot's speckle within 0.5 dB and its seed-free part 1 dB high; the close-up at 640×360,
-not fitted, is predicted within 1.3 dB of each measured setting (docs: Plates and shots).
+The two constants are fitted by bench/quality_fit.py to the close-up at 320×180 and the shot
+at 640×360 (both measured by bench/closeup.py, two seeds); the close-up at 640×360, not
+fitted, is then predicted within 1.5 dB of each measured setting, mostly low (docs: Plates
+and shots).
 
 Auto's looks (:func:`choose`) fit the Memory and Disk Budgets as the recording checks them
 (:func:`looks_within`), and go beyond the coded pair only where each further count gains
@@ -80,8 +80,8 @@ SPECKLE_DB = {
     (3, 9, 2): -20.41, (3, 9, 3): -22.57, (3, 9, 4): -23.02,
     (4.5, 9, 2): -17.51, (4.5, 9, 3): -18.98, (4.5, 9, 4): -19.32,
 }
-SPECKLE_SCALE = 2.39   # the speckle's mean square over (σ/⟨I⟩)² times the objects' size [px]
-EDGE_ERROR = 0.111    # [px] the seed-free mean square (of the peak's) times the objects' size
+SPECKLE_SCALE = 1.86   # the speckle's mean square over (σ/⟨I⟩)² times the objects' size [px]
+EDGE_ERROR = 0.082    # [px] the seed-free mean square (of the peak's) times the objects' size
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -204,6 +204,16 @@ def view_blurs(bounds, eye, *, pupil: float, pixel_angle: float, focus: float | 
     return pupil * np.abs(inverse - 1 / f) / pixel_angle
 
 
+def reference_view(p: PlatePlan, focus: float | None = None) -> tuple[np.ndarray, float]:
+    """(the defocus blurs [px] over the objects' depths, the objects' size [px]) of the plan's
+    reference view: from the zone's centre through its pupil, with the pixels λ = D·Δ/2 asks
+    (:func:`view_blurs`, ``focus`` [m] as there; :func:`objects_size`)."""
+    eye = np.asarray(p.zone.centre, np.float64)
+    pixel = 2 * p.wavelength / p.pupil
+    return (view_blurs(p.bounds, eye, pupil=p.pupil, pixel_angle=pixel, focus=focus),
+            objects_size(p.bounds, eye, pixel))
+
+
 def objects_size(bounds, eye, pixel_angle: float) -> float:
     """The objects' size [px]: the square root of the angular area their box spans from
     ``eye`` over the pixel's."""
@@ -310,10 +320,7 @@ def choose(p: PlatePlan, *, resolution, looks: int = 0, supersample: int = 0,
     looks = validate.integer("looks", looks, 0, 64)
     supersample = validate.integer("supersample", supersample, 0, validate.MAX_SUPERSAMPLE)
     w, h = validate.shape2d("resolution", resolution)
-    eye = np.asarray(p.zone.centre, np.float64)
-    pixel = 2 * p.wavelength / p.pupil  # the reference view's pixel: λ = D·Δ/2
-    blurs = view_blurs(p.bounds, eye, pupil=p.pupil, pixel_angle=pixel, focus=focus)
-    size = objects_size(p.bounds, eye, pixel)
+    blurs, size = reference_view(p, focus)
     every = options(p, blurs=blurs, size=size, resolution=(w, h))
     ceiling = looks_ceiling(every)
     most, refused = looks_within([p] if plans is None else plans, budget)

@@ -17,7 +17,7 @@ from holo_core.io.hologram import read_hologram, write_hologram  # noqa: E402
 from holo_core.scene.hologram import Hologram  # noqa: E402
 from holo_core.scene.plate import ViewingZone  # noqa: E402
 
-RESOLUTION = (320, 240)  # with DEEP, a camera whose cube asks Auto more than the coded pair
+RESOLUTION = (240, 180)  # with DEEP, a camera whose cube asks Auto more than the coded pair
 DEEP = 2.5  # the cube's scale: 1 m across at 3 m
 
 
