@@ -25,7 +25,7 @@ DEFAULT_ZONE_MARGIN = 0.05  # [m] the default zone reaches this far beyond the c
 # reaches this far beyond their pupils: their own positions need no margin, and the recording
 # grows along each axis as the square of the zone's width there (pupil + 2 margins), so at a
 # 14 mm pupil 5 mm costs 2.9 times no margin, 1 cm 5.8 times, 5 cm 64 times (a 1 m dolly's
-# set at 1280x720: 14 GiB, 22 GiB, 140 GiB)
+# set at 1280x720: 13.5 GiB, 21 GiB, 137 GiB)
 SHOT_ZONE_MARGIN = 0.005
 
 
