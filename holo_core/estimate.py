@@ -52,6 +52,9 @@ DIGEST_BYTES_PER_SECOND = 6.0e8  # [B/s] BLAKE2b on one core of the 2-core Zen 4
                                  # set's files are hashed as written, beside the next part's sum
 PART_SECONDS = 1.5  # [s] a set's part beyond its work: its plan, buffers and kernels' set-up,
                     # its files' sync, the manifest rewritten (the 90° orbit's 64 small parts)
+VISIBILITY_SECONDS = 2e-6  # [s] an emitter of a set's part: its visibility from the part's zone
+                           # (the set's emitters found once a lattice; 0.8 s a 1 m dolly part's
+                           # 443k emitters, bench/shot.py --set)
 STAMP = "warm-{kind}-{key}.stamp"
 KINDS = ("plate", "camera")
 
@@ -323,17 +326,19 @@ def plate_set(s, *, channels=4, device=None, cache_dir=None, warm=None, calibrat
     """The estimate of recording a plate set from its plan ``s`` (:class:`~holo_core.plate.
     path.SetPlan`) in a new worker (``warm``, ``calibration``, ``load_average``: as
     :func:`plate`'s): the emitters found once a lattice (``s.lattices``), each part's own
-    set-up (``PART_SECONDS``), its emitters' visibility, zone sum and files, a part's files
+    set-up (``PART_SECONDS``), its emitters' visibility (``VISIBILITY_SECONDS`` each), zone
+    sum and files, a part's files
     written while the next part is summed (the part of the writing that outlasts the next sum
     counted; the last part's whole), their digest on the CPU beside the sum."""
     cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
-    found = [cal.emitters_fixed + p.emitters * cal.emitter_seconds for p in s.plans]
+    found = max(cal.emitters_fixed + p.emitters * cal.emitter_seconds for p in s.plans)
+    seen = sum(p.emitters * VISIBILITY_SECONDS for p in s.plans)
     sums = [cal.zone_sum_fixed + p.pairs(channels) / cal.pairs_per_second for p in s.plans]
     files = [p.disk_bytes(channels) / cal.write_bytes_per_second for p in s.plans]
     digests = [p.disk_bytes(channels) / DIGEST_BYTES_PER_SECOND for p in s.plans]
     waits = [max(f - z, 0.0) for f, z in zip(files, sums[1:])] + files[-1:]
     work = (("job", cal.job_seconds), ("parts", PART_SECONDS * len(s.plans)),
-            ("emitters", s.lattices * max(found) + sum(found)),
+            ("emitters", s.lattices * found + seen),
             ("zone sums", sum(sums) + sum(digests)), ("files", sum(waits)))
     return _loaded(replace(_setup("plate", cal, calibrated, device, cache_dir, warm),
                            work=work), load_average)

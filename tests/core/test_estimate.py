@@ -191,9 +191,10 @@ def test_a_camera_pass_costs_its_fine_pixels_once_and_each_look():
 
 
 def test_a_sets_parts_add_up_and_each_parts_files_are_written_beside_the_next_sum(cache):
-    """estimate.plate_set: the emitters of each lattice and each part, every part's set-up and
-    zone sum (its files' digest beside it), and of the files only what outlasts the next
-    part's sum, the last part's whole; Plan Plate's set line says it in words."""
+    """estimate.plate_set: the emitters found for each lattice and seen from each part, every
+    part's set-up and zone sum (its files' digest beside it), and of the files only what
+    outlasts the next part's sum, the last part's whole; Plan Plate's set line says it in
+    words."""
     from holo_core.plate.path import SetPlan
     p, _ = planned()
     rates = replace(MEASURED, write_bytes_per_second=p.disk_bytes() / 4.0)  # 4 s a part
@@ -202,7 +203,8 @@ def test_a_sets_parts_add_up_and_each_parts_files_are_written_beside_the_next_su
     work = dict(est.work)
     found = rates.emitters_fixed + p.emitters * rates.emitter_seconds
     summed = rates.zone_sum_fixed + p.pairs() / rates.pairs_per_second
-    assert work["emitters"] == pytest.approx(5 * found)
+    assert work["emitters"] == pytest.approx(
+        2 * found + 3 * p.emitters * estimate.VISIBILITY_SECONDS)
     assert work["parts"] == pytest.approx(3 * estimate.PART_SECONDS)
     assert work["zone sums"] == pytest.approx(
         3 * (summed + p.disk_bytes() / estimate.DIGEST_BYTES_PER_SECOND))
