@@ -2,6 +2,7 @@
 placement and the planner only: no device)."""
 
 import itertools
+import math
 
 import numpy as np
 import pytest
@@ -82,6 +83,25 @@ def test_every_pupil_of_the_path_lies_wholly_inside_a_part():
         # a pupil on the path between two frames: inside some part
         mid = (cams[0].position + cams[1].position) / 2
         assert min(p.reach(mid, pupil) for p in parts) == 0
+
+
+def test_the_parts_tile_the_path_evenly():
+    """A 40 cm and a 1 m dolly and a 90° orbit in parts of at most 10 cm: the fewest parts
+    that overlap by a pupil, ⌈(L − D)/(0.1 − D)⌉, each the same stretch (at most 10 cm),
+    consecutive ones sharing exactly a pupil, from the path's start to its end (each a full
+    10 cm, the 40 cm dolly's five parts overlapped by 2.5 cm and cost a quarter more a metre
+    than one part of a 10 cm dolly)."""
+    box = shot_box()
+    for cams in (dolly(0.4), dolly(1.0), orbit(90)):
+        parts = parts_along(cams, box, distance=DISTANCE, stretch=0.1)
+        pupil = cams[0].aperture_diameter
+        length = parts[-1].stretch[1]
+        assert len(parts) == math.ceil((length - pupil) / (0.1 - pupil)), len(parts)
+        spans = [p.stretch[1] - p.stretch[0] for p in parts]
+        assert np.allclose(spans, spans[0], rtol=0, atol=1e-12) and spans[0] <= 0.1, spans
+        assert parts[0].stretch[0] == 0
+        for a, b in itertools.pairwise(parts):
+            assert a.stretch[1] - b.stretch[0] == pytest.approx(pupil, abs=1e-12)
 
 
 def test_a_dolly_gives_parts_side_by_side_each_facing_its_stretch():
