@@ -286,10 +286,11 @@ def choose(p: PlatePlan, *, resolution, looks: int = 0, supersample: int = 0,
            plans=None) -> QualityChoice:
     """The looks and supersampling for views of the plate planned as ``p`` (its reference
     view: the zone's pupil and pixel from the zone's centre) at ``resolution`` (W, H): the
-    fewest looks predicted to reach ``target`` [dB] with some supersampling, else the fewest
-    within NEAR_BEST of the best, whatever the resolution (they are recorded once for every
-    view); the supersampling the cheapest for those looks at ``resolution``; ``looks`` or
-    ``supersample`` > 0 are the user's and are kept (0: Auto).
+    fewest looks predicted to reach ``target`` [dB] and MODEL_MARGIN above it with some
+    supersampling, else the fewest within NEAR_BEST of the best, whatever the resolution
+    (they are recorded once for every view); the supersampling the cheapest for those looks
+    at ``resolution`` that reaches it, else the best; ``looks`` or ``supersample`` > 0 are
+    the user's and are kept (0: Auto).
     ``focus`` [m] from the zone's centre (None: the objects' front, the worst a view focused
     on them meets).
 
@@ -325,13 +326,14 @@ def choose(p: PlatePlan, *, resolution, looks: int = 0, supersample: int = 0,
     ceiling = looks_ceiling(every)
     most, refused = looks_within([p] if plans is None else plans, budget)
     auto = [o for o in every if o.looks <= min(ceiling, most)]
-    planned = _fewest_looks(auto, target)
-    free = _fewest_looks([o for o in every if o.looks <= ceiling], target)
+    aim = target + MODEL_MARGIN  # the model's own error kept in hand
+    planned = _fewest_looks(auto, aim)
+    free = _fewest_looks([o for o in every if o.looks <= ceiling], aim)
     held = refused if free.looks > planned.looks else ""
     allowed = [o for o in (every if looks else auto) if (not looks or o.looks == looks)
                and (not supersample or o.supersample == supersample)]
     if allowed:
-        mine = _fewest_looks(allowed, target)
+        mine = _fewest_looks(allowed, aim)
         n, s, psnr = mine.looks, mine.supersample, mine.psnr
     if looks and supersample:  # both the user's, whatever the table holds
         n, s = looks, supersample
@@ -346,7 +348,9 @@ def choose(p: PlatePlan, *, resolution, looks: int = 0, supersample: int = 0,
                          unbudgeted=free if held else None)
 
 
-NEAR_BEST = 0.5  # [dB] short of a target no setting reaches, the cheapest this near the best
+NEAR_BEST = 0.5  # [dB] short of a target no setting reaches, the fewest looks this near the best
+MODEL_MARGIN = 0.75  # [dB] Auto aims this far above the target: the most the model predicted
+                     # above a measured setting of the scenes bench/quality_fit.py fits it to
 
 
 def _fewest_looks(candidates, target: float) -> Option:
@@ -363,11 +367,10 @@ def _fewest_looks(candidates, target: float) -> Option:
 
 
 def _cheapest(candidates, target: float) -> Option:
-    """The cheapest of ``candidates`` predicted to reach ``target`` [dB]; where none does,
-    the cheapest within NEAR_BEST of the best (more looks there cost their time and disk
-    for what no one sees)."""
+    """The cheapest of ``candidates`` (one look count's supersamplings) predicted to reach
+    ``target`` [dB]; where none does, the best: a finer supersampling costs only the view's
+    time, never a recording or its disk."""
     reach = [o for o in candidates if o.psnr >= target]
     if not reach:
-        best = max(o.psnr for o in candidates)
-        reach = [o for o in candidates if o.psnr >= best - NEAR_BEST]
+        return max(candidates, key=lambda o: (o.psnr, -o.seconds))
     return min(reach, key=lambda o: o.seconds)
