@@ -327,9 +327,9 @@ def plate_set(s, *, channels=4, device=None, cache_dir=None, warm=None, calibrat
     path.SetPlan`) in a new worker (``warm``, ``calibration``, ``load_average``: as
     :func:`plate`'s): the emitters found once a lattice (``s.lattices``), each part's own
     set-up (``PART_SECONDS``), its emitters' visibility (``VISIBILITY_SECONDS`` each), zone
-    sum and files, a part's files
-    written while the next part is summed (the part of the writing that outlasts the next sum
-    counted; the last part's whole), their digest on the CPU beside the sum."""
+    sum and files, a part's files written while the next part is summed (the part of the
+    writing that outlasts the next sum counted; the last part's whole), their digest on the
+    CPU beside the sum."""
     cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
     found = max(cal.emitters_fixed + p.emitters * cal.emitter_seconds for p in s.plans)
     seen = sum(p.emitters * VISIBILITY_SECONDS for p in s.plans)

@@ -103,15 +103,17 @@ def grid_points(zone: ViewingZone) -> tuple[int, int]:
 
 
 def zone_emitters(meshes, zone: ViewingZone, spacing: float, *, layers=3,
-                  grid: tuple | None = None) -> Emitters:
+                  grid: tuple | None = None, sides=None) -> Emitters:
     """The emitters of ``meshes`` (the plate's frame) that the zone sees (module docstring),
-    ``spacing`` apart in direction cosine from the zone's centre."""
+    ``spacing`` apart in direction cosine from the zone's centre; ``sides`` each mesh's
+    :func:`~holo_core.scene.mesh.outward` where the caller found it."""
     if not meshes:
         raise InputError("a plate needs at least one mesh to record")
     every = np.concatenate([m.vertices for m in meshes])
     rotation = zone_frame(zone, np.array([every.min(0), every.max(0)]))
     position, colour, normal, cell, key, closed = surface_points(
-        meshes, zone.centre, rotation, spacing, layers=layers, sides=[outward(m) for m in meshes])
+        meshes, zone.centre, rotation, spacing, layers=layers,
+        sides=[outward(m) for m in meshes] if sides is None else sides)
     g = grid or grid_points(zone)
     offsets, seen = visibility(meshes, position, normal, zone, rotation, spacing, g,
                                closed=closed)

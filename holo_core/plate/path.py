@@ -296,8 +296,8 @@ def lattice_parts(centres, target, turn: float = LATTICE_TURN) -> list[int]:
     (``centres`` (P, 3) [m], in order) cut into runs that turn at most ``turn`` [rad] about
     ``target`` (3,) [m] (the objects' middle), the middle part of each run. A lattice serves
     every part of its run, weighted for each (:func:`holo_core.plate.parts.set_emitters`); a
-    lattice a part would leave a seam between lattices across the surfaces wherever two parts meet (the
-    silhouettes' IoU falls), and too few serve the ends of their runs from far off (at runs
+    lattice a part would leave a seam between lattices across the surfaces wherever two
+    parts meet (the silhouettes' IoU falls), and too few serve the ends of their runs from far off (at runs
     of 15° an orbit's end frame is about 1 dB below its middle, at 5° level with it: docs,
     Performance)."""
     d = np.asarray(centres, np.float64) - np.asarray(target, np.float64)

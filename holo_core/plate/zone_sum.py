@@ -134,7 +134,7 @@ def footprints(position, window: ZoneWindow) -> np.ndarray:
     # (0, 1) (the emitters behind the plate, the zone before it), so the face's corners at
     # -e and +e bound the footprint along x and y, each face's with its own t
     px, py, pz = p.T
-    lo, hi = [np.full(len(p), np.inf)] * 2, [np.full(len(p), -np.inf)] * 2
+    lo, hi = [np.inf, np.inf], [-np.inf, -np.inf]
     for sz in (-1, 1):
         t = -pz / (c[2] + sz * e[2] - pz)
         for i, q in enumerate((px, py)):
