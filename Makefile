@@ -46,9 +46,11 @@ docs: $(STAMP)
 	PYTHONPATH=$(CURDIR) HOLO_FFTW_PLANNER=estimate $(PY) -m sphinx -W --keep-going -n -q \
 	  -b html docs docs/_build/html
 
-# ruff's rules over the whole tree (pyproject.toml, [tool.ruff])
+# ruff's rules and its formatting over the whole tree (pyproject.toml, [tool.ruff]);
+# `ruff format .` writes what the second check asks for
 lint: $(STAMP)
 	$(PY) -m ruff check .
+	$(PY) -m ruff format --check .
 
 # The readers' fuzz suite at 5000 cases each (make test runs 300; about 4 minutes).
 FUZZ_CASES ?= 5000

@@ -6,9 +6,11 @@ pytest imports this file as the root package of every test, core and physics too
 
 def register():
     from .holo_addon import register
+
     register()
 
 
 def unregister():
     from .holo_addon import unregister
+
     unregister()

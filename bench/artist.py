@@ -124,6 +124,7 @@ def side_by_side(name, out: Path, cycles, mine, scene) -> Path:
             image.save_render(str(path), scene=scene)
     else:  # a tree from before: plain sRGB
         from PIL import Image
+
         Image.fromarray((srgb(pair[..., :3]) * 255 + 0.5).astype(np.uint8)).save(path)
     bpy.data.images.remove(image)
     return path
@@ -144,9 +145,11 @@ def edges(mine, cycles, spans):
     lines = []
     for label, channel, rows, cols in spans:
         a, b = (profile(im, channel, rows, cols) for im in (mine, cycles))
-        lines.append(f"{label}: 10-90 % width {width(a):.2f} px, Cycles' {width(b):.2f} px "
-                     f"({width(a) / width(b) - 1:+.1%}); profile at most "
-                     f"{np.abs(a - b).max():.3f} off Cycles'")
+        lines.append(
+            f"{label}: 10-90 % width {width(a):.2f} px, Cycles' {width(b):.2f} px "
+            f"({width(a) / width(b) - 1:+.1%}); profile at most "
+            f"{np.abs(a - b).max():.3f} off Cycles'"
+        )
     return lines
 
 
@@ -167,8 +170,10 @@ def spans(size):
     w, h = size
     rows = slice(h // 3, 2 * h // 3)
     s = w / 320
-    return [("holographic card over the wall", 1, rows, slice(int(200 * s), int(262 * s))),
-            ("red card over the holographic card", 0, rows, slice(int(112 * s), int(178 * s)))]
+    return [
+        ("holographic card over the wall", 1, rows, slice(int(200 * s), int(262 * s))),
+        ("red card over the holographic card", 0, rows, slice(int(112 * s), int(178 * s))),
+    ]
 
 
 def cards(size):
@@ -191,8 +196,7 @@ def cards(size):
     mine, seconds = composite(scene, green, OUT / "holo.exr")
     w, h = size
     rows = slice(h // 3, 2 * h // 3)
-    print(f"moving card ({size[0]}x{size[1]}, 0.1 unit a frame, shutter 0.5): pass "
-          f"{seconds:.1f} s")
+    print(f"moving card ({size[0]}x{size[1]}, 0.1 unit a frame, shutter 0.5): pass {seconds:.1f} s")
     for line in edges(mine, ref, [("right edge", 1, rows, slice(int(w * 0.64), int(w * 0.8)))]):
         print(f"  {line}")
     side_by_side("motion", OUT, ref, mine, scene)
@@ -235,21 +239,24 @@ def instances(size):
     bpy.context.view_layer.update()
     ref = render(scene, OUT / "cycles.exr")
     mine, seconds = composite(scene, sphere, OUT / "holo.exr")
-    print(f"instances (5 collection instances, lit): pass {seconds:.1f} s; "
-          f"{inside_the_object(mine, ref)}")
+    print(
+        f"instances (5 collection instances, lit): pass {seconds:.1f} s; "
+        f"{inside_the_object(mine, ref)}"
+    )
     side_by_side("instances", OUT, ref, mine, scene)
 
 
 def inside_the_object(mine, ref) -> str:
     """The composite against Cycles' frame where the pass is opaque: luminance correlation
     and mean ratio."""
-    alpha = read_exr(OUT / "holo" / "holo_pass_0001.exr", what="pass")[1][
-        "ViewLayer.Combined.A"]
+    alpha = read_exr(OUT / "holo" / "holo_pass_0001.exr", what="pass")[1]["ViewLayer.Combined.A"]
     inside = alpha > 0.99
     lum = [im[..., :3] @ (0.2126, 0.7152, 0.0722) for im in (mine, ref)]
     corr = np.corrcoef(lum[0][inside], lum[1][inside])[0, 1]
-    return (f"inside {inside.sum()} px: luminance correlation {corr:.3f}, mean "
-            f"{lum[0][inside].mean() / lum[1][inside].mean():.3f} x Cycles'")
+    return (
+        f"inside {inside.sum()} px: luminance correlation {corr:.3f}, mean "
+        f"{lum[0][inside].mean() / lum[1][inside].mean():.3f} x Cycles'"
+    )
 
 
 def shot(size):
@@ -287,14 +294,17 @@ def shot(size):
     ref = render(scene, OUT / "cycles.exr")
     mine, seconds = composite(scene, suzanne, OUT / "holo.exr")
     diff = np.abs(mine[..., :3] - ref[..., :3]).mean(-1)
-    print(f"shot ({size[0]}x{size[1]}, f/2, Lighting: Scene): pass {seconds:.1f} s; "
-          f"{inside_the_object(mine, ref)}; whole frame mean |difference| {diff.mean():.4f}, "
-          f"99th percentile {np.percentile(diff, 99):.3f}")
+    print(
+        f"shot ({size[0]}x{size[1]}, f/2, Lighting: Scene): pass {seconds:.1f} s; "
+        f"{inside_the_object(mine, ref)}; whole frame mean |difference| {diff.mean():.4f}, "
+        f"99th percentile {np.percentile(diff, 99):.3f}"
+    )
     side_by_side("shot", OUT, ref, mine, scene)
 
 
 def preview(size):
     from holo_addon.ui import preview as view
+
     scene, green = cards_scene(size, 2.8)
     green.holo.emitter = "POINTS"
     times = []
@@ -308,12 +318,13 @@ def preview(size):
             time.sleep(0.02)
         times.append(time.perf_counter() - begun)
     h, w, _ = view.state().picture.shape
-    print(f"preview ({w}x{h} of {size[0]}x{size[1]}): first picture {times[0]:.2f} s, after "
-          f"a change {times[1]:.2f} and {times[2]:.2f} s (the worker's start included)")
+    print(
+        f"preview ({w}x{h} of {size[0]}x{size[1]}): first picture {times[0]:.2f} s, after "
+        f"a change {times[1]:.2f} and {times[2]:.2f} s (the worker's start included)"
+    )
 
 
-SCENES = {"cards": cards, "units": units, "instances": instances, "shot": shot,
-          "preview": preview}
+SCENES = {"cards": cards, "units": units, "instances": instances, "shot": shot, "preview": preview}
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])

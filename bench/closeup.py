@@ -67,8 +67,14 @@ def speckle_contrast(view, reference) -> float:
     solid = (view.alpha >= 1) & (reference.alpha >= 1)
     lum, ref = view.rgb.mean(-1), reference.rgb.mean(-1)
     pad = np.pad(ref, 1, mode="edge")
-    spread = np.max([np.abs(pad[1 + dy:1 + dy + ref.shape[0], 1 + dx:1 + dx + ref.shape[1]]
-                            - ref) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], 0)
+    spread = np.max(
+        [
+            np.abs(pad[1 + dy : 1 + dy + ref.shape[0], 1 + dx : 1 + dx + ref.shape[1]] - ref)
+            for dy in (-1, 0, 1)
+            for dx in (-1, 0, 1)
+        ],
+        0,
+    )
     flat = solid & (spread < 0.02 * ref.max())
     return float(np.std(lum[flat] / ref[flat])) if flat.sum() >= 20 else float("nan")
 
@@ -92,10 +98,13 @@ def error_split(view, reference, inside) -> dict:
     err = ((view.rgb - reference.rgb) ** 2).sum(-1)
     total = float(err[inside].sum())
     near = float(err[inside & edge].sum())
-    return {"edge share of the error": near / total if total else 0.0,
-            "edge pixels": int((inside & edge).sum()), "face pixels": int((inside & ~edge).sum()),
-            "PSNR on faces [dB]": psnr(view, reference, inside & ~edge),
-            "PSNR near edges [dB]": psnr(view, reference, inside & edge)}
+    return {
+        "edge share of the error": near / total if total else 0.0,
+        "edge pixels": int((inside & edge).sum()),
+        "face pixels": int((inside & ~edge).sum()),
+        "PSNR on faces [dB]": psnr(view, reference, inside & ~edge),
+        "PSNR near edges [dB]": psnr(view, reference, inside & edge),
+    }
 
 
 def seed_split(a, b, reference) -> dict:
@@ -108,16 +117,20 @@ def seed_split(a, b, reference) -> dict:
     da, db = (v.rgb[inside] - reference.rgb[inside] for v in (a, b))
     speckle = float(np.mean((da - db) ** 2) / 2)
     common = max(float(np.mean(da * db)), 1e-30)
-    return {"speckle part [dB]": float(10 * np.log10(peak**2 / speckle)),
-            "seed-free part [dB]": float(10 * np.log10(peak**2 / common))}
+    return {
+        "speckle part [dB]": float(10 * np.log10(peak**2 / speckle)),
+        "seed-free part [dB]": float(10 * np.log10(peak**2 / common)),
+    }
 
 
 def settings(nyquist: int) -> dict:
     """Each setting measured: (the looks of the four viewed, the supersampling)."""
-    return {"defaults (2 looks, supersample 2)": ((0, 3), 2),
-            "4 looks, supersample 2": ((0, 1, 2, 3), 2),
-            f"2 looks, supersample {nyquist} (Nyquist)": ((0, 3), nyquist),
-            f"4 looks, supersample {nyquist} (Nyquist)": ((0, 1, 2, 3), nyquist)}
+    return {
+        "defaults (2 looks, supersample 2)": ((0, 3), 2),
+        "4 looks, supersample 2": ((0, 1, 2, 3), 2),
+        f"2 looks, supersample {nyquist} (Nyquist)": ((0, 3), nyquist),
+        f"4 looks, supersample {nyquist} (Nyquist)": ((0, 1, 2, 3), nyquist),
+    }
 
 
 def record_four(planned, seed: int):
@@ -129,8 +142,11 @@ def record_four(planned, seed: int):
         got = record_planned(planned, codes=[look_code(k, 4) for k in pair], seed=seed)
         for k, h in zip(pair, got):
             looks[k] = h
-        print(f"  seed {seed}, looks {pair} recorded in {time.perf_counter() - t:.1f} s (load "
-              f"{os.getloadavg()[0]:.1f})", flush=True)
+        print(
+            f"  seed {seed}, looks {pair} recorded in {time.perf_counter() - t:.1f} s (load "
+            f"{os.getloadavg()[0]:.1f})",
+            flush=True,
+        )
     return looks, time.perf_counter() - t0
 
 
@@ -147,45 +163,82 @@ def closeup(args):
         zone = PLATE.zone_for(cams["centre"], args.margin)
     else:
         first = cams["left"]
-        zone = ViewingZone.fit([c.position for c in cams.values()],
-                               pupil=first.aperture_diameter, margin=args.margin,
-                               pixel=first.pixel_angle())
-    return meshes(), cams, Plate(matrix_world=PLATE.matrix_world, width=PLATE.width,
-                                 height=PLATE.height, zone=zone)
+        zone = ViewingZone.fit(
+            [c.position for c in cams.values()],
+            pupil=first.aperture_diameter,
+            margin=args.margin,
+            pixel=first.pixel_angle(),
+        )
+    return (
+        meshes(),
+        cams,
+        Plate(matrix_world=PLATE.matrix_world, width=PLATE.width, height=PLATE.height, zone=zone),
+    )
 
 
 def shot_scene(args):
     """The same for bench/shot.py's scene: its frames at the start, middle and end of its
     10 cm dolly, the zone fitted to them with the margin."""
     import shot
-    cams = {eye: shot.camera(x, args.scale) for eye, x in
-            (("left", -0.05), ("centre", 0.0), ("right", 0.05))}
+
+    cams = {
+        eye: shot.camera(x, args.scale)
+        for eye, x in (("left", -0.05), ("centre", 0.0), ("right", 0.05))
+    }
     first = cams["left"]
-    zone = ViewingZone.fit([c.position for c in cams.values()], pupil=first.aperture_diameter,
-                           margin=args.margin, pixel=first.pixel_angle())
-    return shot.scene(), cams, Plate(matrix_world=shot.PLATE.matrix_world,
-                                     width=shot.PLATE.width, height=shot.PLATE.height, zone=zone)
+    zone = ViewingZone.fit(
+        [c.position for c in cams.values()],
+        pupil=first.aperture_diameter,
+        margin=args.margin,
+        pixel=first.pixel_angle(),
+    )
+    return (
+        shot.scene(),
+        cams,
+        Plate(
+            matrix_world=shot.PLATE.matrix_world,
+            width=shot.PLATE.width,
+            height=shot.PLATE.height,
+            zone=zone,
+        ),
+    )
 
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--scale", type=float, default=1.0, help="image size, of 640x360 (1)")
     p.add_argument("--out", type=Path, default=None, help="a folder for the PNGs")
-    p.add_argument("--seeds", type=int, default=2, choices=(1, 2),
-                   help="seeds recorded: with 2 each error is split into the speckle's part "
-                        "and the part no seed changes (2)")
-    p.add_argument("--zone", choices=("shot", "camera"), default="shot",
-                   help="the close-up's zone: fitted to its three cameras, or around the "
-                        "centre one (shot)")
-    p.add_argument("--margin", type=float, default=None,
-                   help=f"the zone's margin [m] ({SHOT_ZONE_MARGIN:g} for a shot's zone, "
-                        f"{CAMERA_MARGIN:g} around a camera)")
-    p.add_argument("--scene", choices=("closeup", "shot"), default="closeup",
-                   help="the close-up, or bench/shot.py's scene measured the same way")
+    p.add_argument(
+        "--seeds",
+        type=int,
+        default=2,
+        choices=(1, 2),
+        help="seeds recorded: with 2 each error is split into the speckle's part "
+        "and the part no seed changes (2)",
+    )
+    p.add_argument(
+        "--zone",
+        choices=("shot", "camera"),
+        default="shot",
+        help="the close-up's zone: fitted to its three cameras, or around the centre one (shot)",
+    )
+    p.add_argument(
+        "--margin",
+        type=float,
+        default=None,
+        help=f"the zone's margin [m] ({SHOT_ZONE_MARGIN:g} for a shot's zone, "
+        f"{CAMERA_MARGIN:g} around a camera)",
+    )
+    p.add_argument(
+        "--scene",
+        choices=("closeup", "shot"),
+        default="closeup",
+        help="the close-up, or bench/shot.py's scene measured the same way",
+    )
     args = p.parse_args()
     if args.margin is None:
         args.margin = SHOT_ZONE_MARGIN if args.zone == "shot" else CAMERA_MARGIN
-    scene, cams, plate = (closeup(args) if args.scene == "closeup" else shot_scene(args))
+    scene, cams, plate = closeup(args) if args.scene == "closeup" else shot_scene(args)
     print(f"load {os.getloadavg()[0]:.1f} at the start")
     planned = plate_plan(scene, plate=plate, looks=2)
     print(f"plan: {planned.plan.describe()}")
@@ -212,23 +265,31 @@ def main():
                 views[seed, name, eye] = view, time.perf_counter() - t
         del looks
         t = time.perf_counter()  # what Auto records and renders
-        chosen = record_planned(chosen_plan, seed=seed,
-                                codes=[look_code(k, choice.looks) for k in range(choice.looks)])
-        print(f"  seed {seed}, the plan's {choice.looks} looks recorded in "
-              f"{time.perf_counter() - t:.1f} s", flush=True)
+        chosen = record_planned(
+            chosen_plan, seed=seed, codes=[look_code(k, choice.looks) for k in range(choice.looks)]
+        )
+        print(
+            f"  seed {seed}, the plan's {choice.looks} looks recorded in "
+            f"{time.perf_counter() - t:.1f} s",
+            flush=True,
+        )
         for eye, cam in cams.items():
             t = time.perf_counter()
             view = render_view(chosen, cam, supersample=choice.supersample)
             views[seed, auto, eye] = view, time.perf_counter() - t
         del chosen
-    figures = {"scene": f"{args.scene} at {cams['centre'].resolution[0]}x"
-                        f"{cams['centre'].resolution[1]}, 50 mm f/2.8, a 10 cm plate, its zone "
-                        f"fitted to the {args.zone}, margin {args.margin:g} m",
-               "plate": f"{planned.plan.shape[1]} x {planned.plan.shape[0]} samples",
-               "four looks recorded [s]": record_s, "Nyquist supersample": nyquist}
-    predicted = {name: choose(planned.plan, resolution=resolution, looks=len(which),
-                              supersample=ss).psnr
-                 for name, (which, ss) in settings(nyquist).items()}
+    figures = {
+        "scene": f"{args.scene} at {cams['centre'].resolution[0]}x"
+        f"{cams['centre'].resolution[1]}, 50 mm f/2.8, a 10 cm plate, its zone "
+        f"fitted to the {args.zone}, margin {args.margin:g} m",
+        "plate": f"{planned.plan.shape[1]} x {planned.plan.shape[0]} samples",
+        "four looks recorded [s]": record_s,
+        "Nyquist supersample": nyquist,
+    }
+    predicted = {
+        name: choose(planned.plan, resolution=resolution, looks=len(which), supersample=ss).psnr
+        for name, (which, ss) in settings(nyquist).items()
+    }
     predicted[auto] = choice.psnr
     # what the quality model takes (holo_core.plate.quality; bench/quality_fit.py fits it)
     blurs, size = reference_view(planned.plan)
@@ -241,45 +302,62 @@ def main():
             view, seconds = views[0, name, eye]
             ref = refs[eye]
             inside = (ref.alpha >= 1) & (view.alpha >= 1)
-            row = {"PSNR [dB]": psnr(view, ref, inside),
-                   "IoU": iou(view.alpha > 0.5, ref.alpha > 0.5),
-                   "speckle contrast": speckle_contrast(view, ref),
-                   "view [s]": seconds, **error_split(view, ref, inside),
-                   "predicted [dB]": predicted[name], "looks": taken[name][0],
-                   "supersample": taken[name][1],
-                   "(σ/⟨I⟩)²": float(np.mean(speckle_variance(blurs, *taken[name])))}
+            row = {
+                "PSNR [dB]": psnr(view, ref, inside),
+                "IoU": iou(view.alpha > 0.5, ref.alpha > 0.5),
+                "speckle contrast": speckle_contrast(view, ref),
+                "view [s]": seconds,
+                **error_split(view, ref, inside),
+                "predicted [dB]": predicted[name],
+                "looks": taken[name][0],
+                "supersample": taken[name][1],
+                "(σ/⟨I⟩)²": float(np.mean(speckle_variance(blurs, *taken[name]))),
+            }
             truth = converged[eye]
             row[f"PSNR against supersample {CONVERGED} [dB]"] = psnr(
-                view, truth, (truth.alpha >= 1) & (view.alpha >= 1))
+                view, truth, (truth.alpha >= 1) & (view.alpha >= 1)
+            )
             row[f"IoU against supersample {CONVERGED}"] = iou(view.alpha > 0.5, truth.alpha > 0.5)
             if args.seeds > 1:
                 row.update(seed_split(views[0, name, eye][0], views[1, name, eye][0], ref))
             rows.append(row)
             figures[f"{name}, {eye}"] = row
-            split = (f"; speckle {row['speckle part [dB]']:.2f} dB, seed-free "
-                     f"{row['seed-free part [dB]']:.2f} dB" if args.seeds > 1 else "")
-            print(f"{name}, {eye}: PSNR {row['PSNR [dB]']:.2f} dB ({CONVERGED}x "
-                  f"{row[f'PSNR against supersample {CONVERGED} [dB]']:.2f}; faces "
-                  f"{row['PSNR on faces [dB]']:.2f}, near edges "
-                  f"{row['PSNR near edges [dB]']:.2f}, edge share "
-                  f"{row['edge share of the error']:.2f}){split}, IoU {row['IoU']:.4f}, "
-                  f"speckle contrast {row['speckle contrast']:.4f}, view {seconds:.2f} s",
-                  flush=True)
+            split = (
+                f"; speckle {row['speckle part [dB]']:.2f} dB, seed-free "
+                f"{row['seed-free part [dB]']:.2f} dB"
+                if args.seeds > 1
+                else ""
+            )
+            print(
+                f"{name}, {eye}: PSNR {row['PSNR [dB]']:.2f} dB ({CONVERGED}x "
+                f"{row[f'PSNR against supersample {CONVERGED} [dB]']:.2f}; faces "
+                f"{row['PSNR on faces [dB]']:.2f}, near edges "
+                f"{row['PSNR near edges [dB]']:.2f}, edge share "
+                f"{row['edge share of the error']:.2f}){split}, IoU {row['IoU']:.4f}, "
+                f"speckle contrast {row['speckle contrast']:.4f}, view {seconds:.2f} s",
+                flush=True,
+            )
             if args.out is not None:
                 args.out.mkdir(parents=True, exist_ok=True)
                 tag = name.split(" (")[0].replace(", ", "_").replace(" ", "").replace("'", "")
                 write_png(args.out / f"{eye}_{tag}.png", picture(view))
                 err = np.abs(view.rgb - ref.rgb).mean(-1) * inside
-                write_png(args.out / f"{eye}_{tag}_error.png",
-                          np.clip(err / max(float(ref.rgb.max()), 1e-12) * 8, 0, 1)[..., None]
-                          .repeat(3, -1))
+                write_png(
+                    args.out / f"{eye}_{tag}_error.png",
+                    np.clip(err / max(float(ref.rgb.max()), 1e-12) * 8, 0, 1)[..., None].repeat(
+                        3, -1
+                    ),
+                )
         against = [r[f"PSNR against supersample {CONVERGED} [dB]"] for r in rows]
-        print(f"{name}: predicted {predicted[name]:.2f} dB; measured "
-              f"{min(r['PSNR [dB]'] for r in rows):.2f}-"
-              f"{max(r['PSNR [dB]'] for r in rows):.2f} dB ({min(against):.2f}-"
-              f"{max(against):.2f} against supersample {CONVERGED}), IoU "
-              f"{min(r['IoU'] for r in rows):.4f}-{max(r['IoU'] for r in rows):.4f} (load "
-              f"{os.getloadavg()[0]:.1f})", flush=True)
+        print(
+            f"{name}: predicted {predicted[name]:.2f} dB; measured "
+            f"{min(r['PSNR [dB]'] for r in rows):.2f}-"
+            f"{max(r['PSNR [dB]'] for r in rows):.2f} dB ({min(against):.2f}-"
+            f"{max(against):.2f} against supersample {CONVERGED}), IoU "
+            f"{min(r['IoU'] for r in rows):.4f}-{max(r['IoU'] for r in rows):.4f} (load "
+            f"{os.getloadavg()[0]:.1f})",
+            flush=True,
+        )
     if args.out is not None:
         for eye, ref in refs.items():
             write_png(args.out / f"{eye}_camera.png", picture(ref))

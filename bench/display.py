@@ -64,10 +64,10 @@ from holo_core.scene.mesh import Mesh
 
 PITCH = 8e-6
 WAVELENGTHS = (638e-9, 520e-9, 488e-9)
-CENTRE = -10e-3      # the scene's centre, behind the display [m]
-HALF_DEPTH = 5e-3    # the focal stack's half-depth [m]
-EYE = 0.3            # the eye box's centre on the axis [m], where occlusion is seen from
-SPOT = PITCH / 0.5   # the resolved spot through the half-Nyquist filter [m]
+CENTRE = -10e-3  # the scene's centre, behind the display [m]
+HALF_DEPTH = 5e-3  # the focal stack's half-depth [m]
+EYE = 0.3  # the eye box's centre on the axis [m], where occlusion is seen from
+SPOT = PITCH / 0.5  # the resolved spot through the half-Nyquist filter [m]
 
 
 def fitted(meshes, width, depth):
@@ -77,8 +77,16 @@ def fitted(meshes, width, depth):
     lo, hi = every.min(0), every.max(0)
     scale = np.array([width / (hi[0] - lo[0])] * 2 + [depth / (hi[2] - lo[2])])
     shift = np.array([0.0, 0.0, CENTRE]) - (lo + hi) / 2 * scale
-    return [Mesh(vertices=m.vertices * scale + shift, triangles=m.triangles, uvs=m.uvs,
-                 texture=m.texture, colours=m.colours) for m in meshes]
+    return [
+        Mesh(
+            vertices=m.vertices * scale + shift,
+            triangles=m.triangles,
+            uvs=m.uvs,
+            texture=m.texture,
+            colours=m.colours,
+        )
+        for m in meshes
+    ]
 
 
 def demo_meshes(width):
@@ -105,10 +113,17 @@ def chart_meshes(width, depth=9e-3):
     width = height = 0.85 * width
     x0, x1 = -width / 2, width / 2
     z0, z1 = CENTRE + depth / 2, CENTRE - depth / 2
-    v = np.array([[x0, -height / 2, z0], [x1, -height / 2, z1], [x1, height / 2, z1],
-                  [x0, height / 2, z0]])
-    return [Mesh(vertices=v, triangles=np.array([[0, 1, 2], [0, 2, 3]]),
-                 uvs=np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]]), texture=chart())]
+    v = np.array(
+        [[x0, -height / 2, z0], [x1, -height / 2, z1], [x1, height / 2, z1], [x0, height / 2, z0]]
+    )
+    return [
+        Mesh(
+            vertices=v,
+            triangles=np.array([[0, 1, 2], [0, 2, 3]]),
+            uvs=np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]]),
+            texture=chart(),
+        )
+    ]
 
 
 def scene_wave(meshes, shape, wavelengths, spacing=SPOT, at_eye=False):
@@ -116,8 +131,7 @@ def scene_wave(meshes, shape, wavelengths, spacing=SPOT, at_eye=False):
     from the eye box's centre, recorded on twice the display's grid and cropped; ``at_eye``:
     the points' light in one phase at the eye box's centre, else at the points."""
     centre = np.array([0.0, 0.0, EYE])
-    pos, colour, *_ = surface_points(meshes, centre, np.eye(3), spacing / (EYE - CENTRE),
-                                       layers=1)
+    pos, colour, *_ = surface_points(meshes, centre, np.eye(3), spacing / (EYE - CENTRE), layers=1)
     big = (2 * shape[0], 2 * shape[1])
     r0, c0 = (big[0] - shape[0]) // 2, (big[1] - shape[1]) // 2
     waves = []
@@ -127,7 +141,7 @@ def scene_wave(meshes, shape, wavelengths, spacing=SPOT, at_eye=False):
             reach = np.linalg.norm(pos - centre, axis=1)
             amp = amp * np.exp(-2j * np.pi / lam * np.remainder(reach, lam)).astype(np.complex64)
         u = point_wave(pos, amp, wavelength=lam, pitch=PITCH, shape=big)
-        waves.append(np.asarray(u)[r0:r0 + shape[0], c0:c0 + shape[1]])
+        waves.append(np.asarray(u)[r0 : r0 + shape[0], c0 : c0 + shape[1]])
     return waves, len(pos)
 
 
@@ -141,21 +155,42 @@ def main(argv=None):
     parser.add_argument("--out", type=Path)
     parser.add_argument("--iterations", type=int)
     parser.add_argument("--gs-iterations", type=int)
-    parser.add_argument("--slices-per-step", type=int, default=1,
-                        help="planes of the stack drawn a gradient-descent step")
-    parser.add_argument("--clip", type=float, default=0.05,
-                        help="clip_fraction of the double-phase (and the warm starts)")
+    parser.add_argument(
+        "--slices-per-step",
+        type=int,
+        default=1,
+        help="planes of the stack drawn a gradient-descent step",
+    )
+    parser.add_argument(
+        "--clip",
+        type=float,
+        default=0.05,
+        help="clip_fraction of the double-phase (and the warm starts)",
+    )
     parser.add_argument("--skip-1080p", action="store_true")
-    parser.add_argument("--eye", type=float, metavar="MM",
-                        help="judge through an eye's pupil MM wide at the eye box (EYE)")
-    parser.add_argument("--hd-steps", type=int,
-                        help="gradient-descent steps run at 1080p (the rest of 100 extrapolated)")
-    parser.add_argument("--scenes", nargs="*", default=["demo", "textured"],
-                        help="scenes to run (none: the 1080p timings alone)")
-    parser.add_argument("--part", type=Path,
-                        help="write this run's figures to PART (JSON) for --merge, not results")
-    parser.add_argument("--merge", nargs="+", type=Path,
-                        help="write the figures of these parts to bench/results")
+    parser.add_argument(
+        "--eye",
+        type=float,
+        metavar="MM",
+        help="judge through an eye's pupil MM wide at the eye box (EYE)",
+    )
+    parser.add_argument(
+        "--hd-steps",
+        type=int,
+        help="gradient-descent steps run at 1080p (the rest of 100 extrapolated)",
+    )
+    parser.add_argument(
+        "--scenes",
+        nargs="*",
+        default=["demo", "textured"],
+        help="scenes to run (none: the 1080p timings alone)",
+    )
+    parser.add_argument(
+        "--part", type=Path, help="write this run's figures to PART (JSON) for --merge, not results"
+    )
+    parser.add_argument(
+        "--merge", nargs="+", type=Path, help="write the figures of these parts to bench/results"
+    )
     args = parser.parse_args(argv)
     if args.merge:
         figures = {}
@@ -168,15 +203,19 @@ def main(argv=None):
     slices = 10 if args.quick else 30
     iterations = args.iterations or (40 if args.quick else 100)
     gs_iterations = args.gs_iterations or (20 if args.quick else 30)
-    display = Display(name="slm-1080p-8um-window", resolution=shape[::-1], pitch=PITCH,
-                      bit_depth=8)
-    setup = SLMSetup(display=display, lasers=[Laser(wavelength=w) for w in WAVELENGTHS],
-                     depth_range=(CENTRE - HALF_DEPTH, CENTRE + HALF_DEPTH), slices=slices,
-                     band=0.5)
-    settings = {"double-phase": {},
-                "gradient-descent": {"iterations": iterations,
-                                     "slices_per_step": args.slices_per_step},
-                "gerchberg-saxton": {"iterations": gs_iterations}}
+    display = Display(name="slm-1080p-8um-window", resolution=shape[::-1], pitch=PITCH, bit_depth=8)
+    setup = SLMSetup(
+        display=display,
+        lasers=[Laser(wavelength=w) for w in WAVELENGTHS],
+        depth_range=(CENTRE - HALF_DEPTH, CENTRE + HALF_DEPTH),
+        slices=slices,
+        band=0.5,
+    )
+    settings = {
+        "double-phase": {},
+        "gradient-descent": {"iterations": iterations, "slices_per_step": args.slices_per_step},
+        "gerchberg-saxton": {"iterations": gs_iterations},
+    }
     for s in settings.values():
         s["clip_fraction"] = args.clip
     out = args.out or Path(tempfile.mkdtemp(prefix="holo-display-"))
@@ -194,32 +233,53 @@ def main(argv=None):
         for method in METHODS:
             folder = out / scene / method
             folder.mkdir(parents=True, exist_ok=True)
-            frame = export_frame(waves, setup, folder, stem="frame_0001", distance=CENTRE,
-                                 method=method, stack_compression="none", eye=eye,
-                                 **settings[method])
+            frame = export_frame(
+                waves,
+                setup,
+                folder,
+                stem="frame_0001",
+                distance=CENTRE,
+                method=method,
+                stack_compression="none",
+                eye=eye,
+                **settings[method],
+            )
             psnr = float(np.mean([c.mean_psnr_db for c in frame.comparisons]))
             ssim = float(np.mean([c.mean_ssim for c in frame.comparisons]))
             figures[f"{scene} {method}{suffix}"] = {
-                "psnr_db": round(psnr, 2), "ssim": round(ssim, 4),
+                "psnr_db": round(psnr, 2),
+                "ssim": round(ssim, 4),
                 "seconds_per_frame": round(frame.seconds, 2),
                 "psnr_db per laser": [round(c.mean_psnr_db, 2) for c in frame.comparisons],
                 "worst slice psnr_db": round(min(min(c.psnr_db) for c in frame.comparisons), 2),
-                "load": load()}
-            print(f"{scene} {method}: {psnr:.2f} dB, SSIM {ssim:.3f}, {frame.seconds:.1f} s a "
-                  f"colour frame (load {load()[0]})", flush=True)
+                "load": load(),
+            }
+            print(
+                f"{scene} {method}: {psnr:.2f} dB, SSIM {ssim:.3f}, {frame.seconds:.1f} s a "
+                f"colour frame (load {load()[0]})",
+                flush=True,
+            )
     if not (args.skip_1080p or args.quick):
         if waves is None:  # no scene ran: the timings do not depend on what the wave shows
             rng = np.random.default_rng(0)
-            waves = [np.exp(1j * rng.uniform(0, 0.1, shape)).astype(np.complex64) * 0.5
-                     for _ in WAVELENGTHS]
+            waves = [
+                np.exp(1j * rng.uniform(0, 0.1, shape)).astype(np.complex64) * 0.5
+                for _ in WAVELENGTHS
+            ]
         figures.update(hd_times(waves, iterations=100, clip=args.clip, steps=args.hd_steps))
-    figures["protocol"] = (f"{PITCH * 1e6:g} um, {'/'.join(f'{w * 1e9:.0f}' for w in WAVELENGTHS)}"
-                           f" nm, {shape[1]}x{shape[0]} computed at 2x and cropped, {slices} "
-                           f"slices over +-{HALF_DEPTH * 1e3:g} mm, 8-bit, band 0.5; GD "
-                           f"{iterations} steps of {args.slices_per_step} slices, GS "
-                           f"{gs_iterations} plane visits, clip_fraction {args.clip:g}"
-                           + ("" if eye is None else f"; eye: a {args.eye:g} mm pupil "
-                              f"{EYE * 1e3:g} mm in front, the points in phase there"))
+    figures["protocol"] = (
+        f"{PITCH * 1e6:g} um, {'/'.join(f'{w * 1e9:.0f}' for w in WAVELENGTHS)}"
+        f" nm, {shape[1]}x{shape[0]} computed at 2x and cropped, {slices} "
+        f"slices over +-{HALF_DEPTH * 1e3:g} mm, 8-bit, band 0.5; GD "
+        f"{iterations} steps of {args.slices_per_step} slices, GS "
+        f"{gs_iterations} plane visits, clip_fraction {args.clip:g}"
+        + (
+            ""
+            if eye is None
+            else f"; eye: a {args.eye:g} mm pupil "
+            f"{EYE * 1e3:g} mm in front, the points in phase there"
+        )
+    )
     figures["out"] = str(out)
     if args.part:
         args.part.write_text(json.dumps(figures, indent=1) + "\n")
@@ -243,7 +303,7 @@ def hd_times(waves, *, iterations, clip, steps=None):
     for w in waves:
         u = np.zeros(shape, np.complex64)
         r, c = ((n - m) // 2 for n, m in zip(shape, w.shape))
-        u[r:r + w.shape[0], c:c + w.shape[1]] = w
+        u[r : r + w.shape[0], c : c + w.shape[1]] = w
         padded.append(u)
     wall, cpu = time.perf_counter(), time.process_time()
     for u, lam in zip(padded, WAVELENGTHS):
@@ -257,23 +317,43 @@ def hd_times(waves, *, iterations, clip, steps=None):
         targets = optics.stack(u)  # the focal stack's targets, made once per frame
         made += (time.perf_counter() - wall, time.process_time() - cpu)
         wall, cpu = time.perf_counter(), time.process_time()
-        encode(u, display, wavelength=lam, method="gradient-descent", optics=optics,
-               targets=targets, iterations=steps, slices_per_step=1, clip_fraction=clip)
+        encode(
+            u,
+            display,
+            wavelength=lam,
+            method="gradient-descent",
+            optics=optics,
+            targets=targets,
+            iterations=steps,
+            slices_per_step=1,
+            clip_fraction=clip,
+        )
         gd += (time.perf_counter() - wall, time.process_time() - cpu)
     gd *= iterations / steps
-    print(f"1080p colour frame: double-phase {dp[0]:.2f} s ({dp[1]:.2f} s CPU), {iterations} "
-          f"steps of gradient descent {gd[0]:.1f} s ({gd[1]:.1f} s CPU"
-          f"{f', {steps} run' if steps < iterations else ''}) after {made[0]:.1f} s "
-          f"({made[1]:.1f} s CPU) making the targets (load {load()[0]})")
-    return {"1080p colour frame double-phase": {
-                "seconds_per_frame": round(dp[0], 2), "cpu_seconds": round(dp[1], 2),
-                "target": 5.0, "load": load()},
-            f"1080p colour frame {iterations} steps gradient-descent": {
-                "seconds_per_frame": round(float(gd[0]), 2),
-                "cpu_seconds": round(float(gd[1]), 2), "target": 60.0, "load": load(),
-                "slices per step": 1, "steps run (the rest extrapolated)": steps,
-                "targets' stack [s]": round(float(made[0]), 2),
-                "targets' stack cpu [s]": round(float(made[1]), 2)}}
+    print(
+        f"1080p colour frame: double-phase {dp[0]:.2f} s ({dp[1]:.2f} s CPU), {iterations} "
+        f"steps of gradient descent {gd[0]:.1f} s ({gd[1]:.1f} s CPU"
+        f"{f', {steps} run' if steps < iterations else ''}) after {made[0]:.1f} s "
+        f"({made[1]:.1f} s CPU) making the targets (load {load()[0]})"
+    )
+    return {
+        "1080p colour frame double-phase": {
+            "seconds_per_frame": round(dp[0], 2),
+            "cpu_seconds": round(dp[1], 2),
+            "target": 5.0,
+            "load": load(),
+        },
+        f"1080p colour frame {iterations} steps gradient-descent": {
+            "seconds_per_frame": round(float(gd[0]), 2),
+            "cpu_seconds": round(float(gd[1]), 2),
+            "target": 60.0,
+            "load": load(),
+            "slices per step": 1,
+            "steps run (the rest extrapolated)": steps,
+            "targets' stack [s]": round(float(made[0]), 2),
+            "targets' stack cpu [s]": round(float(made[1]), 2),
+        },
+    }
 
 
 if __name__ == "__main__":

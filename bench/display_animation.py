@@ -36,8 +36,9 @@ import results  # the bench folder's own: the figures as data
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--frames", type=int, default=24)
-    p.add_argument("--display", type=float, nargs=3, default=(256, 256, 8.0),
-                   metavar=("W", "H", "PITCH_UM"))
+    p.add_argument(
+        "--display", type=float, nargs=3, default=(256, 256, 8.0), metavar=("W", "H", "PITCH_UM")
+    )
     p.add_argument("--lighting", choices=("SCENE", "ALBEDO"), default="SCENE")
     p.add_argument("--slices", type=int, default=5)
     p.add_argument("--out", type=Path, help="keep the frames here (default: a scratch folder)")
@@ -55,8 +56,9 @@ def main(argv=None) -> int:
     register()
     session.exit_on_failure = False
     display = (int(args.display[0]), int(args.display[1]), float(args.display[2]))
-    scene, shown = build_scene(bpy, frames=args.frames, display=display,
-                               lighting=args.lighting, slices=args.slices)
+    scene, shown = build_scene(
+        bpy, frames=args.frames, display=display, lighting=args.lighting, slices=args.slices
+    )
     scene.render.filepath = str(out / "raster") + os.sep
 
     def render(folder: Path, frames=None) -> float:
@@ -78,8 +80,10 @@ def main(argv=None) -> int:
         layout_path = folder / f"frame_{frame:04d}.json"
         try:
             layout = json.loads(layout_path.read_text())
-            names = [x[k] for x in layout["lasers"] for k in ("pattern", "layout")] + \
-                [layout["stack"]["file"], layout["stack"]["sheet"]]
+            names = [x[k] for x in layout["lasers"] for k in ("pattern", "layout")] + [
+                layout["stack"]["file"],
+                layout["stack"]["sheet"],
+            ]
             complete = all((folder / n).is_file() for n in names)
         except (OSError, ValueError, KeyError):
             complete, layout = False, None
@@ -93,21 +97,29 @@ def main(argv=None) -> int:
         alone_seconds.append(render(alone_dir, [frame]))
         there = frame_folder(scene, shown.name)
         for path in sorted(folder.glob(f"frame_{frame:04d}*")):
-            identical.append((there / path.name).is_file()
-                             and (there / path.name).read_bytes() == path.read_bytes())
+            identical.append(
+                (there / path.name).is_file()
+                and (there / path.name).read_bytes() == path.read_bytes()
+            )
     per_frame = sequence / args.frames
     alone = float(np.mean(alone_seconds))
     figures = {
         "display": f"{display[0]}x{display[1]} at {display[2]:g} µm",
-        "lighting": args.lighting, "frames": args.frames, "slices": args.slices,
+        "lighting": args.lighting,
+        "frames": args.frames,
+        "slices": args.slices,
         "seconds per frame (sequence)": round(per_frame, 2),
         "seconds per frame alone (reference)": round(alone, 2),
         "alone / sequence": round(alone / per_frame, 2),
         "frames written": f"{sum(written)} of {args.frames}",
         "frames alone identical to the sequence's": f"{alone_frames}: {all(identical)}",
-        "focal stack": {name: {"psnr_db": round(float(np.mean([a for a, _ in v])), 2),
-                               "ssim": round(float(np.mean([b for _, b in v])), 4)}
-                        for name, v in scores.items()},
+        "focal stack": {
+            name: {
+                "psnr_db": round(float(np.mean([a for a, _ in v])), 2),
+                "ssim": round(float(np.mean([b for _, b in v])), 4),
+            }
+            for name, v in scores.items()
+        },
     }
     path = results.write("display_animation", figures)
     print(json.dumps(figures, indent=1))

@@ -78,8 +78,14 @@ def scene(size, seed=1):
 
 def camera():
     eye = np.array([0.002, 0.001, 0.05])
-    return Camera(matrix_world=look_at(eye, (0.002, 0.001, -0.015), up=(0, 1, 0)), lens=100,
-                  sensor_width=12, resolution=(640, 360), fstop=16, focus_distance=0.065)
+    return Camera(
+        matrix_world=look_at(eye, (0.002, 0.001, -0.015), up=(0, 1, 0)),
+        lens=100,
+        sensor_width=12,
+        resolution=(640, 360),
+        fstop=16,
+        focus_distance=0.065,
+    )
 
 
 def timed(f, *args, **kw):
@@ -94,27 +100,54 @@ def measure(size, mode, tile, work: Path, out: Path | None) -> dict:
     """One size by one route, in this (fresh) process: times [s] and peaks [GB]."""
     pos, col = scene(size)
     if mode == "memory":
-        _, rec_s, rec_gb = timed(record_points, pos, col, shape=(size, size), pitch=PITCH,
-                                 wavelengths=(WAVELENGTH,), method="direct",
-                                 keep_object_wave=True)
+        _, rec_s, rec_gb = timed(
+            record_points,
+            pos,
+            col,
+            shape=(size, size),
+            pitch=PITCH,
+            wavelengths=(WAVELENGTH,),
+            method="direct",
+            keep_object_wave=True,
+        )
         return {"record_s": rec_s, "record_gb": rec_gb}
     url = work / f"plate{size}.zarr"
-    h, rec_s, rec_gb = timed(record_tiled, pos, col, url=url, shape=(size, size), pitch=PITCH,
-                             wavelengths=(WAVELENGTH,), tile=tile)
+    h, rec_s, rec_gb = timed(
+        record_tiled,
+        pos,
+        col,
+        url=url,
+        shape=(size, size),
+        pitch=PITCH,
+        wavelengths=(WAVELENGTH,),
+        tile=tile,
+    )
     view, view_s, view_gb = timed(render_view, h, camera(), supersample=1)
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
-        write_png(out / f"view{size}.png", np.clip(view.rgb / max(view.rgb.max(), 1e-30), 0, 1)
-                  ** (1 / 2.2))
-    return {"points": len(pos), "record_s": rec_s, "record_gb": rec_gb, "view_s": view_s,
-            "view_gb": view_gb}
+        write_png(
+            out / f"view{size}.png",
+            np.clip(view.rgb / max(view.rgb.max(), 1e-30), 0, 1) ** (1 / 2.2),
+        )
+    return {
+        "points": len(pos),
+        "record_s": rec_s,
+        "record_gb": rec_gb,
+        "view_s": view_s,
+        "view_gb": view_gb,
+    }
 
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--sizes", type=int, nargs="+", default=[8192, 16384, 32768])
-    p.add_argument("--memory-sizes", type=int, nargs="*", default=[8192],
-                   help="sizes also recorded in memory (the reference; 16384² needs ~40 GB)")
+    p.add_argument(
+        "--memory-sizes",
+        type=int,
+        nargs="*",
+        default=[8192],
+        help="sizes also recorded in memory (the reference; 16384² needs ~40 GB)",
+    )
     p.add_argument("--tile", type=int, default=2048)
     p.add_argument("--dir", type=Path, default=None, help="where the stores go (a temp dir)")
     p.add_argument("--out", type=Path, default=None, help="a folder for the views' PNGs")
@@ -128,8 +161,17 @@ def main():
     print(f"{cores} cores; stores in {work}; each measurement in a fresh process", flush=True)
 
     def child(size, mode):
-        cmd = [sys.executable, __file__, "--one", str(size), mode, "--tile", str(args.tile),
-               "--dir", str(work)] + (["--out", str(args.out)] if args.out else [])
+        cmd = [
+            sys.executable,
+            __file__,
+            "--one",
+            str(size),
+            mode,
+            "--tile",
+            str(args.tile),
+            "--dir",
+            str(work),
+        ] + (["--out", str(args.out)] if args.out else [])
         run = subprocess.run(cmd, capture_output=True, text=True, check=True)
         return json.loads(run.stdout.strip().splitlines()[-1])
 
@@ -137,39 +179,61 @@ def main():
     try:
         for size in args.sizes:
             r = tiled[size] = child(size, "tiled")
-            print(f"{size}²: {r['points']} points, recorded in {r['record_s']:.1f} s "
-                  f"({size * size / 1e6 / r['record_s'] / cores:.2f} Mpx/s per core), peak "
-                  f"{r['record_gb']:.2f} GB; view {r['view_s']:.1f} s, peak {r['view_gb']:.2f} "
-                  f"GB", flush=True)
+            print(
+                f"{size}²: {r['points']} points, recorded in {r['record_s']:.1f} s "
+                f"({size * size / 1e6 / r['record_s'] / cores:.2f} Mpx/s per core), peak "
+                f"{r['record_gb']:.2f} GB; view {r['view_s']:.1f} s, peak {r['view_gb']:.2f} "
+                f"GB",
+                flush=True,
+            )
             shutil.rmtree(work / f"plate{size}.zarr", ignore_errors=True)
         for size in args.memory_sizes:
             r = memory[size] = child(size, "memory")
-            ratio = f", tiled/in-memory time {tiled[size]['record_s'] / r['record_s']:.2f}" \
-                if size in tiled else ""
-            print(f"{size}² in memory: {r['record_s']:.1f} s, peak {r['record_gb']:.2f} GB"
-                  f"{ratio}", flush=True)
+            ratio = (
+                f", tiled/in-memory time {tiled[size]['record_s'] / r['record_s']:.2f}"
+                if size in tiled
+                else ""
+            )
+            print(
+                f"{size}² in memory: {r['record_s']:.1f} s, peak {r['record_gb']:.2f} GB{ratio}",
+                flush=True,
+            )
     finally:
         shutil.rmtree(work, ignore_errors=True)
     print("\nsize    points  record [s]  Mpx/s/core  peak [GB]  view [s]  view peak [GB]")
     for size, r in tiled.items():
-        print(f"{size:6d}  {r['points']:6d}  {r['record_s']:10.1f}  "
-              f"{size * size / 1e6 / r['record_s'] / cores:10.2f}  {r['record_gb']:9.2f}  "
-              f"{r['view_s']:8.1f}  {r['view_gb']:14.2f}")
+        print(
+            f"{size:6d}  {r['points']:6d}  {r['record_s']:10.1f}  "
+            f"{size * size / 1e6 / r['record_s'] / cores:10.2f}  {r['record_gb']:9.2f}  "
+            f"{r['view_s']:8.1f}  {r['view_gb']:14.2f}"
+        )
     if len(tiled) > 1:  # time = fixed + per-sample: the fit's slope is the linear part
         n = np.array([s * s for s in tiled], float)
         t = np.array([r["record_s"] for r in tiled.values()])
         slope, fixed = np.polyfit(n, t, 1)
         worst = np.abs(fixed + slope * n - t).max() / t.max()
-        print(f"time = {fixed:.1f} s + {slope * 1e9:.1f} s per Gpx (largest deviation "
-              f"{worst:.1%} of the longest): {1e-6 / slope / cores:.2f} Mpx/s per core "
-              f"beyond the cluster's start")
-    table = {f"{size}², tiled": {"points": r["points"], "record [s]": r["record_s"],
-                                 "Mpx/s per core": size * size / 1e6 / r["record_s"] / cores,
-                                 "peak [GB]": r["record_gb"], "a 640x360 view [s]": r["view_s"],
-                                 "the view's peak [GB]": r["view_gb"]}
-             for size, r in tiled.items()}
-    table.update({f"{size}², in memory": {"record [s]": r["record_s"], "peak [GB]": r["record_gb"]}
-                  for size, r in memory.items()})
+        print(
+            f"time = {fixed:.1f} s + {slope * 1e9:.1f} s per Gpx (largest deviation "
+            f"{worst:.1%} of the longest): {1e-6 / slope / cores:.2f} Mpx/s per core "
+            f"beyond the cluster's start"
+        )
+    table = {
+        f"{size}², tiled": {
+            "points": r["points"],
+            "record [s]": r["record_s"],
+            "Mpx/s per core": size * size / 1e6 / r["record_s"] / cores,
+            "peak [GB]": r["record_gb"],
+            "a 640x360 view [s]": r["view_s"],
+            "the view's peak [GB]": r["view_gb"],
+        }
+        for size, r in tiled.items()
+    }
+    table.update(
+        {
+            f"{size}², in memory": {"record [s]": r["record_s"], "peak [GB]": r["record_gb"]}
+            for size, r in memory.items()
+        }
+    )
     results.write("gigapixel", table)
 
 

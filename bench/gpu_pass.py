@@ -48,6 +48,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 # --- the job ----------------------------------------------------------------------------------
 
+
 def make_job(path: Path, resolution, fstop, samples) -> None:
     """The demo scene (holo_addon.demo) read into the worker's job and pickled to ``path``."""
     import bpy
@@ -56,6 +57,7 @@ def make_job(path: Path, resolution, fstop, samples) -> None:
     from holo_addon import register
     from holo_addon.demo import build_scene
     from holo_addon.render import pipeline
+
     bpy.ops.wm.read_factory_settings(use_empty=True)
     register()
     scene = build_scene(bpy, resolution=tuple(resolution), fstop=fstop)
@@ -70,6 +72,7 @@ def make_job(path: Path, resolution, fstop, samples) -> None:
 
 
 # --- one backend in this process ---------------------------------------------------------------
+
 
 class Stages:
     """Exclusive seconds per stage: a stage's time less that of the stages inside it; and, for
@@ -124,11 +127,13 @@ def child(job_path: Path, backend: str, runs: int, result_path: Path) -> None:
     from holo_core.camera import render as camera_render
     from holo_core.job import Job
     from holo_core.opencl import get_runtime
+
     imported = time.perf_counter() - t0
     with open(job_path, "rb") as f:
         job = Job.from_dict(pickle.load(f))
-    job = replace(job, output=replace(job.output, folder=Path(tempfile.mkdtemp(
-        prefix="holo-gpu-pass-"))))
+    job = replace(
+        job, output=replace(job.output, folder=Path(tempfile.mkdtemp(prefix="holo-gpu-pass-")))
+    )
 
     stages = Stages()
     for name in ("choose_optics", "rasterize", "point_emitters", "merged"):
@@ -138,10 +143,10 @@ def child(job_path: Path, backend: str, runs: int, result_path: Path) -> None:
     stages.wrap(recording.PupilFields, "image", "image kernels and readback", sync=True)
     # the incoherent route (the add-on's default: the looks' limit in one pass)
     stages.wrap(incoherent.IncoherentImages, "__init__", "device setup and uploads", sync=True)
-    stages.wrap(incoherent.IncoherentImages, "_transfer_functions", "PSF transfer functions",
-                sync=True)
-    stages.wrap(incoherent.IncoherentImages, "images", "maps, products, reads (kernels)",
-                sync=True)
+    stages.wrap(
+        incoherent.IncoherentImages, "_transfer_functions", "PSF transfer functions", sync=True
+    )
+    stages.wrap(incoherent.IncoherentImages, "images", "maps, products, reads (kernels)", sync=True)
     stages.wrap(camera_render._Accumulator, "add", "accumulate looks (host)")
     stages.wrap(camera_render._Accumulator, "add_expected", "accumulate looks (host)")
     stages.wrap(camera_render._Accumulator, "result", "result: colour, depth (host)")
@@ -163,24 +168,44 @@ def child(job_path: Path, backend: str, runs: int, result_path: Path) -> None:
     profiled = time.perf_counter() - t
     stages.on = False
     np.save(result_path.with_suffix(".npy"), view.rgb * view.alpha[..., None])
-    result_path.write_text(json.dumps({
-        "backend": rt.fft.name, "device": rt.device.name.strip(),
-        "platform": rt.device.platform.name.strip(), "driver": rt.device.driver_version,
-        "import_s": imported, "runs_s": timings, "profiled_s": profiled,
-        "stages": dict(stages.seconds), "info": {k: v for k, v in view.info.items()
-                                                 if k != "pass_key"}}))
+    result_path.write_text(
+        json.dumps(
+            {
+                "backend": rt.fft.name,
+                "device": rt.device.name.strip(),
+                "platform": rt.device.platform.name.strip(),
+                "driver": rt.device.driver_version,
+                "import_s": imported,
+                "runs_s": timings,
+                "profiled_s": profiled,
+                "stages": dict(stages.seconds),
+                "info": {k: v for k, v in view.info.items() if k != "pass_key"},
+            }
+        )
+    )
 
 
 # --- the parent ---------------------------------------------------------------------------------
 
+
 def run_suite(device: str) -> bool:
     """The core's tests on ``device`` in a child process with fresh OpenCL and FFT caches."""
     cache = Path(tempfile.mkdtemp(prefix="holo-gpu-suite-"))
-    env = dict(os.environ, HOLO_DEVICE=device, XDG_CACHE_HOME=str(cache),
-               PYOPENCL_CACHE_FAILURE_FATAL="", PYTHONUNBUFFERED="1")
+    env = dict(
+        os.environ,
+        HOLO_DEVICE=device,
+        XDG_CACHE_HOME=str(cache),
+        PYOPENCL_CACHE_FAILURE_FATAL="",
+        PYTHONUNBUFFERED="1",
+    )
     print(f"== the core's tests on HOLO_DEVICE={device!r} (caches in {cache})", flush=True)
-    r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
-                        "tests/core"], cwd=ROOT, env=env, capture_output=True, text=True)
+    r = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests/core"],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+    )
     lines = r.stdout.strip().splitlines()
     failed = [line for line in lines if line.startswith(("FAILED", "ERROR"))]
     print("\n".join(failed + lines[-1:]), flush=True)
@@ -194,10 +219,22 @@ def run_backend(args, backend, cache, index, out: Path) -> dict | None:
     if index == 0 and not args.keep_caches:
         env["CUDA_CACHE_DISABLE"] = "1"  # NVIDIA's driver-side kernel cache
     result = out / f"{backend}-{index}.json"
-    cmd = [sys.executable, str(Path(__file__).resolve()), str(args.job), "--child", backend,
-           "--runs", str(args.runs), "--result", str(result)]
-    print(f"== HOLO_FFT={backend}, process {index + 1}"
-          f"{' (empty caches)' if index == 0 and not args.keep_caches else ''}", flush=True)
+    cmd = [
+        sys.executable,
+        str(Path(__file__).resolve()),
+        str(args.job),
+        "--child",
+        backend,
+        "--runs",
+        str(args.runs),
+        "--result",
+        str(result),
+    ]
+    print(
+        f"== HOLO_FFT={backend}, process {index + 1}"
+        f"{' (empty caches)' if index == 0 and not args.keep_caches else ''}",
+        flush=True,
+    )
     t = time.perf_counter()
     if subprocess.run(cmd, check=False, env=env).returncode != 0 or not result.is_file():
         print(f"   {backend}: the process failed")
@@ -212,15 +249,21 @@ def report(results: dict) -> None:
     first = next(iter(results.values()))[0]
     print(f"\ndevice: {first['device']} ({first['platform']}, driver {first['driver']})")
     info = first["info"]
-    print(f"pass: {info.get('pupil_samples')} pupil samples, {info.get('samples')} looks, "
-          f"{info.get('layers')} depth layer(s)")
-    print(f"{'backend':<8} {'process':>7} {'import':>7} {'first':>8} {'warm':>8} "
-          f"{'profiled':>8}  stages of the profiled call (exclusive)")
+    print(
+        f"pass: {info.get('pupil_samples')} pupil samples, {info.get('samples')} looks, "
+        f"{info.get('layers')} depth layer(s)"
+    )
+    print(
+        f"{'backend':<8} {'process':>7} {'import':>7} {'first':>8} {'warm':>8} "
+        f"{'profiled':>8}  stages of the profiled call (exclusive)"
+    )
     for procs in results.values():
         for i, r in enumerate(procs):
             warm = f"{min(r['runs_s'][1:]):.2f}s" if len(r["runs_s"]) > 1 else "-"
-            print(f"{r['backend']:<8} {i + 1:>7} {r['import_s']:>6.2f}s {r['runs_s'][0]:>7.2f}s "
-                  f"{warm:>8} {r['profiled_s']:>7.2f}s")
+            print(
+                f"{r['backend']:<8} {i + 1:>7} {r['import_s']:>6.2f}s {r['runs_s'][0]:>7.2f}s "
+                f"{warm:>8} {r['profiled_s']:>7.2f}s"
+            )
         r = procs[0]
         total = r["profiled_s"]
         for name, s in sorted(r["stages"].items(), key=lambda kv: -kv[1]):
@@ -234,25 +277,41 @@ def report(results: dict) -> None:
         r = results[other][0]
         warm = min(r["runs_s"][1:] or [r["profiled_s"]])
         diff = np.abs(np.load(r["picture"]) - ref).max() / max(float(np.abs(ref).max()), 1e-30)
-        print(f"warm {names[0]} / {other}: {base_warm / warm:.3f} "
-              f"({base_warm:.2f} s / {warm:.2f} s); pictures differ by {diff:.1e} of the peak")
+        print(
+            f"warm {names[0]} / {other}: {base_warm / warm:.3f} "
+            f"({base_warm:.2f} s / {warm:.2f} s); pictures differ by {diff:.1e} of the peak"
+        )
 
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("job", type=Path)
-    p.add_argument("--backends", nargs="+", default=["vkfft", "numpy"],
-                   help="HOLO_FFT values, the first is the reference of the ratios")
-    p.add_argument("--runs", type=int, default=2,
-                   help="timed runs per process, before the profiled one (with one, "
-                        "the profiled call stands for the warm pass)")
+    p.add_argument(
+        "--backends",
+        nargs="+",
+        default=["vkfft", "numpy"],
+        help="HOLO_FFT values, the first is the reference of the ratios",
+    )
+    p.add_argument(
+        "--runs",
+        type=int,
+        default=2,
+        help="timed runs per process, before the profiled one (with one, "
+        "the profiled call stands for the warm pass)",
+    )
     p.add_argument("--processes", type=int, default=1, help="processes per backend")
     p.add_argument("--device", default="gpu", help="HOLO_DEVICE ('' for the default)")
-    p.add_argument("--keep-caches", action="store_true",
-                   help="let the first process use the user's kernel caches")
+    p.add_argument(
+        "--keep-caches",
+        action="store_true",
+        help="let the first process use the user's kernel caches",
+    )
     p.add_argument("--make-job", action="store_true", help="write the demo's job to JOB")
-    p.add_argument("--suite", action="store_true",
-                   help="run the core's tests on the device first (the whole GPU check)")
+    p.add_argument(
+        "--suite",
+        action="store_true",
+        help="run the core's tests on the device first (the whole GPU check)",
+    )
     p.add_argument("--resolution", type=int, nargs=2, default=(1920, 1080))
     p.add_argument("--fstop", type=float, default=2.8)
     p.add_argument("--samples", type=int, default=16)
@@ -275,13 +334,20 @@ def main():
             results.setdefault(backend, []).append(r)
     if results:
         report(results)
-        bench_results.write("gpu_pass", {
-            f"{backend}, process {i + 1}": {
-                "import [s]": r["import_s"], "first pass [s]": r["runs_s"][0],
-                "warm pass [s]": min(r["runs_s"][1:]) if len(r["runs_s"]) > 1 else "",
-                "profiled [s]": r["profiled_s"]}
-            for backend, procs in results.items() for i, r in enumerate(procs)},
-            device=next(iter(results.values()))[0]["device"])
+        bench_results.write(
+            "gpu_pass",
+            {
+                f"{backend}, process {i + 1}": {
+                    "import [s]": r["import_s"],
+                    "first pass [s]": r["runs_s"][0],
+                    "warm pass [s]": min(r["runs_s"][1:]) if len(r["runs_s"]) > 1 else "",
+                    "profiled [s]": r["profiled_s"],
+                }
+                for backend, procs in results.items()
+                for i, r in enumerate(procs)
+            },
+            device=next(iter(results.values()))[0]["device"],
+        )
     return 0 if len(results) == len(args.backends) and suite_ok else 1
 
 

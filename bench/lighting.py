@@ -51,6 +51,7 @@ def timing_requests(radiance):
             return request(*args, **kwargs)
         finally:
             WRITE.append(time.perf_counter() - t)
+
     radiance.request = timed
 
 
@@ -78,6 +79,7 @@ def main(argv=None):
     from holo_addon.demo import build_scene
     from holo_addon.export import radiance
     from holo_addon.render import pipeline
+
     bpy.ops.wm.read_factory_settings(use_empty=True)
     register()
     timing_requests(radiance)
@@ -100,17 +102,25 @@ def main(argv=None):
                 note = f" (lighting {lit:.1f} s: +{shares[-1]:.1%} on the rest of the pass)"
             print(f"round {i + 1}: Lighting {lighting.title()}: {total:.1f} s{note}", flush=True)
     albedo, lit = min(times["ALBEDO"]), min(times["SCENE"])
-    print(f"the demo's pass at {w}x{h}, {args.samples} samples, on {cpu()}:\n"
-          f"  lighting adds {min(shares):.1%}-{max(shares):.1%} to the pass (its stages against "
-          f"the rest of the same pass; goal: at most 25 %)\n"
-          f"  whole passes, best of {args.rounds}: Albedo {albedo:.1f} s, Scene {lit:.1f} s "
-          f"({lit / albedo - 1:+.1%})")
-    results.write("lighting", {"resolution": f"{w}x{h}", "samples": args.samples,
-                               "lighting's share of the pass, least (goal <= 0.25)": min(shares),
-                               "lighting's share of the pass, most": max(shares),
-                               "pass, Lighting: Albedo [s]": albedo,
-                               "pass, Lighting: Scene [s]": lit,
-                               "Scene / Albedo": lit / albedo})
+    print(
+        f"the demo's pass at {w}x{h}, {args.samples} samples, on {cpu()}:\n"
+        f"  lighting adds {min(shares):.1%}-{max(shares):.1%} to the pass (its stages against "
+        f"the rest of the same pass; goal: at most 25 %)\n"
+        f"  whole passes, best of {args.rounds}: Albedo {albedo:.1f} s, Scene {lit:.1f} s "
+        f"({lit / albedo - 1:+.1%})"
+    )
+    results.write(
+        "lighting",
+        {
+            "resolution": f"{w}x{h}",
+            "samples": args.samples,
+            "lighting's share of the pass, least (goal <= 0.25)": min(shares),
+            "lighting's share of the pass, most": max(shares),
+            "pass, Lighting: Albedo [s]": albedo,
+            "pass, Lighting: Scene [s]": lit,
+            "Scene / Albedo": lit / albedo,
+        },
+    )
 
 
 if __name__ == "__main__":

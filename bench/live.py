@@ -60,16 +60,19 @@ def load() -> float:
 def held_plate(scale: float, looks: int, folder: Path | None):
     """The shot's looks recorded for a 10 cm dolly at ``scale`` (read from ``folder`` where
     they are kept there), and the seconds it took."""
-    names = [folder / f"scale{scale:g}" / f"look{k}.exr" for k in range(looks)] if folder \
-        else []
+    names = [folder / f"scale{scale:g}" / f"look{k}.exr" for k in range(looks)] if folder else []
     if names and all(p.is_file() for p in names):
         t = time.perf_counter()
         holos = [read_hologram(p) for p in names]
         print(f"  the looks read from {names[0].parent} in {time.perf_counter() - t:.1f} s")
         return holos, None
     cams = [shot.camera(x, scale) for x in (-0.05, 0.0, 0.05)]
-    zone = ViewingZone.fit([c.position for c in cams], pupil=cams[0].aperture_diameter,
-                           margin=0.01, pixel=cams[0].pixel_angle())
+    zone = ViewingZone.fit(
+        [c.position for c in cams],
+        pupil=cams[0].aperture_diameter,
+        margin=0.01,
+        pixel=cams[0].pixel_angle(),
+    )
     plate = Plate(matrix_world=np.eye(4), width=1.0, height=1.0, zone=zone)
     t = time.perf_counter()
     holos = record_looks(shot.scene(), looks=looks, plate=plate, seed=0)
@@ -121,55 +124,89 @@ def one_scale(args, scale: float, rate: float) -> dict:
     # the same path by render_view alone, each view planned afresh at its exact sizes (the
     # reference the viewer's plans are measured against)
     from holo_core.plate.view import render_view
-    runs = {"render_view, unplanned (first visits)": [
-        timed(render_view, holos, c, supersample=args.supersample)[1] for c in cams]}
+
+    runs = {
+        "render_view, unplanned (first visits)": [
+            timed(render_view, holos, c, supersample=args.supersample)[1] for c in cams
+        ]
+    }
     key = "render_view, unplanned (first visits)"
-    print(f"  {key}: median {statistics.median(runs[key]):.3f} s, {min(runs[key]):.3f}-"
-          f"{max(runs[key]):.3f} (load {load()})", flush=True)
+    print(
+        f"  {key}: median {statistics.median(runs[key]):.3f} s, {min(runs[key]):.3f}-"
+        f"{max(runs[key]):.3f} (load {load()})",
+        flush=True,
+    )
     for visit in ("first", "again"):
         for coarse in (False, True):
             key = f"{'coarse' if coarse else 'full'} ({visit} visits)"
             runs[key] = [timed(viewer.view, c, coarse=coarse)[1] for c in cams]
-            print(f"  {key}: median {statistics.median(runs[key]):.3f} s, "
-                  f"{min(runs[key]):.3f}-{max(runs[key]):.3f} (load {load()})", flush=True)
+            print(
+                f"  {key}: median {statistics.median(runs[key]):.3f} s, "
+                f"{min(runs[key]):.3f}-{max(runs[key]):.3f} (load {load()})",
+                flush=True,
+            )
     nbytes = shot.window_bytes(holos, middle)
     bound = nbytes / rate
     st, total = shot.synced_stages(lambda: viewer.view(middle))
-    print(f"  one full view stage by stage: {total:.3f} s; the window's samples "
-          f"{nbytes / 1e9:.2f} GB, {bound * 1e3:.0f} ms at {rate / 1e9:.1f} GB/s "
-          f"({total / bound:.0f}x the bound)")
+    print(
+        f"  one full view stage by stage: {total:.3f} s; the window's samples "
+        f"{nbytes / 1e9:.2f} GB, {bound * 1e3:.0f} ms at {rate / 1e9:.1f} GB/s "
+        f"({total / bound:.0f}x the bound)"
+    )
     for name, s in sorted(st.items(), key=lambda kv: -kv[1]):
         print(f"    {name:28s} {s:.4f} s  {s / bound:6.1f}x the bound")
     viewer.close()
     full = statistics.median(runs["full (again visits)"])
     figures = {
-        "image": size, "plate": f"{h.shape[1]} x {h.shape[0]} samples, {len(h.channels)} "
-        f"channels, {len(holos)} looks", "recording [s]": record_s,
+        "image": size,
+        "plate": f"{h.shape[1]} x {h.shape[0]} samples, {len(h.channels)} "
+        f"channels, {len(holos)} looks",
+        "recording [s]": record_s,
         "camera pass [s]": cam_s,
-        "window's samples [GB]": nbytes / 1e9, "memory bandwidth [GB/s]": rate / 1e9,
+        "window's samples [GB]": nbytes / 1e9,
+        "memory bandwidth [GB/s]": rate / 1e9,
         "the bound: the window read once [s]": bound,
         f"full views a second (goal >= {TARGET_FULL.get(scale, 0):g})": 1 / full,
         "full view / camera pass": full / cam_s,
-        f"coarse latency, revisits [s] (goal <= {COARSE_LATENCY})":
-            statistics.median(runs["coarse (again visits)"]),
-        "stages of one full view [s]": {name: {"s": s, "x the bound": s / bound}
-                                        for name, s in st.items()},
+        f"coarse latency, revisits [s] (goal <= {COARSE_LATENCY})": statistics.median(
+            runs["coarse (again visits)"]
+        ),
+        "stages of one full view [s]": {
+            name: {"s": s, "x the bound": s / bound} for name, s in st.items()
+        },
     }
-    figures.update({f"{key} [s]": {"median": statistics.median(v), "min": min(v),
-                                   "max": max(v), "views a second": 1 / statistics.median(v)}
-                    for key, v in runs.items()})
+    figures.update(
+        {
+            f"{key} [s]": {
+                "median": statistics.median(v),
+                "min": min(v),
+                "max": max(v),
+                "views a second": 1 / statistics.median(v),
+            }
+            for key, v in runs.items()
+        }
+    )
     return figures
 
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--scales", type=float, nargs="+", default=[0.5, 1.0],
-                   help="image sizes, of 1280x720 (0.5 1.0)")
+    p.add_argument(
+        "--scales",
+        type=float,
+        nargs="+",
+        default=[0.5, 1.0],
+        help="image sizes, of 1280x720 (0.5 1.0)",
+    )
     p.add_argument("--poses", type=int, default=8, help="poses of the wandering camera (8)")
     p.add_argument("--looks", type=int, default=2, help="coded looks recorded (2)")
     p.add_argument("--supersample", type=int, default=2, help="the full views' (2)")
-    p.add_argument("--plates", type=Path, default=None,
-                   help="a folder keeping each scale's recorded looks between runs")
+    p.add_argument(
+        "--plates",
+        type=Path,
+        default=None,
+        help="a folder keeping each scale's recorded looks between runs",
+    )
     args = p.parse_args()
     print(f"CPU: {shot.cpu()}; load {load()} (1 min) at the start")
     rate = shot.bandwidth()

@@ -61,9 +61,11 @@ def load() -> float:
 def plate_files(args, folder: Path) -> tuple[list[Path], list]:
     """The looks' files: those ``--plates`` keeps, else recorded now into ``folder``."""
     holos, _ = live.held_plate(args.scale, args.looks, args.plates)
-    names = [args.plates / f"scale{args.scale:g}" / f"look{k}.exr" for k in range(args.looks)] \
-        if args.plates else [write_hologram(folder / f"look{k}.exr", h)
-                             for k, h in enumerate(holos)]
+    names = (
+        [args.plates / f"scale{args.scale:g}" / f"look{k}.exr" for k in range(args.looks)]
+        if args.plates
+        else [write_hologram(folder / f"look{k}.exr", h) for k, h in enumerate(holos)]
+    )
     return names, holos
 
 
@@ -100,9 +102,13 @@ def navigate(views: Views, cams, seconds: float) -> dict:
     full = views.wait(views.ask(cams[0]), timeout=600)
     still = time.perf_counter() - moved
     span = arrived[-1] - arrived[0] if len(arrived) > 1 else float("nan")
-    return {"moves": k, "pictures": len(arrived),
-            "pictures a second": (len(arrived) - 1) / span if len(arrived) > 1 else 0.0,
-            "last move to the full picture [s]": still, "full coarse": full.coarse}
+    return {
+        "moves": k,
+        "pictures": len(arrived),
+        "pictures a second": (len(arrived) - 1) / span if len(arrived) > 1 else 0.0,
+        "last move to the full picture [s]": still,
+        "full coarse": full.coarse,
+    }
 
 
 def _pose(m) -> np.ndarray:
@@ -129,6 +135,7 @@ def texture(picture) -> dict:
     out = {"texture values [s]": values}
     try:
         import gpu
+
         h, w, _ = picture.rgba.shape
         t = time.perf_counter()
         data = gpu.types.Buffer("FLOAT", pixels.size, pixels)
@@ -146,8 +153,12 @@ def main():
     p.add_argument("--looks", type=int, default=2, help="coded looks recorded (2)")
     p.add_argument("--supersample", type=int, default=2, help="the full views' (2)")
     p.add_argument("--seconds", type=float, default=4.0, help="of navigation (4)")
-    p.add_argument("--plates", type=Path, default=None,
-                   help="a folder keeping the recorded looks between runs (bench/live.py's)")
+    p.add_argument(
+        "--plates",
+        type=Path,
+        default=None,
+        help="a folder keeping the recorded looks between runs (bench/live.py's)",
+    )
     args = p.parse_args()
     print(f"CPU: {shot.cpu()}; load {load()} (1 min) at the start")
     with tempfile.TemporaryDirectory(prefix="holo-live-viewport-") as folder:
@@ -163,8 +174,10 @@ def main():
                     here[kind].append(time.perf_counter() - t)
         here = {k: v[1:] for k, v in here.items()}
         del holos, viewer
-        print(f"{size}, in this process: full {statistics.median(here['full']):.3f} s, coarse "
-              f"{statistics.median(here['coarse']):.3f} s a view (median; load {load()})")
+        print(
+            f"{size}, in this process: full {statistics.median(here['full']):.3f} s, coarse "
+            f"{statistics.median(here['coarse']):.3f} s a view (median; load {load()})"
+        )
         with Views(names, supersample=args.supersample) as views:
             t = time.perf_counter()
             views.wait(views.ask(cams[0]), timeout=600)
@@ -181,36 +194,54 @@ def main():
             for kind in there:
                 med, own = statistics.median(there[kind]), statistics.median(worker_s[kind])
                 path = statistics.median(a - b for a, b in zip(there[kind], worker_s[kind]))
-                print(f"  {kind}: each [s] " + ", ".join(
-                    f"{a:.3f} ({b:.3f})" for a, b in zip(there[kind], worker_s[kind])))
-                rows[kind] = {"camera change to picture [s]": med, "worker's view [s]": own,
-                              "path's overhead [s]": path,
-                              "in this process [s]": statistics.median(here[kind]),
-                              "ratio to in this process": med / statistics.median(here[kind])}
-                print(f"  {kind}: {med:.3f} s from the change to the picture in shared memory; "
-                      f"the worker's view {own:.3f} s, the path {1e3 * path:.1f} ms; "
-                      f"{med / statistics.median(here[kind]):.2f}x this process's view "
-                      f"(load {load()})")
+                print(
+                    f"  {kind}: each [s] "
+                    + ", ".join(f"{a:.3f} ({b:.3f})" for a, b in zip(there[kind], worker_s[kind]))
+                )
+                rows[kind] = {
+                    "camera change to picture [s]": med,
+                    "worker's view [s]": own,
+                    "path's overhead [s]": path,
+                    "in this process [s]": statistics.median(here[kind]),
+                    "ratio to in this process": med / statistics.median(here[kind]),
+                }
+                print(
+                    f"  {kind}: {med:.3f} s from the change to the picture in shared memory; "
+                    f"the worker's view {own:.3f} s, the path {1e3 * path:.1f} ms; "
+                    f"{med / statistics.median(here[kind]):.2f}x this process's view "
+                    f"(load {load()})"
+                )
             moving = navigate(views, cams, args.seconds)
-            print(f"  navigating: {moving['pictures a second']:.1f} pictures a second "
-                  f"(goal >= {TARGET_RATE:g}); last move to the full picture "
-                  f"{moving['last move to the full picture [s]']:.2f} s (goal <= "
-                  f"{TARGET_STILL:g} s) (load {load()})")
+            print(
+                f"  navigating: {moving['pictures a second']:.1f} pictures a second "
+                f"(goal >= {TARGET_RATE:g}); last move to the full picture "
+                f"{moving['last move to the full picture [s]']:.2f} s (goal <= "
+                f"{TARGET_STILL:g} s) (load {load()})"
+            )
             tex = texture(views.latest())
             for name, value in tex.items():
                 print(f"  {name}: {value if isinstance(value, str) else f'{value:.4f}'}")
             restarts = views.starts
-    figures = {"image": size, "poses": args.poses, "looks": args.looks,
-               "supersample": args.supersample, "first picture [s]": first,
-               "full": rows["full"], "coarse": rows["coarse"],
-               f"coarse latency [s] (goal <= {TARGET_COARSE:g})":
-                   rows["coarse"]["camera change to picture [s]"],
-               f"navigating: pictures a second (goal >= {TARGET_RATE:g})":
-                   moving["pictures a second"],
-               f"last move to the full picture [s] (goal <= {TARGET_STILL:g})":
-                   moving["last move to the full picture [s]"],
-               "navigating: moves": moving["moves"], "navigating: pictures": moving["pictures"],
-               "worker starts": restarts, **tex}
+    figures = {
+        "image": size,
+        "poses": args.poses,
+        "looks": args.looks,
+        "supersample": args.supersample,
+        "first picture [s]": first,
+        "full": rows["full"],
+        "coarse": rows["coarse"],
+        f"coarse latency [s] (goal <= {TARGET_COARSE:g})": rows["coarse"][
+            "camera change to picture [s]"
+        ],
+        f"navigating: pictures a second (goal >= {TARGET_RATE:g})": moving["pictures a second"],
+        f"last move to the full picture [s] (goal <= {TARGET_STILL:g})": moving[
+            "last move to the full picture [s]"
+        ],
+        "navigating: moves": moving["moves"],
+        "navigating: pictures": moving["pictures"],
+        "worker starts": restarts,
+        **tex,
+    }
     print(f"load at the end {load()}")
     results.write("live_viewport", figures)
 

@@ -31,6 +31,7 @@ def timed_pass(bpy, pipeline, scene) -> float:
 
 def timed_cycles(bpy, scene, sphere, out: Path) -> float:
     from holo_addon.blender.objects import raster_visibility
+
     sphere.holo.emitter = "NONE"
     raster_visibility(sphere)
     scene.render.filepath = str(out / "cycles.png")
@@ -48,10 +49,12 @@ def main():
     p.add_argument("--samples", type=int, default=16)
     args = p.parse_args()
     import bpy
+
     sys.path.insert(0, str(ROOT))
     from holo_addon import register
     from holo_addon.demo import build_scene
     from holo_addon.render import pipeline
+
     bpy.ops.wm.read_factory_settings(use_empty=True)
     register()
     out = Path(tempfile.mkdtemp(prefix="holo-pass-cost-"))
@@ -71,14 +74,21 @@ def main():
         holo = timed_pass(bpy, pipeline, scene)
         cycles = timed_cycles(bpy, scene, sphere, out)
         rows.append((size, holo, cycles))
-        print(f"{size}: holographic pass {holo:.1f} s, Cycles frame ({scene.cycles.samples} "
-              f"samples) {cycles:.1f} s, ratio {holo / cycles:.2f}", flush=True)
+        print(
+            f"{size}: holographic pass {holo:.1f} s, Cycles frame ({scene.cycles.samples} "
+            f"samples) {cycles:.1f} s, ratio {holo / cycles:.2f}",
+            flush=True,
+        )
     print("\nsize        pass [s]  Cycles [s]  pass/Cycles")
     for size, holo, cycles in rows:
         print(f"{size:10s} {holo:9.1f} {cycles:11.1f} {holo / cycles:12.2f}")
-    results.write("pass_cost", {size: {"pass [s]": holo, "Cycles [s]": cycles,
-                                        "pass / Cycles": holo / cycles}
-                                 for size, holo, cycles in rows})
+    results.write(
+        "pass_cost",
+        {
+            size: {"pass [s]": holo, "Cycles [s]": cycles, "pass / Cycles": holo / cycles}
+            for size, holo, cycles in rows
+        },
+    )
 
 
 if __name__ == "__main__":

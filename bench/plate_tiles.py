@@ -39,10 +39,13 @@ from holo_core.scene.plate import Plate, ViewingZone  # noqa: E402
 
 def plate_for(dolly, scale) -> Plate:
     cams = [camera(x, scale) for x in (-dolly / 2, dolly / 2)]
-    zone = ViewingZone.fit([c.position for c in cams], pupil=cams[0].aperture_diameter,
-                           margin=0.01, pixel=cams[0].pixel_angle())
-    return Plate(matrix_world=PLATE.matrix_world, width=PLATE.width, height=PLATE.height,
-                 zone=zone)
+    zone = ViewingZone.fit(
+        [c.position for c in cams],
+        pupil=cams[0].aperture_diameter,
+        margin=0.01,
+        pixel=cams[0].pixel_angle(),
+    )
+    return Plate(matrix_world=PLATE.matrix_world, width=PLATE.width, height=PLATE.height, zone=zone)
 
 
 def measure(dolly, scale, mode, tile, url) -> dict:
@@ -52,8 +55,12 @@ def measure(dolly, scale, mode, tile, url) -> dict:
     if mode == "tiled":
         h, seconds, peak = timed(record_plate, scene(), plate=plate, seed=0, url=url, tile=tile)
         parts = json.loads((Path(url) / "zarr.json").read_text())["attributes"]["recording"]
-        return {"shape": list(h.shape), "emitters": parts["parts"]["emitters"],
-                "seconds": seconds, "peak": peak}
+        return {
+            "shape": list(h.shape),
+            "emitters": parts["parts"]["emitters"],
+            "seconds": seconds,
+            "peak": peak,
+        }
     h, seconds, peak = timed(record_plate, scene(), plate=plate, seed=0)
     tiled = open_plate(url)
     worst, equal = 0.0, True
@@ -67,8 +74,13 @@ def measure(dolly, scale, mode, tile, url) -> dict:
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--scale", type=float, default=0.5, help="image size, of 1280x720 (0.5)")
-    p.add_argument("--dollies", type=float, nargs="+", default=[0.1, 0.4],
-                   help="the camera moves the zones are fitted to [m] (0.1 0.4)")
+    p.add_argument(
+        "--dollies",
+        type=float,
+        nargs="+",
+        default=[0.1, 0.4],
+        help="the camera moves the zones are fitted to [m] (0.1 0.4)",
+    )
     p.add_argument("--tile", type=int, default=2048)
     p.add_argument("--dir", type=Path, default=None, help="where the stores go (a temp dir)")
     p.add_argument("--one", nargs=3, help=argparse.SUPPRESS)
@@ -78,12 +90,25 @@ def main():
         print(json.dumps(measure(float(dolly), args.scale, mode, args.tile, url)))
         return
     work = Path(tempfile.mkdtemp(dir=args.dir))
-    print(f"CPU: {cpu()}; load {os.getloadavg()[0]:.1f} (1 min) at the start; stores in "
-          f"{work}; each route in a fresh process", flush=True)
+    print(
+        f"CPU: {cpu()}; load {os.getloadavg()[0]:.1f} (1 min) at the start; stores in "
+        f"{work}; each route in a fresh process",
+        flush=True,
+    )
 
     def child(dolly, mode, url):
-        cmd = [sys.executable, __file__, "--one", str(dolly), mode, str(url), "--scale",
-               str(args.scale), "--tile", str(args.tile)]
+        cmd = [
+            sys.executable,
+            __file__,
+            "--one",
+            str(dolly),
+            mode,
+            str(url),
+            "--scale",
+            str(args.scale),
+            "--tile",
+            str(args.tile),
+        ]
         run = subprocess.run(cmd, capture_output=True, text=True)
         if run.returncode:
             raise SystemExit(run.stderr[-2000:])
@@ -98,27 +123,40 @@ def main():
             rows.append((dolly, tiled, whole))
             (r, c), n = tiled["shape"], tiled["emitters"]
             same = "bit-equal" if whole["equal"] else f"differ by {whole['worst']:.2e}"
-            print(f"dolly {dolly:g} m: {c} x {r} samples ({r * c / 1e6:.1f} Mpx), {n:,} "
-                  f"emitters; tiled {tiled['seconds']:.1f} s, peak {tiled['peak']:.2f} GB; in "
-                  f"memory {whole['seconds']:.1f} s, peak {whole['peak']:.2f} GB; {same} (load "
-                  f"{os.getloadavg()[0]:.1f})", flush=True)
+            print(
+                f"dolly {dolly:g} m: {c} x {r} samples ({r * c / 1e6:.1f} Mpx), {n:,} "
+                f"emitters; tiled {tiled['seconds']:.1f} s, peak {tiled['peak']:.2f} GB; in "
+                f"memory {whole['seconds']:.1f} s, peak {whole['peak']:.2f} GB; {same} (load "
+                f"{os.getloadavg()[0]:.1f})",
+                flush=True,
+            )
             shutil.rmtree(url, ignore_errors=True)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     print("\ndolly [m]  Mpx    emitters  tiled [s]  peak [GB]  memory [s]  peak [GB]  equal")
     for dolly, tiled, whole in rows:
         (r, c) = tiled["shape"]
-        print(f"{dolly:9g}  {r * c / 1e6:5.1f}  {tiled['emitters']:8d}  {tiled['seconds']:9.1f}"
-              f"  {tiled['peak']:9.2f}  {whole['seconds']:10.1f}  {whole['peak']:9.2f}  "
-              f"{'bit' if whole['equal'] else whole['worst']}")
+        print(
+            f"{dolly:9g}  {r * c / 1e6:5.1f}  {tiled['emitters']:8d}  {tiled['seconds']:9.1f}"
+            f"  {tiled['peak']:9.2f}  {whole['seconds']:10.1f}  {whole['peak']:9.2f}  "
+            f"{'bit' if whole['equal'] else whole['worst']}"
+        )
     print(f"load at the end {os.getloadavg()[0]:.1f}")
-    results.write("plate_tiles", {
-        f"dolly {dolly:g} m": {"samples": f"{tiled['shape'][1]} x {tiled['shape'][0]}",
-                               "emitters": tiled["emitters"], "tiled [s]": tiled["seconds"],
-                               "tiled peak [GB]": tiled["peak"], "in memory [s]": whole["seconds"],
-                               "in memory peak [GB]": whole["peak"],
-                               "plates": "bit-equal" if whole["equal"] else whole["worst"]}
-        for dolly, tiled, whole in rows})
+    results.write(
+        "plate_tiles",
+        {
+            f"dolly {dolly:g} m": {
+                "samples": f"{tiled['shape'][1]} x {tiled['shape'][0]}",
+                "emitters": tiled["emitters"],
+                "tiled [s]": tiled["seconds"],
+                "tiled peak [GB]": tiled["peak"],
+                "in memory [s]": whole["seconds"],
+                "in memory peak [GB]": whole["peak"],
+                "plates": "bit-equal" if whole["equal"] else whole["worst"],
+            }
+            for dolly, tiled, whole in rows
+        },
+    )
 
 
 if __name__ == "__main__":

@@ -35,18 +35,22 @@ def big_ply(path: Path) -> None:
     verts = np.stack([x.ravel(), y.ravel(), np.zeros(n * m, np.float32)], 1)
     idx = np.arange(n * m).reshape(m, n)
     a, b, c, d = idx[:-1, :-1], idx[:-1, 1:], idx[1:, 1:], idx[1:, :-1]
-    tris = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3),
-                           np.stack([a, c, d], -1).reshape(-1, 3)])
+    tris = np.concatenate(
+        [np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)]
+    )
     rows = np.zeros(len(tris), [("n", "u1"), ("v", "<i4", (3,))])
     rows["n"], rows["v"] = 3, tris
-    head = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(verts)}\n"
-            f"property float x\nproperty float y\nproperty float z\nelement face {len(tris)}\n"
-            f"property list uchar int vertex_indices\nend_header\n").encode()
+    head = (
+        f"ply\nformat binary_little_endian 1.0\nelement vertex {len(verts)}\n"
+        f"property float x\nproperty float y\nproperty float z\nelement face {len(tris)}\n"
+        f"property list uchar int vertex_indices\nend_header\n"
+    ).encode()
     path.write_bytes(head + verts.astype("<f4").tobytes() + rows.tobytes())
 
 
 def plyfile_mesh(path):
     from plyfile import PlyData
+
     data = PlyData.read(str(path))
     v = data["vertex"]
     verts = np.stack([v["x"], v["y"], v["z"]], 1)
@@ -88,19 +92,28 @@ def fuzz_outcomes(read, clear):
 
 def main():
     from plyfile import PlyParseError
+
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "grid.ply"
         big_ply(path)
         ours, theirs = timed(read_mesh, path), timed(plyfile_mesh, path)
-        print(f"1M-triangle binary PLY: holo {ours:.3f} s, plyfile {theirs:.3f} s "
-              f"(plyfile/holo = {theirs / ours:.2f})")
+        print(
+            f"1M-triangle binary PLY: holo {ours:.3f} s, plyfile {theirs:.3f} s "
+            f"(plyfile/holo = {theirs / ours:.2f})"
+        )
     holo, other = fuzz_outcomes(read_mesh, InputError), fuzz_outcomes(plyfile_mesh, PlyParseError)
     print(f"fuzz, {CASES} mutated PLYs: holo {holo}")
     print(f"fuzz, {CASES} mutated PLYs: plyfile {other}")
-    results.write("ply_readers", {"1M-triangle binary PLY, holo [s]": ours,
-                                  "… plyfile [s]": theirs, "plyfile / holo": theirs / ours,
-                                  f"{CASES} mutated PLYs, holo": str(holo),
-                                  f"{CASES} mutated PLYs, plyfile": str(other)})
+    results.write(
+        "ply_readers",
+        {
+            "1M-triangle binary PLY, holo [s]": ours,
+            "… plyfile [s]": theirs,
+            "plyfile / holo": theirs / ours,
+            f"{CASES} mutated PLYs, holo": str(holo),
+            f"{CASES} mutated PLYs, plyfile": str(other),
+        },
+    )
 
 
 if __name__ == "__main__":

@@ -51,10 +51,20 @@ class Bound:
 
     def __init__(self, shape):
         self.work = pyfftw.empty_aligned(shape, np.complex64)
-        self.plans = {th: [pyfftw.FFTW(self.work, self.work, axes=(0, 1), direction=d,
-                                       flags=("FFTW_MEASURE",), threads=th)
-                           for d in ("FFTW_FORWARD", "FFTW_BACKWARD")]
-                      for th in sorted({1, THREADS})}
+        self.plans = {
+            th: [
+                pyfftw.FFTW(
+                    self.work,
+                    self.work,
+                    axes=(0, 1),
+                    direction=d,
+                    flags=("FFTW_MEASURE",),
+                    threads=th,
+                )
+                for d in ("FFTW_FORWARD", "FFTW_BACKWARD")
+            ]
+            for th in sorted({1, THREADS})
+        }
 
     def run(self, threads, direction):
         self.plans[threads][direction == "backward"].execute()
@@ -62,6 +72,7 @@ class Bound:
 
 def wisdom_file():
     from platformdirs import user_cache_dir
+
     return os.path.join(user_cache_dir("holo"), "bench-bound-wisdom.pickle")
 
 
@@ -106,33 +117,34 @@ class Convolution:
             def run():
                 w = bound.work
                 w[...] = 0
-                w[r0:r0 + n, c0:c0 + n] = field
+                w[r0 : r0 + n, c0 : c0 + n] = field
                 bound.run(threads, "forward")
                 np.multiply(w, tf_bound, out=w)
                 bound.run(threads, "backward")
-                return w[r0:r0 + n, c0:c0 + n].copy()
+                return w[r0 : r0 + n, c0 : c0 + n].copy()
+
             return run
 
         def scipy_fft():
             big = np.zeros(shape, np.complex64)
-            big[r0:r0 + n, c0:c0 + n] = field
+            big[r0 : r0 + n, c0 : c0 + n] = field
             spec = scipy.fft.fft2(big, workers=THREADS, overwrite_x=True)
             spec *= tf32
-            return scipy.fft.ifft2(spec, workers=THREADS, overwrite_x=True)[r0:r0 + n,
-                                                                             c0:c0 + n]
+            return scipy.fft.ifft2(spec, workers=THREADS, overwrite_x=True)[
+                r0 : r0 + n, c0 : c0 + n
+            ]
 
         def numpy_fft():
             big = np.zeros(shape, np.complex64)
-            big[r0:r0 + n, c0:c0 + n] = field
-            return np.fft.ifft2(np.fft.fft2(big) * tf32)[r0:r0 + n, c0:c0 + n]
+            big[r0 : r0 + n, c0 : c0 + n] = field
+            return np.fft.ifft2(np.fft.fft2(big) * tf32)[r0 : r0 + n, c0 : c0 + n]
 
         def holo_device():
             out = self.holo(self.dev)
             self.rt.queue.finish()
             return out
 
-        methods = {f"FFTW measured, {th} thread{'s' * (th > 1)}": fftw(th)
-                   for th in bound.plans}
+        methods = {f"FFTW measured, {th} thread{'s' * (th > 1)}": fftw(th) for th in bound.plans}
         methods["scipy.fft, workers=all"] = scipy_fft
         if n <= 1024:
             methods["NumPy"] = numpy_fft
@@ -149,17 +161,25 @@ class Transform:
     def __init__(self, rt, n, size, direction):
         self.rt, self.n, self.size, self.direction = rt, n, size, direction
         self.block = random_field(n, 2)
-        self.parts = [((dr, dc), (sr, sc))
-                      for (dr, sr) in zip((slice(*r) for r in grid.embedded(n, size)),
-                                          (slice(0, (n + 1) // 2), slice((n + 1) // 2, n)))
-                      for (dc, sc) in zip((slice(*r) for r in grid.embedded(n, size)),
-                                          (slice(0, (n + 1) // 2), slice((n + 1) // 2, n)))]
+        self.parts = [
+            ((dr, dc), (sr, sc))
+            for (dr, sr) in zip(
+                (slice(*r) for r in grid.embedded(n, size)),
+                (slice(0, (n + 1) // 2), slice((n + 1) // 2, n)),
+            )
+            for (dc, sc) in zip(
+                (slice(*r) for r in grid.embedded(n, size)),
+                (slice(0, (n + 1) // 2), slice((n + 1) // 2, n)),
+            )
+        ]
         self.shapes = [(size, size)]
         self.pupil, self.padded = rt.to_device(self.block), empty(rt, (size, size))
         self.flat = [rt.to_device(np.ones(n), np.float32)] * 2
         self.nonzero = (grid.embedded(n, size),) * 2
-        self.options = rt.real_options + (f"-DTAPS={imaging.TAPS}",
-                                          f"-DES_TABLE={imaging.ES_TABLE}")
+        self.options = rt.real_options + (
+            f"-DTAPS={imaging.TAPS}",
+            f"-DES_TABLE={imaging.ES_TABLE}",
+        )
         self.holo()  # Holo's plans, before any of the bound's
 
     def place(self, w):
@@ -171,14 +191,34 @@ class Transform:
         rt, n = self.rt, self.n
         rt.fft.clear(self.padded, self.nonzero)
         if self.direction == "forward":  # the pupil stage's own kernel (open iris, no lens)
-            imaging.window(rt, self.padded, self.pupil, (n, n), pitch=(1.0, 1.0),
-                           radius=4.0 * n, taper=0.0, k=0.0, focus=0.0,
-                           apodization=self.flat, options=self.options)
+            imaging.window(
+                rt,
+                self.padded,
+                self.pupil,
+                (n, n),
+                pitch=(1.0, 1.0),
+                radius=4.0 * n,
+                taper=0.0,
+                k=0.0,
+                focus=0.0,
+                apodization=self.flat,
+                options=self.options,
+            )
             rt.fft.forward(self.padded, nonzero=self.nonzero)
         else:  # the images' spectra into the read grid (camera/incoherent.py's kernel)
             incoherent.EMBED_DEAPODIZED.launch(
-                rt, by_rows((n, n)), options=self.options, Q=self.padded, H=self.size,
-                W=self.size, A=self.pupil, h=n, w=n, ay=self.flat[0], ax=self.flat[1])
+                rt,
+                by_rows((n, n)),
+                options=self.options,
+                Q=self.padded,
+                H=self.size,
+                W=self.size,
+                A=self.pupil,
+                h=n,
+                w=n,
+                ay=self.flat[0],
+                ax=self.flat[1],
+            )
             rt.fft.backward(self.padded, nonzero=self.nonzero)
         rt.queue.finish()
         return self.padded
@@ -191,6 +231,7 @@ class Transform:
                 self.place(bound.work)
                 bound.run(threads, self.direction)
                 return bound.work
+
             return run
 
         def scipy_fft():
@@ -200,8 +241,7 @@ class Transform:
                 return scipy.fft.fft2(w, workers=THREADS, overwrite_x=True)
             return scipy.fft.ifft2(w, workers=THREADS, overwrite_x=True, norm="forward")
 
-        methods = {f"FFTW measured, {th} thread{'s' * (th > 1)}": fftw(th)
-                   for th in bound.plans}
+        methods = {f"FFTW measured, {th} thread{'s' * (th > 1)}": fftw(th) for th in bound.plans}
         methods["scipy.fft, workers=all"] = scipy_fft
         methods["Holo, on the device"] = self.holo
         return methods
@@ -225,8 +265,9 @@ def report(title, medians, bound_keys):
     scipy_t = medians["scipy.fft, workers=all"]
     print(f"{title}   (load {os.getloadavg()[0]:.1f})")
     for k, t in medians.items():
-        print(f"  {k:30s} {t * 1e3:9.1f} ms  {t / bound:5.2f}x the bound  "
-              f"{t / scipy_t:5.2f}x scipy")
+        print(
+            f"  {k:30s} {t * 1e3:9.1f} ms  {t / bound:5.2f}x the bound  {t / scipy_t:5.2f}x scipy"
+        )
     return {"bound [ms]": bound * 1e3, **{f"{k}, × bound": t / bound for k, t in medians.items()}}
 
 
@@ -237,9 +278,11 @@ def main():
     ap.add_argument("--methods", nargs="+", default=["asm", "fresnel", "pupil", "read"])
     args = ap.parse_args()
     rt = get_runtime()
-    print(f"CPU: {cpu_name()}, {THREADS} CPUs, load average {os.getloadavg()[0]:.1f}; device: "
-          f"{rt.device.name.strip()} ({rt.device.platform.name.strip()}), FFT {rt.fft.name} "
-          f"({getattr(getattr(rt.fft, 'host', None), 'threads', '-')} threads)")
+    print(
+        f"CPU: {cpu_name()}, {THREADS} CPUs, load average {os.getloadavg()[0]:.1f}; device: "
+        f"{rt.device.name.strip()} ({rt.device.platform.name.strip()}), FFT {rt.fft.name} "
+        f"({getattr(getattr(rt.fft, 'host', None), 'threads', '-')} threads)"
+    )
     print("bound = the faster FFTW row; ratios are medians of alternating rounds\n")
     asm = lambda u: angular_spectrum(u, wavelength=LAM, pitch=PITCH, distance=Z)
     fre = lambda u: fresnel(u, wavelength=LAM, pitch=PITCH, distance=Z)
@@ -248,30 +291,48 @@ def main():
         shape = grid.padded_shape((n, n), 2)
         if "asm" in args.methods:
             tf = transfer_function(shape, wavelength=LAM, pitch=PITCH, distance=Z)
-            cases.append((f"angular spectrum, {n}² field, 2x padding ({shape[0]}²)",
-                          Convolution(rt, n, tf, asm)))
+            cases.append(
+                (
+                    f"angular spectrum, {n}² field, 2x padding ({shape[0]}²)",
+                    Convolution(rt, n, tf, asm),
+                )
+            )
         if "fresnel" in args.methods:
             tf = fresnel_transfer_host(shape, LAM, (PITCH, PITCH), Z, (0.0, 0.0))
-            cases.append((f"Fresnel, {n}² field, 2x padding ({shape[0]}²)",
-                          Convolution(rt, n, tf, fre)))
+            cases.append(
+                (f"Fresnel, {n}² field, 2x padding ({shape[0]}²)", Convolution(rt, n, tf, fre))
+            )
         if "pupil" in args.methods:
-            cases.append((f"camera pass / plate view: {n}² pupil into its 2x padded spectrum "
-                          f"({2 * n}²), forward", Transform(rt, n, 2 * n, "forward")))
+            cases.append(
+                (
+                    f"camera pass / plate view: {n}² pupil into its 2x padded spectrum "
+                    f"({2 * n}²), forward",
+                    Transform(rt, n, 2 * n, "forward"),
+                )
+            )
         if "read" in args.methods:
             size = grid.next_fast_len(math.ceil(1.5 * n))
-            cases.append((f"camera pass: {n}² spectrum into its 1.5x read grid ({size}²), "
-                          f"inverse", Transform(rt, n, size, "backward")))
+            cases.append(
+                (
+                    f"camera pass: {n}² spectrum into its 1.5x read grid ({size}²), inverse",
+                    Transform(rt, n, size, "backward"),
+                )
+            )
     made = bounds([s for _, case in cases for s in case.shapes])
     table = {}
     for title, case in cases:
         methods = case.methods(made[case.shapes[0]])
-        table[title] = report(title, timed(methods, args.rounds),
-                              [k for k in methods if k.startswith("FFTW")])
+        table[title] = report(
+            title, timed(methods, args.rounds), [k for k in methods if k.startswith("FFTW")]
+        )
         if isinstance(case, Convolution) and case.holo is asm and case.n <= 1024:
             table[title]["error against float64 NumPy"] = error(case)
     print(f"\nload average at the end {os.getloadavg()[0]:.1f}")
-    results.write("propagation", table, device=f"{rt.device.name.strip()} "
-                  f"({rt.device.platform.name.strip()}), FFT {rt.fft.name}")
+    results.write(
+        "propagation",
+        table,
+        device=f"{rt.device.name.strip()} ({rt.device.platform.name.strip()}), FFT {rt.fft.name}",
+    )
 
 
 def error(case: Convolution):
@@ -279,8 +340,8 @@ def error(case: Convolution):
     shape, n = case.tf.shape, case.n
     big = np.zeros(shape, complex)
     r0 = (shape[0] - n) // 2
-    big[r0:r0 + n, r0:r0 + n] = case.field
-    ref = np.fft.ifft2(np.fft.fft2(big) * case.tf)[r0:r0 + n, r0:r0 + n]
+    big[r0 : r0 + n, r0 : r0 + n] = case.field
+    ref = np.fft.ifft2(np.fft.fft2(big) * case.tf)[r0 : r0 + n, r0 : r0 + n]
     got = case.holo(case.field)
     err = float(np.linalg.norm(got - ref) / np.linalg.norm(ref))
     print(f"  Holo's error against float64 NumPy: {err:.2e}")

@@ -29,16 +29,19 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="holo-be
 
 def read_exr(path):
     import OpenEXR
+
     with OpenEXR.File(str(path), separate_channels=True) as f:
         return {k: v.pixels.copy() for k, v in f.channels().items()}
 
 
 def checker_image(bpy, name, n, a, b, size=256):
-    tiles = (np.add.outer(np.arange(size) * n // size, np.arange(size) * n // size) % 2)
+    tiles = np.add.outer(np.arange(size) * n // size, np.arange(size) * n // size) % 2
     rgb = np.where(tiles[..., None] == 1, a, b)
     img = bpy.data.images.new(name, size, size, float_buffer=True)
     img.colorspace_settings.name = "Non-Color"
-    img.pixels.foreach_set(np.c_[rgb.reshape(-1, 3), np.ones(size * size)].ravel().astype(np.float32))
+    img.pixels.foreach_set(
+        np.c_[rgb.reshape(-1, 3), np.ones(size * size)].ravel().astype(np.float32)
+    )
     return img
 
 
@@ -46,6 +49,7 @@ def emissive(bpy, obj, rgb=None, image=None):
     """A material the add-on reads (Base Color, or an image on it) that Cycles renders as
     the same colour: emission of that colour, strength 1, over a black world."""
     from holo_addon.blender import compat
+
     mat = bpy.data.materials.new(obj.name)
     compat.enable_nodes(mat)
     nodes, links = mat.node_tree.nodes, mat.node_tree.links
@@ -65,24 +69,29 @@ def emissive(bpy, obj, rgb=None, image=None):
 
 def build(bpy, size, fstop):
     from holo_addon.demo import point_at
+
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     scene.world = bpy.data.worlds.new("black")
     scene.world.color = (0, 0, 0)
     scene.render.resolution_x, scene.render.resolution_y = size
     scene.render.resolution_percentage = 100
-    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.45, location=(-0.55, 0.2, 0.45),
-                                         segments=96, ring_count=48)
-    emissive(bpy, bpy.context.object, image=checker_image(bpy, "sphere", 24, (0.9, 0.2, 0.1),
-                                                          (0.1, 0.3, 0.9)))
-    bpy.ops.mesh.primitive_cube_add(size=0.7, location=(0.6, 0.0, 0.35),
-                                    rotation=(0, 0, 0.5))
+    bpy.ops.mesh.primitive_uv_sphere_add(
+        radius=0.45, location=(-0.55, 0.2, 0.45), segments=96, ring_count=48
+    )
+    emissive(
+        bpy,
+        bpy.context.object,
+        image=checker_image(bpy, "sphere", 24, (0.9, 0.2, 0.1), (0.1, 0.3, 0.9)),
+    )
+    bpy.ops.mesh.primitive_cube_add(size=0.7, location=(0.6, 0.0, 0.35), rotation=(0, 0, 0.5))
     emissive(bpy, bpy.context.object, rgb=(0.8, 0.6, 0.2))
     bpy.ops.mesh.primitive_plane_add(size=1.0, location=(0, 0.6, 0.0))
     board = bpy.context.object
     board.scale = (2.4, 3.6, 1)
-    emissive(bpy, board, image=checker_image(bpy, "board", 12, (0.85, 0.85, 0.85),
-                                             (0.15, 0.15, 0.15)))
+    emissive(
+        bpy, board, image=checker_image(bpy, "board", 12, (0.85, 0.85, 0.85), (0.15, 0.15, 0.15))
+    )
     for obj in (o for o in scene.objects if o.type == "MESH"):
         obj.holo.emitter = "POINTS"
     bpy.ops.object.camera_add(location=(0.0, -3.3, 1.2))
@@ -106,6 +115,7 @@ def cycles(bpy, scene, out):
     """Cycles' image (linear RGB), alpha and planar Depth of the holographic objects."""
     from holo_addon.blender import compat
     from holo_addon.blender.objects import show_as_raster
+
     for obj in scene.objects:
         if obj.type == "MESH" and not obj.holo.is_plate:
             show_as_raster(obj)
@@ -141,8 +151,8 @@ def edge_width(lum, alpha):
         if not len(rows) or rows[0] < 8:
             continue
         r = rows[0]
-        seg = lum[r - 6:r + 7, c]
-        plateau = np.median(lum[r + 3:r + 3 + max(3, h // 60), c])
+        seg = lum[r - 6 : r + 7, c]
+        plateau = np.median(lum[r + 3 : r + 3 + max(3, h // 60), c])
         if plateau <= 0:
             continue
         f = np.maximum.accumulate(np.clip(seg / plateau, 0, 1))
@@ -160,14 +170,13 @@ def metrics(rgb, alpha, depth, ref_alpha, ref_depth):
     derr = np.median(np.abs(depth[both] - ref_depth[both])) / extent
     h, w = lum.shape
     # checker contrast: the board's near half, below the objects
-    board = lum[int(h * 0.88):, w // 8: 7 * w // 8]
+    board = lum[int(h * 0.88) :, w // 8 : 7 * w // 8]
     hi, lo = np.percentile(board, 90), np.percentile(board, 10)
     checker = (hi - lo) / (hi + lo)
     # speckle: the middle of the cube's front face
-    face = lum[int(0.45 * h):int(0.7 * h), int(0.62 * w):int(0.85 * w)]
+    face = lum[int(0.45 * h) : int(0.7 * h), int(0.62 * w) : int(0.85 * w)]
     speckle = float(face.std() / face.mean())
-    return dict(edge=edge_width(lum, alpha), checker=checker, speckle=speckle, iou=iou,
-                depth=derr)
+    return dict(edge=edge_width(lum, alpha), checker=checker, speckle=speckle, iou=iou, depth=derr)
 
 
 def main():
@@ -176,9 +185,11 @@ def main():
     p.add_argument("--samples", type=int, default=16)
     args = p.parse_args()
     import bpy
+
     sys.path.insert(0, str(ROOT))
     import holo_addon
     from holo_addon.render import pipeline
+
     holo_addon.register()
     rows = []
     for size in args.sizes:
@@ -200,35 +211,52 @@ def main():
                 if not ok:
                     print(f"{size} f/{fstop} {mode}: the pass failed")
                     continue
-                holo = read_exr(pipeline.pass_file(pipeline.output_dir(scene),
-                                                   scene.frame_current))
+                holo = read_exr(pipeline.pass_file(pipeline.output_dir(scene), scene.frame_current))
                 alpha = holo["ViewLayer.Combined.A"]
                 rgb = np.stack([holo[f"ViewLayer.Combined.{c}"] for c in "RGB"], -1)
                 rgb = rgb / np.maximum(alpha, 1e-6)[..., None]
                 ref_rgb, ref_alpha, ref_depth = cycles(bpy, scene, out)
                 ref_rgb = ref_rgb / np.maximum(ref_alpha, 1e-6)[..., None]
                 from holo_core.io.image import srgb, write_png
-                write_png(ROOT / "out" / f"quality_{size}_{fstop}_{mode}.png",
-                          srgb(np.concatenate([rgb * alpha[..., None],
-                                               ref_rgb * ref_alpha[..., None]], 1)))
+
+                write_png(
+                    ROOT / "out" / f"quality_{size}_{fstop}_{mode}.png",
+                    srgb(
+                        np.concatenate([rgb * alpha[..., None], ref_rgb * ref_alpha[..., None]], 1)
+                    ),
+                )
                 m = metrics(rgb, alpha, holo["ViewLayer.Depth.Z"], ref_alpha, ref_depth)
                 r = metrics(ref_rgb, ref_alpha, ref_depth, ref_alpha, ref_depth)
                 rows.append((size, fstop, mode, m, r, seconds, peak))
-                print(f"{size:>9} {'f/' + str(fstop) if fstop else 'no DOF':>7} {mode:>6}: "
-                      f"edge {m['edge']:.2f} px (Cycles {r['edge']:.2f}), checker contrast "
-                      f"{m['checker']:.3f} ({r['checker']:.3f}), speckle {m['speckle']:.3f} "
-                      f"({r['speckle']:.3f}), IoU {m['iou']:.3f}, depth error "
-                      f"{m['depth']:.2%}, {seconds:.1f} s, worker peak {peak:.2f} GB",
-                      flush=True)
-    print("goals: edge <= 1.5 px, speckle <= 0.10, IoU >= 0.97, depth <= 0.5 %, 1280x720 <= "
-          "60 s, 1920x1080 <= 180 s (2-core CPU)")
-    results.write("quality", {
-        f"{size}, {'f/' + str(fstop) if fstop else 'no DOF'}, {mode.lower()}": {
-            "edge 10-90 % [px]": m["edge"], "Cycles' edge [px]": r["edge"],
-            "checker contrast": m["checker"], "Cycles' contrast": r["checker"],
-            "speckle": m["speckle"], "IoU": m["iou"], "depth error": m["depth"],
-            "s per frame": seconds, "worker peak [GB]": peak}
-        for size, fstop, mode, m, r, seconds, peak in rows})
+                print(
+                    f"{size:>9} {'f/' + str(fstop) if fstop else 'no DOF':>7} {mode:>6}: "
+                    f"edge {m['edge']:.2f} px (Cycles {r['edge']:.2f}), checker contrast "
+                    f"{m['checker']:.3f} ({r['checker']:.3f}), speckle {m['speckle']:.3f} "
+                    f"({r['speckle']:.3f}), IoU {m['iou']:.3f}, depth error "
+                    f"{m['depth']:.2%}, {seconds:.1f} s, worker peak {peak:.2f} GB",
+                    flush=True,
+                )
+    print(
+        "goals: edge <= 1.5 px, speckle <= 0.10, IoU >= 0.97, depth <= 0.5 %, 1280x720 <= "
+        "60 s, 1920x1080 <= 180 s (2-core CPU)"
+    )
+    results.write(
+        "quality",
+        {
+            f"{size}, {'f/' + str(fstop) if fstop else 'no DOF'}, {mode.lower()}": {
+                "edge 10-90 % [px]": m["edge"],
+                "Cycles' edge [px]": r["edge"],
+                "checker contrast": m["checker"],
+                "Cycles' contrast": r["checker"],
+                "speckle": m["speckle"],
+                "IoU": m["iou"],
+                "depth error": m["depth"],
+                "s per frame": seconds,
+                "worker peak [GB]": peak,
+            }
+            for size, fstop, mode, m, r, seconds, peak in rows
+        },
+    )
 
 
 if __name__ == "__main__":

@@ -42,11 +42,16 @@ def rows(name: str):
     """(size [px], the rows that carry the model's inputs) of bench/results/NAME.json."""
     figures = json.loads((results.RESULTS / f"{name}.json").read_text())["figures"]
     size = figures.get("objects' size [px]")
-    taken = [r for r in figures.values() if isinstance(r, dict) and "(σ/⟨I⟩)²" in r
-             and "speckle part [dB]" in r]
+    taken = [
+        r
+        for r in figures.values()
+        if isinstance(r, dict) and "(σ/⟨I⟩)²" in r and "speckle part [dB]" in r
+    ]
     if size is None or not taken:
-        raise SystemExit(f"{name}.json holds no two-seed rows with the model's inputs: run "
-                         f"bench/closeup.py (--seeds 2) again")
+        raise SystemExit(
+            f"{name}.json holds no two-seed rows with the model's inputs: run "
+            f"bench/closeup.py (--seeds 2) again"
+        )
     return size, taken
 
 
@@ -60,8 +65,9 @@ def predicted(size, row, scale, edge) -> float:
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("fitted", nargs="*", default=list(FITTED),
-                   help="results fitted (bench/results/NAME.json)")
+    p.add_argument(
+        "fitted", nargs="*", default=list(FITTED), help="results fitted (bench/results/NAME.json)"
+    )
     args = p.parse_args()
     speckle, edge = [], []
     for name in args.fitted:
@@ -69,11 +75,16 @@ def main():
         speckle += [mean_square(r["speckle part [dB]"]) * size / r["(σ/⟨I⟩)²"] for r in taken]
         edge += [mean_square(r["seed-free part [dB]"]) * size for r in taken]
     scale, error = float(np.exp(np.mean(np.log(speckle)))), float(np.exp(np.mean(np.log(edge))))
-    print(f"fitted over {', '.join(args.fitted)}: SPECKLE_SCALE {scale:.3g} (the code's "
-          f"{quality.SPECKLE_SCALE:g}), EDGE_ERROR {error:.3g} px (the code's "
-          f"{quality.EDGE_ERROR:g})")
-    figures = {"fitted over": ", ".join(args.fitted), "SPECKLE_SCALE": scale,
-               "EDGE_ERROR [px]": error}
+    print(
+        f"fitted over {', '.join(args.fitted)}: SPECKLE_SCALE {scale:.3g} (the code's "
+        f"{quality.SPECKLE_SCALE:g}), EDGE_ERROR {error:.3g} px (the code's "
+        f"{quality.EDGE_ERROR:g})"
+    )
+    figures = {
+        "fitted over": ", ".join(args.fitted),
+        "SPECKLE_SCALE": scale,
+        "EDGE_ERROR [px]": error,
+    }
     over = 0.0  # the most the fitted model predicts above a measured setting of the fitted
     for name in dict.fromkeys([*args.fitted, *CHECKED]):
         try:
@@ -82,19 +93,28 @@ def main():
             print(e)
             continue
         off = [r["PSNR [dB]"] - predicted(size, r, scale, error) for r in taken]
-        now = [r["PSNR [dB]"] - predicted(size, r, quality.SPECKLE_SCALE, quality.EDGE_ERROR)
-               for r in taken]
+        now = [
+            r["PSNR [dB]"] - predicted(size, r, quality.SPECKLE_SCALE, quality.EDGE_ERROR)
+            for r in taken
+        ]
         role = "fitted" if name in args.fitted else "not fitted"
         if name in args.fitted:
             over = max(over, -min(off))
-        print(f"{name} ({role}, {size:.0f} px objects): measured minus predicted "
-              f"{min(off):+.2f} to {max(off):+.2f} dB (the code's constants "
-              f"{min(now):+.2f} to {max(now):+.2f})")
-        figures[name] = {"role": role, "objects' size [px]": size,
-                         "measured - predicted, least [dB]": min(off),
-                         "measured - predicted, most [dB]": max(off)}
-    print(f"the model predicts at most {over:.2f} dB above a fitted setting (Auto aims "
-          f"MODEL_MARGIN {quality.MODEL_MARGIN:g} dB above its target)")
+        print(
+            f"{name} ({role}, {size:.0f} px objects): measured minus predicted "
+            f"{min(off):+.2f} to {max(off):+.2f} dB (the code's constants "
+            f"{min(now):+.2f} to {max(now):+.2f})"
+        )
+        figures[name] = {
+            "role": role,
+            "objects' size [px]": size,
+            "measured - predicted, least [dB]": min(off),
+            "measured - predicted, most [dB]": max(off),
+        }
+    print(
+        f"the model predicts at most {over:.2f} dB above a fitted setting (Auto aims "
+        f"MODEL_MARGIN {quality.MODEL_MARGIN:g} dB above its target)"
+    )
     figures["most predicted above a fitted setting [dB]"] = over
     results.write("quality_fit", figures)
 

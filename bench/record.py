@@ -71,54 +71,72 @@ def best_cpu(f, runs=3):
 
 def scene(n, rng):
     half = SHAPE[1] * PITCH / 2
-    return (np.c_[rng.uniform(-half, half, (n, 2)), rng.uniform(-0.2, -0.1, n)],
-            np.exp(2j * np.pi * rng.random(n)))
+    return (
+        np.c_[rng.uniform(-half, half, (n, 2)), rng.uniform(-0.2, -0.1, n)],
+        np.exp(2j * np.pi * rng.random(n)),
+    )
 
 
 def main():
     warnings.simplefilter("ignore")
     rng = np.random.default_rng(1)
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    print(f"CPU: {cpu_name()}, {cores} cores, load average {os.getloadavg()[0]:.1f}; device: "
-          f"{get_runtime().device.name.strip()}")
+    print(
+        f"CPU: {cpu_name()}, {cores} cores, load average {os.getloadavg()[0]:.1f}; device: "
+        f"{get_runtime().device.name.strip()}"
+    )
     pos, amp = scene(2000, rng)
     point_wave(pos[:8], amp[:8], wavelength=LAM, pitch=PITCH, shape=SHAPE, method="direct")
-    (t_cl, cpu), o = best_cpu(lambda: point_wave(pos, amp, wavelength=LAM, pitch=PITCH,
-                                                 shape=SHAPE, method="direct"), runs=5)
+    (t_cl, cpu), o = best_cpu(
+        lambda: point_wave(pos, amp, wavelength=LAM, pitch=PITCH, shape=SHAPE, method="direct"),
+        runs=5,
+    )
     few = 40  # float64 NumPy on a subset, same hologram
     t_np, ref = best(lambda: numpy_sum(pos[:few], amp[:few], SHAPE), runs=1)
-    sub = point_wave(pos[:few], amp[:few], wavelength=LAM, pitch=PITCH, shape=SHAPE,
-                     method="direct")
+    sub = point_wave(
+        pos[:few], amp[:few], wavelength=LAM, pitch=PITCH, shape=SHAPE, method="direct"
+    )
     pairs = pairs_in_cones(pos, SHAPE)
     err = err_direct = np.abs(sub - ref).max() / np.abs(ref).max()
     rate_np = pairs_in_cones(pos[:few], SHAPE) / t_np
-    print(f"direct sum, {len(pos)} points x {SHAPE[0]}x{SHAPE[1]}: {t_cl:.3f} s, "
-          f"{pairs / t_cl:.3g} pairs/s in the cones; {pairs / cpu:.3g} per CPU second, "
-          f"x{cores} cores {cores * pairs / cpu:.3g} (target 1e10; load "
-          f"{os.getloadavg()[0]:.1f}; "
-          f"{len(pos) * SHAPE[0] * SHAPE[1] / t_cl:.3g} counting every pixel, "
-          f"{pairs / (len(pos) * SHAPE[0] * SHAPE[1]):.0%} of which are in a cone); "
-          f"float64 NumPy {rate_np:.3g} pairs/s; ratio {pairs / t_cl / rate_np:.0f}x; "
-          f"max relative error {err:.2e} (target 1e-4)")
+    print(
+        f"direct sum, {len(pos)} points x {SHAPE[0]}x{SHAPE[1]}: {t_cl:.3f} s, "
+        f"{pairs / t_cl:.3g} pairs/s in the cones; {pairs / cpu:.3g} per CPU second, "
+        f"x{cores} cores {cores * pairs / cpu:.3g} (target 1e10; load "
+        f"{os.getloadavg()[0]:.1f}; "
+        f"{len(pos) * SHAPE[0] * SHAPE[1] / t_cl:.3g} counting every pixel, "
+        f"{pairs / (len(pos) * SHAPE[0] * SHAPE[1]):.0%} of which are in a cone); "
+        f"float64 NumPy {rate_np:.3g} pairs/s; ratio {pairs / t_cl / rate_np:.0f}x; "
+        f"max relative error {err:.2e} (target 1e-4)"
+    )
 
     pos, amp = scene(100_000, rng)
     point_wave(pos[:1000], amp[:1000], wavelength=LAM, pitch=PITCH, shape=SHAPE, method="wrp")
-    t_wrp, fast = best(lambda: point_wave(pos, amp, wavelength=LAM, pitch=PITCH, shape=SHAPE,
-                                          method="wrp"), runs=2)
-    t_dir, direct = best(lambda: point_wave(pos, amp, wavelength=LAM, pitch=PITCH, shape=SHAPE,
-                                            method="direct"), runs=1)
+    t_wrp, fast = best(
+        lambda: point_wave(pos, amp, wavelength=LAM, pitch=PITCH, shape=SHAPE, method="wrp"), runs=2
+    )
+    t_dir, direct = best(
+        lambda: point_wave(pos, amp, wavelength=LAM, pitch=PITCH, shape=SHAPE, method="direct"),
+        runs=1,
+    )
     err = np.linalg.norm(fast - direct) / np.linalg.norm(direct)
-    print(f"100,000 points on {SHAPE[0]}x{SHAPE[1]}: recording planes {t_wrp:.2f} s per colour "
-          f"(target 5 s), direct {t_dir:.2f} s, ratio {t_dir / t_wrp:.1f}x; relative error "
-          f"{err:.2e} (bound 1e-2)")
-    figures = {"direct sum, 2,000 points: pairs/s in the cones (wall)": pairs / t_cl,
-               "… per CPU second of the process": pairs / cpu,
-               "… per CPU second × cores (target 1e10)": cores * pairs / cpu,
-               "float64 NumPy, pairs/s": rate_np, "direct sum / NumPy": pairs / t_cl / rate_np,
-               "direct sum's largest error against NumPy (target 1e-4)": err_direct,
-               "100,000 points: recording planes [s per colour] (target 5)": t_wrp,
-               "100,000 points: direct sum [s]": t_dir, "direct / recording planes": t_dir / t_wrp,
-               "recording planes against the direct sum (bound 1e-2)": err}
+    print(
+        f"100,000 points on {SHAPE[0]}x{SHAPE[1]}: recording planes {t_wrp:.2f} s per colour "
+        f"(target 5 s), direct {t_dir:.2f} s, ratio {t_dir / t_wrp:.1f}x; relative error "
+        f"{err:.2e} (bound 1e-2)"
+    )
+    figures = {
+        "direct sum, 2,000 points: pairs/s in the cones (wall)": pairs / t_cl,
+        "… per CPU second of the process": pairs / cpu,
+        "… per CPU second × cores (target 1e10)": cores * pairs / cpu,
+        "float64 NumPy, pairs/s": rate_np,
+        "direct sum / NumPy": pairs / t_cl / rate_np,
+        "direct sum's largest error against NumPy (target 1e-4)": err_direct,
+        "100,000 points: recording planes [s per colour] (target 5)": t_wrp,
+        "100,000 points: direct sum [s]": t_dir,
+        "direct / recording planes": t_dir / t_wrp,
+        "recording planes against the direct sum (bound 1e-2)": err,
+    }
     figures.update(zones(rng))
     results.write("record", figures, device=get_runtime().device.name.strip())
 
@@ -134,8 +152,10 @@ def zones(rng, shape=(512, 512), n=2000):
         pos = np.c_[rng.uniform(-half, half, (n, 2)), np.full(n, z)]
         amp = np.exp(2j * np.pi * rng.random(n))
         band = fill * LAM / (2 * PITCH)
-        d, w = (point_wave(pos, amp, wavelength=LAM, pitch=PITCH, shape=shape, band=band,
-                           method=m) for m in ("direct", "wrp"))
+        d, w = (
+            point_wave(pos, amp, wavelength=LAM, pitch=PITCH, shape=shape, band=band, method=m)
+            for m in ("direct", "wrp")
+        )
         cone = Grid(shape, PITCH, LAM, fill=fill).cone
         zones_n, diff = abs(z) * cone**2 / LAM, np.linalg.norm(w - d) / np.linalg.norm(d)
         print(f"  N = {zones_n:5.1f}: relative difference {diff:.2e}")

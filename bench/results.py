@@ -29,20 +29,28 @@ def cpu_name() -> str:
     """The CPU's model name as lscpu gives it (else the platform's processor string)."""
     try:
         out = subprocess.run(["lscpu"], check=False, capture_output=True, text=True).stdout
-        return next(line.split(":", 1)[1].strip() for line in out.splitlines()
-                    if line.startswith("Model name"))
+        return next(
+            line.split(":", 1)[1].strip()
+            for line in out.splitlines()
+            if line.startswith("Model name")
+        )
     except (OSError, StopIteration):
         return platform.processor() or "unknown CPU"
 
 
 def machine() -> dict:
     """The machine a result was measured on and its load average (1, 5, 15 minutes)."""
-    return {"cpu": cpu_name(), "cores": os.cpu_count(),
-            "usable_cpus": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
-            else os.cpu_count(),
-            "load_at_start": [round(x, 2) for x in _LOAD_AT_START],
-            "load_at_end": [round(x, 2) for x in os.getloadavg()],
-            "python": platform.python_version(), "system": platform.platform()}
+    return {
+        "cpu": cpu_name(),
+        "cores": os.cpu_count(),
+        "usable_cpus": len(os.sched_getaffinity(0))
+        if hasattr(os, "sched_getaffinity")
+        else os.cpu_count(),
+        "load_at_start": [round(x, 2) for x in _LOAD_AT_START],
+        "load_at_end": [round(x, 2) for x in os.getloadavg()],
+        "python": platform.python_version(),
+        "system": platform.platform(),
+    }
 
 
 def _plain(value):
@@ -60,10 +68,14 @@ def write(name: str, figures: dict, *, device: str | None = None) -> Path:
     """Write ``bench/results/<name>.json``: the figures, the machine and its load, the date,
     the command that ran the bench and, where given, the OpenCL device. Atomic (a temporary
     file renamed over the last result)."""
-    record = {"bench": name,
-              "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-              "command": " ".join([Path(sys.argv[0]).name, *sys.argv[1:]]),
-              "machine": machine(), "device": device, "figures": _plain(figures)}
+    record = {
+        "bench": name,
+        "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "command": " ".join([Path(sys.argv[0]).name, *sys.argv[1:]]),
+        "machine": machine(),
+        "device": device,
+        "figures": _plain(figures),
+    }
     RESULTS.mkdir(exist_ok=True)
     path = RESULTS / f"{name}.json"
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")

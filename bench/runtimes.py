@@ -24,17 +24,27 @@ FIGURES = {  # bench script -> (column, pattern of its figure, unit)
 
 def usable_devices():
     from holo_core.opencl import all_devices, device_problem
-    return [(f"{p}:{d}", f"{dev.name.strip()} ({dev.platform.name.strip()})")
-            for p, d, dev in all_devices() if not device_problem(dev)]
+
+    return [
+        (f"{p}:{d}", f"{dev.name.strip()} ({dev.platform.name.strip()})")
+        for p, d, dev in all_devices()
+        if not device_problem(dev)
+    ]
 
 
 def run(script, spec):
-    env = {**os.environ, "HOLO_DEVICE": spec, "PYTHONUNBUFFERED": "1",
-           "HOLO_BENCH_RESULTS": SCRATCH}  # bench/results/ keeps the default device's runs
-    r = subprocess.run([sys.executable, str(HERE / script)], env=env, capture_output=True,
-                       text=True)
-    print(f"--- {script} on {spec}\n{r.stdout}{r.stderr[-1500:] if r.returncode else ''}",
-          flush=True)
+    env = {
+        **os.environ,
+        "HOLO_DEVICE": spec,
+        "PYTHONUNBUFFERED": "1",
+        "HOLO_BENCH_RESULTS": SCRATCH,
+    }  # bench/results/ keeps the default device's runs
+    r = subprocess.run(
+        [sys.executable, str(HERE / script)], env=env, capture_output=True, text=True
+    )
+    print(
+        f"--- {script} on {spec}\n{r.stdout}{r.stderr[-1500:] if r.returncode else ''}", flush=True
+    )
     name, pattern, unit = FIGURES[script]
     m = re.search(pattern, r.stdout)
     return f"{m.group(1)} {unit}" if m else f"failed ({r.returncode})"

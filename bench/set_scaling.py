@@ -40,20 +40,32 @@ def path_cameras(move: float, *, orbit: bool, scale: float):
 def planned(move: float, *, orbit: bool, scale: float, stretch: float, points) -> dict:
     """One move's set planned: its figures."""
     path, middle = path_cameras(move, orbit=orbit, scale=scale)
-    parts = parts_along(path, [points.min(0), points.max(0)], distance=shot.DISTANCE,
-                        stretch=stretch)
+    parts = parts_along(
+        path, [points.min(0), points.max(0)], distance=shot.DISTANCE, stretch=stretch
+    )
     sp = plan_parts(parts, points, meshes=shot.scene())  # emitters from the surfaces seen
-    k = min(range(len(parts)), key=lambda i: parts[i].reach(middle.position,
-                                                            middle.aperture_diameter))
+    k = min(
+        range(len(parts)), key=lambda i: parts[i].reach(middle.position, middle.aperture_diameter)
+    )
     local = parts[k].plate.to_plate(np.asarray(middle.position)[None])[0]
-    view = plan_view(sp.plans[k], position=local, pixel_angle=middle.pixel_angle(),
-                     pupil=middle.aperture_diameter, resolution=middle.resolution)
-    return {"parts": len(parts), "path [m]": sp.length, "samples [Mpx]": sp.samples / 1e6,
-            "disk [GiB]": sp.disk_bytes() / 2**30,
-            "planned recording [s]": sp.record_seconds(),
-            "estimated recording, default rates [s]": estimate.plate_set(
-                sp, calibration=(estimate.DEFAULT, False), warm=True, load_average=0).seconds,
-            "a view reads [Mpx]": view.window / 1e6}
+    view = plan_view(
+        sp.plans[k],
+        position=local,
+        pixel_angle=middle.pixel_angle(),
+        pupil=middle.aperture_diameter,
+        resolution=middle.resolution,
+    )
+    return {
+        "parts": len(parts),
+        "path [m]": sp.length,
+        "samples [Mpx]": sp.samples / 1e6,
+        "disk [GiB]": sp.disk_bytes() / 2**30,
+        "planned recording [s]": sp.record_seconds(),
+        "estimated recording, default rates [s]": estimate.plate_set(
+            sp, calibration=(estimate.DEFAULT, False), warm=True, load_average=0
+        ).seconds,
+        "a view reads [Mpx]": view.window / 1e6,
+    }
 
 
 def per_unit(rows: dict, unit: float) -> None:
@@ -62,36 +74,54 @@ def per_unit(rows: dict, unit: float) -> None:
     first = None
     for label, r in rows.items():
         move = r.pop("_move")
-        each = {k: r[k] / (move / unit) for k in ("samples [Mpx]", "disk [GiB]",
-                                                  "planned recording [s]")}
+        each = {
+            k: r[k] / (move / unit)
+            for k in ("samples [Mpx]", "disk [GiB]", "planned recording [s]")
+        }
         first = first or each
-        ratios = {f"{k.split(' [')[0]} per unit / the shortest's": each[k] / first[k]
-                  for k in each}
+        ratios = {f"{k.split(' [')[0]} per unit / the shortest's": each[k] / first[k] for k in each}
         r.update(ratios)
-        print(f"{label}: {r['parts']} parts, {r['samples [Mpx]']:.1f} Mpx, "
-              f"{r['disk [GiB]']:.2f} GiB, recording about "
-              f"{r['estimated recording, default rates [s]']:.0f} s (its zone sums "
-              f"{r['planned recording [s]']:.0f} s), "
-              f"a view reads {r['a view reads [Mpx]']:.1f} Mpx; per unit against the "
-              f"shortest: " + ", ".join(f"{k.split(' per')[0]} {v:.2f}"
-                                        for k, v in ratios.items()))
+        print(
+            f"{label}: {r['parts']} parts, {r['samples [Mpx]']:.1f} Mpx, "
+            f"{r['disk [GiB]']:.2f} GiB, recording about "
+            f"{r['estimated recording, default rates [s]']:.0f} s (its zone sums "
+            f"{r['planned recording [s]']:.0f} s), "
+            f"a view reads {r['a view reads [Mpx]']:.1f} Mpx; per unit against the "
+            f"shortest: " + ", ".join(f"{k.split(' per')[0]} {v:.2f}" for k, v in ratios.items())
+        )
 
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--dollies", type=float, nargs="*", default=[0.1, 0.4, 1.0, 2.0],
-                   help="dolly lengths [m] at 1280x720")
-    p.add_argument("--orbits", type=float, nargs="*", default=[30.0, 60.0, 90.0],
-                   help="orbit angles [°] at 640x360")
+    p.add_argument(
+        "--dollies",
+        type=float,
+        nargs="*",
+        default=[0.1, 0.4, 1.0, 2.0],
+        help="dolly lengths [m] at 1280x720",
+    )
+    p.add_argument(
+        "--orbits",
+        type=float,
+        nargs="*",
+        default=[30.0, 60.0, 90.0],
+        help="orbit angles [°] at 640x360",
+    )
     p.add_argument("--stretch", type=float, default=0.1, help="[m] of path a part serves")
     args = p.parse_args()
     points = np.concatenate([m.vertices for m in shot.scene()])
-    dollies = {f"{d * 100:g} cm dolly, 1280x720": dict(
-        planned(d, orbit=False, scale=1.0, stretch=args.stretch, points=points), _move=d)
-        for d in args.dollies}
-    orbits = {f"{a:g}° orbit, 640x360": dict(
-        planned(a, orbit=True, scale=0.5, stretch=args.stretch, points=points), _move=a)
-        for a in args.orbits}
+    dollies = {
+        f"{d * 100:g} cm dolly, 1280x720": dict(
+            planned(d, orbit=False, scale=1.0, stretch=args.stretch, points=points), _move=d
+        )
+        for d in args.dollies
+    }
+    orbits = {
+        f"{a:g}° orbit, 640x360": dict(
+            planned(a, orbit=True, scale=0.5, stretch=args.stretch, points=points), _move=a
+        )
+        for a in args.orbits
+    }
     per_unit(dollies, 1.0)
     per_unit(orbits, 10.0)
     results.write("set_scaling", {**dollies, **orbits})

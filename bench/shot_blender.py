@@ -102,30 +102,63 @@ def main():
         frames = {}
         for mode in ("PLATE", "CAMERA"):
             child = subprocess.run(
-                [sys.executable, __file__, "--mode", mode, "--frames", str(args.frames),
-                 "--dolly", str(args.dolly), "--margin", str(args.margin), "--out", str(out)],
-                capture_output=True, text=True, check=False)
+                [
+                    sys.executable,
+                    __file__,
+                    "--mode",
+                    mode,
+                    "--frames",
+                    str(args.frames),
+                    "--dolly",
+                    str(args.dolly),
+                    "--margin",
+                    str(args.margin),
+                    "--out",
+                    str(out),
+                ],
+                capture_output=True,
+                text=True,
+                check=False,
+            )
             lines = [ln for ln in child.stdout.splitlines() if ln.startswith(RESULT)]
             if child.returncode or not lines:
-                sys.exit(f"shot_blender: {mode} mode failed: "
-                         f"{(child.stderr or child.stdout).strip()[-2000:]}")
-            frames[mode] = [s for _, s in sorted(json.loads(lines[-1][len(RESULT):]))]
-            print(f"{mode.lower()} mode, each frame's pass [s]: "
-                  + " ".join(f"{s:.2f}" for s in frames[mode])
-                  + f" (load {os.getloadavg()[0]:.1f})", flush=True)
+                sys.exit(
+                    f"shot_blender: {mode} mode failed: "
+                    f"{(child.stderr or child.stdout).strip()[-2000:]}"
+                )
+            frames[mode] = [s for _, s in sorted(json.loads(lines[-1][len(RESULT) :]))]
+            print(
+                f"{mode.lower()} mode, each frame's pass [s]: "
+                + " ".join(f"{s:.2f}" for s in frames[mode])
+                + f" (load {os.getloadavg()[0]:.1f})",
+                flush=True,
+            )
     plate, camera = frames["PLATE"], frames["CAMERA"]
     first, frame_s, pass_s = plate[0], float(np.median(plate[1:])), float(np.median(camera))
-    figures = {"frames": args.frames, "dolly [m]": args.dolly,
-               "plate mode: the first frame [s]": first, "plate mode: a frame, median [s]": frame_s,
-               "camera mode: a frame, median [s]": pass_s}
-    print(f"plate: the first frame {first:.1f} s (the plate recorded, lit by Cycles, written), "
-          f"then {frame_s:.2f} s a frame; camera holograms {pass_s:.2f} s a frame")
+    figures = {
+        "frames": args.frames,
+        "dolly [m]": args.dolly,
+        "plate mode: the first frame [s]": first,
+        "plate mode: a frame, median [s]": frame_s,
+        "camera mode: a frame, median [s]": pass_s,
+    }
+    print(
+        f"plate: the first frame {first:.1f} s (the plate recorded, lit by Cycles, written), "
+        f"then {frame_s:.2f} s a frame; camera holograms {pass_s:.2f} s a frame"
+    )
     if pass_s > frame_s:
         n = int(np.ceil((first - frame_s) / (pass_s - frame_s)))
-        print(f"the plate costs less than a camera hologram per frame from {n} frames on; "
-              f"24 frames: {first + 23 * frame_s:.0f} s against {24 * pass_s:.0f} s")
-        figures.update({"break-even [frames]": n, "24 frames from the plate [s]":
-                        first + 23 * frame_s, "24 frames as camera holograms [s]": 24 * pass_s})
+        print(
+            f"the plate costs less than a camera hologram per frame from {n} frames on; "
+            f"24 frames: {first + 23 * frame_s:.0f} s against {24 * pass_s:.0f} s"
+        )
+        figures.update(
+            {
+                "break-even [frames]": n,
+                "24 frames from the plate [s]": first + 23 * frame_s,
+                "24 frames as camera holograms [s]": 24 * pass_s,
+            }
+        )
     else:
         print("a plate's frame costs more than a camera hologram's: no break-even")
         figures["break-even [frames]"] = "none"

@@ -77,6 +77,7 @@ class Bounds:
         self.bandwidth = 2 * src.nbytes / min(times)  # bytes read and written per second
         del src, dst
         from platformdirs import user_cache_dir
+
         self.wisdom = os.path.join(user_cache_dir("holo"), "bench-bound-wisdom.pickle")
         try:
             with open(self.wisdom, "rb") as f:
@@ -89,8 +90,14 @@ class Bounds:
         """Seconds of FFTW's measured 2-D transform of ``shape`` (median of 3)."""
         if shape not in self.cache:
             a = pyfftw.empty_aligned(shape, np.complex64)
-            plan = pyfftw.FFTW(a, a, axes=(0, 1), flags=("FFTW_MEASURE",), threads=1,
-                               planning_timelimit=self.plan_seconds)
+            plan = pyfftw.FFTW(
+                a,
+                a,
+                axes=(0, 1),
+                flags=("FFTW_MEASURE",),
+                threads=1,
+                planning_timelimit=self.plan_seconds,
+            )
             with open(self.wisdom, "wb") as f:
                 pickle.dump(pyfftw.export_wisdom(), f)
             a[...] = 1
@@ -114,10 +121,19 @@ class Bounds:
 
     def of(self, grids) -> dict:
         """The bounds of ``grids`` ((kind, shape) pairs) and the bandwidth, as plain data."""
-        return {"bandwidth": self.bandwidth,
-                "grids": [[kind, list(shape), self.transform(tuple(shape)) if kind ==
-                           "transform" else self.convolution(tuple(shape))]
-                          for kind, shape in grids]}
+        return {
+            "bandwidth": self.bandwidth,
+            "grids": [
+                [
+                    kind,
+                    list(shape),
+                    self.transform(tuple(shape))
+                    if kind == "transform"
+                    else self.convolution(tuple(shape)),
+                ]
+                for kind, shape in grids
+            ],
+        }
 
 
 class Measured:
@@ -125,9 +141,19 @@ class Measured:
     Holo's in one process, where a plan Holo measures would keep both in its wisdom file."""
 
     def __init__(self, grids, plan_seconds):
-        r = subprocess.run([sys.executable, __file__, "--bounds-of", json.dumps(grids),
-                            "--plan-seconds", str(plan_seconds)], capture_output=True,
-                           text=True, check=True)
+        r = subprocess.run(
+            [
+                sys.executable,
+                __file__,
+                "--bounds-of",
+                json.dumps(grids),
+                "--plan-seconds",
+                str(plan_seconds),
+            ],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         data = json.loads(r.stdout.strip().splitlines()[-1])
         self.bandwidth = data["bandwidth"]
         self.grids = {(kind, tuple(shape)): t for kind, shape, t in data["grids"]}
@@ -144,8 +170,10 @@ class Measured:
 
 def fft_stages(stages: Stages) -> list:
     """Time every host transform and convolution by its grid (the wrappers' undo)."""
-    return [stages.wrap(HostFFT, "transform", "transforms", transform_grid),
-            stages.wrap(HostFFT, "convolve", "convolutions (propagations)", convolution_grid)]
+    return [
+        stages.wrap(HostFFT, "transform", "transforms", transform_grid),
+        stages.wrap(HostFFT, "convolve", "convolutions (propagations)", convolution_grid),
+    ]
 
 
 def median_of(rounds: list[tuple[Stages, float]]) -> tuple[Stages, float]:
@@ -183,8 +211,9 @@ def report(title, stages: Stages, total, bounds: Measured, memory_bytes, host):
     print(f"  {'stage':44s} {'seconds':>8s} {'bound':>8s} {'x bound':>8s}")
     rows = {f"{title}: all": {"s": total}}
     for (kind, shape), (seconds, calls) in sorted(stages.grids.items(), key=lambda kv: -kv[1][0]):
-        bound = calls * (bounds.transform(shape) if kind == "transform" else
-                         bounds.convolution(shape))
+        bound = calls * (
+            bounds.transform(shape) if kind == "transform" else bounds.convolution(shape)
+        )
         label = f"{calls} {kind}{'s' * (calls > 1)} of {shape[0]}x{shape[1]}"
         print(f"  {label:44s} {seconds:8.3f} {bound:8.3f} {seconds / bound:8.2f}")
         rows[f"{title}: {label}"] = {"s": seconds, "bound [s]": bound, "× bound": seconds / bound}
@@ -194,12 +223,14 @@ def report(title, stages: Stages, total, bounds: Measured, memory_bytes, host):
         if name in memory_bytes:
             bound = bounds.memory(memory_bytes[name])
             print(f"  {name:44s} {seconds:8.3f} {bound:8.3f} {seconds / bound:8.2f}")
-            rows[f"{title}: {name}"] = {"s": seconds, "bound [s]": bound,
-                                        "× bound": seconds / bound}
+            rows[f"{title}: {name}"] = {
+                "s": seconds,
+                "bound [s]": bound,
+                "× bound": seconds / bound,
+            }
         else:
             print(f"  {name:44s} {seconds:8.3f} {'(host)' if name in host else '':>8s}")
-            rows[f"{title}: {name}"] = {"s": seconds, "bound [s]": "(host)" if name in host
-                                        else ""}
+            rows[f"{title}: {name}"] = {"s": seconds, "bound [s]": "(host)" if name in host else ""}
     other = total - sum(stages.seconds.values())
     print(f"  {'other':44s} {other:8.3f}")
     rows[f"{title}: other"] = {"s": other}
@@ -208,34 +239,41 @@ def report(title, stages: Stages, total, bounds: Measured, memory_bytes, host):
 
 # --- the camera pass --------------------------------------------------------------------------
 
+
 def camera_pass(job_path: Path, rt, rounds) -> list:
     from holo_core import runner
     from holo_core.camera import incoherent
     from holo_core.camera import raster as camera_raster
     from holo_core.camera import render as camera_render
     from holo_core.job import Job
+
     with open(job_path, "rb") as f:
         job = Job.from_dict(pickle.load(f))
-    job = replace(job, output=replace(job.output, folder=Path(tempfile.mkdtemp(
-        prefix="holo-stages-"))))
+    job = replace(
+        job, output=replace(job.output, folder=Path(tempfile.mkdtemp(prefix="holo-stages-")))
+    )
     runner.run(job)  # warm: programs built, plans read or measured
     views = []
 
     def wrap(stages):
-        undo = [stages.wrap(camera_raster, name, "emitters (host)")
-                for name in ("choose_optics", "rasterize", "point_emitters", "merged")]
-        undo += [stages.wrap(incoherent.IncoherentImages, "__init__", "device setup and uploads"),
-                 stages.wrap(incoherent.IncoherentImages, "_transfer_functions",
-                             "PSF kernels (pupils)"),
-                 stages.wrap(incoherent.IncoherentImages, "images",
-                             "maps, products, reads (kernels)"),
-                 stages.wrap(camera_render._Accumulator, "result",
-                             "result: colour, alpha, depth (host)"),
-                 stages.wrap(runner, "_write_pass", "write EXR and PNG (host)")]
+        undo = [
+            stages.wrap(camera_raster, name, "emitters (host)")
+            for name in ("choose_optics", "rasterize", "point_emitters", "merged")
+        ]
+        undo += [
+            stages.wrap(incoherent.IncoherentImages, "__init__", "device setup and uploads"),
+            stages.wrap(incoherent.IncoherentImages, "_transfer_functions", "PSF kernels (pupils)"),
+            stages.wrap(incoherent.IncoherentImages, "images", "maps, products, reads (kernels)"),
+            stages.wrap(
+                camera_render._Accumulator, "result", "result: colour, alpha, depth (host)"
+            ),
+            stages.wrap(runner, "_write_pass", "write EXR and PNG (host)"),
+        ]
         return undo + fft_stages(stages)
 
-    stages, total = measured(lambda: views.append(runner.run(job).view), wrap, rounds,
-                             rt.queue.finish)
+    stages, total = measured(
+        lambda: views.append(runner.run(job).view), wrap, rounds, rt.queue.finish
+    )
     view = views[-1]
     h, w = view.info["pupil_samples"]
     fine = view.rgb.shape[0] * view.rgb.shape[1] * view.info["resolution_limit_px"] ** -2
@@ -243,18 +281,29 @@ def camera_pass(job_path: Path, rt, rounds) -> list:
     memory_bytes = {  # what each element-wise stage must read and write, at least
         # 3 maps: 3 products (read the PSF's transform, write the accumulator), 3 embeddings
         # (read it, write the read grid's corners), 3 reads (the read grid once, the pixels)
-        "maps, products, reads (kernels)": 8 * (3 * 2 * grid + 3 * 2 * grid + 3 * read
-                                                + 3 * fine),
+        "maps, products, reads (kernels)": 8 * (3 * 2 * grid + 3 * 2 * grid + 3 * read + 3 * fine),
         # 2 pupils (h·w) into the 2x grid, and the PSFs' products (read 2, write 2 grids)
         "PSF kernels (pupils)": 8 * (2 * 2 * h * w + 4 * grid),
     }
-    return [(f"camera pass, {view.rgb.shape[1]}x{view.rgb.shape[0]}, pupil {w}x{h} "
-             f"({view.info['layers']} layer)", stages, total, memory_bytes,
-             {"emitters (host)", "result: colour, alpha, depth (host)",
-              "write EXR and PNG (host)", "device setup and uploads"})]
+    return [
+        (
+            f"camera pass, {view.rgb.shape[1]}x{view.rgb.shape[0]}, pupil {w}x{h} "
+            f"({view.info['layers']} layer)",
+            stages,
+            total,
+            memory_bytes,
+            {
+                "emitters (host)",
+                "result: colour, alpha, depth (host)",
+                "write EXR and PNG (host)",
+                "device setup and uploads",
+            },
+        )
+    ]
 
 
 # --- a plate's recording (its slab steps) and a view ------------------------------------------
+
 
 def plate(samples: int, rt, rounds) -> list:
     from plate_scene import PLATE, camera, meshes
@@ -262,29 +311,58 @@ def plate(samples: int, rt, rounds) -> list:
     from holo_core.plate import composition, pupil_images, slabs
     from holo_core.plate.looks import record_plate
     from holo_core.plate.view import render_view
+
     centre = camera("centre", 1.0)
     # warm: programs built, the FFT plans of these grids read (or measured, once per machine)
     render_view(record_plate(meshes(), plate=PLATE, camera=centre, resolution=samples), centre)
     plates = []
     stages, total = measured(
-        lambda: plates.append(record_plate(meshes(), plate=PLATE, camera=centre,
-                                           resolution=samples)),
-        lambda st: [st.wrap(slabs, "record_slabs", "slab recording (host: emitters, masks)")]
-        + fft_stages(st), rounds, rt.queue.finish)
+        lambda: plates.append(
+            record_plate(meshes(), plate=PLATE, camera=centre, resolution=samples)
+        ),
+        lambda st: (
+            [st.wrap(slabs, "record_slabs", "slab recording (host: emitters, masks)")]
+            + fft_stages(st)
+        ),
+        rounds,
+        rt.queue.finish,
+    )
     h = plates[-1]
-    tables = [(f"plate recording by slabs, {h.shape[1]}x{h.shape[0]} (its slab steps are the "
-               f"convolutions)", stages, total, {}, {"slab recording (host: emitters, masks)"})]
+    tables = [
+        (
+            f"plate recording by slabs, {h.shape[1]}x{h.shape[0]} (its slab steps are the "
+            f"convolutions)",
+            stages,
+            total,
+            {},
+            {"slab recording (host: emitters, masks)"},
+        )
+    ]
     stages, total = measured(
         lambda: render_view(h, centre),
-        lambda st: [st.wrap(pupil_images, "field_at_pupil",
-                            "window to the pupil (propagation, rotation)"),
-                    st.wrap(pupil_images.PupilImage, "image", "pupil to image (window, read "
-                            "pixels)"),
-                    st.wrap(composition, "compose", "compose the looks (host)")]
-        + fft_stages(st), rounds, rt.queue.finish)
-    return tables + [(f"plate view, {centre.resolution[0]}x{centre.resolution[1]} from the "
-                      f"{h.shape[1]}x{h.shape[0]} plate", stages, total, {},
-                      {"compose the looks (host)"})]
+        lambda st: (
+            [
+                st.wrap(
+                    pupil_images, "field_at_pupil", "window to the pupil (propagation, rotation)"
+                ),
+                st.wrap(pupil_images.PupilImage, "image", "pupil to image (window, read pixels)"),
+                st.wrap(composition, "compose", "compose the looks (host)"),
+            ]
+            + fft_stages(st)
+        ),
+        rounds,
+        rt.queue.finish,
+    )
+    return tables + [
+        (
+            f"plate view, {centre.resolution[0]}x{centre.resolution[1]} from the "
+            f"{h.shape[1]}x{h.shape[0]} plate",
+            stages,
+            total,
+            {},
+            {"compose the looks (host)"},
+        )
+    ]
 
 
 def main():
@@ -300,11 +378,15 @@ def main():
         print(json.dumps(Bounds(args.plan_seconds).of(json.loads(args.bounds_of))))
         return
     if "camera" in args.parts and not args.job.is_file():
-        subprocess.run([sys.executable, str(ROOT / "bench" / "gpu_pass.py"), str(args.job),
-                        "--make-job"], check=True)
+        subprocess.run(
+            [sys.executable, str(ROOT / "bench" / "gpu_pass.py"), str(args.job), "--make-job"],
+            check=True,
+        )
     rt = get_runtime()
-    print(f"CPU: {cpu_name()}, load average {os.getloadavg()[0]:.1f}; device: "
-          f"{rt.device.name.strip()} ({rt.device.platform.name.strip()}), FFT {rt.fft.name}")
+    print(
+        f"CPU: {cpu_name()}, load average {os.getloadavg()[0]:.1f}; device: "
+        f"{rt.device.name.strip()} ({rt.device.platform.name.strip()}), FFT {rt.fft.name}"
+    )
     tables = []
     if "camera" in args.parts:
         tables += camera_pass(args.job, rt, args.rounds)
@@ -312,14 +394,19 @@ def main():
         tables += plate(args.plate_samples, rt, args.rounds)
     grids = sorted({(kind, tuple(shape)) for _, st, *_ in tables for kind, shape in st.grids})
     bounds = Measured([[kind, list(shape)] for kind, shape in grids], args.plan_seconds)
-    print(f"copy bandwidth {bounds.bandwidth / 1e9:.1f} GB/s (read + written); the bounds "
-          f"measured after the stages, in a process of their own")
+    print(
+        f"copy bandwidth {bounds.bandwidth / 1e9:.1f} GB/s (read + written); the bounds "
+        f"measured after the stages, in a process of their own"
+    )
     figures = {"copy bandwidth, read + written [GB/s]": {"s": bounds.bandwidth / 1e9}}
     for title, stages, total, memory_bytes, host in tables:
         figures.update(report(title, stages, total, bounds, memory_bytes, host))
     print(f"\nload average at the end {os.getloadavg()[0]:.1f}")
-    results.write("stages", figures, device=f"{rt.device.name.strip()} "
-                  f"({rt.device.platform.name.strip()}), FFT {rt.fft.name}")
+    results.write(
+        "stages",
+        figures,
+        device=f"{rt.device.name.strip()} ({rt.device.platform.name.strip()}), FFT {rt.fft.name}",
+    )
 
 
 if __name__ == "__main__":

@@ -36,8 +36,8 @@ def numpy_step(field, shape, z):
     h, w = field.shape
     big = np.zeros(shape, np.complex64)
     r0, c0 = (shape[0] - h) // 2, (shape[1] - w) // 2
-    big[r0:r0 + h, c0:c0 + w] = field
-    return np.fft.ifft2(np.fft.fft2(big) * tf)[r0:r0 + h, c0:c0 + w]
+    big[r0 : r0 + h, c0 : c0 + w] = field
+    return np.fft.ifft2(np.fft.fft2(big) * tf)[r0 : r0 + h, c0 : c0 + w]
 
 
 def main():
@@ -63,17 +63,29 @@ def main():
     tf_shape = quadrant_shape(shape) if quadrant else shape
 
     def transfer(z):  # a new distance's transfer function alone, as angular_spectrum makes it
-        asm_transfer(rt, shape, wavelength=LAM, pitch=(PITCH, PITCH), distance=float(z),
-                     offset=(0.0, 0.0), band_limit=True, edge=BAND_EDGE, quadrant=quadrant,
-                     out=recycled(rt, "bench", tf_shape))  # its own buffers: the cache's stay
+        asm_transfer(
+            rt,
+            shape,
+            wavelength=LAM,
+            pitch=(PITCH, PITCH),
+            distance=float(z),
+            offset=(0.0, 0.0),
+            band_limit=True,
+            edge=BAND_EDGE,
+            quadrant=quadrant,
+            out=recycled(rt, "bench", tf_shape),
+        )  # its own buffers: the cache's stay
         rt.queue.finish()
 
     step(5e-3)  # programs built, FFT planned, the repeated distance's transfer cached
     transfer(5e-3)
     repeated, sweep, made = [], [], []
     for z in distances:
-        for series, run, at in ((sweep, step, z), (repeated, step, 5e-3),
-                                (made, transfer, z + 1e-9)):
+        for series, run, at in (
+            (sweep, step, z),
+            (repeated, step, 5e-3),
+            (made, transfer, z + 1e-9),
+        ):
             t = time.perf_counter()
             run(at)
             series.append(time.perf_counter() - t)
@@ -82,7 +94,7 @@ def main():
     rt.queue.finish()
     batch = (time.perf_counter() - t) / len(distances)
     plain = []
-    for z in distances[:args.numpy_steps]:
+    for z in distances[: args.numpy_steps]:
         t = time.perf_counter()
         numpy_step(field, shape, z)
         plain.append(time.perf_counter() - t)
@@ -92,34 +104,48 @@ def main():
         got = stack[i].get()
         errors.append(float(np.linalg.norm(got - ref) / np.linalg.norm(ref)))
     rep, new, tf, np_med = (statistics.median(v) for v in (repeated, sweep, made, plain))
-    print(f"CPU: {cpu_name()}, load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} "
-          f"cores; device: {rt.device.name.strip()} "
-          f"({rt.device.platform.name.strip()}), FFT {rt.fft.name}, float64 "
-          f"{'yes' if rt.has_fp64 else 'no (split float32 route)'}")
-    print(f"field {n}x{n}, padding 2 -> {shape[0]}x{shape[1]}, {len(distances)} distances "
-          f"{distances[0]:g} to {distances[-1]:g} m")
+    print(
+        f"CPU: {cpu_name()}, load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} "
+        f"cores; device: {rt.device.name.strip()} "
+        f"({rt.device.platform.name.strip()}), FFT {rt.fft.name}, float64 "
+        f"{'yes' if rt.has_fp64 else 'no (split float32 route)'}"
+    )
+    print(
+        f"field {n}x{n}, padding 2 -> {shape[0]}x{shape[1]}, {len(distances)} distances "
+        f"{distances[0]:g} to {distances[-1]:g} m"
+    )
     print(f"repeated distance (cached transfer): {rep * 1e3:7.1f} ms per step (median)")
-    print(f"a new distance's transfer function : {tf * 1e3:7.1f} ms, {tf / rep:.2f}x a "
-          f"propagation (target <= 0.2)")
-    print(f"sweep, new distance each step      : {new * 1e3:7.1f} ms per step (median), "
-          f"{new / rep:.2f}x a repeated step (target <= 1.2)")
+    print(
+        f"a new distance's transfer function : {tf * 1e3:7.1f} ms, {tf / rep:.2f}x a "
+        f"propagation (target <= 0.2)"
+    )
+    print(
+        f"sweep, new distance each step      : {new * 1e3:7.1f} ms per step (median), "
+        f"{new / rep:.2f}x a repeated step (target <= 1.2)"
+    )
     print(f"sweep as one batched call          : {batch * 1e3:7.1f} ms per step")
-    print(f"plain NumPy, kernel rebuilt per step: {np_med * 1e3:7.1f} ms per step "
-          f"({len(plain)} steps): holo is {np_med / new:.1f}x faster")
+    print(
+        f"plain NumPy, kernel rebuilt per step: {np_med * 1e3:7.1f} ms per step "
+        f"({len(plain)} steps): holo is {np_med / new:.1f}x faster"
+    )
     print(f"error vs float64 NumPy at 3 distances: {', '.join(f'{e:.1e}' for e in errors)}")
     print(f"load average at the end {os.getloadavg()[0]:.1f}")
-    results.write("sweep", {
-        "field": f"{n}x{n}, padded to {shape[0]}x{shape[1]}, {len(distances)} distances",
-        "repeated distance, cached transfer [ms/step]": rep * 1e3,
-        "a new distance's transfer function [ms]": tf * 1e3,
-        "transfer function / propagation (target <= 0.2)": tf / rep,
-        "sweep, a new distance each step [ms/step]": new * 1e3,
-        "sweep step / repeated step (target <= 1.2)": new / rep,
-        "sweep as one batched call [ms/step]": batch * 1e3,
-        "plain NumPy, kernel rebuilt per step [ms/step]": np_med * 1e3,
-        "Holo's speed-up over plain NumPy": np_med / new,
-        "largest error against float64 NumPy": max(errors)},
-        device=f"{rt.device.name.strip()} ({rt.device.platform.name.strip()}), FFT {rt.fft.name}")
+    results.write(
+        "sweep",
+        {
+            "field": f"{n}x{n}, padded to {shape[0]}x{shape[1]}, {len(distances)} distances",
+            "repeated distance, cached transfer [ms/step]": rep * 1e3,
+            "a new distance's transfer function [ms]": tf * 1e3,
+            "transfer function / propagation (target <= 0.2)": tf / rep,
+            "sweep, a new distance each step [ms/step]": new * 1e3,
+            "sweep step / repeated step (target <= 1.2)": new / rep,
+            "sweep as one batched call [ms/step]": batch * 1e3,
+            "plain NumPy, kernel rebuilt per step [ms/step]": np_med * 1e3,
+            "Holo's speed-up over plain NumPy": np_med / new,
+            "largest error against float64 NumPy": max(errors),
+        },
+        device=f"{rt.device.name.strip()} ({rt.device.platform.name.strip()}), FFT {rt.fft.name}",
+    )
 
 
 if __name__ == "__main__":

@@ -43,20 +43,22 @@ def _formats():
     import importlib
 
     found = {}
-    for key, module, names in (("hologram", "holo_core.io.hologram", ("FORMAT", "FORMAT_VERSION",
-                                                                      "READS")),
-                               ("display", "holo_core.io.display", ("FORMAT", "VERSION")),
-                               ("slm", "holo_core.io.slm", ("FORMAT", "VERSION")),
-                               ("store", "holo_core.io.store", ("STORE_FORMAT",)),
-                               ("plate_set", "holo_core.io.plate_set", ("KIND", "VERSION"))):
+    for key, module, names in (
+        ("hologram", "holo_core.io.hologram", ("FORMAT", "FORMAT_VERSION", "READS")),
+        ("display", "holo_core.io.display", ("FORMAT", "VERSION")),
+        ("slm", "holo_core.io.slm", ("FORMAT", "VERSION")),
+        ("store", "holo_core.io.store", ("STORE_FORMAT",)),
+        ("plate_set", "holo_core.io.plate_set", ("KIND", "VERSION")),
+    ):
         try:
             m = importlib.import_module(module)
         except ImportError:  # a module moved: the page says so rather than a stale number
             m = None
         for name in names:
             value = getattr(m, name, "(see the module)")
-            found[f"{key}_{name.lower()}"] = (", ".join(map(str, value))
-                                              if isinstance(value, tuple) else str(value))
+            found[f"{key}_{name.lower()}"] = (
+                ", ".join(map(str, value)) if isinstance(value, tuple) else str(value)
+            )
     return found
 
 

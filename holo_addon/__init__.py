@@ -38,8 +38,18 @@ from .ui import (
     properties,
 )
 
-MODULES = (properties, preferences, operators, plates, display, panels, handlers, overlay,
-           preview, live)
+MODULES = (
+    properties,
+    preferences,
+    operators,
+    plates,
+    display,
+    panels,
+    handlers,
+    overlay,
+    preview,
+    live,
+)
 
 
 def register():

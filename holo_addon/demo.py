@@ -40,7 +40,7 @@ def _colour_sphere(bpy, name, location, radius):
     co = np.empty(len(me.vertices) * 3)
     me.vertices.foreach_get("co", co)
     co = co.reshape(-1, 3) / radius
-    rgb = np.clip(0.55 + 0.45 * co[:, [0, 1, 2]] * [1, -1, 1], 0.05, 1)   # a hue per octant
+    rgb = np.clip(0.55 + 0.45 * co[:, [0, 1, 2]] * [1, -1, 1], 0.05, 1)  # a hue per octant
     attr.data.foreach_set("color", np.c_[rgb, np.ones(len(rgb))].ravel())
     me.color_attributes.active_color = attr
     bpy.ops.object.shade_smooth()
@@ -70,6 +70,7 @@ def _material(bpy, obj, rgb):
 def point_at(obj, target):
     """Turn ``obj`` so its −Z looks at ``target`` with +Y up (a camera's convention)."""
     from mathutils import Vector
+
     d = Vector(target) - obj.location
     obj.rotation_euler = d.to_track_quat("-Z", "Y").to_euler()
 
@@ -82,7 +83,7 @@ def build_scene(bpy, *, resolution=(1280, 720), fstop=2.8):
     scene.cycles.device = "CPU"
     scene.render.resolution_x, scene.render.resolution_y = resolution
     scene.render.resolution_percentage = 100
-    scene.view_settings.view_transform = "Standard"   # plain sRGB: the PNG shows the numbers
+    scene.view_settings.view_transform = "Standard"  # plain sRGB: the PNG shows the numbers
     world = bpy.data.worlds.new("World")
     scene.world = world
     world.color = (0.05, 0.05, 0.06)
@@ -124,8 +125,10 @@ def render_still(bpy, scene, out: Path) -> tuple[Path, Path]:
     """Blender's render of the composited frame: ``demo.png`` and float ``demo.exr``."""
     png, exr = out / "demo.png", out / "demo.exr"
     scene.render.filepath = str(out / "demo")  # the holographic layers go beside it
-    for path, setter in ((exr, lambda: compat.set_exr_output(scene, multilayer=False)),
-                         (png, lambda: compat.set_png_output(scene))):
+    for path, setter in (
+        (exr, lambda: compat.set_exr_output(scene, multilayer=False)),
+        (png, lambda: compat.set_png_output(scene)),
+    ):
         setter()
         scene.holo["skip_pass_once"] = True  # the pass was just rendered
         bpy.ops.render.render()
@@ -135,8 +138,9 @@ def render_still(bpy, scene, out: Path) -> tuple[Path, Path]:
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(prog="python -m holo_addon.demo", description=__doc__.split(
-        "\n\n")[0])
+    p = argparse.ArgumentParser(
+        prog="python -m holo_addon.demo", description=__doc__.split("\n\n")[0]
+    )
     p.add_argument("-o", "--output", type=Path, default=Path("out"))
     p.add_argument("--resolution", type=int, nargs=2, default=(1280, 720), metavar=("W", "H"))
     p.add_argument("--fstop", type=float, default=2.8)
@@ -169,10 +173,12 @@ def main(argv=None):
     scene.render.filepath = str(out / "demo")
     bpy.ops.wm.save_as_mainfile(filepath=str(out / "demo.blend"))
     hologram = f"\n  hologram: {plate.holo.hologram}" if args.mode == "PLATE" else ""
-    print(f"demo rendered in {time.perf_counter() - t0:.0f} s:\n  {png}\n  {exr}{hologram}\n"
-          f"  holographic pass: {pipeline.pass_file(out / 'holo', scene.frame_current)}\n"
-          f"  its layers beside the render: {out / 'holo_demo.exr'}\n"
-          f"  scene: {out / 'demo.blend'}")
+    print(
+        f"demo rendered in {time.perf_counter() - t0:.0f} s:\n  {png}\n  {exr}{hologram}\n"
+        f"  holographic pass: {pipeline.pass_file(out / 'holo', scene.frame_current)}\n"
+        f"  its layers beside the render: {out / 'holo_demo.exr'}\n"
+        f"  scene: {out / 'demo.blend'}"
+    )
 
 
 if __name__ == "__main__":

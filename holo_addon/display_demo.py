@@ -91,8 +91,7 @@ def _sphere(bpy, radius: float, location):
     return sphere
 
 
-def build_scene(bpy, *, frames: int = 24, display=None, lighting: str = "SCENE",
-                slices: int = 5):
+def build_scene(bpy, *, frames: int = 24, display=None, lighting: str = "SCENE", slices: int = 5):
     """The scene (module docstring); ``display``: (cols, rows, pitch [µm]) of a custom
     display, or None (the 1080p, 8 µm preset). Returns (scene, the display object)."""
     scene = bpy.context.scene
@@ -134,12 +133,18 @@ def build_scene(bpy, *, frames: int = 24, display=None, lighting: str = "SCENE",
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(prog="python -m holo_addon.display_demo",
-                                description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(
+        prog="python -m holo_addon.display_demo", description=__doc__.split("\n\n")[0]
+    )
     p.add_argument("-o", "--output", type=Path, default=Path("out"))
     p.add_argument("--frames", type=int, default=24)
-    p.add_argument("--display", type=float, nargs=3, metavar=("W", "H", "PITCH_UM"),
-                   help="a custom display (default: 1920 x 1080 at 8 µm)")
+    p.add_argument(
+        "--display",
+        type=float,
+        nargs=3,
+        metavar=("W", "H", "PITCH_UM"),
+        help="a custom display (default: 1920 x 1080 at 8 µm)",
+    )
     p.add_argument("--lighting", choices=("SCENE", "ALBEDO"), default="SCENE")
     p.add_argument("--slices", type=int, default=5)
     args = p.parse_args(argv)
@@ -150,19 +155,25 @@ def main(argv=None):
     out.mkdir(parents=True, exist_ok=True)
     bpy.ops.wm.read_factory_settings(use_empty=True)
     register()
-    display = None if args.display is None else \
-        (int(args.display[0]), int(args.display[1]), args.display[2])
-    scene, shown = build_scene(bpy, frames=args.frames, display=display,
-                               lighting=args.lighting, slices=args.slices)
+    display = (
+        None
+        if args.display is None
+        else (int(args.display[0]), int(args.display[1]), args.display[2])
+    )
+    scene, shown = build_scene(
+        bpy, frames=args.frames, display=display, lighting=args.lighting, slices=args.slices
+    )
     scene.holo.output_dir = str(out / "holo") + os.sep
     scene.render.filepath = str(out / "raster") + os.sep
     bpy.ops.wm.save_as_mainfile(filepath=str(out / "display.blend"))
     t0 = time.perf_counter()
     bpy.ops.render.render(animation=True)
     seconds = time.perf_counter() - t0
-    print(f"display animation: {args.frames} frames in {seconds:.0f} s "
-          f"({seconds / args.frames:.1f} s a frame):\n  "
-          f"{out / 'holo' / 'display' / shown.name}\n  scene: {out / 'display.blend'}")
+    print(
+        f"display animation: {args.frames} frames in {seconds:.0f} s "
+        f"({seconds / args.frames:.1f} s a frame):\n  "
+        f"{out / 'holo' / 'display' / shown.name}\n  scene: {out / 'display.blend'}"
+    )
 
 
 if __name__ == "__main__":

@@ -43,28 +43,37 @@ log = logging.getLogger(__name__)
 RESOLUTION = (320, 180)  # the reference views: small, and large enough that work shows
 
 
-def reference_scene(scale: float = 1.0, margin: float = 0.002
-                    ) -> tuple[list[Mesh], Camera, Plate]:
+def reference_scene(scale: float = 1.0, margin: float = 0.002) -> tuple[list[Mesh], Camera, Plate]:
     """A vertex-coloured sphere of 3 cm radius 0.35 m behind a 10 cm plate, a 50 mm f/2.8
     camera of RESOLUTION × ``scale`` pixels 0.3 m in front of it, the plate's zone fitted
     ``margin`` [m] around its pupil."""
     n = 32
-    th, ph = np.meshgrid(np.linspace(0, np.pi, n + 1), np.linspace(0, 2 * np.pi, 2 * n + 1),
-                         indexing="ij")
+    th, ph = np.meshgrid(
+        np.linspace(0, np.pi, n + 1), np.linspace(0, 2 * np.pi, 2 * n + 1), indexing="ij"
+    )
     v = np.stack([np.sin(th) * np.cos(ph), np.cos(th), np.sin(th) * np.sin(ph)], -1)
     idx = np.arange(v.shape[0] * v.shape[1]).reshape(v.shape[:2])
     a, b, c, d = idx[:-1, :-1], idx[:-1, 1:], idx[1:, :-1], idx[1:, 1:]
-    tri = np.concatenate([np.stack([a, c, d], -1).reshape(-1, 3),
-                          np.stack([a, d, b], -1).reshape(-1, 3)])
+    tri = np.concatenate(
+        [np.stack([a, c, d], -1).reshape(-1, 3), np.stack([a, d, b], -1).reshape(-1, 3)]
+    )
     v = v.reshape(-1, 3)
-    sphere = Mesh(vertices=v * 0.03 + [0.0, 0.0, -0.35], triangles=tri,
-                  colours=np.clip(0.55 + 0.45 * v, 0.05, 1.0))
-    cam = Camera(matrix_world=look_at(np.array([0.0, 0.0, 0.3]), np.array([0.0, 0.0, -0.35]),
-                                      up=(0, 1, 0)),
-                 lens=50, sensor_width=36, fstop=2.8, focus_distance=0.62,
-                 resolution=(round(RESOLUTION[0] * scale), round(RESOLUTION[1] * scale)))
-    zone = ViewingZone.fit([cam.position], pupil=cam.aperture_diameter, margin=margin,
-                           pixel=cam.pixel_angle())
+    sphere = Mesh(
+        vertices=v * 0.03 + [0.0, 0.0, -0.35],
+        triangles=tri,
+        colours=np.clip(0.55 + 0.45 * v, 0.05, 1.0),
+    )
+    cam = Camera(
+        matrix_world=look_at(np.array([0.0, 0.0, 0.3]), np.array([0.0, 0.0, -0.35]), up=(0, 1, 0)),
+        lens=50,
+        sensor_width=36,
+        fstop=2.8,
+        focus_distance=0.62,
+        resolution=(round(RESOLUTION[0] * scale), round(RESOLUTION[1] * scale)),
+    )
+    zone = ViewingZone.fit(
+        [cam.position], pupil=cam.aperture_diameter, margin=margin, pixel=cam.pixel_angle()
+    )
     plate = Plate(matrix_world=np.eye(4), width=0.1, height=0.1, zone=zone)
     return [sphere], cam, plate
 
@@ -73,10 +82,17 @@ def reference_jobs(folder: Path) -> dict[str, Job]:
     """The two reference jobs, writing under ``folder``."""
     meshes, cam, plate = reference_scene()
     route = PlateRoute(plate=plate, holograms=(folder / "look0.exr", folder / "look1.exr"))
-    return {"plate": Job(camera=cam, route=route, triangles=tuple(meshes),
-                         output=Output(folder=folder / "plate")),
-            "camera": Job(camera=cam, route=CameraRoute(), triangles=tuple(meshes),
-                          output=Output(folder=folder / "camera"))}
+    return {
+        "plate": Job(
+            camera=cam, route=route, triangles=tuple(meshes), output=Output(folder=folder / "plate")
+        ),
+        "camera": Job(
+            camera=cam,
+            route=CameraRoute(),
+            triangles=tuple(meshes),
+            output=Output(folder=folder / "camera"),
+        ),
+    }
 
 
 def _timed(job: Job, **options) -> float:
@@ -96,11 +112,18 @@ def _stages(meshes, cam, plate, folder: Path) -> tuple[dict, dict]:
     from .plate.plan import plan_view
     from .plate.recording import plate_plan, prepare_plate
     from .plate.view import render_view
+
     planned = plate_plan(meshes, plate=plate, camera=cam, looks=2)
     p = planned.plan
     eye = plate.to_plate(np.asarray(cam.position)[None])[0]
-    v = plan_view(p, position=eye, pixel_angle=cam.pixel_angle(), pupil=cam.aperture_diameter,
-                  resolution=cam.resolution)
+    v = plan_view(
+        p,
+        position=eye,
+        pixel_angle=cam.pixel_angle(),
+        pupil=cam.aperture_diameter,
+        resolution=cam.resolution,
+    )
+
     def timed(f, *args, **kw):  # as on an idle machine: the load's slowdown taken out
         k, t = estimate.slowdown(), time.perf_counter()
         out = f(*args, **kw)
@@ -120,10 +143,9 @@ def _stages(meshes, cam, plate, folder: Path) -> tuple[dict, dict]:
         timed(render_camera, meshes, cam, via="incoherent")  # Speckle: Exact
         for samples in (2, 10) if run else (2,):  # the first builds and plans: one is enough
             timed(render_camera, meshes, cam, samples=samples)
-    fine = cam.resolution[0] * cam.resolution[1] * 2 ** 2  # the default supersampling
+    fine = cam.resolution[0] * cam.resolution[1] * 2**2  # the default supersampling
     names = ("emitters", "zone sum", "files", "view", "exact", "camera 2", "camera 10")
-    work = dict(zip(names, (p.emitters, p.pairs(), p.disk_bytes(), v.seconds, fine, fine,
-                            fine)))
+    work = dict(zip(names, (p.emitters, p.pairs(), p.disk_bytes(), v.seconds, fine, fine, fine)))
     return work, dict(zip(names, d))
 
 
@@ -146,25 +168,36 @@ def stage_rates(*, say=log.info) -> dict:
         large = _stages(*reference_scene(2.0, 0.01), Path(tmp))
     for (work, secs), size in ((small, "small"), (large, "larger")):
         say(f"{size}: " + ", ".join(f"{k} {secs[k]:.2f} s" for k in secs))
-    fits = {k: _fit((small[0][k], small[1][k]), (large[0][k], large[1][k]), default)
-            for k, default in (("emitters", d.emitter_seconds),
-                               ("zone sum", 1 / d.pairs_per_second),
-                               ("files", 1 / d.write_bytes_per_second),
-                               ("view", d.view_factor),
-                               ("exact", d.exact_pixel_seconds))}
+    fits = {
+        k: _fit((small[0][k], small[1][k]), (large[0][k], large[1][k]), default)
+        for k, default in (
+            ("emitters", d.emitter_seconds),
+            ("zone sum", 1 / d.pairs_per_second),
+            ("files", 1 / d.write_bytes_per_second),
+            ("view", d.view_factor),
+            ("exact", d.exact_pixel_seconds),
+        )
+    }
     # the camera pass: a look's fine pixels from 2 against 10 looks (the larger: more of
     # them), then the pass's own rate and fixed cost from the two sizes' passes of 2 looks
     work, secs = large
     look = max(secs["camera 10"] - secs["camera 2"], 0.0) / 8 / work["camera 2"]
     once = [(w["camera 2"], t["camera 2"] - 2 * look * w["camera 2"]) for w, t in (small, large)]
     fits["camera 2"] = _fit(*once, d.camera_pixel_seconds)
-    return {"emitter_seconds": fits["emitters"][0], "emitters_fixed": fits["emitters"][1],
-            "pairs_per_second": 1 / fits["zone sum"][0], "zone_sum_fixed": fits["zone sum"][1],
-            "write_bytes_per_second": 1 / fits["files"][0],
-            "view_factor": fits["view"][0], "view_fixed": fits["view"][1],
-            "camera_pixel_seconds": fits["camera 2"][0], "camera_look_seconds": look,
-            "camera_fixed": fits["camera 2"][1], "exact_pixel_seconds": fits["exact"][0],
-            "exact_fixed": fits["exact"][1]}
+    return {
+        "emitter_seconds": fits["emitters"][0],
+        "emitters_fixed": fits["emitters"][1],
+        "pairs_per_second": 1 / fits["zone sum"][0],
+        "zone_sum_fixed": fits["zone sum"][1],
+        "write_bytes_per_second": 1 / fits["files"][0],
+        "view_factor": fits["view"][0],
+        "view_fixed": fits["view"][1],
+        "camera_pixel_seconds": fits["camera 2"][0],
+        "camera_look_seconds": look,
+        "camera_fixed": fits["camera 2"][1],
+        "exact_pixel_seconds": fits["exact"][0],
+        "exact_fixed": fits["exact"][1],
+    }
 
 
 def measure(*, device: str | None = None, say=log.info) -> estimate.Calibration:
@@ -178,11 +211,15 @@ def measure(*, device: str | None = None, say=log.info) -> estimate.Calibration:
         opts = {k: {"device": device, "cache_dir": str(tmp / f"cache-{k}")} for k in jobs}
         cold = {k: _timed(j, **opts[k]) for k, j in jobs.items()}
         say("as on an idle machine (each time over the load's slowdown as it began):")
-        say(f"a new worker, a fresh cache: plate {cold['plate']:.1f} s, camera "
-            f"{cold['camera']:.1f} s")
+        say(
+            f"a new worker, a fresh cache: plate {cold['plate']:.1f} s, camera "
+            f"{cold['camera']:.1f} s"
+        )
         warm = {k: _timed(j, **opts[k]) for k, j in jobs.items()}
-        say(f"a new worker, the cache warm: plate {warm['plate']:.1f} s, camera "
-            f"{warm['camera']:.1f} s")
+        say(
+            f"a new worker, the cache warm: plate {warm['plate']:.1f} s, camera "
+            f"{warm['camera']:.1f} s"
+        )
         work = {}
         try:
             for k, j in jobs.items():
@@ -195,24 +232,34 @@ def measure(*, device: str | None = None, say=log.info) -> estimate.Calibration:
         # the stages' rates in a process of its own, on the plate's warm cache (the user's
         # caches are not this calibration's to fill)
         out = subprocess.run(
-            [sys.executable, "-c", "import json; from holo_core.calibration import "
-             "stage_rates; print(json.dumps(stage_rates(say=print)))"],
-            env=worker.environment(**opts["plate"]), capture_output=True, text=True,
-            check=True)
+            [
+                sys.executable,
+                "-c",
+                "import json; from holo_core.calibration import "
+                "stage_rates; print(json.dumps(stage_rates(say=print)))",
+            ],
+            env=worker.environment(**opts["plate"]),
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         lines = out.stdout.strip().splitlines()
         for line in lines[:-1]:
             say(line)
         rates = json.loads(lines[-1])
     cam = jobs["camera"]
-    fine = cam.camera.resolution[0] * cam.camera.resolution[1] * cam.route.supersample ** 2
+    fine = cam.camera.resolution[0] * cam.camera.resolution[1] * cam.route.supersample**2
     passed = rates["exact_fixed"] + fine * rates["exact_pixel_seconds"]  # Speckle: Exact
     d = estimate.DEFAULT
     measured = replace(
-        d, **rates, job_seconds=max(work["camera"] - passed, 0.05),
+        d,
+        **rates,
+        job_seconds=max(work["camera"] - passed, 0.05),
         process_plate_seconds=max(0.0, warm["plate"] - work["plate"]),
         process_camera_seconds=max(0.0, warm["camera"] - work["camera"]),
         first_plate_seconds=max(0.0, cold["plate"] - warm["plate"]),
-        first_camera_seconds=max(0.0, cold["camera"] - warm["camera"]))
+        first_camera_seconds=max(0.0, cold["camera"] - warm["camera"]),
+    )
     return measured  # Cycles' radiance is not measured here: the default's (idle) rates stay
 
 

@@ -17,7 +17,7 @@ from .validate import InputError
 
 log = logging.getLogger(__name__)
 CONNECT_TIMEOUT = 10.0  # [s] to reach a scheduler and hear its first message
-MAX_HANDSHAKE = 2**20   # bytes a Dask scheduler's first message may claim (a few hundred)
+MAX_HANDSHAKE = 2**20  # bytes a Dask scheduler's first message may claim (a few hundred)
 
 
 def scheduler_address(scheduler=None) -> str | None:
@@ -29,8 +29,9 @@ def scheduler_address(scheduler=None) -> str | None:
     return address
 
 
-def run_tasks(task, shared, calls, *, address=None, progress: jobs.Progress = None,
-              dashboard=None, lost=None) -> None:
+def run_tasks(
+    task, shared, calls, *, address=None, progress: jobs.Progress = None, dashboard=None, lost=None
+) -> None:
     """``task(shared, *args)`` for each ``args`` of ``calls``, on the cluster of
     :func:`client_for` (``address``): ``shared`` scattered once to every worker, the fraction
     done to ``progress``, the dashboard's address to ``dashboard``; tasks lost with the
@@ -62,9 +63,16 @@ def client_for(scheduler=None):
     # the scheduler, the workers and the dashboard (a recording's tasks, logs and profiles)
     # listen on loopback only, unless HOLO_DASK_HOST names the interface to publish them on
     host = os.environ.get("HOLO_DASK_HOST", "").strip() or "127.0.0.1"
-    with LocalCluster(n_workers=os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                      host=host, dashboard_address=f"[{host}]:0" if ":" in host else
-                      f"{host}:0") as cluster, Client(cluster) as client:
+    with (
+        LocalCluster(
+            n_workers=os.cpu_count() or 1,
+            threads_per_worker=1,
+            processes=True,
+            host=host,
+            dashboard_address=f"[{host}]:0" if ":" in host else f"{host}:0",
+        ) as cluster,
+        Client(cluster) as client,
+    ):
         log.info("local Dask cluster, dashboard %s", client.dashboard_link)
         yield client
 
@@ -78,8 +86,9 @@ def _connected(Client, address):
     try:
         client = Client(address, timeout=CONNECT_TIMEOUT)
     except Exception as e:  # noqa: BLE001 -- Dask's failures to connect vary; all mean one thing
-        raise InputError(f"scheduler {address}: cannot connect ({type(e).__name__}: "
-                         f"{e})"[:400]) from None
+        raise InputError(
+            f"scheduler {address}: cannot connect ({type(e).__name__}: {e})"[:400]
+        ) from None
     with client:
         yield client
 
@@ -89,6 +98,7 @@ def _probe(address) -> None:
     speaks first, a few hundred bytes) within ``CONNECT_TIMEOUT`` seconds, so that a wrong
     endpoint fails fast and by name instead of hanging or allocating what garbage claims."""
     from distributed.comm.addressing import parse_address, parse_host_port
+
     what = f"scheduler {address}"
     try:
         scheme, location = parse_address(address)
@@ -96,8 +106,7 @@ def _probe(address) -> None:
             return  # another transport (inproc://, ucx://): Dask's own timeout applies
         host, port = parse_host_port(location)
     except (ValueError, TypeError) as e:
-        raise InputError(f"{what}: not a scheduler address (tcp://host:port; {e})"[:300]) \
-            from None
+        raise InputError(f"{what}: not a scheduler address (tcp://host:port; {e})"[:300]) from None
     try:
         with socket.create_connection((host, port), timeout=CONNECT_TIMEOUT) as s:
             if scheme == "tls":
@@ -106,20 +115,21 @@ def _probe(address) -> None:
     except socket.gaierror as e:
         raise InputError(f"{what}: unknown host {host!r} ({e.strerror})") from None
     except ConnectionRefusedError:
-        raise InputError(f"{what}: refuses connections (is a scheduler running there?)") \
-            from None
+        raise InputError(f"{what}: refuses connections (is a scheduler running there?)") from None
     except TimeoutError:
-        raise InputError(f"{what}: no answer within {CONNECT_TIMEOUT:g} s (is it a Dask "
-                         f"scheduler?)") from None
+        raise InputError(
+            f"{what}: no answer within {CONNECT_TIMEOUT:g} s (is it a Dask scheduler?)"
+        ) from None
     except OSError as e:
         raise InputError(f"{what}: cannot connect ({e.strerror or e})") from None
     if header is None:
-        raise InputError(f"{what}: closed the connection without a word; not a Dask "
-                         f"scheduler")
+        raise InputError(f"{what}: closed the connection without a word; not a Dask scheduler")
     (claimed,) = struct.unpack("<Q", header)
     if not 0 < claimed <= MAX_HANDSHAKE:
-        raise InputError(f"{what}: answers, but not as a Dask scheduler (its first message "
-                         f"claims {claimed} bytes)")
+        raise InputError(
+            f"{what}: answers, but not as a Dask scheduler (its first message "
+            f"claims {claimed} bytes)"
+        )
 
 
 def _receive(sock, n) -> bytes | None:
@@ -146,6 +156,7 @@ def _wait(client, futures, progress, lost=None) -> None:
 
     from distributed import KilledWorker, as_completed
     from distributed.comm import CommClosedError
+
     try:
         for n, future in enumerate(as_completed(futures), 1):
             future.result()  # a failed tile raises its error here
@@ -154,9 +165,11 @@ def _wait(client, futures, progress, lost=None) -> None:
         with contextlib.suppress(Exception):  # the scheduler may be gone with them
             client.cancel(futures)
         why = f"{type(e).__name__}: {e}".splitlines()[0][:200]
-        raise TasksLost(f"the recording lost its Dask workers or scheduler ({why}); "
-                        f"{lost() if lost else 'the tiles written are kept'}; run the same "
-                        f"recording again to resume it") from None
+        raise TasksLost(
+            f"the recording lost its Dask workers or scheduler ({why}); "
+            f"{lost() if lost else 'the tiles written are kept'}; run the same "
+            f"recording again to resume it"
+        ) from None
     except BaseException:
         client.cancel(futures)
         raise

@@ -48,13 +48,15 @@ from pathlib import Path
 log = logging.getLogger(__name__)
 
 FILE = "estimates.json"
-DIGEST_BYTES_PER_SECOND = 6.0e8  # [B/s] BLAKE2b on one core of the 2-core Zen 4 EPYC (623 MB/s): a
-                                 # set's files are hashed as written, beside the next part's sum
-PART_SECONDS = 1.5  # [s] a set's part beyond its work: its plan, buffers and kernels' set-up,
-                    # its files' sync, the manifest rewritten (the 90° orbit's 64 small parts)
-VISIBILITY_SECONDS = 2e-6  # [s] an emitter of a set's part: its visibility from the part's zone
-                           # (the set's emitters found once a lattice; 0.8 s a 1 m dolly part's
-                           # 443k emitters, bench/shot.py --set)
+# [B/s] BLAKE2b on one core of the 2-core Zen 4 EPYC (623 MB/s): a set's files are hashed as
+# written, beside the next part's sum
+DIGEST_BYTES_PER_SECOND = 6.0e8
+# [s] a set's part beyond its work: its plan, buffers and kernels' set-up, its files' sync, the
+# manifest rewritten (the 90° orbit's 64 small parts)
+PART_SECONDS = 1.5
+# [s] an emitter of a set's part: its visibility from the part's zone (the set's emitters found once
+# a lattice; 0.8 s a 1 m dolly part's 443k emitters, bench/shot.py --set)
+VISIBILITY_SECONDS = 2e-6
 STAMP = "warm-{kind}-{key}.stamp"
 KINDS = ("plate", "camera")
 
@@ -86,12 +88,18 @@ class Calibration:
     def __post_init__(self):
         for f in fields(self):
             value = getattr(self, f.name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or \
-                    not math.isfinite(value) or value < 0 or \
-                    (f.name == "pairs_per_second" and value == 0):
-                raise ValueError(f"calibration {f.name} must be a finite number >= 0 "
-                                 f"({'> 0' if f.name == 'pairs_per_second' else 'seconds'}); "
-                                 f"got {value!r}")
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, (int, float))
+                or not math.isfinite(value)
+                or value < 0
+                or (f.name == "pairs_per_second" and value == 0)
+            ):
+                raise ValueError(
+                    f"calibration {f.name} must be a finite number >= 0 "
+                    f"({'> 0' if f.name == 'pairs_per_second' else 'seconds'}); "
+                    f"got {value!r}"
+                )
 
     def process_seconds(self, kind: str) -> float:
         """A new worker's set-up before a ``kind`` ('plate' or 'camera') job's work."""
@@ -106,13 +114,26 @@ class Calibration:
 # load 1.6-11, each time over its load's slowdown) rounded to the slow side; Cycles' radiance
 # from bench/estimates.py's demo at 640x360 (5.9-7.1 s at load 16-17: 0.6-0.8 s idle)
 DEFAULT = Calibration(
-    pairs_per_second=2.0e9, zone_sum_fixed=0.05, emitter_seconds=6.0e-6, emitters_fixed=0.05,
-    view_factor=7.0, view_fixed=0.1, write_bytes_per_second=3.0e8,
-    camera_pixel_seconds=2.0e-7, camera_look_seconds=7.0e-7, camera_fixed=0.1,
-    exact_pixel_seconds=1.6e-6, exact_fixed=0.1,
-    radiance_seconds=0.7, radiance_pixel_seconds=5.0e-7, job_seconds=0.2,
-    process_plate_seconds=1.5, process_camera_seconds=1.2, first_plate_seconds=8.0,
-    first_camera_seconds=1.5)
+    pairs_per_second=2.0e9,
+    zone_sum_fixed=0.05,
+    emitter_seconds=6.0e-6,
+    emitters_fixed=0.05,
+    view_factor=7.0,
+    view_fixed=0.1,
+    write_bytes_per_second=3.0e8,
+    camera_pixel_seconds=2.0e-7,
+    camera_look_seconds=7.0e-7,
+    camera_fixed=0.1,
+    exact_pixel_seconds=1.6e-6,
+    exact_fixed=0.1,
+    radiance_seconds=0.7,
+    radiance_pixel_seconds=5.0e-7,
+    job_seconds=0.2,
+    process_plate_seconds=1.5,
+    process_camera_seconds=1.2,
+    first_plate_seconds=8.0,
+    first_camera_seconds=1.5,
+)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -134,10 +155,13 @@ class Estimate:
         return sum(s for _, s in self.work) + self.process + self.first
 
     def __add__(self, other: Estimate) -> Estimate:
-        return Estimate(work=self.work + other.work, process=max(self.process, other.process),
-                        first=max(self.first, other.first),
-                        calibrated=self.calibrated and other.calibrated,
-                        slowdown=max(self.slowdown, other.slowdown))
+        return Estimate(
+            work=self.work + other.work,
+            process=max(self.process, other.process),
+            first=max(self.first, other.first),
+            calibrated=self.calibrated and other.calibrated,
+            slowdown=max(self.slowdown, other.slowdown),
+        )
 
     def words(self) -> str:
         """In plain words, the set-up said apart: 'about 11 s (of which 4 s the first time on
@@ -151,8 +175,7 @@ class Estimate:
         if parts:
             text += f" (of which {', '.join(parts)})"
         if self.slowdown >= 1.2:
-            text += (f", {self.slowdown:.2g} times an idle machine's time at its present "
-                     f"load")
+            text += f", {self.slowdown:.2g} times an idle machine's time at its present load"
         if not self.calibrated:
             text += "; by default rates (python -m holo_core calibrate measures this machine's)"
         return text
@@ -177,12 +200,16 @@ def slowdown(load: float | None = None, cpus: int | None = None) -> float:
         except OSError:  # no load average (Windows): taken as idle
             load = 0.0
     if cpus is None:
-        cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
-            (os.cpu_count() or 1)
+        cpus = (
+            len(os.sched_getaffinity(0))
+            if hasattr(os, "sched_getaffinity")
+            else (os.cpu_count() or 1)
+        )
     return 1.0 + max(float(load), 0.0) / max(cpus, 1)
 
 
 # --- the cache: the calibration and the stamps --------------------------------------------------
+
 
 def cache_folder(cache_dir=None) -> Path:
     """Holo's folder in the user cache directory (the FFT wisdom's), or in ``cache_dir`` (the
@@ -190,6 +217,7 @@ def cache_folder(cache_dir=None) -> Path:
     if cache_dir:
         return Path(cache_dir) / "holo"
     from platformdirs import user_cache_dir
+
     return Path(user_cache_dir("holo"))
 
 
@@ -199,6 +227,7 @@ def kernel_cache(cache_dir=None) -> Path:
     if cache_dir:
         return Path(cache_dir) / "pyopencl"
     from platformdirs import user_cache_dir
+
     return Path(user_cache_dir("pyopencl", "pyopencl"))
 
 
@@ -210,6 +239,7 @@ def device_key(device: str | None = None) -> str:
 
 def _version() -> str:
     from . import __version__
+
     return __version__
 
 
@@ -227,8 +257,12 @@ def load(*, device: str | None = None, cache_dir=None) -> tuple[Calibration, boo
     except FileNotFoundError:
         return DEFAULT, False
     except (OSError, UnicodeDecodeError) as e:
-        log.warning("estimates: the calibration %s cannot be read (%s): default rates taken; "
-                    "python -m holo_core calibrate measures it again", path, e)
+        log.warning(
+            "estimates: the calibration %s cannot be read (%s): default rates taken; "
+            "python -m holo_core calibrate measures it again",
+            path,
+            e,
+        )
         return DEFAULT, False
     try:
         data = json.loads(text)
@@ -238,12 +272,23 @@ def load(*, device: str | None = None, cache_dir=None) -> tuple[Calibration, boo
             raise ValueError("its rates are not the calibration's fields")
         cal = Calibration(**rates)
     except (ValueError, KeyError, TypeError) as e:
-        log.warning("estimates: the calibration %s is refused (%s): default rates taken; "
-                    "python -m holo_core calibrate measures it again", path, str(e)[:200])
+        log.warning(
+            "estimates: the calibration %s is refused (%s): default rates taken; "
+            "python -m holo_core calibrate measures it again",
+            path,
+            str(e)[:200],
+        )
         return DEFAULT, False
     if version != _version() or dev != device_key(device):
-        log.info("estimates: the calibration %s is of Holo %s on device %r, not %s on %r: "
-                 "default rates taken", path, version, dev, _version(), device_key(device))
+        log.info(
+            "estimates: the calibration %s is of Holo %s on device %r, not %s on %r: "
+            "default rates taken",
+            path,
+            version,
+            dev,
+            _version(),
+            device_key(device),
+        )
         return DEFAULT, False
     return cal, True
 
@@ -254,8 +299,12 @@ def save(cal: Calibration, *, device: str | None = None, cache_dir=None) -> Path
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / FILE
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(json.dumps({"version": _version(), "device": device_key(device),
-                               "rates": asdict(cal)}, indent=1), encoding="utf-8")
+    tmp.write_text(
+        json.dumps(
+            {"version": _version(), "device": device_key(device), "rates": asdict(cal)}, indent=1
+        ),
+        encoding="utf-8",
+    )
     os.replace(tmp, path)
     return path
 
@@ -269,8 +318,7 @@ def is_warm(kind: str, *, device: str | None = None, cache_dir=None) -> bool:
     """Whether a ``kind`` ('plate', 'camera') job of this version on ``device`` has run with
     this cache, and the kernel cache it filled is still there."""
     cache = kernel_cache(cache_dir)
-    return _stamp(kind, device, cache_dir).is_file() and cache.is_dir() and \
-        any(cache.iterdir())
+    return _stamp(kind, device, cache_dir).is_file() and cache.is_dir() and any(cache.iterdir())
 
 
 def mark_warm(kind: str, *, device: str | None = None, cache_dir=None) -> None:
@@ -288,21 +336,40 @@ def mark_warm(kind: str, *, device: str | None = None, cache_dir=None) -> None:
 
 # --- the stages ------------------------------------------------------------------------------
 
+
 def _loaded(est: Estimate, load_average) -> Estimate:
     """``est`` (idle seconds) at the machine's ``load_average`` (:func:`slowdown`'s)."""
     k = slowdown(load_average)
-    return replace(est, work=tuple((n, s * k) for n, s in est.work), process=est.process * k,
-                   first=est.first * k, slowdown=k)
+    return replace(
+        est,
+        work=tuple((n, s * k) for n, s in est.work),
+        process=est.process * k,
+        first=est.first * k,
+        slowdown=k,
+    )
 
 
 def _setup(kind, cal, calibrated, device, cache_dir, warm) -> Estimate:
     warm = is_warm(kind, device=device, cache_dir=cache_dir) if warm is None else warm
-    return Estimate(process=cal.process_seconds(kind),
-                    first=0.0 if warm else cal.first_seconds(kind), calibrated=calibrated)
+    return Estimate(
+        process=cal.process_seconds(kind),
+        first=0.0 if warm else cal.first_seconds(kind),
+        calibrated=calibrated,
+    )
 
 
-def plate(p, view=None, *, record=True, channels=4, device=None, cache_dir=None,
-          warm=None, calibration=None, load_average=None) -> Estimate:
+def plate(
+    p,
+    view=None,
+    *,
+    record=True,
+    channels=4,
+    device=None,
+    cache_dir=None,
+    warm=None,
+    calibration=None,
+    load_average=None,
+) -> Estimate:
     """The estimate of a plate's job from its plan ``p`` (:class:`~holo_core.plate.plan.
     PlatePlan`): the recording when ``record`` (its emitters, the zone sum, its files) and
     the view ``view`` (a :class:`~holo_core.plate.plan.ViewPlan`, None: no view), in a new
@@ -312,17 +379,22 @@ def plate(p, view=None, *, record=True, channels=4, device=None, cache_dir=None,
     cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
     work = [("job", cal.job_seconds)]
     if record:
-        work += [("emitters", cal.emitters_fixed + p.emitters * cal.emitter_seconds),
-                 ("zone sum", cal.zone_sum_fixed + p.pairs(channels) / cal.pairs_per_second),
-                 ("files", p.disk_bytes(channels) / cal.write_bytes_per_second)]
+        work += [
+            ("emitters", cal.emitters_fixed + p.emitters * cal.emitter_seconds),
+            ("zone sum", cal.zone_sum_fixed + p.pairs(channels) / cal.pairs_per_second),
+            ("files", p.disk_bytes(channels) / cal.write_bytes_per_second),
+        ]
     if view is not None:
         work.append(("view", cal.view_fixed + view.seconds * cal.view_factor))
-    return _loaded(replace(_setup("plate", cal, calibrated, device, cache_dir, warm),
-                           work=tuple(work)), load_average)
+    return _loaded(
+        replace(_setup("plate", cal, calibrated, device, cache_dir, warm), work=tuple(work)),
+        load_average,
+    )
 
 
-def plate_set(s, *, channels=4, device=None, cache_dir=None, warm=None, calibration=None,
-              load_average=None) -> Estimate:
+def plate_set(
+    s, *, channels=4, device=None, cache_dir=None, warm=None, calibration=None, load_average=None
+) -> Estimate:
     """The estimate of recording a plate set from its plan ``s`` (:class:`~holo_core.plate.
     path.SetPlan`) in a new worker (``warm``, ``calibration``, ``load_average``: as
     :func:`plate`'s): the emitters found once a lattice (``s.lattices``), each part's own
@@ -337,50 +409,95 @@ def plate_set(s, *, channels=4, device=None, cache_dir=None, warm=None, calibrat
     files = [p.disk_bytes(channels) / cal.write_bytes_per_second for p in s.plans]
     digests = [p.disk_bytes(channels) / DIGEST_BYTES_PER_SECOND for p in s.plans]
     waits = [max(f - z, 0.0) for f, z in zip(files, sums[1:])] + files[-1:]
-    work = (("job", cal.job_seconds), ("parts", PART_SECONDS * len(s.plans)),
-            ("emitters", s.lattices * found + seen),
-            ("zone sums", sum(sums) + sum(digests)), ("files", sum(waits)))
-    return _loaded(replace(_setup("plate", cal, calibrated, device, cache_dir, warm),
-                           work=work), load_average)
+    work = (
+        ("job", cal.job_seconds),
+        ("parts", PART_SECONDS * len(s.plans)),
+        ("emitters", s.lattices * found + seen),
+        ("zone sums", sum(sums) + sum(digests)),
+        ("files", sum(waits)),
+    )
+    return _loaded(
+        replace(_setup("plate", cal, calibrated, device, cache_dir, warm), work=work), load_average
+    )
 
 
-def camera(resolution, *, samples, supersample, speckle="EXACT", device=None, cache_dir=None,
-           warm=None, calibration=None, load_average=None) -> Estimate:
+def camera(
+    resolution,
+    *,
+    samples,
+    supersample,
+    speckle="EXACT",
+    device=None,
+    cache_dir=None,
+    warm=None,
+    calibration=None,
+    load_average=None,
+) -> Estimate:
     """The estimate of a camera pass of ``resolution`` (W, H) pixels and ``supersample``
     fine pixels a pixel, with ``speckle`` 'EXACT' (one incoherent pass) or 'LOOKS'
     (``samples`` looks), in a new worker (``warm``, ``calibration``, ``load_average``: as
     :func:`plate`'s)."""
     cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
-    fine = resolution[0] * resolution[1] * supersample ** 2
-    passed = cal.exact_fixed + fine * cal.exact_pixel_seconds if speckle == "EXACT" else \
-        cal.camera_fixed + fine * (cal.camera_pixel_seconds + samples * cal.camera_look_seconds)
+    fine = resolution[0] * resolution[1] * supersample**2
+    passed = (
+        cal.exact_fixed + fine * cal.exact_pixel_seconds
+        if speckle == "EXACT"
+        else cal.camera_fixed
+        + fine * (cal.camera_pixel_seconds + samples * cal.camera_look_seconds)
+    )
     work = (("job", cal.job_seconds), ("camera pass", passed))
-    return _loaded(replace(_setup("camera", cal, calibrated, device, cache_dir, warm),
-                           work=work), load_average)
+    return _loaded(
+        replace(_setup("camera", cal, calibrated, device, cache_dir, warm), work=work), load_average
+    )
 
 
-def radiance(pixels: int, *, device=None, cache_dir=None, calibration=None,
-             load_average=None) -> Estimate:
+def radiance(
+    pixels: int, *, device=None, cache_dir=None, calibration=None, load_average=None
+) -> Estimate:
     """Cycles' radiance of the emitters over ``pixels`` pixels: its process's start and its
     render (the same each run: Blender's own caches are not Holo's)."""
     cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
-    return _loaded(Estimate(work=(("radiance", cal.radiance_seconds
-                                   + pixels * cal.radiance_pixel_seconds),),
-                            calibrated=calibrated), load_average)
+    return _loaded(
+        Estimate(
+            work=(("radiance", cal.radiance_seconds + pixels * cal.radiance_pixel_seconds),),
+            calibrated=calibrated,
+        ),
+        load_average,
+    )
 
 
-def job(j, *, plan=None, view=None, device=None, cache_dir=None, warm=None,
-        calibration=None, load_average=None) -> Estimate:
+def job(
+    j,
+    *,
+    plan=None,
+    view=None,
+    device=None,
+    cache_dir=None,
+    warm=None,
+    calibration=None,
+    load_average=None,
+) -> Estimate:
     """The estimate of a :class:`holo_core.job.Job` in a new worker: its renderer's radiance,
     then its route's; a plate's from its ``plan`` and ``view`` (:func:`plate`'s, which the
     caller makes: the planner is theirs)."""
     from .job import CameraRoute
+
     calibration = calibration or load(device=device, cache_dir=cache_dir)
-    common = {"device": device, "cache_dir": cache_dir, "calibration": calibration,
-              "warm": warm, "load_average": load_average}
+    common = {
+        "device": device,
+        "cache_dir": cache_dir,
+        "calibration": calibration,
+        "warm": warm,
+        "load_average": load_average,
+    }
     if isinstance(j.route, CameraRoute):
-        est = camera(j.camera.resolution, samples=j.route.samples,
-                     supersample=j.route.supersample, speckle=j.route.speckle, **common)
+        est = camera(
+            j.camera.resolution,
+            samples=j.route.samples,
+            supersample=j.route.supersample,
+            speckle=j.route.speckle,
+            **common,
+        )
     else:
         est = plate(plan, view if j.output.render else None, record=j.route.record, **common)
     if j.radiance is not None:

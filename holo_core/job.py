@@ -33,7 +33,7 @@ from .scene.plate_set import PathPart
 from .validate import MAX_SAMPLES, MAX_SUPERSAMPLE, InputError, shown
 from .view import RenderResult
 
-MAX_FRAME = 1048574        # Blender's last frame
+MAX_FRAME = 1048574  # Blender's last frame
 SPECKLE = {"EXACT": "incoherent", "LOOKS": "object_wave"}  # the camera hologram's way per setting
 
 
@@ -45,6 +45,7 @@ def pass_file(folder, frame: int) -> Path:
 
 # --- the route: how the pass is made ----------------------------------------------------------
 
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class _Route:
     """What both routes take: ``supersample`` (fine pixels per pixel per axis), ``exposure``
@@ -55,8 +56,11 @@ class _Route:
     seed: int = 0
 
     def __post_init__(self):
-        _set(self, "supersample", validate.integer("supersample", self.supersample, 1,
-                                                   MAX_SUPERSAMPLE))
+        _set(
+            self,
+            "supersample",
+            validate.integer("supersample", self.supersample, 1, MAX_SUPERSAMPLE),
+        )
         _set(self, "exposure", validate.exposure(_real("exposure", self.exposure)))
         _set(self, "seed", validate.seed(self.seed))
 
@@ -136,13 +140,19 @@ class PlateRoute(_Route):
             value = getattr(self, name)
             if value is not None and not validate.finite(name, _real(name, value), "bytes") > 0:
                 raise InputError(f"{name} must be > 0 [bytes] or None; got {shown(value)}")
-        if self.scheduler is not None and not (isinstance(self.scheduler, str)
-                                               and self.scheduler.strip()):
-            raise InputError(f"scheduler must be a Dask scheduler's address (tcp://host:port) "
-                             f"or None; got {self.scheduler!r}"[:200])
+        if self.scheduler is not None and not (
+            isinstance(self.scheduler, str) and self.scheduler.strip()
+        ):
+            raise InputError(
+                f"scheduler must be a Dask scheduler's address (tcp://host:port) "
+                f"or None; got {self.scheduler!r}"[:200]
+            )
         if self.wavelength is not None:
-            _set(self, "wavelength", validate.length("wavelength",
-                                                     _real("wavelength", self.wavelength)))
+            _set(
+                self,
+                "wavelength",
+                validate.length("wavelength", _real("wavelength", self.wavelength)),
+            )
         _check_composition(self)
         validate.digest("recording", self.recording)
 
@@ -185,8 +195,12 @@ class SetRoute(_Route):
     def __post_init__(self):
         _Route.__post_init__(self)
         parts = self.parts
-        if isinstance(parts, PathPart) or not isinstance(parts, (list, tuple)) or not parts \
-                or not all(isinstance(p, PathPart) for p in parts):
+        if (
+            isinstance(parts, PathPart)
+            or not isinstance(parts, (list, tuple))
+            or not parts
+            or not all(isinstance(p, PathPart) for p in parts)
+        ):
             raise InputError("parts must be a non-empty list of PathPart (parts_along)")
         _set(self, "parts", tuple(parts))
         _set(self, "folder", _path("folder", self.folder))
@@ -205,6 +219,7 @@ ROUTES = {"camera": CameraRoute, "plate": PlateRoute, "set": SetRoute}
 
 
 # --- what is written, and who colours the emitters --------------------------------------------
+
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Output:
@@ -232,18 +247,21 @@ class Output:
         _set(self, "folder", _path("folder", self.folder))
         _set(self, "frame", validate.integer("frame", self.frame, 0, MAX_FRAME))
         _set(self, "render", _flag("render", self.render))
-        _set(self, "depth_unit", validate.length("depth_unit", _real("depth_unit", self.depth_unit),
-                                                 "m per unit"))
+        _set(
+            self,
+            "depth_unit",
+            validate.length("depth_unit", _real("depth_unit", self.depth_unit), "m per unit"),
+        )
         if self.border is not None:
             try:
-                left, top, right, bottom = (validate.integer("border", v, 0)
-                                            for v in self.border)
+                left, top, right, bottom = (validate.integer("border", v, 0) for v in self.border)
             except (TypeError, ValueError):
                 left = top = right = bottom = -1
             if not (0 <= left <= right and 0 <= top <= bottom):
-                raise InputError(f"border must be four integers (left, top, right, bottom) [px], "
-                                 f"0 <= left <= right, 0 <= top <= bottom; got {self.border!r}"
-                                 [:300])
+                raise InputError(
+                    f"border must be four integers (left, top, right, bottom) [px], "
+                    f"0 <= left <= right, 0 <= top <= bottom; got {self.border!r}"[:300]
+                )
             _set(self, "border", (left, top, right, bottom))
         for name in ("pass_key", "shot_key"):
             if not isinstance(getattr(self, name), str):
@@ -269,19 +287,25 @@ class Radiance:
 
     def __post_init__(self):
         command = self.command
-        if isinstance(command, (str, bytes)) or not isinstance(command, (list, tuple)) or \
-                not command or not all(isinstance(a, str) for a in command):
-            raise InputError(f"radiance command must be a list of strings (a program and its "
-                             f"arguments); got {command!r}"[:300])
+        if (
+            isinstance(command, (str, bytes))
+            or not isinstance(command, (list, tuple))
+            or not command
+            or not all(isinstance(a, str) for a in command)
+        ):
+            raise InputError(
+                f"radiance command must be a list of strings (a program and its "
+                f"arguments); got {command!r}"[:300]
+            )
         _set(self, "command", tuple(command))
         _set(self, "image", _path("radiance image", self.image))
         _set(self, "folder", _path("radiance folder", self.folder))
         if not isinstance(self.camera, Camera):
-            raise InputError(f"radiance camera must be a Camera; got "
-                             f"{type(self.camera).__name__}")
+            raise InputError(f"radiance camera must be a Camera; got {type(self.camera).__name__}")
 
 
 # --- the job ----------------------------------------------------------------------------------
+
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
 class Job:
@@ -301,43 +325,54 @@ class Job:
         if not isinstance(self.camera, Camera):
             raise InputError(f"camera must be a Camera; got {type(self.camera).__name__}")
         if not isinstance(self.route, tuple(ROUTES.values())):
-            raise InputError(f"route must be a CameraRoute, a PlateRoute or a SetRoute; got "
-                             f"{type(self.route).__name__}")
+            raise InputError(
+                f"route must be a CameraRoute, a PlateRoute or a SetRoute; got "
+                f"{type(self.route).__name__}"
+            )
         if not isinstance(self.output, Output):
             raise InputError(f"output must be an Output; got {type(self.output).__name__}")
         for name in ("points", "triangles"):
             meshes = getattr(self, name)
-            if isinstance(meshes, Mesh) or not isinstance(meshes, (list, tuple)) or \
-                    not all(isinstance(m, Mesh) for m in meshes):
+            if (
+                isinstance(meshes, Mesh)
+                or not isinstance(meshes, (list, tuple))
+                or not all(isinstance(m, Mesh) for m in meshes)
+            ):
                 raise InputError(f"{name} must be a list of Mesh; got {meshes!r}"[:300])
             _set(self, name, tuple(meshes))
         camera = isinstance(self.route, CameraRoute)
         records = camera or self.route.record
         if records and not self.points + self.triangles:
-            raise InputError("points and triangles hold no emitters: there is nothing to "
-                             "record")
+            raise InputError("points and triangles hold no emitters: there is nothing to record")
         if camera and not self.output.render:
-            raise InputError("output render must be true for a camera hologram (it is made "
-                             "for its pass)")
+            raise InputError(
+                "output render must be true for a camera hologram (it is made for its pass)"
+            )
         if self.radiance is not None and not isinstance(self.radiance, Radiance):
-            raise InputError(f"radiance must be a Radiance or None; got "
-                             f"{type(self.radiance).__name__}")
+            raise InputError(
+                f"radiance must be a Radiance or None; got {type(self.radiance).__name__}"
+            )
         if self.radiance is not None and not records:
-            raise InputError("radiance colours emitters to record: a plate whose holograms "
-                             "are current takes none")
+            raise InputError(
+                "radiance colours emitters to record: a plate whose holograms "
+                "are current takes none"
+            )
         border = self.output.border
         w, h = self.camera.resolution
         if border is not None and (border[2] > w or border[3] > h):
-            raise InputError(f"border must lie within the camera's {w}x{h} pixels; got "
-                             f"{border}")
+            raise InputError(f"border must lie within the camera's {w}x{h} pixels; got {border}")
 
     def to_dict(self) -> dict:
         """The job as plain data (:meth:`from_dict` makes it again)."""
         route = _plain(self.route)
-        return {"camera": _plain(self.camera), "route": {"kind": _kind(self.route), **route},
-                "output": _plain(self.output), "points": [_plain(m) for m in self.points],
-                "triangles": [_plain(m) for m in self.triangles],
-                "radiance": None if self.radiance is None else _plain(self.radiance)}
+        return {
+            "camera": _plain(self.camera),
+            "route": {"kind": _kind(self.route), **route},
+            "output": _plain(self.output),
+            "points": [_plain(m) for m in self.points],
+            "triangles": [_plain(m) for m in self.triangles],
+            "radiance": None if self.radiance is None else _plain(self.radiance),
+        }
 
     @classmethod
     def from_dict(cls, data) -> Job:
@@ -349,20 +384,26 @@ class Job:
         if "plate" in route:
             route["plate"] = _noun(Plate, route["plate"], "plate")
         if kind == "set" and isinstance(route.get("parts"), list):
-            route["parts"] = tuple(_noun(PathPart, p, f"parts[{i}]")
-                                   for i, p in enumerate(route["parts"]))
+            route["parts"] = tuple(
+                _noun(PathPart, p, f"parts[{i}]") for i, p in enumerate(route["parts"])
+            )
         radiance = d.get("radiance")
         if radiance is not None:
             radiance = _noun(Radiance, radiance, "radiance")
-        return _made(cls, "job", camera=_noun(Camera, _needed(d, "camera", "job"), "camera"),
-                     route=_noun(ROUTES[kind], route, "route"),
-                     output=_noun(Output, _needed(d, "output", "job"), "output"),
-                     points=_meshes(d.get("points", ()), "points"),
-                     triangles=_meshes(d.get("triangles", ()), "triangles"),
-                     radiance=radiance)
+        return _made(
+            cls,
+            "job",
+            camera=_noun(Camera, _needed(d, "camera", "job"), "camera"),
+            route=_noun(ROUTES[kind], route, "route"),
+            output=_noun(Output, _needed(d, "output", "job"), "output"),
+            points=_meshes(d.get("points", ()), "points"),
+            triangles=_meshes(d.get("triangles", ()), "triangles"),
+            radiance=radiance,
+        )
 
 
 # --- the result -------------------------------------------------------------------------------
+
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class Plan:
@@ -389,11 +430,14 @@ class Plan:
         if "aperture_m" not in info:
             return None
         pupil = info.get("pupil_samples")
-        return cls(aperture=float(info["aperture_m"]), focus=_number(info.get("focus_m")),
-                   wavelengths=tuple(map(float, info.get("wavelengths_m", ()))),
-                   resolution_limit_px=float(info.get("resolution_limit_px", 0.0)),
-                   pupil_samples=None if pupil is None else tuple(map(int, pupil)),
-                   layers=None if info.get("layers") is None else int(info["layers"]))
+        return cls(
+            aperture=float(info["aperture_m"]),
+            focus=_number(info.get("focus_m")),
+            wavelengths=tuple(map(float, info.get("wavelengths_m", ()))),
+            resolution_limit_px=float(info.get("resolution_limit_px", 0.0)),
+            pupil_samples=None if pupil is None else tuple(map(int, pupil)),
+            layers=None if info.get("layers") is None else int(info["layers"]),
+        )
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -418,9 +462,12 @@ class Report:
         """The report of ``view`` (its ``info``), with ``report``'s fields."""
         info = {} if view is None else view.info
         looks = info.get("samples")
-        return cls(looks=None if looks is None else int(looks),
-                   speckle_contrast=_number(info.get("speckle_contrast")),
-                   plan=Plan.of(info), **report)
+        return cls(
+            looks=None if looks is None else int(looks),
+            speckle_contrast=_number(info.get("speckle_contrast")),
+            plan=Plan.of(info),
+            **report,
+        )
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
@@ -440,33 +487,45 @@ class Result:
 
     def to_dict(self) -> dict:
         """The result as plain data, the view left out (the pass file holds it)."""
-        return {"recorded": [str(p) for p in self.recorded],
-                "pass_path": None if self.pass_path is None else str(self.pass_path),
-                "reused": None if self.reused is None else str(self.reused),
-                "report": _plain(self.report)}
+        return {
+            "recorded": [str(p) for p in self.recorded],
+            "pass_path": None if self.pass_path is None else str(self.pass_path),
+            "reused": None if self.reused is None else str(self.reused),
+            "report": _plain(self.report),
+        }
 
     @classmethod
     def from_dict(cls, data) -> Result:
         d = _fields(cls, data, "result")
-        return cls(recorded=_paths("recorded", d.get("recorded", ())),
-                   pass_path=_path("pass_path", d.get("pass_path"), optional=True),
-                   reused=_path("reused", d.get("reused"), optional=True),
-                   report=_noun(Report, d.get("report", {}), "report"))
+        return cls(
+            recorded=_paths("recorded", d.get("recorded", ())),
+            pass_path=_path("pass_path", d.get("pass_path"), optional=True),
+            reused=_path("reused", d.get("reused"), optional=True),
+            report=_noun(Report, d.get("report", {}), "report"),
+        )
 
 
 # the nouns inside nouns that from_dict makes of their dicts: (owner, field) -> type
-NESTED = {(Plate, "zone"): ViewingZone, (Radiance, "camera"): Camera, (Report, "plan"): Plan,
-          (PathPart, "plate"): Plate}
+NESTED = {
+    (Plate, "zone"): ViewingZone,
+    (Radiance, "camera"): Camera,
+    (Report, "plan"): Plan,
+    (PathPart, "plate"): Plate,
+}
 
 
 # --- plain data -------------------------------------------------------------------------------
+
 
 def _plain(obj):
     """A dataclass as a dict of its fields, nested dataclasses too; paths as strings, tuples as
     lists, arrays as they are."""
     if dataclasses.is_dataclass(obj):
-        return {f.name: _plain(getattr(obj, f.name)) for f in dataclasses.fields(obj) if f.init
-                and (f.name != "view")}
+        return {
+            f.name: _plain(getattr(obj, f.name))
+            for f in dataclasses.fields(obj)
+            if f.init and (f.name != "view")
+        }
     if isinstance(obj, Path):
         return str(obj)
     if isinstance(obj, tuple):
@@ -486,8 +545,10 @@ def _fields(cls, data, name: str) -> dict:
         known = {f.name for f in dataclasses.fields(cls) if f.init}
         unknown = sorted(map(str, set(data) - known))
         if unknown:
-            raise InputError(f"{name} has no field {', '.join(map(repr, unknown))} (its "
-                             f"fields: {', '.join(sorted(known))})"[:300])
+            raise InputError(
+                f"{name} has no field {', '.join(map(repr, unknown))} (its "
+                f"fields: {', '.join(sorted(known))})"[:300]
+            )
     return dict(data)
 
 
@@ -540,11 +601,11 @@ def _check_composition(route) -> None:
     """A plate or set route's composition of its looks ('mean' or 'max') and its opacity
     threshold (a fraction in [0, 1]), checked and the threshold kept as a float."""
     validate.choice("composition", route.composition, ("mean", "max"))
-    threshold = validate.finite("opacity_threshold",
-                                _real("opacity_threshold", route.opacity_threshold))
+    threshold = validate.finite(
+        "opacity_threshold", _real("opacity_threshold", route.opacity_threshold)
+    )
     if not 0 <= threshold <= 1:
-        raise InputError(f"opacity_threshold must be in [0, 1]; got "
-                         f"{route.opacity_threshold!r}")
+        raise InputError(f"opacity_threshold must be in [0, 1]; got {route.opacity_threshold!r}")
     _set(route, "opacity_threshold", threshold)
 
 
@@ -605,10 +666,14 @@ class FrameLaser:
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name.isidentifier():
-            raise InputError(f"laser name must be a word (red, green, blue); got {self.name!r}"
-                             [:200])
-        _set(self, "wavelength", validate.length("laser wavelength",
-                                                 _real("laser wavelength", self.wavelength)))
+            raise InputError(
+                f"laser name must be a word (red, green, blue); got {self.name!r}"[:200]
+            )
+        _set(
+            self,
+            "wavelength",
+            validate.length("laser wavelength", _real("laser wavelength", self.wavelength)),
+        )
         power = validate.finite("laser power", _real("laser power", self.power), "W")
         if not power > 0:
             raise InputError(f"laser power must be > 0 [W]; got {shown(self.power)}")
@@ -665,28 +730,40 @@ class DisplayFrame:
 
     def __post_init__(self):
         lasers = self.lasers
-        if isinstance(lasers, (FrameLaser, dict)) or not isinstance(lasers, (list, tuple)) \
-                or not lasers:
+        if (
+            isinstance(lasers, (FrameLaser, dict))
+            or not isinstance(lasers, (list, tuple))
+            or not lasers
+        ):
             raise InputError("lasers must be one or more FrameLaser")
-        _set(self, "lasers", tuple(x if isinstance(x, FrameLaser)
-                                   else _named(FrameLaser, x, "laser") for x in lasers))
+        _set(
+            self,
+            "lasers",
+            tuple(
+                x if isinstance(x, FrameLaser) else _named(FrameLaser, x, "laser") for x in lasers
+            ),
+        )
         if len({x.name for x in self.lasers}) != len(self.lasers):
-            raise InputError(f"lasers must have distinct names; got "
-                             f"{[x.name for x in self.lasers]}")
+            raise InputError(
+                f"lasers must have distinct names; got {[x.name for x in self.lasers]}"
+            )
         _set(self, "frame", validate.integer("frame", self.frame, 0, MAX_FRAME))
         _set(self, "folder", str(_path("folder", self.folder)))
         try:
             cols, rows = self.resolution
         except (TypeError, ValueError):
-            raise InputError(f"resolution must be (cols, rows); got "
-                             f"{shown(self.resolution)}") from None
+            raise InputError(
+                f"resolution must be (cols, rows); got {shown(self.resolution)}"
+            ) from None
         rows, cols = validate.shape2d("resolution", (rows, cols))
         _set(self, "resolution", (cols, rows))
         _set(self, "pitch", validate.pitch("pitch", _real("pitch", self.pitch)))
         _set(self, "bit_depth", validate.integer("bit_depth", self.bit_depth, 1, 16))
-        _set(self, "phase_range", validate.finite("phase_range",
-                                                  _real("phase_range", self.phase_range),
-                                                  "rad"))
+        _set(
+            self,
+            "phase_range",
+            validate.finite("phase_range", _real("phase_range", self.phase_range), "rad"),
+        )
         validate.choice("packing", self.packing, PATTERN_PACKINGS)
         validate.choice("method", self.method, DISPLAY_METHODS)
         _set(self, "iterations", validate.integer("iterations", self.iterations, 0, 100000))
@@ -702,8 +779,7 @@ class DisplayFrame:
             if value < 0:
                 raise InputError(f"{name} must be >= 0 [m]; got {shown(getattr(self, name))}")
             _set(self, name, value)
-        _set(self, "distance", validate.finite("distance", _real("distance", self.distance),
-                                               "m"))
+        _set(self, "distance", validate.finite("distance", _real("distance", self.distance), "m"))
         validate.digest("digest", self.digest)
 
     def to_dict(self) -> dict:
@@ -720,6 +796,7 @@ class DisplayFrame:
 
 
 # --- views of a held plate (the live viewport's messages) -------------------------------------
+
 
 @dataclass(frozen=True, slots=True, kw_only=True)
 class ViewOpen:
@@ -753,20 +830,31 @@ class ViewOpen:
         if self.recording:
             validate.digest("recording", self.recording)
         if self.supersample != "auto":
-            _set(self, "supersample", validate.integer("supersample", self.supersample, 1,
-                                                       MAX_SUPERSAMPLE))
+            _set(
+                self,
+                "supersample",
+                validate.integer("supersample", self.supersample, 1, MAX_SUPERSAMPLE),
+            )
         _check_composition(self)
         _set(self, "exposure", validate.exposure(_real("exposure", self.exposure)))
 
     def options(self) -> dict:
         """The render options a viewer takes (:class:`holo_core.PlateViewer`'s keywords)."""
-        return {"supersample": self.supersample, "composition": self.composition,
-                "opacity_threshold": self.opacity_threshold}
+        return {
+            "supersample": self.supersample,
+            "composition": self.composition,
+            "opacity_threshold": self.opacity_threshold,
+        }
 
     def to_dict(self) -> dict:
-        return {"plates": list(self.plates), "recording": self.recording,
-                "supersample": self.supersample, "composition": self.composition,
-                "opacity_threshold": self.opacity_threshold, "exposure": self.exposure}
+        return {
+            "plates": list(self.plates),
+            "recording": self.recording,
+            "supersample": self.supersample,
+            "composition": self.composition,
+            "opacity_threshold": self.opacity_threshold,
+            "exposure": self.exposure,
+        }
 
     @classmethod
     def from_dict(cls, data) -> ViewOpen:
@@ -805,9 +893,16 @@ class ViewRequest:
         d = _fields(cls, data, "view request")
         camera = d.get("camera")
         if isinstance(camera, dict):
-            camera = _noun(Camera, {k: tuple(v) if k in ("resolution", "pixel_aspect")
-                                    and isinstance(v, list) else v for k, v in camera.items()},
-                           "camera")
+            camera = _noun(
+                Camera,
+                {
+                    k: tuple(v)
+                    if k in ("resolution", "pixel_aspect") and isinstance(v, list)
+                    else v
+                    for k, v in camera.items()
+                },
+                "camera",
+            )
         return _made(cls, "view request", **{**d, "camera": camera})
 
 
@@ -825,8 +920,14 @@ class ViewReply:
     error: str = ""
 
     def to_dict(self) -> dict:
-        return {"id": self.id, "seconds": self.seconds, "where": self.where,
-                "shared": self.shared, "coarse": self.coarse, "error": self.error}
+        return {
+            "id": self.id,
+            "seconds": self.seconds,
+            "where": self.where,
+            "shared": self.shared,
+            "coarse": self.coarse,
+            "error": self.error,
+        }
 
     @classmethod
     def from_dict(cls, data) -> ViewReply:

@@ -14,10 +14,12 @@ import numpy as np
 
 from .validate import InputError
 
-PAGE = 4096  # [bytes] the alignment of aligned_zeros: a CPU OpenCL device reads such arrays in
-             # place (a buffer over host memory is copied unless it starts aligned)
-SHARE = 0.8  # of the available host or device memory one step may take (the rest: the
-             # interpreter, the OS, the driver)
+# [bytes] the alignment of aligned_zeros: a CPU OpenCL device reads such arrays in place (a buffer
+# over host memory is copied unless it starts aligned)
+PAGE = 4096
+# of the available host or device memory one step may take (the rest: the interpreter, the OS, the
+# driver)
+SHARE = 0.8
 
 
 def gib(nbytes: float) -> str:
@@ -48,8 +50,9 @@ def limit_from_env() -> int | None:
     try:
         value = float(text.rstrip("KMG")) * scale
     except ValueError:
-        raise InputError(f"HOLO_MEMORY_LIMIT must be a size in bytes, e.g. 8G; "
-                         f"got {text!r}") from None
+        raise InputError(
+            f"HOLO_MEMORY_LIMIT must be a size in bytes, e.g. 8G; got {text!r}"
+        ) from None
     if not value > 0:
         raise InputError(f"HOLO_MEMORY_LIMIT must be > 0; got {text!r}")
     return int(value)
@@ -66,8 +69,10 @@ def check_host(what: str, nbytes: float) -> None:
     """Refuse ``what`` when it needs more than the host's share of available memory."""
     budget = host_share()
     if nbytes > budget:
-        raise InputError(f"{what} needs {gib(nbytes)} of memory; {gib(budget)} is available "
-                         f"(lower the resolution or the size, or free memory)")
+        raise InputError(
+            f"{what} needs {gib(nbytes)} of memory; {gib(budget)} is available "
+            f"(lower the resolution or the size, or free memory)"
+        )
 
 
 def check_device(rt, what: str, nbytes: float, largest: float) -> None:
@@ -75,11 +80,15 @@ def check_device(rt, what: str, nbytes: float, largest: float) -> None:
     ``largest`` one buffer) exceed the device's memory or its largest allocation."""
     dev = rt.device
     if largest > dev.max_mem_alloc_size:
-        raise InputError(f"{what} needs a {gib(largest)} buffer; {dev.name.strip()} allocates "
-                         f"at most {gib(dev.max_mem_alloc_size)}")
+        raise InputError(
+            f"{what} needs a {gib(largest)} buffer; {dev.name.strip()} allocates "
+            f"at most {gib(dev.max_mem_alloc_size)}"
+        )
     if nbytes > SHARE * dev.global_mem_size:
-        raise InputError(f"{what} needs {gib(nbytes)} of device memory; {dev.name.strip()} has "
-                         f"{gib(dev.global_mem_size)}")
+        raise InputError(
+            f"{what} needs {gib(nbytes)} of device memory; {dev.name.strip()} has "
+            f"{gib(dev.global_mem_size)}"
+        )
 
 
 def aligned_zeros(shape, dtype=np.complex64) -> np.ndarray:
@@ -90,4 +99,4 @@ def aligned_zeros(shape, dtype=np.complex64) -> np.ndarray:
     nbytes = math.prod(shape) * dtype.itemsize
     raw = np.zeros(nbytes + PAGE, np.uint8)
     start = -raw.ctypes.data % PAGE
-    return raw[start:start + nbytes].view(dtype).reshape(shape)
+    return raw[start : start + nbytes].view(dtype).reshape(shape)

@@ -203,8 +203,10 @@ def spectrum(field, pitch=None, *, ax=None, log=True, colorbar=True, **imshow):
         s = 10 * np.log10(np.maximum(s / max(float(s.max()), 1e-300), 1e-12))
     h, w = s.shape
     fx, fy = (np.fft.fftshift(np.fft.fftfreq(n, p)) * 1e-3 for n in (w, h))  # [1/mm]
-    dx, dy = (fx[1] - fx[0] if w > 1 else 1 / (p * 1e3)), (fy[1] - fy[0] if h > 1 else
-                                                           1 / (p * 1e3))
+    dx, dy = (
+        (fx[1] - fx[0] if w > 1 else 1 / (p * 1e3)),
+        (fy[1] - fy[0] if h > 1 else 1 / (p * 1e3)),
+    )
     extent = (fx[0] - dx / 2, fx[-1] + dx / 2, fy[0] - dy / 2, fy[-1] + dy / 2)
     ax = ax or plt.figure().add_subplot()
     image = ax.imshow(s, origin="lower", extent=extent, **{"cmap": "magma", **imshow})
@@ -255,8 +257,11 @@ def hologram(h, colour: int = 0, *, ax=None, colorbar=True, **imshow):
     if not isinstance(h, Hologram):
         raise InputError(f"h must be a Hologram; got {type(h).__name__}")
     c = validate.index("colour", colour, len(h.wavelengths))
-    held = h.intensity if getattr(h, "encoding", "intensity") == "intensity" else \
-        np.abs(h.object_wave) ** 2
+    held = (
+        h.intensity
+        if getattr(h, "encoding", "intensity") == "intensity"
+        else np.abs(h.object_wave) ** 2
+    )
     image = _plane(held[c], h.pitch, ax, "intensity", colorbar, {"cmap": "gray", **imshow})
     image.axes.set_title(f"{h.channels[c]} at {preview.length(h.wavelengths[c])}")
     return image
@@ -306,8 +311,9 @@ def view(result, *, camera=None, ax=None, **imshow):
         extent, labels = (-0.5, w - 0.5, h - 0.5, -0.5), ("column", "row")
     else:
         if tuple(camera.resolution) != (w, h):
-            raise InputError(f"camera resolution {tuple(camera.resolution)} differs from the "
-                             f"view's {w}x{h}")
+            raise InputError(
+                f"camera resolution {tuple(camera.resolution)} differs from the view's {w}x{h}"
+            )
         tx, ty = camera.pixel_tangents(np.array([0.0, h]), np.array([0.0, w]))
         left, right = np.degrees(np.arctan(tx))
         top, bottom = np.degrees(np.arctan(ty))
@@ -326,12 +332,16 @@ def _field(field, pitch):
             raise InputError("pitch comes with the field; leave it out")
         px, py = carried
         if not math.isclose(px, py, rel_tol=1e-12):
-            raise InputError(f"the field's pitch differs in x and y ({px!r}, {py!r}); plot "
-                             f"an isotropic field or resample it")
+            raise InputError(
+                f"the field's pitch differs in x and y ({px!r}, {py!r}); plot "
+                f"an isotropic field or resample it"
+            )
         u = field.samples
         if getattr(u, "ndim", 2) != 2:
-            raise InputError(f"plot one field at a time; this one holds a batch of shape "
-                             f"{tuple(u.shape)}: index it, field[i]")
+            raise InputError(
+                f"plot one field at a time; this one holds a batch of shape "
+                f"{tuple(u.shape)}: index it, field[i]"
+            )
         return _host(u), px, getattr(field, "wavelength", None)
     if pitch is None:
         raise InputError("pitch must be given [m] for an array")
@@ -348,8 +358,12 @@ def _host(u) -> np.ndarray:
 def _plane(values, pitch, ax, label, colorbar, imshow):
     h, w = values.shape
     unit, scale = next(((n, s) for n, s in _UNITS if max(h, w) * pitch >= 10 * s), _UNITS[-1])
-    extent = (-w * pitch / 2 / scale, w * pitch / 2 / scale, -h * pitch / 2 / scale,
-              h * pitch / 2 / scale)
+    extent = (
+        -w * pitch / 2 / scale,
+        w * pitch / 2 / scale,
+        -h * pitch / 2 / scale,
+        h * pitch / 2 / scale,
+    )
     ax = ax or plt.figure().add_subplot()
     image = ax.imshow(values, origin="lower", extent=extent, **{"cmap": "gray", **imshow})
     ax.set_xlabel(f"x [{unit}]")

@@ -54,8 +54,9 @@ log = logging.getLogger(__name__)
 RADIANCE_SHARE = 0.2  # of the progress bar: the renderer's radiance before the hologram
 
 
-def run(job: Job, progress: jobs.Progress = None, on_partial=None, *,
-        kept: KeptPlates | None = None) -> Result:
+def run(
+    job: Job, progress: jobs.Progress = None, on_partial=None, *, kept: KeptPlates | None = None
+) -> Result:
     """Make the job: the emitters coloured by the renderer's radiance (when the job has
     one), then its route's holograms and view, then its files, each written atomically only
     after every stage has finished (a failed or cancelled run leaves earlier files as they
@@ -80,20 +81,31 @@ def run(job: Job, progress: jobs.Progress = None, on_partial=None, *,
                 if on_partial is not None and n < route.samples and not n & (n - 1):
                     on_partial(view, n)
 
-            view = render_camera(job.points + job.triangles, job.camera, samples=route.samples,
-                                 supersample=route.supersample, exposure=route.exposure,
-                                 seed=route.seed, progress=progress,
-                                 via=SPECKLE[route.speckle], on_sample=sample)
+            view = render_camera(
+                job.points + job.triangles,
+                job.camera,
+                samples=route.samples,
+                supersample=route.supersample,
+                exposure=route.exposure,
+                seed=route.seed,
+                progress=progress,
+                via=SPECKLE[route.speckle],
+                on_sample=sample,
+            )
         elif isinstance(route, SetRoute):
-            view, recorded = _plate_set(job, progress,
-                                        KeptPlates(hold=False) if kept is None else kept)
+            view, recorded = _plate_set(
+                job, progress, KeptPlates(hold=False) if kept is None else kept
+            )
         else:
-            view, recorded = _plate(job, progress,
-                                    KeptPlates(hold=False) if kept is None else kept)
+            view, recorded = _plate(job, progress, KeptPlates(hold=False) if kept is None else kept)
         path = None if view is None else _write_pass(job, view, lit)
     estimate.mark_warm("camera" if isinstance(job.route, CameraRoute) else "plate")
-    report = Report.of(view, warnings=tuple(dict.fromkeys(heard.texts)),
-                       seconds=time.perf_counter() - start, radiance_seconds=lit)
+    report = Report.of(
+        view,
+        warnings=tuple(dict.fromkeys(heard.texts)),
+        seconds=time.perf_counter() - start,
+        radiance_seconds=lit,
+    )
     return Result(recorded=recorded, pass_path=path, report=report, view=view)
 
 
@@ -102,8 +114,10 @@ def _plate(job: Job, progress, kept: KeptPlates):
     before), and their view: the stages in order, each called once from here."""
     route = job.route
     record_share = 0.0 if not route.record else (0.85 if job.output.render else 1.0)
-    recording, viewing = (jobs.scaled(progress, 0, record_share),
-                          jobs.scaled(progress, record_share, 1.0))
+    recording, viewing = (
+        jobs.scaled(progress, 0, record_share),
+        jobs.scaled(progress, record_share, 1.0),
+    )
     if route.record:
         kept.clear()  # a new plate: the one held is not held beside it
         # a plate with its viewing zone is a scene asset: the camera sizes nothing of it (its
@@ -114,16 +128,27 @@ def _plate(job: Job, progress, kept: KeptPlates):
         # every look in one pass; the plan is made once, here, and read by every stage
         planned, urls = _plan(job)
         _say_estimate(job, planned.plan)
-        holos = record_planned(planned, seed=route.seed, urls=urls, scheduler=route.scheduler,
-                               recording=route.recording, phases=route.phases,
-                               progress=recording)
+        holos = record_planned(
+            planned,
+            seed=route.seed,
+            urls=urls,
+            scheduler=route.scheduler,
+            recording=route.recording,
+            phases=route.phases,
+            progress=recording,
+        )
     else:
         holos = kept.read(route.holograms, route.recording)
     view = None
     if job.output.render:
-        view = render_view(holos, job.camera, supersample=route.supersample,
-                           composition=route.composition,
-                           opacity_threshold=route.opacity_threshold, progress=viewing)
+        view = render_view(
+            holos,
+            job.camera,
+            supersample=route.supersample,
+            composition=route.composition,
+            opacity_threshold=route.opacity_threshold,
+            progress=viewing,
+        )
         view.rgb[...] *= route.exposure
     if route.record:  # every stage has finished: only now are files replaced (each atomically)
         job.output.folder.mkdir(parents=True, exist_ok=True)
@@ -142,38 +167,58 @@ def _plate_set(job: Job, progress, kept: KeptPlates):
     record_share = 0.0 if not route.record else (0.85 if job.output.render else 1.0)
     if route.record:
         kept.clear()  # a new set: the one held is not held beside it
-        plates = record_set(list(job.points) + list(job.triangles), route.parts,
-                            looks=route.looks, seed=route.seed, folder=route.folder,
-                            budget=(route.memory_budget, route.disk_budget),
-                            recording=route.recording,
-                            progress=jobs.scaled(progress, 0, record_share))
+        plates = record_set(
+            list(job.points) + list(job.triangles),
+            route.parts,
+            looks=route.looks,
+            seed=route.seed,
+            folder=route.folder,
+            budget=(route.memory_budget, route.disk_budget),
+            recording=route.recording,
+            progress=jobs.scaled(progress, 0, record_share),
+        )
         kept.hold_set(route.folder, plates)
     else:
         plates = kept.read_set(route.folder)
     if route.recording and plates.recording != route.recording:
-        raise HologramFileError(f"{route.folder}: holds the plate set of recording "
-                                f"{plates.recording[:16]}, not {route.recording} (this "
-                                f"scene's): another recording's set under this name is never "
-                                f"rendered; record the set again")
+        raise HologramFileError(
+            f"{route.folder}: holds the plate set of recording "
+            f"{plates.recording[:16]}, not {route.recording} (this "
+            f"scene's): another recording's set under this name is never "
+            f"rendered; record the set again"
+        )
     if len(plates) != len(route.parts) or not all(
-            np.allclose(a.plate.matrix_world, b.plate.matrix_world, atol=1e-9)
-            for a, b in zip(plates.parts, route.parts)):
-        raise HologramFileError(f"{route.folder}: holds a set of {len(plates)} part(s) that "
-                                f"are not this job's {len(route.parts)}: another shot's set "
-                                f"under this name is never rendered; record the set again")
+        np.allclose(a.plate.matrix_world, b.plate.matrix_world, atol=1e-9)
+        for a, b in zip(plates.parts, route.parts)
+    ):
+        raise HologramFileError(
+            f"{route.folder}: holds a set of {len(plates)} part(s) that "
+            f"are not this job's {len(route.parts)}: another shot's set "
+            f"under this name is never rendered; record the set again"
+        )
     view = None
     if job.output.render:
         k, _ = part_for(plates, job.camera)
-        view = render_set_view(plates, job.camera, frame=job.output.frame,
-                               outside=route.outside, supersample=route.supersample,
-                               composition=route.composition,
-                               opacity_threshold=route.opacity_threshold,
-                               progress=jobs.scaled(progress, record_share, 1.0))
+        view = render_set_view(
+            plates,
+            job.camera,
+            frame=job.output.frame,
+            outside=route.outside,
+            supersample=route.supersample,
+            composition=route.composition,
+            opacity_threshold=route.opacity_threshold,
+            progress=jobs.scaled(progress, record_share, 1.0),
+        )
         view.rgb[...] *= route.exposure
         view.info["part"] = k
         if route.recording:
-            log.info("frame %d from part %d of %d of the plate set %s", job.output.frame,
-                     k + 1, len(plates), route.recording)
+            log.info(
+                "frame %d from part %d of %d of the plate set %s",
+                job.output.frame,
+                k + 1,
+                len(plates),
+                route.recording,
+            )
     return view, ((route.folder / MANIFEST,) if route.record else ())
 
 
@@ -183,14 +228,19 @@ def _say_estimate(job: Job, p: PlatePlan | None = None) -> None:
     view = None
     if p is not None and job.output.render:
         eye = job.route.plate.to_plate(np.asarray(job.camera.position)[None])[0]
-        view = plan_view(p, position=eye, pixel_angle=job.camera.pixel_angle(),
-                         pupil=job.camera.aperture_diameter or None,
-                         resolution=job.camera.resolution)
+        view = plan_view(
+            p,
+            position=eye,
+            pixel_angle=job.camera.pixel_angle(),
+            pupil=job.camera.aperture_diameter or None,
+            resolution=job.camera.resolution,
+        )
     est = replace(estimate.job(job, plan=p, view=view), process=0.0)
-    log.info("estimate: the %s %s", "plate's recording and view" if p is not None else
-             "camera pass", est.words())
-
-
+    log.info(
+        "estimate: the %s %s",
+        "plate's recording and view" if p is not None else "camera pass",
+        est.words(),
+    )
 
 
 def _plan(job: Job) -> tuple[PlannedPlate, list[str] | None]:
@@ -202,14 +252,22 @@ def _plan(job: Job) -> tuple[PlannedPlate, list[str] | None]:
     resuming there). The disk that takes them is checked for their room now, before the
     recording."""
     route = job.route
-    planned = plate_plan(list(job.points) + list(job.triangles), plate=route.plate,
-                         camera=job.camera, wavelength=route.wavelength,
-                         looks=len(route.holograms),
-                         budget=(route.memory_budget, route.disk_budget), tiled=None)
+    planned = plate_plan(
+        list(job.points) + list(job.triangles),
+        plate=route.plate,
+        camera=job.camera,
+        wavelength=route.wavelength,
+        looks=len(route.holograms),
+        budget=(route.memory_budget, route.disk_budget),
+        tiled=None,
+    )
     p, channels = planned.plan, len(planned.channels)
-    check_room(route.holograms, p.disk_bytes(channels, tiled=planned.tiled) / p.looks,
-               f"the plate's {{n}} look(s) ({p.shape[1]} x {p.shape[0]} samples, {channels} "
-               f"channels{', in tiles' if planned.tiled else ''})")
+    check_room(
+        route.holograms,
+        p.disk_bytes(channels, tiled=planned.tiled) / p.looks,
+        f"the plate's {{n}} look(s) ({p.shape[1]} x {p.shape[0]} samples, {channels} "
+        f"channels{', in tiles' if planned.tiled else ''})",
+    )
     return planned, [str(store_of(path)) for path in route.holograms] if planned.tiled else None
 
 
@@ -234,9 +292,15 @@ def lit_emitters(job: Job, progress: jobs.Progress = None) -> Job:
     r = job.radiance
     try:
         tail = []
-        with subprocess.Popen(r.command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                              stderr=subprocess.STDOUT, cwd=r.folder, text=True,
-                              errors="replace") as child:
+        with subprocess.Popen(
+            r.command,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            cwd=r.folder,
+            text=True,
+            errors="replace",
+        ) as child:
             try:
                 for line in child.stdout:
                     if line.startswith("HOLO_PROGRESS "):
@@ -248,15 +312,19 @@ def lit_emitters(job: Job, progress: jobs.Progress = None) -> Job:
                 child.kill()
                 raise
         if child.returncode != 0 or not r.image.is_file():
-            raise RuntimeError(f"the radiance render failed (exit code {child.returncode}): "
-                               + " | ".join(tail[-3:]))
+            raise RuntimeError(
+                f"the radiance render failed (exit code {child.returncode}): "
+                + " | ".join(tail[-3:])
+            )
         _, channels = read_exr(r.image, what="radiance")
     finally:
         shutil.rmtree(r.folder, ignore_errors=True)
     rgb = np.stack([channels[c] for c in "RGB"], -1)
     alpha = channels.get("A", np.ones(rgb.shape[:2], np.float32))
-    points, triangles = (tuple(projected(list(meshes), r.camera, rgb, alpha))
-                         for meshes in (job.points, job.triangles))
+    points, triangles = (
+        tuple(projected(list(meshes), r.camera, rgb, alpha))
+        for meshes in (job.points, job.triangles)
+    )
     return replace(job, points=points, triangles=triangles, radiance=None)
 
 
@@ -324,6 +392,7 @@ class _Heard(logging.Handler):
 
 
 # --- the process ------------------------------------------------------------------------------
+
 
 class _Forward(logging.Handler):
     def __init__(self, send):
@@ -429,5 +498,7 @@ def serve(idle: float, on_message=None) -> int:
 
 if __name__ == "__main__":  # run as the package's module, so that its log records are the
     from holo_core import runner  # core's ("holo_core.runner", not "__main__") and reach the parent
-    sys.exit(runner.serve(float(sys.argv[2])) if sys.argv[1] == "--serve" else
-             runner.main(sys.argv[1]))
+
+    sys.exit(
+        runner.serve(float(sys.argv[2])) if sys.argv[1] == "--serve" else runner.main(sys.argv[1])
+    )

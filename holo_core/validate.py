@@ -19,7 +19,7 @@ import numpy as np
 MIN_LENGTH, MAX_LENGTH = 1e-13, 1e3
 MAX_SUPERSAMPLE = 16  # fine pixels per pixel per axis, at most (either renderer, a job, the CLI)
 MAX_SAMPLES = 1 << 16  # a camera hologram's looks, at most (the renderer, a job)
-MAX_EXPOSURE = 1e20    # linear; with colours up to 1e12 the float32 view stays finite
+MAX_EXPOSURE = 1e20  # linear; with colours up to 1e12 the float32 view stays finite
 
 
 class InputError(ValueError):
@@ -51,8 +51,11 @@ def shown(value) -> str:
         return str(value)
     if isinstance(value, (list, tuple)) and any(isinstance(v, np.generic) for v in value):
         inner = ", ".join(shown(v) for v in value)
-        return f"[{inner}]" if isinstance(value, list) else \
-            f"({inner}{',' if len(value) == 1 else ''})"
+        return (
+            f"[{inner}]"
+            if isinstance(value, list)
+            else f"({inner}{',' if len(value) == 1 else ''})"
+        )
     return repr(value)
 
 
@@ -69,16 +72,20 @@ def keywords(function: str, given, allowed) -> None:
         if name not in allowed:
             near = difflib.get_close_matches(name, allowed, 1)
             hint = f" (did you mean {near[0]!r}?)" if near else ""
-            raise InputError(f"{function}() takes no keyword {name!r}{hint}; it takes "
-                             f"{', '.join(allowed)}"[:400])
+            raise InputError(
+                f"{function}() takes no keyword {name!r}{hint}; it takes {', '.join(allowed)}"[:400]
+            )
 
 
 def public(function):
     """Decorate a public function so that a keyword it does not take, or a missing or extra
     argument, is an :class:`InputError` naming it (:func:`keywords`), not a ``TypeError``."""
     signature = inspect.signature(function)
-    named = [p.name for p in signature.parameters.values()
-             if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    named = [
+        p.name
+        for p in signature.parameters.values()
+        if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)
+    ]
 
     @functools.wraps(function)
     def call(*args, **kwargs):
@@ -115,8 +122,9 @@ def length(name: str, value, unit: str = "m") -> float:
     """A pitch or a wavelength [m]: finite, in [MIN_LENGTH, MAX_LENGTH]."""
     v = _finite(name, value, unit)
     if not MIN_LENGTH <= v <= MAX_LENGTH:
-        raise InputError(f"{name} must be in [{MIN_LENGTH:g}, {MAX_LENGTH:g}]{_unit(unit)}; "
-                         f"got {shown(value)}")
+        raise InputError(
+            f"{name} must be in [{MIN_LENGTH:g}, {MAX_LENGTH:g}]{_unit(unit)}; got {shown(value)}"
+        )
     return v
 
 
@@ -131,8 +139,10 @@ WAVELENGTH_RANGE = (1e-13, 1e-2)
 PITCH_RANGE = (1e-12, 1e-2)
 _UNITS = (("nanometres", 1e-9), ("micrometres", 1e-6), ("millimetres", 1e-3))
 _TYPICAL = {"wavelength": 550e-9, "pitch": 5e-6}  # the likely unit is the one that lands nearest
-_SPANS = {"wavelength": "MeV electrons to microwaves", "pitch": "an electron hologram's pm "
-          "sampling to a coarse antenna array"}
+_SPANS = {
+    "wavelength": "MeV electrons to microwaves",
+    "pitch": "an electron hologram's pm sampling to a coarse antenna array",
+}
 # Where a real length that is in range still looks like millimetres typed as metres, a
 # UnitWarning says so: a camera's or scanner's pixel is 0.5-50 µm and a film scan's at most
 # a few hundred µm, so a pitch of 1 mm or more (0.00345 for 3.45 µm) is more likely in mm.
@@ -147,8 +157,11 @@ class UnitWarning(UserWarning):
 def warn_millimetres(name: str, value: float, why: str) -> None:
     """Warn (:class:`UnitWarning`) that ``value`` [m] of ``name`` looks like millimetres,
     saying ``why`` and what the value in millimetres would be in metres."""
-    warnings.warn(f"{name} {value:g} m {why}; if it is in millimetres, pass {value * 1e-3:g}",
-                  UnitWarning, stacklevel=3)
+    warnings.warn(
+        f"{name} {value:g} m {why}; if it is in millimetres, pass {value * 1e-3:g}",
+        UnitWarning,
+        stacklevel=3,
+    )
 
 
 def pitch_typed(name: str, value) -> float:
@@ -156,8 +169,9 @@ def pitch_typed(name: str, value) -> float:
     when it is :data:`MILLIMETRE_PITCH` or more."""
     v = pitch(name, value)
     if v >= MILLIMETRE_PITCH and not _SCALE_FREE.get():
-        warn_millimetres(name, v, f"is {v * 1e3:g} mm, coarser than any camera's or scanner's "
-                         f"pixel (0.5-50 µm)")
+        warn_millimetres(
+            name, v, f"is {v * 1e3:g} mm, coarser than any camera's or scanner's pixel (0.5-50 µm)"
+        )
     return v
 
 
@@ -197,20 +211,29 @@ def _optical(name: str, value, limits: tuple[float, float], kind: str) -> float:
     if lo <= v <= hi:
         return v
     hint = ""
-    fits = [(abs(math.log10(v * f / _TYPICAL[kind])), unit, f) for unit, f in _UNITS
-            if lo <= v * f <= hi]
+    fits = [
+        (abs(math.log10(v * f / _TYPICAL[kind])), unit, f)
+        for unit, f in _UNITS
+        if lo <= v * f <= hi
+    ]
     if fits and v >= 0.1:  # a number of a smaller unit (below 0.1 m, a real but odd length)
         _, unit, f = min(fits)
         metres = f"{v * f:g}" if "e" in f"{v:g}" else f"{v:g}e{round(math.log10(f))}"
         hint = f" ({v:g} looks like {unit}: pass {metres})"
-    raise InputError(f"{name} must be in [{lo:g}, {hi:g}] [m] ({_SPANS[kind]}); got "
-                     f"{shown(value)}{hint}")
+    raise InputError(
+        f"{name} must be in [{lo:g}, {hi:g}] [m] ({_SPANS[kind]}); got {shown(value)}{hint}"
+    )
 
 
 def integer(name: str, value, minimum: int | None = None, maximum: int | None = None) -> int:
     """``value`` as an int: a whole number (not a bool), in [minimum, maximum] when given."""
-    allowed = "an integer" + (f" >= {minimum}" if maximum is None and minimum is not None
-                              else f" in [{minimum}, {maximum}]" if maximum is not None else "")
+    allowed = "an integer" + (
+        f" >= {minimum}"
+        if maximum is None and minimum is not None
+        else f" in [{minimum}, {maximum}]"
+        if maximum is not None
+        else ""
+    )
     ok = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
     if isinstance(value, (float, np.floating)) and math.isfinite(value) and value == int(value):
         ok = True  # 2.0 is the integer 2
@@ -225,16 +248,19 @@ def integer(name: str, value, minimum: int | None = None, maximum: int | None = 
 def digest(name: str, value) -> str:
     """A recording's digest: up to 64 lowercase hexadecimal digits, or '' (none known)."""
     if not isinstance(value, str) or len(value) > 64 or value.strip("0123456789abcdef"):
-        raise InputError(f"{name} must be the recording's digest (up to 64 hexadecimal digits) "
-                         f"or ''; got {value!r}"[:200])
+        raise InputError(
+            f"{name} must be the recording's digest (up to 64 hexadecimal digits) "
+            f"or ''; got {value!r}"[:200]
+        )
     return value
 
 
 def choice(name: str, value, options: tuple) -> str:
     """One of the strings ``options``."""
     if not isinstance(value, str) or value not in options:
-        raise InputError(f"{name} must be one of {', '.join(map(repr, options))}; got "
-                         f"{shown(value)}"[:300])
+        raise InputError(
+            f"{name} must be one of {', '.join(map(repr, options))}; got {shown(value)}"[:300]
+        )
     return value
 
 
@@ -242,8 +268,9 @@ def exposure(value, name: str = "exposure") -> float:
     """A linear factor on the radiance, as a float: in (0, MAX_EXPOSURE]."""
     v = _finite(name, value, "")
     if not 0 < v <= MAX_EXPOSURE:
-        raise InputError(f"{name} must be in (0, {MAX_EXPOSURE:g}] (a linear factor); got "
-                         f"{shown(value)}")
+        raise InputError(
+            f"{name} must be in (0, {MAX_EXPOSURE:g}] (a linear factor); got {shown(value)}"
+        )
     return v
 
 
@@ -284,8 +311,9 @@ def within(name: str, value, limit: float, unit: str = "m") -> float:
     wave's phase k·z meaningful in float64)."""
     v = _finite(name, value, unit)
     if abs(v) > limit:
-        raise InputError(f"{name} must be in [-{limit:g}, {limit:g}]{_unit(unit)}; got "
-                         f"{shown(value)}")
+        raise InputError(
+            f"{name} must be in [-{limit:g}, {limit:g}]{_unit(unit)}; got {shown(value)}"
+        )
     return v
 
 
@@ -326,8 +354,9 @@ def rigid_pose(name: str, value) -> np.ndarray:
         raise InputError(f"{name} must be a finite 4x4 matrix; got shape {m.shape}")
     rotation(f"{name} rotation", m[:3, :3])
     if not np.array_equal(m[3], [0, 0, 0, 1]):
-        raise InputError(f"{name} must have the bottom row 0 0 0 1 (a rigid pose); "
-                         f"got {m[3].tolist()}")
+        raise InputError(
+            f"{name} must have the bottom row 0 0 0 1 (a rigid pose); got {m[3].tolist()}"
+        )
     return m
 
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from . import preview
 
-BACKGROUND_DEPTH = 1e10     # depth of empty pixels [m], as Blender's Cycles and Workbench
+BACKGROUND_DEPTH = 1e10  # depth of empty pixels [m], as Blender's Cycles and Workbench
 
 
 def channel_colours(count: int) -> np.ndarray:
@@ -74,12 +74,17 @@ class RenderResult:
         """One line: resolution, brightness, coverage and depth range; no pixels."""
         h, w = np.shape(self.alpha)[:2]
         seen = np.asarray(self.depth) < BACKGROUND_DEPTH
-        depth = (f"depth {preview.length(float(np.min(self.depth[seen])))} to "
-                 f"{preview.length(float(np.max(self.depth[seen])))}" if seen.any()
-                 else "no depth")
-        return (f"RenderResult({w}x{h}, rgb max {float(np.max(self.rgb)):.3g}, "
-                f"{100 * float(np.mean(self.alpha)):.3g} % opaque, {depth}, info: "
-                f"{', '.join(sorted(self.info)) or 'none'})")
+        depth = (
+            f"depth {preview.length(float(np.min(self.depth[seen])))} to "
+            f"{preview.length(float(np.max(self.depth[seen])))}"
+            if seen.any()
+            else "no depth"
+        )
+        return (
+            f"RenderResult({w}x{h}, rgb max {float(np.max(self.rgb)):.3g}, "
+            f"{100 * float(np.mean(self.alpha)):.3g} % opaque, {depth}, info: "
+            f"{', '.join(sorted(self.info)) or 'none'})"
+        )
 
     def _repr_png_(self) -> bytes:
         """A notebook's picture: the rgb radiance in sRGB, at most 512 pixels a side."""

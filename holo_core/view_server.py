@@ -43,11 +43,15 @@ class ViewServer:
     def open(self, settings: ViewOpen) -> None:
         """Hold the plate of ``settings`` (the one held before is closed first)."""
         from .plate.viewer import PlateViewer  # loads the OpenCL driver: the worker's alone
+
         self.close_viewer()
         self.settings = settings
         plates = list(settings.plates)
-        self.viewer = PlateViewer(plates if len(plates) > 1 else plates[0],
-                                  scene=settings.recording or None, **settings.options())
+        self.viewer = PlateViewer(
+            plates if len(plates) > 1 else plates[0],
+            scene=settings.recording or None,
+            **settings.options(),
+        )
         log.info("live views of recording %s held", self.viewer.recording or "(unnamed)")
 
     def view(self, request: ViewRequest) -> ViewReply:
@@ -60,24 +64,28 @@ class ViewServer:
             self.open(self.settings)
         where = self.viewer.where(request.camera)
         if where:
-            return ViewReply(id=request.id, where=where, coarse=request.coarse,
-                             seconds=time.perf_counter() - start)
+            return ViewReply(
+                id=request.id,
+                where=where,
+                coarse=request.coarse,
+                seconds=time.perf_counter() - start,
+            )
         result = self.viewer.view(request.camera, coarse=request.coarse)
         planes = (result.rgb, result.alpha, result.depth)
         if not all(np.isfinite(p).all() for p in planes):
-            return ViewReply(id=request.id, error="the view holds NaN or infinite values: "
-                             "nothing is shown")
+            return ViewReply(
+                id=request.id, error="the view holds NaN or infinite values: nothing is shown"
+            )
         h, w = np.shape(result.alpha)[:2]
         shared = self._attached(request.shared)
-        with shared.writing(w, h, 5, request=request.id, coarse=request.coarse,
-                            started=start) as out:
-            np.multiply(result.rgb, self.settings.exposure, out=out[..., :3],
-                        casting="unsafe")
+        with shared.writing(
+            w, h, 5, request=request.id, coarse=request.coarse, started=start
+        ) as out:
+            np.multiply(result.rgb, self.settings.exposure, out=out[..., :3], casting="unsafe")
             out[..., 3] = result.alpha
             out[..., 4] = result.depth
         seconds = time.perf_counter() - start
-        return ViewReply(id=request.id, seconds=seconds, shared=shared.name,
-                         coarse=request.coarse)
+        return ViewReply(id=request.id, seconds=seconds, shared=shared.name, coarse=request.coarse)
 
     def _attached(self, name: str) -> SharedView:
         """The shared view ``name``, attached once (those of earlier names are let go: the
@@ -128,18 +136,17 @@ def handle(server: ViewServer, message: dict, send) -> bool:
     return True
 
 
-
 def main(idle: float) -> int:
     """The view-serving worker (``python -m holo_core.view_server IDLE``): jobs and live
     views, until stdin closes or no line comes for ``idle`` seconds."""
     server = ViewServer()
     try:
-        return runner.serve(idle, on_message=lambda message, send: handle(server, message,
-                                                                          send))
+        return runner.serve(idle, on_message=lambda message, send: handle(server, message, send))
     finally:
         server.close()
 
 
 if __name__ == "__main__":  # run as the package's module, so that its log records are the
     from holo_core import view_server  # core's and reach the parent
+
     sys.exit(view_server.main(float(sys.argv[1])))

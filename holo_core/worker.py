@@ -55,8 +55,13 @@ class WorkerError(RuntimeError):
 
 # --- the parent's handle ----------------------------------------------------------------------
 
-def environment(paths=(), device: str | None = None, memory_limit: str | None = None,
-                cache_dir: str | None = None) -> dict:
+
+def environment(
+    paths=(),
+    device: str | None = None,
+    memory_limit: str | None = None,
+    cache_dir: str | None = None,
+) -> dict:
     """The parent's environment for a child Python: its module search path (the worker imports
     holo_core and its dependencies from wherever the parent found them, Blender's extension
     folder), ``paths`` before it (packages installed on demand), ``HOLO_DEVICE`` when
@@ -83,9 +88,11 @@ def _death(code: int) -> str:
         name = signal.Signals(-code).name
     except ValueError:
         name = str(-code)
-    why = {signal.SIGKILL: " (killed: out of memory?)",
-           signal.SIGSEGV: " (a crash in native code: the OpenCL driver?)",
-           signal.SIGABRT: " (aborted in native code: the OpenCL driver?)"}
+    why = {
+        signal.SIGKILL: " (killed: out of memory?)",
+        signal.SIGSEGV: " (a crash in native code: the OpenCL driver?)",
+        signal.SIGABRT: " (aborted in native code: the OpenCL driver?)",
+    }
     return f"signal {name}{why.get(-code, '')}"
 
 
@@ -102,9 +109,13 @@ class _Process:
         self.stderr = open(self.folder / "stderr.txt", "w+b")
         self.popen = subprocess.Popen(
             [sys.executable, "-m", *command, str(IDLE_SECONDS)],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.stderr,
-            env=env, cwd=self.folder,
-            start_new_session=os.name == "posix")  # its group: the renderer it runs dies too
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=self.stderr,
+            env=env,
+            cwd=self.folder,
+            start_new_session=os.name == "posix",
+        )  # its group: the renderer it runs dies too
         self.messages: queue.SimpleQueue = queue.SimpleQueue()
         self.busy = False
         self.idle_since = time.monotonic()
@@ -137,8 +148,9 @@ class _Process:
     def stderr_tail(self) -> str:
         self.stderr.flush()
         self.stderr.seek(0)
-        lines = [ln for ln in self.stderr.read().decode(errors="replace").splitlines()
-                 if ln.strip()]
+        lines = [
+            ln for ln in self.stderr.read().decode(errors="replace").splitlines() if ln.strip()
+        ]
         return f"; its last output: {lines[-1][-300:]}" if lines else ""
 
     def kill(self) -> None:
@@ -168,7 +180,7 @@ class _Process:
 
 
 IDLE_SECONDS = 600  # a serving worker left this long without a job ends (its plate freed)
-IDLE_GRACE = 60     # ... and is not handed a job in its last minute
+IDLE_GRACE = 60  # ... and is not handed a job in its last minute
 # the process kept between jobs (resident=True)
 _resident: _Process | None = None
 _resident_lock = threading.Lock()
@@ -223,9 +235,16 @@ class Worker:
     it (the next starts a fresh one).
     """
 
-    def __init__(self, job: Job, *, paths=(), device: str | None = None,
-                 memory_limit: str | None = None, cache_dir: str | None = None,
-                 resident: bool = False):
+    def __init__(
+        self,
+        job: Job,
+        *,
+        paths=(),
+        device: str | None = None,
+        memory_limit: str | None = None,
+        cache_dir: str | None = None,
+        resident: bool = False,
+    ):
         data = pickle.dumps(job.to_dict(), protocol=pickle.HIGHEST_PROTOCOL)  # plain data
         self.folder = Path(tempfile.mkdtemp(prefix="holo-worker-"))
         (self.folder / "job.pickle").write_bytes(data)
@@ -255,8 +274,11 @@ class Worker:
         out = []
         while not self.finished:
             try:
-                msg = self._server.messages.get(timeout=timeout) if timeout and not out \
+                msg = (
+                    self._server.messages.get(timeout=timeout)
+                    if timeout and not out
                     else self._server.messages.get_nowait()
+                )
             except queue.Empty:
                 break
             out.append(self._translate(msg))
@@ -267,8 +289,11 @@ class Worker:
     def _translate(self, msg):
         if msg is None:
             code = self.process.wait()
-            return ("failed", self._error or f"the worker process ended with {_death(code)}"
-                    f"{self._server.stderr_tail()}")
+            return (
+                "failed",
+                self._error
+                or f"the worker process ended with {_death(code)}{self._server.stderr_tail()}",
+            )
         if "progress" in msg:
             return ("progress", float(msg["progress"]))
         if "log" in msg:
@@ -346,6 +371,7 @@ def run(job: Job, progress: jobs.Progress = None, on_log=None, **options) -> Res
 
 # --- live views of a held plate ---------------------------------------------------------------
 
+
 @dataclass(frozen=True, slots=True, kw_only=True)
 class ViewPicture:
     """The newest finished answer of a :class:`Views`.
@@ -412,24 +438,39 @@ class Views:
     >>> views.close()                                                  # doctest: +SKIP
     """
 
-    def __init__(self, plates, *, recording: str = "", supersample="auto",
-                 composition: str = "mean", opacity_threshold: float = 0.5,
-                 exposure: float = 1.0, paths=(), device: str | None = None,
-                 memory_limit: str | None = None, cache_dir: str | None = None):
-        self.settings = ViewOpen(plates=plates, recording=recording, supersample=supersample,
-                                 composition=composition, opacity_threshold=opacity_threshold,
-                                 exposure=exposure)
+    def __init__(
+        self,
+        plates,
+        *,
+        recording: str = "",
+        supersample="auto",
+        composition: str = "mean",
+        opacity_threshold: float = 0.5,
+        exposure: float = 1.0,
+        paths=(),
+        device: str | None = None,
+        memory_limit: str | None = None,
+        cache_dir: str | None = None,
+    ):
+        self.settings = ViewOpen(
+            plates=plates,
+            recording=recording,
+            supersample=supersample,
+            composition=composition,
+            opacity_threshold=opacity_threshold,
+            exposure=exposure,
+        )
         self._env = environment(paths, device, memory_limit, cache_dir)
         self._process: _Process | None = None
         self._shared: SharedView | None = None
-        self._asked = 0          # the newest request's number
-        self._shown = None       # the newest finished ViewPicture
-        self._number = 0         # the shared view's newest picture read
+        self._asked = 0  # the newest request's number
+        self._shown = None  # the newest finished ViewPicture
+        self._number = 0  # the shared view's newest picture read
         self._replies: dict = {}  # request -> ViewReply, newest kept
-        self.opened = ""         # the recording the worker holds ('' : not yet)
-        self.error = ""          # why the worker holds no plate, or why it ended
-        self.starts = 0          # worker processes started (a crash starts another)
-        self.answered = 0        # replies received (a skipped request gets none)
+        self.opened = ""  # the recording the worker holds ('' : not yet)
+        self.error = ""  # why the worker holds no plate, or why it ended
+        self.starts = 0  # worker processes started (a crash starts another)
+        self.answered = 0  # replies received (a skipped request gets none)
         self._closed = False
 
     def ask(self, camera: Camera, *, coarse: bool = False) -> int:
@@ -444,8 +485,9 @@ class Views:
             if old is not None:
                 old.close()  # unlinked; a worker still writing into it keeps its mapping
         self._asked += 1
-        request = ViewRequest(id=self._asked, camera=camera, shared=self._shared.name,
-                              coarse=coarse)
+        request = ViewRequest(
+            id=self._asked, camera=camera, shared=self._shared.name, coarse=coarse
+        )
         self._send({"view": request.to_dict()})
         return self._asked
 
@@ -489,8 +531,11 @@ class Views:
                 return
             if msg is None:
                 code = process.popen.wait()
-                self.error = f"the view worker ended with {_death(code)}" \
-                    f"{process.stderr_tail()}" if code else ""
+                self.error = (
+                    f"the view worker ended with {_death(code)}{process.stderr_tail()}"
+                    if code
+                    else ""
+                )
                 process.close()
                 self._process = None
                 return
@@ -502,8 +547,9 @@ class Views:
             elif "view" in msg:
                 reply = ViewReply.from_dict(msg["view"])
                 self.answered += 1
-                self._replies = {k: v for k, v in self._replies.items()
-                                 if k >= reply.id - 8}  # a few kept for their pictures
+                self._replies = {
+                    k: v for k, v in self._replies.items() if k >= reply.id - 8
+                }  # a few kept for their pictures
                 self._replies[reply.id] = reply
 
     def latest(self) -> ViewPicture | None:
@@ -511,22 +557,32 @@ class Views:
         first; never blocks. An answer to an older request than one shown is never shown
         after it."""
         self._drain()
-        replies = [r for r in self._replies.values()
-                   if r.where or r.error] if self._replies else []
+        replies = [r for r in self._replies.values() if r.where or r.error] if self._replies else []
         newest = max(replies, key=lambda r: r.id, default=None)
         picture = self._shared.read(after=self._number) if self._shared is not None else None
         if picture is not None:
             self._number = picture.number
         shown = self._shown.request if self._shown is not None else 0
-        if picture is not None and picture.request > shown and \
-                (newest is None or picture.request > newest.id):
-            self._shown = ViewPicture(request=picture.request, rgba=picture.rgba,
-                                      depth=picture.depth, coarse=picture.coarse,
-                                      seconds=picture.seconds)
+        if (
+            picture is not None
+            and picture.request > shown
+            and (newest is None or picture.request > newest.id)
+        ):
+            self._shown = ViewPicture(
+                request=picture.request,
+                rgba=picture.rgba,
+                depth=picture.depth,
+                coarse=picture.coarse,
+                seconds=picture.seconds,
+            )
         elif newest is not None and newest.id > shown:
-            self._shown = ViewPicture(request=newest.id, coarse=newest.coarse,
-                                      seconds=newest.seconds, where=newest.where,
-                                      error=newest.error)
+            self._shown = ViewPicture(
+                request=newest.id,
+                coarse=newest.coarse,
+                seconds=newest.seconds,
+                where=newest.where,
+                error=newest.error,
+            )
         return self._shown
 
     def wait(self, request: int, timeout: float = 60.0) -> ViewPicture:

@@ -29,12 +29,12 @@ WRP_VS_DIRECT = 1e-2
 # rotated spectrum, before, gave 1.8e-2 flat and 0.1-0.25 tilted.
 PRIMITIVE_VS_POINTS = 1e-2
 # image generation (Sect. VII)
-PIXEL_POSITION = 0.5        # px, the issue's bound for a point through a pinhole
-AIRY_RADIUS = 0.05          # first zero vs 1.22 λ/D (measured ~2 % with 4 spectrum samples/λ/D)
-DEFOCUS_DIAMETER = 0.10     # blur disc vs D·|1/r - 1/f| (geometric optics)
-DEPTH_SINGLE_POINT = 5e-3   # two-wavelength depth vs the true planar depth (measured 2e-5)
-ALIAS_ENERGY = 1e-2         # energy above the new Nyquist, against a point-sampled raster's
-SPECKLE_SQRT_N = 0.3        # contrast ratio of 1 vs N renders against √N (finite-N scatter)
+PIXEL_POSITION = 0.5  # px, the issue's bound for a point through a pinhole
+AIRY_RADIUS = 0.05  # first zero vs 1.22 λ/D (measured ~2 % with 4 spectrum samples/λ/D)
+DEFOCUS_DIAMETER = 0.10  # blur disc vs D·|1/r - 1/f| (geometric optics)
+DEPTH_SINGLE_POINT = 5e-3  # two-wavelength depth vs the true planar depth (measured 2e-5)
+ALIAS_ENERGY = 1e-2  # energy above the new Nyquist, against a point-sampled raster's
+SPECKLE_SQRT_N = 0.3  # contrast ratio of 1 vs N renders against √N (finite-N scatter)
 
 # a transfer function made on the device (float64, or float32 with the split product) vs the
 # float64 host one: complex64 rounding and cexpi's 1e-7 (measured 3e-7 in float64; the split
@@ -58,6 +58,8 @@ def rel_err(a, ref) -> float:
     """Relative complex error ||a - ref|| / ||ref|| in float64."""
     a, ref = np.asarray(a, np.complex128), np.asarray(ref, np.complex128)
     return float(np.linalg.norm(a - ref) / np.linalg.norm(ref))
+
+
 # the zone sum (per-tile exact phase, row recurrence, the window exact in its rim, the
 # visibility linear along 32-sample segments) vs float64 NumPy: measured 7e-6 with a smooth
 # visibility, 1e-3 with a table of random values (kinks every grid cell)

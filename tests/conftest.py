@@ -1,5 +1,3 @@
-
-
 import numpy as np
 import pytest
 
@@ -12,6 +10,7 @@ def rng():
 @pytest.fixture(scope="session")
 def rt():
     from holo_core.opencl import get_runtime
+
     return get_runtime()
 
 
@@ -19,6 +18,7 @@ def rt():
 def point_hologram():
     """The point behind a small plate of :mod:`pinhole`."""
     import pinhole
+
     return pinhole.record()
 
 
@@ -26,6 +26,6 @@ def point_hologram():
 def small_disk(tmp_path):
     """A 1 MiB file system of its own (a tmpfs: the test must run as root, else it is skipped)."""
     from mounts import small_disk
+
     with small_disk(tmp_path / "disk") as disk:
         yield disk
-

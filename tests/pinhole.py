@@ -7,13 +7,18 @@ from holo_core.scene.camera import Camera, look_at
 
 
 def record():
-    return record_points([[0, 0, -3e-3]], [[1.0]], shape=(128, 128), pitch=1e-6,
-                         wavelengths=(633e-9,))
+    return record_points(
+        [[0, 0, -3e-3]], [[1.0]], shape=(128, 128), pitch=1e-6, wavelengths=(633e-9,)
+    )
 
 
 def camera(resolution=(16, 16)):
-    return Camera(matrix_world=look_at((0, 0, 4e-3), (0, 0, -3e-3)), lens=50,
-                  sensor_width=50 * 48 * 4e-3 * resolution[0] / 48, resolution=resolution)
+    return Camera(
+        matrix_world=look_at((0, 0, 4e-3), (0, 0, -3e-3)),
+        lens=50,
+        sensor_width=50 * 48 * 4e-3 * resolution[0] / 48,
+        resolution=resolution,
+    )
 
 
 # the camera's settings on the command line

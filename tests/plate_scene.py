@@ -33,43 +33,64 @@ def checker(n, a, b):
 
 def cube(centre=CUBE_CENTRE, size=CUBE_SIZE, angles=(0.35, 0.6)):
     """A cube, each face a 4×4 checker of its own two colours (a texture atlas of 6 cells)."""
-    faces = [((0, 0, 1), (1, 0, 0)), ((0, 0, -1), (-1, 0, 0)), ((1, 0, 0), (0, 0, -1)),
-             ((-1, 0, 0), (0, 0, 1)), ((0, 1, 0), (1, 0, 0)), ((0, -1, 0), (1, 0, 0))]
-    colours = [((0.9, 0.2, 0.1), (0.9, 0.8, 0.2)), ((0.2, 0.3, 0.9), (0.8, 0.8, 0.8)),
-               ((0.1, 0.7, 0.3), (0.9, 0.9, 0.5)), ((0.7, 0.2, 0.7), (0.3, 0.9, 0.9)),
-               ((0.95, 0.55, 0.1), (0.2, 0.2, 0.6)), ((0.5, 0.5, 0.5), (0.9, 0.3, 0.4))]
+    faces = [
+        ((0, 0, 1), (1, 0, 0)),
+        ((0, 0, -1), (-1, 0, 0)),
+        ((1, 0, 0), (0, 0, -1)),
+        ((-1, 0, 0), (0, 0, 1)),
+        ((0, 1, 0), (1, 0, 0)),
+        ((0, -1, 0), (1, 0, 0)),
+    ]
+    colours = [
+        ((0.9, 0.2, 0.1), (0.9, 0.8, 0.2)),
+        ((0.2, 0.3, 0.9), (0.8, 0.8, 0.8)),
+        ((0.1, 0.7, 0.3), (0.9, 0.9, 0.5)),
+        ((0.7, 0.2, 0.7), (0.3, 0.9, 0.9)),
+        ((0.95, 0.55, 0.1), (0.2, 0.2, 0.6)),
+        ((0.5, 0.5, 0.5), (0.9, 0.3, 0.4)),
+    ]
     cell = 16
     atlas = np.zeros((cell, 6 * cell, 3))
     verts, uvs, tris = [], [], []
     for f, ((nx, ny, nz), (ux, uy, uz)) in enumerate(faces):
         n, u = np.array([nx, ny, nz], float), np.array([ux, uy, uz], float)
         v = np.cross(n, u)
-        atlas[:, f * cell:(f + 1) * cell] = np.repeat(np.repeat(checker(4, *colours[f]), 4, 0),
-                                                      4, 1)
+        atlas[:, f * cell : (f + 1) * cell] = np.repeat(
+            np.repeat(checker(4, *colours[f]), 4, 0), 4, 1
+        )
         base = len(verts)
         for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
             verts.append((n + su * u + sv * v) * size / 2)
             uvs.append(((f + (su + 1) / 2 * 0.98 + 0.01) / 6, (sv + 1) / 2 * 0.98 + 0.01))
         tris += [(base, base + 1, base + 2), (base, base + 2, base + 3)]
     r = rotation(*angles)
-    return Mesh(vertices=np.asarray(verts) @ r.T + centre, triangles=np.asarray(tris),
-                uvs=np.asarray(uvs), texture=atlas)
+    return Mesh(
+        vertices=np.asarray(verts) @ r.T + centre,
+        triangles=np.asarray(tris),
+        uvs=np.asarray(uvs),
+        texture=atlas,
+    )
 
 
 def sphere(centre=SPHERE_CENTRE, radius=SPHERE_RADIUS, n=48):
     """A UV sphere with 8 × 12 checker squares of two colours."""
-    th, ph = np.meshgrid(np.linspace(0, np.pi, n + 1), np.linspace(0, 2 * np.pi, 2 * n + 1),
-                         indexing="ij")
+    th, ph = np.meshgrid(
+        np.linspace(0, np.pi, n + 1), np.linspace(0, 2 * np.pi, 2 * n + 1), indexing="ij"
+    )
     v = np.stack([np.sin(th) * np.cos(ph), np.cos(th), np.sin(th) * np.sin(ph)], -1)
     uv = np.stack([ph / (2 * np.pi), 1 - th / np.pi], -1)
     idx = np.arange(v.shape[0] * v.shape[1]).reshape(v.shape[:2])
     a, b, c, d = idx[:-1, :-1], idx[:-1, 1:], idx[1:, :-1], idx[1:, 1:]
-    tri = np.concatenate([np.stack([a, c, d], -1).reshape(-1, 3),
-                          np.stack([a, d, b], -1).reshape(-1, 3)])
-    tex = np.repeat(np.repeat(checker(12, (0.85, 0.85, 0.85), (0.15, 0.45, 0.8))[:8], 8, 0),
-                    8, 1)
-    return Mesh(vertices=v.reshape(-1, 3) * radius + centre, triangles=tri,
-                uvs=uv.reshape(-1, 2), texture=tex)
+    tri = np.concatenate(
+        [np.stack([a, c, d], -1).reshape(-1, 3), np.stack([a, d, b], -1).reshape(-1, 3)]
+    )
+    tex = np.repeat(np.repeat(checker(12, (0.85, 0.85, 0.85), (0.15, 0.45, 0.8))[:8], 8, 0), 8, 1)
+    return Mesh(
+        vertices=v.reshape(-1, 3) * radius + centre,
+        triangles=tri,
+        uvs=uv.reshape(-1, 2),
+        texture=tex,
+    )
 
 
 def meshes():
@@ -82,9 +103,14 @@ def camera(eye="centre", scale=1.0, fstop=2.8, crop=False):
     and 6 pixels around them."""
     e = np.asarray(EYES.get(eye, eye) if isinstance(eye, str) else eye, float)
     size = (round(640 * scale), round(360 * scale))
-    cam = Camera(matrix_world=look_at(e, TARGET, up=(0, 1, 0)), lens=50, sensor_width=36,
-                 resolution=size, fstop=fstop,
-                 focus_distance=float(np.linalg.norm(CUBE_CENTRE - e)) if fstop else None)
+    cam = Camera(
+        matrix_world=look_at(e, TARGET, up=(0, 1, 0)),
+        lens=50,
+        sensor_width=36,
+        resolution=size,
+        fstop=fstop,
+        focus_distance=float(np.linalg.norm(CUBE_CENTRE - e)) if fstop else None,
+    )
     if not crop:
         return cam
     xy = cam.project(np.concatenate([m.vertices for m in meshes()]))[0]

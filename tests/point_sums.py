@@ -20,5 +20,8 @@ def square(size, z, tilt_deg=0.0):
     t = np.radians(tilt_deg)
     corners = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], float) * size / 2
     rot = np.array([[1, 0, 0], [0, np.cos(t), -np.sin(t)], [0, np.sin(t), np.cos(t)]])
-    return Mesh(vertices=corners @ rot.T + [0, 0, z], triangles=np.array([[0, 1, 2], [0, 2, 3]]),
-                colours=np.ones((4, 3)))
+    return Mesh(
+        vertices=corners @ rot.T + [0, 0, z],
+        triangles=np.array([[0, 1, 2], [0, 2, 3]]),
+        colours=np.ones((4, 3)),
+    )

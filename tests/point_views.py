@@ -15,15 +15,26 @@ EYE = np.array([0.0, 0.0, 4e-3])
 
 def off_axis(lam2=LAM, pitch=PITCH):
     """The off-axis recording of holo_core.plate.sampling: cone b = λ/(8d), reference sin ϑ = 3b."""
-    return dict(band=0.95 * lam2 / (8 * pitch),
-                reference=Reference(angle=math.asin(3 * lam2 / (8 * pitch))))
+    return dict(
+        band=0.95 * lam2 / (8 * pitch), reference=Reference(angle=math.asin(3 * lam2 / (8 * pitch)))
+    )
 
 
 def point_hologram(points, wavelengths=(LAM,), channels=(), n=N, seeds=(0,), pitch=PITCH):
     pts = np.asarray(points, np.float64)
-    return [record_points(pts, np.ones((len(pts), len(wavelengths))), shape=(n, n),
-                          pitch=pitch, wavelengths=wavelengths, channels=channels, seed=s,
-                          **off_axis(min(wavelengths), pitch)) for s in seeds]
+    return [
+        record_points(
+            pts,
+            np.ones((len(pts), len(wavelengths))),
+            shape=(n, n),
+            pitch=pitch,
+            wavelengths=wavelengths,
+            channels=channels,
+            seed=s,
+            **off_axis(min(wavelengths), pitch),
+        )
+        for s in seeds
+    ]
 
 
 def camera(pixel_angle, size, **kw):

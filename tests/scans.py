@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 
 WAVELENGTH, PITCH, DISTANCE, SIZE = 633e-9, 3.45e-6, 0.05, 2048
-BAND = 35e3                                 # the aperture stop's band [1/m] (sin θ = 0.022)
+BAND = 35e3  # the aperture stop's band [1/m] (sin θ = 0.022)
 CARRIER = (0.55 / (2 * PITCH), -0.55 / (2 * PITCH))  # [1/m]: 0.78 of Nyquist, azimuth -45°
-LETTER_HEIGHT = 3.2e-3                      # the letter 'F' [m]
-NOISE = 2e-3                                # the camera's noise, rms, of the peak intensity
+LETTER_HEIGHT = 3.2e-3  # the letter 'F' [m]
+NOISE = 2e-3  # the camera's noise, rms, of the peak intensity
 
 
 def letter(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -31,6 +31,7 @@ def letter(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 
     def box(x0, y1, w, hh):  # from its left edge x0 and its top edge y1, down
         return (x >= x0) & (x < x0 + w) & (y <= y1) & (y > y1 - hh)
+
     stem = box(left, top, stroke, h)
     bar = box(left, top, 0.62 * h, stroke)
     arm = box(left, top - 0.42 * h, 0.45 * h, stroke)
@@ -56,7 +57,7 @@ def object_wave(size: int = SIZE) -> np.ndarray:
     transfer = np.exp(2j * np.pi * DISTANCE * kz) * stop
     wave = np.fft.ifft2(np.fft.fft2(mask) * transfer)
     lo = (n - size) // 2
-    return wave[lo:lo + size, lo:lo + size]
+    return wave[lo : lo + size, lo : lo + size]
 
 
 def hologram(size: int = SIZE, seed: int = 38) -> np.ndarray:
@@ -65,8 +66,11 @@ def hologram(size: int = SIZE, seed: int = 38) -> np.ndarray:
     o = object_wave(size)
     o *= 0.6 / np.abs(o).max()
     x = coords(size, PITCH)
-    r = np.exp(2j * np.pi * (np.remainder(CARRIER[0] * x, 1.0)[None, :] +
-                             np.remainder(CARRIER[1] * x, 1.0)[:, None]))
+    r = np.exp(
+        2j
+        * np.pi
+        * (np.remainder(CARRIER[0] * x, 1.0)[None, :] + np.remainder(CARRIER[1] * x, 1.0)[:, None])
+    )
     h = np.abs(o + r) ** 2
     rng = np.random.default_rng(seed)
     return np.clip(h + NOISE * h.max() * rng.normal(size=h.shape), 0, None)
@@ -79,13 +83,22 @@ def save_png16(path, intensity: np.ndarray) -> Path:
     rows = b"".join(b"\0" + counts[i].tobytes() for i in range(counts.shape[0]))
 
     def chunk(kind, data):
-        return len(data).to_bytes(4, "big") + kind + data + \
-            (zlib.crc32(kind + data) & 0xFFFFFFFF).to_bytes(4, "big")
+        return (
+            len(data).to_bytes(4, "big")
+            + kind
+            + data
+            + (zlib.crc32(kind + data) & 0xFFFFFFFF).to_bytes(4, "big")
+        )
+
     h, w = counts.shape
     header = w.to_bytes(4, "big") + h.to_bytes(4, "big") + bytes([16, 0, 0, 0, 0])
     path = Path(path)
-    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) +
-                     chunk(b"IDAT", zlib.compress(rows, 6)) + chunk(b"IEND", b""))
+    path.write_bytes(
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", header)
+        + chunk(b"IDAT", zlib.compress(rows, 6))
+        + chunk(b"IEND", b"")
+    )
     return path
 
 
@@ -109,5 +122,17 @@ def resolution() -> float:
     return 1 / BAND
 
 
-__all__ = ["BAND", "CARRIER", "DISTANCE", "PITCH", "SIZE", "WAVELENGTH", "depth_of_focus",
-           "hologram", "letter", "object_wave", "optical_scan", "resolution"]
+__all__ = [
+    "BAND",
+    "CARRIER",
+    "DISTANCE",
+    "PITCH",
+    "SIZE",
+    "WAVELENGTH",
+    "depth_of_focus",
+    "hologram",
+    "letter",
+    "object_wave",
+    "optical_scan",
+    "resolution",
+]

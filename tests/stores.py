@@ -17,6 +17,7 @@ def cancel_after(n):
         calls.append(fraction)
         if len(calls) == n:
             raise jobs.Cancelled()
+
     return progress
 
 

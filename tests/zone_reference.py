@@ -34,8 +34,9 @@ def reference(em: ZoneEmitters, win: ZoneWindow, wavelength) -> np.ndarray:
     for j, p in enumerate(em.position):
         s = (Z[2] - p[2]) / -p[2]  # the ray through x reaches the zone's plane at xi
         xi, eta = p[0] - Z[0] + s * (X - p[0]), p[1] - Z[1] + s * (Y - p[1])
-        w = rim(xi, e[0] + e[2] * np.abs(X - p[0]) / -p[2], win.rim * e[0]) * \
-            rim(eta, e[1] + e[2] * np.abs(Y - p[1]) / -p[2], win.rim * e[1])
+        w = rim(xi, e[0] + e[2] * np.abs(X - p[0]) / -p[2], win.rim * e[0]) * rim(
+            eta, e[1] + e[2] * np.abs(Y - p[1]) / -p[2], win.rim * e[1]
+        )
         if em.visibility[j] >= 0:
             v = em.table[em.visibility[j]] / 255.0
             gy, gx = v.shape
@@ -55,9 +56,15 @@ def reference(em: ZoneEmitters, win: ZoneWindow, wavelength) -> np.ndarray:
 def object_wave(em: ZoneEmitters, zone, wavelength, xs, ys) -> np.ndarray:
     """O (C, len(ys), len(xs)) complex128 at the grid of columns ``xs`` and rows ``ys`` [m]
     (evenly spaced): the same sum with no carrier."""
-    win = ZoneWindow(origin=(xs[0], ys[0]), pitch=xs[1] - xs[0], row_pitch=ys[1] - ys[0],
-                     shape=(len(ys), len(xs)), centre=zone.centre,
-                     half_extents=zone.half_extents, rim=RIM)
+    win = ZoneWindow(
+        origin=(xs[0], ys[0]),
+        pitch=xs[1] - xs[0],
+        row_pitch=ys[1] - ys[0],
+        shape=(len(ys), len(xs)),
+        centre=zone.centre,
+        half_extents=zone.half_extents,
+        rim=RIM,
+    )
     cx, cy, cz = zone.centre
     r = np.sqrt((xs[None] - cx) ** 2 + (ys[:, None] - cy) ** 2 + cz**2)
     return reference(em, win, wavelength) * np.exp(-2j * np.pi / wavelength * r)[None]
@@ -71,9 +78,21 @@ def carrier_plate(em: ZoneEmitters, zone, wavelength, finer=1) -> Hologram:
     lo, hi = window_on_plate(box, zone, math.inf, math.inf)
     pitch, row_pitch = (wavelength / (2 * b * finer) for b in zone_band(lo, hi, zone))
     shape = (math.ceil((hi[1] - lo[1]) / row_pitch) + 1, math.ceil((hi[0] - lo[0]) / pitch) + 1)
-    win = ZoneWindow(origin=tuple(lo), pitch=pitch, row_pitch=row_pitch, shape=shape,
-                     centre=zone.centre, half_extents=zone.half_extents, rim=RIM)
-    return Hologram(object_wave=zone_sum(em, win, wavelength), encoding="complex",
-                    wavelengths=(wavelength,) * em.amplitude.shape[1], pitch=pitch, zone=zone,
-                    bounds=box, carrier=Carrier(centre=zone.centre, origin=tuple(lo),
-                                                row_pitch=row_pitch))
+    win = ZoneWindow(
+        origin=tuple(lo),
+        pitch=pitch,
+        row_pitch=row_pitch,
+        shape=shape,
+        centre=zone.centre,
+        half_extents=zone.half_extents,
+        rim=RIM,
+    )
+    return Hologram(
+        object_wave=zone_sum(em, win, wavelength),
+        encoding="complex",
+        wavelengths=(wavelength,) * em.amplitude.shape[1],
+        pitch=pitch,
+        zone=zone,
+        bounds=box,
+        carrier=Carrier(centre=zone.centre, origin=tuple(lo), row_pitch=row_pitch),
+    )

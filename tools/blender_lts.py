@@ -67,8 +67,11 @@ def find_python(line: str) -> str | None:
     pyenv = os.environ.get("PYENV_ROOT") or Path.home() / ".pyenv"
     if shutil.which("pyenv"):
         pyenv = subprocess.run(["pyenv", "root"], capture_output=True, text=True).stdout.strip()
-    versions = sorted(Path(pyenv).glob(f"versions/{line}.*/bin/python{line}"), reverse=True,
-                      key=lambda p: [int(n) for n in re.findall(r"\d+", p.parts[-3])])
+    versions = sorted(
+        Path(pyenv).glob(f"versions/{line}.*/bin/python{line}"),
+        reverse=True,
+        key=lambda p: [int(n) for n in re.findall(r"\d+", p.parts[-3])],
+    )
     candidates = [shutil.which(f"python{line}"), *map(str, versions), sys.executable]
     return next((p for p in candidates if p and _runs(p, line)), None)
 
@@ -83,17 +86,31 @@ def bpy_environment(release: str, python: str) -> tuple[Path, str]:
     installing them took ("" when they were there)."""
     venv = ROOT / f".venv-bpy{release}"
     py = venv / "bin" / "python"
-    ready = (f"import importlib.metadata as m, sys; sys.exit(m.version('bpy') != {release!r} "
-             f"or '%d.%d' % sys.version_info[:2] != {python_line(release)!r} "
-             "or not m.version('pytest'))")
+    ready = (
+        f"import importlib.metadata as m, sys; sys.exit(m.version('bpy') != {release!r} "
+        f"or '%d.%d' % sys.version_info[:2] != {python_line(release)!r} "
+        "or not m.version('pytest'))"
+    )
     if py.exists() and subprocess.run([py, "-c", ready], capture_output=True).returncode == 0:
         return py, ""
     start = time.monotonic()
     shutil.rmtree(venv, ignore_errors=True)  # none, half installed, or another Python's
     print(f"Blender {release}: bpy {release} into {venv.name} (a 370 MB download)", flush=True)
-    if (_run([python, "-m", "venv", venv]).returncode or
-            _run([py, "-m", "pip", "install", "--quiet", f"bpy=={release}",
-                  NUMPY[python_line(release)], "pytest"]).returncode):
+    if (
+        _run([python, "-m", "venv", venv]).returncode
+        or _run(
+            [
+                py,
+                "-m",
+                "pip",
+                "install",
+                "--quiet",
+                f"bpy=={release}",
+                NUMPY[python_line(release)],
+                "pytest",
+            ]
+        ).returncode
+    ):
         sys.exit(f"Blender {release}: installing bpy {release} failed")
     return py, f" (bpy installed in {time.monotonic() - start:.0f} s)"
 
@@ -114,14 +131,25 @@ def check_release(release: str, python: str, zip_path: Path) -> str:
     # The suite's Blender gets a user folder of its own (tests/addon/conftest.py): in the one
     # that holds the extension, factory settings disable it and 4.5 then removes its wheels.
     env.pop("BLENDER_USER_RESOURCES")
-    env["PYTHONPATH"] = str(user / f"extensions/.local/lib/python{python_line(release)}"
-                                   "/site-packages")
-    cmd = [py, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-W", "error::DeprecationWarning",
-           "tests/addon"]
+    env["PYTHONPATH"] = str(
+        user / f"extensions/.local/lib/python{python_line(release)}/site-packages"
+    )
+    cmd = [
+        py,
+        "-m",
+        "pytest",
+        "-q",
+        "-p",
+        "no:cacheprovider",
+        "-W",
+        "error::DeprecationWarning",
+        "tests/addon",
+    ]
     print("+", " ".join(map(str, cmd)), flush=True)
     last = "no summary"
-    with subprocess.Popen(cmd, env=env, cwd=ROOT, text=True, stdout=subprocess.PIPE,
-                          stderr=subprocess.STDOUT) as tests:
+    with subprocess.Popen(
+        cmd, env=env, cwd=ROOT, text=True, stdout=subprocess.PIPE, stderr=subprocess.STDOUT
+    ) as tests:
         for line in tests.stdout:
             print(line, end="", flush=True)
             if re.match(r"\d+ (passed|failed|error)", line):  # "45 passed in 150.2s"
@@ -142,22 +170,36 @@ def main(releases: list[str]) -> None:
             runs.append(release)
             continue
         var = "PYTHON" + line.replace(".", "")
-        summary.append(f"Blender {release}: skipped, its bpy needs Python {line} and none was "
-                       f"found; install it (pyenv install {line}, or the system's python{line} "
-                       f"with venv) or name it: make check-lts {var}=/path/to/python{line}")
+        summary.append(
+            f"Blender {release}: skipped, its bpy needs Python {line} and none was "
+            f"found; install it (pyenv install {line}, or the system's python{line} "
+            f"with venv) or name it: make check-lts {var}=/path/to/python{line}"
+        )
     if runs:
         shutil.rmtree(BUILD, ignore_errors=True)
         lines = sorted({python_line(r) for r in runs})
-        if _run([sys.executable, "-m", "holo_addon.build", "--platform", "linux-x64",
-                 *(a for line in lines for a in ("--python", line)), "-o", BUILD],
-                cwd=ROOT).returncode:
+        if _run(
+            [
+                sys.executable,
+                "-m",
+                "holo_addon.build",
+                "--platform",
+                "linux-x64",
+                *(a for line in lines for a in ("--python", line)),
+                "-o",
+                BUILD,
+            ],
+            cwd=ROOT,
+        ).returncode:
             sys.exit("building the extension failed")
         zips = {line: next(BUILD.glob(f"holo-*-py{line.replace('.', '')}.zip")) for line in lines}
     for release in runs:
         python = pythons[python_line(release)]
         version = subprocess.run([python, "-V"], capture_output=True, text=True).stdout.split()
-        summary.append(f"Blender {release} (Python {version[-1]}, {python}): "
-                       + check_release(release, python, zips[python_line(release)]))
+        summary.append(
+            f"Blender {release} (Python {version[-1]}, {python}): "
+            + check_release(release, python, zips[python_line(release)])
+        )
     print("\n".join(["", *summary, f"check-lts: {time.monotonic() - start:.0f} s"]))
     if any("FAILED" in line for line in summary):
         sys.exit(1)
@@ -165,17 +207,23 @@ def main(releases: list[str]) -> None:
 
 # The second form, run by one release's bpy module.
 
+
 def install(zip_path: str):
     """The zip validated and then installed and enabled by this release's own extension tools;
     returns the add-on's module."""
     import bpy
+
     bl_pkg = Path(bpy.utils.system_resource("SCRIPTS")) / "addons_core" / "bl_pkg"
-    check = subprocess.run([sys.executable, bl_pkg / "cli" / "blender_ext.py", "validate",
-                            zip_path], capture_output=True, text=True)
+    check = subprocess.run(
+        [sys.executable, bl_pkg / "cli" / "blender_ext.py", "validate", zip_path],
+        capture_output=True,
+        text=True,
+    )
     if check.returncode:  # this release's own rules for the manifest and the zip
         sys.exit(f"the zip does not validate:\n{check.stdout}{check.stderr}")
     sys.path.insert(0, str(bl_pkg.parent))
     from bl_pkg import cli_extension
+
     bpy.ops.wm.read_homefile(app_template="")
     rc = cli_extension(["install-file", zip_path, "--repo", "user_default", "--enable"])
     if rc or not hasattr(bpy.types.Scene, "holo"):
@@ -185,6 +233,7 @@ def install(zip_path: str):
 
 def scene(work: Path):
     import bpy
+
     s = bpy.context.scene
     for obj in list(s.objects):
         bpy.data.objects.remove(obj)
@@ -208,11 +257,13 @@ def scene(work: Path):
 def end_to_end(zip_path: str, work: str) -> tuple[str, list[Path]]:
     """What was done, and the folders of the add-on's and the core's code."""
     import bpy
+
     work = Path(work)
     addon = install(zip_path)
     import pyopencl
 
     import holo_core
+
     s = scene(work)
     for op in (bpy.ops.holo.render_pass, bpy.ops.holo.setup_compositing):
         if op() != {"FINISHED"}:
@@ -222,15 +273,17 @@ def end_to_end(zip_path: str, work: str) -> tuple[str, list[Path]]:
     w, h = image.size
     px = list(image.pixels)
     centre, corner = ((h // 2 * w + w // 2) * 4, 0)
-    if not sum(px[centre:centre + 3]) > sum(px[corner:corner + 3]) + 0.1:
+    if not sum(px[centre : centre + 3]) > sum(px[corner : corner + 3]) + 0.1:
         sys.exit("the holographic sphere is missing from the composited frame")
     layers = sorted(work.glob("holo_frame*.exr"))
     if not layers or not layers[0].stat().st_size:
         sys.exit(f"no holographic layers beside the render in {work}")
-    done = (f"Blender {bpy.app.version_string}: installed, registered (core at "
-            f"{holo_core.__file__}, {len(pyopencl.get_platforms())} OpenCL platform), recorded, "
-            f"pass rendered and composited, layers written beside the frame ({layers[0].name}), "
-            "no deprecation warning from the extension: OK")
+    done = (
+        f"Blender {bpy.app.version_string}: installed, registered (core at "
+        f"{holo_core.__file__}, {len(pyopencl.get_platforms())} OpenCL platform), recorded, "
+        f"pass rendered and composited, layers written beside the frame ({layers[0].name}), "
+        "no deprecation warning from the extension: OK"
+    )
     return done, [Path(addon.__file__).parent, Path(holo_core.__file__).parent]
 
 
@@ -240,8 +293,12 @@ def in_blender(zip_path: str, work: str) -> None:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", DeprecationWarning)
         done, ours = end_to_end(zip_path, work)
-    mine = [w for w in caught if issubclass(w.category, DeprecationWarning)
-            and any(Path(w.filename).is_relative_to(d) for d in ours)]
+    mine = [
+        w
+        for w in caught
+        if issubclass(w.category, DeprecationWarning)
+        and any(Path(w.filename).is_relative_to(d) for d in ours)
+    ]
     for w in mine:
         print(f"{w.filename}:{w.lineno}: {w.category.__name__}: {w.message}", file=sys.stderr)
     if mine:

@@ -31,8 +31,11 @@ def _options(obj, path=""):
     package's name is one of the package's modules, not the package autodoc reads."""
     if _kind(obj) != "data":
         return []
-    return ["   :no-value:", "", *("   " + escaped(line) if line else ""
-                                   for line in _attribute_doc(path))]
+    return [
+        "   :no-value:",
+        "",
+        *("   " + escaped(line) if line else "" for line in _attribute_doc(path)),
+    ]
 
 
 def _attribute_doc(path):
@@ -77,32 +80,46 @@ def write(app):
         home = getattr(obj, "__module__", "holo_core") or "holo_core"
         package = ".".join(home.split(".")[:2])
         groups.setdefault(package, []).append((name, obj, home))
-    lines = [*_heading("The top-level names", "="),
-             "Every name in ``holo_core.__all__``, under the package that defines it. "
-             "``import holo_core as hc`` gives them all (``hc.angular_spectrum``, "
-             "``hc.Camera``, …).", "", ".. currentmodule:: holo_core", ""]
+    lines = [
+        *_heading("The top-level names", "="),
+        "Every name in ``holo_core.__all__``, under the package that defines it. "
+        "``import holo_core as hc`` gives them all (``hc.angular_spectrum``, "
+        "``hc.Camera``, …).",
+        "",
+        ".. currentmodule:: holo_core",
+        "",
+    ]
     for package in sorted(groups):
         lines += _heading(f"From ``{package}``", "-")
         for name, obj, home in groups[package]:
-            lines += [f".. auto{_kind(obj)}:: holo_core.{name}", *_options(obj, f"holo_core.{name}"), "",
-                      f"   *Defined in* ``{home}``.", ""]
+            lines += [
+                f".. auto{_kind(obj)}:: holo_core.{name}",
+                *_options(obj, f"holo_core.{name}"),
+                "",
+                f"   *Defined in* ``{home}``.",
+                "",
+            ]
     _write(out / "names.rst", lines)
-    lines = [*_heading("The packages", "="),
-             "The floors of ``holo_core``, each with the files it holds (the package's "
-             "docstring).", ""]
+    lines = [
+        *_heading("The packages", "="),
+        "The floors of ``holo_core``, each with the files it holds (the package's docstring).",
+        "",
+    ]
     top = {id(getattr(holo_core, n)): n for n in holo_core.__all__}
     for name in _packages():
         module = importlib.import_module(f"holo_core.{name}")
-        lines += [*_heading(f"``holo_core.{name}``", "-"),
-                  f".. automodule:: holo_core.{name}", ""]
+        lines += [*_heading(f"``holo_core.{name}``", "-"), f".. automodule:: holo_core.{name}", ""]
         again = []
         for member in getattr(module, "__all__", ()):
             obj = getattr(module, member)
             if id(obj) in top:  # documented once, under its top-level name
                 again.append(f":py:obj:`holo_core.{top[id(obj)]}`")
             elif not inspect.ismodule(obj):
-                lines += [f".. auto{_kind(obj)}:: holo_core.{name}.{member}",
-                          *_options(obj, f"holo_core.{name}.{member}"), ""]
+                lines += [
+                    f".. auto{_kind(obj)}:: holo_core.{name}.{member}",
+                    *_options(obj, f"holo_core.{name}.{member}"),
+                    "",
+                ]
         if again:
             lines += ["Also here: " + ", ".join(again) + ".", ""]
     _write(out / "packages.rst", lines)

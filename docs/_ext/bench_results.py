@@ -36,8 +36,11 @@ def _value(v):
 
 def _date(iso):
     try:
-        return datetime.datetime.fromisoformat(iso).astimezone(datetime.UTC).strftime(
-            "%Y-%m-%d %H:%M UTC")
+        return (
+            datetime.datetime.fromisoformat(iso)
+            .astimezone(datetime.UTC)
+            .strftime("%Y-%m-%d %H:%M UTC")
+        )
     except ValueError:
         return iso
 
@@ -52,8 +55,7 @@ def _cell(text):
 
 def _table(header, rows):
     """A Markdown pipe table."""
-    out = ["| " + " | ".join(_cell(c) for c in header) + " |",
-           "|" + "---|" * len(header)]
+    out = ["| " + " | ".join(_cell(c) for c in header) + " |", "|" + "---|" * len(header)]
     return out + ["| " + " | ".join(_cell(c) for c in row) + " |" for row in rows]
 
 
@@ -61,8 +63,7 @@ class _Markdown(SphinxDirective):
     def parse(self, lines):
         container = nodes.container()
         flat = [part for line in lines for part in line.split("\n")]  # a line an entry
-        self.state.nested_parse(StringList(flat, source=str(BENCH)), self.content_offset,
-                                container)
+        self.state.nested_parse(StringList(flat, source=str(BENCH)), self.content_offset, container)
         return container.children
 
 
@@ -77,8 +78,11 @@ class BenchList(_Markdown):
             self.env.note_dependency(str(path))
             doc = ast.get_docstring(ast.parse(path.read_text())) or "(no docstring)"
             first = doc.split("\n\n")[0]
-            lines += [f"`bench/{path.name}`", ": " + _literal_roles(first).replace(
-                "\n", "\n  "), ""]
+            lines += [
+                f"`bench/{path.name}`",
+                ": " + _literal_roles(first).replace("\n", "\n  "),
+                "",
+            ]
         return self.parse(lines)
 
 
@@ -88,20 +92,29 @@ class BenchResults(_Markdown):
     def run(self):
         found = sorted((BENCH / "results").glob("*.json"))
         if not found:
-            return self.parse(["No bench has written its figures here yet: run one (`python "
-                               "bench/sweep.py`) and build again."])
+            return self.parse(
+                [
+                    "No bench has written its figures here yet: run one (`python "
+                    "bench/sweep.py`) and build again."
+                ]
+            )
         lines = []
         for path in found:
             self.env.note_dependency(str(path))
             r = json.loads(path.read_text())
             m = r.get("machine", {})
-            lines += [f"**`bench/{r.get('bench', path.stem)}.py`**", "",
-                      f"`{r.get('command', '')}` on {_date(r.get('date', ''))}: "
-                      f"{_cell(m.get('cpu', '?'))}, {m.get('cores', '?')} cores "
-                      f"({m.get('usable_cpus', '?')} usable), load average "
-                      f"{_value(m.get('load_at_start', []))} at the start and "
-                      f"{_value(m.get('load_at_end', []))} at the end (1, 5, 15 min)"
-                      + (f"; device {_cell(r['device'])}" if r.get("device") else "") + ".", ""]
+            lines += [
+                f"**`bench/{r.get('bench', path.stem)}.py`**",
+                "",
+                f"`{r.get('command', '')}` on {_date(r.get('date', ''))}: "
+                f"{_cell(m.get('cpu', '?'))}, {m.get('cores', '?')} cores "
+                f"({m.get('usable_cpus', '?')} usable), load average "
+                f"{_value(m.get('load_at_start', []))} at the start and "
+                f"{_value(m.get('load_at_end', []))} at the end (1, 5, 15 min)"
+                + (f"; device {_cell(r['device'])}" if r.get("device") else "")
+                + ".",
+                "",
+            ]
             figures = r.get("figures", {})
             tables = {k: v for k, v in figures.items() if isinstance(v, dict)}
             scalars = [(k, _value(v)) for k, v in figures.items() if not isinstance(v, dict)]
@@ -109,9 +122,10 @@ class BenchResults(_Markdown):
                 lines += _table(("figure", "value"), scalars) + [""]
             if tables:
                 columns = list(dict.fromkeys(c for row in tables.values() for c in row))
-                lines += _table(("case", *columns), [
-                    (k, *(_value(row.get(c, "")) for c in columns)) for k, row in tables.items()
-                ]) + [""]
+                lines += _table(
+                    ("case", *columns),
+                    [(k, *(_value(row.get(c, "")) for c in columns)) for k, row in tables.items()],
+                ) + [""]
         return self.parse(lines)
 
 

@@ -15,8 +15,14 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def _help(*args):
     env = dict(os.environ, COLUMNS="96", PYTHONPATH=str(ROOT))
-    run = subprocess.run([sys.executable, "-m", "holo_core", *args, "--help"], env=env,
-                         capture_output=True, text=True, check=True, cwd=ROOT)
+    run = subprocess.run(
+        [sys.executable, "-m", "holo_core", *args, "--help"],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=ROOT,
+    )
     return run.stdout.replace(Path(sys.executable).name, "python")
 
 

@@ -37,8 +37,9 @@ def escaped(line):
     """Escape ``|`` and lone ``*`` outside literals and roles (a table row keeps its bars),
     and set a break between a literal and a letter glued to it."""
     stripped = line.strip()
-    if stripped.startswith(("+-", "+=")) or (stripped.startswith("|") and
-                                             stripped.endswith("|") and stripped.count("|") > 2):
+    if stripped.startswith(("+-", "+=")) or (
+        stripped.startswith("|") and stripped.endswith("|") and stripped.count("|") > 2
+    ):
         return line
     parts = LITERAL.split(line)
     for i in range(1, len(parts), 2):  # a literal glued to a letter (``spacing``²) gets a break
@@ -115,10 +116,18 @@ def resolve(app, env, node, contnode):
         if obj is not None and id(obj) in documented:
             name = documented[id(obj)]
             kind = env.domains["py"].objects[name].objtype
-            role = {"function": "func", "method": "meth", "class": "class", "exception": "exc",
-                    "module": "mod", "data": "data", "attribute": "attr"}.get(kind, "obj")
-            return env.domains["py"].resolve_xref(env, node.get("refdoc", ""), app.builder,
-                                                  role, name, node, contnode)
+            role = {
+                "function": "func",
+                "method": "meth",
+                "class": "class",
+                "exception": "exc",
+                "module": "mod",
+                "data": "data",
+                "attribute": "attr",
+            }.get(kind, "obj")
+            return env.domains["py"].resolve_xref(
+                env, node.get("refdoc", ""), app.builder, role, name, node, contnode
+            )
     source = node.source or ""
     if "docstring of" in source:
         app._holo_unresolved.add(f"{source.split('docstring of ')[-1]}: {node['reftarget']}")

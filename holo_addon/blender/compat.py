@@ -40,8 +40,11 @@ def output_socket(tree):
         node = next((n for n in tree.nodes if n.bl_idname == "CompositorNodeComposite"), None)
         node = node or tree.nodes.new("CompositorNodeComposite")
         return node.inputs[0]
-    if not any(s.in_out == "OUTPUT" for s in tree.interface.items_tree
-               if getattr(s, "item_type", "SOCKET") == "SOCKET"):
+    if not any(
+        s.in_out == "OUTPUT"
+        for s in tree.interface.items_tree
+        if getattr(s, "item_type", "SOCKET") == "SOCKET"
+    ):
         tree.interface.new_socket(name="Image", in_out="OUTPUT", socket_type="NodeSocketColor")
     node = next((n for n in tree.nodes if n.bl_idname == "NodeGroupOutput"), None)
     node = node or tree.nodes.new("NodeGroupOutput")
@@ -50,8 +53,7 @@ def output_socket(tree):
 
 def math_node(tree, operation: str, *, clamp=False):
     """A compositor Math node (4.x ``CompositorNodeMath``, 5.x the shader nodes' Math)."""
-    idname = "CompositorNodeMath" if hasattr(bpy.types, "CompositorNodeMath") \
-        else "ShaderNodeMath"
+    idname = "CompositorNodeMath" if hasattr(bpy.types, "CompositorNodeMath") else "ShaderNodeMath"
     node = tree.nodes.new(idname)
     node.operation, node.use_clamp = operation, clamp
     return node
@@ -138,8 +140,7 @@ def png_output(scene):
     """The scene's render output as 8-bit RGBA PNG for a while (Image.save_render writes in
     it), then as it was."""
     s = scene.render.image_settings
-    names = [n for n in ("media_type", "file_format", "color_mode", "color_depth")
-             if hasattr(s, n)]
+    names = [n for n in ("media_type", "file_format", "color_mode", "color_depth") if hasattr(s, n)]
     kept = {n: getattr(s, n) for n in names}
     try:
         set_png_output(scene)
@@ -175,6 +176,7 @@ def draws_linear_textures() -> bool:
     """Whether ``draw_texture_2d`` converts a scene-linear texture for the viewport (else
     the texture must hold display values)."""
     from gpu_extras.presets import draw_texture_2d
+
     return LINEAR_TEXTURE in inspect.signature(draw_texture_2d).parameters
 
 

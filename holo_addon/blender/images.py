@@ -35,7 +35,7 @@ def show_image(path: Path, name: str):
         image.name = name
     image.reload()
     wm = getattr(bpy.context, "window_manager", None)
-    for window in (wm.windows if wm is not None else ()):
+    for window in wm.windows if wm is not None else ():
         for area in window.screen.areas:
             if area.type == "IMAGE_EDITOR":
                 area.spaces.active.image = image

@@ -8,8 +8,14 @@ from contextlib import contextmanager
 
 import bpy
 
-RAY_VISIBILITY = ("visible_camera", "visible_diffuse", "visible_glossy", "visible_transmission",
-                  "visible_volume_scatter", "visible_shadow")
+RAY_VISIBILITY = (
+    "visible_camera",
+    "visible_diffuse",
+    "visible_glossy",
+    "visible_transmission",
+    "visible_volume_scatter",
+    "visible_shadow",
+)
 HOLDOUT = "is_holdout"
 KEPT = "holo_ray_visibility"  # the user's own ray visibility, while the add-on sets it
 
@@ -71,8 +77,7 @@ def shown_as_rendered(scene, view_layer=None):
     view_layer = view_layer or bpy.context.view_layer
     objects, collections = [], []
     for obj in scene.objects:
-        if obj.type != "MESH" or obj.holo.emitter == "NONE" or obj.holo.is_plate or \
-                obj.hide_render:
+        if obj.type != "MESH" or obj.holo.emitter == "NONE" or obj.holo.is_plate or obj.hide_render:
             continue
         try:
             hidden = obj.hide_get(view_layer=view_layer)
@@ -109,5 +114,6 @@ def _layer_collections(root, collections):
             found.extend(p for p in path if p not in found)
         for child in lc.children:
             walk(child, path)
+
     walk(root, [])
     return found

@@ -43,8 +43,11 @@ def render_init(scene, *_):
     if tree.uses_pass(scene):  # a frame of the render (F12's) gets a clear pass where it has
         # none before Blender's copy of the image looks for it (found missing then, it stays
         # missing for the render: the Image node's grey)
-        _point_passes(scene, scene.frame_current,
-                      rendering=scene.frame_start <= scene.frame_current <= scene.frame_end)
+        _point_passes(
+            scene,
+            scene.frame_current,
+            rendering=scene.frame_start <= scene.frame_current <= scene.frame_end,
+        )
 
 
 @persistent
@@ -65,9 +68,11 @@ def render_post(scene, *_):
     the frame by now."""
     if session.shutter is not None:
         frame, session.shutter = session.shutter.frame, None
-        _delivered_wrong(f"Holo: frame {frame}: the render never evaluated its shutter's "
-                         f"closing, so its holographic pass was not made (turn motion blur "
-                         f"off for this frame)")
+        _delivered_wrong(
+            f"Holo: frame {frame}: the render never evaluated its shutter's "
+            f"closing, so its holographic pass was not made (turn motion blur "
+            f"off for this frame)"
+        )
     session.frame_done = None
     if not tree.uses_pass(scene):
         return
@@ -77,17 +82,21 @@ def render_post(scene, *_):
                 tree.name_depths_z(path)
                 _say_holes(scene, tree.holes(path))
         except Exception as e:  # noqa: BLE001 -- the library's errors, whatever their class
-            _delivered_wrong(f"Holo: the holographic layers {path} of frame "
-                             f"{scene.frame_current} could not be rewritten with their depth "
-                             f"channels named .Z: {e}")
+            _delivered_wrong(
+                f"Holo: the holographic layers {path} of frame "
+                f"{scene.frame_current} could not be rewritten with their depth "
+                f"channels named .Z: {e}"
+            )
 
 
 def _say_holes(scene, count: int) -> None:
     """An opaque scene's frame with transparent pixels is said, with their count."""
     if count and not scene.render.film_transparent:
-        warn(f"Holo: frame {scene.frame_current}: {count} pixels of the composite are "
-             f"transparent (alpha below 0.99): neither Blender's render nor the holographic "
-             f"pass covers them")
+        warn(
+            f"Holo: frame {scene.frame_current}: {count} pixels of the composite are "
+            f"transparent (alpha below 0.99): neither Blender's render nor the holographic "
+            f"pass covers them"
+        )
 
 
 ENGINES_WITH_SHUTTER = ("CYCLES", "BLENDER_EEVEE", "BLENDER_EEVEE_NEXT")  # evaluate sub-frames
@@ -116,8 +125,9 @@ def _render_frame(scene, depsgraph) -> None:
         pending.add(motion.sample(scene, depsgraph))
         if pending.complete():
             session.shutter = None
-            job = pipeline.moving(pending.job, list(pending.samples.values()),
-                                  pending.opening, pending.closing)
+            job = pipeline.moving(
+                pending.job, list(pending.samples.values()), pending.opening, pending.closing
+            )
             _frame_pass(scene, pending.frame, job)
         return
     if scene.frame_subframe or session.frame_done == (scene.name, frame):
@@ -129,21 +139,32 @@ def _render_frame(scene, depsgraph) -> None:
         display_frame(scene, depsgraph, shown, resident=True)
     names = [inst.object.original.name for inst, _ in emitter_instances(depsgraph)]
     if not tree.uses_pass(scene):
-        if names and shown is None:  # never a silent vanish: the camera sees emitters through the pass only
-            _warn_once("setup", f"Holo: the holographic objects ({_listed(names)}) are not "
-                                f"in this render: the compositor has no holographic pass "
-                                f"(Render ▸ Holo ▸ Set Up Compositing, or Render with "
-                                f"Hologram)")
+        if (
+            names and shown is None
+        ):  # never a silent vanish: the camera sees emitters through the pass only
+            _warn_once(
+                "setup",
+                f"Holo: the holographic objects ({_listed(names)}) are not "
+                f"in this render: the compositor has no holographic pass "
+                f"(Render ▸ Holo ▸ Set Up Compositing, or Render with "
+                f"Hologram)",
+            )
         return
     if not _point_passes(scene, frame, rendering=True):
         return
     blur = names and motion.blurs(scene)
     if names and scene.render.use_motion_blur and not blur:
-        _warn_once("blur", "Holo: motion blur is on: in Plate mode the holographic objects "
-                           "are rendered at each frame's time, without blur")
+        _warn_once(
+            "blur",
+            "Holo: motion blur is on: in Plate mode the holographic objects "
+            "are rendered at each frame's time, without blur",
+        )
     elif blur and scene.render.engine not in ENGINES_WITH_SHUTTER:
-        _warn_once("blur", f"Holo: motion blur is on, but {scene.render.engine} evaluates no "
-                           f"shutter: the holographic objects are not blurred")
+        _warn_once(
+            "blur",
+            f"Holo: motion blur is on, but {scene.render.engine} evaluates no "
+            f"shutter: the holographic objects are not blurred",
+        )
         blur = False
     if session.take_made(scene.name, frame):
         log.info("Holo: frame %d: holographic pass made just before this render, reused", frame)
@@ -154,13 +175,17 @@ def _render_frame(scene, depsgraph) -> None:
         if scene.holo.pass_on_render:
             pipeline.clear_pass(scene, frame)
             tree.point_passes(scene, frame)
-            log.info("Holo: frame %d: no holographic emitters left: it renders the raster "
-                     "alone (Render ▸ Holo ▸ Remove Holo Compositing takes the pass out)",
-                     frame)
+            log.info(
+                "Holo: frame %d: no holographic emitters left: it renders the raster "
+                "alone (Render ▸ Holo ▸ Remove Holo Compositing takes the pass out)",
+                frame,
+            )
         elif (path := tree.point_passes(scene, frame)) is not None and path.is_file():
-            warn(f"Holo: the holographic pass of frame {frame} is stale: no holographic "
-                 f"emitter is left, and it is composited as it is (Pass on Every Render is "
-                 f"off)")
+            warn(
+                f"Holo: the holographic pass of frame {frame} is stale: no holographic "
+                f"emitter is left, and it is composited as it is (Pass on Every Render is "
+                f"off)"
+            )
         return
     except Exception as e:
         if not scene.holo.pass_on_render:  # the scene cannot be read: say so, render on
@@ -220,9 +245,12 @@ def _point_passes(scene, frame: int, *, rendering: bool) -> bool:
         tree.point_passes(scene, frame, rendering=rendering)
     except Exception as e:  # noqa: BLE001 -- the OS's errors and the writer's InputError
         reason = e.strerror if isinstance(e, OSError) and e.strerror else e
-        failed(scene, f"Holo: the holographic pass of frame {frame} cannot be written: the "
-                      f"Output Folder (Render Properties ▸ Holo) "
-                      f"{_folder_of(scene)}: {reason}")
+        failed(
+            scene,
+            f"Holo: the holographic pass of frame {frame} cannot be written: the "
+            f"Output Folder (Render Properties ▸ Holo) "
+            f"{_folder_of(scene)}: {reason}",
+        )
         return False
     return True
 
@@ -251,8 +279,11 @@ def _frame_pass(scene, frame: int, job) -> None:
         return
     finally:
         session.pass_ended()
-    log.info("Holo: frame %d: %s", frame, made(result, time.perf_counter() - started,
-                                                session.warnings["texts"], job.made_by))
+    log.info(
+        "Holo: frame %d: %s",
+        frame,
+        made(result, time.perf_counter() - started, session.warnings["texts"], job.made_by),
+    )
 
 
 def made(result, seconds: float, warnings=(), route="") -> str:
@@ -264,8 +295,11 @@ def made(result, seconds: float, warnings=(), route="") -> str:
         verb = f"reused from {result.reused.name} (a static shot: only the frame changed)"
     else:
         verb = f"made in {seconds:.1f} s" + (" (hologram recorded)" if result.recorded else "")
-    said = f"; {len(warnings)} warning{'s' * (len(warnings) != 1)}: " + " | ".join(
-        warnings) if warnings else "; no warnings"
+    said = (
+        f"; {len(warnings)} warning{'s' * (len(warnings) != 1)}: " + " | ".join(warnings)
+        if warnings
+        else "; no warnings"
+    )
     return f"holographic pass {verb}{' ' * bool(route)}{route}: {result.pass_path}{said}"
 
 
@@ -310,19 +344,24 @@ def _check_stale(scene, job) -> None:
     pass then takes its place: a missing file shows as the Image node's grey)."""
     frame, key, path = job.job.output.frame, job.job.output.pass_key, job.job.output.pass_path
     if not path.is_file() or _is_clear(path):
-        warn(f"Holo: frame {frame} has no holographic pass (Pass on Every Render is off): "
-             f"its holographic objects' places are left empty")
+        warn(
+            f"Holo: frame {frame} has no holographic pass (Pass on Every Render is off): "
+            f"its holographic objects' places are left empty"
+        )
         pipeline.clear_pass(scene, frame)
         tree.point_passes(scene, frame)
         return
     if pipeline.stored_key(path) != key:
         age = _age(time.time() - path.stat().st_mtime)
-        warn(f"Holo: the holographic pass of frame {frame} is stale: made {age} ago from "
-             f"another state of the scene, it is composited as it is (Pass on Every Render "
-             f"is off; Render Pass makes it again)")
+        warn(
+            f"Holo: the holographic pass of frame {frame} is stale: made {age} ago from "
+            f"another state of the scene, it is composited as it is (Pass on Every Render "
+            f"is off; Render Pass makes it again)"
+        )
     else:
-        log.info("Holo: frame %d: holographic pass up to date, composited as it is: %s",
-                 frame, path)
+        log.info(
+            "Holo: frame %d: holographic pass up to date, composited as it is: %s", frame, path
+        )
 
 
 def _is_clear(path) -> bool:
@@ -348,9 +387,14 @@ def _progress(fraction):
 def _show_progress():
     """A timer on the interface's thread: the render's pass progress in the status bar."""
     running = session.running
-    text = None if running.frame is None else (
-        f"Holo: holographic pass of frame {running.frame}: {running.fraction:.0%} (Render "
-        f"Properties ▸ Holo ▸ Cancel Pass)")
+    text = (
+        None
+        if running.frame is None
+        else (
+            f"Holo: holographic pass of frame {running.frame}: {running.fraction:.0%} (Render "
+            f"Properties ▸ Holo ▸ Cancel Pass)"
+        )
+    )
     if text != session.shown:
         session.shown = text
         for window in bpy.context.window_manager.windows:
@@ -393,8 +437,7 @@ def _exit_in_background(message: str) -> None:
     """In a background Blender (unless :attr:`Session.exit_on_failure` says otherwise), the
     process ends here with status 1, ``message`` said once on stderr whatever the log's
     handlers (the farm's output)."""
-    exit_now = bpy.app.background if session.exit_on_failure is None else \
-        session.exit_on_failure
+    exit_now = bpy.app.background if session.exit_on_failure is None else session.exit_on_failure
     if exit_now:
         sys.stderr.write(message + "\n")
         sys.stderr.flush()
@@ -435,6 +478,7 @@ def _show_error(message):
 
     def draw(menu, _context):
         menu.layout.label(text=message)
+
     bpy.context.window_manager.popup_menu(draw, title="Holo", icon="ERROR")
 
 
@@ -459,10 +503,15 @@ def file_saved(*_):
 
 def _handlers():
     h = bpy.app.handlers
-    return ((h.frame_change_post, render_frame), (h.load_post, file_loaded),
-            (h.save_post, file_saved), (h.render_init, render_init),
-            (h.render_post, render_post), (h.render_complete, render_ended),
-            (h.render_cancel, render_ended))
+    return (
+        (h.frame_change_post, render_frame),
+        (h.load_post, file_loaded),
+        (h.save_post, file_saved),
+        (h.render_init, render_init),
+        (h.render_post, render_post),
+        (h.render_complete, render_ended),
+        (h.render_cancel, render_ended),
+    )
 
 
 def register():

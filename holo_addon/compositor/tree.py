@@ -63,8 +63,7 @@ def _source(tree):
         if node is not None:
             feed = node.inputs[index]
             source = feed.links[0].from_socket if feed.is_linked else None
-            return None if source is None or source.node.name.startswith(NODE_PREFIX) \
-                else source
+            return None if source is None or source.node.name.startswith(NODE_PREFIX) else source
     feed = compat.output_socket(tree)
     return feed.links[0].from_socket if feed.is_linked else None
 
@@ -81,8 +80,10 @@ def setup(scene, folder: Path):
     if not first.is_file():
         pipeline.clear_pass(scene, scene.frame_current)
     if BEFORE not in scene:  # what Remove Holo Compositing puts back
-        scene[BEFORE] = {**compat.compositor_state(scene), "depth": {
-            layer.name: int(layer.use_pass_z) for layer in scene.view_layers}}
+        scene[BEFORE] = {
+            **compat.compositor_state(scene),
+            "depth": {layer.name: int(layer.use_pass_z) for layer in scene.view_layers},
+        }
     for layer in scene.view_layers:
         layer.use_pass_z = True
     for obj in scene.objects:
@@ -115,9 +116,16 @@ def setup(scene, folder: Path):
         return node.outputs[0]
 
     layers = new("CompositorNodeRLayers", "Render Layers", (-700, 300), scene=scene)
-    holo = new("CompositorNodeImage", "Pass", (-700, -200), image=pass_image(first),
-               frame_start=1, frame_offset=0, frame_duration=MAX_FRAME,  # file = frame
-               use_auto_refresh=True)
+    holo = new(
+        "CompositorNodeImage",
+        "Pass",
+        (-700, -200),
+        image=pass_image(first),
+        frame_start=1,
+        frame_offset=0,
+        frame_duration=MAX_FRAME,  # file = frame
+        use_auto_refresh=True,
+    )
     raster = new("CompositorNodeSeparateColor", "Raster", (-450, 300))
     split = new("CompositorNodeSeparateColor", "Split", (-450, -200))
     tree.links.new(source or _output(layers, "Image"), raster.inputs[0])
@@ -126,29 +134,57 @@ def setup(scene, folder: Path):
     share = math("Share", "DIVIDE", (-100, 100), clear, split.outputs[3], clamp=True)
     coverage = math("Coverage", "MAXIMUM", (-250, -50), split.outputs[3], MIN_COVERAGE)
     matte = math("Matte", "DIVIDE", (-100, -50), clear, coverage)
-    share = math("Opaque", "MULTIPLY_ADD", (-100, 0), opacity(scene),
-                 math("Fill", "SUBTRACT", (-100, -100), matte, share), share)
+    share = math(
+        "Opaque",
+        "MULTIPLY_ADD",
+        (-100, 0),
+        opacity(scene),
+        math("Fill", "SUBTRACT", (-100, -100), matte, share),
+        share,
+    )
     # the hole's share the pass is too faint to fill (its coverage below MIN_COVERAGE) shows
     # the raster's own colour in the pixel: R scaled by 1 + rest / a
-    left = math("Rest", "SUBTRACT", (-250, -200), clear,
-                math("Filled", "MULTIPLY", (-400, -300), share, split.outputs[3]))
-    beside = math("Beside", "DIVIDE", (-100, -200), left,
-                  math("Seen", "MAXIMUM", (-250, -300), raster.outputs[3], MIN_COVERAGE))
+    left = math(
+        "Rest",
+        "SUBTRACT",
+        (-250, -200),
+        clear,
+        math("Filled", "MULTIPLY", (-400, -300), share, split.outputs[3]),
+    )
+    beside = math(
+        "Beside",
+        "DIVIDE",
+        (-100, -200),
+        left,
+        math("Seen", "MAXIMUM", (-250, -300), raster.outputs[3], MIN_COVERAGE),
+    )
     scale = math("Opaque Beside", "MULTIPLY_ADD", (-100, -300), opacity(scene), beside, 1.0)
     combine = new("CompositorNodeCombineColor", "Composite", (250, 100))
     for c in range(4):
-        seen = math("Raster " + "RGBA"[c], "MULTIPLY", (50, 200 - 100 * c), scale,
-                    raster.outputs[c])
-        tree.links.new(math("RGBA"[c], "MULTIPLY_ADD", (150, 250 - 100 * c), share,
-                            split.outputs[c], seen), combine.inputs[c])
-    depth = math("Depth", "MINIMUM", (50, -250), _output(layers, "Depth", "Z"),
-                 _output(holo, "Depth", "Z"))
+        seen = math(
+            "Raster " + "RGBA"[c], "MULTIPLY", (50, 200 - 100 * c), scale, raster.outputs[c]
+        )
+        tree.links.new(
+            math("RGBA"[c], "MULTIPLY_ADD", (150, 250 - 100 * c), share, split.outputs[c], seen),
+            combine.inputs[c],
+        )
+    depth = math(
+        "Depth", "MINIMUM", (50, -250), _output(layers, "Depth", "Z"), _output(holo, "Depth", "Z")
+    )
     tree.links.new(combine.outputs[0], compat.output_socket(tree))
-    files = compat.multilayer_output(tree, NODE_PREFIX + "File Output", beside_render(scene),
-                                     LAYERS)
+    files = compat.multilayer_output(
+        tree, NODE_PREFIX + "File Output", beside_render(scene), LAYERS
+    )
     files.parent, files.location = frame, (450, -250)
-    for socket, layer in zip((combine.outputs[0], _output(holo, "Combined", "Image"),
-                              _output(holo, "Depth", "Z"), depth), files.inputs):
+    for socket, layer in zip(
+        (
+            combine.outputs[0],
+            _output(holo, "Combined", "Image"),
+            _output(holo, "Depth", "Z"),
+            depth,
+        ),
+        files.inputs,
+    ):
         tree.links.new(socket, layer)
     return combine
 
@@ -179,8 +215,11 @@ def pass_image(path: Path):
 
 def passes_images():
     """The image sequences of holographic passes in the file."""
-    return [image for image in bpy.data.images if image.source == "SEQUENCE" and
-            Path(image.filepath).name.startswith("holo_pass_")]
+    return [
+        image
+        for image in bpy.data.images
+        if image.source == "SEQUENCE" and Path(image.filepath).name.startswith("holo_pass_")
+    ]
 
 
 def point_passes(scene, frame: int | None = None, *, rendering=False) -> Path | None:
@@ -282,18 +321,19 @@ def name_depths_z(path: Path) -> bool:
     import OpenEXR
 
     from holo_core.io.image import atomic_path
+
     with OpenEXR.File(str(path), separate_channels=True) as f:
         parts, renamed = [], False
         for part in f.parts:
-            header = {k: v for k, v in part.header.items() if k not in ("channels",
-                                                                          "chunkCount")}
+            header = {k: v for k, v in part.header.items() if k not in ("channels", "chunkCount")}
             channels = {}
             for name, c in part.channels.items():
                 layer, _, channel = name.rpartition(".")
                 new = f"{layer}.Z" if layer in DEPTHS and channel == "V" else name
                 renamed |= new != name
-                channels[new] = OpenEXR.Channel(new, c.pixels.copy(), c.xSampling,
-                                                c.ySampling, c.pLinear)
+                channels[new] = OpenEXR.Channel(
+                    new, c.pixels.copy(), c.xSampling, c.ySampling, c.pLinear
+                )
             parts.append(OpenEXR.Part(header, channels, part.name()))
     if renamed:
         with atomic_path(path) as tmp:
@@ -304,6 +344,7 @@ def name_depths_z(path: Path) -> bool:
 def holes(path: Path) -> int:
     """The pixels of the layers file ``path`` whose composite's alpha is below 0.99."""
     import OpenEXR
+
     with OpenEXR.File(str(path), separate_channels=True) as f:
         for part in f.parts:
             alpha = part.channels.get("Composite.A")

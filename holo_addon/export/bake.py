@@ -22,8 +22,8 @@ from ..blender.materials import principled
 from ..blender.objects import seen_by_every_ray
 
 UV_NAME = "Holo Bake"
-SIZE = 1024      # texels along the atlas side
-MARGIN = 0.08    # of a cell, left free around each face (the bake's margin bleeds into it)
+SIZE = 1024  # texels along the atlas side
+MARGIN = 0.08  # of a cell, left free around each face (the bake's margin bleeds into it)
 BAKE_SAMPLES = 4  # the albedo has no noise: a few samples only average across each texel
 
 
@@ -56,14 +56,29 @@ def digest(obj) -> str:
             h.update(f"{node.bl_idname} {node.name}".encode())
             for socket in node.inputs:
                 value = getattr(socket, "default_value", None)
-                h.update(repr(tuple(value) if hasattr(value, "__len__") and not
-                              isinstance(value, str) else value).encode())
-            for key in ("noise_dimensions", "gradient_type", "voronoi_dimensions",
-                        "feature", "distance", "interpolation", "blend_type", "operation"):
+                h.update(
+                    repr(
+                        tuple(value)
+                        if hasattr(value, "__len__") and not isinstance(value, str)
+                        else value
+                    ).encode()
+                )
+            for key in (
+                "noise_dimensions",
+                "gradient_type",
+                "voronoi_dimensions",
+                "feature",
+                "distance",
+                "interpolation",
+                "blend_type",
+                "operation",
+            ):
                 h.update(repr(getattr(node, key, None)).encode())
         for link in tree.links if tree is not None else ():
-            h.update(f"{link.from_node.name}.{link.from_socket.identifier}>"
-                     f"{link.to_node.name}.{link.to_socket.identifier}".encode())
+            h.update(
+                f"{link.from_node.name}.{link.from_socket.identifier}>"
+                f"{link.to_node.name}.{link.to_socket.identifier}".encode()
+            )
     return h.hexdigest()[:16]
 
 
@@ -99,11 +114,19 @@ def bake(obj, scene, size: int = SIZE) -> bpy.types.Image:
     try:
         obj.select_set(True)
         # an emitter is a holdout in the raster, which the bake must not see
-        with seen_by_every_ray(obj), bpy.context.temp_override(
-                scene=scene, object=obj, active_object=obj, selected_objects=[obj],
-                selected_editable_objects=[obj]):
-            bpy.ops.object.bake(type="DIFFUSE", pass_filter={"COLOR"}, margin=4,
-                                use_clear=True, uv_layer=UV_NAME)
+        with (
+            seen_by_every_ray(obj),
+            bpy.context.temp_override(
+                scene=scene,
+                object=obj,
+                active_object=obj,
+                selected_objects=[obj],
+                selected_editable_objects=[obj],
+            ),
+        ):
+            bpy.ops.object.bake(
+                type="DIFFUSE", pass_filter={"COLOR"}, margin=4, use_clear=True, uv_layer=UV_NAME
+            )
         # packed (and kept by a fake user) while the nodes still use it: an image nobody uses
         # loses its baked buffer, and is not saved with the .blend
         image.pack()

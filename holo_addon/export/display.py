@@ -152,8 +152,8 @@ class DisplayPrepared:
     colours: tuple
     frame: int
     folder: Path
-    distance: float         # [m] the scene's mean signed depth (negative: behind), physical
-    digest: str             # of everything the frame's files depend on
+    distance: float  # [m] the scene's mean signed depth (negative: behind), physical
+    digest: str  # of everything the frame's files depend on
     warnings: tuple = field(default=())
 
 
@@ -161,8 +161,9 @@ def scene_display(scene):
     """The scene's one display object, or None."""
     found = [o for o in scene.objects if o.type == "MESH" and o.holo.is_display]
     if len(found) > 1:
-        raise ExportError(f"one holographic display per scene; found "
-                          f"{', '.join(o.name for o in found)}")
+        raise ExportError(
+            f"one holographic display per scene; found {', '.join(o.name for o in found)}"
+        )
     return found[0] if found else None
 
 
@@ -180,32 +181,53 @@ def display_from_object(obj) -> DisplaySpec:
     else:
         _, resolution, pitch, bits = PRESETS[d.preset]
     tables = (d.table_red, d.table_green, d.table_blue)
-    lasers = tuple(Laser(name=n, wavelength=_given(w, 1e-9), power=_given(p, 1e-3), channel=i,
-                         table=bpy.path.abspath(t) if t else "")
-                   for i, (n, w, p, t) in enumerate(zip(COLOURS, d.wavelengths, d.powers,
-                                                        tables))
-                   if d.colours[i])
+    lasers = tuple(
+        Laser(
+            name=n,
+            wavelength=_given(w, 1e-9),
+            power=_given(p, 1e-3),
+            channel=i,
+            table=bpy.path.abspath(t) if t else "",
+        )
+        for i, (n, w, p, t) in enumerate(zip(COLOURS, d.wavelengths, d.powers, tables))
+        if d.colours[i]
+    )
     if any(x.table for x in lasers) and not all(x.table for x in lasers):
         bare = ", ".join(x.name for x in lasers if not x.table)
-        raise ExportError(f"display '{obj.name}': phase tables are given for some lasers but "
-                          f"not for {bare}: give one per laser, or none (the display's "
-                          f"linear response)")
+        raise ExportError(
+            f"display '{obj.name}': phase tables are given for some lasers but "
+            f"not for {bare}: give one per laser, or none (the display's "
+            f"linear response)"
+        )
     if not lasers:
-        raise ExportError(f"display '{obj.name}': no laser is on (Lasers: tick red, green or "
-                          f"blue)")
+        raise ExportError(f"display '{obj.name}': no laser is on (Lasers: tick red, green or blue)")
     if FORMATS[d.pattern_format] < bits:
-        raise ExportError(f"display '{obj.name}': its {bits}-bit phase does not fit the "
-                          f"{d.pattern_format} pattern file ({FORMATS[d.pattern_format]} bits): "
-                          f"choose a pattern file of {bits} bits or more")
-    return DisplaySpec(name=obj.name, preset=d.preset, resolution=resolution, pitch=pitch,
-                       bit_depth=bits, pattern_format=d.pattern_format,
-                       phase_range=PHASE_RANGES[d.phase_range], inverted=d.inverted,
-                       lasers=lasers, front=_given(d.front, 1e-3),
-                       behind=_given(d.behind, 1e-3), scale=_given(d.scene_scale),
-                       eye_distance=_given(d.eye_distance, 1e-3),
-                       eye_box=_given(d.eye_box, 1e-3), pupil=_given(d.pupil, 1e-3),
-                       method=d.method, iterations=d.iterations, slices=d.slices,
-                       phases=d.phases.lower())
+        raise ExportError(
+            f"display '{obj.name}': its {bits}-bit phase does not fit the "
+            f"{d.pattern_format} pattern file ({FORMATS[d.pattern_format]} bits): "
+            f"choose a pattern file of {bits} bits or more"
+        )
+    return DisplaySpec(
+        name=obj.name,
+        preset=d.preset,
+        resolution=resolution,
+        pitch=pitch,
+        bit_depth=bits,
+        pattern_format=d.pattern_format,
+        phase_range=PHASE_RANGES[d.phase_range],
+        inverted=d.inverted,
+        lasers=lasers,
+        front=_given(d.front, 1e-3),
+        behind=_given(d.behind, 1e-3),
+        scale=_given(d.scene_scale),
+        eye_distance=_given(d.eye_distance, 1e-3),
+        eye_box=_given(d.eye_box, 1e-3),
+        pupil=_given(d.pupil, 1e-3),
+        method=d.method,
+        iterations=d.iterations,
+        slices=d.slices,
+        phases=d.phases.lower(),
+    )
 
 
 def display_matrix(obj, unit: float) -> np.ndarray:
@@ -230,9 +252,11 @@ def check(spec: DisplaySpec, depths: np.ndarray) -> None:
     """
     name, p, d_eye, eye = spec.name, spec.pitch, spec.eye_distance, spec.eye_box
     if not d_eye > spec.front:
-        raise ExportError(f"display '{name}': the eye box ({d_eye * 1e3:.4g} mm away) must lie "
-                          f"beyond the volume's front ({spec.front * 1e3:.4g} mm): move it "
-                          f"farther or bring the front in")
+        raise ExportError(
+            f"display '{name}': the eye box ({d_eye * 1e3:.4g} mm away) must lie "
+            f"beyond the volume's front ({spec.front * 1e3:.4g} mm): move it "
+            f"farther or bring the front in"
+        )
     hx, hy = (v / 2 for v in spec.size)
     lam = min(laser.wavelength for laser in spec.lasers)
     sin_limit = spec.sin_passed(lam)
@@ -254,24 +278,28 @@ def check(spec: DisplaySpec, depths: np.ndarray) -> None:
             f"and a {p * 1e6:.3g} µm sample sends {lam * 1e9:.4g} nm light through the "
             f"display's filter at most {math.degrees(math.asin(sin_limit)):.3g}° off it "
             f"(sin θ = band·λ/2p, band {BAND:g}); use {shrink}an eye distance of at least "
-            f"{nearest * 1e3:.4g} mm, or a pitch of at most {finest * 1e6:.3g} µm")
+            f"{nearest * 1e3:.4g} mm, or a pitch of at most {finest * 1e6:.3g} µm"
+        )
     if not len(depths):
         return
     deepest, nearest_front = float(depths.min()), float(depths.max())
     if deepest < -spec.behind * (1 + 1e-9) or nearest_front > spec.front * (1 + 1e-9) + 1e-12:
         extent = nearest_front - deepest
-        fits = min(spec.behind / max(-deepest, 1e-300) if deepest < 0 else math.inf,
-                   spec.front / nearest_front if nearest_front > 0 else math.inf)
-        fit = (f"a Scene Scale of at most {spec.scale * fits:.4g}, or " if 0 < fits < 1 else "")
+        fits = min(
+            spec.behind / max(-deepest, 1e-300) if deepest < 0 else math.inf,
+            spec.front / nearest_front if nearest_front > 0 else math.inf,
+        )
+        fit = f"a Scene Scale of at most {spec.scale * fits:.4g}, or " if 0 < fits < 1 else ""
         raise ExportError(
             f"display '{name}': the scene reaches from {deepest * 1e3:.4g} mm to "
             f"{nearest_front * 1e3:.4g} mm off the display ({extent * 1e3:.4g} mm deep at "
             f"Scene Scale {spec.scale:g}), outside its volume of {spec.behind * 1e3:.4g} mm "
             f"behind and {spec.front * 1e3:.4g} mm in front: use {fit}a volume reaching "
             f"{max(-deepest, 0) * 1e3:.4g} mm behind and {max(nearest_front, 0) * 1e3:.4g} mm "
-            f"in front, or move the objects")
+            f"in front, or move the objects"
+        )
     n = MIN_FOOTPRINT_SAMPLES
-    behind_min = n * p * d_eye / (spec.pupil + n * p)    # a·z / (D + z) = n·p, z behind
+    behind_min = n * p * d_eye / (spec.pupil + n * p)  # a·z / (D + z) = n·p, z behind
     front_min = n * p * d_eye / (spec.pupil - n * p) if spec.pupil > n * p else math.inf
     closest = depths[np.argmin(np.abs(depths))]
     limit = behind_min if closest <= 0 else front_min
@@ -284,7 +312,8 @@ def check(spec: DisplaySpec, depths: np.ndarray) -> None:
             f"{d_eye * 1e3:.4g} mm away, a point there is formed by {across:.2g} samples "
             f"across (it needs {n}); keep the scene at least {limit * 1e3:.3g} mm {side} the "
             f"display (move the objects or the display, or raise the Scene Scale), or use a "
-            f"wider pupil or a finer pitch")
+            f"wider pupil or a finer pitch"
+        )
 
 
 def depths_of(meshes, display: np.ndarray, scene_scale: float) -> np.ndarray:
@@ -304,8 +333,9 @@ def read(scene, depsgraph, obj=None) -> DisplayPrepared:
     scene the display cannot show, before any work."""
     obj = obj or scene_display(scene)
     if obj is None:
-        raise ExportError("no holographic display: mark a plane with Object ▸ Holo ▸ "
-                          "Holographic Display")
+        raise ExportError(
+            "no holographic display: mark a plane with Object ▸ Holo ▸ Holographic Display"
+        )
     spec = display_from_object(obj)
     unit = scale(scene)
     lit = scene.holo.lighting == "SCENE"
@@ -313,8 +343,10 @@ def read(scene, depsgraph, obj=None) -> DisplayPrepared:
     kinds, names = emitters(depsgraph, unit, notes, lit=lit)
     meshes = kinds["POINTS"] + kinds["TRIANGLES"]
     if not meshes:
-        raise NoEmitters("no holographic emitters in the frame: set Object ▸ Holo ▸ Emitter "
-                         "on a mesh that renders")
+        raise NoEmitters(
+            "no holographic emitters in the frame: set Object ▸ Holo ▸ Emitter "
+            "on a mesh that renders"
+        )
     m = display_matrix(evaluated(obj, depsgraph), unit)
     depths = depths_of(meshes, m, spec.scale)
     check(spec, depths)
@@ -323,9 +355,17 @@ def read(scene, depsgraph, obj=None) -> DisplayPrepared:
     def shown(points):  # the scene as the display shows it: scaled by s about its origin
         return origin + s * (np.asarray(points, np.float64) - origin)
 
-    physical = {kind: [replace(mesh, vertices=shown(mesh.vertices),
-                               motion=None if mesh.motion is None else shown(mesh.motion))
-                       for mesh in kinds[kind]] for kind in ("POINTS", "TRIANGLES")}
+    physical = {
+        kind: [
+            replace(
+                mesh,
+                vertices=shown(mesh.vertices),
+                motion=None if mesh.motion is None else shown(mesh.motion),
+            )
+            for mesh in kinds[kind]
+        ]
+        for kind in ("POINTS", "TRIANGLES")
+    }
     # the plane the wave is recorded on: the display, or the volume's front (then carried
     # back), wide enough for the light the display's samples send to the eye box
     front = spec.recorded_at()
@@ -339,45 +379,100 @@ def read(scene, depsgraph, obj=None) -> DisplayPrepared:
     every = np.concatenate([mesh.vertices for mesh in meshes])
     # the radiance is rendered from the eye box in the scene as it stands (its scale 1/s):
     # a pinhole sees a scene scaled about a point alike from that point scaled alike
-    view = _eye_camera(origin + (eye - origin) / s, (every.min(0) + every.max(0)) / 2,
-                       m[:3, 1], every)
+    view = _eye_camera(
+        origin + (eye - origin) / s, (every.min(0) + every.max(0)) / 2, m[:3, 1], every
+    )
     eye_view = replace(view, matrix_world=_scaled_pose(view.matrix_world, origin, s))
-    data = SceneData(points=physical["POINTS"], triangles=physical["TRIANGLES"], plate=None,
-                     plate_name=obj.name, camera=eye_view,
-                     warnings=tuple(dict.fromkeys(notes)), names=tuple(names), view=eye_view,
-                     unit=unit)
+    data = SceneData(
+        points=physical["POINTS"],
+        triangles=physical["TRIANGLES"],
+        plate=None,
+        plate_name=obj.name,
+        camera=eye_view,
+        warnings=tuple(dict.fromkeys(notes)),
+        names=tuple(names),
+        view=eye_view,
+        unit=unit,
+    )
     lighting = radiance.digest(scene, depsgraph) if lit else ""
     settings = Settings.from_scene(scene, unit)
     folder = frame_folder(scene, obj.name)
     colours, keys = [], []
     for laser in spec.lasers:
         zone = recording_zone(spec, laser.wavelength)
-        plate = Plate(matrix_world=plate_m, width=w + 2 * reach, height=h + 2 * reach,
-                      zone=zone)
+        plate = Plate(matrix_world=plate_m, width=w + 2 * reach, height=h + 2 * reach, zone=zone)
         data = replace(data, plate=plate)
-        fingerprint = digest(data, laser.wavelength, 1, settings.seed, scene.holo.lighting,
-                             lighting, spec.phases, camera=False)
+        fingerprint = digest(
+            data,
+            laser.wavelength,
+            1,
+            settings.seed,
+            scene.holo.lighting,
+            lighting,
+            spec.phases,
+            camera=False,
+        )
         path = folder / "waves" / f"{bpy.path.clean_name(obj.name)}_{laser.name}_{fingerprint}.exr"
         # a file there of another recording is recorded again, never shown as this scene's
-        route = PlateRoute(plate=plate, holograms=(path,),
-                           record=not plate_current(path, fingerprint),
-                           recording=fingerprint, memory_budget=settings.memory_budget,
-                           disk_budget=settings.disk_budget, wavelength=laser.wavelength,
-                           seed=settings.seed, phases=spec.phases)
-        output = Output(folder=path.parent, frame=scene.frame_current, render=False,
-                        depth_unit=unit)
-        job = Job(camera=eye_view, points=tuple(physical["POINTS"]),
-                  triangles=tuple(physical["TRIANGLES"]), route=route, output=output)
-        light = partial(_radiance, scene, depsgraph.view_layer.name, view, meshes,
-                        tuple(names), settings.lighting_samples, origin, s) if lit else None
-        colours.append((laser, Prepared(job=job, fingerprint=fingerprint,
-                                        plate_name=obj.name, warnings=data.warnings,
-                                        lighting=light)))
+        route = PlateRoute(
+            plate=plate,
+            holograms=(path,),
+            record=not plate_current(path, fingerprint),
+            recording=fingerprint,
+            memory_budget=settings.memory_budget,
+            disk_budget=settings.disk_budget,
+            wavelength=laser.wavelength,
+            seed=settings.seed,
+            phases=spec.phases,
+        )
+        output = Output(
+            folder=path.parent, frame=scene.frame_current, render=False, depth_unit=unit
+        )
+        job = Job(
+            camera=eye_view,
+            points=tuple(physical["POINTS"]),
+            triangles=tuple(physical["TRIANGLES"]),
+            route=route,
+            output=output,
+        )
+        light = (
+            partial(
+                _radiance,
+                scene,
+                depsgraph.view_layer.name,
+                view,
+                meshes,
+                tuple(names),
+                settings.lighting_samples,
+                origin,
+                s,
+            )
+            if lit
+            else None
+        )
+        colours.append(
+            (
+                laser,
+                Prepared(
+                    job=job,
+                    fingerprint=fingerprint,
+                    plate_name=obj.name,
+                    warnings=data.warnings,
+                    lighting=light,
+                ),
+            )
+        )
         keys.append(fingerprint)
     key = hashlib.sha256(repr((keys, spec)).encode()).hexdigest()[:16]
-    return DisplayPrepared(spec=spec, colours=tuple(colours), frame=scene.frame_current,
-                           folder=folder, distance=float(np.mean(depths)), digest=key,
-                           warnings=data.warnings)
+    return DisplayPrepared(
+        spec=spec,
+        colours=tuple(colours),
+        frame=scene.frame_current,
+        folder=folder,
+        distance=float(np.mean(depths)),
+        digest=key,
+        warnings=data.warnings,
+    )
 
 
 def recording_zone(spec: DisplaySpec, wavelength: float) -> ViewingZone:
@@ -391,8 +486,9 @@ def recording_zone(spec: DisplaySpec, wavelength: float) -> ViewingZone:
     tan_t = sin_t / math.sqrt(1 - sin_t**2)
     w, h = spec.size
     half = [max(spec.eye_box, 2 * spec.eye_distance * tan_t - size) / 2 for size in (w, h)]
-    return ViewingZone(centre=(0.0, 0.0, d), half_extents=(*half, spec.eye_box / 2),
-                       pupil=2 * min(half))
+    return ViewingZone(
+        centre=(0.0, 0.0, d), half_extents=(*half, spec.eye_box / 2), pupil=2 * min(half)
+    )
 
 
 def _scaled_pose(matrix, origin, s: float) -> np.ndarray:
@@ -406,12 +502,12 @@ def _scaled_pose(matrix, origin, s: float) -> np.ndarray:
 def _radiance(scene, view_layer, view, meshes, names, samples, origin, s):
     """The emitters' radiance rendered by Cycles from the eye box in the scene as it stands
     (``view``, ``meshes``), its camera then placed in the scene as the display shows it."""
-    r = radiance.request(scene, view_layer, view, meshes, names, samples=samples,
-                         own_lens=True)
+    r = radiance.request(scene, view_layer, view, meshes, names, samples=samples, own_lens=True)
     if r is None:
         return None
-    return replace(r, camera=replace(r.camera, matrix_world=_scaled_pose(
-        r.camera.matrix_world, origin, s)))
+    return replace(
+        r, camera=replace(r.camera, matrix_world=_scaled_pose(r.camera.matrix_world, origin, s))
+    )
 
 
 def _eye_camera(eye, target, up, points) -> Camera:
@@ -423,8 +519,13 @@ def _eye_camera(eye, target, up, points) -> Camera:
     spread = float(np.max(np.abs(local[:, :2]) / depth[:, None]))
     sensor = 36.0
     lens = sensor / (2 * max(spread, 1e-6) * 1.1)
-    return Camera(matrix_world=matrix, lens=lens, sensor_width=sensor, sensor_height=sensor,
-                  resolution=(RADIANCE_PIXELS, RADIANCE_PIXELS))
+    return Camera(
+        matrix_world=matrix,
+        lens=lens,
+        sensor_width=sensor,
+        sensor_height=sensor,
+        resolution=(RADIANCE_PIXELS, RADIANCE_PIXELS),
+    )
 
 
 def frame_folder(scene, name: str) -> Path:

@@ -43,8 +43,11 @@ def shutter(scene) -> tuple[float, float]:
 def blurs(scene) -> bool:
     """Whether the holographic objects are to be motion-blurred: the render's motion blur
     is on, in Camera mode (a plate is recorded once for many frames, unblurred)."""
-    return scene.render.use_motion_blur and scene.holo.mode == "CAMERA" and \
-        scene.render.motion_blur_shutter > 0
+    return (
+        scene.render.use_motion_blur
+        and scene.holo.mode == "CAMERA"
+        and scene.render.motion_blur_shutter > 0
+    )
 
 
 def sample(scene, depsgraph) -> Sample:
@@ -53,12 +56,16 @@ def sample(scene, depsgraph) -> Sample:
     corners = []
     for inst, kind in emitter_instances(depsgraph):
         try:
-            corners.append((kind, corner_positions(inst.object, depsgraph, unit,
-                                                   np.array(inst.matrix_world))))
+            corners.append(
+                (kind, corner_positions(inst.object, depsgraph, unit, np.array(inst.matrix_world)))
+            )
         except ValueError:  # left out of the export too (no faces)
             continue
-    return Sample(time=scene.frame_current + scene.frame_subframe,
-                  camera=camera_matrix(scene, depsgraph, unit), corners=tuple(corners))
+    return Sample(
+        time=scene.frame_current + scene.frame_subframe,
+        camera=camera_matrix(scene, depsgraph, unit),
+        corners=tuple(corners),
+    )
 
 
 @dataclass
@@ -78,8 +85,9 @@ class Shutter:
 
     def complete(self) -> bool:
         times = np.array(list(self.samples))
-        return all(np.abs(times - t).min(initial=1.0) <= TOLERANCE
-                   for t in (self.opening, self.closing))
+        return all(
+            np.abs(times - t).min(initial=1.0) <= TOLERANCE for t in (self.opening, self.closing)
+        )
 
 
 def evaluate_shutter(scene, depsgraph_of) -> list[Sample]:
@@ -133,8 +141,13 @@ def with_motion(job: Job, samples, opening: float, closing: float) -> Job:
                 continue
             track = np.stack(track)  # (S, V, 3) at the samples' times
             resampled = (1 - f) * track[at] + f * track[at + 1]
-            out.append(mesh if np.array_equal(resampled.min(0), resampled.max(0))
-                       else replace(mesh, motion=resampled))
+            out.append(
+                mesh
+                if np.array_equal(resampled.min(0), resampled.max(0))
+                else replace(mesh, motion=resampled)
+            )
         return tuple(out)
-    return replace(job, points=moving(job.points, "POINTS"),
-                   triangles=moving(job.triangles, "TRIANGLES"))
+
+    return replace(
+        job, points=moving(job.points, "POINTS"), triangles=moving(job.triangles, "TRIANGLES")
+    )

@@ -36,8 +36,10 @@ def scene_plate(scene, *, required: bool):
     """The scene's one plate object (None when there is none and none is ``required``)."""
     plates = [o for o in scene.objects if o.holo.is_plate]
     if required and not plates:
-        raise ExportError("no hologram plate: mark a plane with Object ▸ Holo ▸ Plate, or "
-                          "record for the camera (Holo ▸ Hologram: Camera)")
+        raise ExportError(
+            "no hologram plate: mark a plane with Object ▸ Holo ▸ Plate, or "
+            "record for the camera (Holo ▸ Hologram: Camera)"
+        )
     if len(plates) > 1:
         raise ExportError(f"one plate per scene; found {', '.join(o.name for o in plates)}")
     return plates[0] if plates else None
@@ -61,10 +63,16 @@ def with_plate(data: SceneData, plate_object, depsgraph, strict=False) -> SceneD
     beyond = outside_zone(plate, name, camera)
     if beyond and strict:
         raise ExportError(f"{beyond} (Outside Zone: Fail)")
-    warnings = data.warnings + tuple(filter(None, (
-        beyond, plate_coverage(plate, name, camera, data.points + data.triangles))))
-    data = replace(data, plate=replace(plate, zone=plate.zone or zone), plate_name=name,
-                   warnings=warnings, zone=zone)
+    warnings = data.warnings + tuple(
+        filter(None, (beyond, plate_coverage(plate, name, camera, data.points + data.triangles)))
+    )
+    data = replace(
+        data,
+        plate=replace(plate, zone=plate.zone or zone),
+        plate_name=name,
+        warnings=warnings,
+        zone=zone,
+    )
     return replace(data, view=zone_view(data))
 
 
@@ -77,8 +85,9 @@ def plate_parts(obj) -> tuple | None:
     try:
         return parts_from_json(holo.parts)
     except InputError as e:
-        raise ExportError(f"plate '{obj.name}': its parts along the path: {e}; run Fit Zone "
-                          f"to Shot again") from None
+        raise ExportError(
+            f"plate '{obj.name}': its parts along the path: {e}; run Fit Zone to Shot again"
+        ) from None
 
 
 def nearest_part(parts, camera: Camera) -> tuple[int, float]:
@@ -105,14 +114,17 @@ def with_set(data: SceneData, plate_object, parts, strict=False) -> SceneData:
     _in_front(plate, f"{name} (part {k + 1} of {len(parts)})", camera)
     outside = None
     if beyond > 1e-9:
-        outside = (f"the camera's pupil reaches {beyond:.3g} m beyond every part of plate "
-                   f"'{name}' (the nearest, part {k + 1} of {len(parts)}: "
-                   f"{plate.zone.describe()}): what the set cannot send there is left out of "
-                   f"its view; run Fit Zone to Shot for this camera's path")
+        outside = (
+            f"the camera's pupil reaches {beyond:.3g} m beyond every part of plate "
+            f"'{name}' (the nearest, part {k + 1} of {len(parts)}: "
+            f"{plate.zone.describe()}): what the set cannot send there is left out of "
+            f"its view; run Fit Zone to Shot for this camera's path"
+        )
         if strict:
             raise ExportError(f"{outside} (Outside Zone: Fail)")
-    warnings = data.warnings + tuple(filter(None, (
-        outside, plate_coverage(plate, name, camera, data.points + data.triangles))))
+    warnings = data.warnings + tuple(
+        filter(None, (outside, plate_coverage(plate, name, camera, data.points + data.triangles)))
+    )
     data = replace(data, plate=plate, plate_name=name, warnings=warnings, zone=None)
     return replace(data, view=zone_view(data))
 
@@ -120,9 +132,11 @@ def with_set(data: SceneData, plate_object, parts, strict=False) -> SceneData:
 def kept(zone: ViewingZone) -> ViewingZone:
     """``zone`` as the plate's settings keep it (single precision), so that the digest of a
     job read after it is kept is the digest of this one."""
-    return ViewingZone(centre=tuple(map(float, np.float32(zone.centre))),
-                       half_extents=tuple(map(float, np.float32(zone.half_extents))),
-                       pupil=float(np.float32(zone.pupil)))
+    return ViewingZone(
+        centre=tuple(map(float, np.float32(zone.centre))),
+        half_extents=tuple(map(float, np.float32(zone.half_extents))),
+        pupil=float(np.float32(zone.pupil)),
+    )
 
 
 def zone_view(data: SceneData) -> Camera:
@@ -138,8 +152,10 @@ def zone_view(data: SceneData) -> Camera:
 
 def _in_front(plate: Plate, name: str, camera: Camera) -> None:
     if plate.to_plate(camera.position[None])[0, 2] <= 0:
-        raise ExportError(f"the camera is behind plate '{name}': viewers must be on its +Z "
-                          f"side (rotate the plate 180°)")
+        raise ExportError(
+            f"the camera is behind plate '{name}': viewers must be on its +Z "
+            f"side (rotate the plate 180°)"
+        )
 
 
 def plate_from_object(obj, unit: float) -> Plate:
@@ -148,8 +164,12 @@ def plate_from_object(obj, unit: float) -> Plate:
     w, h = obj.dimensions.x * unit, obj.dimensions.y * unit
     if w <= 0 or h <= 0:
         raise ExportError(f"plate '{obj.name}' must have a width and height (a plane)")
-    return Plate(matrix_world=world_matrix(obj.matrix_world, unit, normalise=True), width=w,
-                 height=h, zone=plate_zone(obj))
+    return Plate(
+        matrix_world=world_matrix(obj.matrix_world, unit, normalise=True),
+        width=w,
+        height=h,
+        zone=plate_zone(obj),
+    )
 
 
 def plate_zone(obj) -> ViewingZone | None:
@@ -160,8 +180,12 @@ def plate_zone(obj) -> ViewingZone | None:
     if not holo.zone_set:
         return None
     try:
-        return ViewingZone(centre=tuple(holo.zone_centre), half_extents=tuple(holo.zone_half),
-                           pupil=holo.zone_pupil, pixel=holo.zone_pixel)
+        return ViewingZone(
+            centre=tuple(holo.zone_centre),
+            half_extents=tuple(holo.zone_half),
+            pupil=holo.zone_pupil,
+            pixel=holo.zone_pixel,
+        )
     except InputError as e:
         raise ExportError(f"plate '{obj.name}': its viewing zone: {e}") from None
 
@@ -189,11 +213,13 @@ def outside_zone(plate: Plate, name: str, camera: Camera) -> str | None:
     beyond = beyond_zone(plate, camera)
     if not beyond:
         return None
-    return (f"the camera's pupil reaches {beyond:.3g} m beyond the viewing zone of plate "
-            f"'{name}' ({plate.zone.describe()}): what the plate cannot send there is left "
-            f"out of its view, transparent in the composite, and its view may be soft; use "
-            f"Fit Zone to Shot (Object ▸ Holo) to record the plate for every frame of the "
-            f"camera's move, or Fit Zone to Camera for where it is now")
+    return (
+        f"the camera's pupil reaches {beyond:.3g} m beyond the viewing zone of plate "
+        f"'{name}' ({plate.zone.describe()}): what the plate cannot send there is left "
+        f"out of its view, transparent in the composite, and its view may be soft; use "
+        f"Fit Zone to Shot (Object ▸ Holo) to record the plate for every frame of the "
+        f"camera's move, or Fit Zone to Camera for where it is now"
+    )
 
 
 def export_imported(scene, depsgraph, plate_object) -> SceneData:
@@ -207,10 +233,17 @@ def export_imported(scene, depsgraph, plate_object) -> SceneData:
     plate = plate_from_object(evaluated(plate_object, depsgraph), unit)
     _in_front(plate, plate_object.name, camera)
     outside = outside_zone(plate, plate_object.name, camera)
-    return SceneData(points=[], triangles=[], plate=plate, plate_name=plate_object.name,
-                     camera=camera, warnings=(outside,) if outside else (),
-                     view=replace(camera, fstop=None, focus_distance=None),
-                     region=render_region(scene.render), unit=unit)
+    return SceneData(
+        points=[],
+        triangles=[],
+        plate=plate,
+        plate_name=plate_object.name,
+        camera=camera,
+        warnings=(outside,) if outside else (),
+        view=replace(camera, fstop=None, focus_distance=None),
+        region=render_region(scene.render),
+        unit=unit,
+    )
 
 
 def _surface_samples(mesh: Mesh, count=4000) -> np.ndarray:
@@ -248,11 +281,15 @@ def plate_coverage(plate: Plate, name: str, camera: Camera, meshes) -> str | Non
     inside, hits = through_plate(plate, camera.position, world[seen])
     share = inside.mean()
     if share == 0:
-        raise ExportError(f"plate '{name}' is not between the camera and the holographic "
-                          f"objects: the pass would be empty (move it onto the line of sight)")
+        raise ExportError(
+            f"plate '{name}' is not between the camera and the holographic "
+            f"objects: the pass would be empty (move it onto the line of sight)"
+        )
     if share < 1:
         need = 2 * np.abs(hits).max(0) if len(hits) else (plate.width, plate.height)
-        return (f"plate '{name}' covers {share:.0%} of the holographic objects the camera "
-                f"sees; the rest is cut from the pass (it needs about {need[0]:.3g} x "
-                f"{need[1]:.3g} m where it stands)")
+        return (
+            f"plate '{name}' covers {share:.0%} of the holographic objects the camera "
+            f"sees; the rest is cut from the pass (it needs about {need[0]:.3g} x "
+            f"{need[1]:.3g} m where it stands)"
+        )
     return None

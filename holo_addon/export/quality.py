@@ -42,12 +42,27 @@ def plate_choice(data, settings, parts=None) -> QualityChoice | None:
             if zone is None:
                 return None
             local = plate.to_plate(world)
-            plans = [plan((plate.width, plate.height), [local.min(0), local.max(0)],
-                          zone=zone, pixel_angle=zone.pixel or data.camera.pixel_angle(),
-                          wavelength=settings.wavelength)]
+            plans = [
+                plan(
+                    (plate.width, plate.height),
+                    [local.min(0), local.max(0)],
+                    zone=zone,
+                    pixel_angle=zone.pixel or data.camera.pixel_angle(),
+                    wavelength=settings.wavelength,
+                )
+            ]
         budget = (settings.memory_budget, settings.disk_budget)
-        choices = [choose(p, resolution=resolution, looks=looks, supersample=supersample,
-                          budget=budget, plans=plans) for p in plans]
+        choices = [
+            choose(
+                p,
+                resolution=resolution,
+                looks=looks,
+                supersample=supersample,
+                budget=budget,
+                plans=plans,
+            )
+            for p in plans
+        ]
     except InputError:
         return None
     return min(choices, key=lambda c: c.planned.psnr)  # the part that needs the most
@@ -58,17 +73,25 @@ def resolve(settings, data, parts=None):
     (0) takes the plan's choice for Plate mode, the coded pair and two fine pixels for Camera
     mode; a user's setting that loses against the plan's is said, with the dB it loses."""
     if settings.mode != "PLATE" or data.plate is None:
-        return replace(settings, iterations=settings.iterations or LOOKS,
-                       supersample=settings.supersample or SUPERSAMPLE), ()
+        return replace(
+            settings,
+            iterations=settings.iterations or LOOKS,
+            supersample=settings.supersample or SUPERSAMPLE,
+        ), ()
     choice = plate_choice(data, settings, parts)
     if choice is None:
-        return replace(settings, iterations=settings.iterations or LOOKS,
-                       supersample=settings.supersample or SUPERSAMPLE), ()
+        return replace(
+            settings,
+            iterations=settings.iterations or LOOKS,
+            supersample=settings.supersample or SUPERSAMPLE,
+        ), ()
     log.info("plate '%s': %s", data.plate_name, choice.describe())
     if choice.capped():
         log.info("plate '%s': %s", data.plate_name, choice.capped())
     warning = choice.warning()
     if warning:
         log.warning("plate '%s': %s", data.plate_name, warning)
-    return (replace(settings, iterations=choice.looks, supersample=choice.supersample),
-            (f"plate '{data.plate_name}': {warning}",) if warning else ())
+    return (
+        replace(settings, iterations=choice.looks, supersample=choice.supersample),
+        (f"plate '{data.plate_name}': {warning}",) if warning else (),
+    )

@@ -31,8 +31,16 @@ from ..blender import compat
 from .scene import scale
 
 SIMPLE = {"BOOLEAN", "INT", "FLOAT", "STRING", "ENUM"}
-RAYS = ("visible_camera", "visible_diffuse", "visible_glossy", "visible_transmission",
-        "visible_volume_scatter", "visible_shadow", "is_holdout", "is_shadow_catcher")
+RAYS = (
+    "visible_camera",
+    "visible_diffuse",
+    "visible_glossy",
+    "visible_transmission",
+    "visible_volume_scatter",
+    "visible_shadow",
+    "is_holdout",
+    "is_shadow_catcher",
+)
 MARGIN = 2  # pixels around the emitters' projected box
 
 
@@ -113,18 +121,27 @@ def _tree(h, tree, seen: set) -> None:
         _rna(h, node)
         for socket in node.inputs:
             value = getattr(socket, "default_value", None)
-            h.update(repr(tuple(value) if hasattr(value, "__len__") and not
-                          isinstance(value, str) else value).encode())
+            h.update(
+                repr(
+                    tuple(value)
+                    if hasattr(value, "__len__") and not isinstance(value, str)
+                    else value
+                ).encode()
+            )
         image = getattr(node, "image", None)
         if image is not None:
-            h.update(f"{image.name_full}|{image.filepath}|{tuple(image.size)}|{image.source}|"
-                     f"{image.packed_file.size if image.packed_file else 0}".encode())
+            h.update(
+                f"{image.name_full}|{image.filepath}|{tuple(image.size)}|{image.source}|"
+                f"{image.packed_file.size if image.packed_file else 0}".encode()
+            )
         group = getattr(node, "node_tree", None)
         if group is not None:
             _tree(h, group, seen)
     for link in tree.links:
-        h.update(f"{link.from_node.name}.{link.from_socket.identifier}>"
-                 f"{link.to_node.name}.{link.to_socket.identifier}".encode())
+        h.update(
+            f"{link.from_node.name}.{link.from_socket.identifier}>"
+            f"{link.to_node.name}.{link.to_socket.identifier}".encode()
+        )
 
 
 def region(camera: Camera, meshes) -> tuple[int, int, int, int] | None:
@@ -151,12 +168,24 @@ def border(box, size) -> tuple[float, float, float, float]:
     ``box`` (left, top, right, bottom) of an image of ``size`` (w, h): Blender truncates
     border × size, so each edge is set half a pixel inside."""
     (left, top, right, bottom), (w, h) = box, size
-    return (min((left + 0.5) / w, 1.0), min((right + 0.5) / w, 1.0),
-            min((h - bottom + 0.5) / h, 1.0), min((h - top + 0.5) / h, 1.0))
+    return (
+        min((left + 0.5) / w, 1.0),
+        min((right + 0.5) / w, 1.0),
+        min((h - bottom + 0.5) / h, 1.0),
+        min((h - top + 0.5) / h, 1.0),
+    )
 
 
-def request(scene, view_layer: str, camera: Camera, meshes, emitter_names, *,
-            samples: int = 8, own_lens: bool = False) -> Radiance | None:
+def request(
+    scene,
+    view_layer: str,
+    camera: Camera,
+    meshes,
+    emitter_names,
+    *,
+    samples: int = 8,
+    own_lens: bool = False,
+) -> Radiance | None:
     """The job's :class:`holo_core.job.Radiance` (see :func:`holo_core.runner.lit_emitters`):
     the scene written to a scratch folder as it is now (unsaved changes included), the
     command that renders its view layer ``view_layer`` with Cycles, and the camera of the
@@ -172,22 +201,49 @@ def request(scene, view_layer: str, camera: Camera, meshes, emitter_names, *,
     blend = folder / "scene.blend"
     write_scene(scene, blend)
     image = folder / "radiance.exr"
-    args = {"blend": str(blend), "scene": scene.name, "view_layer": view_layer,
-            "frame": scene.frame_current, "emitters": sorted(set(emitter_names)),
-            "border": border(box, camera.resolution), "image": str(image), "samples": samples,
-            "compat": compat.__file__, "view": view_matrix(camera, scale(scene)),
-            "lens": {"lens": camera.lens, "sensor_width": camera.sensor_width,
-                     "sensor_height": camera.sensor_height, "sensor_fit": camera.sensor_fit,
-                     "resolution": list(camera.resolution)} if own_lens else None}
+    args = {
+        "blend": str(blend),
+        "scene": scene.name,
+        "view_layer": view_layer,
+        "frame": scene.frame_current,
+        "emitters": sorted(set(emitter_names)),
+        "border": border(box, camera.resolution),
+        "image": str(image),
+        "samples": samples,
+        "compat": compat.__file__,
+        "view": view_matrix(camera, scale(scene)),
+        "lens": {
+            "lens": camera.lens,
+            "sensor_width": camera.sensor_width,
+            "sensor_height": camera.sensor_height,
+            "sensor_fit": camera.sensor_fit,
+            "resolution": list(camera.resolution),
+        }
+        if own_lens
+        else None,
+    }
     script = str(Path(__file__).resolve().parents[1] / "render" / "cycles_radiance.py")
     if bpy.app.binary_path:  # Blender: a background Blender without the user's add-ons
-        command = [bpy.app.binary_path, "-b", "--factory-startup", "-noaudio", str(blend),
-                   "--python", script, "--", json.dumps(args)]
+        command = [
+            bpy.app.binary_path,
+            "-b",
+            "--factory-startup",
+            "-noaudio",
+            str(blend),
+            "--python",
+            script,
+            "--",
+            json.dumps(args),
+        ]
     else:  # the bpy module: a Python that imports it
         command = [sys.executable, "-I", script, "--", json.dumps(args)]  # bpy's own path
     left, top, right, bottom = box
-    return Radiance(command=tuple(command), image=image, folder=folder,
-                    camera=camera.cropped(left, top, right - left, bottom - top))
+    return Radiance(
+        command=tuple(command),
+        image=image,
+        folder=folder,
+        camera=camera.cropped(left, top, right - left, bottom - top),
+    )
 
 
 def view_matrix(camera: Camera, unit: float) -> list:

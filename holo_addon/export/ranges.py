@@ -17,8 +17,10 @@ import bpy
 
 from .scene import ExportError
 
-WHERE = {"HoloSceneSettings": "Render Properties ▸ Holo",
-         "HoloObjectSettings": "Object Properties ▸ Holo"}
+WHERE = {
+    "HoloSceneSettings": "Render Properties ▸ Holo",
+    "HoloObjectSettings": "Object Properties ▸ Holo",
+}
 _UNIT = re.compile(r"\[([^\]]+)\]")  # a description's unit: "… in memory [GiB]: …"
 
 
@@ -37,16 +39,20 @@ def check(settings, scene) -> None:
             continue
         if prop.type in ("INT", "FLOAT"):
             value = getattr(settings, prop.identifier)
-            for v in (tuple(value) if prop.is_array else (value,)):
+            for v in tuple(value) if prop.is_array else (value,):
                 if not (math.isfinite(v) and prop.hard_min <= v <= prop.hard_max):
-                    raise ExportError(f"{prop.name} ({where}) must be "
-                                      f"{_range(prop, scene)}; got {_shown(prop, v, scene)}")
+                    raise ExportError(
+                        f"{prop.name} ({where}) must be "
+                        f"{_range(prop, scene)}; got {_shown(prop, v, scene)}"
+                    )
         elif prop.type == "ENUM" and not prop.is_enum_flag:
             stored = settings.get(prop.identifier)  # the file's number (None: the default)
             if stored is not None and stored not in {item.value for item in prop.enum_items}:
                 items = ", ".join(item.name for item in prop.enum_items)
-                raise ExportError(f"{prop.name} ({where}) must be one of {items}; the file "
-                                  f"holds none of them ({stored!r})")
+                raise ExportError(
+                    f"{prop.name} ({where}) must be one of {items}; the file "
+                    f"holds none of them ({stored!r})"
+                )
 
 
 def _range(prop, scene) -> str:
@@ -74,8 +80,17 @@ def _shown(prop, value, scene) -> str:
     return f"{value:.6g}" + (f" {unit.group(1)}" if unit else "")
 
 
-LENGTH_UNITS = {"KILOMETERS": "km", "METERS": "m", "CENTIMETERS": "cm", "MILLIMETERS": "mm",
-                "MICROMETERS": "um", "MILES": "mi", "FEET": "ft", "INCHES": "in", "THOU": "thou"}
+LENGTH_UNITS = {
+    "KILOMETERS": "km",
+    "METERS": "m",
+    "CENTIMETERS": "cm",
+    "MILLIMETERS": "mm",
+    "MICROMETERS": "um",
+    "MILES": "mi",
+    "FEET": "ft",
+    "INCHES": "in",
+    "THOU": "thou",
+}
 
 
 def _length(value: float, units) -> str:

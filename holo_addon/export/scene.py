@@ -68,8 +68,7 @@ def world_matrix(m, unit: float, *, normalise: bool) -> np.ndarray:
     return a
 
 
-def mesh_from_object(obj, depsgraph, unit: float, matrix=None, notes=None, *,
-                     lit=False) -> Mesh:
+def mesh_from_object(obj, depsgraph, unit: float, matrix=None, notes=None, *, lit=False) -> Mesh:
     """The evaluated mesh of ``obj`` (modifiers applied at the depsgraph's settings) as
     world-space triangles [m]; ``matrix``: an instance's world matrix instead of the object's.
     Material features the export cannot honour are added to ``notes`` (``lit``: the colours
@@ -81,15 +80,20 @@ def mesh_from_object(obj, depsgraph, unit: float, matrix=None, notes=None, *,
         nt = len(loops) // 3
         mat_index = np.empty(nt, np.int64)
         me.loop_triangles.foreach_get("material_index", mat_index)
-        colours, uvs, texture = _colours(ev, me, loops, lv, mat_index,
-                                         None if lit else notes)
+        colours, uvs, texture = _colours(ev, me, loops, lv, mat_index, None if lit else notes)
         if notes is not None:
-            notes.extend(filter(None, (unhonoured(slot.material, lit=lit)
-                                       for slot in ev.material_slots)))
+            notes.extend(
+                filter(None, (unhonoured(slot.material, lit=lit) for slot in ev.material_slots))
+            )
     finally:
         ev.to_mesh_clear()
-    return Mesh(vertices=vertices, triangles=np.arange(nt * 3).reshape(nt, 3),
-                colours=colours, uvs=uvs, texture=texture)
+    return Mesh(
+        vertices=vertices,
+        triangles=np.arange(nt * 3).reshape(nt, 3),
+        colours=colours,
+        uvs=uvs,
+        texture=texture,
+    )
 
 
 def _corners(obj, ev, me, unit: float, matrix=None):
@@ -150,11 +154,14 @@ def _colours(obj, me, loops, loop_vertex, mat_index, notes=None):
         node = principled(slot.material)
         if node is not None and node.inputs["Base Color"].is_linked and notes is not None:
             src = node.inputs["Base Color"].links[0].from_node
-            notes.append(f"material '{slot.material.name}': its Base Color comes from a "
-                         f"{src.bl_label} node and is not baked yet (Render Pass bakes it; a "
-                         f"render cannot): the holographic object uses the Base Color value")
-    base = np.array([base_colour(slot.material) for slot in obj.material_slots] or
-                    [(1.0, 1.0, 1.0)], np.float64)
+            notes.append(
+                f"material '{slot.material.name}': its Base Color comes from a "
+                f"{src.bl_label} node and is not baked yet (Render Pass bakes it; a "
+                f"render cannot): the holographic object uses the Base Color value"
+            )
+    base = np.array(
+        [base_colour(slot.material) for slot in obj.material_slots] or [(1.0, 1.0, 1.0)], np.float64
+    )
     return np.repeat(base[np.clip(mat_index, 0, len(base) - 1)], 3, axis=0), None, None
 
 
@@ -196,11 +203,19 @@ def camera_from_object(scene, obj, unit: float, depsgraph=None, *, crop=True) ->
             focus = cam.dof.focus_distance * unit
         if focus <= 0:
             raise ExportError("the camera's focus must lie in front of it (focus distance > 0)")
-    camera = Camera(matrix_world=m, lens=cam.lens * unit, sensor_width=cam.sensor_width * unit,
-                    sensor_height=cam.sensor_height * unit, sensor_fit=cam.sensor_fit,
-                    shift_x=cam.shift_x, shift_y=cam.shift_y, resolution=res,
-                    pixel_aspect=(r.pixel_aspect_x, r.pixel_aspect_y),
-                    focus_distance=focus, fstop=fstop)
+    camera = Camera(
+        matrix_world=m,
+        lens=cam.lens * unit,
+        sensor_width=cam.sensor_width * unit,
+        sensor_height=cam.sensor_height * unit,
+        sensor_fit=cam.sensor_fit,
+        shift_x=cam.shift_x,
+        shift_y=cam.shift_y,
+        resolution=res,
+        pixel_aspect=(r.pixel_aspect_x, r.pixel_aspect_y),
+        focus_distance=focus,
+        fstop=fstop,
+    )
     if crop and r.use_border and r.use_crop_to_border:  # the render is the region alone
         left, top, right, bottom = border_pixels(r)
         if right > left and bottom > top:
@@ -230,8 +245,13 @@ def border_pixels(render) -> tuple[int, int, int, int]:
 
     def edge(fraction, size):
         return int(np.float32(fraction) * np.float32(size))
-    return (edge(render.border_min_x, w), h - edge(render.border_max_y, h),
-            edge(render.border_max_x, w), h - edge(render.border_min_y, h))
+
+    return (
+        edge(render.border_min_x, w),
+        h - edge(render.border_max_y, h),
+        edge(render.border_max_x, w),
+        h - edge(render.border_min_y, h),
+    )
 
 
 def export_scene(scene, depsgraph, *, lit=False) -> SceneData:
@@ -247,17 +267,30 @@ def export_scene(scene, depsgraph, *, lit=False) -> SceneData:
     kinds, names = emitters(depsgraph, unit, notes, lit=lit)
     if not kinds["POINTS"] + kinds["TRIANGLES"]:
         left_out = "; ".join(n for n in notes if "left out" in n)
-        raise NoEmitters("no holographic emitters in the render: set Object ▸ Holo ▸ Emitter "
-                         "on a mesh that renders (not disabled in renders, in a collection "
-                         "the view layer includes)" + (f" ({left_out})" if left_out else ""))
+        raise NoEmitters(
+            "no holographic emitters in the render: set Object ▸ Holo ▸ Emitter "
+            "on a mesh that renders (not disabled in renders, in a collection "
+            "the view layer includes)" + (f" ({left_out})" if left_out else "")
+        )
     camera_object = evaluated(scene.camera, depsgraph)
     camera = camera_from_object(scene, camera_object, unit, depsgraph)
-    view = replace(camera_from_object(scene, camera_object, unit, depsgraph, crop=False),
-                   fstop=None, focus_distance=None)
-    return SceneData(points=kinds["POINTS"], triangles=kinds["TRIANGLES"], plate=None,
-                     plate_name=None, camera=camera, warnings=tuple(dict.fromkeys(notes)),
-                     names=tuple(names), view=view, region=render_region(scene.render),
-                     unit=unit)
+    view = replace(
+        camera_from_object(scene, camera_object, unit, depsgraph, crop=False),
+        fstop=None,
+        focus_distance=None,
+    )
+    return SceneData(
+        points=kinds["POINTS"],
+        triangles=kinds["TRIANGLES"],
+        plate=None,
+        plate_name=None,
+        camera=camera,
+        warnings=tuple(dict.fromkeys(notes)),
+        names=tuple(names),
+        view=view,
+        region=render_region(scene.render),
+        unit=unit,
+    )
 
 
 def emitters(depsgraph, unit: float, notes: list, *, lit=False) -> tuple[dict, list]:
@@ -269,8 +302,9 @@ def emitters(depsgraph, unit: float, notes: list, *, lit=False) -> tuple[dict, l
     for inst, kind in emitter_instances(depsgraph):
         name = inst.object.original.name
         try:
-            mesh = mesh_from_object(inst.object, depsgraph, unit, np.array(inst.matrix_world),
-                                    notes, lit=lit)
+            mesh = mesh_from_object(
+                inst.object, depsgraph, unit, np.array(inst.matrix_world), notes, lit=lit
+            )
         except ValueError as e:  # ExportError, and holo_core's InputError on its data
             notes.append(f"emitter '{name}' is left out of the hologram: {e}")
             continue
@@ -321,6 +355,7 @@ def _rendered_collections(view_layer) -> set:
             shown.add(lc.collection.as_pointer())
             for child in lc.children:
                 walk(child, ok)
+
     walk(view_layer.layer_collection, True)
     return shown
 

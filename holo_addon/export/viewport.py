@@ -42,8 +42,9 @@ def live_resolution(size, pixels: int) -> tuple[int, int]:
     return max(1, round(w * k)), max(1, round(h * k))
 
 
-def view_camera(view_matrix, lens: float, resolution, unit: float,
-                focus: Focus | None = None) -> Camera:
+def view_camera(
+    view_matrix, lens: float, resolution, unit: float, focus: Focus | None = None
+) -> Camera:
     """A perspective 3D view as a camera.
 
     Parameters
@@ -80,11 +81,20 @@ def view_camera(view_matrix, lens: float, resolution, unit: float,
         if focus.target is not None:
             distance = float(-(np.asarray(focus.target, np.float64) - m[:3, 3]) @ m[:3, 2])
         if distance is None or distance <= 0:
-            raise ExportError("the camera's focus lies behind the viewport's eye: move the "
-                              "view, or the focus object, so that it lies in front")
-    return Camera(matrix_world=m, lens=lens * unit, sensor_width=VIEW_SENSOR[0] * unit,
-                  sensor_height=VIEW_SENSOR[1] * unit, sensor_fit="AUTO",
-                  resolution=tuple(resolution), focus_distance=distance, fstop=fstop)
+            raise ExportError(
+                "the camera's focus lies behind the viewport's eye: move the "
+                "view, or the focus object, so that it lies in front"
+            )
+    return Camera(
+        matrix_world=m,
+        lens=lens * unit,
+        sensor_width=VIEW_SENSOR[0] * unit,
+        sensor_height=VIEW_SENSOR[1] * unit,
+        sensor_fit="AUTO",
+        resolution=tuple(resolution),
+        focus_distance=distance,
+        fstop=fstop,
+    )
 
 
 def scene_focus(scene, unit: float, depsgraph=None) -> Focus | None:
@@ -140,7 +150,14 @@ def viewport_camera(scene, space, region_3d, size, pixels: int, depsgraph=None) 
         cam = camera_from_object(scene, obj, unit, depsgraph, crop=False)
         return replace(cam, resolution=live_resolution(cam.resolution, pixels))
     if not region_3d.is_perspective:
-        raise ExportError("the view is orthographic: a plate is looked through from an eye "
-                          "(View ▸ Perspective/Orthographic, or numpad 5)")
-    return view_camera(region_3d.view_matrix, space.lens, live_resolution(size, pixels), unit,
-                       scene_focus(scene, unit, depsgraph))
+        raise ExportError(
+            "the view is orthographic: a plate is looked through from an eye "
+            "(View ▸ Perspective/Orthographic, or numpad 5)"
+        )
+    return view_camera(
+        region_3d.view_matrix,
+        space.lens,
+        live_resolution(size, pixels),
+        unit,
+        scene_focus(scene, unit, depsgraph),
+    )

@@ -32,18 +32,28 @@ import sys
 import bpy
 from mathutils import Matrix
 
-RAYS = ("visible_camera", "visible_diffuse", "visible_glossy", "visible_transmission",
-        "visible_volume_scatter", "visible_shadow")
+RAYS = (
+    "visible_camera",
+    "visible_diffuse",
+    "visible_glossy",
+    "visible_transmission",
+    "visible_volume_scatter",
+    "visible_shadow",
+)
 
 
 def instancers_of(depsgraph, emitters: set) -> set:
     """Names of the objects that instance one of ``emitters`` (collection instances,
     geometry-node and particle instancers): Cycles gives an instance its instancer's ray
     visibility, so these must stay visible to the camera for the instances to be seen."""
-    return {inst.parent.original.name for inst in depsgraph.object_instances
-            if inst.is_instance and inst.parent is not None
-            and inst.object.original.name in emitters
-            and inst.parent.original.name not in emitters}
+    return {
+        inst.parent.original.name
+        for inst in depsgraph.object_instances
+        if inst.is_instance
+        and inst.parent is not None
+        and inst.object.original.name in emitters
+        and inst.parent.original.name not in emitters
+    }
 
 
 def view_from(scene, matrix, lens=None) -> None:
@@ -68,8 +78,11 @@ def view_from(scene, matrix, lens=None) -> None:
     if camera is None or camera.type != "CAMERA":
         return
     view = Matrix(matrix)
-    if all(abs(a - b) <= 1e-6 * max(1.0, abs(b)) for row, want in zip(camera.matrix_world, view)
-           for a, b in zip(row, want)):
+    if all(
+        abs(a - b) <= 1e-6 * max(1.0, abs(b))
+        for row, want in zip(camera.matrix_world, view)
+        for a, b in zip(row, want)
+    ):
         return
     stand_in = bpy.data.objects.new("Holo radiance view", camera.data)
     scene.collection.objects.link(stand_in)
@@ -84,8 +97,16 @@ def main(args: dict) -> None:
     compat = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(compat)
     handlers = bpy.app.handlers
-    for kind in ("frame_change_pre", "frame_change_post", "render_init", "render_pre",
-                 "render_post", "render_write", "render_complete", "render_stats"):
+    for kind in (
+        "frame_change_pre",
+        "frame_change_post",
+        "render_init",
+        "render_pre",
+        "render_post",
+        "render_write",
+        "render_complete",
+        "render_stats",
+    ):
         getattr(handlers, kind).clear()  # no add-on makes a pass of this render
     scene = bpy.data.scenes[args["scene"]]
     scene.frame_set(args["frame"])
@@ -129,6 +150,7 @@ def main(args: dict) -> None:
                 print(f"HOLO_PROGRESS {int(done) / int(total):.3f}", flush=True)
             except ValueError:
                 pass
+
     handlers.render_stats.append(lambda *a: stats(str(a[-1])))
     bpy.ops.render.render(write_still=True, scene=scene.name, layer=args["view_layer"])
 

@@ -53,19 +53,40 @@ class FrameResult:
 def frame_of(prepared: DisplayPrepared) -> DisplayFrame:
     """The core's description of the frame's stage."""
     spec = prepared.spec
-    lasers = tuple(FrameLaser(name=laser.name, wavelength=laser.wavelength, power=laser.power,
-                              hologram=str(p.holograms[0]), channel=laser.channel,
-                              table=laser.table)
-                   for laser, p in prepared.colours)
-    return DisplayFrame(name=spec.name, frame=prepared.frame, folder=str(prepared.folder),
-                        resolution=spec.resolution, pitch=spec.pitch, bit_depth=spec.bit_depth,
-                        phase_range=spec.phase_range, inverted=spec.inverted,
-                        packing=PACKINGS[spec.pattern_format], lasers=lasers,
-                        scale=spec.scale, front=spec.front, behind=spec.behind,
-                        eye_distance=spec.eye_distance, eye_box=spec.eye_box,
-                        pupil=spec.pupil, distance=prepared.distance, method=spec.method,
-                        iterations=spec.iterations, slices=spec.slices,
-                        digest=prepared.digest)
+    lasers = tuple(
+        FrameLaser(
+            name=laser.name,
+            wavelength=laser.wavelength,
+            power=laser.power,
+            hologram=str(p.holograms[0]),
+            channel=laser.channel,
+            table=laser.table,
+        )
+        for laser, p in prepared.colours
+    )
+    return DisplayFrame(
+        name=spec.name,
+        frame=prepared.frame,
+        folder=str(prepared.folder),
+        resolution=spec.resolution,
+        pitch=spec.pitch,
+        bit_depth=spec.bit_depth,
+        phase_range=spec.phase_range,
+        inverted=spec.inverted,
+        packing=PACKINGS[spec.pattern_format],
+        lasers=lasers,
+        scale=spec.scale,
+        front=spec.front,
+        behind=spec.behind,
+        eye_distance=spec.eye_distance,
+        eye_box=spec.eye_box,
+        pupil=spec.pupil,
+        distance=prepared.distance,
+        method=spec.method,
+        iterations=spec.iterations,
+        slices=spec.slices,
+        digest=prepared.digest,
+    )
 
 
 def layout_path(frame: DisplayFrame) -> Path:
@@ -79,8 +100,10 @@ def current(frame: DisplayFrame) -> dict | None:
     path = layout_path(frame)
     try:
         layout = json.loads(path.read_text())
-        names = [x[key] for x in layout["lasers"] for key in ("pattern", "layout")] + \
-            [layout["stack"]["file"], layout["stack"]["sheet"]]
+        names = [x[key] for x in layout["lasers"] for key in ("pattern", "layout")] + [
+            layout["stack"]["file"],
+            layout["stack"]["sheet"],
+        ]
     except (OSError, ValueError, KeyError, TypeError):
         return None
     if layout.get("digest") != frame.digest or not frame.digest:
@@ -88,8 +111,13 @@ def current(frame: DisplayFrame) -> dict | None:
     return layout if all((path.parent / str(n)).is_file() for n in names) else None
 
 
-def run(prepared: DisplayPrepared, progress: jobs.Progress = None, on_log=None, *,
-        resident: bool = False) -> FrameResult:
+def run(
+    prepared: DisplayPrepared,
+    progress: jobs.Progress = None,
+    on_log=None,
+    *,
+    resident: bool = False,
+) -> FrameResult:
     """Make the frame (module docstring). ``progress`` may raise
     :class:`holo_core.jobs.Cancelled`: the running process is killed and nothing of the
     frame is written. A failed stage raises :class:`holo_core.worker.WorkerError`."""
@@ -97,18 +125,29 @@ def run(prepared: DisplayPrepared, progress: jobs.Progress = None, on_log=None, 
     frame = frame_of(prepared)
     layout = current(frame)
     if layout is not None:
-        return FrameResult(layout=layout, path=layout_path(frame), made=False,
-                           recorded=(), seconds=time.perf_counter() - started)
+        return FrameResult(
+            layout=layout,
+            path=layout_path(frame),
+            made=False,
+            recorded=(),
+            seconds=time.perf_counter() - started,
+        )
     todo = [(laser, p) for laser, p in prepared.colours if p.records]
     recorded = []
     for i, (laser, p) in enumerate(todo):
-        share = jobs.scaled(progress, RECORD_SHARE * i / len(todo),
-                            RECORD_SHARE * (i + 1) / len(todo))
+        share = jobs.scaled(
+            progress, RECORD_SHARE * i / len(todo), RECORD_SHARE * (i + 1) / len(todo)
+        )
         pipeline.start(p, resident=resident).wait(share, on_log)
         recorded.append(laser.name)
     layout = _stage(frame, jobs.scaled(progress, RECORD_SHARE if todo else 0.0, 1.0))
-    return FrameResult(layout=layout, path=layout_path(frame), made=True,
-                       recorded=tuple(recorded), seconds=time.perf_counter() - started)
+    return FrameResult(
+        layout=layout,
+        path=layout_path(frame),
+        made=True,
+        recorded=tuple(recorded),
+        seconds=time.perf_counter() - started,
+    )
 
 
 def _stage(frame: DisplayFrame, progress: jobs.Progress) -> dict:
@@ -120,9 +159,14 @@ def _stage(frame: DisplayFrame, progress: jobs.Progress) -> dict:
         with tempfile.TemporaryFile("w+") as errors:
             # the worker's environment (the preferences' device, memory limit, kernel cache);
             # its own session, so that a kill reaches what it started too
-            child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=errors, text=True,
-                                     env=environment(**worker_options()),
-                                     start_new_session=os.name == "posix")
+            child = subprocess.Popen(
+                command,
+                stdout=subprocess.PIPE,
+                stderr=errors,
+                text=True,
+                env=environment(**worker_options()),
+                start_new_session=os.name == "posix",
+            )
             last = ""
             try:
                 for line in child.stdout:
@@ -141,8 +185,10 @@ def _stage(frame: DisplayFrame, progress: jobs.Progress) -> dict:
             if code != 0:
                 errors.seek(0)
                 lines = [t for t in errors.read().splitlines() if t.strip()]
-                raise WorkerError(f"the display frame {frame.frame} failed: "
-                                  f"{lines[-1] if lines else f'exit code {code}'}")
+                raise WorkerError(
+                    f"the display frame {frame.frame} failed: "
+                    f"{lines[-1] if lines else f'exit code {code}'}"
+                )
     return json.loads(last)
 
 
@@ -151,13 +197,23 @@ def summary(name: str, result: FrameResult) -> str:
     and SSIM per focal slice (the quantised pattern's stack against the wave's)."""
     layout = result.layout
     lasers = layout["lasers"]
-    verb = (f"made in {result.seconds:.1f} s" + (f" (waves recorded: "
-                                                  f"{', '.join(result.recorded)})"
-                                                  if result.recorded else "")) \
-        if result.made else "up to date"
+    verb = (
+        (
+            f"made in {result.seconds:.1f} s"
+            + (f" (waves recorded: {', '.join(result.recorded)})" if result.recorded else "")
+        )
+        if result.made
+        else "up to date"
+    )
     depths = " ".join(f"{z * 1e3:.3g}" for z in layout["stack"]["depths"])
-    scores = "; ".join(f"{laser['name']} PSNR " + " ".join(f"{v:.1f}" for v in laser["psnr_db"])
-                       + " dB, SSIM " + " ".join(f"{v:.3f}" for v in laser["ssim"])
-                       for laser in lasers)
-    return (f"display '{name}' frame {layout['frame']}: {len(lasers)} pattern(s) "
-            f"{verb}: {result.path}; focal slices at {depths} mm: {scores}")
+    scores = "; ".join(
+        f"{laser['name']} PSNR "
+        + " ".join(f"{v:.1f}" for v in laser["psnr_db"])
+        + " dB, SSIM "
+        + " ".join(f"{v:.3f}" for v in laser["ssim"])
+        for laser in lasers
+    )
+    return (
+        f"display '{name}' frame {layout['frame']}: {len(lasers)} pattern(s) "
+        f"{verb}: {result.path}; focal slices at {depths} mm: {scores}"
+    )

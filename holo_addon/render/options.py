@@ -41,8 +41,12 @@ def worker_options() -> dict:
     prefs = addon_preferences()
     limit = prefs.memory_limit if prefs is not None else 0.0
     cache = bpy.path.abspath(prefs.cache_dir) if prefs is not None and prefs.cache_dir else None
-    return {"paths": runtime_paths(), "device": device() or None,
-            "memory_limit": f"{limit}G" if limit > 0 else None, "cache_dir": cache}
+    return {
+        "paths": runtime_paths(),
+        "device": device() or None,
+        "memory_limit": f"{limit}G" if limit > 0 else None,
+        "cache_dir": cache,
+    }
 
 
 def scheduler() -> str | None:

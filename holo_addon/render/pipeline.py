@@ -33,8 +33,21 @@ from ..export.scene import ExportError, border_pixels, render_size
 from .options import scheduler, worker_options
 
 log = logging.getLogger(__name__)
-__all__ = ["Prepared", "apply", "cached_pass", "check_hologram", "clear_pass", "moving",
-           "output_dir", "pass_file", "prepare", "release", "run", "start", "stored_key"]
+__all__ = [
+    "Prepared",
+    "apply",
+    "cached_pass",
+    "check_hologram",
+    "clear_pass",
+    "moving",
+    "output_dir",
+    "pass_file",
+    "prepare",
+    "release",
+    "run",
+    "start",
+    "stored_key",
+]
 
 
 def prepare(scene, depsgraph, *, render=True, bake=False, preview=1) -> Prepared:
@@ -50,8 +63,14 @@ def prepare(scene, depsgraph, *, render=True, bake=False, preview=1) -> Prepared
 def bake_emitters(scene):
     """Bake every emitter whose procedural Base Color has no current bake; returns the
     depsgraph evaluated afterwards, or None when nothing was baked."""
-    todo = [o for o in scene.objects if o.type == "MESH" and o.holo.emitter != "NONE"
-            and bake.needs_bake(o) and bake.current(o) is None]
+    todo = [
+        o
+        for o in scene.objects
+        if o.type == "MESH"
+        and o.holo.emitter != "NONE"
+        and bake.needs_bake(o)
+        and bake.current(o) is None
+    ]
     for obj in todo:
         bake.bake(obj, scene)
         log.info("baked the Base Color of '%s' into image '%s'", obj.name, bake.image_name(obj))
@@ -81,8 +100,9 @@ def release() -> None:
     worker.release()
 
 
-def run(prepared: Prepared, progress: jobs.Progress = None, on_log=None, *,
-        resident: bool = False) -> Result:
+def run(
+    prepared: Prepared, progress: jobs.Progress = None, on_log=None, *, resident: bool = False
+) -> Result:
     """Run the job in a worker process and wait for it, unless its pass can be reused
     (:func:`cached_pass`). ``progress`` may raise :class:`holo_core.jobs.Cancelled` (the
     worker is killed); a failed worker raises :class:`holo_core.worker.WorkerError` with
@@ -110,8 +130,12 @@ def cached_pass(prepared: Prepared) -> Result | None:
     if shot is None:
         return None
     copy_view(shot, path, pass_key=job.output.pass_key)
-    log.info("holographic pass of frame %d: the shot is static since %s (only the frame "
-             "changed), its pass reused", job.output.frame, shot.name)
+    log.info(
+        "holographic pass of frame %d: the shot is static since %s (only the frame "
+        "changed), its pass reused",
+        job.output.frame,
+        shot.name,
+    )
     return Result(pass_path=path, reused=shot)
 
 
@@ -125,10 +149,14 @@ def _same_shot(path: Path, shot_key: str) -> Path | None:
     def distance(p):
         number = p.stem.rsplit("_", 1)[-1]
         return abs(int(number) - frame) if number.isdigit() else float("inf")
+
     for other in sorted(path.parent.glob("holo_pass_*.exr"), key=distance):
-        if other != path and distance(other) < float("inf") and \
-                _header(other).get("shot_key") == shot_key and \
-                other.with_suffix(".png").is_file():
+        if (
+            other != path
+            and distance(other) < float("inf")
+            and _header(other).get("shot_key") == shot_key
+            and other.with_suffix(".png").is_file()
+        ):
             return other
     return None
 
@@ -157,9 +185,12 @@ def clear_pass(scene, frame: int, folder: Path | None = None) -> Path:
     if r.use_border and r.use_crop_to_border:
         left, top, right, bottom = border_pixels(r)
         w, h = max(1, right - left), max(1, bottom - top)
-    view = RenderResult(rgb=np.zeros((h, w, 3), np.float32), alpha=np.zeros((h, w), np.float32),
-                        depth=np.full((h, w), BACKGROUND_DEPTH, np.float32),
-                        info={"emitters": 0})
+    view = RenderResult(
+        rgb=np.zeros((h, w, 3), np.float32),
+        alpha=np.zeros((h, w), np.float32),
+        depth=np.full((h, w), BACKGROUND_DEPTH, np.float32),
+        info={"emitters": 0},
+    )
     path = pass_file(output_dir(scene) if folder is None else folder, frame)
     path.parent.mkdir(parents=True, exist_ok=True)
     write_view(view, path)
@@ -187,8 +218,11 @@ def _keep_zone(plate, zone) -> None:
         plate.holo.zone_pixel = zone.pixel
         plate.holo.zone_set = True
     except AttributeError:  # a context that may not write ID data (inside a render)
-        log.warning("plate '%s': its viewing zone is used for this frame but not kept (Fit "
-                    "Zone to Camera keeps it)", plate.name)
+        log.warning(
+            "plate '%s': its viewing zone is used for this frame but not kept (Fit "
+            "Zone to Camera keeps it)",
+            plate.name,
+        )
 
 
 def check_hologram(scene) -> Path:

@@ -34,12 +34,14 @@ def lines(obj) -> list[str]:
     w, h = spec.size
     lam = min(laser.wavelength for laser in spec.lasers)
     angle = math.degrees(math.asin(min(1.0, spec.sin_diffraction(lam))))
-    return [f"{spec.resolution[0]} x {spec.resolution[1]} at {spec.pitch * 1e6:.3g} µm: "
-            f"{w * 1e3:.3g} x {h * 1e3:.3g} mm, {spec.bit_depth}-bit",
-            f"scene: {w / spec.scale:.3g} x {h / spec.scale:.3g} m, "
-            f"{spec.behind / spec.scale:.3g} m behind, {spec.front / spec.scale:.3g} m in front",
-            f"diffraction: ±{angle:.3g}° at {lam * 1e9:.4g} nm; eye box "
-            f"{spec.eye_box * 1e3:.3g} mm at {spec.eye_distance * 1e3:.4g} mm"]
+    return [
+        f"{spec.resolution[0]} x {spec.resolution[1]} at {spec.pitch * 1e6:.3g} µm: "
+        f"{w * 1e3:.3g} x {h * 1e3:.3g} mm, {spec.bit_depth}-bit",
+        f"scene: {w / spec.scale:.3g} x {h / spec.scale:.3g} m, "
+        f"{spec.behind / spec.scale:.3g} m behind, {spec.front / spec.scale:.3g} m in front",
+        f"diffraction: ±{angle:.3g}° at {lam * 1e9:.4g} nm; eye box "
+        f"{spec.eye_box * 1e3:.3g} mm at {spec.eye_distance * 1e3:.4g} mm",
+    ]
 
 
 def draw_display(layout, context, obj) -> None:
@@ -97,8 +99,9 @@ class HOLO_OT_export_display(bpy.types.Operator):
         scene = context.scene
         obj = scene_display(scene)
         try:
-            result = handlers.display_frame(scene, context.evaluated_depsgraph_get(), obj,
-                                            progress=lambda _f: None)
+            result = handlers.display_frame(
+                scene, context.evaluated_depsgraph_get(), obj, progress=lambda _f: None
+            )
         except jobs.Cancelled:
             self.report({"WARNING"}, "the display frame was cancelled: nothing was written")
             return {"CANCELLED"}

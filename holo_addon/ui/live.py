@@ -38,9 +38,9 @@ from .overlay import attach, detach
 from .preview import frame_rect
 
 log = logging.getLogger(__name__)
-STILL = 0.15   # s of stillness after a move before the full view is asked
-POLL = 0.02    # s between the timer's looks at the worker while a view is awaited
-REREAD = 0.3   # s after the last scene change before the plate's files are looked up again
+STILL = 0.15  # s of stillness after a move before the full view is asked
+POLL = 0.02  # s between the timer's looks at the worker while a view is awaited
+REREAD = 0.3  # s after the last scene change before the plate's files are looked up again
 ZONE_HINT = "The plate's viewing zone is the blue box (Overlays ▸ Holo Plate Coverage)."
 
 
@@ -91,6 +91,7 @@ def state() -> Live:
 
 # -- the plate ----------------------------------------------------------------------------
 
+
 def plate_source(scene, depsgraph) -> Source:
     """The plate's files the scene's render would view (:func:`holo_addon.export.job.read`),
     or why there are none: not Plate mode, no plate, not recorded since the scene changed."""
@@ -104,16 +105,24 @@ def plate_source(scene, depsgraph) -> Source:
     if isinstance(route, CameraRoute):
         return Source(why=prepared.instead or "the frame is a camera hologram")
     if route.record:
-        return Source(why=f"plate '{prepared.plate_name}' is not recorded for the scene as it "
-                          f"is: Record Hologram (Render ▸ Holo), then look through it")
-    plates = (str(route.folder),) if isinstance(route, SetRoute) else \
-        tuple(map(str, route.holograms))
+        return Source(
+            why=f"plate '{prepared.plate_name}' is not recorded for the scene as it "
+            f"is: Record Hologram (Render ▸ Holo), then look through it"
+        )
+    plates = (
+        (str(route.folder),) if isinstance(route, SetRoute) else tuple(map(str, route.holograms))
+    )
     # the route's settings, Supersample at Auto resolved as the render resolves it
-    return Source(plates=plates, recording=route.recording,
-                  options=(("supersample", route.supersample),
-                           ("composition", route.composition),
-                           ("opacity_threshold", route.opacity_threshold),
-                           ("exposure", route.exposure)))
+    return Source(
+        plates=plates,
+        recording=route.recording,
+        options=(
+            ("supersample", route.supersample),
+            ("composition", route.composition),
+            ("opacity_threshold", route.opacity_threshold),
+            ("exposure", route.exposure),
+        ),
+    )
 
 
 def refresh(scene, depsgraph) -> Source:
@@ -126,8 +135,9 @@ def refresh(scene, depsgraph) -> Source:
     close()
     p.source, p.why = source, source.why
     if not source.why:
-        p.views = Views(source.plates, recording=source.recording, **dict(source.options),
-                        **worker_options())
+        p.views = Views(
+            source.plates, recording=source.recording, **dict(source.options), **worker_options()
+        )
     _redraw()
     return source
 
@@ -137,18 +147,28 @@ def close() -> None:
     p = state()
     if p.views is not None:
         p.views.close()
-    p.views, p.shown, p.texture, p.key, p.camera, p.full, p.first = \
-        None, None, None, (), None, 0, 0
+    p.views, p.shown, p.texture, p.key, p.camera, p.full, p.first = None, None, None, (), None, 0, 0
     p.keys = {}
 
 
 # -- asking and taking views -----------------------------------------------------------------
 
+
 def camera_key(camera) -> tuple:
     """What a view depends on of ``camera`` (its pose, lens, sensor, frame and focus)."""
-    return (camera.matrix_world.tobytes(), camera.lens, camera.sensor_width,
-            camera.sensor_height, camera.sensor_fit, camera.shift_x, camera.shift_y,
-            camera.resolution, camera.pixel_aspect, camera.fstop, camera.focus_distance)
+    return (
+        camera.matrix_world.tobytes(),
+        camera.lens,
+        camera.sensor_width,
+        camera.sensor_height,
+        camera.sensor_fit,
+        camera.shift_x,
+        camera.shift_y,
+        camera.resolution,
+        camera.pixel_aspect,
+        camera.fstop,
+        camera.focus_distance,
+    )
 
 
 def look(region: int, camera, now: float | None = None) -> int:
@@ -213,7 +233,7 @@ def texture_pixels(rgba, exposure: float = 0.0, *, linear: bool = True) -> np.nd
     False: encoded with the sRGB curve (a drawing that takes display values)."""
     out = np.array(rgba[::-1], np.float32)
     rgb = out[..., :3]
-    rgb *= np.float32(2.0 ** exposure)
+    rgb *= np.float32(2.0**exposure)
     if not linear:
         rgb[...] = srgb(rgb)
     np.clip(out[..., 3], 0.0, 1.0, out=out[..., 3])
@@ -239,6 +259,7 @@ def words(scene) -> str:
 
 # -- the interface ---------------------------------------------------------------------------
 
+
 def _ensure_timer():
     if not bpy.app.timers.is_registered(_tick):
         bpy.app.timers.register(_tick, first_interval=POLL)
@@ -261,8 +282,13 @@ def shows(context) -> bool:
     """Whether this 3D view draws the live view: Live Plate View on, Plate mode, Rendered
     shading."""
     scene, space = context.scene, context.space_data
-    return scene.holo.live_plate and scene.holo.mode == "PLATE" and space is not None and \
-        space.type == "VIEW_3D" and space.shading.type == "RENDERED"
+    return (
+        scene.holo.live_plate
+        and scene.holo.mode == "PLATE"
+        and space is not None
+        and space.type == "VIEW_3D"
+        and space.shading.type == "RENDERED"
+    )
 
 
 def toggled(context) -> None:
@@ -309,8 +335,9 @@ def _frame(scene, rv3d, region):
     cam = scene.camera
     local = np.array([tuple(v) for v in cam.data.view_frame(scene=scene)])
     m = np.array(cam.matrix_world)
-    left, bottom, right, top = frame_rect(rv3d.perspective_matrix, (region.width,
-                                          region.height), local @ m[:3, :3].T + m[:3, 3])
+    left, bottom, right, top = frame_rect(
+        rv3d.perspective_matrix, (region.width, region.height), local @ m[:3, :3].T + m[:3, 3]
+    )
     return left, bottom, right - left, top - bottom
 
 
@@ -329,8 +356,9 @@ def _draw():
         _text(region, [p.why])
         return
     try:  # the objects as the viewport shows them (their matrices are the evaluated ones)
-        camera = viewport_camera(scene, context.space_data, rv3d, (region.width,
-                                 region.height), scene.holo.live_pixels)
+        camera = viewport_camera(
+            scene, context.space_data, rv3d, (region.width, region.height), scene.holo.live_pixels
+        )
     except (ExportError, ValueError) as e:
         _text(region, [str(e)])
         return
@@ -343,6 +371,7 @@ def _draw():
         return
     import gpu
     from gpu_extras.presets import draw_texture_2d
+
     linear = compat.draws_linear_textures()
     if p.texture is None:
         h, w, _ = shown.rgba.shape
@@ -351,17 +380,18 @@ def _draw():
         p.texture = gpu.types.GPUTexture((w, h), format="RGBA16F", data=data)
     left, bottom, width, height = _frame(scene, rv3d, region)
     gpu.state.blend_set("ALPHA")
-    compat.draw_linear_texture(draw_texture_2d, p.texture, (left, bottom), width, height,
-                               linear=linear)
+    compat.draw_linear_texture(
+        draw_texture_2d, p.texture, (left, bottom), width, height, linear=linear
+    )
     gpu.state.blend_set("NONE")
     if shown.coarse:
-        _text(region, ["Holo: coarse view (the full view follows when the view stops)"],
-              dim=True)
+        _text(region, ["Holo: coarse view (the full view follows when the view stops)"], dim=True)
 
 
 def _text(region, lines, *, dim=False) -> None:
     """``lines`` written in the view's top-left corner, wrapped to its width."""
     import blf
+
     font, size = 0, 13
     blf.size(font, size)
     blf.color(font, 1.0, 1.0, 1.0, 0.6 if dim else 0.95)

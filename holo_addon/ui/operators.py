@@ -62,21 +62,28 @@ class _PipelineOperator:
         scene = context.scene
         try:  # what the render draws, emitters hidden in the viewport only included
             with shown_as_rendered(scene, getattr(context, "view_layer", None)):
-                job = pipeline.prepare(scene, context.evaluated_depsgraph_get(),
-                                       render=self.render, bake=True)
+                job = pipeline.prepare(
+                    scene, context.evaluated_depsgraph_get(), render=self.render, bake=True
+                )
                 if motion.blurs(scene):  # blurred as the render's raster will be
                     now = motion.sample(scene, context.evaluated_depsgraph_get())
-                    job = pipeline.moving(job, [now, *motion.evaluate_shutter(
-                        scene, context.evaluated_depsgraph_get)], *motion.shutter(scene))
+                    job = pipeline.moving(
+                        job,
+                        [now, *motion.evaluate_shutter(scene, context.evaluated_depsgraph_get)],
+                        *motion.shutter(scene),
+                    )
         except USER_ERRORS as e:
             self.report({"ERROR"}, str(e))
             return None
         for warning in job.warnings:
             self.report({"WARNING"}, warning)
         if not viewport_matches_render(context.scene):
-            self.report({"WARNING"}, "an emitter's modifiers differ between viewport and render: "
-                                     "this pass uses the viewport's; F12 and animation renders "
-                                     "make theirs at render settings")
+            self.report(
+                {"WARNING"},
+                "an emitter's modifiers differ between viewport and render: "
+                "this pass uses the viewport's; F12 and animation renders "
+                "make theirs at render settings",
+            )
         return job
 
     def execute(self, context):
@@ -86,9 +93,12 @@ class _PipelineOperator:
         wm = context.window_manager
         wm.progress_begin(0, 1000)
         try:
-            result = pipeline.run(job, lambda f: wm.progress_update(int(f * 1000)),
-                                  lambda level, text: _report_log(self, level, text),
-                                  resident=_kept(job))
+            result = pipeline.run(
+                job,
+                lambda f: wm.progress_update(int(f * 1000)),
+                lambda level, text: _report_log(self, level, text),
+                resident=_kept(job),
+            )
         except USER_ERRORS as e:
             self.report({"ERROR"}, f"{self.bl_label} failed: {e}")
             return {"CANCELLED"}
@@ -123,8 +133,11 @@ class _PipelineOperator:
             self.cancel(context)
             self.report({"WARNING"}, f"{self.bl_label} cancelled; earlier results kept")
             return {"CANCELLED"}
-        if event.type in {"RET", "NUMPAD_ENTER"} and event.value == "PRESS" and \
-                self._worker.partial:
+        if (
+            event.type in {"RET", "NUMPAD_ENTER"}
+            and event.value == "PRESS"
+            and self._worker.partial
+        ):
             return self._keep(context)
         if event.type != "TIMER" or event.timer is not self._timer:
             return {"PASS_THROUGH"}  # the interface stays usable while the worker runs
@@ -132,14 +145,15 @@ class _PipelineOperator:
         for kind, value in self._worker.poll():
             if kind == "progress":
                 wm.progress_update(int(value * 1000))
-                context.workspace.status_text_set(f"Holo: {self.bl_label} {value:.0%} "
-                                                  f"(Esc to cancel)")
+                context.workspace.status_text_set(
+                    f"Holo: {self.bl_label} {value:.0%} (Esc to cancel)"
+                )
             elif kind == "log":
                 _report_log(self, *value)
             elif kind == "partial":
                 context.workspace.status_text_set(
-                    f"Holo: {self.bl_label}: {value} samples so far (Enter keeps them, Esc "
-                    f"cancels)")
+                    f"Holo: {self.bl_label}: {value} samples so far (Enter keeps them, Esc cancels)"
+                )
             elif kind == "failed":
                 self._end(context)
                 self.report({"ERROR"}, f"{self.bl_label} failed: {value}")
@@ -157,8 +171,10 @@ class _PipelineOperator:
         samples = self._worker.stop_and_keep(frame)
         self._end(context)
         if not samples:
-            self.report({"WARNING"}, f"{self.bl_label} stopped before its first sample; "
-                                     f"earlier results kept")
+            self.report(
+                {"WARNING"},
+                f"{self.bl_label} stopped before its first sample; earlier results kept",
+            )
             return {"CANCELLED"}
         self.report({"INFO"}, f"stopped at {samples} samples; that pass is kept")
         return self._done(context, job, Result(pass_path=frame, report=Report(looks=samples)))
@@ -204,8 +220,7 @@ def speckle(report) -> str:
     if not looks:
         return ""
     if contrast is None:  # one look has no spread to measure (the view's NaN)
-        return " (1 look: its speckle is not measured; two or more looks are)" \
-            if looks == 1 else ""
+        return " (1 look: its speckle is not measured; two or more looks are)" if looks == 1 else ""
     if looks == 1 and contrast == 0:
         return " (the looks' limit: no speckle)"
     return f" ({looks} samples, speckle contrast {contrast:.3f})"
@@ -249,8 +264,11 @@ class HOLO_OT_setup_compositing(bpy.types.Operator):
         except USER_ERRORS as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        self.report({"INFO"}, "compositor: the holographic pass fills the holes Blender's "
-                              "render leaves for holographic objects")
+        self.report(
+            {"INFO"},
+            "compositor: the holographic pass fills the holes Blender's "
+            "render leaves for holographic objects",
+        )
         return {"FINISHED"}
 
 
@@ -285,8 +303,7 @@ class HOLO_OT_cancel_pass(bpy.types.Operator):
         return session.running.frame is not None
 
     def execute(self, context):
-        self.report({"INFO"}, f"cancelling the holographic pass of frame "
-                              f"{session.cancel_pass()}")
+        self.report({"INFO"}, f"cancelling the holographic pass of frame {session.cancel_pass()}")
         return {"FINISHED"}
 
 
@@ -298,8 +315,9 @@ class HOLO_OT_report(bpy.types.Operator):
     bl_options = {"INTERNAL"}
 
     message: bpy.props.StringProperty()
-    level: bpy.props.EnumProperty(items=[("ERROR", "Error", ""), ("WARNING", "Warning", "")],
-                                  default="ERROR")
+    level: bpy.props.EnumProperty(
+        items=[("ERROR", "Error", ""), ("WARNING", "Warning", "")], default="ERROR"
+    )
 
     def execute(self, context):
         self.report({self.level}, self.message)
@@ -317,12 +335,18 @@ class HOLO_OT_remove_compositing(bpy.types.Operator):
         if not tree.remove(context.scene):
             self.report({"INFO"}, "the compositor has no holographic pass")
             return {"CANCELLED"}
-        self.report({"INFO"}, "compositor: the holographic pass removed, the user's nodes "
-                              "restored")
+        self.report({"INFO"}, "compositor: the holographic pass removed, the user's nodes restored")
         return {"FINISHED"}
 
 
-CLASSES = (HOLO_OT_record_hologram, HOLO_OT_render_pass, HOLO_OT_setup_compositing,
-           HOLO_OT_render, HOLO_OT_cancel_pass, HOLO_OT_report, HOLO_OT_remove_compositing)
+CLASSES = (
+    HOLO_OT_record_hologram,
+    HOLO_OT_render_pass,
+    HOLO_OT_setup_compositing,
+    HOLO_OT_render,
+    HOLO_OT_cancel_pass,
+    HOLO_OT_report,
+    HOLO_OT_remove_compositing,
+)
 
 register, unregister = bpy.utils.register_classes_factory(CLASSES)

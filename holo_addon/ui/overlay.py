@@ -23,8 +23,7 @@ from bpy.app.handlers import persistent
 from ..export.plates import plate_from_object, plate_parts, through_plate
 from ..export.scene import ExportError, emitter_instances
 
-COLOURS = {"ALL": (0.3, 0.9, 0.4, 0.9), "PART": (1.0, 0.6, 0.1, 0.9),
-           "NONE": (1.0, 0.25, 0.2, 0.9)}
+COLOURS = {"ALL": (0.3, 0.9, 0.4, 0.9), "PART": (1.0, 0.6, 0.1, 0.9), "NONE": (1.0, 0.25, 0.2, 0.9)}
 ZONE_COLOUR = (0.3, 0.75, 1.0, 0.9)
 PART_COLOUR = (0.7, 0.45, 1.0, 0.9)
 CORNERS = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1)]) / 2  # around the plate, in its sizes
@@ -145,11 +144,13 @@ def _forget(*_):
 def _draw():
     context = bpy.context
     found = _cache.get(context.scene.name)
-    if found is None or not (context.scene.holo.show_coverage and
-                             context.space_data.overlay.show_overlays):
+    if found is None or not (
+        context.scene.holo.show_coverage and context.space_data.overlay.show_overlays
+    ):
         return
     import gpu
     from gpu_extras.batch import batch_for_shader
+
     shader = gpu.shader.from_builtin("POLYLINE_UNIFORM_COLOR")
     batch = batch_for_shader(shader, "LINES", {"pos": found.lines.tolist()})
     shader.uniform_float("viewportSize", [float(n) for n in gpu.state.viewport_get()[2:]])
@@ -195,8 +196,11 @@ def detach(handlers, drawn: list) -> bool:
     return True
 
 
-HANDLERS = (("depsgraph_update_post", _update), ("frame_change_post", _update),
-            ("load_post", _forget))
+HANDLERS = (
+    ("depsgraph_update_post", _update),
+    ("frame_change_post", _update),
+    ("load_post", _forget),
+)
 _handle = []
 
 

@@ -48,14 +48,15 @@ class HOLO_PT_scene(bpy.types.Panel):
             layout.prop(h, "preview")
             shown = preview.state()
             if h.preview and shown.latency is not None:
-                layout.label(text=f"Preview: {shown.latency:.1f} s from the change to the "
-                                  f"picture", icon="HIDE_OFF")
+                layout.label(
+                    text=f"Preview: {shown.latency:.1f} s from the change to the picture",
+                    icon="HIDE_OFF",
+                )
         layout.prop(h, "pass_on_render")
         running, warnings = session.running, session.warnings
         if running.frame is not None:  # a render is making its pass
             box = layout.box()
-            box.label(text=f"Pass of frame {running.frame}: {running.fraction:.0%}",
-                      icon="TIME")
+            box.label(text=f"Pass of frame {running.frame}: {running.fraction:.0%}", icon="TIME")
             box.operator("holo.cancel_pass", icon="CANCEL")
         if warnings["texts"]:  # of the latest pass a render made
             box = layout.box()
@@ -104,7 +105,6 @@ class HOLO_PT_object(bpy.types.Panel):
         layout.prop(h, "emitter")
 
 
-
 def draw_live(layout, context) -> None:
     """Live Plate View, its resolution and what it does now."""
     h = context.scene.holo
@@ -127,13 +127,17 @@ def draw_plate(layout, context, h) -> None:
     layout.prop(h, "zone_margin")
     layout.prop(h, "part_length")
     if h.parts:
-        layout.label(text=f"A set of {plates.part_count(h)} parts along the camera's path "
-                          f"(Fit Zone to Shot): each frame renders from the part that holds "
-                          f"its camera")
+        layout.label(
+            text=f"A set of {plates.part_count(h)} parts along the camera's path "
+            f"(Fit Zone to Shot): each frame renders from the part that holds "
+            f"its camera"
+        )
     elif h.zone_set:
         (x, y, z), (hx, hy, hz) = h.zone_centre, h.zone_half
-        layout.label(text=f"Viewing zone: ({x:.3g}, {y:.3g}, {z:.3g}) m "
-                          f"±({hx:.3g}, {hy:.3g}, {hz:.3g}) m, plate's frame")
+        layout.label(
+            text=f"Viewing zone: ({x:.3g}, {y:.3g}, {z:.3g}) m "
+            f"±({hx:.3g}, {hy:.3g}, {hz:.3g}) m, plate's frame"
+        )
     else:
         layout.label(text="Viewing zone: set around the camera when recorded")
     row = layout.row(align=True)

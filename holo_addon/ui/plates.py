@@ -115,8 +115,9 @@ class HOLO_OT_fit_zone_to_shot(bpy.types.Operator):
     def execute(self, context):
         scene, obj, unit = context.scene, plate_object(context), scale(context.scene)
         try:
-            parts, frames, distance = shot_parts(scene, obj, unit,
-                                                 context.evaluated_depsgraph_get())
+            parts, frames, distance = shot_parts(
+                scene, obj, unit, context.evaluated_depsgraph_get()
+            )
             if len(parts) == 1:  # one plate serves the move: the plate as the user placed it
                 zone, frames = shot_zone(scene, obj, unit)
         except (ExportError, ValueError) as e:
@@ -126,17 +127,23 @@ class HOLO_OT_fit_zone_to_shot(bpy.types.Operator):
             obj.holo.parts = parts_to_json(parts)
             obj.holo.zone_set = False
             length = parts[-1].stretch[1]
-            self.report({"INFO"}, f"plate '{obj.name}': a set of {len(parts)} parts along "
-                                  f"{length / unit:.3g} units of the camera's path over "
-                                  f"frames {frames[0]}-{frames[-1]}, each facing its stretch "
-                                  f"{distance / unit:.3g} units from the "
-                                  f"objects: every frame renders from the part that holds its "
-                                  f"camera")
+            self.report(
+                {"INFO"},
+                f"plate '{obj.name}': a set of {len(parts)} parts along "
+                f"{length / unit:.3g} units of the camera's path over "
+                f"frames {frames[0]}-{frames[-1]}, each facing its stretch "
+                f"{distance / unit:.3g} units from the "
+                f"objects: every frame renders from the part that holds its "
+                f"camera",
+            )
             overlay.refresh(context)
             return {"FINISHED"}
         _keep(obj, zone)
-        self.report({"INFO"}, f"plate '{obj.name}': viewing zone {zone.describe()}, the "
-                              f"camera's pupil over frames {frames[0]}-{frames[-1]}")
+        self.report(
+            {"INFO"},
+            f"plate '{obj.name}': viewing zone {zone.describe()}, the "
+            f"camera's pupil over frames {frames[0]}-{frames[-1]}",
+        )
         return {"FINISHED"}
 
 
@@ -164,8 +171,10 @@ def emitter_box(depsgraph, unit) -> np.ndarray:
 def emitter_corners(depsgraph, unit) -> list[np.ndarray]:
     """Each holographic object's triangles' corners (3T, 3) [m, world], as the recording
     takes them."""
-    corners = [corner_positions(inst.object, depsgraph, unit, inst.matrix_world)
-               for inst, _ in emitter_instances(depsgraph)]
+    corners = [
+        corner_positions(inst.object, depsgraph, unit, inst.matrix_world)
+        for inst, _ in emitter_instances(depsgraph)
+    ]
     if not corners:
         raise ExportError("no holographic emitters to plan for")
     return corners
@@ -188,9 +197,13 @@ def shot_parts(scene, obj, unit, depsgraph):
     plate = plate_from_object(obj, unit)
     distance = float(np.linalg.norm(plate.matrix_world[:3, 3] - box.mean(0)))
     try:
-        parts = parts_along(cameras, box, distance=distance,
-                            stretch=obj.holo.part_length * unit,
-                            margin=obj.holo.zone_margin * unit)
+        parts = parts_along(
+            cameras,
+            box,
+            distance=distance,
+            stretch=obj.holo.part_length * unit,
+            margin=obj.holo.zone_margin * unit,
+        )
     except InputError as e:
         raise ExportError(f"plate '{obj.name}': {_frames_named(str(e), frames)}") from None
     return parts, frames, distance
@@ -199,11 +212,13 @@ def shot_parts(scene, obj, unit, depsgraph):
 def _frames_named(text: str, frames) -> str:
     """The core's message, its frames (indices along the path) named by their numbers on the
     timeline."""
+
     def number(m):
         first = frames[min(int(m.group(2)), len(frames) - 1)]
         if m.group(4) is None:
             return f"{m.group(1)} {first}"
         return f"{m.group(1)} {first}-{frames[min(int(m.group(4)), len(frames) - 1)]}"
+
     return re.sub(r"\b(frames?) (\d+)(-(\d+))?", number, text)
 
 
@@ -221,10 +236,16 @@ def shot_zone(scene, obj, unit):
     finally:
         scene.frame_set(current)
     if min(p[2] for p in positions) <= 0:
-        raise ExportError(f"the camera passes behind plate '{obj.name}' during the shot: "
-                          f"viewers must stay on its +Z side")
-    zone = ViewingZone.fit(positions, camera.aperture_diameter or 0.0,
-                           obj.holo.zone_margin * unit, camera.pixel_angle())
+        raise ExportError(
+            f"the camera passes behind plate '{obj.name}' during the shot: "
+            f"viewers must stay on its +Z side"
+        )
+    zone = ViewingZone.fit(
+        positions,
+        camera.aperture_diameter or 0.0,
+        obj.holo.zone_margin * unit,
+        camera.pixel_angle(),
+    )
     return zone, frames
 
 
@@ -238,36 +259,57 @@ def set_summary(context, obj, parts) -> list[str]:
     corners = box_corners(np.array([every.min(0), every.max(0)]))
     camera = camera_from_object(scene, scene.camera, unit)
     plans = plan_parts(parts, corners, meshes=meshes).plans
-    choices = [choose(q, resolution=camera.resolution, looks=h.iterations,
-                      supersample=h.supersample, budget=budget(h), plans=plans)
-               for q in plans]
+    choices = [
+        choose(
+            q,
+            resolution=camera.resolution,
+            looks=h.iterations,
+            supersample=h.supersample,
+            budget=budget(h),
+            plans=plans,
+        )
+        for q in plans
+    ]
     choice = min(choices, key=lambda c: c.planned.psnr)  # the part that needs the most
     p = plan_parts(parts, corners, looks=choice.looks, meshes=meshes)
     options = worker_options()  # the estimate of this machine for the worker's device and cache
     took = estimate.plate_set(p, device=options["device"], cache_dir=options["cache_dir"])
     k, beyond = nearest_part(parts, camera)
-    here = (f"part {k + 1} holds the camera's pupil" if not beyond else
-            f"the camera's pupil reaches {beyond:.3g} m beyond every part (part {k + 1} is "
-            f"the nearest)")
+    here = (
+        f"part {k + 1} holds the camera's pupil"
+        if not beyond
+        else f"the camera's pupil reaches {beyond:.3g} m beyond every part (part {k + 1} is "
+        f"the nearest)"
+    )
     widest = max(p.plans, key=lambda q: q.samples)
-    lines = [f"verdict     a set of {len(parts)} parts along the camera's path; each frame "
-             f"renders from the part that holds its camera ({here})",
-             f"set         {p.describe(took)}",
-             f"a view      reads one part, at most {widest.samples / 1e6:.3g} Mpx",
-             *quality_lines(choice)]
+    lines = [
+        f"verdict     a set of {len(parts)} parts along the camera's path; each frame "
+        f"renders from the part that holds its camera ({here})",
+        f"set         {p.describe(took)}",
+        f"a view      reads one part, at most {widest.samples / 1e6:.3g} Mpx",
+        *quality_lines(choice),
+    ]
     for n, (part, q) in enumerate(zip(parts, p.plans), 1):
-        lines.append(f"part {n:<6d} {part.plate.width / unit:.3g} x "
-                     f"{part.plate.height / unit:.3g} units, {q.samples / 1e6:.3g} Mpx, path "
-                     f"{part.stretch[0] / unit:.3g}-{part.stretch[1] / unit:.3g} units")
+        lines.append(
+            f"part {n:<6d} {part.plate.width / unit:.3g} x "
+            f"{part.plate.height / unit:.3g} units, {q.samples / 1e6:.3g} Mpx, path "
+            f"{part.stretch[0] / unit:.3g}-{part.stretch[1] / unit:.3g} units"
+        )
     gb = 2.0**30
     if p.disk_bytes() > h.plate_disk * gb:
-        lines.insert(1, f"refused     the set needs {memory.gib(p.disk_bytes())} on disk; the "
-                        f"Disk Budget is {h.plate_disk:g} GiB (a longer Part Length shares "
-                        f"more, a smaller aperture or coarser views need less)")
+        lines.insert(
+            1,
+            f"refused     the set needs {memory.gib(p.disk_bytes())} on disk; the "
+            f"Disk Budget is {h.plate_disk:g} GiB (a longer Part Length shares "
+            f"more, a smaller aperture or coarser views need less)",
+        )
     elif p.memory_bytes() > h.plate_memory * gb:
-        lines.insert(1, f"refused     a part needs {memory.gib(p.memory_bytes())} of memory "
-                        f"while recorded; the Memory Budget is {h.plate_memory:g} GiB (a "
-                        f"shorter Part Length needs less)")
+        lines.insert(
+            1,
+            f"refused     a part needs {memory.gib(p.memory_bytes())} of memory "
+            f"while recorded; the Memory Budget is {h.plate_memory:g} GiB (a "
+            f"shorter Part Length needs less)",
+        )
     return lines
 
 
@@ -276,9 +318,11 @@ def quality_lines(choice) -> list[str]:
     what the views use and why, and what a user's lower setting loses."""
     p = choice.planned
     if choice.user_looks or choice.user_supersample:
-        lines = [f"quality     {choice.looks} looks at supersample {choice.supersample} "
-                 f"predict {choice.psnr:.1f} dB; Auto would choose {p.looks} looks at "
-                 f"supersample {p.supersample} ({p.psnr:.1f} dB)"]
+        lines = [
+            f"quality     {choice.looks} looks at supersample {choice.supersample} "
+            f"predict {choice.psnr:.1f} dB; Auto would choose {p.looks} looks at "
+            f"supersample {p.supersample} ({p.psnr:.1f} dB)"
+        ]
     else:
         lines = [f"quality     Auto chose {choice.describe()}"]
     if choice.capped():
@@ -309,38 +353,66 @@ def plan_summary(context) -> list[str]:
     # the triangles' corners, as the recording takes them: an object's bounding box turned
     # into the plate's frame is up to √3 times wider than the object, and a plate planned
     # from it overstates its samples and memory by as much (docs, Performance)
-    meshes = [replace(m, vertices=plate.to_plate(m.vertices))
-              for m in corner_meshes(emitter_corners(context.evaluated_depsgraph_get(), unit))]
+    meshes = [
+        replace(m, vertices=plate.to_plate(m.vertices))
+        for m in corner_meshes(emitter_corners(context.evaluated_depsgraph_get(), unit))
+    ]
     local = np.concatenate([m.vertices for m in meshes])
     eye = plate.to_plate(camera.position[None])[0]
     zone = plate.zone or zone_around(plate, camera, obj.holo.zone_margin * unit)
     h = scene.holo
-    p = plan((plate.width, plate.height), [local.min(0), local.max(0)], zone=zone,
-             pixel_angle=zone.pixel or camera.pixel_angle(),
-             wavelength=h.wavelength * unit if h.wavelength > 0 else None,
-             seen=seen_area(meshes, zone.centre))
-    choice = choose(p, resolution=camera.resolution, looks=h.iterations,
-                    supersample=h.supersample, budget=budget(h))
+    p = plan(
+        (plate.width, plate.height),
+        [local.min(0), local.max(0)],
+        zone=zone,
+        pixel_angle=zone.pixel or camera.pixel_angle(),
+        wavelength=h.wavelength * unit if h.wavelength > 0 else None,
+        seen=seen_area(meshes, zone.centre),
+    )
+    choice = choose(
+        p,
+        resolution=camera.resolution,
+        looks=h.iterations,
+        supersample=h.supersample,
+        budget=budget(h),
+    )
     p = replace(p, looks=choice.looks)
-    v = plan_view(p, position=eye, pixel_angle=camera.pixel_angle(),
-                  pupil=camera.aperture_diameter, resolution=camera.resolution)
-    lens = f"{camera.lens:g} mm f/{camera.fstop:g}" if camera.fstop else \
-        f"a {camera.lens:g} mm pinhole"
+    v = plan_view(
+        p,
+        position=eye,
+        pixel_angle=camera.pixel_angle(),
+        pupil=camera.aperture_diameter,
+        resolution=camera.resolution,
+    )
+    lens = (
+        f"{camera.lens:g} mm f/{camera.fstop:g}"
+        if camera.fstop
+        else f"a {camera.lens:g} mm pinhole"
+    )
     options = worker_options()  # the estimate of this machine for the worker's device and cache
-    lines = summary(p, v, lens=lens, resolution=camera.resolution,
-                    plate_size=(plate.width, plate.height), camera=eye,
-                    device=options["device"], cache_dir=options["cache_dir"])
+    lines = summary(
+        p,
+        v,
+        lens=lens,
+        resolution=camera.resolution,
+        plate_size=(plate.width, plate.height),
+        camera=eye,
+        device=options["device"],
+        cache_dir=options["cache_dir"],
+    )
     lines[1:1] = quality_lines(choice)
     gb = 2.0**30
     try:  # as the recording's plan decides: tile by tile where the looks exceed the memory
-        tiled = p.check_recording(memory=h.plate_memory * gb, disk=h.plate_disk * gb,
-                                  tiled=None)
+        tiled = p.check_recording(memory=h.plate_memory * gb, disk=h.plate_disk * gb, tiled=None)
     except InputError as e:
         lines.insert(1, f"refused     {e}")
     else:
         if tiled:
-            lines.insert(1, "tiles       the looks exceed the memory in one piece: they are "
-                            "recorded tile by tile, into a store beside each file")
+            lines.insert(
+                1,
+                "tiles       the looks exceed the memory in one piece: they are "
+                "recorded tile by tile, into a store beside each file",
+            )
     return lines
 
 
@@ -379,18 +451,30 @@ def _number(value) -> str:
     return np.format_float_positional(float(value), unique=True, trim="-")
 
 
-_PITCH_UNITS = [("UM", "µm", "Micrometres (cameras, SLMs, scanned film)", 1e-6),
-                ("NM", "nm", "Nanometres (electron and X-ray holograms)", 1e-9),
-                ("MM", "mm", "Millimetres (antenna arrays)", 1e-3)]
-_WAVE_UNITS = [("NM", "nm", "Nanometres (light, X-rays)", 1e-9),
-               ("PM", "pm", "Picometres (electrons)", 1e-12),
-               ("UM", "µm", "Micrometres (infrared)", 1e-6),
-               ("KV", "kV", "An electron microscope's accelerating voltage", None)]
-_RADIUS_UNITS = [("carrier", "Fraction of Carrier", ("A fraction of the carrier's frequency "
-                                                     "(1/3: weak phase objects, 0.5: holospy's "
-                                                     "for strong ones)")),
-                 ("1/mm", "Cycles per mm", "Spatial frequency [1/mm]"),
-                 ("mrad", "mrad", "The scattering angle [mrad]")]
+_PITCH_UNITS = [
+    ("UM", "µm", "Micrometres (cameras, SLMs, scanned film)", 1e-6),
+    ("NM", "nm", "Nanometres (electron and X-ray holograms)", 1e-9),
+    ("MM", "mm", "Millimetres (antenna arrays)", 1e-3),
+]
+_WAVE_UNITS = [
+    ("NM", "nm", "Nanometres (light, X-rays)", 1e-9),
+    ("PM", "pm", "Picometres (electrons)", 1e-12),
+    ("UM", "µm", "Micrometres (infrared)", 1e-6),
+    ("KV", "kV", "An electron microscope's accelerating voltage", None),
+]
+_RADIUS_UNITS = [
+    (
+        "carrier",
+        "Fraction of Carrier",
+        (
+            "A fraction of the carrier's frequency "
+            "(1/3: weak phase objects, 0.5: holospy's "
+            "for strong ones)"
+        ),
+    ),
+    ("1/mm", "Cycles per mm", "Spatial frequency [1/mm]"),
+    ("mrad", "mrad", "The scattering angle [mrad]"),
+]
 
 
 _PITCH_FACTOR = {key: factor for key, *_, factor in _PITCH_UNITS}
@@ -409,58 +493,113 @@ class HOLO_OT_import_hologram(bpy.types.Operator, ImportHelper):
     bl_options = {"REGISTER", "UNDO"}
     filename_ext = ".exr"
     filter_glob: bpy.props.StringProperty(
-        default="*.exr;*.png;*.tif;*.tiff;*.npy;*.h5;*.hdf5;*.mat", options={"HIDDEN"})
-    pitch: bpy.props.FloatProperty(name="Pitch", default=3.45, min=1e-6, max=1e6,
-                                   description="An acquired hologram's sample spacing, in the "
-                                               "unit beside it")
-    pitch_unit: bpy.props.EnumProperty(name="Pitch Unit", items=_items(_PITCH_UNITS),
-                                       default="UM")
-    wavelength: bpy.props.FloatProperty(name="Wavelength", default=633.0, min=1e-6, max=1e7,
-                                        description="An acquired hologram's wavelength, in the "
-                                                    "unit beside it (kV: electrons of that "
-                                                    "accelerating voltage)")
-    wavelength_unit: bpy.props.EnumProperty(name="Wavelength Unit", items=_items(_WAVE_UNITS),
-                                            default="NM")
-    distance: bpy.props.FloatProperty(name="Distance", default=0.05, min=1e-9, soft_max=10.0,
-                                      subtype="DISTANCE", unit="LENGTH",
-                                      description="How far behind an acquired hologram its "
-                                                  "objects lie")
+        default="*.exr;*.png;*.tif;*.tiff;*.npy;*.h5;*.hdf5;*.mat", options={"HIDDEN"}
+    )
+    pitch: bpy.props.FloatProperty(
+        name="Pitch",
+        default=3.45,
+        min=1e-6,
+        max=1e6,
+        description="An acquired hologram's sample spacing, in the unit beside it",
+    )
+    pitch_unit: bpy.props.EnumProperty(name="Pitch Unit", items=_items(_PITCH_UNITS), default="UM")
+    wavelength: bpy.props.FloatProperty(
+        name="Wavelength",
+        default=633.0,
+        min=1e-6,
+        max=1e7,
+        description="An acquired hologram's wavelength, in the "
+        "unit beside it (kV: electrons of that "
+        "accelerating voltage)",
+    )
+    wavelength_unit: bpy.props.EnumProperty(
+        name="Wavelength Unit", items=_items(_WAVE_UNITS), default="NM"
+    )
+    distance: bpy.props.FloatProperty(
+        name="Distance",
+        default=0.05,
+        min=1e-9,
+        soft_max=10.0,
+        subtype="DISTANCE",
+        unit="LENGTH",
+        description="How far behind an acquired hologram its objects lie",
+    )
     carrier: bpy.props.EnumProperty(
-        name="Carrier", default="FIND",
-        items=[("FIND", "Find in Spectrum", ("The +1 order's carrier found in the hologram's "
-                                             "spectrum (the file's reference angle, if it "
-                                             "states one)")),
-               ("GIVEN", "Reference Angle", "The reference's angle and azimuth given here")])
+        name="Carrier",
+        default="FIND",
+        items=[
+            (
+                "FIND",
+                "Find in Spectrum",
+                (
+                    "The +1 order's carrier found in the hologram's "
+                    "spectrum (the file's reference angle, if it "
+                    "states one)"
+                ),
+            ),
+            ("GIVEN", "Reference Angle", "The reference's angle and azimuth given here"),
+        ],
+    )
     sideband: bpy.props.EnumProperty(
-        name="Sideband", default="AUTO",
-        items=[("AUTO", "Auto", "The order that comes into focus at the distance"),
-               ("LOWER", "Lower", "holospy's 'lower': the carrier with f_y > 0"),
-               ("UPPER", "Upper", "holospy's 'upper': the carrier with f_y < 0")])
-    reference_angle: bpy.props.FloatProperty(name="Reference Angle", default=0.05, min=0.0,
-                                             max=1.5, subtype="ANGLE",
-                                             description="The off-axis reference's angle to "
-                                                         "the hologram's normal")
-    reference_azimuth: bpy.props.FloatProperty(name="Azimuth", default=0.0, subtype="ANGLE",
-                                               description="The reference's direction in the "
-                                                           "hologram's plane, from +x to +y")
-    radius: bpy.props.FloatProperty(name="Filter Radius", default=1 / 3, min=1e-6,
-                                    description="The sideband filter's radius, in its unit")
-    radius_unit: bpy.props.EnumProperty(name="Radius Unit", items=_RADIUS_UNITS,
-                                        default="carrier")
+        name="Sideband",
+        default="AUTO",
+        items=[
+            ("AUTO", "Auto", "The order that comes into focus at the distance"),
+            ("LOWER", "Lower", "holospy's 'lower': the carrier with f_y > 0"),
+            ("UPPER", "Upper", "holospy's 'upper': the carrier with f_y < 0"),
+        ],
+    )
+    reference_angle: bpy.props.FloatProperty(
+        name="Reference Angle",
+        default=0.05,
+        min=0.0,
+        max=1.5,
+        subtype="ANGLE",
+        description="The off-axis reference's angle to the hologram's normal",
+    )
+    reference_azimuth: bpy.props.FloatProperty(
+        name="Azimuth",
+        default=0.0,
+        subtype="ANGLE",
+        description="The reference's direction in the hologram's plane, from +x to +y",
+    )
+    radius: bpy.props.FloatProperty(
+        name="Filter Radius",
+        default=1 / 3,
+        min=1e-6,
+        description="The sideband filter's radius, in its unit",
+    )
+    radius_unit: bpy.props.EnumProperty(name="Radius Unit", items=_RADIUS_UNITS, default="carrier")
     edge: bpy.props.EnumProperty(
-        name="Filter Edge", default="HARD",
-        items=[("HARD", "Hard", "A hard-edged aperture"),
-               ("TANH", "Smooth (tanh)", "holospy's smooth edge"),
-               ("COSINE", "Raised Cosine", "A raised-cosine (Tukey) edge")])
-    edge_width: bpy.props.FloatProperty(name="Edge Width", default=0.05, min=1e-3, max=1.0,
-                                        description="The edge's width, a fraction of the radius")
+        name="Filter Edge",
+        default="HARD",
+        items=[
+            ("HARD", "Hard", "A hard-edged aperture"),
+            ("TANH", "Smooth (tanh)", "holospy's smooth edge"),
+            ("COSINE", "Raised Cosine", "A raised-cosine (Tukey) edge"),
+        ],
+    )
+    edge_width: bpy.props.FloatProperty(
+        name="Edge Width",
+        default=0.05,
+        min=1e-3,
+        max=1.0,
+        description="The edge's width, a fraction of the radius",
+    )
     window: bpy.props.EnumProperty(
-        name="Apodisation", default="NONE",
-        items=[(k.upper(), k.capitalize(), f"A {k} window across the filter")
-               for k in ("none", "hann", "hamming", "blackman", "gaussian", "butterworth")])
-    add_camera: bpy.props.BoolProperty(name="Add Camera", default=True,
-                                       description="Add a camera that frames the plate, focused "
-                                                   "at the distance, as the scene's camera")
+        name="Apodisation",
+        default="NONE",
+        items=[
+            (k.upper(), k.capitalize(), f"A {k} window across the filter")
+            for k in ("none", "hann", "hamming", "blackman", "gaussian", "butterworth")
+        ],
+    )
+    add_camera: bpy.props.BoolProperty(
+        name="Add Camera",
+        default=True,
+        description="Add a camera that frames the plate, focused "
+        "at the distance, as the scene's camera",
+    )
 
     def draw(self, context):
         layout = self.layout
@@ -491,15 +630,31 @@ class HOLO_OT_import_hologram(bpy.types.Operator, ImportHelper):
             wavelength = f"{_number(self.wavelength)}kV"
         else:
             wavelength = f"{_number(self.wavelength * _WAVE_FACTOR[self.wavelength_unit])}m"
-        options = ["--pitch", f"{_number(self.pitch * _PITCH_FACTOR[self.pitch_unit])}m",
-                   "--wavelength", wavelength,
-                   "--distance", f"{_number(self.distance * scale(context.scene))}m",
-                   "--radius", _number(self.radius), "--radius-unit", self.radius_unit,
-                   "--edge", self.edge.lower(), "--edge-width", _number(self.edge_width),
-                   "--window", self.window.lower()]
+        options = [
+            "--pitch",
+            f"{_number(self.pitch * _PITCH_FACTOR[self.pitch_unit])}m",
+            "--wavelength",
+            wavelength,
+            "--distance",
+            f"{_number(self.distance * scale(context.scene))}m",
+            "--radius",
+            _number(self.radius),
+            "--radius-unit",
+            self.radius_unit,
+            "--edge",
+            self.edge.lower(),
+            "--edge-width",
+            _number(self.edge_width),
+            "--window",
+            self.window.lower(),
+        ]
         if self.carrier == "GIVEN":
-            return options + ["--reference-angle", _number(self.reference_angle),
-                              "--reference-azimuth", _number(self.reference_azimuth)]
+            return options + [
+                "--reference-angle",
+                _number(self.reference_angle),
+                "--reference-azimuth",
+                _number(self.reference_azimuth),
+            ]
         return options + ["--sideband", self.sideband.lower()]
 
     def execute(self, context):
@@ -530,10 +685,25 @@ def imported(path: Path, options: list[str]):
         if "without hologram metadata" not in str(e) and path.suffix.lower() == ".exr":
             raise
     out = path.with_name(f"{path.stem}_holo.exr")
-    command = [sys.executable, "-m", "holo_core", "import", str(path), "-o", str(out),
-               "--no-view", *options]
-    r = subprocess.run(command, capture_output=True, text=True, timeout=1800, check=False,
-                       env=environment(runtime_paths(), device() or None))
+    command = [
+        sys.executable,
+        "-m",
+        "holo_core",
+        "import",
+        str(path),
+        "-o",
+        str(out),
+        "--no-view",
+        *options,
+    ]
+    r = subprocess.run(
+        command,
+        capture_output=True,
+        text=True,
+        timeout=1800,
+        check=False,
+        env=environment(runtime_paths(), device() or None),
+    )
     if r.returncode != 0:
         raise HologramFileError((r.stderr.strip().splitlines() or [f"{path}: import failed"])[-1])
     lines = [line for line in r.stdout.strip().splitlines() if line.strip()]
@@ -572,9 +742,16 @@ def add_plate(context, hologram: Hologram, path: Path):
     unit = scale(context.scene)
     w, h = hologram.size
     mesh = bpy.data.meshes.new(path.stem)
-    mesh.from_pydata([(-w / 2 / unit, -h / 2 / unit, 0), (w / 2 / unit, -h / 2 / unit, 0),
-                      (w / 2 / unit, h / 2 / unit, 0), (-w / 2 / unit, h / 2 / unit, 0)], [],
-                     [(0, 1, 2, 3)])
+    mesh.from_pydata(
+        [
+            (-w / 2 / unit, -h / 2 / unit, 0),
+            (w / 2 / unit, -h / 2 / unit, 0),
+            (w / 2 / unit, h / 2 / unit, 0),
+            (-w / 2 / unit, h / 2 / unit, 0),
+        ],
+        [],
+        [(0, 1, 2, 3)],
+    )
     obj = bpy.data.objects.new(path.stem, mesh)
     context.collection.objects.link(obj)
     m = np.array(hologram.plate, np.float64)
@@ -596,12 +773,10 @@ def add_plate(context, hologram: Hologram, path: Path):
 
 
 def _menu(menu, _context):
-    menu.layout.operator(HOLO_OT_import_hologram.bl_idname,
-                         text="Hologram (.exr, scan, lab array)")
+    menu.layout.operator(HOLO_OT_import_hologram.bl_idname, text="Hologram (.exr, scan, lab array)")
 
 
-CLASSES = (HOLO_OT_fit_zone, HOLO_OT_fit_zone_to_shot, HOLO_OT_plan_plate,
-           HOLO_OT_import_hologram)
+CLASSES = (HOLO_OT_fit_zone, HOLO_OT_fit_zone_to_shot, HOLO_OT_plan_plate, HOLO_OT_import_hologram)
 
 
 def register():

@@ -26,9 +26,13 @@ CPU_RUNTIME = ("intel-opencl-rt", "intel-cmplr-lib-rt")
 
 def list_devices() -> list[str]:
     """``python -m holo_core devices`` in a child process, as the worker would see them."""
-    r = subprocess.run([sys.executable, "-m", "holo_core", "devices"], capture_output=True,
-                       text=True, env=environment(runtime_paths(), device() or None),
-                       timeout=120)
+    r = subprocess.run(
+        [sys.executable, "-m", "holo_core", "devices"],
+        capture_output=True,
+        text=True,
+        env=environment(runtime_paths(), device() or None),
+        timeout=120,
+    )
     lines = (r.stdout + (r.stderr if r.returncode else "")).strip().splitlines()
     return lines or [f"the device listing failed (exit code {r.returncode})"]
 
@@ -63,8 +67,17 @@ class HOLO_OT_install_cpu_runtime(bpy.types.Operator):
         return True
 
     def execute(self, context):
-        cmd = [sys.executable, "-m", "pip", "install", "--prefix", str(runtime_prefix()),
-               "--no-warn-script-location", "--disable-pip-version-check", *CPU_RUNTIME]
+        cmd = [
+            sys.executable,
+            "-m",
+            "pip",
+            "install",
+            "--prefix",
+            str(runtime_prefix()),
+            "--no-warn-script-location",
+            "--disable-pip-version-check",
+            *CPU_RUNTIME,
+        ]
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode:
             tail = (r.stderr or r.stdout).strip().splitlines()[-1:] or ["no output"]
@@ -79,25 +92,37 @@ class HoloPreferences(bpy.types.AddonPreferences):
     bl_idname = ADDON
 
     device: StringProperty(
-        name="Device", default="",
+        name="Device",
+        default="",
         description="The OpenCL device for recording and rendering. Empty: the best that "
-                    "works (a GPU, else a CPU). Or 'gpu', 'cpu', a number pair such as 1:0, "
-                    "or part of a device name, as Check Devices lists them")
+        "works (a GPU, else a CPU). Or 'gpu', 'cpu', a number pair such as 1:0, "
+        "or part of a device name, as Check Devices lists them",
+    )
     memory_limit: FloatProperty(
-        name="Memory Limit", default=0.0, min=0.0, soft_max=256.0, precision=1,
+        name="Memory Limit",
+        default=0.0,
+        min=0.0,
+        soft_max=256.0,
+        precision=1,
         description="The most memory (GiB) Holo may use; a larger pass is refused with the "
-                    "size it needs. 0: what the system has free (set it on shared farm nodes)")
+        "size it needs. 0: what the system has free (set it on shared farm nodes)",
+    )
 
     scheduler: StringProperty(
-        name="Dask Scheduler", default="",
+        name="Dask Scheduler",
+        default="",
         description="The Dask scheduler (tcp://host:8786) that records a plate too large for "
-                    "memory tile by tile on many machines. Empty: DASK_SCHEDULER_ADDRESS, "
-                    "else a local cluster of this machine's cores")
+        "memory tile by tile on many machines. Empty: DASK_SCHEDULER_ADDRESS, "
+        "else a local cluster of this machine's cores",
+    )
 
     cache_dir: StringProperty(
-        name="Cache Folder", subtype="DIR_PATH", default="",
+        name="Cache Folder",
+        subtype="DIR_PATH",
+        default="",
         description="Where compiled OpenCL kernels and FFT plans are kept between runs. Empty: "
-                    "the system's user cache folder")
+        "the system's user cache folder",
+    )
 
     def draw(self, context):
         layout = self.layout

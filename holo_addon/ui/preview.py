@@ -28,9 +28,9 @@ from ..render import pipeline
 from .overlay import attach, detach
 
 log = logging.getLogger(__name__)
-PREVIEW_SCALE = 4      # the preview pass's resolution: the render's over this
-DEBOUNCE = 0.25        # s after the last change before a preview pass starts
-POLL = 0.1             # s between the timer's looks at the worker
+PREVIEW_SCALE = 4  # the preview pass's resolution: the render's over this
+DEBOUNCE = 0.25  # s after the last change before a preview pass starts
+POLL = 0.1  # s between the timer's looks at the worker
 
 
 @dataclass
@@ -58,6 +58,7 @@ def state() -> Preview:
 
 # -- alignment ---------------------------------------------------------------------------
 
+
 def camera_frame(scene, camera) -> np.ndarray:
     """The world corners (4, 3) of the part of the camera's frame the pass covers, in the
     order of ``Camera.view_frame`` (the whole frame; the render region when the render is
@@ -78,14 +79,21 @@ def frame_rect(perspective, size, corners) -> tuple[float, float, float, float]:
     """(left, bottom, right, top) [region pixels] where the world ``corners`` (4, 3) land
     in a region of ``size`` (w, h) whose view has the 4x4 ``perspective`` matrix (the
     viewport's ``region_3d.perspective_matrix``), as Blender projects them."""
-    p = np.c_[np.asarray(corners, np.float64), np.ones(len(corners))] @ np.asarray(
-        perspective, np.float64).T
+    p = (
+        np.c_[np.asarray(corners, np.float64), np.ones(len(corners))]
+        @ np.asarray(perspective, np.float64).T
+    )
     xy = (p[:, :2] / p[:, 3:] + 1) / 2 * np.asarray(size, np.float64)
-    return float(xy[:, 0].min()), float(xy[:, 1].min()), float(xy[:, 0].max()), \
-        float(xy[:, 1].max())
+    return (
+        float(xy[:, 0].min()),
+        float(xy[:, 1].min()),
+        float(xy[:, 0].max()),
+        float(xy[:, 1].max()),
+    )
 
 
 # -- the picture ---------------------------------------------------------------------------
+
 
 def show(path) -> None:
     """Show the pass ``path`` (its PNG through the scene's view transform beside it): the
@@ -100,8 +108,12 @@ def show(path) -> None:
     finally:
         bpy.data.images.remove(image)
     p = state()
-    p.picture, p.source, p.stamp, p.texture = pixels.reshape(h, w, 4), str(path), \
-        png.stat().st_mtime, None
+    p.picture, p.source, p.stamp, p.texture = (
+        pixels.reshape(h, w, 4),
+        str(path),
+        png.stat().st_mtime,
+        None,
+    )
     if p.changed:
         p.latency, p.changed = time.perf_counter() - p.changed, 0.0
     _redraw()
@@ -114,13 +126,19 @@ def shown_pass(scene):
         out = pipeline.output_dir(scene)
     except ExportError:
         return None
-    found = [p for p in (pipeline.pass_file(out, scene.frame_current),
-                         pipeline.pass_file(out / "preview", scene.frame_current))
-             if p.is_file() and p.with_suffix(".png").is_file()]
+    found = [
+        p
+        for p in (
+            pipeline.pass_file(out, scene.frame_current),
+            pipeline.pass_file(out / "preview", scene.frame_current),
+        )
+        if p.is_file() and p.with_suffix(".png").is_file()
+    ]
     return max(found, key=lambda p: p.stat().st_mtime, default=None)
 
 
 # -- the preview pass -----------------------------------------------------------------------
+
 
 def start(scene, depsgraph) -> bool:
     """Start a preview pass of the scene as ``depsgraph`` evaluates it (a running one is
@@ -181,12 +199,16 @@ def _done(scene, result) -> None:
 
 # -- the interface ---------------------------------------------------------------------------
 
+
 def _camera_views():
     """The 3D views that look through the scene camera."""
     for window in bpy.context.window_manager.windows:
         for area in window.screen.areas:
-            if area.type == "VIEW_3D" and area.spaces.active.region_3d is not None and \
-                    area.spaces.active.region_3d.view_perspective == "CAMERA":
+            if (
+                area.type == "VIEW_3D"
+                and area.spaces.active.region_3d is not None
+                and area.spaces.active.region_3d.view_perspective == "CAMERA"
+            ):
                 yield area
 
 
@@ -201,8 +223,12 @@ def _redraw():
 def _changed(scene, depsgraph=None):
     """The scene changed (or the frame): a preview pass after ``DEBOUNCE`` s of quiet, when
     a 3D view looks through the camera."""
-    if depsgraph is None or depsgraph.mode != "VIEWPORT" or not scene.holo.preview or \
-            not any(_camera_views()):
+    if (
+        depsgraph is None
+        or depsgraph.mode != "VIEWPORT"
+        or not scene.holo.preview
+        or not any(_camera_views())
+    ):
         return
     if depsgraph.updates and all(isinstance(u.id, bpy.types.Image) for u in depsgraph.updates):
         return  # the preview's own pictures
@@ -214,8 +240,9 @@ def _changed(scene, depsgraph=None):
 
 def _refresh():
     scene = bpy.context.scene
-    if start(scene, bpy.context.evaluated_depsgraph_get()) and \
-            not bpy.app.timers.is_registered(_drain):
+    if start(scene, bpy.context.evaluated_depsgraph_get()) and not bpy.app.timers.is_registered(
+        _drain
+    ):
         bpy.app.timers.register(_drain, first_interval=POLL)
     return None
 
@@ -228,8 +255,13 @@ def _draw():
     """POST_PIXEL in every 3D view: the pass over the camera's frame, in camera view."""
     context = bpy.context
     scene, rv3d = context.scene, context.region_data
-    if rv3d is None or rv3d.view_perspective != "CAMERA" or scene.camera is None or \
-            not scene.holo.preview or scene.holo.mode != "CAMERA":
+    if (
+        rv3d is None
+        or rv3d.view_perspective != "CAMERA"
+        or scene.camera is None
+        or not scene.holo.preview
+        or scene.holo.mode != "CAMERA"
+    ):
         return
     p = state()
     path = shown_pass(scene)
@@ -241,13 +273,15 @@ def _draw():
         return
     import gpu
     from gpu_extras.presets import draw_texture_2d
+
     if p.texture is None:
         h, w, _ = p.picture.shape
         data = gpu.types.Buffer("FLOAT", w * h * 4, p.picture.ravel().tolist())
         p.texture = gpu.types.GPUTexture((w, h), format="RGBA16F", data=data)
     region = context.region
-    left, bottom, right, top = frame_rect(rv3d.perspective_matrix, (region.width,
-                                          region.height), camera_frame(scene, scene.camera))
+    left, bottom, right, top = frame_rect(
+        rv3d.perspective_matrix, (region.width, region.height), camera_frame(scene, scene.camera)
+    )
     gpu.state.blend_set("ALPHA")
     draw_texture_2d(p.texture, (left, bottom), right - left, top - bottom)
     gpu.state.blend_set("NONE")

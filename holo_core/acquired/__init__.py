@@ -19,18 +19,54 @@ stages the others use.
 
 from ..lazy import lazy_names
 
-_API = {"Carrier": ".carrier", "InlineHologramError": ".carrier", "find_carrier": ".carrier",
-        "METRICS": ".focus", "Focus": ".focus", "autofocus": ".focus", "decimate": ".focus",
-        "depth_of_focus": ".focus", "focus_metric": ".focus", "refocus": ".focus",
-        "fit_phase": ".processing", "remove_background": ".processing",
-        "remove_tilt": ".processing", "unwrap": ".processing", "OrderWarning": ".scan",
-        "import_acquired": ".scan", "object_hologram": ".scan", "default_camera": ".framing",
-        "plane_bounds": ".framing", "stated_plane": ".framing", "Aperture": ".filters",
-        "sideband": ".filters"}
-__all__ = ["METRICS", "Aperture", "Carrier", "Focus", "InlineHologramError", "OrderWarning",
-           "autofocus", "decimate", "default_camera", "depth_of_focus", "find_carrier",
-           "fit_phase", "focus_metric", "import_acquired", "object_hologram", "plane_bounds",
-           "refocus", "remove_background", "remove_tilt", "sideband", "stated_plane", "unwrap"]
+_API = {
+    "Carrier": ".carrier",
+    "InlineHologramError": ".carrier",
+    "find_carrier": ".carrier",
+    "METRICS": ".focus",
+    "Focus": ".focus",
+    "autofocus": ".focus",
+    "decimate": ".focus",
+    "depth_of_focus": ".focus",
+    "focus_metric": ".focus",
+    "refocus": ".focus",
+    "fit_phase": ".processing",
+    "remove_background": ".processing",
+    "remove_tilt": ".processing",
+    "unwrap": ".processing",
+    "OrderWarning": ".scan",
+    "import_acquired": ".scan",
+    "object_hologram": ".scan",
+    "default_camera": ".framing",
+    "plane_bounds": ".framing",
+    "stated_plane": ".framing",
+    "Aperture": ".filters",
+    "sideband": ".filters",
+}
+__all__ = [
+    "METRICS",
+    "Aperture",
+    "Carrier",
+    "Focus",
+    "InlineHologramError",
+    "OrderWarning",
+    "autofocus",
+    "decimate",
+    "default_camera",
+    "depth_of_focus",
+    "find_carrier",
+    "fit_phase",
+    "focus_metric",
+    "import_acquired",
+    "object_hologram",
+    "plane_bounds",
+    "refocus",
+    "remove_background",
+    "remove_tilt",
+    "sideband",
+    "stated_plane",
+    "unwrap",
+]
 
 
 __getattr__, __dir__ = lazy_names(__name__, _API)

@@ -39,8 +39,8 @@ from ..scene.hologram import Hologram
 from ..validate import InputError
 
 DC_EXCLUSION = 0.1  # the search skips |f| below this fraction of the Nyquist frequency ...
-MIN_DC_BINS = 4     # ... and at least this many FFT bins around zero
-ZOOM = 16           # sub-bin steps per level of the carrier's refinement (3 levels: 1/4096 bin)
+MIN_DC_BINS = 4  # ... and at least this many FFT bins around zero
+ZOOM = 16  # sub-bin steps per level of the carrier's refinement (3 levels: 1/4096 bin)
 OFF_AXIS_CONTRAST = 4.0  # sideband energy over the same disc turned by 90°, at least
 SIDEBANDS = ("lower", "upper")
 
@@ -151,18 +151,27 @@ class Carrier:
         str
         """
         angle = self.angle
-        tilt = "" if angle is None else (f", reference at {math.degrees(angle):.4g}° "
-                                         f"({angle * 1e3:.4g} mrad)")
-        contrast = "" if math.isnan(self.contrast) else \
-            f", sideband {self.contrast:.3g}x the disc turned by 90°"
-        return (f"carrier ({self.fx:.6g}, {self.fy:.6g}) 1/m{tilt}, azimuth "
-                f"{math.degrees(self.azimuth):.4g}°, the {self.sideband} sideband ({self.rule})"
-                f"{contrast}")
+        tilt = (
+            ""
+            if angle is None
+            else (f", reference at {math.degrees(angle):.4g}° ({angle * 1e3:.4g} mrad)")
+        )
+        contrast = (
+            ""
+            if math.isnan(self.contrast)
+            else f", sideband {self.contrast:.3g}x the disc turned by 90°"
+        )
+        return (
+            f"carrier ({self.fx:.6g}, {self.fy:.6g}) 1/m{tilt}, azimuth "
+            f"{math.degrees(self.azimuth):.4g}°, the {self.sideband} sideband ({self.rule})"
+            f"{contrast}"
+        )
 
 
 @validate.public
-def find_carrier(hologram, colour: int = 0, *, pitch=None, sideband="lower", near=None,
-                 refine=True) -> Carrier:
+def find_carrier(
+    hologram, colour: int = 0, *, pitch=None, sideband="lower", near=None, refine=True
+) -> Carrier:
     """Find the reference wave's carrier of an off-axis intensity hologram.
 
     The rule is the one of this module's docstring.
@@ -214,8 +223,7 @@ def find_carrier(hologram, colour: int = 0, *, pitch=None, sideband="lower", nea
     validate.choice("sideband", sideband, SIDEBANDS)
     if near is not None:
         near = validate.pair("near", near, "1/m")
-    return locate(h, pitch, sideband=sideband, near=near, refine=refine,
-                  wavelength=wavelength)
+    return locate(h, pitch, sideband=sideband, near=near, refine=refine, wavelength=wavelength)
 
 
 def intensity_of(hologram, colour, pitch):
@@ -224,29 +232,40 @@ def intensity_of(hologram, colour, pitch):
     if isinstance(hologram, Hologram):
         colour = validate.index("colour", colour, len(hologram.wavelengths))
         if getattr(hologram, "intensity", None) is None:
-            raise InputError("hologram must be an intensity hologram (a complex one holds its "
-                             "object wave already: hologram.object_wave)")
+            raise InputError(
+                "hologram must be an intensity hologram (a complex one holds its "
+                "object wave already: hologram.object_wave)"
+            )
         if pitch is not None and grid.pitch_pair(pitch) != (hologram.pitch,) * 2:
-            raise InputError(f"pitch {pitch!r} differs from the hologram's {hologram.pitch!r} m; "
-                             f"leave it out for a Hologram")
-        return (np.asarray(hologram.intensity[colour], np.float64), (hologram.pitch,) * 2,
-                hologram.wavelengths[colour])
+            raise InputError(
+                f"pitch {pitch!r} differs from the hologram's {hologram.pitch!r} m; "
+                f"leave it out for a Hologram"
+            )
+        return (
+            np.asarray(hologram.intensity[colour], np.float64),
+            (hologram.pitch,) * 2,
+            hologram.wavelengths[colour],
+        )
     h = validate.host_field("hologram", hologram)
     if np.iscomplexobj(h):
-        raise InputError("hologram must be a real intensity array (H, W) or a Hologram; got "
-                         "a complex array")
+        raise InputError(
+            "hologram must be a real intensity array (H, W) or a Hologram; got a complex array"
+        )
     if pitch is None:
         raise InputError("pitch must be given [m] for a hologram passed as an array")
     return h.astype(np.float64), grid.pitch_pair(pitch), None
 
 
-def locate(h: np.ndarray, pitch, *, sideband="lower", near=None, refine=True,
-           wavelength=None) -> Carrier:
+def locate(
+    h: np.ndarray, pitch, *, sideband="lower", near=None, refine=True, wavelength=None
+) -> Carrier:
     """:func:`find_carrier` of a checked float64 intensity ``h`` with ``pitch`` (x, y) [m]."""
     rows, cols = h.shape
     if min(rows, cols) < 4 * MIN_DC_BINS:
-        raise InputError(f"hologram must be at least {4 * MIN_DC_BINS}x{4 * MIN_DC_BINS} "
-                         f"samples to find its carrier; got {rows}x{cols}")
+        raise InputError(
+            f"hologram must be at least {4 * MIN_DC_BINS}x{4 * MIN_DC_BINS} "
+            f"samples to find its carrier; got {rows}x{cols}"
+        )
     w = (h - h.mean()) * np.outer(np.hanning(rows), np.hanning(cols))
     spectrum = np.abs(np.fft.fft2(w))
     ky, kx = grid.signed_indices(rows)[:, None], grid.signed_indices(cols)[None, :]
@@ -262,8 +281,10 @@ def locate(h: np.ndarray, pitch, *, sideband="lower", near=None, refine=True,
         allowed &= lower if sideband == "lower" else ~lower
         rule = f"the spectrum's peak, {sideband} sideband"
     if not allowed.any() or not spectrum[allowed].any():
-        raise InlineHologramError("hologram has no fringes to find a carrier in (its spectrum "
-                                  "is empty outside the zero order)")
+        raise InlineHologramError(
+            "hologram has no fringes to find a carrier in (its spectrum "
+            "is empty outside the zero order)"
+        )
     i, j = np.unravel_index(np.argmax(np.where(allowed, spectrum, -1.0)), spectrum.shape)
     py, px = float(ky[i, 0]), float(kx[0, j])
     half = "lower" if py > 0 or (py == 0 and px >= 0) else "upper"
@@ -272,8 +293,9 @@ def locate(h: np.ndarray, pitch, *, sideband="lower", near=None, refine=True,
         rule += ", refined to 1/4096 bin"
     carrier = (px / (cols * pitch[0]), py / (rows * pitch[1]))
     contrast = sideband_contrast(spectrum, pitch, carrier)
-    found = Carrier(fx=carrier[0], fy=carrier[1], wavelength=wavelength, rule=rule,
-                    contrast=contrast, half=half)
+    found = Carrier(
+        fx=carrier[0], fy=carrier[1], wavelength=wavelength, rule=rule, contrast=contrast, half=half
+    )
     check_off_axis(found)
     return found
 
@@ -307,7 +329,8 @@ def check_off_axis(carrier: Carrier) -> None:
             f"of the same disc turned by 90° (an off-axis hologram's sideband holds "
             f">= {OFF_AXIS_CONTRAST:g} times); an in-line hologram's orders overlap at zero "
             f"frequency and no sideband filter separates them: propagate (H - mean)/|R| with "
-            f"holo_core.acquired.refocus for its in-line reconstruction (twin included)")
+            f"holo_core.acquired.refocus for its in-line reconstruction (twin included)"
+        )
 
 
 def _refine(w, ky: float, kx: float) -> tuple[float, float]:

@@ -30,10 +30,17 @@ from ..scene.hologram import Hologram
 from ..validate import InputError, shown
 from .carrier import Carrier, check_off_axis, intensity_of, locate, sideband_contrast
 
-ITERATIONS = 8      # passes that take the zero order's and the twin's leakage away ...
-CONVERGED = 1e-7    # ... until a pass changes the object wave by less than this (relative)
-RADIUS_UNITS = {"carrier": None, "1/m": 1.0, "1/mm": 1e3, "1/um": 1e6, "1/nm": 1e9,
-                "mrad": None, "rad": None}
+ITERATIONS = 8  # passes that take the zero order's and the twin's leakage away ...
+CONVERGED = 1e-7  # ... until a pass changes the object wave by less than this (relative)
+RADIUS_UNITS = {
+    "carrier": None,
+    "1/m": 1.0,
+    "1/mm": 1e3,
+    "1/um": 1e6,
+    "1/nm": 1e9,
+    "mrad": None,
+    "rad": None,
+}
 EDGES = ("hard", "tanh", "cosine")
 WINDOWS = ("none", "hann", "hamming", "blackman", "gaussian", "butterworth")
 SHAPES = ("disc", "square")
@@ -107,8 +114,10 @@ class Aperture:
         validate.choice("aperture window", self.window, WINDOWS)
         width = validate.positive("aperture width", self.width)
         if width > 1:
-            raise InputError(f"aperture width must be in (0, 1] (a fraction of the radius); "
-                             f"got {shown(self.width)}")
+            raise InputError(
+                f"aperture width must be in (0, 1] (a fraction of the radius); "
+                f"got {shown(self.width)}"
+            )
 
     @classmethod
     def holospy(cls) -> Aperture:
@@ -149,12 +158,16 @@ class Aperture:
             return self.radius * carrier
         if self.unit in ("mrad", "rad"):
             if wavelength is None:
-                raise InputError(f"an aperture in {self.unit} needs the wavelength: pass a "
-                                 f"Hologram, or the radius in 1/m")
+                raise InputError(
+                    f"an aperture in {self.unit} needs the wavelength: pass a "
+                    f"Hologram, or the radius in 1/m"
+                )
             angle = self.radius * (1e-3 if self.unit == "mrad" else 1.0)
             if not angle < math.pi / 2:
-                raise InputError(f"aperture radius must be an angle below π/2 rad; got "
-                                 f"{self.radius!r} {self.unit}")
+                raise InputError(
+                    f"aperture radius must be an angle below π/2 rad; got "
+                    f"{self.radius!r} {self.unit}"
+                )
             return math.sin(angle) / wavelength
         return self.radius * RADIUS_UNITS[self.unit]
 
@@ -194,15 +207,29 @@ def _window(name: str, u: np.ndarray) -> np.ndarray:
     if name == "butterworth":
         return 1 / (1 + u**8)
     c = np.cos(np.pi * np.minimum(u, 1))
-    shapes = {"hann": 0.5 + 0.5 * c, "hamming": 0.54 + 0.46 * c,
-              "blackman": 0.42 + 0.5 * c + 0.08 * (2 * c * c - 1)}
+    shapes = {
+        "hann": 0.5 + 0.5 * c,
+        "hamming": 0.54 + 0.46 * c,
+        "blackman": 0.42 + 0.5 * c + 0.08 * (2 * c * c - 1),
+    }
     return np.where(u <= 1, shapes[name], 0.0)
 
 
 @validate.public
-def sideband(hologram, colour: int = 0, *, pitch=None, carrier="auto", sideband="lower",
-             aperture: Aperture | None = None, radius=None, reference_hologram=None,
-             subtract=(), reference_amplitude=None, iterations=ITERATIONS) -> np.ndarray:
+def sideband(
+    hologram,
+    colour: int = 0,
+    *,
+    pitch=None,
+    carrier="auto",
+    sideband="lower",
+    aperture: Aperture | None = None,
+    radius=None,
+    reference_hologram=None,
+    subtract=(),
+    reference_amplitude=None,
+    iterations=ITERATIONS,
+) -> np.ndarray:
     """Filter the object wave out of an off-axis intensity hologram, its +1 order at baseband.
 
     Parameters
@@ -275,48 +302,69 @@ def sideband(hologram, colour: int = 0, *, pitch=None, carrier="auto", sideband=
     h, pitch, wavelength = intensity_of(hologram, colour, pitch)
     h = h - _intensities(subtract, h.shape)
     amplitude = _amplitude(hologram, colour, reference_amplitude)
-    reference = None if reference_hologram is None else \
-        intensity_of(reference_hologram, colour, pitch)[0]
+    reference = (
+        None if reference_hologram is None else intensity_of(reference_hologram, colour, pitch)[0]
+    )
     if reference is not None and reference.shape != h.shape:
-        raise InputError(f"reference_hologram must have the hologram's shape {h.shape}; got "
-                         f"{reference.shape}")
+        raise InputError(
+            f"reference_hologram must have the hologram's shape {h.shape}; got {reference.shape}"
+        )
     validate.choice("sideband", sideband, ("lower", "upper"))
-    fc = _carrier(hologram, h if reference is None else reference, pitch, wavelength, carrier,
-                  sideband)
+    fc = _carrier(
+        hologram, h if reference is None else reference, pitch, wavelength, carrier, sideband
+    )
     norm = fc.norm
     if norm == 0:
-        raise InputError("carrier must be off-axis (a non-zero frequency); an on-axis "
-                         "hologram's orders overlap and no filter separates them")
+        raise InputError(
+            "carrier must be off-axis (a non-zero frequency); an on-axis "
+            "hologram's orders overlap and no filter separates them"
+        )
     if aperture is not None and radius is not None:
         raise InputError("give the radius in the aperture or as radius=, not both")
     if aperture is None:
-        aperture = Aperture() if radius is None else \
-            Aperture(radius=validate.positive("radius", radius, "1/m"), unit="1/m")
+        aperture = (
+            Aperture()
+            if radius is None
+            else Aperture(radius=validate.positive("radius", radius, "1/m"), unit="1/m")
+        )
     if not isinstance(aperture, Aperture):
         raise InputError(f"aperture must be an Aperture; got {type(aperture).__name__}")
     band = getattr(hologram, "band", 0.0) if isinstance(hologram, Hologram) else 0.0
     r = aperture.radius_per_m(norm, wavelength, band)
     if r > norm:
-        raise InputError(f"radius must be <= |carrier| = {norm:.6g} 1/m (beyond it the band "
-                         f"takes in the zero order); got {r:.6g} 1/m")
+        raise InputError(
+            f"radius must be <= |carrier| = {norm:.6g} 1/m (beyond it the band "
+            f"takes in the zero order); got {r:.6g} 1/m"
+        )
     if r > norm / 2 * (1 + 1e-9):
-        validate.warn_sampling(f"sideband: a band of radius {r:.4g} 1/m reaches past half the "
-                               f"way to the zero order (|carrier|/2 = {norm / 2:.4g} 1/m): the "
-                               f"zero order (twice the object's band) overlaps it")
+        validate.warn_sampling(
+            f"sideband: a band of radius {r:.4g} 1/m reaches past half the "
+            f"way to the zero order (|carrier|/2 = {norm / 2:.4g} 1/m): the "
+            f"zero order (twice the object's band) overlaps it"
+        )
     iterations = validate.integer("iterations", iterations, 0, 100)
     fy, fx = grid.freqs(h.shape[0], pitch[1])[:, None], grid.freqs(h.shape[1], pitch[0])[None, :]
     keep = aperture.weights(fx, fy, r)
     if math.isnan(fc.contrast):  # a given carrier: is there a sideband at it?
         spectrum = np.abs(np.fft.fft2(h - h.mean()))
-        check_off_axis(Carrier(fx=fc.fx, fy=fc.fy, wavelength=wavelength, rule=fc.rule,
-                               contrast=sideband_contrast(spectrum, pitch, fc.frequency, r)))
+        check_off_axis(
+            Carrier(
+                fx=fc.fx,
+                fy=fc.fy,
+                wavelength=wavelength,
+                rule=fc.rule,
+                contrast=sideband_contrast(spectrum, pitch, fc.frequency, r),
+            )
+        )
     o = _filtered(h, fc.frequency, pitch, keep, fx, fy, r, amplitude, iterations)
     if reference is not None:
         o_ref = _filtered(reference, fc.frequency, pitch, keep, fx, fy, r, amplitude, iterations)
         small = np.abs(o_ref) <= VANISHING * np.sqrt(np.mean(np.abs(o_ref) ** 2))
         if small.any():
-            raise InputError(f"reference_hologram's filtered wave vanishes at {int(small.sum())} "
-                             f"samples (no fringes there): it cannot divide the object's")
+            raise InputError(
+                f"reference_hologram's filtered wave vanishes at {int(small.sum())} "
+                f"samples (no fringes there): it cannot divide the object's"
+            )
         o = o / o_ref
     return o.astype(np.complex64)
 
@@ -327,7 +375,7 @@ def _filtered(h, carrier, pitch, keep, fx, fy, radius, amplitude, iterations) ->
     rows, cols = h.shape
     y, x = grid.coords(rows, pitch[1])[:, None], grid.coords(cols, pitch[0])[None, :]
     t = _tone(carrier[1], y) * _tone(carrier[0], x)  # R/|R|
-    half = fx[:, :cols // 2 + 1] if fx.shape[1] == cols else fx  # rfft2's columns: fx >= 0
+    half = fx[:, : cols // 2 + 1] if fx.shape[1] == cols else fx  # rfft2's columns: fx >= 0
     zero = half * half + fy * fy <= 4 * radius * radius
 
     def low_pass(u, weights):
@@ -358,16 +406,24 @@ def _carrier(hologram, h, pitch, wavelength, carrier, sideband) -> Carrier:
         fx, fy = validate.pair("carrier", carrier, "1/m")
         nyquist = (1 / (2 * pitch[0]), 1 / (2 * pitch[1]))
         if abs(fx) > nyquist[0] or abs(fy) > nyquist[1]:
-            raise InputError(f"carrier must be within the Nyquist frequency ±{nyquist[0]:.6g} "
-                             f"1/m (x), ±{nyquist[1]:.6g} 1/m (y); got {shown(carrier)}")
+            raise InputError(
+                f"carrier must be within the Nyquist frequency ±{nyquist[0]:.6g} "
+                f"1/m (x), ±{nyquist[1]:.6g} 1/m (y); got {shown(carrier)}"
+            )
         return Carrier(fx=fx, fy=fy, wavelength=wavelength, rule="given")
     validate.choice("carrier", carrier, ("auto", "reference", "spectrum"))
     if carrier == "reference" and stated is None:
-        raise InputError("carrier 'reference' needs a Hologram with a tilted reference "
-                         "(reference_angle > 0); use 'spectrum' or give (fx, fy) [1/m]")
+        raise InputError(
+            "carrier 'reference' needs a Hologram with a tilted reference "
+            "(reference_angle > 0); use 'spectrum' or give (fx, fy) [1/m]"
+        )
     if carrier == "reference" or (carrier == "auto" and stated is not None):
-        return Carrier(fx=stated[0], fy=stated[1], wavelength=wavelength,
-                       rule="the reference angle and azimuth stated")
+        return Carrier(
+            fx=stated[0],
+            fy=stated[1],
+            wavelength=wavelength,
+            rule="the reference angle and azimuth stated",
+        )
     return locate(h, pitch, sideband=sideband, near=stated, wavelength=wavelength)
 
 
@@ -376,8 +432,9 @@ def _stated(hologram):
     if not isinstance(hologram, Hologram) or not hologram.reference_angle:
         return None
     s, lam = math.sin(hologram.reference_angle), hologram.wavelengths[0]
-    return s * math.cos(hologram.reference_azimuth) / lam, \
-        s * math.sin(hologram.reference_azimuth) / lam
+    return s * math.cos(hologram.reference_azimuth) / lam, s * math.sin(
+        hologram.reference_azimuth
+    ) / lam
 
 
 def _amplitude(hologram, colour, given) -> float:
@@ -395,8 +452,10 @@ def _intensities(frames, shape) -> np.ndarray | float:
         a = frame.intensity[0] if isinstance(frame, Hologram) else frame
         a = validate.host_field(f"subtract[{k}]", a)
         if a.shape != shape or np.iscomplexobj(a):
-            raise InputError(f"subtract[{k}] must be a real intensity of the hologram's shape "
-                             f"{shape}; got {a.dtype} {a.shape}")
+            raise InputError(
+                f"subtract[{k}] must be a real intensity of the hologram's shape "
+                f"{shape}; got {a.dtype} {a.shape}"
+            )
         total = total + a.astype(np.float64)
     return total
 

@@ -177,13 +177,15 @@ def refocus(wave, *, wavelength, pitch, distance) -> np.ndarray:
     >>> bool(np.abs(back - g).max() < 1e-5), there.dtype
     (True, dtype('complex64'))
     """
-    return angular_spectrum(np.asarray(wave, np.complex64), wavelength=wavelength, pitch=pitch,
-                            distance=distance)
+    return angular_spectrum(
+        np.asarray(wave, np.complex64), wavelength=wavelength, pitch=pitch, distance=distance
+    )
 
 
 @validate.public
-def autofocus(wave, *, wavelength, pitch, distances, metric="brenner", extremum="max",
-              region=None) -> Focus:
+def autofocus(
+    wave, *, wavelength, pitch, distances, metric="brenner", extremum="max", region=None
+) -> Focus:
     """Find the distance among ``distances`` at which ``wave`` is sharpest by ``metric``.
 
     Parameters
@@ -237,17 +239,22 @@ def autofocus(wave, *, wavelength, pitch, distances, metric="brenner", extremum=
     u = validate.host_field("wave", wave).astype(np.complex64)
     distances = np.asarray(distances, np.float64).reshape(-1)
     if not distances.size or not np.isfinite(distances).all():
-        raise InputError(f"distances must be a non-empty sequence of finite numbers [m]; got "
-                         f"{distances!r}"[:300])
+        raise InputError(
+            f"distances must be a non-empty sequence of finite numbers [m]; got {distances!r}"[:300]
+        )
     validate.choice("metric", metric, tuple(METRICS))
     validate.choice("extremum", extremum, ("max", "min"))
     rows = _region(region, u.shape)
-    scores = np.array([focus_metric(refocus(u, wavelength=wavelength, pitch=pitch,
-                                            distance=float(z))[rows], metric)
-                       for z in distances])
+    scores = np.array(
+        [
+            focus_metric(
+                refocus(u, wavelength=wavelength, pitch=pitch, distance=float(z))[rows], metric
+            )
+            for z in distances
+        ]
+    )
     best = int(np.argmax(scores) if extremum == "max" else np.argmin(scores))
-    return Focus(distance=float(distances[best]), distances=distances, scores=scores,
-                 metric=metric)
+    return Focus(distance=float(distances[best]), distances=distances, scores=scores, metric=metric)
 
 
 def _region(region, shape):
@@ -258,8 +265,9 @@ def _region(region, shape):
     except (TypeError, ValueError):
         raise InputError(f"region must be (row0, row1, col0, col1); got {shown(region)}") from None
     if not (r0 < r1 <= shape[0] and c0 < c1 <= shape[1]) or min(r1 - r0, c1 - c0) < 3:
-        raise InputError(f"region must lie in the {shape[0]}x{shape[1]} plane, at least 3x3; "
-                         f"got {shown(region)}")
+        raise InputError(
+            f"region must lie in the {shape[0]}x{shape[1]} plane, at least 3x3; got {shown(region)}"
+        )
     return (slice(r0, r1), slice(c0, c1))
 
 
@@ -316,7 +324,7 @@ def decimate(wave, *, pitch, band) -> tuple[np.ndarray, float]:
         keep = [min(n, 2 * math.ceil(ratio * n / 2)) for n in (rows, cols)]
     spectrum = np.fft.fftshift(np.fft.fft2(u))
     r0, c0 = (rows - keep[0]) // 2, (cols - keep[1]) // 2
-    small = np.fft.ifft2(np.fft.ifftshift(spectrum[r0:r0 + keep[0], c0:c0 + keep[1]]))
+    small = np.fft.ifft2(np.fft.ifftshift(spectrum[r0 : r0 + keep[0], c0 : c0 + keep[1]]))
     small *= keep[0] * keep[1] / (rows * cols)  # the same amplitudes on fewer samples
     return small.astype(np.complex64), pitch * cols / keep[1]
 
@@ -354,5 +362,4 @@ def depth_of_focus(wavelength: float, band: float) -> float:
     return wavelength / na**2
 
 
-__all__ = ["METRICS", "Focus", "autofocus", "decimate", "depth_of_focus", "focus_metric",
-           "refocus"]
+__all__ = ["METRICS", "Focus", "autofocus", "decimate", "depth_of_focus", "focus_metric", "refocus"]

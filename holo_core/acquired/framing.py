@@ -19,22 +19,27 @@ from ..scene.camera import Camera, look_at
 from ..scene.hologram import Hologram
 from ..validate import InputError
 
-FAR = 1000            # a distance beyond this many hologram widths looks like millimetres
-VIEW_DISTANCE = 2     # the default camera stands this many object distances in front
-FRAME_MARGIN = 1.05   # its field of view takes in the plate and this much more
+FAR = 1000  # a distance beyond this many hologram widths looks like millimetres
+VIEW_DISTANCE = 2  # the default camera stands this many object distances in front
+FRAME_MARGIN = 1.05  # its field of view takes in the plate and this much more
 VIEW_PIXELS = (256, 2048)  # the default view's side: the band's Nyquist sampling, within these
 
 
 def checked_distance(distance, h: Hologram) -> float:
     """The objects' distance [m] behind ``h``: > 0, and warned
     (:class:`~holo_core.validate.UnitWarning`) beyond :data:`FAR` widths of the hologram."""
-    d = validate.positive("distance", validate.within("distance", distance,
-                                                      validate.MAX_LENGTH), "m")
+    d = validate.positive(
+        "distance", validate.within("distance", distance, validate.MAX_LENGTH), "m"
+    )
     width = max(h.size)
     if d > FAR * width:
-        validate.warn_millimetres("distance", d, f"is {d / width:.3g} times the hologram's "
-                                  f"{width * 1e3:.3g} mm width: its objects would be resolved "
-                                  f"no finer than {h.wavelengths[0] * d / width * 1e3:.3g} mm")
+        validate.warn_millimetres(
+            "distance",
+            d,
+            f"is {d / width:.3g} times the hologram's "
+            f"{width * 1e3:.3g} mm width: its objects would be resolved "
+            f"no finer than {h.wavelengths[0] * d / width * 1e3:.3g} mm",
+        )
     return d
 
 
@@ -149,8 +154,9 @@ def default_camera(hologram: Hologram, *, distance=None, resolution=None) -> Cam
     bounds = np.asarray(hologram.bounds)
     if distance is None:
         if bounds[0, 2] >= 0:
-            raise InputError("distance must be given [m]: the hologram's bounds put no "
-                             "objects behind it")
+            raise InputError(
+                "distance must be given [m]: the hologram's bounds put no objects behind it"
+            )
         distance = -float(bounds[:, 2].mean())
     distance = checked_distance(distance, hologram)
     width, height = hologram.size
@@ -161,14 +167,22 @@ def default_camera(hologram: Hologram, *, distance=None, resolution=None) -> Cam
     if resolution is None:
         side = 2 * band / lam * max(plane) * (1 + 1 / VIEW_DISTANCE) * FRAME_MARGIN
         n = int(min(max(math.ceil(side / 16) * 16, VIEW_PIXELS[0]), VIEW_PIXELS[1]))
-        resolution = (n, max(16, round(n * height / width / 2) * 2)) if width >= height else \
-            (max(16, round(n * width / height / 2) * 2), n)
+        resolution = (
+            (n, max(16, round(n * height / width / 2) * 2))
+            if width >= height
+            else (max(16, round(n * width / height / 2) * 2), n)
+        )
     sensor = 36.0  # spans the image's larger side, the plate's larger side
     lens = sensor * standoff / (FRAME_MARGIN * max(plane))
     pupil = 2 * (standoff + distance) * math.tan(math.asin(min(band, 0.999)))
     plate = np.asarray(hologram.plate, np.float64)
     eye = (plate @ np.array([0.0, 0.0, standoff, 1.0]))[:3]
     centre = (plate @ np.array([0.0, 0.0, -distance, 1.0]))[:3]
-    return Camera(matrix_world=look_at(eye, centre, up=plate[:3, 1]), lens=lens,
-                  sensor_width=sensor, resolution=tuple(resolution),
-                  fstop=lens * 1e-3 / pupil, focus_distance=standoff + distance)
+    return Camera(
+        matrix_world=look_at(eye, centre, up=plate[:3, 1]),
+        lens=lens,
+        sensor_width=sensor,
+        resolution=tuple(resolution),
+        fstop=lens * 1e-3 / pupil,
+        focus_distance=standoff + distance,
+    )

@@ -132,8 +132,10 @@ def fit_phase(wave, *, order: int = 1, mask=None) -> np.ndarray:
     terms = [x**i * y**j for i in range(order + 1) for j in range(order + 1 - i)]
     keep = np.ones(phase.shape, bool) if mask is None else np.asarray(mask, bool)
     if keep.shape != phase.shape or keep.sum() < len(terms):
-        raise InputError(f"mask must be a boolean (H, W) = {phase.shape} array with at least "
-                         f"{len(terms)} True samples")
+        raise InputError(
+            f"mask must be a boolean (H, W) = {phase.shape} array with at least "
+            f"{len(terms)} True samples"
+        )
     design = np.stack([t[keep] for t in terms], -1)
     coeffs, *_ = np.linalg.lstsq(design, phase[keep], rcond=None)
     return sum(c * t for c, t in zip(coeffs, terms))

@@ -40,7 +40,7 @@ from .framing import checked_distance, plane_bounds
 
 log = logging.getLogger(__name__)
 
-ORDER_MARGIN = 0.05   # the orders' Tamura coefficients closer than this (relative): warned
+ORDER_MARGIN = 0.05  # the orders' Tamura coefficients closer than this (relative): warned
 
 
 class OrderWarning(UserWarning):
@@ -58,9 +58,19 @@ class OrderWarning(UserWarning):
 
 
 @validate.public
-def import_acquired(source, *, pitch=None, wavelength=None, reference_angle=None,
-                    reference_azimuth=None, page=None, dataset=None, distance=None,
-                    sideband="auto", find_carrier=True):
+def import_acquired(
+    source,
+    *,
+    pitch=None,
+    wavelength=None,
+    reference_angle=None,
+    reference_azimuth=None,
+    page=None,
+    dataset=None,
+    distance=None,
+    sideband="auto",
+    find_carrier=True,
+):
     """Import an acquired intensity hologram and find its carrier.
 
     The carrier is found as :mod:`holo_core.acquired.carrier` describes.
@@ -103,9 +113,15 @@ def import_acquired(source, *, pitch=None, wavelength=None, reference_angle=None
     (0.0396, (1, 64, 64))
     """
     validate.choice("sideband", sideband, ("auto", "lower", "upper"))
-    read = read_acquired(source, pitch=pitch, wavelength=wavelength,
-                         reference_angle=reference_angle, reference_azimuth=reference_azimuth,
-                         page=page, dataset=dataset)
+    read = read_acquired(
+        source,
+        pitch=pitch,
+        wavelength=wavelength,
+        reference_angle=reference_angle,
+        reference_azimuth=reference_azimuth,
+        page=page,
+        dataset=dataset,
+    )
     holograms = read if isinstance(read, list) else [read]
     if distance is not None:
         distance = checked_distance(distance, holograms[0])
@@ -121,12 +137,12 @@ def import_acquired(source, *, pitch=None, wavelength=None, reference_angle=None
 
 def _with_carrier(h: Hologram, side: str, distance, source) -> Hologram:
     """``h`` with the carrier found in its spectrum as its reference angle and azimuth."""
-    name = source if isinstance(source, (str, bytes)) or hasattr(source, "__fspath__") \
-        else "array"
+    name = source if isinstance(source, (str, bytes)) or hasattr(source, "__fspath__") else "array"
     intensity, pitch, wavelength = intensity_of(h, 0, None)
     try:
-        carrier = locate(intensity, pitch, sideband="lower" if side == "auto" else side,
-                         wavelength=wavelength)
+        carrier = locate(
+            intensity, pitch, sideband="lower" if side == "auto" else side, wavelength=wavelength
+        )
     except InlineHologramError as e:
         log.warning("%s: %s", name, e)
         return h
@@ -134,8 +150,10 @@ def _with_carrier(h: Hologram, side: str, distance, source) -> Hologram:
         carrier = _order_by_focus(h, carrier, distance)
     angle = carrier.angle
     if angle is None:
-        raise InputError(f"{name}: its carrier {carrier.frequency} 1/m is beyond 1/λ: the "
-                         f"wavelength {wavelength!r} m cannot be right")
+        raise InputError(
+            f"{name}: its carrier {carrier.frequency} 1/m is beyond 1/λ: the "
+            f"wavelength {wavelength!r} m cannot be right"
+        )
     log.info("%s: %s", name, carrier.describe())
     return replace(h, reference_angle=angle, reference_azimuth=carrier.azimuth)
 
@@ -145,24 +163,38 @@ def _order_by_focus(h: Hologram, carrier: Carrier, distance: float) -> Carrier:
     judged on the aperture's band alone (the wave resampled to its Nyquist rate)."""
     wave, pitch = _baseband(h, carrier)
     lam = h.wavelengths[0]
-    behind = focus_metric(refocus(wave, wavelength=lam, pitch=pitch, distance=-distance),
-                          "tamura")
-    front = focus_metric(refocus(wave, wavelength=lam, pitch=pitch, distance=distance),
-                         "tamura")  # the twin's amplitude behind: conj(o) carried by −d
+    behind = focus_metric(refocus(wave, wavelength=lam, pitch=pitch, distance=-distance), "tamura")
+    front = focus_metric(
+        refocus(wave, wavelength=lam, pitch=pitch, distance=distance), "tamura"
+    )  # the twin's amplitude behind: conj(o) carried by −d
     if abs(behind - front) < ORDER_MARGIN * max(behind, front):
-        warnings.warn(f"the two orders focus alike at {distance:g} m behind the hologram "
-                      f"(Tamura {behind:.4g} and {front:.4g}): a phase object, or another "
-                      f"distance; the order taken may be the twin: name the sideband",
-                      OrderWarning, stacklevel=4)
+        warnings.warn(
+            f"the two orders focus alike at {distance:g} m behind the hologram "
+            f"(Tamura {behind:.4g} and {front:.4g}): a phase object, or another "
+            f"distance; the order taken may be the twin: name the sideband",
+            OrderWarning,
+            stacklevel=4,
+        )
     twin = front > behind
-    log.info("orders at -%g m: Tamura %.4g (%s) against %.4g (the other): the %s", distance,
-             behind, carrier.sideband, front, "other" if twin else carrier.sideband)
+    log.info(
+        "orders at -%g m: Tamura %.4g (%s) against %.4g (the other): the %s",
+        distance,
+        behind,
+        carrier.sideband,
+        front,
+        "other" if twin else carrier.sideband,
+    )
     if not twin:
         return replace(carrier, rule=carrier.rule + "; the order that focuses behind")
-    return Carrier(fx=-carrier.fx, fy=-carrier.fy, wavelength=carrier.wavelength,
-                   rule=carrier.rule.replace(carrier.sideband, "the other") +
-                   "; the order that focuses behind", contrast=carrier.contrast,
-                   half="upper" if carrier.sideband == "lower" else "lower")
+    return Carrier(
+        fx=-carrier.fx,
+        fy=-carrier.fy,
+        wavelength=carrier.wavelength,
+        rule=carrier.rule.replace(carrier.sideband, "the other")
+        + "; the order that focuses behind",
+        contrast=carrier.contrast,
+        half="upper" if carrier.sideband == "lower" else "lower",
+    )
 
 
 def _baseband(h: Hologram, carrier: Carrier) -> tuple[np.ndarray, float]:
@@ -173,8 +205,15 @@ def _baseband(h: Hologram, carrier: Carrier) -> tuple[np.ndarray, float]:
 
 
 @validate.public
-def object_hologram(hologram: Hologram, *, distance=None, aperture: Aperture | None = None,
-                    reference_hologram=None, subtract=(), iterations=ITERATIONS) -> Hologram:
+def object_hologram(
+    hologram: Hologram,
+    *,
+    distance=None,
+    aperture: Aperture | None = None,
+    reference_hologram=None,
+    subtract=(),
+    iterations=ITERATIONS,
+) -> Hologram:
     """Turn an acquired intensity hologram into the complex hologram of its object wave.
 
     Parameters
@@ -223,30 +262,50 @@ def object_hologram(hologram: Hologram, *, distance=None, aperture: Aperture | N
     ((1, 64, 64), 1.0)
     """
     if not isinstance(hologram, Hologram) or hologram.intensity is None:
-        raise InputError(f"hologram must be an intensity Hologram (import_acquired's); got "
-                         f"{type(hologram).__name__}")
+        raise InputError(
+            f"hologram must be an intensity Hologram (import_acquired's); got "
+            f"{type(hologram).__name__}"
+        )
     if distance is None:
         bounds = np.asarray(hologram.bounds)
         if bounds[0, 2] != bounds[1, 2] or bounds[0, 2] >= 0:
-            raise InputError("distance must be given [m] (how far behind the hologram its "
-                             "objects lie): the hologram does not state it")
+            raise InputError(
+                "distance must be given [m] (how far behind the hologram its "
+                "objects lie): the hologram does not state it"
+            )
         distance = -float(bounds[0, 2])
     distance = checked_distance(distance, hologram)
     if not hologram.reference_angle:
-        raise InlineHologramError("hologram states no carrier (its reference angle is 0): "
-                                  "import it with holo_core.import_acquired, which finds it, "
-                                  "or give the reference's angle and azimuth")
+        raise InlineHologramError(
+            "hologram states no carrier (its reference angle is 0): "
+            "import it with holo_core.import_acquired, which finds it, "
+            "or give the reference's angle and azimuth"
+        )
     aperture = aperture or Aperture()
-    waves = [sideband(hologram, c, aperture=aperture, reference_hologram=reference_hologram,
-                      subtract=subtract, iterations=iterations)
-             for c in range(len(hologram.wavelengths))]
+    waves = [
+        sideband(
+            hologram,
+            c,
+            aperture=aperture,
+            reference_hologram=reference_hologram,
+            subtract=subtract,
+            iterations=iterations,
+        )
+        for c in range(len(hologram.wavelengths))
+    ]
     lam = hologram.wavelengths[0]
     s = math.sin(hologram.reference_angle) / lam
     radius = aperture.radius_per_m(s, lam, hologram.band)
-    return Hologram(object_wave=np.stack(waves), encoding="complex",
-                    wavelengths=hologram.wavelengths, pitch=hologram.pitch,
-                    plate=hologram.plate, bounds=plane_bounds(hologram, distance),
-                    band=min(radius * lam, 0.999), channels=hologram.channels)
+    return Hologram(
+        object_wave=np.stack(waves),
+        encoding="complex",
+        wavelengths=hologram.wavelengths,
+        pitch=hologram.pitch,
+        plate=hologram.plate,
+        bounds=plane_bounds(hologram, distance),
+        band=min(radius * lam, 0.999),
+        channels=hologram.channels,
+    )
 
 
 @validate.public
@@ -255,6 +314,7 @@ def complex_scan(path, *, pitch, wavelength, distance) -> Hologram | None:
     ``im`` (a phase-shifting setup's result), its objects on the plane ``distance`` [m] behind
     it; None for any other file."""
     from ..io.image import read_exr
+
     if Path(path).suffix.lower() != ".exr":
         return None
     header, channels = read_exr(path, what="scan")
@@ -263,4 +323,3 @@ def complex_scan(path, *, pitch, wavelength, distance) -> Hologram | None:
     wave = (channels["re"] + 1j * channels["im"]).astype(np.complex64)[None]
     h = Hologram(object_wave=wave, encoding="complex", wavelengths=(wavelength,), pitch=pitch)
     return replace(h, bounds=plane_bounds(h, checked_distance(distance, h)))
-

@@ -42,16 +42,23 @@ from .optics import PupilOptics
 from .raster import Emitters
 
 PROGRAM = associated(__file__)
+# the kernels' signatures as tables (their arguments in the .cl file's order)
+# fmt: off
 SCATTER_VALUES = kernel(PROGRAM, "scatter_values", M=BUFFER, idx=BUFFER, val=BUFFER,
                         first=int32)
+# fmt: on
 PSF_PRODUCTS = kernel(PROGRAM, "psf_products", p1=BUFFER, p2=BUFFER)
+# the kernels' signatures as tables (their arguments in the .cl file's order)
+# fmt: off
 MULTIPLY_TILED = kernel(PROGRAM, "multiply_tiled", acc=BUFFER, m=BUFFER, k=BUFFER, h=int32,
                         w=int32, first=int32)
 EMBED_DEAPODIZED = kernel(PROGRAM, "embed_deapodized", Q=BUFFER, H=int32, W=int32, A=BUFFER,
                           h=int32, w=int32, ay=BUFFER, ax=BUFFER)
+# fmt: on
 
-BUFFERS = 5.25  # complex buffers of the padded grid on the device: 3 accumulators, 2 PSFs,
-                # and a map of a quarter of its size
+# complex buffers of the padded grid on the device: 3 accumulators, 2 PSFs, and a map of a quarter
+# of its size
+BUFFERS = 5.25
 READ_PADDING = 1.5  # the images' grid is padded by this much for the ES read ...
 READ_TAPS, READ_BETA = 6, 2.03  # ... with these taps and this β per tap (FINUFFT's for 1.5x)
 
@@ -73,27 +80,34 @@ class IncoherentImages:
         self.flat = [rt.to_device(np.ones(n), np.float32) for n in (h, w)]
         self.read_shape = tuple(next_fast_len(math.ceil(READ_PADDING * n)) for n in self.shape)
         self.read = empty(rt, self.read_shape)
-        self.deapodize = [rt.to_device(1 / es_transform(_signed(n) / m, READ_TAPS, READ_BETA),
-                                       np.float32) for n, m in zip(self.shape, self.read_shape)]
+        self.deapodize = [
+            rt.to_device(1 / es_transform(_signed(n) / m, READ_TAPS, READ_BETA), np.float32)
+            for n, m in zip(self.shape, self.read_shape)
+        ]
         self.es = cached_array(rt, "es-table", es_table, READ_TAPS, READ_BETA)
         alpha, beta, _ = camera_fine.direction_cosines()
         # each fine pixel's direction in samples of the read grid (2·α/b on the padded one)
-        self.u = rt.to_device(2 * alpha / optics.bin * self.read_shape[1] / self.shape[1],
-                              np.float32)
-        self.v = rt.to_device(2 * beta / optics.bin * self.read_shape[0] / self.shape[0],
-                              np.float32)
+        self.u = rt.to_device(
+            2 * alpha / optics.bin * self.read_shape[1] / self.shape[1], np.float32
+        )
+        self.v = rt.to_device(
+            2 * beta / optics.bin * self.read_shape[0] / self.shape[0], np.float32
+        )
         self.pixels = empty(rt, alpha.shape)
         # E|A|² in the looks' normalisation (|A|² / (N·Σw²), recording.py), and the 1/N of
         # the unnormalised inverse FFT
         iris = imaging.iris_weights((h, w), optics.pitch(), optics.diameter)
-        self.scale = 1 / (h * w * float(np.sum(iris ** 2)) * math.prod(self.shape))
+        self.scale = 1 / (h * w * float(np.sum(iris**2)) * math.prod(self.shape))
 
     def images(self, progress: jobs.Progress = None) -> list[np.ndarray]:
         """(R + iG, B + i·coverage, cross) at the fine pixels: complex64 (H, W) each."""
         rt, em = self.rt, self.em
         h, w = self.optics.shape
-        layers = [(z, int(em.starts[i]), int(em.starts[i + 1]))
-                  for i, z in enumerate(self.optics.layers) if em.starts[i] < em.starts[i + 1]]
+        layers = [
+            (z, int(em.starts[i]), int(em.starts[i + 1]))
+            for i, z in enumerate(self.optics.layers)
+            if em.starts[i] < em.starts[i + 1]
+        ]
         if not layers:
             for acc in self.acc:
                 fill(rt, acc, 0)
@@ -103,24 +117,60 @@ class IncoherentImages:
                 # the map on the (h, w) grid: on the 2x grid it fills the even bins only, and
                 # its transform there is this one tiled (multiply_tiled)
                 fill(rt, self.map, 0)
-                SCATTER_VALUES.launch(rt, (last - first,), options=self.options, M=self.map,
-                                      idx=self.index, val=values, first=first)
+                SCATTER_VALUES.launch(
+                    rt,
+                    (last - first,),
+                    options=self.options,
+                    M=self.map,
+                    idx=self.index,
+                    val=values,
+                    first=first,
+                )
                 rt.fft.forward(self.map)
-                MULTIPLY_TILED.launch(rt, by_rows(self.shape), options=self.options, acc=acc,
-                                      m=self.map, k=self.psf[k], h=h, w=w, first=done == 0)
+                MULTIPLY_TILED.launch(
+                    rt,
+                    by_rows(self.shape),
+                    options=self.options,
+                    acc=acc,
+                    m=self.map,
+                    k=self.psf[k],
+                    h=h,
+                    w=w,
+                    first=done == 0,
+                )
             jobs.report(progress, done + 1, len(layers) + 1)
         out = []
         corners = tuple(embedded(n, m) for n, m in zip(self.shape, self.read_shape))
         (read_h, read_w), (acc_h, acc_w) = self.read_shape, self.shape
         for acc in self.acc:
             rt.fft.clear(self.read, corners)
-            EMBED_DEAPODIZED.launch(rt, by_rows(self.shape), options=self.options, Q=self.read,
-                                    H=read_h, W=read_w, A=acc, h=acc_h, w=acc_w,
-                                    ay=self.deapodize[0], ax=self.deapodize[1])
+            EMBED_DEAPODIZED.launch(
+                rt,
+                by_rows(self.shape),
+                options=self.options,
+                Q=self.read,
+                H=read_h,
+                W=read_w,
+                A=acc,
+                h=acc_h,
+                w=acc_w,
+                ay=self.deapodize[0],
+                ax=self.deapodize[1],
+            )
             rt.fft.backward(self.read, nonzero=corners)
-            imaging.READ_PIXELS.launch(rt, (self.pixels.size,), options=self.options,
-                                       out=self.pixels, A=self.read, h=read_h, w=read_w,
-                                       u=self.u, v=self.v, scale=self.scale, es=self.es)
+            imaging.READ_PIXELS.launch(
+                rt,
+                (self.pixels.size,),
+                options=self.options,
+                out=self.pixels,
+                A=self.read,
+                h=read_h,
+                w=read_w,
+                u=self.u,
+                v=self.v,
+                scale=self.scale,
+                es=self.es,
+            )
             out.append(read(self.pixels))
         jobs.report(progress, 1, 1)
         return out
@@ -135,15 +185,37 @@ class IncoherentImages:
             dy, dx = o.pitch(lam)
             k = 2 * np.pi / lam
             fill(rt, self.pupil, 0)
-            recording.ADD_LAYER.launch(rt, by_rows((h, w)), options=self.options, P=self.pupil,
-                                       u=self.ones, h=h, w=w, dy=dy, dx=dx, k=k, z=z)
+            recording.ADD_LAYER.launch(
+                rt,
+                by_rows((h, w)),
+                options=self.options,
+                P=self.pupil,
+                u=self.ones,
+                h=h,
+                w=w,
+                dy=dy,
+                dx=dx,
+                k=k,
+                z=z,
+            )
             rt.fft.clear(psf, corners)
-            imaging.window(rt, psf, self.pupil, (h, w), pitch=(dy, dx),
-                           radius=o.diameter / 2 * lam / o.wavelength, taper=IRIS_TAPER, k=k,
-                           focus=o.focus or 0.0, apodization=self.flat, options=self.options)
+            imaging.window(
+                rt,
+                psf,
+                self.pupil,
+                (h, w),
+                pitch=(dy, dx),
+                radius=o.diameter / 2 * lam / o.wavelength,
+                taper=IRIS_TAPER,
+                k=k,
+                focus=o.focus or 0.0,
+                apodization=self.flat,
+                options=self.options,
+            )
             rt.fft.forward(psf, nonzero=corners)
-        PSF_PRODUCTS.launch(rt, (self.psf[0].size,), options=self.options, p1=self.psf[0],
-                            p2=self.psf[1])
+        PSF_PRODUCTS.launch(
+            rt, (self.psf[0].size,), options=self.options, p1=self.psf[0], p2=self.psf[1]
+        )
         for psf in self.psf:
             rt.fft.forward(psf)
 
@@ -159,12 +231,12 @@ def _emitter_maps(em: Emitters, optics: PupilOptics) -> list[np.ndarray]:
     col = np.asarray(em.colour, np.float64)
     cov = np.asarray(em.coverage, np.float64)
     dk = 2 * np.pi * (1 / optics.wavelength - 1 / optics.depth_wavelength)
-    cross = np.sqrt(col).sum(1) * np.sqrt(cov) * np.exp(1j * np.remainder(dk * em.distance,
-                                                                          2 * np.pi))
+    cross = (
+        np.sqrt(col).sum(1) * np.sqrt(cov) * np.exp(1j * np.remainder(dk * em.distance, 2 * np.pi))
+    )
     return [col[:, 0] + 1j * col[:, 1], col[:, 2] + 1j * cov, cross]
 
 
 def grid_bytes(optics: PupilOptics) -> float:
     """Device bytes of the route's buffers for ``optics``."""
     return (BUFFERS + READ_PADDING**2) * 8.0 * 4 * math.prod(optics.shape)
-

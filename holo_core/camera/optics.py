@@ -24,9 +24,10 @@ from ..propagation import grid
 from ..scene.camera import Camera
 
 log = logging.getLogger(__name__)
-SUPERSAMPLE = 2        # fine pixels per pixel (per axis): the pupil resolves one fine pixel
-LAYER_PHASE = math.pi / 2  # a layer's largest curvature error at the pupil's rim [rad]: a
-                           # quarter wave, Rayleigh's depth of focus
+SUPERSAMPLE = 2  # fine pixels per pixel (per axis): the pupil resolves one fine pixel
+# a layer's largest curvature error at the pupil's rim [rad]: a quarter wave, Rayleigh's depth of
+# focus
+LAYER_PHASE = math.pi / 2
 MAX_LAYERS = 512
 EDGE_BINS = 8  # bins beyond the field of view and its blur: the read's taps and a guard
 
@@ -77,13 +78,16 @@ class PupilOptics:
     def describe(self) -> str:
         h, w = self.shape
         lens = f"focus {self.focus:.4g} m" if self.focus else "no lens"
-        return (f"camera hologram {w}x{h} on a {self.diameter * 1e3:.3g} mm pupil ({lens}), "
-                f"λ = {self.wavelength:.4g} m (depth λ2 = {self.depth_wavelength:.6g} m), "
-                f"{len(self.layers)} depth layers, {self.supersample}x supersampling")
+        return (
+            f"camera hologram {w}x{h} on a {self.diameter * 1e3:.3g} mm pupil ({lens}), "
+            f"λ = {self.wavelength:.4g} m (depth λ2 = {self.depth_wavelength:.6g} m), "
+            f"{len(self.layers)} depth layers, {self.supersample}x supersampling"
+        )
 
 
-def choose_optics(camera: Camera, depth_range, *, supersample=SUPERSAMPLE,
-                  pupil_diameter: float | None = None) -> PupilOptics:
+def choose_optics(
+    camera: Camera, depth_range, *, supersample=SUPERSAMPLE, pupil_diameter: float | None = None
+) -> PupilOptics:
     """Optics for ``camera`` and emitters at planar depths ``depth_range`` (near, far) [m]
     (module docstring). ``pupil_diameter`` [m] overrides the pupil's diameter."""
     s = validate.integer("supersample", supersample, 1)
@@ -101,21 +105,31 @@ def choose_optics(camera: Camera, depth_range, *, supersample=SUPERSAMPLE,
     lam = diameter * b
     blur = diameter * max(abs(1 / near - 1 / focus), abs(1 / far - 1 / focus))
     margin = math.ceil(blur / b) + EDGE_BINS
-    shape = tuple(grid.next_fast_len(2 * (math.ceil(np.abs(a).max() / b) + margin))
-                  for a in (beta, alpha))
+    shape = tuple(
+        grid.next_fast_len(2 * (math.ceil(np.abs(a).max() / b) + margin)) for a in (beta, alpha)
+    )
     step = 16 * LAYER_PHASE * lam / (2 * math.pi * diameter**2)  # layer spacing in 1/z
     n = max(1, math.ceil((1 / near - 1 / far) / step))
     if n > MAX_LAYERS:
-        validate.warn_sampling(f"the emitters' depth range needs {n} layers at this aperture; "
-                               f"using {MAX_LAYERS} (defocus phase error up to "
-                               f"{LAYER_PHASE * n / MAX_LAYERS:.2g} rad)")
+        validate.warn_sampling(
+            f"the emitters' depth range needs {n} layers at this aperture; "
+            f"using {MAX_LAYERS} (defocus phase error up to "
+            f"{LAYER_PHASE * n / MAX_LAYERS:.2g} rad)"
+        )
         n = MAX_LAYERS
     inv = 1 / far + (np.arange(n) + 0.5) * (1 / near - 1 / far) / n
     farthest = far / float(gamma.min())  # the longest ray to the far depth
     depth_half = DEPTH_MARGIN * max(farthest - near, lam) / 2
-    optics = PupilOptics(wavelength=lam, depth_wavelength=partner_wavelength(lam, depth_half),
-                         pupil=Pupil(diameter=diameter, focus=focus),
-                         supersample=s, bin=b, shape=shape, layers=tuple(sorted(1 / inv)),
-                         depth_range=(near, far), centre=(near + farthest) / 2)
+    optics = PupilOptics(
+        wavelength=lam,
+        depth_wavelength=partner_wavelength(lam, depth_half),
+        pupil=Pupil(diameter=diameter, focus=focus),
+        supersample=s,
+        bin=b,
+        shape=shape,
+        layers=tuple(sorted(1 / inv)),
+        depth_range=(near, far),
+        centre=(near + farthest) / 2,
+    )
     log.info("optics: %s", optics.describe())
     return optics

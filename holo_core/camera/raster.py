@@ -49,17 +49,20 @@ def camera_space(camera: Camera, points) -> np.ndarray:
 
 
 RASTER_CHUNK = 4_000_000  # bin-triangle pairs tested at once
-TRIANGLE_BYTES = 1000  # host bytes per triangle of the largest mesh while rasterizing (its
-                       # projected corners and bin boxes), above the peak (docs, Performance)
-VERTEX_BYTES = 64      # per vertex: camera-space positions, depths, tangents
-PAIR_BYTES = 100       # per bin-triangle pair of a chunk, above the peak (docs, Performance)
+# host bytes per triangle of the largest mesh while rasterizing (its projected corners and bin
+# boxes), above the peak (docs, Performance)
+TRIANGLE_BYTES = 1000
+VERTEX_BYTES = 64  # per vertex: camera-space positions, depths, tangents
+PAIR_BYTES = 100  # per bin-triangle pair of a chunk, above the peak (docs, Performance)
 
 
 def raster_bytes(meshes, chunk=RASTER_CHUNK) -> float:
     """Host bytes :func:`rasterize` takes for ``meshes`` beyond the pupil's grid (one mesh is
     projected at a time, so the largest counts)."""
-    largest = max((TRIANGLE_BYTES * len(m.triangles) + VERTEX_BYTES * len(m.vertices)
-                   for m in meshes), default=0)
+    largest = max(
+        (TRIANGLE_BYTES * len(m.triangles) + VERTEX_BYTES * len(m.vertices) for m in meshes),
+        default=0,
+    )
     return largest + PAIR_BYTES * chunk
 
 
@@ -71,7 +74,8 @@ def rasterize(meshes, camera: Camera, optics: PupilOptics, *, chunk=RASTER_CHUNK
     bary = np.zeros((h * w, 2), np.float32)
     meshes = list(meshes)
     for kx, ky, depth, mesh, triangle, weights in crossing_chunks(
-            meshes, camera.position, camera.rotation, optics.bin, (h, w), chunk):
+        meshes, camera.position, camera.rotation, optics.bin, (h, w), chunk
+    ):
         flat = (ky % h) * w + kx % w
         order = np.lexsort((depth, flat))  # nearest first within each bin
         flat, depth = flat[order], depth[order]
@@ -102,8 +106,9 @@ def _emitters(meshes, covered, owner, bary, depth, optics: PupilOptics) -> Emitt
         c = surface_colour(mesh, corners, weights, 3)
         colour[sel] = c if c.shape[1] == 3 else np.repeat(c.mean(1, keepdims=True), 3, 1)
     ky, kx = grid_indices(covered, optics.shape)
-    return _sorted_emitters(covered, depth, _ray_distance(kx, ky, depth, optics), colour,
-                            np.ones(len(covered)), optics)
+    return _sorted_emitters(
+        covered, depth, _ray_distance(kx, ky, depth, optics), colour, np.ones(len(covered)), optics
+    )
 
 
 def _ray_distance(kx, ky, depth, optics: PupilOptics) -> np.ndarray:
@@ -133,9 +138,15 @@ def _sorted_emitters(index, depth, distance, colour, coverage, optics, layer=Non
         layer = layer_of(optics, depth)
     order = np.argsort(layer, kind="stable")
     starts = np.searchsorted(layer[order], np.arange(len(optics.layers) + 1))
-    return Emitters(index=index[order], depth=depth[order], distance=distance[order],
-                    colour=np.clip(colour[order], 0, None), coverage=coverage[order],
-                    layer=layer[order], starts=starts)
+    return Emitters(
+        index=index[order],
+        depth=depth[order],
+        distance=distance[order],
+        colour=np.clip(colour[order], 0, None),
+        coverage=coverage[order],
+        layer=layer[order],
+        starts=starts,
+    )
 
 
 def point_emitters(positions, colours, camera: Camera, optics: PupilOptics) -> Emitters:
@@ -156,12 +167,11 @@ def point_emitters(positions, colours, camera: Camera, optics: PupilOptics) -> E
     weight = col.sum(1) + 1e-30
     summed = np.stack([np.bincount(inverse, col[:, c]) for c in range(3)], -1)
     mean = lambda a: np.bincount(inverse, a * weight) / np.bincount(inverse, weight)  # noqa: E731
-    return _sorted_emitters(index, mean(depth), mean(dist), summed, np.ones(len(index)),
-                            optics)
+    return _sorted_emitters(index, mean(depth), mean(dist), summed, np.ones(len(index)), optics)
 
 
-MOTION_STEP = 1.0   # bins a vertex may move between two of the shutter's times
-MAX_TIMES = 256     # times across the shutter, at most
+MOTION_STEP = 1.0  # bins a vertex may move between two of the shutter's times
+MAX_TIMES = 256  # times across the shutter, at most
 DENSE_CELLS = 1 << 23  # (layer, bin) cells summed in dense grids, at most (six of 64 MiB)
 
 
@@ -179,15 +189,17 @@ def shutter_times(meshes, camera: Camera, optics: PupilOptics) -> np.ndarray:
         local = camera_space(camera, motion.reshape(-1, 3)).reshape(motion.shape)
         d = np.maximum(-local[..., 2], 1e-9)
         t = local[..., :2] / d[..., None]
-        n = np.sqrt(1 + (t ** 2).sum(-1))[..., None]
+        n = np.sqrt(1 + (t**2).sum(-1))[..., None]
         bins = -t / n / optics.bin
         jump = float(np.abs(np.diff(bins, axis=0)).max(initial=0))
         per = max(per, k * math.ceil(jump / MOTION_STEP))
     count = per
     if count > MAX_TIMES:
-        validate.warn_sampling(f"the motion across the shutter needs {count} times to stay "
-                               f"within {MOTION_STEP} fine pixel a step; using {MAX_TIMES} "
-                               f"(the blur may show steps)")
+        validate.warn_sampling(
+            f"the motion across the shutter needs {count} times to stay "
+            f"within {MOTION_STEP} fine pixel a step; using {MAX_TIMES} "
+            f"(the blur may show steps)"
+        )
         count = MAX_TIMES
     return (np.arange(count) + 0.5) / count
 
@@ -229,12 +241,20 @@ def across_shutter(meshes, camera: Camera, optics: PupilOptics) -> Emitters | No
         return None
     cover = sums[0]
     weight = np.maximum(cover, 1e-300)
-    return _sorted_emitters(keys % size, sums[1] / weight, sums[2] / weight, sums[3:].T,
-                            cover, optics, layer=keys // size)
+    return _sorted_emitters(
+        keys % size,
+        sums[1] / weight,
+        sums[2] / weight,
+        sums[3:].T,
+        cover,
+        optics,
+        layer=keys // size,
+    )
 
 
-def camera_emitters(meshes, points, camera: Camera, *, supersample, pupil_diameter=None
-                    ) -> tuple[PupilOptics, Emitters]:
+def camera_emitters(
+    meshes, points, camera: Camera, *, supersample, pupil_diameter=None
+) -> tuple[PupilOptics, Emitters]:
     """(the optics, the emitters) of ``meshes`` (a list of Mesh, across the shutter where they
     move) and bare ``points`` ((positions (N, 3) [m], colours (N, 3)) or None) seen by
     ``camera``: the optics chosen for their depths (:func:`.optics.choose_optics`, at
@@ -243,8 +263,7 @@ def camera_emitters(meshes, points, camera: Camera, *, supersample, pupil_diamet
     is the caller's to check first (:func:`holo_core.camera.render.render_camera` does)."""
     pos, colours = (None, None) if points is None else points
     near_far = depth_range(meshes, camera, pos)
-    optics = choose_optics(camera, near_far, supersample=supersample,
-                           pupil_diameter=pupil_diameter)
+    optics = choose_optics(camera, near_far, supersample=supersample, pupil_diameter=pupil_diameter)
     em = across_shutter(meshes, camera, optics) if meshes else None
     if pos is not None:
         em = merged(em, point_emitters(pos, colours, camera, optics), optics)
@@ -256,8 +275,10 @@ def camera_emitters(meshes, points, camera: Camera, *, supersample, pupil_diamet
 def depth_range(meshes, camera: Camera, points=None) -> tuple[float, float]:
     """(near, far) planar depths [m] of the emitters in front of ``camera`` (across the
     shutter, for meshes that move)."""
-    zs = [-camera_space(camera, m.vertices if m.motion is None else
-                        m.motion.reshape(-1, 3))[:, 2] for m in meshes]
+    zs = [
+        -camera_space(camera, m.vertices if m.motion is None else m.motion.reshape(-1, 3))[:, 2]
+        for m in meshes
+    ]
     if points is not None and len(points):
         zs.append(-camera_space(camera, points)[:, 2])
     z = np.concatenate(zs) if zs else np.zeros(0)
@@ -270,6 +291,8 @@ def depth_range(meshes, camera: Camera, points=None) -> tuple[float, float]:
 def merged(a: Emitters | None, b: Emitters, optics) -> Emitters:
     if a is None:
         return b
-    cat = [np.concatenate([getattr(a, k), getattr(b, k)])
-           for k in ("index", "depth", "distance", "colour", "coverage")]
+    cat = [
+        np.concatenate([getattr(a, k), getattr(b, k)])
+        for k in ("index", "depth", "distance", "colour", "coverage")
+    ]
     return _sorted_emitters(*cat, optics)

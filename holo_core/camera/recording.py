@@ -28,10 +28,13 @@ from .optics import PupilOptics
 from .raster import Emitters
 
 PROGRAM = associated(__file__)
+# the kernels' signatures as tables (their arguments in the .cl file's order)
+# fmt: off
 SCATTER = kernel(PROGRAM, "scatter", S=BUFFER, idx=BUFFER, amp=BUFFER, phase0=BUFFER,
                  phi=BUFFER, first=int32)
 ADD_LAYER = kernel(PROGRAM, "add_layer", P=BUFFER, u=BUFFER, h=int32, w=int32, dy=float32,
                    dx=float32, k=float32, z=float32)
+# fmt: on
 
 
 class PupilFields:
@@ -43,15 +46,17 @@ class PupilFields:
         self.index = rt.to_device(em.index.astype(np.int32))
         self.wavelengths = (optics.wavelength, optics.depth_wavelength)
         self.pitches = [optics.pitch(lam) for lam in self.wavelengths]  # (dy, dx) [m] each
-        self.phase0 = [rt.to_device(np.remainder(2 * np.pi / lam * em.distance, 2 * np.pi),
-                                    np.float32) for lam in self.wavelengths]
+        self.phase0 = [
+            rt.to_device(np.remainder(2 * np.pi / lam * em.distance, 2 * np.pi), np.float32)
+            for lam in self.wavelengths
+        ]
         self.amps = [rt.to_device(np.sqrt(em.colour[:, c]), np.float32) for c in range(3)]
         self.amps.append(rt.to_device(np.sqrt(em.coverage), np.float32))
         self.spectrum, self.pupil = empty(rt, (h, w)), empty(rt, (h, w))
         self.imager = PupilImage(rt, (h, w), bin=optics.bin, camera=camera_fine)
         # |A|² / (N·Σw²) is the emitters' intensity (Parseval), w the iris on the samples
         iris = iris_weights((h, w), self.pitches[0], optics.diameter)
-        self.scale = 1 / math.sqrt(h * w * float(np.sum(iris ** 2)))
+        self.scale = 1 / math.sqrt(h * w * float(np.sum(iris**2)))
         self.options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
 
     def object_wave(self, field: int, phases):
@@ -66,12 +71,31 @@ class PupilFields:
             if first == last:
                 continue
             fill(rt, self.spectrum, 0)
-            SCATTER.launch(rt, (last - first,), options=self.options, S=self.spectrum,
-                           idx=self.index, amp=self.amps[field],
-                           phase0=self.phase0[field == 3], phi=phases, first=first)
+            SCATTER.launch(
+                rt,
+                (last - first,),
+                options=self.options,
+                S=self.spectrum,
+                idx=self.index,
+                amp=self.amps[field],
+                phase0=self.phase0[field == 3],
+                phi=phases,
+                first=first,
+            )
             rt.fft.backward(self.spectrum)
-            ADD_LAYER.launch(rt, by_rows((h, w)), options=self.options, P=self.pupil,
-                             u=self.spectrum, h=h, w=w, dy=dy, dx=dx, k=2 * np.pi / lam, z=z)
+            ADD_LAYER.launch(
+                rt,
+                by_rows((h, w)),
+                options=self.options,
+                P=self.pupil,
+                u=self.spectrum,
+                h=h,
+                w=w,
+                dy=dy,
+                dx=dx,
+                k=2 * np.pi / lam,
+                z=z,
+            )
         return self.pupil
 
     def image(self, field: int) -> np.ndarray:
@@ -79,13 +103,19 @@ class PupilFields:
         E|A|² is the emitters' intensity."""
         optics = self.optics
         lam = self.wavelengths[field == 3]
-        return self.imager.image(self.pupil, pitch=self.pitches[field == 3],
-                                 diameter=optics.diameter * lam / optics.wavelength,
-                                 focus=optics.focus, lens_k=2 * np.pi / lam, scale=self.scale)
+        return self.imager.image(
+            self.pupil,
+            pitch=self.pitches[field == 3],
+            diameter=optics.diameter * lam / optics.wavelength,
+            focus=optics.focus,
+            lens_k=2 * np.pi / lam,
+            scale=self.scale,
+        )
 
 
-def object_wave(em: Emitters, optics: PupilOptics, camera: Camera, *, field=0,
-                seed=0) -> np.ndarray:
+def object_wave(
+    em: Emitters, optics: PupilOptics, camera: Camera, *, field=0, seed=0
+) -> np.ndarray:
     """The camera hologram: the object wave of colour channel ``field`` (0-2) or the depth
     partner (3) on the pupil (h, w) [field units], centred (row, col of the optical axis at
     (h//2, w//2)), pitch ``optics.pitch(λ)``, emitter phases drawn from ``seed``."""
@@ -117,13 +147,14 @@ def intensity_hologram(o: np.ndarray, *, beam_ratio=4.0) -> HologramRecording:
     h, w = o.shape
     spec = np.fft.fftshift(np.fft.fft2(np.fft.ifftshift(o)))
     big = np.zeros((h, 4 * w), complex)
-    big[:, 3 * w // 2: 3 * w // 2 + w] = spec
+    big[:, 3 * w // 2 : 3 * w // 2 + w] = spec
     fine = np.fft.fftshift(np.fft.ifft2(np.fft.ifftshift(big))) * 4
     amplitude = math.sqrt(beam_ratio * float(np.mean(np.abs(o) ** 2)))
     carrier = 1.5 * w / (4 * w)
     ref = _reference(amplitude, carrier, 4 * w)
-    return HologramRecording(intensity=np.abs(fine + ref).astype(np.float32) ** 2,
-                             carrier=carrier, amplitude=amplitude)
+    return HologramRecording(
+        intensity=np.abs(fine + ref).astype(np.float32) ** 2, carrier=carrier, amplitude=amplitude
+    )
 
 
 def _reference(amplitude, carrier, n) -> np.ndarray:
@@ -139,5 +170,5 @@ def reconstruct_object_wave(rec: HologramRecording) -> np.ndarray:
     ref = _reference(rec.amplitude, rec.carrier, ww)
     u = (rec.intensity - rec.intensity.mean()) * ref / rec.amplitude**2  # O·R*·R = O|R|²
     spec = np.fft.fftshift(np.fft.fft2(np.fft.ifftshift(u)))
-    o = spec[:, 3 * w // 2: 3 * w // 2 + w]
+    o = spec[:, 3 * w // 2 : 3 * w // 2 + w]
     return np.fft.fftshift(np.fft.ifft2(np.fft.ifftshift(o))) / 4

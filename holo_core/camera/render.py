@@ -42,12 +42,23 @@ log = logging.getLogger(__name__)
 # --- rendering -------------------------------------------------------------------------------
 
 FINE_PIXEL_BYTES = 64  # per fine pixel: the four looks' images, coverage, depth, accumulators
-DEVICE_FIELDS = 6      # complex pupil-sized buffers on the device: the layers' sum, FFTs, iris
+DEVICE_FIELDS = 6  # complex pupil-sized buffers on the device: the layers' sum, FFTs, iris
 
 
-def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
-                  supersample=SUPERSAMPLE, pupil_diameter=None, exposure=1.0, seed=0,
-                  via="object_wave", progress: jobs.Progress = None, on_sample=None):
+def render_camera(
+    meshes=(),
+    camera: Camera = None,
+    *,
+    points=None,
+    samples=16,
+    supersample=SUPERSAMPLE,
+    pupil_diameter=None,
+    exposure=1.0,
+    seed=0,
+    via="object_wave",
+    progress: jobs.Progress = None,
+    on_sample=None,
+):
     """Render meshes (and bare points) as a camera sees them through its camera hologram.
 
     The camera hologram is the module docstring's; meshes that move (``Mesh.motion``) are
@@ -116,8 +127,9 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     ((24, 32, 3), 0.31)
     """
     if not isinstance(camera, Camera):
-        raise InputError(f"camera must be a Camera (render_camera needs one); got "
-                         f"{type(camera).__name__}")
+        raise InputError(
+            f"camera must be a Camera (render_camera needs one); got {type(camera).__name__}"
+        )
     validate.choice("via", via, ("incoherent", "object_wave", "hologram"))
     samples = validate.integer("samples", samples, 1, MAX_SAMPLES)
     supersample = validate.integer("supersample", supersample, 1, MAX_SUPERSAMPLE)
@@ -129,17 +141,22 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
     # the host's memory before the meshes are projected (a 10^7-vertex mesh took 8 GB and more)
     memory.check_host(f"a {w}x{h} camera view at supersample {supersample}", view)
     if meshes:
-        memory.check_host(f"rasterizing {sum(len(m.triangles) for m in meshes)} triangles",
-                          raster_bytes(meshes))
-    optics, em = camera_emitters(meshes, points, camera, supersample=supersample,
-                                 pupil_diameter=pupil_diameter)
+        memory.check_host(
+            f"rasterizing {sum(len(m.triangles) for m in meshes)} triangles", raster_bytes(meshes)
+        )
+    optics, em = camera_emitters(
+        meshes, points, camera, supersample=supersample, pupil_diameter=pupil_diameter
+    )
     rt, pupil = get_runtime(), 8.0 * math.prod(optics.shape)
     # the layers' padded images, else the pupil's fields
-    what, held, largest = (("padded images", grid_bytes(optics) + view, 4 * pupil)
-                           if via == "incoherent" else
-                           ("fields", DEVICE_FIELDS * pupil + view, pupil))
-    memory.check_device(rt, f"the {optics.shape[1]}x{optics.shape[0]} pupil's {what}", held,
-                        largest)
+    what, held, largest = (
+        ("padded images", grid_bytes(optics) + view, 4 * pupil)
+        if via == "incoherent"
+        else ("fields", DEVICE_FIELDS * pupil + view, pupil)
+    )
+    memory.check_device(
+        rt, f"the {optics.shape[1]}x{optics.shape[0]} pupil's {what}", held, largest
+    )
     acc = _Accumulator(camera, optics, exposure)
     if via == "incoherent":
         return _incoherent(rt, em, optics, fine, acc, progress, on_sample)
@@ -151,21 +168,29 @@ def render_camera(meshes=(), camera: Camera = None, *, points=None, samples=16,
         for f in range(4):
             wave = fields.object_wave(f, phases)
             if via == "hologram":
-                write(wave, np.fft.ifftshift(reconstruct_object_wave(
-                    intensity_hologram(np.fft.fftshift(read(wave))))))
+                write(
+                    wave,
+                    np.fft.ifftshift(
+                        reconstruct_object_wave(intensity_hologram(np.fft.fftshift(read(wave))))
+                    ),
+                )
             images.append(fields.image(f))
             jobs.report(progress, (n - 1) * 4 + f + 1, samples * 4)
         acc.add(images)
         if on_sample is not None and not n & (n - 1):  # the result costs a few looks' time
             on_sample(acc.result(), n)
     result = acc.result()
-    log.info("camera hologram: %d samples, speckle contrast %.3f", samples,
-             result.info["speckle_contrast"])
+    log.info(
+        "camera hologram: %d samples, speckle contrast %.3f",
+        samples,
+        result.info["speckle_contrast"],
+    )
     return result
 
 
-def _incoherent(rt, em, optics: PupilOptics, fine: Camera, acc: _Accumulator, progress,
-                on_sample) -> RenderResult:
+def _incoherent(
+    rt, em, optics: PupilOptics, fine: Camera, acc: _Accumulator, progress, on_sample
+) -> RenderResult:
     acc.add_expected(*IncoherentImages(rt, em, optics, fine).images(progress))
     result = acc.result()
     if on_sample is not None:
@@ -181,8 +206,9 @@ def _meshes(meshes) -> list:
     except TypeError:
         out = [meshes]
     if not all(isinstance(m, Mesh) for m in out):
-        raise InputError(f"meshes must be a Mesh or a sequence of Mesh; got "
-                         f"{type(meshes).__name__}")
+        raise InputError(
+            f"meshes must be a Mesh or a sequence of Mesh; got {type(meshes).__name__}"
+        )
     return out
 
 
@@ -230,18 +256,37 @@ class _Accumulator:
     def result(self) -> RenderResult:
         o, n, s = self.optics, self.n, self.optics.supersample
         colour, alpha, depth, radiance, coverage = assemble(
-            self.rgb / n, self.coverage / n, self.cross, camera=self.camera, supersample=s,
-            wavelengths=(o.wavelength, o.depth_wavelength), centre=o.centre,
-            exposure=self.exposure, soft=self.exact)
+            self.rgb / n,
+            self.coverage / n,
+            self.cross,
+            camera=self.camera,
+            supersample=s,
+            wavelengths=(o.wavelength, o.depth_wavelength),
+            centre=o.centre,
+            exposure=self.exposure,
+            soft=self.exact,
+        )
         mean = self.lum / n
         spread = np.sqrt(np.maximum(self.lum2 / n - mean**2, 0) / max(n - 1, 1))
         solid = alpha >= 1
-        contrast = 0.0 if self.exact else float(np.median(
-            spread[solid] / np.maximum(mean[solid], 1e-30))) if solid.any() and n > 1 \
+        contrast = (
+            0.0
+            if self.exact
+            else float(np.median(spread[solid] / np.maximum(mean[solid], 1e-30)))
+            if solid.any() and n > 1
             else float("nan")
-        info = {"samples": n, "speckle_contrast": contrast, "aperture_m": o.diameter,
-                "focus_m": o.focus, "wavelengths_m": [o.wavelength, o.depth_wavelength],
-                "layers": len(o.layers), "pupil_samples": list(o.shape),
-                "resolution_limit_px": 1 / s, "exposure": self.exposure}
-        return RenderResult(rgb=colour, alpha=alpha, depth=depth, info=info, coverage=coverage,
-                            radiance=radiance)
+        )
+        info = {
+            "samples": n,
+            "speckle_contrast": contrast,
+            "aperture_m": o.diameter,
+            "focus_m": o.focus,
+            "wavelengths_m": [o.wavelength, o.depth_wavelength],
+            "layers": len(o.layers),
+            "pupil_samples": list(o.shape),
+            "resolution_limit_px": 1 / s,
+            "exposure": self.exposure,
+        }
+        return RenderResult(
+            rgb=colour, alpha=alpha, depth=depth, info=info, coverage=coverage, radiance=radiance
+        )

@@ -63,16 +63,41 @@ KEYS = ("pitch_m", "wavelength_m", "reference_angle_rad", "reference_azimuth_rad
 IMAGES = (".png", ".tif", ".tiff")
 HDF5 = (".h5", ".hdf5", ".mat")
 SUFFIXES = (*IMAGES, ".exr", ".npy", *HDF5)
-MAX_PAGES = 4096      # page='all' returns at most this many holograms (each a full array)
+MAX_PAGES = 4096  # page='all' returns at most this many holograms (each a full array)
 MAX_OBJECTS = 100_000  # an HDF5 file's objects visited to find its datasets
-_IMAGEJ_UNITS = {"nm": 1e-9, "nanometer": 1e-9, "micron": 1e-6, "um": 1e-6, "µm": 1e-6,
-                 "\\u00B5m": 1e-6, "mm": 1e-3, "cm": 1e-2, "m": 1.0, "meter": 1.0}
-_AS_RGB = {"P": "RGBA", "PA": "RGBA", "CMYK": "RGB", "YCbCr": "RGB", "LAB": "RGB",
-           "HSV": "RGB", "RGBX": "RGB", "RGBa": "RGBA", "La": "LA"}
+_IMAGEJ_UNITS = {
+    "nm": 1e-9,
+    "nanometer": 1e-9,
+    "micron": 1e-6,
+    "um": 1e-6,
+    "µm": 1e-6,
+    "\\u00B5m": 1e-6,
+    "mm": 1e-3,
+    "cm": 1e-2,
+    "m": 1.0,
+    "meter": 1.0,
+}
+_AS_RGB = {
+    "P": "RGBA",
+    "PA": "RGBA",
+    "CMYK": "RGB",
+    "YCbCr": "RGB",
+    "LAB": "RGB",
+    "HSV": "RGB",
+    "RGBX": "RGB",
+    "RGBa": "RGBA",
+    "La": "LA",
+}
 _MAT_HEADER = b"MATLAB 7.3 MAT-file, written by holo; HDF5 schema 1.00 ."
 _NPY_MAGIC, _ZIP_MAGIC = b"\x93NUMPY", b"PK\x03\x04"
-_COMPRESSION = {1: "uncompressed", 5: "LZW", 7: "JPEG", 8: "deflate", 32773: "PackBits",
-                32946: "deflate"}
+_COMPRESSION = {
+    1: "uncompressed",
+    5: "LZW",
+    7: "JPEG",
+    8: "deflate",
+    32773: "PackBits",
+    32946: "deflate",
+}
 
 
 @dataclass
@@ -87,8 +112,16 @@ class _Scan:
 
 
 @validate.public
-def read_acquired(source, *, pitch=None, wavelength=None, reference_angle=None,
-                    reference_azimuth=None, page=None, dataset=None):
+def read_acquired(
+    source,
+    *,
+    pitch=None,
+    wavelength=None,
+    reference_angle=None,
+    reference_azimuth=None,
+    page=None,
+    dataset=None,
+):
     """Read an acquired (real) intensity hologram from a file or an array.
 
     Parameters
@@ -137,8 +170,12 @@ def read_acquired(source, *, pitch=None, wavelength=None, reference_angle=None,
     >>> h.intensity.shape, h.pitch, h.wavelengths
     ((1, 64, 64), 3.45e-06, (6.33e-07,))
     """
-    settings = {"pitch_m": pitch, "wavelength_m": wavelength,
-                "reference_angle_rad": reference_angle, "reference_azimuth_rad": reference_azimuth}
+    settings = {
+        "pitch_m": pitch,
+        "wavelength_m": wavelength,
+        "reference_angle_rad": reference_angle,
+        "reference_azimuth_rad": reference_azimuth,
+    }
     if page is not None and not (isinstance(page, str) and page == "all"):
         page = validate.integer("page", page, 0)
     _optics("", settings, {}, required=False)  # the given values, before any reading
@@ -149,19 +186,22 @@ def read_acquired(source, *, pitch=None, wavelength=None, reference_angle=None,
         scan = _read_file(Path(source), page, dataset)
     else:
         if dataset is not None:
-            raise InputError("dataset names a dataset of an HDF5 or .mat file; an array "
-                             "source has none")
+            raise InputError(
+                "dataset names a dataset of an HDF5 or .mat file; an array source has none"
+            )
         name = "array"
         scan = _array_scan(name, _intensities(name, source), page)
     holograms = []
     for index in _wanted(name, scan.count, page):
         optics = _optics(name, settings, {**scan.meta, **scan.per_page.get(index, {})})
-        h = Hologram(intensity=scan.pages[index][None].astype(np.float32),
-                     wavelengths=(optics["wavelength_m"],), pitch=optics["pitch_m"],
-                     reference_angle=optics["reference_angle_rad"],
-                     reference_azimuth=optics["reference_azimuth_rad"],
-                     reference_amplitudes=(scan.per_page.get(index, {}).get(
-                         "reference_amplitude", 1.0),))
+        h = Hologram(
+            intensity=scan.pages[index][None].astype(np.float32),
+            wavelengths=(optics["wavelength_m"],),
+            pitch=optics["pitch_m"],
+            reference_angle=optics["reference_angle_rad"],
+            reference_azimuth=optics["reference_azimuth_rad"],
+            reference_amplitudes=(scan.per_page.get(index, {}).get("reference_amplitude", 1.0),),
+        )
         check_pixels(name, h)
         holograms.append(h)
     return holograms if page == "all" else holograms[0]
@@ -209,20 +249,24 @@ def write_acquired(path, hologram: Hologram, *, colour: int = 0) -> Path:
     (2e-06, (6.33e-07,))
     """
     if not isinstance(hologram, Hologram) or getattr(hologram, "intensity", None) is None:
-        raise InputError(f"hologram must be an intensity Hologram; got "
-                         f"{type(hologram).__name__}")
+        raise InputError(f"hologram must be an intensity Hologram; got {type(hologram).__name__}")
     suffix = Path(path).suffix.lower()
     if suffix not in SUFFIXES:
-        raise InputError(f"{path}: write_acquired writes {', '.join(SUFFIXES)}; the suffix "
-                         f"{suffix or '(none)'!r} names none of them")
+        raise InputError(
+            f"{path}: write_acquired writes {', '.join(SUFFIXES)}; the suffix "
+            f"{suffix or '(none)'!r} names none of them"
+        )
     if suffix == ".exr":
         return write_hologram(path, hologram)
     c = validate.index("colour", colour, len(hologram.wavelengths))
     check_writable(path, suffix)
     data = np.ascontiguousarray(hologram.intensity[c], np.float32)
-    meta = {"pitch_m": float(hologram.pitch), "wavelength_m": float(hologram.wavelengths[c]),
-            "reference_angle_rad": float(hologram.reference_angle),
-            "reference_azimuth_rad": float(hologram.reference_azimuth)}
+    meta = {
+        "pitch_m": float(hologram.pitch),
+        "wavelength_m": float(hologram.wavelengths[c]),
+        "reference_angle_rad": float(hologram.reference_angle),
+        "reference_azimuth_rad": float(hologram.reference_azimuth),
+    }
     targets = [path] + ([Path(path).with_suffix(".json")] if suffix == ".npy" else [])
     with atomic_paths(*targets) as temps:
         if suffix == ".npy":
@@ -237,6 +281,7 @@ def write_acquired(path, hologram: Hologram, *, colour: int = 0) -> Path:
 
 
 # --- reading ---------------------------------------------------------------------------------
+
 
 def _read_file(path: Path, page, dataset) -> _Scan:
     """The pages ``page`` asks for of a file, its page count and metadata."""
@@ -258,14 +303,20 @@ def _wanted(name: str, count: int, page) -> list[int]:
     """The page indices ``page`` asks for (None: the only one; an index; 'all'), checked
     against ``count`` before anything is read."""
     if page is None and count > 1:
-        raise InputError(f"{name}: holds {count} pages; pass page=i (0 to {count - 1}) for one "
-                         f"of them or page='all' for every one")
+        raise InputError(
+            f"{name}: holds {count} pages; pass page=i (0 to {count - 1}) for one "
+            f"of them or page='all' for every one"
+        )
     if isinstance(page, int) and page >= count:
-        raise InputError(f"page must be in [0, {count - 1}] for {name} ({count} page"
-                         f"{'s' if count > 1 else ''}); got {page}")
+        raise InputError(
+            f"page must be in [0, {count - 1}] for {name} ({count} page"
+            f"{'s' if count > 1 else ''}); got {page}"
+        )
     if page == "all" and count > MAX_PAGES:
-        raise InputError(f"{name}: holds {count} pages; page='all' returns at most {MAX_PAGES} "
-                         f"holograms: pass page=i (0 to {count - 1})")
+        raise InputError(
+            f"{name}: holds {count} pages; page='all' returns at most {MAX_PAGES} "
+            f"holograms: pass page=i (0 to {count - 1})"
+        )
     return list(range(count)) if page in (None, "all") else [page]
 
 
@@ -273,8 +324,10 @@ def _array_scan(name: str, a: np.ndarray, page) -> _Scan:
     """The pages of a 2-D or 3-D (pages, H, W) array, scaled to intensities (only those
     asked for)."""
     if a.ndim not in (2, 3):
-        raise HologramFileError(f"{name}: holds a {a.ndim}-D array; an intensity hologram is "
-                                f"2-D (H, W), or 3-D (pages, H, W)")
+        raise HologramFileError(
+            f"{name}: holds a {a.ndim}-D array; an intensity hologram is "
+            f"2-D (H, W), or 3-D (pages, H, W)"
+        )
     stack = a[None] if a.ndim == 2 else a
     pages = {i: _scaled(name, np.asarray(stack[i])) for i in _wanted(name, len(stack), page)}
     return _Scan(pages, len(stack), {})
@@ -292,32 +345,43 @@ def _read_exr(path: Path, page) -> _Scan:
     if "holo" in header:  # written by write_hologram (or write_acquired's .exr)
         h = read_hologram(path)
         if h.intensity is None:
-            raise HologramFileError(f"{path}: a complex hologram (its samples are the object "
-                                    f"wave already); read it with read_hologram")
+            raise HologramFileError(
+                f"{path}: a complex hologram (its samples are the object "
+                f"wave already); read it with read_hologram"
+            )
         count = len(h.wavelengths)
-        per_page = {c: {"wavelength_m": h.wavelengths[c],
-                        "reference_amplitude": (h.reference_amplitudes or (1.0,) * count)[c]}
-                    for c in range(count)}
-        meta = {"pitch_m": h.pitch, "reference_angle_rad": h.reference_angle,
-                "reference_azimuth_rad": h.reference_azimuth}
+        per_page = {
+            c: {
+                "wavelength_m": h.wavelengths[c],
+                "reference_amplitude": (h.reference_amplitudes or (1.0,) * count)[c],
+            }
+            for c in range(count)
+        }
+        meta = {
+            "pitch_m": h.pitch,
+            "reference_angle_rad": h.reference_angle,
+            "reference_azimuth_rad": h.reference_azimuth,
+        }
         pages = {c: h.intensity[c].astype(np.float64) for c in _wanted(str(path), count, page)}
         return _Scan(pages, count, meta, per_page)
     if "Y" in chans:
         grey = chans["Y"].astype(np.float64)
     elif any(n in chans for n in ("R", "G", "B")):
-        grey = np.mean([chans[n] for n in ("R", "G", "B") if n in chans], axis=0,
-                       dtype=np.float64)
+        grey = np.mean([chans[n] for n in ("R", "G", "B") if n in chans], axis=0, dtype=np.float64)
     elif len(chans) == 1:
         grey = next(iter(chans.values())).astype(np.float64)
     else:
-        raise HologramFileError(f"{path}: an EXR scan needs a Y channel, R/G/B channels or a "
-                                f"single channel; it has {', '.join(sorted(chans))[:200]}")
+        raise HologramFileError(
+            f"{path}: an EXR scan needs a Y channel, R/G/B channels or a "
+            f"single channel; it has {', '.join(sorted(chans))[:200]}"
+        )
     return _Scan(dict.fromkeys(_wanted(str(path), 1, page), grey), 1, {})
 
 
 def _read_image(path: Path, page) -> _Scan:
     """The pages of a PNG or TIFF (the ones asked for), their count and the metadata."""
     from PIL import Image
+
     try:
         with warnings.catch_warnings():  # the memory check below is the limit, not PIL's guess
             warnings.simplefilter("ignore", Image.DecompressionBombWarning)
@@ -328,19 +392,25 @@ def _read_image(path: Path, page) -> _Scan:
             frames = _frame_count(im)
             count = frames * planes
             wanted = _wanted(str(path), count, page)
-            memory.check_host(f"{path} (scan, {w}x{h} pixels, {len(wanted)} page(s))",
-                              8.0 * 4 * w * h * len(wanted))
+            memory.check_host(
+                f"{path} (scan, {w}x{h} pixels, {len(wanted)} page(s))",
+                8.0 * 4 * w * h * len(wanted),
+            )
             pages = {}
             for i in wanted:
                 im.seek(i // planes)
-                pages[i] = _grey(path, im) if planes == 1 else \
-                    _scaled(str(path), _plane(path, im, i % planes))
+                pages[i] = (
+                    _grey(path, im)
+                    if planes == 1
+                    else _scaled(str(path), _plane(path, im, i % planes))
+                )
             meta = _image_meta(im)  # after the pixels: a PNG's text chunks load the image
     except InputError:
         raise
     except Exception as e:  # noqa: BLE001 -- PIL's errors for damaged files vary by format
-        raise HologramFileError(f"{path}: not a readable PNG/TIFF image ({type(e).__name__}: "
-                                f"{e})"[:400]) from None
+        raise HologramFileError(
+            f"{path}: not a readable PNG/TIFF image ({type(e).__name__}: {e})"[:400]
+        ) from None
     scale = meta.pop("intensity_scale", None)
     if scale is not None:
         scale = validate.positive(f"{path}: metadata intensity_scale", scale)
@@ -371,8 +441,11 @@ def _grey(path: Path, im) -> np.ndarray:
     im.load()
     if im.mode in _AS_RGB:
         im = im.convert(_AS_RGB[im.mode])
-    a = _wide(im, raw) if raw.endswith((";16B", ";16L", ";16N")) and \
-        im.mode in ("RGB", "RGBA", "LA") else np.asarray(im)
+    a = (
+        _wide(im, raw)
+        if raw.endswith((";16B", ";16L", ";16N")) and im.mode in ("RGB", "RGBA", "LA")
+        else np.asarray(im)
+    )
     if im.mode in ("LA", "RGBA"):
         a = a[..., :-1]
     a = _scaled(str(path), a)
@@ -396,18 +469,23 @@ def _wide(im, raw: str) -> np.ndarray:
     byte, by the tile's raw mode 'RGB;16B'); decoding the same tiles a second time with the
     other byte order's raw mode gives the low bytes, and the two make the 16 bits."""
     from PIL import Image
+
     other = raw[:-1] + _OTHER_END[raw[-1]]
     low = Image.open(im.filename)
     with low:
         low.seek(im.tell())
-        low.tile = [t._replace(args=other if isinstance(t.args, str) else (other, *t.args[1:]))
-                    for t in low.tile]
+        low.tile = [
+            t._replace(args=other if isinstance(t.args, str) else (other, *t.args[1:]))
+            for t in low.tile
+        ]
         try:
             low.load()
         except ValueError:  # no decoder for that byte order (16-bit grey with alpha)
-            raise HologramFileError(f"{im.filename}: 16-bit samples laid out as {raw}, of which "
-                                    f"Pillow reads only 8 bits a sample: not read (save it as "
-                                    f"16-bit grey, RGB or RGBA)") from None
+            raise HologramFileError(
+                f"{im.filename}: 16-bit samples laid out as {raw}, of which "
+                f"Pillow reads only 8 bits a sample: not read (save it as "
+                f"16-bit grey, RGB or RGBA)"
+            ) from None
         return np.asarray(im).astype(np.uint16) * 256 + np.asarray(low)
 
 
@@ -429,16 +507,24 @@ def _plane(path: Path, im, k: int) -> np.ndarray:
     compression = int(tags.get(259, 1))
     samples = int(tags.get(277, 1))
     w, h = im.size
-    layout = (f"{samples} {bits[0]}-bit samples per pixel stored as separate planes, "
-              f"{_COMPRESSION.get(compression, f'compression {compression}')}")
-    if compression == 1 and 273 in tags and 324 not in tags and len(set(bits)) == 1 and \
-            bits[0] in (8, 16, 32, 64):
+    layout = (
+        f"{samples} {bits[0]}-bit samples per pixel stored as separate planes, "
+        f"{_COMPRESSION.get(compression, f'compression {compression}')}"
+    )
+    if (
+        compression == 1
+        and 273 in tags
+        and 324 not in tags
+        and len(set(bits)) == 1
+        and bits[0] in (8, 16, 32, 64)
+    ):
         return _strip_plane(path, tags, k, (h, w), bits[0], layout)
     if bits[0] == 8 and im.mode in ("RGB", "RGBA") and samples == len(im.mode):
         im.load()
         return np.asarray(im)[..., k]
-    raise HologramFileError(f"{path}: a TIFF of {layout}: not read (save it uncompressed, or "
-                            f"one page per frame)")
+    raise HologramFileError(
+        f"{path}: a TIFF of {layout}: not read (save it uncompressed, or one page per frame)"
+    )
 
 
 def _strip_plane(path: Path, tags, k: int, shape, bits: int, layout: str) -> np.ndarray:
@@ -455,43 +541,54 @@ def _strip_plane(path: Path, tags, k: int, shape, bits: int, layout: str) -> np.
         strips = -(-rows // max(per_strip, 1))
         mine = range(k * strips, (k + 1) * strips)
         if len(offsets) < (k + 1) * strips or len(counts) != len(offsets):
-            raise HologramFileError(f"{path}: a TIFF of {layout} whose strips do not cover "
-                                    f"its planes ({len(offsets)} strips for {strips} a plane)")
+            raise HologramFileError(
+                f"{path}: a TIFF of {layout} whose strips do not cover "
+                f"its planes ({len(offsets)} strips for {strips} a plane)"
+            )
         chunks = []
         for s in mine:
             if offsets[s] + counts[s] > size:
-                raise HologramFileError(f"{path}: strip {s} reaches beyond the file's {size} "
-                                        f"bytes")
+                raise HologramFileError(f"{path}: strip {s} reaches beyond the file's {size} bytes")
             f.seek(offsets[s])
             chunks.append(f.read(counts[s]))
     data = np.frombuffer(b"".join(chunks), dtype)
     if data.size < rows * cols:
-        raise HologramFileError(f"{path}: plane {k} holds {data.size} samples, {rows}x{cols} "
-                                f"needed")
-    return data[:rows * cols].reshape(rows, cols).astype(dtype.newbyteorder("="))
+        raise HologramFileError(
+            f"{path}: plane {k} holds {data.size} samples, {rows}x{cols} needed"
+        )
+    return data[: rows * cols].reshape(rows, cols).astype(dtype.newbyteorder("="))
 
 
 def _scaled(name: str, a: np.ndarray) -> np.ndarray:
     """Integers to [0, 1] by their bit depth; floats and booleans as they are, in float64."""
     if a.dtype.kind in "iu":
         if a.size and a.min() < 0:
-            raise HologramFileError(f"{name}: a scan of signed integers holds negative values; "
-                                    f"intensities must be >= 0")
+            raise HologramFileError(
+                f"{name}: a scan of signed integers holds negative values; intensities must be >= 0"
+            )
         top = int(a.max()) if a.size else 0
-        scale = 255 if a.dtype.itemsize == 1 else 65535 if a.dtype.itemsize == 2 else \
-            next((s for s in (255, 65535, 2**32 - 1) if top <= s), None)
+        scale = (
+            255
+            if a.dtype.itemsize == 1
+            else 65535
+            if a.dtype.itemsize == 2
+            else next((s for s in (255, 65535, 2**32 - 1) if top <= s), None)
+        )
         if scale is None:
             raise HologramFileError(f"{name}: integer intensities up to {top} exceed 32 bits")
         return a.astype(np.float64) / scale
     if a.dtype.kind == "c":
-        raise HologramFileError(f"{name}: holds complex values; an acquired hologram is an "
-                                f"intensity (real, >= 0)")
+        raise HologramFileError(
+            f"{name}: holds complex values; an acquired hologram is an intensity (real, >= 0)"
+        )
     if a.dtype.kind not in "fb":
         raise HologramFileError(f"{name}: holds {a.dtype} values, not numbers")
     a = a.astype(np.float64)
     if a.size and not (np.isfinite(a).all() and np.abs(a).max() <= np.finfo(np.float32).max):
-        raise HologramFileError(f"{name}: the intensity holds NaN, infinite or values beyond "
-                                f"float32's range (it must be finite)")
+        raise HologramFileError(
+            f"{name}: the intensity holds NaN, infinite or values beyond "
+            f"float32's range (it must be finite)"
+        )
     return a
 
 
@@ -505,13 +602,16 @@ def _image_meta(im) -> dict:
         text.update(_description(f"{im.filename}: ImageDescription", str(tags[270])))
         unit = _IMAGEJ_UNITS.get(str(text.get("unit", "")).strip().lower())
         if str(tags[270]).startswith("ImageJ=") and unit and 282 in tags:
-            pitches = {1 / float(tags[t]) * unit for t in (282, 283) if t in tags and
-                       float(tags[t]) > 0}
+            pitches = {
+                1 / float(tags[t]) * unit for t in (282, 283) if t in tags and float(tags[t]) > 0
+            }
             if len(pitches) == 1:
                 meta["pitch_m"] = pitches.pop()
             elif pitches:
-                raise HologramFileError(f"{im.filename}: its pixels are {sorted(pitches)} m "
-                                        f"apart in x and y; a hologram has one pitch")
+                raise HologramFileError(
+                    f"{im.filename}: its pixels are {sorted(pitches)} m "
+                    f"apart in x and y; a hologram has one pitch"
+                )
     for key in (*KEYS, "intensity_scale"):
         if key in text:
             meta[key] = text[key]
@@ -534,15 +634,18 @@ def _read_npy(path: Path, page) -> _Scan:
     with open(path, "rb") as f:
         magic = f.read(6)
     if magic.startswith(_ZIP_MAGIC):
-        raise HologramFileError(f"{path}: a zip archive (.npz, several arrays) named .npy; "
-                                f"save the hologram with numpy.save, or pass the array itself")
+        raise HologramFileError(
+            f"{path}: a zip archive (.npz, several arrays) named .npy; "
+            f"save the hologram with numpy.save, or pass the array itself"
+        )
     if magic != _NPY_MAGIC:
         raise HologramFileError(f"{path}: not a .npy array (it starts with {magic!r})")
     try:
         a = np.load(path, mmap_mode="r", allow_pickle=False)
     except Exception as e:  # noqa: BLE001 -- a damaged header: ValueError, EOFError, OSError
-        raise HologramFileError(f"{path}: not a readable .npy array ({type(e).__name__}: "
-                                f"{e})"[:400]) from None
+        raise HologramFileError(
+            f"{path}: not a readable .npy array ({type(e).__name__}: {e})"[:400]
+        ) from None
     meta = {}
     side = path.with_suffix(".json")
     if side.exists():
@@ -552,8 +655,10 @@ def _read_npy(path: Path, page) -> _Scan:
     if a.ndim in (2, 3):
         plane = a.shape[-2] * a.shape[-1]
         wanted = _wanted(str(path), 1 if a.ndim == 2 else a.shape[0], page)
-        memory.check_host(f"{path} ({'x'.join(map(str, a.shape))} array, {len(wanted)} "
-                          f"page(s))", 2.0 * 8 * plane * len(wanted))
+        memory.check_host(
+            f"{path} ({'x'.join(map(str, a.shape))} array, {len(wanted)} page(s))",
+            2.0 * 8 * plane * len(wanted),
+        )
     scan = _array_scan(str(path), a, page)
     scan.meta = meta
     return scan
@@ -563,8 +668,10 @@ def _h5py(path):
     try:
         import h5py
     except ImportError:
-        raise InputError(f"{path}: HDF5 and .mat v7.3 files are read through h5py; install "
-                         f"it (pip install 'holo[lab]')") from None
+        raise InputError(
+            f"{path}: HDF5 and .mat v7.3 files are read through h5py; install "
+            f"it (pip install 'holo[lab]')"
+        ) from None
     return h5py
 
 
@@ -574,10 +681,11 @@ def _read_hdf5(path: Path, dataset, page) -> _Scan:
     h5py = _h5py(path)
     with open(path, "rb") as f:
         head = f.read(128)
-    if head.startswith(b"MATLAB 5.0") or (path.suffix.lower() == ".mat" and
-                                          not h5py.is_hdf5(path)):
-        raise HologramFileError(f"{path}: a MATLAB v5 (or older) MAT-file; save it in MATLAB "
-                                f"with save(name, ..., '-v7.3') (HDF5), which this reads")
+    if head.startswith(b"MATLAB 5.0") or (path.suffix.lower() == ".mat" and not h5py.is_hdf5(path)):
+        raise HologramFileError(
+            f"{path}: a MATLAB v5 (or older) MAT-file; save it in MATLAB "
+            f"with save(name, ..., '-v7.3') (HDF5), which this reads"
+        )
     try:
         with h5py.File(path, "r") as f:
             return _hdf5_scan(h5py, path, f, dataset, page)
@@ -585,8 +693,9 @@ def _read_hdf5(path: Path, dataset, page) -> _Scan:
         raise
     except Exception as e:  # noqa: BLE001 -- HDF5's errors for damaged files: OSError,
         # RuntimeError, KeyError, ValueError, TypeError, by where the damage lies
-        raise HologramFileError(f"{path}: not a readable HDF5 file ({type(e).__name__}: "
-                                f"{e})"[:400]) from None
+        raise HologramFileError(
+            f"{path}: not a readable HDF5 file ({type(e).__name__}: {e})"[:400]
+        ) from None
 
 
 def _hdf5_scan(h5py, path: Path, f, dataset, page) -> _Scan:
@@ -594,17 +703,23 @@ def _hdf5_scan(h5py, path: Path, f, dataset, page) -> _Scan:
     d = _local(path, f[name])
     where = f"{path}:{name}"
     if d.chunks is not None:  # HDF5 allocates a whole chunk to read any of it
-        memory.check_host(f"{where} (chunks of {'x'.join(map(str, d.chunks))})",
-                          2.0 * d.dtype.itemsize * math.prod(d.chunks))
+        memory.check_host(
+            f"{where} (chunks of {'x'.join(map(str, d.chunks))})",
+            2.0 * d.dtype.itemsize * math.prod(d.chunks),
+        )
     matlab = "MATLAB_class" in d.attrs
     if d.ndim not in (2, 3):
-        raise HologramFileError(f"{where}: holds a {d.ndim}-D array; an intensity hologram is "
-                                f"2-D (H, W), or 3-D (pages, H, W)")
+        raise HologramFileError(
+            f"{where}: holds a {d.ndim}-D array; an intensity hologram is "
+            f"2-D (H, W), or 3-D (pages, H, W)"
+        )
     count = 1 if d.ndim == 2 else d.shape[0]
     wanted = _wanted(where, count, page)
     plane = math.prod(d.shape) // count
-    memory.check_host(f"{where} ({'x'.join(map(str, d.shape))}, {len(wanted)} page(s))",
-                      2.0 * 8 * plane * len(wanted))
+    memory.check_host(
+        f"{where} ({'x'.join(map(str, d.shape))}, {len(wanted)} page(s))",
+        2.0 * 8 * plane * len(wanted),
+    )
     pages = {}
     for i in wanted:
         a = d[()] if d.ndim == 2 else d[i]
@@ -623,23 +738,33 @@ def _dataset_name(h5py, path: Path, f, dataset) -> str:
         seen[0] += 1
         if seen[0] > MAX_OBJECTS:
             return True  # stops the walk
-        if isinstance(obj, h5py.Dataset) and obj.ndim in (2, 3) and min(obj.shape) > 1 and \
-                obj.dtype.kind in "iufb" and "original_metadata" not in name.split("/"):
+        if (
+            isinstance(obj, h5py.Dataset)
+            and obj.ndim in (2, 3)
+            and min(obj.shape) > 1
+            and obj.dtype.kind in "iufb"
+            and "original_metadata" not in name.split("/")
+        ):
             candidates.append(name)
         return None
 
     f.visititems(visit)
     if seen[0] > MAX_OBJECTS and dataset is None:
-        raise InputError(f"{path}: holds more than {MAX_OBJECTS} objects; pass dataset= the "
-                         f"one to read")
+        raise InputError(
+            f"{path}: holds more than {MAX_OBJECTS} objects; pass dataset= the one to read"
+        )
     if dataset is None:
         if len(candidates) != 1:
-            raise InputError(f"{path}: holds {len(candidates)} 2-D or 3-D numeric datasets; "
-                             f"pass dataset= one of {', '.join(candidates[:10]) or '(none)'}")
+            raise InputError(
+                f"{path}: holds {len(candidates)} 2-D or 3-D numeric datasets; "
+                f"pass dataset= one of {', '.join(candidates[:10]) or '(none)'}"
+            )
         return candidates[0]
     if not isinstance(dataset, str) or not _inside(h5py, path, f, dataset):
-        raise InputError(f"dataset must name a dataset of {path}: one of "
-                         f"{', '.join(candidates[:10]) or '(none)'}; got {dataset!r}"[:400])
+        raise InputError(
+            f"dataset must name a dataset of {path}: one of "
+            f"{', '.join(candidates[:10]) or '(none)'}; got {dataset!r}"[:400]
+        )
     return dataset.strip("/")
 
 
@@ -656,9 +781,11 @@ def _inside(h5py, path: Path, f, name: str) -> bool:
         if link is None:
             return False
         if isinstance(link, h5py.ExternalLink):
-            raise HologramFileError(f"{path}:{step} is an external link to "
-                                    f"{link.filename}:{link.path}; refused: nothing is read "
-                                    f"from outside the file named"[:400])
+            raise HologramFileError(
+                f"{path}:{step} is an external link to "
+                f"{link.filename}:{link.path}; refused: nothing is read "
+                f"from outside the file named"[:400]
+            )
     return bool(parts) and isinstance(f.get("/".join(parts)), h5py.Dataset)
 
 
@@ -667,14 +794,18 @@ def _local(path: Path, d):
     virtual dataset): nothing is read from outside the file the user named."""
     if d.external:
         files = ", ".join(sorted({str(e[0]) for e in d.external}))
-        raise HologramFileError(f"{path}:{d.name.lstrip('/')} stores its samples in another "
-                                f"file ({files}); refused: nothing is read from outside the "
-                                f"file named"[:400])
+        raise HologramFileError(
+            f"{path}:{d.name.lstrip('/')} stores its samples in another "
+            f"file ({files}); refused: nothing is read from outside the "
+            f"file named"[:400]
+        )
     if d.is_virtual:
         files = ", ".join(sorted({m.file_name for m in d.virtual_sources()}))
-        raise HologramFileError(f"{path}:{d.name.lstrip('/')} is a virtual dataset mapping "
-                                f"{files}; refused: nothing is read from outside the file "
-                                f"named"[:400])
+        raise HologramFileError(
+            f"{path}:{d.name.lstrip('/')} is a virtual dataset mapping "
+            f"{files}; refused: nothing is read from outside the file "
+            f"named"[:400]
+        )
     return d
 
 
@@ -687,8 +818,12 @@ def _hdf5_meta(h5py, path: Path, f, d) -> dict:
             if key in node.attrs and key not in meta:
                 meta[key] = _scalar(node.attrs[key])
     for key in KEYS:  # MATLAB's scalar variables, in this file only
-        if key not in meta and isinstance(f.get(key, getlink=True), h5py.HardLink) and \
-                isinstance(f[key], h5py.Dataset) and f[key].size == 1:
+        if (
+            key not in meta
+            and isinstance(f.get(key, getlink=True), h5py.HardLink)
+            and isinstance(f[key], h5py.Dataset)
+            and f[key].size == 1
+        ):
             meta[key] = _scalar(f[key][()])
     if str(_scalar(f.attrs.get("file_format", ""))) == "HyperSpy":
         meta = {**_hyperspy_meta(h5py, path, d), **meta}
@@ -738,8 +873,10 @@ def _intensities(name: str, a) -> np.ndarray:
         arr = None
     if arr is None or arr.ndim not in (2, 3) or arr.dtype.kind not in "iufbc" or not arr.size:
         shape = None if arr is None else arr.shape
-        raise InputError(f"source must be a path or an (H, W) or (P, H, W) array of "
-                         f"intensities; got {type(a).__name__} of shape {shape}")
+        raise InputError(
+            f"source must be a path or an (H, W) or (P, H, W) array of "
+            f"intensities; got {type(a).__name__} of shape {shape}"
+        )
     return arr
 
 
@@ -751,15 +888,22 @@ def _optics(name: str, given: dict, meta: dict, required=True) -> dict:
         arg = key.rsplit("_", 1)[0]  # the argument's name: pitch, wavelength, ...
         value, stored = given[key], meta.get(key)
         if value is not None and stored is not None and not _same(value, stored):
-            log.warning("%s: %s given as %r, the file says %r; using the given value", name,
-                        arg, value, stored)
+            log.warning(
+                "%s: %s given as %r, the file says %r; using the given value",
+                name,
+                arg,
+                value,
+                stored,
+            )
         if value is None and stored is not None:
             value, arg = stored, f"{name}: metadata {key}"
         if value is None and key in ("pitch_m", "wavelength_m"):
             if not required:
                 continue
-            raise InputError(f"{arg} must be given [m]: {name} holds no {key} (pass "
-                             f"{arg}=..., or store {key} in its metadata)")
+            raise InputError(
+                f"{arg} must be given [m]: {name} holds no {key} (pass "
+                f"{arg}=..., or store {key} in its metadata)"
+            )
         if key == "pitch_m":
             out[key] = validate.pitch(arg, value)
         elif key == "wavelength_m":
@@ -779,6 +923,7 @@ def _same(a, b) -> bool:
 
 
 # --- writing ---------------------------------------------------------------------------------
+
 
 def _write_hdf5(filename, data: np.ndarray, meta: dict, matlab: bool) -> None:
     h5py = _h5py(filename)
@@ -801,6 +946,7 @@ def _write_hdf5(filename, data: np.ndarray, meta: dict, matlab: bool) -> None:
 def _write_image(filename, suffix: str, data: np.ndarray, meta: dict) -> None:
     from PIL import Image
     from PIL.PngImagePlugin import PngInfo
+
     if suffix == ".png":
         peak = float(data.max())
         scale = peak if peak > 0 else 1.0

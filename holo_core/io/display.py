@@ -32,9 +32,9 @@ FORMAT, VERSION = "holo-display-tiles", 1
 QUANTITIES = ("phase", "amplitude")
 TILE_FORMATS = ("png", "tiff")
 CODE_BITS = 16
-FULL = (1 << CODE_BITS) - 1   # 65535
-DEFAULT_TILE = (2048, 2048)   # rows, cols: 8 MiB of 16-bit codes, a size every viewer opens
-MAX_TILES = 4096              # a layout that lists more is refused before a file is read
+FULL = (1 << CODE_BITS) - 1  # 65535
+DEFAULT_TILE = (2048, 2048)  # rows, cols: 8 MiB of 16-bit codes, a size every viewer opens
+MAX_TILES = 4096  # a layout that lists more is refused before a file is read
 MAX_LAYOUT_BYTES = 4 * 2**20  # ~1 KiB per tile entry and the header, far above what is written
 
 
@@ -57,8 +57,7 @@ def to_codes(values, quantity: str, bits: int = CODE_BITS) -> np.ndarray:
 
 def _check_amplitudes(v: np.ndarray) -> None:
     if v.size and (v.min() < -1e-9 or v.max() > 1 + 1e-9):  # float rounding is not clipping
-        raise InputError(f"amplitude values must be in [0, 1]; got [{v.min():.6g}, "
-                         f"{v.max():.6g}]")
+        raise InputError(f"amplitude values must be in [0, 1]; got [{v.min():.6g}, {v.max():.6g}]")
 
 
 def from_codes(codes, quantity: str) -> np.ndarray:
@@ -71,17 +70,31 @@ def from_codes(codes, quantity: str) -> np.ndarray:
 def quantisation(quantity: str, bits: int) -> dict:
     """The layout's description of the codes (what a driver needs to undo them)."""
     if quantity == "phase":
-        return {"quantity": "phase", "unit": "rad", "code_bits": CODE_BITS, "levels": 2**bits,
-                "step": 2 * math.pi / 2**CODE_BITS, "range": [0.0, 2 * math.pi],
-                "rule": f"phase = code * 2*pi / {2**CODE_BITS}, modulo 2*pi; the codes are "
-                        f"multiples of {2**(CODE_BITS - bits)}"}
-    return {"quantity": "amplitude", "unit": "1", "code_bits": CODE_BITS, "levels": 2**bits,
-            "step": 1 / FULL, "range": [0.0, 1.0], "rule": f"amplitude = code / {FULL}"}
+        return {
+            "quantity": "phase",
+            "unit": "rad",
+            "code_bits": CODE_BITS,
+            "levels": 2**bits,
+            "step": 2 * math.pi / 2**CODE_BITS,
+            "range": [0.0, 2 * math.pi],
+            "rule": f"phase = code * 2*pi / {2**CODE_BITS}, modulo 2*pi; the codes are "
+            f"multiples of {2 ** (CODE_BITS - bits)}",
+        }
+    return {
+        "quantity": "amplitude",
+        "unit": "1",
+        "code_bits": CODE_BITS,
+        "levels": 2**bits,
+        "step": 1 / FULL,
+        "range": [0.0, 1.0],
+        "rule": f"amplitude = code / {FULL}",
+    }
 
 
 def tile_bytes(codes: np.ndarray, fmt: str) -> bytes:
     """One 16-bit greyscale PNG or TIFF (uncompressed) file of (rows, cols) uint16 ``codes``."""
     from PIL import Image
+
     fmt = validate.choice("fmt", fmt, TILE_FORMATS)
     a = np.ascontiguousarray(codes, dtype="<u2")  # 'I;16' is little-endian in memory
     if a.ndim != 2:
@@ -96,6 +109,7 @@ def read_tile(path) -> np.ndarray:
     """The uint16 codes of a 16-bit greyscale PNG or TIFF tile; :class:`InputError` naming
     the file if it is missing, damaged or not 16-bit greyscale."""
     from PIL import Image
+
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: no such tile")
@@ -104,21 +118,33 @@ def read_tile(path) -> np.ndarray:
             mode, size = im.mode, im.size
             if mode not in ("I;16", "I;16B", "I;16L", "I"):
                 raise InputError(f"{path}: a tile must be 16-bit greyscale; its mode is {mode}")
-            memory.check_host(f"{path} (tile, {size[0]}x{size[1]} pixels)",
-                              8.0 * size[0] * size[1])
+            memory.check_host(f"{path} (tile, {size[0]}x{size[1]} pixels)", 8.0 * size[0] * size[1])
             a = np.asarray(im)
     except InputError:
         raise
     except Exception as e:  # noqa: BLE001 -- PIL's errors for damaged files vary by format
-        raise InputError(f"{path}: not a readable PNG/TIFF tile ({type(e).__name__}: {e})") \
-            from None
+        raise InputError(
+            f"{path}: not a readable PNG/TIFF tile ({type(e).__name__}: {e})"
+        ) from None
     if a.size and (a.min() < 0 or a.max() > FULL):  # mode 'I' holds 32-bit integers
         raise InputError(f"{path}: values outside 0..{FULL}: not a 16-bit tile")
     return a.astype(np.uint16)
 
 
-def write_tiles(path, values, *, quantity, pitch, wavelength, distance, encoding,
-                bit_depth=CODE_BITS, tile=DEFAULT_TILE, fmt="png", display="") -> Path:
+def write_tiles(
+    path,
+    values,
+    *,
+    quantity,
+    pitch,
+    wavelength,
+    distance,
+    encoding,
+    bit_depth=CODE_BITS,
+    tile=DEFAULT_TILE,
+    fmt="png",
+    display="",
+) -> Path:
     """Write ``values`` (rows, cols) as 16-bit tiles beside the layout ``path`` (*.json).
 
     Parameters
@@ -157,17 +183,27 @@ def write_tiles(path, values, *, quantity, pitch, wavelength, distance, encoding
         raise InputError("values must be real (phases [rad] or amplitudes); got complex")
     tile = validate.shape2d("tile", tile)
     fmt = validate.choice("fmt", fmt, TILE_FORMATS)
-    layout = _layout(v.shape, quantity=quantity, pitch=pitch, wavelength=wavelength,
-                     distance=distance, encoding=encoding, bit_depth=bit_depth, display=display)
+    layout = _layout(
+        v.shape,
+        quantity=quantity,
+        pitch=pitch,
+        wavelength=wavelength,
+        distance=distance,
+        encoding=encoding,
+        bit_depth=bit_depth,
+        display=display,
+    )
     if layout["kind"] == "amplitude":
         _check_amplitudes(v)  # before a file is opened, not at the tile that holds it
     places = _places(v.shape, tile)
     names = [f"{layout_path.stem}_r{r}_c{c}.{fmt}" for r, c, _, _ in places]
-    layout["tiles"] = [{"file": n, "row": r, "col": c, "rows": h, "cols": w}
-                       for n, (r, c, h, w) in zip(names, places)]
+    layout["tiles"] = [
+        {"file": n, "row": r, "col": c, "rows": h, "cols": w}
+        for n, (r, c, h, w) in zip(names, places)
+    ]
     with atomic_paths(*[layout_path.parent / n for n in names], layout_path) as temps:
         for tmp, (r, c, h, w) in zip(temps, places):  # one tile's codes in memory at a time
-            codes = to_codes(v[r:r + h, c:c + w], layout["kind"], layout["bit_depth"])
+            codes = to_codes(v[r : r + h, c : c + w], layout["kind"], layout["bit_depth"])
             Path(tmp).write_bytes(tile_bytes(codes, fmt))
         Path(temps[-1]).write_text(json.dumps(layout, indent=1) + "\n")
     return Path(path)
@@ -187,40 +223,52 @@ def read_tiles(path) -> tuple[np.ndarray, dict]:
     for t in layout["tiles"]:
         window = (slice(t["row"], t["row"] + t["rows"]), slice(t["col"], t["col"] + t["cols"]))
         if covered[window].any():  # before its file is read
-            raise InputError(f"{path}: the tiles do not cover the {cols}x{rows} grid exactly "
-                             f"once: tile {t['file']} (row {t['row']}, col {t['col']}) covers "
-                             f"samples an earlier tile covers")
+            raise InputError(
+                f"{path}: the tiles do not cover the {cols}x{rows} grid exactly "
+                f"once: tile {t['file']} (row {t['row']}, col {t['col']}) covers "
+                f"samples an earlier tile covers"
+            )
         try:
             a = read_tile(path.parent / t["file"])
         except InputError as e:  # the layout that lists it, and the tile's own complaint
             raise InputError(f"{path}: {e}") from None
         if a.shape != (t["rows"], t["cols"]):
-            raise InputError(f"{path}: tile {t['file']} is {a.shape[1]}x{a.shape[0]} samples; "
-                             f"the layout says {t['cols']}x{t['rows']}")
+            raise InputError(
+                f"{path}: tile {t['file']} is {a.shape[1]}x{a.shape[0]} samples; "
+                f"the layout says {t['cols']}x{t['rows']}"
+            )
         codes[window] = a
         covered[window] = True
     if not covered.all():
-        raise InputError(f"{path}: the tiles do not cover the {cols}x{rows} grid exactly "
-                         f"once: {int((~covered).sum())} samples missing")
+        raise InputError(
+            f"{path}: the tiles do not cover the {cols}x{rows} grid exactly "
+            f"once: {int((~covered).sum())} samples missing"
+        )
     return from_codes(codes, layout["kind"]), layout
 
 
-def _layout(shape, *, quantity, pitch, wavelength, distance, encoding, bit_depth,
-            display) -> dict:
+def _layout(shape, *, quantity, pitch, wavelength, distance, encoding, bit_depth, display) -> dict:
     quantity = validate.choice("quantity", quantity, QUANTITIES)
     bits = validate.integer("bit_depth", bit_depth, 1, CODE_BITS)
     if not isinstance(encoding, str) or not encoding.strip() or len(encoding) > 100:
-        raise InputError(f"encoding must name the encoding (1 to 100 characters); got "
-                         f"{encoding!r}"[:200])
+        raise InputError(
+            f"encoding must name the encoding (1 to 100 characters); got {encoding!r}"[:200]
+        )
     if not isinstance(display, str) or len(display) > 100:
-        raise InputError(f"display must be a name of at most 100 characters; got "
-                         f"{display!r}"[:200])
-    return {"format": FORMAT, "version": VERSION, "display": display, "kind": quantity,
-            "encoding": encoding, "shape": [int(shape[0]), int(shape[1])],
-            "pitch": validate.pitch("pitch", pitch),
-            "wavelength": validate.wavelength("wavelength", wavelength),
-            "distance": validate.within("distance", distance, validate.MAX_LENGTH),
-            "bit_depth": bits, "quantisation": quantisation(quantity, bits)}
+        raise InputError(f"display must be a name of at most 100 characters; got {display!r}"[:200])
+    return {
+        "format": FORMAT,
+        "version": VERSION,
+        "display": display,
+        "kind": quantity,
+        "encoding": encoding,
+        "shape": [int(shape[0]), int(shape[1])],
+        "pitch": validate.pitch("pitch", pitch),
+        "wavelength": validate.wavelength("wavelength", wavelength),
+        "distance": validate.within("distance", distance, validate.MAX_LENGTH),
+        "bit_depth": bits,
+        "quantisation": quantisation(quantity, bits),
+    }
 
 
 def _places(shape, tile) -> list[tuple[int, int, int, int]]:
@@ -228,10 +276,13 @@ def _places(shape, tile) -> list[tuple[int, int, int, int]]:
     (h, w), (th, tw) = shape, tile
     count = math.ceil(h / th) * math.ceil(w / tw)
     if count > MAX_TILES:
-        raise InputError(f"tile {th}x{tw} cuts {w}x{h} samples into {count} tiles; at most "
-                         f"{MAX_TILES} are written: choose larger tiles")
-    return [(r, c, min(th, h - r), min(tw, w - c)) for r in range(0, h, th)
-            for c in range(0, w, tw)]
+        raise InputError(
+            f"tile {th}x{tw} cuts {w}x{h} samples into {count} tiles; at most "
+            f"{MAX_TILES} are written: choose larger tiles"
+        )
+    return [
+        (r, c, min(th, h - r), min(tw, w - c)) for r in range(0, h, th) for c in range(0, w, tw)
+    ]
 
 
 def _read_layout(path: Path) -> dict:
@@ -239,24 +290,32 @@ def _read_layout(path: Path) -> dict:
     if not path.is_file():
         raise InputError(f"{path}: no such layout file")
     if path.stat().st_size > MAX_LAYOUT_BYTES:
-        raise InputError(f"{path}: {path.stat().st_size} bytes; a layout of {MAX_TILES} tiles "
-                         f"takes less than {MAX_LAYOUT_BYTES}")
+        raise InputError(
+            f"{path}: {path.stat().st_size} bytes; a layout of {MAX_TILES} tiles "
+            f"takes less than {MAX_LAYOUT_BYTES}"
+        )
     try:
         layout = json.loads(path.read_text())
     except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as e:
-        raise InputError(f"{path}: not a JSON layout ({type(e).__name__}: {e})"[:400]) \
-            from None
+        raise InputError(f"{path}: not a JSON layout ({type(e).__name__}: {e})"[:400]) from None
     if not isinstance(layout, dict) or layout.get("format") != FORMAT:
         raise InputError(f"{path}: not a display layout (format {FORMAT!r})")
     if layout.get("version") != VERSION:
-        raise InputError(f"{path}: layout version {layout.get('version')!r}; this reader "
-                         f"reads version {VERSION}")
+        raise InputError(
+            f"{path}: layout version {layout.get('version')!r}; this reader reads version {VERSION}"
+        )
     try:
         shape = validate.shape2d("shape", layout["shape"])  # first: _layout takes it as valid
-        checked = _layout(shape, quantity=layout["kind"], pitch=layout["pitch"],
-                          wavelength=layout["wavelength"], distance=layout["distance"],
-                          encoding=layout["encoding"], bit_depth=layout["bit_depth"],
-                          display=layout.get("display", ""))
+        checked = _layout(
+            shape,
+            quantity=layout["kind"],
+            pitch=layout["pitch"],
+            wavelength=layout["wavelength"],
+            distance=layout["distance"],
+            encoding=layout["encoding"],
+            bit_depth=layout["bit_depth"],
+            display=layout.get("display", ""),
+        )
         tiles = [_tile_entry(t, shape) for t in _tile_list(layout["tiles"])]
     except KeyError as e:
         raise InputError(f"{path}: the layout lacks the field {e.args[0]!r}") from None
@@ -278,8 +337,9 @@ def _tile_entry(t, shape) -> dict:
         raise InputError(f"each tile must be an object; got {t!r}"[:200])
     name = t.get("file")
     if not isinstance(name, str) or not name or Path(name).name != name or name in (".", ".."):
-        raise InputError(f"a tile's file must be a plain file name in the layout's folder; "
-                         f"got {name!r}"[:200])
+        raise InputError(
+            f"a tile's file must be a plain file name in the layout's folder; got {name!r}"[:200]
+        )
     r = validate.integer(f"tile {name} row", t.get("row"), 0, shape[0] - 1)
     c = validate.integer(f"tile {name} col", t.get("col"), 0, shape[1] - 1)
     h = validate.integer(f"tile {name} rows", t.get("rows"), 1, shape[0] - r)

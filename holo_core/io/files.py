@@ -22,8 +22,8 @@ from pathlib import Path
 from .hologram import HologramFileError
 from .image import check_writable, process_alive
 
-LOCK = "holo.lock"      # the recording lock's file (:mod:`holo_core.io.store_lock`)
-MAX_JSON = 2**20        # bytes of a zarr.json: the metadata is a few kB
+LOCK = "holo.lock"  # the recording lock's file (:mod:`holo_core.io.store_lock`)
+MAX_JSON = 2**20  # bytes of a zarr.json: the metadata is a few kB
 STALE_TEMPORARY = 3600  # [s] unchanged, another host's temporary file is a dead writer's
 # a temporary file as Files.write names it: .NAME.HOST.PID.N.tmp (NAME and HOST may hold dots)
 _TEMPORARY = re.compile(r"^\.(?P<name_host>.+)\.(?P<pid>\d+)\.\d+\.tmp$")
@@ -43,7 +43,7 @@ class Files:
         text = str(url)
         self.name = text
         if text.startswith("file://"):
-            text = text[len("file://"):]
+            text = text[len("file://") :]
         if "://" in text:
             self.fs, self.root = _filesystem(text)
             self.local = None
@@ -71,7 +71,8 @@ class Files:
         """Whether nothing but our lock is there (a folder made for the store)."""
         if self.local is not None:
             return not os.path.lexists(self.local) or (
-                self.local.is_dir() and set(os.listdir(self.local)) <= {LOCK})
+                self.local.is_dir() and set(os.listdir(self.local)) <= {LOCK}
+            )
         try:
             listed = self.fs.ls(self.root, detail=False)
         except FileNotFoundError:
@@ -91,10 +92,12 @@ class Files:
                 try:
                     kind = _kind(os.lstat(path).st_mode)
                 except FileNotFoundError:  # gone since the listing: a recording's temporary
-                    continue               # file renamed into place (nothing left to refuse)
+                    continue  # file renamed into place (nothing left to refuse)
                 if kind not in ("a folder", "a regular file"):
-                    raise self.fail(f"holds {kind} {os.path.relpath(path, self.local)}: a store "
-                                    f"holds only folders and regular files, and none is read")
+                    raise self.fail(
+                        f"holds {kind} {os.path.relpath(path, self.local)}: a store "
+                        f"holds only folders and regular files, and none is read"
+                    )
 
     def read(self, key, *, size=None, limit=None) -> bytes | None:
         """The bytes of ``key``, None when it is missing: refused unless it is a regular file
@@ -123,8 +126,9 @@ class Files:
             raise self.fail("a folder of it is a file", key) from None
         except OSError as e:
             if e.errno == errno.ELOOP:
-                raise self.fail("is a symbolic link; a store's files are read, never "
-                                "followed", key) from None
+                raise self.fail(
+                    "is a symbolic link; a store's files are read, never followed", key
+                ) from None
             raise self.fail(f"cannot be read ({e.strerror})", key) from None
         try:
             st = os.fstat(fd)
@@ -163,8 +167,9 @@ class Files:
         if path.is_dir() and not path.is_symlink():
             raise self.fail("is a folder where a file belongs; remove it", key)
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(f".{path.name}.{socket.gethostname()}.{os.getpid()}."
-                             f"{next(_count)}.tmp")
+        tmp = path.with_name(
+            f".{path.name}.{socket.gethostname()}.{os.getpid()}.{next(_count)}.tmp"
+        )
         fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW, 0o666)
         try:
             with os.fdopen(fd, "wb") as f:
@@ -239,10 +244,15 @@ class Files:
 
 
 def _kind(mode) -> str:
-    for test, name in ((stat.S_ISDIR, "a folder"), (stat.S_ISREG, "a regular file"),
-                       (stat.S_ISLNK, "a symbolic link"), (stat.S_ISFIFO, "a FIFO"),
-                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
-                       (stat.S_ISSOCK, "a socket")):
+    for test, name in (
+        (stat.S_ISDIR, "a folder"),
+        (stat.S_ISREG, "a regular file"),
+        (stat.S_ISLNK, "a symbolic link"),
+        (stat.S_ISFIFO, "a FIFO"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISSOCK, "a socket"),
+    ):
         if test(mode):
             return name
     return "an unknown kind of file"
@@ -256,10 +266,12 @@ def _protocols(fs) -> tuple:
 def _filesystem(url):
     try:
         import fsspec
+
         return fsspec.core.url_to_fs(url)
     except ImportError as e:  # the protocol's own package (s3fs, gcsfs, ...) is missing
-        raise StoreError(f"{url}: its protocol needs a package that is not installed "
-                         f"({e})"[:400]) from None
+        raise StoreError(
+            f"{url}: its protocol needs a package that is not installed ({e})"[:400]
+        ) from None
     except (ValueError, KeyError) as e:
         raise StoreError(f"{url}: not a store address fsspec knows ({e})"[:400]) from None
 
@@ -273,14 +285,17 @@ def check_output(url) -> Files:
     files = Files(url)
     if files.local is None:
         if files.name.split("://", 1)[0] == "memory":
-            raise files.fail("a memory:// store lives in one process; the recording's "
-                             "workers cannot reach it: record to a path or a shared URL")
+            raise files.fail(
+                "a memory:// store lives in one process; the recording's "
+                "workers cannot reach it: record to a path or a shared URL"
+            )
         try:
             files.make_folders("")
             files.fs.exists(files.root)
         except Exception as e:  # noqa: BLE001 -- each file system fails its own way
-            raise files.fail(f"cannot be reached or written ({type(e).__name__}: "
-                             f"{e})"[:300]) from None
+            raise files.fail(
+                f"cannot be reached or written ({type(e).__name__}: {e})"[:300]
+            ) from None
         return files
     if os.path.lexists(files.local) and not files.local.is_dir():
         raise files.fail("is a file, not a store folder: record to another path")

@@ -31,9 +31,9 @@ from .image import exr_attribute, read_exr, write_exr
 
 FORMAT = "holo-hologram"
 FORMAT_VERSION = 5  # 5: a complex hologram's samples as (real, imaginary) pairs, ``c<c>.O``
-READS = (2, 3, 4, 5)  # 2: the depth partner 'Z' records every emitter at unit intensity;
-                      # 3: the encoding (complex or intensity) and the plate's viewing zone;
-                      # 4: the samples' carrier and the zone's pixel angle
+# 2: the depth partner 'Z' records every emitter at unit intensity; 3: the encoding (complex or
+# intensity) and the plate's viewing zone; 4: the samples' carrier and the zone's pixel angle
+READS = (2, 3, 4, 5)
 
 
 class HologramFileError(InputError):
@@ -41,34 +41,61 @@ class HologramFileError(InputError):
 
 
 # the file's name of each field of a hologram's description (HologramInfo)
-FILE_KEYS = {"wavelengths": "wavelengths_m", "pitch": "pitch_m", "shape": "size_px",
-             "plate": "plate_to_world", "reference_angle": "reference.angle_rad",
-             "reference_azimuth": "reference.azimuth_rad",
-             "reference_amplitudes": "reference.amplitudes", "bounds": "bounds_m",
-             "band": "band_sin", "point_density": "point_density_per_m2",
-             "zone": "viewing_zone", "keeps_object_wave": "object_wave", "carrier": "carrier",
-             "recording": "recording"}
+FILE_KEYS = {
+    "wavelengths": "wavelengths_m",
+    "pitch": "pitch_m",
+    "shape": "size_px",
+    "plate": "plate_to_world",
+    "reference_angle": "reference.angle_rad",
+    "reference_azimuth": "reference.azimuth_rad",
+    "reference_amplitudes": "reference.amplitudes",
+    "bounds": "bounds_m",
+    "band": "band_sin",
+    "point_density": "point_density_per_m2",
+    "zone": "viewing_zone",
+    "keeps_object_wave": "object_wave",
+    "carrier": "carrier",
+    "recording": "recording",
+}
 
 
 def metadata(h: Hologram | HologramInfo) -> dict:
     """The file's metadata of a hologram or of its description (:class:`HologramInfo`)."""
     info = h.info if isinstance(h, Hologram) else h
     return {
-        "format": FORMAT, "format_version": FORMAT_VERSION, "software": f"holo {__version__}",
-        "wavelengths_m": list(map(float, info.wavelengths)), "pitch_m": float(info.pitch),
-        "size_px": list(info.shape), "plate_to_world": np.asarray(info.plate).ravel().tolist(),
-        "reference": {"angle_rad": float(info.reference_angle),
-                      "azimuth_rad": float(info.reference_azimuth),
-                      "amplitudes": list(map(float, info.reference_amplitudes))},
-        "bounds_m": np.asarray(info.bounds).tolist(), "object_wave": info.keeps_object_wave,
-        "band_sin": float(info.band), "channels": list(info.channels),
-        "point_density_per_m2": float(info.point_density), "encoding": info.encoding,
-        "viewing_zone": None if info.zone is None else {
-            "centre_m": list(info.zone.centre), "half_extents_m": list(info.zone.half_extents),
-            "pupil_m": info.zone.pupil, "pixel_rad": info.zone.pixel},
-        "carrier": None if info.carrier is None else {
-            "centre_m": list(info.carrier.centre), "origin_m": list(info.carrier.origin),
-            "row_pitch_m": info.carrier.row_pitch},
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "software": f"holo {__version__}",
+        "wavelengths_m": list(map(float, info.wavelengths)),
+        "pitch_m": float(info.pitch),
+        "size_px": list(info.shape),
+        "plate_to_world": np.asarray(info.plate).ravel().tolist(),
+        "reference": {
+            "angle_rad": float(info.reference_angle),
+            "azimuth_rad": float(info.reference_azimuth),
+            "amplitudes": list(map(float, info.reference_amplitudes)),
+        },
+        "bounds_m": np.asarray(info.bounds).tolist(),
+        "object_wave": info.keeps_object_wave,
+        "band_sin": float(info.band),
+        "channels": list(info.channels),
+        "point_density_per_m2": float(info.point_density),
+        "encoding": info.encoding,
+        "viewing_zone": None
+        if info.zone is None
+        else {
+            "centre_m": list(info.zone.centre),
+            "half_extents_m": list(info.zone.half_extents),
+            "pupil_m": info.zone.pupil,
+            "pixel_rad": info.zone.pixel,
+        },
+        "carrier": None
+        if info.carrier is None
+        else {
+            "centre_m": list(info.carrier.centre),
+            "origin_m": list(info.carrier.origin),
+            "row_pitch_m": info.carrier.row_pitch,
+        },
         "recording": info.recording,
     }
 
@@ -121,8 +148,7 @@ def write_hologram(path, h: Hologram) -> Path:
             channels[f"c{c}.O"] = np.ascontiguousarray(h.object_wave[c]).view(np.float32)
     # a plate's object wave is speckle, which ZIP barely shrinks (by about a fifth) at seconds
     # to write and to read it, where a frame reads it each time (docs, Performance)
-    write_exr(path, channels, holo=header,
-              compression="none" if h.carrier is not None else "zip")
+    write_exr(path, channels, holo=header, compression="none" if h.carrier is not None else "zip")
     return path
 
 
@@ -131,10 +157,11 @@ def check_pixels(name: str, h: Hologram) -> None:
     intensity (if any) all finite and >= 0, and its object wave (if any) finite."""
     if 0 in h.shape:
         raise HologramFileError(f"{name}: the hologram holds no samples")
-    if h.intensity is not None and (not np.isfinite(h.intensity).all() or
-                                    (h.intensity < 0).any()):
-        raise HologramFileError(f"{name}: the intensity holds NaN, infinite or negative values "
-                                f"(it must be finite and >= 0)")
+    if h.intensity is not None and (not np.isfinite(h.intensity).all() or (h.intensity < 0).any()):
+        raise HologramFileError(
+            f"{name}: the intensity holds NaN, infinite or negative values "
+            f"(it must be finite and >= 0)"
+        )
     if h.object_wave is not None and not np.isfinite(h.object_wave).all():
         raise HologramFileError(f"{name}: the object wave holds NaN or infinite values")
 
@@ -187,15 +214,19 @@ def read_hologram(path) -> Hologram:
     for n in wanted:
         shape = (info.shape[0], 2 * info.shape[1]) if n.endswith(".O") else info.shape
         if names[n].shape != shape:
-            raise HologramFileError(f"{path}: channel {n} is {names[n].shape}, metadata says "
-                                    f"{shape}")
+            raise HologramFileError(
+                f"{path}: channel {n} is {names[n].shape}, metadata says {shape}"
+            )
     wave = None
     if pairs:
         wave = _complex([(names[f"c{c}.O"],) for c in colours])
     elif info.keeps_object_wave:
         wave = _complex([(names[f"c{c}.O.re"], names[f"c{c}.O.im"]) for c in colours])
-    h = Hologram(info=info, intensity=np.stack([names[f"c{c}.H"] for c in colours])
-                 if intensity else None, object_wave=wave)
+    h = Hologram(
+        info=info,
+        intensity=np.stack([names[f"c{c}.H"] for c in colours]) if intensity else None,
+        object_wave=wave,
+    )
     check_pixels(str(path), h)
     return h
 
@@ -209,15 +240,16 @@ def _complex(parts) -> np.ndarray:
 
     def fill(block):
         c, r0 = block
-        out = wave[c, r0:r0 + ROWS_A_BLOCK]
+        out = wave[c, r0 : r0 + ROWS_A_BLOCK]
         if len(parts[c]) == 1:
-            out.view(np.float32)[...] = parts[c][0][r0:r0 + ROWS_A_BLOCK]
+            out.view(np.float32)[...] = parts[c][0][r0 : r0 + ROWS_A_BLOCK]
         else:
-            out.real, out.imag = (p[r0:r0 + ROWS_A_BLOCK] for p in parts[c])
+            out.real, out.imag = (p[r0 : r0 + ROWS_A_BLOCK] for p in parts[c])
 
     with ThreadPoolExecutor(os.cpu_count() or 1) as pool:  # NumPy's copies release the GIL
-        list(pool.map(fill, [(c, r0) for c in range(len(parts)) for r0 in range(0, h,
-                                                                              ROWS_A_BLOCK)]))
+        list(
+            pool.map(fill, [(c, r0) for c in range(len(parts)) for r0 in range(0, h, ROWS_A_BLOCK)])
+        )
     return wave
 
 
@@ -259,8 +291,10 @@ def _described(path: Path, header) -> HologramInfo:
     format and version this reads, each field of its type), every value by the description
     itself, its complaint naming the file and the field as the file names it."""
     if "holo" not in header:
-        raise HologramFileError(f"{path}: an EXR image without hologram metadata; import it "
-                                f"with holo_core.import_acquired(pitch=, wavelength=, ...)")
+        raise HologramFileError(
+            f"{path}: an EXR image without hologram metadata; import it "
+            f"with holo_core.import_acquired(pitch=, wavelength=, ...)"
+        )
     try:
         meta = json.loads(header["holo"])
     except (TypeError, ValueError, RecursionError) as e:
@@ -268,16 +302,26 @@ def _described(path: Path, header) -> HologramInfo:
     if not isinstance(meta, dict):
         raise HologramFileError(f"{path}: hologram metadata must be a JSON object")
     if meta.get("format") != FORMAT:
-        raise HologramFileError(f"{path}: metadata format {meta.get('format')!r}, "
-                                f"expected {FORMAT!r}")
+        raise HologramFileError(
+            f"{path}: metadata format {meta.get('format')!r}, expected {FORMAT!r}"
+        )
     version = meta.get("format_version")
     if isinstance(version, bool) or version not in READS:
-        raise HologramFileError(f"{path}: format version {version!r} is not supported (this "
-                                f"is holo {__version__}, which reads versions "
-                                f"{', '.join(map(str, READS))})"[:400])
-    meta = {"band_sin": 0.0, "channels": [], "point_density_per_m2": 0.0,
-            "encoding": "intensity", "viewing_zone": None, "carrier": None, "recording": "",
-            **meta}
+        raise HologramFileError(
+            f"{path}: format version {version!r} is not supported (this "
+            f"is holo {__version__}, which reads versions "
+            f"{', '.join(map(str, READS))})"[:400]
+        )
+    meta = {
+        "band_sin": 0.0,
+        "channels": [],
+        "point_density_per_m2": 0.0,
+        "encoding": "intensity",
+        "viewing_zone": None,
+        "carrier": None,
+        "recording": "",
+        **meta,
+    }
     schema = _Schema(path, meta)
     ref = meta.get("reference")
     if not isinstance(ref, dict):
@@ -286,15 +330,18 @@ def _described(path: Path, header) -> HologramInfo:
     fields = {
         "wavelengths": schema.numbers("wavelengths_m", "a list of wavelengths [m]", shape="any"),
         "pitch": schema.numbers("pitch_m", "a number [m]"),
-        "shape": schema.numbers("size_px", "two integers >= 1",
-                                lambda v: v >= 1 and v == int(v), shape=2),
-        "plate": np.reshape(schema.numbers("plate_to_world", "16 finite numbers (a rigid pose)",
-                                           shape=16), (4, 4)),
+        "shape": schema.numbers(
+            "size_px", "two integers >= 1", lambda v: v >= 1 and v == int(v), shape=2
+        ),
+        "plate": np.reshape(
+            schema.numbers("plate_to_world", "16 finite numbers (a rigid pose)", shape=16), (4, 4)
+        ),
         "reference_angle": sub.numbers("angle_rad", "a number [rad]"),
         "reference_azimuth": sub.numbers("azimuth_rad", "a number [rad]"),
         "reference_amplitudes": sub.numbers("amplitudes", "a list of numbers", shape="any"),
-        "bounds": np.reshape(schema.numbers("bounds_m", "two corners (x, y, z) [m]",
-                                            shape=(2, 3)), (2, 3)),
+        "bounds": np.reshape(
+            schema.numbers("bounds_m", "two corners (x, y, z) [m]", shape=(2, 3)), (2, 3)
+        ),
         "band": schema.numbers("band_sin", "a number"),
         "point_density": schema.numbers("point_density_per_m2", "a number [1/m²]"),
         "channels": schema.kind("channels", list, "a list of channel roles"),
@@ -309,8 +356,7 @@ def _described(path: Path, header) -> HologramInfo:
         return HologramInfo(**fields)
     except InputError as e:  # named as the file names the field
         field, _, rest = str(e).partition(" ")
-        raise HologramFileError(f"{path}: metadata {FILE_KEYS.get(field, field)} "
-                                f"{rest}") from None
+        raise HologramFileError(f"{path}: metadata {FILE_KEYS.get(field, field)} {rest}") from None
 
 
 def _zone(path, zone) -> ViewingZone | None:
@@ -318,14 +364,16 @@ def _zone(path, zone) -> ViewingZone | None:
         return None
     if not isinstance(zone, dict):
         _Schema(path, {"viewing_zone": zone}).fail(
-            "viewing_zone", "null or an object with centre_m, half_extents_m and pupil_m")
+            "viewing_zone", "null or an object with centre_m, half_extents_m and pupil_m"
+        )
     sub = _Schema(path, {"pupil_m": 0.0, "pixel_rad": 0.0, **zone}, "viewing_zone.")
     try:
-        return ViewingZone(centre=sub.numbers("centre_m", "three coordinates [m]", shape=3),
-                           half_extents=sub.numbers("half_extents_m", "three half widths [m]",
-                                                    shape=3),
-                           pupil=sub.numbers("pupil_m", "a number [m]"),
-                           pixel=sub.numbers("pixel_rad", "a number [rad]"))
+        return ViewingZone(
+            centre=sub.numbers("centre_m", "three coordinates [m]", shape=3),
+            half_extents=sub.numbers("half_extents_m", "three half widths [m]", shape=3),
+            pupil=sub.numbers("pupil_m", "a number [m]"),
+            pixel=sub.numbers("pixel_rad", "a number [rad]"),
+        )
     except InputError as e:
         raise HologramFileError(f"{path}: metadata viewing_zone: {e}") from None
 
@@ -335,12 +383,15 @@ def _carrier(path, carrier) -> Carrier | None:
         return None
     if not isinstance(carrier, dict):
         _Schema(path, {"carrier": carrier}).fail(
-            "carrier", "null or an object with centre_m, origin_m and row_pitch_m")
+            "carrier", "null or an object with centre_m, origin_m and row_pitch_m"
+        )
     sub = _Schema(path, carrier, "carrier.")
     try:
-        return Carrier(centre=sub.numbers("centre_m", "three coordinates [m]", shape=3),
-                       origin=sub.numbers("origin_m", "two coordinates [m]", shape=2),
-                       row_pitch=sub.numbers("row_pitch_m", "a number [m]"))
+        return Carrier(
+            centre=sub.numbers("centre_m", "three coordinates [m]", shape=3),
+            origin=sub.numbers("origin_m", "two coordinates [m]", shape=2),
+            row_pitch=sub.numbers("row_pitch_m", "a number [m]"),
+        )
     except InputError as e:
         raise HologramFileError(f"{path}: metadata carrier: {e}") from None
 
@@ -353,8 +404,9 @@ class _Schema:
 
     def fail(self, key, allowed):
         value = repr(self.obj.get(key, "missing"))[:80]
-        raise HologramFileError(f"{self.path}: metadata {self.prefix}{key} must be {allowed}; "
-                                f"got {value}")
+        raise HologramFileError(
+            f"{self.path}: metadata {self.prefix}{key} must be {allowed}; got {value}"
+        )
 
     def kind(self, key, kind, allowed):
         """The field, when it is of the JSON type ``kind``."""
@@ -368,8 +420,10 @@ class _Schema:
         length) as a flat list of numbers; each finite, not a bool, and ``ok``."""
         value = self.obj.get(key)
         flat = [value] if shape is None else _flatten(value, shape)
-        if flat is None or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                                   and math.isfinite(v) and ok(v) for v in flat):
+        if flat is None or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and ok(v)
+            for v in flat
+        ):
             self.fail(key, allowed)
         return flat[0] if shape is None else flat
 

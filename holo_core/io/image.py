@@ -47,8 +47,10 @@ def atomic_paths(*paths):
     onto their targets together (under a lock on their folder, so two writers of the same
     set never leave a mixed pair), when it fails all are removed."""
     targets = [_target(p) for p in paths]
-    temps = [t.parent / f".{t.stem}{TEMP_TAG}{_HOST}.{os.getpid()}.{next(_count)}{t.suffix}"
-             for t in targets]
+    temps = [
+        t.parent / f".{t.stem}{TEMP_TAG}{_HOST}.{os.getpid()}.{next(_count)}{t.suffix}"
+        for t in targets
+    ]
     try:
         with _terminate_raises():
             for tmp, path in zip(temps, paths):
@@ -74,19 +76,33 @@ def _failed_write(e: BaseException, temps, targets) -> InputError | None:
     """The project's error for a write into ``temps`` that failed (a full disk, a quota, a
     lost share), naming the target the user asked for, never the hidden temporary file; None
     for another failure (the caller's own error, a cancellation)."""
-    named = [t for tmp, t in zip(temps, targets) if str(tmp) in str(e) or
-             str(tmp) == getattr(e, "filename", None)]
-    disk = isinstance(e, OSError) and e.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG,
-                                                   errno.EROFS, errno.EIO)
+    named = [
+        t
+        for tmp, t in zip(temps, targets)
+        if str(tmp) in str(e) or str(tmp) == getattr(e, "filename", None)
+    ]
+    disk = isinstance(e, OSError) and e.errno in (
+        errno.ENOSPC,
+        errno.EDQUOT,
+        errno.EFBIG,
+        errno.EROFS,
+        errno.EIO,
+    )
     if not named and not disk:
         return None
     why = e.strerror if isinstance(e, OSError) and e.strerror else str(e)
     for tmp, t in zip(temps, targets):
         why = why.replace(str(tmp), str(t))
-    full = " (the disk is full: free some room there, or write to another folder)" if \
-        "No space left" in why or (isinstance(e, OSError) and e.errno == errno.ENOSPC) else ""
-    return InputError(f"{', '.join(map(str, named or targets))}: cannot be written "
-                      f"({why.rstrip('.')}){full}"[:600])
+    full = (
+        " (the disk is full: free some room there, or write to another folder)"
+        if "No space left" in why or (isinstance(e, OSError) and e.errno == errno.ENOSPC)
+        else ""
+    )
+    return InputError(
+        f"{', '.join(map(str, named or targets))}: cannot be written ({why.rstrip('.')}){full}"[
+            :600
+        ]
+    )
 
 
 @contextmanager
@@ -130,8 +146,9 @@ def check_writable(path, suffix: str | None = None) -> Path:
     that a bad output is found before the work, not after it."""
     path = Path(path)
     if suffix is not None and path.suffix.lower() != suffix:
-        raise InputError(f"{path}: the file is written as {_FORMATS.get(suffix, suffix)}; "
-                         f"name it *{suffix}")
+        raise InputError(
+            f"{path}: the file is written as {_FORMATS.get(suffix, suffix)}; name it *{suffix}"
+        )
     if path.is_dir():
         raise InputError(f"{path}: is a folder; name the file to write")
     folder = _folder(path)
@@ -146,8 +163,7 @@ def check_writable(path, suffix: str | None = None) -> Path:
             finally:
                 probe.unlink(missing_ok=True)
     except OSError as e:
-        raise InputError(f"{path}: its folder {existing} is not writable ({e.strerror})") \
-            from None
+        raise InputError(f"{path}: its folder {existing} is not writable ({e.strerror})") from None
     return folder / path.name
 
 
@@ -167,9 +183,11 @@ def check_room(paths, nbytes: float, what: str) -> None:
             continue
         need = nbytes * len(held)
         if need > free:
-            raise InputError(f"{what.format(n=len(held))} need {memory.gib(need)} on disk, and "
-                             f"{existing} has {memory.gib(free)} free: free some room there, or "
-                             f"write them to another folder")
+            raise InputError(
+                f"{what.format(n=len(held))} need {memory.gib(need)} on disk, and "
+                f"{existing} has {memory.gib(free)} free: free some room there, or "
+                f"write them to another folder"
+            )
 
 
 def _existing(folder: Path) -> Path:
@@ -271,8 +289,10 @@ def process_alive(pid: int) -> bool:
 def _terminate_raises():
     """While a write is open, SIGTERM raises :class:`Terminated` (exit status 143) instead of
     ending the process where it stands, so the temporary file is removed."""
-    if threading.current_thread() is not threading.main_thread() or \
-            signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+    if (
+        threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL
+    ):
         return nullcontext()
     return _sigterm_handler()
 
@@ -281,6 +301,7 @@ def _terminate_raises():
 def _sigterm_handler():
     def terminate(signum, _frame):
         raise Terminated(128 + signum)
+
     signal.signal(signal.SIGTERM, terminate)
     try:
         yield
@@ -300,18 +321,21 @@ def write_exr(path, channels: dict, *, preview=None, compression="zip", **header
     file) also a PNG beside it, the two renamed into place as one unit. ``compression``:
     'zip', or 'none' for data that barely compresses and is read often (a plate's samples)."""
     import OpenEXR  # noqa: F401 -- before the write opens: a SIGTERM inside an import is lost
+
     check_writable(path, ".exr")
     paths = [path] + ([Path(path).with_suffix(".png")] if preview is not None else [])
     with atomic_paths(*paths) as temps:
         _exr_to(temps[0], channels, compression=compression, **header)
         if preview is not None:
-            Path(temps[1]).write_bytes(preview if isinstance(preview, bytes)
-                                       else png_bytes(preview))
+            Path(temps[1]).write_bytes(
+                preview if isinstance(preview, bytes) else png_bytes(preview)
+            )
     return Path(path)
 
 
 def _exr_to(filename, channels: dict, compression="zip", **header) -> None:
     import OpenEXR
+
     data = {n: np.ascontiguousarray(a, np.float32) for n, a in channels.items()}
     codec = {"zip": OpenEXR.ZIP_COMPRESSION, "none": OpenEXR.NO_COMPRESSION}[compression]
     head = {"compression": codec, "type": OpenEXR.scanlineimage, **header}
@@ -324,6 +348,7 @@ def read_exr(path, *, what="image") -> tuple[dict, dict]:
     against the memory budget before a pixel is read; :class:`InputError` naming the file if
     it is missing, not an EXR, damaged or too large."""
     import OpenEXR
+
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: no such file")
@@ -339,8 +364,7 @@ def read_exr(path, *, what="image") -> tuple[dict, dict]:
         raise InputError(f"{path}: unreadable EXR header ({e})") from None
     if w < 1 or h < 1:
         raise InputError(f"{path}: an EXR of {w}x{h} pixels holds no image")
-    memory.check_host(f"{path} ({what}, {w}x{h} pixels, {count} channels)",
-                      2 * 4.0 * w * h * count)
+    memory.check_host(f"{path} ({what}, {w}x{h} pixels, {count} channels)", 2 * 4.0 * w * h * count)
     try:
         with OpenEXR.File(str(path), separate_channels=True) as f:
             header = dict(f.header())
@@ -349,8 +373,10 @@ def read_exr(path, *, what="image") -> tuple[dict, dict]:
         raise InputError(f"{path}: unreadable EXR data ({e})") from None
     for n, a in pixels.items():
         if a.shape != (h, w):
-            raise InputError(f"{path}: channel {n} is sampled {a.shape}, not {h}x{w} "
-                             f"(subsampled channels are not supported)")
+            raise InputError(
+                f"{path}: channel {n} is sampled {a.shape}, not {h}x{w} "
+                f"(subsampled channels are not supported)"
+            )
     return header, pixels
 
 
@@ -376,7 +402,7 @@ def exr_attribute(path, name: str) -> bytes | None:
         if size < 0 or value + size > len(head):
             return None
         if head[at:key_end] == name.encode():
-            return head[value:value + size]
+            return head[value : value + size]
         at = value + size
     return None
 
@@ -393,9 +419,17 @@ def png_bytes(image: np.ndarray) -> bytes:
     raw = np.concatenate([np.zeros((h, 1), np.uint8), rows], axis=1).tobytes()
 
     def chunk(kind, body):
-        return struct.pack(">I", len(body)) + kind + body + struct.pack(
-            ">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
+        return (
+            struct.pack(">I", len(body))
+            + kind
+            + body
+            + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
+        )
 
     header = struct.pack(">IIBBBBB", w, h, 8, colour, 0, 0, 0)
-    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw, 6)) \
+    return (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", header)
+        + chunk(b"IDAT", zlib.compress(raw, 6))
         + chunk(b"IEND", b"")
+    )

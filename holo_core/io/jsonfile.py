@@ -18,8 +18,8 @@ import numpy as np
 
 from ..validate import InputError
 
-MAX_DEPTH = 64          # metadata objects nest a few levels; 64 is far beyond any real one
-MAX_CHARS = 16 << 20    # 16 Mi characters: metadata, never samples
+MAX_DEPTH = 64  # metadata objects nest a few levels; 64 is far beyond any real one
+MAX_CHARS = 16 << 20  # 16 Mi characters: metadata, never samples
 _STRINGS = re.compile(r'"(?:[^"\\]|\\.)*"')  # a JSON string, escapes included
 
 
@@ -27,23 +27,28 @@ def depth(text: str) -> int:
     """The deepest nesting of arrays and objects in ``text`` (brackets inside strings do not
     count)."""
     skeleton = np.frombuffer(_STRINGS.sub('""', text).encode("utf-8", "replace"), np.uint8)
-    steps = np.isin(skeleton, (ord("["), ord("{"))).astype(np.int64) \
-        - np.isin(skeleton, (ord("]"), ord("}")))
+    steps = np.isin(skeleton, (ord("["), ord("{"))).astype(np.int64) - np.isin(
+        skeleton, (ord("]"), ord("}"))
+    )
     return int(np.cumsum(steps).max(initial=0))
 
 
-def loads(text: str, name, *, error=InputError, max_depth: int = MAX_DEPTH,
-          max_chars: int = MAX_CHARS):
+def loads(
+    text: str, name, *, error=InputError, max_depth: int = MAX_DEPTH, max_chars: int = MAX_CHARS
+):
     """The value of the JSON ``text`` from ``name`` (a file, or a file and the place in it);
     ``error`` (an :class:`InputError` class) naming ``name`` when the text is longer than
     ``max_chars``, nested deeper than ``max_depth`` or not JSON."""
     if len(text) > max_chars:
-        raise error(f"{name}: {len(text)} characters of JSON metadata, more than the "
-                    f"{max_chars} a reader takes")
+        raise error(
+            f"{name}: {len(text)} characters of JSON metadata, more than the "
+            f"{max_chars} a reader takes"
+        )
     deepest = depth(text)
     if deepest > max_depth:
-        raise error(f"{name}: JSON nested {deepest} levels deep; metadata may nest at most "
-                    f"{max_depth}")
+        raise error(
+            f"{name}: JSON nested {deepest} levels deep; metadata may nest at most {max_depth}"
+        )
     try:
         return json.loads(text)
     except (ValueError, RecursionError) as e:

@@ -38,25 +38,32 @@ class KeptPlates:
         names = [_identity(p) for p in paths]
         self._held = {k: h for k, h in self._held.items() if k in names}  # freed before reads
         self._set = (None, None)
-        holos = [self._held[k] if k in self._held else read_plate(p)
-                 for k, p in zip(names, paths)]
+        holos = [self._held[k] if k in self._held else read_plate(p) for k, p in zip(names, paths)]
         if self._held:
-            log.info("the plate's holograms held in memory from the job before: %d of %d "
-                     "not read again", len(self._held), len(paths))
+            log.info(
+                "the plate's holograms held in memory from the job before: %d of %d not read again",
+                len(self._held),
+                len(paths),
+            )
         for path, h in zip(paths, holos):
             if recording and h.recording != recording:
                 held = f"recording {h.recording}" if h.recording else "no named recording"
-                raise HologramFileError(f"{plate_files(path)}: holds {held}, not {recording} "
-                                        f"(this scene's): another recording's plate under "
-                                        f"this name is never rendered; record the plate again")
+                raise HologramFileError(
+                    f"{plate_files(path)}: holds {held}, not {recording} "
+                    f"(this scene's): another recording's plate under "
+                    f"this name is never rendered; record the plate again"
+                )
         return holos
 
     def hold(self, paths, holos) -> None:
         """Hold ``holos``, the plates of ``paths`` as their files are now (their identities),
         in place of those held before."""
         if self._hold:
-            self._held = {k: h for k, h in zip(map(_identity, paths), holos)
-                          if k is not None and not isinstance(h.object_wave, TiledWave)}
+            self._held = {
+                k: h
+                for k, h in zip(map(_identity, paths), holos)
+                if k is not None and not isinstance(h.object_wave, TiledWave)
+            }
 
     def read_set(self, folder):
         """The plate set in ``folder`` (:func:`read_plate_set`: each part's digests checked

@@ -1,5 +1,4 @@
-"""Mesh files: OBJ and PLY (ASCII and binary) read into a :class:`~holo_core.scene.Mesh`.
-"""
+"""Mesh files: OBJ and PLY (ASCII and binary) read into a :class:`~holo_core.scene.Mesh`."""
 
 from __future__ import annotations
 
@@ -72,16 +71,17 @@ def _mesh(path, verts, faces, colours, first=0) -> Mesh:
     if not len(verts):
         raise MeshFileError(f"{path}: no vertices")
     if not np.isfinite(verts).all():
-        raise MeshFileError(f"{path}: vertex coordinates must be finite (NaN or infinity "
-                            f"found)")
+        raise MeshFileError(f"{path}: vertex coordinates must be finite (NaN or infinity found)")
     _check_indices(path, faces, len(verts), first)
     tris, skipped = _triangles(faces)
     if skipped:
-        warnings.warn(f"{path}: {skipped} face(s) of fewer than 3 vertices skipped",
-                      UserWarning, stacklevel=3)
+        warnings.warn(
+            f"{path}: {skipped} face(s) of fewer than 3 vertices skipped", UserWarning, stacklevel=3
+        )
     if not len(tris):
-        raise MeshFileError(f"{path}: no faces of 3 or more vertices (read_mesh needs a "
-                            f"surface, not a point cloud)")
+        raise MeshFileError(
+            f"{path}: no faces of 3 or more vertices (read_mesh needs a surface, not a point cloud)"
+        )
     if colours is not None:
         colours = np.asarray(colours, np.float64).reshape(len(verts), -1)
         if not np.isfinite(colours).all() or (colours < 0).any():
@@ -109,11 +109,21 @@ def _check_indices(path, faces, count, first) -> None:
         bad = faces[(faces < 0) | (faces >= count)] if faces.size else faces
         offender = int(bad.flat[0]) if bad.size else None
     else:
-        offender = next((int(i) for f in faces if len(f) and not (
-            min(f) >= 0 and max(f) < count) for i in f if not 0 <= i < count), None)
+        offender = next(
+            (
+                int(i)
+                for f in faces
+                if len(f) and not (min(f) >= 0 and max(f) < count)
+                for i in f
+                if not 0 <= i < count
+            ),
+            None,
+        )
     if offender is not None:
-        raise MeshFileError(f"{path}: face vertex index {offender + first} is out of range "
-                            f"(the file has {count} vertices, numbered from {first})")
+        raise MeshFileError(
+            f"{path}: face vertex index {offender + first} is out of range "
+            f"(the file has {count} vertices, numbered from {first})"
+        )
 
 
 def _read_obj(path: Path, data: bytes):
@@ -139,8 +149,10 @@ def _read_obj(path: Path, data: bytes):
                 if 0 in idx:
                     raise ValueError("OBJ indices start at 1 (0 is not an index)")
                 if idx and min(idx) < -len(verts):
-                    raise ValueError(f"relative index {min(idx)} reaches before the first "
-                                     f"vertex ({len(verts)} so far)")
+                    raise ValueError(
+                        f"relative index {min(idx)} reaches before the first "
+                        f"vertex ({len(verts)} so far)"
+                    )
                 faces.append([i - 1 if i > 0 else len(verts) + i for i in idx])
         except ValueError as e:
             raise MeshFileError(f"{path}, line {number}: {e}") from None
@@ -148,10 +160,24 @@ def _read_obj(path: Path, data: bytes):
     return verts, faces, colours
 
 
-_PLY_TYPES = {"char": "i1", "uchar": "u1", "short": "i2", "ushort": "u2", "int": "i4",
-              "uint": "u4", "float": "f4", "double": "f8", "int8": "i1", "uint8": "u1",
-              "int16": "i2", "uint16": "u2", "int32": "i4", "uint32": "u4", "float32": "f4",
-              "float64": "f8"}
+_PLY_TYPES = {
+    "char": "i1",
+    "uchar": "u1",
+    "short": "i2",
+    "ushort": "u2",
+    "int": "i4",
+    "uint": "u4",
+    "float": "f4",
+    "double": "f8",
+    "int8": "i1",
+    "uint8": "u1",
+    "int16": "i2",
+    "uint16": "u2",
+    "int32": "i4",
+    "uint32": "u4",
+    "float32": "f4",
+    "float64": "f8",
+}
 
 
 _PLY_FORMATS = {"ascii": None, "binary_little_endian": "<", "binary_big_endian": ">"}
@@ -170,18 +196,31 @@ def _read_ply(path: Path, data: bytes):
     face = values.get("face", {})
     name = "vertex_indices" if "vertex_indices" in face else "vertex_index"
     faces = face.get(name, [])
-    if any(p[-1] == name and p[0] != "list" for e, _, props in elements if e == "face"
-           for p in props):
-        raise MeshFileError(f"{path}: face property {name} must be a list (property list "
-                            f"<count type> <index type> {name}); it is a single number")
+    if any(
+        p[-1] == name and p[0] != "list" for e, _, props in elements if e == "face" for p in props
+    ):
+        raise MeshFileError(
+            f"{path}: face property {name} must be a list (property list "
+            f"<count type> <index type> {name}); it is a single number"
+        )
     colours = None
     rgb = ("red", "green", "blue")
     if all(k in vertex for k in rgb):  # integers scale by their type's full range
-        kinds = {p[-1]: np.dtype(_PLY_TYPES[p[0]]) for name, _, props in elements
-                 if name == "vertex" for p in props if p[0] != "list"}
-        colours = np.stack([np.asarray(vertex[k], np.float64) /
-                            (np.iinfo(kinds[k]).max if kinds[k].kind in "iu" else 1.0)
-                            for k in rgb], 1)
+        kinds = {
+            p[-1]: np.dtype(_PLY_TYPES[p[0]])
+            for name, _, props in elements
+            if name == "vertex"
+            for p in props
+            if p[0] != "list"
+        }
+        colours = np.stack(
+            [
+                np.asarray(vertex[k], np.float64)
+                / (np.iinfo(kinds[k]).max if kinds[k].kind in "iu" else 1.0)
+                for k in rgb
+            ],
+            1,
+        )
     return verts, faces, colours
 
 
@@ -192,7 +231,7 @@ def _ply_header(path: Path, data: bytes):
     if not data.startswith(b"ply") or end < 0:
         raise MeshFileError(f"{path}: not a PLY file (no 'ply' ... 'end_header' header)")
     newline = data.find(b"\n", end)
-    body = data[newline + 1:] if newline >= 0 else b""
+    body = data[newline + 1 :] if newline >= 0 else b""
     try:
         lines = data[:end].decode("ascii").splitlines()[1:]
     except UnicodeDecodeError:
@@ -207,17 +246,29 @@ def _ply_header(path: Path, data: bytes):
             fmt = _PLY_FORMATS[p[1]]
         elif p[0] == "element" and len(p) == 3 and p[2].isdigit():
             elements.append((p[1], int(p[2]), []))
-        elif p[0] == "property" and elements and (
-                (len(p) == 3 and p[1] in _PLY_TYPES) or
-                (len(p) == 5 and p[1] == "list" and p[2] in _PLY_TYPES and p[3] in _PLY_TYPES
-                 and np.dtype(_PLY_TYPES[p[2]]).kind in "iu"
-                 and np.dtype(_PLY_TYPES[p[3]]).kind in "iu")):
+        elif (
+            p[0] == "property"
+            and elements
+            and (
+                (len(p) == 3 and p[1] in _PLY_TYPES)
+                or (
+                    len(p) == 5
+                    and p[1] == "list"
+                    and p[2] in _PLY_TYPES
+                    and p[3] in _PLY_TYPES
+                    and np.dtype(_PLY_TYPES[p[2]]).kind in "iu"
+                    and np.dtype(_PLY_TYPES[p[3]]).kind in "iu"
+                )
+            )
+        ):
             elements[-1][2].append(p[1:])
         else:
-            raise MeshFileError(f"{where}: cannot read {line.strip()[:80]!r} (expected format "
-                                f"ascii|binary_little_endian|binary_big_endian 1.0, element "
-                                f"<name> <count>, property <type> <name>, or property list "
-                                f"<int type> <int type> <name>)")
+            raise MeshFileError(
+                f"{where}: cannot read {line.strip()[:80]!r} (expected format "
+                f"ascii|binary_little_endian|binary_big_endian 1.0, element "
+                f"<name> <count>, property <type> <name>, or property list "
+                f"<int type> <int type> <name>)"
+            )
     if fmt == "missing":
         raise MeshFileError(f"{path}: the PLY header has no valid format line")
     for name, _, props in elements:
@@ -228,11 +279,15 @@ def _ply_header(path: Path, data: bytes):
     for name, count, props in elements:
         if count and not props:
             raise MeshFileError(f"{path}: element {name} has {count} entries but no properties")
-        least = sum(2 if fmt is None else np.dtype(_PLY_TYPES[q[1] if q[0] == "list" else q[0]])
-                    .itemsize for q in props)  # per entry: '0 ' per value, or the fixed bytes
+        least = sum(
+            2 if fmt is None else np.dtype(_PLY_TYPES[q[1] if q[0] == "list" else q[0]]).itemsize
+            for q in props
+        )  # per entry: '0 ' per value, or the fixed bytes
         if count * least > room:
-            raise MeshFileError(f"{path}: element {name} declares {count} entries, more than "
-                                f"the file's {len(body)} bytes of data can hold")
+            raise MeshFileError(
+                f"{path}: element {name} declares {count} entries, more than "
+                f"the file's {len(body)} bytes of data can hold"
+            )
         room -= count * least if fmt is not None else 0
     return fmt, elements, body
 
@@ -253,8 +308,10 @@ class _PlyBinary:
             first = self._first_lengths(name, props)
             for p in props:
                 if p[0] == "list":
-                    fields += [(p[-1] + "#n", self.dtype(p[1])), (p[-1], self.dtype(p[2]),
-                                                                   (first[p[-1]],))]
+                    fields += [
+                        (p[-1] + "#n", self.dtype(p[1])),
+                        (p[-1], self.dtype(p[2]), (first[p[-1]],)),
+                    ]
                 else:
                     fields.append((p[-1], self.dtype(p[0])))
             rows = self._take(name, np.dtype(fields), count)
@@ -283,8 +340,7 @@ class _PlyBinary:
         for _ in range(count):
             for p in props:
                 if p[0] == "list":
-                    out[p[-1]].append(self._take(name, self.dtype(p[2]),
-                                                 self._length(name, p[1])))
+                    out[p[-1]].append(self._take(name, self.dtype(p[2]), self._length(name, p[1])))
                 else:
                     out[p[-1]].append(self._take(name, self.dtype(p[0]), 1)[0])
         return out
@@ -298,8 +354,10 @@ class _PlyBinary:
 
     def _take(self, name, dtype, count):
         if self.at + dtype.itemsize * count > len(self.body):
-            raise MeshFileError(f"{self.path}: truncated in element {name} (the data ends "
-                                f"after {len(self.body)} bytes)")
+            raise MeshFileError(
+                f"{self.path}: truncated in element {name} (the data ends "
+                f"after {len(self.body)} bytes)"
+            )
         rows = np.frombuffer(self.body, dtype, count, self.at)
         self.at += rows.nbytes
         return rows
@@ -318,8 +376,10 @@ class _PlyText:
                 if p[0] == "list":
                     n = int(self._next(name, True))
                     if n < 0 or self.at + n > len(self.tokens):
-                        raise MeshFileError(f"{self.path}: element {name}: a list of length "
-                                            f"{n} the file cannot hold")
+                        raise MeshFileError(
+                            f"{self.path}: element {name}: a list of length "
+                            f"{n} the file cannot hold"
+                        )
                     out[p[-1]].append([int(self._next(name, True)) for _ in range(n)])
                 else:
                     out[p[-1]].append(self._next(name, np.dtype(_PLY_TYPES[p[0]]).kind in "iu"))
@@ -334,5 +394,6 @@ class _PlyText:
             return int(token) if integer else float(token)
         except ValueError:
             kind = "an integer" if integer else "a number"
-            raise MeshFileError(f"{self.path}: element {name}: {token[:20]!r} is not "
-                                f"{kind}") from None
+            raise MeshFileError(
+                f"{self.path}: element {name}: {token[:20]!r} is not {kind}"
+            ) from None

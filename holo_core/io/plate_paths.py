@@ -61,5 +61,9 @@ def plate_current(path, recording: str = "") -> bool:
         store = read_store(str(store_of(path)))
     except HologramFileError:  # a StoreError too
         return False
-    return not store.bad and bool(store.written().all()) and not store.foreign().any() and \
-        (not recording or store.info.recording == recording)
+    return (
+        not store.bad
+        and bool(store.written().all())
+        and not store.foreign().any()
+        and (not recording or store.info.recording == recording)
+    )

@@ -33,7 +33,7 @@ from .image import check_writable, write_atomic
 
 MANIFEST = "plate_set.json"
 KIND = "holo plate set"
-VERSION = 1          # the manifest's format
+VERSION = 1  # the manifest's format
 MANIFEST_CHARS = 1 << 20  # a manifest names files and numbers: 1 Mi characters is far beyond
 
 
@@ -84,8 +84,9 @@ def write_plate_set(folder, plates: PlateSet) -> Path:
         raise InputError(f"plates must be a PlateSet; got {type(plates).__name__}")
     folder = set_folder(folder)
     entries = [write_part(folder, k, plates.part_looks(k)) for k in range(len(plates))]
-    return write_manifest(folder, plates.parts, entries, seed=plates.seed,
-                          recording=plates.recording)
+    return write_manifest(
+        folder, plates.parts, entries, seed=plates.seed, recording=plates.recording
+    )
 
 
 def set_folder(folder) -> Path:
@@ -103,21 +104,34 @@ def write_part(folder: Path, k: int, looks) -> list:
     files = []
     for look, h in enumerate(looks):
         path = write_hologram(folder / part_file(k, look), h)
-        files.append({"name": path.name, "bytes": path.stat().st_size,
-                      "blake2b": file_digest(path), "metadata": metadata_digest(h)})
+        files.append(
+            {
+                "name": path.name,
+                "bytes": path.stat().st_size,
+                "blake2b": file_digest(path),
+                "metadata": metadata_digest(h),
+            }
+        )
     return files
 
 
-def write_manifest(folder: Path, parts, entries, *, seed: int, recording: str,
-                   looks: int | None = None) -> Path:
+def write_manifest(
+    folder: Path, parts, entries, *, seed: int, recording: str, looks: int | None = None
+) -> Path:
     """The manifest of ``parts`` (PathPart) whose files ``entries`` (:func:`write_part`, one a
     part, None for a part not recorded yet) lie in ``folder``: rewritten after each part a
     recording finishes, so that a recording stopped resumes from the parts it wrote
     (:func:`recorded_parts`); a set with a part not recorded is refused by the reader."""
     listed = [{**part_entry(part), "files": files} for part, files in zip(parts, entries)]
     looks = looks or len(next(e for e in entries if e is not None))
-    manifest = {"kind": KIND, "version": VERSION, "recording": recording, "seed": seed,
-                "looks": looks, "parts": listed}
+    manifest = {
+        "kind": KIND,
+        "version": VERSION,
+        "recording": recording,
+        "seed": seed,
+        "looks": looks,
+        "parts": listed,
+    }
     return write_atomic(folder / MANIFEST, json.dumps(manifest, indent=1).encode())
 
 
@@ -125,12 +139,19 @@ def part_entry(part: PathPart) -> dict:
     """A part as the manifest names it: its plate's pose, size and zone, its stretch [m] and
     frames (plain data, JSON's)."""
     p = part.plate
-    return {"plate_to_world": np.asarray(p.matrix_world).tolist(),
-            "width_m": p.width, "height_m": p.height,
-            "zone": {"centre_m": list(p.zone.centre),
-                     "half_extents_m": list(p.zone.half_extents),
-                     "pupil_m": p.zone.pupil, "pixel_rad": p.zone.pixel},
-            "stretch_m": list(part.stretch), "frames": list(part.frames)}
+    return {
+        "plate_to_world": np.asarray(p.matrix_world).tolist(),
+        "width_m": p.width,
+        "height_m": p.height,
+        "zone": {
+            "centre_m": list(p.zone.centre),
+            "half_extents_m": list(p.zone.half_extents),
+            "pupil_m": p.zone.pupil,
+            "pixel_rad": p.zone.pixel,
+        },
+        "stretch_m": list(part.stretch),
+        "frames": list(part.frames),
+    }
 
 
 def part_of(entry, name: str = "part") -> PathPart:
@@ -138,15 +159,25 @@ def part_of(entry, name: str = "part") -> PathPart:
     where it is malformed)."""
     try:
         z = entry["zone"]
-        zone = ViewingZone(centre=z["centre_m"], half_extents=z["half_extents_m"],
-                           pupil=z["pupil_m"], pixel=z["pixel_rad"])
-        plate = Plate(matrix_world=np.asarray(entry["plate_to_world"], np.float64),
-                      width=entry["width_m"], height=entry["height_m"], zone=zone)
-        return PathPart(plate=plate, stretch=tuple(entry["stretch_m"]),
-                        frames=tuple(entry["frames"]))
+        zone = ViewingZone(
+            centre=z["centre_m"],
+            half_extents=z["half_extents_m"],
+            pupil=z["pupil_m"],
+            pixel=z["pixel_rad"],
+        )
+        plate = Plate(
+            matrix_world=np.asarray(entry["plate_to_world"], np.float64),
+            width=entry["width_m"],
+            height=entry["height_m"],
+            zone=zone,
+        )
+        return PathPart(
+            plate=plate, stretch=tuple(entry["stretch_m"]), frames=tuple(entry["frames"])
+        )
     except (KeyError, TypeError, ValueError) as e:
-        raise InputError(f"{name}: not a plate set's part ({type(e).__name__}: {e})"[:300]) \
-            from None
+        raise InputError(
+            f"{name}: not a plate set's part ({type(e).__name__}: {e})"[:300]
+        ) from None
     except InputError as e:
         raise InputError(f"{name}: {e}") from None
 
@@ -181,9 +212,13 @@ def set_current(folder, recording: str, count: int) -> bool:
     except HologramFileError:
         return False  # damaged: the recording replaces it, or the reader names it
     listed = m.get("parts") if isinstance(m, dict) else None
-    return (m.get("kind") == KIND and m.get("recording") == recording and
-            isinstance(listed, list) and len(listed) == count and
-            all(isinstance(e, dict) and e.get("files") for e in listed))
+    return (
+        m.get("kind") == KIND
+        and m.get("recording") == recording
+        and isinstance(listed, list)
+        and len(listed) == count
+        and all(isinstance(e, dict) and e.get("files") for e in listed)
+    )
 
 
 def file_digest(path) -> str:
@@ -215,9 +250,11 @@ def recorded_parts(folder, recording: str, count: int, *, overwrite=False) -> di
     if held != recording or m.get("kind") != KIND:
         if overwrite:
             return {}
-        raise InputError(f"{folder}: holds another plate set (recording {str(held)[:12]}; this "
-                         f"one is {recording[:12]}: the scene, the path or the looks "
-                         f"differ); record to a new folder, or replace it (overwrite=True)")
+        raise InputError(
+            f"{folder}: holds another plate set (recording {str(held)[:12]}; this "
+            f"one is {recording[:12]}: the scene, the path or the looks "
+            f"differ); record to a new folder, or replace it (overwrite=True)"
+        )
     field, done = _Fields(folder / MANIFEST), {}
     listed = m.get("parts") if isinstance(m.get("parts"), list) else []
     for k, entry in enumerate(listed[:count]):
@@ -291,8 +328,10 @@ def read_plate_set(folder) -> PlateSet:
         at = f"parts[{k}]."
         field.value(entry, dict, "an object", f"parts[{k}]")
         if entry.get("files") is None:
-            raise HologramFileError(f"{folder}: part {k} was not recorded (the recording "
-                                    f"stopped before it); recording the set again resumes it")
+            raise HologramFileError(
+                f"{folder}: part {k} was not recorded (the recording "
+                f"stopped before it); recording the set again resumes it"
+            )
         files = field.check(entry, "files", list, f"{looks} files", at)
         if len(files) != looks:
             field.fail(f"{at}files", f"{looks} files (one a look); it lists {len(files)}")
@@ -306,18 +345,31 @@ def read_plate_set(folder) -> PlateSet:
             _listed_file(folder, k, look, f, field, at)
         z = field.check(entry, "zone", dict, "the part's viewing zone", at)
         try:
-            zone = ViewingZone(centre=z.get("centre_m"), half_extents=z.get("half_extents_m"),
-                               pupil=z.get("pupil_m"), pixel=z.get("pixel_rad"))
-            plate = Plate(matrix_world=pose, width=entry.get("width_m"),
-                          height=entry.get("height_m"), zone=zone)
+            zone = ViewingZone(
+                centre=z.get("centre_m"),
+                half_extents=z.get("half_extents_m"),
+                pupil=z.get("pupil_m"),
+                pixel=z.get("pixel_rad"),
+            )
+            plate = Plate(
+                matrix_world=pose,
+                width=entry.get("width_m"),
+                height=entry.get("height_m"),
+                zone=zone,
+            )
             parts.append(PathPart(plate=plate, stretch=stretch, frames=frames))
         except InputError as e:
             raise HologramFileError(f"{name}: {at[:-1]}: {e}") from None
         held.append(files)
     load = partial(_load_part, folder, tuple(parts), tuple(held))
     try:
-        return PlateSet(parts=tuple(parts), looks=(None,) * len(parts), seed=seed,
-                        recording=recording, load=load)
+        return PlateSet(
+            parts=tuple(parts),
+            looks=(None,) * len(parts),
+            seed=seed,
+            recording=recording,
+            load=load,
+        )
     except InputError as e:
         raise HologramFileError(f"{name}: {e}") from None
 
@@ -345,8 +397,9 @@ def _listed_file(folder: Path, k: int, look: int, entry, field, at) -> Path:
     if path.is_symlink() or (path.exists() and not path.is_file()):
         raise HologramFileError(f"{folder}: part {k} ({name}) is not a regular file")
     if not path.exists():
-        raise HologramFileError(f"{folder}: part {k} ({name}) is missing: the set is "
-                                f"incomplete; record it again")
+        raise HologramFileError(
+            f"{folder}: part {k} ({name}) is missing: the set is incomplete; record it again"
+        )
     if path.stat().st_size != entry["bytes"]:
         _refuse(folder, k, entry, path)
     return path
@@ -368,11 +421,15 @@ def _refuse(folder: Path, k: int, entry, path: Path):
         h = None
     name = entry["name"]
     if h is not None and metadata_digest(h) != entry["metadata"]:
-        raise HologramFileError(f"{folder}: part {k} ({name}) is foreign: a hologram, but "
-                                f"not the one this set recorded (its description differs "
-                                f"from the manifest's); record the set again")
-    raise HologramFileError(f"{folder}: part {k} ({name}) is damaged: its bytes do not "
-                            f"match the manifest's digest; record the set again")
+        raise HologramFileError(
+            f"{folder}: part {k} ({name}) is foreign: a hologram, but "
+            f"not the one this set recorded (its description differs "
+            f"from the manifest's); record the set again"
+        )
+    raise HologramFileError(
+        f"{folder}: part {k} ({name}) is damaged: its bytes do not "
+        f"match the manifest's digest; record the set again"
+    )
 
 
 def _load_part(folder: Path, parts, files, k: int) -> tuple:
@@ -384,8 +441,10 @@ def _load_part(folder: Path, parts, files, k: int) -> tuple:
     for entry in files[k]:
         path = folder / entry["name"]
         if not path.is_file() or path.stat().st_size != entry["bytes"]:
-            raise HologramFileError(f"{folder}: part {k} ({entry['name']}) changed or went "
-                                    f"missing since the set was opened")
+            raise HologramFileError(
+                f"{folder}: part {k} ({entry['name']}) changed or went "
+                f"missing since the set was opened"
+            )
         with ThreadPoolExecutor(1, thread_name_prefix="holo-part-digest") as pool:
             digest = pool.submit(file_digest, path)
             try:
@@ -397,9 +456,12 @@ def _load_part(folder: Path, parts, files, k: int) -> tuple:
         if h is None:
             h = read_hologram(path)  # its bytes are the manifest's: the reader's own refusal
         if metadata_digest(h) != entry["metadata"] or not np.allclose(
-                np.asarray(h.plate), parts[k].plate.matrix_world, atol=1e-12):
-            raise HologramFileError(f"{folder}: part {k} ({entry['name']}) is foreign: its "
-                                    f"plate is not the manifest's part {k}")
+            np.asarray(h.plate), parts[k].plate.matrix_world, atol=1e-12
+        ):
+            raise HologramFileError(
+                f"{folder}: part {k} ({entry['name']}) is foreign: its "
+                f"plate is not the manifest's part {k}"
+            )
         looks.append(h)
     return tuple(looks)
 

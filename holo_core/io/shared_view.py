@@ -28,12 +28,12 @@ import numpy as np
 
 from ..validate import InputError, integer
 
-MAGIC = 0x484F4C4F56494557   # "HOLOVIEW": a segment that is not a SharedView is refused
-HEADER_WORDS = 32            # int64 words of the header
+MAGIC = 0x484F4C4F56494557  # "HOLOVIEW": a segment that is not a SharedView is refused
+HEADER_WORDS = 32  # int64 words of the header
 SLOTS = 2
-SLOT_WORDS = 8               # each slot's words in the header, from SLOT_BASE
+SLOT_WORDS = 8  # each slot's words in the header, from SLOT_BASE
 SLOT_BASE = 8
-TRIES = 8                    # a reader's attempts before it gives up on this look
+TRIES = 8  # a reader's attempts before it gives up on this look
 # the header's words: 0 magic, 1 capacity [bytes a slot], 2 the published slot (-1: none),
 # 3 pictures published so far; a slot's: 0 its sequence lock, 1 its picture's number, 2 the
 # request it answers, 3 width, 4 height, 5 channels, 6 coarse, 7 seconds (float64 bits)
@@ -106,9 +106,15 @@ class SharedView:
         self._header = np.ndarray((HEADER_WORDS,), np.int64, memory.buf)
         self._seconds = np.ndarray((HEADER_WORDS,), np.float64, memory.buf)  # the same words
         self.capacity = int(self._header[1])
-        self._data = [np.ndarray((self.capacity // 4,), np.float32, memory.buf,
-                                 offset=HEADER_WORDS * 8 + s * self.capacity)
-                      for s in range(SLOTS)]
+        self._data = [
+            np.ndarray(
+                (self.capacity // 4,),
+                np.float32,
+                memory.buf,
+                offset=HEADER_WORDS * 8 + s * self.capacity,
+            )
+            for s in range(SLOTS)
+        ]
 
     @classmethod
     def create(cls, capacity: int, *, name: str | None = None) -> SharedView:
@@ -116,8 +122,9 @@ class SharedView:
         named ``name`` or :func:`session_name`; this process owns it (unlinks it on
         :meth:`close`)."""
         capacity = validate_capacity(capacity)
-        memory = shared_memory.SharedMemory(name=name or session_name(), create=True,
-                                            size=HEADER_WORDS * 8 + SLOTS * capacity)
+        memory = shared_memory.SharedMemory(
+            name=name or session_name(), create=True, size=HEADER_WORDS * 8 + SLOTS * capacity
+        )
         _created.add(memory.name)
         header = np.ndarray((HEADER_WORDS,), np.int64, memory.buf)
         header[:] = 0
@@ -134,21 +141,31 @@ class SharedView:
             memory = _untracked(name)
         except (FileNotFoundError, ValueError) as e:
             raise InputError(f"shared view {name!r}: no such segment ({e})") from None
-        if memory.size < HEADER_WORDS * 8 or \
-                int(np.ndarray((1,), np.int64, memory.buf)[0]) != MAGIC:
+        if (
+            memory.size < HEADER_WORDS * 8
+            or int(np.ndarray((1,), np.int64, memory.buf)[0]) != MAGIC
+        ):
             memory.close()
             raise InputError(f"shared view {name!r}: not a segment of pictures")
         return cls(memory, owner=False)
 
     def slot(self, s: int) -> np.ndarray:
         """Slot ``s``'s header words (a view into the segment)."""
-        return self._header[SLOT_BASE + s * SLOT_WORDS:SLOT_BASE + (s + 1) * SLOT_WORDS]
+        return self._header[SLOT_BASE + s * SLOT_WORDS : SLOT_BASE + (s + 1) * SLOT_WORDS]
 
     # -- the writer's side ------------------------------------------------------------------
 
     @contextlib.contextmanager
-    def writing(self, width: int, height: int, channels: int, *, request: int,
-                coarse: bool = False, started: float | None = None):
+    def writing(
+        self,
+        width: int,
+        height: int,
+        channels: int,
+        *,
+        request: int,
+        coarse: bool = False,
+        started: float | None = None,
+    ):
         """A slot's (``height``, ``width``, ``channels``) float32 array to fill, published
         when the block ends without an error; a block that raises (or a writer that dies
         in it) leaves the slot's lock odd and the published picture as it was. The slot is
@@ -158,18 +175,25 @@ class SharedView:
         channels = validate_channels(channels)
         need = slot_bytes(width, height, channels)
         if need > self.capacity:
-            raise InputError(f"picture of {width} x {height} px x {channels} channels needs "
-                             f"{need} bytes; the shared view {self.name!r} holds {self.capacity}"
-                             f" a slot")
+            raise InputError(
+                f"picture of {width} x {height} px x {channels} channels needs "
+                f"{need} bytes; the shared view {self.name!r} holds {self.capacity}"
+                f" a slot"
+            )
         published = int(self._header[2])
         s = 0 if published < 0 else 1 - published
         words = self.slot(s)
         words[SEQ] += 2 if words[SEQ] & 1 else 1  # odd: being written (a new odd value
         # where a write before was left unfinished, so a reader that saw it sees a change)
-        words[REQUEST], words[WIDTH], words[HEIGHT], words[CHANNELS], words[COARSE] = \
-            request, width, height, channels, bool(coarse)
+        words[REQUEST], words[WIDTH], words[HEIGHT], words[CHANNELS], words[COARSE] = (
+            request,
+            width,
+            height,
+            channels,
+            bool(coarse),
+        )
         start = float(time.perf_counter() if started is None else started)
-        yield self._data[s][:need // 4].reshape(height, width, channels)
+        yield self._data[s][: need // 4].reshape(height, width, channels)
         number = int(self._header[3]) + 1
         words[NUMBER] = number
         self._seconds[SLOT_BASE + s * SLOT_WORDS + SECONDS] = time.perf_counter() - start
@@ -177,8 +201,9 @@ class SharedView:
         self._header[3] = number
         self._header[2] = s
 
-    def write(self, rgba, *, depth=None, request: int, coarse: bool = False,
-              seconds: float | None = None) -> int:
+    def write(
+        self, rgba, *, depth=None, request: int, coarse: bool = False, seconds: float | None = None
+    ) -> int:
         """Write and publish one picture: ``rgba`` (H, W, 4) straight radiance and opacity,
         row 0 at the top, and ``depth`` (H, W) [m] or None; ``seconds`` [s] how long its
         view took (default: the copy's own time). Returns its number. Non-finite values are
@@ -188,13 +213,11 @@ class SharedView:
             raise InputError(f"rgba must be (H, W, 4); got shape {rgba.shape}")
         planes = (rgba,) if depth is None else (rgba, np.asarray(depth, np.float32)[..., None])
         if depth is not None and planes[1].shape[:2] != rgba.shape[:2]:
-            raise InputError(f"depth must be (H, W) = {rgba.shape[:2]}; got "
-                             f"{np.shape(depth)}")
+            raise InputError(f"depth must be (H, W) = {rgba.shape[:2]}; got {np.shape(depth)}")
         if not all(np.isfinite(p).all() for p in planes):
             raise InputError("the picture holds NaN or infinite values: nothing is published")
         h, w, _ = rgba.shape
-        with self.writing(w, h, 4 if depth is None else 5, request=request,
-                          coarse=coarse) as out:
+        with self.writing(w, h, 4 if depth is None else 5, request=request, coarse=coarse) as out:
             out[..., :4] = rgba
             if depth is not None:
                 out[..., 4] = planes[1][..., 0]
@@ -228,14 +251,18 @@ class SharedView:
             w, h, c = int(meta[WIDTH]), int(meta[HEIGHT]), int(meta[CHANNELS])
             if slot_bytes(w, h, c) > self.capacity or c not in (4, 5):
                 continue
-            pixels = self._data[s][:w * h * c].reshape(h, w, c).copy()
+            pixels = self._data[s][: w * h * c].reshape(h, w, c).copy()
             seconds = float(self._seconds[SLOT_BASE + s * SLOT_WORDS + SECONDS])
             if int(words[SEQ]) != lock:
                 continue  # rewritten while it was copied
-            return SharedPicture(number=int(meta[NUMBER]), request=int(meta[REQUEST]),
-                                 rgba=np.ascontiguousarray(pixels[..., :4]),
-                                 depth=pixels[..., 4].copy() if c == 5 else None,
-                                 coarse=bool(meta[COARSE]), seconds=seconds)
+            return SharedPicture(
+                number=int(meta[NUMBER]),
+                request=int(meta[REQUEST]),
+                rgba=np.ascontiguousarray(pixels[..., :4]),
+                depth=pixels[..., 4].copy() if c == 5 else None,
+                coarse=bool(meta[COARSE]),
+                seconds=seconds,
+            )
         return None
 
     def close(self) -> None:
@@ -279,5 +306,6 @@ def _untracked(name: str) -> shared_memory.SharedMemory:
     memory = shared_memory.SharedMemory(name=name)
     if os.name == "posix" and name not in _created:  # this process's own stays registered
         from multiprocessing import resource_tracker
+
         resource_tracker.unregister(memory._name, "shared_memory")
     return memory

@@ -55,8 +55,9 @@ def _check_codes(codes, bit_depth: int) -> np.ndarray:
         raise InputError(f"codes must be integers; got {c.dtype}")
     top = 2**bit_depth - 1
     if c.min() < 0 or c.max() > top:
-        raise InputError(f"codes must be in 0..{top} for {bit_depth} bits; got "
-                         f"{int(c.min())}..{int(c.max())}")
+        raise InputError(
+            f"codes must be in 0..{top} for {bit_depth} bits; got {int(c.min())}..{int(c.max())}"
+        )
     return c.astype(np.uint16)
 
 
@@ -68,8 +69,10 @@ def pack(codes, bit_depth: int, packing: str) -> np.ndarray:
     c = _check_codes(codes, b)
     if packing == "grey8":
         if b > 8:
-            raise InputError(f"packing grey8 holds at most 8 bits; the display has {b} "
-                             f"(grey16, or packed10 for 10 bits)")
+            raise InputError(
+                f"packing grey8 holds at most 8 bits; the display has {b} "
+                f"(grey16, or packed10 for 10 bits)"
+            )
         return (c << (8 - b)).astype(np.uint8)
     if packing == "grey16":
         return (c.astype(np.uint32) << (16 - b)).astype(np.uint16)
@@ -97,8 +100,7 @@ def unpack(pixels, bit_depth: int, packing: str) -> np.ndarray:
         raise InputError(f"a {packing} image is greyscale; got shape {p.shape}")
     shift = (8 if packing == "grey8" else 16) - b
     if shift < 0 or (p & ((1 << shift) - 1)).any():
-        raise InputError(f"not a {packing} image of {b}-bit codes (the low {shift} bits must "
-                         f"be 0)")
+        raise InputError(f"not a {packing} image of {b}-bit codes (the low {shift} bits must be 0)")
     return (p >> shift).astype(np.uint16)
 
 
@@ -107,6 +109,7 @@ def image_bytes(pixels: np.ndarray) -> bytes:
     if pixels.dtype == np.uint8:
         return png_bytes(pixels / 255.0)  # exact: round(v / 255 · 255) = v
     from PIL import Image
+
     a = np.ascontiguousarray(pixels, dtype="<u2")
     image = Image.frombuffer("I;16", (a.shape[1], a.shape[0]), a.tobytes(), "raw", "I;16", 0, 1)
     out = io.BytesIO()
@@ -130,8 +133,7 @@ def write_patterns(items) -> list[tuple[Path, Path]]:
         image_path = check_writable(path, ".png")
         data, layout = pattern_files(image_path.name, codes, **fields)
         layout_path = image_path.with_suffix(".json")
-        files += [(image_path, data), (layout_path, (json.dumps(layout, indent=1) + "\n")
-                                       .encode())]
+        files += [(image_path, data), (layout_path, (json.dumps(layout, indent=1) + "\n").encode())]
         pairs.append((image_path, layout_path))
     if len({p for p, _ in files}) != len(files):
         raise InputError("patterns must be written to distinct files")
@@ -141,9 +143,24 @@ def write_patterns(items) -> list[tuple[Path, Path]]:
     return pairs
 
 
-def pattern_files(image_name, codes, *, response, display, pitch, bit_depth, phase_range,
-                  inverted, wavelength, power, distance, encoding, packing=None, table="",
-                  extra=None) -> tuple[bytes, dict]:
+def pattern_files(
+    image_name,
+    codes,
+    *,
+    response,
+    display,
+    pitch,
+    bit_depth,
+    phase_range,
+    inverted,
+    wavelength,
+    power,
+    distance,
+    encoding,
+    packing=None,
+    table="",
+    extra=None,
+) -> tuple[bytes, dict]:
     """The image file's bytes and the layout of one pattern.
 
     Parameters
@@ -178,28 +195,40 @@ def pattern_files(image_name, codes, *, response, display, pitch, bit_depth, pha
         JSON values, finite.
     """
     bits = validate.integer("bit_depth", bit_depth, 1, 16)
-    packing = packing_for(bits) if packing is None else validate.choice("packing", packing,
-                                                                        PACKINGS)
+    packing = (
+        packing_for(bits) if packing is None else validate.choice("packing", packing, PACKINGS)
+    )
     pixels = pack(codes, bits, packing)
     curve = np.asarray(response, np.float64)
     if curve.shape != (2**bits,) or not np.isfinite(curve).all():
-        raise InputError(f"response must be {2**bits} finite phases [rad]; got shape "
-                         f"{curve.shape}")
+        raise InputError(f"response must be {2**bits} finite phases [rad]; got shape {curve.shape}")
     rows, cols = pixels.shape[:2]
     layout = {
-        "format": FORMAT, "version": VERSION, "image": str(image_name),
-        "display": {"name": str(display), "resolution": [cols, rows],
-                    "pitch": validate.pitch("pitch", pitch), "bit_depth": bits,
-                    "phase_range": validate.positive("phase_range", phase_range, "rad"),
-                    "inverted": bool(inverted)},
-        "laser": {"wavelength": validate.wavelength("wavelength", wavelength),
-                  "power": validate.positive("power", power, "W")},
+        "format": FORMAT,
+        "version": VERSION,
+        "image": str(image_name),
+        "display": {
+            "name": str(display),
+            "resolution": [cols, rows],
+            "pitch": validate.pitch("pitch", pitch),
+            "bit_depth": bits,
+            "phase_range": validate.positive("phase_range", phase_range, "rad"),
+            "inverted": bool(inverted),
+        },
+        "laser": {
+            "wavelength": validate.wavelength("wavelength", wavelength),
+            "power": validate.positive("power", power, "W"),
+        },
         "distance": validate.within("distance", distance, validate.MAX_LENGTH),
-        "encoding": str(encoding), "packing": packing,
-        "packing_rule": {"grey8": f"code = value >> {max(0, 8 - bits)}",
-                         "grey16": f"code = value >> {16 - bits}",
-                         "packed10": "code = 4 * red + blue (green 0)"}[packing],
-        "table": str(table), "response": [float(v) for v in curve],
+        "encoding": str(encoding),
+        "packing": packing,
+        "packing_rule": {
+            "grey8": f"code = value >> {max(0, 8 - bits)}",
+            "grey16": f"code = value >> {16 - bits}",
+            "packed10": "code = 4 * red + blue (green 0)",
+        }[packing],
+        "table": str(table),
+        "response": [float(v) for v in curve],
         "response_rule": "the phase [rad] code k shows is response[k]",
     }
     if extra:
@@ -219,6 +248,7 @@ def read_pattern(path) -> tuple[np.ndarray, dict]:
     unpacked from its image and the layout's fields; InputError naming the file when the
     layout or image is damaged or does not match."""
     from PIL import Image
+
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: no such layout file")
@@ -235,16 +265,18 @@ def read_pattern(path) -> tuple[np.ndarray, dict]:
             pixels = np.asarray(im)
         codes = unpack(pixels, bits, packing)
         if list(codes.shape[::-1]) != list(d["resolution"]):
-            raise InputError(f"{path}: the image is {codes.shape[1]}x{codes.shape[0]}; the "
-                             f"layout says {d['resolution']}")
+            raise InputError(
+                f"{path}: the image is {codes.shape[1]}x{codes.shape[0]}; the "
+                f"layout says {d['resolution']}"
+            )
         if len(layout["response"]) != 2**bits:
-            raise InputError(f"{path}: {len(layout['response'])} response phases for "
-                             f"{bits} bits")
+            raise InputError(f"{path}: {len(layout['response'])} response phases for {bits} bits")
     except InputError as e:
         raise InputError(f"{path}: {e}" if str(path) not in str(e) else str(e)) from None
     except (KeyError, TypeError, ValueError, OSError) as e:
-        raise InputError(f"{path}: not a readable pattern and layout ({type(e).__name__}: "
-                         f"{e})"[:400]) from None
+        raise InputError(
+            f"{path}: not a readable pattern and layout ({type(e).__name__}: {e})"[:400]
+        ) from None
     return codes, layout
 
 
@@ -253,6 +285,7 @@ def contact_sheet(stack, labels=(), columns=6) -> np.ndarray:
     one peak, the whole stack's 99.9th percentile, so slices compare), labelled in their
     top-left corner, float64 (rows·H', cols·W'[, 3])."""
     from PIL import Image, ImageDraw
+
     s = np.asarray(stack, np.float64)
     if s.ndim == 3:
         s = s[..., None].repeat(3, axis=3)
@@ -265,7 +298,7 @@ def contact_sheet(stack, labels=(), columns=6) -> np.ndarray:
     sheet = np.ones((rows * (h + gap), cols * (w + gap), 3))
     for i in range(n):
         r, c = divmod(i, cols)
-        sheet[r * (h + gap):r * (h + gap) + h, c * (w + gap):c * (w + gap) + w] = s[i]
+        sheet[r * (h + gap) : r * (h + gap) + h, c * (w + gap) : c * (w + gap) + w] = s[i]
     im = Image.fromarray(np.round(sheet * 255).astype(np.uint8))
     draw = ImageDraw.Draw(im)
     for i, label in enumerate(labels):
@@ -274,8 +307,17 @@ def contact_sheet(stack, labels=(), columns=6) -> np.ndarray:
     return np.asarray(im) / 255.0
 
 
-def write_stack(path, stack, *, distances, reference=None, metrics=None, labels=(),
-                sheet_width=1800, compression="zip") -> tuple[Path, ...]:
+def write_stack(
+    path,
+    stack,
+    *,
+    distances,
+    reference=None,
+    metrics=None,
+    labels=(),
+    sheet_width=1800,
+    compression="zip",
+) -> tuple[Path, ...]:
     """Write a focal stack as one EXR (``path``, *.exr; channels ``z00.R`` ... per slice,
     ``ref.z00.R`` ... for the ``reference`` stack when given) with a PNG contact sheet beside
     it (same stem, *.png; the reference's slices below the stack's when given), renamed into
@@ -286,10 +328,15 @@ def write_stack(path, stack, *, distances, reference=None, metrics=None, labels=
     exr_path = check_writable(path, ".exr")
     s = np.asarray(stack, np.float32)
     z = np.asarray(distances, np.float64)
-    if s.ndim not in (3, 4) or s.shape[0] != z.size or not np.isfinite(s).all() or \
-            not np.isfinite(z).all():
-        raise InputError(f"stack must be finite (N, H, W[, 3]) with N distances; got "
-                         f"{s.shape} and {z.size}")
+    if (
+        s.ndim not in (3, 4)
+        or s.shape[0] != z.size
+        or not np.isfinite(s).all()
+        or not np.isfinite(z).all()
+    ):
+        raise InputError(
+            f"stack must be finite (N, H, W[, 3]) with N distances; got {s.shape} and {z.size}"
+        )
     stacks = {"": s}
     if reference is not None:
         ref = np.asarray(reference, np.float32)
@@ -307,12 +354,16 @@ def write_stack(path, stack, *, distances, reference=None, metrics=None, labels=
     # one slice per ~300 px across the sheet: a 30-slice stack is 6 across
     step = max(1, math.ceil(s.shape[2] * min(6, s.shape[0]) / sheet_width))
     small = {k: a[:, ::step, ::step] for k, a in stacks.items()}
-    sheets = [contact_sheet(small[k], labels if k == "" else [f"ref {x}" for x in labels])
-              for k in stacks]
+    sheets = [
+        contact_sheet(small[k], labels if k == "" else [f"ref {x}" for x in labels]) for k in stacks
+    ]
     sheet = np.concatenate(sheets, axis=0)
-    header = {"holo_format": STACK_FORMAT,
-              "holo_distances": json.dumps([float(v) for v in z]),
-              "holo_metrics": json.dumps(_finite_json("metrics", metrics or {}))}
-    write_exr(exr_path, channels, preview=png_bytes(sheet), compression=compression,
-              **header)  # one unit, atomic
+    header = {
+        "holo_format": STACK_FORMAT,
+        "holo_distances": json.dumps([float(v) for v in z]),
+        "holo_metrics": json.dumps(_finite_json("metrics", metrics or {})),
+    }
+    write_exr(
+        exr_path, channels, preview=png_bytes(sheet), compression=compression, **header
+    )  # one unit, atomic
     return exr_path, exr_path.with_suffix(".png")

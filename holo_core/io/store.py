@@ -78,31 +78,45 @@ def _zarr():
 
 def _array_meta(shape, chunks, dtype, fill, names) -> dict:
     """The fields of an array's zarr.json this module relies on."""
-    return {"zarr_format": 3, "node_type": "array", "shape": list(shape), "data_type": dtype,
-            "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": list(chunks)}},
-            "chunk_key_encoding": {"name": "default", "configuration": {"separator": "/"}},
-            "fill_value": fill, "codecs": [{"name": "bytes",
-                                            "configuration": {"endian": "little"}}],
-            "dimension_names": list(names)}
+    return {
+        "zarr_format": 3,
+        "node_type": "array",
+        "shape": list(shape),
+        "data_type": dtype,
+        "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": list(chunks)}},
+        "chunk_key_encoding": {"name": "default", "configuration": {"separator": "/"}},
+        "fill_value": fill,
+        "codecs": [{"name": "bytes", "configuration": {"endian": "little"}}],
+        "dimension_names": list(names),
+    }
 
 
 def _expected_arrays(shape, count, tile) -> dict:
     rows, cols = tile_grid(shape, tile)
-    return {WAVE: _array_meta((count, *shape), (1, tile, tile), "complex64", [0.0, 0.0],
-                              ("channel", "y", "x")),
-            DONE: _array_meta((rows, cols, 1 + count), (1, 1, 1 + count), "uint64", 0,
-                              ("tile_row", "tile_col", "record"))}
+    return {
+        WAVE: _array_meta(
+            (count, *shape), (1, tile, tile), "complex64", [0.0, 0.0], ("channel", "y", "x")
+        ),
+        DONE: _array_meta(
+            (rows, cols, 1 + count),
+            (1, 1, 1 + count),
+            "uint64",
+            0,
+            ("tile_row", "tile_col", "record"),
+        ),
+    }
 
 
 class PlateStore:
     """A checked tiled store: its files, the plate's description, tile size, recording and
     tiles' records."""
 
-    def __init__(self, files: Files, info: HologramInfo, tile: int, recording: dict, records,
-                 bad=None):
+    def __init__(
+        self, files: Files, info: HologramInfo, tile: int, recording: dict, records, bad=None
+    ):
         self.files, self.info, self.tile, self.recording = files, info, tile, recording
         self.records = records  # (rows, cols, 1 + C) uint64; 0: no record
-        self.bad = bad or {}    # (i, j): why a tile's record cannot be read
+        self.bad = bad or {}  # (i, j): why a tile's record cannot be read
         self.shape = info.shape
         self.count = len(info.wavelengths)
 
@@ -123,12 +137,18 @@ class PlateStore:
         key = wave_key(c, i, j)
         data = self.files.read(key, size=self.chunk_bytes)
         if data is None:
-            raise self.files.fail(f"tile ({i}, {j}) channel {c}: its samples are missing "
-                                  f"though its record says written", key)
+            raise self.files.fail(
+                f"tile ({i}, {j}) channel {c}: its samples are missing "
+                f"though its record says written",
+                key,
+            )
         if chunk_sum(data) != int(self.records[i, j, 1 + c]):
-            raise self.files.fail(f"tile ({i}, {j}) channel {c}: its samples do not match "
-                                  f"their checksum (damaged or written by another "
-                                  f"recording); resume the recording to write it again", key)
+            raise self.files.fail(
+                f"tile ({i}, {j}) channel {c}: its samples do not match "
+                f"their checksum (damaged or written by another "
+                f"recording); resume the recording to write it again",
+                key,
+            )
         return np.frombuffer(data, SAMPLE).reshape(self.tile, self.tile)
 
     def damaged(self, i, j) -> str | None:
@@ -146,12 +166,13 @@ class PlateStore:
         sums = [record_id(self.recording)]
         for c in range(self.count):
             chunk = np.zeros((self.tile, self.tile), SAMPLE)
-            chunk[:samples.shape[1], :samples.shape[2]] = samples[c]
+            chunk[: samples.shape[1], : samples.shape[2]] = samples[c]
             data = chunk.tobytes()
             self.files.write(wave_key(c, i, j), data, what=f"tile ({i}, {j}) ")
             sums.append(chunk_sum(data))
-        self.files.write(record_key(i, j), np.array(sums, RECORD).tobytes(),
-                         what=f"tile ({i}, {j})'s record ")
+        self.files.write(
+            record_key(i, j), np.array(sums, RECORD).tobytes(), what=f"tile ({i}, {j})'s record "
+        )
 
 
 def read_store(url, *, files: Files | None = None, records=True) -> PlateStore:
@@ -167,32 +188,39 @@ def read_store(url, *, files: Files | None = None, records=True) -> PlateStore:
     group = files.json("zarr.json")
     attrs = group.get("attributes")
     if group.get("node_type") != "group" or not isinstance(attrs, dict) or "holo" not in attrs:
-        raise files.fail("not a tiled plate (a Zarr group without hologram metadata)",
-                         "zarr.json")
+        raise files.fail("not a tiled plate (a Zarr group without hologram metadata)", "zarr.json")
     info = info_of(files.name, json.dumps(attrs["holo"]))
     tile, recording = attrs.get("tile"), attrs.get("recording")
     if attrs.get("store_format") != STORE_FORMAT:
-        raise files.fail(f"store format {attrs.get('store_format')!r}; this reader reads "
-                         f"format {STORE_FORMAT} (record the plate again)"[:300], "zarr.json")
+        raise files.fail(
+            f"store format {attrs.get('store_format')!r}; this reader reads "
+            f"format {STORE_FORMAT} (record the plate again)"[:300],
+            "zarr.json",
+        )
     if isinstance(tile, bool) or not isinstance(tile, int) or not MIN_TILE <= tile <= MAX_TILE:
-        raise files.fail(f"tile must be an integer in [{MIN_TILE}, {MAX_TILE}]; got "
-                         f"{tile!r}"[:200], "zarr.json")
-    if not isinstance(recording, dict) or not isinstance(recording.get("digest"), str) or \
-            len(recording["digest"]) != 64 or \
-            any(ch not in "0123456789abcdef" for ch in recording["digest"]):
-        raise files.fail("damaged metadata: recording must name the scene's digest",
-                         "zarr.json")
+        raise files.fail(
+            f"tile must be an integer in [{MIN_TILE}, {MAX_TILE}]; got {tile!r}"[:200], "zarr.json"
+        )
+    if (
+        not isinstance(recording, dict)
+        or not isinstance(recording.get("digest"), str)
+        or len(recording["digest"]) != 64
+        or any(ch not in "0123456789abcdef" for ch in recording["digest"])
+    ):
+        raise files.fail("damaged metadata: recording must name the scene's digest", "zarr.json")
     if info.encoding != "complex":
-        raise files.fail(f"a tiled plate is complex; it says encoding {info.encoding!r}",
-                         "zarr.json")
+        raise files.fail(
+            f"a tiled plate is complex; it says encoding {info.encoding!r}", "zarr.json"
+        )
     shape, count = info.shape, len(info.wavelengths)
     for name, expected in _expected_arrays(shape, count, tile).items():
         key = f"{name}/zarr.json"
         found = files.json(key)
         for field, value in expected.items():
             if found.get(field) != value:
-                raise files.fail(f"{name}'s {field} is {found.get(field)!r}; the plate's is "
-                                 f"{value!r}"[:300], key)
+                raise files.fail(
+                    f"{name}'s {field} is {found.get(field)!r}; the plate's is {value!r}"[:300], key
+                )
         if found.get("storage_transformers", []) != []:
             raise files.fail(f"{name} has storage transformers; it has none", key)
     table = np.zeros((*tile_grid(shape, tile), 1 + count), np.uint64)
@@ -210,6 +238,7 @@ def read_store(url, *, files: Files | None = None, records=True) -> PlateStore:
 
 # --- making, resuming and locking a store -----------------------------------------------------
 
+
 def create_plate(files: Files, info: HologramInfo, tile: int, recording: dict) -> PlateStore:
     """A new store at ``files`` (empty or absent) for the complex plate ``info`` describes,
     recording ``recording``."""
@@ -218,15 +247,33 @@ def create_plate(files: Files, info: HologramInfo, tile: int, recording: dict) -
     try:
         files.make_folders("", WAVE, DONE)  # Zarr puts its metadata there, as into a bucket
         group = zarr.open_group(store=files.url, mode="a")
-        group.create_array(WAVE, shape=(count, *shape), chunks=(1, tile, tile),
-                           dtype="complex64", fill_value=0, compressors=None,
-                           dimension_names=("channel", "y", "x"))
-        group.create_array(DONE, shape=(*tile_grid(shape, tile), 1 + count),
-                           chunks=(1, 1, 1 + count), dtype="uint64", fill_value=0,
-                           compressors=None, dimension_names=("tile_row", "tile_col", "record"))
+        group.create_array(
+            WAVE,
+            shape=(count, *shape),
+            chunks=(1, tile, tile),
+            dtype="complex64",
+            fill_value=0,
+            compressors=None,
+            dimension_names=("channel", "y", "x"),
+        )
+        group.create_array(
+            DONE,
+            shape=(*tile_grid(shape, tile), 1 + count),
+            chunks=(1, 1, 1 + count),
+            dtype="uint64",
+            fill_value=0,
+            compressors=None,
+            dimension_names=("tile_row", "tile_col", "record"),
+        )
         # last: a group without them is not a plate (and is removed by the call that made it)
-        group.attrs.update({"holo": metadata(info), "tile": tile,
-                            "store_format": STORE_FORMAT, "recording": recording})
+        group.attrs.update(
+            {
+                "holo": metadata(info),
+                "tile": tile,
+                "store_format": STORE_FORMAT,
+                "recording": recording,
+            }
+        )
     except OSError as e:  # a full disk, a lost share: said as the store, not as Zarr's file
         raise files.fail(f"its metadata cannot be written ({e.strerror or e})") from None
     return read_store(files.name, files=files)
@@ -237,16 +284,23 @@ def same_plate(store: PlateStore, info: HologramInfo, tile: int, recording: dict
     user's terms, or None."""
     theirs, ours = store.recording, recording
     if theirs["digest"] != ours["digest"]:
-        parts = sorted(k for k in set(theirs.get("parts", {})) | set(ours["parts"])
-                       if theirs.get("parts", {}).get(k) != ours["parts"].get(k))
-        return (f"its {', '.join(parts) or 'scene'} differ: the store holds recording "
-                f"{theirs['digest'][:12]} ({_describe(theirs)}), this call is recording "
-                f"{ours['digest'][:12]} ({_describe(ours)})")
+        parts = sorted(
+            k
+            for k in set(theirs.get("parts", {})) | set(ours["parts"])
+            if theirs.get("parts", {}).get(k) != ours["parts"].get(k)
+        )
+        return (
+            f"its {', '.join(parts) or 'scene'} differ: the store holds recording "
+            f"{theirs['digest'][:12]} ({_describe(theirs)}), this call is recording "
+            f"{ours['digest'][:12]} ({_describe(ours)})"
+        )
     ours, theirs = (json.loads(json.dumps(metadata(i))) for i in (info, store.info))
     keys = sorted(k for k in set(ours) | set(theirs) if ours.get(k) != theirs.get(k))
     if keys or store.tile != tile:
-        return (f"its {', '.join(keys + (['tile'] if store.tile != tile else []))} differ "
-                f"from this call's")
+        return (
+            f"its {', '.join(keys + (['tile'] if store.tile != tile else []))} differ "
+            f"from this call's"
+        )
     return None
 
 
@@ -256,8 +310,9 @@ def _describe(recording: dict) -> str:
 
 
 @contextmanager
-def recording_into(files: Files, info: HologramInfo, tile: int, recording: dict, *,
-                   overwrite=False):
+def recording_into(
+    files: Files, info: HologramInfo, tile: int, recording: dict, *, overwrite=False
+):
     """The store a recording writes, locked for it while the block runs: a new one, or the
     existing one of the same recording (resumed), or with ``overwrite`` a new one in place of
     another recording's Holo store. Never another program's data: a folder or Zarr group that
@@ -283,8 +338,11 @@ def recording_into(files: Files, info: HologramInfo, tile: int, recording: dict,
         if not made:
             removed = files.remove_dead_temporaries()
             if removed:
-                log.info("%s: removed %d temporary file(s) of writers that died inside a "
-                         "write", files.name, removed)
+                log.info(
+                    "%s: removed %d temporary file(s) of writers that died inside a write",
+                    files.name,
+                    removed,
+                )
         try:
             _check_room(store)
             yield store
@@ -303,8 +361,7 @@ def _check_room(store: PlateStore) -> None:
     missing = int((~store.written()).sum())
     need = missing * (store.count * store.chunk_bytes + RECORD.itemsize * (1 + store.count))
     try:
-        check_room([store.files.local / WAVE], need,
-                   f"the {missing} tiles still to write")
+        check_room([store.files.local / WAVE], need, f"the {missing} tiles still to write")
     except InputError as e:
         raise store.files.fail(str(e)) from None
 
@@ -322,13 +379,17 @@ def _check_holo(files: Files) -> None:
     try:
         group = files.json("zarr.json")
     except StoreError as e:
-        raise files.fail(f"cannot be told to be a Holo plate ({str(e).split(': ', 1)[-1]}); "
-                         f"what is not known to be one is never written into: record to "
-                         f"another path, or remove it") from None
+        raise files.fail(
+            f"cannot be told to be a Holo plate ({str(e).split(': ', 1)[-1]}); "
+            f"what is not known to be one is never written into: record to "
+            f"another path, or remove it"
+        ) from None
     attrs = group.get("attributes") if isinstance(group.get("attributes"), dict) else {}
     if "holo" not in attrs or "store_format" not in attrs:
-        raise files.fail("holds data that is not a Holo plate (no Holo store metadata); it is "
-                         "never written into: record to another path")
+        raise files.fail(
+            "holds data that is not a Holo plate (no Holo store metadata); it is "
+            "never written into: record to another path"
+        )
 
 
 def _open_or_make(files, info, tile, recording, overwrite):
@@ -342,8 +403,10 @@ def _open_or_make(files, info, tile, recording, overwrite):
     store = read_store(files.name, files=files)
     differs = same_plate(store, info, tile, recording)
     if differs:
-        raise files.fail(f"holds another recording ({differs}); record to a new path, or "
-                         f"replace it (overwrite=True, --overwrite)")
+        raise files.fail(
+            f"holds another recording ({differs}); record to a new path, or "
+            f"replace it (overwrite=True, --overwrite)"
+        )
     return store, False
 
 

@@ -21,14 +21,22 @@ def locked(files: Files, recording: dict):
     by a killed recording is refused by name, to be removed by hand once that recording is
     known to have stopped. Yields whether this call made the lock file (a store refused under
     the lock then leaves no file of ours behind)."""
-    holder = json.dumps({"host": socket.gethostname(), "pid": os.getpid(),
-                         "since": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-                         "recording": recording["digest"][:12]})
+    holder = json.dumps(
+        {
+            "host": socket.gethostname(),
+            "pid": os.getpid(),
+            "since": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+            "recording": recording["digest"][:12],
+        }
+    )
     if files.local is None:
         found = files.read(LOCK, limit=MAX_JSON)
         if found is not None:
-            raise files.fail(f"another recording holds its lock ({_holder(found)}); if that "
-                             f"one is not running, remove {files.name}/{LOCK}", LOCK)
+            raise files.fail(
+                f"another recording holds its lock ({_holder(found)}); if that "
+                f"one is not running, remove {files.name}/{LOCK}",
+                LOCK,
+            )
         files.write(LOCK, holder.encode())
         try:
             yield True
@@ -36,22 +44,26 @@ def locked(files: Files, recording: dict):
             files.fs.rm(f"{files.root.rstrip('/')}/{LOCK}")
         return
     import fcntl
+
     try:
         files.local.mkdir(parents=True, exist_ok=True)
         made = not os.path.lexists(files.local / LOCK)
         fd = os.open(files.local / LOCK, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o666)
     except OSError as e:
         if e.errno == errno.ELOOP:
-            raise files.fail("is a symbolic link; a store's files are read, never followed",
-                             LOCK) from None
+            raise files.fail(
+                "is a symbolic link; a store's files are read, never followed", LOCK
+            ) from None
         raise files.fail(f"cannot be locked ({e.strerror or e})", LOCK) from None
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             holder_now = _holder(os.pread(fd, MAX_JSON, 0))
-            raise files.fail(f"another recording is writing it ({holder_now}); wait for it "
-                             f"to end, or stop it", LOCK) from None
+            raise files.fail(
+                f"another recording is writing it ({holder_now}); wait for it to end, or stop it",
+                LOCK,
+            ) from None
         os.ftruncate(fd, 0)
         os.pwrite(fd, holder.encode(), 0)
         try:
@@ -65,7 +77,8 @@ def locked(files: Files, recording: dict):
 def _holder(data: bytes) -> str:
     try:
         h = json.loads(data.decode("utf-8"))
-        return (f"host {h['host']}, process {h['pid']}, since {h['since']}, recording "
-                f"{h['recording']}")[:200]
+        return (
+            f"host {h['host']}, process {h['pid']}, since {h['since']}, recording {h['recording']}"
+        )[:200]
     except (ValueError, KeyError, TypeError, UnicodeDecodeError, RecursionError):
         return "its holder unreadable"

@@ -29,8 +29,9 @@ class TiledWave:
 
     def __getitem__(self, key) -> np.ndarray:
         axes = _axes(key, self.shape)
-        (c0, c1), (r0, r1), (q0, q1) = ((int(a.min()), int(a.max()) + 1) if a.size else (0, 0)
-                                         for a, _ in axes)
+        (c0, c1), (r0, r1), (q0, q1) = (
+            (int(a.min()), int(a.max()) + 1) if a.size else (0, 0) for a, _ in axes
+        )
         box = self._box(c0, c1, r0, r1, q0, q1)
         rel = [a - lo for (a, _), lo in zip(axes, (c0, r0, q0))]
         out = box[np.ix_(*rel)]
@@ -47,8 +48,9 @@ class TiledWave:
                     tile = self.store.read_tile(c, i, j)
                     a, b = max(r0, i * t), min(r1, (i + 1) * t)
                     e, f = max(q0, j * t), min(q1, (j + 1) * t)
-                    out[c - c0, a - r0:b - r0, e - q0:f - q0] = \
-                        tile[a - i * t:b - i * t, e - j * t:f - j * t]
+                    out[c - c0, a - r0 : b - r0, e - q0 : f - q0] = tile[
+                        a - i * t : b - i * t, e - j * t : f - j * t
+                    ]
         return out
 
 
@@ -57,7 +59,7 @@ def _axes(key, shape):
     key = key if isinstance(key, tuple) else (key,)
     if any(k is Ellipsis for k in key):
         at = next(n for n, k in enumerate(key) if k is Ellipsis)
-        key = key[:at] + (slice(None),) * (len(shape) - len(key) + 1) + key[at + 1:]
+        key = key[:at] + (slice(None),) * (len(shape) - len(key) + 1) + key[at + 1 :]
     key = key + (slice(None),) * (len(shape) - len(key))
     if len(key) != len(shape):
         raise IndexError(f"too many indices for an array of {len(shape)} dimensions")
@@ -86,15 +88,19 @@ def open_plate(url, *, complete=True) -> Hologram:
     foreign = np.argwhere(store.foreign())
     if len(foreign):
         i, j = map(int, foreign[0])
-        raise store.files.fail(f"tile ({i}, {j}) and {len(foreign) - 1} more were written by "
-                               f"another recording than the store's; resume the recording to "
-                               f"write them again")
+        raise store.files.fail(
+            f"tile ({i}, {j}) and {len(foreign) - 1} more were written by "
+            f"another recording than the store's; resume the recording to "
+            f"write them again"
+        )
     missing = np.argwhere(~store.written())
     if complete and len(missing):
         i, j = map(int, missing[0])
-        raise store.files.fail(f"{len(missing)} of {store.written().size} tiles are not "
-                               f"written yet (tile ({i}, {j}) first); resume the recording "
-                               f"(the same call again)")
+        raise store.files.fail(
+            f"{len(missing)} of {store.written().size} tiles are not "
+            f"written yet (tile ({i}, {j}) first); resume the recording "
+            f"(the same call again)"
+        )
     return Hologram(info=store.info, object_wave=TiledWave(store))
 
 

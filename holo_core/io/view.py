@@ -52,14 +52,19 @@ def write_view(result: RenderResult, path, *, layer="ViewLayer") -> tuple[Path, 
     planes = {"rgb": result.rgb, "alpha": result.alpha, "depth": result.depth}
     for name, a in planes.items():
         if not np.size(a) or not np.isfinite(a).all():
-            raise InputError(f"{path}: the view's {name} is empty or not finite; nothing is "
-                             f"written")
+            raise InputError(
+                f"{path}: the view's {name} is empty or not finite; nothing is written"
+            )
     rgb = result.rgb * result.alpha[..., None]  # premultiplied (emission: dark where clear)
     channels = {f"{layer}.Combined.{c}": rgb[..., i] for i, c in enumerate("RGB")}
     channels[f"{layer}.Combined.A"] = result.alpha
     channels[f"{layer}.Depth.Z"] = result.depth
-    write_exr(path, channels, preview=srgb(rgb),  # as the EXR shows over black
-              holo=json.dumps(result.info, default=float))
+    write_exr(
+        path,
+        channels,
+        preview=srgb(rgb),  # as the EXR shows over black
+        holo=json.dumps(result.info, default=float),
+    )
     return path, path.with_suffix(".png")
 
 
@@ -74,6 +79,10 @@ def copy_view(source, path, **info) -> tuple[Path, Path]:
         meta = json.loads(stored.decode() if isinstance(stored, bytes) else stored)
     except ValueError:
         raise InputError(f"{source}: damaged view metadata") from None
-    write_exr(path, channels, preview=source.with_suffix(".png").read_bytes(),
-              holo=json.dumps({**meta, **info}, default=float))
+    write_exr(
+        path,
+        channels,
+        preview=source.with_suffix(".png").read_bytes(),
+        holo=json.dumps({**meta, **info}, default=float),
+    )
     return path, path.with_suffix(".png")

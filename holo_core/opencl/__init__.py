@@ -16,16 +16,27 @@ os.environ.setdefault("PYOPENCL_CACHE_FAILURE_FATAL", "")
 
 from .arrays import as_device, is_device_array, like_input, to_device
 from .runtime import (
-                      Runtime,
-                      all_devices,
-                      associated,
-                      choose_device,
-                      device_problem,
-                      device_table,
-                      get_runtime,
-                      set_device,
+    Runtime,
+    all_devices,
+    associated,
+    choose_device,
+    device_problem,
+    device_table,
+    get_runtime,
+    set_device,
 )
 
-__all__ = ["Runtime", "all_devices", "as_device", "associated", "choose_device", "device_problem",
-           "device_table", "get_runtime",
-           "is_device_array", "like_input", "set_device", "to_device"]
+__all__ = [
+    "Runtime",
+    "all_devices",
+    "as_device",
+    "associated",
+    "choose_device",
+    "device_problem",
+    "device_table",
+    "get_runtime",
+    "is_device_array",
+    "like_input",
+    "set_device",
+    "to_device",
+]

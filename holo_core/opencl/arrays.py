@@ -85,8 +85,9 @@ def as_device(field, name: str = "field", runtime: Runtime | None = None, check:
     if field.ndim != 2:
         raise InputError(f"{name} must be a 2-D array [rows=y, cols=x]; got {field.ndim}-D")
     if not field.size:
-        raise InputError(f"{name} must hold at least 1x1 samples; got {field.shape[0]}x"
-                         f"{field.shape[1]}")
+        raise InputError(
+            f"{name} must hold at least 1x1 samples; got {field.shape[0]}x{field.shape[1]}"
+        )
     if field.context != rt.context:
         raise InputError(f"{name} lives in another OpenCL context than the runtime's")
     if not field.flags.c_contiguous:
@@ -146,8 +147,9 @@ def to_device(array, runtime: Runtime | None = None):
     return rt.to_device(a, np.complex64)
 
 
-LANES = 16  # a row's work items go in whole multiples of this: a CPU runtime vectorises only a
-            # work group of whole vector lanes (Intel's: 16 floats with AVX-512)
+# a row's work items go in whole multiples of this: a CPU runtime vectorises only a work group of
+# whole vector lanes (Intel's: 16 floats with AVX-512)
+LANES = 16
 
 
 def by_rows(shape) -> tuple[int, int]:
@@ -162,8 +164,14 @@ def put_plane(rt: Runtime, stack: cla.Array, index: int, plane: cla.Array) -> No
     (..., H, W), device to device."""
     if plane.nbytes * (index + 1) > stack.nbytes or plane.dtype != stack.dtype:
         raise InputError(f"plane {index} of {plane.shape} does not fit the stack {stack.shape}")
-    cl.enqueue_copy(rt.queue, stack.base_data, plane.base_data, byte_count=plane.nbytes,
-                    src_offset=plane.offset, dst_offset=stack.offset + index * plane.nbytes)
+    cl.enqueue_copy(
+        rt.queue,
+        stack.base_data,
+        plane.base_data,
+        byte_count=plane.nbytes,
+        src_offset=plane.offset,
+        dst_offset=stack.offset + index * plane.nbytes,
+    )
 
 
 def empty(rt: Runtime, shape, dtype=np.complex64) -> cla.Array:
@@ -210,22 +218,30 @@ def like_input(result, from_host: bool):
 
 def nonfinite_count(rt: Runtime, a: cla.Array) -> int:
     """How many float components of ``a`` are not finite (a reduction on the device)."""
-    return _count(rt, "nonfinite", "isfinite(x[i]) ? 0 : 1", "float",
-                  a.view(np.float32).reshape(-1))
+    return _count(
+        rt, "nonfinite", "isfinite(x[i]) ? 0 : 1", "float", a.view(np.float32).reshape(-1)
+    )
 
 
 def nonzero_count(rt: Runtime, a: cla.Array) -> int:
     """How many complex samples of ``a`` are not zero (a reduction on the device)."""
-    return _count(rt, "nonzero", "(x[i].x != 0.0f || x[i].y != 0.0f) ? 1 : 0", "float2",
-                  a.reshape(-1))
+    return _count(
+        rt, "nonzero", "(x[i].x != 0.0f || x[i].y != 0.0f) ? 1 : 0", "float2", a.reshape(-1)
+    )
 
 
 def _count(rt: Runtime, key: str, test: str, ctype: str, flat: cla.Array) -> int:
     """The sum of ``test`` (1 or 0) over ``flat``'s elements of C type ``ctype``; its
     reduction kernel built once per runtime."""
     if key not in rt.cache:
-        rt.cache[key] = ReductionKernel(rt.context, np.int32, neutral="0", reduce_expr="a+b",
-                                        map_expr=test, arguments=f"__global const {ctype} *x")
+        rt.cache[key] = ReductionKernel(
+            rt.context,
+            np.int32,
+            neutral="0",
+            reduce_expr="a+b",
+            map_expr=test,
+            arguments=f"__global const {ctype} *x",
+        )
     return int(rt.cache[key](flat).get())
 
 
@@ -240,8 +256,9 @@ def fill(rt: Runtime, a: cla.Array, value) -> None:
     if not rt.is_cpu:
         a.fill(value)
         return
-    host, _ = cl.enqueue_map_buffer(rt.queue, a.base_data, cl.map_flags.WRITE_INVALIDATE_REGION,
-                                    a.offset, a.shape, a.dtype)
+    host, _ = cl.enqueue_map_buffer(
+        rt.queue, a.base_data, cl.map_flags.WRITE_INVALIDATE_REGION, a.offset, a.shape, a.dtype
+    )
     host[...] = value
     host.base.release(rt.queue)
 
@@ -268,11 +285,16 @@ def window(rt: Runtime, src: cla.Array, shape, r0: int, c0: int) -> cla.Array:
 def _rect(rt, dst, src, src_rc, dst_rc, shape):
     item = src.dtype.itemsize
     (src_buf, src_row), (dst_buf, dst_row) = _rows(src), _rows(dst)
-    cl.enqueue_copy(rt.queue, dst_buf, src_buf,
-                    src_origin=(src_rc[1] * item, src_rc[0] + src_row),
-                    dst_origin=(dst_rc[1] * item, dst_rc[0] + dst_row),
-                    region=(shape[1] * item, shape[0]),
-                    src_pitches=(src.shape[-1] * item,), dst_pitches=(dst.shape[-1] * item,))
+    cl.enqueue_copy(
+        rt.queue,
+        dst_buf,
+        src_buf,
+        src_origin=(src_rc[1] * item, src_rc[0] + src_row),
+        dst_origin=(dst_rc[1] * item, dst_rc[0] + dst_row),
+        region=(shape[1] * item, shape[0]),
+        src_pitches=(src.shape[-1] * item,),
+        dst_pitches=(dst.shape[-1] * item,),
+    )
 
 
 def _rows(a: cla.Array):
@@ -305,9 +327,16 @@ def upload_window(dst, host, planes, row0: int, col0: int) -> None:
     rows, cols = dst.shape[1:]
     item = host.dtype.itemsize
     for m, p in enumerate(planes):
-        cl.enqueue_copy(dst.queue, dst.data, host[p], buffer_origin=(0, m * rows),
-                        host_origin=(col0 * item, row0), region=(cols * item, rows),
-                        buffer_pitches=(cols * item,), host_pitches=(host.shape[2] * item,))
+        cl.enqueue_copy(
+            dst.queue,
+            dst.data,
+            host[p],
+            buffer_origin=(0, m * rows),
+            host_origin=(col0 * item, row0),
+            region=(cols * item, rows),
+            buffer_pitches=(cols * item,),
+            host_pitches=(host.shape[2] * item,),
+        )
 
 
 def host_buffer(rt, host) -> cl.Buffer | None:
@@ -320,8 +349,7 @@ def host_buffer(rt, host) -> cl.Buffer | None:
         return None
     if host.ctypes.data % max(rt.device.mem_base_addr_align // 8, 1):
         return None
-    return cl.Buffer(rt.context, cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR,
-                     hostbuf=host)
+    return cl.Buffer(rt.context, cl.mem_flags.READ_ONLY | cl.mem_flags.USE_HOST_PTR, hostbuf=host)
 
 
 def exclusive_scan(rt, counts: cla.Array, out: cla.Array) -> None:
@@ -359,8 +387,12 @@ def resident(rt, host) -> cl.Buffer | None:
         return None
     while kept and sum(r.buffer.size for r in kept.values()) + host.nbytes > budget:
         kept.popitem(last=False)[1].release()  # the least recently used copy goes
-    kept[key] = _Resident(kept, key, host, cl.Buffer(
-        rt.context, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR, hostbuf=host))
+    kept[key] = _Resident(
+        kept,
+        key,
+        host,
+        cl.Buffer(rt.context, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR, hostbuf=host),
+    )
     return kept[key].buffer
 
 

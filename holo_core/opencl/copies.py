@@ -20,10 +20,12 @@ def read(a: cla.Array, out: np.ndarray | None = None) -> np.ndarray:
     if out is None:
         out = np.empty(a.shape, a.dtype)
     elif out.shape != a.shape or out.dtype != a.dtype or not out.flags.c_contiguous:
-        raise InputError(f"a {out.shape} {out.dtype} array cannot take a device array of "
-                         f"{a.shape} {a.dtype}")
-    cl.enqueue_copy(a.queue, out, a.base_data, src_offset=a.offset, wait_for=a.events,
-                    is_blocking=True)
+        raise InputError(
+            f"a {out.shape} {out.dtype} array cannot take a device array of {a.shape} {a.dtype}"
+        )
+    cl.enqueue_copy(
+        a.queue, out, a.base_data, src_offset=a.offset, wait_for=a.events, is_blocking=True
+    )
     return out
 
 
@@ -33,5 +35,6 @@ def write(a: cla.Array, host) -> None:
     host = np.ascontiguousarray(host, a.dtype)
     if host.shape != a.shape:
         raise InputError(f"a {host.shape} array cannot fill a device array of {a.shape}")
-    cl.enqueue_copy(a.queue, a.base_data, host, dst_offset=a.offset, wait_for=a.events,
-                    is_blocking=True)
+    cl.enqueue_copy(
+        a.queue, a.base_data, host, dst_offset=a.offset, wait_for=a.events, is_blocking=True
+    )

@@ -44,8 +44,9 @@ def backend_for(runtime):
         except ImportError:
             if choice:
                 raise
-            log.warning("pyvkfft is not importable: FFTs on %s go through host copies",
-                        runtime.device.name)
+            log.warning(
+                "pyvkfft is not importable: FFTs on %s go through host copies", runtime.device.name
+            )
     if choice in ("", "fftw"):
         try:
             return FFTW(runtime)
@@ -66,8 +67,14 @@ class _Mapped:
         if self.copy:
             self.host = read(self.arr)
         else:
-            self.host, _ = cl.enqueue_map_buffer(self.q, self.arr.base_data, self.flags,
-                                                 self.arr.offset, self.arr.shape, self.arr.dtype)
+            self.host, _ = cl.enqueue_map_buffer(
+                self.q,
+                self.arr.base_data,
+                self.flags,
+                self.arr.offset,
+                self.arr.shape,
+                self.arr.dtype,
+            )
         return self.host
 
     def __exit__(self, *exc):
@@ -84,6 +91,7 @@ class FFTW:
 
     def __init__(self, runtime):
         from .host_fft import HostFFT
+
         self.runtime = runtime
         self.host = HostFFT()
 
@@ -109,13 +117,22 @@ class FFTW:
         field is not finite (its DC term)."""
         rt = self.runtime
         on_device = not isinstance(field, np.ndarray)
-        out = cla.empty(rt.queue, field.shape, np.complex64) if on_device \
+        out = (
+            cla.empty(rt.queue, field.shape, np.complex64)
+            if on_device
             else np.empty(field.shape, np.complex64)
+        )
         with contextlib.ExitStack() as maps:
-            src = maps.enter_context(_Mapped(rt, field, cl.map_flags.READ)) if on_device \
+            src = (
+                maps.enter_context(_Mapped(rt, field, cl.map_flags.READ))
+                if on_device
                 else np.asarray(field, np.complex64)
-            dst = maps.enter_context(_Mapped(rt, out, cl.map_flags.WRITE_INVALIDATE_REGION)) \
-                if on_device else out
+            )
+            dst = (
+                maps.enter_context(_Mapped(rt, out, cl.map_flags.WRITE_INVALIDATE_REGION))
+                if on_device
+                else out
+            )
             tf = maps.enter_context(_Mapped(rt, transfer, cl.map_flags.READ))
             dc = self.host.convolve(src, tf, dst, padded)
         if not np.isfinite(dc):
@@ -129,14 +146,16 @@ class VkFFT:
 
     def __init__(self, runtime):
         from pyvkfft.opencl import VkFFTApp
+
         self._App = VkFFTApp
         self.runtime = runtime
         self.apps = {}
 
     def _app(self, shape):
         if shape not in self.apps:
-            self.apps[shape] = self._App(shape, np.complex64, self.runtime.queue, ndim=2,
-                                         inplace=True, norm=0)
+            self.apps[shape] = self._App(
+                shape, np.complex64, self.runtime.queue, ndim=2, inplace=True, norm=0
+            )
         return self.apps[shape]
 
     def clear(self, arr, nonzero) -> None:

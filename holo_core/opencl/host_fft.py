@@ -45,8 +45,8 @@ from ..validate import InputError
 log = logging.getLogger(__name__)
 
 BLOCK_BYTES = 1 << 18  # a block of columns or rows: 256 KiB, within any current core's L2
-ALIGN = 8              # column blocks start on multiples of 8 samples (64 bytes)
-WORK_GRIDS = 2         # padded work arrays kept, the most recently used
+ALIGN = 8  # column blocks start on multiples of 8 samples (64 bytes)
+WORK_GRIDS = 2  # padded work arrays kept, the most recently used
 PARALLEL_SAMPLES = 1 << 19  # grids of fewer samples are transformed on the caller's thread
 FORWARD, BACKWARD = "FFTW_FORWARD", "FFTW_BACKWARD"
 
@@ -58,8 +58,9 @@ def thread_count() -> int:
         if not value.isdigit() or not 1 <= int(value) <= 256:
             raise InputError(f"HOLO_FFT_THREADS={value!r}; allowed: an integer in [1, 256]")
         return int(value)
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
-        else (os.cpu_count() or 1)
+    return (
+        len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    )
 
 
 def spans(ranges, n: int, align: int = 1) -> list[tuple[int, int]]:
@@ -68,8 +69,9 @@ def spans(ranges, n: int, align: int = 1) -> list[tuple[int, int]]:
     if ranges is None:
         return [(0, n)]
     out = []
-    for a, b in sorted((max(0, a // align * align), min(n, -(-b // align) * align))
-                       for a, b in ranges):
+    for a, b in sorted(
+        (max(0, a // align * align), min(n, -(-b // align) * align)) for a, b in ranges
+    ):
         if a >= b:
             continue
         if out and a <= out[-1][1]:
@@ -100,11 +102,14 @@ class Wisdom:
 
     def __init__(self, planner: str):
         import pyfftw
+
         self.fftw = pyfftw
         planner = planner.strip().upper()
         if planner not in ("ESTIMATE", "MEASURE", "PATIENT"):
-            raise InputError(f"HOLO_FFTW_PLANNER={planner.lower()!r}; allowed: 'measure' "
-                             f"(default), 'patient' or 'estimate'")
+            raise InputError(
+                f"HOLO_FFTW_PLANNER={planner.lower()!r}; allowed: 'measure' "
+                f"(default), 'patient' or 'estimate'"
+            )
         self.rigour = f"FFTW_{planner}"
         self.known = set()  # problems whose plan this process's wisdom holds
         self.lock = threading.Lock()  # FFTW's planner is not thread-safe
@@ -114,6 +119,7 @@ class Wisdom:
     @property
     def path(self) -> str:
         from platformdirs import user_cache_dir
+
         suffix = "" if self.rigour == "FFTW_MEASURE" else "-patient"
         name = f"fftw-wisdom-{platform.node()}{suffix}.pickle"
         return os.path.join(user_cache_dir("holo"), name)
@@ -130,21 +136,38 @@ class Wisdom:
         flags = (("FFTW_UNALIGNED",) if unaligned else ()) + (self.rigour,)
         with self.lock:
             if self.rigour == "FFTW_ESTIMATE":
-                return self.fftw.FFTW(view, view, axes=(axis,), direction=direction,
-                                      flags=flags, threads=1)
+                return self.fftw.FFTW(
+                    view, view, axes=(axis,), direction=direction, flags=flags, threads=1
+                )
             key = (view.shape, view.strides, axis, direction, unaligned)
             if key not in self.known:
                 self._measure_once(view, axis, direction, flags)
                 self.known.add(key)
             try:
-                return self.fftw.FFTW(view, view, axes=(axis,), direction=direction,
-                                      flags=flags + ("FFTW_WISDOM_ONLY",), threads=1)
+                return self.fftw.FFTW(
+                    view,
+                    view,
+                    axes=(axis,),
+                    direction=direction,
+                    flags=flags + ("FFTW_WISDOM_ONLY",),
+                    threads=1,
+                )
             except RuntimeError:  # the wisdom did not carry over from the scratch array
-                log.warning("FFTW: no wisdom for %s transforms of %d along axis %d after "
-                            "measuring them; estimating instead", view.shape[1 - axis],
-                            view.shape[axis], axis)
-                return self.fftw.FFTW(view, view, axes=(axis,), direction=direction,
-                                      flags=flags[:-1] + ("FFTW_ESTIMATE",), threads=1)
+                log.warning(
+                    "FFTW: no wisdom for %s transforms of %d along axis %d after "
+                    "measuring them; estimating instead",
+                    view.shape[1 - axis],
+                    view.shape[axis],
+                    axis,
+                )
+                return self.fftw.FFTW(
+                    view,
+                    view,
+                    axes=(axis,),
+                    direction=direction,
+                    flags=flags[:-1] + ("FFTW_ESTIMATE",),
+                    threads=1,
+                )
 
     def _measure_once(self, view, axis, direction, flags) -> None:
         """Measure the problem of ``view`` unless some process has: on a scratch array of the
@@ -156,17 +179,28 @@ class Wisdom:
             self.load()  # another process may have measured it meanwhile
             if self._known(scratch, axis, direction, flags):
                 return
-            log.info("FFTW: measuring a plan for %s transforms of %d along axis %d (kept for "
-                     "later processes on this machine)", view.shape[1 - axis], view.shape[axis],
-                     axis)
-            self.fftw.FFTW(scratch, scratch, axes=(axis,), direction=direction, flags=flags,
-                           threads=1)
+            log.info(
+                "FFTW: measuring a plan for %s transforms of %d along axis %d (kept for "
+                "later processes on this machine)",
+                view.shape[1 - axis],
+                view.shape[axis],
+                axis,
+            )
+            self.fftw.FFTW(
+                scratch, scratch, axes=(axis,), direction=direction, flags=flags, threads=1
+            )
             self._save()
 
     def _known(self, scratch, axis, direction, flags) -> bool:
         try:
-            self.fftw.FFTW(scratch, scratch, axes=(axis,), direction=direction,
-                           flags=flags + ("FFTW_WISDOM_ONLY",), threads=1)
+            self.fftw.FFTW(
+                scratch,
+                scratch,
+                axes=(axis,),
+                direction=direction,
+                flags=flags + ("FFTW_WISDOM_ONLY",),
+                threads=1,
+            )
             return True
         except RuntimeError:
             return False
@@ -178,7 +212,7 @@ class Wisdom:
         pitch = view.strides[0] // view.itemsize
         shift = view.ctypes.data % self.fftw.simd_alignment // view.itemsize
         flat = self.fftw.empty_aligned(rows * pitch + shift + cols, np.complex64)
-        return flat[shift:shift + rows * pitch].reshape(rows, pitch)[:, :cols]
+        return flat[shift : shift + rows * pitch].reshape(rows, pitch)[:, :cols]
 
     @contextlib.contextmanager
     def _file_lock(self):
@@ -186,6 +220,7 @@ class Wisdom:
         written (else none: the atomic replace still keeps the file whole)."""
         try:
             import fcntl
+
             os.makedirs(os.path.dirname(self.path), exist_ok=True)
             f = open(self.path + ".lock", "a")
         except (ImportError, OSError):
@@ -255,14 +290,16 @@ class HostFFT:
         if copies is None:  # one per thread that may run a block, all made now from the
             with self.making:  # same wisdom: whatever FFTW learns later changes none of them
                 copies = self.plans.get(key) or [
-                    self.wisdom.plan(view, axis, direction, unaligned)
-                    for _ in range(self.threads)]
+                    self.wisdom.plan(view, axis, direction, unaligned) for _ in range(self.threads)
+                ]
                 self.plans[key] = copies
         slot = self._slot()
         if slot >= len(copies):  # a caller thread beyond the first (a runtime is per thread)
             with self.making:
-                copies.extend(self.wisdom.plan(view, axis, direction, unaligned)
-                              for _ in range(slot + 1 - len(copies)))
+                copies.extend(
+                    self.wisdom.plan(view, axis, direction, unaligned)
+                    for _ in range(slot + 1 - len(copies))
+                )
         plan = copies[slot]
         plan.update_arrays(view, view)
         plan.execute()
@@ -288,6 +325,7 @@ class HostFFT:
         """Transform the columns ``cols`` (sorted, disjoint, aligned spans) of ``a`` in place,
         block by block; ``before(c0, c1)`` and ``after(c0, c1)`` run on each block around
         its transform."""
+
         def job(span):
             c0, c1 = span
             if before is not None:
@@ -301,6 +339,7 @@ class HostFFT:
     def rows(self, a, directions, before=None, between=None) -> None:
         """Transform every row of ``a`` in place by each of ``directions`` in turn, block by
         block; ``before(r0, r1)`` runs before the first, ``between(r0, r1)`` after it."""
+
         def job(span):
             r0, r1 = span
             if before is not None:
@@ -332,7 +371,7 @@ class HostFFT:
                     a[r0:r1, c0:c1] = 0
                 for g0, g1 in widened:
                     if g0 < c1 and g1 > c0:
-                        a[:, max(g0, c0):min(g1, c1)] = 0
+                        a[:, max(g0, c0) : min(g1, c1)] = 0
 
             def zero_cols(r0, r1):
                 for c0, c1 in col_gaps:
@@ -349,8 +388,9 @@ class HostFFT:
 
     # --- the padded convolution -----------------------------------------------------------
 
-    def convolve(self, field: np.ndarray, transfer: np.ndarray, out: np.ndarray,
-                 padded=None) -> complex:
+    def convolve(
+        self, field: np.ndarray, transfer: np.ndarray, out: np.ndarray, padded=None
+    ) -> complex:
         """``out`` (h, w) ← the centre of IFFT(FFT(``field`` zero-padded to (H, W)) · T):
         ``transfer`` is T (H, W) in FFT order, with the inverse FFT's 1/(H·W), or, given the
         grid's shape ``padded``, T's first quadrant (H//2 + 1, W//2 + 1) of a T even in both
@@ -371,12 +411,12 @@ class HostFFT:
                 x[:, a:b] = 0
                 return
             x[:r0, a:b] = 0
-            x[r0 + h:, a:b] = 0
+            x[r0 + h :, a:b] = 0
             if lo > a:
-                x[r0:r0 + h, a:lo] = 0
+                x[r0 : r0 + h, a:lo] = 0
             if hi < b:
-                x[r0:r0 + h, hi:b] = 0
-            x[r0:r0 + h, lo:hi] = field[:, lo - c0:hi - c0]
+                x[r0 : r0 + h, hi:b] = 0
+            x[r0 : r0 + h, lo:hi] = field[:, lo - c0 : hi - c0]
 
         def zero_margins(a, b):
             for g0, g1 in col_gaps:
@@ -390,11 +430,11 @@ class HostFFT:
                 return
             rows = transfer[mirrored[a:b]]
             np.multiply(x[a:b, :half], rows, out=x[a:b, :half])
-            np.multiply(x[a:b, half:], rows[:, (W - 1) // 2:0:-1], out=x[a:b, half:])
+            np.multiply(x[a:b, half:], rows[:, (W - 1) // 2 : 0 : -1], out=x[a:b, half:])
 
         def crop(a, b):
             lo, hi = max(a, c0), min(b, c0 + w)
-            out[:, lo - c0:hi - c0] = x[r0:r0 + h, lo:hi]
+            out[:, lo - c0 : hi - c0] = x[r0 : r0 + h, lo:hi]
 
         self.columns(x, FORWARD, cols, before=pad)
         self.rows(x, (FORWARD, BACKWARD), before=zero_margins, between=multiply)

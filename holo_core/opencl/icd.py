@@ -55,8 +55,9 @@ def _existing_vendors(previous: str) -> dict[str, str]:
     """The vendor files the loader would read without us: the user's ``OCL_ICD_VENDORS`` (a
     folder or one file), else the system folder."""
     source = Path(previous) if previous else SYSTEM_VENDORS
-    files = [source] if source.is_file() else sorted(source.glob("*.icd")) if source.is_dir() \
-        else []
+    files = (
+        [source] if source.is_file() else sorted(source.glob("*.icd")) if source.is_dir() else []
+    )
     vendors = {}
     for f in files:
         try:
@@ -70,6 +71,7 @@ def _write_folder(vendors: dict[str, str]) -> Path | None:
     digest = hashlib.sha256(repr(sorted(vendors.items())).encode()).hexdigest()[:16]
     try:
         from platformdirs import user_cache_dir
+
         bases = [Path(user_cache_dir("holo"))]
     except ImportError:
         bases = []

@@ -24,7 +24,7 @@ import pyopencl.array as cla
 from ..validate import InputError
 
 BUFFER = "buffer"  # a ``__global`` or ``__constant`` pointer: a device array or buffer
-REAL = "real"      # the kernels' ``real``: the runtime's (float64 where the device has it)
+REAL = "real"  # the kernels' ``real``: the runtime's (float64 where the device has it)
 
 
 @dataclass(frozen=True, slots=True)
@@ -37,9 +37,12 @@ class Arg:
 
     def __post_init__(self):
         if self.type not in (BUFFER, REAL) and not (
-                isinstance(self.type, type) and issubclass(self.type, np.number)):
-            raise InputError(f"argument {self.name!r} has type {self.type!r}; allowed: "
-                             "BUFFER, REAL or a NumPy scalar type (np.int32, np.float32, …)")
+            isinstance(self.type, type) and issubclass(self.type, np.number)
+        ):
+            raise InputError(
+                f"argument {self.name!r} has type {self.type!r}; allowed: "
+                "BUFFER, REAL or a NumPy scalar type (np.int32, np.float32, …)"
+            )
 
 
 @dataclass(frozen=True, slots=True)
@@ -56,8 +59,9 @@ class Kernel:
         ``local_size``, None: the driver's), built with ``options``, each argument given by
         name. Raises :class:`~holo_core.validate.InputError` naming the kernel and the
         argument for one missing, unknown or of the wrong kind."""
-        return self._kernel(rt, tuple(options))(rt.queue, global_size, local_size,
-                                                *self._values(rt, values))
+        return self._kernel(rt, tuple(options))(
+            rt.queue, global_size, local_size, *self._values(rt, values)
+        )
 
     def _values(self, rt, given: dict) -> list:
         """The arguments ``given`` by name, in the kernel's order: buffers as they are (a
@@ -65,12 +69,16 @@ class Kernel:
         names = [a.name for a in self.args]
         unknown = [n for n in given if n not in names]
         if unknown:
-            raise InputError(f"kernel {self.name} has no argument {unknown[0]!r}; its "
-                             f"arguments: {', '.join(names)}")
+            raise InputError(
+                f"kernel {self.name} has no argument {unknown[0]!r}; its "
+                f"arguments: {', '.join(names)}"
+            )
         missing = [n for n in names if n not in given]
         if missing:
-            raise InputError(f"kernel {self.name}: argument {missing[0]!r} is missing "
-                             f"({len(given)} given of {len(names)})")
+            raise InputError(
+                f"kernel {self.name}: argument {missing[0]!r} is missing "
+                f"({len(given)} given of {len(names)})"
+            )
         return [self._value(a, given[a.name], rt) for a in self.args]
 
     def _value(self, arg: Arg, value, rt):
@@ -79,20 +87,28 @@ class Kernel:
                 return value.data
             if isinstance(value, cl.MemoryObjectHolder):
                 return value
-            raise InputError(f"kernel {self.name}: argument {arg.name!r} must be a device "
-                             f"array or buffer; got {type(value).__name__}")
+            raise InputError(
+                f"kernel {self.name}: argument {arg.name!r} must be a device "
+                f"array or buffer; got {type(value).__name__}"
+            )
         dtype = np.dtype(rt.real if arg.type == REAL else arg.type)
         if dtype.kind in "iu":
             if not isinstance(value, (numbers.Integral, np.bool_)):
-                raise InputError(f"kernel {self.name}: argument {arg.name!r} must be an "
-                                 f"integer ({dtype}); got {type(value).__name__} {value!r}")
+                raise InputError(
+                    f"kernel {self.name}: argument {arg.name!r} must be an "
+                    f"integer ({dtype}); got {type(value).__name__} {value!r}"
+                )
             limits = np.iinfo(dtype)
             if not limits.min <= value <= limits.max:
-                raise InputError(f"kernel {self.name}: argument {arg.name!r} = {value} lies "
-                                 f"outside {dtype}'s [{limits.min}, {limits.max}]")
+                raise InputError(
+                    f"kernel {self.name}: argument {arg.name!r} = {value} lies "
+                    f"outside {dtype}'s [{limits.min}, {limits.max}]"
+                )
         elif not isinstance(value, numbers.Real):
-            raise InputError(f"kernel {self.name}: argument {arg.name!r} must be a real "
-                             f"number ({dtype}); got {type(value).__name__}")
+            raise InputError(
+                f"kernel {self.name}: argument {arg.name!r} must be a real "
+                f"number ({dtype}); got {type(value).__name__}"
+            )
         return dtype.type(value)
 
     def _kernel(self, rt, options: tuple[str, ...]) -> cl.Kernel:
@@ -101,18 +117,24 @@ class Kernel:
         takes one."""
         key = ("typed kernel", self.program, self.name, options)
         if key not in rt.cache:
-            if any(a.type == REAL for a in self.args) and \
-                    not set(rt.real_options) <= set(options):
-                raise InputError(f"kernel {self.name} takes real arguments: its options must "
-                                 f"hold the runtime's {rt.real_options}; got {options}")
+            if any(a.type == REAL for a in self.args) and not set(rt.real_options) <= set(options):
+                raise InputError(
+                    f"kernel {self.name} takes real arguments: its options must "
+                    f"hold the runtime's {rt.real_options}; got {options}"
+                )
             k = rt.kernel(self.program, self.name, options)
             if k.num_args != len(self.args):
-                raise InputError(f"kernel {self.name} takes {k.num_args} arguments in "
-                                 f"{Path(self.program).name}; its signature names "
-                                 f"{len(self.args)}")
-            k.set_scalar_arg_dtypes([None if a.type == BUFFER else
-                                     np.dtype(rt.real if a.type == REAL else a.type)
-                                     for a in self.args])
+                raise InputError(
+                    f"kernel {self.name} takes {k.num_args} arguments in "
+                    f"{Path(self.program).name}; its signature names "
+                    f"{len(self.args)}"
+                )
+            k.set_scalar_arg_dtypes(
+                [
+                    None if a.type == BUFFER else np.dtype(rt.real if a.type == REAL else a.type)
+                    for a in self.args
+                ]
+            )
             rt.cache[key] = k
         return rt.cache[key]
 

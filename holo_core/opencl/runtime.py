@@ -44,14 +44,31 @@ log = logging.getLogger(__name__)
 warnings.filterwarnings("ignore", category=cl.CompilerWarning)
 
 HEADERS = Path(__file__).parent  # the kernels' shared headers (holo_complex.h, …)
-_TYPES = {"gpu": cl.device_type.GPU, "cpu": cl.device_type.CPU,
-          "accelerator": cl.device_type.ACCELERATOR}
+_TYPES = {
+    "gpu": cl.device_type.GPU,
+    "cpu": cl.device_type.CPU,
+    "accelerator": cl.device_type.ACCELERATOR,
+}
 # CPU drivers in order of preference, by platform name (see the module docstring)
 _CPU_DRIVERS = ("intel", "portable computing language")
 # LLVM CPU names with AVX-512, for PoCL, which compiles for the target its version string names
-AVX512_TARGETS = {"skylake-avx512", "cascadelake", "cooperlake", "cannonlake", "icelake-client",
-                  "icelake-server", "tigerlake", "rocketlake", "sapphirerapids", "graniterapids",
-                  "emeraldrapids", "znver4", "znver5", "knl", "knm"}
+AVX512_TARGETS = {
+    "skylake-avx512",
+    "cascadelake",
+    "cooperlake",
+    "cannonlake",
+    "icelake-client",
+    "icelake-server",
+    "tigerlake",
+    "rocketlake",
+    "sapphirerapids",
+    "graniterapids",
+    "emeraldrapids",
+    "znver4",
+    "znver5",
+    "knl",
+    "knm",
+}
 
 
 def all_devices() -> list[tuple[int, int, cl.Device]]:
@@ -112,7 +129,8 @@ def _probe(device: cl.Device) -> str:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             prg = cl.Program(ctx, _PROBE).build(
-                options=[f"-I{HEADERS}", *(["-DHOLO_FP64"] if fp64 else [])])
+                options=[f"-I{HEADERS}", *(["-DHOLO_FP64"] if fp64 else [])]
+            )
         xd = cla.to_device(queue, x)
         yd = cla.empty(queue, x.shape, np.complex64)
         cl.Kernel(prg, "probe")(queue, x.shape, None, xd.data, yd.data)
@@ -150,8 +168,12 @@ def device_problem(device: cl.Device) -> str:
     if key not in _probed:
         _probed[key] = _probe(device)
         if _probed[key]:
-            log.warning("OpenCL device %s (%s) skipped: %s", device.name.strip(),
-                        device.platform.name.strip(), _probed[key])
+            log.warning(
+                "OpenCL device %s (%s) skipped: %s",
+                device.name.strip(),
+                device.platform.name.strip(),
+                _probed[key],
+            )
     return _probed[key]
 
 
@@ -160,8 +182,7 @@ def _rank(device: cl.Device) -> tuple[int, int]:
         return (0, 0)
     if device.type & cl.device_type.CPU:
         name = device.platform.name.lower()
-        return (1, next((i for i, d in enumerate(_CPU_DRIVERS) if d in name),
-                        len(_CPU_DRIVERS)))
+        return (1, next((i for i, d in enumerate(_CPU_DRIVERS) if d in name), len(_CPU_DRIVERS)))
     return (2, 0)
 
 
@@ -223,13 +244,21 @@ def choose_device(spec: str | None = None) -> cl.Device:
     usable = [_describe(*t) for t in devices if not device_problem(t[2])]
     tried = [f"{_describe(*t)}: {device_problem(t[2])}" for t in _matching(spec, devices)]
     if not spec:
-        raise RuntimeError("no usable OpenCL device" + (f" ({'; '.join(tried)})" if tried else
-                           "; install pocl-binary-distribution or intel-opencl-rt (pip) for a "
-                           "CPU device, or a GPU vendor's OpenCL driver"))
-    raise InputError(f"HOLO_DEVICE={spec!r} names no usable device"
-                     + (f" ({'; '.join(tried)})" if tried else "")
-                     + "; allowed: 'gpu', 'cpu', 'accelerator', 'P:D' or part of a device or "
-                     f"platform name. Usable: {'; '.join(usable) or 'none'}")
+        raise RuntimeError(
+            "no usable OpenCL device"
+            + (
+                f" ({'; '.join(tried)})"
+                if tried
+                else "; install pocl-binary-distribution or intel-opencl-rt (pip) for a "
+                "CPU device, or a GPU vendor's OpenCL driver"
+            )
+        )
+    raise InputError(
+        f"HOLO_DEVICE={spec!r} names no usable device"
+        + (f" ({'; '.join(tried)})" if tried else "")
+        + "; allowed: 'gpu', 'cpu', 'accelerator', 'P:D' or part of a device or "
+        f"platform name. Usable: {'; '.join(usable) or 'none'}"
+    )
 
 
 def device_table(spec: str | None = None) -> list[tuple[str, str, bool]]:
@@ -256,8 +285,10 @@ def device_table(spec: str | None = None) -> list[tuple[str, str, bool]]:
         chosen = choose_device(spec).int_ptr
     except (ValueError, RuntimeError):
         chosen = None
-    return [(_describe(p, d, dev), device_problem(dev) or "usable", dev.int_ptr == chosen)
-            for p, d, dev in all_devices()]
+    return [
+        (_describe(p, d, dev), device_problem(dev) or "usable", dev.int_ptr == chosen)
+        for p, d, dev in all_devices()
+    ]
 
 
 def _has_fp64(device: cl.Device) -> bool:
@@ -394,8 +425,7 @@ class Runtime:
         key = ("workspace", tag)
         if key not in self.cache or self.cache[key].size < nbytes:
             self.cache.pop(key, None)  # the smaller buffer goes before the larger is made
-            self.cache[key] = cl.Buffer(self.context, cl.mem_flags.READ_WRITE,
-                                        nbytes + nbytes // 4)
+            self.cache[key] = cl.Buffer(self.context, cl.mem_flags.READ_WRITE, nbytes + nbytes // 4)
         return cla.Array(self.queue, shape, dtype, data=self.cache[key])
 
     def to_device(self, host: np.ndarray, dtype=None) -> cla.Array:
@@ -534,8 +564,11 @@ def _same_file(path: Path, found: os.stat_result) -> bool:
 def cache_lock() -> Path:
     """The lock file of pyopencl's program cache (where pyopencl puts it)."""
     base = os.getenv("XDG_CACHE_HOME") if sys.platform == "darwin" else None
-    base = os.path.join(base, "pyopencl") if base else \
-        platformdirs.user_cache_dir("pyopencl", "pyopencl")
+    base = (
+        os.path.join(base, "pyopencl")
+        if base
+        else platformdirs.user_cache_dir("pyopencl", "pyopencl")
+    )
     version = ".".join(str(i) for i in sys.version_info)
     return Path(base) / f"pyopencl-compiler-cache-v2-py{version}" / "lock"
 

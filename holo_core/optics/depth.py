@@ -30,8 +30,9 @@ def from_phase_difference(u1, u2, *, wavelengths, centre, focus=None) -> np.ndar
     """Distance r [m] along each pixel's ray from the complex images ``u1`` at λ1 and ``u2`` at
     λ2 (Eq. 26-29), unwrapped around ``centre`` [m]; ``focus`` f [m] of a thin lens (r = r_f
     in the paper's notation, Eq. 29), None for a pinhole."""
-    return from_cross_spectrum(np.asarray(u1) * np.conj(u2), wavelengths=wavelengths,
-                               centre=centre, focus=focus)
+    return from_cross_spectrum(
+        np.asarray(u1) * np.conj(u2), wavelengths=wavelengths, centre=centre, focus=focus
+    )
 
 
 def from_cross_spectrum(cross, *, wavelengths, centre, focus=None) -> np.ndarray:
@@ -48,9 +49,10 @@ def from_cross_spectrum(cross, *, wavelengths, centre, focus=None) -> np.ndarray
     # exp(-i·dk·x_c), not a per-pixel exponential (a transcendental a pixel, a pass of its own)
     cross = np.asarray(cross)
     turn = np.exp(-1j * np.remainder(dk * x_c, 2 * np.pi)).astype(
-        np.complex64 if cross.dtype == np.complex64 else np.complex128)
+        np.complex64 if cross.dtype == np.complex64 else np.complex128
+    )
     ray = np.angle(cross * turn)  # then in place: the steps of a 1280×720 view cost passes
-    ray /= ray.dtype.type(dk)    # over memory, not arithmetic
+    ray /= ray.dtype.type(dk)  # over memory, not arithmetic
     ray += ray.dtype.type(f + x_c)
     return ray
 

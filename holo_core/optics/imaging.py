@@ -31,6 +31,8 @@ from .depth import from_cross_spectrum
 from .speckle import box_mean, downsample
 
 PROGRAM = associated(__file__)
+# the kernels' signatures as tables (their arguments in the .cl file's order)
+# fmt: off
 PUPIL_WINDOW = kernel(PROGRAM, "pupil_window", Q=BUFFER, P=BUFFER, h=int32, w=int32,
                       dy=float32, dx=float32, radius=float32, taper=float32, k=float32,
                       f=float32, dy_apod=BUFFER, dx_apod=BUFFER, plane=int32)
@@ -39,12 +41,13 @@ READ_PIXELS = kernel(PROGRAM, "read_pixels", out=BUFFER, A=BUFFER, h=int32, w=in
 READ_FOLDED = kernel(PROGRAM, "read_folded", power=BUFFER, cross=BUFFER, fine=BUFFER,
                      A=BUFFER, h=int32, w=int32, W=int32, H=int32, s=int32, t0=REAL, dt=REAL,
                      r0=REAL, dr=REAL, ca=REAL, cb=REAL, bin2=REAL, scale=BUFFER, es=BUFFER)
+# fmt: on
 TAPS, ES_TABLE = 4, 4096  # the image read: 4 taps at 2x padding agree with 6 to 100 dB PSNR
-IRIS_TAPER = 0.1       # the iris's raised-cosine rim, a fraction of its radius
+IRIS_TAPER = 0.1  # the iris's raised-cosine rim, a fraction of its radius
 COVERAGE_EDGE = (0.25, 0.75)  # coverage mapped to alpha 0 … 1 (0.5: the geometric edge)
 COVERAGE_FLOOR = 0.05  # the colour is radiance / coverage where coverage exceeds this
-COVERAGE_RADIUS = 1    # a speckle minimum inside a surface: the (2r+1)² pixels' mean
-SOFT_FLOOR = 1e-3      # soft alpha: coverage below this is clear, within this of 1 opaque
+COVERAGE_RADIUS = 1  # a speckle minimum inside a surface: the (2r+1)² pixels' mean
+SOFT_FLOOR = 1e-3  # soft alpha: coverage below this is clear, within this of 1 opaque
 SPECTRA = "pupil-spectra"  # the workspace of a stack of padded spectra (P, 2h, 2w)
 
 
@@ -56,8 +59,7 @@ def iris_weights(shape, pitch, diameter, taper=IRIS_TAPER) -> np.ndarray:
     y, x = grid.signed_indices(h)[:, None] * dy, grid.signed_indices(w)[None, :] * dx
     rho, radius = np.hypot(x, y), diameter / 2
     inner = (1 - taper) * radius
-    edge = 0.5 * (1 + np.cos(np.pi * np.clip(rho - inner, 0, None) / max(radius - inner,
-                                                                         1e-300)))
+    edge = 0.5 * (1 + np.cos(np.pi * np.clip(rho - inner, 0, None) / max(radius - inner, 1e-300)))
     return np.where(rho >= radius, 0.0, np.where(rho > inner, edge, 1.0))
 
 
@@ -94,27 +96,39 @@ class PupilImage:
         on the first :meth:`image` (:meth:`fold` finds the bins in its kernel)."""
         if self._pixels is None:
             alpha, beta, _ = self.camera.direction_cosines()
-            self._pixels = (self.rt.to_device(2 * (alpha - self.centre[0]) / self.bin,
-                                              np.float32),
-                            self.rt.to_device(2 * (beta - self.centre[1]) / self.bin,
-                                              np.float32),
-                            empty(self.rt, alpha.shape))
+            self._pixels = (
+                self.rt.to_device(2 * (alpha - self.centre[0]) / self.bin, np.float32),
+                self.rt.to_device(2 * (beta - self.centre[1]) / self.bin, np.float32),
+                empty(self.rt, alpha.shape),
+            )
         return self._pixels
 
-    def image(self, pupil, *, pitch, diameter, focus=None, taper=IRIS_TAPER, lens_k=None,
-              scale=1.0) -> np.ndarray:
+    def image(
+        self, pupil, *, pitch, diameter, focus=None, taper=IRIS_TAPER, lens_k=None, scale=1.0
+    ) -> np.ndarray:
         """The complex image (H, W) of ``pupil`` (device, (h, w), FFT order, samples
         ``pitch`` = (dy, dx) [m] apart): the iris of ``diameter`` [m] with its rim ``taper``
         (0: a hard edge), the thin lens focused at ``focus`` [m] (None: none) whose wave number
         is ``lens_k`` [rad/m], and the spectrum read at the pixels times ``scale``."""
         rt = self.rt
         h, w = self.shape
-        self._spectrum(pupil, pitch=pitch, diameter=diameter, focus=focus, taper=taper,
-                       lens_k=lens_k)
+        self._spectrum(
+            pupil, pitch=pitch, diameter=diameter, focus=focus, taper=taper, lens_k=lens_k
+        )
         u, v, pixels = self._directions()
-        READ_PIXELS.launch(rt, (pixels.size,), options=self.options, out=pixels,
-                           A=self._padded(), h=2 * h, w=2 * w, u=u, v=v, scale=scale,
-                           es=self.es)
+        READ_PIXELS.launch(
+            rt,
+            (pixels.size,),
+            options=self.options,
+            out=pixels,
+            A=self._padded(),
+            h=2 * h,
+            w=2 * w,
+            u=u,
+            v=v,
+            scale=scale,
+            es=self.es,
+        )
         return read(pixels)
 
     def _padded(self):
@@ -129,13 +143,34 @@ class PupilImage:
         padded = self._padded()
         corners = (grid.embedded(h, 2 * h), grid.embedded(w, 2 * w))
         self.rt.fft.clear(padded, corners)
-        window(self.rt, padded, pupil, (h, w), pitch=pitch, radius=diameter / 2,
-               taper=taper, k=lens_k or 0.0, focus=focus or 0.0, apodization=self.apod,
-               options=self.options)
+        window(
+            self.rt,
+            padded,
+            pupil,
+            (h, w),
+            pitch=pitch,
+            radius=diameter / 2,
+            taper=taper,
+            k=lens_k or 0.0,
+            focus=focus or 0.0,
+            apodization=self.apod,
+            options=self.options,
+        )
         self.rt.fft.forward(padded, nonzero=corners)
 
-    def fold(self, pupils, channels, *, same, partner, supersample, diameter, focus=None,
-             taper=IRIS_TAPER, keep_fine=False) -> list:
+    def fold(
+        self,
+        pupils,
+        channels,
+        *,
+        same,
+        partner,
+        supersample,
+        diameter,
+        focus=None,
+        taper=IRIS_TAPER,
+        keep_fine=False,
+    ) -> list:
         """Each look's images folded to the camera's pixels as they are read (speckle
         reduction, Sect. VII-E): a list of :class:`Folded`, one per look. What a view composes
         is linear in the fine pixels' intensities and the depth pair's cross image, so one
@@ -156,38 +191,81 @@ class PupilImage:
         looks = planes // len(names)
         cols, rows = (n // s for n in self.camera.resolution)
         spectra = rt.workspace(SPECTRA, (planes, 2 * h, 2 * w))
-        scales = rt.to_device(np.array([channels[names[p % len(names)]][2]
-                                        for p in range(planes)]), np.float32)
+        scales = rt.to_device(
+            np.array([channels[names[p % len(names)]][2] for p in range(planes)]), np.float32
+        )
         corners = (grid.embedded(h, 2 * h), grid.embedded(w, 2 * w))
         rt.fft.clear(spectra, corners)
         for p in range(planes):  # each plane windowed into its spectrum's corners ...
             pitch, lens_k, _ = channels[names[p % len(names)]]
-            window(rt, spectra, pupils, (h, w), pitch=pitch, radius=diameter / 2, taper=taper,
-                   k=lens_k, focus=focus or 0.0, apodization=self.apod, options=self.options,
-                   plane=p)
+            window(
+                rt,
+                spectra,
+                pupils,
+                (h, w),
+                pitch=pitch,
+                radius=diameter / 2,
+                taper=taper,
+                k=lens_k,
+                focus=focus or 0.0,
+                apodization=self.apod,
+                options=self.options,
+                plane=p,
+            )
         rt.fft.forward(spectra, nonzero=corners)  # ... and every plane transformed in place
-        pair = (sum(1 << names.index(c) for c in same), names.index(partner)) \
-            if partner is not None else (0, -1)
-        options = self.options + (f"-DPLANES={planes}", f"-DLOOK_PLANES={len(names)}",
-                                  f"-DSAME={pair[0]}", f"-DPARTNER={pair[1]}",
-                                  f"-DKEEP_FINE={int(keep_fine)}")
+        pair = (
+            (sum(1 << names.index(c) for c in same), names.index(partner))
+            if partner is not None
+            else (0, -1)
+        )
+        options = self.options + (
+            f"-DPLANES={planes}",
+            f"-DLOOK_PLANES={len(names)}",
+            f"-DSAME={pair[0]}",
+            f"-DPARTNER={pair[1]}",
+            f"-DKEEP_FINE={int(keep_fine)}",
+        )
         power = rt.scratch("pixel-power", (planes, rows, cols), np.float32)
         cross = rt.scratch("pixel-cross", (looks, rows, cols))
         # without KEEP_FINE the kernel never writes ``fine``: any buffer fills the argument
         fine = rt.scratch("pixel-fine", (planes, rows * s, cols * s)) if keep_fine else cross
         t0, dt, r0, dr = self.camera.tangent_steps()
         ca, cb = self.centre
-        READ_FOLDED.launch(rt, (cols, rows), options=options, power=power, cross=cross,
-                           fine=fine, A=spectra, h=2 * h, w=2 * w, W=cols, H=rows, s=s, t0=t0,
-                           dt=dt, r0=r0, dr=dr, ca=ca, cb=cb, bin2=2 / self.bin, scale=scales,
-                           es=self.es)
+        READ_FOLDED.launch(
+            rt,
+            (cols, rows),
+            options=options,
+            power=power,
+            cross=cross,
+            fine=fine,
+            A=spectra,
+            h=2 * h,
+            w=2 * w,
+            W=cols,
+            H=rows,
+            s=s,
+            t0=t0,
+            dt=dt,
+            r0=r0,
+            dr=dr,
+            ca=ca,
+            cb=cb,
+            bin2=2 / self.bin,
+            scale=scales,
+            es=self.es,
+        )
         power, cross = read(power), read(cross)
         fine = read(fine) if keep_fine else None
-        return [Folded({c: power[look * len(names) + m] for m, c in enumerate(names)},
-                       cross[look] if partner is not None else None,
-                       {c: fine[look * len(names) + m] for m, c in enumerate(names)}
-                       if keep_fine else None)
-                for look in range(looks)]
+        return [
+            Folded(
+                {c: power[look * len(names) + m] for m, c in enumerate(names)},
+                cross[look] if partner is not None else None,
+                {c: fine[look * len(names) + m] for m, c in enumerate(names)}
+                if keep_fine
+                else None,
+            )
+            for look in range(looks)
+        ]
 
 
 class Folded(NamedTuple):
@@ -209,14 +287,23 @@ def fold_images(images, *, same, partner, supersample, keep_fine=False) -> Folde
     pixels, as :meth:`PupilImage.fold` folds them on the device: for images read one by one
     (a full-band plate's channels, each on its own wavelength's bins)."""
     s = supersample
-    cross = None if partner is None else downsample(
-        sum(images[c] for c in same) * np.conj(images[partner]), s).astype(np.complex64)
-    return Folded({c: downsample(np.abs(a) ** 2, s).astype(np.float32)
-                   for c, a in images.items()}, cross, dict(images) if keep_fine else None)
+    cross = (
+        None
+        if partner is None
+        else downsample(sum(images[c] for c in same) * np.conj(images[partner]), s).astype(
+            np.complex64
+        )
+    )
+    return Folded(
+        {c: downsample(np.abs(a) ** 2, s).astype(np.float32) for c, a in images.items()},
+        cross,
+        dict(images) if keep_fine else None,
+    )
 
 
-def window(rt, padded, pupil, shape, *, pitch, radius, taper, k, focus, apodization,
-           options, plane=0) -> None:
+def window(
+    rt, padded, pupil, shape, *, pitch, radius, taper, k, focus, apodization, options, plane=0
+) -> None:
     """``pupil`` (device, ``shape`` (h, w), FFT order) through the iris (``radius`` [m], its rim
     ``taper``), the thin lens (wave number ``k`` [rad/m], focused at ``focus`` [m], 0: none)
     and the ``apodization`` (per row, per column; device float32) into the corners of
@@ -224,13 +311,38 @@ def window(rt, padded, pupil, shape, *, pitch, radius, taper, k, focus, apodizat
     as it is (``rt.fft.clear`` with the corners first). ``plane``: of stacks (P, h, w) and
     (P, 2h, 2w) given as ``pupil`` and ``padded``."""
     (h, w), (dy, dx) = shape, pitch
-    PUPIL_WINDOW.launch(rt, by_rows(shape), options=options, Q=padded, P=pupil, h=h, w=w,
-                        dy=dy, dx=dx, radius=radius, taper=taper, k=k, f=focus,
-                        dy_apod=apodization[0], dx_apod=apodization[1], plane=plane)
+    PUPIL_WINDOW.launch(
+        rt,
+        by_rows(shape),
+        options=options,
+        Q=padded,
+        P=pupil,
+        h=h,
+        w=w,
+        dy=dy,
+        dx=dx,
+        radius=radius,
+        taper=taper,
+        k=k,
+        f=focus,
+        dy_apod=apodization[0],
+        dx_apod=apodization[1],
+        plane=plane,
+    )
 
 
-def assemble(radiance, coverage, cross, *, camera: Camera, supersample: int, wavelengths,
-             centre: float, exposure: float, soft: bool = False):
+def assemble(
+    radiance,
+    coverage,
+    cross,
+    *,
+    camera: Camera,
+    supersample: int,
+    wavelengths,
+    centre: float,
+    exposure: float,
+    soft: bool = False,
+):
     """The view from the fine pixels' images: ``radiance`` (H·s, W·s, C), ``coverage``
     (H·s, W·s) (1 where surfaces cover a fine pixel), ``cross`` (H·s, W·s) the depth pair's
     u1·conj(u2) at ``wavelengths`` (λ1, λ2) [m] unwrapped around ``centre`` [m], ``exposure``
@@ -269,19 +381,26 @@ def assemble(radiance, coverage, cross, *, camera: Camera, supersample: int, wav
     colour = np.empty(radiance.shape, np.result_type(radiance, per_cover))
     for c in range(radiance.shape[-1]):  # a channel at a time: broadcast over the last axis,
         np.multiply(radiance[..., c], per_cover, out=colour[..., c])  # numpy loops by 3
-    depth = from_cross_spectrum(downsample(cross, s), wavelengths=tuple(wavelengths),
-                                centre=centre).astype(f32, copy=False)
+    depth = from_cross_spectrum(
+        downsample(cross, s), wavelengths=tuple(wavelengths), centre=centre
+    ).astype(f32, copy=False)
     depth /= _ray_per_depth(camera)  # planar: along the view axis, as Blender's Depth pass
     np.copyto(depth, f32(BACKGROUND_DEPTH), where=alpha <= 0)
-    return (colour.astype(f32, copy=False), alpha, depth,
-            (radiance * f32(exposure)).astype(f32, copy=False), coverage.astype(f32, copy=False))
+    return (
+        colour.astype(f32, copy=False),
+        alpha,
+        depth,
+        (radiance * f32(exposure)).astype(f32, copy=False),
+        coverage.astype(f32, copy=False),
+    )
 
 
 def _ray_per_depth(camera: Camera) -> np.ndarray:
     """(H, W) float32: a pixel's distance along its ray per unit of planar depth,
     √(1 + t_x² + t_y²) of its centre's view tangents."""
     w, h = camera.resolution  # the tangents by row and by column, broadcast
-    tx, ty = camera.pixel_tangents(rows=np.arange(h)[:, None] + 0.5,
-                                   cols=np.arange(w)[None, :] + 0.5)
+    tx, ty = camera.pixel_tangents(
+        rows=np.arange(h)[:, None] + 0.5, cols=np.arange(w)[None, :] + 0.5
+    )
     ratio = (1 + tx * tx).astype(np.float32) + (ty * ty).astype(np.float32)
     return np.sqrt(ratio, out=ratio)

@@ -25,8 +25,9 @@ def _thin_lens(field, *, wavelength, pitch, focal_length, centre=(0.0, 0.0)):
     wavelength, (px, py) = grid.wave_pair(wavelength, pitch)
     f = validate.within("focal_length", focal_length, validate.MAX_LENGTH)
     if abs(f) < validate.MIN_LENGTH:
-        raise validate.InputError(f"focal_length must be non-zero [m]; got "
-                                  f"{validate.shown(focal_length)}")
+        raise validate.InputError(
+            f"focal_length must be non-zero [m]; got {validate.shown(focal_length)}"
+        )
     cx, cy = validate.pair("centre", centre, "m", validate.MAX_LENGTH)
     rt, dev, from_host = as_device(field)
     h, w = dev.shape
@@ -50,8 +51,7 @@ def _thin_lens_adjoint(field, *, wavelength, pitch, focal_length, centre=(0.0, 0
     """One plane of :func:`thin_lens`'s adjoint: it multiplies by t̄, the lens of focal length
     −f."""
     f = validate.within("focal_length", focal_length, validate.MAX_LENGTH)
-    return _thin_lens(field, wavelength=wavelength, pitch=pitch, focal_length=-f,
-                      centre=centre)
+    return _thin_lens(field, wavelength=wavelength, pitch=pitch, focal_length=-f, centre=centre)
 
 
 thin_lens = batched(_thin_lens)

@@ -85,11 +85,12 @@ def ssim(image, reference, *, data_range) -> float:
     a, b = _pair(image, reference)
     r = validate.positive("data_range", data_range)
     if min(a.shape[:2]) < SSIM_TAPS:
-        raise InputError(f"image must be at least {SSIM_TAPS}x{SSIM_TAPS} for SSIM's window; "
-                         f"got {a.shape[0]}x{a.shape[1]}")
+        raise InputError(
+            f"image must be at least {SSIM_TAPS}x{SSIM_TAPS} for SSIM's window; "
+            f"got {a.shape[0]}x{a.shape[1]}"
+        )
     if a.ndim == 3:
-        return float(np.mean([ssim(a[..., c], b[..., c], data_range=r)
-                              for c in range(a.shape[2])]))
+        return float(np.mean([ssim(a[..., c], b[..., c], data_range=r) for c in range(a.shape[2])]))
     c1, c2 = (K1 * r) ** 2, (K2 * r) ** 2
     mx, my = _filtered(a), _filtered(b)
     sxx = _filtered(a * a) - mx * mx
@@ -113,18 +114,25 @@ def _filtered(a: np.ndarray) -> np.ndarray:
     g = gaussian_window()
     n = g.size
     h, w = a.shape
-    rows = sum(g[j] * a[j:h - n + 1 + j] for j in range(n))
-    return sum(g[j] * rows[:, j:w - n + 1 + j] for j in range(n))
+    rows = sum(g[j] * a[j : h - n + 1 + j] for j in range(n))
+    return sum(g[j] * rows[:, j : w - n + 1 + j] for j in range(n))
 
 
 def _pair(image, reference) -> tuple[np.ndarray, np.ndarray]:
-    a, b = (np.asarray(x.get() if hasattr(x, "get") and hasattr(x, "queue") else x)
-            for x in (image, reference))
+    a, b = (
+        np.asarray(x.get() if hasattr(x, "get") and hasattr(x, "queue") else x)
+        for x in (image, reference)
+    )
     for name, x in (("image", a), ("reference", b)):
-        if x.ndim not in (2, 3) or not x.size or not np.issubdtype(x.dtype, np.number) or \
-                np.iscomplexobj(x):
-            raise InputError(f"{name} must be a real (H, W) or (H, W, C) image; got "
-                             f"{x.dtype} of shape {x.shape}")
+        if (
+            x.ndim not in (2, 3)
+            or not x.size
+            or not np.issubdtype(x.dtype, np.number)
+            or np.iscomplexobj(x)
+        ):
+            raise InputError(
+                f"{name} must be a real (H, W) or (H, W, C) image; got {x.dtype} of shape {x.shape}"
+            )
         if not np.isfinite(x).all():
             raise InputError(f"{name} must be finite; it holds NaN or infinite values")
     if a.shape != b.shape:

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from .. import validate
 from ..scene.camera import Camera
 
-PINHOLE_SAMPLES = 2         # a pinhole's resolution λ/D spans this many pixels (alias-free |A|²)
+PINHOLE_SAMPLES = 2  # a pinhole's resolution λ/D spans this many pixels (alias-free |A|²)
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -66,15 +66,15 @@ class Pupil:
             validate.positive("lens_wavelength", self.lens_wavelength, "m")
 
 
-def camera_pupil(camera: Camera, wavelength: float, distance: float, *,
-                    apodize=True) -> Pupil:
+def camera_pupil(camera: Camera, wavelength: float, distance: float, *, apodize=True) -> Pupil:
     """The camera's own lens (diameter lens/N, its focus), or a pinhole at ``wavelength`` [m]
     for objects ``distance`` [m] away: as wide as the alias-free size λ/D = PINHOLE_SAMPLES
     pixels (Sect. VII-A, VII-D) allows, but no wider than √(λ·distance), beyond which its own
     geometric blur D/distance outgrows its diffraction λ/D."""
     if camera.fstop is not None:
-        return Pupil(diameter=camera.aperture_diameter, focus=camera.focus_distance,
-                    apodize=apodize)
+        return Pupil(
+            diameter=camera.aperture_diameter, focus=camera.focus_distance, apodize=apodize
+        )
     alias_free = wavelength / (PINHOLE_SAMPLES * camera.pixel_angle())
     return Pupil(diameter=min(alias_free, math.sqrt(wavelength * distance)), apodize=apodize)
 

@@ -25,12 +25,24 @@ def bin_boxes(tris, b, h, w):
     """Bin ranges (kx0, kx1, ky0, ky1) that may hold each projected triangle (T, 3, 2) of view
     tangents: its edges sampled, as direction cosines bend them, plus one bin."""
     s = np.linspace(0, 1, 9)[:, None]
-    pts = np.concatenate([tris[:, i:i + 1] * (1 - s) + tris[:, (i + 1) % 3:(i + 1) % 3 + 1] * s
-                          for i in range(3)], 1)
-    n = np.sqrt(1 + (pts ** 2).sum(-1))
+    pts = np.concatenate(
+        [
+            tris[:, i : i + 1] * (1 - s) + tris[:, (i + 1) % 3 : (i + 1) % 3 + 1] * s
+            for i in range(3)
+        ],
+        1,
+    )
+    n = np.sqrt(1 + (pts**2).sum(-1))
     kx, ky = -pts[..., 0] / n / b, -pts[..., 1] / n / b
-    box = np.stack([np.floor(kx.min(1)) - 1, np.ceil(kx.max(1)) + 1,
-                    np.floor(ky.min(1)) - 1, np.ceil(ky.max(1)) + 1], 1)
+    box = np.stack(
+        [
+            np.floor(kx.min(1)) - 1,
+            np.ceil(kx.max(1)) + 1,
+            np.floor(ky.min(1)) - 1,
+            np.ceil(ky.max(1)) + 1,
+        ],
+        1,
+    )
     lim = np.array([-(w // 2), (w - 1) // 2, -(h // 2), (h - 1) // 2])
     box[:, 0::2] = np.maximum(box[:, 0::2], lim[0::2])
     box[:, 1::2] = np.minimum(box[:, 1::2], lim[1::2])
@@ -55,8 +67,9 @@ class Crossings:
         return len(self.depth)
 
 
-def crossings(meshes, position, rotation, b, shape, *, layers=1, chunk=2_000_000,
-              coincident=1e-6) -> Crossings:
+def crossings(
+    meshes, position, rotation, b, shape, *, layers=1, chunk=2_000_000, coincident=1e-6
+) -> Crossings:
     """The first ``layers`` surfaces each bin's ray crosses (nearest first) for a pupil at
     ``position`` [m] with axes ``rotation`` (columns X right, Y up, Z back, world frame) and
     bins ``b`` apart on a grid of ``shape`` (h, w); crossings within ``coincident``·depth of
@@ -66,11 +79,16 @@ def crossings(meshes, position, rotation, b, shape, *, layers=1, chunk=2_000_000
     parts = list(crossing_chunks(meshes, position, rotation, b, shape, chunk))
     if not parts:
         empty = np.zeros(0)
-        return Crossings(empty.astype(np.int64), empty.astype(np.int64), empty,
-                         empty.astype(np.int64), empty.astype(np.int64), np.zeros((0, 3)),
-                         empty.astype(np.int64))
-    kx, ky, depth, mesh, tri_id, bary = (np.concatenate([p[i] for p in parts])
-                                         for i in range(6))
+        return Crossings(
+            empty.astype(np.int64),
+            empty.astype(np.int64),
+            empty,
+            empty.astype(np.int64),
+            empty.astype(np.int64),
+            np.zeros((0, 3)),
+            empty.astype(np.int64),
+        )
+    kx, ky, depth, mesh, tri_id, bary = (np.concatenate([p[i] for p in parts]) for i in range(6))
     flat = (ky % h) * w + kx % w
     order = np.lexsort((depth, flat))
     flat, depth = flat[order], depth[order]
@@ -82,11 +100,14 @@ def crossings(meshes, position, rotation, b, shape, *, layers=1, chunk=2_000_000
     layer = np.arange(len(flat)) - start
     inside = layer < layers
     kept = kept[inside]
-    return Crossings(kx[kept], ky[kept], depth[inside], mesh[kept], tri_id[kept], bary[kept],
-                     layer[inside])
+    return Crossings(
+        kx[kept], ky[kept], depth[inside], mesh[kept], tri_id[kept], bary[kept], layer[inside]
+    )
 
 
-CROSSING_BYTES = 176  # host bytes a crossing holds in crossings(): its chunk's fields, joined, sorted
+CROSSING_BYTES = (
+    176  # host bytes a crossing holds in crossings(): its chunk's fields, joined, sorted
+)
 
 
 def crossing_count(meshes, position, rotation, b) -> float:
@@ -103,8 +124,12 @@ def crossing_count(meshes, position, rotation, b) -> float:
         tri = np.asarray(mesh.triangles)
         front = (v[:, 2][tri] < -1e-9).all(1)
         p0, p1, p2 = (u[tri[front, i]] for i in range(3))
-        total += 0.5 * float(np.abs((p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1])
-                                    - (p2[:, 0] - p0[:, 0]) * (p1[:, 1] - p0[:, 1])).sum())
+        total += 0.5 * float(
+            np.abs(
+                (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1])
+                - (p2[:, 0] - p0[:, 0]) * (p1[:, 1] - p0[:, 1])
+            ).sum()
+        )
     return total / b**2
 
 
@@ -119,8 +144,9 @@ def crossing_chunks(meshes, position, rotation, b, shape, chunk):
         d = -v[:, 2]
         t = v[:, :2] / np.where(d > 1e-9, d, 1)[:, None]
         p0, p1, p2 = (t[tri[:, i]] for i in range(3))
-        area = (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - \
-            (p2[:, 0] - p0[:, 0]) * (p1[:, 1] - p0[:, 1])
+        area = (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p2[:, 0] - p0[:, 0]) * (
+            p1[:, 1] - p0[:, 1]
+        )
         ids = np.nonzero((d[tri] > 1e-9).all(1) & (area != 0))[0]
         if not len(ids):
             continue
@@ -180,8 +206,9 @@ def _inside(p0, p1, p2, tx, ty):
     runs left level); ``emitters.cl``'s depth raster keeps the same rule. Testing
     barycentrics divided by each triangle's own area instead lets rounding put a ray on a
     shared edge outside both: a crack that light leaks through."""
-    area = (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - \
-        (p2[:, 0] - p0[:, 0]) * (p1[:, 1] - p0[:, 1])
+    area = (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p2[:, 0] - p0[:, 0]) * (
+        p1[:, 1] - p0[:, 1]
+    )
     s = np.sign(area)
     inside = area != 0
     weights = []

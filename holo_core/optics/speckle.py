@@ -28,7 +28,7 @@ def downsample(image, factor: int) -> np.ndarray:
     if factor == 1:
         return image
     h, w = image.shape[0] // factor, image.shape[1] // factor
-    blocks = image[:h * factor, :w * factor].reshape(h, factor, w, factor, *image.shape[2:])
+    blocks = image[: h * factor, : w * factor].reshape(h, factor, w, factor, *image.shape[2:])
     return blocks.mean((1, 3))
 
 
@@ -38,16 +38,15 @@ def box_mean(image, radius: int) -> np.ndarray:
     if radius == 0:
         return image
     image = np.asarray(image)  # float32 stays float32: a sum of nine carries 5e-7 at most
-    a = np.pad(image if image.dtype.kind == "f" else image.astype(np.float64), radius,
-               mode="edge")
+    a = np.pad(image if image.dtype.kind == "f" else image.astype(np.float64), radius, mode="edge")
     n = 2 * radius + 1
     h, w = a.shape[0] - 2 * radius, a.shape[1] - 2 * radius
     rows = a[:h].copy()  # the shifted copies summed in place: no running sum's rounding
     for i in range(1, n):  # to carry, and no temporary array for each shifted copy
-        rows += a[i:i + h]
+        rows += a[i : i + h]
     out = rows[:, :w].copy()
     for j in range(1, n):
-        out += rows[:, j:j + w]
+        out += rows[:, j : j + w]
     out *= out.dtype.type(1 / (n * n))
     return out
 
@@ -60,8 +59,12 @@ def pick_brightest(values, brightness, factor: int) -> np.ndarray:
     h, w = values.shape[0] // factor, values.shape[1] // factor
 
     def blocks(a):
-        return a[:h * factor, :w * factor].reshape(h, factor, w, factor).transpose(
-            0, 2, 1, 3).reshape(h, w, factor * factor)
+        return (
+            a[: h * factor, : w * factor]
+            .reshape(h, factor, w, factor)
+            .transpose(0, 2, 1, 3)
+            .reshape(h, w, factor * factor)
+        )
 
     best = np.argmax(blocks(brightness), -1)[..., None]
     return np.take_along_axis(blocks(values), best, -1)[..., 0]
@@ -74,9 +77,10 @@ def contrast(intensity, mask=None) -> float:
     return float(i.std() / i.mean())
 
 
-PUPIL_TAPER = 0.1     # the iris's raised-cosine rim, a fraction of its radius (imaging.IRIS_TAPER)
-SAMPLES_PER_PIXEL = 24  # the simulated field's samples a pixel: fine pixels of 2, 3 and 4
-                        # and emitters half a pixel apart all fall on them
+PUPIL_TAPER = 0.1  # the iris's raised-cosine rim, a fraction of its radius (imaging.IRIS_TAPER)
+# the simulated field's samples a pixel: fine pixels of 2, 3 and 4 and emitters half a pixel apart
+# all fall on them
+SAMPLES_PER_PIXEL = 24
 
 
 def coded_look_codes(looks: int):
@@ -89,8 +93,9 @@ def coded_look_codes(looks: int):
     return [(k, m) for k in range(looks)] if looks > 1 and m * m == looks else None
 
 
-def uniform_surface_variance(blur: float, looks: int, supersample: int, *, pixels=32,
-                             seeds=2, spacing=0.5) -> float:
+def uniform_surface_variance(
+    blur: float, looks: int, supersample: int, *, pixels=32, seeds=2, spacing=0.5
+) -> float:
     """The relative variance (σ/⟨I⟩)² of a plate view's pixels on a uniform surface.
 
     The surface's emitters lie on a lattice ``spacing`` pixels apart (a plate's: one per
@@ -133,21 +138,27 @@ def uniform_surface_variance(blur: float, looks: int, supersample: int, *, pixel
         raise InputError(f"supersample must divide {SAMPLES_PER_PIXEL}; got {supersample!r}")
     step = round(spacing * SAMPLES_PER_PIXEL)
     if step < 1 or abs(step - spacing * SAMPLES_PER_PIXEL) > 1e-9 or n % step:
-        raise InputError(f"spacing must be a multiple of 1/{SAMPLES_PER_PIXEL} px dividing "
-                         f"the patch; got {spacing!r}")
+        raise InputError(
+            f"spacing must be a multiple of 1/{SAMPLES_PER_PIXEL} px dividing "
+            f"the patch; got {spacing!r}"
+        )
     f = np.fft.fftfreq(n, d=1 / SAMPLES_PER_PIXEL)  # [cycles/px]
     radius = np.hypot(*np.meshgrid(f, f)) * spacing * 2  # the pupil's edge: 1/(2·spacing)
     inner = 1 - PUPIL_TAPER
-    iris = np.where(radius <= inner, 1.0, np.where(
-        radius < 1, 0.5 * (1 + np.cos(np.pi * (radius - inner) / PUPIL_TAPER)), 0.0))
+    iris = np.where(
+        radius <= inner,
+        1.0,
+        np.where(radius < 1, 0.5 * (1 + np.cos(np.pi * (radius - inner) / PUPIL_TAPER)), 0.0),
+    )
     # the defocus's phase at the pupil's edge, in units of the blur: π/4 · D²δ/λ, with
     # D/λ = 1/(spacing·Δ) and blur = Dδ/Δ
     spectrum = iris * np.exp(1j * np.pi / 4 * blur / spacing * radius**2)
     count = n // step
     i, j = np.meshgrid(np.arange(count), np.arange(count), indexing="ij")
     codes = coded_look_codes(looks)
-    centres = ((np.arange(pixels * supersample) + 0.5) * SAMPLES_PER_PIXEL
-               / supersample).astype(int)
+    centres = ((np.arange(pixels * supersample) + 0.5) * SAMPLES_PER_PIXEL / supersample).astype(
+        int
+    )
     spread = []
     for seed in range(seeds):
         rng = np.random.default_rng(seed)
@@ -161,7 +172,7 @@ def uniform_surface_variance(blur: float, looks: int, supersample: int, *, pixel
                 k1, k2 = divmod(codes[look][0], codes[look][1])
                 phase = base + 2 * np.pi * (k1 * j + k2 * i) / codes[look][1]
             comb = np.zeros((n, n), complex)
-            comb[offset[0]::step, offset[1]::step] = np.exp(1j * phase)
+            comb[offset[0] :: step, offset[1] :: step] = np.exp(1j * phase)
             field = np.fft.ifft2(np.fft.fft2(comb) * spectrum)
             fine = np.abs(field[np.ix_(centres, centres)]) ** 2
             total += downsample(fine, supersample)

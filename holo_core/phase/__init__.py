@@ -23,7 +23,27 @@ from .retrieval import Retrieval, gerchberg_saxton, optimise_phase
 from .slm import EyeBox, Laser, PhaseTable, SLMSetup, check_scene, read_phase_table
 from .stack import Comparison, EyePupil, Optics, compare
 
-__all__ = ["Comparison", "Display", "EyeBox", "EyePupil", "Frame", "Laser", "Optics",
-           "Pattern", "PhaseTable", "Retrieval", "SLMSetup", "check_scene", "compare",
-           "display_preset", "double_phase", "encode", "export_frame", "gerchberg_saxton",
-           "optimise_phase", "quantise", "read_phase_table", "response"]
+__all__ = [
+    "Comparison",
+    "Display",
+    "EyeBox",
+    "EyePupil",
+    "Frame",
+    "Laser",
+    "Optics",
+    "Pattern",
+    "PhaseTable",
+    "Retrieval",
+    "SLMSetup",
+    "check_scene",
+    "compare",
+    "display_preset",
+    "double_phase",
+    "encode",
+    "export_frame",
+    "gerchberg_saxton",
+    "optimise_phase",
+    "quantise",
+    "read_phase_table",
+    "response",
+]

@@ -81,27 +81,31 @@ class Display:
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not 1 <= len(self.name) <= 100:
-            raise InputError(f"display name must be 1 to 100 characters; got {self.name!r}"
-                             [:200])
+            raise InputError(f"display name must be 1 to 100 characters; got {self.name!r}"[:200])
         try:
             cols, rows = self.resolution
         except (TypeError, ValueError):
-            raise InputError(f"display resolution must be (cols, rows); got "
-                             f"{self.resolution!r}") from None
+            raise InputError(
+                f"display resolution must be (cols, rows); got {self.resolution!r}"
+            ) from None
         rows, cols = validate.shape2d("display resolution", (rows, cols))
         object.__setattr__(self, "resolution", (cols, rows))
         object.__setattr__(self, "pitch", validate.pitch("display pitch", self.pitch))
         validate.choice("display kind", self.kind, KINDS)
-        object.__setattr__(self, "bit_depth", validate.integer(
-            "display bit_depth", self.bit_depth, 1, display_io.CODE_BITS))
+        object.__setattr__(
+            self,
+            "bit_depth",
+            validate.integer("display bit_depth", self.bit_depth, 1, display_io.CODE_BITS),
+        )
         r = validate.finite("display phase_range", self.phase_range, "rad")
         if not 2 * math.pi * (1 - 1e-9) <= r <= 4 * math.pi * (1 + 1e-9):
-            raise InputError(f"display phase_range must be in [2π, 4π] rad (6.283 to 12.57; "
-                             f"2π or 3π on common SLMs); got {shown(self.phase_range)}")
+            raise InputError(
+                f"display phase_range must be in [2π, 4π] rad (6.283 to 12.57; "
+                f"2π or 3π on common SLMs); got {shown(self.phase_range)}"
+            )
         object.__setattr__(self, "phase_range", r)
         if not isinstance(self.inverted, (bool, np.bool_)):
-            raise InputError(f"display inverted must be True or False; got "
-                             f"{shown(self.inverted)}")
+            raise InputError(f"display inverted must be True or False; got {shown(self.inverted)}")
         object.__setattr__(self, "inverted", bool(self.inverted))
 
     @property
@@ -114,19 +118,33 @@ class Display:
 # splatting and Tensor Holography protocols) and 6.4 µm (Neural Holography), 4K at 3.74 µm
 # (GAEA class) and 3.6 µm (OpenHolo's default); 8-bit over 2π unless a table says otherwise
 PHASE_PRESETS = ("slm-1080p-8um", "slm-1080p-6.4um", "slm-4k-3.74um", "slm-4k-3.6um")
-DISPLAYS = {d.name: d for d in (
-    Display(name="slm-1080p-8um", resolution=(1920, 1080), pitch=8.0e-6),
-    Display(name="slm-1080p-6.4um", resolution=(1920, 1080), pitch=6.4e-6),
-    Display(name="slm-4k-3.74um", resolution=(3840, 2160), pitch=3.74e-6),
-    Display(name="slm-4k-3.6um", resolution=(3840, 2160), pitch=3.6e-6),
-    Display(name="holoeye-gaea-4k", resolution=(3840, 2160), pitch=3.74e-6, kind="phase",
-            bit_depth=8),
-    Display(name="holoeye-pluto-2", resolution=(1920, 1080), pitch=8.0e-6, kind="phase",
-            bit_depth=8),
-    # a film or mask writer's plate: 16.4 mm square at 1 µm, written in grey levels
-    Display(name="print-1um", resolution=(16384, 16384), pitch=1.0e-6, kind="amplitude",
-            bit_depth=16),
-)}
+DISPLAYS = {
+    d.name: d
+    for d in (
+        Display(name="slm-1080p-8um", resolution=(1920, 1080), pitch=8.0e-6),
+        Display(name="slm-1080p-6.4um", resolution=(1920, 1080), pitch=6.4e-6),
+        Display(name="slm-4k-3.74um", resolution=(3840, 2160), pitch=3.74e-6),
+        Display(name="slm-4k-3.6um", resolution=(3840, 2160), pitch=3.6e-6),
+        Display(
+            name="holoeye-gaea-4k",
+            resolution=(3840, 2160),
+            pitch=3.74e-6,
+            kind="phase",
+            bit_depth=8,
+        ),
+        Display(
+            name="holoeye-pluto-2", resolution=(1920, 1080), pitch=8.0e-6, kind="phase", bit_depth=8
+        ),
+        # a film or mask writer's plate: 16.4 mm square at 1 µm, written in grey levels
+        Display(
+            name="print-1um",
+            resolution=(16384, 16384),
+            pitch=1.0e-6,
+            kind="amplitude",
+            bit_depth=16,
+        ),
+    )
+}
 
 
 def display_preset(name: str, **changes) -> Display:
@@ -144,8 +162,9 @@ def display_preset(name: str, **changes) -> Display:
     preset = DISPLAYS[validate.choice("display", name, tuple(DISPLAYS))]
     unknown = set(changes) - {f.name for f in dataclasses.fields(Display)}
     if unknown:
-        raise InputError(f"display_preset takes the fields of Display; got "
-                         f"{', '.join(sorted(unknown))}")
+        raise InputError(
+            f"display_preset takes the fields of Display; got {', '.join(sorted(unknown))}"
+        )
     return dataclasses.replace(preset, **changes) if changes else preset
 
 
@@ -199,12 +218,13 @@ def _down(errors: np.ndarray) -> np.ndarray:
     beyond the edge are dropped."""
     out = BELOW * errors
     out[:-1] += BELOW_BEHIND * errors[1:]  # sample j's error reaches j − 1 below
-    out[1:] += BELOW_AHEAD * errors[:-1]   # and j + 1
+    out[1:] += BELOW_AHEAD * errors[:-1]  # and j + 1
     return out
 
 
-def amplitude_pattern(field, *, pitch, wavelength, angle=None, azimuth=0.0, method="bias",
-                      max_amplitude=None) -> np.ndarray:
+def amplitude_pattern(
+    field, *, pitch, wavelength, angle=None, azimuth=0.0, method="bias", max_amplitude=None
+) -> np.ndarray:
     """A transmittance in [0, 1] (float64, the shape of ``field``) encoding ``field`` on an
     off-axis carrier, for an amplitude SLM or a print.
 
@@ -232,8 +252,13 @@ def amplitude_pattern(field, *, pitch, wavelength, angle=None, azimuth=0.0, meth
     pitch = validate.pitch("pitch", pitch)
     wavelength = validate.wavelength("wavelength", wavelength)
     c = normalised(field, max_amplitude)
-    r = _carrier(c.shape, pitch, wavelength, _sin_angle(angle, pitch, wavelength),
-                 validate.finite("azimuth", azimuth, "rad"))
+    r = _carrier(
+        c.shape,
+        pitch,
+        wavelength,
+        _sin_angle(angle, pitch, wavelength),
+        validate.finite("azimuth", azimuth, "rad"),
+    )
     if method == "bias":
         return np.clip((1 + (c * r.conj()).real) / 2, 0, 1)
     return np.clip(np.abs(c + r) ** 2 / 4, 0, 1)
@@ -246,8 +271,10 @@ def _sin_angle(angle, pitch: float, wavelength: float) -> float:
     a = validate.finite("angle", angle, "rad")
     if not 0 <= a < math.pi / 2 or math.sin(a) > most * (1 + 1e-12):
         limit = math.asin(min(most, 1.0))
-        raise InputError(f"angle must be in [0, {limit:.6g}] rad (sin ϑ <= λ/(2·pitch), beyond "
-                         f"which the carrier aliases); got {shown(angle)}")
+        raise InputError(
+            f"angle must be in [0, {limit:.6g}] rad (sin ϑ <= λ/(2·pitch), beyond "
+            f"which the carrier aliases); got {shown(angle)}"
+        )
     return math.sin(a)
 
 
@@ -270,8 +297,10 @@ def display_field(hologram: Hologram, display: Display, *, channel=0) -> np.ndar
     wave, channel = _object_wave(hologram, channel)
     if hologram.carrier is not None:
         return _carrier_field(hologram, display, channel)
-    window = tuple(_window(n, hologram.pitch, n_out, display.pitch)
-                   for n, n_out in zip(hologram.shape, display.shape))
+    window = tuple(
+        _window(n, hologram.pitch, n_out, display.pitch)
+        for n, n_out in zip(hologram.shape, display.shape)
+    )
     _check_memory(display, [w.stop - w.start for w in window])
     _check_band(hologram, channel, display)
     # indexing first: a chunked store reads only the window, not the gigapixel plate
@@ -282,21 +311,31 @@ def display_field(hologram: Hologram, display: Display, *, channel=0) -> np.ndar
 def _carrier_field(hologram: Hologram, display: Display, channel: int) -> np.ndarray:
     """A carrier plate's physical field on the display's grid, centred on the plate."""
     from ..plate import carrier
+
     rows, cols = display.shape
     xs, ys = ((np.arange(n) - (n - 1) / 2) * display.pitch for n in (cols, rows))
     region = (xs[0], ys[0], xs[-1], ys[-1])
-    reads = [min(math.ceil(n * display.pitch / step) + 2 * carrier.TAPS, size)
-             for n, step, size in ((rows, hologram.row_pitch, hologram.shape[0]),
-                                   (cols, hologram.pitch, hologram.shape[1]))]
+    reads = [
+        min(math.ceil(n * display.pitch / step) + 2 * carrier.TAPS, size)
+        for n, step, size in (
+            (rows, hologram.row_pitch, hologram.shape[0]),
+            (cols, hologram.pitch, hologram.shape[1]),
+        )
+    ]
     _check_memory(display, reads)
     reach = 1 / (2 * carrier.physical_pitch(hologram, channel, region))
-    _warn_band(reach, display, f"a display of pitch <= {1 / (4 * reach):.4g} m holds it (the "
-                               f"carrier's direction and the zone's band)")
+    _warn_band(
+        reach,
+        display,
+        f"a display of pitch <= {1 / (4 * reach):.4g} m holds it (the "
+        f"carrier's direction and the zone's band)",
+    )
     return carrier.field_at(hologram, channel, xs, ys)
 
 
-PATTERN_SAMPLE_BYTES = 96  # host bytes per display sample while encoding (measured: 88 for
-                           # double-phase, 64 for the amplitude patterns)
+# host bytes per display sample while encoding (measured: 88 for double-phase, 64 for the amplitude
+# patterns)
+PATTERN_SAMPLE_BYTES = 96
 
 
 def _check_memory(display: Display, window) -> None:
@@ -304,8 +343,12 @@ def _check_memory(display: Display, window) -> None:
     per display sample, the plate's window and the resampling's two matrices (float64 made,
     float32 kept) and its intermediate rows."""
     (rows, cols), (h, w) = display.shape, window
-    need = (PATTERN_SAMPLE_BYTES * rows * cols + 8.0 * h * w + 8.0 * rows * w
-            + 12.0 * (rows * h + cols * w))
+    need = (
+        PATTERN_SAMPLE_BYTES * rows * cols
+        + 8.0 * h * w
+        + 8.0 * rows * w
+        + 12.0 * (rows * h + cols * w)
+    )
     memory.check_host(f"a {cols}x{rows} pattern for the display {display.name!r}", need)
 
 
@@ -313,8 +356,10 @@ def _object_wave(hologram, channel):
     if not isinstance(hologram, Hologram):
         raise InputError(f"hologram must be a Hologram; got {type(hologram).__name__}")
     if hologram.object_wave is None:
-        raise InputError("hologram has no object_wave (an intensity hologram that did not keep "
-                         "it): a display's pattern is encoded from the complex plate")
+        raise InputError(
+            "hologram has no object_wave (an intensity hologram that did not keep "
+            "it): a display's pattern is encoded from the complex plate"
+        )
     return hologram.object_wave, validate.index("channel", channel, len(hologram.wavelengths))
 
 
@@ -334,9 +379,12 @@ def _check_band(hologram: Hologram, channel: int, display: Display) -> None:
     the encodings' low-pass (a 4f filter or the carrier's room) needs free."""
     wavelength = hologram.wavelengths[channel]
     half = 1 / (4 * display.pitch)
-    _warn_band(hologram.band / wavelength if hologram.band else 1 / (2 * hologram.pitch),
-               display, f"record the plate with band <= {half * wavelength:.4g} or a plate "
-                        f"pitch >= {2 * display.pitch:.4g} m")
+    _warn_band(
+        hologram.band / wavelength if hologram.band else 1 / (2 * hologram.pitch),
+        display,
+        f"record the plate with band <= {half * wavelength:.4g} or a plate "
+        f"pitch >= {2 * display.pitch:.4g} m",
+    )
 
 
 def _warn_band(reach: float, display: Display, advice: str) -> None:
@@ -344,17 +392,24 @@ def _warn_band(reach: float, display: Display, advice: str) -> None:
     the display's Nyquist frequency."""
     half = 1 / (4 * display.pitch)
     if reach > half * (1 + 1e-9):
-        log.warning("the plate's wave reaches %.4g cycles/m, beyond half the display's Nyquist "
-                    "frequency (%.4g cycles/m): the encoding's low-pass will cut or alias it; "
-                    "%s", reach, half, advice)
+        log.warning(
+            "the plate's wave reaches %.4g cycles/m, beyond half the display's Nyquist "
+            "frequency (%.4g cycles/m): the encoding's low-pass will cut or alias it; "
+            "%s",
+            reach,
+            half,
+            advice,
+        )
 
 
 def _display(display) -> Display:
     if isinstance(display, str):
         return display_preset(display)
     if not isinstance(display, Display):
-        raise InputError(f"display must be a Display or one of {', '.join(DISPLAYS)}; got "
-                         f"{type(display).__name__}")
+        raise InputError(
+            f"display must be a Display or one of {', '.join(DISPLAYS)}; got "
+            f"{type(display).__name__}"
+        )
     return display
 
 
@@ -364,8 +419,9 @@ def _method(display: Display, method) -> str:
     return methods[0] if method is None else validate.choice("method", method, methods)
 
 
-def for_display(hologram: Hologram, display, *, channel=0, method=None, angle=None,
-                azimuth=0.0) -> np.ndarray:
+def for_display(
+    hologram: Hologram, display, *, channel=0, method=None, angle=None, azimuth=0.0
+) -> np.ndarray:
     """The pattern ``display`` shows for the plate: phases [rad] in (−π, π] on a phase
     display, a transmittance in [0, 1] on an amplitude one, float64 (rows, cols).
 
@@ -379,18 +435,36 @@ def for_display(hologram: Hologram, display, *, channel=0, method=None, angle=No
     channel = _object_wave(hologram, channel)[1]
     u = display_field(hologram, display, channel=channel)
     if not np.abs(u).max() > 0:
-        raise InputError("the plate's object wave is zero on the display's window: nothing to "
-                         "encode")
+        raise InputError(
+            "the plate's object wave is zero on the display's window: nothing to encode"
+        )
     if method == "double-phase":
         return double_phase(u)
     if method == "error-diffusion":
         return error_diffusion(u)
-    return amplitude_pattern(u, pitch=display.pitch, wavelength=hologram.wavelengths[channel],
-                             angle=angle, azimuth=azimuth, method=method)
+    return amplitude_pattern(
+        u,
+        pitch=display.pitch,
+        wavelength=hologram.wavelengths[channel],
+        angle=angle,
+        azimuth=azimuth,
+        method=method,
+    )
 
 
-def export(hologram: Hologram, display, path, *, distance, channel=0, method=None,
-           angle=None, azimuth=0.0, tile=display_io.DEFAULT_TILE, fmt="png") -> tuple:
+def export(
+    hologram: Hologram,
+    display,
+    path,
+    *,
+    distance,
+    channel=0,
+    method=None,
+    angle=None,
+    azimuth=0.0,
+    tile=display_io.DEFAULT_TILE,
+    fmt="png",
+) -> tuple:
     """Encode the plate for ``display`` and write its 16-bit tiles and layout ``path``
     (*.json), atomically; returns (layout path, pattern).
 
@@ -406,12 +480,22 @@ def export(hologram: Hologram, display, path, *, distance, channel=0, method=Non
     validate.choice("fmt", fmt, display_io.TILE_FORMATS)
     method = _method(display, method)
     channel = _object_wave(hologram, channel)[1]
-    pattern = for_display(hologram, display, channel=channel, method=method, angle=angle,
-                          azimuth=azimuth)
+    pattern = for_display(
+        hologram, display, channel=channel, method=method, angle=angle, azimuth=azimuth
+    )
     written = display_io.write_tiles(
-        path, pattern, quantity=display.kind, pitch=display.pitch,
-        wavelength=hologram.wavelengths[channel], distance=distance, encoding=method,
-        bit_depth=display.bit_depth, tile=tile, fmt=fmt, display=display.name)
+        path,
+        pattern,
+        quantity=display.kind,
+        pitch=display.pitch,
+        wavelength=hologram.wavelengths[channel],
+        distance=distance,
+        encoding=method,
+        bit_depth=display.bit_depth,
+        tile=tile,
+        fmt=fmt,
+        display=display.name,
+    )
     return written, pattern
 
 
@@ -421,8 +505,14 @@ def read_phase_hologram(path) -> tuple[Hologram, dict]:
     layout's wavelength and pitch) that the core propagates and views like a plate."""
     phase, layout = display_io.read_tiles(path)
     if layout["kind"] != "phase":
-        raise InputError(f"{path}: holds {layout['kind']} values, not phases: a phase-only "
-                         f"hologram is read from a phase display's layout")
+        raise InputError(
+            f"{path}: holds {layout['kind']} values, not phases: a phase-only "
+            f"hologram is read from a phase display's layout"
+        )
     wave = np.exp(1j * phase).astype(np.complex64)[None]
-    return Hologram(encoding="complex", object_wave=wave, wavelengths=(layout["wavelength"],),
-                    pitch=layout["pitch"]), layout
+    return Hologram(
+        encoding="complex",
+        object_wave=wave,
+        wavelengths=(layout["wavelength"],),
+        pitch=layout["pitch"],
+    ), layout

@@ -61,22 +61,35 @@ LAYOUT_FORMAT, LAYOUT_VERSION = "holo-display-frame", 1
 
 def setup_of(frame: DisplayFrame) -> SLMSetup:
     """The core's description of the frame's display, lasers, tables, eye box and volume."""
-    display = Display(name=frame.name[:100], resolution=frame.resolution, pitch=frame.pitch,
-                      bit_depth=frame.bit_depth, phase_range=frame.phase_range,
-                      inverted=frame.inverted)
-    tables = tuple(read_phase_table(x.table, wavelength=x.wavelength, bit_depth=frame.bit_depth)
-                   for x in frame.lasers if x.table)
+    display = Display(
+        name=frame.name[:100],
+        resolution=frame.resolution,
+        pitch=frame.pitch,
+        bit_depth=frame.bit_depth,
+        phase_range=frame.phase_range,
+        inverted=frame.inverted,
+    )
+    tables = tuple(
+        read_phase_table(x.table, wavelength=x.wavelength, bit_depth=frame.bit_depth)
+        for x in frame.lasers
+        if x.table
+    )
     if tables and len(tables) != len(frame.lasers):
         bare = [x.name for x in frame.lasers if not x.table]
-        raise InputError(f"phase tables are given for some lasers but not for {', '.join(bare)}: "
-                         f"give one per laser, or none (the display's linear response)")
-    return SLMSetup(display=display,
-                    lasers=tuple(Laser(wavelength=x.wavelength, power=x.power)
-                                 for x in frame.lasers),
-                    tables=tables,
-                    eye_box=EyeBox(size=(frame.eye_box, frame.eye_box),
-                                   distance=frame.eye_distance, pupil=frame.pupil),
-                    depth_range=(-frame.behind, frame.front), slices=frame.slices)
+        raise InputError(
+            f"phase tables are given for some lasers but not for {', '.join(bare)}: "
+            f"give one per laser, or none (the display's linear response)"
+        )
+    return SLMSetup(
+        display=display,
+        lasers=tuple(Laser(wavelength=x.wavelength, power=x.power) for x in frame.lasers),
+        tables=tables,
+        eye_box=EyeBox(
+            size=(frame.eye_box, frame.eye_box), distance=frame.eye_distance, pupil=frame.pupil
+        ),
+        depth_range=(-frame.behind, frame.front),
+        slices=frame.slices,
+    )
 
 
 def paths(frame: DisplayFrame) -> dict:
@@ -100,6 +113,7 @@ def wave_at_display(frame: DisplayFrame, laser: FrameLaser) -> np.ndarray:
     recorded there."""
     from ..io.plate_paths import read_plate
     from ..propagation import angular_spectrum
+
     hologram = read_plate(Path(laser.hologram))
     p = frame.pitch
     cols, rows = frame.resolution
@@ -107,17 +121,20 @@ def wave_at_display(frame: DisplayFrame, laser: FrameLaser) -> np.ndarray:
     if frame.front > 0:  # the light the display's edge sends to the eye box crosses the front
         sin_t = min(laser.wavelength / (2 * p), 0.99)
         pad = math.ceil(frame.front * sin_t / math.sqrt(1 - sin_t**2) / p) + 8
-    wide = Display(name=frame.name[:100], resolution=(cols + 2 * pad, rows + 2 * pad),
-                   pitch=p)
+    wide = Display(name=frame.name[:100], resolution=(cols + 2 * pad, rows + 2 * pad), pitch=p)
     u = np.asarray(display_field(hologram, wide, channel=laser.channel), np.complex128)
     if frame.front > 0:
-        u = np.asarray(angular_spectrum(u, wavelength=laser.wavelength, pitch=p,
-                                        distance=-frame.front), np.complex128)
-        u = u[pad:pad + rows, pad:pad + cols]
+        u = np.asarray(
+            angular_spectrum(u, wavelength=laser.wavelength, pitch=p, distance=-frame.front),
+            np.complex128,
+        )
+        u = u[pad : pad + rows, pad : pad + cols]
     peak = float(np.abs(u).max())
     if not peak > 0 or not np.isfinite(u).all():
-        raise InputError(f"the recorded wave of the {laser.name} laser ({laser.hologram}) is "
-                         f"zero or not finite on the display: nothing to encode")
+        raise InputError(
+            f"the recorded wave of the {laser.name} laser ({laser.hologram}) is "
+            f"zero or not finite on the display: nothing to encode"
+        )
     return u / peak
 
 
@@ -133,57 +150,115 @@ def make_frame(frame: DisplayFrame, progress: jobs.Progress = None) -> dict:
     Path(frame.folder).mkdir(parents=True, exist_ok=True)
     files, lasers, shown, wanted = {}, [], [], []
     n, distances = len(frame.lasers), setup.distances()
-    extra = {"frame": frame.frame, "digest": frame.digest, "scale": frame.scale,
-             "eye_box": {"size": [frame.eye_box] * 2, "distance": frame.eye_distance,
-                         "pupil": frame.pupil}}
+    extra = {
+        "frame": frame.frame,
+        "digest": frame.digest,
+        "scale": frame.scale,
+        "eye_box": {
+            "size": [frame.eye_box] * 2,
+            "distance": frame.eye_distance,
+            "pupil": frame.pupil,
+        },
+    }
     for i, (x, laser) in enumerate(zip(frame.lasers, setup.lasers)):
         jobs.report(progress, i, n)
         u = wave_at_display(frame, x)
-        optics = Optics(setup.display.shape, pitch=frame.pitch, wavelength=x.wavelength,
-                        distances=distances, band=setup.band,
-                        eye=EyePupil(diameter=frame.pupil, distance=frame.eye_distance))
+        optics = Optics(
+            setup.display.shape,
+            pitch=frame.pitch,
+            wavelength=x.wavelength,
+            distances=distances,
+            band=setup.band,
+            eye=EyePupil(diameter=frame.pupil, distance=frame.eye_distance),
+        )
         ref = optics.seen(u)
-        pattern = encode(u, setup, wavelength=x.wavelength, method=frame.method,
-                         optics=optics, iterations=frame.iterations)
+        pattern = encode(
+            u,
+            setup,
+            wavelength=x.wavelength,
+            method=frame.method,
+            optics=optics,
+            iterations=frame.iterations,
+        )
         table = setup.table_for(x.wavelength)
         data, layout = slm_io.pattern_files(
-            where[x.name].name, pattern.codes, response=levels.response(setup.display, table),
-            display=frame.name, pitch=frame.pitch, bit_depth=frame.bit_depth,
-            phase_range=frame.phase_range, inverted=frame.inverted,
-            wavelength=x.wavelength, power=laser.power, distance=frame.distance,
-            encoding=frame.method, packing=frame.packing, table=pattern.table, extra=extra)
+            where[x.name].name,
+            pattern.codes,
+            response=levels.response(setup.display, table),
+            display=frame.name,
+            pitch=frame.pitch,
+            bit_depth=frame.bit_depth,
+            phase_range=frame.phase_range,
+            inverted=frame.inverted,
+            wavelength=x.wavelength,
+            power=laser.power,
+            distance=frame.distance,
+            encoding=frame.method,
+            packing=frame.packing,
+            table=pattern.table,
+            extra=extra,
+        )
         files[x.name] = data
         files[f"{x.name} layout"] = (json.dumps(layout, indent=1) + "\n").encode()
-        log.info("display '%s' frame %d: %s encoded (%s) in %.2f s", frame.name, frame.frame,
-                 x.name, frame.method, pattern.seconds)  # a time: never in a file
+        log.info(
+            "display '%s' frame %d: %s encoded (%s) in %.2f s",
+            frame.name,
+            frame.frame,
+            x.name,
+            frame.method,
+            pattern.seconds,
+        )  # a time: never in a file
         jobs.report(progress, i + 0.6, n)
         got = optics.seen(np.exp(1j * pattern.phase))
         c = compare(got, ref)
         shown.append((x.channel, fitted(got, ref)[0] ** 2))
         wanted.append((x.channel, np.asarray(ref, np.float64) ** 2))
-        lasers.append({"name": x.name, "wavelength": x.wavelength, "power": x.power,
-                       "pattern": where[x.name].name,
-                       "layout": where[f"{x.name} layout"].name,
-                       "encoding": frame.method, "table": pattern.table,
-                       "psnr_db": [round(float(v), 3) for v in c.psnr_db],
-                       "ssim": [round(float(v), 4) for v in c.ssim]})
+        lasers.append(
+            {
+                "name": x.name,
+                "wavelength": x.wavelength,
+                "power": x.power,
+                "pattern": where[x.name].name,
+                "layout": where[f"{x.name} layout"].name,
+                "encoding": frame.method,
+                "table": pattern.table,
+                "psnr_db": [round(float(v), 3) for v in c.psnr_db],
+                "ssim": [round(float(v), 4) for v in c.ssim],
+            }
+        )
     stack, sheet = _stack_files(frame, shown, wanted, distances, lasers)
     files["stack"], files["sheet"] = stack, sheet
-    layout = {"format": LAYOUT_FORMAT, "version": LAYOUT_VERSION, "display": frame.name,
-              "frame": frame.frame, "digest": frame.digest,
-              "resolution": list(frame.resolution), "pitch": frame.pitch,
-              "distance": frame.distance, "scale": frame.scale, "packing": frame.packing,
-              "lasers": lasers,
-              "stack": {"file": where["stack"].name, "sheet": where["sheet"].name,
-                        "depths": [float(z) for z in distances]}}
+    layout = {
+        "format": LAYOUT_FORMAT,
+        "version": LAYOUT_VERSION,
+        "display": frame.name,
+        "frame": frame.frame,
+        "digest": frame.digest,
+        "resolution": list(frame.resolution),
+        "pitch": frame.pitch,
+        "distance": frame.distance,
+        "scale": frame.scale,
+        "packing": frame.packing,
+        "lasers": lasers,
+        "stack": {
+            "file": where["stack"].name,
+            "sheet": where["sheet"].name,
+            "depths": [float(z) for z in distances],
+        },
+    }
     files["layout"] = (json.dumps(layout, indent=1) + "\n").encode()
     roles = list(where)  # the frame's layout last: it appears with the files it names
     with atomic_paths(*(where[r] for r in roles)) as temps:
         for role, tmp in zip(roles, temps):
             Path(tmp).write_bytes(files[role])
     jobs.report(progress, 1, 1)
-    log.info("display '%s' frame %d: %d pattern(s) in %.1f s", frame.name, frame.frame, n,
-             time.perf_counter() - started)
+    log.info(
+        "display '%s' frame %d: %d pattern(s) in %.1f s",
+        frame.name,
+        frame.frame,
+        n,
+        time.perf_counter() - started,
+    )
     return layout
 
 
@@ -202,8 +277,14 @@ def _stack_files(frame: DisplayFrame, shown, wanted, distances, lasers) -> tuple
     labels = [f"{z * 1e3:+.2f} mm {q:.1f} dB" for z, q in zip(distances, psnrs)]
     metrics = {x["name"]: {"psnr_db": x["psnr_db"], "ssim": x["ssim"]} for x in lasers}
     with tempfile.TemporaryDirectory(prefix="holo-stack-") as folder:
-        exr, png = slm_io.write_stack(Path(folder) / "stack.exr", sim, reference=ref,
-                                      distances=distances, metrics=metrics, labels=labels)
+        exr, png = slm_io.write_stack(
+            Path(folder) / "stack.exr",
+            sim,
+            reference=ref,
+            distances=distances,
+            metrics=metrics,
+            labels=labels,
+        )
         return exr.read_bytes(), png.read_bytes()
 
 

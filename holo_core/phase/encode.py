@@ -66,10 +66,25 @@ class Pattern(NamedTuple):
     seconds: float
 
 
-def encode(field, display, *, wavelength, method="double-phase", tables=(), band=None,
-           distances=None, pupil=None, iterations=100, learning_rate=LEARNING_RATE,
-           slices_per_step=None, quantised_steps=None, seed=0, clip_fraction=0.0,
-           optics=None, targets=None) -> Pattern:
+def encode(
+    field,
+    display,
+    *,
+    wavelength,
+    method="double-phase",
+    tables=(),
+    band=None,
+    distances=None,
+    pupil=None,
+    iterations=100,
+    learning_rate=LEARNING_RATE,
+    slices_per_step=None,
+    quantised_steps=None,
+    seed=0,
+    clip_fraction=0.0,
+    optics=None,
+    targets=None,
+) -> Pattern:
     """Encode the complex ``field`` at the display as the codes a phase SLM shows.
 
     Parameters
@@ -136,24 +151,32 @@ def encode(field, display, *, wavelength, method="double-phase", tables=(), band
     setup = display if isinstance(display, SLMSetup) else None
     display = setup.display if setup else display
     if not isinstance(display, Display) or display.kind != "phase":
-        raise InputError(f"display must be a phase Display or an SLMSetup; got "
-                         f"{type(display).__name__}")
+        raise InputError(
+            f"display must be a phase Display or an SLMSetup; got {type(display).__name__}"
+        )
     method = validate.choice("method", method, METHODS)
     wavelength = validate.wavelength("wavelength", wavelength)
     table = table_for(tables or (setup.tables if setup else ()), wavelength)
-    band = validate.positive("band", band if band is not None else
-                             (setup.band if setup else 0.5))
+    band = validate.positive("band", band if band is not None else (setup.band if setup else 0.5))
     if distances is None:
         distances = setup.distances() if setup else [0.0]
     u = np.asarray(validate.host_field("field", field))
     if u.shape != display.shape:
-        raise InputError(f"field must be the display's {display.shape[1]}x{display.shape[0]} "
-                         f"samples (rows, cols) {display.shape}; got {u.shape}")
+        raise InputError(
+            f"field must be the display's {display.shape[1]}x{display.shape[0]} "
+            f"samples (rows, cols) {display.shape}; got {u.shape}"
+        )
     if not np.abs(u).max() > 0:
         raise InputError("field is zero on the display: nothing to encode")
     if optics is None:
-        optics = Optics(display.shape, pitch=display.pitch, wavelength=wavelength,
-                        distances=distances, band=band, pupil=pupil)
+        optics = Optics(
+            display.shape,
+            pitch=display.pitch,
+            wavelength=wavelength,
+            distances=distances,
+            band=band,
+            pupil=pupil,
+        )
     curve = levels.response(display, table)
     quantise = levels.Quantiser(curve)
     clip = validate.finite("clip_fraction", clip_fraction)
@@ -165,18 +188,35 @@ def encode(field, display, *, wavelength, method="double-phase", tables=(), band
         iterations = validate.integer("iterations", iterations, 0, 100_000)
         a = optics.stack(u) if targets is None else np.asarray(targets, np.float32)
         if method == "gradient-descent":
-            phase, losses = _descend(phase, a, optics, curve, quantise, iterations,
-                                     validate.positive("learning_rate", learning_rate, "rad"),
-                                     slices_per_step, validate.integer(
-                                         "quantised_steps", min(10, iterations) if
-                                         quantised_steps is None else quantised_steps, 0,
-                                         iterations),
-                                     validate.seed(seed))
+            phase, losses = _descend(
+                phase,
+                a,
+                optics,
+                curve,
+                quantise,
+                iterations,
+                validate.positive("learning_rate", learning_rate, "rad"),
+                slices_per_step,
+                validate.integer(
+                    "quantised_steps",
+                    min(10, iterations) if quantised_steps is None else quantised_steps,
+                    0,
+                    iterations,
+                ),
+                validate.seed(seed),
+            )
         else:
             phase, losses = _projections(phase, a, optics, iterations)
     codes = quantise(phase)
-    return Pattern(codes, curve[codes].astype(np.float32), wavelength, method,
-                   table.source if table else "", losses, time.perf_counter() - start)
+    return Pattern(
+        codes,
+        curve[codes].astype(np.float32),
+        wavelength,
+        method,
+        table.source if table else "",
+        losses,
+        time.perf_counter() - start,
+    )
 
 
 def low_passed(u, optics: Optics) -> np.ndarray:
@@ -188,17 +228,24 @@ def _double_phase(u, optics: Optics, clip: float) -> np.ndarray:
     """Double-phase phases [rad] of ``u`` band-limited to the filter (float64), the
     brightest ``clip`` of its samples clipped to the others' largest amplitude."""
     if optics.band > 0.5 + 1e-9:
-        raise InputError(f"double-phase needs the display's filter to stop at half the Nyquist "
-                         f"frequency or below (band <= 0.5), where its checkerboard term is "
-                         f"cut; got band {optics.band:g}")
+        raise InputError(
+            f"double-phase needs the display's filter to stop at half the Nyquist "
+            f"frequency or below (band <= 0.5), where its checkerboard term is "
+            f"cut; got band {optics.band:g}"
+        )
     c = np.asarray(low_passed(u, optics), np.complex128)
     if clip > 0:
         a = np.abs(c)
         top = float(np.quantile(a, 1 - clip))
         if top > 0:
-            log.info("double-phase: %.3g %% of the samples clipped from up to %.4g to %.4g "
-                     "(clip_fraction %g)", 100 * float(np.mean(a > top)), float(a.max()), top,
-                     clip)
+            log.info(
+                "double-phase: %.3g %% of the samples clipped from up to %.4g to %.4g "
+                "(clip_fraction %g)",
+                100 * float(np.mean(a > top)),
+                float(a.max()),
+                top,
+                clip,
+            )
             c = c / np.maximum(1.0, a / top)
     return double_phase(c)
 
@@ -267,8 +314,9 @@ def unit(phase) -> np.ndarray:
     waves, are taken as they are)."""
     t = np.asarray(phase)
     if t.dtype != np.float32:
-        t = np.mod(np.asarray(t, np.float64) + np.pi, 2 * np.pi).astype(np.float32) \
-            - np.float32(np.pi)
+        t = np.mod(np.asarray(t, np.float64) + np.pi, 2 * np.pi).astype(np.float32) - np.float32(
+            np.pi
+        )
     out = np.empty(t.shape, np.complex64)
     out.real = np.cos(t)
     out.imag = np.sin(t)
@@ -293,8 +341,9 @@ def _projections(phase, a, optics: Optics, iterations):
         target = ((a[k] * scale) * np.exp(1j * np.angle(v))).astype(np.complex64)
         inside = optics.keep > 0  # the pupil's frequencies are imposed, the rest kept
         # the transfer is a pure phase inside the band: its conjugate carries the plane back
-        full[optics.block] = np.where(inside, optics.spectrum(target)
-                                      * np.conj(optics.transfer(k)), s)
+        full[optics.block] = np.where(
+            inside, optics.spectrum(target) * np.conj(optics.transfer(k)), s
+        )
         u = unit(np.angle(optics.crop(ifft2(full))))
     return np.angle(u).astype(np.float64), losses
 

@@ -65,6 +65,8 @@ def normalised(field, max_amplitude=None) -> np.ndarray:
     if m == 0:
         raise InputError("field must not be all zero (no amplitude to encode)")
     if top > m * (1 + 1e-12):
-        raise InputError(f"field's largest amplitude {top:.6g} exceeds max_amplitude {m!r}; "
-                         f"the encoding would clip it")
+        raise InputError(
+            f"field's largest amplitude {top:.6g} exceeds max_amplitude {m!r}; "
+            f"the encoding would clip it"
+        )
     return c / m

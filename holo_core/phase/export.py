@@ -49,9 +49,22 @@ def laser_name(wavelength: float) -> str:
     return f"{nm:.0f}nm" if abs(nm - round(nm)) < 0.05 else f"{nm:.1f}nm"
 
 
-def export_frame(fields, setup: SLMSetup, folder, *, stem="frame", distance=0.0,
-                 method="double-phase", simulate=True, pupil=None, eye=None, frame=None,
-                 extent=None, stack_compression="zip", **settings) -> Frame:
+def export_frame(
+    fields,
+    setup: SLMSetup,
+    folder,
+    *,
+    stem="frame",
+    distance=0.0,
+    method="double-phase",
+    simulate=True,
+    pupil=None,
+    eye=None,
+    frame=None,
+    extent=None,
+    stack_compression="zip",
+    **settings,
+) -> Frame:
     """Encode, write and (``simulate``) judge one frame.
 
     Parameters
@@ -104,8 +117,9 @@ def export_frame(fields, setup: SLMSetup, folder, *, stem="frame", distance=0.0,
         raise InputError(f"setup must be an SLMSetup; got {type(setup).__name__}")
     fields = list(fields)
     if len(fields) != len(setup.lasers):
-        raise InputError(f"fields must hold one wave per laser ({len(setup.lasers)}); got "
-                         f"{len(fields)}")
+        raise InputError(
+            f"fields must hold one wave per laser ({len(setup.lasers)}); got {len(fields)}"
+        )
     folder = Path(folder)
     if not folder.is_dir():
         raise InputError(f"folder {folder}: no such folder")
@@ -123,31 +137,71 @@ def export_frame(fields, setup: SLMSetup, folder, *, stem="frame", distance=0.0,
     display = setup.display
     patterns, optics_list, refs, seconds = [], [], [], 0.0
     for laser, field in zip(setup.lasers, fields):
-        optics = Optics(display.shape, pitch=display.pitch, wavelength=laser.wavelength,
-                        distances=setup.distances(), band=setup.band, pupil=pupil_at, eye=eye)
+        optics = Optics(
+            display.shape,
+            pitch=display.pitch,
+            wavelength=laser.wavelength,
+            distances=setup.distances(),
+            band=setup.band,
+            pupil=pupil_at,
+            eye=eye,
+        )
         targets = optics.stack(field) if method != "double-phase" else None
-        ref = (targets if eye is None and targets is not None else optics.seen(field)) \
-            if simulate else None
-        p = encode(field, setup, wavelength=laser.wavelength, method=method, optics=optics,
-                   targets=targets, **settings)
+        ref = (
+            (targets if eye is None and targets is not None else optics.seen(field))
+            if simulate
+            else None
+        )
+        p = encode(
+            field,
+            setup,
+            wavelength=laser.wavelength,
+            method=method,
+            optics=optics,
+            targets=targets,
+            **settings,
+        )
         seconds += p.seconds
         patterns.append(p)
         optics_list.append(optics)
         refs.append(ref)
-    extra = {"frame": frame, "band": setup.band, "slices": setup.slices,
-             "depth_range": list(setup.depth_range),
-             "eye_box": None if eye is None else {"size": list(eye.size),
-                                                  "distance": eye.distance,
-                                                  "pupil": eye.pupil,
-                                                  "centre": list(eye.centre)}}
+    extra = {
+        "frame": frame,
+        "band": setup.band,
+        "slices": setup.slices,
+        "depth_range": list(setup.depth_range),
+        "eye_box": None
+        if eye is None
+        else {
+            "size": list(eye.size),
+            "distance": eye.distance,
+            "pupil": eye.pupil,
+            "centre": list(eye.centre),
+        },
+    }
     items = []
     for laser, p in zip(setup.lasers, patterns):
         table = setup.table_for(laser.wavelength)
-        items.append((folder / f"{stem}_{laser_name(laser.wavelength)}.png", p.codes, dict(
-            response=levels.response(display, table), display=display.name,
-            pitch=display.pitch, bit_depth=display.bit_depth, phase_range=display.phase_range,
-            inverted=display.inverted, wavelength=laser.wavelength, power=laser.power,
-            distance=distance, encoding=method, table=p.table, extra=extra)))
+        items.append(
+            (
+                folder / f"{stem}_{laser_name(laser.wavelength)}.png",
+                p.codes,
+                dict(
+                    response=levels.response(display, table),
+                    display=display.name,
+                    pitch=display.pitch,
+                    bit_depth=display.bit_depth,
+                    phase_range=display.phase_range,
+                    inverted=display.inverted,
+                    wavelength=laser.wavelength,
+                    power=laser.power,
+                    distance=distance,
+                    encoding=method,
+                    table=p.table,
+                    extra=extra,
+                ),
+            )
+        )
     files = [f for pair in slm_io.write_patterns(items) for f in pair]
     comparisons = []
     if simulate:
@@ -158,9 +212,14 @@ def export_frame(fields, setup: SLMSetup, folder, *, stem="frame", distance=0.0,
             comparisons.append(c)
             shown.append(fitted(s, ref)[0] ** 2)
             wanted.append(np.asarray(ref, np.float64) ** 2)
-            log.info("display: %s %s: focal stack %.2f dB PSNR, SSIM %.3f (mean of %d slices)",
-                     stem, laser_name(p.wavelength), c.mean_psnr_db, c.mean_ssim,
-                     len(c.psnr_db))
+            log.info(
+                "display: %s %s: focal stack %.2f dB PSNR, SSIM %.3f (mean of %d slices)",
+                stem,
+                laser_name(p.wavelength),
+                c.mean_psnr_db,
+                c.mean_ssim,
+                len(c.psnr_db),
+            )
         order = np.argsort([-x.wavelength for x in setup.lasers])  # R, G, B
         if len(shown) == 3:
             sim = np.stack([shown[i] for i in order], axis=-1)
@@ -169,10 +228,17 @@ def export_frame(fields, setup: SLMSetup, folder, *, stem="frame", distance=0.0,
             sim, ref_stack = shown[0], wanted[0]
         psnrs = np.mean([c.psnr_db for c in comparisons], axis=0)
         labels = [f"{z * 1e3:+.2f} mm {q:.1f} dB" for z, q in zip(setup.distances(), psnrs)]
-        metrics = {laser_name(x.wavelength): {"psnr_db": c.psnr_db, "ssim": c.ssim}
-                   for x, c in zip(setup.lasers, comparisons)}
-        files += slm_io.write_stack(folder / f"{stem}_stack.exr", sim, reference=ref_stack,
-                                    distances=setup.distances(), metrics=metrics,
-                                    labels=labels, compression=stack_compression)
+        metrics = {
+            laser_name(x.wavelength): {"psnr_db": c.psnr_db, "ssim": c.ssim}
+            for x, c in zip(setup.lasers, comparisons)
+        }
+        files += slm_io.write_stack(
+            folder / f"{stem}_stack.exr",
+            sim,
+            reference=ref_stack,
+            distances=setup.distances(),
+            metrics=metrics,
+            labels=labels,
+            compression=stack_compression,
+        )
     return Frame(patterns, comparisons, files, seconds)
-

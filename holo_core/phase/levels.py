@@ -35,8 +35,10 @@ def response(display, table=None) -> np.ndarray:
     n = 2**display.bit_depth
     if table is not None:
         if table.phases.size != n:
-            raise InputError(f"{table.source or 'phase table'}: {table.phases.size} entries; "
-                             f"the {display.bit_depth}-bit display needs {n}")
+            raise InputError(
+                f"{table.source or 'phase table'}: {table.phases.size} entries; "
+                f"the {display.bit_depth}-bit display needs {n}"
+            )
         return table.phases.copy()
     line = np.arange(n) * (display.phase_range / n)
     return -line if display.inverted else line
@@ -63,8 +65,10 @@ class Quantiser:
         codes = np.tile(np.arange(c.size), 3)
         order = np.argsort(shifted, kind="stable")
         self.around = (shifted[order], codes[order])
-        self._bins = (_Bins(self.low, self.high, *self.inside),
-                      _Bins(self.low, self.low + 2 * math.pi, *self.around))
+        self._bins = (
+            _Bins(self.low, self.high, *self.inside),
+            _Bins(self.low, self.low + 2 * math.pi, *self.around),
+        )
 
     def __call__(self, phase) -> np.ndarray:
         """uint16 codes of ``phase`` [rad] (finite, any shape)."""
@@ -141,6 +145,8 @@ def shown(codes, display, table=None) -> np.ndarray:
     c = np.asarray(codes)
     n = 2**display.bit_depth
     if c.size and (c.min() < 0 or c.max() >= n):
-        raise InputError(f"codes must be in 0..{n - 1} for a {display.bit_depth}-bit display; "
-                         f"got {c.min()}..{c.max()}")
+        raise InputError(
+            f"codes must be in 0..{n - 1} for a {display.bit_depth}-bit display; "
+            f"got {c.min()}..{c.max()}"
+        )
     return response(display, table)[c.astype(np.int64)]

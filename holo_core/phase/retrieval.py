@@ -26,8 +26,7 @@ from ..propagation import angular_spectrum, fraunhofer, fresnel
 from ..propagation.adjoint import adjoint
 from ..validate import InputError
 
-PROPAGATIONS = {"angular_spectrum": angular_spectrum, "fresnel": fresnel,
-                "fraunhofer": fraunhofer}
+PROPAGATIONS = {"angular_spectrum": angular_spectrum, "fresnel": fresnel, "fraunhofer": fraunhofer}
 
 
 class Retrieval(NamedTuple):
@@ -39,8 +38,18 @@ class Retrieval(NamedTuple):
     errors: list
 
 
-def gerchberg_saxton(targets, *, wavelength, pitch, distances, propagation="angular_spectrum",
-                     source=1.0, iterations=50, seed=0, **settings) -> Retrieval:
+def gerchberg_saxton(
+    targets,
+    *,
+    wavelength,
+    pitch,
+    distances,
+    propagation="angular_spectrum",
+    source=1.0,
+    iterations=50,
+    seed=0,
+    **settings,
+) -> Retrieval:
     """Retrieve an SLM phase by Gerchberg–Saxton over the planes at ``distances``.
 
     Parameters
@@ -100,9 +109,20 @@ def gerchberg_saxton(targets, *, wavelength, pitch, distances, propagation="angu
     return Retrieval(phase, errors)
 
 
-def optimise_phase(targets, *, wavelength, pitch, distances, propagation="angular_spectrum",
-                   source=1.0, iterations=100, learning_rate=0.05, seed=0, phase=None,
-                   **settings) -> Retrieval:
+def optimise_phase(
+    targets,
+    *,
+    wavelength,
+    pitch,
+    distances,
+    propagation="angular_spectrum",
+    source=1.0,
+    iterations=100,
+    learning_rate=0.05,
+    seed=0,
+    phase=None,
+    **settings,
+) -> Retrieval:
     """Retrieve an SLM phase by gradient descent (Adam) for the planes at ``distances``.
 
     Parameters
@@ -166,26 +186,32 @@ class _Problem:
         self.method = PROPAGATIONS[name]
         self.adjoint = adjoint(self.method)
         self.far = name == "fraunhofer"
-        distances = np.atleast_1d(np.asarray(validate.array(
-            "distances", distances, "a distance or a sequence of them [m]"), np.float64))
+        distances = np.atleast_1d(
+            np.asarray(
+                validate.array("distances", distances, "a distance or a sequence of them [m]"),
+                np.float64,
+            )
+        )
         if distances.ndim != 1 or not distances.size:
-            raise InputError(f"distances must be a distance or a sequence of them [m]; got "
-                             f"{distances!r}")
+            raise InputError(
+                f"distances must be a distance or a sequence of them [m]; got {distances!r}"
+            )
         if isinstance(targets, np.ndarray) and targets.ndim == 2:
             targets = [targets]
         try:
-            targets = [np.asarray(validate.host_field("targets", t), np.float64)
-                       for t in targets]
+            targets = [np.asarray(validate.host_field("targets", t), np.float64) for t in targets]
         except TypeError:
-            raise InputError("targets must be an (H, W) amplitude or a sequence of them") \
-                from None
+            raise InputError("targets must be an (H, W) amplitude or a sequence of them") from None
         if len(targets) != len(distances):
-            raise InputError(f"targets and distances must pair up; got {len(targets)} targets "
-                             f"and {len(distances)} distances")
+            raise InputError(
+                f"targets and distances must pair up; got {len(targets)} targets "
+                f"and {len(distances)} distances"
+            )
         shapes = {t.shape for t in targets}
         if len(shapes) != 1 or any(np.iscomplexobj(t) or (t < 0).any() for t in targets):
-            raise InputError(f"targets must be real amplitudes >= 0 of one shape; got shapes "
-                             f"{sorted(shapes)}")
+            raise InputError(
+                f"targets must be real amplitudes >= 0 of one shape; got shapes {sorted(shapes)}"
+            )
         self.shape = targets[0].shape
         self.targets, self.distances = targets, [float(d) for d in distances]
         self.norm = sum(float(np.sum(t * t)) for t in targets)
@@ -193,8 +219,7 @@ class _Problem:
             raise InputError("targets must not all be zero")
         self.source = np.broadcast_to(np.asarray(source, np.float64), self.shape)
         if (self.source < 0).any() or not np.isfinite(self.source).all():
-            raise InputError("source must be a finite amplitude >= 0, a number or an (H, W) "
-                             "array")
+            raise InputError("source must be a finite amplitude >= 0, a number or an (H, W) array")
         self.kw = {"wavelength": wavelength, "pitch": pitch, **settings}
 
     def forward(self, k, u):
@@ -202,8 +227,9 @@ class _Problem:
         return (out[0] if self.far else out).astype(np.complex128)
 
     def backward(self, k, v):
-        return self.adjoint(v.astype(np.complex64), distance=self.distances[k],
-                            **self.kw).astype(np.complex128)
+        return self.adjoint(v.astype(np.complex64), distance=self.distances[k], **self.kw).astype(
+            np.complex128
+        )
 
     def forward_all(self, u):
         return [self.forward(k, u) for k in range(len(self.targets))]
@@ -216,8 +242,12 @@ class _Problem:
 
     def error(self, vs) -> float:
         s = self.scale(vs)
-        return float(np.sqrt(sum(float(np.sum((s * np.abs(v) - a) ** 2))
-                                 for v, a in zip(vs, self.targets)) / self.norm))
+        return float(
+            np.sqrt(
+                sum(float(np.sum((s * np.abs(v) - a) ** 2)) for v, a in zip(vs, self.targets))
+                / self.norm
+            )
+        )
 
     def loss_and_gradient(self, phase):
         u = self.source * np.exp(1j * phase)
@@ -228,6 +258,5 @@ class _Problem:
             mag = np.abs(v)
             r = s * mag - a
             loss += float(np.sum(r * r))
-            g += self.backward(k, s * r * np.divide(v, mag, out=np.zeros_like(v),
-                                                     where=mag > 0))
+            g += self.backward(k, s * r * np.divide(v, mag, out=np.zeros_like(v), where=mag > 0))
         return loss / self.norm, 2 * np.imag(g * np.conj(u)) / self.norm

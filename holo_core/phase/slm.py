@@ -32,7 +32,7 @@ from ..validate import InputError, shown
 from .display import Display, display_preset
 
 TABLE_SUFFIXES = (".npy", ".csv", ".txt")
-MAX_TABLE_BYTES = 16 * 2**20   # 65536 codes as text take under 2 MB
+MAX_TABLE_BYTES = 16 * 2**20  # 65536 codes as text take under 2 MB
 # a table of radians spans about 2π to 4π; one of waves (~1) or units of π (~2) spans less
 # than this, which is how a table in another unit is told apart
 MIN_TABLE_SPAN, MAX_TABLE_SPAN = 2 * math.pi, 4 * math.pi * (1 + 1e-6)
@@ -55,8 +55,9 @@ class Laser:
     power: float = 1.0
 
     def __post_init__(self):
-        object.__setattr__(self, "wavelength", validate.wavelength("laser wavelength",
-                                                                   self.wavelength))
+        object.__setattr__(
+            self, "wavelength", validate.wavelength("laser wavelength", self.wavelength)
+        )
         object.__setattr__(self, "power", validate.positive("laser power", self.power, "W"))
 
 
@@ -82,8 +83,9 @@ class PhaseTable:
     source: str = ""
 
     def __post_init__(self):
-        object.__setattr__(self, "wavelength", validate.wavelength("table wavelength",
-                                                                   self.wavelength))
+        object.__setattr__(
+            self, "wavelength", validate.wavelength("table wavelength", self.wavelength)
+        )
         where = self.source or "phase table"
         object.__setattr__(self, "phases", _checked_phases(self.phases, where, None))
 
@@ -99,25 +101,32 @@ def _checked_phases(values, where: str, bit_depth: int | None) -> np.ndarray:
     except (TypeError, ValueError):
         raise InputError(f"{where}: a phase table holds numbers (radians)") from None
     if a.ndim != 1:
-        raise InputError(f"{where}: a phase table is one column of phases [rad] (or two: code, "
-                         f"phase); got shape {a.shape}")
+        raise InputError(
+            f"{where}: a phase table is one column of phases [rad] (or two: code, "
+            f"phase); got shape {a.shape}"
+        )
     n = a.size
     if bit_depth is not None and n != 2**bit_depth:
-        raise InputError(f"{where}: {n} entries; a {bit_depth}-bit display's table has "
-                         f"{2**bit_depth} (one phase per code)")
+        raise InputError(
+            f"{where}: {n} entries; a {bit_depth}-bit display's table has "
+            f"{2**bit_depth} (one phase per code)"
+        )
     if n < 2 or n & (n - 1) or n > 2**16:
-        raise InputError(f"{where}: {n} entries; a table has 2^bits entries (2 to 65536), one "
-                         f"phase per code")
+        raise InputError(
+            f"{where}: {n} entries; a table has 2^bits entries (2 to 65536), one phase per code"
+        )
     if not np.isfinite(a).all():
         raise InputError(f"{where}: holds NaN or infinite phases")
     span = float(a.max() - a.min())
     # the codes must reach every phase of a wave to within one step of a linear table
     least = MIN_TABLE_SPAN * (1 - 1.5 / n)
     if not least <= span <= MAX_TABLE_SPAN or abs(a).max() > 4 * math.pi:
-        raise InputError(f"{where}: its phases span {span:.4g} rad (from {a.min():.4g} to "
-                         f"{a.max():.4g}); a table's must span {least:.4g} to {MAX_TABLE_SPAN:.4g}"
-                         f" rad (2π to 4π, within ±4π): radians, not waves (~1) or units of π "
-                         f"(~2), and one that reaches a whole wave")
+        raise InputError(
+            f"{where}: its phases span {span:.4g} rad (from {a.min():.4g} to "
+            f"{a.max():.4g}); a table's must span {least:.4g} to {MAX_TABLE_SPAN:.4g}"
+            f" rad (2π to 4π, within ±4π): radians, not waves (~1) or units of π "
+            f"(~2), and one that reaches a whole wave"
+        )
     return a
 
 
@@ -149,8 +158,10 @@ def read_phase_table(path, *, wavelength, bit_depth) -> PhaseTable:
     if path.suffix.lower() not in TABLE_SUFFIXES:
         raise InputError(f"{path}: a phase table is one of {', '.join(TABLE_SUFFIXES)}")
     if path.stat().st_size > MAX_TABLE_BYTES:
-        raise InputError(f"{path}: {path.stat().st_size} bytes; a table of 65536 codes takes "
-                         f"under {MAX_TABLE_BYTES}")
+        raise InputError(
+            f"{path}: {path.stat().st_size} bytes; a table of 65536 codes takes "
+            f"under {MAX_TABLE_BYTES}"
+        )
     try:
         if path.suffix.lower() == ".npy":
             a = np.load(path, allow_pickle=False)
@@ -159,25 +170,31 @@ def read_phase_table(path, *, wavelength, bit_depth) -> PhaseTable:
     except InputError:
         raise
     except (OSError, ValueError, UnicodeDecodeError) as e:
-        raise InputError(f"{path}: not a readable phase table ({type(e).__name__}: {e})"[:400]) \
-            from None
+        raise InputError(
+            f"{path}: not a readable phase table ({type(e).__name__}: {e})"[:400]
+        ) from None
     a = np.asarray(a)
     if a.ndim == 2 and a.shape[1] == 2:
         if not np.array_equal(a[:, 0], np.arange(len(a))):
-            raise InputError(f"{path}: its first column must be the codes 0, 1, ..., "
-                             f"{len(a) - 1} in order")
+            raise InputError(
+                f"{path}: its first column must be the codes 0, 1, ..., {len(a) - 1} in order"
+            )
         a = a[:, 1]
     elif a.ndim == 2 and 1 in a.shape:
         a = a.ravel()
-    return PhaseTable(wavelength=wavelength, phases=_checked_phases(a, str(path), bits),
-                      source=path.name)
+    return PhaseTable(
+        wavelength=wavelength, phases=_checked_phases(a, str(path), bits), source=path.name
+    )
 
 
 def _text_table(path: Path) -> np.ndarray:
     rows = []
     with path.open(newline="") as f:
-        for i, row in enumerate(csv.reader(f, delimiter="," if path.suffix.lower() == ".csv"
-                                           else " ", skipinitialspace=True)):
+        for i, row in enumerate(
+            csv.reader(
+                f, delimiter="," if path.suffix.lower() == ".csv" else " ", skipinitialspace=True
+            )
+        ):
             row = [c for c in row if c.strip()]
             if not row:
                 continue
@@ -186,12 +203,13 @@ def _text_table(path: Path) -> np.ndarray:
             except ValueError:
                 if i == 0 and not rows:
                     continue  # a header
-                raise InputError(f"{path}: line {i + 1} is not numbers: {row!r}"[:300]) \
-                    from None
+                raise InputError(f"{path}: line {i + 1} is not numbers: {row!r}"[:300]) from None
     widths = {len(r) for r in rows}
     if len(widths) != 1:
-        raise InputError(f"{path}: its lines have {sorted(widths)} columns; a table has one "
-                         f"(phase) or two (code, phase)")
+        raise InputError(
+            f"{path}: its lines have {sorted(widths)} columns; a table has one "
+            f"(phase) or two (code, phase)"
+        )
     return np.array(rows)
 
 
@@ -222,8 +240,9 @@ class EyeBox:
         validate.positive("eye box width", w, "m")
         validate.positive("eye box height", h, "m")
         object.__setattr__(self, "size", (w, h))
-        object.__setattr__(self, "distance", validate.positive("eye box distance",
-                                                               self.distance, "m"))
+        object.__setattr__(
+            self, "distance", validate.positive("eye box distance", self.distance, "m")
+        )
         object.__setattr__(self, "pupil", validate.positive("eye box pupil", self.pupil, "m"))
         object.__setattr__(self, "centre", validate.pair("eye box centre", self.centre, "m"))
 
@@ -268,8 +287,9 @@ class SLMSetup:
     def __post_init__(self):
         display = display_preset(self.display) if isinstance(self.display, str) else self.display
         if not isinstance(display, Display) or display.kind != "phase":
-            raise InputError(f"display must be a phase Display or a preset's name; got "
-                             f"{shown(self.display)}")
+            raise InputError(
+                f"display must be a phase Display or a preset's name; got {shown(self.display)}"
+            )
         object.__setattr__(self, "display", display)
         lasers = tuple(self.lasers) if isinstance(self.lasers, (list, tuple)) else (self.lasers,)
         if not lasers or not all(isinstance(x, Laser) for x in lasers):
@@ -280,9 +300,11 @@ class SLMSetup:
             raise InputError("tables must be PhaseTable objects (read_phase_table reads a file)")
         for t in tables:
             if t.phases.size != 2**display.bit_depth:
-                raise InputError(f"{t.source or 'phase table'} ({t.wavelength:.4g} m): "
-                                 f"{t.phases.size} entries; the {display.bit_depth}-bit "
-                                 f"display needs {2**display.bit_depth}")
+                raise InputError(
+                    f"{t.source or 'phase table'} ({t.wavelength:.4g} m): "
+                    f"{t.phases.size} entries; the {display.bit_depth}-bit "
+                    f"display needs {2**display.bit_depth}"
+                )
         object.__setattr__(self, "tables", tables)
         if tables:
             for laser in lasers:
@@ -291,13 +313,17 @@ class SLMSetup:
             raise InputError(f"eye_box must be an EyeBox or None; got {shown(self.eye_box)}")
         near, far = validate.pair("depth_range", self.depth_range, "m", validate.MAX_LENGTH)
         if near > far:
-            raise InputError(f"depth_range must be (near, far) with near <= far [m]; got "
-                             f"{shown(self.depth_range)}")
+            raise InputError(
+                f"depth_range must be (near, far) with near <= far [m]; got "
+                f"{shown(self.depth_range)}"
+            )
         object.__setattr__(self, "depth_range", (near, far))
         b = validate.positive("band", self.band)
         if b > 1:
-            raise InputError(f"band must be in (0, 1] (a fraction of the Nyquist frequency); "
-                             f"got {shown(self.band)}")
+            raise InputError(
+                f"band must be in (0, 1] (a fraction of the Nyquist frequency); "
+                f"got {shown(self.band)}"
+            )
         object.__setattr__(self, "band", b)
         object.__setattr__(self, "slices", validate.integer("slices", self.slices, 1, 1000))
 
@@ -313,8 +339,9 @@ class SLMSetup:
     def distances(self) -> np.ndarray:
         """The focal stack's planes [m]: ``slices`` evenly over ``depth_range``."""
         near, far = self.depth_range
-        return np.linspace(near, far, self.slices) if self.slices > 1 else np.array(
-            [(near + far) / 2])
+        return (
+            np.linspace(near, far, self.slices) if self.slices > 1 else np.array([(near + far) / 2])
+        )
 
 
 def table_for(tables, wavelength) -> PhaseTable | None:
@@ -328,9 +355,11 @@ def table_for(tables, wavelength) -> PhaseTable | None:
         if abs(t.wavelength - wavelength) <= 1e-6 * wavelength:
             return t
     have = ", ".join(f"{t.wavelength * 1e9:.6g} nm ({t.source or 'table'})" for t in tables)
-    raise InputError(f"no phase table for the wavelength {wavelength * 1e9:.6g} nm; the tables "
-                     f"given are for {have}: give one per laser (or none, for the display's "
-                     f"linear response)")
+    raise InputError(
+        f"no phase table for the wavelength {wavelength * 1e9:.6g} nm; the tables "
+        f"given are for {have}: give one per laser (or none, for the display's "
+        f"linear response)"
+    )
 
 
 def diffraction_angle(wavelength: float, pitch: float, band: float = 1.0) -> float:
@@ -377,8 +406,11 @@ def check_scene(setup: SLMSetup, *, extent=None, depth_range=None) -> list[str]:
     d = setup.display
     width, height = d.resolution[0] * d.pitch, d.resolution[1] * d.pitch
     ex, ey = (width / 2, height / 2) if extent is None else validate.pair("extent", extent, "m")
-    near, far = setup.depth_range if depth_range is None else validate.pair(
-        "depth_range", depth_range, "m", validate.MAX_LENGTH)
+    near, far = (
+        setup.depth_range
+        if depth_range is None
+        else validate.pair("depth_range", depth_range, "m", validate.MAX_LENGTH)
+    )
     lam = min(setup.wavelengths)
     full = diffraction_angle(lam, d.pitch)
     passed = diffraction_angle(lam, d.pitch, setup.band)
@@ -395,14 +427,19 @@ def check_scene(setup: SLMSetup, *, extent=None, depth_range=None) -> list[str]:
             f"beyond the {math.degrees(full):.3g}° a pitch of {d.pitch * 1e6:.4g} µm diffracts "
             f"{lam * 1e9:.4g} nm into (asin(λ/2p)): shrink it to a diagonal of "
             f"{room * 1e3:.3g} mm, move it to >= {eye.distance * math.tan(reach) / math.tan(full) * 1e3:.4g} mm, "
-            f"or use a display of pitch <= {lam / (2 * math.sin(reach)) * 1e6:.3g} µm")
+            f"or use a display of pitch <= {lam / (2 * math.sin(reach)) * 1e6:.3g} µm"
+        )
     if reach > passed:
-        notes.append(f"eye box reaches {math.degrees(reach):.3g}°, beyond the "
-                     f"{math.degrees(passed):.3g}° the filter passes (band {setup.band:g}): its "
-                     f"edge sees no light at {lam * 1e9:.4g} nm")
+        notes.append(
+            f"eye box reaches {math.degrees(reach):.3g}°, beyond the "
+            f"{math.degrees(passed):.3g}° the filter passes (band {setup.band:g}): its "
+            f"edge sees no light at {lam * 1e9:.4g} nm"
+        )
     if far >= eye.distance:
-        raise InputError(f"depth_range: the scene reaches {far * 1e3:.4g} mm in front of the "
-                         f"display, at or beyond the eye box ({eye.distance * 1e3:.4g} mm)")
+        raise InputError(
+            f"depth_range: the scene reaches {far * 1e3:.4g} mm in front of the "
+            f"display, at or beyond the eye box ({eye.distance * 1e3:.4g} mm)"
+        )
     (w, h), (cx, cy) = eye.size, eye.centre
     # the widest ray: from the scene's farthest corner to the eye box's opposite edge
     lateral = math.hypot(ex + abs(cx) + w / 2, ey + abs(cy) + h / 2)
@@ -417,5 +454,6 @@ def check_scene(setup: SLMSetup, *, extent=None, depth_range=None) -> list[str]:
                 f"{math.degrees(passed):.3g}° a pitch of {d.pitch * 1e6:.4g} µm passes at "
                 f"{lam * 1e9:.4g} nm (asin(band·λ/2p), band {setup.band:g}): keep the scene at "
                 f"z <= {fits * 1e3:.4g} mm, make it or the eye box smaller, or use a pitch <= "
-                f"{setup.band * lam / (2 * math.sin(angle)) * 1e6:.3g} µm")
+                f"{setup.band * lam / (2 * math.sin(angle)) * 1e6:.3g} µm"
+            )
     return notes

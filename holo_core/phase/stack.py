@@ -80,10 +80,12 @@ class EyePupil:
     centre: tuple = (0.0, 0.0)
 
     def __post_init__(self):
-        object.__setattr__(self, "diameter", validate.positive("eye pupil diameter",
-                                                               self.diameter, "m"))
-        object.__setattr__(self, "distance", validate.positive("eye pupil distance",
-                                                               self.distance, "m"))
+        object.__setattr__(
+            self, "diameter", validate.positive("eye pupil diameter", self.diameter, "m")
+        )
+        object.__setattr__(
+            self, "distance", validate.positive("eye pupil distance", self.distance, "m")
+        )
         object.__setattr__(self, "centre", validate.pair("eye pupil centre", self.centre, "m"))
 
 
@@ -144,8 +146,7 @@ class Optics:
     (2, 64, 64)
     """
 
-    def __init__(self, shape, *, pitch, wavelength, distances, band=0.5, pupil=None,
-                 eye=None):
+    def __init__(self, shape, *, pitch, wavelength, distances, band=0.5, pupil=None, eye=None):
         self.shape = validate.shape2d("shape", shape)
         self.pitch = validate.pitch("pitch", pitch)
         self.wavelength = validate.wavelength("wavelength", wavelength)
@@ -173,12 +174,17 @@ class Optics:
             x, y, diameter, focal = (validate.finite("pupil", v, "m") for v in pupil)
             lam_d = self.wavelength * validate.positive("pupil distance", focal, "m")
             r = validate.positive("pupil diameter", diameter, "m") / (2 * lam_d)
-            keep = ((fy[self.rows][:, None] - y / lam_d) ** 2
-                    + (fx[self.cols][None, :] - x / lam_d) ** 2 <= r * r).astype(np.float64)
+            keep = (
+                (fy[self.rows][:, None] - y / lam_d) ** 2
+                + (fx[self.cols][None, :] - x / lam_d) ** 2
+                <= r * r
+            ).astype(np.float64)
             if not keep.any():
-                raise InputError(f"pupil: a {diameter * 1e3:.3g} mm pupil at ({x * 1e3:.3g}, "
-                                 f"{y * 1e3:.3g}) mm lies outside the band the display's "
-                                 f"filter passes")
+                raise InputError(
+                    f"pupil: a {diameter * 1e3:.3g} mm pupil at ({x * 1e3:.3g}, "
+                    f"{y * 1e3:.3g}) mm lies outside the band the display's "
+                    f"filter passes"
+                )
         self.keep = keep
         self.top = tuple((p - n) // 2 for p, n in zip(self.padded, self.shape))
         self._transfer = {}
@@ -197,22 +203,28 @@ class Optics:
         for z in (float(self.distances.min()), float(self.distances.max())):
             ell = eye.distance - z
             if not ell > 0:
-                raise InputError(f"eye: the plane at {z * 1e3:.4g} mm lies at or beyond the "
-                                 f"eye's pupil ({eye.distance * 1e3:.4g} mm in front of the "
-                                 f"display)")
+                raise InputError(
+                    f"eye: the plane at {z * 1e3:.4g} mm lies at or beyond the "
+                    f"eye's pupil ({eye.distance * 1e3:.4g} mm in front of the "
+                    f"display)"
+                )
             half = max(self.shape) * p / 2
             reach = self.band / (2 * p) + half / (lam * ell)
             room = 1 / p - (eye.diameter / 2 + math.hypot(*eye.centre)) / (lam * ell)
             if reach >= room:
-                near = half / (lam * (room - self.band / (2 * p))) if room > self.band / (
-                    2 * p) else math.inf
+                near = (
+                    half / (lam * (room - self.band / (2 * p)))
+                    if room > self.band / (2 * p)
+                    else math.inf
+                )
                 raise InputError(
                     f"eye: a pupil {eye.distance * 1e3:.4g} mm from a display "
                     f"{2 * half * 1e3:.3g} mm wide sees its edge at "
                     f"{half / ell:.3g} rad, beyond what a {p * 1e6:.3g} µm grid holds at "
                     f"{lam * 1e9:.4g} nm with the filter's band {self.band:g}: move the eye "
                     f"to >= {(near + z) * 1e3:.4g} mm, or judge through a pupil in the "
-                    f"Fourier plane (pupil=)")
+                    f"Fourier plane (pupil=)"
+                )
 
     def _eye_grid(self, k: int):
         """(padded shape, rows, cols, disc, chirp) of the eye focused on plane ``k``: the
@@ -230,7 +242,7 @@ class Optics:
         cx, cy = (c / (lam * ell) for c in eye.centre)
         rows = np.flatnonzero(np.abs(fy - cy) <= r)
         cols = np.flatnonzero(np.abs(fx - cx) <= r)
-        disc = ((fy[rows][:, None] - cy) ** 2 + (fx[cols][None, :] - cx) ** 2 <= r * r)
+        disc = (fy[rows][:, None] - cy) ** 2 + (fx[cols][None, :] - cx) ** 2 <= r * r
         if not disc.any():  # a pupil narrower than the grid's frequency step: its nearest
             rows, cols = rows[:1], cols[:1]
             disc = np.ones((1, 1), bool)
@@ -238,7 +250,8 @@ class Optics:
         x = (np.arange(self.shape[1]) - (self.shape[1] - 1) / 2) * p
         turn = np.pi / (lam * ell)
         chirp = np.exp(1j * np.remainder(turn * y[:, None] ** 2, 2 * np.pi)) * np.exp(
-            1j * np.remainder(turn * x[None, :] ** 2, 2 * np.pi))
+            1j * np.remainder(turn * x[None, :] ** 2, 2 * np.pi)
+        )
         return padded, rows, cols, disc.astype(np.complex64), chirp.astype(np.complex64)
 
     def through_eye(self, v: np.ndarray, k: int) -> np.ndarray:
@@ -248,17 +261,17 @@ class Optics:
         padded, rows, cols, disc, chirp = self._eye_grid(k)
         (h, w), (r0, c0) = self.shape, tuple((q - n) // 2 for q, n in zip(padded, self.shape))
         a = np.zeros((padded[0], w), np.complex64)
-        a[r0:r0 + h] = np.asarray(v, np.complex64) * chirp
+        a[r0 : r0 + h] = np.asarray(v, np.complex64) * chirp
         a = fft(a, axis=0)[rows]
         b = np.zeros((rows.size, padded[1]), np.complex64)
-        b[:, c0:c0 + w] = a
+        b[:, c0 : c0 + w] = a
         block = fft(b, axis=1)[:, cols] * disc
         b = np.zeros((rows.size, padded[1]), np.complex64)
         b[:, cols] = block
-        b = ifft(b, axis=1)[:, c0:c0 + w]
+        b = ifft(b, axis=1)[:, c0 : c0 + w]
         a = np.zeros((padded[0], w), np.complex64)
         a[rows] = b
-        return ifft(a, axis=0)[r0:r0 + h]
+        return ifft(a, axis=0)[r0 : r0 + h]
 
     def seen(self, u) -> np.ndarray:
         """The amplitude the eye sees on every plane, float32 (N, rows, cols): |U| through
@@ -266,8 +279,9 @@ class Optics:
         if self.eye is None:
             return self.stack(u)
         s = self.spectrum(u)
-        return np.stack([np.abs(self.through_eye(self.to_plane(s, k), k))
-                         for k in range(self.distances.size)])
+        return np.stack(
+            [np.abs(self.through_eye(self.to_plane(s, k), k)) for k in range(self.distances.size)]
+        )
 
     def transfer(self, k: int) -> np.ndarray:
         """The filter, pupil and transfer function to plane ``k`` on the filter's block,
@@ -278,8 +292,14 @@ class Optics:
             full_cols = grid.freqs(self.padded[1], self.pitch)[self.cols]
             # the transfer function's formula on the block's frequencies only: the same
             # values as transfer_function on the padded grid, at band² of its cost
-            h = _block_transfer(self.padded, full_rows, full_cols, self.wavelength, self.pitch,
-                                float(self.distances[k]))
+            h = _block_transfer(
+                self.padded,
+                full_rows,
+                full_cols,
+                self.wavelength,
+                self.pitch,
+                float(self.distances[k]),
+            )
             t = (h * self.keep).astype(np.complex64)
             self._transfer[k] = t
         return t
@@ -287,12 +307,12 @@ class Optics:
     def pad(self, u: np.ndarray) -> np.ndarray:
         out = np.zeros(self.padded, np.complex64)
         (r, c), (h, w) = self.top, self.shape
-        out[r:r + h, c:c + w] = u
+        out[r : r + h, c : c + w] = u
         return out
 
     def crop(self, v: np.ndarray) -> np.ndarray:
         (r, c), (h, w) = self.top, self.shape
-        return v[r:r + h, c:c + w]
+        return v[r : r + h, c : c + w]
 
     def spectrum(self, u) -> np.ndarray:
         """The filter's block of the padded field's spectrum, complex64: fft2 of the padded
@@ -302,11 +322,11 @@ class Optics:
         time than columns first)."""
         (r, c), (h, w) = self.top, self.shape
         rows = np.zeros((h, self.padded[1]), np.complex64)
-        rows[:, c:c + w] = u
+        rows[:, c : c + w] = u
         rows = fft(rows, axis=1)
         cols = np.zeros((self.padded[0], self.cols.size), np.complex64)
         for full, part in self._col_runs:
-            cols[r:r + h, part] = rows[:, full]
+            cols[r : r + h, part] = rows[:, full]
         cols = fft(cols, axis=0)
         out = np.empty((self.rows.size, self.cols.size), np.complex64)
         for full, part in self._row_runs:
@@ -323,8 +343,8 @@ class Optics:
         cols = ifft(cols, axis=0)
         rows = np.zeros((h, self.padded[1]), np.complex64)
         for full, part in self._col_runs:
-            rows[:, full] = cols[r:r + h, part]
-        return ifft(rows, axis=1)[:, c:c + w]
+            rows[:, full] = cols[r : r + h, part]
+        return ifft(rows, axis=1)[:, c : c + w]
 
     def to_plane(self, spectrum_block: np.ndarray, k: int) -> np.ndarray:
         """The field (display's window, complex64) on plane ``k`` of a spectrum's block."""
@@ -335,8 +355,7 @@ class Optics:
         block (conj of the transfer; FFT then ifft's 1/N, as NumPy's pair is adjoint)."""
         t = self._adjoint.get(k)
         if t is None:  # cached: the descent carries a plane back every step
-            t = (np.conj(self.transfer(k)) / (self.padded[0] * self.padded[1])).astype(
-                np.complex64)
+            t = (np.conj(self.transfer(k)) / (self.padded[0] * self.padded[1])).astype(np.complex64)
             self._adjoint[k] = t
         return self.spectrum(v) * t
 
@@ -422,6 +441,8 @@ def compare(stack, reference) -> Comparison:
     peak = float(r.max())
     if not peak > 0:
         raise InputError("reference stack is dark: nothing to compare against")
-    return Comparison([psnr(a / peak, b / peak, data_range=1.0) for a, b in zip(s, r)],
-                      [ssim(a / peak, b / peak, data_range=1.0) for a, b in zip(s, r)], scale)
-
+    return Comparison(
+        [psnr(a / peak, b / peak, data_range=1.0) for a, b in zip(s, r)],
+        [ssim(a / peak, b / peak, data_range=1.0) for a, b in zip(s, r)],
+        scale,
+    )

@@ -47,11 +47,22 @@ from importlib import import_module
 
 # the names below import their modules on first use: the planner (plan.py) is pure arithmetic,
 # and Blender's process imports it without the OpenCL driver the recorder and the viewer load
-_API = {"Reference": ".reference", "record_hologram": ".record", "record_plate": ".looks",
-        "record_looks": ".looks", "record_points": ".points", "reconstruct": ".reconstruction",
-        "render_view": ".view", "physical_field": ".carrier", "parts_along": ".path",
-        "record_set": ".parts", "render_set_view": ".view", "PlateViewer": ".viewer",
-        "find_carrier": "..acquired", "sideband": "..acquired"}  # their home: acquired/
+_API = {
+    "Reference": ".reference",
+    "record_hologram": ".record",
+    "record_plate": ".looks",
+    "record_looks": ".looks",
+    "record_points": ".points",
+    "reconstruct": ".reconstruction",
+    "render_view": ".view",
+    "physical_field": ".carrier",
+    "parts_along": ".path",
+    "record_set": ".parts",
+    "render_set_view": ".view",
+    "PlateViewer": ".viewer",
+    "find_carrier": "..acquired",
+    "sideband": "..acquired",
+}  # their home: acquired/
 __all__ = sorted(_API)
 
 

@@ -34,16 +34,18 @@ from ..scene.plate import Carrier
 from ..validate import InputError
 from .plan import RIM
 
-TAPS = 32                         # samples a side of the interpolation kernel
-TRANSITION = RIM / (1 + RIM)      # half the kernel's transition band, a fraction of f_N: the
-                                  # zone's soft rim, the part of B's band the zone proper lacks
-RIPPLE = 1e-6                     # the kernel's pass-band ripple and stop-band leak (120 dB)
-BLOCK = 512                       # output samples a side computed at once
-FIELD_BYTES = 24                  # host bytes per output sample: the field, the block's parts
+TAPS = 32  # samples a side of the interpolation kernel
+# half the kernel's transition band, a fraction of f_N: the zone's soft rim, the part of B's band
+# the zone proper lacks
+TRANSITION = RIM / (1 + RIM)
+RIPPLE = 1e-6  # the kernel's pass-band ripple and stop-band leak (120 dB)
+BLOCK = 512  # output samples a side computed at once
+FIELD_BYTES = 24  # host bytes per output sample: the field, the block's parts
 
 
-def modulate(samples, carrier: Carrier, *, wavelength: float, pitch: float, rows=None,
-             cols=None) -> np.ndarray:
+def modulate(
+    samples, carrier: Carrier, *, wavelength: float, pitch: float, rows=None, cols=None
+) -> np.ndarray:
     """The physical object wave O = B·exp(−ik|x − c|) (complex64) of ``samples`` B
     ((..., rows, cols), the window's ``rows`` and ``cols`` index ranges, default from 0)."""
     b = np.asarray(samples)
@@ -53,8 +55,9 @@ def modulate(samples, carrier: Carrier, *, wavelength: float, pitch: float, rows
     return (b * np.exp(-1j * carrier.phase(wavelength, pitch, rows, cols))).astype(np.complex64)
 
 
-def demodulate(field, carrier: Carrier, *, wavelength: float, pitch: float, rows=None,
-               cols=None) -> np.ndarray:
+def demodulate(
+    field, carrier: Carrier, *, wavelength: float, pitch: float, rows=None, cols=None
+) -> np.ndarray:
     """The stored samples B = O·exp(+ik|x − c|) (complex64) of an object wave ``field`` O on
     the carrier's sample grid (the inverse of :func:`modulate`)."""
     o = np.asarray(field)
@@ -153,17 +156,21 @@ def physical_field(h: Hologram, channel=0, *, pitch=None, region=None) -> Field:
         raise InputError(f"hologram must be a Hologram; got {type(h).__name__}")
     channel = validate.index("channel", channel, len(h.wavelengths))
     if h.encoding != "complex":
-        raise InputError("an intensity hologram holds |O + R|², not the object wave: "
-                         "holo_core.plate.reconstruct or sideband gives its object wave")
+        raise InputError(
+            "an intensity hologram holds |O + R|², not the object wave: "
+            "holo_core.plate.reconstruct or sideband gives its object wave"
+        )
     lam = h.wavelengths[channel]
     if h.carrier is None:
         return _full_band(h, channel, pitch, region)
     x0, y0, x1, y1 = _region(h, region)
-    pitch = physical_pitch(h, channel, region) if pitch is None else \
-        validate.pitch("pitch", pitch)
+    pitch = physical_pitch(h, channel, region) if pitch is None else validate.pitch("pitch", pitch)
     xs, ys = _grid(x0, x1, pitch), _grid(y0, y1, pitch)
-    memory.check_host(f"the physical field's {len(xs)}x{len(ys)} samples at {pitch:.3g} m "
-                      f"(ask a region or a coarser pitch)", FIELD_BYTES * len(xs) * len(ys))
+    memory.check_host(
+        f"the physical field's {len(xs)}x{len(ys)} samples at {pitch:.3g} m "
+        f"(ask a region or a coarser pitch)",
+        FIELD_BYTES * len(xs) * len(ys),
+    )
     samples = field_at(h, channel, xs, ys)
     pose = np.asarray(h.plate, np.float64) @ _translation((x0 + x1) / 2, (y0 + y1) / 2)
     return Field(samples=samples, wavelength=lam, pitch=pitch, pose=pose)
@@ -178,15 +185,17 @@ def field_at(h: Hologram, channel: int, xs, ys) -> np.ndarray:
     c = h.carrier
     k = 2 * math.pi / h.wavelengths[channel]
     out = np.zeros((len(ys), len(xs)), np.complex64)
-    columns = [(b, *kernel((xs[b:b + BLOCK] - c.origin[0]) / h.pitch, h.shape[1]))
-               for b in range(0, len(xs), BLOCK)]
+    columns = [
+        (b, *kernel((xs[b : b + BLOCK] - c.origin[0]) / h.pitch, h.shape[1]))
+        for b in range(0, len(xs), BLOCK)
+    ]
     columns = [(b, c0, c1, kx) for b, c0, c1, kx in columns if c1 > c0]
     if not columns:
         return out
     first, last = min(c0 for _, c0, _, _ in columns), max(c1 for _, _, c1, _ in columns)
     dx2 = (xs - c.centre[0]) ** 2
     for a in range(0, len(ys), BLOCK):
-        y = ys[a:a + BLOCK]
+        y = ys[a : a + BLOCK]
         r0, r1, ky = kernel((y - c.origin[1]) / c.row_pitch, h.shape[0])
         if r1 <= r0:
             continue
@@ -194,9 +203,10 @@ def field_at(h: Hologram, channel: int, xs, ys) -> np.ndarray:
         dyz2 = (y - c.centre[1]) ** 2 + c.centre[2] ** 2
         for b, c0, c1, kx in columns:
             n = kx.shape[0]
-            r = np.sqrt(dx2[None, b:b + n] + dyz2[:, None])
-            out[a:a + len(y), b:b + n] = (rows[:, c0 - first:c1 - first] @ kx.T) * \
-                np.exp(-1j * np.remainder(k * r, 2 * math.pi))
+            r = np.sqrt(dx2[None, b : b + n] + dyz2[:, None])
+            out[a : a + len(y), b : b + n] = (rows[:, c0 - first : c1 - first] @ kx.T) * np.exp(
+                -1j * np.remainder(k * r, 2 * math.pi)
+            )
     return out
 
 
@@ -220,8 +230,10 @@ BETA = 0.1102 * (-20 * math.log10(RIPPLE) - 8.7)  # Kaiser's rule for the stop b
 
 def _carrier_plate(h: Hologram) -> None:
     if not isinstance(h, Hologram) or h.carrier is None:
-        raise InputError("a carrier plate is needed (a complex plate stored against its zone's "
-                         "carrier, record_plate's)")
+        raise InputError(
+            "a carrier plate is needed (a complex plate stored against its zone's "
+            "carrier, record_plate's)"
+        )
 
 
 def _region(h: Hologram, region) -> tuple[float, float, float, float]:
@@ -229,8 +241,11 @@ def _region(h: Hologram, region) -> tuple[float, float, float, float]:
         return window(h)
     x0, y0, x1, y1 = validate.vector("region", region, 4, "m")
     if not (x0 <= x1 and y0 <= y1):
-        raise InputError(f"region must be (x0, y0, x1, y1) [m] with x0 <= x1 and y0 <= y1; "
-                         f"got {list(region)!r}"[:300])
+        raise InputError(
+            f"region must be (x0, y0, x1, y1) [m] with x0 <= x1 and y0 <= y1; got {list(region)!r}"[
+                :300
+            ]
+        )
     return float(x0), float(y0), float(x1), float(y1)
 
 
@@ -250,8 +265,10 @@ def _full_band(h: Hologram, channel: int, pitch, region) -> Field:
     """A plate without a carrier: its samples (the object wave, centred on the plate) cut to
     ``region``, at its own pitch."""
     if pitch is not None and validate.pitch("pitch", pitch) != h.pitch:
-        raise InputError(f"pitch: a plate without a carrier holds its object wave at its own "
-                         f"pitch ({h.pitch:.6g} m); holo_core.resample resamples it")
+        raise InputError(
+            f"pitch: a plate without a carrier holds its object wave at its own "
+            f"pitch ({h.pitch:.6g} m); holo_core.resample resamples it"
+        )
     rows, cols = h.shape
     x = (np.arange(cols) - (cols - 1) / 2) * h.pitch
     y = (np.arange(rows) - (rows - 1) / 2) * h.pitch
@@ -261,6 +278,7 @@ def _full_band(h: Hologram, channel: int, pitch, region) -> Field:
     if c1 <= c0 or r1 <= r0:
         raise InputError(f"region {[x0, y0, x1, y1]} [m] holds no sample of the plate")
     samples = np.asarray(h.object_wave[channel, r0:r1, c0:c1], np.complex64)
-    pose = np.asarray(h.plate, np.float64) @ _translation((x[c0] + x[c1 - 1]) / 2,
-                                                          (y[r0] + y[r1 - 1]) / 2)
+    pose = np.asarray(h.plate, np.float64) @ _translation(
+        (x[c0] + x[c1 - 1]) / 2, (y[r0] + y[r1 - 1]) / 2
+    )
     return Field(samples=samples, wavelength=h.wavelengths[channel], pitch=h.pitch, pose=pose)

@@ -28,8 +28,22 @@ from .window import plane_depth
 log = logging.getLogger(__name__)
 
 
-def compose(looks, colours, z_ch, first: Hologram, camera, pupil, *, supersample,
-            composition, depth_estimate, centre, exposure, threshold, n) -> RenderResult:
+def compose(
+    looks,
+    colours,
+    z_ch,
+    first: Hologram,
+    camera,
+    pupil,
+    *,
+    supersample,
+    composition,
+    depth_estimate,
+    centre,
+    exposure,
+    threshold,
+    n,
+) -> RenderResult:
     """The view from each iteration's images at the pixels (``looks``: :class:`~holo_core.
     optics.imaging.Folded`, radiance |A|² calibrated): with the depth partner and a known
     emitter density, as the camera hologram assembles it (:func:`holo_core.optics.imaging.
@@ -42,43 +56,88 @@ def compose(looks, colours, z_ch, first: Hologram, camera, pupil, *, supersample
     cross = _summed([look.cross for look in looks])
     coverage = _summed([look.power[z_ch] for look in looks])
     coverage *= coverage.dtype.type(1 / len(looks))
-    depth_of = {"same": same_wavelength(first, colours), "partner": z_ch,
-                "estimate": depth_estimate, "wavelengths": pair, "centre": centre, "camera": camera,
-                "supersample": supersample}
+    depth_of = {
+        "same": same_wavelength(first, colours),
+        "partner": z_ch,
+        "estimate": depth_estimate,
+        "wavelengths": pair,
+        "centre": centre,
+        "camera": camera,
+        "supersample": supersample,
+    }
     if not first.point_density:  # bare points: no coverage to calibrate; alpha from luminance
-        return _finish(radiance, _depth(looks, cross, **depth_of), None, first, camera, pupil,
-                       exposure, threshold, lam0)
+        return _finish(
+            radiance,
+            _depth(looks, cross, **depth_of),
+            None,
+            first,
+            camera,
+            pupil,
+            exposure,
+            threshold,
+            lam0,
+        )
     exposure = 1.0 if exposure is None else exposure
     colour, alpha, depth, seen, cover = assemble(
-        as_rgb(radiance), coverage, cross, camera=camera, supersample=1, wavelengths=pair,
-        centre=centre, exposure=exposure)
+        as_rgb(radiance),
+        coverage,
+        cross,
+        camera=camera,
+        supersample=1,
+        wavelengths=pair,
+        centre=centre,
+        exposure=exposure,
+    )
     if depth_estimate == "brightest":
-        depth = np.where(alpha > 0, _depth(looks, cross, **depth_of),
-                         BACKGROUND_DEPTH).astype(np.float32)
+        depth = np.where(alpha > 0, _depth(looks, cross, **depth_of), BACKGROUND_DEPTH).astype(
+            np.float32
+        )
     if not (np.isfinite(colour.min(initial=0)) and np.isfinite(colour.max(initial=0))):
-        raise InputError(f"exposure must keep the view's pixels within float32 (finite); got "
-                         f"{shown(exposure)}")
+        raise InputError(
+            f"exposure must keep the view's pixels within float32 (finite); got {shown(exposure)}"
+        )
     limit = lam0 / pupil.diameter
-    info = {"aperture_m": pupil.diameter, "focus_m": pupil.focus,
-            "resolution_limit_rad": limit, "pixel_angle_rad": camera.pixel_angle(),
-            "resolution_limit_px": limit / camera.pixel_angle(),
-            "wavelengths_m": list(first.wavelengths), "exposure": exposure,
-            "pupil_samples": list(n) if isinstance(n, tuple) else [n, n],
-            "iterations": len(looks), "samples": len(looks),
-            "speckle_contrast": _spread(looks, colours, z_ch, coverage)}
-    log.info("render: aperture %.4g m, resolution limit λ/D = %.3g rad = %.2f px",
-             pupil.diameter, limit, info["resolution_limit_px"])
+    info = {
+        "aperture_m": pupil.diameter,
+        "focus_m": pupil.focus,
+        "resolution_limit_rad": limit,
+        "pixel_angle_rad": camera.pixel_angle(),
+        "resolution_limit_px": limit / camera.pixel_angle(),
+        "wavelengths_m": list(first.wavelengths),
+        "exposure": exposure,
+        "pupil_samples": list(n) if isinstance(n, tuple) else [n, n],
+        "iterations": len(looks),
+        "samples": len(looks),
+        "speckle_contrast": _spread(looks, colours, z_ch, coverage),
+    }
+    log.info(
+        "render: aperture %.4g m, resolution limit λ/D = %.3g rad = %.2f px",
+        pupil.diameter,
+        limit,
+        info["resolution_limit_px"],
+    )
     _check_sharp(first, camera, pupil.diameter, info["resolution_limit_px"])
-    return RenderResult(rgb=colour, alpha=alpha, depth=depth, info=info, coverage=cover,
-                        radiance=seen)
+    return RenderResult(
+        rgb=colour, alpha=alpha, depth=depth, info=info, coverage=cover, radiance=seen
+    )
 
 
-def black_view(first: Hologram, camera: Camera, pupil, colours, exposure, threshold
-               ) -> RenderResult:
+def black_view(
+    first: Hologram, camera: Camera, pupil, colours, exposure, threshold
+) -> RenderResult:
     """The view of no light (the camera sees the objects beside the plate, or out of its
     zone's light), with the settings' exposure and the pupil's figures in its info."""
-    return _finish(np.zeros(camera.resolution[::-1] + (len(colours),)), None, None, first,
-                   camera, pupil, exposure, threshold, first.wavelengths[colours[0]])
+    return _finish(
+        np.zeros(camera.resolution[::-1] + (len(colours),)),
+        None,
+        None,
+        first,
+        camera,
+        pupil,
+        exposure,
+        threshold,
+        first.wavelengths[colours[0]],
+    )
 
 
 def same_wavelength(h: Hologram, colours) -> list:
@@ -98,13 +157,22 @@ def _check_sharp(h: Hologram, camera: Camera, diameter: float, spot_px: float) -
     ``diameter`` [m] resolves ``spot_px`` pixels, more than the half pixel of a sharp view."""
     if spot_px * SUPERSAMPLE <= 1 + SHARP_SLACK:
         return
-    made = "" if h.zone is None or not h.zone.pixel else (
-        f"; the plate was recorded for pixels of {h.zone.pixel:.3g} rad"
-        + (f" through a pupil of {h.zone.pupil:.3g} m" if h.zone.pupil else ""))
-    warnings.warn(f"this view resolves {spot_px:.2g} px where a sharp view resolves "
-                  f"{1 / SUPERSAMPLE:g}: its pixels are {camera.pixel_angle():.3g} rad through "
-                  f"a pupil of {diameter:.3g} m{made}; it looks soft: record the plate for "
-                  f"this camera's pixels and pupil", SoftViewWarning, stacklevel=3)
+    made = (
+        ""
+        if h.zone is None or not h.zone.pixel
+        else (
+            f"; the plate was recorded for pixels of {h.zone.pixel:.3g} rad"
+            + (f" through a pupil of {h.zone.pupil:.3g} m" if h.zone.pupil else "")
+        )
+    )
+    warnings.warn(
+        f"this view resolves {spot_px:.2g} px where a sharp view resolves "
+        f"{1 / SUPERSAMPLE:g}: its pixels are {camera.pixel_angle():.3g} rad through "
+        f"a pupil of {diameter:.3g} m{made}; it looks soft: record the plate for "
+        f"this camera's pixels and pupil",
+        SoftViewWarning,
+        stacklevel=3,
+    )
 
 
 def _radiance(looks, colours, composition, supersample) -> np.ndarray:
@@ -117,9 +185,13 @@ def _radiance(looks, colours, composition, supersample) -> np.ndarray:
             _summed([look.power[c] for look in looks], out=radiance[..., i])
         radiance *= radiance.dtype.type(1 / len(looks))
         return radiance
-    return speckle.downsample(speckle.compose(
-        [np.stack([np.abs(look.fine[c]) ** 2 for c in colours], -1) for look in looks],
-        composition), supersample)
+    return speckle.downsample(
+        speckle.compose(
+            [np.stack([np.abs(look.fine[c]) ** 2 for c in colours], -1) for look in looks],
+            composition,
+        ),
+        supersample,
+    )
 
 
 def _summed(images, out=None) -> np.ndarray:
@@ -151,14 +223,15 @@ def _spread(looks, colours, z_ch, coverage) -> float:
     return float(np.median(spread / np.maximum(mean, 1e-30)))
 
 
-def _depth(looks, cross, *, same, partner, estimate, wavelengths, centre, camera: Camera,
-           supersample) -> np.ndarray:
+def _depth(
+    looks, cross, *, same, partner, estimate, wavelengths, centre, camera: Camera, supersample
+) -> np.ndarray:
     """Planar depth [m] from the depth pair's cross image u1·conj(u2): of the pixels' means
     summed over the iterations (``cross``: the intensity-weighted consensus), or per fine
     pixel from the brightest iteration (their ``fine`` images, ``same`` summed into u1)."""
+
     def ranges(c):
-        return depth_mod.from_cross_spectrum(c, wavelengths=wavelengths, centre=centre,
-                                             focus=None)
+        return depth_mod.from_cross_spectrum(c, wavelengths=wavelengths, centre=centre, focus=None)
 
     def planar(ray, cam):
         tx, ty = cam.pixel_tangents()
@@ -169,29 +242,39 @@ def _depth(looks, cross, *, same, partner, estimate, wavelengths, centre, camera
     first = [sum(look.fine[c] for c in same) for look in looks]
     ray, bright = depth_mod.keep_brightest(
         [ranges(u * np.conj(look.fine[partner])) for u, look in zip(first, looks)],
-        [np.abs(u) for u in first])
-    return speckle.pick_brightest(planar(ray, camera.supersampled(supersample)), bright,
-                                  supersample)
+        [np.abs(u) for u in first],
+    )
+    return speckle.pick_brightest(
+        planar(ray, camera.supersampled(supersample)), bright, supersample
+    )
 
 
 def _finish(radiance, ray, coverage, h: Hologram, camera, pupil, exposure, threshold, lam0):
     if not np.isfinite(radiance).all() or (ray is not None and not np.isfinite(ray).all()):
-        peak = float(h.intensity.max() if h.intensity is not None else  # never a NaN view:
-                     np.abs(h.object_wave).max() ** 2)  # say which numbers overflowed
+        peak = float(
+            h.intensity.max()
+            if h.intensity is not None
+            # never a NaN view:
+            else np.abs(h.object_wave).max() ** 2
+        )  # say which numbers overflowed
         scale = min(h.reference_amplitudes, default=1.0) ** 2
-        raise InputError(f"intensity must stay within float32 arithmetic through the view: "
-                         f"this hologram's reaches {peak:.3g}, {peak / scale:.3g} times its "
-                         f"reference intensity |R|² (a recording holds far less than 1e12 "
-                         f"times), and the view overflowed")
+        raise InputError(
+            f"intensity must stay within float32 arithmetic through the view: "
+            f"this hologram's reaches {peak:.3g}, {peak / scale:.3g} times its "
+            f"reference intensity |R|² (a recording holds far less than 1e12 "
+            f"times), and the view overflowed"
+        )
     lum = radiance.mean(-1)
     ref = float(np.percentile(lum, 99.5))
     if exposure is None:
         exposure = 1 / h.point_density if h.point_density else (1 / ref if ref > 0 else 1.0)
     rgb = radiance * exposure
     if np.abs(rgb).max(initial=0) > np.finfo(np.float32).max:  # a view of inf pixels
-        raise InputError(f"exposure must keep the view's pixels within float32: at most "
-                         f"{np.finfo(np.float32).max / np.abs(radiance).max():.3g} for this "
-                         f"view; got {shown(exposure)}")
+        raise InputError(
+            f"exposure must keep the view's pixels within float32: at most "
+            f"{np.finfo(np.float32).max / np.abs(radiance).max():.3g} for this "
+            f"view; got {shown(exposure)}"
+        )
     rgb = as_rgb(rgb)  # one, two, four or more channels: the stated colours
     if coverage is not None:  # geometric: half covered at a silhouette edge, whatever the colour
         alpha = (coverage > threshold).astype(np.float32)
@@ -204,10 +287,19 @@ def _finish(radiance, ray, coverage, h: Hologram, camera, pupil, exposure, thres
     if ray is not None:
         depth = np.where(alpha > 0, ray, BACKGROUND_DEPTH).astype(np.float32)
     limit = lam0 / pupil.diameter
-    info = {"aperture_m": pupil.diameter, "focus_m": pupil.focus,
-            "resolution_limit_rad": limit, "pixel_angle_rad": camera.pixel_angle(),
-            "resolution_limit_px": limit / camera.pixel_angle(),
-            "wavelengths_m": list(h.wavelengths), "exposure": exposure}
-    log.info("render: aperture %.4g m, resolution limit λ/W = %.3g rad = %.2f px",
-             pupil.diameter, limit, info["resolution_limit_px"])
+    info = {
+        "aperture_m": pupil.diameter,
+        "focus_m": pupil.focus,
+        "resolution_limit_rad": limit,
+        "pixel_angle_rad": camera.pixel_angle(),
+        "resolution_limit_px": limit / camera.pixel_angle(),
+        "wavelengths_m": list(h.wavelengths),
+        "exposure": exposure,
+    }
+    log.info(
+        "render: aperture %.4g m, resolution limit λ/W = %.3g rad = %.2f px",
+        pupil.diameter,
+        limit,
+        info["resolution_limit_px"],
+    )
     return RenderResult(rgb=rgb.astype(np.float32), alpha=alpha, depth=depth, info=info)

@@ -36,17 +36,20 @@ from ..scene.plate import ViewingZone
 from ..validate import InputError
 
 PROGRAM = associated(__file__)
+# the kernels' signatures as tables (their arguments in the .cl file's order)
+# fmt: off
 DEPTH_RASTER = kernel(PROGRAM, "depth_raster", zbuf=BUFFER, h=int32, w=int32, b=float32,
                       tx=BUFFER, ty=BUFFER, d=BUFFER, tri=BUFFER, triangles=int32)
 SEEN_FROM = kernel(PROGRAM, "seen_from", seen=BUFFER, point=int32, zbuf=BUFFER, h=int32,
                    w=int32, b=float32, px=BUFFER, py=BUFFER, pz=BUFFER, nx=BUFFER, ny=BUFFER,
                    nz=BUFFER, ex=float32, ey=float32, axes=BUFFER, max_slope=float32,
                    bias_bins=float32, bias_depth=float32, closed=BUFFER, emitters=int32)
+# fmt: on
 
-EDGE_BINS = 4          # bins around the objects' directions
-BIAS_BINS = 1.5        # the depth test's slack: the surface's depth change over this many bins
-BIAS_DEPTH = 2e-3      # ... plus this fraction of the depth
-MAX_SLOPE = 11.0       # tan 85°: a surface seen more edge-on gets no more slack
+EDGE_BINS = 4  # bins around the objects' directions
+BIAS_BINS = 1.5  # the depth test's slack: the surface's depth change over this many bins
+BIAS_DEPTH = 2e-3  # ... plus this fraction of the depth
+MAX_SLOPE = 11.0  # tan 85°: a surface seen more edge-on gets no more slack
 GRID_POINTS = (3, 17)  # the zone's visibility grid, points a side (at least, at most)
 
 
@@ -102,8 +105,9 @@ def grid_points(zone: ViewingZone) -> tuple[int, int]:
     return tuple(int(np.clip(math.ceil(2 * half / step) + 1, *GRID_POINTS)) for half in (hy, hx))
 
 
-def zone_emitters(meshes, zone: ViewingZone, spacing: float, *, layers=3,
-                  grid: tuple | None = None, sides=None) -> Emitters:
+def zone_emitters(
+    meshes, zone: ViewingZone, spacing: float, *, layers=3, grid: tuple | None = None, sides=None
+) -> Emitters:
     """The emitters of ``meshes`` (the plate's frame) that the zone sees (module docstring),
     ``spacing`` apart in direction cosine from the zone's centre; ``sides`` each mesh's
     :func:`~holo_core.scene.mesh.outward` where the caller found it."""
@@ -112,18 +116,27 @@ def zone_emitters(meshes, zone: ViewingZone, spacing: float, *, layers=3,
     every = np.concatenate([m.vertices for m in meshes])
     rotation = zone_frame(zone, np.array([every.min(0), every.max(0)]))
     position, colour, normal, cell, key, closed = surface_points(
-        meshes, zone.centre, rotation, spacing, layers=layers,
-        sides=[outward(m) for m in meshes] if sides is None else sides)
+        meshes,
+        zone.centre,
+        rotation,
+        spacing,
+        layers=layers,
+        sides=[outward(m) for m in meshes] if sides is None else sides,
+    )
     g = grid or grid_points(zone)
-    offsets, seen = visibility(meshes, position, normal, zone, rotation, spacing, g,
-                               closed=closed)
+    offsets, seen = visibility(meshes, position, normal, zone, rotation, spacing, g, closed=closed)
     keep = seen.reshape(len(seen), -1).max(1) > 0
-    return Emitters(position=position[keep], colour=colour[keep], cell=cell[keep],
-                    visibility=seen[keep], grid=offsets, key=key[keep])
+    return Emitters(
+        position=position[keep],
+        colour=colour[keep],
+        cell=cell[keep],
+        visibility=seen[keep],
+        grid=offsets,
+        key=key[keep],
+    )
 
 
-def surface_points(meshes, centre, rotation, spacing: float, *, layers=3, lattice=0,
-                   sides=None):
+def surface_points(meshes, centre, rotation, spacing: float, *, layers=3, lattice=0, sides=None):
     """(position (n, 3) [m], linear colour (n, 3) >= 0, unit normal (n, 3), bin (kx, ky) (n, 2),
     key (n,) uint64, closed (n,) bool) of the crossings of the rays of a pupil at ``centre``
     (3,) [m] with axes ``rotation``, bins ``spacing`` apart in direction cosine, with
@@ -149,11 +162,18 @@ def surface_points(meshes, centre, rotation, spacing: float, *, layers=3, lattic
         colour[sel] = c if c.shape[1] == 3 else np.repeat(c.mean(1, keepdims=True), 3, 1)
         v = np.asarray(mesh.vertices, np.float64)[corners]
         n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
-        normal[sel] = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300) * \
-            (sides[m] or 1.0)
+        normal[sel] = (
+            n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300) * (sides[m] or 1.0)
+        )
     key = emitter_keys(hits.mesh, hits.triangle, hits.kx, hits.ky, lattice)
-    return (position, np.clip(colour, 0, None), normal, np.stack([hits.kx, hits.ky], 1), key,
-            sides[hits.mesh] != 0 if len(hits) else np.zeros(0, bool))
+    return (
+        position,
+        np.clip(colour, 0, None),
+        normal,
+        np.stack([hits.kx, hits.ky], 1),
+        key,
+        sides[hits.mesh] != 0 if len(hits) else np.zeros(0, bool),
+    )
 
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)  # SplitMix64's increment (2⁶⁴/φ)
@@ -197,8 +217,9 @@ def _points(hits, centre, rotation, spacing) -> np.ndarray:
     return local @ rotation.T + centre
 
 
-def visibility(meshes, position, normal, zone: ViewingZone, rotation, spacing, g, *,
-               closed=None, rt=None):
+def visibility(
+    meshes, position, normal, zone: ViewingZone, rotation, spacing, g, *, closed=None, rt=None
+):
     """(grid offsets ((x0, step_x), (y0, step_y)) [m], (n, gy, gx) visibility in [0, 1]) of
     the points ``position`` (n, 3) on surfaces of ``normal`` from the g = (gy, gx) points of
     the zone's centre plane (module docstring; ``emitters.cl``). ``closed`` (n,) bool: the
@@ -215,10 +236,18 @@ def visibility(meshes, position, normal, zone: ViewingZone, rotation, spacing, g
     n = len(position)
     seen = rt.to_device(np.zeros(g[0] * g[1] * max(n, 1), np.float32))
     # the emitters from the zone's centre, and their normals, handed over once for all pupils
-    offsets = dict(zip(("px", "py", "pz"), (rt.to_device(a, np.float32) for a in (
-        np.asarray(position, np.float64) - centre).T)))
-    normals = dict(zip(("nx", "ny", "nz"), (rt.to_device(a, np.float32)
-                                            for a in np.asarray(normal, np.float64).T)))
+    offsets = dict(
+        zip(
+            ("px", "py", "pz"),
+            (rt.to_device(a, np.float32) for a in (np.asarray(position, np.float64) - centre).T),
+        )
+    )
+    normals = dict(
+        zip(
+            ("nx", "ny", "nz"),
+            (rt.to_device(a, np.float32) for a in np.asarray(normal, np.float64).T),
+        )
+    )
     axes = rt.to_device(np.asarray(rotation, np.float64).ravel(), np.float32)  # its rows
     flags = np.zeros(max(n, 1), np.uint8)
     if closed is not None and n:
@@ -232,15 +261,39 @@ def visibility(meshes, position, normal, zone: ViewingZone, rotation, spacing, g
             v = (vertices - eye) @ rotation
             d = -v[:, 2]
             t = v[:, :2] / np.where(d > 1e-9, d, 1)[:, None]
-            DEPTH_RASTER.launch(rt, (len(triangles),), zbuf=zbuf, h=h, w=w, b=spacing,
-                                tx=rt.to_device(t[:, 0], np.float32),
-                                ty=rt.to_device(t[:, 1], np.float32),
-                                d=rt.to_device(d, np.float32), tri=tri,
-                                triangles=len(triangles))
-            SEEN_FROM.launch(rt, (max(n, 1),), seen=seen, point=iy * g[1] + ix, zbuf=zbuf, h=h,
-                             w=w, b=spacing, **offsets, **normals, ex=x, ey=y, axes=axes,
-                             max_slope=MAX_SLOPE, bias_bins=BIAS_BINS, bias_depth=BIAS_DEPTH,
-                             closed=closed, emitters=n)
+            DEPTH_RASTER.launch(
+                rt,
+                (len(triangles),),
+                zbuf=zbuf,
+                h=h,
+                w=w,
+                b=spacing,
+                tx=rt.to_device(t[:, 0], np.float32),
+                ty=rt.to_device(t[:, 1], np.float32),
+                d=rt.to_device(d, np.float32),
+                tri=tri,
+                triangles=len(triangles),
+            )
+            SEEN_FROM.launch(
+                rt,
+                (max(n, 1),),
+                seen=seen,
+                point=iy * g[1] + ix,
+                zbuf=zbuf,
+                h=h,
+                w=w,
+                b=spacing,
+                **offsets,
+                **normals,
+                ex=x,
+                ey=y,
+                axes=axes,
+                max_slope=MAX_SLOPE,
+                bias_bins=BIAS_BINS,
+                bias_depth=BIAS_DEPTH,
+                closed=closed,
+                emitters=n,
+            )
     step = lambda a: float(a[1] - a[0]) if len(a) > 1 else 1.0  # noqa: E731
-    table = read(seen)[:g[0] * g[1] * n].reshape(g[0], g[1], n).transpose(2, 0, 1)
+    table = read(seen)[: g[0] * g[1] * n].reshape(g[0], g[1], n).transpose(2, 0, 1)
     return ((float(xs[0]), step(xs)), (float(ys[0]), step(ys))), np.ascontiguousarray(table)

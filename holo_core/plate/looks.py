@@ -14,11 +14,26 @@ from .recording import PlannedPlate, plate_plan, prepare_plate
 from .tiles import record_looks_tiled
 
 
-def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
-                 zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, depth=True, seed=0,
-                 code=None, encoding="complex", budget=(None, None), url=None, tile=None,
-                 scheduler=None, overwrite=False, progress: jobs.Progress = None,
-                 dashboard=None) -> Hologram:
+def record_plate(
+    meshes,
+    *,
+    plate: Plate,
+    camera=None,
+    zone: ViewingZone | None = None,
+    zone_margin=DEFAULT_ZONE_MARGIN,
+    wavelength=None,
+    depth=True,
+    seed=0,
+    code=None,
+    encoding="complex",
+    budget=(None, None),
+    url=None,
+    tile=None,
+    scheduler=None,
+    overwrite=False,
+    progress: jobs.Progress = None,
+    dashboard=None,
+) -> Hologram:
     """A plate hologram of ``meshes`` (world metres), independent of any camera: what it
     records depends on the meshes, the plate's placement and size, the viewing zone and the
     views' sharpness (:mod:`holo_core.plate.plan`). Its samples are the object wave against
@@ -83,20 +98,53 @@ def record_plate(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None 
     record_looks : several looks of one plate in one pass.
     holo_core.render_view : a camera's view of the plate.
     """
-    planned = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
-                         zone_margin=zone_margin, wavelength=wavelength, looks=1, depth=depth,
-                         budget=budget, tiled=url is not None, tile=tile)
-    return record_planned(planned, codes=(code,), urls=None if url is None else [url],
-                          seed=seed, encoding=encoding, scheduler=scheduler,
-                          overwrite=overwrite, progress=progress, dashboard=dashboard)[0]
+    planned = plate_plan(
+        meshes,
+        plate=plate,
+        camera=camera,
+        zone=zone,
+        zone_margin=zone_margin,
+        wavelength=wavelength,
+        looks=1,
+        depth=depth,
+        budget=budget,
+        tiled=url is not None,
+        tile=tile,
+    )
+    return record_planned(
+        planned,
+        codes=(code,),
+        urls=None if url is None else [url],
+        seed=seed,
+        encoding=encoding,
+        scheduler=scheduler,
+        overwrite=overwrite,
+        progress=progress,
+        dashboard=dashboard,
+    )[0]
 
 
 @validate.scale_free()  # as record_hologram: the renderer's jobs come this way
-def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
-                 zone: ViewingZone | None = None, zone_margin=DEFAULT_ZONE_MARGIN,
-                 wavelength=None, depth=True, seed=0, budget=(None, None), urls=None,
-                 tile=None, scheduler=None, overwrite=False, progress: jobs.Progress = None,
-                 dashboard=None, recording="") -> list[Hologram]:
+def record_looks(
+    meshes,
+    *,
+    looks: int,
+    plate: Plate,
+    camera=None,
+    zone: ViewingZone | None = None,
+    zone_margin=DEFAULT_ZONE_MARGIN,
+    wavelength=None,
+    depth=True,
+    seed=0,
+    budget=(None, None),
+    urls=None,
+    tile=None,
+    scheduler=None,
+    overwrite=False,
+    progress: jobs.Progress = None,
+    dashboard=None,
+    recording="",
+) -> list[Hologram]:
     """Several looks of one plate, recorded in one pass.
 
     The looks differ only in their emitters' phases, so one sum carries them all as further
@@ -138,18 +186,46 @@ def record_looks(meshes, *, looks: int, plate: Plate, camera=None,
         Where ``looks`` is not an integer >= 1, or as :func:`record_plate`.
     """
     looks = validate.integer("looks", looks, 1)
-    planned = plate_plan(meshes, plate=plate, camera=camera, zone=zone,
-                         zone_margin=zone_margin, wavelength=wavelength, looks=looks,
-                         depth=depth, budget=budget, tiled=urls is not None, tile=tile)
-    return record_planned(planned, seed=seed, urls=urls, scheduler=scheduler,
-                          overwrite=overwrite, progress=progress, dashboard=dashboard,
-                          recording=recording)
+    planned = plate_plan(
+        meshes,
+        plate=plate,
+        camera=camera,
+        zone=zone,
+        zone_margin=zone_margin,
+        wavelength=wavelength,
+        looks=looks,
+        depth=depth,
+        budget=budget,
+        tiled=urls is not None,
+        tile=tile,
+    )
+    return record_planned(
+        planned,
+        seed=seed,
+        urls=urls,
+        scheduler=scheduler,
+        overwrite=overwrite,
+        progress=progress,
+        dashboard=dashboard,
+        recording=recording,
+    )
 
 
 @validate.scale_free()
-def record_planned(planned: PlannedPlate, *, codes=None, seed=0, encoding="complex",
-                   urls=None, scheduler=None, overwrite=False, progress: jobs.Progress = None,
-                   dashboard=None, recording="", phases="random") -> list[Hologram]:
+def record_planned(
+    planned: PlannedPlate,
+    *,
+    codes=None,
+    seed=0,
+    encoding="complex",
+    urls=None,
+    scheduler=None,
+    overwrite=False,
+    progress: jobs.Progress = None,
+    dashboard=None,
+    recording="",
+    phases="random",
+) -> list[Hologram]:
     """The looks of the plate ``planned`` (:func:`~holo_core.plate.recording.plate_plan`,
     made once a job, its budget checked there) in one pass: ``codes`` one a look (default:
     the coded looks of its plan's looks, :func:`~holo_core.plate.recording.prepare_plate`),
@@ -157,13 +233,25 @@ def record_planned(planned: PlannedPlate, *, codes=None, seed=0, encoding="compl
     as for :func:`record_looks`; ``phases`` as
     :func:`~holo_core.plate.recording.prepare_plate` takes it)."""
     if planned.tiled != (urls is not None):
-        raise InputError("urls must name the stores of a plate planned tile by tile, and only "
-                         f"of one; this plate is planned {'in tiles' if planned.tiled else 'in memory'}"
-                         f" and urls is {'None' if urls is None else 'given'}")
+        raise InputError(
+            "urls must name the stores of a plate planned tile by tile, and only "
+            f"of one; this plate is planned {'in tiles' if planned.tiled else 'in memory'}"
+            f" and urls is {'None' if urls is None else 'given'}"
+        )
     if urls is not None:
-        return record_looks_tiled(planned, urls=list(urls), codes=codes, scheduler=scheduler,
-                                  overwrite=overwrite, progress=progress, dashboard=dashboard,
-                                  seed=seed, encoding=encoding, recording=recording,
-                                  phases=phases)
-    return prepare_plate(planned, codes=codes, seed=seed, encoding=encoding,
-                         recording=recording, phases=phases).record(progress)
+        return record_looks_tiled(
+            planned,
+            urls=list(urls),
+            codes=codes,
+            scheduler=scheduler,
+            overwrite=overwrite,
+            progress=progress,
+            dashboard=dashboard,
+            seed=seed,
+            encoding=encoding,
+            recording=recording,
+            phases=phases,
+        )
+    return prepare_plate(
+        planned, codes=codes, seed=seed, encoding=encoding, recording=recording, phases=phases
+    ).record(progress)

@@ -51,9 +51,19 @@ MIN_SLANT = 0.05  # cos of the most grazing view a lattice's density is weighted
 
 
 @validate.scale_free()  # each part's wavelength is the plan's (as record_looks)
-def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = True,
-               budget=(None, None), folder=None, overwrite=False, recording: str = "",
-               progress: jobs.Progress = None) -> PlateSet:
+def record_set(
+    meshes,
+    parts,
+    *,
+    looks: int = 2,
+    seed: int = 0,
+    depth: bool = True,
+    budget=(None, None),
+    folder=None,
+    overwrite=False,
+    recording: str = "",
+    progress: jobs.Progress = None,
+) -> PlateSet:
     """Record the looks of every part of a plate along a path, in memory or into a folder.
 
     Parameters
@@ -120,31 +130,38 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
     seed = validate.seed(seed)
     world = mesh_list(meshes)
     sides = [outward(m) for m in world]  # each mesh's outside, found once for every part
-    plans = [_part_plan(world, k, part, looks=looks, depth=depth, memory=budget[0],
-                        sides=sides) for k, part in enumerate(parts)]
+    plans = [
+        _part_plan(world, k, part, looks=looks, depth=depth, memory=budget[0], sides=sides)
+        for k, part in enumerate(parts)
+    ]
     spacing = plans[0].plan.spacing
     for k, p in enumerate(planned.plan for planned in plans):
         if not math.isclose(p.spacing, spacing, rel_tol=1e-9):
-            raise InputError(f"part {k}'s emitters would lie {p.spacing:.4g} apart in direction "
-                             f"cosine, part 0's {spacing:.4g}: a set's parts share one pupil "
-                             f"and pixel angle (parts_along gives them that)")
+            raise InputError(
+                f"part {k}'s emitters would lie {p.spacing:.4g} apart in direction "
+                f"cosine, part 0's {spacing:.4g}: a set's parts share one pupil "
+                f"and pixel angle (parts_along gives them that)"
+            )
     stored = sum(planned.plan.disk_bytes(len(planned.channels)) for planned in plans)
     if budget[1] is not None and stored > budget[1]:
-        raise InputError(f"the set of {len(parts)} parts needs {stored / 2**30:.2f} GiB on disk "
-                         f"({looks} look(s) each); the disk budget is "
-                         f"{budget[1] / 2**30:.2f} GiB: longer stretches share more, a "
-                         f"smaller pupil or coarser views need less")
+        raise InputError(
+            f"the set of {len(parts)} parts needs {stored / 2**30:.2f} GiB on disk "
+            f"({looks} look(s) each); the disk budget is "
+            f"{budget[1] / 2**30:.2f} GiB: longer stretches share more, a "
+            f"smaller pupil or coarser views need less"
+        )
     digest = validate.digest("recording", recording) or set_digest(
-        meshes, parts, seed=seed, looks=looks, depth=depth)
+        meshes, parts, seed=seed, looks=looks, depth=depth
+    )
     recorded = [None] * len(parts)
     if folder is not None:
         folder = set_folder(folder)
-        for k, files in recorded_parts(folder, digest, len(parts),
-                                       overwrite=overwrite).items():
+        for k, files in recorded_parts(folder, digest, len(parts), overwrite=overwrite).items():
             recorded[k] = files
         if all(r is not None for r in recorded):
-            log.info("plate set: %s holds its %d parts already; nothing recorded", folder,
-                     len(parts))
+            log.info(
+                "plate set: %s holds its %d parts already; nothing recorded", folder, len(parts)
+            )
             return read_plate_set(folder)
     shared = set_emitters(world, parts, plans, spacing, sides)
     codes = tuple(look_code(k, looks) for k in range(looks))
@@ -156,16 +173,25 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
     # a part is written while the next is recorded where both fit the memory: the writes wait
     # on the disk (1 GiB a part took 3-6 s, a sixth of a part's time), the sum on the CPU
     pending = None
-    with ThreadPoolExecutor(1, thread_name_prefix="holo-set-writer") if folder is not None \
-            and _overlap_fits(plans, budget[0]) else nullcontext() as writer:
+    with (
+        ThreadPoolExecutor(1, thread_name_prefix="holo-set-writer")
+        if folder is not None and _overlap_fits(plans, budget[0])
+        else nullcontext() as writer
+    ):
         for k, (part, em) in enumerate(zip(parts, shared)):
             if recorded[k] is not None:
                 continue  # written by a recording that stopped
             done = jobs.scaled(progress, k / len(parts), (k + 1) / len(parts))
             recording = prepare_plate(plans[k], codes=codes, seed=seed, emitters=em)
             held = tuple(recording.record(done))
-            log.info("part %d of %d: %d emitters of the set's %d, %s", k + 1, len(parts),
-                     len(em), em.count, recording.plan.describe())
+            log.info(
+                "part %d of %d: %d emitters of the set's %d, %s",
+                k + 1,
+                len(parts),
+                len(em),
+                em.count,
+                recording.plan.describe(),
+            )
             if folder is None:
                 recorded[k] = held
             elif writer is None:
@@ -176,7 +202,7 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
                 pending = writer.submit(write, k, held)
             del held, recording  # a part's samples let go as soon as they are written
         if pending is not None:  # a failed write raises here; a stopped recording's part
-            pending.result()      # being written finishes as the block ends
+            pending.result()  # being written finishes as the block ends
     if folder is None:
         return PlateSet(parts=parts, looks=tuple(recorded), seed=seed, recording=digest)
     return read_plate_set(folder)
@@ -185,20 +211,23 @@ def record_set(meshes, parts, *, looks: int = 2, seed: int = 0, depth: bool = Tr
 def _overlap_fits(plans, budget) -> bool:
     """Whether a part's samples, held while they are written, and the next part's recording
     fit the host's share of its memory and the memory ``budget`` [bytes] (None: no limit)."""
-    need = [(p.plan.memory_bytes(len(p.channels) * p.plan.looks),
-             p.plan.disk_bytes(len(p.channels))) for p in plans]
-    most = max((held + recording for (_, held), (recording, _) in itertools.pairwise(need)),
-               default=0.0)
+    need = [
+        (p.plan.memory_bytes(len(p.channels) * p.plan.looks), p.plan.disk_bytes(len(p.channels)))
+        for p in plans
+    ]
+    most = max(
+        (held + recording for (_, held), (recording, _) in itertools.pairwise(need)), default=0.0
+    )
     return most <= memory.host_share(budget)
 
 
-def _part_plan(meshes, k: int, part: PathPart, *, looks, depth, memory,
-               sides=None) -> PlannedPlate:
+def _part_plan(meshes, k: int, part: PathPart, *, looks, depth, memory, sides=None) -> PlannedPlate:
     """Part ``k``'s plan (:func:`~holo_core.plate.recording.plate_plan`, its looks held
     together within ``memory`` [bytes]); its refusal names the part."""
     try:
-        return plate_plan(meshes, plate=part.plate, looks=looks, depth=depth,
-                          budget=(memory, None), sides=sides)
+        return plate_plan(
+            meshes, plate=part.plate, looks=looks, depth=depth, budget=(memory, None), sides=sides
+        )
     except InputError as e:
         raise InputError(f"part {k}: {e}") from None
 
@@ -214,8 +243,12 @@ def set_emitters(meshes, parts, plans, spacing: float, sides=None) -> Iterator[E
     for part, planned in zip(parts, plans):
         m, zone = part.plate.matrix_world, planned.plan.zone
         every = np.concatenate([x.vertices for x in planned.meshes])
-        poses.append((m[:3, :3] @ np.asarray(zone.centre) + m[:3, 3],
-                      m[:3, :3] @ zone_frame(zone, np.array([every.min(0), every.max(0)]))))
+        poses.append(
+            (
+                m[:3, :3] @ np.asarray(zone.centre) + m[:3, 3],
+                m[:3, :3] @ zone_frame(zone, np.array([every.min(0), every.max(0)])),
+            )
+        )
     every = np.concatenate([x.vertices for x in world])
     lattices = [poses[k] for k in lattice_parts([c for c, _ in poses], every.mean(0))]
     centres = np.array([c for c, _ in lattices])
@@ -223,7 +256,8 @@ def set_emitters(meshes, parts, plans, spacing: float, sides=None) -> Iterator[E
     sides = [outward(m) for m in world] if sides is None else sides  # found once a set
     for k, (centre, rotation) in enumerate(lattices):
         position, colour, normal, cell, key, closed = surface_points(
-            world, centre, rotation, spacing, layers=LAYERS, lattice=k, sides=sides)
+            world, centre, rotation, spacing, layers=LAYERS, lattice=k, sides=sides
+        )
         towards = centres[None, :, :] - position[:, None, :]
         cosine = np.einsum("nj,npj->np", normal, towards) / np.linalg.norm(towards, axis=2)
         facing = np.abs(cosine)
@@ -233,10 +267,18 @@ def set_emitters(meshes, parts, plans, spacing: float, sides=None) -> Iterator[E
         # surface has no emitters where they run out: a 90° orbit's end frame lost a bite of
         # the sphere, and gained a blur beyond it, to the far end's lattice)
         own = np.where(closed[:, None], cosine, facing).argmax(1) == k
-        points.append((position[own], colour[own], normal[own], cell[own], facing[own, k],
-                       key[own], closed[own]))
-    position, colour, normal, cell, slant, key, closed = (np.concatenate(a)
-                                                          for a in zip(*points))
+        points.append(
+            (
+                position[own],
+                colour[own],
+                normal[own],
+                cell[own],
+                facing[own, k],
+                key[own],
+                closed[own],
+            )
+        )
+    position, colour, normal, cell, slant, key, closed = (np.concatenate(a) for a in zip(*points))
     seen = []
     for part, planned, (centre, _) in zip(parts, plans, poses):
         local, zone = planned.meshes, planned.plan.zone
@@ -244,8 +286,16 @@ def set_emitters(meshes, parts, plans, spacing: float, sides=None) -> Iterator[E
         every = np.concatenate([x.vertices for x in local])
         rotation = zone_frame(zone, np.array([every.min(0), every.max(0)]))
         here = part.plate.to_plate(position)
-        offsets, table = visibility(local, here, normal @ m[:3, :3], zone, rotation, spacing,
-                                    grid_points(zone), closed=closed)
+        offsets, table = visibility(
+            local,
+            here,
+            normal @ m[:3, :3],
+            zone,
+            rotation,
+            spacing,
+            grid_points(zone),
+            closed=closed,
+        )
         towards = centre - position
         facing = np.abs(np.einsum("nj,nj->n", normal, towards)) / np.linalg.norm(towards, axis=1)
         # a lattice seen from this zone holds cos(its slant)/cos(this zone's) emitters a
@@ -254,17 +304,26 @@ def set_emitters(meshes, parts, plans, spacing: float, sides=None) -> Iterator[E
         keep = np.flatnonzero(table.reshape(len(table), -1).max(1) > 0)
         # held as the recording's own 8-bit table (prepare_plate rounds it so), not float32:
         # a long path's parts hold every one of their emitters' tables at once here
-        seen.append((keep, offsets, np.round(table[keep] * 255).astype(np.uint8),
-                     weight[keep]))
+        seen.append((keep, offsets, np.round(table[keep] * 255).astype(np.uint8), weight[keep]))
     kept = np.zeros(len(position), bool)
     for keep, *_ in seen:
         kept[keep] = True
     ids = np.cumsum(kept) - 1  # the set's emitters: those some part sees, numbered once
     count = int(kept.sum())
-    return (Emitters(position=part.plate.to_plate(position[keep]), colour=colour[keep],
-                     cell=cell[keep], visibility=table / np.float32(255), grid=offsets,
-                     ids=ids[keep], count=count, weight=weight, key=key[keep])
-            for part, (keep, offsets, table, weight) in zip(parts, seen))
+    return (
+        Emitters(
+            position=part.plate.to_plate(position[keep]),
+            colour=colour[keep],
+            cell=cell[keep],
+            visibility=table / np.float32(255),
+            grid=offsets,
+            ids=ids[keep],
+            count=count,
+            weight=weight,
+            key=key[keep],
+        )
+        for part, (keep, offsets, table, weight) in zip(parts, seen)
+    )
 
 
 def set_digest(meshes, parts, *, seed: int, looks: int, depth: bool) -> str:
@@ -280,6 +339,9 @@ def set_digest(meshes, parts, *, seed: int, looks: int, depth: bool) -> str:
     for part in parts:
         z = part.plate.zone
         h.update(np.asarray(part.plate.matrix_world, np.float64).tobytes())
-        h.update(repr((part.plate.width, part.plate.height, z.centre, z.half_extents, z.pupil,
-                       z.pixel)).encode())
+        h.update(
+            repr(
+                (part.plate.width, part.plate.height, z.centre, z.half_extents, z.pupil, z.pixel)
+            ).encode()
+        )
     return h.hexdigest()

@@ -31,13 +31,19 @@ from ..scene.plate_set import PathPart, PlateSet, reach_beyond
 from ..validate import InputError, shown
 from .plan import CHANNELS, LOOKS, plan, seen_area
 
-DEFAULT_STRETCH = 0.1   # [m] of path a part holds (the 10 cm dolly one plate serves well)
-WINDOW_PAD = 0.02       # fraction of the window added on each side of a part's plate
+DEFAULT_STRETCH = 0.1  # [m] of path a part holds (the 10 cm dolly one plate serves well)
+WINDOW_PAD = 0.02  # fraction of the window added on each side of a part's plate
 LATTICE_TURN = math.radians(5)  # [rad] of the path's turn about the objects a lattice serves
 
 
-def parts_along(cameras, bounds, *, distance: float, stretch: float = DEFAULT_STRETCH,
-                margin: float = SHOT_ZONE_MARGIN) -> tuple[PathPart, ...]:
+def parts_along(
+    cameras,
+    bounds,
+    *,
+    distance: float,
+    stretch: float = DEFAULT_STRETCH,
+    margin: float = SHOT_ZONE_MARGIN,
+) -> tuple[PathPart, ...]:
     """Plan the parts of a plate serving ``cameras`` (one a frame, in order along the path).
 
     Parameters
@@ -94,8 +100,10 @@ def parts_along(cameras, bounds, *, distance: float, stretch: float = DEFAULT_ST
         raise InputError("cameras must be a non-empty sequence of Camera (one a frame)")
     box = validate.array("bounds", bounds, "(2, 3) min and max corners [m]")
     if box.shape != (2, 3) or not np.isfinite(box).all() or (box[1] < box[0]).any():
-        raise InputError(f"bounds must be (2, 3) finite min and max corners [m]; got "
-                         f"{np.asarray(bounds).tolist()}"[:300])
+        raise InputError(
+            f"bounds must be (2, 3) finite min and max corners [m]; got "
+            f"{np.asarray(bounds).tolist()}"[:300]
+        )
     distance = validate.positive("distance", distance, "m")
     margin = validate.finite("margin", margin, "m")
     if margin < 0:
@@ -104,19 +112,25 @@ def parts_along(cameras, bounds, *, distance: float, stretch: float = DEFAULT_ST
     pixel = min(c.pixel_angle() for c in cams)
     stretch = validate.positive("stretch", stretch, "m")
     if stretch <= pupil:
-        raise InputError(f"stretch must exceed the pupil ({pupil:.4g} m), which consecutive "
-                         f"parts overlap by; got {shown(stretch)} m")
+        raise InputError(
+            f"stretch must exceed the pupil ({pupil:.4g} m), which consecutive "
+            f"parts overlap by; got {shown(stretch)} m"
+        )
     positions = np.array([c.position for c in cams])
     for f, p in enumerate(positions):
         if ((p >= box[0]) & (p <= box[1])).all():
-            raise InputError(f"frame {f}: the camera at ({p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g}) m "
-                             f"lies inside the objects' box {box.tolist()}: a plate can only "
-                             f"be looked at from outside the objects")
+            raise InputError(
+                f"frame {f}: the camera at ({p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g}) m "
+                f"lies inside the objects' box {box.tolist()}: a plate can only "
+                f"be looked at from outside the objects"
+            )
     for f, (p, q) in enumerate(itertools.pairwise(positions)):
         if _crosses(p, q, box):
-            raise InputError(f"frame {f}: the path from its camera to frame {f + 1}'s passes "
-                             f"through the objects' box {box.tolist()}: a plate can only be "
-                             f"looked at from outside the objects")
+            raise InputError(
+                f"frame {f}: the path from its camera to frame {f + 1}'s passes "
+                f"through the objects' box {box.tolist()}: a plate can only be "
+                f"looked at from outside the objects"
+            )
     s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(positions, axis=0), axis=1))]
     length = float(s[-1])
     count = 1 if length <= stretch else math.ceil((length - pupil) / (stretch - pupil))
@@ -128,17 +142,21 @@ def parts_along(cameras, bounds, *, distance: float, stretch: float = DEFAULT_ST
     for k, a in enumerate(starts):
         span = (float(a), float(min(a + stretch, length)))
         path = _path_between(positions, s, *span, step=max(pupil, margin, 1e-3) / 2)
-        inside = [f for f, sf in enumerate(s) if span[0] <= sf <= span[1]] or \
-            [min(int(np.searchsorted(s, span[0])), len(s) - 1)]
+        inside = [f for f, sf in enumerate(s) if span[0] <= sf <= span[1]] or [
+            min(int(np.searchsorted(s, span[0])), len(s) - 1)
+        ]
         up = np.mean([cams[f].matrix_world[:3, 1] for f in inside], 0)
-        plate = _facing(path, {f: positions[f] for f in inside}, up, box, centre, distance,
-                        pupil, margin, pixel)
+        plate = _facing(
+            path, {f: positions[f] for f in inside}, up, box, centre, distance, pupil, margin, pixel
+        )
         held = [f for f, p in enumerate(positions) if reach_beyond(plate, p, pupil) <= 1e-9]
         parts.append(PathPart(plate=plate, stretch=span, frames=tuple(held)))
     for f, p in enumerate(positions):
         if not any(f in part.frames for part in parts):  # the stretches' overlap prevents it
-            raise InputError(f"frame {f}: no part's zone holds the camera's pupil at "
-                             f"({p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g}) m")
+            raise InputError(
+                f"frame {f}: no part's zone holds the camera's pupil at "
+                f"({p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g}) m"
+            )
     return tuple(parts)
 
 
@@ -148,10 +166,12 @@ def _crosses(p, q, box) -> bool:
     d = q - p
     with np.errstate(divide="ignore", invalid="ignore"):
         t0, t1 = (box[0] - p) / d, (box[1] - p) / d
-    lo = np.where(d == 0, np.where((p >= box[0]) & (p <= box[1]), -np.inf, np.inf),
-                  np.minimum(t0, t1))
-    hi = np.where(d == 0, np.where((p >= box[0]) & (p <= box[1]), np.inf, -np.inf),
-                  np.maximum(t0, t1))
+    lo = np.where(
+        d == 0, np.where((p >= box[0]) & (p <= box[1]), -np.inf, np.inf), np.minimum(t0, t1)
+    )
+    hi = np.where(
+        d == 0, np.where((p >= box[0]) & (p <= box[1]), np.inf, -np.inf), np.maximum(t0, t1)
+    )
     return bool(max(lo.max(), 0.0) <= min(hi.min(), 1.0))
 
 
@@ -171,8 +191,10 @@ def _facing(path, frames: dict, up, box, centre, distance, pupil, margin, pixel)
     ``frames`` (index: world position [m]) the frames on its stretch, named where refused."""
     z = path.mean(0) - centre
     if np.linalg.norm(z) < 1e-9:
-        raise InputError(f"frame {min(frames)}: the path's stretch there is centred on the "
-                         f"objects' centre; no plate can face it")
+        raise InputError(
+            f"frame {min(frames)}: the path's stretch there is centred on the "
+            f"objects' centre; no plate can face it"
+        )
     z = z / np.linalg.norm(z)
     x = np.cross(up, z)
     if np.linalg.norm(x) < 1e-6:  # the cameras' up along the plate's normal
@@ -185,21 +207,27 @@ def _facing(path, frames: dict, up, box, centre, distance, pupil, margin, pixel)
     plate = Plate(matrix_world=pose, width=1.0, height=1.0)
     objects = plate.to_plate(box_corners(box))
     if objects[:, 2].max() >= 0:
-        raise InputError(f"frames {min(frames)}-{max(frames)}: a plate {distance:.4g} m from "
-                         f"the objects' centre facing them cuts the objects (they reach z = "
-                         f"{objects[:, 2].max():.4g} m in its frame); place it farther from "
-                         f"them")
+        raise InputError(
+            f"frames {min(frames)}-{max(frames)}: a plate {distance:.4g} m from "
+            f"the objects' centre facing them cuts the objects (they reach z = "
+            f"{objects[:, 2].max():.4g} m in its frame); place it farther from "
+            f"them"
+        )
     for f, p in frames.items():
         z_f = plate.to_plate(p[None])[0, 2]
         if z_f <= 0:
-            raise InputError(f"frame {f}: the camera is {-z_f:.4g} m behind its part's plate "
-                             f"(the plates lie {distance:.4g} m from the objects' centre); "
-                             f"the path passes behind a part there: place the plates nearer "
-                             f"the objects")
+            raise InputError(
+                f"frame {f}: the camera is {-z_f:.4g} m behind its part's plate "
+                f"(the plates lie {distance:.4g} m from the objects' centre); "
+                f"the path passes behind a part there: place the plates nearer "
+                f"the objects"
+            )
     local = plate.to_plate(path)
     if (local[:, 2] <= 0).any():  # between frames: named by the frame before
-        raise InputError(f"frame {min(frames)}: the path after it passes behind its part's "
-                         f"plate (z = {local[:, 2].min():.4g} m in the plate's frame)")
+        raise InputError(
+            f"frame {min(frames)}: the path after it passes behind its part's "
+            f"plate (z = {local[:, 2].min():.4g} m in the plate's frame)"
+        )
     zone = ViewingZone.fit(local, pupil=pupil, margin=margin, pixel=pixel)
     # the window through which the objects' light reaches the zone
     b, q = objects[:, None, :], zone.corners()[None, :, :]
@@ -210,10 +238,12 @@ def _facing(path, frames: dict, up, box, centre, distance, pupil, margin, pixel)
     mid = (lo + hi) / 2
     pose[:3, 3] += x * mid[0] + y * mid[1]
     shifted = np.asarray(zone.centre) - (mid[0], mid[1], 0.0)
-    zone = ViewingZone(centre=tuple(shifted), half_extents=zone.half_extents, pupil=pupil,
-                       pixel=pixel)
-    return Plate(matrix_world=pose, width=float(hi[0] - lo[0]), height=float(hi[1] - lo[1]),
-                 zone=zone)
+    zone = ViewingZone(
+        centre=tuple(shifted), half_extents=zone.half_extents, pupil=pupil, pixel=pixel
+    )
+    return Plate(
+        matrix_world=pose, width=float(hi[0] - lo[0]), height=float(hi[1] - lo[1]), zone=zone
+    )
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -251,14 +281,21 @@ class SetPlan:
         machine's: :func:`holo_core.estimate.plate_set`), else the zone sums' at the
         development machine's rate."""
         widest = max(self.plans, key=lambda p: p.samples)
-        time = f"records in {estimate.words()}" if estimate is not None else \
-            (f"its zone sums about {self.record_seconds():.0f} s at the development machine's "
-             f"rate (the emitters, the files and this machine's speed not counted)")
-        return (f"{len(self.plans)} part(s) along {self.length:.3g} m of path, "
-                f"{self.samples / 1e6:.3g} Mpx in all (the largest {widest.shape[1]} x "
-                f"{widest.shape[0]}), {self.plans[0].looks} look(s): "
-                f"{gib(self.disk_bytes())} on disk, {gib(self.memory_bytes())} of memory "
-                f"while recording (a part at a time); {time}; a view reads one part")
+        time = (
+            f"records in {estimate.words()}"
+            if estimate is not None
+            else (
+                f"its zone sums about {self.record_seconds():.0f} s at the development machine's "
+                f"rate (the emitters, the files and this machine's speed not counted)"
+            )
+        )
+        return (
+            f"{len(self.plans)} part(s) along {self.length:.3g} m of path, "
+            f"{self.samples / 1e6:.3g} Mpx in all (the largest {widest.shape[1]} x "
+            f"{widest.shape[0]}), {self.plans[0].looks} look(s): "
+            f"{gib(self.disk_bytes())} on disk, {gib(self.memory_bytes())} of memory "
+            f"while recording (a part at a time); {time}; a view reads one part"
+        )
 
 
 def plan_parts(parts, points, *, looks: int = LOOKS, meshes=None) -> SetPlan:
@@ -279,16 +316,35 @@ def plan_parts(parts, points, *, looks: int = LOOKS, meshes=None) -> SetPlan:
     for part in parts:
         local = part.plate.to_plate(world)
         zone = part.plate.zone
-        seen = None if shapes is None else seen_area(
-            [replace(m, vertices=part.plate.to_plate(m.vertices)) for m in shapes], zone.centre,
-            sides)
-        plans.append(plan((part.plate.width, part.plate.height),
-                          np.array([local.min(0), local.max(0)]), zone=zone,
-                          pixel_angle=zone.pixel, looks=looks, seen=seen))
-    centres = [part.plate.matrix_world[:3, :3] @ np.asarray(part.plate.zone.centre)
-               + part.plate.matrix_world[:3, 3] for part in parts]
-    return SetPlan(plans=tuple(plans), length=float(parts[-1].stretch[1] - parts[0].stretch[0]),
-                   lattices=len(lattice_parts(centres, world.mean(0))))
+        seen = (
+            None
+            if shapes is None
+            else seen_area(
+                [replace(m, vertices=part.plate.to_plate(m.vertices)) for m in shapes],
+                zone.centre,
+                sides,
+            )
+        )
+        plans.append(
+            plan(
+                (part.plate.width, part.plate.height),
+                np.array([local.min(0), local.max(0)]),
+                zone=zone,
+                pixel_angle=zone.pixel,
+                looks=looks,
+                seen=seen,
+            )
+        )
+    centres = [
+        part.plate.matrix_world[:3, :3] @ np.asarray(part.plate.zone.centre)
+        + part.plate.matrix_world[:3, 3]
+        for part in parts
+    ]
+    return SetPlan(
+        plans=tuple(plans),
+        length=float(parts[-1].stretch[1] - parts[0].stretch[0]),
+        lattices=len(lattice_parts(centres, world.mean(0))),
+    )
 
 
 def lattice_parts(centres, target, turn: float = LATTICE_TURN) -> list[int]:
@@ -327,5 +383,6 @@ def _room(part: PathPart, position, pupil) -> float:
     """How far [m] the pupil's edge lies inside the part's zone, across the plate."""
     z = part.plate.zone
     local = part.plate.to_plate(np.asarray(position, np.float64)[None])[0]
-    return float((np.asarray(z.half_extents[:2]) - np.abs(local[:2] - z.centre[:2])).min()
-                 - pupil / 2)
+    return float(
+        (np.asarray(z.half_extents[:2]) - np.abs(local[:2] - z.centre[:2])).min() - pupil / 2
+    )

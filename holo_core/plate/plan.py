@@ -30,29 +30,30 @@ from ..scene.mesh import outward
 from ..scene.plate import ViewingZone, box_corners
 from ..validate import InputError
 
-SUPERSAMPLE = 2        # fine pixels per pixel: the reference view resolves one
-SHARP_SLACK = 1e-6     # of a spot: a zone's pixel and pupil kept in float32 (a .blend's) round
-                       # them by 6e-8
-RIM = 0.15             # the zone's soft rim, a fraction of its half widths
-LAYERS = 3             # surfaces an emitter ray may cross and still be recorded (depth peeling)
-TILE = 2048            # samples a side of a tiled recording's tile, at most (fitted_tile)
-TILE_COST = 2**17      # samples a tile costs beyond its own: its task, its emitters' lists
-LOOKS = 2              # coded looks recorded by default (the checkerboard pair)
-CHANNELS = 4           # R, G, B at λ1 and the depth partner at λ2
-SAMPLE_BYTES = 8       # complex64
+SUPERSAMPLE = 2  # fine pixels per pixel: the reference view resolves one
+# of a spot: a zone's pixel and pupil kept in float32 (a .blend's) round them by 6e-8
+SHARP_SLACK = 1e-6
+RIM = 0.15  # the zone's soft rim, a fraction of its half widths
+LAYERS = 3  # surfaces an emitter ray may cross and still be recorded (depth peeling)
+TILE = 2048  # samples a side of a tiled recording's tile, at most (fitted_tile)
+TILE_COST = 2**17  # samples a tile costs beyond its own: its task, its emitters' lists
+LOOKS = 2  # coded looks recorded by default (the checkerboard pair)
+CHANNELS = 4  # R, G, B at λ1 and the depth partner at λ2
+SAMPLE_BYTES = 8  # complex64
 # measured on the development machine (2-core EPYC Zen 4, Intel's CPU OpenCL, alone): the
 # zone sum's pairs (emitter, sample) per second, per channel group (three colours cost one),
 # as this plan counts them (the emitters from the surfaces the zone sees, the footprints the
 # cones' whole: the sum skips their faded rims, and pays for the tiles they cut)
-PAIRS_PER_SECOND = 2.2e9  # one look, its depth partner in the colours' pass, the colours one
-                          # amplitude an emitter: the shot's part of a 10 cm dolly at the 5 mm
-                          # margin, 3.3e10 pairs (two coded looks) summed in 14.5 s
-FURTHER_LOOK = 0.35      # a further independent look in the same pass, of a look's time (its
-                         # channels: on the shot's plate two looks took 34.6 s, apart 51.5 s)
-FURTHER_CODED = 0.12     # a further coded look (2 or m² looks): its classes' set-up and mixing
-COLOURS_ONLY = 0.8       # no depth partner: the colours' recurrence alone
+# one look, its depth partner in the colours' pass, the colours one amplitude an emitter: the shot's
+# part of a 10 cm dolly at the 5 mm margin, 3.3e10 pairs (two coded looks) summed in 14.5 s
+PAIRS_PER_SECOND = 2.2e9
+# a further independent look in the same pass, of a look's time (its channels: on the shot's plate
+# two looks took 34.6 s, apart 51.5 s)
+FURTHER_LOOK = 0.35
+FURTHER_CODED = 0.12  # a further coded look (2 or m² looks): its classes' set-up and mixing
+COLOURS_ONLY = 0.8  # no depth partner: the colours' recurrence alone
 VIEW_SAMPLE_SECONDS = 3.9e-9  # per window sample and channel of a view: read, filter, gather
-FINE_PIXEL_SECONDS = 7e-8    # per fine pixel and look of a view: spectra, image, assembly
+FINE_PIXEL_SECONDS = 7e-8  # per fine pixel and look of a view: spectra, image, assembly
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -99,9 +100,13 @@ class PlatePlan:
     def disk_bytes(self, channels=CHANNELS, tiled=False) -> float:
         """Bytes of the recorded plate, every look: its files, or its tiled stores, which
         keep their edge tiles whole."""
-        held = self.samples if not tiled else \
-            math.ceil(self.shape[0] / self.tile) * math.ceil(self.shape[1] / self.tile) * \
-            self.tile ** 2
+        held = (
+            self.samples
+            if not tiled
+            else math.ceil(self.shape[0] / self.tile)
+            * math.ceil(self.shape[1] / self.tile)
+            * self.tile**2
+        )
         return SAMPLE_BYTES * channels * self.looks * held
 
     def needs_tiles(self, limit: float) -> bool:
@@ -113,7 +118,7 @@ class PlatePlan:
         """Host bytes while recording: the whole plate of one look in memory, or one tile's
         channels and the emitters' tables when ``tiled``."""
         per_emitter = 8 * 3 + 8 * channels + 4 * 4 + 64  # position, amplitudes, footprint, …
-        held = self.tile ** 2 if tiled else self.samples
+        held = self.tile**2 if tiled else self.samples
         return 2 * SAMPLE_BYTES * channels * held + per_emitter * self.emitters
 
     def pairs(self, channels=CHANNELS) -> float:
@@ -130,32 +135,40 @@ class PlatePlan:
         (:func:`holo_core.estimate.plate` counts those on this machine)."""
         return self.pairs(channels) / PAIRS_PER_SECOND
 
-    def check_budget(self, *, memory=None, disk=None, channels=CHANNELS, tiled=False,
-                     held=1) -> None:
+    def check_budget(
+        self, *, memory=None, disk=None, channels=CHANNELS, tiled=False, held=1
+    ) -> None:
         """:class:`InputError` with the sizes and what would take less, before any work, when
         the recording needs more than ``memory`` (the whole plate, or one tile when
         ``tiled``; of ``held`` looks recorded together) or its plate more than ``disk``
         [bytes] (None: no limit)."""
-        advice = ("a smaller viewing zone, objects nearer the plate, a coarser view (fewer "
-                  "pixels or a smaller aperture) or fewer looks need less; Camera mode needs "
-                  "no plate")
+        advice = (
+            "a smaller viewing zone, objects nearer the plate, a coarser view (fewer "
+            "pixels or a smaller aperture) or fewer looks need less; Camera mode needs "
+            "no plate"
+        )
         stored = self.disk_bytes(channels, tiled=tiled)
         if disk is not None and stored > disk:
-            raise InputError(f"the plate needs {memory_mod.gib(stored)} on disk "
-                             f"({self.looks} look(s) of {self.shape[1]} x {self.shape[0]} "
-                             f"samples, {channels} channels{', in tiles' if tiled else ''}); "
-                             f"the disk budget is {memory_mod.gib(disk)}: "
-                             f"{advice}")
+            raise InputError(
+                f"the plate needs {memory_mod.gib(stored)} on disk "
+                f"({self.looks} look(s) of {self.shape[1]} x {self.shape[0]} "
+                f"samples, {channels} channels{', in tiles' if tiled else ''}); "
+                f"the disk budget is {memory_mod.gib(disk)}: "
+                f"{advice}"
+            )
         need = self.memory_bytes(channels * held, tiled=tiled)
         if memory is not None and need > memory:
             piece = "a tile at a time" if tiled else "in one piece"
-            raise InputError(f"recording the plate needs {memory_mod.gib(need)} of memory "
-                             f"{piece}; the memory budget is "
-                             f"{memory_mod.gib(memory)}: "
-                             f"{'' if tiled else 'record it tile by tile, or '}{advice}")
+            raise InputError(
+                f"recording the plate needs {memory_mod.gib(need)} of memory "
+                f"{piece}; the memory budget is "
+                f"{memory_mod.gib(memory)}: "
+                f"{'' if tiled else 'record it tile by tile, or '}{advice}"
+            )
 
-    def check_recording(self, *, memory=None, disk=None, channels=CHANNELS,
-                        tiled: bool | None = False) -> bool:
+    def check_recording(
+        self, *, memory=None, disk=None, channels=CHANNELS, tiled: bool | None = False
+    ) -> bool:
         """Whether the looks are recorded tile by tile, checked before any work: ``tiled``
         None decides it (:meth:`needs_tiles` against the host's share of its memory, at
         most ``memory``); :class:`InputError` where the recording of every look together
@@ -163,23 +176,29 @@ class PlatePlan:
         :meth:`check_budget`) or the host's share of its memory."""
         if tiled is None:
             tiled = self.needs_tiles(memory_mod.host_share(memory))
-        self.check_budget(memory=memory, disk=disk, channels=channels, tiled=tiled,
-                          held=self.looks)
-        held = f"a {self.tile}x{self.tile} tile" if tiled else \
-            f"a {self.shape[1]}x{self.shape[0]} plate"
-        memory_mod.check_host(f"{held} of {channels * self.looks} channels",
-                              self.memory_bytes(channels * self.looks, tiled=tiled))
+        self.check_budget(memory=memory, disk=disk, channels=channels, tiled=tiled, held=self.looks)
+        held = (
+            f"a {self.tile}x{self.tile} tile"
+            if tiled
+            else f"a {self.shape[1]}x{self.shape[0]} plate"
+        )
+        memory_mod.check_host(
+            f"{held} of {channels * self.looks} channels",
+            self.memory_bytes(channels * self.looks, tiled=tiled),
+        )
         return bool(tiled)
 
     def describe(self) -> str:
         """The plan in plain words: samples, spacing, size on disk (its time:
         :func:`holo_core.estimate.plate`)."""
         mpx = self.samples / 1e6
-        return (f"{self.shape[1]} x {self.shape[0]} samples ({mpx:.3g} Mpx, "
-                f"{self.pitch * 1e6:.3g} µm apart, {self.size[0] * 1e3:.4g} x "
-                f"{self.size[1] * 1e3:.4g} mm of the plate) for the zone {self.zone.describe()}; "
-                f"about {self.emitters:,} emitters; {self.looks} look(s): "
-                f"{memory_mod.gib(self.disk_bytes())}")
+        return (
+            f"{self.shape[1]} x {self.shape[0]} samples ({mpx:.3g} Mpx, "
+            f"{self.pitch * 1e6:.3g} µm apart, {self.size[0] * 1e3:.4g} x "
+            f"{self.size[1] * 1e3:.4g} mm of the plate) for the zone {self.zone.describe()}; "
+            f"about {self.emitters:,} emitters; {self.looks} look(s): "
+            f"{memory_mod.gib(self.disk_bytes())}"
+        )
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -198,16 +217,31 @@ class ViewPlan:
     seconds: float
 
     def describe(self) -> str:
-        verdict = ("sharp" if self.sharp else f"about {self.spot_px:.2g} px blurred")
-        where = ("inside the zone" if not self.outside_zone else
-                 f"{self.outside_zone * 1e3:.3g} mm outside the zone")
-        return (f"the view is {verdict} (resolves {self.spot_px:.2g} px), the camera "
-                f"{where}; it reads {self.window / 1e6:.3g} Mpx of the plate, about "
-                f"{duration(self.seconds)} here")
+        verdict = "sharp" if self.sharp else f"about {self.spot_px:.2g} px blurred"
+        where = (
+            "inside the zone"
+            if not self.outside_zone
+            else f"{self.outside_zone * 1e3:.3g} mm outside the zone"
+        )
+        return (
+            f"the view is {verdict} (resolves {self.spot_px:.2g} px), the camera "
+            f"{where}; it reads {self.window / 1e6:.3g} Mpx of the plate, about "
+            f"{duration(self.seconds)} here"
+        )
 
 
-def summary(p: PlatePlan, v: ViewPlan, *, lens: str, resolution, plate_size,
-            camera, device=None, cache_dir=None, load_average=None) -> list[str]:
+def summary(
+    p: PlatePlan,
+    v: ViewPlan,
+    *,
+    lens: str,
+    resolution,
+    plate_size,
+    camera,
+    device=None,
+    cache_dir=None,
+    load_average=None,
+) -> list[str]:
     """The plan in plain words, the verdict first: whether ``v``'s views (``resolution``
     (W, H) through ``lens``, e.g. '40 mm f/2.8', from ``camera`` (3,) [m]) are sharp, how
     long the first frame (the recording, its files and its view, in a new worker, the set-up
@@ -217,17 +251,22 @@ def summary(p: PlatePlan, v: ViewPlan, *, lens: str, resolution, plate_size,
     the emitters, disk and memory (mm, µm, seconds, GiB)."""
     rows, cols = p.shape
     calibration = estimate_mod.load(device=device, cache_dir=cache_dir)
-    first = estimate_mod.plate(p, v, device=device, cache_dir=cache_dir,
-                               calibration=calibration, load_average=load_average)
-    later = estimate_mod.plate(p, v, record=False, calibration=calibration, warm=True,
-                               load_average=load_average)
+    first = estimate_mod.plate(
+        p, v, device=device, cache_dir=cache_dir, calibration=calibration, load_average=load_average
+    )
+    later = estimate_mod.plate(
+        p, v, record=False, calibration=calibration, warm=True, load_average=load_average
+    )
     later_view = sum(s for name, s in later.work if name == "view")
-    verdict = ("sharp" if v.sharp else f"blurred: they resolve {v.spot_px:.2g} px where a sharp "
-               f"view resolves half a pixel; a longer lens, a wider aperture or Camera mode "
-               f"makes them sharp")
+    verdict = (
+        "sharp"
+        if v.sharp
+        else f"blurred: they resolve {v.spot_px:.2g} px where a sharp "
+        f"view resolves half a pixel; a longer lens, a wider aperture or Camera mode "
+        f"makes them sharp"
+    )
     lines = [
-        f"verdict     views of {resolution[0]} x {resolution[1]} px through {lens} are "
-        f"{verdict}",
+        f"verdict     views of {resolution[0]} x {resolution[1]} px through {lens} are {verdict}",
         f"time        the first frame (the plate recorded, its files written, its view) "
         f"{first.words()}; each later view about {duration(later_view)} in the same worker",
         f"plate       {p.size[0] * 1e3:.4g} x {p.size[1] * 1e3:.4g} mm of the {plate_size[0]:g} "
@@ -244,19 +283,31 @@ def summary(p: PlatePlan, v: ViewPlan, *, lens: str, resolution, plate_size,
         f"recording {memory_mod.gib(p.memory_bytes(CHANNELS * p.looks))} in one piece (the "
         f"looks together), {memory_mod.gib(p.memory_bytes(CHANNELS * p.looks, tiled=True))} "
         f"tile by tile",
-        f"per view    reads {v.window / 1e6:.3g} Mpx of the plate for {p.looks} look(s)"]
+        f"per view    reads {v.window / 1e6:.3g} Mpx of the plate for {p.looks} look(s)",
+    ]
     if v.outside_zone > 0:
-        lines.append(f"warning     the camera's pupil reaches {v.outside_zone * 1e3:.3g} mm "
-                     f"beyond the zone: its views will be cut off or soft")
+        lines.append(
+            f"warning     the camera's pupil reaches {v.outside_zone * 1e3:.3g} mm "
+            f"beyond the zone: its views will be cut off or soft"
+        )
     return lines
 
 
 duration = estimate_mod.duration
 
 
-def plan(plate_size, bounds, *, zone: ViewingZone, pixel_angle: float,
-         supersample: int = SUPERSAMPLE, looks: int = LOOKS, wavelength=None,
-         tile: int | None = None, seen: float | None = None) -> PlatePlan:
+def plan(
+    plate_size,
+    bounds,
+    *,
+    zone: ViewingZone,
+    pixel_angle: float,
+    supersample: int = SUPERSAMPLE,
+    looks: int = LOOKS,
+    wavelength=None,
+    tile: int | None = None,
+    seen: float | None = None,
+) -> PlatePlan:
     """The plan of a plate of ``plate_size`` (width, height) [m] for objects in the box
     ``bounds`` (2, 3) [m] (the plate's frame, z < 0) seen from ``zone``, whose views have
     pixels of ``pixel_angle`` [rad] (module docstring). ``wavelength`` [m] overrides λ1.
@@ -276,49 +327,74 @@ def plan(plate_size, bounds, *, zone: ViewingZone, pixel_angle: float,
         if tile % 256:
             raise InputError(f"tile must be a multiple of 256 samples; got {tile}")
     # a pinhole's views: the widest pupil its defocus allows, within the zone
-    pupil = zone.pupil or min(pinhole_pupil(box, zone.centre, pixel / s)[0],
-                              2 * min(zone.half_extents[:2]) or math.inf)
+    pupil = zone.pupil or min(
+        pinhole_pupil(box, zone.centre, pixel / s)[0], 2 * min(zone.half_extents[:2]) or math.inf
+    )
     if wavelength is None:
         lam = pupil * pixel / s
         if not validate.MIN_LENGTH <= lam <= validate.MAX_LENGTH:
-            raise InputError(f"pixel_angle {pixel:.3g} rad through the zone's pupil of "
-                             f"{pupil:.3g} m asks views at λ = {lam:.3g} m, outside the "
-                             f"[{validate.MIN_LENGTH:g}, {validate.MAX_LENGTH:g}] m a "
-                             f"plate holds: give the views' real pixel angle and pupil")
+            raise InputError(
+                f"pixel_angle {pixel:.3g} rad through the zone's pupil of "
+                f"{pupil:.3g} m asks views at λ = {lam:.3g} m, outside the "
+                f"[{validate.MIN_LENGTH:g}, {validate.MAX_LENGTH:g}] m a "
+                f"plate holds: give the views' real pixel angle and pupil"
+            )
     else:
         lam = validate.length("wavelength", wavelength)
     extent = float(np.linalg.norm(box[1] - box[0]))
     half_depth = DEPTH_MARGIN * extent / 2
     size = " x ".join(f"{d:.3g}" for d in box[1] - box[0])
     if extent == 0:
-        raise InputError(f"bounds: the objects' box ({size} m) has no size; give the box the "
-                         f"objects fill")
+        raise InputError(
+            f"bounds: the objects' box ({size} m) has no size; give the box the objects fill"
+        )
     if not lam < 2 * half_depth:
-        raise InputError(f"bounds: the objects' box ({size} m) is smaller than the wavelength "
-                         f"its views need (λ = {lam:.3g} m), and the depth pair tells depths "
-                         f"apart only within a range above it: give the objects' real size")
+        raise InputError(
+            f"bounds: the objects' box ({size} m) is smaller than the wavelength "
+            f"its views need (λ = {lam:.3g} m), and the depth pair tells depths "
+            f"apart only within a range above it: give the objects' real size"
+        )
     lam2 = partner_wavelength(lam, half_depth)
     lo, hi = window_on_plate(box, zone, width, height)
     band = zone_band(lo, hi, zone)
     pitch, row_pitch = (min(lam, lam2) / (2 * b) for b in band)
-    shape = (int(math.ceil((hi[1] - lo[1]) / row_pitch)) + 1,
-             int(math.ceil((hi[0] - lo[0]) / pitch)) + 1)
+    shape = (
+        int(math.ceil((hi[1] - lo[1]) / row_pitch)) + 1,
+        int(math.ceil((hi[0] - lo[0]) / pitch)) + 1,
+    )
     narrow = hi[0] - lo[0] < pitch or hi[1] - lo[1] < row_pitch
     if narrow and wavelength is not None:
-        raise InputError(f"wavelength {lam:.3g} m asks samples {pitch:.3g} x {row_pitch:.3g} m "
-                         f"apart, wider than the {hi[0] - lo[0]:.3g} x {hi[1] - lo[1]:.3g} m "
-                         f"of the plate the objects' light crosses: give a shorter one, or "
-                         f"none (the views' sharpness then sets it)")
+        raise InputError(
+            f"wavelength {lam:.3g} m asks samples {pitch:.3g} x {row_pitch:.3g} m "
+            f"apart, wider than the {hi[0] - lo[0]:.3g} x {hi[1] - lo[1]:.3g} m "
+            f"of the plate the objects' light crosses: give a shorter one, or "
+            f"none (the views' sharpness then sets it)"
+        )
     if narrow:
-        raise InputError(f"plate_size {width:g} x {height:g} m: where the objects' light "
-                         f"crosses it, it is narrower than one sample at the pitch the zone "
-                         f"needs ({pitch:.3g} x {row_pitch:.3g} m): make it larger")
+        raise InputError(
+            f"plate_size {width:g} x {height:g} m: where the objects' light "
+            f"crosses it, it is narrower than one sample at the pitch the zone "
+            f"needs ({pitch:.3g} x {row_pitch:.3g} m): make it larger"
+        )
     spacing = lam / pupil
     emitters, footprint = _emitters(box, zone, spacing, pitch * row_pitch, seen)
-    return PlatePlan(zone=zone, bounds=box, pupil=pupil, wavelength=lam, depth_wavelength=lam2,
-                     spacing=spacing, band=band, pitch=pitch, row_pitch=row_pitch,
-                     origin=(float(lo[0]), float(lo[1])), shape=shape, emitters=emitters,
-                     footprint=footprint, looks=looks, tile=tile or fitted_tile(shape))
+    return PlatePlan(
+        zone=zone,
+        bounds=box,
+        pupil=pupil,
+        wavelength=lam,
+        depth_wavelength=lam2,
+        spacing=spacing,
+        band=band,
+        pitch=pitch,
+        row_pitch=row_pitch,
+        origin=(float(lo[0]), float(lo[1])),
+        shape=shape,
+        emitters=emitters,
+        footprint=footprint,
+        looks=looks,
+        tile=tile or fitted_tile(shape),
+    )
 
 
 def fitted_tile(shape, largest=TILE, step=256) -> int:
@@ -327,9 +403,11 @@ def fitted_tile(shape, largest=TILE, step=256) -> int:
     tile counted TILE_COST more. A store keeps its edge tiles whole, so a tile that fits the
     plate wastes little: bench/shot.py's plate, 2525 x 11965 samples, took 67 % more in
     tiles of 2048 and takes 8.5 % more in its fitted 1280."""
+
     def cost(t):
         tiles = math.ceil(shape[0] / t) * math.ceil(shape[1] / t)
         return tiles * (t * t + TILE_COST), -t
+
     return min(range(step, largest + 1, step), key=cost)
 
 
@@ -354,8 +432,10 @@ def _box(bounds) -> np.ndarray:
     except (TypeError, ValueError):
         box = np.full((2, 3), np.nan)
     if not np.isfinite(box).all() or (box[0] > box[1]).any() or box[1, 2] >= 0:
-        raise InputError(f"bounds must be the objects' box (min, max corners [m]) behind the "
-                         f"plate (z < 0 in its frame); got {np.asarray(bounds).tolist()!r}"[:300])
+        raise InputError(
+            f"bounds must be the objects' box (min, max corners [m]) behind the "
+            f"plate (z < 0 in its frame); got {np.asarray(bounds).tolist()!r}"[:300]
+        )
     return box
 
 
@@ -376,9 +456,11 @@ def window_on_plate(box, zone: ViewingZone, width, height) -> tuple[np.ndarray, 
     edge = np.array([width / 2, height / 2])
     lo, hi = np.maximum(lo, -edge), np.minimum(hi, edge)
     if (hi <= lo).any():
-        raise InputError(f"no light from the objects reaches the viewing zone through the "
-                         f"{width:g} x {height:g} m plate: the zone ({zone.describe()}) sees "
-                         f"the objects beside it")
+        raise InputError(
+            f"no light from the objects reaches the viewing zone through the "
+            f"{width:g} x {height:g} m plate: the zone ({zone.describe()}) sees "
+            f"the objects beside it"
+        )
     return lo, hi
 
 
@@ -389,8 +471,10 @@ def zone_band(lo, hi, zone: ViewingZone) -> tuple[float, float]:
     corners = np.array([[x, y, 0.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])])
     to_eyes = rim_corners(zone)[None] - corners[:, None]
     to_centre = np.asarray(zone.centre)[None] - corners
-    d = to_eyes / np.linalg.norm(to_eyes, axis=-1, keepdims=True) \
+    d = (
+        to_eyes / np.linalg.norm(to_eyes, axis=-1, keepdims=True)
         - (to_centre / np.linalg.norm(to_centre, axis=-1, keepdims=True))[:, None]
+    )
     return float(np.abs(d[..., 0]).max()), float(np.abs(d[..., 1]).max())
 
 
@@ -441,8 +525,10 @@ def plan_view(p: PlatePlan, *, position, pixel_angle, pupil=None, resolution) ->
     own) and ``resolution`` (W, H) sees of the plate planned as ``p``."""
     position = validate.vector("position", position, 3, "m")
     if position[2] <= 0:
-        raise InputError(f"the camera must be in front of the plate (z > 0 in its frame); it "
-                         f"is at z = {position[2]:.4g} m")
+        raise InputError(
+            f"the camera must be in front of the plate (z > 0 in its frame); it "
+            f"is at z = {position[2]:.4g} m"
+        )
     pixel = validate.positive("pixel_angle", pixel_angle, "rad")
     pupil = p.pupil if pupil is None else validate.positive("pupil", pupil, "m")
     w, h = validate.shape2d("resolution", resolution)
@@ -454,8 +540,13 @@ def plan_view(p: PlatePlan, *, position, pixel_angle, pupil=None, resolution) ->
     hi = np.minimum(xy.max(0) + pupil, np.asarray(p.origin) + np.asarray(p.size))
     window = int(np.prod(np.maximum(hi - lo, 0)) / (p.pitch * p.row_pitch))
     fine = max(SUPERSAMPLE, math.ceil(SUPERSAMPLE * spot * (1 - SHARP_SLACK)))
-    seconds = p.looks * (CHANNELS * window * VIEW_SAMPLE_SECONDS
-                         + w * h * fine * fine * FINE_PIXEL_SECONDS)
-    return ViewPlan(spot_px=spot, sharp=spot * SUPERSAMPLE <= 1 + SHARP_SLACK,
-                    outside_zone=p.zone.distance_outside(position, pupil / 2),
-                    window=window, seconds=seconds)
+    seconds = p.looks * (
+        CHANNELS * window * VIEW_SAMPLE_SECONDS + w * h * fine * fine * FINE_PIXEL_SECONDS
+    )
+    return ViewPlan(
+        spot_px=spot,
+        sharp=spot * SUPERSAMPLE <= 1 + SHARP_SLACK,
+        outside_zone=p.zone.distance_outside(position, pupil / 2),
+        window=window,
+        seconds=seconds,
+    )

@@ -34,23 +34,25 @@ PROGRAM = associated(__file__)
 SEGMENTS = (32, 16, 8, 4)  # columns per recurrence segment, longest first (error ~ SEG³)
 PHASE_TOLERANCE = 5e-5  # rad, the recurrence's largest phase error (see ``segment``) ...
 WRP_PHASE_TOLERANCE = 2e-3  # ... and on recording planes, whose method errs by ~5e-3 anyway
-CONE_FILL = 0.8      # a point's cone ends at this fraction of the Nyquist angle ...
-CONE_RIM = 0.5     # ... and its outer fraction (of the radius) is a soft rim
+CONE_FILL = 0.8  # a point's cone ends at this fraction of the Nyquist angle ...
+CONE_RIM = 0.5  # ... and its outer fraction (of the radius) is a soft rim
 WRP_WIDEN, WRP_RIM = 1.5, 0.17  # on a recording plane the cone reaches 1.5x the band (past
-                                 # Nyquist for the full band: aliases land beyond the cone)
-CPU_LANES = 16       # rows per work item on CPU devices, as a cost-model figure (Runtime.lanes)
+# Nyquist for the full band: aliases land beyond the cone)
+CPU_LANES = 16  # rows per work item on CPU devices, as a cost-model figure (Runtime.lanes)
 PAIRS_PER_LAUNCH = 2e9  # point-pixel pairs per kernel launch, between progress reports
 MIN_CONE_PIXELS = 32  # a recording plane keeps this many pixels of cone radius to its points
-DIRECT_RATE = 3.3e9  # pairs/s of the direct kernel at 32-column segments (the cost model of
-                     # the automatic choice; shorter segments are proportionally slower) ...
-TILE_CHECKS = 3e8    # ... plus its point-tile cone tests per second (it bins nothing)
-BINNED_RATE = 6e8     # pairs/s on recording planes (small cones: setup-bound)
+# pairs/s of the direct kernel at 32-column segments (the cost model of the automatic choice;
+# shorter segments are proportionally slower) ...
+DIRECT_RATE = 3.3e9
+TILE_CHECKS = 3e8  # ... plus its point-tile cone tests per second (it bins nothing)
+BINNED_RATE = 6e8  # pairs/s on recording planes (small cones: setup-bound)
 FFT_SECONDS_PER_SAMPLE = 3.5e-8  # one plane carried to the hologram, per plane sample
 
 
 class Grid(NamedTuple):
     """A plane's sampling, ``shape`` (rows, cols), ``pitch`` [m], ``wavelength`` [m], and the
     cone its points light: ``fill`` of the Nyquist angle, the outer ``rim`` of it soft."""
+
     shape: tuple[int, int]
     pitch: float
     wavelength: float
@@ -64,9 +66,10 @@ class Grid(NamedTuple):
         return math.inf if s >= 1 else s / math.sqrt(1 - s * s)
 
 
-POINT_BYTES = 200         # host bytes per point emitter while recording, plus ...
-POINT_CHANNEL_BYTES = 96  # ... per point and channel: the recording planes' peak, above what
-                          # one to four channels hold (docs, Performance)
+POINT_BYTES = 200  # host bytes per point emitter while recording, plus ...
+# ... per point and channel: the recording planes' peak, above what one to four channels hold (docs,
+# Performance)
+POINT_CHANNEL_BYTES = 96
 
 
 def point_bytes(points: int, channels: int) -> float:
@@ -75,8 +78,19 @@ def point_bytes(points: int, channels: int) -> float:
     return (POINT_BYTES + POINT_CHANNEL_BYTES * channels) * points
 
 
-def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=False, band=None,
-               method="auto", progress: jobs.Progress = None, as_device=False):
+def point_wave(
+    positions,
+    amplitudes,
+    *,
+    wavelength,
+    pitch,
+    shape,
+    obliquity=False,
+    band=None,
+    method="auto",
+    progress: jobs.Progress = None,
+    as_device=False,
+):
     """The object wave O on the plane z = 0 from point emitters (Eq. 3).
 
     Parameters
@@ -117,8 +131,9 @@ def point_wave(positions, amplitudes, *, wavelength, pitch, shape, obliquity=Fal
     validate.choice("method", method, ("auto", "direct", "wrp"))
     if method == "auto":
         method = "wrp" if wrp_seconds(pos, g) < direct_seconds(pos, g) else "direct"
-    memory.check_host(f"{len(pos)} point emitters of {amp.shape[1]} channels",
-                      point_bytes(len(pos), amp.shape[1]))
+    memory.check_host(
+        f"{len(pos)} point emitters of {amp.shape[1]} channels", point_bytes(len(pos), amp.shape[1])
+    )
     rt = get_runtime()
     nbytes = 8.0 * amp.shape[1] * math.prod(g.shape)
     memory.check_device(rt, f"the {g.shape[1]}x{g.shape[0]} object wave", nbytes, nbytes)
@@ -143,8 +158,9 @@ def sampling_grid(shape, wavelength, pitch, band) -> Grid:
     band = validate.finite("band", band)
     if not 0 < band <= most * (1 + 1e-9) or band >= 1:  # sin θ: no direction lies past 90°
         limit = f"(0, {most:.4g}]" if most < 1 else "(0, 1)"
-        raise InputError(f"band must be in {limit} (sin θ of the cone the pitch samples); "
-                         f"got {shown(band)}")
+        raise InputError(
+            f"band must be in {limit} (sin θ of the cone the pitch samples); got {shown(band)}"
+        )
     return g._replace(fill=band * 2 * g.pitch / g.wavelength)
 
 
@@ -154,14 +170,17 @@ def _points(positions, amplitudes):
     if pos.ndim != 2 or pos.shape[1] != 3:
         raise InputError(f"positions must be an (N, 3) array [m]; got shape {pos.shape}")
     if amp.ndim not in (1, 2) or len(amp) != len(pos) or (amp.ndim == 2 and not amp.shape[1]):
-        raise InputError(f"amplitudes must be (N,) or (N, C) with N = {len(pos)} points; "
-                         f"got shape {amp.shape}")
+        raise InputError(
+            f"amplitudes must be (N,) or (N, C) with N = {len(pos)} points; got shape {amp.shape}"
+        )
     amp = amp[:, None] if amp.ndim == 1 else amp
     if not (np.isfinite(pos).all() and np.isfinite(amp).all()):
         raise InputError("positions and amplitudes must be finite")
     if len(pos) and pos[:, 2].max() >= 0:
-        raise InputError(f"positions: every z must be < 0 m (in front of the hologram, light "
-                         f"travelling +z); the largest is {pos[:, 2].max():.4g} m")
+        raise InputError(
+            f"positions: every z must be < 0 m (in front of the hologram, light "
+            f"travelling +z); the largest is {pos[:, 2].max():.4g} m"
+        )
     return pos, amp
 
 
@@ -182,10 +201,12 @@ def check_distance(pos, g: Grid) -> None:
     safe, nearest = safe_distance(g), float(np.abs(pos[:, 2]).min())
     if nearest < safe:
         count = int((np.abs(pos[:, 2]) < safe).sum())
-        raise InputError(f"positions: {count} point(s) lie closer to the plate than it can "
-                         f"record ({nearest:.3g} m, the nearest); at pitch {g.pitch:.3g} m and "
-                         f"λ = {g.wavelength:.3g} m points need |z| >= {safe:.3g} m (move the "
-                         f"objects back or use a finer pitch)")
+        raise InputError(
+            f"positions: {count} point(s) lie closer to the plate than it can "
+            f"record ({nearest:.3g} m, the nearest); at pitch {g.pitch:.3g} m and "
+            f"λ = {g.wavelength:.3g} m points need |z| >= {safe:.3g} m (move the "
+            f"objects back or use a finer pitch)"
+        )
 
 
 def _pixels_reached(pos, g: Grid, z) -> np.ndarray:
@@ -208,6 +229,7 @@ def wrp_seconds(pos, g: Grid) -> float:
 
 
 # --- the point sum on the device -------------------------------------------------------------
+
 
 def cone_weight(rho2, rho_max2, rim=CONE_RIM):
     """The cone's weight at squared lateral distance ``rho2`` [m²] from a point whose cone
@@ -246,8 +268,9 @@ def _sum(rt, out, pos, amp, g: Grid, obliquity, *, binned, progress=None):
         if binned:
             order, starts, reach = _bins(rt, pos[sel], g, n)
             dpos, damp = _upload(rt, pos[sel][order], amp[sel][order], g.wavelength)
-            _launch(rt, out, dpos, damp, g, obliquity, n, bins=(rt.to_device(starts, np.int32),
-                                                              reach))
+            _launch(
+                rt, out, dpos, damp, g, obliquity, n, bins=(rt.to_device(starts, np.int32), reach)
+            )
             continue
         dpos, damp = _upload(rt, pos[sel], amp[sel], g.wavelength)
         per_launch = max(1, int(PAIRS_PER_LAUNCH / (g.shape[0] * g.shape[1])))
@@ -260,18 +283,23 @@ def _sum(rt, out, pos, amp, g: Grid, obliquity, *, binned, progress=None):
         done += cum[-1]
 
 
+# the kernels' signatures as tables (their arguments in the .cl file's order)
+# fmt: off
 POINT_WAVE = kernel(PROGRAM, "point_wave", out=BUFFER, h=int32, w=int32, pitch=REAL, x0=REAL,
                     y0=REAL, k=REAL, cone2=REAL, inner2=REAL, px=BUFFER, py=BUFFER,
                     pz=BUFFER, amp=BUFFER, first=int32, last=int32, binned=int32,
                     bin_start=BUFFER, reach_x=int32, reach_y=int32)
+# fmt: on
 
 
 def _launch(rt, out, pos, amp, g: Grid, obliquity, seg, *, first=0, last=None, bins=None):
     lanes = rt.lanes
     channels = amp.shape[1]
-    options = (f"-DVEC={lanes}", f"-DSEG={seg}", f"-DCHANNELS={channels}",
-               "-cl-fast-relaxed-math") + \
-        rt.real_options + (("-DOBLIQUITY",) if obliquity else ())
+    options = (
+        (f"-DVEC={lanes}", f"-DSEG={seg}", f"-DCHANNELS={channels}", "-cl-fast-relaxed-math")
+        + rt.real_options
+        + (("-DOBLIQUITY",) if obliquity else ())
+    )
     h, w = g.shape
     x0, y0 = -(w - 1) / 2 * g.pitch, -(h - 1) / 2 * g.pitch
     cone2 = min(g.cone, 1e15) ** 2
@@ -279,11 +307,31 @@ def _launch(rt, out, pos, amp, g: Grid, obliquity, seg, *, first=0, last=None, b
     binned = bins is not None
     starts, (reach_x, reach_y) = bins if binned else (_dummy(rt), (0, 0))
     last = len(pos.x) if last is None else last
-    POINT_WAVE.launch(rt, (-(-h // lanes), -(-w // seg)), rt.series_group, options=options,
-                      out=out, h=h, w=w, pitch=g.pitch, x0=x0, y0=y0, k=k, cone2=cone2,
-                      inner2=(1 - g.rim) ** 2, px=pos.x, py=pos.y, pz=pos.z, amp=amp,
-                      first=first, last=last, binned=binned, bin_start=starts,
-                      reach_x=reach_x, reach_y=reach_y)
+    POINT_WAVE.launch(
+        rt,
+        (-(-h // lanes), -(-w // seg)),
+        rt.series_group,
+        options=options,
+        out=out,
+        h=h,
+        w=w,
+        pitch=g.pitch,
+        x0=x0,
+        y0=y0,
+        k=k,
+        cone2=cone2,
+        inner2=(1 - g.rim) ** 2,
+        px=pos.x,
+        py=pos.y,
+        pz=pos.z,
+        amp=amp,
+        first=first,
+        last=last,
+        binned=binned,
+        bin_start=starts,
+        reach_x=reach_x,
+        reach_y=reach_y,
+    )
 
 
 def _dummy(rt):
@@ -306,6 +354,7 @@ def _upload(rt, pos, amp, wavelength):
 
 
 # --- wavefront recording planes ---------------------------------------------------------------
+
 
 def _slab_plan(pos, g: Grid):
     """Slab edges (far to near, [m]) and the modelled seconds, for the cheapest slab thickness."""

@@ -26,19 +26,36 @@ from .triangles import depth_texture, mesh_primitives, primitive_wave, surface_p
 
 DEFAULT_WAVELENGTHS = (633e-9, 532e-9, 473e-9)  # HeNe red, Nd:YAG green, DPSS blue [m]
 MIN_OBLIQUITY = 0.1  # a primitive seen more edge-on than this (cos) gets no brighter
-ROTATION_SECONDS = 2e-7  # a primitive's rotation and propagation per padded hologram sample
-                         # and wavelength, a 2-core CPU's (docs, Performance) ...
-SLOW_TRIANGLES = 60.0    # ... and the estimate [s] above which the user is warned
+# a primitive's rotation and propagation per padded hologram sample and wavelength, a 2-core CPU's
+# (docs, Performance) ...
+ROTATION_SECONDS = 2e-7
+SLOW_TRIANGLES = 60.0  # ... and the estimate [s] above which the user is warned
 MAX_INTENSITY = 1e12  # a point's colour, at most: the float32 hologram holds sums of millions
 HOST_BYTES = 40  # per sample and wavelength: object and reference waves, H, the stored copy
 log = logging.getLogger(__name__)
 
 
-def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVELENGTHS,
-                  phases=None, seed=0, reference=Reference(), obliquity=False,  # noqa: B008 -- frozen
-                  keep_object_wave=True, plate=None, method="auto", band=None,
-                  channels=(), point_density=0.0, extra_wave=None, bounds=None,
-                  progress: jobs.Progress = None) -> Hologram:
+def record_points(
+    positions,
+    colours,
+    *,
+    shape,
+    pitch,
+    wavelengths=DEFAULT_WAVELENGTHS,
+    phases=None,
+    seed=0,
+    reference=Reference(),  # noqa: B008 -- frozen
+    obliquity=False,
+    keep_object_wave=True,
+    plate=None,
+    method="auto",
+    band=None,
+    channels=(),
+    point_density=0.0,
+    extra_wave=None,
+    bounds=None,
+    progress: jobs.Progress = None,
+) -> Hologram:
     """Record the holograms of point emitters, one per wavelength.
 
     Parameters
@@ -102,8 +119,9 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     >>> h.intensity.shape, h.object_wave.shape
     ((1, 64, 64), (1, 64, 64))
     """
-    pos, wavelengths, amplitude = point_amplitudes(positions, colours, wavelengths, phases,
-                                                   seed, empty_ok=extra_wave is not None)
+    pos, wavelengths, amplitude = point_amplitudes(
+        positions, colours, wavelengths, phases, seed, empty_ok=extra_wave is not None
+    )
     shape = validate.shape2d("shape", shape)
     pitch = validate.pitch("pitch", pitch)
     band = None if band is None else validate.finite("band", band)
@@ -112,38 +130,73 @@ def record_points(positions, colours, *, shape, pitch, wavelengths=DEFAULT_WAVEL
     if bounds is None:
         bounds = np.array([pos.min(0), pos.max(0)]) if len(pos) else np.zeros((2, 3))
     # what the hologram will hold, checked now: a bad field is found before the recording
-    info = HologramInfo(wavelengths=wavelengths, pitch=pitch, shape=shape,
-                        reference_angle=reference.angle, reference_azimuth=reference.azimuth,
-                        bounds=bounds, band=band or 0.0, channels=channels,
-                        plate=np.eye(4) if plate is None else plate, point_density=point_density,
-                        keeps_object_wave=bool(keep_object_wave))
-    memory.check_host(f"a {shape[1]}x{shape[0]} hologram of {len(wavelengths)} wavelengths",
-                      HOST_BYTES * len(wavelengths) * math.prod(shape))
+    info = HologramInfo(
+        wavelengths=wavelengths,
+        pitch=pitch,
+        shape=shape,
+        reference_angle=reference.angle,
+        reference_azimuth=reference.azimuth,
+        bounds=bounds,
+        band=band or 0.0,
+        channels=channels,
+        plate=np.eye(4) if plate is None else plate,
+        point_density=point_density,
+        keeps_object_wave=bool(keep_object_wave),
+    )
+    memory.check_host(
+        f"a {shape[1]}x{shape[0]} hologram of {len(wavelengths)} wavelengths",
+        HOST_BYTES * len(wavelengths) * math.prod(shape),
+    )
     for lam in wavelengths:
         reference.check(lam, pitch)
-    groups = {lam: [c for c, other in enumerate(wavelengths) if other == lam] for lam in wavelengths}
+    groups = {
+        lam: [c for c, other in enumerate(wavelengths) if other == lam] for lam in wavelengths
+    }
     objects = {}
     for g, (lam, chans) in enumerate(groups.items()):  # equal wavelengths share one pass
-        objects.update(zip(chans, point_wave(
-            pos, amplitude[:, chans], wavelength=lam, pitch=pitch, shape=shape,
-            obliquity=obliquity, method=method, band=band,
-            progress=jobs.scaled(progress, g / len(groups), (g + 1) / len(groups)))))
+        objects.update(
+            zip(
+                chans,
+                point_wave(
+                    pos,
+                    amplitude[:, chans],
+                    wavelength=lam,
+                    pitch=pitch,
+                    shape=shape,
+                    obliquity=obliquity,
+                    method=method,
+                    band=band,
+                    progress=jobs.scaled(progress, g / len(groups), (g + 1) / len(groups)),
+                ),
+            )
+        )
     intensity, waves, amplitudes = [], [], []
     for c, lam in enumerate(wavelengths):
         o = objects[c]
         if extra_wave is not None:
             o = o + extra_wave(c, lam)
         if not np.isfinite(o).all():  # never a hologram of NaN: it would be written as one
-            raise RuntimeError(f"the object wave at λ = {lam:.4g} m holds non-finite samples "
-                               f"(the OpenCL device's arithmetic failed); nothing was recorded")
+            raise RuntimeError(
+                f"the object wave at λ = {lam:.4g} m holds non-finite samples "
+                f"(the OpenCL device's arithmetic failed); nothing was recorded"
+            )
         a_r = math.sqrt(reference.beam_ratio * max(float(np.mean(np.abs(o) ** 2)), 1e-30))
-        intensity.append(interfere(o, reference_wave(shape, wavelength=lam, pitch=pitch,
-                                                     reference=reference, amplitude=a_r)))
+        intensity.append(
+            interfere(
+                o,
+                reference_wave(
+                    shape, wavelength=lam, pitch=pitch, reference=reference, amplitude=a_r
+                ),
+            )
+        )
         waves.append(o)
         amplitudes.append(a_r)
-    return Hologram(info=info, intensity=np.stack(intensity),
-                    object_wave=np.stack(waves) if keep_object_wave else None,
-                    reference_amplitudes=tuple(amplitudes))
+    return Hologram(
+        info=info,
+        intensity=np.stack(intensity),
+        object_wave=np.stack(waves) if keep_object_wave else None,
+        reference_amplitudes=tuple(amplitudes),
+    )
 
 
 def point_amplitudes(positions, colours, wavelengths, phases=None, seed=0, *, empty_ok=False):
@@ -155,16 +208,26 @@ def point_amplitudes(positions, colours, wavelengths, phases=None, seed=0, *, em
         raise InputError("positions holds no points: there is nothing to record")
     wavelengths = np.atleast_1d(_array("wavelengths", wavelengths, "wavelengths [m]", None))
     if wavelengths.ndim != 1 or not len(wavelengths):
-        raise InputError(f"wavelengths must hold at least one wavelength [m]; got "
-                         f"{wavelengths.tolist()!r}")
+        raise InputError(
+            f"wavelengths must hold at least one wavelength [m]; got {wavelengths.tolist()!r}"
+        )
     wavelengths = tuple(validate.wavelength("wavelengths", w) for w in wavelengths)
-    memory.check_host(f"{len(pos)} point emitters of {len(wavelengths)} wavelengths",
-                      point_bytes(len(pos), len(wavelengths)))
-    cols = _array("colours", colours, f"an (N, {len(wavelengths)}) array of intensities, one "
-                  f"column per wavelength, N = {len(pos)} points", (len(pos), len(wavelengths)))
+    memory.check_host(
+        f"{len(pos)} point emitters of {len(wavelengths)} wavelengths",
+        point_bytes(len(pos), len(wavelengths)),
+    )
+    cols = _array(
+        "colours",
+        colours,
+        f"an (N, {len(wavelengths)}) array of intensities, one "
+        f"column per wavelength, N = {len(pos)} points",
+        (len(pos), len(wavelengths)),
+    )
     if not np.isfinite(cols).all() or (cols < 0).any() or (cols > MAX_INTENSITY).any():
-        raise InputError(f"colours must be finite intensities in [0, {MAX_INTENSITY:g}]; got "
-                         f"values from {cols.min():.3g} to {cols.max():.3g}")
+        raise InputError(
+            f"colours must be finite intensities in [0, {MAX_INTENSITY:g}]; got "
+            f"values from {cols.min():.3g} to {cols.max():.3g}"
+        )
     if phases is None:
         phases = np.random.default_rng(validate.seed(seed)).uniform(0, 2 * np.pi, len(pos))
     phases = _array("phases", phases, f"{len(pos)} finite phases [rad]", (len(pos),))
@@ -183,29 +246,57 @@ def _array(name, value, allowed, shape) -> np.ndarray:
         raise InputError(f"{name} must be {allowed}; got shape {np.shape(value)}") from None
 
 
-def record_scene_points(emitters, meshes, triangles, *, plate, camera, zone, zone_margin,
-                        resolution, max_resolution, wavelength, encoding, depth, seed, method,
-                        cull, progress: jobs.Progress = None) -> Hologram:
+def record_scene_points(
+    emitters,
+    meshes,
+    triangles,
+    *,
+    plate,
+    camera,
+    zone,
+    zone_margin,
+    resolution,
+    max_resolution,
+    wavelength,
+    encoding,
+    depth,
+    seed,
+    method,
+    cull,
+    progress: jobs.Progress = None,
+) -> Hologram:
     """The point sum of a scene in world metres on ``plate`` (:func:`holo_core.plate.record.
     record_hologram`'s arguments, checked there): ``meshes`` sampled into points (or, where
     None, the bare points ``emitters``) and ``triangles`` as textured triangles, with the
     sampling chosen for the scene (:func:`holo_core.plate.sampling.choose`)."""
-    probe = [m.vertices for m in meshes + triangles] if meshes is not None else \
-        [np.asarray(emitters[0], np.float64)] + [m.vertices for m in triangles]
+    probe = (
+        [m.vertices for m in meshes + triangles]
+        if meshes is not None
+        else [np.asarray(emitters[0], np.float64)] + [m.vertices for m in triangles]
+    )
     if not sum(len(p) for p in probe):
         raise InputError("record_hologram needs emitters or triangles")
     view = None
     if camera is not None:
         view = (plate.to_plate(camera.position[None])[0], camera.pixel_angle())
     local = plate.to_plate(np.concatenate(probe))
-    s = choose((plate.width, plate.height), local, camera=view,
-               resolution=resolution, max_resolution=max_resolution, wavelength=wavelength)
+    s = choose(
+        (plate.width, plate.height),
+        local,
+        camera=view,
+        resolution=resolution,
+        max_resolution=max_resolution,
+        wavelength=wavelength,
+    )
     if meshes is not None:
-        parts = [sample_points(m, s.spacing, channels=3, seed=seed + i, normals=True)
-                 for i, m in enumerate(meshes)]
+        parts = [
+            sample_points(m, s.spacing, channels=3, seed=seed + i, normals=True)
+            for i, m in enumerate(meshes)
+        ]
         pos = np.concatenate([p for p, _, _ in parts] or [np.zeros((0, 3))])
-        rgb = np.concatenate([np.broadcast_to(c, (len(c), 3)) for _, c, _ in parts]
-                             or [np.zeros((0, 3))])
+        rgb = np.concatenate(
+            [np.broadcast_to(c, (len(c), 3)) for _, c, _ in parts] or [np.zeros((0, 3))]
+        )
         density = 1 / s.spacing**2
         normals = np.concatenate([n for _, _, n in parts] or [np.zeros((0, 3))])
         if cull and camera is not None and len(pos):
@@ -216,11 +307,16 @@ def record_scene_points(emitters, meshes, triangles, *, plate, camera, zone, zon
         density, normals = 0.0, None
     # the depth partner's emitters: unit intensity, times the cosine towards the camera, so
     # that its image is the projected area covered (a tilted surface holds more emitters)
-    cover = np.ones(len(pos)) if normals is None or camera is None else \
-        facing(camera.position, pos, normals)
-    prims = [replace(p, corners=plate.to_plate(p.corners)) for m in triangles
-             for p in mesh_primitives(m, visible_to=camera if cull else None,
-                                         spacing=s.spacing)]  # in the plate's frame
+    cover = (
+        np.ones(len(pos))
+        if normals is None or camera is None
+        else facing(camera.position, pos, normals)
+    )
+    prims = [
+        replace(p, corners=plate.to_plate(p.corners))
+        for m in triangles
+        for p in mesh_primitives(m, visible_to=camera if cull else None, spacing=s.spacing)
+    ]  # in the plate's frame
     if prims:
         density = 1 / s.spacing**2
     rgb = np.asarray(rgb, np.float64).reshape(len(pos), 3)
@@ -231,19 +327,38 @@ def record_scene_points(emitters, meshes, triangles, *, plate, camera, zone, zon
         colours.append(cover[:, None])
     reference = Reference(angle=s.reference_angle)
     split = 0.1 if prims else 1.0  # the triangles' propagations dominate where there are any
-    recorded = record_points(plate.to_plate(pos), np.concatenate(colours, 1), shape=s.shape,
-                         pitch=s.pitch, wavelengths=tuple(wavelengths), seed=seed,
-                         reference=reference, plate=plate.matrix_world, method=method,
-                         band=s.band, channels=channels, point_density=density,
-                         extra_wave=_triangle_waves(prims, s, wavelengths, channels, view, seed,
-                                                    jobs.scaled(progress, split, 1.0))
-                         if prims else None, progress=jobs.scaled(progress, 0.0, split),
-                         bounds=np.array([local.min(0), local.max(0)]))
+    recorded = record_points(
+        plate.to_plate(pos),
+        np.concatenate(colours, 1),
+        shape=s.shape,
+        pitch=s.pitch,
+        wavelengths=tuple(wavelengths),
+        seed=seed,
+        reference=reference,
+        plate=plate.matrix_world,
+        method=method,
+        band=s.band,
+        channels=channels,
+        point_density=density,
+        extra_wave=_triangle_waves(
+            prims, s, wavelengths, channels, view, seed, jobs.scaled(progress, split, 1.0)
+        )
+        if prims
+        else None,
+        progress=jobs.scaled(progress, 0.0, split),
+        bounds=np.array([local.min(0), local.max(0)]),
+    )
     if zone is None and camera is not None:
         zone = plate.zone or plate.zone_for(camera, zone_margin)
     if encoding == "complex":
-        return replace(recorded, intensity=None, encoding="complex", reference_amplitudes=(),
-                       reference_angle=0.0, zone=zone or plate.zone)
+        return replace(
+            recorded,
+            intensity=None,
+            encoding="complex",
+            reference_amplitudes=(),
+            reference_angle=0.0,
+            zone=zone or plate.zone,
+        )
     return replace(recorded, zone=zone or plate.zone)
 
 
@@ -253,27 +368,40 @@ def _triangle_waves(prims, s, wavelengths, channels, view, seed, progress: jobs.
     ``view`` = (camera position [m], pixel angle [rad]) or None. One pass per wavelength serves
     all its channels; ``progress`` hears of every primitive."""
     shortest = min(wavelengths)
-    seconds = len(prims) * len(set(wavelengths)) * math.prod(grid.padded_shape(s.shape, 2)) \
+    seconds = (
+        len(prims)
+        * len(set(wavelengths))
+        * math.prod(grid.padded_shape(s.shape, 2))
         * ROTATION_SECONDS
+    )
     (log.warning if seconds > SLOW_TRIANGLES else log.info)(
         "triangles: %d primitives, about %.0f s to record on a 2-core CPU (a rotation and a "
         "propagation per primitive and wavelength); points record tessellated meshes much "
-        "faster", len(prims), seconds)
+        "faster",
+        len(prims),
+        seconds,
+    )
     # a surface field u radiates like points of density ρ and amplitude A when u = A·√ρ·λ/q
     # (q² per sample, the 1/λ of Eq. 7) over the obliquity cos α of Eq. 7 towards the viewer
     # (the camera, else the plate's normal), which isotropic points do not have
     frames = [p.frame() for p in prims]
     pitches = [surface_pitch(p, wavelength=shortest, pitch=s.pitch) for p in prims]
-    toward = [abs(m[2, 2]) if view is None else
-              float(facing(view[0], centre[None], m[:, 2][None])[0]) for m, centre in frames]
+    toward = [
+        abs(m[2, 2]) if view is None else float(facing(view[0], centre[None], m[:, 2][None])[0])
+        for m, centre in frames
+    ]
 
     def intensities(i, p, lam, chans):
         """Per channel in ``chans`` (all at ``lam`` [m]): the primitive's texture as surface
         intensity (the depth partner: unit intensity times its coverage seen by the camera)."""
         gain = (lam / (pitches[i] * s.spacing * max(toward[i], MIN_OBLIQUITY))) ** 2
         cover = 1.0 if view is None else toward[i]
-        return [depth_texture(p.texture)[..., 0] * gain * cover
-                if channels[c] == "Z" else p.texture[..., c] * gain for c in chans]
+        return [
+            depth_texture(p.texture)[..., 0] * gain * cover
+            if channels[c] == "Z"
+            else p.texture[..., c] * gain
+            for c in chans
+        ]
 
     def waves_at(lam):
         """The waves of every channel at ``lam`` [m]. A single-colour primitive's channels
@@ -285,16 +413,23 @@ def _triangle_waves(prims, s, wavelengths, channels, view, seed, progress: jobs.
             texs = intensities(i, p, lam, chans)
             flat = all(t.shape[:2] == (1, 1) for t in texs)
             for k, tex in enumerate([np.ones((1, 1))] if flat else texs):
-                wave = primitive_wave(replace(p, texture=tex[..., None]), wavelength=lam,
-                                         pitch=s.pitch, shape=s.shape, seed=seed + 7919 * (i + 1),
-                                         sampled_for=shortest)
+                wave = primitive_wave(
+                    replace(p, texture=tex[..., None]),
+                    wavelength=lam,
+                    pitch=s.pitch,
+                    shape=s.shape,
+                    seed=seed + 7919 * (i + 1),
+                    sampled_for=shortest,
+                )
                 if flat:
                     totals += np.sqrt([t[0, 0] for t in texs])[:, None, None] * wave
                 else:
                     totals[k] += wave
         # the points' cone, in angle: the band the off-axis reference leaves free
-        return {c: cone_filter(t, wavelength=lam, pitch=s.pitch, band=s.band)
-                for c, t in zip(chans, totals)}
+        return {
+            c: cone_filter(t, wavelength=lam, pitch=s.pitch, band=s.band)
+            for c, t in zip(chans, totals)
+        }
 
     done, passes = {}, list(dict.fromkeys(wavelengths))  # the order record_points asks for them
 
@@ -302,4 +437,5 @@ def _triangle_waves(prims, s, wavelengths, channels, view, seed, progress: jobs.
         if lam not in done:
             done[lam] = waves_at(lam)
         return done[lam].pop(c)
+
     return wave

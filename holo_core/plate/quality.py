@@ -55,33 +55,64 @@ from .plan import (
     PlatePlan,
 )
 
-TARGET_DB = 30.0       # PSNR inside the objects against the camera hologram, the default goal
-LOOK_CHOICES = (2, 4, 9)        # coded looks (the checkerboard pair, m² of m = 2, 3)
+TARGET_DB = 30.0  # PSNR inside the objects against the camera hologram, the default goal
+LOOK_CHOICES = (2, 4, 9)  # coded looks (the checkerboard pair, m² of m = 2, 3)
 SUPERSAMPLE_CHOICES = (2, 3, 4)  # fine pixels a pixel of the views (at most the Nyquist 4)
-FRAMES = 24            # a shot's frames, over which the recording's time is shared
-GAIN_PER_DOUBLING = 1.0  # [dB] the least a further look count must gain per doubling of the
-                         # looks for Auto to take it: its disk and memory grow as the looks
+FRAMES = 24  # a shot's frames, over which the recording's time is shared
+# [dB] the least a further look count must gain per doubling of the looks for Auto to take it: its
+# disk and memory grow as the looks
+GAIN_PER_DOUBLING = 1.0
 # (σ/⟨I⟩)² [dB] of a uniform surface's pixels (uniform_surface_variance, 24 px, 2 draws) by
 # (blur [px], looks, supersample)
 SPECKLE_DB = {
-    (0, 2, 2): -15.47, (0, 2, 3): -16.82, (0, 2, 4): -17.04,
-    (1, 2, 2): -13.36, (1, 2, 3): -14.54, (1, 2, 4): -14.78,
-    (2, 2, 2): -10.91, (2, 2, 3): -11.98, (2, 2, 4): -12.22,
-    (3, 2, 2): -9.67, (3, 2, 3): -10.67, (3, 2, 4): -10.9,
-    (4.5, 2, 2): -9.06, (4.5, 2, 3): -10.04, (4.5, 2, 4): -10.25,
-    (0, 4, 2): -18.35, (0, 4, 3): -19.57, (0, 4, 4): -19.78,
-    (1, 4, 2): -17.76, (1, 4, 3): -19.21, (1, 4, 4): -19.48,
-    (2, 4, 2): -15.77, (2, 4, 3): -17.3, (2, 4, 4): -17.63,
-    (3, 4, 2): -13.73, (3, 4, 3): -15.03, (3, 4, 4): -15.32,
-    (4.5, 4, 2): -12.33, (4.5, 4, 3): -13.42, (4.5, 4, 4): -13.67,
-    (0, 9, 2): -22.8, (0, 9, 3): -24.69, (0, 9, 4): -25.03,
-    (1, 9, 2): -22.53, (1, 9, 3): -24.41, (1, 9, 4): -24.73,
-    (2, 9, 2): -21.94, (2, 9, 3): -24.07, (2, 9, 4): -24.45,
-    (3, 9, 2): -20.41, (3, 9, 3): -22.57, (3, 9, 4): -23.02,
-    (4.5, 9, 2): -17.51, (4.5, 9, 3): -18.98, (4.5, 9, 4): -19.32,
+    (0, 2, 2): -15.47,
+    (0, 2, 3): -16.82,
+    (0, 2, 4): -17.04,
+    (1, 2, 2): -13.36,
+    (1, 2, 3): -14.54,
+    (1, 2, 4): -14.78,
+    (2, 2, 2): -10.91,
+    (2, 2, 3): -11.98,
+    (2, 2, 4): -12.22,
+    (3, 2, 2): -9.67,
+    (3, 2, 3): -10.67,
+    (3, 2, 4): -10.9,
+    (4.5, 2, 2): -9.06,
+    (4.5, 2, 3): -10.04,
+    (4.5, 2, 4): -10.25,
+    (0, 4, 2): -18.35,
+    (0, 4, 3): -19.57,
+    (0, 4, 4): -19.78,
+    (1, 4, 2): -17.76,
+    (1, 4, 3): -19.21,
+    (1, 4, 4): -19.48,
+    (2, 4, 2): -15.77,
+    (2, 4, 3): -17.3,
+    (2, 4, 4): -17.63,
+    (3, 4, 2): -13.73,
+    (3, 4, 3): -15.03,
+    (3, 4, 4): -15.32,
+    (4.5, 4, 2): -12.33,
+    (4.5, 4, 3): -13.42,
+    (4.5, 4, 4): -13.67,
+    (0, 9, 2): -22.8,
+    (0, 9, 3): -24.69,
+    (0, 9, 4): -25.03,
+    (1, 9, 2): -22.53,
+    (1, 9, 3): -24.41,
+    (1, 9, 4): -24.73,
+    (2, 9, 2): -21.94,
+    (2, 9, 3): -24.07,
+    (2, 9, 4): -24.45,
+    (3, 9, 2): -20.41,
+    (3, 9, 3): -22.57,
+    (3, 9, 4): -23.02,
+    (4.5, 9, 2): -17.51,
+    (4.5, 9, 3): -18.98,
+    (4.5, 9, 4): -19.32,
 }
-SPECKLE_SCALE = 1.86   # the speckle's mean square over (σ/⟨I⟩)² times the objects' size [px]
-EDGE_ERROR = 0.082    # [px] the seed-free mean square (of the peak's) times the objects' size
+SPECKLE_SCALE = 1.86  # the speckle's mean square over (σ/⟨I⟩)² times the objects' size [px]
+EDGE_ERROR = 0.082  # [px] the seed-free mean square (of the peak's) times the objects' size
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -134,19 +165,25 @@ class QualityChoice:
 
     def describe(self) -> str:
         """What was chosen and why, in plain words."""
-        why = (f"the objects' back lies up to {self.blur:.2g} px out of focus when the front "
-               f"is sharp, and a defocused spot mixes emitters that coded looks do not "
-               f"cancel" if self.blur >= 1 else
-               f"the objects lie within {self.blur:.2g} px of focus, where coded looks cancel "
-               f"most of the speckle")
+        why = (
+            f"the objects' back lies up to {self.blur:.2g} px out of focus when the front "
+            f"is sharp, and a defocused spot mixes emitters that coded looks do not "
+            f"cancel"
+            if self.blur >= 1
+            else f"the objects lie within {self.blur:.2g} px of focus, where coded looks cancel "
+            f"most of the speckle"
+        )
         p = self.planned
-        reach = (f"predicted {p.psnr:.1f} dB against the camera hologram (the target "
-                 f"{self.target:g} dB)" if p.psnr >= self.target else
-                 f"predicted {p.psnr:.1f} dB, short of the target {self.target:g} dB: "
-                 f"{self.budget} holds no more looks" if self.budget else
-                 f"predicted {p.psnr:.1f} dB, short of the target {self.target:g} dB: the "
-                 f"edges of colours and silhouettes ({self.size:.0f} px objects) limit it "
-                 f"whatever the looks; more pixels or Camera mode reach it")
+        reach = (
+            f"predicted {p.psnr:.1f} dB against the camera hologram (the target {self.target:g} dB)"
+            if p.psnr >= self.target
+            else f"predicted {p.psnr:.1f} dB, short of the target {self.target:g} dB: "
+            f"{self.budget} holds no more looks"
+            if self.budget
+            else f"predicted {p.psnr:.1f} dB, short of the target {self.target:g} dB: the "
+            f"edges of colours and silhouettes ({self.size:.0f} px objects) limit it "
+            f"whatever the looks; more pixels or Camera mode reach it"
+        )
         return f"{p.looks} looks, supersample {p.supersample}: {reach}; {why}"
 
     def capped(self) -> str:
@@ -154,20 +191,29 @@ class QualityChoice:
         u = self.unbudgeted
         if not self.budget or u is None:
             return ""
-        return (f"Auto chose {self.planned.looks} looks, the most {self.budget} holds; "
-                f"{u.looks} would reach {u.psnr:.1f} dB")
+        return (
+            f"Auto chose {self.planned.looks} looks, the most {self.budget} holds; "
+            f"{u.looks} would reach {u.psnr:.1f} dB"
+        )
 
     def warning(self) -> str | None:
         """What the user's Iterations or Supersample lose, or None."""
         if self.loss < 0.05:
             return None
-        mine = [f"{name} {value}" for name, value, auto in
-                (("Iterations", self.looks, self.user_looks),
-                 ("Supersample", self.supersample, self.user_supersample)) if auto]
-        return (f"{' and '.join(mine)} (set by hand) predict {self.psnr:.1f} dB against the "
-                f"camera hologram, {self.loss:.1f} dB less than Auto's {self.planned.looks} "
-                f"looks at supersample {self.planned.supersample} ({self.planned.psnr:.1f} dB): "
-                f"expect visible grain; set them to 0 (Auto) for the plan's choice")
+        mine = [
+            f"{name} {value}"
+            for name, value, auto in (
+                ("Iterations", self.looks, self.user_looks),
+                ("Supersample", self.supersample, self.user_supersample),
+            )
+            if auto
+        ]
+        return (
+            f"{' and '.join(mine)} (set by hand) predict {self.psnr:.1f} dB against the "
+            f"camera hologram, {self.loss:.1f} dB less than Auto's {self.planned.looks} "
+            f"looks at supersample {self.planned.supersample} ({self.planned.psnr:.1f} dB): "
+            f"expect visible grain; set them to 0 (Auto) for the plan's choice"
+        )
 
 
 def speckle_variance(blur, looks: int, supersample: int) -> np.ndarray:
@@ -191,8 +237,9 @@ def predicted_psnr(looks: int, supersample: int, *, blurs, size: float) -> float
     return 10 * math.log10(size / (EDGE_ERROR + SPECKLE_SCALE * speckle))
 
 
-def view_blurs(bounds, eye, *, pupil: float, pixel_angle: float, focus: float | None = None,
-               count: int = 9) -> np.ndarray:
+def view_blurs(
+    bounds, eye, *, pupil: float, pixel_angle: float, focus: float | None = None, count: int = 9
+) -> np.ndarray:
     """Defocus blurs [px] over the objects' depths for a view from ``eye`` (3,) [m] through
     a pupil of ``pupil`` [m] with pixels of ``pixel_angle`` [rad], focused at ``focus`` [m]
     (None: the objects' front, the worst a view focused on them meets), at ``count`` depths
@@ -210,8 +257,10 @@ def reference_view(p: PlatePlan, focus: float | None = None) -> tuple[np.ndarray
     (:func:`view_blurs`, ``focus`` [m] as there; :func:`objects_size`)."""
     eye = np.asarray(p.zone.centre, np.float64)
     pixel = 2 * p.wavelength / p.pupil
-    return (view_blurs(p.bounds, eye, pupil=p.pupil, pixel_angle=pixel, focus=focus),
-            objects_size(p.bounds, eye, pixel))
+    return (
+        view_blurs(p.bounds, eye, pupil=p.pupil, pixel_angle=pixel, focus=focus),
+        objects_size(p.bounds, eye, pixel),
+    )
 
 
 def objects_size(bounds, eye, pixel_angle: float) -> float:
@@ -230,10 +279,17 @@ def options(p: PlatePlan, *, blurs, size: float, resolution) -> list[Option]:
     for n in LOOK_CHOICES:
         record = p.emitters * p.footprint * (1 + FURTHER_CODED * (n - 1)) / PAIRS_PER_SECOND
         for s in SUPERSAMPLE_CHOICES:
-            view = n * (CHANNELS * p.samples / 2 * VIEW_SAMPLE_SECONDS
-                        + w * h * s * s * FINE_PIXEL_SECONDS)
-            out.append(Option(looks=n, supersample=s, seconds=record / FRAMES + view,
-                              psnr=predicted_psnr(n, s, blurs=blurs, size=size)))
+            view = n * (
+                CHANNELS * p.samples / 2 * VIEW_SAMPLE_SECONDS + w * h * s * s * FINE_PIXEL_SECONDS
+            )
+            out.append(
+                Option(
+                    looks=n,
+                    supersample=s,
+                    seconds=record / FRAMES + view,
+                    psnr=predicted_psnr(n, s, blurs=blurs, size=size),
+                )
+            )
     return out
 
 
@@ -281,9 +337,17 @@ def looks_ceiling(every: list[Option]) -> int:
     return ceiling
 
 
-def choose(p: PlatePlan, *, resolution, looks: int = 0, supersample: int = 0,
-           target: float = TARGET_DB, focus: float | None = None, budget=(None, None),
-           plans=None) -> QualityChoice:
+def choose(
+    p: PlatePlan,
+    *,
+    resolution,
+    looks: int = 0,
+    supersample: int = 0,
+    target: float = TARGET_DB,
+    focus: float | None = None,
+    budget=(None, None),
+    plans=None,
+) -> QualityChoice:
     """The looks and supersampling for views of the plate planned as ``p`` (its reference
     view: the zone's pupil and pixel from the zone's centre) at ``resolution`` (W, H): the
     fewest looks predicted to reach ``target`` [dB] and MODEL_MARGIN above it with some
@@ -330,8 +394,11 @@ def choose(p: PlatePlan, *, resolution, looks: int = 0, supersample: int = 0,
     planned = _fewest_looks(auto, aim)
     free = _fewest_looks([o for o in every if o.looks <= ceiling], aim)
     held = refused if free.looks > planned.looks else ""
-    allowed = [o for o in (every if looks else auto) if (not looks or o.looks == looks)
-               and (not supersample or o.supersample == supersample)]
+    allowed = [
+        o
+        for o in (every if looks else auto)
+        if (not looks or o.looks == looks) and (not supersample or o.supersample == supersample)
+    ]
     if allowed:
         mine = _fewest_looks(allowed, aim)
         n, s, psnr = mine.looks, mine.supersample, mine.psnr
@@ -342,15 +409,25 @@ def choose(p: PlatePlan, *, resolution, looks: int = 0, supersample: int = 0,
         n = looks or planned.looks
         s = supersample or planned.supersample
         psnr = predicted_psnr(n, s, blurs=blurs, size=size)
-    return QualityChoice(looks=n, supersample=s, psnr=psnr, target=target, planned=planned,
-                         blur=float(blurs.max()), size=size, user_looks=looks,
-                         user_supersample=supersample, budget=held,
-                         unbudgeted=free if held else None)
+    return QualityChoice(
+        looks=n,
+        supersample=s,
+        psnr=psnr,
+        target=target,
+        planned=planned,
+        blur=float(blurs.max()),
+        size=size,
+        user_looks=looks,
+        user_supersample=supersample,
+        budget=held,
+        unbudgeted=free if held else None,
+    )
 
 
 NEAR_BEST = 0.5  # [dB] short of a target no setting reaches, the fewest looks this near the best
-MODEL_MARGIN = 0.75  # [dB] Auto aims this far above the target: the most the model predicted
-                     # above a measured setting of the scenes bench/quality_fit.py fits it to
+# [dB] Auto aims this far above the target: the most the model predicted above a measured setting of
+# the scenes bench/quality_fit.py fits it to
+MODEL_MARGIN = 0.75
 
 
 def _fewest_looks(candidates, target: float) -> Option:

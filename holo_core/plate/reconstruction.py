@@ -68,8 +68,14 @@ def reconstruct(hologram: Hologram, colour: int = 0, *, dc_suppression=True) -> 
     if dc_suppression:
         h = h - h.mean()
     amplitude = hologram.reference_amplitudes[colour] if hologram.reference_amplitudes else 1.0
-    ref = Reference(angle=hologram.reference_angle, azimuth=hologram.reference_azimuth,
-                    allow_aliasing=True)
-    r = reference_wave(hologram.shape, wavelength=hologram.wavelengths[colour],
-                       pitch=hologram.pitch, reference=ref, amplitude=amplitude)
+    ref = Reference(
+        angle=hologram.reference_angle, azimuth=hologram.reference_azimuth, allow_aliasing=True
+    )
+    r = reference_wave(
+        hologram.shape,
+        wavelength=hologram.wavelengths[colour],
+        pitch=hologram.pitch,
+        reference=ref,
+        amplitude=amplitude,
+    )
     return (r * h / amplitude**2).astype(np.complex64)

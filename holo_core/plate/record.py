@@ -17,11 +17,26 @@ PLATE_METHODS = ("zone", "auto", "direct", "wrp")
 
 
 @validate.scale_free()
-def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, zone=None,
-                    zone_margin=DEFAULT_ZONE_MARGIN, resolution=None, max_resolution=2048,
-                    wavelength=None, encoding="complex", depth=True, seed=0, method="zone",
-                    cull=True, code=None, budget=(None, None),
-                    progress: jobs.Progress = None) -> Hologram:
+def record_hologram(
+    emitters=(),
+    *,
+    plate: Plate,
+    triangles=(),
+    camera=None,
+    zone=None,
+    zone_margin=DEFAULT_ZONE_MARGIN,
+    resolution=None,
+    max_resolution=2048,
+    wavelength=None,
+    encoding="complex",
+    depth=True,
+    seed=0,
+    method="zone",
+    cull=True,
+    code=None,
+    budget=(None, None),
+    progress: jobs.Progress = None,
+) -> Hologram:
     """Record a scene in world metres onto ``plate``, choosing the optics automatically.
 
     The choice (:mod:`holo_core.plate.sampling`) is logged and stored in the hologram.
@@ -113,20 +128,47 @@ def record_hologram(emitters=(), *, plate: Plate, triangles=(), camera=None, zon
     triangles = list(triangles)
     if method == "zone" and meshes is not None:
         if resolution is not None:
-            raise InputError("resolution applies to point sums; a plate of meshes takes the "
-                             "samples its zone asks (holo_core.plate.plan): give a wavelength "
-                             "to change them")
-        return record_plate(meshes + triangles, plate=plate, camera=camera, zone=zone,
-                            zone_margin=zone_margin, wavelength=wavelength,
-                            encoding=encoding, depth=depth, seed=seed, code=code,
-                            budget=budget, progress=progress)
+            raise InputError(
+                "resolution applies to point sums; a plate of meshes takes the "
+                "samples its zone asks (holo_core.plate.plan): give a wavelength "
+                "to change them"
+            )
+        return record_plate(
+            meshes + triangles,
+            plate=plate,
+            camera=camera,
+            zone=zone,
+            zone_margin=zone_margin,
+            wavelength=wavelength,
+            encoding=encoding,
+            depth=depth,
+            seed=seed,
+            code=code,
+            budget=budget,
+            progress=progress,
+        )
     if code is not None:
-        raise InputError("code applies to plates of meshes (method 'zone'); bare points and "
-                         "point sums take independent seeds")
+        raise InputError(
+            "code applies to plates of meshes (method 'zone'); bare points and "
+            "point sums take independent seeds"
+        )
     if method == "zone":
         method = "auto"  # bare points: no surface to be hidden by
-    return record_scene_points(emitters, meshes, triangles, plate=plate, camera=camera, zone=zone,
-                               zone_margin=zone_margin, resolution=resolution,
-                               max_resolution=max_resolution, wavelength=wavelength,
-                               encoding=encoding, depth=depth, seed=seed, method=method,
-                               cull=cull, progress=progress)
+    return record_scene_points(
+        emitters,
+        meshes,
+        triangles,
+        plate=plate,
+        camera=camera,
+        zone=zone,
+        zone_margin=zone_margin,
+        resolution=resolution,
+        max_resolution=max_resolution,
+        wavelength=wavelength,
+        encoding=encoding,
+        depth=depth,
+        seed=seed,
+        method=method,
+        cull=cull,
+        progress=progress,
+    )

@@ -57,8 +57,10 @@ class PlateRecording:
 
     def look_columns(self, look: int) -> list[slice]:
         """Per group, the columns of its emitters' amplitudes that are look ``look``'s."""
-        return [slice(look * n, (look + 1) * n)
-                for n in (em.amplitude.shape[1] // self.looks for _, em in self.groups)]
+        return [
+            slice(look * n, (look + 1) * n)
+            for n in (em.amplitude.shape[1] // self.looks for _, em in self.groups)
+        ]
 
     def look_channels(self, look: int) -> list[int]:
         """The channels of a block's samples (:meth:`region`) that are look ``look``'s, in the
@@ -82,8 +84,10 @@ class PlateRecording:
         pair's partner summed with the colours in one pass where their channels an emitter
         fit the kernel's accumulators (FUSED_CHANNELS), else one a wavelength."""
         (lam, em), *rest = self.groups
-        per_emitter = sum(e.amplitude.shape[1] // (1 if e.mixing is None else len(e.mixing))
-                          for _, e in self.groups)
+        per_emitter = sum(
+            e.amplitude.shape[1] // (1 if e.mixing is None else len(e.mixing))
+            for _, e in self.groups
+        )
         if len(rest) == 1 and per_emitter <= FUSED_CHANNELS:
             return [ZoneSum(em, self.window, lam, rt, partner=rest[0])]
         return [ZoneSum(e, self.window, lam, rt) for lam, e in self.groups]
@@ -106,9 +110,17 @@ class PlateRecording:
         # each sum's channel c goes to plane i of look l
         where, first = [], 0
         for s in self.sums():
-            where.append((s, [(look, i, b - first) for look in range(self.looks)
-                              for i, b in enumerate(self.look_channels(look))
-                              if first <= b < first + s.channels]))
+            where.append(
+                (
+                    s,
+                    [
+                        (look, i, b - first)
+                        for look in range(self.looks)
+                        for i, b in enumerate(self.look_channels(look))
+                        if first <= b < first + s.channels
+                    ],
+                )
+            )
             first += s.channels
         for r0 in range(0, rows, SUM_ROWS):
             here = min(SUM_ROWS, rows - r0)
@@ -117,20 +129,23 @@ class PlateRecording:
                 if nonfinite_count(s.rt, block):  # never a hologram of NaN
                     _not_finite(r0, 0, here, cols)
                 for look, i, c in planes:
-                    read(block[c], out=waves[look][i, r0:r0 + here])
+                    read(block[c], out=waves[look][i, r0 : r0 + here])
             jobs.report(progress, r0 + here, rows)
         return [Hologram(info=self.info, object_wave=w) for w in waves]
 
 
 def _not_finite(row0, col0, rows, cols):
-    raise RuntimeError(f"the object wave holds non-finite samples in rows {row0}-"
-                       f"{row0 + rows - 1}, columns {col0}-{col0 + cols - 1} (the OpenCL "
-                       f"device's arithmetic failed); nothing was recorded")
+    raise RuntimeError(
+        f"the object wave holds non-finite samples in rows {row0}-"
+        f"{row0 + rows - 1}, columns {col0}-{col0 + cols - 1} (the OpenCL "
+        f"device's arithmetic failed); nothing was recorded"
+    )
 
 
 SUM_ROWS = 256  # rows of the plate summed at once in memory (a multiple of the block lists')
-FUSED_CHANNELS = 8  # channels an emitter the zone sum carries in one pass at most: its
-                    # accumulators (32 columns x 16 lanes x re, im) stay within a core's L1
+# channels an emitter the zone sum carries in one pass at most: its accumulators (32 columns x 16
+# lanes x re, im) stay within a core's L1
+FUSED_CHANNELS = 8
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
@@ -164,10 +179,21 @@ def mesh_list(meshes) -> list[Mesh]:
     return meshes
 
 
-def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = None,
-               zone_margin=DEFAULT_ZONE_MARGIN, wavelength=None, looks=LOOKS, depth=True,
-               budget=(None, None), tiled: bool | None = False,
-               tile: int | None = None, sides=None) -> PlannedPlate:
+def plate_plan(
+    meshes,
+    *,
+    plate: Plate,
+    camera=None,
+    zone: ViewingZone | None = None,
+    zone_margin=DEFAULT_ZONE_MARGIN,
+    wavelength=None,
+    looks=LOOKS,
+    depth=True,
+    budget=(None, None),
+    tiled: bool | None = False,
+    tile: int | None = None,
+    sides=None,
+) -> PlannedPlate:
     """The plan of a plate of ``meshes`` and its ``looks`` (``sides``: each mesh's
     :func:`holo_core.scene.mesh.outward`, where the caller found it; the other arguments as
     :func:`holo_core.plate.looks.record_plate` takes them): what its recording will hold and
@@ -179,38 +205,56 @@ def plate_plan(meshes, *, plate: Plate, camera=None, zone: ViewingZone | None = 
     if not isinstance(plate, Plate):
         raise InputError(f"plate must be a Plate; got {type(plate).__name__}")
     meshes = mesh_list(meshes)
-    memory.check_host(f"moving {sum(len(m.triangles) for m in meshes)} triangles onto the "
-                      f"plate", sum(320.0 * len(m.triangles) + 96.0 * len(m.vertices)
-                                    for m in meshes))
+    memory.check_host(
+        f"moving {sum(len(m.triangles) for m in meshes)} triangles onto the plate",
+        sum(320.0 * len(m.triangles) + 96.0 * len(m.vertices) for m in meshes),
+    )
     local = [replace(m, vertices=plate.to_plate(m.vertices)) for m in meshes]
     every = np.concatenate([m.vertices for m in local])
     bounds = np.array([every.min(0), every.max(0)])
     if bounds[1, 2] >= 0:
-        raise InputError(f"the objects must lie behind the plate (z < 0 in its frame); they "
-                         f"reach z = {bounds[1, 2]:.4g} m")
+        raise InputError(
+            f"the objects must lie behind the plate (z < 0 in its frame); they "
+            f"reach z = {bounds[1, 2]:.4g} m"
+        )
     zone = plate.recording_zone(zone, camera, zone_margin, bounds)
     pixel = zone.pixel or (camera.pixel_angle() if camera is not None else None)
     if pixel is None and wavelength is None:
-        raise InputError("a plate needs the sharpness of its views: a camera, a zone with its "
-                         "pixel angle, or a wavelength")
+        raise InputError(
+            "a plate needs the sharpness of its views: a camera, a zone with its "
+            "pixel angle, or a wavelength"
+        )
     sides = tuple(outward(m) for m in local) if sides is None else tuple(sides)
-    p = plan((plate.width, plate.height), bounds, zone=zone, pixel_angle=pixel or 1.0,
-             wavelength=wavelength, looks=looks, tile=tile,
-             seen=seen_area(local, zone.centre, sides))
-    count = crossing_count(local, np.asarray(zone.centre, np.float64), zone_frame(zone, bounds),
-                           p.spacing)  # what finding the emitters holds, before it starts
-    memory.check_host(f"finding the emitters of {sum(len(m.triangles) for m in local)} "
-                      f"triangles ({count:.3g} crossings of the zone's rays: many large "
-                      f"triangles through each other cross many)", CROSSING_BYTES * count)
+    p = plan(
+        (plate.width, plate.height),
+        bounds,
+        zone=zone,
+        pixel_angle=pixel or 1.0,
+        wavelength=wavelength,
+        looks=looks,
+        tile=tile,
+        seen=seen_area(local, zone.centre, sides),
+    )
+    count = crossing_count(
+        local, np.asarray(zone.centre, np.float64), zone_frame(zone, bounds), p.spacing
+    )  # what finding the emitters holds, before it starts
+    memory.check_host(
+        f"finding the emitters of {sum(len(m.triangles) for m in local)} "
+        f"triangles ({count:.3g} crossings of the zone's rays: many large "
+        f"triangles through each other cross many)",
+        CROSSING_BYTES * count,
+    )
     depth, decided = _flag("depth", depth), tiled is None
-    tiled = p.check_recording(memory=budget[0], disk=budget[1], channels=3 + depth,
-                              tiled=tiled)
+    tiled = p.check_recording(memory=budget[0], disk=budget[1], channels=3 + depth, tiled=tiled)
     if decided and tiled:
-        log.info("the plate's %d look(s) need %s in one piece, more than %s: recording them "
-                 "tile by tile", p.looks, memory.gib(p.memory_bytes((3 + depth) * p.looks)),
-                 memory.gib(memory.host_share(budget[0])))
-    return PlannedPlate(plan=p, meshes=local, plate=plate, depth=depth, tiled=tiled,
-                        sides=sides)
+        log.info(
+            "the plate's %d look(s) need %s in one piece, more than %s: recording them "
+            "tile by tile",
+            p.looks,
+            memory.gib(p.memory_bytes((3 + depth) * p.looks)),
+            memory.gib(memory.host_share(budget[0])),
+        )
+    return PlannedPlate(plan=p, meshes=local, plate=plate, depth=depth, tiled=tiled, sides=sides)
 
 
 def _flag(name, value) -> bool:
@@ -219,9 +263,16 @@ def _flag(name, value) -> bool:
     return bool(value)
 
 
-def prepare_plate(planned: PlannedPlate, *, codes=None, seed=0, encoding="complex",
-                  emitters: Emitters | None = None, recording: str = "",
-                  phases: str = "random") -> PlateRecording:
+def prepare_plate(
+    planned: PlannedPlate,
+    *,
+    codes=None,
+    seed=0,
+    encoding="complex",
+    emitters: Emitters | None = None,
+    recording: str = "",
+    phases: str = "random",
+) -> PlateRecording:
     """The emitters, visibility tables and sampling of the plate ``planned`` (its budget
     checked as it was planned), before any sum: the emitters the zone sees with their amplitudes, for
     the looks ``codes`` summed at once (:func:`holo_core.plate.looks.record_looks`), look
@@ -238,58 +289,107 @@ def prepare_plate(planned: PlannedPlate, *, codes=None, seed=0, encoding="comple
     picture, not speckle; one phase on the surface itself would send a tilted surface's
     light along its normal, past the eye)."""
     if encoding != "complex":
-        raise InputError(f"encoding must be 'complex' for a plate of meshes (a display's "
-                         f"intensity pattern is made from it: holo_core.phase.display); got "
-                         f"{encoding!r}"[:200])
+        raise InputError(
+            f"encoding must be 'complex' for a plate of meshes (a display's "
+            f"intensity pattern is made from it: holo_core.phase.display); got "
+            f"{encoding!r}"[:200]
+        )
     seed = validate.seed(seed)
     phases = validate.choice("phases", phases, PHASES)
     p, local, zone = planned.plan, planned.meshes, planned.plan.zone
-    codes = tuple(look_code(k, p.looks) for k in range(p.looks)) if codes is None else \
-        tuple(codes)
+    codes = tuple(look_code(k, p.looks) for k in range(p.looks)) if codes is None else tuple(codes)
     if len(codes) != p.looks:  # the plan's budget counts its looks
-        raise InputError(f"codes must give one code per look of the plan ({p.looks}); got "
-                         f"{len(codes)}")
+        raise InputError(
+            f"codes must give one code per look of the plan ({p.looks}); got {len(codes)}"
+        )
     bounds, depth, channels = p.bounds, planned.depth, planned.channels
     log.info("sampling: %s", p.describe())
-    em = emitters if emitters is not None else zone_emitters(
-        local, zone, p.spacing, layers=LAYERS, sides=planned.sides or None)
+    em = (
+        emitters
+        if emitters is not None
+        else zone_emitters(local, zone, p.spacing, layers=LAYERS, sides=planned.sides or None)
+    )
     if not len(em):
-        raise InputError(f"no surface of the meshes is seen from the viewing zone "
-                         f"({zone.describe()})")
+        raise InputError(
+            f"no surface of the meshes is seen from the viewing zone ({zone.describe()})"
+        )
     # |a| = √I·|p − Z|: each emitter's light reaches the zone's centre with its own amplitude
     reach = np.linalg.norm(em.position - np.asarray(zone.centre), axis=1)
     if em.weight is not None:  # a shared set's emitters, weighted for this zone
         reach = reach * em.weight
     smooth = phases == "smooth"
-    waves = [np.exp(1j * (_phases(em, _look_seed(seed, codes, look), c, smooth)
-                          + _in_phase_at_zone(reach, p.wavelength, smooth))) * reach
-             for look, c in enumerate(codes)]
+    waves = [
+        np.exp(
+            1j
+            * (
+                _phases(em, _look_seed(seed, codes, look), c, smooth)
+                + _in_phase_at_zone(reach, p.wavelength, smooth)
+            )
+        )
+        * reach
+        for look, c in enumerate(codes)
+    ]
     partial = em.visibility.reshape(len(em), -1).min(1) < 1
     rows = np.where(partial, np.cumsum(partial) - 1, -1).astype(np.int32)
     table = np.round(em.visibility[partial] * 255).astype(np.uint8)
-    window = ZoneWindow(origin=p.origin, pitch=p.pitch, row_pitch=p.row_pitch, shape=p.shape,
-                        centre=zone.centre, half_extents=zone.half_extents, rim=RIM)
-    amplitudes = [(p.wavelength, np.concatenate([np.sqrt(em.colour) * wave[:, None]
-                                                 for wave in waves], 1))]
+    window = ZoneWindow(
+        origin=p.origin,
+        pitch=p.pitch,
+        row_pitch=p.row_pitch,
+        shape=p.shape,
+        centre=zone.centre,
+        half_extents=zone.half_extents,
+        rim=RIM,
+    )
+    amplitudes = [
+        (p.wavelength, np.concatenate([np.sqrt(em.colour) * wave[:, None] for wave in waves], 1))
+    ]
     if depth:  # the depth channel's own wavelength: its light in phase at the zone too
         turn = _in_phase_at_zone(reach, p.depth_wavelength, smooth) - _in_phase_at_zone(
-            reach, p.wavelength, smooth)
+            reach, p.wavelength, smooth
+        )
         amplitudes.append((p.depth_wavelength, np.stack(waves, 1) * np.exp(1j * turn)[:, None]))
     classes, mixing = _code_classes(em, codes)
-    groups = tuple((lam, ZoneEmitters(position=em.position, amplitude=a, visibility=rows,
-                                      table=table, grid=em.grid, classes=classes,
-                                      mixing=mixing)) for lam, a in amplitudes)
+    groups = tuple(
+        (
+            lam,
+            ZoneEmitters(
+                position=em.position,
+                amplitude=a,
+                visibility=rows,
+                table=table,
+                grid=em.grid,
+                classes=classes,
+                mixing=mixing,
+            ),
+        )
+        for lam, a in amplitudes
+    )
     distance = float(np.linalg.norm(bounds.mean(0) - np.asarray(zone.centre)))
     wavelengths = (p.wavelength,) * 3 + ((p.depth_wavelength,) if depth else ())
-    info = HologramInfo(shape=p.shape, encoding="complex", wavelengths=wavelengths,
-                        pitch=p.pitch, band=max(p.band), channels=tuple(channels),
-                        point_density=1 / (p.spacing * distance) ** 2, zone=zone,
-                        bounds=bounds, plate=planned.plate.matrix_world,
-                        carrier=Carrier(centre=zone.centre, origin=p.origin,
-                                        row_pitch=p.row_pitch),
-                        recording=validate.digest("recording", recording))
-    return PlateRecording(info=info, window=window, groups=groups, plan=p, meshes=local,
-                          seed=seed, codes=tuple(None if c is None else tuple(c) for c in codes))
+    info = HologramInfo(
+        shape=p.shape,
+        encoding="complex",
+        wavelengths=wavelengths,
+        pitch=p.pitch,
+        band=max(p.band),
+        channels=tuple(channels),
+        point_density=1 / (p.spacing * distance) ** 2,
+        zone=zone,
+        bounds=bounds,
+        plate=planned.plate.matrix_world,
+        carrier=Carrier(centre=zone.centre, origin=p.origin, row_pitch=p.row_pitch),
+        recording=validate.digest("recording", recording),
+    )
+    return PlateRecording(
+        info=info,
+        window=window,
+        groups=groups,
+        plan=p,
+        meshes=local,
+        seed=seed,
+        codes=tuple(None if c is None else tuple(c) for c in codes),
+    )
 
 
 def _code_classes(em, codes) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -346,8 +446,10 @@ def _in_phase_at_zone(reach, wavelength: float, smooth: bool):
     from the zone's centre: their light reaches it in one phase; 0 unless ``smooth``."""
     if not smooth:
         return np.zeros(np.shape(reach))
-    return np.remainder(-2 * np.pi / wavelength * np.asarray(reach, np.float64) + np.pi,
-                        2 * np.pi) - np.pi
+    return (
+        np.remainder(-2 * np.pi / wavelength * np.asarray(reach, np.float64) + np.pi, 2 * np.pi)
+        - np.pi
+    )
 
 
 def _code_steps(em, code) -> np.ndarray:

@@ -77,8 +77,9 @@ class Reference:
         (3,) float64 ndarray
         """
         s = math.sin(self.angle)
-        return np.array([s * math.cos(self.azimuth), s * math.sin(self.azimuth),
-                         math.cos(self.angle)])
+        return np.array(
+            [s * math.cos(self.azimuth), s * math.sin(self.azimuth), math.cos(self.angle)]
+        )
 
     def check(self, wavelength: float, pitch: float) -> None:
         """Eq. 19: the carrier fringes need pitch <= λ / (2 sin ϑ).
@@ -101,9 +102,11 @@ class Reference:
         limit = wavelength / (2 * math.sin(self.angle))
         if pitch > limit:
             safe = math.asin(min(1.0, wavelength / (2 * pitch)))
-            message = (f"reference angle {self.angle:.4g} rad needs a pitch <= {limit:.4g} m "
-                       f"at λ = {wavelength:.4g} m (Eq. 19); with pitch {pitch:.4g} m the "
-                       f"largest safe angle is {safe:.4g} rad")
+            message = (
+                f"reference angle {self.angle:.4g} rad needs a pitch <= {limit:.4g} m "
+                f"at λ = {wavelength:.4g} m (Eq. 19); with pitch {pitch:.4g} m the "
+                f"largest safe angle is {safe:.4g} rad"
+            )
             if not self.allow_aliasing:
                 raise InputError(message)
             validate.warn_sampling(message)

@@ -31,9 +31,9 @@ from ..validate import InputError
 from .point_sources import CONE_RIM
 
 log = logging.getLogger(__name__)
-DEFAULT_BAND = 0.25      # sin θ of the viewing zone without a camera
-MAX_BAND = 0.9           # the widest cone chosen, sin θ (64°), with a camera or without
-MARGIN = 0.95            # the cone stays this fraction inside the off-axis sampling limit
+DEFAULT_BAND = 0.25  # sin θ of the viewing zone without a camera
+MAX_BAND = 0.9  # the widest cone chosen, sin θ (64°), with a camera or without
+MARGIN = 0.95  # the cone stays this fraction inside the off-axis sampling limit
 MIN_RESOLUTION, DEFAULT_RESOLUTION = 256, 1024
 
 
@@ -52,10 +52,12 @@ class Sampling:
     spacing: float
 
     def describe(self) -> str:
-        return (f"hologram {self.shape[1]}x{self.shape[0]} at pitch {self.pitch:.4g} m, "
-                f"λ = {self.wavelength:.4g} m (depth λ2 = {self.depth_wavelength:.6g} m), "
-                f"cone sin θ = {self.band:.3g}, reference {math.degrees(self.reference_angle):.2f}°,"
-                f" point spacing {self.spacing:.3g} m")
+        return (
+            f"hologram {self.shape[1]}x{self.shape[0]} at pitch {self.pitch:.4g} m, "
+            f"λ = {self.wavelength:.4g} m (depth λ2 = {self.depth_wavelength:.6g} m), "
+            f"cone sin θ = {self.band:.3g}, reference {math.degrees(self.reference_angle):.2f}°,"
+            f" point spacing {self.spacing:.3g} m"
+        )
 
 
 def band_towards(points, camera_position) -> float:
@@ -65,8 +67,9 @@ def band_towards(points, camera_position) -> float:
     return float(np.max(np.hypot(v[:, 0], v[:, 1]) / np.linalg.norm(v, axis=1)))
 
 
-def choose(plate_size, points, *, camera=None, resolution=None,
-           max_resolution=2048, wavelength=None) -> Sampling:
+def choose(
+    plate_size, points, *, camera=None, resolution=None, max_resolution=2048, wavelength=None
+) -> Sampling:
     """The hologram and wavelength for ``points`` (N, 3) [m] in the plate's frame behind a plate
     of ``plate_size`` (width, height) [m].
 
@@ -86,8 +89,9 @@ def choose(plate_size, points, *, camera=None, resolution=None,
     except (TypeError, ValueError):
         pts = np.zeros((0, 3))
     if not len(pts) or not np.isfinite(pts).all() or (pts[:, 2] >= 0).any():
-        raise InputError("points must be finite (x, y, z) [m] behind the plate (z < 0 in its "
-                         "frame)")
+        raise InputError(
+            "points must be finite (x, y, z) [m] behind the plate (z < 0 in its frame)"
+        )
     max_resolution = validate.integer("max_resolution", max_resolution, 16)
     if wavelength is not None:
         wavelength = validate.wavelength("wavelength", wavelength)
@@ -115,17 +119,27 @@ def choose(plate_size, points, *, camera=None, resolution=None,
     # λ2 < λ1 is the tighter one; a wavelength long against the pitch samples every
     # direction, but a cone ends at 90° (sin θ < 1, what a hologram file holds)
     band = min(MARGIN * lam2 / (8 * pitch), MAX_BAND)
-    s = Sampling(shape=(max(1, round(height / pitch)), max(1, round(width / pitch))),
-                 pitch=pitch, wavelength=lam, depth_wavelength=lam2, band=band,
-                 reference_angle=math.asin(min(0.99, 3 * lam2 / (8 * pitch))),
-                 spacing=max(lam / (2 * band) / math.sqrt(2), footprint / 2))
+    s = Sampling(
+        shape=(max(1, round(height / pitch)), max(1, round(width / pitch))),
+        pitch=pitch,
+        wavelength=lam,
+        depth_wavelength=lam2,
+        band=band,
+        reference_angle=math.asin(min(0.99, 3 * lam2 / (8 * pitch))),
+        spacing=max(lam / (2 * band) / math.sqrt(2), footprint / 2),
+    )
     log.info("sampling: %s", s.describe())
     if lam_image is not None and lam > 1.5 * lam_image:
         # the spot grows as √λ at the pinhole's best (λ = 4Δ²r gives two pixels), and the
         # sharp λ needs the hologram's side to grow as 1/λ
-        log.warning("sampling: this plate's view resolves about %.1f px (2 px at best): the "
-                    "image needs λ <= %.3g m, a hologram of %d samples allows %.3g m; %d "
-                    "samples (Max Hologram Size) or the camera mode would make it sharp",
-                    2 * math.sqrt(lam / lam_image), lam_image, resolution, lam,
-                    math.ceil(resolution * lam / lam_image))
+        log.warning(
+            "sampling: this plate's view resolves about %.1f px (2 px at best): the "
+            "image needs λ <= %.3g m, a hologram of %d samples allows %.3g m; %d "
+            "samples (Max Hologram Size) or the camera mode would make it sharp",
+            2 * math.sqrt(lam / lam_image),
+            lam_image,
+            resolution,
+            lam,
+            math.ceil(resolution * lam / lam_image),
+        )
     return s

@@ -49,10 +49,28 @@ TILE_STEP = 64  # point tiles are multiples of this: the kernel's column segment
 ZONE_TILE_STEP = BLOCK  # a plate of meshes' tiles: multiples of its emitters' block lists
 
 
-def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_WAVELENGTHS,
-                 tile=DEFAULT_TILE, phases=None, seed=0, band=None, plate=None, bounds=None,
-                 channels=(), zone=None, method="direct", scheduler=None, overwrite=False,
-                 progress: jobs.Progress = None, dashboard=None) -> Hologram:
+def record_tiled(
+    positions,
+    colours,
+    *,
+    url,
+    shape,
+    pitch,
+    wavelengths=DEFAULT_WAVELENGTHS,
+    tile=DEFAULT_TILE,
+    phases=None,
+    seed=0,
+    band=None,
+    plate=None,
+    bounds=None,
+    channels=(),
+    zone=None,
+    method="direct",
+    scheduler=None,
+    overwrite=False,
+    progress: jobs.Progress = None,
+    dashboard=None,
+) -> Hologram:
     """Record the complex plate of point emitters into the tiled store at ``url`` and return
     it opened (:func:`holo_core.io.tiled_wave.open_plate`).
 
@@ -92,22 +110,59 @@ def record_tiled(positions, colours, *, url, shape, pitch, wavelengths=DEFAULT_W
     _flag("overwrite", overwrite)
     for lam in set(wavelengths):
         check_distance(pos, sampling_grid(shape, lam, pitch, band))
-    info = HologramInfo(shape=shape, encoding="complex", wavelengths=wavelengths, pitch=pitch,
-                        band=band or 0.0, plate=np.eye(4) if plate is None else plate,
-                        channels=channels, zone=zone,
-                        bounds=np.array([pos.min(0), pos.max(0)]) if bounds is None else bounds)
+    info = HologramInfo(
+        shape=shape,
+        encoding="complex",
+        wavelengths=wavelengths,
+        pitch=pitch,
+        band=band or 0.0,
+        plate=np.eye(4) if plate is None else plate,
+        channels=channels,
+        zone=zone,
+        bounds=np.array([pos.min(0), pos.max(0)]) if bounds is None else bounds,
+    )
     files, address = _output_and_scheduler([url], scheduler)
-    recording = _recording(pos, colours, phases, seed, method=method, shape=shape,
-                           pitch=pitch, band=band, wavelengths=wavelengths, tile=tile)
-    _record_tiles(files, info, tile, [recording], overwrite=overwrite, address=address,
-                  task=record_tile, shared=(pos, amp), progress=progress, dashboard=dashboard)
+    recording = _recording(
+        pos,
+        colours,
+        phases,
+        seed,
+        method=method,
+        shape=shape,
+        pitch=pitch,
+        band=band,
+        wavelengths=wavelengths,
+        tile=tile,
+    )
+    _record_tiles(
+        files,
+        info,
+        tile,
+        [recording],
+        overwrite=overwrite,
+        address=address,
+        task=record_tile,
+        shared=(pos, amp),
+        progress=progress,
+        dashboard=dashboard,
+    )
     return open_plate(files[0].name)
 
 
-def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, seed=0,
-                       encoding="complex", scheduler=None, overwrite=False,
-                       progress: jobs.Progress = None, dashboard=None,
-                       recording="", phases="random") -> list[Hologram]:
+def record_looks_tiled(
+    planned: PlannedPlate,
+    *,
+    urls,
+    codes=None,
+    seed=0,
+    encoding="complex",
+    scheduler=None,
+    overwrite=False,
+    progress: jobs.Progress = None,
+    dashboard=None,
+    recording="",
+    phases="random",
+) -> list[Hologram]:
     """The looks ``codes`` of the plate of meshes ``planned`` (with occlusion, against the
     carrier converging on its zone: :func:`holo_core.plate.recording.plate_plan`; the other
     arguments as :func:`holo_core.plate.looks.record_plate` takes them; look l coded by
@@ -133,23 +188,34 @@ def record_looks_tiled(planned: PlannedPlate, *, urls, codes=None, seed=0,
     _flag("overwrite", overwrite)
     looks = planned.plan.looks if codes is None else len(codes)
     if len(urls) != looks or not urls:
-        raise InputError(f"urls must name one store per look; got {len(urls)} for "
-                         f"{looks} look(s)")
+        raise InputError(f"urls must name one store per look; got {len(urls)} for {looks} look(s)")
     files, address = _output_and_scheduler(urls, scheduler)
-    job = prepare_plate(planned, codes=codes, seed=seed, encoding=encoding,
-                        recording=recording, phases=phases)
+    job = prepare_plate(
+        planned, codes=codes, seed=seed, encoding=encoding, recording=recording, phases=phases
+    )
     recordings = [_plate_recording(job, tile, look) for look in range(job.looks)]
-    _record_tiles(files, job.info, tile, recordings, overwrite=overwrite, address=address,
-                  task=record_plate_tile, shared=replace(job, meshes=()), progress=progress,
-                  dashboard=dashboard)
+    _record_tiles(
+        files,
+        job.info,
+        tile,
+        recordings,
+        overwrite=overwrite,
+        address=address,
+        task=record_plate_tile,
+        shared=replace(job, meshes=()),
+        progress=progress,
+        dashboard=dashboard,
+    )
     return [open_plate(f.name) for f in files]
 
 
 def _tile(tile, step) -> int:
     tile = validate.integer("tile", tile, store.MIN_TILE, store.MAX_TILE)
     if tile % step:
-        raise InputError(f"tile must be a multiple of {step} samples in "
-                         f"[{store.MIN_TILE}, {store.MAX_TILE}]; got {tile}")
+        raise InputError(
+            f"tile must be a multiple of {step} samples in "
+            f"[{store.MIN_TILE}, {store.MAX_TILE}]; got {tile}"
+        )
     return tile
 
 
@@ -169,26 +235,43 @@ def _output_and_scheduler(urls, scheduler):
     return files, cluster.scheduler_address(scheduler)
 
 
-def _record_tiles(files, info, tile, recordings, *, overwrite, address, task, shared,
-                  progress, dashboard) -> None:
+def _record_tiles(
+    files, info, tile, recordings, *, overwrite, address, task, shared, progress, dashboard
+) -> None:
     """Write the tiles of each of ``recordings`` still missing from its store (``files``: one
     each; resumed, made, or replaced with ``overwrite``): ``shared`` scattered once to every
     worker, then one ``task(shared, spec, i, j)`` per tile that any store lacks."""
     with contextlib.ExitStack() as held:
-        plates = [held.enter_context(store.recording_into(f, info, tile, r, overwrite=overwrite))
-                  for f, r in zip(files, recordings)]
+        plates = [
+            held.enter_context(store.recording_into(f, info, tile, r, overwrite=overwrite))
+            for f, r in zip(files, recordings)
+        ]
         lacking = [set(_to_record(plate)) for plate in plates]
         todo = sorted(set().union(*lacking))
         for f, plate, missing in zip(files, plates, lacking):
             log.info("%s: %d of %d tiles to record", f.name, len(missing), plate.written().size)
         if todo:
-            spec = {"urls": [f.url for f in files],
-                    "recordings": [r["digest"] for r in recordings]}
+            spec = {"urls": [f.url for f in files], "recordings": [r["digest"] for r in recordings]}
             # a tile is written only into the stores that lack it (the others keep theirs)
-            cluster.run_tasks(task, shared, [({**spec, "looks": [
-                k for k, missing in enumerate(lacking) if (i, j) in missing]}, int(i), int(j))
-                for i, j in todo], address=address, progress=progress, dashboard=dashboard,
-                lost=lambda: _kept(files))
+            cluster.run_tasks(
+                task,
+                shared,
+                [
+                    (
+                        {
+                            **spec,
+                            "looks": [k for k, missing in enumerate(lacking) if (i, j) in missing],
+                        },
+                        int(i),
+                        int(j),
+                    )
+                    for i, j in todo
+                ],
+                address=address,
+                progress=progress,
+                dashboard=dashboard,
+                lost=lambda: _kept(files),
+            )
 
 
 def _kept(files) -> str:
@@ -206,15 +289,29 @@ def _kept(files) -> str:
 def _recording(pos, colours, phases, seed, **sampling) -> dict:
     """What a store records, its digest and the parts a message names when two differ."""
     cols = np.asarray(colours, np.float64).reshape(len(pos), -1)
-    parts = {"emitters": len(pos), "geometry": digests.array_digest(pos),
-             "colours": digests.array_digest(cols),
-             "phases": "from the seed" if phases is None
-             else digests.array_digest(np.asarray(phases, np.float64)),
-             "seed": int(seed) if phases is None else None, "method": sampling.pop("method"),
-             "sampling": digests.array_digest(np.array(
-                 [*sampling["shape"], sampling["pitch"], sampling["band"] or 0.0,
-                  sampling["tile"], *sampling["wavelengths"]], np.float64)),
-             "encoding": "complex"}
+    parts = {
+        "emitters": len(pos),
+        "geometry": digests.array_digest(pos),
+        "colours": digests.array_digest(cols),
+        "phases": "from the seed"
+        if phases is None
+        else digests.array_digest(np.asarray(phases, np.float64)),
+        "seed": int(seed) if phases is None else None,
+        "method": sampling.pop("method"),
+        "sampling": digests.array_digest(
+            np.array(
+                [
+                    *sampling["shape"],
+                    sampling["pitch"],
+                    sampling["band"] or 0.0,
+                    sampling["tile"],
+                    *sampling["wavelengths"],
+                ],
+                np.float64,
+            )
+        ),
+        "encoding": "complex",
+    }
     return {"digest": digests.digest_of(parts), "parts": parts}
 
 
@@ -222,26 +319,48 @@ def _plate_recording(job: PlateRecording, tile: int, look: int = 0) -> dict:
     """What the store of look ``look`` of a plate of meshes records: its digest and the parts
     a message names when two differ (the look's own seed, code and amplitudes: the same
     whether it is recorded alone or with other looks)."""
-    meshes = digests.digest_of({str(n): [None if a is None else digests.array_digest(a)
-                                       for a in (m.vertices, m.triangles, m.colours, m.uvs,
-                                                 m.texture)]
-                              for n, m in enumerate(job.meshes)})
+    meshes = digests.digest_of(
+        {
+            str(n): [
+                None if a is None else digests.array_digest(a)
+                for a in (m.vertices, m.triangles, m.colours, m.uvs, m.texture)
+            ]
+            for n, m in enumerate(job.meshes)
+        }
+    )
     z, p = job.info.zone, job.plan
-    emitters = [digests.array_digest(np.ascontiguousarray(a))  # the look's own amplitudes
-                for (_, em), columns in zip(job.groups, job.look_columns(look))
-                for a in (em.position, em.amplitude[:, columns], em.visibility, em.table,
-                          em.grid)]
-    parts = {"method": "zone", "meshes": meshes[:16],
-             "zone": digests.array_digest(np.array([*z.centre, *z.half_extents, z.pupil,
-                                                  z.pixel], np.float64)),
-             "plan": digests.array_digest(np.array(
-                 [*p.shape, p.pitch, p.row_pitch, *p.origin, *job.info.wavelengths, *p.band,
-                  p.spacing, tile], np.float64)),
-             "seed": job.look_seed(look),
-             "code": None if job.codes[look] is None else list(job.codes[look]),
-             "emitters": len(job.groups[0][1].position),
-             "emitters_found": digests.digest_of({"groups": emitters})[:16],
-             "encoding": "complex"}
+    emitters = [
+        digests.array_digest(np.ascontiguousarray(a))  # the look's own amplitudes
+        for (_, em), columns in zip(job.groups, job.look_columns(look))
+        for a in (em.position, em.amplitude[:, columns], em.visibility, em.table, em.grid)
+    ]
+    parts = {
+        "method": "zone",
+        "meshes": meshes[:16],
+        "zone": digests.array_digest(
+            np.array([*z.centre, *z.half_extents, z.pupil, z.pixel], np.float64)
+        ),
+        "plan": digests.array_digest(
+            np.array(
+                [
+                    *p.shape,
+                    p.pitch,
+                    p.row_pitch,
+                    *p.origin,
+                    *job.info.wavelengths,
+                    *p.band,
+                    p.spacing,
+                    tile,
+                ],
+                np.float64,
+            )
+        ),
+        "seed": job.look_seed(look),
+        "code": None if job.codes[look] is None else list(job.codes[look]),
+        "emitters": len(job.groups[0][1].position),
+        "emitters_found": digests.digest_of({"groups": emitters})[:16],
+        "encoding": "complex",
+    }
     return {"digest": digests.digest_of(parts), "parts": parts}
 
 
@@ -266,13 +385,18 @@ def record_tile(points, spec: dict, i: int, j: int) -> tuple[int, int]:
     (positions, amplitudes) whose cones reach it, written with its record. A store that now
     holds another recording (replaced while this task waited) is left alone."""
     pos, amp = points
-    plate, = _still_ours(spec, i, j).values()
+    (plate,) = _still_ours(spec, i, j).values()
     info, tile = plate.info, plate.tile
     shape, pitch, band = plate.shape, info.pitch, info.band or None
     r0, r1, c0, c1 = store.tile_window(shape, tile, i, j)
     # the tile's centre in the plate's frame: its samples lie where the whole plate's do
-    centre = np.array([((c0 + c1 - 1) / 2 - (shape[1] - 1) / 2) * pitch,
-                       ((r0 + r1 - 1) / 2 - (shape[0] - 1) / 2) * pitch, 0.0])
+    centre = np.array(
+        [
+            ((c0 + c1 - 1) / 2 - (shape[1] - 1) / 2) * pitch,
+            ((r0 + r1 - 1) / 2 - (shape[0] - 1) / 2) * pitch,
+            0.0,
+        ]
+    )
     half = np.array([(c1 - c0) / 2 * pitch, (r1 - r0) / 2 * pitch])
     waves = np.zeros((plate.count, r1 - r0, c1 - c0), np.complex64)
     groups = {}
@@ -282,11 +406,17 @@ def record_tile(points, spec: dict, i: int, j: int) -> tuple[int, int]:
         cone = sampling_grid(shape, lam, pitch, band).cone
         reach = np.abs(pos[:, 2]) * cone + pitch
         gap = np.maximum(np.abs(pos[:, :2] - centre[:2]) - half, 0)
-        near = (gap ** 2).sum(1) <= reach ** 2
+        near = (gap**2).sum(1) <= reach**2
         if near.any():
-            waves[chans] = point_wave(pos[near] - centre, amp[near][:, chans], wavelength=lam,
-                                      pitch=pitch, shape=(r1 - r0, c1 - c0), band=band,
-                                      method=plate.recording["parts"]["method"])
+            waves[chans] = point_wave(
+                pos[near] - centre,
+                amp[near][:, chans],
+                wavelength=lam,
+                pitch=pitch,
+                shape=(r1 - r0, c1 - c0),
+                band=band,
+                method=plate.recording["parts"]["method"],
+            )
     plate.write_tile(i, j, waves)
     return i, j
 
@@ -322,7 +452,9 @@ def _still_ours(spec: dict, i: int, j: int) -> dict:
         url, digest = spec["urls"][look], spec["recordings"][look]
         plate = store.read_store(url, records=False)
         if plate.recording["digest"] != digest:
-            raise InputError(f"{url}: now holds another recording; tile ({i}, {j}) of "
-                             f"recording {digest[:12]} is not written")
+            raise InputError(
+                f"{url}: now holds another recording; tile ({i}, {j}) of "
+                f"recording {digest[:12]} is not written"
+            )
         plates[look] = plate
     return plates

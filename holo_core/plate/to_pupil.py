@@ -34,16 +34,16 @@ from .window import PUPIL_EDGE
 
 PROGRAM = associated(__file__)
 
-PUPIL_PADDING = 1.25  # the pupil grid's padding in the rotation: the crop rotated onto it
-                      # reaches little beyond it (1.25 against 2: 1e-4 of the field's norm)
+# the pupil grid's padding in the rotation: the crop rotated onto it reaches little beyond it (1.25
+# against 2: 1e-4 of the field's norm)
+PUPIL_PADDING = 1.25
 
 
 def neighbourhood(n: int, pitch: float, rotation, plate_pitch: float) -> int:
     """Samples (per side, of ``plate_pitch`` [m]) of the parallel plane around the pupil's foot
     that a view reads and rotates: the n×n pupil grid of ``pitch`` [m], tilted by
     ``rotation``, seen on that plane, and a few samples more."""
-    return math.ceil(n * pitch / max(float(rotation[2, 2]), 1e-3) / plate_pitch) \
-        + 2 * PUPIL_EDGE
+    return math.ceil(n * pitch / max(float(rotation[2, 2]), 1e-3) / plate_pitch) + 2 * PUPIL_EDGE
 
 
 def output_padding(shape, near: int) -> float:
@@ -65,37 +65,50 @@ def field_at_pupil(u, window, h: Hologram, *, wavelength, position, rotation, n,
     x_mid = ((c0 + c1 - 1) / 2 - (cols - 1) / 2) * h.pitch
     y_mid = ((r0 + r1 - 1) / 2 - (rows - 1) / 2) * h.pitch
     near = neighbourhood(n, pitch, rotation, h.pitch)
-    parallel = angular_spectrum(u, wavelength=wavelength, pitch=h.pitch,
-                                distance=float(position[2]),
-                                offset=(float(position[0] - x_mid), float(position[1] - y_mid)),
-                                padding=output_padding(u.shape, near), read=(near, near))
+    parallel = angular_spectrum(
+        u,
+        wavelength=wavelength,
+        pitch=h.pitch,
+        distance=float(position[2]),
+        offset=(float(position[0] - x_mid), float(position[1] - y_mid)),
+        padding=output_padding(u.shape, near),
+        read=(near, near),
+    )
     crop = []
     for size in parallel.shape:
         m = min(size, near)
         m += (size - m) % 2  # the same centre: the pupil's
         crop.append(slice((size - m) // 2, (size - m) // 2 + m))
-    at = tilt(np.ascontiguousarray(parallel[tuple(crop)]), wavelength=wavelength,
-              pitch=h.pitch, rotation=rotation, out_shape=(n, n), out_pitch=pitch,
-              out_padding=PUPIL_PADDING)
+    at = tilt(
+        np.ascontiguousarray(parallel[tuple(crop)]),
+        wavelength=wavelength,
+        pitch=h.pitch,
+        rotation=rotation,
+        out_shape=(n, n),
+        out_pitch=pitch,
+        out_padding=PUPIL_PADDING,
+    )
     return np.ascontiguousarray(np.fft.ifftshift(at))
-
 
 
 # --- plates stored against a carrier converging on their zone ---------------------------------
 
-DECIMATION_STOP = 50.0   # [dB] the decimation filter's stop band: light towards the rest of the
-                         # zone, as strong as the pupil's own, kept out of the pupil
-PASS_MARGIN = 1.1        # the filter passes this much beyond the pupil's own band ...
-TRANSITION = 0.35        # ... and falls to its stop band over this fraction of the pass band
-BAND_ROWS = 512          # samples read and filtered per band of rows
+# [dB] the decimation filter's stop band: light towards the rest of the zone, as strong as the
+# pupil's own, kept out of the pupil
+DECIMATION_STOP = 50.0
+PASS_MARGIN = 1.1  # the filter passes this much beyond the pupil's own band ...
+TRANSITION = 0.35  # ... and falls to its stop band over this fraction of the pass band
+BAND_ROWS = 512  # samples read and filtered per band of rows
 DEMODULATE_SEGMENT = 32  # columns per exact phase (to_pupil.cl's SEGMENT)
-DECIMATE_GROUPS = (256, 64, 16)  # outputs of a row decimated by one work group: the largest
-                                 # whose inputs fit the device's local memory (the larger,
-                                 # the faster: docs, Performance)
+# outputs of a row decimated by one work group: the largest whose inputs fit the device's local
+# memory (the larger, the faster: docs, Performance)
+DECIMATE_GROUPS = (256, 64, 16)
 
 # the kernels of to_pupil.cl, their arguments in its order
 _GEOMETRY = dict(pitch=REAL, row_pitch=REAL, x0=REAL, y0=REAL)  # of a band's first sample
 _POINTS = dict(px=REAL, py=REAL, pz=REAL, zx=REAL, zy=REAL, zz=REAL)  # pupil's, zone's centre
+# the kernels' signatures as tables (their arguments in the .cl file's order)
+# fmt: off
 DEMODULATE_CENTRES = kernel(PROGRAM, "demodulate_centres", table=BUFFER, rows=int32,
                             segments=int32, **_GEOMETRY, k=REAL, **_POINTS)
 DEMODULATE_DECIMATE = kernel(
@@ -119,12 +132,16 @@ GATHER_KEYS = kernel(PROGRAM, "gather_keys", key=BUFFER, count=BUFFER, gy=BUFFER
                      lo_y=float32, lo_x=float32, cells_h=int32, cells_w=int32)
 GATHER_PLACE = kernel(PROGRAM, "gather_place", order=BUFFER, fill=BUFFER, key=BUFFER,
                       start=BUFFER)
+# fmt: on
 GATHER_SORT_CELLS = kernel(PROGRAM, "gather_sort_cells", order=BUFFER, start=BUFFER)
+# the kernels' signatures as tables (their arguments in the .cl file's order)
+# fmt: off
 GATHER_PERMUTE = kernel(
     PROGRAM, "gather_permute", at_y=BUFFER, at_x=BUFFER, wt_at=BUFFER, inv_at=BUFFER,
     slot=BUFFER, order=BUFFER, gy=BUFFER, gx=BUFFER, wt=BUFFER, inv_depth=BUFFER)
 LAYER_WEIGHTS = kernel(PROGRAM, "layer_weights", out=BUFFER, wt=BUFFER, inv_at=BUFFER,
                        lo=float32, step=float32, layers=int32, layer=int32)
+# fmt: on
 
 
 def kaiser_lowpass(cutoff: float, transition: float, taps_len=None) -> np.ndarray:
@@ -169,8 +186,20 @@ class CarrierPupil:
         it needs (a moving camera's views share the kernels built for a few counts)
     """
 
-    def __init__(self, rt, h, *, position, rotation, diameter, bin, shape, window,
-                 centre=(0.0, 0.0), taps_len=None):
+    def __init__(
+        self,
+        rt,
+        h,
+        *,
+        position,
+        rotation,
+        diameter,
+        bin,
+        shape,
+        window,
+        centre=(0.0, 0.0),
+        taps_len=None,
+    ):
         self.rt, self.h, self.centre, self.taps_len = rt, h, centre, taps_len
         self._designs, self._taps = {}, {}
         self._gathers = {}
@@ -201,9 +230,18 @@ class CarrierPupil:
         out = []
         for pitch in (h.carrier.row_pitch, h.pitch):
             q = max(1, int(1 / (pitch * band * (1 + TRANSITION + 1 / PASS_MARGIN))))
-            out.append((1, np.ones(1, np.float32)) if q == 1 else
-                       (q, kaiser_lowpass((1 + TRANSITION / 2) * band * pitch,
-                                          TRANSITION * band * pitch, self.taps_len)))
+            out.append(
+                (1, np.ones(1, np.float32))
+                if q == 1
+                else (
+                    q,
+                    kaiser_lowpass(
+                        (1 + TRANSITION / 2) * band * pitch,
+                        TRANSITION * band * pitch,
+                        self.taps_len,
+                    ),
+                )
+            )
         return out
 
     def fields(self, parts, *, amplitude=1.0, progress=None):
@@ -225,13 +263,15 @@ class CarrierPupil:
                 self._gathers[key] = _Gather(self, *key)
             mine = [i for i, (rows, cols) in enumerate(designs) if (rows[0], cols[0]) == key]
             gather = self._gathers[key]
-            stack = self.rt.workspace("plate-decimated", (gather.count, sum(
-                len(parts[i][1]) for i in mine)))
+            stack = self.rt.workspace(
+                "plate-decimated", (gather.count, sum(len(parts[i][1]) for i in mine))
+            )
             runs, at = [], 0
             for i in mine:
                 samples, channels, wavelength = parts[i]
-                self._decimated(samples, channels, wavelength, *designs[i], out=stack, at=at,
-                                slot=gather.slot)
+                self._decimated(
+                    samples, channels, wavelength, *designs[i], out=stack, at=at, slot=gather.slot
+                )
                 runs.append((at, int(firsts[i]), len(channels), wavelength))
                 at += len(channels)
                 done += 1
@@ -246,8 +286,7 @@ class CarrierPupil:
             self._taps[key] = self.rt.to_device(taps)
         return self._taps[key]
 
-    def _decimated(self, samples, channels, wavelength, along_rows, along_cols, *, out, at,
-                   slot):
+    def _decimated(self, samples, channels, wavelength, along_rows, along_cols, *, out, at, slot):
         """The window's samples turned onto the pupil's carrier, filtered and thinned to every
         q-th along each axis (``along_rows``, ``along_cols``: (q, taps)): the rows r0 + q·i
         and columns c0 + q·j of the plate, into planes ``at`` … of the device array ``out``
@@ -265,12 +304,17 @@ class CarrierPupil:
         k = 2 * math.pi / wavelength
         taps = [self._device_taps(t) for t in (taps_x, taps_y)]
         group = _decimate_group(rt, planes, qx, len(taps_x))
-        options = rt.real_options + (f"-DTAPS={len(taps_x)}", f"-DQ={qx}",
-                                     f"-DPLANES={planes}", f"-DGROUP={group}")
+        options = rt.real_options + (
+            f"-DTAPS={len(taps_x)}",
+            f"-DQ={qx}",
+            f"-DPLANES={planes}",
+            f"-DGROUP={group}",
+        )
         # a CPU reads the host's samples where they are, a GPU its copy of them, kept between
         # views
-        in_place = resident(rt, samples) if getattr(samples, "dtype", None) == np.complex64 \
-            else None
+        in_place = (
+            resident(rt, samples) if getattr(samples, "dtype", None) == np.complex64 else None
+        )
         for b0 in range(rr0, rr1, BAND_ROWS):
             b1 = min(b0 + BAND_ROWS, rr1)
             if in_place is not None:
@@ -280,33 +324,74 @@ class CarrierPupil:
                 # one buffer for every band (a fresh one would cost the first touch of its
                 # pages): the window's rectangle of an array, or a store's tiles, read
                 band = rt.workspace("plate-band", (planes, b1 - b0, cc1 - cc0))
-                if isinstance(samples, np.ndarray) and samples.flags.c_contiguous and \
-                        samples.dtype == np.complex64:
+                if (
+                    isinstance(samples, np.ndarray)
+                    and samples.flags.c_contiguous
+                    and samples.dtype == np.complex64
+                ):
                     upload_window(band, samples, channels, b0, cc0)
                 else:
-                    write(band, samples[channels[0]:channels[-1] + 1, b0:b1, cc0:cc1])
+                    write(band, samples[channels[0] : channels[-1] + 1, b0:b1, cc0:cc1])
                 source = band.data
                 first, plane, stride = 0, (b1 - b0) * (cc1 - cc0), cc1 - cc0
             x0, y0 = h.carrier.coords(h.pitch, [b0], [cc0])
             segments = -(-(cc1 - cc0) // DEMODULATE_SEGMENT)
             table = rt.workspace("plate-demodulate", (b1 - b0, segments), np.float32)
             geometry = dict(pitch=h.pitch, row_pitch=h.carrier.row_pitch, x0=x0[0], y0=y0[0])
-            points = dict(zip(("px", "py", "pz", "zx", "zy", "zz"),
-                              (*self.position, *h.carrier.centre)))
-            DEMODULATE_CENTRES.launch(rt, (segments, b1 - b0), options=rt.real_options,
-                                      table=table, rows=b1 - b0, segments=segments,
-                                      **geometry, k=k, **points)
+            points = dict(
+                zip(("px", "py", "pz", "zx", "zy", "zz"), (*self.position, *h.carrier.centre))
+            )
+            DEMODULATE_CENTRES.launch(
+                rt,
+                (segments, b1 - b0),
+                options=rt.real_options,
+                table=table,
+                rows=b1 - b0,
+                segments=segments,
+                **geometry,
+                k=k,
+                **points,
+            )
             groups = -(-out_cols // group)
             DEMODULATE_DECIMATE.launch(
-                rt, (groups * group, b1 - b0), (group, 1), options=options, out=rowpass,
-                samples=source, first=first, plane=plane, stride=stride, rows=b1 - b0,
-                cols=cc1 - cc0, out_cols=out_cols, out_row0=b0 - rr0, out_height=rr1 - rr0,
-                lead=c0 - cc0 - pad_x, h=taps[0], **geometry, k=k, **points, table=table,
-                segments=segments)
-        DECIMATE.launch(rt, (out_cols, out_rows, planes), options=(f"-DTAPS={len(taps_y)}",),
-                        out=out, rowpass=rowpass, rows=rr1 - rr0, cols=out_cols,
-                        out_rows=out_rows, slot=slot, stride=out.shape[1], plane0=at, q=qy,
-                        first=r0 - rr0 - pad_y, h=taps[1])
+                rt,
+                (groups * group, b1 - b0),
+                (group, 1),
+                options=options,
+                out=rowpass,
+                samples=source,
+                first=first,
+                plane=plane,
+                stride=stride,
+                rows=b1 - b0,
+                cols=cc1 - cc0,
+                out_cols=out_cols,
+                out_row0=b0 - rr0,
+                out_height=rr1 - rr0,
+                lead=c0 - cc0 - pad_x,
+                h=taps[0],
+                **geometry,
+                k=k,
+                **points,
+                table=table,
+                segments=segments,
+            )
+        DECIMATE.launch(
+            rt,
+            (out_cols, out_rows, planes),
+            options=(f"-DTAPS={len(taps_y)}",),
+            out=out,
+            rowpass=rowpass,
+            rows=rr1 - rr0,
+            cols=out_cols,
+            out_rows=out_rows,
+            slot=slot,
+            stride=out.shape[1],
+            plane0=at,
+            q=qy,
+            first=r0 - rr0 - pad_y,
+            h=taps[1],
+        )
 
 
 def _decimate_group(rt, planes: int, q: int, taps: int) -> int:
@@ -317,8 +402,10 @@ def _decimate_group(rt, planes: int, q: int, taps: int) -> int:
         need = 8 * planes * q * (group + (taps + q - 1) // q + 1)
         if need <= device.local_mem_size and group <= device.max_work_group_size:
             return group
-    raise InputError(f"a view's decimation needs {8 * planes * (16 * q + taps)} bytes of "
-                     f"local memory; the device {device.name} has {device.local_mem_size}")
+    raise InputError(
+        f"a view's decimation needs {8 * planes * (16 * q + taps)} bytes of "
+        f"local memory; the device {device.name} has {device.local_mem_size}"
+    )
 
 
 class _Gather:
@@ -337,36 +424,71 @@ class _Gather:
         real = rt.real
         # the samples' places on the grid, weights and depths: made on the device, as the
         # list below (a pass over every sample on the host costs a quarter of a view)
-        gy, gx, wt, inv = (rt.workspace(f"gather-{name}", (count,), np.float32)
-                           for name in ("gy", "gx", "weight", "inverse-depth"))
+        gy, gx, wt, inv = (
+            rt.workspace(f"gather-{name}", (count,), np.float32)
+            for name in ("gy", "gx", "weight", "inverse-depth")
+        )
         rot = rt.to_device(np.asarray(view.rotation), real)
         px, py, pz = view.position
         GATHER_GEOMETRY.launch(
-            rt, (cols, rows), options=rt.real_options, gy=gy, gx=gx, wt=wt, inv_depth=inv,
-            rows=rows, cols=cols, x0=x0, xs=qx * h.pitch, y0=y0, ys=qy * h.carrier.row_pitch,
-            px=px, py=py, pz=pz, rot=rot, cy=view.centre[1], cx=view.centre[0],
-            grid_units=2 / view.bin, w0=qx * h.pitch * qy * h.carrier.row_pitch * pz)
+            rt,
+            (cols, rows),
+            options=rt.real_options,
+            gy=gy,
+            gx=gx,
+            wt=wt,
+            inv_depth=inv,
+            rows=rows,
+            cols=cols,
+            x0=x0,
+            xs=qx * h.pitch,
+            y0=y0,
+            ys=qy * h.carrier.row_pitch,
+            px=px,
+            py=py,
+            pz=pz,
+            rot=rot,
+            cy=view.centre[1],
+            cx=view.centre[0],
+            grid_units=2 / view.bin,
+            w0=qx * h.pitch * qy * h.carrier.row_pitch * pz,
+        )
         (gy_lo, gy_hi), (gx_lo, gx_hi), self.inverse_depth = map(extent, (gy, gx, inv))
         hh, ww = view.shape
         # only the grid points the samples reach: their box in grid coordinates, in cells
-        self.lo = (max(math.floor(gy_lo - ES_TAPS / 2), -hh),
-                   max(math.floor(gx_lo - ES_TAPS / 2), -ww))
-        self.hi = (min(math.ceil(gy_hi + ES_TAPS / 2), hh - 1),
-                   min(math.ceil(gx_hi + ES_TAPS / 2), ww - 1))
-        self.cells = tuple(max(-(-(b - a + 1) // SPREAD_CELL), 1)
-                           for a, b in zip(self.lo, self.hi))
+        self.lo = (
+            max(math.floor(gy_lo - ES_TAPS / 2), -hh),
+            max(math.floor(gx_lo - ES_TAPS / 2), -ww),
+        )
+        self.hi = (
+            min(math.ceil(gy_hi + ES_TAPS / 2), hh - 1),
+            min(math.ceil(gx_hi + ES_TAPS / 2), ww - 1),
+        )
+        self.cells = tuple(max(-(-(b - a + 1) // SPREAD_CELL), 1) for a, b in zip(self.lo, self.hi))
         # the list: by cell, a cell's samples by index (a stable sort by cell)
         n_cells = self.cells[0] * self.cells[1]
         key = rt.workspace("gather-key", (count,), np.int32)
         counts = rt.workspace("gather-count", (n_cells + 1,), np.int32)
         counts.fill(0)
-        GATHER_KEYS.launch(rt, (count,), options=(f"-DCELL={SPREAD_CELL}",), key=key,
-                           count=counts, gy=gy, gx=gx, lo_y=self.lo[0], lo_x=self.lo[1],
-                           cells_h=self.cells[0], cells_w=self.cells[1])
+        GATHER_KEYS.launch(
+            rt,
+            (count,),
+            options=(f"-DCELL={SPREAD_CELL}",),
+            key=key,
+            count=counts,
+            gy=gy,
+            gx=gx,
+            lo_y=self.lo[0],
+            lo_x=self.lo[1],
+            cells_h=self.cells[0],
+            cells_w=self.cells[1],
+        )
         self.start = empty(rt, (n_cells + 1,), np.int32)
         exclusive_scan(rt, counts, self.start)
-        order, fill = (rt.workspace(f"gather-{name}", shape, np.int32)
-                       for name, shape in (("order", (count,)), ("fill", (n_cells,))))
+        order, fill = (
+            rt.workspace(f"gather-{name}", shape, np.int32)
+            for name, shape in (("order", (count,)), ("fill", (n_cells,)))
+        )
         fill.fill(0)
         GATHER_PLACE.launch(rt, (count,), order=order, fill=fill, key=key, start=self.start)
         GATHER_SORT_CELLS.launch(rt, (n_cells,), order=order, start=self.start)
@@ -374,9 +496,20 @@ class _Gather:
         self.weight, self.inverse = (empty(rt, (count,), np.float32) for _ in range(2))
         # where the decimation puts each sample: in the gather's order, planes side by side
         self.slot = empty(rt, (count,), np.int32)
-        GATHER_PERMUTE.launch(rt, (count,), at_y=self.at[0], at_x=self.at[1], wt_at=self.weight,
-                              inv_at=self.inverse, slot=self.slot, order=order, gy=gy, gx=gx,
-                              wt=wt, inv_depth=inv)
+        GATHER_PERMUTE.launch(
+            rt,
+            (count,),
+            at_y=self.at[0],
+            at_x=self.at[1],
+            wt_at=self.weight,
+            inv_at=self.inverse,
+            slot=self.slot,
+            order=order,
+            gy=gy,
+            gx=gx,
+            wt=wt,
+            inv_depth=inv,
+        )
         self.deapod = [es_profile(rt, n, ES_TAPS) for n in (hh, ww)]
         self.layers = {}
 
@@ -394,8 +527,10 @@ class _Gather:
                 self.layers[key] = [(2 / (lo + hi), self.weight)]
             else:  # the layers that hold samples
                 which = np.clip(np.floor((read(self.inverse) - lo) / ((hi - lo) / n)), 0, n - 1)
-                self.layers[key] = [(2 / (edges[i] + edges[i + 1]), self._layer(i, n, lo, hi))
-                                    for i in np.unique(which).astype(int)]
+                self.layers[key] = [
+                    (2 / (edges[i] + edges[i + 1]), self._layer(i, n, lo, hi))
+                    for i in np.unique(which).astype(int)
+                ]
         return self.layers[key]
 
     def _layer(self, i, n, lo, hi):
@@ -403,8 +538,17 @@ class _Gather:
         ``lo`` … ``hi`` [1/m], 0 for the other layers' samples (a device array)."""
         rt = self.view.rt
         out = empty(rt, (self.count,), np.float32)
-        LAYER_WEIGHTS.launch(rt, (self.count,), out=out, wt=self.weight, inv_at=self.inverse,
-                             lo=lo, step=(hi - lo) / n, layers=n, layer=i)
+        LAYER_WEIGHTS.launch(
+            rt,
+            (self.count,),
+            out=out,
+            wt=self.weight,
+            inv_at=self.inverse,
+            lo=lo,
+            step=(hi - lo) / n,
+            layers=n,
+            layer=i,
+        )
         return out
 
     def pupil(self, values, runs, out, scale):
@@ -419,8 +563,12 @@ class _Gather:
         hh, ww = view.shape
         planes = values.shape[1]
         es = cached_array(rt, "es-table", es_table, ES_TAPS)
-        options = (f"-DCHANNELS={planes}", f"-DES_TAPS={ES_TAPS}", f"-DES_TABLE={ES_TABLE}",
-                   f"-DCELL={SPREAD_CELL}")
+        options = (
+            f"-DCHANNELS={planes}",
+            f"-DES_TAPS={ES_TAPS}",
+            f"-DES_TABLE={ES_TABLE}",
+            f"-DCELL={SPREAD_CELL}",
+        )
         grid_shape = (2 * hh, 2 * ww)
         if self.hi[0] < self.lo[0] or self.hi[1] < self.lo[1]:
             return
@@ -431,32 +579,60 @@ class _Gather:
         planes_by_wavelength = {}
         for first, to, n, wavelength in runs:
             planes_by_wavelength.setdefault(wavelength, []).extend(
-                (to + i, first + i) for i in range(n))
-        planes_by_wavelength = {lam: rt.to_device(np.array(p, np.int32))
-                                for lam, p in planes_by_wavelength.items()}
+                (to + i, first + i) for i in range(n)
+            )
+        planes_by_wavelength = {
+            lam: rt.to_device(np.array(p, np.int32)) for lam, p in planes_by_wavelength.items()
+        }
         for z, weight in self._layers(min(run[3] for run in runs)):
             spread.fill(0)
-            SPREAD.launch(rt, (self.hi[1] - self.lo[1] + 1, self.hi[0] - self.lo[0] + 1),
-                          options=options, out=spread, grid_h=grid_shape[0],
-                          grid_w=grid_shape[1], row_first=self.lo[0], col_first=self.lo[1],
-                          v=values, wt=weight, gy=self.at[0], gx=self.at[1], start=self.start,
-                          cells_h=self.cells[0], cells_w=self.cells[1], scale=scale, es=es)
+            SPREAD.launch(
+                rt,
+                (self.hi[1] - self.lo[1] + 1, self.hi[0] - self.lo[0] + 1),
+                options=options,
+                out=spread,
+                grid_h=grid_shape[0],
+                grid_w=grid_shape[1],
+                row_first=self.lo[0],
+                col_first=self.lo[1],
+                v=values,
+                wt=weight,
+                gy=self.at[0],
+                gx=self.at[1],
+                start=self.start,
+                cells_h=self.cells[0],
+                cells_w=self.cells[1],
+                scale=scale,
+                es=es,
+            )
             # every plane in place; only the pupil's columns are read (pupil_layer)
             rt.fft.backward(spread, read=[(0, (ww + 1) // 2), (2 * ww - ww // 2, 2 * ww)])
             for wavelength, pairs in planes_by_wavelength.items():
                 dy, dx = wavelength / (hh * view.bin), wavelength / (ww * view.bin)
-                PUPIL_LAYER.launch(rt, (ww, hh), u=out, g=spread, h=hh, w=ww, pairs=pairs,
-                                   n=pairs.shape[0], dr=self.deapod[0], dc=self.deapod[1],
-                                   dy=dy, dx=dx, k=2 * math.pi / wavelength, z=z,
-                                   scale=1 / wavelength)
+                PUPIL_LAYER.launch(
+                    rt,
+                    (ww, hh),
+                    u=out,
+                    g=spread,
+                    h=hh,
+                    w=ww,
+                    pairs=pairs,
+                    n=pairs.shape[0],
+                    dr=self.deapod[0],
+                    dc=self.deapod[1],
+                    dy=dy,
+                    dx=dx,
+                    k=2 * math.pi / wavelength,
+                    z=z,
+                    scale=1 / wavelength,
+                )
 
 
-SPREAD_TAPS = 4  # the gather's ES kernel taps per axis: 1e-4 at 2x oversampling, as the
-                 # image's read (optics/imaging.py TAPS); 6 cost twice as much for 1e-5
+# the gather's ES kernel taps per axis: 1e-4 at 2x oversampling, as the image's read
+# (optics/imaging.py TAPS); 6 cost twice as much for 1e-5
+SPREAD_TAPS = 4
 ES_TAPS = SPREAD_TAPS
-SPREAD_CELL = 1  # grid units a side of the cells the samples are listed by for the gather,
-                 # each grid point reading a row of cells as one run of the list (1 is faster
-                 # than 2: docs, Performance)
+# grid units a side of the cells the samples are listed by for the gather, each grid point reading a
+# row of cells as one run of the list (1 is faster than 2: docs, Performance)
+SPREAD_CELL = 1
 LAYER_PHASE = math.pi / 2  # a layer's largest curvature error at the pupil's rim [rad]
-
-

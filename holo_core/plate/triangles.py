@@ -14,8 +14,9 @@ from ..propagation import propagate_to_plane
 from ..scene.mesh import Mesh, surface_samples, texture_lookup, visible_from
 from ..validate import InputError
 
-MIN_SEEN = 0.3  # a primitive is recorded when the camera sees this share of its samples
-                # (a cube: its hidden faces 0-0.15 through their rims, a grazing seen face 0.47)
+# a primitive is recorded when the camera sees this share of its samples (a cube: its hidden faces
+# 0-0.15 through their rims, a grazing seen face 0.47)
+MIN_SEEN = 0.3
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -88,8 +89,18 @@ def surface_pitch(prim: Primitive, *, wavelength, pitch) -> float:
     return min(pitch, wavelength / (2 * math.sin(min(math.pi / 2, tilt + accept))))
 
 
-def primitive_wave(prim: Primitive, *, wavelength, pitch, shape, channel=0, seed=0, padding=2,
-                   diffuse=True, sampled_for=None):
+def primitive_wave(
+    prim: Primitive,
+    *,
+    wavelength,
+    pitch,
+    shape,
+    channel=0,
+    seed=0,
+    padding=2,
+    diffuse=True,
+    sampled_for=None,
+):
     """The primitive's wave on the hologram (z = 0, ``shape``, ``pitch`` [m]) at ``wavelength``
     [m]: its surface field, sampled at :func:`surface_pitch`, carried by spectrum rotation plus
     offset propagation (Sect. IV-D). ``sampled_for``: the shortest wavelength [m] of a set
@@ -100,9 +111,16 @@ def primitive_wave(prim: Primitive, *, wavelength, pitch, shape, channel=0, seed
     field, mid = surface_field(prim, pitch=q, channel=channel, seed=seed, diffuse=diffuse)
     grid_centre = centre + m[:, :2] @ mid  # the surface grid's centre in the hologram frame
     # the hologram plane seen from the primitive: axes = rows of m, centre at -grid_centre
-    return propagate_to_plane(field.astype(np.complex64), wavelength=wavelength, pitch=q,
-                              rotation=m.T, position=m.T @ (-grid_centre), padding=padding,
-                              out_shape=shape, out_pitch=pitch)
+    return propagate_to_plane(
+        field.astype(np.complex64),
+        wavelength=wavelength,
+        pitch=q,
+        rotation=m.T,
+        position=m.T @ (-grid_centre),
+        padding=padding,
+        out_shape=shape,
+        out_pitch=pitch,
+    )
 
 
 def mesh_primitives(mesh: Mesh, *, visible_to=None, spacing=None) -> list[Primitive]:
@@ -113,8 +131,9 @@ def mesh_primitives(mesh: Mesh, *, visible_to=None, spacing=None) -> list[Primit
     if visible_to is not None:  # seen: most of its samples (a hidden face's rim passes)
         tri, _, pos = surface_samples(mesh, spacing, 0, 2_000_000)
         seen = visible_from(visible_to, pos, spacing, mesh.normals()[tri])
-        share = np.bincount(tri[seen], minlength=len(keep)) / \
-            np.maximum(np.bincount(tri, minlength=len(keep)), 1)
+        share = np.bincount(tri[seen], minlength=len(keep)) / np.maximum(
+            np.bincount(tri, minlength=len(keep)), 1
+        )
         keep = np.flatnonzero(share >= MIN_SEEN)
     prims = []
     for t in keep:
@@ -122,8 +141,11 @@ def mesh_primitives(mesh: Mesh, *, visible_to=None, spacing=None) -> list[Primit
         if mesh.texture is not None and mesh.uvs is not None:
             uvs, tex = mesh.uvs[idx], mesh.texture
         else:
-            colour = (np.asarray(mesh.colours, np.float64)[idx].mean(0)
-                      if mesh.colours is not None else np.ones(3))
+            colour = (
+                np.asarray(mesh.colours, np.float64)[idx].mean(0)
+                if mesh.colours is not None
+                else np.ones(3)
+            )
             uvs, tex = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]), colour[None, None, :]
         if np.linalg.norm(np.cross(*(mesh.vertices[idx[1:]] - mesh.vertices[idx[0]]))) > 0:
             prims.append(Primitive(corners=mesh.vertices[idx], uvs=uvs, texture=tex))

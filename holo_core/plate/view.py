@@ -41,10 +41,22 @@ log = logging.getLogger(__name__)
 
 @validate.scale_free()
 @np.errstate(over="ignore", invalid="ignore")  # an overflow is refused at the end (_finish)
-def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apodize=True,
-                chromatic=True, composition="mean", supersample="auto", exposure=None,
-                opacity_threshold=0.5, source="hologram", depth_estimate="consensus",
-                progress: jobs.Progress = None, plans=None) -> RenderResult:
+def render_view(
+    holograms,
+    camera: Camera,
+    *,
+    aperture: Pupil | None = None,
+    apodize=True,
+    chromatic=True,
+    composition="mean",
+    supersample="auto",
+    exposure=None,
+    opacity_threshold=0.5,
+    source="hologram",
+    depth_estimate="consensus",
+    progress: jobs.Progress = None,
+    plans=None,
+) -> RenderResult:
     """Render a view of one hologram, or of several of one scene with independent phases.
 
     Several holograms recorded with independent random phases are composed in time
@@ -127,19 +139,30 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     ((24, 32, 3), 0.31)
     """
     if isinstance(holograms, PlateSet):
-        return render_set_view(holograms, camera, aperture=aperture, apodize=apodize,
-                               chromatic=chromatic, composition=composition,
-                               supersample=supersample, exposure=exposure,
-                               opacity_threshold=opacity_threshold, source=source,
-                               depth_estimate=depth_estimate, progress=progress,
-                               plans=plans)
+        return render_set_view(
+            holograms,
+            camera,
+            aperture=aperture,
+            apodize=apodize,
+            chromatic=chromatic,
+            composition=composition,
+            supersample=supersample,
+            exposure=exposure,
+            opacity_threshold=opacity_threshold,
+            source=source,
+            depth_estimate=depth_estimate,
+            progress=progress,
+            plans=plans,
+        )
     try:
         holos = [holograms] if isinstance(holograms, Hologram) else list(holograms)
     except TypeError:
         holos = []
     if not holos:
-        raise InputError(f"holograms must be a Hologram or a non-empty list of them; got "
-                         f"{type(holograms).__name__}")
+        raise InputError(
+            f"holograms must be a Hologram or a non-empty list of them; got "
+            f"{type(holograms).__name__}"
+        )
     if not all(isinstance(h, Hologram) for h in holos):
         raise InputError("holograms must be Hologram objects (read_hologram, record_points)")
     if not isinstance(camera, Camera):
@@ -153,8 +176,11 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     rotation, position = camera_in_plate(first, camera)
     # a pinhole on a carrier plate: the smallest sharp pupil, made once for its supersampling
     # and its view
-    pinhole = (pinhole_view_pupil(first, camera, rotation, position, apodize=apodize)
-               if first.carrier is not None and camera.fstop is None else None)
+    pinhole = (
+        pinhole_view_pupil(first, camera, rotation, position, apodize=apodize)
+        if first.carrier is not None and camera.fstop is None
+        else None
+    )
     nyquist = nyquist_supersample(first, camera, pinhole)
     if isinstance(supersample, str) and supersample == "auto":
         supersample = nyquist
@@ -162,23 +188,40 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
     if supersample < nyquist:  # kept, not raised: on the shot of bench/shot.py (two coded
         # looks, f/2.8) 2 -> 4 gains 0.7 dB of PSNR (32.7 -> 33.4) for 2.4x the view's time,
         # and no difference shows at 1:1, so the artist's Supersample decides
-        log.info("Supersample %d samples the view's speckle below its Nyquist rate: %d "
-                 "would average it a little further, at more time a frame", supersample, nyquist)
+        log.info(
+            "Supersample %d samples the view's speckle below its Nyquist rate: %d "
+            "would average it a little further, at more time a frame",
+            supersample,
+            nyquist,
+        )
     _check_settings(holos, camera, supersample, exposure, opacity_threshold)
     fine = camera.supersampled(supersample)
     colours, z_ch = first.colour_channels(), first.depth_channel()
     keep_fine = composition == "max" or depth_estimate == "brightest"  # else the pixels' means
     if z_ch is None and stated_plane(first) is None:
-        warnings.warn("the hologram has no depth channel (record it with depth=True): the "
-                      f"view's depth is the background ({BACKGROUND_DEPTH:g} m) everywhere, so a "
-                      "Z-combine puts it behind every surface", NoDepthWarning, stacklevel=2)
+        warnings.warn(
+            "the hologram has no depth channel (record it with depth=True): the "
+            f"view's depth is the background ({BACKGROUND_DEPTH:g} m) everywhere, so a "
+            "Z-combine puts it behind every surface",
+            NoDepthWarning,
+            stacklevel=2,
+        )
     lam0 = first.wavelengths[colours[0]]
     centre = _centre_distance(first, camera)
     pupil = aperture or camera_pupil(fine, lam0, centre, apodize=apodize)
     _check_zone(first, camera, position, pupil.diameter)
-    route = {"camera": camera, "fine": fine, "rotation": rotation, "position": position,
-             "colours": colours, "z_ch": z_ch, "supersample": supersample,
-             "chromatic": chromatic, "keep_fine": keep_fine, "progress": progress}
+    route = {
+        "camera": camera,
+        "fine": fine,
+        "rotation": rotation,
+        "position": position,
+        "colours": colours,
+        "z_ch": z_ch,
+        "supersample": supersample,
+        "chromatic": chromatic,
+        "keep_fine": keep_fine,
+        "progress": progress,
+    }
     unseen = None
     if first.carrier is not None:
         if aperture is None and pinhole is not None:
@@ -186,18 +229,32 @@ def render_view(holograms, camera: Camera, *, aperture: Pupil | None = None, apo
         looks, n = carrier_looks(holos, pupil=pupil, plans=plans, **route)
     else:
         unseen = unseen_light(first, rotation, position)
-        looks, n = (None, None) if unseen else full_band_looks(holos, pupil=pupil,
-                                                               source=source, **route)
+        looks, n = (
+            (None, None) if unseen else full_band_looks(holos, pupil=pupil, source=source, **route)
+        )
     if looks is None:  # a black view, said aloud (an animation's camera may pass out of the zone)
         warnings.warn(f"the view is black: {unseen or BESIDE}", EmptyViewWarning, stacklevel=2)
         return black_view(first, camera, pupil, colours, exposure, opacity_threshold)
-    return compose(looks, colours, z_ch, first, camera, pupil, supersample=supersample,
-                   composition=composition, depth_estimate=depth_estimate, centre=centre,
-                   exposure=exposure, threshold=opacity_threshold, n=n)
+    return compose(
+        looks,
+        colours,
+        z_ch,
+        first,
+        camera,
+        pupil,
+        supersample=supersample,
+        composition=composition,
+        depth_estimate=depth_estimate,
+        centre=centre,
+        exposure=exposure,
+        threshold=opacity_threshold,
+        n=n,
+    )
 
 
-def render_set_view(plates: PlateSet, camera: Camera, *, frame: int | None = None,
-                    outside: str = "warn", **settings):
+def render_set_view(
+    plates: PlateSet, camera: Camera, *, frame: int | None = None, outside: str = "warn", **settings
+):
     """A camera's view of a plate set, from the part whose zone holds its pupil.
 
     Parameters
@@ -240,14 +297,19 @@ def render_set_view(plates: PlateSet, camera: Camera, *, frame: int | None = Non
     k, beyond = part_for(plates, camera)
     if beyond > 0:
         p = camera.position
-        what = (f"{'frame ' + str(frame) + ': ' if frame is not None else ''}the camera's pupil "
-                f"at ({p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g}) m lies outside every part of the "
-                f"plate set; it reaches {beyond:.3g} m beyond the nearest, part {k} "
-                f"({plates.parts[k].plate.zone.describe()})")
+        what = (
+            f"{'frame ' + str(frame) + ': ' if frame is not None else ''}the camera's pupil "
+            f"at ({p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g}) m lies outside every part of the "
+            f"plate set; it reaches {beyond:.3g} m beyond the nearest, part {k} "
+            f"({plates.parts[k].plate.zone.describe()})"
+        )
         if outside == "fail":
             raise InputError(f"{what}: record the set for a path that holds the camera")
-        warnings.warn(f"{what}: viewed from that part, the view may be cut off or soft",
-                      OutsideZoneWarning, stacklevel=2)
+        warnings.warn(
+            f"{what}: viewed from that part, the view may be cut off or soft",
+            OutsideZoneWarning,
+            stacklevel=2,
+        )
     with warnings.catch_warnings() if beyond > 0 else contextlib.nullcontext():
         if beyond > 0:  # said once, for the set
             warnings.simplefilter("ignore", OutsideZoneWarning)
@@ -257,8 +319,7 @@ def render_set_view(plates: PlateSet, camera: Camera, *, frame: int | None = Non
 BESIDE = "the camera sees the objects beside the plate, not through it"
 
 
-def pinhole_view_pupil(h: Hologram, camera: Camera, rotation, position, *, apodize=True
-                       ) -> Pupil:
+def pinhole_view_pupil(h: Hologram, camera: Camera, rotation, position, *, apodize=True) -> Pupil:
     """A pinhole camera's pupil on the carrier plate ``h``: the smallest that makes the view
     sharp, the plate's own resolution rule.
 
@@ -298,7 +359,8 @@ def pinhole_view_pupil(h: Hologram, camera: Camera, rotation, position, *, apodi
     diameter = min(lam / fine, math.sqrt(lam / defocus))
     if h.zone is not None:
         room = np.asarray(h.zone.half_extents[:2]) - np.abs(
-            position[:2] - np.asarray(h.zone.centre[:2]))
+            position[:2] - np.asarray(h.zone.centre[:2])
+        )
         diameter = min(diameter, max(2 * float(room.min()), lam / camera.pixel_angle()))
     return Pupil(diameter=diameter, focus=focus, apodize=apodize)
 
@@ -313,8 +375,7 @@ def nyquist_supersample(h: Hologram, camera: Camera, pinhole: Pupil | None = Non
     if camera.fstop is not None:
         diameter = camera.aperture_diameter
     elif h.carrier is not None:
-        diameter = (pinhole or pinhole_view_pupil(h, camera, *camera_in_plate(h, camera))
-                    ).diameter
+        diameter = (pinhole or pinhole_view_pupil(h, camera, *camera_in_plate(h, camera))).diameter
     else:
         return 1
     return intensity_supersample(diameter, camera.pixel_angle(), min(h.wavelengths))
@@ -333,11 +394,15 @@ def _check_zone(h: Hologram, camera: Camera, position, diameter) -> None:
     beyond = h.zone.distance_outside(position, diameter / 2)
     if beyond > 1e-9:
         world = (np.asarray(h.plate) @ np.append(h.zone.centre, 1.0))[:3]
-        warnings.warn(f"the camera's pupil reaches {beyond:.3g} m beyond the plate's viewing "
-                      f"zone, {h.zone.describe()} (centred at ({world[0]:.4g}, {world[1]:.4g}, "
-                      f"{world[2]:.4g}) m in the world): the plate was recorded for views from "
-                      f"there, and this one may be cut off or soft; record the plate for a zone "
-                      f"that holds the camera", OutsideZoneWarning, stacklevel=3)
+        warnings.warn(
+            f"the camera's pupil reaches {beyond:.3g} m beyond the plate's viewing "
+            f"zone, {h.zone.describe()} (centred at ({world[0]:.4g}, {world[1]:.4g}, "
+            f"{world[2]:.4g}) m in the world): the plate was recorded for views from "
+            f"there, and this one may be cut off or soft; record the plate for a zone "
+            f"that holds the camera",
+            OutsideZoneWarning,
+            stacklevel=3,
+        )
 
 
 class NoDepthWarning(UserWarning):
@@ -346,7 +411,6 @@ class NoDepthWarning(UserWarning):
 
 class EmptyViewWarning(UserWarning):
     """No light of the hologram reaches the camera: the view is black (the message says why)."""
-
 
 
 def unseen_light(h: Hologram, rotation, position) -> str | None:
@@ -361,15 +425,19 @@ def unseen_light(h: Hologram, rotation, position) -> str | None:
     lateral = np.maximum(np.abs(position[:2]) - [width / 2, height / 2], 0)
     angle = math.atan2(float(np.hypot(*lateral)), position[2])  # from the nearest plate point
     if angle > zone:
-        return (f"the camera is {math.degrees(angle):.1f}° off the plate's normal, seen from "
-                f"the plate's nearest point; the hologram's light leaves within "
-                f"{math.degrees(zone):.1f}° of it")
+        return (
+            f"the camera is {math.degrees(angle):.1f}° off the plate's normal, seen from "
+            f"the plate's nearest point; the hologram's light leaves within "
+            f"{math.degrees(zone):.1f}° of it"
+        )
     tilt = math.acos(float(np.clip(rotation[2, 2], -1, 1)))
     reach = tilt_reach(wavelength, h.pitch, h.pitch)
     if tilt >= reach:
-        return (f"the camera's view axis is {math.degrees(tilt):.1f}° off the plate's normal; "
-                f"its sampling (pitch {h.pitch:.3g} m, λ = {wavelength:.3g} m) carries light "
-                f"to planes tilted by less than {math.degrees(reach):.1f}°")
+        return (
+            f"the camera's view axis is {math.degrees(tilt):.1f}° off the plate's normal; "
+            f"its sampling (pitch {h.pitch:.3g} m, λ = {wavelength:.3g} m) carries light "
+            f"to planes tilted by less than {math.degrees(reach):.1f}°"
+        )
     return None
 
 
@@ -388,17 +456,25 @@ def _check_settings(holos, camera: Camera, supersample, exposure, threshold) -> 
     for i, h in enumerate(holos[1:], 1):
         for name in ("wavelengths", "pitch", "shape", "channels"):
             if getattr(h, name) != getattr(first, name):
-                raise InputError(f"holograms[{i}] has {name} {getattr(h, name)!r}, holograms[0] "
-                                 f"{getattr(first, name)!r}: iterations must be of one recording")
+                raise InputError(
+                    f"holograms[{i}] has {name} {getattr(h, name)!r}, holograms[0] "
+                    f"{getattr(first, name)!r}: iterations must be of one recording"
+                )
         if not np.allclose(h.plate, first.plate, rtol=0, atol=1e-9):
-            raise InputError(f"holograms[{i}] lies on another plate pose than holograms[0]: "
-                             f"iterations must be of one recording")
+            raise InputError(
+                f"holograms[{i}] lies on another plate pose than holograms[0]: "
+                f"iterations must be of one recording"
+            )
     w, h = camera.resolution
-    memory.check_host(f"a {w}x{h} view at supersample {supersample}",
-                      PIXEL_BYTES * w * h * supersample**2 * (len(first.wavelengths) + 1))
+    memory.check_host(
+        f"a {w}x{h} view at supersample {supersample}",
+        PIXEL_BYTES * w * h * supersample**2 * (len(first.wavelengths) + 1),
+    )
     if first.encoding != "complex":  # reconstructed whole; a complex plate's window: below
-        memory.check_host(f"the hologram's {first.shape[1]}x{first.shape[0]} fields",
-                          HOLOGRAM_SAMPLE_BYTES * np.prod(first.shape))
+        memory.check_host(
+            f"the hologram's {first.shape[1]}x{first.shape[0]} fields",
+            HOLOGRAM_SAMPLE_BYTES * np.prod(first.shape),
+        )
 
 
 def _centre_distance(h: Hologram, camera: Camera) -> float:

@@ -22,8 +22,8 @@ from ..propagation import grid
 from .to_pupil import CarrierPupil
 from .view import render_view
 
-SLACK_STEPS = 8    # ladder sizes per octave: a size is rounded up by at most 1/8 (12.5 %)
-HELD_PUPILS = 8    # cameras whose pupil plans (decimation designs, gathers) are kept
+SLACK_STEPS = 8  # ladder sizes per octave: a size is rounded up by at most 1/8 (12.5 %)
+HELD_PUPILS = 8  # cameras whose pupil plans (decimation designs, gathers) are kept
 
 
 def slack_len(n: int, steps: int = SLACK_STEPS) -> int:
@@ -82,10 +82,17 @@ class ViewPlans:
         """The :class:`~holo_core.plate.to_pupil.CarrierPupil` of ``h``'s samples for one
         camera's ``geometry`` (its keywords): the one made for the same geometry before, with
         its decimation designs and gathers, or a new one."""
-        key = (id(h), h.shape, tuple(np.asarray(geometry["position"], np.float64).round(12)),
-               tuple(np.asarray(geometry["rotation"], np.float64).ravel().round(12)),
-               float(geometry["diameter"]), float(geometry["bin"]), tuple(geometry["shape"]),
-               tuple(geometry["window"]), tuple(map(float, geometry["centre"])))
+        key = (
+            id(h),
+            h.shape,
+            tuple(np.asarray(geometry["position"], np.float64).round(12)),
+            tuple(np.asarray(geometry["rotation"], np.float64).ravel().round(12)),
+            float(geometry["diameter"]),
+            float(geometry["bin"]),
+            tuple(geometry["shape"]),
+            tuple(geometry["window"]),
+            tuple(map(float, geometry["centre"])),
+        )
         if key in self._pupils:
             self._pupils.move_to_end(key)
             view = self._pupils[key]

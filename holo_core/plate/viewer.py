@@ -30,8 +30,17 @@ from .path import part_for
 from .view_plans import ViewPlans
 
 # render_view's settings a viewer keeps for every view
-RENDER_OPTIONS = ("aperture", "apodize", "chromatic", "composition", "supersample", "exposure",
-                  "opacity_threshold", "source", "depth_estimate")
+RENDER_OPTIONS = (
+    "aperture",
+    "apodize",
+    "chromatic",
+    "composition",
+    "supersample",
+    "exposure",
+    "opacity_threshold",
+    "source",
+    "depth_estimate",
+)
 COARSE_PIXELS = 320 * 180  # a coarse view's pixels at most, upsampled to the camera's
 INSIDE = 1e-9  # [m] a pupil reaching less than this beyond the zone lies inside it
 
@@ -113,11 +122,14 @@ class PlateViewer:
     def __init__(self, plate, *, scene: str | None = None, **render_options):
         unknown = sorted(set(render_options) - set(RENDER_OPTIONS))
         if unknown:
-            raise InputError(f"PlateViewer has no setting {', '.join(map(repr, unknown))}; "
-                             f"render settings are {', '.join(RENDER_OPTIONS)}")
+            raise InputError(
+                f"PlateViewer has no setting {', '.join(map(repr, unknown))}; "
+                f"render settings are {', '.join(RENDER_OPTIONS)}"
+            )
         if scene is not None and not isinstance(scene, str):
-            raise InputError(f"scene must be a recording digest (text) or None; got "
-                             f"{type(scene).__name__}")
+            raise InputError(
+                f"scene must be a recording digest (text) or None; got {type(scene).__name__}"
+            )
         self.scene = scene
         self.options = dict(render_options)
         self._source = _source_of(plate, scene)
@@ -212,11 +224,16 @@ class PlateViewer:
         view = self._plans.render(looks[:1], small, **options)
         rgb, alpha = (upsampled(a, factor, (h, w)) for a in (view.rgb, view.alpha))
         # depth by the pixel that holds it: a surface's beside the background's is no mean
-        rows, cols = (np.minimum(np.arange(n) // factor, m - 1)
-                      for n, m in zip((h, w), view.depth.shape))
+        rows, cols = (
+            np.minimum(np.arange(n) // factor, m - 1) for n, m in zip((h, w), view.depth.shape)
+        )
         depth = view.depth[np.ix_(rows, cols)]
-        return RenderResult(rgb=rgb, alpha=alpha, depth=depth,
-                            info={**view.info, "coarse": True, "coarse_factor": factor})
+        return RenderResult(
+            rgb=rgb,
+            alpha=alpha,
+            depth=depth,
+            info={**view.info, "coarse": True, "coarse_factor": factor},
+        )
 
     # -- the end -----------------------------------------------------------------------------
     def close(self) -> None:
@@ -259,6 +276,7 @@ class PlateViewer:
             Where ipywidgets is not installed (``pip install ipywidgets``).
         """
         from .viewer_widget import widget
+
         return widget(self, camera, coarse=coarse)
 
 
@@ -271,9 +289,11 @@ class _Looks:
         self.recording = first.recording
         for i, h in enumerate(self.holos[1:], 1):
             if h.recording != first.recording:
-                raise InputError(f"{name}: look {i} is of recording {h.recording or '(none)'}, "
-                                 f"look 0 of {first.recording or '(none)'}: a plate's looks "
-                                 f"are of one recording")
+                raise InputError(
+                    f"{name}: look {i} is of recording {h.recording or '(none)'}, "
+                    f"look 0 of {first.recording or '(none)'}: a plate's looks "
+                    f"are of one recording"
+                )
 
     def where(self, camera: Camera) -> str | None:
         return zone_sentence(self.holos[0], camera)
@@ -294,9 +314,11 @@ class _Set:
             return None
         part = self.plates.parts[k]
         local = part.plate.to_plate(np.asarray(camera.position, np.float64)[None])[0]
-        return (f"the camera's pupil lies outside every part of the plate set; "
-                f"{beyond_words(part.plate.zone, local, camera.aperture_diameter or 0.0)} of "
-                f"the nearest, part {k} ({part.plate.zone.describe()})")
+        return (
+            f"the camera's pupil lies outside every part of the plate set; "
+            f"{beyond_words(part.plate.zone, local, camera.aperture_diameter or 0.0)} of "
+            f"the nearest, part {k} ({part.plate.zone.describe()})"
+        )
 
     def looks_for(self, camera: Camera):
         k, _ = part_for(self.plates, camera)
@@ -336,13 +358,15 @@ class _Files:
         if self._held is not None and names == self._names and None not in names:
             return self._held
         from ..io.hologram import HologramFileError
+
         if self.folder:
             plates = self._kept.read_set(self.paths)
             if self.scene is not None and plates.recording != self.scene:
                 raise HologramFileError(
                     f"{self.paths}: holds the plate set of recording "
                     f"{plates.recording or '(none)'}, not {self.scene} (this scene's): another "
-                    f"recording's set is never viewed; record the set again")
+                    f"recording's set is never viewed; record the set again"
+                )
             held = _Set(plates, str(self.paths))
         else:
             holos = self._kept.read(self.paths, self.scene or "")
@@ -376,15 +400,19 @@ def _source_of(plate, scene: str | None):
         return _Held(looks)
     if items and all(isinstance(p, (str, Path)) for p in items):
         return _Files([Path(p) for p in items], scene, False)
-    raise InputError(f"plate must be a Hologram, a sequence of Hologram (its looks), a "
-                     f"PlateSet, or the path(s) of its files; got {type(plate).__name__}")
+    raise InputError(
+        f"plate must be a Hologram, a sequence of Hologram (its looks), a "
+        f"PlateSet, or the path(s) of its files; got {type(plate).__name__}"
+    )
 
 
 def _check_scene(recording: str, scene: str | None, name: str) -> None:
     if scene is not None and recording != scene:
-        raise InputError(f"{name} is of recording {recording or '(none named)'}, not {scene} "
-                         f"(this scene's): another recording's plate is never viewed; record "
-                         f"the plate again")
+        raise InputError(
+            f"{name} is of recording {recording or '(none named)'}, not {scene} "
+            f"(this scene's): another recording's plate is never viewed; record "
+            f"the plate again"
+        )
 
 
 def zone_sentence(h: Hologram, camera: Camera) -> str | None:
@@ -392,6 +420,7 @@ def zone_sentence(h: Hologram, camera: Camera) -> str | None:
     it (or where ``h`` has no zone and its light reaches the camera)."""
     from .view import unseen_light
     from .window import camera_in_plate
+
     try:
         rotation, position = camera_in_plate(h, camera)
     except InputError as e:
@@ -401,9 +430,11 @@ def zone_sentence(h: Hologram, camera: Camera) -> str | None:
     pupil = camera.aperture_diameter or 0.0
     if h.zone.distance_outside(position, pupil / 2) <= INSIDE:
         return None
-    return (f"the camera's pupil lies outside the plate's viewing zone: "
-            f"{beyond_words(h.zone, position, pupil)} ({h.zone.describe()}); move the camera "
-            f"inside it or record the plate for a zone that holds it")
+    return (
+        f"the camera's pupil lies outside the plate's viewing zone: "
+        f"{beyond_words(h.zone, position, pupil)} ({h.zone.describe()}); move the camera "
+        f"inside it or record the plate for a zone that holds it"
+    )
 
 
 def beyond_words(zone, position, pupil: float) -> str:
@@ -411,11 +442,17 @@ def beyond_words(zone, position, pupil: float) -> str:
     plate's frame) reaches beyond ``zone``, in words."""
     d = np.asarray(position, np.float64) - zone.centre
     over = np.abs(d) - zone.half_extents + np.array([pupil / 2, pupil / 2, 0.0])
-    sides = (("+x (right)", "-x (left)"), ("+y (up)", "-y (down)"),
-             ("farther from the plate", "nearer the plate"))
-    ways = [f"{_length(over[i])} {'past its ' if i < 2 else ''}"
-            f"{sides[i][0] if d[i] > 0 else sides[i][1]}{' side' if i < 2 else ''}"
-            for i in range(3) if over[i] > INSIDE]
+    sides = (
+        ("+x (right)", "-x (left)"),
+        ("+y (up)", "-y (down)"),
+        ("farther from the plate", "nearer the plate"),
+    )
+    ways = [
+        f"{_length(over[i])} {'past its ' if i < 2 else ''}"
+        f"{sides[i][0] if d[i] > 0 else sides[i][1]}{' side' if i < 2 else ''}"
+        for i in range(3)
+        if over[i] > INSIDE
+    ]
     total = zone.distance_outside(position, pupil / 2)
     return f"it reaches {_length(total)} beyond the zone, {' and '.join(ways)}"
 
@@ -437,9 +474,14 @@ def coarser(camera: Camera, factor: int) -> Camera:
     # horizontally (tangent = (col − W/2 + dx)/s; Camera._plane)
     sx = ws / 2 + (dx - w / 2) / factor
     sy = (0.5 * ycor * h + dy) / factor - 0.5 * ycor * hs
-    return replace(camera, resolution=(ws, hs), sensor_fit="HORIZONTAL",
-                   sensor_width=camera.lens * ws * factor / s, shift_x=sx / ws,
-                   shift_y=sy / ws)
+    return replace(
+        camera,
+        resolution=(ws, hs),
+        sensor_fit="HORIZONTAL",
+        sensor_width=camera.lens * ws * factor / s,
+        shift_x=sx / ws,
+        shift_y=sy / ws,
+    )
 
 
 def upsampled(a: np.ndarray, factor: int, shape) -> np.ndarray:

@@ -14,12 +14,13 @@ from ..io.image import png_bytes, srgb
 from ..scene.camera import Camera
 from ..validate import InputError
 
-MOVE = 0.05    # [m] the position sliders' reach either way, at most ...
-TURN = 10.0    # [°] ... and the aim sliders'
+MOVE = 0.05  # [m] the position sliders' reach either way, at most ...
+TURN = 10.0  # [°] ... and the aim sliders'
 
 
-def moved(camera: Camera, *, across=0.0, up=0.0, along=0.0, yaw=0.0, pitch=0.0,
-          focus=None) -> Camera:
+def moved(
+    camera: Camera, *, across=0.0, up=0.0, along=0.0, yaw=0.0, pitch=0.0, focus=None
+) -> Camera:
     """``camera`` moved ``across``, ``up`` and ``along`` [m] its own axes (x right, y up, z
     back), turned by ``yaw`` about its up axis and ``pitch`` about its right axis [°], and
     focused at ``focus`` [m] (None: as it was)."""
@@ -44,21 +45,31 @@ def widget(viewer, camera: Camera, *, coarse: bool = True):
     try:
         import ipywidgets
     except ImportError:
-        raise InputError("PlateViewer.widget needs ipywidgets (pip install ipywidgets); "
-                         "PlateViewer.view gives the views without it") from None
+        raise InputError(
+            "PlateViewer.widget needs ipywidgets (pip install ipywidgets); "
+            "PlateViewer.view gives the views without it"
+        ) from None
     if not isinstance(camera, Camera):
         raise InputError(f"camera must be a Camera; got {type(camera).__name__}")
     reach = min(MOVE, _zone_reach(viewer, camera))
 
     def slider(name, lo, hi, value=0.0, step=None):
-        return ipywidgets.FloatSlider(value=value, min=lo, max=hi, step=step or (hi - lo) / 200,
-                                      description=name, continuous_update=coarse)
+        return ipywidgets.FloatSlider(
+            value=value,
+            min=lo,
+            max=hi,
+            step=step or (hi - lo) / 200,
+            description=name,
+            continuous_update=coarse,
+        )
 
-    sliders = {"across": slider("across [m]", -reach, reach),
-               "up": slider("up [m]", -reach, reach),
-               "along": slider("along [m]", -reach, reach),
-               "yaw": slider("aim ← → [°]", -TURN, TURN),
-               "pitch": slider("aim ↓ ↑ [°]", -TURN, TURN)}
+    sliders = {
+        "across": slider("across [m]", -reach, reach),
+        "up": slider("up [m]", -reach, reach),
+        "along": slider("along [m]", -reach, reach),
+        "yaw": slider("aim ← → [°]", -TURN, TURN),
+        "pitch": slider("aim ↓ ↑ [°]", -TURN, TURN),
+    }
     if camera.fstop is not None:
         f = camera.focus_distance
         sliders["focus"] = slider("focus [m]", 0.5 * f, 2 * f, f)

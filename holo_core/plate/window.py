@@ -26,11 +26,11 @@ from ..scene.plate import box_corners
 from ..validate import InputError
 from ..view import BACKGROUND_DEPTH
 
-WINDOW_MARGIN = 0.1   # the window reaches this fraction of its size beyond the cone ...
-WINDOW_SAMPLES = 8    # ... and at least this many samples
-VIEW_MARGIN = 0.1     # ... and the field of view this fraction of the image beyond its corners
-PUPIL_GUARD = 0.05    # direction cosines carried beyond the band, the tilt and the lens spread
-PUPIL_EDGE = 4        # pupil samples beyond the iris on each side
+WINDOW_MARGIN = 0.1  # the window reaches this fraction of its size beyond the cone ...
+WINDOW_SAMPLES = 8  # ... and at least this many samples
+VIEW_MARGIN = 0.1  # ... and the field of view this fraction of the image beyond its corners
+PUPIL_GUARD = 0.05  # direction cosines carried beyond the band, the tilt and the lens spread
+PUPIL_EDGE = 4  # pupil samples beyond the iris on each side
 
 
 def camera_in_plate(hologram: Hologram, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
@@ -42,11 +42,15 @@ def camera_in_plate(hologram: Hologram, camera: Camera) -> tuple[np.ndarray, np.
     rotation = u @ vt
     position = axes.T @ (camera.position - plate[:3, 3])
     if position[2] <= 0:
-        raise InputError(f"the camera must be in front of the hologram (z > 0 in the plate's "
-                         f"frame); it is at z = {position[2]:.4g} m")
+        raise InputError(
+            f"the camera must be in front of the hologram (z > 0 in the plate's "
+            f"frame); it is at z = {position[2]:.4g} m"
+        )
     if rotation[2, 2] <= 0:
-        raise InputError("the camera must look towards the hologram (its view axis has to "
-                         "point to −z of the plate)")
+        raise InputError(
+            "the camera must look towards the hologram (its view axis has to "
+            "point to −z of the plate)"
+        )
     return rotation, position
 
 
@@ -67,8 +71,7 @@ def odd_fast_len(n: int) -> int:
     return grid.smooth_len(n, (3, 5, 7))
 
 
-def plate_window(h: Hologram, position, rotation, diameter, view=None
-                 ) -> tuple[int, int, int, int]:
+def plate_window(h: Hologram, position, rotation, diameter, view=None) -> tuple[int, int, int, int]:
     """(row0, row1, col0, col1) of the plate's samples the camera's pupil (centre ``position``
     (3,) [m], axes ``rotation`` (3, 3), both in the plate's frame, diameter ``diameter`` [m])
     sees the objects through (:func:`seen_on_plate`; ``view``: the directions of the image's
@@ -94,16 +97,16 @@ def plate_window(h: Hologram, position, rotation, diameter, view=None
     return r0, r1, c0, c1
 
 
-def seen_on_plate(bounds, position, rotation, diameter, view=None
-                  ) -> tuple[np.ndarray, np.ndarray]:
+def seen_on_plate(bounds, position, rotation, diameter, view=None) -> tuple[np.ndarray, np.ndarray]:
     """(lo, hi) (x, y) [m] on the plate of the cone from the rim of a pupil (centre
     ``position`` (3,) [m], axes ``rotation`` (3, 3), diameter ``diameter`` [m]) to the
     objects' box ``bounds`` (2, 3) [m], cut to the camera's field of view where ``view`` (the
     directions (N, 3) of the image's corners, :func:`image_corners`) is given; all in the
     plate's frame. Where the cut leaves nothing, hi < lo."""
     r = diameter / 2
-    rim = np.array([position + s * r * rotation[:, a] for a in (0, 1) for s in (-1, 1)]
-                   + [position])
+    rim = np.array(
+        [position + s * r * rotation[:, a] for a in (0, 1) for s in (-1, 1)] + [position]
+    )
     lo, hi = cone_on_plate(bounds, rim)
     if view is not None:
         d = np.asarray(view, np.float64)
@@ -131,8 +134,9 @@ def image_corners(camera: Camera, rotation, margin=VIEW_MARGIN) -> np.ndarray:
     beyond them (a defocused pixel gathers light from around its ray)."""
     w, h = camera.resolution
     rows, cols = np.array([-1, -1, 1, 1]) * margin * h, np.array([-1, 1, -1, 1]) * margin * w
-    tx, ty = camera.pixel_tangents(rows=rows + np.array([0, 0, h, h]),
-                                   cols=cols + np.array([0, w, 0, w]))
+    tx, ty = camera.pixel_tangents(
+        rows=rows + np.array([0, 0, h, h]), cols=cols + np.array([0, w, 0, w])
+    )
     return np.stack([tx, ty, -np.ones(4)], -1) @ np.asarray(rotation).T
 
 
@@ -162,9 +166,8 @@ def window_of(plane, window, channel=None) -> np.ndarray:
     out = np.zeros((r1 - r0, c1 - c0), np.complex64)
     a, b, c, d = max(r0, 0), min(r1, rows), max(c0, 0), min(c1, cols)
     if a < b and c < d:
-        at = (slice(a, b), slice(c, d)) if channel is None else (channel, slice(a, b),
-                                                                 slice(c, d))
-        out[a - r0:b - r0, c - c0:d - c0] = plane[at]
+        at = (slice(a, b), slice(c, d)) if channel is None else (channel, slice(a, b), slice(c, d))
+        out[a - r0 : b - r0, c - c0 : d - c0] = plane[at]
     return out
 
 
@@ -182,8 +185,11 @@ def lit_diameter(h: Hologram, position, rotation, diameter) -> float:
         return diameter
     spread = float(position[2]) * band / math.sqrt(1 - band * band)
     width, height = h.size
-    reach = max(abs(float(position[0])) + width / 2, abs(float(position[1])) + height / 2) \
-        + spread + WINDOW_SAMPLES * h.pitch
+    reach = (
+        max(abs(float(position[0])) + width / 2, abs(float(position[1])) + height / 2)
+        + spread
+        + WINDOW_SAMPLES * h.pitch
+    )
     return min(diameter, 2 * reach / max(float(rotation[2, 2]), 1e-3))
 
 

@@ -31,6 +31,8 @@ from ..opencl.kernel import BUFFER, REAL, kernel
 from ..opencl.runtime import associated
 
 PROGRAM = associated(__file__)
+# the kernels' signatures as tables (their arguments in the .cl file's order)
+# fmt: off
 ZONE_SUM = kernel(
     PROGRAM, "zone_sum", out=BUFFER, first_plane=int32, row_first=int32, col_first=int32,
     oh=int32, ow=int32, pitch=REAL, row_pitch=REAL, x0=REAL, y0=REAL, k=REAL, k2=REAL, zx=REAL,
@@ -41,12 +43,14 @@ ZONE_SUM = kernel(
     block_col0=int32)
 MIX_CLASSES = kernel(PROGRAM, "mix_classes", out=BUFFER, sums=BUFFER, mixing=BUFFER,
                      looks=int32, classes=int32, plane=int64)
+# fmt: on
 
-SEG = 32       # columns per work item: the recurrence's segment
-BLOCK = 256    # emitters are listed per BLOCK x BLOCK samples
+SEG = 32  # columns per work item: the recurrence's segment
+BLOCK = 256  # emitters are listed per BLOCK x BLOCK samples
 SHARED_PHASE = 1e-6  # an emitter's channels whose amplitudes' phases agree to this share one
-PARTNER_TURN = 0.01  # [rad] the most (k2 - k)·|Δr| may turn over a segment for the partner to
-                     # ride on the colours' recurrence (linear between its ends: 1.25e-5 off)
+# [rad] the most (k2 - k)·|Δr| may turn over a segment for the partner to ride on the colours'
+# recurrence (linear between its ends: 1.25e-5 off)
+PARTNER_TURN = 0.01
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
@@ -68,7 +72,6 @@ class ZoneWindow:
     centre: tuple
     half_extents: tuple
     rim: float
-
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)
@@ -186,8 +189,14 @@ class ZoneSum:
     emitter's geometry, window and visibility at a sample, and its set-up: summed apart it
     cost three quarters of the three colour channels' time for its one channel."""
 
-    def __init__(self, em: ZoneEmitters, window: ZoneWindow, wavelength: float, rt=None,
-                 partner: tuple | None = None):
+    def __init__(
+        self,
+        em: ZoneEmitters,
+        window: ZoneWindow,
+        wavelength: float,
+        rt=None,
+        partner: tuple | None = None,
+    ):
         self.rt = rt = rt or get_runtime()
         self.window, self.k = window, 2 * math.pi / wavelength
         self.k2 = 0.0 if partner is None else 2 * math.pi / partner[0]
@@ -202,29 +211,48 @@ class ZoneSum:
         self.foot = foot = footprints(pos, window)
         # (the emitters, their footprints) of each class; None: all of them, the looks summed
         # as channels
-        self.members = [(None, foot)] if self.mixing is None else \
-            [(m, foot[m]) for m in (np.nonzero(em.classes == k)[0]
-                                    for k in range(self.mixing.shape[1]))]
-        self.pairs = float(np.sum((foot[:, 1] - foot[:, 0] + 1.0).clip(0)
-                                  * (foot[:, 3] - foot[:, 2] + 1.0).clip(0)))
+        self.members = (
+            [(None, foot)]
+            if self.mixing is None
+            else [
+                (m, foot[m])
+                for m in (np.nonzero(em.classes == k)[0] for k in range(self.mixing.shape[1]))
+            ]
+        )
+        self.pairs = float(
+            np.sum(
+                (foot[:, 1] - foot[:, 0] + 1.0).clip(0) * (foot[:, 3] - foot[:, 2] + 1.0).clip(0)
+            )
+        )
         table = em.table if len(em.table) else np.zeros((1, 2, 2), np.uint8)
-        self.options = (f"-DVEC={rt.lanes}", f"-DSEG={SEG}", f"-DCHANNELS={counts[0]}",
-                        f"-DCHANNELS2={counts[1] if partner else 0}",
-                        f"-DSHADED={int(self.shaded)}",
-                        f"-DPARTNER_LERP={int(self.partner_lerp)}",
-                        f"-DGRID_Y={table.shape[1]}", f"-DGRID_X={table.shape[2]}",
-                        "-cl-fast-relaxed-math") + rt.real_options
+        self.options = (
+            f"-DVEC={rt.lanes}",
+            f"-DSEG={SEG}",
+            f"-DCHANNELS={counts[0]}",
+            f"-DCHANNELS2={counts[1] if partner else 0}",
+            f"-DSHADED={int(self.shaded)}",
+            f"-DPARTNER_LERP={int(self.partner_lerp)}",
+            f"-DGRID_Y={table.shape[1]}",
+            f"-DGRID_X={table.shape[2]}",
+            "-cl-fast-relaxed-math",
+        ) + rt.real_options
         amp = [rt.to_device(np.ascontiguousarray(a, np.complex64)) for a in amps]
         self._mixing = None if self.mixing is None else rt.to_device(self.mixing)
         (g0x, gsx), (g0y, gsy) = em.grid
         # the emitters' arguments of the kernel, on the device as long as the sum lives
-        self.args = dict(zip(("px", "py", "pz"), (rt.to_device(pos[:, i], rt.real)
-                                                  for i in range(3))),
-                         amp=amp[0], amp2=amp[-1], shade=rt.to_device(shade, np.float32),
-                         foot=rt.to_device(foot),
-                         vis_row=rt.to_device(np.asarray(em.visibility, np.int32)),
-                         vis=rt.to_device(np.ascontiguousarray(table, np.uint8)),
-                         g0x=g0x, g0y=g0y, gsx=gsx, gsy=gsy)
+        self.args = dict(
+            zip(("px", "py", "pz"), (rt.to_device(pos[:, i], rt.real) for i in range(3))),
+            amp=amp[0],
+            amp2=amp[-1],
+            shade=rt.to_device(shade, np.float32),
+            foot=rt.to_device(foot),
+            vis_row=rt.to_device(np.asarray(em.visibility, np.int32)),
+            vis=rt.to_device(np.ascontiguousarray(table, np.uint8)),
+            g0x=g0x,
+            g0y=g0y,
+            gsx=gsx,
+            gsy=gsy,
+        )
 
     def _factored(self, amps, partner: bool, window) -> tuple[list, np.ndarray]:
         """The amplitudes as the kernel takes them, and the channels' real shares. Where each
@@ -234,8 +262,12 @@ class ZoneSum:
         ``partner_lerp``), the colours' amplitude and the partner's over it."""
         shared = [shared_phase(a) for a in amps]
         self.shaded = all(f is not None for f in shared)
-        self.partner_lerp = self.shaded and partner and amps[-1].shape[1] == 1 and \
-            abs(self.k2 - self.k) * SEG * window.pitch <= PARTNER_TURN
+        self.partner_lerp = (
+            self.shaded
+            and partner
+            and amps[-1].shape[1] == 1
+            and abs(self.k2 - self.k) * SEG * window.pitch <= PARTNER_TURN
+        )
         if not self.shaded:
             return amps, np.zeros(1, np.float32)
         shade = np.concatenate([f[1] for f in shared], 1)
@@ -247,10 +279,12 @@ class ZoneSum:
         """The amplitudes the kernel sums at wave number ``k`` [rad/m]: the carriers exp(ik|z_j|)
         of its phase and exp(ik·Z_z) of its epilogue folded in (float64), look 0's only where
         the classes mix them."""
-        fold = np.exp(1j * np.remainder(k * (np.abs(pos[:, 2]) + window.centre[2]),
-                                        2 * math.pi))
-        a = em.amplitude if self.mixing is None else \
-            em.amplitude[:, :em.amplitude.shape[1] // len(self.mixing)]
+        fold = np.exp(1j * np.remainder(k * (np.abs(pos[:, 2]) + window.centre[2]), 2 * math.pi))
+        a = (
+            em.amplitude
+            if self.mixing is None
+            else em.amplitude[:, : em.amplitude.shape[1] // len(self.mixing)]
+        )
         return a * fold[:, None]
 
     def region(self, row0: int, col0: int, rows: int, cols: int) -> np.ndarray:
@@ -266,31 +300,62 @@ class ZoneSum:
         e = win.half_extents
         for k, (members, foot) in enumerate(self.members):
             lst, start, (_, blocks_x, block_row0, block_col0) = block_lists(
-                foot, win.shape, region=(row0, col0, rows, cols))
+                foot, win.shape, region=(row0, col0, rows, cols)
+            )
             if members is not None:
                 lst = members[lst]
             ZONE_SUM.launch(
-                rt, (-(-rows // rt.lanes), -(-cols // SEG)), rt.series_group,
-                options=self.options, out=sums, first_plane=k * self.planes, row_first=row0,
-                col_first=col0, oh=rows, ow=cols, pitch=win.pitch, row_pitch=win.row_pitch,
-                x0=win.origin[0], y0=win.origin[1], k=self.k, k2=self.k2,
-                **dict(zip(("zx", "zy", "zz"), win.centre)), ex=e[0], ey=e[1], ez=e[2],
-                rim_x=win.rim * e[0], rim_y=win.rim * e[1], **self.args,
+                rt,
+                (-(-rows // rt.lanes), -(-cols // SEG)),
+                rt.series_group,
+                options=self.options,
+                out=sums,
+                first_plane=k * self.planes,
+                row_first=row0,
+                col_first=col0,
+                oh=rows,
+                ow=cols,
+                pitch=win.pitch,
+                row_pitch=win.row_pitch,
+                x0=win.origin[0],
+                y0=win.origin[1],
+                k=self.k,
+                k2=self.k2,
+                **dict(zip(("zx", "zy", "zz"), win.centre)),
+                ex=e[0],
+                ey=e[1],
+                ez=e[2],
+                rim_x=win.rim * e[0],
+                rim_y=win.rim * e[1],
+                **self.args,
                 list=rt.to_device(lst if len(lst) else np.zeros(1, np.int32), np.int32),
-                start=rt.to_device(start), blocks_x=blocks_x, block=BLOCK,
-                block_row0=block_row0, block_col0=block_col0)
+                start=rt.to_device(start),
+                blocks_x=blocks_x,
+                block=BLOCK,
+                block_row0=block_row0,
+                block_col0=block_col0,
+            )
         if self.mixing is None:
             return sums
         out = rt.workspace("zone-sum-looks", (self.channels, rows, cols))
         looks, classes = self.mixing.shape
-        MIX_CLASSES.launch(rt, (rows * cols, self.planes), options=self.options, out=out,
-                           sums=sums, mixing=self._mixing, looks=looks, classes=classes,
-                           plane=rows * cols)
+        MIX_CLASSES.launch(
+            rt,
+            (rows * cols, self.planes),
+            options=self.options,
+            out=out,
+            sums=sums,
+            mixing=self._mixing,
+            looks=looks,
+            classes=classes,
+            plane=rows * cols,
+        )
         return out
 
 
-def zone_sum(em: ZoneEmitters, window: ZoneWindow, wavelength: float, region=None,
-             rt=None) -> np.ndarray:
+def zone_sum(
+    em: ZoneEmitters, window: ZoneWindow, wavelength: float, region=None, rt=None
+) -> np.ndarray:
     """B (C, rows, cols) complex64 over ``region`` (row0, col0, rows, cols) of the window
     (default: all of it) at ``wavelength`` [m] (module docstring)."""
     h, w = window.shape

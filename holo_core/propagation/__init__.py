@@ -34,40 +34,66 @@ def _shifted_back(kw):  # where an adjoint's output lies: the source's plane
 
 
 def _out_grid(kw, shape, pitch):
-    shape = validate.shape2d("out_shape", kw["out_shape"]) if kw.get("out_shape") is not None \
-        else shape
-    return shape, grid.pitch_pair(kw["out_pitch"], "out_pitch") \
-        if kw.get("out_pitch") is not None else pitch
+    shape = (
+        validate.shape2d("out_shape", kw["out_shape"]) if kw.get("out_shape") is not None else shape
+    )
+    return shape, grid.pitch_pair(kw["out_pitch"], "out_pitch") if kw.get(
+        "out_pitch"
+    ) is not None else pitch
 
 
 def _scaled_grid(kw, shape, pitch):  # scaled.py's defaults: the input's window at out_pitch
-    out = grid.pitch_pair(kw["out_pitch"], "out_pitch") if kw.get("out_pitch") is not None \
-        else pitch
+    out = (
+        grid.pitch_pair(kw["out_pitch"], "out_pitch") if kw.get("out_pitch") is not None else pitch
+    )
     if kw.get("out_shape") is not None:
         return validate.shape2d("out_shape", kw["out_shape"]), out
-    return (max(1, round(shape[0] * pitch[1] / out[1])),
-            max(1, round(shape[1] * pitch[0] / out[0]))), out
+    return (
+        max(1, round(shape[0] * pitch[1] / out[1])),
+        max(1, round(shape[1] * pitch[0] / out[0])),
+    ), out
 
 
 # the public names: plane functions that also take Fields and batches (batch.py)
 angular_spectrum = batched(_asm_module.angular_spectrum, moves=_shifted, grid_of=_scaled_grid)
 fresnel = batched(_fresnel_module.fresnel, moves=_shifted, grid_of=_scaled_grid)
-fraunhofer = batched(_fresnel_module.fraunhofer, returns_pitch=True,
-                     moves=lambda kw: translation(0.0, 0.0, kw["distance"]))
-angular_spectrum.adjoint = batched(_asm_module.angular_spectrum_adjoint, moves=_shifted_back,
-                                   grid_of=_scaled_grid)
-fresnel.adjoint = batched(_fresnel_module.fresnel_adjoint, moves=_shifted_back,
-                          grid_of=_scaled_grid)
+fraunhofer = batched(
+    _fresnel_module.fraunhofer,
+    returns_pitch=True,
+    moves=lambda kw: translation(0.0, 0.0, kw["distance"]),
+)
+angular_spectrum.adjoint = batched(
+    _asm_module.angular_spectrum_adjoint, moves=_shifted_back, grid_of=_scaled_grid
+)
+fresnel.adjoint = batched(
+    _fresnel_module.fresnel_adjoint, moves=_shifted_back, grid_of=_scaled_grid
+)
 fraunhofer.adjoint = _fresnel_module.fraunhofer_adjoint
-rayleigh_sommerfeld = batched(_rs_module.rayleigh_sommerfeld, moves=_shifted,
-                              grid_of=_out_grid)
+rayleigh_sommerfeld = batched(_rs_module.rayleigh_sommerfeld, moves=_shifted, grid_of=_out_grid)
 tilt = batched(_tilt_module.tilt, moves=lambda kw: rigid(kw["rotation"]), grid_of=_out_grid)
-propagate_to_plane = batched(_tilt_module.propagate_to_plane, grid_of=_out_grid,
-                             moves=lambda kw: rigid(kw["rotation"], kw["position"]))
-resample = batched(_resample_module.resample, grid_of=lambda kw, shape, pitch: (
-    validate.shape2d("out_shape", kw["out_shape"]),
-    grid.pitch_pair(kw["out_pitch"], "out_pitch")))
+propagate_to_plane = batched(
+    _tilt_module.propagate_to_plane,
+    grid_of=_out_grid,
+    moves=lambda kw: rigid(kw["rotation"], kw["position"]),
+)
+resample = batched(
+    _resample_module.resample,
+    grid_of=lambda kw, shape, pitch: (
+        validate.shape2d("out_shape", kw["out_shape"]),
+        grid.pitch_pair(kw["out_pitch"], "out_pitch"),
+    ),
+)
 
-__all__ = ["alias_free_distance", "angular_spectrum", "batched", "fraunhofer", "fresnel",
-           "interpolation_matrix", "propagate_to_plane", "rayleigh_sommerfeld", "resample",
-           "tilt", "transfer_function"]
+__all__ = [
+    "alias_free_distance",
+    "angular_spectrum",
+    "batched",
+    "fraunhofer",
+    "fresnel",
+    "interpolation_matrix",
+    "propagate_to_plane",
+    "rayleigh_sommerfeld",
+    "resample",
+    "tilt",
+    "transfer_function",
+]

@@ -48,8 +48,10 @@ def adjoint(propagation):
     """
     transposed = getattr(propagation, "adjoint", None)
     if not callable(transposed):
-        raise validate.InputError(f"propagation must be angular_spectrum, fresnel, fraunhofer "
-                                  f"or thin_lens; got {propagation!r}"[:300])
+        raise validate.InputError(
+            f"propagation must be angular_spectrum, fresnel, fraunhofer "
+            f"or thin_lens; got {propagation!r}"[:300]
+        )
     return transposed
 
 

@@ -28,8 +28,19 @@ from .scaled import scaled
 from .transfer import BAND_EDGE, asm_transfer, quadrant_shape, transfer_function
 
 
-def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
-                     band_limit=True, out_pitch=None, out_shape=None, read=None):
+def angular_spectrum(
+    field,
+    *,
+    wavelength,
+    pitch,
+    distance,
+    offset=(0.0, 0.0),
+    padding=2,
+    band_limit=True,
+    out_pitch=None,
+    out_shape=None,
+    read=None,
+):
     """Propagate a field to the parallel plane at ``distance``, its centre shifted by ``offset``.
 
     Parameters
@@ -90,10 +101,18 @@ def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), p
     ((64, 64), 1.0, 1.571)
     """
     if out_pitch is not None or out_shape is not None:
-        return scaled(field, transfer=functools.partial(_transfer, band_limit=band_limit),
-                      name="angular_spectrum", wavelength=wavelength, pitch=pitch,
-                      distance=distance, offset=offset, padding=padding, out_pitch=out_pitch,
-                      out_shape=out_shape)
+        return scaled(
+            field,
+            transfer=functools.partial(_transfer, band_limit=band_limit),
+            name="angular_spectrum",
+            wavelength=wavelength,
+            pitch=pitch,
+            distance=distance,
+            offset=offset,
+            padding=padding,
+            out_pitch=out_pitch,
+            out_shape=out_shape,
+        )
     s = convolution_setup(field, wavelength, pitch, distance, offset, padding)
     wavelength, pitch, z, (x0, y0), padding = s.wavelength, s.pitch, s.z, s.offset, s.padding
     rt, dev, from_host, shape = s.rt, s.dev, s.from_host, s.shape
@@ -101,39 +120,70 @@ def angular_spectrum(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), p
     quadrant = symmetric(rt, (x0, y0))
 
     def make():  # on the device (transfer.py); the float64 reference is transfer_function
-        tf = asm_transfer(rt, shape, wavelength=wavelength, pitch=pitch, distance=z,
-                          offset=(x0, y0), band_limit=band_limit, edge=BAND_EDGE,
-                          quadrant=quadrant, out=recycled(rt, "transfer", quadrant_shape(shape)
-                                                          if quadrant else shape))
+        tf = asm_transfer(
+            rt,
+            shape,
+            wavelength=wavelength,
+            pitch=pitch,
+            distance=z,
+            offset=(x0, y0),
+            band_limit=band_limit,
+            edge=BAND_EDGE,
+            quadrant=quadrant,
+            out=recycled(rt, "transfer", quadrant_shape(shape) if quadrant else shape),
+        )
         # with no offset the straight-through wave (f = 0) always passes
         reaches = quadrant or (x0, y0) == (0.0, 0.0) or nonzero_count(rt, tf) > 0
-        notes = sampling_notes(dev.shape, shape, wavelength, pitch, z, (x0, y0), padding,
-                               band_limit, reaches, read)
+        notes = sampling_notes(
+            dev.shape, shape, wavelength, pitch, z, (x0, y0), padding, band_limit, reaches, read
+        )
         return tf, notes
 
-    key = ("asm", dev.shape, shape, wavelength, pitch, z, x0, y0, bool(band_limit),
-           None if read is None else tuple(read), quadrant)
+    key = (
+        "asm",
+        dev.shape,
+        shape,
+        wavelength,
+        pitch,
+        z,
+        x0,
+        y0,
+        bool(band_limit),
+        None if read is None else tuple(read),
+        quadrant,
+    )
     tf, notes = cached(rt, key, make)
     for note in notes:
         validate.warn_sampling(note)
     return like_input(convolve(rt, dev, tf, shape if quadrant else None), from_host)
 
 
-def angular_spectrum_adjoint(field, *, wavelength, pitch, distance, offset=(0.0, 0.0),
-                             **settings):
+def angular_spectrum_adjoint(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), **settings):
     """The adjoint of :func:`angular_spectrum` (the same keywords): a field on the target
     plane back to the source's grid. The propagation pads, transforms, multiplies by H,
     transforms back and crops at the same place, so its adjoint multiplies by H̄ instead, and
     H̄(z, x0, y0) = H(−z, −x0, −y0), its band limit |x0 − z·f/fz| too: the angular spectrum
     to −z with the offset negated."""
     x0, y0 = validate.pair("offset", offset, "m")
-    return angular_spectrum(field, wavelength=wavelength, pitch=pitch,
-                            distance=-np.asarray(distance), offset=(-x0, -y0), **settings)
+    return angular_spectrum(
+        field,
+        wavelength=wavelength,
+        pitch=pitch,
+        distance=-np.asarray(distance),
+        offset=(-x0, -y0),
+        **settings,
+    )
 
 
 def _transfer(shape, wavelength, pitch, distance, offset, band_limit) -> np.ndarray:
-    return transfer_function(shape, wavelength=wavelength, pitch=pitch, distance=distance,
-                             offset=offset, band_limit=band_limit)
+    return transfer_function(
+        shape,
+        wavelength=wavelength,
+        pitch=pitch,
+        distance=distance,
+        offset=offset,
+        band_limit=band_limit,
+    )
 
 
 def alias_free_distance(shape, pitch, wavelength, offset=(0.0, 0.0)) -> float:
@@ -175,13 +225,16 @@ def alias_free_distance(shape, pitch, wavelength, offset=(0.0, 0.0)) -> float:
     fz2 = 1.0 / wavelength**2 - fmax[0] ** 2 - fmax[1] ** 2
     if fz2 <= 0:
         return 0.0
-    limits = [(n * p / 2 - abs(o)) * math.sqrt(fz2) / f for n, p, o, f in
-              ((shape[1], px, offset[0], fmax[1]), (shape[0], py, offset[1], fmax[0]))]
+    limits = [
+        (n * p / 2 - abs(o)) * math.sqrt(fz2) / f
+        for n, p, o, f in ((shape[1], px, offset[0], fmax[1]), (shape[0], py, offset[1], fmax[0]))
+    ]
     return max(0.0, min(limits))
 
 
-def sampling_notes(shape, padded, wavelength, pitch, z, offset, padding, band_limit, reaches,
-                   read=None):
+def sampling_notes(
+    shape, padded, wavelength, pitch, z, offset, padding, band_limit, reaches, read=None
+):
     """Why the grid cannot carry the field to ``z`` alias-free, as messages (empty if it can);
     ``reaches``: the transfer function is not all zero; ``read``: the (rows, cols) around the
     output's centre that will be read (a padded grid spanning the input and those wraps
@@ -192,14 +245,23 @@ def sampling_notes(shape, padded, wavelength, pitch, z, offset, padding, band_li
     where = f"{shape[0]}x{shape[1]} at {spacing} pitch, padding {padding:g}"
     notes = []
     if abs(z) > safe and not band_limit:
-        notes.append(f"angular_spectrum: |distance| = {abs(z):.4g} m exceeds the alias-free "
-                     f"limit {safe:.4g} m of this grid ({where}); use band_limit=True or more "
-                     f"padding")
-    elif abs(z) > safe and padding < 2 and (read is None or any(
-            p < n + r for p, n, r in zip(padded, shape, read))):
-        notes.append(f"angular_spectrum: with padding {padding:g} < 2 the band-limited "
-                     f"convolution wraps around beyond |distance| = {safe:.4g} m; use padding >= 2")
+        notes.append(
+            f"angular_spectrum: |distance| = {abs(z):.4g} m exceeds the alias-free "
+            f"limit {safe:.4g} m of this grid ({where}); use band_limit=True or more "
+            f"padding"
+        )
+    elif (
+        abs(z) > safe
+        and padding < 2
+        and (read is None or any(p < n + r for p, n, r in zip(padded, shape, read)))
+    ):
+        notes.append(
+            f"angular_spectrum: with padding {padding:g} < 2 the band-limited "
+            f"convolution wraps around beyond |distance| = {safe:.4g} m; use padding >= 2"
+        )
     if not reaches:
-        notes.append(f"angular_spectrum: no direction this grid ({where}) samples reaches the "
-                     f"target at offset {offset} m, distance {z:.4g} m: the result is zero")
+        notes.append(
+            f"angular_spectrum: no direction this grid ({where}) samples reaches the "
+            f"target at offset {offset} m, distance {z:.4g} m: the result is zero"
+        )
     return notes

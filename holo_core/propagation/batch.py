@@ -90,8 +90,9 @@ def batched(plane, *, moves=None, grid_of=None, returns_pitch=False):
         if is_field:
             for name in ("wavelength", "pitch"):
                 if settings.get(name) is not None:
-                    raise InputError(f"{name} comes with the Field; leave it out (got "
-                                     f"{settings[name]!r})")
+                    raise InputError(
+                        f"{name} comes with the Field; leave it out (got {settings[name]!r})"
+                    )
             samples, pose, lam = field.samples, field.pose, field.wavelength
             settings = {**settings, "pitch": field.pitch}
             if "wavelength" in _parameters(plane):
@@ -112,7 +113,7 @@ def batched(plane, *, moves=None, grid_of=None, returns_pitch=False):
 
 def _parameters(plane) -> tuple:
     code = plane.__code__
-    return code.co_varnames[:code.co_argcount + code.co_kwonlyargcount]
+    return code.co_varnames[: code.co_argcount + code.co_kwonlyargcount]
 
 
 def _batched(field, settings) -> bool:
@@ -126,15 +127,18 @@ class _Run:
     def __init__(self, plane, samples, pose, settings, moves, grid_of, returns_pitch):
         if samples.ndim < 2 or 0 in samples.shape[-2:]:  # a batch of wavelengths over an
             # empty field would fail reshaping it, with no word of the field (tools/fuzz.py)
-            raise InputError(f"field must be (..., H, W) with H, W >= 1; got shape "
-                             f"{tuple(samples.shape)}")
+            raise InputError(
+                f"field must be (..., H, W) with H, W >= 1; got shape {tuple(samples.shape)}"
+            )
         self.plane, self.samples, self.settings = plane, samples, settings
         self.moves, self.returns_pitch = moves, returns_pitch
         self.batch_in = tuple(samples.shape[:-2])
-        self.varying = {k: _numbers(k, settings[k]) for k in VARYING
-                        if settings.get(k) is not None}
-        shapes = {"field": self.batch_in, **{k: v.shape for k, v in self.varying.items()},
-                  "pose": tuple(np.shape(pose)[:-2])}
+        self.varying = {k: _numbers(k, settings[k]) for k in VARYING if settings.get(k) is not None}
+        shapes = {
+            "field": self.batch_in,
+            **{k: v.shape for k, v in self.varying.items()},
+            "pose": tuple(np.shape(pose)[:-2]),
+        }
         try:
             self.batch = np.broadcast_shapes(*shapes.values())
         except ValueError:
@@ -145,12 +149,18 @@ class _Run:
         h, w = self.shape = tuple(samples.shape[-2:])
         self.pitch = grid.pitch_pair(settings["pitch"])
         first = {**settings, **{k: float(v.reshape(-1)[0]) for k, v in self.varying.items()}}
-        self.out_shape, self.out_pitch = grid_of(first, (h, w), self.pitch) if grid_of \
-            else ((h, w), self.pitch)
-        if returns_pitch and len(self.varying) and np.ptp(
-                np.prod(np.broadcast_arrays(*self.varying.values()), axis=0)) > 0:
-            raise InputError("the far field's pitch λ·z/(N·pitch) must be one for the whole "
-                             "batch; give its entries one product wavelength·distance")
+        self.out_shape, self.out_pitch = (
+            grid_of(first, (h, w), self.pitch) if grid_of else ((h, w), self.pitch)
+        )
+        if (
+            returns_pitch
+            and len(self.varying)
+            and np.ptp(np.prod(np.broadcast_arrays(*self.varying.values()), axis=0)) > 0
+        ):
+            raise InputError(
+                "the far field's pitch λ·z/(N·pitch) must be one for the whole "
+                "batch; give its entries one product wavelength·distance"
+            )
 
     def __call__(self):
         batch, (h, w), (oh, ow) = self.batch, self.shape, self.out_shape
@@ -166,15 +176,19 @@ class _Run:
         else:
             memory.check_host(what, 2 * nbytes)
             out = np.empty((*batch, oh, ow), np.complex64)
-        source = np.broadcast_to(np.arange(max(1, math.prod(self.batch_in)))
-                                 .reshape(self.batch_in), batch)
+        source = np.broadcast_to(
+            np.arange(max(1, math.prod(self.batch_in))).reshape(self.batch_in), batch
+        )
         values = {k: np.broadcast_to(v, batch) for k, v in self.varying.items()}
         flat = self.samples.reshape(-1, h, w)
         poses = np.broadcast_to(self.pose, (*batch, 4, 4)).copy()
         pitch, far = self.out_pitch, None
         for i, idx in enumerate(np.ndindex(*batch)):
-            kw = {**self.settings, **{k: float(v[idx]) for k, v in values.items()},
-                  "pitch": _scalar(self.pitch)}
+            kw = {
+                **self.settings,
+                **{k: float(v[idx]) for k, v in values.items()},
+                "pitch": _scalar(self.pitch),
+            }
             src = flat[int(source[idx])]
             if on_device and src.offset:
                 src = src.copy()  # a plane of a stack: the plane functions take whole arrays
@@ -198,8 +212,9 @@ def _numbers(name: str, value) -> np.ndarray:
     except (TypeError, ValueError):
         a = np.zeros(0)
     if not a.size:
-        raise InputError(f"{name} must be a number or a non-empty array of numbers [m]; got "
-                         f"{value!r}"[:300])
+        raise InputError(
+            f"{name} must be a number or a non-empty array of numbers [m]; got {value!r}"[:300]
+        )
     return a
 
 

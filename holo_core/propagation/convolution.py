@@ -52,8 +52,17 @@ def convolution_setup(field, wavelength, pitch, distance, offset, padding) -> Se
         dev, from_host = np.ascontiguousarray(host_field("field", field), np.complex64), True
     else:
         rt, dev, from_host = as_device(field, check=False)  # convolve checks the DC term
-    return Setup(wavelength, pitch, z, offset, padding, rt, dev, from_host,
-                 grid.padded_shape(dev.shape, padding))
+    return Setup(
+        wavelength,
+        pitch,
+        z,
+        offset,
+        padding,
+        rt,
+        dev,
+        from_host,
+        grid.padded_shape(dev.shape, padding),
+    )
 
 
 def convolve(rt, field, transfer, padded=None):

@@ -23,8 +23,17 @@ from .scaled import scaled
 from .transfer import fresnel_transfer, fresnel_transfer_host, quadrant_shape
 
 
-def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
-            out_pitch=None, out_shape=None):
+def fresnel(
+    field,
+    *,
+    wavelength,
+    pitch,
+    distance,
+    offset=(0.0, 0.0),
+    padding=2,
+    out_pitch=None,
+    out_shape=None,
+):
     """Propagate a field paraxially (Fresnel) to the parallel plane at ``distance``.
 
     Parameters
@@ -72,9 +81,18 @@ def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
     ((64, 64), 1.0)
     """
     if out_pitch is not None or out_shape is not None:
-        return scaled(field, transfer=fresnel_transfer_host, name="fresnel",
-                      wavelength=wavelength, pitch=pitch, distance=distance, offset=offset,
-                      padding=padding, out_pitch=out_pitch, out_shape=out_shape)
+        return scaled(
+            field,
+            transfer=fresnel_transfer_host,
+            name="fresnel",
+            wavelength=wavelength,
+            pitch=pitch,
+            distance=distance,
+            offset=offset,
+            padding=padding,
+            out_pitch=out_pitch,
+            out_shape=out_shape,
+        )
     s = convolution_setup(field, wavelength, pitch, distance, offset, padding)
     wavelength, pitch, z, (x0, y0), padding = s.wavelength, s.pitch, s.z, s.offset, s.padding
     rt, dev, from_host, shape = s.rt, s.dev, s.from_host, s.shape
@@ -86,10 +104,18 @@ def fresnel(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), padding=2,
         return tf / (shape[0] * shape[1]), []
 
     def made():  # on the device where it has float64 (transfer.py), else on the host
-        tf = fresnel_transfer(rt, shape, wavelength=wavelength, pitch=pitch, distance=z,
-                              offset=(x0, y0), quadrant=quadrant, out=recycled(
-                                  rt, "transfer", quadrant_shape(shape) if quadrant else shape)
-                              if rt.has_fp64 else None)
+        tf = fresnel_transfer(
+            rt,
+            shape,
+            wavelength=wavelength,
+            pitch=pitch,
+            distance=z,
+            offset=(x0, y0),
+            quadrant=quadrant,
+            out=recycled(rt, "transfer", quadrant_shape(shape) if quadrant else shape)
+            if rt.has_fp64
+            else None,
+        )
         return make() if tf is None else (tf, [])
 
     tf, _ = cached(rt, ("fresnel", shape, wavelength, pitch, z, x0, y0, quadrant), made)
@@ -100,8 +126,14 @@ def fresnel_adjoint(field, *, wavelength, pitch, distance, offset=(0.0, 0.0), **
     """The adjoint of :func:`fresnel` (the same keywords): Fresnel to −z with the offset
     negated, as for the angular spectrum (its kept rays |x0 − λz·f| alike)."""
     x0, y0 = validate.pair("offset", offset, "m")
-    return fresnel(field, wavelength=wavelength, pitch=pitch, distance=-np.asarray(distance),
-                   offset=(-x0, -y0), **settings)
+    return fresnel(
+        field,
+        wavelength=wavelength,
+        pitch=pitch,
+        distance=-np.asarray(distance),
+        offset=(-x0, -y0),
+        **settings,
+    )
 
 
 def centred_ramp(shape) -> np.ndarray:
@@ -119,8 +151,11 @@ def far_factor(shape, wavelength, pitch, z) -> np.ndarray:
     yo = grid.coords(h, wavelength * z / (h * pitch))[:, None]
     xo = grid.coords(w, wavelength * z / (w * pitch))[None, :]
     k = 2 * np.pi / wavelength
-    phase = math.remainder(k * z, 2 * math.pi) + k * (xo**2 + yo**2) / (2 * z) \
+    phase = (
+        math.remainder(k * z, 2 * math.pi)
+        + k * (xo**2 + yo**2) / (2 * z)
         - np.pi * ((h - 1) ** 2 / (2 * h) + (w - 1) ** 2 / (2 * w))
+    )
     return centred_ramp(shape) * np.exp(1j * phase) * pitch**2 / (1j * wavelength * z)
 
 
@@ -172,22 +207,27 @@ def fraunhofer(field, *, wavelength, pitch, distance):
     ((64, 64), 2.4727)
     """
     wavelength, pitch = grid.wave(wavelength, pitch)
-    z = validate.positive("distance", validate.within("distance", distance, validate.MAX_LENGTH),
-                          "m")
+    z = validate.positive(
+        "distance", validate.within("distance", distance, validate.MAX_LENGTH), "m"
+    )
     if not is_device_array(field):
         support = grid.support(validate.host_field("field", field))[0].shape
         extent = math.hypot(*support) * pitch
         if z < 2 * extent**2 / wavelength:
             validate.warn_sampling(
                 f"fraunhofer: distance {z:.4g} m is short of the far field of this field "
-                f"(2·D²/λ = {2 * extent**2 / wavelength:.4g} m); use fresnel or angular_spectrum")
+                f"(2·D²/λ = {2 * extent**2 / wavelength:.4g} m); use fresnel or angular_spectrum"
+            )
     rt, dev, from_host = as_device(field)
     h, w = dev.shape
     out_pitch = (wavelength * z / (w * pitch), wavelength * z / (h * pitch))
 
     pre, _ = cached(rt, ("centred-dft", (h, w)), lambda: (centred_ramp((h, w)), []))
-    post, _ = cached(rt, ("fraunhofer", (h, w), wavelength, pitch, z),
-                     lambda: (far_factor((h, w), wavelength, pitch, z), []))
+    post, _ = cached(
+        rt,
+        ("fraunhofer", (h, w), wavelength, pitch, z),
+        lambda: (far_factor((h, w), wavelength, pitch, z), []),
+    )
     out = copy(dev)
     multiply(rt, out, pre)
     rt.fft.forward(out)
@@ -198,14 +238,19 @@ def fraunhofer(field, *, wavelength, pitch, distance):
 def _fraunhofer_adjoint(field, *, wavelength, pitch, distance):
     """The far field's adjoint: from its grid back to the source grid of ``pitch`` [m]."""
     wavelength, pitch = grid.wave(wavelength, pitch)
-    z = validate.positive("distance", validate.within("distance", distance,
-                                                      validate.MAX_LENGTH), "m")
+    z = validate.positive(
+        "distance", validate.within("distance", distance, validate.MAX_LENGTH), "m"
+    )
     rt, dev, from_host = as_device(field)
     h, w = dev.shape
-    conj_pre, _ = cached(rt, ("centred-dft-adjoint", (h, w)),
-                         lambda: (centred_ramp((h, w)).conj(), []))
-    conj_post, _ = cached(rt, ("fraunhofer-adjoint", (h, w), wavelength, pitch, z),
-                          lambda: (far_factor((h, w), wavelength, pitch, z).conj(), []))
+    conj_pre, _ = cached(
+        rt, ("centred-dft-adjoint", (h, w)), lambda: (centred_ramp((h, w)).conj(), [])
+    )
+    conj_post, _ = cached(
+        rt,
+        ("fraunhofer-adjoint", (h, w), wavelength, pitch, z),
+        lambda: (far_factor((h, w), wavelength, pitch, z).conj(), []),
+    )
     out = copy(dev)
     multiply(rt, out, conj_post)
     rt.fft.backward(out)
@@ -222,7 +267,8 @@ def fraunhofer_adjoint(field, *, wavelength, pitch, distance):
     fraunhofer; ``wavelength``, ``distance`` [m] (scalars or arrays over a batch). Arrays
     (H, W) or (..., H, W), NumPy or device; complex64 like the input."""
     if isinstance(field, Field):
-        raise validate.InputError("fraunhofer_adjoint takes arrays: a Field carries the far "
-                                  "field's pitch, and the adjoint needs the source's")
-    return _batched_fraunhofer_adjoint(field, wavelength=wavelength, pitch=pitch,
-                                       distance=distance)
+        raise validate.InputError(
+            "fraunhofer_adjoint takes arrays: a Field carries the far "
+            "field's pitch, and the adjoint needs the source's"
+        )
+    return _batched_fraunhofer_adjoint(field, wavelength=wavelength, pitch=pitch, distance=distance)

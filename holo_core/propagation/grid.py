@@ -48,8 +48,9 @@ def smooth_len(n: int, primes) -> int:
     best = base ** max(0, math.ceil(math.log(max(n, 1), base)))
     products = [1]  # every product of the other primes below best
     for q in others:
-        products = [m * q**e for m in products for e in range(int(math.log(best, q)) + 2)
-                    if m * q**e < best]
+        products = [
+            m * q**e for m in products for e in range(int(math.log(best, q)) + 2) if m * q**e < best
+        ]
     for m in products:
         while m < n:
             m *= base
@@ -67,13 +68,12 @@ def support(field: np.ndarray):
     rows, cols = np.nonzero(field.any(axis=1))[0], np.nonzero(field.any(axis=0))[0]
     if rows.size == 0:
         return field[:1, :1], (0, 0)
-    return field[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1], (int(rows[0]), int(cols[0]))
+    return field[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1], (int(rows[0]), int(cols[0]))
 
 
 def wave(wavelength, pitch) -> tuple[float, float]:
     """Checked (wavelength [m], pitch [m])."""
-    return (validate.wavelength("wavelength", wavelength),
-            validate.pitch("pitch", pitch))
+    return (validate.wavelength("wavelength", wavelength), validate.pitch("pitch", pitch))
 
 
 def wave_pair(wavelength, pitch) -> tuple[float, tuple[float, float]]:

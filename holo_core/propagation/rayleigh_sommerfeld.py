@@ -21,13 +21,17 @@ from ..validate import InputError, shown
 from . import grid
 
 PROGRAM = associated(__file__)
+# the kernels' signatures as tables (their arguments in the .cl file's order)
+# fmt: off
 RS_DIRECT = kernel(PROGRAM, "rs_direct", out=BUFFER, src=BUFFER, h=int32, w=int32,
                    pitch=REAL, src_x0=REAL, src_y0=REAL, out_pitch=REAL, out_x0=REAL,
                    out_y0=REAL, z=REAL, k=REAL, sgn=REAL, gr=REAL, gi=REAL)
+# fmt: on
 
 
-def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0),
-                        out_shape=None, out_pitch=None):
+def rayleigh_sommerfeld(
+    field, *, wavelength, pitch, distance, offset=(0.0, 0.0), out_shape=None, out_pitch=None
+):
     """Propagate a field to any grid of the parallel plane at ``distance`` by direct summation.
 
     Parameters
@@ -84,9 +88,11 @@ def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0)
     wavelength, pitch = grid.wave(wavelength, pitch)
     z = validate.within("distance", distance, validate.MAX_LENGTH)
     if abs(z) < validate.MIN_LENGTH:
-        raise InputError(f"distance must be non-zero for rayleigh_sommerfeld, |distance| >= "
-                         f"{validate.MIN_LENGTH:g} m (the integral is singular on the source "
-                         f"plane); got {shown(distance)}")
+        raise InputError(
+            f"distance must be non-zero for rayleigh_sommerfeld, |distance| >= "
+            f"{validate.MIN_LENGTH:g} m (the integral is singular on the source "
+            f"plane); got {shown(distance)}"
+        )
     x0, y0 = validate.pair("offset", offset, "m", validate.MAX_LENGTH)
     out_pitch = pitch if out_pitch is None else validate.pitch("out_pitch", out_pitch)
     if not is_device_array(field):
@@ -99,15 +105,39 @@ def rayleigh_sommerfeld(field, *, wavelength, pitch, distance, offset=(0.0, 0.0)
     rt, src, from_host = as_device(field)
     out_x0 = x0 - (out_shape[1] - 1) / 2 * out_pitch
     out_y0 = y0 - (out_shape[0] - 1) / 2 * out_pitch
-    _check_aliasing(src.shape, pitch, (src_x0, src_y0), out_shape, out_pitch, (out_x0, out_y0),
-                    wavelength, abs(z))
+    _check_aliasing(
+        src.shape,
+        pitch,
+        (src_x0, src_y0),
+        out_shape,
+        out_pitch,
+        (out_x0, out_y0),
+        wavelength,
+        abs(z),
+    )
     k, sgn = 2 * math.pi / wavelength, math.copysign(1.0, z)
     g = pitch**2 * np.exp(1j * math.remainder(sgn * k * abs(z), 2 * math.pi))
     out = empty(rt, out_shape)
-    RS_DIRECT.launch(rt, out_shape, options=rt.real_options, out=out, src=src, h=src.shape[0],
-                     w=src.shape[1], pitch=pitch, src_x0=src_x0, src_y0=src_y0,
-                     out_pitch=out_pitch, out_x0=out_x0, out_y0=out_y0, z=abs(z), k=k,
-                     sgn=sgn, gr=g.real, gi=g.imag)
+    RS_DIRECT.launch(
+        rt,
+        out_shape,
+        options=rt.real_options,
+        out=out,
+        src=src,
+        h=src.shape[0],
+        w=src.shape[1],
+        pitch=pitch,
+        src_x0=src_x0,
+        src_y0=src_y0,
+        out_pitch=out_pitch,
+        out_x0=out_x0,
+        out_y0=out_y0,
+        z=abs(z),
+        k=k,
+        sgn=sgn,
+        gr=g.real,
+        gi=g.imag,
+    )
     return like_input(out, from_host)
 
 
@@ -116,13 +146,18 @@ def _check_aliasing(shape, pitch, src0, out_shape, out_pitch, out0, wavelength, 
     sin_max = wavelength / (2 * pitch)  # the steepest ray the source pitch samples
     if sin_max >= 1:
         return
-    span = [max(abs(o + (m - 1) * op - s), abs(o - s - (n - 1) * pitch))
-            for o, m, op, s, n in ((out0[0], out_shape[1], out_pitch, src0[0], shape[1]),
-                                   (out0[1], out_shape[0], out_pitch, src0[1], shape[0]))]
+    span = [
+        max(abs(o + (m - 1) * op - s), abs(o - s - (n - 1) * pitch))
+        for o, m, op, s, n in (
+            (out0[0], out_shape[1], out_pitch, src0[0], shape[1]),
+            (out0[1], out_shape[0], out_pitch, src0[1], shape[0]),
+        )
+    ]
     rho = math.hypot(*span)
     z_min = rho * math.sqrt(1 / sin_max**2 - 1)
     if z < z_min:
         validate.warn_sampling(
             f"rayleigh_sommerfeld: at |distance| = {z:.4g} m the impulse response is aliased at "
             f"lateral separations up to {rho:.4g} m; this grid needs |distance| >= {z_min:.4g} m "
-            f"or a pitch <= {wavelength * math.hypot(rho, z) / (2 * rho):.4g} m")
+            f"or a pitch <= {wavelength * math.hypot(rho, z) / (2 * rho):.4g} m"
+        )

@@ -23,8 +23,10 @@ from ..opencl.kernel import BUFFER, kernel
 from . import grid
 
 PROGRAM = associated(__file__)
-APPLY_AXIS0, APPLY_AXIS1 = (kernel(PROGRAM, name, out=BUFFER, K=BUFFER, src=BUFFER,
-                                   n_in=int32) for name in ("apply_axis0", "apply_axis1"))
+APPLY_AXIS0, APPLY_AXIS1 = (
+    kernel(PROGRAM, name, out=BUFFER, K=BUFFER, src=BUFFER, n_in=int32)
+    for name in ("apply_axis0", "apply_axis1")
+)
 
 
 def resample(field, *, pitch, out_shape, out_pitch):
@@ -127,8 +129,11 @@ def interpolation_matrix(n: int, pitch: float, n_out: int, out_pitch: float) -> 
         k = np.where(small, 2.0 * m, np.sin(2 * m * theta) * c / s_safe)
     else:
         m = math.floor(cut)
-        k = np.where(small, (2.0 * m + 1) * np.cos((2 * m + 1) * theta) / np.where(small, c, 1),
-                     np.sin((2 * m + 1) * theta) / s_safe)
+        k = np.where(
+            small,
+            (2.0 * m + 1) * np.cos((2 * m + 1) * theta) / np.where(small, c, 1),
+            np.sin((2 * m + 1) * theta) / s_safe,
+        )
     k /= n
     inside = np.abs(grid.coords(n_out, out_pitch)) <= n * pitch / 2 * (1 + 1e-12)
     return k * inside[:, None]

@@ -27,8 +27,9 @@ from . import grid
 MAX_SAMPLES = 2**26  # padded samples (1 GiB of complex128), at most
 
 
-def scaled(field, *, transfer, name, wavelength, pitch, distance, offset, padding, out_pitch,
-           out_shape):
+def scaled(
+    field, *, transfer, name, wavelength, pitch, distance, offset, padding, out_pitch, out_shape
+):
     """The propagation of ``field`` (H, W) by the transfer function ``transfer(shape,
     wavelength, pitch (x, y), distance, offset) -> complex128`` (FFT order) to ``distance``
     [m], centred at ``offset`` (x0, y0) [m], on ``out_shape`` (rows, cols) samples of
@@ -44,28 +45,51 @@ def scaled(field, *, transfer, name, wavelength, pitch, distance, offset, paddin
     u = field.get() if on_device else field
     u = validate.host_field("field", u).astype(np.complex128)
     h, w = u.shape
-    oh, ow = (max(1, round(h * py / opy)), max(1, round(w * px / opx))) if out_shape is None \
+    oh, ow = (
+        (max(1, round(h * py / opy)), max(1, round(w * px / opx)))
+        if out_shape is None
         else validate.shape2d("out_shape", out_shape)
-    memory.check_host(f"{name} onto {oh}x{ow} samples", 16.0 * 6 * max(
-        h * w, oh * ow) * padding * padding)
-    extent = [max(n * p, 2 * abs(o) + m * q) for n, p, o, m, q in
-              ((h, py, y0, oh, opy), (w, px, x0, ow, opx))]
-    shape = tuple(grid.next_fast_len(math.ceil(padding * e / p - 1e-9))
-                  for e, p in zip(extent, (py, px)))
+    )
+    memory.check_host(
+        f"{name} onto {oh}x{ow} samples", 16.0 * 6 * max(h * w, oh * ow) * padding * padding
+    )
+    extent = [
+        max(n * p, 2 * abs(o) + m * q)
+        for n, p, o, m, q in ((h, py, y0, oh, opy), (w, px, x0, ow, opx))
+    ]
+    shape = tuple(
+        grid.next_fast_len(math.ceil(padding * e / p - 1e-9)) for e, p in zip(extent, (py, px))
+    )
     if math.prod(shape) > MAX_SAMPLES:
-        raise validate.InputError(f"out_shape and offset need a padded grid of {shape[0]}x"
-                                  f"{shape[1]} samples at the input pitch; at most "
-                                  f"{MAX_SAMPLES} (bring the window nearer the source)")
+        raise validate.InputError(
+            f"out_shape and offset need a padded grid of {shape[0]}x"
+            f"{shape[1]} samples at the input pitch; at most "
+            f"{MAX_SAMPLES} (bring the window nearer the source)"
+        )
     pitch, offset = (px, py), (x0, y0)
     r0, c0 = (shape[0] - h) // 2, (shape[1] - w) // 2
     big = np.zeros(shape, np.complex128)
-    big[r0:r0 + h, c0:c0 + w] = u
+    big[r0 : r0 + h, c0 : c0 + w] = u
     spectrum = np.fft.fft2(big) * transfer(shape, wavelength, pitch, distance, offset)
     # each output axis: fractional indices a + j·b on the padded grid (its centre the offset)
-    rows = _czt(spectrum, 0, r0 + (h - 1) / 2 - (oh - 1) / 2 * opy / py, opy / py, oh,
-                1 / (2 * opy) if opy > py else None, py)
-    out = _czt(rows, 1, c0 + (w - 1) / 2 - (ow - 1) / 2 * opx / px, opx / px, ow,
-               1 / (2 * opx) if opx > px else None, px)
+    rows = _czt(
+        spectrum,
+        0,
+        r0 + (h - 1) / 2 - (oh - 1) / 2 * opy / py,
+        opy / py,
+        oh,
+        1 / (2 * opy) if opy > py else None,
+        py,
+    )
+    out = _czt(
+        rows,
+        1,
+        c0 + (w - 1) / 2 - (ow - 1) / 2 * opx / px,
+        opx / px,
+        ow,
+        1 / (2 * opx) if opx > px else None,
+        px,
+    )
     out = (out / (shape[0] * shape[1])).astype(np.complex64)
     return to_device(out) if on_device else out
 
@@ -87,6 +111,6 @@ def _czt(spectrum, axis, a, b, count, cut, pitch) -> np.ndarray:
     n = np.arange(-(p - 1), count)
     kernel = turn(-beta * n * n / 2)
     size = grid.next_fast_len(p + count - 1)
-    conv = np.fft.ifft(np.fft.fft(x, size) * np.fft.fft(kernel, size))[..., p - 1:p - 1 + count]
+    conv = np.fft.ifft(np.fft.fft(x, size) * np.fft.fft(kernel, size))[..., p - 1 : p - 1 + count]
     out = conv * turn(beta * j * j / 2 + k0 * (a + b * j) / p)
     return np.moveaxis(out, -1, axis)

@@ -29,18 +29,30 @@ from .convolution import multiply
 
 PROGRAM = associated(__file__)
 _ROTATION = {f"m{i}{j}": REAL for i in range(3) for j in range(3)}  # its rows
+# the kernels' signatures as tables (their arguments in the .cl file's order)
+# fmt: off
 ROTATE_SPECTRUM = kernel(PROGRAM, "rotate_spectrum", dst=BUFFER, A=BUFFER, hs=int32,
                          ws=int32, ht=int32, wt=int32, dft_y=REAL, dft_x=REAL,
                          dfs_y=REAL, dfs_x=REAL, inv_l2=REAL, **_ROTATION, ct_y=REAL,
                          ct_x=REAL, scale=float32, es=BUFFER)
+# fmt: on
 
-TAPS = 6                # spectrum interpolation taps per axis (error ~10^-(TAPS-1) at padding 2)
-ES_BETA = 2.30          # the kernel's shape per tap for 2x oversampling (Barnett et al. 2019)
-ES_TABLE = 4096         # kernel samples, linearly interpolated (error ~1e-6)
+TAPS = 6  # spectrum interpolation taps per axis (error ~10^-(TAPS-1) at padding 2)
+ES_BETA = 2.30  # the kernel's shape per tap for 2x oversampling (Barnett et al. 2019)
+ES_TABLE = 4096  # kernel samples, linearly interpolated (error ~1e-6)
 
 
-def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_pitch=None,
-         out_padding=None):
+def tilt(
+    field,
+    *,
+    wavelength,
+    pitch,
+    rotation,
+    padding=2,
+    out_shape=None,
+    out_pitch=None,
+    out_padding=None,
+):
     """Propagate a field to the plane through the source centre with orientation ``rotation``.
 
     Parameters
@@ -101,13 +113,16 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     out_pitch = pitch if out_pitch is None else validate.pitch("out_pitch", out_pitch)
     angle, reach = math.acos(np.clip(m[2, 2], -1, 1)), tilt_reach(wavelength, pitch, out_pitch)
     if angle >= reach:  # the result would be zero whatever the field: say so instead
-        raise InputError(f"rotation tilts the target plane by {math.degrees(angle):.1f}°; "
-                         f"light sampled at pitch {pitch:.3g} m and out_pitch {out_pitch:.3g} m "
-                         f"(λ = {wavelength:.3g} m) reaches planes tilted by less than "
-                         f"{math.degrees(reach):.1f}°")
+        raise InputError(
+            f"rotation tilts the target plane by {math.degrees(angle):.1f}°; "
+            f"light sampled at pitch {pitch:.3g} m and out_pitch {out_pitch:.3g} m "
+            f"(λ = {wavelength:.3g} m) reaches planes tilted by less than "
+            f"{math.degrees(reach):.1f}°"
+        )
     hs, ws = grid.padded_shape(src.shape, padding)
-    ht, wt = grid.padded_shape(out_shape, padding if out_padding is None else
-                               grid.padding_factor(out_padding))
+    ht, wt = grid.padded_shape(
+        out_shape, padding if out_padding is None else grid.padding_factor(out_padding)
+    )
     spectrum = rt.scratch("tilt-source", (hs, ws))
     (r0, c0), (t0, u0) = _corner(src.shape, (hs, ws)), _corner(out_shape, (ht, wt))
     lies = ((r0, r0 + src.shape[0]),), ((c0, c0 + src.shape[1]),)  # where the source is
@@ -120,11 +135,26 @@ def tilt(field, *, wavelength, pitch, rotation, padding=2, out_shape=None, out_p
     target = empty(rt, (ht, wt))
     options = rt.real_options + (f"-DTAPS={TAPS}", f"-DES_TABLE={ES_TABLE}")
     ROTATE_SPECTRUM.launch(
-        rt, by_rows((ht, wt)), options=options, dst=target, A=spectrum, hs=hs, ws=ws, ht=ht,
-        wt=wt, dft_y=1 / (ht * out_pitch), dft_x=1 / (wt * out_pitch), dfs_y=1 / (hs * pitch),
-        dfs_x=1 / (ws * pitch), inv_l2=1 / wavelength**2, **dict(zip(_ROTATION, m.ravel())),
-        ct_y=(t0 + (out_shape[0] - 1) / 2) / ht, ct_x=(u0 + (out_shape[1] - 1) / 2) / wt,
-        scale=pitch**2 / (out_pitch**2 * ht * wt), es=cached_array(rt, "es-table", es_table))
+        rt,
+        by_rows((ht, wt)),
+        options=options,
+        dst=target,
+        A=spectrum,
+        hs=hs,
+        ws=ws,
+        ht=ht,
+        wt=wt,
+        dft_y=1 / (ht * out_pitch),
+        dft_x=1 / (wt * out_pitch),
+        dfs_y=1 / (hs * pitch),
+        dfs_x=1 / (ws * pitch),
+        inv_l2=1 / wavelength**2,
+        **dict(zip(_ROTATION, m.ravel())),
+        ct_y=(t0 + (out_shape[0] - 1) / 2) / ht,
+        ct_x=(u0 + (out_shape[1] - 1) / 2) / wt,
+        scale=pitch**2 / (out_pitch**2 * ht * wt),
+        es=cached_array(rt, "es-table", es_table),
+    )
     rt.fft.backward(target, read=((u0, u0 + out_shape[1]),))
     return like_input(window(rt, target, out_shape, t0, u0), from_host)
 
@@ -158,9 +188,11 @@ def cached_array(rt, name, make, *args):
 def es_profile(rt, n: int, taps=TAPS, *, inverse=False):
     """:func:`es_transform` at the n signed indices of a grid oversampled twice (index/(2n)),
     or its inverse: a device float32 array (n,) in FFT order, made once per runtime."""
+
     def make():
         t = es_transform(grid.signed_indices(n) / (2 * n), taps)
         return rt.to_device(1 / t if inverse else t, np.float32), None
+
     return cached(rt, ("es-profile", n, taps, inverse), make)[0]
 
 
@@ -188,8 +220,9 @@ def _corner(shape, padded):
     return (padded[0] - shape[0]) // 2, (padded[1] - shape[1]) // 2
 
 
-def propagate_to_plane(field, *, wavelength, pitch, rotation, position, padding=2,
-                       out_shape=None, out_pitch=None):
+def propagate_to_plane(
+    field, *, wavelength, pitch, rotation, position, padding=2, out_shape=None, out_pitch=None
+):
     """Propagate a field to a placed plane: tilt first, then propagate with offset.
 
     Parameters
@@ -239,10 +272,18 @@ def propagate_to_plane(field, *, wavelength, pitch, rotation, position, padding=
     if out_shape is not None or out_pitch is not None or not np.allclose(m, np.eye(3), atol=1e-12):
         # also without a tilt: the interpolated spectrum places a small field in a large grid
         # without the wrap-around of resampling on the small grid
-        tilted = tilt(tilted, wavelength=wavelength, pitch=pitch, rotation=m, padding=padding,
-                      out_shape=out_shape, out_pitch=out_pitch)
+        tilted = tilt(
+            tilted,
+            wavelength=wavelength,
+            pitch=pitch,
+            rotation=m,
+            padding=padding,
+            out_shape=out_shape,
+            out_pitch=out_pitch,
+        )
         pitch = out_pitch or pitch
     if z != 0 or x0 != 0 or y0 != 0:
-        tilted = angular_spectrum(tilted, wavelength=wavelength, pitch=pitch, distance=z,
-                                  offset=(x0, y0), padding=padding)
+        tilted = angular_spectrum(
+            tilted, wavelength=wavelength, pitch=pitch, distance=z, offset=(x0, y0), padding=padding
+        )
     return like_input(tilted, from_host)

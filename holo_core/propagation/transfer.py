@@ -29,6 +29,8 @@ from ..validate import InputError
 from . import grid
 
 PROGRAM = associated(__file__)
+# the kernels' signatures as tables (their arguments in the .cl file's order)
+# fmt: off
 ASM_TRANSFER = kernel(PROGRAM, "asm_transfer", t=BUFFER, dfy=float64, dfx=float64,
                       inv_l=float64, z=float64, c=float64, x0=float64, y0=float64,
                       half_y=float64, half_x=float64, band=int32, edge=float32, scale=float32)
@@ -41,6 +43,7 @@ ASM_TRANSFER_CHIRP = kernel(
     rx=BUFFER, shifted=int32, quadrant=int32, h=int32, w=int32, gw=int32, z_hi=float32,
     z_lo=float32, c=float32, dfy=float32, dfx=float32, x0=float32, y0=float32,
     half_y=float32, half_x=float32, band=int32, edge=float32, scale=float32)
+# fmt: on
 BAND_EDGE = 0.2  # fraction of the band-limited ray range given to the cosine roll-off
 
 
@@ -49,8 +52,20 @@ def quadrant_shape(shape) -> tuple[int, int]:
     return shape[0] // 2 + 1, shape[1] // 2 + 1
 
 
-def asm_transfer(rt, shape, *, wavelength, pitch, distance, offset, band_limit, edge,
-                 split=None, quadrant=False, out=None):
+def asm_transfer(
+    rt,
+    shape,
+    *,
+    wavelength,
+    pitch,
+    distance,
+    offset,
+    band_limit,
+    edge,
+    split=None,
+    quadrant=False,
+    out=None,
+):
     """The band-limited angular spectrum's transfer function on the padded ``shape`` (FFT
     order), times 1/(H·W), as a complex64 device array. ``pitch`` (x, y) [m], ``wavelength``,
     ``distance``, ``offset`` [m]; ``edge`` the band's roll-off fraction; ``split=False`` takes
@@ -64,18 +79,43 @@ def asm_transfer(rt, shape, *, wavelength, pitch, distance, offset, band_limit, 
     carrier = math.remainder(2 * math.pi * distance / wavelength, 2 * math.pi)
     half = (h * py / 2, w * px / 2)
     if split is not False:
-        return _from_chirp(rt, shape, wavelength, pitch, distance, offset, band_limit,
-                           edge, carrier, half, quadrant, out)
+        return _from_chirp(
+            rt,
+            shape,
+            wavelength,
+            pitch,
+            distance,
+            offset,
+            band_limit,
+            edge,
+            carrier,
+            half,
+            quadrant,
+            out,
+        )
     out = _output(rt, out, shape)
-    ASM_TRANSFER.launch(rt, (w, h), options=rt.real_options, t=out, dfy=1 / (h * py),
-                        dfx=1 / (w * px), inv_l=1 / wavelength, z=distance, c=carrier, x0=x0,
-                        y0=y0, half_y=half[0], half_x=half[1], band=bool(band_limit),
-                        edge=edge, scale=1 / (h * w))
+    ASM_TRANSFER.launch(
+        rt,
+        (w, h),
+        options=rt.real_options,
+        t=out,
+        dfy=1 / (h * py),
+        dfx=1 / (w * px),
+        inv_l=1 / wavelength,
+        z=distance,
+        c=carrier,
+        x0=x0,
+        y0=y0,
+        half_y=half[0],
+        half_x=half[1],
+        band=bool(band_limit),
+        edge=edge,
+        scale=1 / (h * w),
+    )
     return out
 
 
-def fresnel_transfer(rt, shape, *, wavelength, pitch, distance, offset, quadrant=False,
-                     out=None):
+def fresnel_transfer(rt, shape, *, wavelength, pitch, distance, offset, quadrant=False, out=None):
     """The Fresnel transfer function (see :func:`~holo_core.propagation.fresnel.fresnel`) on
     the device, times 1/(H·W) (its first quadrant only with ``quadrant``, offset (0, 0)), into
     ``out`` if given; None where the device lacks float64 (the host makes it)."""
@@ -86,11 +126,26 @@ def fresnel_transfer(rt, shape, *, wavelength, pitch, distance, offset, quadrant
     carrier = math.remainder(2 * math.pi * distance / wavelength, 2 * math.pi)
     made = quadrant_shape(shape) if quadrant else shape
     out = _output(rt, out, made)
-    FRESNEL_TRANSFER.launch(rt, by_rows(made), options=rt.real_options, t=out,
-                            quadrant=bool(quadrant), h=h, w=w, gw=made[1], dfy=1 / (h * py),
-                            dfx=1 / (w * px), lam=wavelength, z=distance, c=carrier,
-                            x0=offset[0], y0=offset[1], half_y=h * py / 2, half_x=w * px / 2,
-                            scale=1 / (h * w))
+    FRESNEL_TRANSFER.launch(
+        rt,
+        by_rows(made),
+        options=rt.real_options,
+        t=out,
+        quadrant=bool(quadrant),
+        h=h,
+        w=w,
+        gw=made[1],
+        dfy=1 / (h * py),
+        dfx=1 / (w * px),
+        lam=wavelength,
+        z=distance,
+        c=carrier,
+        x0=offset[0],
+        y0=offset[1],
+        half_y=h * py / 2,
+        half_x=w * px / 2,
+        scale=1 / (h * w),
+    )
     return out
 
 
@@ -113,24 +168,53 @@ def chirp_table(shape, wavelength, pitch) -> tuple[np.ndarray, np.ndarray]:
 _chirp_table = functools.lru_cache(maxsize=1)(chirp_table)  # its two parts are cached apart
 
 
-def _from_chirp(rt, shape, wavelength, pitch, distance, offset, band_limit, edge, carrier,
-                half, quadrant, out):
+def _from_chirp(
+    rt, shape, wavelength, pitch, distance, offset, band_limit, edge, carrier, half, quadrant, out
+):
     h, w = shape
     made = quadrant_shape(shape) if quadrant else shape
     out = _output(rt, out, made)
     px, py = pitch
     x0, y0 = offset
-    table = [cached(rt, ("asm-chirp", part, shape, wavelength, pitch), lambda part=part: (
-        rt.to_device(_chirp_table(shape, wavelength, pitch)[part]), []))[0] for part in (0, 1)]
+    table = [
+        cached(
+            rt,
+            ("asm-chirp", part, shape, wavelength, pitch),
+            lambda part=part: (rt.to_device(_chirp_table(shape, wavelength, pitch)[part]), []),
+        )[0]
+        for part in (0, 1)
+    ]
     ry, _ = cached(rt, ("ramp", h, py, y0), lambda: (_ramp(h, py, y0), []))
     rx, _ = cached(rt, ("ramp", w, px, x0), lambda: (_ramp(w, px, x0), []))
     z_hi = np.float32(distance)
     z_lo = np.float32(distance - float(z_hi))
     ASM_TRANSFER_CHIRP.launch(
-        rt, by_rows(made), t=out, g=table[0], inv_fz=table[1], qw=w // 2 + 1, ry=ry, rx=rx,
-        shifted=x0 != 0 or y0 != 0, quadrant=bool(quadrant), h=h, w=w, gw=made[1], z_hi=z_hi,
-        z_lo=z_lo, c=carrier, dfy=1 / (h * py), dfx=1 / (w * px), x0=x0, y0=y0,
-        half_y=half[0], half_x=half[1], band=bool(band_limit), edge=edge, scale=1 / (h * w))
+        rt,
+        by_rows(made),
+        t=out,
+        g=table[0],
+        inv_fz=table[1],
+        qw=w // 2 + 1,
+        ry=ry,
+        rx=rx,
+        shifted=x0 != 0 or y0 != 0,
+        quadrant=bool(quadrant),
+        h=h,
+        w=w,
+        gw=made[1],
+        z_hi=z_hi,
+        z_lo=z_lo,
+        c=carrier,
+        dfy=1 / (h * py),
+        dfx=1 / (w * px),
+        x0=x0,
+        y0=y0,
+        half_y=half[0],
+        half_x=half[1],
+        band=bool(band_limit),
+        edge=edge,
+        scale=1 / (h * w),
+    )
     return out
 
 
@@ -140,8 +224,9 @@ def _output(rt, out, shape):
     if out is None:
         return empty(rt, shape)
     if tuple(out.shape) != tuple(shape) or out.dtype != np.complex64:
-        raise InputError(f"out must be complex64 of {tuple(shape)}; got {out.dtype} of "
-                         f"{tuple(out.shape)}")
+        raise InputError(
+            f"out must be complex64 of {tuple(shape)}; got {out.dtype} of {tuple(out.shape)}"
+        )
     return out
 
 
@@ -152,6 +237,7 @@ def _ramp(n, pitch, x0) -> np.ndarray:
 
 
 # --- on the host, in float64 ------------------------------------------------------------------
+
 
 def transfer_function(shape, *, wavelength, pitch, distance, offset=(0.0, 0.0), band_limit=True):
     """The angular spectrum's transfer function on a grid, float64 on the host.
@@ -204,8 +290,11 @@ def transfer_function(shape, *, wavelength, pitch, distance, offset=(0.0, 0.0), 
     keep = fz2 > 0
     fz = np.sqrt(np.where(keep, fz2, 1.0))
     carrier = math.remainder(2 * math.pi * distance / wavelength, 2 * math.pi)
-    phase = carrier - 2 * np.pi * distance * f2 / (1.0 / wavelength + fz) \
+    phase = (
+        carrier
+        - 2 * np.pi * distance * f2 / (1.0 / wavelength + fz)
         + 2 * np.pi * (fx * x0 + fy * y0)
+    )
     if band_limit:
         keep = keep * band_mask(shape, pitch, distance, offset, fx, fy, fz)
     return keep * np.exp(1j * phase)
@@ -231,6 +320,7 @@ def fresnel_transfer_host(shape, wavelength, pitch, distance, offset) -> np.ndar
     fy, fx = grid.freqs(shape[0], py)[:, None], grid.freqs(shape[1], px)[None, :]
     carrier = math.remainder(2 * math.pi * z / wavelength, 2 * math.pi)
     phase = carrier - np.pi * wavelength * z * (fx**2 + fy**2) + 2 * np.pi * (fx * x0 + fy * y0)
-    keep = (np.abs(x0 - wavelength * z * fx) <= shape[1] * px / 2) \
-        & (np.abs(y0 - wavelength * z * fy) <= shape[0] * py / 2)
+    keep = (np.abs(x0 - wavelength * z * fx) <= shape[1] * px / 2) & (
+        np.abs(y0 - wavelength * z * fy) <= shape[0] * py / 2
+    )
     return np.where(keep, np.exp(1j * phase), 0)

@@ -16,4 +16,13 @@ from .hologram import Hologram
 from .mesh import Mesh, sample_points
 from .plate import Plate, ViewingZone
 
-__all__ = ["Camera", "Field", "Hologram", "Mesh", "Plate", "ViewingZone", "look_at", "sample_points"]
+__all__ = [
+    "Camera",
+    "Field",
+    "Hologram",
+    "Mesh",
+    "Plate",
+    "ViewingZone",
+    "look_at",
+    "sample_points",
+]

@@ -82,9 +82,11 @@ class Camera:
         if m.shape != (4, 4) or not np.isfinite(m).all():
             raise InputError(f"matrix_world must be a finite 4x4 matrix; got shape {m.shape}")
         if np.linalg.cond(m[:3, :3]) > 1e12 or not np.array_equal(m[3], [0, 0, 0, 1]):
-            raise InputError("matrix_world must be an invertible pose (rotation, positive "
-                             "scale, translation; bottom row 0 0 0 1); its 3x3 part is singular "
-                             "or its bottom row is not 0 0 0 1")
+            raise InputError(
+                "matrix_world must be an invertible pose (rotation, positive "
+                "scale, translation; bottom row 0 0 0 1); its 3x3 part is singular "
+                "or its bottom row is not 0 0 0 1"
+            )
         object.__setattr__(self, "matrix_world", m)
         for name in ("lens", "sensor_width", "sensor_height"):
             validate.positive(name, getattr(self, name), "mm")
@@ -100,8 +102,9 @@ class Camera:
             validate.positive("fstop", self.fstop)
             validate.positive("focus_distance", self.focus_distance, "m")
         elif self.focus_distance is not None:
-            raise InputError("focus_distance needs an fstop (None is a pinhole, focused "
-                             "everywhere)")
+            raise InputError(
+                "focus_distance needs an fstop (None is a pinhole, focused everywhere)"
+            )
 
     # -- pose ---------------------------------------------------------------------------------
     @property
@@ -146,14 +149,20 @@ class Camera:
         render cropped to its border)."""
         w, h = self.resolution
         if not (0 <= left < left + width <= w and 0 <= top < top + height <= h):
-            raise InputError(f"crop ({left}, {top}, {width}, {height}) must lie inside the "
-                             f"{w}x{h} image")
+            raise InputError(
+                f"crop ({left}, {top}, {width}, {height}) must lie inside the {w}x{h} image"
+            )
         s, dx, dy, ycor = self._plane()
         dx += left + width / 2 - w / 2
         dy += ycor * (h / 2 - top - height / 2)
-        return replace(self, resolution=(width, height), sensor_fit="HORIZONTAL",
-                       sensor_width=self.lens * width / s, shift_x=dx / width,
-                       shift_y=dy / width)
+        return replace(
+            self,
+            resolution=(width, height),
+            sensor_fit="HORIZONTAL",
+            sensor_width=self.lens * width / s,
+            shift_x=dx / width,
+            shift_y=dy / width,
+        )
 
     def pixel_tangents(self, rows=None, cols=None) -> tuple[np.ndarray, np.ndarray]:
         """View tangents (t_x, t_y) of the pixel centres, each (H, W); or of given continuous
@@ -183,8 +192,7 @@ class Camera:
         xy[depth <= 0] = np.nan
         return xy, depth
 
-    def direction_cosines(self, rows=None, cols=None) -> tuple[np.ndarray, np.ndarray,
-                                                               np.ndarray]:
+    def direction_cosines(self, rows=None, cols=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Eq. 22: (α, β, γ) per pixel (H, W) of the light arriving along each pixel's ray,
         in camera axes; or at given (rows, cols) positions (:meth:`pixel_tangents`)."""
         tx, ty = self.pixel_tangents(rows=rows, cols=cols)
@@ -197,8 +205,12 @@ class Camera:
         so a kernel finds any pixel's ray from these four numbers."""
         w, h = self.resolution
         s, dx, dy, ycor = self._plane()
-        return (0.5 - w / 2 + dx) / s, 1 / s, ((h - 0.5) * ycor - 0.5 * ycor * h + dy) / s, \
-            -ycor / s
+        return (
+            (0.5 - w / 2 + dx) / s,
+            1 / s,
+            ((h - 0.5) * ycor - 0.5 * ycor * h + dy) / s,
+            -ycor / s,
+        )
 
     def direction_range(self) -> tuple[np.ndarray, np.ndarray]:
         """((α, β) least, (α, β) greatest) of :meth:`direction_cosines` over the pixels, from
@@ -207,7 +219,7 @@ class Camera:
         w, h = self.resolution
         rows, cols = np.arange(h) + 0.5, np.arange(w) + 0.5
         edge_rows = np.concatenate([rows, rows, np.full(2 * w, 0.5)])
-        edge_rows[2 * h + w:] = h - 0.5
+        edge_rows[2 * h + w :] = h - 0.5
         edge_cols = np.concatenate([np.full(h, 0.5), np.full(h, w - 0.5), cols, cols])
         ab = np.stack(self.direction_cosines(rows=edge_rows, cols=edge_cols)[:2])
         return ab.min(1), ab.max(1)

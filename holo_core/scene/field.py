@@ -68,22 +68,30 @@ class Field:
                 raise InputError(f"samples must be numeric; got dtype {s.dtype}")
             object.__setattr__(self, "samples", s)
         if s.ndim < 2 or 0 in s.shape[-2:]:
-            raise InputError(f"samples must be (..., H, W) with H, W >= 1; got shape "
-                             f"{tuple(s.shape)}")
+            raise InputError(
+                f"samples must be (..., H, W) with H, W >= 1; got shape {tuple(s.shape)}"
+            )
         batch = tuple(s.shape[:-2])
-        lam = np.asarray(self.wavelength, np.float64) if not isinstance(self.wavelength, str) \
+        lam = (
+            np.asarray(self.wavelength, np.float64)
+            if not isinstance(self.wavelength, str)
             else None
+        )
         if lam is None or not _broadcasts(lam.shape, batch):
-            raise InputError(f"wavelength must be a number [m] or an array broadcast against "
-                             f"the batch shape {batch}; got {shown(self.wavelength)}"[:300])
+            raise InputError(
+                f"wavelength must be a number [m] or an array broadcast against "
+                f"the batch shape {batch}; got {shown(self.wavelength)}"[:300]
+            )
         for v in lam.reshape(-1):
             validate.wavelength("wavelength", v)
         object.__setattr__(self, "wavelength", float(lam) if lam.ndim == 0 else lam)
         object.__setattr__(self, "pitch", pitches(self.pitch))
         pose = np.asarray(self.pose, np.float64) if np.size(self.pose) else np.zeros(0)
         if pose.ndim < 2 or pose.shape[-2:] != (4, 4) or not _broadcasts(pose.shape[:-2], batch):
-            raise InputError(f"pose must be a (4, 4) plane-to-world matrix or one per batch "
-                             f"entry (..., 4, 4); got shape {pose.shape}")
+            raise InputError(
+                f"pose must be a (4, 4) plane-to-world matrix or one per batch "
+                f"entry (..., 4, 4); got shape {pose.shape}"
+            )
         for m in pose.reshape(-1, 4, 4):
             validate.rigid_pose("pose", m)
         object.__setattr__(self, "pose", pose)
@@ -139,8 +147,12 @@ class Field:
             raise InputError(f"index the batch axes {batch} with ints or slices; got {index!r}")
         ids = np.arange(int(np.prod(batch))).reshape(batch)[index]
         samples = self.samples[index]
-        return Field(samples=samples, wavelength=self.wavelengths().reshape(-1)[ids],
-                     pitch=self.pitch, pose=self.poses().reshape(-1, 4, 4)[ids])
+        return Field(
+            samples=samples,
+            wavelength=self.wavelengths().reshape(-1)[ids],
+            pitch=self.pitch,
+            pose=self.poses().reshape(-1, 4, 4)[ids],
+        )
 
     def __repr__(self) -> str:
         lam = np.unique(self.wavelengths()) if self.batch_shape else [self.wavelength]
@@ -149,8 +161,7 @@ class Field:
         pitch = preview.length(px) if px == py else f"{preview.length(px)} x {preview.length(py)}"
         batch = f"batch {'x'.join(map(str, self.batch_shape))} of " if self.batch_shape else ""
         h, w = self.shape
-        return (f"Field({batch}{h}x{w}, λ {lam}, pitch {pitch}, "
-                f"{preview.where(self.samples)})")
+        return f"Field({batch}{h}x{w}, λ {lam}, pitch {pitch}, {preview.where(self.samples)})"
 
     def _repr_png_(self) -> bytes:
         """A notebook's picture: |U| of the first plane, normalised, at most 512 px a side

@@ -1,5 +1,4 @@
-"""The hologram: recorded holograms of one scene, one per wavelength, with their optics.
-"""
+"""The hologram: recorded holograms of one scene, one per wavelength, with their optics."""
 
 from __future__ import annotations
 
@@ -71,24 +70,28 @@ class HologramInfo:
     def __post_init__(self):
         wavelengths = self.wavelengths
         if np.ndim(wavelengths) != 1 or not 1 <= len(wavelengths) <= MAX_CHANNELS:
-            raise InputError(f"wavelengths must be 1 to {MAX_CHANNELS} wavelengths [m]; "
-                             f"got {shown(wavelengths)}")
-        self._set("wavelengths", tuple(validate.wavelength("wavelengths", w)
-                                       for w in wavelengths))
+            raise InputError(
+                f"wavelengths must be 1 to {MAX_CHANNELS} wavelengths [m]; got {shown(wavelengths)}"
+            )
+        self._set("wavelengths", tuple(validate.wavelength("wavelengths", w) for w in wavelengths))
         self._set("pitch", validate.pitch("pitch", self.pitch))
         try:
             rows, cols = (validate.integer("shape", n, 0) for n in self.shape)
         except (TypeError, ValueError):
-            raise InputError(f"shape must be two integers >= 0 (rows, cols); got "
-                             f"{self.shape!r}"[:300]) from None
+            raise InputError(
+                f"shape must be two integers >= 0 (rows, cols); got {self.shape!r}"[:300]
+            ) from None
         self._set("shape", (rows, cols))
         validate.choice("encoding", self.encoding, ENCODINGS)
-        kept = self.encoding == "complex" if self.keeps_object_wave is None else \
-            self.keeps_object_wave
+        kept = (
+            self.encoding == "complex" if self.keeps_object_wave is None else self.keeps_object_wave
+        )
         if not isinstance(kept, (bool, np.bool_)) or (self.encoding == "complex" and not kept):
-            raise InputError(f"keeps_object_wave must be true or false (true for a complex "
-                             f"hologram: its samples are the object wave); got "
-                             f"{self.keeps_object_wave!r}")
+            raise InputError(
+                f"keeps_object_wave must be true or false (true for a complex "
+                f"hologram: its samples are the object wave); got "
+                f"{self.keeps_object_wave!r}"
+            )
         self._set("keeps_object_wave", bool(kept))
         self._check_channels()
         validate.digest("recording", self.recording)
@@ -96,10 +99,13 @@ class HologramInfo:
         self._check_optics()
         if self.zone is not None and not isinstance(self.zone, ViewingZone):
             raise InputError(f"zone must be a ViewingZone or None; got {type(self.zone).__name__}")
-        if self.carrier is not None and (not isinstance(self.carrier, Carrier)
-                                         or self.encoding != "complex"):
-            raise InputError(f"carrier must be a Carrier of a complex hologram, or None; got "
-                             f"{type(self.carrier).__name__} on an {self.encoding} hologram")
+        if self.carrier is not None and (
+            not isinstance(self.carrier, Carrier) or self.encoding != "complex"
+        ):
+            raise InputError(
+                f"carrier must be a Carrier of a complex hologram, or None; got "
+                f"{type(self.carrier).__name__} on an {self.encoding} hologram"
+            )
 
     def _set(self, name, value):
         object.__setattr__(self, name, value)
@@ -109,49 +115,64 @@ class HologramInfo:
         try:
             self._set("channels", tuple(self.channels or ()))
         except TypeError:
-            raise InputError(f"channels must be a sequence of {'/'.join(CHANNEL_ROLES)}; got "
-                             f"{self.channels!r}") from None
+            raise InputError(
+                f"channels must be a sequence of {'/'.join(CHANNEL_ROLES)}; got {self.channels!r}"
+            ) from None
         if not self.channels:
             names = ("R", "G", "B") if count == 3 else ("Y",) * MAX_CHANNELS
             self._set("channels", names[:count])
         if len(self.channels) != count or not all(c in CHANNEL_ROLES for c in self.channels):
-            raise InputError(f"channels must name each of the {count} wavelengths by one of "
-                             f"{'/'.join(CHANNEL_ROLES)}; got {self.channels!r}")
+            raise InputError(
+                f"channels must name each of the {count} wavelengths by one of "
+                f"{'/'.join(CHANNEL_ROLES)}; got {self.channels!r}"
+            )
         if "Z" in self.channels[:1]:
-            raise InputError("channels must begin with a colour channel (the depth pair's λ1); "
-                             f"got {self.channels!r}")
+            raise InputError(
+                "channels must begin with a colour channel (the depth pair's λ1); "
+                f"got {self.channels!r}"
+            )
 
     def _check_optics(self):
         angle = validate.finite("reference_angle", self.reference_angle, "rad")
         if not 0 <= angle < math.pi / 2:
-            raise InputError(f"reference_angle must be in [0, π/2) rad; got "
-                             f"{self.reference_angle!r}")
+            raise InputError(
+                f"reference_angle must be in [0, π/2) rad; got {self.reference_angle!r}"
+            )
         self._set("reference_angle", angle)
-        self._set("reference_azimuth",
-                  validate.finite("reference_azimuth", self.reference_azimuth, "rad"))
+        self._set(
+            "reference_azimuth", validate.finite("reference_azimuth", self.reference_azimuth, "rad")
+        )
         amplitudes, count = self.reference_amplitudes, len(self.wavelengths)
         try:  # R'·H / |R|² divides by them (Eq. 18)
             values = tuple(float(a) for a in amplitudes) if np.ndim(amplitudes) == 1 else None
         except (TypeError, ValueError):
             values = None
-        if values is None or len(values) not in (0, count) or \
-                not all(math.isfinite(a) and a > 0 for a in values):
-            raise InputError(f"reference_amplitudes must be {count} numbers > 0 (|R| per "
-                             f"wavelength) or none; got {amplitudes!r}"[:300])
+        if (
+            values is None
+            or len(values) not in (0, count)
+            or not all(math.isfinite(a) and a > 0 for a in values)
+        ):
+            raise InputError(
+                f"reference_amplitudes must be {count} numbers > 0 (|R| per "
+                f"wavelength) or none; got {amplitudes!r}"[:300]
+            )
         self._set("reference_amplitudes", values)
         band = validate.finite("band", self.band)
         if not 0 <= band < 1:
-            raise InputError(f"band must be in [0, 1) (sin θ of the object wave's cone; 0: "
-                             f"all); got {shown(self.band)}")
+            raise InputError(
+                f"band must be in [0, 1) (sin θ of the object wave's cone; 0: "
+                f"all); got {shown(self.band)}"
+            )
         self._set("band", band)
         try:
             bounds = np.asarray(self.bounds, np.float64)
         except (TypeError, ValueError):
             bounds = np.zeros(0)
-        if bounds.shape != (2, 3) or not np.isfinite(bounds).all() or \
-                (bounds[0] > bounds[1]).any():
-            raise InputError(f"bounds must be two finite corners (min, max) of (x, y, z) [m], "
-                             f"min <= max; got {shown(self.bounds)}")
+        if bounds.shape != (2, 3) or not np.isfinite(bounds).all() or (bounds[0] > bounds[1]).any():
+            raise InputError(
+                f"bounds must be two finite corners (min, max) of (x, y, z) [m], "
+                f"min <= max; got {shown(self.bounds)}"
+            )
         self._set("bounds", bounds)
         density = validate.finite("point_density", self.point_density, "1/m²")
         if density < 0:
@@ -177,14 +198,28 @@ class HologramInfo:
 
 
 # the fields a hologram's description holds beside its shape (which its samples give)
-DESCRIPTION = ("wavelengths", "pitch", "encoding", "reference_angle", "reference_azimuth",
-               "reference_amplitudes", "plate", "bounds", "band", "channels", "point_density",
-               "zone", "carrier", "recording")
+DESCRIPTION = (
+    "wavelengths",
+    "pitch",
+    "encoding",
+    "reference_angle",
+    "reference_azimuth",
+    "reference_amplitudes",
+    "plate",
+    "bounds",
+    "band",
+    "channels",
+    "point_density",
+    "zone",
+    "carrier",
+    "recording",
+)
 
 
 def _described(name):
-    return property(lambda self: getattr(self.info, name),
-                    doc=f"The hologram's {name} (:class:`HologramInfo`).")
+    return property(
+        lambda self: getattr(self.info, name), doc=f"The hologram's {name} (:class:`HologramInfo`)."
+    )
 
 
 @dataclass(frozen=True, eq=False, init=False)
@@ -233,21 +268,24 @@ class Hologram:
     object_wave: np.ndarray | None
     info: HologramInfo
 
-    def __init__(self, *, intensity=None, object_wave=None, info: HologramInfo | None = None,
-                 **description):
+    def __init__(
+        self, *, intensity=None, object_wave=None, info: HologramInfo | None = None, **description
+    ):
         unknown = set(description) - set(DESCRIPTION)
         if unknown:
             raise TypeError(f"Hologram() got unexpected keyword arguments {sorted(unknown)}")
         if info is not None and not isinstance(info, HologramInfo):
             raise InputError(f"info must be a HologramInfo; got {type(info).__name__}")
         encoding = description.get("encoding", "intensity" if info is None else info.encoding)
-        held, name = (intensity, "intensity") if encoding == "intensity" else \
-            (object_wave, "object_wave")
+        held, name = (
+            (intensity, "intensity") if encoding == "intensity" else (object_wave, "object_wave")
+        )
         if np.ndim(held) != 3:
-            raise InputError(f"{name} must be (C, H, W), one (H, W) image per wavelength, for "
-                             f"an {encoding} hologram; got shape {np.shape(held)}"[:300])
-        samples = {"shape": tuple(np.shape(held)[1:]),
-                   "keeps_object_wave": object_wave is not None}
+            raise InputError(
+                f"{name} must be (C, H, W), one (H, W) image per wavelength, for "
+                f"an {encoding} hologram; got shape {np.shape(held)}"[:300]
+            )
+        samples = {"shape": tuple(np.shape(held)[1:]), "keeps_object_wave": object_wave is not None}
         if info is None:
             info = HologramInfo(**samples, **description)
         else:  # a described hologram's samples change its description only where they differ
@@ -259,12 +297,16 @@ class Hologram:
         object.__setattr__(self, "info", info)
         count = len(info.wavelengths)
         if np.shape(held)[0] != count:
-            raise InputError(f"{name} must be (C, H, W) with C = {count} wavelengths for an "
-                             f"{encoding} hologram; got shape {np.shape(held)}")
+            raise InputError(
+                f"{name} must be (C, H, W) with C = {count} wavelengths for an "
+                f"{encoding} hologram; got shape {np.shape(held)}"
+            )
         for other, other_name in ((intensity, "intensity"), (object_wave, "object_wave")):
             if other is not None and np.shape(other) != np.shape(held):
-                raise InputError(f"{other_name} must be shaped as the {name} "
-                                 f"{np.shape(held)}; got {np.shape(other)}")
+                raise InputError(
+                    f"{other_name} must be shaped as the {name} "
+                    f"{np.shape(held)}; got {np.shape(other)}"
+                )
 
     wavelengths = _described("wavelengths")
     pitch = _described("pitch")
@@ -296,12 +338,16 @@ class Hologram:
         h, w = self.shape
         encoding = self.encoding
         count = len(self.wavelengths)
-        channels = (f"{count} channel{'s' * (count > 1)} {'/'.join(self.channels)} at "
-                    f"{preview.lengths(self.wavelengths)}")
+        channels = (
+            f"{count} channel{'s' * (count > 1)} {'/'.join(self.channels)} at "
+            f"{preview.lengths(self.wavelengths)}"
+        )
         parts = [f"{h}x{w}", channels, f"pitch {preview.length(self.pitch)}", encoding]
         if self.reference_angle:
-            parts.append(f"reference {self.reference_angle:.4g} rad at azimuth "
-                         f"{self.reference_azimuth:.4g} rad")
+            parts.append(
+                f"reference {self.reference_angle:.4g} rad at azimuth "
+                f"{self.reference_azimuth:.4g} rad"
+            )
         if self.object_wave is not None and encoding == "intensity":
             parts.append("object wave kept")
         if self.band:
@@ -313,8 +359,7 @@ class Hologram:
     def _repr_png_(self) -> bytes:
         """A notebook's picture: the intensity (|O|² of a complex hologram) of the R, G, B
         channels as colour, else of channel 0, normalised, at most 512 pixels a side."""
-        held = self.intensity if self.encoding == "intensity" \
-            else np.abs(self.object_wave) ** 2
+        held = self.intensity if self.encoding == "intensity" else np.abs(self.object_wave) ** 2
         rgb = [self.channels.index(c) for c in "RGB" if c in self.channels]
         if len(rgb) == 3:
             image = np.stack([preview.thumbnail(held[c]) for c in rgb], -1)

@@ -66,11 +66,15 @@ class Mesh:
             raise InputError(f"vertices must be a finite (V, 3) array [m]; got shape {v.shape}")
         t = np.asarray(self.triangles)
         if t.ndim != 2 or t.shape[1] != 3 or (t.size and t.dtype.kind not in "iu"):
-            raise InputError(f"triangles must be a (T, 3) array of integer vertex indices; got "
-                             f"shape {t.shape}, dtype {t.dtype}")
+            raise InputError(
+                f"triangles must be a (T, 3) array of integer vertex indices; got "
+                f"shape {t.shape}, dtype {t.dtype}"
+            )
         if not len(t):  # a stage would end in NumPy's reduction of an empty array
-            raise InputError(f"triangles must hold at least one triangle (a Mesh is a "
-                             f"surface); got none, with {len(v)} vertices")
+            raise InputError(
+                f"triangles must hold at least one triangle (a Mesh is a "
+                f"surface); got none, with {len(v)} vertices"
+            )
         if t.min() < 0 or t.max() >= len(v):
             bad = t[(t < 0) | (t >= len(v))][0]
             raise InputError(f"triangles must index vertices in [0, {len(v) - 1}]; got {bad}")
@@ -79,10 +83,11 @@ class Mesh:
         self._check_appearance(len(v))
         if self.motion is not None:
             m = _numbers("motion", self.motion, "a finite (K, V, 3) array [m], K >= 2")
-            if m.ndim != 3 or m.shape[0] < 2 or m.shape[1:] != v.shape or \
-                    not np.isfinite(m).all():
-                raise InputError(f"motion must be a finite (K, V, 3) array [m] with K >= 2 "
-                                 f"and V = {len(v)} vertices; got shape {m.shape}")
+            if m.ndim != 3 or m.shape[0] < 2 or m.shape[1:] != v.shape or not np.isfinite(m).all():
+                raise InputError(
+                    f"motion must be a finite (K, V, 3) array [m] with K >= 2 "
+                    f"and V = {len(v)} vertices; got shape {m.shape}"
+                )
             object.__setattr__(self, "motion", m.astype(np.float64, copy=False))
 
     def at_shutter(self, t: float) -> Mesh:
@@ -94,8 +99,13 @@ class Mesh:
         i = min(int(t * k), k - 1)
         f = t * k - i
         moved = (1 - f) * self.motion[i] + f * self.motion[i + 1]
-        return Mesh(vertices=moved, triangles=self.triangles, colours=self.colours,
-                    uvs=self.uvs, texture=self.texture)
+        return Mesh(
+            vertices=moved,
+            triangles=self.triangles,
+            colours=self.colours,
+            uvs=self.uvs,
+            texture=self.texture,
+        )
 
     def _check_appearance(self, count):
         """Colours (V, C) and a texture (h, w[, C]) of finite intensities >= 0; UVs (V, 2)."""
@@ -104,30 +114,44 @@ class Mesh:
             if value is None:
                 continue
             a = _numbers(name, value, f"a finite {shape} array")
-            ok = a.ndim == 2 and len(a) == count and a.shape[1] >= 1 if name != "texture" \
+            ok = (
+                a.ndim == 2 and len(a) == count and a.shape[1] >= 1
+                if name != "texture"
                 else a.ndim in (2, 3) and min(a.shape) >= 1
+            )
             if name == "uvs":
                 ok = ok and a.shape[1] == 2
             if not ok:
-                raise InputError(f"{name} must be a {shape} array (V = {count} vertices); got "
-                                 f"shape {a.shape}")
+                raise InputError(
+                    f"{name} must be a {shape} array (V = {count} vertices); got shape {a.shape}"
+                )
             if not np.isfinite(a).all() or (name != "uvs" and (a < 0).any()):
                 kind = "finite" if name == "uvs" else "finite intensities >= 0"
-                raise InputError(f"{name} must be {kind}; they hold NaN, infinite or "
-                                 f"negative values")
+                raise InputError(
+                    f"{name} must be {kind}; they hold NaN, infinite or negative values"
+                )
             object.__setattr__(self, name, a)
 
     def __repr__(self) -> str:
         """One line: counts, extent and appearance; no arrays."""
-        lo, hi = (self.vertices.min(0), self.vertices.max(0)) if len(self.vertices) else \
-            (np.zeros(3), np.zeros(3))
-        look = ("texture {}x{}".format(*self.texture.shape[:2]) if self.texture is not None
-                else f"{self.colours.shape[1]} colour channels" if self.colours is not None
-                else "no colours")
+        lo, hi = (
+            (self.vertices.min(0), self.vertices.max(0))
+            if len(self.vertices)
+            else (np.zeros(3), np.zeros(3))
+        )
+        look = (
+            "texture {}x{}".format(*self.texture.shape[:2])
+            if self.texture is not None
+            else f"{self.colours.shape[1]} colour channels"
+            if self.colours is not None
+            else "no colours"
+        )
         t, v = len(self.triangles), len(self.vertices)
         moving = "" if self.motion is None else f", moving ({len(self.motion)} steps)"
-        return (f"Mesh({t} triangle{'s' * (t != 1)}, {v} vert{'ices' if v != 1 else 'ex'}, extent "
-                f"{' x '.join(preview.length(e) for e in hi - lo)}, {look}{moving})")
+        return (
+            f"Mesh({t} triangle{'s' * (t != 1)}, {v} vert{'ices' if v != 1 else 'ex'}, extent "
+            f"{' x '.join(preview.length(e) for e in hi - lo)}, {look}{moving})"
+        )
 
     def areas(self) -> np.ndarray:
         a, b, c = (self.vertices[self.triangles[:, i]] for i in range(3))
@@ -148,13 +172,16 @@ def _numbers(name, value, allowed) -> np.ndarray:
     except (TypeError, ValueError):
         a = None
     if a is None or a.dtype.kind not in "iuf":
-        raise InputError(f"{name} must be {allowed}; got {type(value).__name__}"
-                         f"{'' if a is None else f' of dtype {a.dtype}'}")
+        raise InputError(
+            f"{name} must be {allowed}; got {type(value).__name__}"
+            f"{'' if a is None else f' of dtype {a.dtype}'}"
+        )
     return a
 
 
-def sample_points(mesh: Mesh, spacing: float, *, channels=3, seed=0, max_points=2_000_000,
-                  normals=False):
+def sample_points(
+    mesh: Mesh, spacing: float, *, channels=3, seed=0, max_points=2_000_000, normals=False
+):
     """Area-uniform random points on a mesh, one per ``spacing``² of surface on average.
 
     Parameters
@@ -244,7 +271,7 @@ def visible_from(camera, positions, spacing: float, normals=None) -> np.ndarray:
     xy, depth = camera.project(positions)
     w, h = camera.resolution
     footprint = camera.pixel_angle() * np.nanmin(np.where(depth > 0, depth, np.nan))
-    cell = max(1.0, 2 * spacing / footprint)         # a few points per cell
+    cell = max(1.0, 2 * spacing / footprint)  # a few points per cell
     cols, rows = math.ceil(w / cell), math.ceil(h / cell)
     inside = (depth > 0) & (xy[:, 0] >= 0) & (xy[:, 0] < w) & (xy[:, 1] >= 0) & (xy[:, 1] < h)
     keep = np.ones(len(depth), bool)
@@ -267,8 +294,9 @@ def visible_from(camera, positions, spacing: float, normals=None) -> np.ndarray:
     bound = reach.copy()
     for dr in (-1, 0, 1):
         for dc in (-1, 0, 1):
-            bound[1:-1, 1:-1] = np.minimum(bound[1:-1, 1:-1],
-                                           reach[1 + dr:rows + 1 + dr, 1 + dc:cols + 1 + dc])
+            bound[1:-1, 1:-1] = np.minimum(
+                bound[1:-1, 1:-1], reach[1 + dr : rows + 1 + dr, 1 + dc : cols + 1 + dc]
+            )
     keep[inside] = d <= bound[r, c] + 2 * spacing
     return keep
 

@@ -68,17 +68,22 @@ class ViewingZone:
         c = validate.vector("zone centre", self.centre, 3, "m")
         e = validate.vector("zone half_extents", self.half_extents, 3, "m")
         if (np.abs(c) > validate.MAX_LENGTH).any() or (e > validate.MAX_LENGTH).any():
-            raise InputError(f"the viewing zone must lie within {validate.MAX_LENGTH:g} m; got "
-                             f"centre {c.tolist()}, half_extents {e.tolist()}")
+            raise InputError(
+                f"the viewing zone must lie within {validate.MAX_LENGTH:g} m; got "
+                f"centre {c.tolist()}, half_extents {e.tolist()}"
+            )
         if (e < 0).any():
             raise InputError(f"zone half_extents must be >= 0 [m]; got {e.tolist()}")
         if c[2] - e[2] <= 0:
-            raise InputError(f"the viewing zone must lie in front of the plate (z > 0 in its "
-                             f"frame); it reaches z = {c[2] - e[2]:.4g} m")
+            raise InputError(
+                f"the viewing zone must lie in front of the plate (z > 0 in its "
+                f"frame); it reaches z = {c[2] - e[2]:.4g} m"
+            )
         pupil = validate.finite("zone pupil", self.pupil, "m")
         if not 0 <= pupil <= validate.MAX_LENGTH:
-            raise InputError(f"zone pupil must be in [0, {validate.MAX_LENGTH:g}] [m]; got "
-                             f"{self.pupil!r}")
+            raise InputError(
+                f"zone pupil must be in [0, {validate.MAX_LENGTH:g}] [m]; got {self.pupil!r}"
+            )
         object.__setattr__(self, "centre", tuple(map(float, c)))
         object.__setattr__(self, "half_extents", tuple(map(float, e)))
         object.__setattr__(self, "pupil", pupil)
@@ -88,8 +93,9 @@ class ViewingZone:
         object.__setattr__(self, "pixel", pixel)
 
     @classmethod
-    def around(cls, position, pupil: float = 0.0, margin: float = DEFAULT_ZONE_MARGIN,
-               pixel: float = 0.0):
+    def around(
+        cls, position, pupil: float = 0.0, margin: float = DEFAULT_ZONE_MARGIN, pixel: float = 0.0
+    ):
         """The zone covering a pupil of diameter ``pupil`` [m] centred at ``position`` (3,) [m]
         (the plate's frame), ``margin`` [m] beyond it in every direction (in depth too), for
         views of pixels ``pixel`` [rad]."""
@@ -99,23 +105,27 @@ class ViewingZone:
         pupil = validate.finite("pupil", pupil, "m")
         p = validate.vector("position", position, 3, "m")
         if p[2] <= 0:  # a zone behind the plate sees none of its light
-            raise InputError(f"position must be in front of the plate (z > 0 in its frame); "
-                             f"got ({p[0]:g}, {p[1]:g}, {p[2]:g}) m")
+            raise InputError(
+                f"position must be in front of the plate (z > 0 in its frame); "
+                f"got ({p[0]:g}, {p[1]:g}, {p[2]:g}) m"
+            )
         half = pupil / 2 + margin
         depth = min(margin, 0.5 * float(p[2]))  # never reaching the plate
         return cls(centre=tuple(p), half_extents=(half, half, depth), pupil=pupil, pixel=pixel)
 
     @classmethod
-    def fit(cls, positions, pupil: float = 0.0, margin: float = DEFAULT_ZONE_MARGIN,
-            pixel: float = 0.0):
+    def fit(
+        cls, positions, pupil: float = 0.0, margin: float = DEFAULT_ZONE_MARGIN, pixel: float = 0.0
+    ):
         """The smallest zone holding a pupil of diameter ``pupil`` [m] at every one of
         ``positions`` (N, 3) [m] (a shot's camera path, the plate's frame), ``margin`` [m]
         beyond it (in depth, at most half the nearest position's distance), for views of
         pixels ``pixel`` [rad]."""
         p = np.atleast_2d(validate.array("positions", positions, "(N, 3) positions [m]"))
         if p.ndim != 2 or p.shape[1] != 3 or not len(p) or not np.isfinite(p).all():
-            raise InputError(f"positions must be (N, 3) finite camera positions [m]; got "
-                             f"shape {p.shape}")
+            raise InputError(
+                f"positions must be (N, 3) finite camera positions [m]; got shape {p.shape}"
+            )
         margin = validate.finite("zone margin", margin, "m")
         if margin < 0:
             raise InputError(f"zone margin must be >= 0 [m]; got {shown(margin)}")
@@ -123,9 +133,12 @@ class ViewingZone:
         lo, hi = p.min(0), p.max(0)
         reach = pupil / 2 + margin
         depth = (hi[2] - lo[2]) / 2 + min(margin, 0.5 * float(lo[2]))
-        return cls(centre=tuple((lo + hi) / 2), half_extents=(
-            (hi[0] - lo[0]) / 2 + reach, (hi[1] - lo[1]) / 2 + reach, depth), pupil=pupil,
-            pixel=pixel)
+        return cls(
+            centre=tuple((lo + hi) / 2),
+            half_extents=((hi[0] - lo[0]) / 2 + reach, (hi[1] - lo[1]) / 2 + reach, depth),
+            pupil=pupil,
+            pixel=pixel,
+        )
 
     def corners(self) -> np.ndarray:
         """The box's eight corners (8, 3) [m] in the plate's frame."""
@@ -141,8 +154,10 @@ class ViewingZone:
 
     def describe(self) -> str:
         (x, y, z), (hx, hy, hz) = self.centre, self.half_extents
-        return (f"the box centred at ({x:.4g}, {y:.4g}, {z:.4g}) m in the plate's frame, "
-                f"±({hx:.4g}, {hy:.4g}, {hz:.4g}) m")
+        return (
+            f"the box centred at ({x:.4g}, {y:.4g}, {z:.4g}) m in the plate's frame, "
+            f"±({hx:.4g}, {hy:.4g}, {hz:.4g}) m"
+        )
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -163,19 +178,22 @@ class Carrier:
     def __post_init__(self):
         c = validate.vector("carrier centre", self.centre, 3, "m")
         if not c[2] > 0:
-            raise InputError(f"carrier centre must lie in front of the plate (z > 0 in its "
-                             f"frame) [m]; got {c.tolist()}")
+            raise InputError(
+                f"carrier centre must lie in front of the plate (z > 0 in its "
+                f"frame) [m]; got {c.tolist()}"
+            )
         o = validate.vector("carrier origin", self.origin, 2, "m")
         object.__setattr__(self, "centre", tuple(map(float, c)))
         object.__setattr__(self, "origin", tuple(map(float, o)))
-        object.__setattr__(self, "row_pitch", validate.pitch("carrier row_pitch",
-                                                             self.row_pitch))
+        object.__setattr__(self, "row_pitch", validate.pitch("carrier row_pitch", self.row_pitch))
 
     def coords(self, pitch: float, rows, cols) -> tuple[np.ndarray, np.ndarray]:
         """(x (cols,), y (rows,)) [m] of the samples ``rows`` and ``cols`` (index ranges or
         arrays) in the plate's frame, columns ``pitch`` [m] apart."""
-        return (self.origin[0] + np.asarray(cols, np.float64) * pitch,
-                self.origin[1] + np.asarray(rows, np.float64) * self.row_pitch)
+        return (
+            self.origin[0] + np.asarray(cols, np.float64) * pitch,
+            self.origin[1] + np.asarray(rows, np.float64) * self.row_pitch,
+        )
 
     def phase(self, wavelength: float, pitch: float, rows, cols) -> np.ndarray:
         """k·|x − c| reduced to [0, 2π) (rows, cols) float64 at the samples."""
@@ -237,10 +255,13 @@ class Plate:
         taken as a point) with ``margin`` [m] around it."""
         position = self.to_plate(camera.position[None])[0]
         if position[2] <= 0:
-            raise InputError(f"the camera must be in front of the plate (z > 0 in its frame) to "
-                             f"define its viewing zone; it is at z = {position[2]:.4g} m")
-        return ViewingZone.around(position, camera.aperture_diameter or 0.0, margin,
-                                  camera.pixel_angle())
+            raise InputError(
+                f"the camera must be in front of the plate (z > 0 in its frame) to "
+                f"define its viewing zone; it is at z = {position[2]:.4g} m"
+            )
+        return ViewingZone.around(
+            position, camera.aperture_diameter or 0.0, margin, camera.pixel_angle()
+        )
 
     def recording_zone(self, zone, camera, margin, bounds) -> ViewingZone:
         """The viewing zone of a recording: ``zone``, else the plate's own, else one around
@@ -248,16 +269,17 @@ class Plate:
         distance in front of it (``bounds`` (2, 3) [m], the plate's frame)."""
         if zone is not None:
             if not isinstance(zone, ViewingZone):
-                raise InputError(f"zone must be a ViewingZone or None; got "
-                                 f"{type(zone).__name__}")
+                raise InputError(f"zone must be a ViewingZone or None; got {type(zone).__name__}")
             return zone
         if self.zone is not None:
             return self.zone
         if camera is not None:
             return self.zone_for(camera, margin)
         distance = -float(bounds[1, 2])
-        zone = ViewingZone(centre=(0.0, 0.0, distance),
-                           half_extents=(self.width / 2, self.height / 2, distance / 4))
+        zone = ViewingZone(
+            centre=(0.0, 0.0, distance),
+            half_extents=(self.width / 2, self.height / 2, distance / 4),
+        )
         log.info("plate: no camera and no viewing zone given: %s", zone.describe())
         return zone
 
@@ -265,5 +287,6 @@ class Plate:
 def box_corners(bounds) -> np.ndarray:
     """The eight corners (8, 3) [m] of the box ``bounds`` (min, max corners (2, 3) [m])."""
     lo, hi = np.asarray(bounds, np.float64)
-    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                     for z in (lo[2], hi[2])])
+    return np.array(
+        [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+    )

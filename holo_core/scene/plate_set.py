@@ -33,8 +33,9 @@ class PathPart:
             raise InputError("a path part needs a Plate with its viewing zone")
         s0, s1 = (validate.finite("part stretch", s, "m") for s in self.stretch)
         if not s1 >= s0:
-            raise InputError(f"a part's stretch must run forwards (s1 >= s0) [m]; got "
-                             f"({shown(s0)}, {shown(s1)})")
+            raise InputError(
+                f"a part's stretch must run forwards (s1 >= s0) [m]; got ({shown(s0)}, {shown(s1)})"
+            )
         object.__setattr__(self, "stretch", (s0, s1))
         object.__setattr__(self, "frames", tuple(int(f) for f in self.frames))
 
@@ -78,20 +79,24 @@ class PlateSet:
         if not parts or not all(isinstance(p, PathPart) for p in parts):
             raise InputError("a plate set's parts must be a non-empty sequence of PathPart")
         if len(looks) != len(parts):
-            raise InputError(f"a plate set needs the looks of each of its {len(parts)} parts; "
-                             f"got {len(looks)}")
+            raise InputError(
+                f"a plate set needs the looks of each of its {len(parts)} parts; got {len(looks)}"
+            )
         counts = {len(held) for held in looks if held is not None}
         for k, held in enumerate(looks):
             if held is None:
                 if not callable(self.load):
-                    raise InputError(f"part {k}'s looks are None: the set needs load, a "
-                                     f"callable reading a part's looks")
+                    raise InputError(
+                        f"part {k}'s looks are None: the set needs load, a "
+                        f"callable reading a part's looks"
+                    )
                 continue
             if not held or not all(isinstance(h, Hologram) for h in held):
                 raise InputError(f"part {k}'s looks must be a non-empty sequence of Hologram")
         if len(counts) > 1:
-            raise InputError(f"the parts hold {sorted(counts)} looks: the parts of a set share "
-                             f"their looks")
+            raise InputError(
+                f"the parts hold {sorted(counts)} looks: the parts of a set share their looks"
+            )
         object.__setattr__(self, "parts", parts)
         object.__setattr__(self, "looks", looks)
         object.__setattr__(self, "seed", validate.seed(self.seed))

@@ -19,8 +19,8 @@ from ..validate import InputError
 from .camera import Camera
 from .mesh import Mesh
 
-MIN_ALPHA = 0.05   # coverage below which a pixel's radiance is taken from its neighbours
-FILL_STEPS = 16    # pixels of growth of the covered region into the empty one
+MIN_ALPHA = 0.05  # coverage below which a pixel's radiance is taken from its neighbours
+FILL_STEPS = 16  # pixels of growth of the covered region into the empty one
 # An emitter of zero radiance would leave its depth without a phase (the depth is the phase
 # of the colour against the depth partner, Eq. 26-29): none emits less than this share of the
 # image's bright radiance (its 99th percentile), or than FLOOR_ABSOLUTE in an unlit image,
@@ -50,8 +50,10 @@ def projected(meshes, camera: Camera, rgb, alpha) -> list[Mesh]:
     rgb, alpha = np.asarray(rgb, np.float64), np.asarray(alpha, np.float64)
     w, h = camera.resolution
     if rgb.ndim != 3 or rgb.shape[:2] != (h, w) or alpha.shape != (h, w):
-        raise InputError(f"radiance image must be ({h}, {w}, C) with alpha ({h}, {w}) for the "
-                         f"camera's {w}x{h} pixels; got {rgb.shape} and {alpha.shape}")
+        raise InputError(
+            f"radiance image must be ({h}, {w}, C) with alpha ({h}, {w}) for the "
+            f"camera's {w}x{h} pixels; got {rgb.shape} and {alpha.shape}"
+        )
     if not (np.isfinite(rgb).all() and np.isfinite(alpha).all()):
         raise InputError("radiance image must be finite")
     texture = filled(rgb, alpha)
@@ -85,8 +87,8 @@ def filled(rgb, alpha) -> np.ndarray:
         h, w = known.shape
         for dr in (-1, 0, 1):
             for dc in (-1, 0, 1):
-                total += padded[1 + dr:h + 1 + dr, 1 + dc:w + 1 + dc]
-                count += weight[1 + dr:h + 1 + dr, 1 + dc:w + 1 + dc]
+                total += padded[1 + dr : h + 1 + dr, 1 + dc : w + 1 + dc]
+                count += weight[1 + dr : h + 1 + dr, 1 + dc : w + 1 + dc]
         grow = ~known & (count > 0)
         out[grow] = total[grow] / count[grow, None]
         known = known | grow

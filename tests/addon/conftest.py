@@ -14,6 +14,7 @@ bpy = pytest.importorskip("bpy")
 def addon():
     import holo_addon
     from holo_addon.compositor.session import session
+
     holo_addon.register()
     # a failed pass in a render ends a background Blender (os._exit): not pytest's process
     session.exit_on_failure = False
@@ -35,11 +36,13 @@ def worker_frames(monkeypatch):
     """The frames of the worker processes started while the test runs, in order (a pass that
     is reused starts none)."""
     from holo_core import worker
+
     started = []
     original = worker.Worker.__init__
 
     def counting(self, job, *args, **kwargs):
         started.append(job.output.frame)
         original(self, job, *args, **kwargs)
+
     monkeypatch.setattr(worker.Worker, "__init__", counting)
     return started

@@ -19,6 +19,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def _plate_camera_cube(scene, *, cube_size=0.5):
     from holo_addon.demo import point_at
+
     bpy.ops.mesh.primitive_cube_add(size=cube_size, location=(0, 0, 0))
     cube = bpy.context.object
     cube.holo.emitter = "POINTS"
@@ -37,12 +38,14 @@ def _plate_camera_cube(scene, *, cube_size=0.5):
 def test_export_known_mesh_in_metres(empty_scene):
     from holo_addon.export.plates import with_plate
     from holo_addon.export.scene import export_scene
+
     scene = empty_scene
-    scene.unit_settings.scale_length = 0.01          # 1 Blender unit = 1 cm
+    scene.unit_settings.scale_length = 0.01  # 1 Blender unit = 1 cm
     cube, cam, plate = _plate_camera_cube(scene, cube_size=50)  # 50 units = 0.5 m
     cube.location = (10, 20, 30)
     mat = bpy.data.materials.new("c")
     from holo_addon.blender import compat
+
     compat.enable_nodes(mat)
     bsdf = next(n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
     bsdf.inputs["Base Color"].default_value = (0.2, 0.4, 0.6, 1)
@@ -69,19 +72,23 @@ def test_export_known_mesh_in_metres(empty_scene):
     # the focus object's distance along the view axis, in metres
     assert data.camera.focus_distance == pytest.approx(3.0 + 0.2, abs=1e-6)
     from holo_addon.blender.objects import RAY_VISIBILITY
-    assert cube.is_holdout and cube.visible_camera and cube.visible_shadow and \
-        cube.visible_glossy, "an emitter is a holdout in the raster, in its shadows and " \
-                             "reflections"
+
+    assert (
+        cube.is_holdout and cube.visible_camera and cube.visible_shadow and cube.visible_glossy
+    ), "an emitter is a holdout in the raster, in its shadows and reflections"
     assert not any(getattr(plate, n) for n in RAY_VISIBILITY), "the plate is out of the raster"
     assert not cube.hide_render and not plate.hide_render, "Disable in Renders is the user's"
 
 
-@pytest.mark.parametrize("fit, shift, aspect, size", [
-    ("AUTO", (0.0, 0.0), (1.0, 1.0), (320, 240)),
-    ("HORIZONTAL", (0.1, -0.05), (1.0, 1.0), (200, 300)),
-    ("VERTICAL", (-0.2, 0.15), (2.0, 1.0), (256, 160)),
-    ("AUTO", (0.05, 0.1), (1.0, 1.5), (150, 310)),
-])
+@pytest.mark.parametrize(
+    "fit, shift, aspect, size",
+    [
+        ("AUTO", (0.0, 0.0), (1.0, 1.0), (320, 240)),
+        ("HORIZONTAL", (0.1, -0.05), (1.0, 1.0), (200, 300)),
+        ("VERTICAL", (-0.2, 0.15), (2.0, 1.0), (256, 160)),
+        ("AUTO", (0.05, 0.1), (1.0, 1.5), (150, 310)),
+    ],
+)
 def test_camera_projects_as_blender_does(empty_scene, rng, fit, shift, aspect, size):
     """The exported camera puts world points on the pixel Blender's own projection
     (bpy_extras world_to_camera_view: normalised, y up) gives, within 1e-3 px (Blender
@@ -90,6 +97,7 @@ def test_camera_projects_as_blender_does(empty_scene, rng, fit, shift, aspect, s
     from mathutils import Vector
 
     from holo_addon.export.scene import camera_from_object
+
     scene = empty_scene
     bpy.ops.object.camera_add(location=(0.4, -2.5, 0.7), rotation=(1.2, 0.1, 0.3))
     cam = bpy.context.object
@@ -110,6 +118,7 @@ def test_camera_projects_as_blender_does(empty_scene, rng, fit, shift, aspect, s
 
 def _read_exr(path):
     import OpenEXR
+
     with OpenEXR.File(str(path), separate_channels=True) as f:
         return {k: v.pixels.copy() for k, v in f.channels().items()}
 
@@ -118,6 +127,7 @@ def _flat_plane(name, size, location, rgb, *, emission=1.0):
     """A plane facing the camera on −Y of Base Color ``rgb``, shining it (an emission of
     strength ``emission``: its colour in Cycles whatever the light)."""
     from holo_addon.blender import compat
+
     bpy.ops.mesh.primitive_plane_add(size=size, location=location, rotation=(np.pi / 2, 0, 0))
     obj = bpy.context.object
     obj.name = name
@@ -137,6 +147,7 @@ def test_compositing_keeps_the_nearer_surface(empty_scene, tmp_path):
     plane covers the square's left half, the square covers the blue plane."""
     from holo_addon.blender import compat
     from holo_addon.demo import point_at
+
     scene = empty_scene
     scene.render.engine = "CYCLES"
     scene.cycles.samples = 8
@@ -149,8 +160,8 @@ def test_compositing_keeps_the_nearer_surface(empty_scene, tmp_path):
     bpy.ops.object.camera_add(location=(0, -5, 0))
     point_at(bpy.context.object, (0, 0, 0))
     scene.camera = bpy.context.object
-    _flat_plane("red", 4, (-2.0, -3.5, 0), (1, 0, 0))     # 1.5 m from the camera, left half
-    _flat_plane("blue", 20, (0, -2.0, 0), (0, 0, 1))      # 3 m, fills the frame
+    _flat_plane("red", 4, (-2.0, -3.5, 0), (1, 0, 0))  # 1.5 m from the camera, left half
+    _flat_plane("blue", 20, (0, -2.0, 0), (0, 0, 1))  # 3 m, fills the frame
     square = _flat_plane("green", 0.8, (0, -3.0, 0), (0, 1, 0), emission=0.0)  # 35.6 px
     square.holo.emitter = "POINTS"
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
@@ -160,10 +171,10 @@ def test_compositing_keeps_the_nearer_surface(empty_scene, tmp_path):
     bpy.ops.render.render(write_still=True)
     c = _read_exr(tmp_path / "composite.exr")
     img = np.stack([c["R"], c["G"], c["B"]], -1)
-    dominant = np.argmax(img, -1)               # 0 red, 1 green, 2 blue
+    dominant = np.argmax(img, -1)  # 0 red, 1 green, 2 blue
     rows, cols = np.mgrid[:h, :w]
     in_square = (np.abs(rows + 0.5 - h / 2) < 15) & (np.abs(cols + 0.5 - w / 2) < 15)
-    red_side = cols < w // 2 - 2                 # the red plane's half, clear of its edge
+    red_side = cols < w // 2 - 2  # the red plane's half, clear of its edge
     blue_side = cols >= w // 2 + 2
     outside = (np.abs(rows + 0.5 - h / 2) > 20) | (np.abs(cols + 0.5 - w / 2) > 20)
     assert (dominant[in_square & red_side] == 0).mean() > 0.99, "red (nearer) must cover"
@@ -178,6 +189,7 @@ def _raster_alpha_and_depth(scene, tmp_path):
     """Blender's own render of the scene (Cycles, box filter): alpha (16 samples) and the
     planar Depth pass (through the compositor: multilayer stills keep only Combined)."""
     from holo_addon.blender import compat
+
     scene.render.engine = "CYCLES"
     scene.cycles.samples = 16
     scene.cycles.pixel_filter_type = "BOX"
@@ -196,12 +208,19 @@ def _raster_alpha_and_depth(scene, tmp_path):
     return alpha, _read_exr(tmp_path / "depth.exr")["R"]
 
 
-@pytest.mark.parametrize("mode, shape, emitter, bound", [
-    ("CAMERA", "sphere", "POINTS", 0.97), ("CAMERA", "cube", "TRIANGLES", 0.97),
-    ("PLATE", "sphere", "POINTS", 0.9), ("PLATE", "cube", "POINTS", 0.9),
-    ("PLATE", "cube", "TRIANGLES", 0.9)])
-def test_silhouette_and_depth_match_blenders_raster(empty_scene, tmp_path, mode, shape,
-                                                    emitter, bound):
+@pytest.mark.parametrize(
+    "mode, shape, emitter, bound",
+    [
+        ("CAMERA", "sphere", "POINTS", 0.97),
+        ("CAMERA", "cube", "TRIANGLES", 0.97),
+        ("PLATE", "sphere", "POINTS", 0.9),
+        ("PLATE", "cube", "POINTS", 0.9),
+        ("PLATE", "cube", "TRIANGLES", 0.9),
+    ],
+)
+def test_silhouette_and_depth_match_blenders_raster(
+    empty_scene, tmp_path, mode, shape, emitter, bound
+):
     """A holographic object's pass against Blender's render of the same object from the same
     pinhole camera: silhouette IoU >= ``bound`` (alpha > 0.5 both; 0.97 for camera
     holograms, 0.9 for the plate's, which its size limits), and the median depth error over
@@ -209,6 +228,7 @@ def test_silhouette_and_depth_match_blenders_raster(empty_scene, tmp_path, mode,
     Blender's Depth pass."""
     from holo_addon.demo import point_at
     from holo_addon.render import pipeline
+
     scene = empty_scene
     scene.render.resolution_x, scene.render.resolution_y = 96, 72
     scene.render.resolution_percentage = 100
@@ -242,8 +262,10 @@ def test_silhouette_and_depth_match_blenders_raster(empty_scene, tmp_path, mode,
     extent = np.ptp(depth[theirs & (depth < 1e9)])
     both = mine & theirs & (depth < 1e9)
     err = np.median(np.abs(holo["ViewLayer.Depth.Z"][both] - depth[both])) / extent
-    print(f"{mode} {shape} {emitter}: silhouette IoU {iou:.3f}, median depth error {err:.2%} "
-          f"of {extent:.3f} m")
+    print(
+        f"{mode} {shape} {emitter}: silhouette IoU {iou:.3f}, median depth error {err:.2%} "
+        f"of {extent:.3f} m"
+    )
     # a plate's pinhole views take the camera hologram's pupil (the widest whose defocus over
     # the objects stays within a fine pixel), its emitters one such spot apart seen from its
     # zone: 2.5 % for it (measured 0.27-0.28 %, silhouettes 0.944-0.970)
@@ -258,6 +280,7 @@ def test_animation_renders_a_pass_per_frame(empty_scene, tmp_path):
     hologram is recorded again only for the frame whose scene changed."""
     from holo_addon.blender import compat
     from holo_addon.render import pipeline
+
     scene = empty_scene
     cube, cam, plate = _plate_camera_cube(scene, cube_size=0.4)
     scene.render.resolution_x, scene.render.resolution_y = 48, 36
@@ -276,9 +299,11 @@ def test_animation_renders_a_pass_per_frame(empty_scene, tmp_path):
     scene.render.filepath = str(tmp_path / "frame_")
     recorded = []
     original = pipeline.run
+
     def run(job, progress=None, on_log=None, **kw):
         recorded.append(job.records)
         return original(job, progress, on_log, **kw)
+
     pipeline.run = run
     try:
         bpy.ops.render.render(animation=True)
@@ -294,8 +319,10 @@ def test_animation_renders_a_pass_per_frame(empty_scene, tmp_path):
         assert cols.size, f"frame {frame}: the cube is missing from its pass"
         middles.append((cols.min() + cols.max() + 1) / 2)  # the silhouette's horizontal middle
     corners = np.array([(x, y, z) for x in (-0.2, 0.2) for y in (-0.2, 0.2) for z in (-0.2, 0.2)])
-    expected = [np.mean([f(_camera_columns(scene, cam, corners + (x, 0, 0))) for f in (min, max)])
-                for x in (-0.15, 0.15)]
+    expected = [
+        np.mean([f(_camera_columns(scene, cam, corners + (x, 0, 0))) for f in (min, max)])
+        for x in (-0.15, 0.15)
+    ]
     print(f"animation: silhouette middles {middles} px, projected {np.round(expected, 2)} px")
     assert abs((middles[1] - middles[0]) - (expected[1] - expected[0])) <= 1.0
     assert middles[2] == middles[1]
@@ -303,6 +330,7 @@ def test_animation_renders_a_pass_per_frame(empty_scene, tmp_path):
 
 def _camera_columns(scene, cam, points):
     from holo_addon.export.scene import camera_from_object
+
     cols, _ = camera_from_object(scene, cam, 1.0).project(np.asarray(points, float))
     return cols[:, 0]
 
@@ -310,14 +338,14 @@ def _camera_columns(scene, cam, points):
 def _earlier_outputs(scene, *, size=(32, 24), iterations=1):
     """A small scene's job, with random bytes standing for its earlier hologram and pass."""
     from holo_addon.render import pipeline
+
     _plate_camera_cube(scene)
     scene.holo.mode = "PLATE"
     scene.render.resolution_x, scene.render.resolution_y = size
     scene.holo.iterations = iterations
     job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
     job.job.output.folder.mkdir(parents=True)
-    earlier = {p: os.urandom(64) for p in (job.holograms[0],
-                                                  job.job.output.pass_path)}
+    earlier = {p: os.urandom(64) for p in (job.holograms[0], job.job.output.pass_path)}
     for p, data in earlier.items():
         p.write_bytes(data)
     return job, earlier
@@ -325,6 +353,7 @@ def _earlier_outputs(scene, *, size=(32, 24), iterations=1):
 
 def test_missing_or_corrupt_hologram_is_reported(empty_scene):
     from holo_addon.render import pipeline
+
     scene = empty_scene
     _, _, plate = _plate_camera_cube(scene)
     scene.holo.mode = "PLATE"
@@ -342,7 +371,9 @@ def test_missing_or_corrupt_hologram_is_reported(empty_scene):
         p.write_bytes(b"not an exr")
     plate.holo.hologram = str(job.holograms[0])
     plate.holo.fingerprint = job.fingerprint
-    with pytest.raises(RuntimeError, match=r"Plane_hologram_[0-9a-f]{16}\.exr: not an OpenEXR file"):
+    with pytest.raises(
+        RuntimeError, match=r"Plane_hologram_[0-9a-f]{16}\.exr: not an OpenEXR file"
+    ):
         bpy.ops.holo.render_pass()
 
 
@@ -366,14 +397,29 @@ def test_built_zip_installs_and_registers(tmp_path):
     """make extension's build for this machine, installed with Blender's own installer into a
     fresh user folder, registers the operators and imports the core from its wheels."""
     from holo_addon import build
+
     py = f"{sys.version_info.major}.{sys.version_info.minor}"
     (zip_path,) = build.build(tmp_path / "dist", ("linux-x64",), (py,))
-    env = {**os.environ, "BLENDER_USER_RESOURCES": str(tmp_path / "user"),
-           "PYTHONPATH": "", "PYTHONNOUSERSITE": "1"}
+    env = {
+        **os.environ,
+        "BLENDER_USER_RESOURCES": str(tmp_path / "user"),
+        "PYTHONPATH": "",
+        "PYTHONNOUSERSITE": "1",
+    }
     bl_pkg = Path(build.blender_builder()).parents[1].parent
-    r = subprocess.run([sys.executable, "-I", "-c",
-                        f"import sys; sys.path.insert(0, {str(bl_pkg)!r})\n" + INSTALL + CHECK,
-                        str(zip_path)], env=env, capture_output=True, text=True, cwd=tmp_path)
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-I",
+            "-c",
+            f"import sys; sys.path.insert(0, {str(bl_pkg)!r})\n" + INSTALL + CHECK,
+            str(zip_path),
+        ],
+        env=env,
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     assert "registered from" in r.stdout and str(tmp_path / "user") in r.stdout, r.stdout
 
@@ -399,6 +445,7 @@ def test_blender_process_loads_no_opencl_driver(empty_scene, monkeypatch):
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
     assert bpy.ops.holo.check_devices() == {"FINISHED"}
     from holo_addon.compositor.session import session
+
     assert any("<- would use" in line for line in session.devices), session.devices
 
 
@@ -408,11 +455,12 @@ def test_a_killed_worker_is_reported_and_earlier_files_stay(empty_scene, monkeyp
     import signal
 
     from holo_addon.render import pipeline
+
     _, earlier = _earlier_outputs(empty_scene, size=(160, 120), iterations=8)
     start = pipeline.start
 
     def start_then_kill(job, **kw):  # killed once it reports work under way (not by a clock: the
-        w = start(job, **kw)    # job may take less than any fixed delay)
+        w = start(job, **kw)  # job may take less than any fixed delay)
         translate = w._translate
 
         def kill_at_work(msg):
@@ -424,8 +472,11 @@ def test_a_killed_worker_is_reported_and_earlier_files_stay(empty_scene, monkeyp
         return w
 
     monkeypatch.setattr(pipeline, "start", start_then_kill)
-    with pytest.raises(RuntimeError, match=r"Render Holographic Pass failed: the worker process "
-                                           r"ended with signal SIGKILL \(killed: out of memory"):
+    with pytest.raises(
+        RuntimeError,
+        match=r"Render Holographic Pass failed: the worker process "
+        r"ended with signal SIGKILL \(killed: out of memory",
+    ):
         bpy.ops.holo.render_pass()
     for p, data in earlier.items():
         assert p.read_bytes() == data, f"{p.name} changed by a killed run"

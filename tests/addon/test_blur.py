@@ -13,9 +13,9 @@ bpy = pytest.importorskip("bpy")
 from test_addon import _flat_plane, _read_exr  # noqa: E402
 
 SIZE = (320, 180)
-ROWS = slice(60, 120)           # rows clear of every card's top and bottom
-BEHIND = slice(200, 262)        # columns across the holographic card's right edge (col 231)
-FRONT = slice(112, 178)         # columns across the red card's right edge (col 145)
+ROWS = slice(60, 120)  # rows clear of every card's top and bottom
+BEHIND = slice(200, 262)  # columns across the holographic card's right edge (col 231)
+FRONT = slice(112, 178)  # columns across the red card's right edge (col 145)
 
 
 def _cards(scene, fstop, unit=1.0):
@@ -26,6 +26,7 @@ def _cards(scene, fstop, unit=1.0):
     ``unit`` metres per Blender unit. Returns the green card."""
     from holo_addon.blender import compat
     from holo_addon.demo import point_at
+
     scene.unit_settings.scale_length = unit
     scene.render.engine = "CYCLES"
     scene.cycles.samples = 64
@@ -46,14 +47,15 @@ def _cards(scene, fstop, unit=1.0):
     cam.data.dof.focus_distance = 1.0
     cam.data.dof.aperture_fstop = fstop
     scene.camera = cam
-    _flat_plane("red", 1.0, (-0.52, -0.4, 0), (1, 0, 0))   # right edge at x = -0.02
+    _flat_plane("red", 1.0, (-0.52, -0.4, 0), (1, 0, 0))  # right edge at x = -0.02
     _flat_plane("blue", 40, (0, 5.0, 0), (0, 0, 1))
     green = _flat_plane("green", 0.8, (0, 1.5, 0), (0, 1, 0))
     for obj in scene.objects:
         if obj.type == "MESH":  # its emission alone: a black Base Color reflects nothing
             bsdf = obj.data.materials[0].node_tree.nodes["Principled BSDF"]
-            bsdf.inputs["Base Color"].default_value = (0, 0, 0, 1) if obj is not green else \
-                (0, 1, 0, 1)
+            bsdf.inputs["Base Color"].default_value = (
+                (0, 0, 0, 1) if obj is not green else (0, 1, 0, 1)
+            )
     bpy.context.view_layer.update()
     return green
 
@@ -96,12 +98,15 @@ def _compare(mine, theirs, label):
     """Each edge's 10-90 % width within 20 % of Cycles', and its profile nowhere more than
     0.08 of the step from Cycles' (a hard or stair-stepped edge is 0.3-0.5 off)."""
     out = []
-    for what, a, b in zip(("holographic over the wall", "red over holographic"),
-                          _edges(mine), _edges(theirs)):
+    for what, a, b in zip(
+        ("holographic over the wall", "red over holographic"), _edges(mine), _edges(theirs)
+    ):
         wa, wb = _width(a), _width(b)
         off = float(np.abs(a - b).max())
-        print(f"{label}: {what}: 10-90 % width {wa:.2f} px, Cycles' {wb:.2f} px "
-              f"({wa / wb - 1:+.1%}); profile at most {off:.3f} off Cycles'")
+        print(
+            f"{label}: {what}: 10-90 % width {wa:.2f} px, Cycles' {wb:.2f} px "
+            f"({wa / wb - 1:+.1%}); profile at most {off:.3f} off Cycles'"
+        )
         out.append((what, wa, wb, off))
     for what, wa, wb, off in out:
         assert abs(wa / wb - 1) <= 0.2, f"{label}: {what}: width {wa:.2f} px, Cycles' {wb:.2f}"
@@ -130,6 +135,7 @@ def test_any_unit_scale_gives_the_same_pass_and_depth_of_field(empty_scene, tmp_
 
     from holo_addon.render import pipeline
     from holo_core.io.image import exr_attribute
+
     scene = empty_scene
     green = _cards(scene, 2.8)
     cycles = _render(scene, tmp_path / "cycles.exr")
@@ -141,8 +147,10 @@ def test_any_unit_scale_gives_the_same_pass_and_depth_of_field(empty_scene, tmp_
         path = pipeline.pass_file(pipeline.output_dir(scene), 1)
         info = json.loads(exr_attribute(path, "holo"))
         passes[unit] = (_read_exr(path), info)
-        print(f"scale {unit}: {info['layers']} layers, aperture {info['aperture_m'] / unit:.6g} "
-              f"units, {info['pupil_samples']} pupil samples")
+        print(
+            f"scale {unit}: {info['layers']} layers, aperture {info['aperture_m'] / unit:.6g} "
+            f"units, {info['pupil_samples']} pupil samples"
+        )
     (ref, ref_info) = passes[1.0]
     for unit, (image, info) in passes.items():
         assert info["layers"] == ref_info["layers"], (unit, info["layers"])
@@ -158,13 +166,14 @@ def test_any_unit_scale_gives_the_same_pass_and_depth_of_field(empty_scene, tmp_
 def _ring(silhouette, width=2):
     """The pixels within ``width`` px of ``silhouette``'s edge, either side of it."""
     from scipy import ndimage
-    return ndimage.binary_dilation(silhouette, iterations=width) & \
-        ~ndimage.binary_erosion(silhouette, iterations=width)
+
+    return ndimage.binary_dilation(silhouette, iterations=width) & ~ndimage.binary_erosion(
+        silhouette, iterations=width
+    )
 
 
 @pytest.mark.parametrize("mode", ["CAMERA", "PLATE"])
-def test_an_opaque_scene_composites_opaque_with_edges_as_cycles_frame(empty_scene, tmp_path,
-                                                                     mode):
+def test_an_opaque_scene_composites_opaque_with_edges_as_cycles_frame(empty_scene, tmp_path, mode):
     """The cards before the wall (an opaque scene), the holographic card through its camera
     hologram at f/2.8 or a plate's view at f/16 in a 96x54 frame (a plate's views are sharper
     than Cycles' f/2.8 blur: 2.4 % off on this ring, 4.6 % just outside the card): every pixel of
@@ -173,6 +182,7 @@ def test_an_opaque_scene_composites_opaque_with_edges_as_cycles_frame(empty_scen
     card's silhouette in Cycles' frame of the same card the green differs from Cycles' by at
     most 2 % of the card's green on average."""
     from holo_addon.demo import point_at
+
     scene = empty_scene
     green = _cards(scene, 2.8 if mode == "CAMERA" else 16.0)
     if mode == "PLATE":  # half way to the card, covering its view; a small frame, a small plate
@@ -186,14 +196,18 @@ def test_an_opaque_scene_composites_opaque_with_edges_as_cycles_frame(empty_scen
     mine = _composite(scene, green, tmp_path, "holo")
     alpha = mine[..., 3]
     short = int((alpha < 0.99).sum())
-    assert short == 0, f"{short} pixels of an opaque scene's composite have alpha < 0.99 " \
-                       f"(down to {alpha.min():.3f})"
+    assert short == 0, (
+        f"{short} pixels of an opaque scene's composite have alpha < 0.99 "
+        f"(down to {alpha.min():.3f})"
+    )
     card = cycles[..., 1] > 0.5
     ring = _ring(card)
     off = float(np.abs(mine[..., 1] - cycles[..., 1])[ring].mean())
     level = float(cycles[..., 1][card].mean())
-    print(f"{mode}: ring of {ring.sum()} px: mean |green - Cycles'| {off:.4f}, "
-          f"{off / level:.2%} of the card's {level:.3f}")
+    print(
+        f"{mode}: ring of {ring.sum()} px: mean |green - Cycles'| {off:.4f}, "
+        f"{off / level:.2%} of the card's {level:.3f}"
+    )
     assert off <= 0.02 * level, f"the edge is {off / level:.2%} of the card's green off Cycles'"
 
 
@@ -215,10 +229,13 @@ def test_a_transparent_film_keeps_cycles_alpha(empty_scene, tmp_path):
     mine = _render(scene, tmp_path / "holo.exr")
     off = float(np.abs(mine[..., 3] - cycles[..., 3]).mean())
     from scipy import ndimage
+
     world = ~ndimage.binary_dilation(cycles[..., 3] > 0.01, iterations=4)
     filled = int((mine[..., 3][world] >= 0.01).sum())
-    print(f"transparent film: mean |alpha - Cycles'| {off:.4f}; {filled} of {world.sum()} "
-          f"world pixels with alpha >= 0.01")
+    print(
+        f"transparent film: mean |alpha - Cycles'| {off:.4f}; {filled} of {world.sum()} "
+        f"world pixels with alpha >= 0.01"
+    )
     assert off <= 0.01, f"the composite's alpha is {off:.4f} off Cycles' on average"
     assert filled == 0, f"{filled} pixels of the transparent world were filled"
 
@@ -239,6 +256,7 @@ def test_a_moving_card_is_blurred_as_cycles_blurs_it(empty_scene, tmp_path, work
     Blender evaluates for the raster's blur, makes the same pass as Render Pass (bit for
     bit), in one worker."""
     from holo_addon.render import pipeline
+
     scene = empty_scene
     green = _cards(scene, 2.8)
     scene.camera.data.dof.use_dof = False
@@ -252,11 +270,19 @@ def test_a_moving_card_is_blurred_as_cycles_blurs_it(empty_scene, tmp_path, work
     made = _read_exr(path)
     widths = []
     for side, cols, sign in (("right", slice(205, 258), 1), ("left", slice(62, 115), -1)):
-        a, b = (_profile(im[:, ::sign], 1, cols if sign > 0 else
-                         slice(SIZE[0] - cols.stop, SIZE[0] - cols.start)) for im in (mine, cycles))
+        a, b = (
+            _profile(
+                im[:, ::sign],
+                1,
+                cols if sign > 0 else slice(SIZE[0] - cols.stop, SIZE[0] - cols.start),
+            )
+            for im in (mine, cycles)
+        )
         wa, wb, off = _width(a), _width(b), float(np.abs(a - b).max())
-        print(f"moving card, {side} edge: 10-90 % width {wa:.2f} px, Cycles' {wb:.2f} px "
-              f"({wa / wb - 1:+.1%}); profile at most {off:.3f} off Cycles'")
+        print(
+            f"moving card, {side} edge: 10-90 % width {wa:.2f} px, Cycles' {wb:.2f} px "
+            f"({wa / wb - 1:+.1%}); profile at most {off:.3f} off Cycles'"
+        )
         widths.append((side, wa, wb, off))
     for side, wa, wb, off in widths:
         assert wb > 5, f"{side}: Cycles' edge is {wb:.2f} px: no motion blur to compare"
@@ -268,4 +294,3 @@ def test_a_moving_card_is_blurred_as_cycles_blurs_it(empty_scene, tmp_path, work
     again = _read_exr(path)
     assert worker_frames == workers + [2], worker_frames
     assert all(np.array_equal(made[k], again[k]) for k in made), "the render's pass differs"
-

@@ -53,11 +53,13 @@ def _middle(path):
 
 
 def test_an_animation_started_away_from_the_timeline_frame_uses_each_frames_geometry(
-        empty_scene, tmp_path):
+    empty_scene, tmp_path
+):
     """The timeline rests on frame 1; frames 2-3 are rendered (a farm chunk): each pass shows
     its own frame's cube, where the camera projects it (within half a pixel)."""
     from holo_addon.blender import compat
     from holo_addon.render import pipeline
+
     scene = empty_scene
     cube, cam = _moving_cube(scene, tmp_path)
     scene.frame_set(1)
@@ -79,6 +81,7 @@ def test_an_animation_started_away_from_the_timeline_frame_uses_each_frames_geom
 
 def _render_range(scene, start, end, folder, tmp_path):
     from holo_addon.blender import compat
+
     scene.holo.output_dir = str(folder) + "/"
     compat.set_exr_output(scene, multilayer=False)
     scene.render.filepath = str(tmp_path / folder.name / "frame_")
@@ -87,7 +90,8 @@ def _render_range(scene, start, end, folder, tmp_path):
 
 
 def test_three_frames_as_one_animation_or_separate_frames_give_identical_passes(
-        empty_scene, tmp_path, monkeypatch):
+    empty_scene, tmp_path, monkeypatch
+):
     """A cube and the camera both move; ``-a`` over frames 1-3 and three single-frame runs
     (as a farm splits them) give bit-identical passes, each where the camera projects that
     frame's cube (within half a pixel), and each frame's composite shows its own pass. The
@@ -96,10 +100,12 @@ def test_three_frames_as_one_animation_or_separate_frames_give_identical_passes(
     the render."""
     from holo_addon.render import pipeline
     from holo_core import worker
+
     started = []
     process = worker._Process.__init__
-    monkeypatch.setattr(worker._Process, "__init__",
-                        lambda self, env: (started.append(1), process(self, env))[-1])
+    monkeypatch.setattr(
+        worker._Process, "__init__", lambda self, env: (started.append(1), process(self, env))[-1]
+    )
     scene = empty_scene
     # a zone that holds the camera's 10 cm move with room for its pinhole pupil (the widest
     # its defocus allows, 34 cm here)
@@ -121,8 +127,10 @@ def test_three_frames_as_one_animation_or_separate_frames_give_identical_passes(
         assert all(np.array_equal(a[k], b[k]) for k in a), f"frame {frame}: passes differ"
         scene.frame_set(frame)
         cols = _camera_columns(scene, cam, corners + (x, 0, 0))
-        want, got = (min(cols) + max(cols)) / 2, _middle(pipeline.pass_file(tmp_path / "all",
-                                                                             frame))
+        want, got = (
+            (min(cols) + max(cols)) / 2,
+            _middle(pipeline.pass_file(tmp_path / "all", frame)),
+        )
         image = _read_exr(tmp_path / "all" / f"frame_{frame:04d}.exr")
         rgb = np.stack([image[c] for c in "RGB"], -1)
         shown = np.nonzero((np.abs(rgb - rgb[0, 0]).max(-1) > 0.05).any(0))[0]
@@ -140,6 +148,7 @@ def test_compositing_keeps_the_users_nodes_and_links(empty_scene, tmp_path):
     from holo_addon.render import pipeline
     from holo_core.io.view import write_view
     from holo_core.view import RenderResult
+
     scene = empty_scene
     _plate_camera_cube(scene)
     tree = compat.compositor_tree(scene)
@@ -151,12 +160,17 @@ def test_compositing_keeps_the_users_nodes_and_links(empty_scene, tmp_path):
     tree.links.new(rl.outputs["Image"], viewer.inputs[0])
 
     def links():
-        return {(l.from_node.name, l.from_socket.identifier, l.to_node.name,
-                 l.to_socket.identifier) for l in tree.links}
+        return {
+            (l.from_node.name, l.from_socket.identifier, l.to_node.name, l.to_socket.identifier)
+            for l in tree.links
+        }
+
     before, nodes = links(), {n.name for n in tree.nodes}
     out = pipeline.output_dir(scene)
-    write_view(RenderResult(rgb=np.ones((24, 32, 3)), alpha=np.ones((24, 32)),
-                            depth=np.ones((24, 32))), pipeline.pass_file(out, scene.frame_current))
+    write_view(
+        RenderResult(rgb=np.ones((24, 32, 3)), alpha=np.ones((24, 32)), depth=np.ones((24, 32))),
+        pipeline.pass_file(out, scene.frame_current),
+    )
     for _ in range(2):  # again: only the add-on's nodes are rebuilt
         compositing.setup(scene, out)
     raster = tree.nodes[compositing.NODE_PREFIX + "Raster"]
@@ -171,6 +185,7 @@ def test_compositing_keeps_the_users_nodes_and_links(empty_scene, tmp_path):
 
 def _scene_with_pass(scene, tmp_path):
     from holo_addon.blender import compat
+
     _moving_cube(scene, tmp_path)
     scene.frame_set(1)
     assert bpy.ops.holo.render_pass() == {"FINISHED"}
@@ -187,6 +202,7 @@ def _shown_columns(path):
 def _read_parts(path):
     """Every channel of every part (Blender 5 writes a multilayer EXR as one part per layer)."""
     import OpenEXR
+
     with OpenEXR.File(str(path), separate_channels=True) as f:
         return {k: v.pixels.copy() for part in f.parts for k, v in part.channels.items()}
 
@@ -197,6 +213,7 @@ def test_each_rendered_frame_gets_its_holographic_layers_beside_it(empty_scene, 
     composite's depth (the nearer of the pass's and the raster's), depths in ``.Z`` channels
     as Blender's own passes (Blender's File Output names them ``.V``)."""
     from holo_addon.render import pipeline
+
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
     scene.render.filepath = str(tmp_path / "out" / "shot_####")
@@ -208,14 +225,12 @@ def test_each_rendered_frame_gets_its_holographic_layers_beside_it(empty_scene, 
     holo = _read_exr(pipeline.pass_file(pipeline.output_dir(scene), 1))
     for c in "RGBA":
         np.testing.assert_allclose(layers[f"Composite.{c}"], frame[c], atol=1e-6)
-        np.testing.assert_allclose(layers[f"Holo.{c}"], holo[f"ViewLayer.Combined.{c}"],
-                                   atol=1e-6)
+        np.testing.assert_allclose(layers[f"Holo.{c}"], holo[f"ViewLayer.Combined.{c}"], atol=1e-6)
     assert not [k for k in layers if k.endswith(".V")], "depth channels are named .Z"
     np.testing.assert_allclose(layers["HoloDepth.Z"], holo["ViewLayer.Depth.Z"], rtol=1e-6)
     shown = holo["ViewLayer.Combined.A"] > 0.5
     assert shown.any() and (layers["Depth.Z"] <= layers["HoloDepth.Z"]).all()
-    np.testing.assert_allclose(layers["Depth.Z"][shown], layers["HoloDepth.Z"][shown],
-                               rtol=1e-6)
+    np.testing.assert_allclose(layers["Depth.Z"][shown], layers["HoloDepth.Z"][shown], rtol=1e-6)
 
 
 def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monkeypatch):
@@ -224,6 +239,7 @@ def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monke
     from holo_addon.compositor.session import session
     from holo_addon.render import pipeline
     from holo_core.worker import WorkerError
+
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
     monkeypatch.setattr(session, "exit_on_failure", False)
@@ -231,6 +247,7 @@ def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monke
 
     def broken(job, progress=None, on_log=None, **_):
         raise WorkerError("a crash in native code")
+
     monkeypatch.setattr(pipeline, "run", broken)
     assert pipeline.pass_file(pipeline.output_dir(scene), 1).is_file()  # the stale pass
     scene.render.filepath = str(tmp_path / "failed.exr")
@@ -243,13 +260,15 @@ def test_a_failed_pass_never_composites_a_stale_one(empty_scene, tmp_path, monke
     assert _shown_columns(tmp_path / "good.exr").size > 0
 
 
-def test_an_output_folder_that_cannot_be_written_fails_the_frame(empty_scene, tmp_path,
-                                                                monkeypatch):
+def test_an_output_folder_that_cannot_be_written_fails_the_frame(
+    empty_scene, tmp_path, monkeypatch
+):
     """An Output Folder under a file: the render's frame fails, naming the setting (a
     background render exits with status 1 there), and it composites no pass of the folder
     before."""
     from holo_addon.compositor import handlers
     from holo_addon.compositor.session import session
+
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
     monkeypatch.setattr(session, "exit_on_failure", False)
@@ -265,7 +284,8 @@ def test_an_output_folder_that_cannot_be_written_fails_the_frame(empty_scene, tm
 
 
 def test_after_save_as_a_failed_pass_never_composites_the_old_folders(
-        empty_scene, tmp_path, monkeypatch):
+    empty_scene, tmp_path, monkeypatch
+):
     """A .blend with its pass in its folder's holo/, saved as another .blend in another
     folder: the compositor's image follows the new folder (Blender kept the old folder's
     file), so a failed pass there shows the raster alone, not the old folder's pass; the next
@@ -273,6 +293,7 @@ def test_after_save_as_a_failed_pass_never_composites_the_old_folders(
     from holo_addon.compositor.session import session
     from holo_addon.render import pipeline
     from holo_core.worker import WorkerError
+
     scene = empty_scene
     scene.holo.output_dir = "//holo/"
     (tmp_path / "a").mkdir()
@@ -290,6 +311,7 @@ def test_after_save_as_a_failed_pass_never_composites_the_old_folders(
 
     def broken(job, progress=None, on_log=None, **_):
         raise WorkerError("a crash in native code")
+
     monkeypatch.setattr(pipeline, "run", broken)
     scene.render.filepath = str(tmp_path / "failed.exr")
     bpy.ops.render.render(write_still=True)
@@ -315,19 +337,38 @@ holo_addon.register()
 scene = bpy.context.scene
 scene.holo.output_dir = sys.argv[3] + "/holo/"
 """
-BACKGROUND_SCENE = BACKGROUND + """import test_compositor
+BACKGROUND_SCENE = (
+    BACKGROUND
+    + """import test_compositor
 test_compositor._scene_with_pass(scene, None)
 """
+)
 
 
 def in_background(script: str, tmp_path, *args):
     """``script`` (:data:`BACKGROUND` and what follows) run by a Python of its own, on
     ``tmp_path`` (its ``sys.argv[3]``; ``args`` follow): the ended process."""
     here = Path(__file__).resolve()
-    return subprocess.run([sys.executable, "-c", script, str(here.parents[2]), str(here.parent),
-                           str(tmp_path), *map(str, args)], capture_output=True, text=True,
-                          timeout=600, check=False)
-FAILING_FARM_RENDER = BACKGROUND_SCENE + """from holo_addon.render import pipeline
+    return subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            script,
+            str(here.parents[2]),
+            str(here.parent),
+            str(tmp_path),
+            *map(str, args),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
+
+
+FAILING_FARM_RENDER = (
+    BACKGROUND_SCENE
+    + """from holo_addon.render import pipeline
 def broken(job, progress=None, on_log=None, **_):
     raise RuntimeError("the worker failed")
 pipeline.run = broken
@@ -335,6 +376,7 @@ scene.render.filepath = sys.argv[3] + "/frame_"
 bpy.ops.render.render(animation=True)
 print("rendered")
 """
+)
 
 
 def test_a_failed_pass_fails_a_background_animation(tmp_path):
@@ -346,12 +388,15 @@ def test_a_failed_pass_fails_a_background_animation(tmp_path):
     assert "rendered" not in run.stdout and not list(tmp_path.glob("frame_*"))
 
 
-UNWRITABLE_FARM_RENDER = BACKGROUND_SCENE + """open(sys.argv[3] + "/a file", "w").close()
+UNWRITABLE_FARM_RENDER = (
+    BACKGROUND_SCENE
+    + """open(sys.argv[3] + "/a file", "w").close()
 scene.holo.output_dir = sys.argv[3] + "/a file/holo/"
 scene.render.filepath = sys.argv[3] + "/frame_"
 bpy.ops.render.render(animation=True)
 print("rendered")
 """
+)
 
 
 def test_an_unwritable_output_folder_fails_a_background_animation(tmp_path):
@@ -364,11 +409,14 @@ def test_an_unwritable_output_folder_fails_a_background_animation(tmp_path):
     assert "rendered" not in run.stdout and not list(tmp_path.glob("frame_*"))
 
 
-READ_ONLY_FARM_RENDER = BACKGROUND_SCENE + """scene.holo.output_dir = sys.argv[4] + "/"
+READ_ONLY_FARM_RENDER = (
+    BACKGROUND_SCENE
+    + """scene.holo.output_dir = sys.argv[4] + "/"
 scene.render.filepath = sys.argv[3] + "/frame_"
 bpy.ops.render.render(animation=True)
 print("rendered")
 """
+)
 
 
 @pytest.mark.parametrize("linked", [False, True], ids=["share", "link to it"])
@@ -378,6 +426,7 @@ def test_a_read_only_output_folder_fails_a_background_animation(tmp_path, linked
     the folder, before any frame is written (it printed two tracebacks, rendered on and wrote
     the frames without their pass, status 0)."""
     from mounts import read_only_folder
+
     with read_only_folder(tmp_path / "share") as share:
         folder = share
         if linked:
@@ -386,8 +435,11 @@ def test_a_read_only_output_folder_fails_a_background_animation(tmp_path, linked
         run = in_background(READ_ONLY_FARM_RENDER, tmp_path, folder)
     assert run.returncode == 1, run.stdout[-2000:] + run.stderr[-2000:]
     said = [line for line in run.stderr.splitlines() if "Holo:" in line]
-    assert len(said) == 1 and "cannot be written: the Output Folder (Render Properties ▸ " \
-        f"Holo) {folder}" in said[0] and "not writable" in said[0], run.stderr[-2000:]
+    assert (
+        len(said) == 1
+        and f"cannot be written: the Output Folder (Render Properties ▸ Holo) {folder}" in said[0]
+        and "not writable" in said[0]
+    ), run.stderr[-2000:]
     assert "Traceback" not in run.stderr, run.stderr[-2000:]
     assert "rendered" not in run.stdout and not list(tmp_path.glob("frame_*"))
 
@@ -396,6 +448,7 @@ def test_renders_use_render_modifier_levels(empty_scene, tmp_path, monkeypatch):
     """Subdivision at level 0 in the viewport and 2 in renders: the pass of an F12 render is
     made from level 2 (a cube's 12 triangles become 192)."""
     from holo_addon.render import pipeline
+
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
     cube = next(o for o in scene.objects if o.holo.emitter == "POINTS")
@@ -407,6 +460,7 @@ def test_renders_use_render_modifier_levels(empty_scene, tmp_path, monkeypatch):
     def run(job, progress=None, on_log=None, **kw):
         seen.append(sum(len(m.triangles) for m in job.job.points))
         return original(job, progress, on_log, **kw)
+
     monkeypatch.setattr(pipeline, "run", run)
     scene.render.filepath = str(tmp_path / "f12.exr")
     bpy.ops.render.render(write_still=True)
@@ -419,17 +473,20 @@ def test_the_pass_of_a_render_can_be_cancelled(empty_scene, tmp_path, monkeypatc
     alone (the stale pass set aside) and the panel's state is cleared."""
     from holo_addon.compositor.session import session
     from holo_addon.render import pipeline
+
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
-    scene.holo.exposure = 1.0                      # the pass is out of date: the worker runs
+    scene.holo.exposure = 1.0  # the pass is out of date: the worker runs
     original, clicked = pipeline.run, []
 
     def run(job, progress=None, on_log=None, **kw):
         def user(fraction):
-            if not clicked:                        # the user clicks while it runs
+            if not clicked:  # the user clicks while it runs
                 clicked.append(bpy.ops.holo.cancel_pass())
             progress(fraction)
+
         return original(job, user, on_log, **kw)
+
     monkeypatch.setattr(pipeline, "run", run)
     scene.render.filepath = str(tmp_path / "cancelled.exr")
     bpy.ops.render.render(write_still=True)

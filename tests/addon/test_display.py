@@ -32,6 +32,7 @@ def _display_scene(scene, *, depth=1.0, colours=(True, True, False)):
     quad.holo.emitter = "TRIANGLES"
     mat = bpy.data.materials.new("colour")
     from holo_addon.blender import compat
+
     compat.enable_nodes(mat)
     bsdf = next(n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
     bsdf.inputs["Base Color"].default_value = (0.9, 0.6, 0.3, 1)
@@ -60,8 +61,7 @@ def _files(folder, frame):
     return sorted(p for p in folder.glob(f"frame_{frame:04d}*") if p.is_file())
 
 
-def test_render_animation_writes_every_frame_and_a_frame_alone_is_the_same(empty_scene,
-                                                                          tmp_path):
+def test_render_animation_writes_every_frame_and_a_frame_alone_is_the_same(empty_scene, tmp_path):
     """Render Animation over frames 1-3: each frame's patterns (8-bit grey PNG of the
     display's 256 x 256 codes, one per laser), its layout and its focal stack (EXR and
     contact sheet) are written, the sheet loaded as an image; the PSNR of each slice is in
@@ -71,6 +71,7 @@ def test_render_animation_writes_every_frame_and_a_frame_alone_is_the_same(empty
     from holo_addon.compositor import handlers
     from holo_addon.export.display import frame_folder, scene_display
     from holo_core import jobs
+
     scene = empty_scene
     quad, shown = _display_scene(scene)
     bpy.ops.render.render(animation=True)
@@ -78,17 +79,28 @@ def test_render_animation_writes_every_frame_and_a_frame_alone_is_the_same(empty
     for frame in FRAMES:
         names = [p.name for p in _files(folder, frame)]
         stem = f"frame_{frame:04d}"
-        assert names == [f"{stem}.json", f"{stem}_520nm.json", f"{stem}_520nm.png",
-                         f"{stem}_638nm.json", f"{stem}_638nm.png", f"{stem}_stack.exr",
-                         f"{stem}_stack.png"], names
+        assert names == [
+            f"{stem}.json",
+            f"{stem}_520nm.json",
+            f"{stem}_520nm.png",
+            f"{stem}_638nm.json",
+            f"{stem}_638nm.png",
+            f"{stem}_stack.exr",
+            f"{stem}_stack.png",
+        ], names
         layout = json.loads((folder / f"{stem}.json").read_text())
-        assert layout["frame"] == frame and [laser["name"] for laser in layout["lasers"]] == \
-            ["red", "green"]
+        assert layout["frame"] == frame and [laser["name"] for laser in layout["lasers"]] == [
+            "red",
+            "green",
+        ]
         for laser in layout["lasers"]:
             assert len(laser["psnr_db"]) == 3 and all(math.isfinite(v) for v in laser["psnr_db"])
         codes, pattern = read_pattern(folder / f"{stem}_638nm.json")
-        assert codes.shape == (256, 256) and codes.max() < 256 and \
-            pattern["laser"]["wavelength"] == pytest.approx(638e-9)
+        assert (
+            codes.shape == (256, 256)
+            and codes.max() < 256
+            and pattern["laser"]["wavelength"] == pytest.approx(638e-9)
+        )
         image = bpy.data.images.load(str(folder / f"{stem}_638nm.png"))
         assert tuple(image.size) == (256, 256) and image.channels in (1, 4), image.channels
         bpy.data.images.remove(image)
@@ -96,8 +108,9 @@ def test_render_animation_writes_every_frame_and_a_frame_alone_is_the_same(empty
     _, stack = read_exr(folder / "frame_0003_stack.exr")
     assert {"z00.R", "ref.z02.G"} <= set(stack), sorted(stack)[:6]
     # the quad moves: its frames differ
-    assert (folder / "frame_0001_638nm.png").read_bytes() != \
-        (folder / "frame_0003_638nm.png").read_bytes()
+    assert (folder / "frame_0001_638nm.png").read_bytes() != (
+        folder / "frame_0003_638nm.png"
+    ).read_bytes()
     sequence = {p.name: p.read_bytes() for p in _files(folder, 3)}
 
     scene.holo.output_dir = str(tmp_path / "alone") + "/"
@@ -118,9 +131,11 @@ def test_render_animation_writes_every_frame_and_a_frame_alone_is_the_same(empty
     def cancel_late(fraction):
         if fraction > 0.8:
             raise jobs.Cancelled()
+
     with pytest.raises(jobs.Cancelled):
-        handlers.display_frame(scene, bpy.context.evaluated_depsgraph_get(),
-                               scene_display(scene), progress=cancel_late)
+        handlers.display_frame(
+            scene, bpy.context.evaluated_depsgraph_get(), scene_display(scene), progress=cancel_late
+        )
     after = {p.name: p.read_bytes() for p in _files(folder, 2)}
     assert after == before, "a cancelled frame changed frame 2's files"
     assert not [p.name for p in folder.iterdir() if p.name.startswith(".")]
@@ -134,6 +149,7 @@ def test_a_scene_too_close_for_the_pitch_is_refused_with_its_numbers(empty_scene
     Frame reports it."""
     from holo_addon.export.display import read
     from holo_addon.export.scene import ExportError
+
     scene = empty_scene
     _display_scene(scene, depth=0.05)
     with pytest.raises(ExportError) as refused:
@@ -153,6 +169,7 @@ def test_an_eye_box_beyond_the_diffraction_angle_is_refused_with_what_to_change(
     (√2·11.024 / tan 0.931° = 959 mm)."""
     from holo_addon.export.display import read
     from holo_addon.export.scene import ExportError
+
     scene = empty_scene
     _, shown = _display_scene(scene, colours=(False, True, False))
     shown.holo.display.eye_box = 20.0
@@ -171,6 +188,7 @@ def test_a_scene_outside_the_volume_names_the_scale_that_fits(empty_scene):
     refuses it, with the Scene Scale that fits (0.005)."""
     from holo_addon.export.display import read
     from holo_addon.export.scene import ExportError
+
     scene = empty_scene
     _, shown = _display_scene(scene)
     shown.holo.display.behind = 5.0
@@ -189,11 +207,24 @@ def test_the_display_panel_draws_its_controls_and_sizes_the_plane(empty_scene):
     from test_interface import _draw
 
     from holo_addon.ui import panels as ui
+
     _, shown = _display_scene(empty_scene)
     context = SimpleNamespace(scene=empty_scene, object=shown)
     drawn = _draw(ui.HOLO_PT_object, context)
-    for name in ("preset", "resolution", "pitch", "wavelengths", "powers", "scene_scale",
-                 "behind", "front", "eye_distance", "eye_box", "pupil", "table_red"):
+    for name in (
+        "preset",
+        "resolution",
+        "pitch",
+        "wavelengths",
+        "powers",
+        "scene_scale",
+        "behind",
+        "front",
+        "eye_distance",
+        "eye_box",
+        "pupil",
+        "table_red",
+    ):
         assert ("prop", name) in drawn, name
     assert ("operator", "holo.export_display") in drawn and ("prop", "iterations") not in drawn
     assert ("label", "256 x 256 at 8 µm: 2.05 x 2.05 mm, 8-bit") in drawn, drawn

@@ -11,6 +11,7 @@ from test_addon import _plate_camera_cube  # noqa: E402
 
 def _fingerprint(scene):
     from holo_addon.render import pipeline
+
     return pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get()).fingerprint
 
 
@@ -32,6 +33,7 @@ def test_the_fingerprint_covers_emitter_kind_material_and_lens(empty_scene):
     # once it is recorded (here as a recording's result is applied)
     from holo_addon.render import pipeline
     from holo_core.job import Result
+
     plate = next(o for o in scene.objects if o.holo.is_plate)
     prepared = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
     assert not plate.holo.zone_set and prepared.zone is not None
@@ -49,22 +51,24 @@ def test_the_fingerprint_covers_emitter_kind_material_and_lens(empty_scene):
 
 def _prepare(scene):
     from holo_addon.render import pipeline
+
     return pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get())
 
 
 def test_a_plate_too_small_warns_and_one_off_the_view_is_refused(empty_scene):
     from holo_addon.export.scene import ExportError
+
     scene = empty_scene
     _, _, plate = _plate_camera_cube(scene)
     scene.holo.mode = "PLATE"
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
     assert _prepare(scene).warnings == ()
-    plate.scale = (0.3, 0.3, 1)               # 0.18 m: the cube's outline is cut
+    plate.scale = (0.3, 0.3, 1)  # 0.18 m: the cube's outline is cut
     bpy.context.view_layer.update()
     (warning,) = _prepare(scene).warnings
     assert "covers" in warning and "cut from the pass" in warning, warning
     plate.scale = (1, 1, 1)
-    plate.location.x = 2.0                    # beside the line of sight
+    plate.location.x = 2.0  # beside the line of sight
     bpy.context.view_layer.update()
     with pytest.raises(ExportError, match="not between the camera and the holographic objects"):
         _prepare(scene)
@@ -74,6 +78,7 @@ def test_exposure_is_in_stops_and_unsaved_files_need_a_folder(empty_scene):
     from holo_addon.export.job import Settings
     from holo_addon.export.scene import ExportError
     from holo_addon.render import pipeline
+
     scene = empty_scene
     _plate_camera_cube(scene)
     scene.holo.exposure = 1.0
@@ -90,6 +95,7 @@ def test_exposure_is_in_stops_and_unsaved_files_need_a_folder(empty_scene):
 
 def _emitter_meshes(scene):
     from holo_addon.export.scene import export_scene
+
     data = export_scene(scene, bpy.context.evaluated_depsgraph_get())
     return data.points + data.triangles
 
@@ -110,6 +116,7 @@ def test_blenders_render_visibility_decides_what_is_recorded(empty_scene):
     """Excluded and render-disabled collections and Disable in Renders leave an emitter out;
     the add-on never writes Disable in Renders itself."""
     from holo_addon.export.scene import ExportError
+
     scene = empty_scene
     cube, _, _ = _plate_camera_cube(scene)
     assert not cube.hide_render
@@ -120,8 +127,8 @@ def test_blenders_render_visibility_decides_what_is_recorded(empty_scene):
     bpy.context.view_layer.layer_collection.children["Extra"].exclude = False
     coll.hide_render = True
     assert len(_emitter_meshes(scene)) == 1
-    cube.hide_render = True                      # the user's own Disable in Renders
-    cube.holo.emitter = "TRIANGLES"              # changing the kind leaves it alone
+    cube.hide_render = True  # the user's own Disable in Renders
+    cube.holo.emitter = "TRIANGLES"  # changing the kind leaves it alone
     assert cube.hide_render
     with pytest.raises(ExportError, match="no holographic emitters in the render"):
         _emitter_meshes(scene)
@@ -130,7 +137,7 @@ def test_blenders_render_visibility_decides_what_is_recorded(empty_scene):
 def test_collection_instances_of_an_emitter_are_recorded_where_they_stand(empty_scene):
     scene = empty_scene
     _, _, _ = _plate_camera_cube(scene)
-    scene.objects[0].holo.emitter = "NONE"       # the plain cube of the helper
+    scene.objects[0].holo.emitter = "NONE"  # the plain cube of the helper
     cube, coll = _cube_in("Source", scene)
     bpy.context.view_layer.layer_collection.children["Source"].exclude = True
     for x in (-0.3, 0.3):
@@ -146,6 +153,7 @@ def test_collection_instances_of_an_emitter_are_recorded_where_they_stand(empty_
 
 def test_procedural_base_colours_are_reported(empty_scene):
     from holo_addon.blender import compat
+
     scene = empty_scene
     cube, _, _ = _plate_camera_cube(scene)
     material = bpy.data.materials.new("marble")
@@ -168,6 +176,7 @@ def test_material_features_the_hologram_does_not_show_are_reported(empty_scene):
     with the albedo, one naming them all. An Emission shader alone: lit by the scene no note,
     with the albedo a note that the viewport colour is used."""
     from holo_addon.blender import compat
+
     scene = empty_scene
     cube, _, _ = _plate_camera_cube(scene)
     scene.holo.mode = "PLATE"
@@ -186,8 +195,9 @@ def test_material_features_the_hologram_does_not_show_are_reported(empty_scene):
     assert warning.startswith("material 'shiny': Alpha not shown"), warning
     scene.holo.lighting = "ALBEDO"
     (warning,) = _prepare(scene).warnings
-    assert warning.startswith("material 'shiny': Metallic, Alpha, Emission Strength, Normal "
-                              "not shown"), warning
+    assert warning.startswith(
+        "material 'shiny': Metallic, Alpha, Emission Strength, Normal not shown"
+    ), warning
     glow = bpy.data.materials.new("glow")
     compat.enable_nodes(glow)
     tree = glow.node_tree
@@ -210,6 +220,7 @@ def test_a_procedural_base_colour_is_baked_and_recorded(empty_scene):
     from holo_addon.export import bake
     from holo_addon.render import pipeline
     from holo_core.scene.mesh import sample_points
+
     scene = empty_scene
     cube, _, _ = _plate_camera_cube(scene)
     material = bpy.data.materials.new("position")
@@ -233,7 +244,7 @@ def test_a_procedural_base_colour_is_baked_and_recorded(empty_scene):
     error = np.abs(colours - want)
     print(f"baked colours: error median {np.median(error):.4f}, 99% {np.percentile(error, 99):.4f}")
     assert np.percentile(error, 99) <= 0.01
-    bsdf.inputs["Roughness"].default_value = 0.2      # the material changed: baked again
+    bsdf.inputs["Roughness"].default_value = 0.2  # the material changed: baked again
     assert bake.current(cube) is None
 
 
@@ -242,6 +253,7 @@ def test_a_state_recorded_before_is_not_recorded_again(empty_scene, monkeypatch)
     workers on different frames never share a hologram file). The render's size, which a
     plate does not depend on, records nothing."""
     from holo_addon.render import pipeline
+
     scene = empty_scene
     _plate_camera_cube(scene)
     scene.holo.mode = "PLATE"
@@ -252,6 +264,7 @@ def test_a_state_recorded_before_is_not_recorded_again(empty_scene, monkeypatch)
     def run(job, progress=None, on_log=None, **kw):
         recorded.append(job.records)
         return original(job, progress, on_log, **kw)
+
     monkeypatch.setattr(pipeline, "run", run)
     paths = []
     for iterations in (1, 2, 1):
@@ -274,6 +287,7 @@ def test_a_plate_file_replaced_by_another_scenes_is_recorded_again(empty_scene):
 
     from holo_core.io.hologram import recording_of
     from holo_core.io.image import read_exr, write_exr
+
     scene = empty_scene
     _plate_camera_cube(scene)
     scene.holo.mode = "PLATE"
@@ -285,6 +299,5 @@ def test_a_plate_file_replaced_by_another_scenes_is_recorded_again(empty_scene):
     assert prepared.job.route.recording == prepared.fingerprint
     header, channels = read_exr(path)
     other = "f" * 16 if prepared.fingerprint != "f" * 16 else "e" * 16
-    write_exr(path, channels, holo=json.dumps({**json.loads(header["holo"]),
-                                               "recording": other}))
+    write_exr(path, channels, holo=json.dumps({**json.loads(header["holo"]), "recording": other}))
     assert _prepare(scene).records, "another recording's plate under this name was current"

@@ -74,12 +74,14 @@ def _instancing_scene(scene):
 
 def _instances(depsgraph):
     from holo_addon.export.scene import emitter_instances
+
     return [inst for inst, _ in emitter_instances(depsgraph)]
 
 
 @pytest.mark.parametrize("lighting", ["SCENE", "ALBEDO"])
 def test_instanced_emitters_are_lit_and_coloured_as_the_same_objects_linked(
-        empty_scene, tmp_path, lighting):
+    empty_scene, tmp_path, lighting
+):
     """Seven instances of one sphere (two collection instances, two geometry-node instances,
     three hair particles) are recorded, and composited they show Cycles' colours: with
     Lighting: Scene, inside the pass's alpha (one pixel in from the rims) the luminance
@@ -89,6 +91,7 @@ def test_instanced_emitters_are_lit_and_coloured_as_the_same_objects_linked(
     instances were black under Lighting: Scene (their instancer was hidden from the radiance
     render's camera, and Cycles hides an instancer's instances with it)."""
     from holo_addon.render import pipeline
+
     scene = empty_scene
     scene.holo.lighting = lighting
     sphere = _instancing_scene(scene)
@@ -112,7 +115,9 @@ def test_instanced_emitters_are_lit_and_coloured_as_the_same_objects_linked(
     mine, theirs = _luminance(composite), _luminance(reference)
     corr = np.corrcoef(mine[inside], theirs[inside])[0, 1]
     ratio = mine[inside].mean() / theirs[inside].mean()
-    print(f"instances, lit: {inside.sum()} px inside, luminance correlation {corr:.3f}, "
-          f"mean ratio {ratio:.3f}")
+    print(
+        f"instances, lit: {inside.sum()} px inside, luminance correlation {corr:.3f}, "
+        f"mean ratio {ratio:.3f}"
+    )
     assert corr >= 0.9, f"luminance correlation inside the instances {corr:.3f}"
     assert abs(ratio - 1) <= 0.15, f"mean luminance {ratio:.3f} x Cycles'"

@@ -57,6 +57,7 @@ def _event(kind, value="PRESS", timer=None):
 def interface(monkeypatch):
     """(operator, context) as Blender's interface would drive them: not in background."""
     from holo_addon.ui import operators
+
     monkeypatch.setattr(operators, "bpy", SimpleNamespace(app=SimpleNamespace(background=False)))
 
     class RenderPass(operators._PipelineOperator):
@@ -68,9 +69,13 @@ def interface(monkeypatch):
         def report(self, kind, text):
             self.reports.append((next(iter(kind)), text, time.monotonic()))
 
-    context = SimpleNamespace(scene=bpy.context.scene, window=None,
-                              window_manager=_WindowManager(), workspace=_Workspace(),
-                              evaluated_depsgraph_get=bpy.context.evaluated_depsgraph_get)
+    context = SimpleNamespace(
+        scene=bpy.context.scene,
+        window=None,
+        window_manager=_WindowManager(),
+        workspace=_Workspace(),
+        evaluated_depsgraph_get=bpy.context.evaluated_depsgraph_get,
+    )
     return RenderPass(), context
 
 
@@ -99,6 +104,7 @@ def test_the_interface_stays_usable_and_esc_cancels_within_a_second(empty_scene,
     worker within a second, ends the operator's timer, progress and status text, and the
     earlier pass is kept."""
     from holo_addon.render import pipeline
+
     op, context = interface
     _camera_scene(empty_scene, samples=256)
     earlier = pipeline.pass_file(pipeline.output_dir(empty_scene), empty_scene.frame_current)
@@ -129,6 +135,7 @@ def test_progress_and_messages_arrive_while_the_worker_runs(empty_scene, interfa
     """Progress reaches the progress bar and the status text as it is made, the worker's
     messages become reports before the run ends, and the run ends with the pass written."""
     from holo_addon.render import pipeline
+
     op, context = interface
     _camera_scene(empty_scene, samples=8)
     assert op.invoke(context, _event("LEFTMOUSE")) == {"RUNNING_MODAL"}
@@ -149,6 +156,7 @@ def test_enter_keeps_the_samples_made_so_far(empty_scene, interface):
     frame's pass."""
     from holo_addon.render import pipeline
     from holo_core.io.image import exr_attribute
+
     op, context = interface
     _camera_scene(empty_scene, samples=256)
     assert op.invoke(context, _event("LEFTMOUSE")) == {"RUNNING_MODAL"}
@@ -196,6 +204,7 @@ def test_the_panels_draw_every_state(empty_scene):
     exists."""
     from holo_addon.compositor.session import session
     from holo_addon.ui import panels as ui
+
     cube, _, plate = _plate_camera_cube(empty_scene)
     context = SimpleNamespace(scene=empty_scene, object=cube)
     for mode in ("CAMERA", "PLATE"):
@@ -219,10 +228,21 @@ def test_controls_show_only_where_they_apply(empty_scene):
     Opacity Threshold, Plate Coverage, Record Hologram, the object's Hologram Plate); Plate
     mode: no Samples; both: Lighting. Remove Holo Compositing only once it is set up."""
     from holo_addon.ui import panels as ui
+
     cube, _, plate = _plate_camera_cube(empty_scene)
     context = SimpleNamespace(scene=empty_scene, object=cube)
-    plate_only = {("prop", n) for n in ("plate_memory", "plate_disk", "wavelength", "iterations",
-                                        "composition", "opacity_threshold", "show_coverage")}
+    plate_only = {
+        ("prop", n)
+        for n in (
+            "plate_memory",
+            "plate_disk",
+            "wavelength",
+            "iterations",
+            "composition",
+            "opacity_threshold",
+            "show_coverage",
+        )
+    }
     plate_only |= {("operator", "holo.record_hologram")}
     for mode, hidden in (("CAMERA", plate_only), ("PLATE", {("prop", "samples")})):
         empty_scene.holo.mode = mode
@@ -242,20 +262,26 @@ def test_a_renders_pass_shows_its_progress_in_the_status_bar(monkeypatch):
 
     from holo_addon.compositor import handlers
     from holo_addon.compositor.session import Running, session
+
     redrawn = []
     area = SimpleNamespace(type="PROPERTIES", tag_redraw=lambda: redrawn.append(1))
-    window = SimpleNamespace(workspace=_Workspace(),
-                             screen=SimpleNamespace(areas=[area, SimpleNamespace(type="VIEW_3D")]))
-    context = SimpleNamespace(window_manager=SimpleNamespace(windows=[window]),
-                              temp_override=lambda **_: nullcontext())
+    window = SimpleNamespace(
+        workspace=_Workspace(),
+        screen=SimpleNamespace(areas=[area, SimpleNamespace(type="VIEW_3D")]),
+    )
+    context = SimpleNamespace(
+        window_manager=SimpleNamespace(windows=[window]), temp_override=lambda **_: nullcontext()
+    )
     monkeypatch.setattr(handlers, "bpy", SimpleNamespace(context=context))
     monkeypatch.setattr(session, "shown", None)
     for frame, fraction in ((12, 0.0), (12, 0.25), (12, 0.25), (None, 0.25)):
         session.running = Running(frame=frame, fraction=fraction)
         assert handlers._show_progress() == 0.25  # the timer runs again in 0.25 s
     status = window.workspace.status
-    assert status[:2] == [f"Holo: holographic pass of frame 12: {p} (Render Properties ▸ Holo "
-                          f"▸ Cancel Pass)" for p in ("0%", "25%")]
+    assert status[:2] == [
+        f"Holo: holographic pass of frame 12: {p} (Render Properties ▸ Holo ▸ Cancel Pass)"
+        for p in ("0%", "25%")
+    ]
     assert status[2:] == [None] and len(redrawn) == 3  # unchanged text: not set again
 
 
@@ -265,12 +291,19 @@ def test_a_pass_of_one_look_reports_no_nan_contrast():
     from holo_addon.ui.operators import speckle
     from holo_core.job import Report
     from holo_core.view import RenderResult
-    one = speckle(Report.of(RenderResult(rgb=0, alpha=0, depth=0, info={
-        "samples": 1, "speckle_contrast": float("nan")})))
+
+    one = speckle(
+        Report.of(
+            RenderResult(
+                rgb=0, alpha=0, depth=0, info={"samples": 1, "speckle_contrast": float("nan")}
+            )
+        )
+    )
     assert "nan" not in one and "not measured" in one, one
     assert "no speckle" in speckle(Report(looks=1, speckle_contrast=0.0))
-    assert speckle(Report(looks=4, speckle_contrast=0.1234)) == \
-        " (4 samples, speckle contrast 0.123)"
+    assert (
+        speckle(Report(looks=4, speckle_contrast=0.1234)) == " (4 samples, speckle contrast 0.123)"
+    )
 
 
 def test_the_plate_coverage_overlay_follows_the_lines_of_sight(empty_scene):
@@ -278,18 +311,20 @@ def test_the_plate_coverage_overlay_follows_the_lines_of_sight(empty_scene):
     of sight pass through the plate's corners and end at the cube's far side (y = 0.25); the
     cube in the middle is covered (green), half out is partly (orange), far out not (red)."""
     from holo_addon.ui import overlay
+
     scene = empty_scene
     scene.holo.mode = "PLATE"
     cube, cam, plate = _plate_camera_cube(scene)
     found = overlay.coverage(scene, bpy.context.evaluated_depsgraph_get())
     assert found.state == "ALL"
     outline, sight, end = found.lines[:8], found.lines[8:16], found.lines[16:]
-    corners = np.array([(x, -1.5, z) for x, z in ((-0.3, -0.3), (0.3, -0.3), (0.3, 0.3),
-                                                  (-0.3, 0.3))])
+    corners = np.array(
+        [(x, -1.5, z) for x, z in ((-0.3, -0.3), (0.3, -0.3), (0.3, 0.3), (-0.3, 0.3))]
+    )
     np.testing.assert_allclose(np.sort(outline[::2], 0), np.sort(corners, 0), atol=1e-6)
     eye, far = sight[::2], sight[1::2]
     np.testing.assert_allclose(eye, [(0, -3, 0)] * 4, atol=1e-6)
-    np.testing.assert_allclose(far[:, 1], 0.25, atol=1e-6)       # the cube's far side
+    np.testing.assert_allclose(far[:, 1], 0.25, atol=1e-6)  # the cube's far side
     np.testing.assert_allclose(np.abs(far[:, [0, 2]]), 0.3 * 3.25 / 1.5, atol=1e-6)
     np.testing.assert_allclose(np.sort(end[::2], 0), np.sort(far, 0), atol=1e-6)
     for x, state in ((0.5, "PART"), (3.0, "NONE")):
@@ -307,6 +342,7 @@ def test_a_renders_warnings_reach_the_panel(empty_scene, tmp_path):
 
     from holo_addon.compositor.session import session
     from holo_addon.ui import panels as ui
+
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
     plate = next(o for o in scene.objects if o.holo.is_plate)
@@ -318,18 +354,25 @@ def test_a_renders_warnings_reach_the_panel(empty_scene, tmp_path):
     (warning,) = [text for kind, text in drawn if kind == "label" and "cut from the pass" in text]
     assert "covers" in warning
     bpy.ops.wm.read_factory_settings(use_empty=True)  # another file: its own warnings only
-    assert not any("cut from the pass" in text for _, text in
-                   _draw(ui.HOLO_PT_scene, SimpleNamespace(scene=bpy.context.scene)))
+    assert not any(
+        "cut from the pass" in text
+        for _, text in _draw(ui.HOLO_PT_scene, SimpleNamespace(scene=bpy.context.scene))
+    )
 
 
 def test_a_failed_render_pass_reaches_blenders_reports(addon, monkeypatch):
     """In the interface a failed render pass is put in Blender's reports (status bar, Info
     log) by the holo.report operator, and shown in a popup."""
     from holo_addon.compositor import handlers
+
     with pytest.raises(RuntimeError, match="Error: Holo: the pass of frame 3 failed"):
         bpy.ops.holo.report(message="Holo: the pass of frame 3 failed")
     shown = []
-    monkeypatch.setattr(bpy.types.WindowManager, "popup_menu",
-                        lambda self, draw, title, icon: shown.append((title, icon)), raising=False)
+    monkeypatch.setattr(
+        bpy.types.WindowManager,
+        "popup_menu",
+        lambda self, draw, title, icon: shown.append((title, icon)),
+        raising=False,
+    )
     handlers._show_error("Holo: the pass of frame 3 failed")
     assert shown == [("Holo", "ERROR")]

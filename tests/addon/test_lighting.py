@@ -19,6 +19,7 @@ def lit_stage(scene, size, *, sun=(65, -70), camera=((0.4, -3.4, 1.5), (0.6, 0.0
     sun."""
     from holo_addon.blender import compat
     from holo_addon.demo import point_at
+
     scene.render.engine = "CYCLES"
     scene.cycles.samples = 32
     scene.cycles.use_denoising = False
@@ -46,6 +47,7 @@ def lit_stage(scene, size, *, sun=(65, -70), camera=((0.4, -3.4, 1.5), (0.6, 0.0
 def paint(obj, name, rgb, roughness=0.5):
     """A Principled material ``name`` of Base Color ``rgb`` on ``obj``."""
     from holo_addon.blender import compat
+
     material = bpy.data.materials.new(name)
     compat.enable_nodes(material)
     bsdf = next(n for n in material.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
@@ -58,8 +60,9 @@ def _lit_scene(scene):
     """A smooth glossy grey sphere on the lit stage (its shadow falls on the floor in
     view)."""
     sun = lit_stage(scene, SIZE)
-    bpy.ops.mesh.primitive_uv_sphere_add(segments=48, ring_count=24, radius=0.3,
-                                         location=(0, 0, 0.3))
+    bpy.ops.mesh.primitive_uv_sphere_add(
+        segments=48, ring_count=24, radius=0.3, location=(0, 0, 0.3)
+    )
     sphere = bpy.context.object
     bpy.ops.object.shade_smooth()
     paint(sphere, "glossy grey", (0.6, 0.6, 0.6), roughness=0.3)
@@ -96,6 +99,7 @@ def _plate_between(scene, target):
     zone around the camera's pupil: the radiance is seen from the zone's centre, which the
     camera (aimed beside the target) shares."""
     from holo_addon.demo import point_at
+
     eye = np.array(scene.camera.location)
     bpy.ops.mesh.primitive_plane_add(size=1.0, location=tuple((eye + np.array(target)) / 2))
     plate = bpy.context.object
@@ -108,7 +112,8 @@ def _plate_between(scene, target):
 
 @pytest.mark.parametrize("mode", ["CAMERA", "PLATE"])
 def test_a_lit_holographic_sphere_shades_and_casts_its_shadow_as_cycles_does(
-        empty_scene, tmp_path, mode):
+    empty_scene, tmp_path, mode
+):
     """Cycles renders the sphere as an ordinary object, then as a POINTS emitter through its
     camera hologram (or a plate's view, the plate recorded for the camera's zone), composited:
     inside the object (the pass's alpha, one pixel in from the rim) the luminance correlates
@@ -117,6 +122,7 @@ def test_a_lit_holographic_sphere_shades_and_casts_its_shadow_as_cycles_does(
     bright as in Cycles. (A plate's radiance was rendered from the scene's camera but projected
     from the zone's view, aimed elsewhere: its highlight moved.)"""
     from holo_addon.render import pipeline
+
     scene = empty_scene
     sphere, _ = _lit_scene(scene)
     reference = _render(scene, tmp_path / "cycles.exr")
@@ -134,14 +140,17 @@ def test_a_lit_holographic_sphere_shades_and_casts_its_shadow_as_cycles_does(
     mine, theirs = _luminance(composite), _luminance(reference)
     corr = np.corrcoef(mine[inside], theirs[inside])[0, 1]
     ratio = mine[inside].mean() / theirs[inside].mean()
-    peak = [np.unravel_index(np.argmax(np.where(inside, lum, -1)), lum.shape)
-            for lum in (mine, theirs)]
+    peak = [
+        np.unravel_index(np.argmax(np.where(inside, lum, -1)), lum.shape) for lum in (mine, theirs)
+    ]
     shift = float(np.hypot(*np.subtract(*peak)))
     shadow = (_luminance(reference) < 0.5 * _luminance(unshadowed)) & ~_grow(alpha > 0.5, 2)
     shade = mine[shadow].mean() / theirs[shadow].mean()
-    print(f"lit sphere ({mode}): {inside.sum()} px inside, luminance correlation {corr:.3f}, mean "
-          f"ratio {ratio:.3f}, highlight {peak[0]} vs Cycles' {peak[1]} ({shift:.1f} px); "
-          f"shadow {shadow.sum()} px, {shade:.3f} x Cycles'")
+    print(
+        f"lit sphere ({mode}): {inside.sum()} px inside, luminance correlation {corr:.3f}, mean "
+        f"ratio {ratio:.3f}, highlight {peak[0]} vs Cycles' {peak[1]} ({shift:.1f} px); "
+        f"shadow {shadow.sum()} px, {shade:.3f} x Cycles'"
+    )
     assert inside.sum() > 300 and shadow.sum() > 100, (inside.sum(), shadow.sum())
     assert corr >= 0.9, f"luminance correlation inside the object {corr:.3f}"
     assert abs(ratio - 1) <= 0.15, f"mean luminance {ratio:.3f} x Cycles'"
@@ -150,7 +159,8 @@ def test_a_lit_holographic_sphere_shades_and_casts_its_shadow_as_cycles_does(
 
 
 def test_a_changed_light_renders_the_pass_again_and_nothing_changed_reuses_it(
-        empty_scene, worker_frames):
+    empty_scene, worker_frames
+):
     """Render Pass twice: one worker. The sun's strength doubled: the pass is made again and
     the cube's radiance doubles (no other light: within 5 %); the floor's colour changed
     (light it bounces): made again; nothing changed: reused."""
@@ -158,6 +168,7 @@ def test_a_changed_light_renders_the_pass_again_and_nothing_changed_reuses_it(
 
     from holo_addon.blender import compat
     from holo_addon.render import pipeline
+
     scene = empty_scene
     scene.cycles.samples = 8
     _plate_camera_cube(scene)
@@ -176,6 +187,7 @@ def test_a_changed_light_renders_the_pass_again_and_nothing_changed_reuses_it(
         image = _read_exr(path)
         shown = image["ViewLayer.Combined.A"] > 0.5
         return sum(image[f"ViewLayer.Combined.{c}"][shown].sum() for c in "RGB")
+
     assert bpy.ops.holo.render_pass() == {"FINISHED"} and worker_frames == [1]
     before = radiance()
     assert bpy.ops.holo.render_pass() == {"FINISHED"} and worker_frames == [1]

@@ -25,12 +25,17 @@ def _view(location, rotation, distance):
     R(rotation)⁻¹ · T(−location) (``view_rotation`` is the view's rotation, its eye at
     location + R · (0, 0, distance))."""
     from mathutils import Matrix, Quaternion, Vector
+
     q = Quaternion(rotation)
-    m = Matrix.Translation((0, 0, -distance)) @ q.to_matrix().to_4x4().inverted() @ \
-        Matrix.Translation(-Vector(location))
+    m = (
+        Matrix.Translation((0, 0, -distance))
+        @ q.to_matrix().to_4x4().inverted()
+        @ Matrix.Translation(-Vector(location))
+    )
     eye = Vector(location) + q @ Vector((0, 0, distance))
-    return SimpleNamespace(view_matrix=m, view_perspective="PERSP", is_perspective=True), \
-        np.array(eye)
+    return SimpleNamespace(view_matrix=m, view_perspective="PERSP", is_perspective=True), np.array(
+        eye
+    )
 
 
 def test_in_camera_view_the_viewports_camera_is_the_scene_cameras(empty_scene):
@@ -38,6 +43,7 @@ def test_in_camera_view_the_viewports_camera_is_the_scene_cameras(empty_scene):
     focus, at 1 Blender unit = 1 cm), at the live resolution (the render's aspect)."""
     from holo_addon.export.scene import camera_from_object, scale
     from holo_addon.export.viewport import viewport_camera
+
     scene = empty_scene
     scene.unit_settings.scale_length = 0.01
     _, cam, _ = _plate_camera_cube(scene)
@@ -50,8 +56,16 @@ def test_in_camera_view_the_viewports_camera_is_the_scene_cameras(empty_scene):
     theirs = camera_from_object(scene, cam, scale(scene), crop=False)  # float32 0.01
     assert ours.resolution == (640, 360)
     np.testing.assert_array_equal(ours.matrix_world, theirs.matrix_world)
-    for name in ("lens", "sensor_width", "sensor_height", "sensor_fit", "shift_x", "shift_y",
-                 "fstop", "focus_distance"):
+    for name in (
+        "lens",
+        "sensor_width",
+        "sensor_height",
+        "sensor_fit",
+        "shift_x",
+        "shift_y",
+        "fstop",
+        "focus_distance",
+    ):
         assert getattr(ours, name) == getattr(theirs, name), name
     assert ours.focus_distance == pytest.approx(0.03)
 
@@ -64,6 +78,7 @@ def test_an_orbit_moves_the_eye_around_the_views_centre(empty_scene):
     from mathutils import Euler, Quaternion
 
     from holo_addon.export.viewport import viewport_camera
+
     scene = empty_scene
     _, cam, _ = _plate_camera_cube(scene)
     focus = bpy.data.objects.new("focus", None)
@@ -92,9 +107,11 @@ def test_an_orbit_moves_the_eye_around_the_views_centre(empty_scene):
     assert after.field_of_view()[0] == pytest.approx(2 * math.atan(36 / 35), rel=1e-9)
     assert after.aperture_diameter == pytest.approx(50e-3 / 4.0, rel=1e-12)
     assert after.focus_distance == pytest.approx(distance, abs=F32)
-    ortho = SimpleNamespace(view_matrix=rv3d.view_matrix, view_perspective="ORTHO",
-                            is_perspective=False)
+    ortho = SimpleNamespace(
+        view_matrix=rv3d.view_matrix, view_perspective="ORTHO", is_perspective=False
+    )
     from holo_addon.export.scene import ExportError
+
     with pytest.raises(ExportError, match="orthographic"):
         viewport_camera(scene, space, ortho, (960, 540), 640)
 
@@ -103,6 +120,7 @@ def test_the_texture_holds_the_picture_bottom_row_first_at_the_scenes_exposure()
     """Rows from the bottom, RGB × 2^exposure, alpha as it is; the sRGB curve where the
     drawing takes display values (0.5 → 0.7354, 1.055·0.5^(1/2.4) − 0.055)."""
     from holo_addon.ui.live import texture_pixels
+
     rgba = np.zeros((2, 3, 4), np.float32)
     rgba[0, :, :3], rgba[1, :, :3], rgba[..., 3] = 0.25, 0.125, (0.5, 1.0, 0.0)
     out = texture_pixels(rgba, 1.0).reshape(2, 3, 4)
@@ -118,6 +136,7 @@ def test_the_live_view_registers_and_unregisters_without_a_screen(empty_scene):
     starts no worker; unregistered, its state and timers are gone (registered again)."""
     from holo_addon.compositor.session import session
     from holo_addon.ui import live
+
     scene = empty_scene
     scene.holo.mode = "PLATE"
     scene.holo.live_plate = True
@@ -137,6 +156,7 @@ def _wait(until, timeout=120.0, clock=None):
     (a frozen clock keeps the full view from being asked, so a loaded machine's slow
     coarse view is not superseded before it is seen)."""
     from holo_addon.ui import live
+
     end = time.monotonic() + timeout
     while time.monotonic() < end:
         live.poll(None if clock is None else clock())
@@ -146,8 +166,7 @@ def _wait(until, timeout=120.0, clock=None):
     raise AssertionError(f"the live view did not answer in {timeout} s: {live.state()}")
 
 
-def test_a_recorded_plate_is_seen_live_coarse_then_full_and_outside_its_zone_in_words(
-        empty_scene):
+def test_a_recorded_plate_is_seen_live_coarse_then_full_and_outside_its_zone_in_words(empty_scene):
     """The scene's recorded plate: the first look's full picture holds the cube (its coarse
     one superseded while the worker starts); a move asks a coarse picture, which arrives,
     and after STILL s of stillness the full one is asked and arrives; an eye 1 m aside
@@ -155,6 +174,7 @@ def test_a_recorded_plate_is_seen_live_coarse_then_full_and_outside_its_zone_in_
     process), ended when the view is turned off."""
     from holo_addon.export.viewport import viewport_camera
     from holo_addon.ui import live
+
     scene = empty_scene
     _, cam, plate = _plate_camera_cube(scene)
     plate.holo.zone_margin = 0.05  # room to look around: the view moves 1 cm
@@ -166,8 +186,13 @@ def test_a_recorded_plate_is_seen_live_coarse_then_full_and_outside_its_zone_in_
     p = live.state()
     assert p.views is not None, p.why
     try:
-        camera = viewport_camera(scene, SimpleNamespace(lens=50.0),
-                                 SimpleNamespace(view_perspective="CAMERA"), (64, 48), 32)
+        camera = viewport_camera(
+            scene,
+            SimpleNamespace(lens=50.0),
+            SimpleNamespace(view_perspective="CAMERA"),
+            (64, 48),
+            32,
+        )
         first = live.look(1, camera)
         assert first and live.look(1, camera) == 0  # no move, no request
         p = _wait(lambda s: s.full and s.shown is not None and s.shown.request >= s.full)
@@ -182,9 +207,11 @@ def test_a_recorded_plate_is_seen_live_coarse_then_full_and_outside_its_zone_in_
         assert p.shown.rgba[..., 3].max() == 1.0 and p.coarse is not None
         p = _wait(lambda s: s.full and s.shown.request >= s.full)
         assert not p.shown.coarse and p.latency >= live.STILL
-        aside = SimpleNamespace(view_matrix=np.linalg.inv(np.array(cam.matrix_world) @
-                                                          _shift(1.0)),
-                                view_perspective="PERSP", is_perspective=True)
+        aside = SimpleNamespace(
+            view_matrix=np.linalg.inv(np.array(cam.matrix_world) @ _shift(1.0)),
+            view_perspective="PERSP",
+            is_perspective=True,
+        )
         live.look(1, viewport_camera(scene, SimpleNamespace(lens=50.0), aside, (64, 48), 32))
         p = _wait(lambda s: s.shown.where)
         assert p.shown.rgba is None and "zone" in p.shown.where, p.shown

@@ -12,16 +12,19 @@ from test_compositor import _middle, _scene_with_pass, _shown_columns  # noqa: E
 
 def test_the_memory_limit_preference_reaches_the_worker():
     from holo_core.worker import environment
+
     assert environment((), None, "6.0G")["HOLO_MEMORY_LIMIT"] == "6.0G"
     unset = environment((), None, None).get("HOLO_MEMORY_LIMIT")
     assert unset == __import__("os").environ.get("HOLO_MEMORY_LIMIT")  # not overridden
 
 
 def test_a_render_cropped_to_an_off_centre_border_gets_the_border_of_the_pass(
-        empty_scene, tmp_path):
+    empty_scene, tmp_path
+):
     """Crop to Render Region: the pass has the cropped render's size and shows the cube where
     the full frame's pass has it, shifted by the region's corner (within a pixel)."""
     from holo_addon.render import pipeline
+
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
     full = pipeline.pass_file(pipeline.output_dir(scene), 1)
@@ -46,6 +49,7 @@ def test_an_up_to_date_pass_is_not_rendered_again(empty_scene, worker_frames):
     """The frame's pass carries a digest of what it was made from: the same scene renders
     nothing again; any change (here the exposure) renders anew."""
     from holo_addon.render import pipeline
+
     scene = empty_scene
     _plate_camera_cube(scene)
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
@@ -65,6 +69,7 @@ def test_a_render_region_without_crop_clears_the_pass_outside_it(empty_scene, tm
     """Blender renders only inside the region: the pass matches the full frame's inside and
     is clear outside, so no holographic object floats over the unrendered part."""
     from holo_addon.render import pipeline
+
     scene = empty_scene
     _scene_with_pass(scene, tmp_path)
     path = pipeline.pass_file(pipeline.output_dir(scene), 1)
@@ -85,6 +90,7 @@ def test_a_static_shot_is_made_once_and_each_frame_stays_pure(empty_scene, tmp_p
     its own frame's digest. Frame 3 rendered alone, into an empty folder (a farm's node), gives
     the same pixels. The cube moving at frame 4 makes frame 4 anew."""
     from holo_addon.render import pipeline
+
     scene = empty_scene
     cube, _, _ = _plate_camera_cube(scene)
     scene.render.resolution_x, scene.render.resolution_y = 32, 24

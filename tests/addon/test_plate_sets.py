@@ -37,7 +37,8 @@ def _dolly_scene(scene):
 
 
 def test_a_long_dolly_makes_a_set_that_each_frame_renders_from_its_part(
-        empty_scene, tmp_path, worker_frames):
+    empty_scene, tmp_path, worker_frames
+):
     """Fit Zone to Shot: two parts (a 30 cm path, parts of 20 cm overlapping by a pupil),
     each facing its stretch 1.5 m from the cube, together holding every frame's pupil; the
     timeline left where it was; the overlay draws both parts. Plan Plate's verdict names the
@@ -51,6 +52,7 @@ def test_a_long_dolly_makes_a_set_that_each_frame_renders_from_its_part(
     from holo_addon.ui import overlay, plates
     from holo_core.io.plate_set import MANIFEST
     from holo_core.job import SetRoute
+
     scene = empty_scene
     _, cam, plate = _dolly_scene(scene)
     assert bpy.ops.holo.fit_zone_to_shot() == {"FINISHED"}
@@ -99,8 +101,10 @@ def test_a_long_dolly_makes_a_set_that_each_frame_renders_from_its_part(
         scene.frame_set(frame)
         cols = _camera_columns(scene, cam, corners)
         got = _middle(path)
-        print(f"frame {frame}: part {chosen[frame]}, pass middle {got}, projected "
-              f"{(min(cols) + max(cols)) / 2:.2f}")
+        print(
+            f"frame {frame}: part {chosen[frame]}, pass middle {got}, projected "
+            f"{(min(cols) + max(cols)) / 2:.2f}"
+        )
         assert abs(got - (min(cols) + max(cols)) / 2) <= 0.5, frame
 
 
@@ -113,7 +117,9 @@ def test_a_path_through_the_objects_is_refused_naming_its_frame(empty_scene):
     cam.location.y = 1.0
     cam.keyframe_insert("location", frame=3)
     bpy.context.view_layer.update()
-    with pytest.raises(RuntimeError, match="frame 2: the path from its camera to frame 3's "
-                                           "passes through the objects"):
+    with pytest.raises(
+        RuntimeError,
+        match="frame 2: the path from its camera to frame 3's passes through the objects",
+    ):
         bpy.ops.holo.fit_zone_to_shot()
     assert plate.holo.parts == ""

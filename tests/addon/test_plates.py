@@ -40,12 +40,14 @@ def test_camera_moves_inside_the_zone_never_record_again(empty_scene):
     named, and a changed margin sets a new zone (a new recording)."""
     from holo_addon.export.scene import ExportError
     from holo_addon.render import pipeline
+
     scene = empty_scene
     _, cam, plate = _plate_scene(scene)
     assert bpy.ops.holo.record_hologram() == {"FINISHED"}
     assert plate.holo.zone_set
-    zone = ViewingZone(centre=tuple(plate.holo.zone_centre),
-                       half_extents=tuple(plate.holo.zone_half))
+    zone = ViewingZone(
+        centre=tuple(plate.holo.zone_centre), half_extents=tuple(plate.holo.zone_half)
+    )
     assert zone.half_extents[0] == pytest.approx(0.05 / 2.8 / 2 + 0.2, rel=1e-6)
     assert read_hologram(plate.holo.hologram).zone is not None
 
@@ -54,8 +56,9 @@ def test_camera_moves_inside_the_zone_never_record_again(empty_scene):
 
     first = job()
     # Iterations 1 by hand is said to lose against Auto (test_auto_iterations_...); nothing else
-    assert not first.records and not [w for w in first.warnings
-                                      if "set by hand" not in w], first.warnings
+    assert not first.records and not [w for w in first.warnings if "set by hand" not in w], (
+        first.warnings
+    )
     cam.location.x += 0.1
     cam.rotation_euler.z += 0.02
     cam.data.dof.focus_distance = 2.5
@@ -68,12 +71,16 @@ def test_camera_moves_inside_the_zone_never_record_again(empty_scene):
     bpy.context.view_layer.update()
     outside = job()
     said = [w for w in outside.warnings if "viewing zone" in w]
-    assert said and "beyond the viewing zone of plate 'Plane' (the box centred at" in said[0], \
+    assert said and "beyond the viewing zone of plate 'Plane' (the box centred at" in said[0], (
         outside.warnings
+    )
     assert "Fit Zone to Shot" in said[0]
     scene.holo.outside_zone = "FAIL"  # a farm's frame the plate was not made for: it fails
-    with pytest.raises(ExportError, match=r"beyond the viewing zone of plate 'Plane' .*\(Outside "
-                       r"Zone: Fail\)"):
+    with pytest.raises(
+        ExportError,
+        match=r"beyond the viewing zone of plate 'Plane' .*\(Outside "
+        r"Zone: Fail\)",
+    ):
         job()
     scene.holo.outside_zone = "WARN"
     plate.holo.zone_margin = 0.3
@@ -88,6 +95,7 @@ def test_render_passes_of_a_recorded_plate_share_the_worker_that_holds_it(empty_
     end ends that worker."""
     from holo_addon.render import pipeline
     from holo_core import worker
+
     scene = empty_scene
     _, cam, _ = _plate_scene(scene)
     assert bpy.ops.holo.record_hologram() == {"FINISHED"}
@@ -107,8 +115,7 @@ def test_render_passes_of_a_recorded_plate_share_the_worker_that_holds_it(empty_
     assert worker._resident is None and kept.popen.poll() is not None
 
 
-def test_a_frame_beyond_the_zone_renders_whole_as_a_camera_hologram(empty_scene, tmp_path,
-                                                                    caplog):
+def test_a_frame_beyond_the_zone_renders_whole_as_a_camera_hologram(empty_scene, tmp_path, caplog):
     """The plate recorded, the camera moved 0.5 m beyond its zone: by default (Outside Zone:
     Camera Hologram) the frame's job is a camera hologram of that frame, which names the
     distance and the plate, and its render composites opaque (no pixel with alpha < 0.99)
@@ -120,6 +127,7 @@ def test_a_frame_beyond_the_zone_renders_whole_as_a_camera_hologram(empty_scene,
     from holo_addon.blender import compat
     from holo_addon.render import pipeline
     from holo_core.job import CameraRoute, PlateRoute
+
     scene = empty_scene
     _, cam, _ = _plate_scene(scene)
     assert bpy.ops.holo.record_hologram() == {"FINISHED"}
@@ -167,14 +175,16 @@ def test_the_zone_is_drawn_as_its_box(empty_scene):
     """The overlay's zone: the box's 12 edges, at its centre and half widths in the world."""
     from holo_addon.export.plates import plate_from_object
     from holo_addon.ui.overlay import zone_edges
+
     scene = empty_scene
     _, _, plate = _plate_scene(scene)
     plate.holo.zone_centre, plate.holo.zone_half = (0.0, 0.0, 1.5), (0.3, 0.2, 0.1)
     plate.holo.zone_set = True
     edges = zone_edges(plate_from_object(plate, 1.0), 1.0)
     assert edges.shape == (24, 3)
-    local = (edges - np.array(plate.matrix_world.translation)) @ \
-        np.array(plate.matrix_world.to_3x3().normalized())
+    local = (edges - np.array(plate.matrix_world.translation)) @ np.array(
+        plate.matrix_world.to_3x3().normalized()
+    )
     assert np.allclose(np.abs(local - (0, 0, 1.5)).max(0), (0.3, 0.2, 0.1), atol=1e-6)
 
 
@@ -182,6 +192,7 @@ def test_planner_in_the_panel(empty_scene):
     """Plan Plate states, before recording, its verdict, the plate's samples, wavelength,
     disk, memory, time and what the camera's view of it resolves."""
     from holo_addon.ui import plates
+
     scene = empty_scene
     _, _, plate = _plate_scene(scene)
     bpy.context.view_layer.objects.active = plate
@@ -201,6 +212,7 @@ def test_the_plan_samples_the_plate_the_recording_samples(empty_scene):
     from holo_addon.render import pipeline
     from holo_addon.ui import plates
     from holo_core.plate.recording import plate_plan
+
     scene = empty_scene
     cube, _, plate = _plate_scene(scene)
     bpy.data.objects.remove(cube)
@@ -210,8 +222,12 @@ def test_the_plan_samples_the_plate_the_recording_samples(empty_scene):
     bpy.context.view_layer.objects.active = plate
     assert bpy.ops.holo.plan_plate() == {"FINISHED"}
     job = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False).job
-    p = plate_plan(list(job.points) + list(job.triangles), plate=job.route.plate,
-                   camera=job.camera, wavelength=job.route.wavelength).plan
+    p = plate_plan(
+        list(job.points) + list(job.triangles),
+        plate=job.route.plate,
+        camera=job.camera,
+        wavelength=job.route.wavelength,
+    ).plan
     rows, cols = p.shape
     text = "\n".join(plates.plan_lines(plate))
     assert f": {cols} x {rows} samples" in text, (p.shape, text)
@@ -227,11 +243,16 @@ def test_import_a_hologram_and_keep_its_link(empty_scene, tmp_path, rng):
     scene.render.resolution_x, scene.render.resolution_y = 24, 16
     pose = np.eye(4)
     pose[:3, 3] = (0.2, -0.1, 0.5)
-    wave = (rng.standard_normal((1, 64, 96)) + 1j * rng.standard_normal((1, 64, 96)))
-    h = Hologram(object_wave=wave.astype(np.complex64), encoding="complex",
-                 wavelengths=(2e-5,), pitch=5e-4, plate=pose,
-                 bounds=[[-0.02, -0.02, -0.3], [0.02, 0.02, -0.29]],
-                 zone=ViewingZone(centre=(0, 0, 0.5), half_extents=(0.1, 0.1, 0.1)))
+    wave = rng.standard_normal((1, 64, 96)) + 1j * rng.standard_normal((1, 64, 96))
+    h = Hologram(
+        object_wave=wave.astype(np.complex64),
+        encoding="complex",
+        wavelengths=(2e-5,),
+        pitch=5e-4,
+        plate=pose,
+        bounds=[[-0.02, -0.02, -0.3], [0.02, 0.02, -0.29]],
+        zone=ViewingZone(centre=(0, 0, 0.5), half_extents=(0.1, 0.1, 0.1)),
+    )
     path = write_hologram(tmp_path / "acquired.exr", h)
     blend = tmp_path / "scene.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend))
@@ -262,10 +283,12 @@ def test_import_a_scan_and_composite_its_letter(empty_scene, tmp_path):
 
     from holo_addon.blender import compat
     from holo_addon.export.scene import camera_from_object
+
     scene = empty_scene
     scan = scans.optical_scan(tmp_path)
-    assert bpy.ops.holo.import_hologram(filepath=str(scan), pitch=3.45, wavelength=633.0,
-                                        distance=0.05) == {"FINISHED"}
+    assert bpy.ops.holo.import_hologram(
+        filepath=str(scan), pitch=3.45, wavelength=633.0, distance=0.05
+    ) == {"FINISHED"}
     plate = next(o for o in scene.objects if o.holo.is_plate)
     assert plate.holo.imported and plate.holo.hologram.endswith("letter_scan_2048_holo.exr")
     assert scene.camera is not None and scene.camera.data.dof.use_dof
@@ -291,6 +314,7 @@ def test_import_a_scan_and_composite_its_letter(empty_scene, tmp_path):
     def meets(z):  # where each pixel's ray meets the plane z [m]
         t = (z - camera.position[2]) / rays[..., 2]
         return camera.position[0] + t * rays[..., 0], camera.position[1] + t * rays[..., 1]
+
     x, y = meets(-scans.DISTANCE)
     truth = scans.letter(x, y)
     px, py = meets(0.0)
@@ -301,10 +325,13 @@ def test_import_a_scan_and_composite_its_letter(empty_scene, tmp_path):
     shown = window & (luminance > float(np.median(luminance[truth])) / 2)
     iou = (shown & truth).sum() / (shown | truth).sum()
     cols = np.indices(shown.shape)[1]
-    dot = (x - 0.25 * scans.LETTER_HEIGHT) ** 2 + (y + 0.3 * scans.LETTER_HEIGHT) ** 2 <= \
-        (0.09 * scans.LETTER_HEIGHT) ** 2
-    print(f"composite: IoU {iou:.4f}, dot {shown[dot].mean():.3f} shown, the wall around the "
-          f"window {wall_seen:.3g}, inside it {float(np.median(luminance[window & ~truth])):.3g}")
+    dot = (x - 0.25 * scans.LETTER_HEIGHT) ** 2 + (y + 0.3 * scans.LETTER_HEIGHT) ** 2 <= (
+        0.09 * scans.LETTER_HEIGHT
+    ) ** 2
+    print(
+        f"composite: IoU {iou:.4f}, dot {shown[dot].mean():.3f} shown, the wall around the "
+        f"window {wall_seen:.3g}, inside it {float(np.median(luminance[window & ~truth])):.3g}"
+    )
     assert iou >= 0.95, iou
     assert shown[dot].mean() >= 0.9 and cols[dot].mean() > cols[truth].mean()
     assert wall_seen > 0.01, "the raster around the plate's window is the wall"
@@ -317,6 +344,7 @@ def test_a_shot_records_once_and_every_frame_renders_from_it(empty_scene):
     process, gives its verdict first."""
     from holo_addon.render import pipeline
     from holo_addon.ui import plates
+
     scene = empty_scene
     _, cam, plate = _plate_scene(scene)
     plate.holo.zone_margin = 0.01
@@ -328,8 +356,11 @@ def test_a_shot_records_once_and_every_frame_renders_from_it(empty_scene):
     bpy.context.view_layer.objects.active = plate
     assert bpy.ops.holo.fit_zone_to_shot() == {"FINISHED"}
     assert scene.frame_current == 2
-    zone = ViewingZone(centre=tuple(plate.holo.zone_centre),
-                       half_extents=tuple(plate.holo.zone_half), pupil=plate.holo.zone_pupil)
+    zone = ViewingZone(
+        centre=tuple(plate.holo.zone_centre),
+        half_extents=tuple(plate.holo.zone_half),
+        pupil=plate.holo.zone_pupil,
+    )
     pupil = 0.05 / 2.8
     assert zone.half_extents[0] == pytest.approx(0.05 + pupil / 2 + 0.01, rel=1e-4), zone
     assert zone.half_extents[1] == pytest.approx(pupil / 2 + 0.01, rel=1e-4), zone
@@ -354,6 +385,7 @@ def test_auto_iterations_and_supersample_take_the_plans_choice(empty_scene):
     from holo_addon.render import pipeline
     from holo_addon.ui import plates
     from holo_core.plate.quality import choose
+
     scene = empty_scene
     _, cam, plate = _plate_scene(scene)
     scene.holo.property_unset("iterations")
@@ -367,8 +399,10 @@ def test_auto_iterations_and_supersample_take_the_plans_choice(empty_scene):
     assert not [w for w in prepared.warnings if "set by hand" in w], prepared.warnings
     assert bpy.ops.holo.plan_plate() == {"FINISHED"}
     text = "\n".join(plates.plan_lines(plate))
-    assert f"quality     Auto chose {expected.looks} looks, supersample " \
-           f"{expected.supersample}: predicted {expected.psnr:.1f} dB" in text, text
+    assert (
+        f"quality     Auto chose {expected.looks} looks, supersample "
+        f"{expected.supersample}: predicted {expected.psnr:.1f} dB" in text
+    ), text
     scene.holo.iterations = 1
     mine = choose(_route_plan(prepared), resolution=prepared.job.camera.resolution, looks=1)
     assert mine.loss > 0.05, mine  # the scene's plan asks more than one look
@@ -391,6 +425,7 @@ def test_auto_looks_fit_the_disk_budget(empty_scene):
     from holo_addon.render import pipeline
     from holo_addon.ui import plates
     from holo_core.plate.quality import choose
+
     scene = empty_scene
     cube, cam, plate = _plate_scene(scene)
     cube.scale = (DEEP, DEEP, DEEP)  # its back out of focus when its front is sharp
@@ -409,8 +444,11 @@ def test_auto_looks_fit_the_disk_budget(empty_scene):
     assert len(route.holograms) == free.looks
     fewer = 2 if free.looks == 4 else 4
     scene.holo.plate_disk = replace(p, looks=fewer).disk_bytes(tiled=True) / 2**30 * 1.02
-    held = choose(p, resolution=RESOLUTION, budget=(scene.holo.plate_memory * 2**30,
-                                                    scene.holo.plate_disk * 2**30))
+    held = choose(
+        p,
+        resolution=RESOLUTION,
+        budget=(scene.holo.plate_memory * 2**30, scene.holo.plate_disk * 2**30),
+    )
     assert held.looks == fewer and held.capped(), held
     prepared = pipeline.prepare(scene, bpy.context.evaluated_depsgraph_get(), render=False)
     assert len(prepared.job.route.holograms) == fewer
@@ -425,10 +463,14 @@ def test_auto_looks_fit_the_disk_budget(empty_scene):
 def _route_plan(prepared):
     """The plan of the prepared job's plate for its meshes, as the add-on's Auto plans it."""
     from holo_core.plate.plan import plan
+
     job = prepared.job
     route = job.route
-    local = route.plate.to_plate(np.concatenate([m.vertices for m in job.points
-                                                 + job.triangles]))
+    local = route.plate.to_plate(np.concatenate([m.vertices for m in job.points + job.triangles]))
     zone = route.plate.zone
-    return plan((route.plate.width, route.plate.height), [local.min(0), local.max(0)],
-                zone=zone, pixel_angle=zone.pixel or job.camera.pixel_angle())
+    return plan(
+        (route.plate.width, route.plate.height),
+        [local.min(0), local.max(0)],
+        zone=zone,
+        pixel_angle=zone.pixel or job.camera.pixel_angle(),
+    )

@@ -22,13 +22,15 @@ def _perspective(scene, cam, size):
     return np.array(projection) @ np.array(cam.matrix_world.inverted())
 
 
-@pytest.mark.parametrize("fit, shift, size", [("AUTO", (0.0, 0.0), (64, 48)),
-                                               ("VERTICAL", (0.1, -0.05), (40, 60))])
+@pytest.mark.parametrize(
+    "fit, shift, size", [("AUTO", (0.0, 0.0), (64, 48)), ("VERTICAL", (0.1, -0.05), (40, 60))]
+)
 def test_the_pass_is_drawn_exactly_on_the_cameras_frame(empty_scene, fit, shift, size):
     """Through a view whose projection is the camera's own, the frame lands on the region's
     edges (within 1e-3 px); a region zoomed 2x about a point moves it there; a render
     cropped to a region draws its pass on that region's pixels."""
     from holo_addon.ui.preview import camera_frame, frame_rect
+
     scene = empty_scene
     _, cam, _ = _plate_camera_cube(scene)
     cam.data.sensor_fit, (cam.data.shift_x, cam.data.shift_y) = fit, shift
@@ -42,9 +44,16 @@ def test_the_pass_is_drawn_exactly_on_the_cameras_frame(empty_scene, fit, shift,
     zoom = np.diag([2.0, 2.0, 1.0, 1.0])
     zoom[:2, 3] = (-0.5, 0.25)  # NDC: x → 2x − 0.5, y → 2y + 0.25 (w = 1 after the divide)
     rect = frame_rect(zoom @ view, size, camera_frame(scene, cam))
-    np.testing.assert_allclose(rect, ((-2 - 0.5 + 1) / 2 * w, (-2 + 0.25 + 1) / 2 * h,
-                                      (2 - 0.5 + 1) / 2 * w, (2 + 0.25 + 1) / 2 * h),
-                               atol=1e-3)
+    np.testing.assert_allclose(
+        rect,
+        (
+            (-2 - 0.5 + 1) / 2 * w,
+            (-2 + 0.25 + 1) / 2 * h,
+            (2 - 0.5 + 1) / 2 * w,
+            (2 + 0.25 + 1) / 2 * h,
+        ),
+        atol=1e-3,
+    )
     r = scene.render
     r.use_border = r.use_crop_to_border = True
     r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = 0.25, 0.75, 0.5, 1.0
@@ -52,8 +61,7 @@ def test_the_pass_is_drawn_exactly_on_the_cameras_frame(empty_scene, fit, shift,
     np.testing.assert_allclose(rect, (0.25 * w, 0.5 * h, 0.75 * w, h), atol=1e-3)
 
 
-def test_a_preview_pass_is_made_by_the_worker_and_becomes_the_picture(empty_scene,
-                                                                      monkeypatch):
+def test_a_preview_pass_is_made_by_the_worker_and_becomes_the_picture(empty_scene, monkeypatch):
     """With OpenCL made unusable in Blender's process: *start* returns at once with the
     worker running, the pass at a quarter of the render's resolution arrives in the output
     folder's preview/, and the picture the texture is made from is its PNG: the pass's alpha
@@ -69,6 +77,7 @@ def test_a_preview_pass_is_made_by_the_worker_and_becomes_the_picture(empty_scen
 
     def refuse(*_, **__):
         raise AssertionError("Blender's process must not touch OpenCL")
+
     monkeypatch.setattr(runtime, "choose_device", refuse)
     monkeypatch.setattr(runtime, "get_runtime", refuse)
     scene = empty_scene
@@ -90,8 +99,10 @@ def test_a_preview_pass_is_made_by_the_worker_and_becomes_the_picture(empty_scen
         while preview.poll(scene):
             time.sleep(0.05)
         shown = preview.state()
-        print(f"{transform}: preview {shown.picture.shape[1]}x{shown.picture.shape[0]} "
-              f"in {time.perf_counter() - begun:.2f} s")
+        print(
+            f"{transform}: preview {shown.picture.shape[1]}x{shown.picture.shape[0]} "
+            f"in {time.perf_counter() - begun:.2f} s"
+        )
         pictures[transform] = shown.picture.copy()
         path = pipeline.pass_file(pipeline.output_dir(scene) / "preview", 1)
         assert shown.source == str(path)
@@ -103,8 +114,9 @@ def test_a_preview_pass_is_made_by_the_worker_and_becomes_the_picture(empty_scen
     np.testing.assert_allclose(pictures["AgX"][..., 3], alpha, atol=1 / 255 + 1e-6)
     solid = alpha > 0.99
     assert solid.sum() > 20
-    np.testing.assert_allclose(pictures["Standard"][..., :3][solid], srgb(straight)[solid],
-                               atol=1 / 255 + 1e-6)
+    np.testing.assert_allclose(
+        pictures["Standard"][..., :3][solid], srgb(straight)[solid], atol=1 / 255 + 1e-6
+    )
     agx = np.abs(pictures["AgX"][..., :3][solid] - srgb(straight)[solid]).max()
     assert agx > 0.05, f"AgX changes the object's pixels by {agx:.3f} at most"
     assert not preview.start(scene, bpy.context.evaluated_depsgraph_get()), "nothing changed"

@@ -17,6 +17,7 @@ def test_the_pass_depth_is_in_scene_units(empty_scene, tmp_path):
     so the depth merge compares like with like (median error over the object <= 0.5 % of its
     depth extent in Blender's Depth pass; in metres it was 100 times too small)."""
     from holo_addon.render import pipeline
+
     scene = empty_scene
     scene.unit_settings.scale_length = 0.01
     cube, cam, plate = _plate_camera_cube(scene, cube_size=50)
@@ -35,8 +36,9 @@ def test_the_pass_depth_is_in_scene_units(empty_scene, tmp_path):
     both = (holo["ViewLayer.Combined.A"] > 0.5) & (alpha > 0.5) & (depth < 1e9)
     extent = np.ptp(depth[both])
     err = np.median(np.abs(holo["ViewLayer.Depth.Z"][both] - depth[both])) / extent
-    print(f"scale_length 0.01: median depth error {err:.2%} of {extent:.1f} units "
-          f"({both.sum()} px)")
+    print(
+        f"scale_length 0.01: median depth error {err:.2%} of {extent:.1f} units ({both.sum()} px)"
+    )
     assert both.sum() > 100 and err <= 0.005, f"median depth error {err:.2%} of {extent:.1f}"
 
 
@@ -54,6 +56,7 @@ def test_a_failing_emitter_is_a_warning_naming_it_while_the_rest_renders(empty_s
     the wire; alone, the wire gives the no-emitter error, which names it too."""
     from holo_addon.export.scene import NoEmitters
     from holo_addon.render import pipeline
+
     scene = empty_scene
     cube, _, _ = _plate_camera_cube(scene)
     _faceless(scene)
@@ -74,6 +77,7 @@ def test_a_failing_emitter_is_a_warning_naming_it_while_the_rest_renders(empty_s
 def _composited_cube(scene, size=(48, 36)):
     """The helper cube under a sun, its pass made and composited; Cycles at 4 samples."""
     from holo_addon.blender import compat
+
     cube, cam, plate = _plate_camera_cube(scene, cube_size=0.4)
     bpy.ops.object.light_add(type="SUN", rotation=(np.radians(60), 0, 0))
     scene.render.resolution_x, scene.render.resolution_y = size
@@ -92,14 +96,19 @@ def test_a_crop_gives_a_pass_of_exactly_the_crops_size(empty_scene, tmp_path):
     edge is border x size in single precision, truncated); the pass is 128x108 too (it was
     129x107) and shows the cube where the full frame has it, shifted by the crop's corner."""
     from holo_addon.render import pipeline
+
     scene = empty_scene
     _composited_cube(scene, size=(160, 120))
     path = pipeline.pass_file(pipeline.output_dir(scene), 1)
     full = _read_exr(path)["ViewLayer.Combined.A"] > 0.5
     r = scene.render
     r.use_border = r.use_crop_to_border = True
-    r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = 7 / 160, 135 / 160, \
-        5 / 120, 113 / 120
+    r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = (
+        7 / 160,
+        135 / 160,
+        5 / 120,
+        113 / 120,
+    )
     r.filepath = str(tmp_path / "crop.exr")
     bpy.ops.render.render(write_still=True)
     rendered = _read_exr(tmp_path / "crop.exr")["R"].shape
@@ -118,6 +127,7 @@ def test_emitters_hidden_in_the_viewport_are_recorded_as_the_render_draws_them(e
     emitter still renders, so Render Pass records it (and leaves it hidden); disabled in
     renders, it is left out and the refusal says so."""
     from holo_addon.render import pipeline
+
     scene = empty_scene
     cube, _, _ = _plate_camera_cube(scene)
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
@@ -128,11 +138,18 @@ def test_emitters_hidden_in_the_viewport_are_recorded_as_the_render_draws_them(e
     collection.objects.link(cube)
     layer = bpy.context.view_layer.layer_collection.children["Hidden"]
     for hide, show, hidden in (
-            (lambda: cube.hide_set(True), lambda: cube.hide_set(False), cube.hide_get),
-            (lambda: setattr(cube, "hide_viewport", True),
-             lambda: setattr(cube, "hide_viewport", False), lambda: cube.hide_viewport),
-            (lambda: setattr(layer, "hide_viewport", True),
-             lambda: setattr(layer, "hide_viewport", False), lambda: layer.hide_viewport)):
+        (lambda: cube.hide_set(True), lambda: cube.hide_set(False), cube.hide_get),
+        (
+            lambda: setattr(cube, "hide_viewport", True),
+            lambda: setattr(cube, "hide_viewport", False),
+            lambda: cube.hide_viewport,
+        ),
+        (
+            lambda: setattr(layer, "hide_viewport", True),
+            lambda: setattr(layer, "hide_viewport", False),
+            lambda: layer.hide_viewport,
+        ),
+    ):
         hide()
         path.unlink(missing_ok=True)
         assert bpy.ops.holo.render_pass() == {"FINISHED"}
@@ -152,6 +169,7 @@ def test_f12_without_compositing_warns_in_blenders_report(empty_scene, tmp_path,
     """An emitter and no Set Up Compositing: F12 warns (the log, Render ▸ Holo, and Blender's
     reports in the interface) naming the object and the fix, instead of a silent vanish."""
     from holo_addon.compositor.session import session
+
     scene = empty_scene
     _plate_camera_cube(scene)
     scene.render.resolution_x, scene.render.resolution_y = 32, 24
@@ -171,14 +189,16 @@ def test_layers_follow_the_output_path_at_render_time(empty_scene, tmp_path):
     scene.render.filepath = str(tmp_path / "farm" / "take_")
     scene.frame_start = scene.frame_end = 1
     bpy.ops.render.render(animation=True)
-    written = sorted(p.name for p in tmp_path.rglob("holo_*.exr")
-                     if not p.name.startswith("holo_pass_"))
+    written = sorted(
+        p.name for p in tmp_path.rglob("holo_*.exr") if not p.name.startswith("holo_pass_")
+    )
     assert written == ["holo_take_0001.exr"], written
     assert (tmp_path / "farm" / "holo_take_0001.exr").is_file()
 
 
 def test_motion_blur_in_plate_mode_warns_once_and_makes_one_pass_per_frame(
-        empty_scene, tmp_path, caplog, worker_frames):
+    empty_scene, tmp_path, caplog, worker_frames
+):
     """Motion blur on in Plate mode (a plate is recorded once for many frames, unblurred),
     -a over frames 1-3 of a moving cube: Blender evaluates each frame at its shutter's steps
     (sub-frames), but one pass per frame is made (3 workers, was 11), each of its own
@@ -189,6 +209,7 @@ def test_motion_blur_in_plate_mode_warns_once_and_makes_one_pass_per_frame(
     from test_compositor import _middle, _moving_cube
 
     from holo_addon.render import pipeline
+
     scene = empty_scene
     _, cam = _moving_cube(scene, tmp_path)
     scene.frame_set(1)
@@ -218,6 +239,7 @@ def test_a_stale_pass_warns_with_its_age(empty_scene, tmp_path, caplog):
     import time
 
     from holo_addon.render import pipeline
+
     scene = empty_scene
     cube, _, _ = _composited_cube(scene)
     path = pipeline.pass_file(pipeline.output_dir(scene), 1)
@@ -238,7 +260,9 @@ def test_a_stale_pass_warns_with_its_age(empty_scene, tmp_path, caplog):
     assert [w for w in _warnings(caplog) if "no holographic pass" in w]
 
 
-NO_EMITTER_LEFT = BACKGROUND_SCENE + """
+NO_EMITTER_LEFT = (
+    BACKGROUND_SCENE
+    + """
 for obj in scene.objects:
     obj.holo.emitter = "NONE"
 scene.render.filepath = sys.argv[3] + "/frame_"
@@ -251,6 +275,7 @@ print("rendered", flush=True)
 import os
 os._exit(0)
 """
+)
 
 
 def test_with_no_emitter_left_frames_render_the_raster_alone_with_exit_0(tmp_path):
@@ -267,7 +292,9 @@ def test_with_no_emitter_left_frames_render_the_raster_alone_with_exit_0(tmp_pat
         assert not alpha["ViewLayer.Combined.A"].any(), f"frame {frame}'s pass is clear"
 
 
-FARM_LOG = BACKGROUND + """
+FARM_LOG = (
+    BACKGROUND
+    + """
 from test_addon import _plate_camera_cube
 _plate_camera_cube(scene)
 scene.render.engine = "CYCLES"
@@ -283,6 +310,7 @@ bpy.ops.render.render(animation=True)
 import os
 os._exit(0)  # bpy 4.2.0's teardown after a render crashes, 4.5.15's never returns
 """
+)
 
 
 def test_a_background_render_logs_what_each_frames_pass_was(tmp_path):
@@ -291,22 +319,31 @@ def test_a_background_render_logs_what_each_frames_pass_was(tmp_path):
     here): frame 1's made, in how many seconds; frame 2's the static shot's (frame 1's, only
     the frame changed); rendered again, frame 2's up to date."""
     import re
+
     run = in_background(FARM_LOG, tmp_path)
     lines = [ln for ln in run.stderr.splitlines() if "Holo: frame" in ln]
     print("\n".join(lines))
     assert run.returncode == 0, run.stderr[-2000:]
     assert len(lines) == 3, lines
-    assert re.search(r"^INFO Holo: frame 1: holographic pass made in [0-9.]+ s as a camera "
-                     r"hologram: .*holo_pass_0001\.exr; no warnings$", lines[0]), lines[0]
-    assert re.search(r"^INFO Holo: frame 2: holographic pass reused from holo_pass_0001\.exr "
-                     r"\(a static shot: only the frame changed\) as a camera hologram: "
-                     r".*holo_pass_0002\.exr; no warnings$", lines[1]), lines[1]
+    assert re.search(
+        r"^INFO Holo: frame 1: holographic pass made in [0-9.]+ s as a camera "
+        r"hologram: .*holo_pass_0001\.exr; no warnings$",
+        lines[0],
+    ), lines[0]
+    assert re.search(
+        r"^INFO Holo: frame 2: holographic pass reused from holo_pass_0001\.exr "
+        r"\(a static shot: only the frame changed\) as a camera hologram: "
+        r".*holo_pass_0002\.exr; no warnings$",
+        lines[1],
+    ), lines[1]
     assert re.search(r"^INFO Holo: frame 2: holographic pass reused \(up to date\)", lines[2])
 
 
 def _links(tree):
-    return {(l.from_node.name, l.from_socket.identifier, l.to_node.name,
-             l.to_socket.identifier) for l in tree.links}
+    return {
+        (l.from_node.name, l.from_socket.identifier, l.to_node.name, l.to_socket.identifier)
+        for l in tree.links
+    }
 
 
 def test_remove_holo_compositing_restores_the_users_own_tree(empty_scene, tmp_path):
@@ -315,6 +352,7 @@ def test_remove_holo_compositing_restores_the_users_own_tree(empty_scene, tmp_pa
     none back."""
     from holo_addon.blender import compat
     from holo_addon.compositor import tree as passes
+
     scene = empty_scene
     _composited_cube(scene)
     assert bpy.ops.holo.remove_compositing() == {"FINISHED"}

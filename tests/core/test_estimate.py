@@ -17,9 +17,15 @@ from holo_core.scene.plate import ViewingZone
 
 BOX = np.array([[-0.02, -0.015, -0.33], [0.025, 0.02, -0.28]])
 ZONE = ViewingZone(centre=(0.01, -0.005, 0.3), half_extents=(0.04, 0.03, 0.02), pupil=0.05 / 2.8)
-MEASURED = replace(DEFAULT, pairs_per_second=3e9, emitter_seconds=5e-5, view_factor=1.5,
-                   write_bytes_per_second=1e8, process_plate_seconds=2.5,
-                   first_plate_seconds=11.0)
+MEASURED = replace(
+    DEFAULT,
+    pairs_per_second=3e9,
+    emitter_seconds=5e-5,
+    view_factor=1.5,
+    write_bytes_per_second=1e8,
+    process_plate_seconds=2.5,
+    first_plate_seconds=11.0,
+)
 
 
 @pytest.fixture
@@ -31,8 +37,13 @@ def cache(tmp_path, monkeypatch):
 
 def planned():
     p = plan((0.1, 0.1), BOX, zone=ZONE, pixel_angle=0.036 / 640 / 0.05)
-    v = plan_view(p, position=(0.01, -0.005, 0.3), pixel_angle=0.036 / 640 / 0.05,
-                  pupil=0.05 / 2.8, resolution=(640, 360))
+    v = plan_view(
+        p,
+        position=(0.01, -0.005, 0.3),
+        pixel_angle=0.036 / 640 / 0.05,
+        pupil=0.05 / 2.8,
+        resolution=(640, 360),
+    )
     return p, v
 
 
@@ -50,16 +61,21 @@ def test_parts_are_rates_times_work_and_add_up(cache):
     p, v = planned()
     est = estimate.plate(p, v, cache_dir=cache, calibration=(MEASURED, True), load_average=0)
     work = dict(est.work)
-    assert work == pytest.approx({
-        "job": MEASURED.job_seconds,
-        "emitters": MEASURED.emitters_fixed + p.emitters * 5e-5,
-        "zone sum": MEASURED.zone_sum_fixed + p.pairs() / 3e9,
-        "files": 8 * 4 * p.looks * p.samples / 1e8,
-        "view": MEASURED.view_fixed + 1.5 * v.seconds}, rel=1e-12), work
+    assert work == pytest.approx(
+        {
+            "job": MEASURED.job_seconds,
+            "emitters": MEASURED.emitters_fixed + p.emitters * 5e-5,
+            "zone sum": MEASURED.zone_sum_fixed + p.pairs() / 3e9,
+            "files": 8 * 4 * p.looks * p.samples / 1e8,
+            "view": MEASURED.view_fixed + 1.5 * v.seconds,
+        },
+        rel=1e-12,
+    ), work
     assert est.process == 2.5 and est.first == 11.0
     assert est.seconds == pytest.approx(sum(work.values()) + 2.5 + 11.0, rel=1e-12)
-    viewed = estimate.plate(p, v, record=False, cache_dir=cache, calibration=(MEASURED, True),
-                            load_average=0)
+    viewed = estimate.plate(
+        p, v, record=False, cache_dir=cache, calibration=(MEASURED, True), load_average=0
+    )
     assert [k for k, _ in viewed.work] == ["job", "view"], viewed.work
 
 
@@ -108,12 +124,10 @@ def test_a_calibration_of_another_version_or_device_is_ignored(cache, field, val
     assert str(path) in caplog.text and value in caplog.text, caplog.text
 
 
-@pytest.mark.parametrize("text", [
-    "{not json",
-    json.dumps({"version": "x", "device": ""}),
-    "BAD_RATE",
-    "MISSING_RATE",
-    "\udcff"])
+@pytest.mark.parametrize(
+    "text",
+    ["{not json", json.dumps({"version": "x", "device": ""}), "BAD_RATE", "MISSING_RATE", "\udcff"],
+)
 def test_a_bad_calibration_is_refused_with_a_warning_naming_it(cache, text, caplog):
     path = estimate.save(MEASURED, cache_dir=cache)
     data = json.loads(path.read_text())
@@ -133,9 +147,15 @@ def test_a_bad_calibration_is_refused_with_a_warning_naming_it(cache, text, capl
     assert len(warned) == 1 and str(path) in warned[0], warned
 
 
-@pytest.mark.parametrize("field, value", [("pairs_per_second", 0.0), ("job_seconds", -1.0),
-                                          ("view_factor", float("nan")),
-                                          ("process_camera_seconds", True)])
+@pytest.mark.parametrize(
+    "field, value",
+    [
+        ("pairs_per_second", 0.0),
+        ("job_seconds", -1.0),
+        ("view_factor", float("nan")),
+        ("process_camera_seconds", True),
+    ],
+)
 def test_a_calibration_refuses_what_is_not_a_rate(field, value):
     with pytest.raises(ValueError, match=field):
         Calibration(**{**asdict(DEFAULT), field: value})
@@ -158,8 +178,9 @@ def test_other_work_on_the_machine_scales_every_part_by_its_fair_share(cache):
 
 def test_the_words_say_the_set_up_apart():
     est = Estimate(work=(("a", 3.0), ("b", 1.6)), process=2.4, first=4.0, calibrated=True)
-    assert est.words() == ("about 11 s (of which 4 s the first time on this machine, 2 s "
-                           "starting the worker)")
+    assert est.words() == (
+        "about 11 s (of which 4 s the first time on this machine, 2 s starting the worker)"
+    )
     bare = Estimate(work=(("a", 3.0),), calibrated=False)
     assert bare.words().startswith("about 3 s; by default rates"), bare.words()
 
@@ -168,8 +189,16 @@ def test_the_plan_states_the_first_frames_time_with_its_set_up(cache):
     """The planner's time line is the estimate's words (a cold cache: the first time said)."""
     estimate.save(MEASURED, cache_dir=cache)
     p, v = planned()
-    lines = summary(p, v, lens="50 mm f/2.8", resolution=(640, 360), plate_size=(0.1, 0.1),
-                    camera=(0.01, -0.005, 0.3), cache_dir=cache, load_average=0)
+    lines = summary(
+        p,
+        v,
+        lens="50 mm f/2.8",
+        resolution=(640, 360),
+        plate_size=(0.1, 0.1),
+        camera=(0.01, -0.005, 0.3),
+        cache_dir=cache,
+        load_average=0,
+    )
     said = estimate.plate(p, v, cache_dir=cache, load_average=0).words()
     time = next(line for line in lines if line.startswith("time"))
     assert said in time and "11 s the first time on this machine" in time, time
@@ -177,16 +206,31 @@ def test_the_plan_states_the_first_frames_time_with_its_set_up(cache):
 
 def test_a_camera_pass_costs_its_fine_pixels_once_and_each_look():
     """Speckle: Looks costs the fine pixels once and each look; Exact, one pass of them."""
-    exact = estimate.camera((640, 360), samples=16, supersample=2, warm=True,
-                            calibration=(MEASURED, True), load_average=0)
+    exact = estimate.camera(
+        (640, 360),
+        samples=16,
+        supersample=2,
+        warm=True,
+        calibration=(MEASURED, True),
+        load_average=0,
+    )
     assert dict(exact.work)["camera pass"] == pytest.approx(
-        MEASURED.exact_fixed + 640 * 360 * 4 * MEASURED.exact_pixel_seconds, rel=1e-12)
-    est = estimate.camera((640, 360), samples=16, supersample=2, speckle="LOOKS", warm=True,
-                          calibration=(MEASURED, True), load_average=0)
+        MEASURED.exact_fixed + 640 * 360 * 4 * MEASURED.exact_pixel_seconds, rel=1e-12
+    )
+    est = estimate.camera(
+        (640, 360),
+        samples=16,
+        supersample=2,
+        speckle="LOOKS",
+        warm=True,
+        calibration=(MEASURED, True),
+        load_average=0,
+    )
     assert dict(est.work)["camera pass"] == pytest.approx(
-        MEASURED.camera_fixed + 640 * 360 * 4 * (MEASURED.camera_pixel_seconds
-                                                 + 16 * MEASURED.camera_look_seconds),
-        rel=1e-12)
+        MEASURED.camera_fixed
+        + 640 * 360 * 4 * (MEASURED.camera_pixel_seconds + 16 * MEASURED.camera_look_seconds),
+        rel=1e-12,
+    )
     assert est.process == MEASURED.process_camera_seconds and est.first == 0.0
 
 
@@ -196,6 +240,7 @@ def test_a_sets_parts_add_up_and_each_parts_files_are_written_beside_the_next_su
     outlasts the next part's sum, the last part's whole; Plan Plate's set line says it in
     words."""
     from holo_core.plate.path import SetPlan
+
     p, _ = planned()
     rates = replace(MEASURED, write_bytes_per_second=p.disk_bytes() / 4.0)  # 4 s a part
     s = SetPlan(plans=(p, p, p), length=0.3, lattices=2)
@@ -204,10 +249,12 @@ def test_a_sets_parts_add_up_and_each_parts_files_are_written_beside_the_next_su
     found = rates.emitters_fixed + p.emitters * rates.emitter_seconds
     summed = rates.zone_sum_fixed + p.pairs() / rates.pairs_per_second
     assert work["emitters"] == pytest.approx(
-        2 * found + 3 * p.emitters * estimate.VISIBILITY_SECONDS)
+        2 * found + 3 * p.emitters * estimate.VISIBILITY_SECONDS
+    )
     assert work["parts"] == pytest.approx(3 * estimate.PART_SECONDS)
     assert work["zone sums"] == pytest.approx(
-        3 * (summed + p.disk_bytes() / estimate.DIGEST_BYTES_PER_SECOND))
+        3 * (summed + p.disk_bytes() / estimate.DIGEST_BYTES_PER_SECOND)
+    )
     assert work["files"] == pytest.approx(2 * max(4.0 - summed, 0.0) + 4.0)
     assert est.seconds == pytest.approx(sum(work.values()) + rates.process_plate_seconds)
     assert "records in about" in s.describe(est)

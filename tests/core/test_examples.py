@@ -51,8 +51,11 @@ def _run(name, doc):
     report = []
     # NumPy 2 writes a scalar as np.float64(…); the examples print NumPy 1's form, which 2 keeps
     # under its legacy print mode (make test-numpy2 runs them there)
-    legacy = (np.printoptions(legacy="1.25") if np.lib.NumpyVersion(np.__version__) >= "2.0.0"
-              else contextlib.nullcontext())
+    legacy = (
+        np.printoptions(legacy="1.25")
+        if np.lib.NumpyVersion(np.__version__) >= "2.0.0"
+        else contextlib.nullcontext()
+    )
     try:
         with legacy:
             runner.run(test, out=report.append)
@@ -72,7 +75,8 @@ def test_example(name, doc):
     _run(name, doc)
 
 
-@pytest.mark.parametrize(("name", "doc"),
-                         [pytest.param(n, d, id=n) for n, d in _package_examples()])
+@pytest.mark.parametrize(
+    ("name", "doc"), [pytest.param(n, d, id=n) for n, d in _package_examples()]
+)
 def test_package_example(name, doc):
     _run(name, doc)

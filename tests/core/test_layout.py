@@ -34,7 +34,7 @@ def _imports(path: Path, root: Path = ROOT):
             for a in node.names:
                 yield a.name, []
         elif isinstance(node, ast.ImportFrom):
-            base = package[:len(package) - node.level + 1] if node.level else []
+            base = package[: len(package) - node.level + 1] if node.level else []
             module = ".".join(base + ([node.module] if node.module else []))
             names = [a.name for a in node.names]
             yield module, names
@@ -96,21 +96,50 @@ def _places(module: str) -> list[str]:
     return module.split(".")[:2]
 
 
-@pytest.mark.parametrize("rule, bad", [
-    ("holo_core imports bpy", lambda a, b: b.split(".")[0] == "bpy"),
-    ("pyopencl outside holo_core.opencl",
-     lambda a, b: b.split(".")[0] == "pyopencl" and _places(a) != ["holo_core", "opencl"]),
-    ("plate imports camera", lambda a, b: _places(a) == ["holo_core", "plate"]
-     and _places(b) == ["holo_core", "camera"]),
-    ("camera imports plate", lambda a, b: _places(a) == ["holo_core", "camera"]
-     and _places(b) == ["holo_core", "plate"]),
-    ("io imports physics", lambda a, b: _places(a) == ["holo_core", "io"] and _places(b)[1:] in (
-        ["plate"], ["camera"], ["optics"], ["propagation"], ["opencl"])),
-    ("scene imports a stage", lambda a, b: _places(a) == ["holo_core", "scene"] and _places(b)[1:] in (
-        ["plate"], ["camera"], ["io"], ["optics"], ["propagation"], ["opencl"])),
-])
+@pytest.mark.parametrize(
+    "rule, bad",
+    [
+        ("holo_core imports bpy", lambda a, b: b.split(".")[0] == "bpy"),
+        (
+            "pyopencl outside holo_core.opencl",
+            lambda a, b: b.split(".")[0] == "pyopencl" and _places(a) != ["holo_core", "opencl"],
+        ),
+        (
+            "plate imports camera",
+            lambda a, b: (
+                _places(a) == ["holo_core", "plate"] and _places(b) == ["holo_core", "camera"]
+            ),
+        ),
+        (
+            "camera imports plate",
+            lambda a, b: (
+                _places(a) == ["holo_core", "camera"] and _places(b) == ["holo_core", "plate"]
+            ),
+        ),
+        (
+            "io imports physics",
+            lambda a, b: (
+                _places(a) == ["holo_core", "io"]
+                and _places(b)[1:]
+                in (["plate"], ["camera"], ["optics"], ["propagation"], ["opencl"])
+            ),
+        ),
+        (
+            "scene imports a stage",
+            lambda a, b: (
+                _places(a) == ["holo_core", "scene"]
+                and _places(b)[1:]
+                in (["plate"], ["camera"], ["io"], ["optics"], ["propagation"], ["opencl"])
+            ),
+        ),
+    ],
+)
 def test_holo_core_rules(rule, bad):
-    hits = [f"{a} -> {b}" for a, b, _ in _edges("holo_core") if b.startswith(("holo_core", "bpy", "pyopencl")) and bad(a, b)]
+    hits = [
+        f"{a} -> {b}"
+        for a, b, _ in _edges("holo_core")
+        if b.startswith(("holo_core", "bpy", "pyopencl")) and bad(a, b)
+    ]
     assert hits == [], f"{rule}: {hits}"
 
 
@@ -129,16 +158,24 @@ def test_addon_folders_import_only_those_below():
 
 @pytest.mark.parametrize("package", ["holo_core", "holo_addon"])
 def test_no_private_name_crosses_a_module(package):
-    hits = [f"{a} imports {b}.{n}" for a, b, names in _edges(package) for n in names
-            if b.split(".")[0] in ("holo_core", "holo_addon") and n.startswith("_")
-            and not n.startswith("__")]
+    hits = [
+        f"{a} imports {b}.{n}"
+        for a, b, names in _edges(package)
+        for n in names
+        if b.split(".")[0] in ("holo_core", "holo_addon")
+        and n.startswith("_")
+        and not n.startswith("__")
+    ]
     assert hits == [], hits
 
 
 def _file(module: str) -> str:
     path = ROOT.joinpath(*module.split("."))
-    return str((path.with_suffix(".py") if path.with_suffix(".py").is_file()
-                else path / "__init__.py").relative_to(ROOT))
+    return str(
+        (
+            path.with_suffix(".py") if path.with_suffix(".py").is_file() else path / "__init__.py"
+        ).relative_to(ROOT)
+    )
 
 
 @pytest.mark.parametrize("package", ["holo_core", "holo_addon"])
@@ -169,8 +206,9 @@ def test_the_rules_see_real_imports():
     """The reader resolves relative imports: the plate's view is seen importing the scene."""
     edges = {(a, b) for a, b, _ in _edges("holo_core")}
     assert ("holo_core.plate.view", "holo_core.scene.camera") in edges
-    assert ("holo_addon.ui.panels", "holo_addon.compositor.session") in \
-        {(a, b) for a, b, _ in _edges("holo_addon")}
+    assert ("holo_addon.ui.panels", "holo_addon.compositor.session") in {
+        (a, b) for a, b, _ in _edges("holo_addon")
+    }
 
 
 def test_each_kernel_file_lies_beside_its_module_and_ships():
@@ -183,9 +221,11 @@ def test_each_kernel_file_lies_beside_its_module_and_ships():
     assert orphans == [], f"kernel files without their host module: {orphans}"
     in_opencl = [str(k.relative_to(ROOT)) for k in kernels if k.parent.name == "opencl"]
     assert in_opencl == [], f"opencl/ keeps only the shared headers: {in_opencl}"
-    patterns = tomllib.loads((ROOT / "pyproject.toml").read_text())[
-        "tool"]["setuptools"]["package-data"]["holo_core"]
+    patterns = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"][
+        "package-data"
+    ]["holo_core"]
     shipped = {p for pattern in patterns for p in core.glob(pattern)}
-    missing = [str(p.relative_to(ROOT)) for p in kernels + sorted(core.rglob("*.h"))
-               if p not in shipped]
+    missing = [
+        str(p.relative_to(ROOT)) for p in kernels + sorted(core.rglob("*.h")) if p not in shipped
+    ]
     assert missing == [], f"not in the package data: {missing}"

@@ -18,9 +18,9 @@ def decoded(png: bytes) -> np.ndarray:
     w, h, _, colour = struct.unpack(">IIBB", png[16:26])
     at, data = 8, b""
     while at < len(png):
-        (n,), kind = struct.unpack(">I", png[at:at + 4]), png[at + 4:at + 8]
+        (n,), kind = struct.unpack(">I", png[at : at + 4]), png[at + 4 : at + 8]
         if kind == b"IDAT":
-            data += png[at + 8:at + 8 + n]
+            data += png[at + 8 : at + 8 + n]
         at += 12 + n
     c = 3 if colour == 2 else 1
     rows = np.frombuffer(zlib.decompress(data), np.uint8).reshape(h, 1 + w * c)
@@ -29,8 +29,16 @@ def decoded(png: bytes) -> np.ndarray:
 
 def test_dir_and_all_list_the_api():
     names = dir(holo_core)
-    for name in ("angular_spectrum", "sideband", "import_acquired", "to_device", "Hologram",
-                 "propagation", "plot", "scene"):
+    for name in (
+        "angular_spectrum",
+        "sideband",
+        "import_acquired",
+        "to_device",
+        "Hologram",
+        "propagation",
+        "plot",
+        "scene",
+    ):
         assert name in names, name
     assert sorted(holo_core.__all__) == sorted(holo_core._API)
     assert "plot" not in holo_core.__all__  # `import *` does not need matplotlib
@@ -40,11 +48,17 @@ def test_dir_and_all_list_the_api():
 
 def test_a_hologram_summarises_itself_and_shows_its_intensity(rng):
     intensity = rng.random((3, 600, 40)).astype(np.float32)
-    h = Hologram(intensity=intensity, wavelengths=(633e-9, 532e-9, 473e-9), pitch=3.45e-6,
-                 reference_angle=0.02)
+    h = Hologram(
+        intensity=intensity,
+        wavelengths=(633e-9, 532e-9, 473e-9),
+        pitch=3.45e-6,
+        reference_angle=0.02,
+    )
     text = repr(h)
-    assert text.startswith("Hologram(600x40, 3 channels R/G/B at 633/532/473 nm, pitch "
-                           "3.45 µm, intensity, reference 0.02 rad"), text
+    assert text.startswith(
+        "Hologram(600x40, 3 channels R/G/B at 633/532/473 nm, pitch "
+        "3.45 µm, intensity, reference 0.02 rad"
+    ), text
     assert len(text) < 200 and "array" not in text
     image = decoded(h._repr_png_())
     assert image.shape == (300, 20, 3)  # 600 rows in blocks of 2, at most 512 a side
@@ -57,19 +71,25 @@ def test_a_view_and_a_mesh_summarise_themselves():
     rgb[1, 2] = 0.5
     depth = np.full((4, 6), 1e10)
     depth[1, 2] = 0.25
-    result = RenderResult(rgb=rgb, alpha=(depth < 1).astype(float), depth=depth,
-                          info={"wavelengths": [1e-6]})
-    assert repr(result) == ("RenderResult(6x4, rgb max 0.5, 4.17 % opaque, depth 250 mm to "
-                            "250 mm, info: wavelengths)")
+    result = RenderResult(
+        rgb=rgb, alpha=(depth < 1).astype(float), depth=depth, info={"wavelengths": [1e-6]}
+    )
+    assert repr(result) == (
+        "RenderResult(6x4, rgb max 0.5, 4.17 % opaque, depth 250 mm to 250 mm, info: wavelengths)"
+    )
     image = decoded(result._repr_png_())
     assert image.shape == (4, 6, 3) and image[1, 2, 0] == round(255 * preview.srgb(0.5))
-    mesh = Mesh(vertices=np.array([[0, 0, -1], [0.1, 0, -1], [0, 0.02, -1.0]]),
-                triangles=np.array([[0, 1, 2]]))
+    mesh = Mesh(
+        vertices=np.array([[0, 0, -1], [0.1, 0, -1], [0, 0.02, -1.0]]),
+        triangles=np.array([[0, 1, 2]]),
+    )
     assert repr(mesh) == "Mesh(1 triangle, 3 vertices, extent 100 mm x 20 mm x 0 m, no colours)"
 
 
-@pytest.mark.parametrize("metres, text", [(633e-9, "633 nm"), (3.45e-6, "3.45 µm"),
-                                          (1e-6, "1 µm"), (0.0125, "12.5 mm"), (2.0, "2 m")])
+@pytest.mark.parametrize(
+    "metres, text",
+    [(633e-9, "633 nm"), (3.45e-6, "3.45 µm"), (1e-6, "1 µm"), (0.0125, "12.5 mm"), (2.0, "2 m")],
+)
 def test_lengths_read_in_their_unit(metres, text):
     assert preview.length(metres) == text
 

@@ -72,8 +72,9 @@ def test_hologram_and_view_axes():
     image = plot.hologram(h)
     assert image.get_extent() == pytest.approx((-256, 256, -128, 128))
     cam = Camera(matrix_world=look_at((0, 0, 1), (0, 0, 0)), resolution=(64, 48))
-    result = RenderResult(rgb=np.zeros((48, 64, 3)), alpha=np.ones((48, 64)),
-                          depth=np.ones((48, 64)))
+    result = RenderResult(
+        rgb=np.zeros((48, 64, 3)), alpha=np.ones((48, 64)), depth=np.ones((48, 64))
+    )
     image = plot.view(result, camera=cam)
     half_x, half_y = (math.degrees(a) / 2 for a in cam.field_of_view())
     assert image.get_extent() == pytest.approx((-half_x, half_x, -half_y, half_y))

@@ -28,14 +28,18 @@ def cameras():
 
 def parts():
     every = np.concatenate([m.vertices for m in ps.meshes()])
-    return parts_along(cameras(), np.array([every.min(0), every.max(0)]), distance=0.32,
-                       stretch=0.04, margin=0.005)
+    return parts_along(
+        cameras(), np.array([every.min(0), every.max(0)]), distance=0.32, stretch=0.04, margin=0.005
+    )
 
 
 def job(folder, cam, frame, **route):
-    return Job(camera=cam, points=tuple(ps.meshes()),
-               output=Output(folder=folder, frame=frame),
-               route=SetRoute(parts=parts(), folder=folder / "set", looks=2, seed=3, **route))
+    return Job(
+        camera=cam,
+        points=tuple(ps.meshes()),
+        output=Output(folder=folder, frame=frame),
+        route=SetRoute(parts=parts(), folder=folder / "set", looks=2, seed=3, **route),
+    )
 
 
 def test_a_set_job_crosses_the_process_boundary_as_plain_data(tmp_path):
@@ -49,8 +53,12 @@ def test_a_set_job_crosses_the_process_boundary_as_plain_data(tmp_path):
     for a, b in zip(again.route.parts, j.route.parts):
         assert np.array_equal(a.plate.matrix_world, b.plate.matrix_world)
         za, zb = a.plate.zone, b.plate.zone
-        assert (za.centre, za.half_extents, za.pupil, za.pixel) == \
-            (zb.centre, zb.half_extents, zb.pupil, zb.pixel)
+        assert (za.centre, za.half_extents, za.pupil, za.pixel) == (
+            zb.centre,
+            zb.half_extents,
+            zb.pupil,
+            zb.pixel,
+        )
         assert a.stretch == b.stretch and a.frames == b.frames
     bad = copy.deepcopy(plain)
     bad["route"]["parts"][1]["stretch"] = [0.03, 0.0]
@@ -78,8 +86,9 @@ def test_each_frame_is_made_from_the_part_that_holds_its_pupil_and_recorded_once
     kept = KeptPlates()
     chosen = []
     for frame, cam in enumerate(cams, 1):
-        result = first if frame == 1 else runner.run(job(tmp_path, cam, frame, record=False),
-                                                     kept=kept)
+        result = (
+            first if frame == 1 else runner.run(job(tmp_path, cam, frame, record=False), kept=kept)
+        )
         k, beyond = part_for(plates, cam)
         assert beyond == 0, beyond
         chosen.append(k)
@@ -122,6 +131,7 @@ def test_a_set_recorded_under_the_callers_name_is_read_under_it(tmp_path):
     """A route's recording names the set in its manifest (set_current tells it whole), and
     resuming or reading matches that name, not the digest of the emitters."""
     from holo_core.io.plate_set import set_current
+
     cams = cameras()
     assert not set_current(tmp_path / "set", "ab12", 2)
     runner.run(job(tmp_path, cams[0], 1, recording="ab12"))

@@ -39,35 +39,47 @@ CALLS = {
     "fraunhofer": lambda w: fraunhofer(FIELD, **w, distance=1.0),
     "rayleigh_sommerfeld": lambda w: rayleigh_sommerfeld(FIELD, **w, distance=1e-3),
     "tilt": lambda w: tilt(FIELD, **w, rotation=np.eye(3)),
-    "propagate_to_plane": lambda w: propagate_to_plane(FIELD, **w, rotation=np.eye(3),
-                                                       position=(0, 0, 1e-3)),
+    "propagate_to_plane": lambda w: propagate_to_plane(
+        FIELD, **w, rotation=np.eye(3), position=(0, 0, 1e-3)
+    ),
     "point_wave": lambda w: point_wave([[0, 0, -1e-3]], [1.0], **w, shape=(8, 8)),
     "reference_wave": lambda w: reference_wave((8, 8), **w, reference=Reference()),
-    "record_points": lambda w: record_points([[0, 0, -3e-3]], [[1.0]], shape=(8, 8),
-                                             pitch=w["pitch"], wavelengths=(w["wavelength"],)),
-    "Hologram": lambda w: Hologram(intensity=np.ones((1, 4, 4), np.float32),
-                                   wavelengths=(w["wavelength"],), pitch=w["pitch"]),
+    "record_points": lambda w: record_points(
+        [[0, 0, -3e-3]], [[1.0]], shape=(8, 8), pitch=w["pitch"], wavelengths=(w["wavelength"],)
+    ),
+    "Hologram": lambda w: Hologram(
+        intensity=np.ones((1, 4, 4), np.float32), wavelengths=(w["wavelength"],), pitch=w["pitch"]
+    ),
     "read_acquired": lambda w: read_acquired("missing.png", **w),
 }
 
 
 @pytest.mark.parametrize("name", CALLS)
 def test_a_wavelength_in_nanometres_is_refused_with_the_unit(name):
-    with pytest.raises(InputError, match=r"wavelengths? must be in \[1e-13, 0.01\] \[m\] "
-                                         r"\(MeV electrons to microwaves\); got 633(\.0)? \(" + NM):
+    with pytest.raises(
+        InputError,
+        match=r"wavelengths? must be in \[1e-13, 0.01\] \[m\] "
+        r"\(MeV electrons to microwaves\); got 633(\.0)? \(" + NM,
+    ):
         CALLS[name](wave(wavelength=633))
 
 
 @pytest.mark.parametrize("name", CALLS)
 def test_a_pitch_in_micrometres_is_refused_with_the_unit(name):
-    with pytest.raises(InputError, match=r"pitch must be in \[1e-12, 0.01\] \[m\] \(.*\); "
-                                         r"got 8(\.0)? \(" + UM):
+    with pytest.raises(
+        InputError,
+        match=r"pitch must be in \[1e-12, 0.01\] \[m\] \(.*\); "
+        r"got 8(\.0)? \(" + UM,
+    ):
         CALLS[name](wave(pitch=8))
 
 
 def test_the_other_checks_refuse_with_the_unit():
-    with pytest.raises(InputError, match=r"wavelength .* \(0.633 looks like micrometres: pass "
-                                         r"0.633e-6\)"):
+    with pytest.raises(
+        InputError,
+        match=r"wavelength .* \(0.633 looks like micrometres: pass "
+        r"0.633e-6\)",
+    ):
         choose((0.01, 0.01), [[0, 0, -0.05]], wavelength=0.633)
     with pytest.raises(InputError, match=r"out_pitch .* \(8 looks like micrometres"):
         resample(FIELD, pitch=1e-6, out_shape=(4, 4), out_pitch=8)
@@ -75,25 +87,31 @@ def test_the_other_checks_refuse_with_the_unit():
         rayleigh_sommerfeld(FIELD, **wave(), distance=1e-3, out_pitch=8)
 
 
-@pytest.mark.parametrize("value, hint", [
-    (633, "633 looks like nanometres: pass 633e-9"),
-    (532.0, "532 looks like nanometres: pass 532e-9"),
-    (0.633, "0.633 looks like micrometres: pass 0.633e-6"),
-    (10.6, "10.6 looks like micrometres: pass 10.6e-6"),   # CO2 laser, µm
-    (1.55, "1.55 looks like micrometres: pass 1.55e-6"),   # telecom, µm
-    (1e6, "1e+06 looks like nanometres: pass 0.001"),
-])
+@pytest.mark.parametrize(
+    "value, hint",
+    [
+        (633, "633 looks like nanometres: pass 633e-9"),
+        (532.0, "532 looks like nanometres: pass 532e-9"),
+        (0.633, "0.633 looks like micrometres: pass 0.633e-6"),
+        (10.6, "10.6 looks like micrometres: pass 10.6e-6"),  # CO2 laser, µm
+        (1.55, "1.55 looks like micrometres: pass 1.55e-6"),  # telecom, µm
+        (1e6, "1e+06 looks like nanometres: pass 0.001"),
+    ],
+)
 def test_the_likely_unit_of_a_wavelength(value, hint):
     with pytest.raises(InputError) as e:
         validate.wavelength("wavelength", value)
     assert hint in str(e.value), str(e.value)
 
 
-@pytest.mark.parametrize("value, hint", [
-    (8, "8 looks like micrometres: pass 8e-6"),
-    (3.74, "3.74 looks like micrometres: pass 3.74e-6"),   # an SLM's pixel
-    (0.5, "0.5 looks like micrometres: pass 0.5e-6"),
-])
+@pytest.mark.parametrize(
+    "value, hint",
+    [
+        (8, "8 looks like micrometres: pass 8e-6"),
+        (3.74, "3.74 looks like micrometres: pass 3.74e-6"),  # an SLM's pixel
+        (0.5, "0.5 looks like micrometres: pass 0.5e-6"),
+    ],
+)
 def test_the_likely_unit_of_a_pitch(value, hint):
     with pytest.raises(InputError) as e:
         validate.pitch("pitch", value)
@@ -116,12 +134,15 @@ def test_the_range_ends_are_accepted():
     assert (validate.pitch("p", lo), validate.pitch("p", hi)) == (1e-12, 1e-2)
 
 
-@pytest.mark.parametrize("wavelength, pitch", [
-    (1.9687e-12, 0.92e-9),   # 300 kV electrons, holospy's Fe needle sampled at 0.92 nm
-    (0.87e-12, 5e-12),       # a 1 MV holography microscope at atomic resolution
-    (1.54e-10, 13.5e-6),     # Cu K-alpha X-rays on a 13.5 µm detector
-    (3e-3, 1e-3),            # 100 GHz millimetre waves on a 1 mm array
-])
+@pytest.mark.parametrize(
+    "wavelength, pitch",
+    [
+        (1.9687e-12, 0.92e-9),  # 300 kV electrons, holospy's Fe needle sampled at 0.92 nm
+        (0.87e-12, 5e-12),  # a 1 MV holography microscope at atomic resolution
+        (1.54e-10, 13.5e-6),  # Cu K-alpha X-rays on a 13.5 µm detector
+        (3e-3, 1e-3),  # 100 GHz millimetre waves on a 1 mm array
+    ],
+)
 def test_electron_x_ray_and_millimetre_waves_pass(wavelength, pitch):
     """Real waves and samplings of other holographies are accepted everywhere, with no
     scale-free context: a Hologram holds them and a propagation runs at them."""
@@ -133,8 +154,11 @@ def test_electron_x_ray_and_millimetre_waves_pass(wavelength, pitch):
 def test_a_scan_pitch_in_millimetres_is_warned_with_the_value():
     """0.00345 (3.45 µm typed in millimetres) is a real but implausible pixel: warned with
     what it would be in metres; 3.45e-6 passes quietly."""
-    with pytest.warns(validate.UnitWarning, match=r"pitch 0.00345 m is 3.45 mm, coarser than "
-                                                  r"any camera's .* pass 3.45e-06"):
+    with pytest.warns(
+        validate.UnitWarning,
+        match=r"pitch 0.00345 m is 3.45 mm, coarser than "
+        r"any camera's .* pass 3.45e-06",
+    ):
         assert validate.pitch_typed("pitch", 0.00345) == 0.00345
     assert validate.pitch_typed("pitch", 3.45e-6) == 3.45e-6
 
@@ -152,11 +176,21 @@ def test_the_plate_renderer_keeps_its_scale_free_wavelengths():
         Hologram(intensity=np.ones((1, 4, 4), np.float32), wavelengths=(633e-9,), pitch=0.05)
 
 
-@pytest.mark.parametrize("text, metres", [("3.45um", 3.45e-6), ("3.45 µm", 3.45e-6),
-                                          ("5cm", 0.05), ("0.05", 0.05), ("1.97pm", 1.97e-12),
-                                          ("2e-3 m", 2e-3), ("1.5angstrom", 1.5e-10)])
+@pytest.mark.parametrize(
+    "text, metres",
+    [
+        ("3.45um", 3.45e-6),
+        ("3.45 µm", 3.45e-6),
+        ("5cm", 0.05),
+        ("0.05", 0.05),
+        ("1.97pm", 1.97e-12),
+        ("2e-3 m", 2e-3),
+        ("1.5angstrom", 1.5e-10),
+    ],
+)
 def test_lengths_with_their_units(text, metres):
     from holo_core import units
+
     assert units.length(text, "length") == metres
 
 
@@ -164,6 +198,7 @@ def test_an_electron_microscope_states_its_wave_as_a_voltage():
     """λ = h/√(2·m·e·U·(1 + e·U/(2·m·c²))): 1.9687 pm at 300 kV (holospy's Fe needle), 2.5079
     pm at 200 kV, 0.8719 pm at 1 MV (tabulated relativistic values)."""
     from holo_core import units
+
     for text, pm in (("300kV", 1.9687), ("200 kV", 2.5079), ("1MV", 0.8719)):
         assert units.wavelength(text) == pytest.approx(pm * 1e-12, rel=1e-4), text
     assert units.wavelength("633") == 633e-9  # a plain number: nm, as --wavelengths

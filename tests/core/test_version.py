@@ -14,7 +14,8 @@ def test_the_manifest_holds_the_core_version():
     manifest = tomllib.loads((ROOT / "blender_manifest.toml").read_text())
     assert manifest["version"] == holo_core.__version__, (
         f"blender_manifest.toml version {manifest['version']!r}, "
-        f"holo_core.__version__ {holo_core.__version__!r}")
+        f"holo_core.__version__ {holo_core.__version__!r}"
+    )
 
 
 def test_pyproject_takes_the_version_from_the_core():

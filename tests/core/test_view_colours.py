@@ -28,10 +28,15 @@ def test_every_channel_count_has_stated_colours(count):
 
 def test_a_two_channel_view_shows_the_first_red_and_the_second_cyan():
     """A point lit in the first channel only shows red: its G and B are exactly zero."""
-    h = record_points([[0, 0, -3e-3]], [[1.0, 0.0]], shape=(128, 128), pitch=1e-6,
-                      wavelengths=(633e-9, 532e-9))
-    cam = Camera(matrix_world=look_at((0, 0, 4e-3), (0, 0, -3e-3)), lens=50,
-                 sensor_width=50 * 16 * 4e-3, resolution=(16, 16))
+    h = record_points(
+        [[0, 0, -3e-3]], [[1.0, 0.0]], shape=(128, 128), pitch=1e-6, wavelengths=(633e-9, 532e-9)
+    )
+    cam = Camera(
+        matrix_world=look_at((0, 0, 4e-3), (0, 0, -3e-3)),
+        lens=50,
+        sensor_width=50 * 16 * 4e-3,
+        resolution=(16, 16),
+    )
     with pytest.warns(UserWarning, match="no depth channel"):
         view = render_view(h, cam, supersample=1)
     assert view.rgb.shape == (16, 16, 3)

@@ -33,9 +33,14 @@ EXPOSURE = 2.0
 @pytest.fixture(scope="module")
 def plate_files(tmp_path_factory):
     folder = tmp_path_factory.mktemp("plate")
-    looks = record_looks(ps.meshes(), looks=2, plate=PLATE,
-                         camera=ps.camera("centre", scale=SCALE), zone_margin=0.01,
-                         recording=DIGEST)
+    looks = record_looks(
+        ps.meshes(),
+        looks=2,
+        plate=PLATE,
+        camera=ps.camera("centre", scale=SCALE),
+        zone_margin=0.01,
+        recording=DIGEST,
+    )
     return [write_hologram(folder / f"plate.{i}.exr", h) for i, h in enumerate(looks)]
 
 
@@ -47,16 +52,25 @@ def here(plate_files):
 
 
 def cameras():
-    eyes = [(0.0, 0.0, 0.3), (0.003, 0.0, 0.3), (0.0, -0.003, 0.3), (0.002, 0.002, 0.297),
-            (-0.003, 0.001, 0.3), (0.001, -0.002, 0.302), (-0.002, -0.002, 0.3),
-            (0.003, 0.003, 0.3)]
+    eyes = [
+        (0.0, 0.0, 0.3),
+        (0.003, 0.0, 0.3),
+        (0.0, -0.003, 0.3),
+        (0.002, 0.002, 0.297),
+        (-0.003, 0.001, 0.3),
+        (0.001, -0.002, 0.302),
+        (-0.002, -0.002, 0.3),
+        (0.003, 0.003, 0.3),
+    ]
     return [ps.camera(e, scale=SCALE) for e in eyes]
 
 
 def expected(viewer, camera, coarse=False):
     view = viewer.view(camera, coarse=coarse)
-    return (np.concatenate([view.rgb * EXPOSURE, view.alpha[..., None]], -1).astype(np.float32),
-            view.depth.astype(np.float32))
+    return (
+        np.concatenate([view.rgb * EXPOSURE, view.alpha[..., None]], -1).astype(np.float32),
+        view.depth.astype(np.float32),
+    )
 
 
 # the views are made in two processes: the same float32 arithmetic, but a process that loaded
@@ -70,8 +84,9 @@ def assert_same(picture, want):
     assert picture.rgba is not None, picture.where or picture.error
     assert picture.rgba.shape == rgba.shape
     err = float(np.abs(picture.rgba - rgba).max())
-    assert err <= RTOL * float(np.abs(rgba).max()), \
+    assert err <= RTOL * float(np.abs(rgba).max()), (
         f"the picture differs from this process's view by {err}"
+    )
     np.testing.assert_allclose(picture.depth, depth, rtol=RTOL)
     assert np.asarray(rgba[..., 3]).max() == 1.0, "the objects are missing from the view"
 

@@ -20,27 +20,41 @@ from holo_core.validate import InputError
 
 def cube(size=0.4):
     c = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * size / 2
-    faces = [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
-             [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]]
+    faces = [
+        [0, 1, 3],
+        [0, 3, 2],
+        [4, 6, 7],
+        [4, 7, 5],
+        [0, 4, 5],
+        [0, 5, 1],
+        [2, 3, 7],
+        [2, 7, 6],
+        [0, 2, 6],
+        [0, 6, 4],
+        [1, 5, 7],
+        [1, 7, 3],
+    ]
     return Mesh(vertices=c, triangles=np.array(faces), colours=np.full((8, 3), 0.8))
 
 
-def job(tmp_path, *, resolution=(32, 24), iterations=1, route=None,
-        **output):
+def job(tmp_path, *, resolution=(32, 24), iterations=1, route=None, **output):
     """A plate of a cube and its view (or ``route``'s), frame 1 into ``tmp_path/holo``."""
-    plate = Plate(matrix_world=look_at((0, -1.5, 0), (0, 0, 0), up=(0, 0, 1)),
-                  width=0.6, height=0.6)
-    cam = Camera(matrix_world=look_at((0, -3.0, 0), (0, 0, 0), up=(0, 0, 1)),
-                 resolution=resolution)
+    plate = Plate(
+        matrix_world=look_at((0, -1.5, 0), (0, 0, 0), up=(0, 0, 1)), width=0.6, height=0.6
+    )
+    cam = Camera(matrix_world=look_at((0, -3.0, 0), (0, 0, 0), up=(0, 0, 1)), resolution=resolution)
     out = tmp_path / "holo"
-    route = route or PlateRoute(plate=plate, supersample=1,
-                                holograms=tuple(out / f"h{i}.exr" for i in range(iterations)))
-    return Job(points=(cube(),), camera=cam, route=route,
-               output=Output(folder=out, frame=1, **output))
+    route = route or PlateRoute(
+        plate=plate, supersample=1, holograms=tuple(out / f"h{i}.exr" for i in range(iterations))
+    )
+    return Job(
+        points=(cube(),), camera=cam, route=route, output=Output(folder=out, frame=1, **output)
+    )
 
 
 def _pass(path):
     import OpenEXR
+
     with OpenEXR.File(str(path), separate_channels=True) as f:
         return {k: v.pixels.copy() for k, v in f.channels().items()}
 
@@ -115,8 +129,11 @@ def test_a_killed_worker_is_a_clear_report(tmp_path):
     while not any(kind == "progress" for kind, _ in w.poll(timeout=0.1)):
         pass
     os.kill(w.process.pid, signal.SIGKILL)
-    with pytest.raises(worker.WorkerError, match=r"ended with signal SIGKILL \(killed: out of "
-                                                 r"memory\?\)"):
+    with pytest.raises(
+        worker.WorkerError,
+        match=r"ended with signal SIGKILL \(killed: out of "
+        r"memory\?\)",
+    ):
         w.wait()
     _unchanged(files, j.output.folder)
 
@@ -126,6 +143,7 @@ class _Segfault:
 
     def __reduce__(self):
         import ctypes
+
         return ctypes.string_at, (0,)
 
 
@@ -153,8 +171,11 @@ def test_a_raising_worker_reports_its_error_and_writes_nothing(tmp_path):
 def test_stop_and_keep_hands_over_a_complete_running_pass(tmp_path):
     """A camera hologram stopped after its first running passes: the pass kept is a whole
     file of that many samples (not the cancelled run's nothing)."""
-    j = job(tmp_path, resolution=(160, 120),
-            route=CameraRoute(speckle="LOOKS", samples=64, supersample=1))
+    j = job(
+        tmp_path,
+        resolution=(160, 120),
+        route=CameraRoute(speckle="LOOKS", samples=64, supersample=1),
+    )
     w = worker.Worker(j)
     while not any(kind == "partial" and n >= 2 for kind, n in w.poll(timeout=0.1)):
         assert not w.finished, "the worker ended before its second running pass"
@@ -171,8 +192,9 @@ def test_the_cache_folder_reaches_the_worker(tmp_path):
     cache = tmp_path / "cache"
     assert worker.environment((), None, None, str(cache))["XDG_CACHE_HOME"] == str(cache)
     worker.Worker(job(tmp_path), cache_dir=str(cache)).wait()
-    assert any((cache / name).is_dir() for name in ("pyopencl", "holo")), \
+    assert any((cache / name).is_dir() for name in ("pyopencl", "holo")), (
         list(cache.iterdir()) if cache.exists() else "no cache folder"
+    )
 
 
 def test_an_unwritable_output_folder_is_refused_before_the_recording(tmp_path, monkeypatch):
@@ -181,32 +203,39 @@ def test_an_unwritable_output_folder_is_refused_before_the_recording(tmp_path, m
     recorded = []
     monkeypatch.setattr(runner, "record_planned", lambda *a, **k: recorded.append(1))
     j = job(tmp_path)
-    j = dataclasses.replace(j, output=Output(folder=Path("/sys/holo")), route=dataclasses.replace(
-        j.route, holograms=(Path("/sys/holo/h0.exr"),)))
+    j = dataclasses.replace(
+        j,
+        output=Output(folder=Path("/sys/holo")),
+        route=dataclasses.replace(j.route, holograms=(Path("/sys/holo/h0.exr"),)),
+    )
     with pytest.raises(InputError, match="/sys"):
         runner.run(j)
     assert recorded == [], "the recording ran before the output was checked"
 
 
-def test_a_plate_larger_than_the_disks_room_is_refused_before_the_recording(tmp_path,
-                                                                            monkeypatch):
+def test_a_plate_larger_than_the_disks_room_is_refused_before_the_recording(tmp_path, monkeypatch):
     """A plate's files that would not fit on the disk that takes them are an InputError
     naming the folder, the room they need and the room there is, before anything is
     recorded (a full disk found after the recording lost it: the shot's 16 s)."""
     import shutil
 
     from holo_core.io import image
+
     recorded = []
     monkeypatch.setattr(runner, "record_planned", lambda *a, **k: recorded.append(1))
     j = job(tmp_path, iterations=2)
     p = runner.plate_plan(list(j.points), plate=j.route.plate, camera=j.camera).plan
     need = 2 * p.disk_bytes() / p.looks  # two looks
     usage = shutil.disk_usage(tmp_path)
-    monkeypatch.setattr(image.shutil, "disk_usage",
-                        lambda path: usage._replace(free=int(need * 0.99)))
+    monkeypatch.setattr(
+        image.shutil, "disk_usage", lambda path: usage._replace(free=int(need * 0.99))
+    )
     number = r"[\d.]+(e-\d+)?"
-    with pytest.raises(InputError, match=rf"the plate's 2 look\(s\) .* need {number} GiB on "
-                       rf"disk, and {tmp_path} has {number} GiB free"):
+    with pytest.raises(
+        InputError,
+        match=rf"the plate's 2 look\(s\) .* need {number} GiB on "
+        rf"disk, and {tmp_path} has {number} GiB free",
+    ):
         runner.run(j)
     assert recorded == [], "the recording ran before the disk's room was checked"
     monkeypatch.undo()  # the disk's own room, enough: the plate is recorded and written
@@ -221,6 +250,7 @@ def test_a_plates_iterations_are_coded_looks_of_one_seed(tmp_path):
     seeds)."""
     from holo_core.io.hologram import read_hologram
     from holo_core.plate.record import record_hologram
+
     j = job(tmp_path, iterations=2, render=False)
     result = runner.run(j)
     assert result.recorded == j.route.holograms and result.pass_path is None
@@ -230,19 +260,27 @@ def test_a_plates_iterations_are_coded_looks_of_one_seed(tmp_path):
     for code, look in ((None, a), ((3, 2), b)):
         h = record_hologram(list(j.points), code=code, **same)
         assert np.max(np.abs(h.object_wave - look.object_wave)) <= 1e-5 * np.max(
-            np.abs(h.object_wave)), code
+            np.abs(h.object_wave)
+        ), code
     with pytest.raises(InputError, match="code applies to plates of meshes"):
-        record_hologram((np.array([[0.0, 0.0, -1.0]]), np.ones((1, 3))), plate=j.route.plate,
-                        resolution=64, code=(1, 2))
+        record_hologram(
+            (np.array([[0.0, 0.0, -1.0]]), np.ones((1, 3))),
+            plate=j.route.plate,
+            resolution=64,
+            code=(1, 2),
+        )
 
 
 def _moved(j, frame, x):
     """``j`` as frame ``frame``, its camera moved to ``x`` [m] and the plate read, not
     recorded."""
-    cam = dataclasses.replace(j.camera, matrix_world=look_at((x, -3.0, 0), (0, 0, 0),
-                                                             up=(0, 0, 1)))
-    return dataclasses.replace(j, camera=cam, route=dataclasses.replace(j.route, record=False),
-                               output=dataclasses.replace(j.output, frame=frame))
+    cam = dataclasses.replace(j.camera, matrix_world=look_at((x, -3.0, 0), (0, 0, 0), up=(0, 0, 1)))
+    return dataclasses.replace(
+        j,
+        camera=cam,
+        route=dataclasses.replace(j.route, record=False),
+        output=dataclasses.replace(j.output, frame=frame),
+    )
 
 
 def test_a_resident_worker_renders_the_next_frames_from_the_plate_it_holds(tmp_path):
@@ -258,20 +296,29 @@ def test_a_resident_worker_renders_the_next_frames_from_the_plate_it_holds(tmp_p
         frames = [_moved(first, 2, 0.05), _moved(first, 3, -0.05)]
         for j in frames:
             kept = worker.run(j, on_log=lambda *r: logs.append(r[1]), resident=True)
-            fresh = worker.run(dataclasses.replace(j, output=dataclasses.replace(
-                j.output, folder=tmp_path / "fresh")))
+            fresh = worker.run(
+                dataclasses.replace(
+                    j, output=dataclasses.replace(j.output, folder=tmp_path / "fresh")
+                )
+            )
             a, b = _pass(kept.pass_path), _pass(fresh.pass_path)
             assert all(np.array_equal(a[k], b[k]) for k in a), "the held plate's view differs"
         assert worker._resident.popen.pid == pid, "a frame started a process of its own"
         assert sum("held in memory from the job before: 2 of 2" in t for t in logs) == 2, logs
         # the plate recorded again (another seed) by another process: read again
-        again = dataclasses.replace(first, route=dataclasses.replace(first.route, seed=7),
-                                    output=dataclasses.replace(first.output, render=False))
+        again = dataclasses.replace(
+            first,
+            route=dataclasses.replace(first.route, seed=7),
+            output=dataclasses.replace(first.output, render=False),
+        )
         runner.run(again)
         logs.clear()
         kept = worker.run(frames[0], on_log=lambda *r: logs.append(r[1]), resident=True)
-        fresh = worker.run(dataclasses.replace(frames[0], output=dataclasses.replace(
-            frames[0].output, folder=tmp_path / "fresh")))
+        fresh = worker.run(
+            dataclasses.replace(
+                frames[0], output=dataclasses.replace(frames[0].output, folder=tmp_path / "fresh")
+            )
+        )
         assert not any("held in memory" in t for t in logs), logs
         a, b = _pass(kept.pass_path), _pass(fresh.pass_path)
         assert all(np.array_equal(a[k], b[k]) for k in a), "the rewritten plate was not read"
@@ -300,10 +347,15 @@ def test_a_serving_worker_ends_when_its_parent_goes_or_it_is_left_idle(tmp_path)
     it held."""
     import subprocess
     import sys
+
     env = worker.environment()
     for code, close in (("runner.serve(idle=600)", True), ("runner.serve(idle=0.5)", False)):
-        p = subprocess.Popen([sys.executable, "-c", f"from holo_core import runner; {code}"],
-                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env)
+        p = subprocess.Popen(
+            [sys.executable, "-c", f"from holo_core import runner; {code}"],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            env=env,
+        )
         if close:
             p.stdin.close()
         try:
@@ -337,8 +389,11 @@ def test_the_core_s_warnings_reach_the_report(tmp_path):
     made = dataclasses.replace(made, points=(), triangles=(cube(),), camera=cam)
     first = runner.run(made)
     assert not [w for w in first.report.warnings if "resolves" in w], first.report.warnings
-    stopped = dataclasses.replace(made, camera=dataclasses.replace(cam, fstop=8.0),
-                                  route=dataclasses.replace(made.route, record=False))
+    stopped = dataclasses.replace(
+        made,
+        camera=dataclasses.replace(cam, fstop=8.0),
+        route=dataclasses.replace(made.route, record=False),
+    )
     said = [w for w in runner.run(stopped).report.warnings if "resolves" in w]
     assert len(said) == 1 and "where a sharp view resolves 0.5" in said[0], said
 
@@ -349,14 +404,18 @@ def test_a_plate_replaced_by_another_scenes_valid_plate_is_refused_never_rendere
     scene's, exit 0. A plate carries the digest of the recording it is; the worker reading it
     for another recording refuses it, naming the file, and writes no pass."""
     from holo_core.io.hologram import recording_of
+
     ours, theirs = "a1" * 8, "b2" * 8
 
     def named(j, recording, **route):
-        return dataclasses.replace(j, route=dataclasses.replace(j.route, recording=recording,
-                                                                **route))
+        return dataclasses.replace(
+            j, route=dataclasses.replace(j.route, recording=recording, **route)
+        )
+
     mine = named(job(tmp_path / "mine", render=False), ours)
-    other = named(dataclasses.replace(job(tmp_path / "other", render=False),
-                                      points=(cube(0.25),)), theirs)
+    other = named(
+        dataclasses.replace(job(tmp_path / "other", render=False), points=(cube(0.25),)), theirs
+    )
     for j in (mine, other):
         runner.run(j)
     plate = mine.route.holograms[0]
@@ -366,9 +425,12 @@ def test_a_plate_replaced_by_another_scenes_valid_plate_is_refused_never_rendere
     assert runner.run(again).pass_path.is_file()  # its own plate: rendered
     plate.write_bytes(other.route.holograms[0].read_bytes())
     frame2 = dataclasses.replace(again, output=dataclasses.replace(again.output, frame=2))
-    with pytest.raises(worker.WorkerError, match=rf"{plate}: holds recording {theirs}, not "
-                                                 rf"{ours} \(this scene's\): another "
-                                                 rf"recording's plate under this name is never "
-                                                 rf"rendered"):
+    with pytest.raises(
+        worker.WorkerError,
+        match=rf"{plate}: holds recording {theirs}, not "
+        rf"{ours} \(this scene's\): another "
+        rf"recording's plate under this name is never "
+        rf"rendered",
+    ):
         worker.run(frame2)
     assert not frame2.output.pass_path.exists()

@@ -13,8 +13,11 @@ from holo_core.acquired import Aperture, find_carrier, sideband
 from holo_core.io.acquired import read_acquired
 from holo_core.units import electron_wavelength
 
-holospy = pytest.importorskip("holospy", reason="holospy is not installed (pip install "
-                              "'holo[peers]'): its reconstruction, the reference, cannot be built")
+holospy = pytest.importorskip(
+    "holospy",
+    reason="holospy is not installed (pip install "
+    "'holo[peers]'): its reconstruction, the reference, cannot be built",
+)
 
 NEEDLE = "01_holo_Vbp_130V_0V_bin2_crop.hdf5"
 VACUUM = "00_ref_Vbp_130V_0V_bin2_crop.hdf5"
@@ -36,6 +39,7 @@ class _quiet:
 
     def __enter__(self):
         import warnings
+
         self.catch = warnings.catch_warnings()
         self.catch.__enter__()
         warnings.simplefilter("ignore")
@@ -65,15 +69,19 @@ def test_holospy_reconstruction_is_reproduced_with_its_filter(data):
     bins = (round(carrier.fy * n * pitch) % n, round(carrier.fx * n * pitch) % n)
     assert bins == position, (bins, position)
     assert carrier.sideband == "lower"
-    got = sideband(h, carrier=carrier, aperture=Aperture.holospy(), reference_hologram=vacuum,
-                   iterations=0)
+    got = sideband(
+        h, carrier=carrier, aperture=Aperture.holospy(), reference_hologram=vacuum, iterations=0
+    )
     err = np.linalg.norm(got - want) / np.linalg.norm(want)
     assert err <= 1e-4, f"holospy vs holo: {err:.3g}"
     phase = np.angle(got * np.conj(want))
-    print(f"relative L2 {err:.3g}, phase rms {np.sqrt(np.mean(phase ** 2)):.3g} rad; "
-          f"carrier {carrier.describe()}")
-    hard = sideband(h, carrier=carrier, aperture=Aperture(radius=0.5), reference_hologram=vacuum,
-                    iterations=0)
+    print(
+        f"relative L2 {err:.3g}, phase rms {np.sqrt(np.mean(phase**2)):.3g} rad; "
+        f"carrier {carrier.describe()}"
+    )
+    hard = sideband(
+        h, carrier=carrier, aperture=Aperture(radius=0.5), reference_hologram=vacuum, iterations=0
+    )
     off = np.linalg.norm(hard - want) / np.linalg.norm(want)
     print(f"the hard disc of the same bin and radius: {off:.3g}")
     assert off > 1e-2, off

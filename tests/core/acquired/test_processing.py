@@ -76,8 +76,9 @@ def _amplitude_object(z, bead=False):
     n = 2 * N
     c = (np.arange(n) - (n - 1) / 2) * PITCH
     x, y = c[None, :], c[:, None]
-    bars = ((np.abs(x) < 120e-6) & (np.abs(y) < 120e-6) &
-            (np.floor((x + 120e-6) / 40e-6) % 2 == 0)) | (np.hypot(x - 60e-6, y + 160e-6) < 25e-6)
+    bars = (
+        (np.abs(x) < 120e-6) & (np.abs(y) < 120e-6) & (np.floor((x + 120e-6) / 40e-6) % 2 == 0)
+    ) | (np.hypot(x - 60e-6, y + 160e-6) < 25e-6)
     if bead:
         bars = np.hypot(x, y) < 6e-6
     f = np.fft.fftfreq(n, PITCH)
@@ -86,11 +87,12 @@ def _amplitude_object(z, bead=False):
     band = 0.5 * (1 - np.tanh((np.sqrt(f2) - 60e3) / 3e3))
     wave = np.fft.ifft2(np.fft.fft2(bars.astype(float)) * np.exp(2j * np.pi * z * kz) * band)
     lo = n // 4
-    return wave[lo:lo + N, lo:lo + N], bars[lo:lo + N, lo:lo + N]
+    return wave[lo : lo + N, lo : lo + N], bars[lo : lo + N, lo : lo + N]
 
 
-@pytest.mark.parametrize("metric, bead", [(m, False) for m in sorted(set(METRICS) - {"peak"})]
-                         + [("peak", True)])
+@pytest.mark.parametrize(
+    "metric, bead", [(m, False) for m in sorted(set(METRICS) - {"peak"})] + [("peak", True)]
+)
 def test_autofocus_finds_the_distance_within_its_depth_of_focus(metric, bead):
     """The wave of an object 6.3 mm behind the hologram (band 60e3 1/m: depth of focus
     λ/NA² = 0.44 mm), searched from 4 to 9 mm in 0.1 mm steps: each metric finds it within
@@ -99,10 +101,13 @@ def test_autofocus_finds_the_distance_within_its_depth_of_focus(metric, bead):
     z0 = 6.3e-3
     wave, _ = _amplitude_object(z0, bead)
     dof = depth_of_focus(LAM, 60e3)
-    found = autofocus(wave, wavelength=LAM, pitch=PITCH, distances=-np.arange(4e-3, 9e-3, 1e-4),
-                      metric=metric)
-    print(f"{metric}: {-found.distance * 1e3:.2f} mm for {z0 * 1e3:.2f} (depth of focus "
-          f"{dof * 1e3:.2f} mm)")
+    found = autofocus(
+        wave, wavelength=LAM, pitch=PITCH, distances=-np.arange(4e-3, 9e-3, 1e-4), metric=metric
+    )
+    print(
+        f"{metric}: {-found.distance * 1e3:.2f} mm for {z0 * 1e3:.2f} (depth of focus "
+        f"{dof * 1e3:.2f} mm)"
+    )
     assert abs(-found.distance - z0) <= dof, (metric, found.distance)
 
 

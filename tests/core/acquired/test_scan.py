@@ -36,8 +36,20 @@ def imported(tmp_path_factory):
     out = folder / "out"
     out.mkdir()
     with contextlib.redirect_stdout(io.StringIO()) as stdout:
-        status = main(["import", str(scan), "--pitch", "3.45um", "--wavelength", "633",
-                       "--distance", "5cm", "-o", f"{out}/"])
+        status = main(
+            [
+                "import",
+                str(scan),
+                "--pitch",
+                "3.45um",
+                "--wavelength",
+                "633",
+                "--distance",
+                "5cm",
+                "-o",
+                f"{out}/",
+            ]
+        )
     assert status == 0, stdout.getvalue()
     hologram = read_hologram(out / "letter_scan_2048_holo.exr")
     _, channels = read_exr(out / "letter_scan_2048_view.exr")
@@ -82,8 +94,9 @@ def test_the_view_shows_the_letter_where_it_is(imported):
     truth, (x, y) = truth_in_view(hologram, camera)
     seen = alpha > 0.5
     iou = (seen & truth).sum() / (seen | truth).sum()
-    dot = (x - 0.25 * scans.LETTER_HEIGHT) ** 2 + (y + 0.3 * scans.LETTER_HEIGHT) ** 2 <= \
-        (0.09 * scans.LETTER_HEIGHT) ** 2
+    dot = (x - 0.25 * scans.LETTER_HEIGHT) ** 2 + (y + 0.3 * scans.LETTER_HEIGHT) ** 2 <= (
+        0.09 * scans.LETTER_HEIGHT
+    ) ** 2
     mirrored = scans.letter(-x, y)  # the letter as a mirrored view would show it
     rows, cols = np.indices(alpha.shape)
 
@@ -91,12 +104,15 @@ def test_the_view_shows_the_letter_where_it_is(imported):
         f = mask & ~dot
         d = mask & dot
         return math.hypot(cols[d].mean() - cols[f].mean(), rows[d].mean() - rows[f].mean())
+
     scale = spacing(seen) / spacing(truth)
     edge = _edge_width(view["Combined.R"] / np.maximum(alpha, 1e-6) * seen, truth)
     depth = view["Depth.Z"][seen]
     flipped = (seen & mirrored).sum() / (seen | mirrored).sum()
-    print(f"IoU {iou:.4f} (mirrored {flipped:.3f}), dot {seen[dot].mean():.3f} found, scale "
-          f"{scale:.4f}, edge {edge:.2f} px, depth {depth.min():.6g}-{depth.max():.6g} m")
+    print(
+        f"IoU {iou:.4f} (mirrored {flipped:.3f}), dot {seen[dot].mean():.3f} found, scale "
+        f"{scale:.4f}, edge {edge:.2f} px, depth {depth.min():.6g}-{depth.max():.6g} m"
+    )
     assert iou >= 0.95, iou
     assert seen[dot].mean() >= 0.9 and cols[dot].mean() > cols[truth].mean()  # on the right
     assert flipped <= 0.5, flipped
@@ -109,9 +125,9 @@ def _edge_width(luminance, truth) -> float:
     """The 10-90 % width [px] of the letter's stem's left edge, averaged over the stem's
     middle rows."""
     rows = np.nonzero(truth.any(1))[0]
-    middle = rows[len(rows) // 3: 2 * len(rows) // 3]
+    middle = rows[len(rows) // 3 : 2 * len(rows) // 3]
     left = int(np.nonzero(truth[middle].any(0))[0][0])
-    profile = luminance[middle, left - 8:left + 8].mean(0)
+    profile = luminance[middle, left - 8 : left + 8].mean(0)
     profile = (profile - profile[:3].mean()) / (profile[-3:].mean() - profile[:3].mean())
     at = np.arange(profile.size, dtype=float)
     return float(np.interp(0.9, profile, at) - np.interp(0.1, profile, at))
@@ -122,14 +138,21 @@ def test_render_takes_the_written_hologram_and_frames_it(imported, tmp_path, cap
     frames it, as import did; ``render`` of the scan itself without its optics says what it
     needs."""
     _, _, view, scan = imported
-    status, _, err = run_cli(capsys, "render", scan.parent / "out" / "letter_scan_2048_holo.exr",
-                             "-o", tmp_path / "v.exr")
+    status, _, err = run_cli(
+        capsys,
+        "render",
+        scan.parent / "out" / "letter_scan_2048_holo.exr",
+        "-o",
+        tmp_path / "v.exr",
+    )
     assert status == 0, err
     again = {k.split(".", 1)[1]: v for k, v in read_exr(tmp_path / "v.exr")[1].items()}
     assert np.array_equal(again["Combined.A"], view["Combined.A"])
     status, _, err = run_cli(capsys, "render", scan, "-o", tmp_path / "v.exr")
-    assert status == 2 and "is a scan, not a Holo hologram: give --pitch, --wavelength, " \
-        "--distance" in err, err
+    assert (
+        status == 2
+        and "is a scan, not a Holo hologram: give --pitch, --wavelength, --distance" in err
+    ), err
 
 
 def test_millimetres_typed_as_metres_are_warned(imported):
@@ -138,8 +161,11 @@ def test_millimetres_typed_as_metres_are_warned(imported):
     _, _, _, scan = imported
     with pytest.warns(UnitWarning, match="pitch 0.00345 m is 3.45 mm"):
         import_acquired(scan, pitch=0.00345, wavelength=633e-9, find_carrier=False)
-    with pytest.warns(UnitWarning, match=r"distance 50 m is 7.08e\+03 times the hologram's "
-                                         r"7.07 mm width: .* if it is in millimetres, pass 0.05"):
+    with pytest.warns(
+        UnitWarning,
+        match=r"distance 50 m is 7.08e\+03 times the hologram's "
+        r"7.07 mm width: .* if it is in millimetres, pass 0.05",
+    ):
         import_acquired(scan, pitch=3.45e-6, wavelength=633e-9, distance=50, sideband="upper")
 
 
@@ -150,13 +176,19 @@ def test_autofocus_finds_the_distance_within_a_depth_of_focus(imported, metric):
     focus λ/NA² (NA = the band's sin θ = 0.024: 1.1 mm). Measured: 0 to 0.5 mm off."""
     _, hologram, _, _ = imported
     lam = hologram.wavelengths[0]
-    wave, pitch = decimate(hologram.object_wave[0], pitch=hologram.pitch,
-                           band=hologram.band / lam)
-    found = autofocus(wave, wavelength=lam, pitch=pitch, metric=metric,
-                      distances=-np.arange(0.03, 0.07 + 1e-9, 0.5e-3))
+    wave, pitch = decimate(hologram.object_wave[0], pitch=hologram.pitch, band=hologram.band / lam)
+    found = autofocus(
+        wave,
+        wavelength=lam,
+        pitch=pitch,
+        metric=metric,
+        distances=-np.arange(0.03, 0.07 + 1e-9, 0.5e-3),
+    )
     dof = depth_of_focus(lam, hologram.band / lam)
-    print(f"{metric}: {-found.distance * 1e3:.2f} mm (depth of focus {dof * 1e3:.2f} mm, on "
-          f"{wave.shape[0]}x{wave.shape[1]})")
+    print(
+        f"{metric}: {-found.distance * 1e3:.2f} mm (depth of focus {dof * 1e3:.2f} mm, on "
+        f"{wave.shape[0]}x{wave.shape[1]})"
+    )
     assert abs(-found.distance - scans.DISTANCE) <= dof, found.distance
 
 
@@ -164,10 +196,23 @@ def test_a_complex_wave_file_imports_as_its_plane(tmp_path, capsys, rng):
     """An EXR of an acquired object wave (channels re, im: a phase-shifting setup's result)
     needs no filter: imported as it is, its objects on the plane at the distance."""
     from holo_core.io.image import write_exr
+
     wave = rng.normal(size=(32, 48)) + 1j * rng.normal(size=(32, 48))
     path = write_exr(tmp_path / "wave.exr", {"re": wave.real, "im": wave.imag})
-    status, out, err = run_cli(capsys, "import", path, "--pitch", "5um", "--wavelength", "633",
-                               "--distance", "1cm", "-o", tmp_path / "h.exr", "--no-view")
+    status, out, err = run_cli(
+        capsys,
+        "import",
+        path,
+        "--pitch",
+        "5um",
+        "--wavelength",
+        "633",
+        "--distance",
+        "1cm",
+        "-o",
+        tmp_path / "h.exr",
+        "--no-view",
+    )
     assert status == 0, err
     h = read_hologram(tmp_path / "h.exr")
     assert h.encoding == "complex" and h.shape == (32, 48) and h.pitch == 5e-6

@@ -29,9 +29,14 @@ def recorded(obj, angle, azimuth, amplitude=2.0):
     """The intensity hologram of ``obj`` with the plane reference (angle, azimuth) [rad]."""
     ref = Reference(angle=angle, azimuth=azimuth)
     r = reference_wave(obj.shape, wavelength=LAM, pitch=PITCH, reference=ref, amplitude=amplitude)
-    return Hologram(intensity=interfere(obj, r)[None], wavelengths=(LAM,), pitch=PITCH,
-                    reference_angle=angle, reference_azimuth=azimuth,
-                    reference_amplitudes=(amplitude,))
+    return Hologram(
+        intensity=interfere(obj, r)[None],
+        wavelengths=(LAM,),
+        pitch=PITCH,
+        reference_angle=angle,
+        reference_azimuth=azimuth,
+        reference_amplitudes=(amplitude,),
+    )
 
 
 def angle_for(carrier):
@@ -75,11 +80,13 @@ def test_an_off_grid_carrier_is_found_in_the_spectrum(rng):
     assert miss <= 1e-2, f"carrier {found} vs {true}: {miss:.3g} bin"
     twin = find_carrier(h, pitch=PITCH).frequency  # the default, lower: the pair's other peak
     assert np.allclose(twin, (-found[0], -found[1]), rtol=1e-9), (twin, found)
-    err = rel_err(sideband(h, pitch=PITCH, reference_amplitude=2.0, radius=band,
-                           sideband="upper"), obj)
+    err = rel_err(
+        sideband(h, pitch=PITCH, reference_amplitude=2.0, radius=band, sideband="upper"), obj
+    )
     assert err <= SIDEBAND_FOUND, f"sideband vs object wave: {err:.3g}"
-    exact = rel_err(sideband(h, pitch=PITCH, reference_amplitude=2.0, radius=band,
-                             carrier=true), obj)
+    exact = rel_err(
+        sideband(h, pitch=PITCH, reference_amplitude=2.0, radius=band, carrier=true), obj
+    )
     assert exact <= SIDEBAND, f"with the true carrier: {exact:.3g}"
 
 
@@ -92,13 +99,19 @@ def test_the_metadata_picks_the_plus_one_order_out_of_the_pair(rng):
     obj = 1.0 + 0.1 * band_limited(rng, band)
     angle = angle_for(40e3)
     h = recorded(obj, angle, math.pi)
-    rough = Hologram(intensity=h.intensity, wavelengths=(LAM,), pitch=PITCH,
-                     reference_angle=angle * 1.05, reference_azimuth=math.pi,
-                     reference_amplitudes=(2.0,))
+    rough = Hologram(
+        intensity=h.intensity,
+        wavelengths=(LAM,),
+        pitch=PITCH,
+        reference_angle=angle * 1.05,
+        reference_azimuth=math.pi,
+        reference_amplitudes=(2.0,),
+    )
     err = rel_err(sideband(rough, carrier="spectrum", radius=band), obj)
     assert err <= SIDEBAND_FOUND, f"+1 order from rough metadata: {err:.3g}"
-    twin = rel_err(sideband(h.intensity[0], pitch=PITCH, reference_amplitude=2.0, radius=band),
-                   obj.conj())
+    twin = rel_err(
+        sideband(h.intensity[0], pitch=PITCH, reference_amplitude=2.0, radius=band), obj.conj()
+    )
     assert twin <= SIDEBAND_FOUND, f"without metadata, the twin: {twin:.3g}"
     fx, fy = find_carrier(h.intensity[0], pitch=PITCH).frequency
     assert fx > 0 and abs(fx - 40e3) < 10 and abs(fy) < 10, (fx, fy)
@@ -110,6 +123,7 @@ def test_the_recorded_band_is_the_default_radius(rng):
     obj = band_limited(rng, band)
     h = recorded(obj, angle_for(3.4 * band), 0.3)
     import dataclasses
+
     stated = dataclasses.replace(h, band=band * LAM)
     err = rel_err(sideband(stated), obj)
     assert err <= SIDEBAND, f"{err:.3g}"
@@ -145,8 +159,11 @@ def test_an_inline_hologram_is_recognised_and_said_so(rng):
     given."""
     obj = 1.0 + 0.3 * band_limited(rng, 12e3)
     h = interfere(obj, 2.0 * np.ones((N, N)))
-    with pytest.raises(InlineHologramError, match=r"hologram looks in-line: .* holds "
-                                                  r"[0-9.]+ times the energy of the same disc"):
+    with pytest.raises(
+        InlineHologramError,
+        match=r"hologram looks in-line: .* holds "
+        r"[0-9.]+ times the energy of the same disc",
+    ):
         sideband(h, pitch=PITCH)
     with pytest.raises(InlineHologramError, match="looks in-line"):
         sideband(h, pitch=PITCH, carrier=(40e3, 0.0))
@@ -154,11 +171,18 @@ def test_an_inline_hologram_is_recognised_and_said_so(rng):
     assert find_carrier(off_axis).contrast > 100
 
 
-@pytest.mark.parametrize("edge, window, at_radius, at_centre", [
-    ("hard", "none", 1.0, 1.0), ("tanh", "none", 0.5, 1.0), ("cosine", "none", 0.5, 1.0),
-    ("hard", "hann", 0.0, 1.0), ("hard", "hamming", 0.08, 1.0), ("hard", "gaussian",
-                                                                  math.exp(-2), 1.0),
-    ("hard", "butterworth", 0.5, 1.0)])
+@pytest.mark.parametrize(
+    "edge, window, at_radius, at_centre",
+    [
+        ("hard", "none", 1.0, 1.0),
+        ("tanh", "none", 0.5, 1.0),
+        ("cosine", "none", 0.5, 1.0),
+        ("hard", "hann", 0.0, 1.0),
+        ("hard", "hamming", 0.08, 1.0),
+        ("hard", "gaussian", math.exp(-2), 1.0),
+        ("hard", "butterworth", 0.5, 1.0),
+    ],
+)
 def test_the_aperture_weights_are_the_stated_functions(edge, window, at_radius, at_centre):
     """At the centre, the radius R and 1.06 R (the edge's width w = 0.1 R): holospy's tanh is
     ½ at R and ½(1 − tanh(0.06/0.05)) beyond, the raised cosine ½ at R and 0 from R + w/2;
@@ -211,11 +235,18 @@ def test_a_vacuum_hologram_divides_the_reference_wave_away():
     edge = N / 2 * PITCH  # the curvature's local frequency reaches 5e3 1/m there
     r = 2.0 * np.exp(2j * np.pi * 40e3 * x + 1j * np.pi * 5e3 * (x**2 + y**2) / edge)
     h, vacuum = interfere(transmission, r), interfere(np.ones((N, N)), r)
-    got = sideband(h, pitch=PITCH, reference_hologram=vacuum, reference_amplitude=2.0,
-                   aperture=Aperture(radius=0.5))
+    got = sideband(
+        h,
+        pitch=PITCH,
+        reference_hologram=vacuum,
+        reference_amplitude=2.0,
+        aperture=Aperture(radius=0.5),
+    )
     inner = (slice(32, -32), slice(32, -32))
     err = rel_err(got[inner], transmission[inner])
     assert err <= 1e-2, f"{err:.3g}"
-    without = rel_err(sideband(h, pitch=PITCH, reference_amplitude=2.0,
-                               aperture=Aperture(radius=0.5))[inner], transmission[inner])
+    without = rel_err(
+        sideband(h, pitch=PITCH, reference_amplitude=2.0, aperture=Aperture(radius=0.5))[inner],
+        transmission[inner],
+    )
     assert without > 0.5, f"{without:.3g}"

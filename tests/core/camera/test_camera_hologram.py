@@ -38,31 +38,39 @@ def on_ray(camera, col, row, depth):
 
 def plane(corners, colour=(0.5, 0.5, 0.5), texture=None):
     v = np.asarray(corners, float)
-    return Mesh(vertices=v, triangles=np.array([[0, 1, 2], [0, 2, 3]]),
-                colours=None if texture is not None else np.tile(colour, (4, 1)),
-                uvs=np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]]) if texture is not None else None,
-                texture=texture)
+    return Mesh(
+        vertices=v,
+        triangles=np.array([[0, 1, 2], [0, 2, 3]]),
+        colours=None if texture is not None else np.tile(colour, (4, 1)),
+        uvs=np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]]) if texture is not None else None,
+        texture=texture,
+    )
 
 
 def uv_sphere(centre, radius, n=72):
     """A UV sphere of 2·n·(n-1) triangles."""
-    th, ph = np.meshgrid(np.linspace(0, np.pi, n), np.linspace(0, 2 * np.pi, 2 * n + 1)[:-1],
-                         indexing="ij")
+    th, ph = np.meshgrid(
+        np.linspace(0, np.pi, n), np.linspace(0, 2 * np.pi, 2 * n + 1)[:-1], indexing="ij"
+    )
     v = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], -1)
     idx = np.arange(v.shape[0] * v.shape[1]).reshape(v.shape[:2])
     a, b = idx[:-1], np.roll(idx, -1, 1)[:-1]
     c, d = idx[1:], np.roll(idx, -1, 1)[1:]
-    tri = np.concatenate([np.stack([a, b, d], -1).reshape(-1, 3),
-                          np.stack([a, d, c], -1).reshape(-1, 3)])
-    return Mesh(vertices=v.reshape(-1, 3) * radius + centre, triangles=tri,
-                colours=np.full((v.shape[0] * v.shape[1], 3), 0.6))
+    tri = np.concatenate(
+        [np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)]
+    )
+    return Mesh(
+        vertices=v.reshape(-1, 3) * radius + centre,
+        triangles=tri,
+        colours=np.full((v.shape[0] * v.shape[1], 3), 0.6),
+    )
 
 
 def centroid(img, col, row, r=4):
     """Intensity-weighted centre (col, row) [px from the top-left corner] near (col, row)."""
     c0, r0 = int(col), int(row)
-    win = img[r0 - r:r0 + r + 1, c0 - r:c0 + r + 1]
-    yy, xx = np.mgrid[r0 - r:r0 + r + 1, c0 - r:c0 + r + 1] + 0.5
+    win = img[r0 - r : r0 + r + 1, c0 - r : c0 + r + 1]
+    yy, xx = np.mgrid[r0 - r : r0 + r + 1, c0 - r : c0 + r + 1] + 0.5
     return (win * xx).sum() / win.sum(), (win * yy).sum() / win.sum()
 
 
@@ -93,8 +101,7 @@ def test_defocused_point_is_the_thin_lens_circle_of_confusion(fstop):
     diameter = camera.aperture_diameter
     z = 1 / (1 / focus + blur_px * camera.pixel_angle() / diameter)
     p = on_ray(camera, 80.0, 60.0, z)
-    r = render_camera(camera=camera, points=(p[None], np.ones((1, 3))), samples=1,
-                         supersample=2)
+    r = render_camera(camera=camera, points=(p[None], np.ones((1, 3))), samples=1, supersample=2)
     lum = r.radiance.mean(-1)
     plateau = np.median(lum[lum > 0.2 * lum.max()])
     measured = 2 * math.sqrt((lum > plateau / 4).sum() / math.pi)
@@ -169,12 +176,13 @@ def test_looks_converge_on_the_incoherent_route():
     """Many emitters: the looks' mean approaches the incoherent route as 1/√N (its error
     halves from 4 to 16 looks) and is within 28 dB PSNR of it inside a textured wall."""
     camera = cam((64, 48), fstop=2.8, focus_distance=3.5)
-    wall = plane([[-0.5, 0, -0.4], [0.5, 0, -0.4], [0.5, 0.3, 0.4], [-0.5, 0.3, 0.4]],
-                 texture=np.random.default_rng(1).uniform(0.2, 1, (6, 6, 3)))
+    wall = plane(
+        [[-0.5, 0, -0.4], [0.5, 0, -0.4], [0.5, 0.3, 0.4], [-0.5, 0.3, 0.4]],
+        texture=np.random.default_rng(1).uniform(0.2, 1, (6, 6, 3)),
+    )
     exact = render_camera(wall, camera, via="incoherent")
     looks = {}
-    render_camera(wall, camera, samples=64,
-                  on_sample=lambda r, n: looks.__setitem__(n, r.radiance))
+    render_camera(wall, camera, samples=64, on_sample=lambda r, n: looks.__setitem__(n, r.radiance))
     inside = exact.alpha >= 1
     rms = {n: np.sqrt(np.mean((looks[n] - exact.radiance)[inside] ** 2)) for n in (4, 16, 64)}
     psnr = 20 * np.log10(exact.radiance[inside].max() / rms[64])
@@ -188,8 +196,10 @@ def test_intensity_hologram_route_gives_the_object_wave_back():
     """H = |O + R|² recorded off axis, then R'·H with DC suppression and the band filter:
     the object wave again (float32 intensities), and the same render either way."""
     camera = cam((48, 36), fstop=4.0, focus_distance=3.5)
-    wall = plane([[-0.5, 0, -0.4], [0.5, 0, -0.4], [0.5, 0.3, 0.4], [-0.5, 0.3, 0.4]],
-                 texture=np.random.default_rng(1).uniform(0.2, 1, (6, 6, 3)))
+    wall = plane(
+        [[-0.5, 0, -0.4], [0.5, 0, -0.4], [0.5, 0.3, 0.4], [-0.5, 0.3, 0.4]],
+        texture=np.random.default_rng(1).uniform(0.2, 1, (6, 6, 3)),
+    )
     optics = choose_optics(camera, depth_range([wall], camera))
     o = object_wave(rasterize([wall], camera, optics), optics, camera, seed=2)
     back = reconstruct_object_wave(intensity_hologram(o))
@@ -233,6 +243,7 @@ def test_camera_hologram_equals_the_plate_hologram_carried_to_the_pupil():
     waves, where the camera hologram is 4e-4)."""
     from holo_core.plate.point_sources import point_wave
     from holo_core.propagation import angular_spectrum
+
     d_c = 0.01
     pose = np.eye(4)
     pose[2, 3] = d_c  # the plate is z = 0 of the world; the camera looks down −z at it
@@ -251,13 +262,13 @@ def test_camera_hologram_equals_the_plate_hologram_carried_to_the_pupil():
     lam, (dy, dx), (h, w) = optics.wavelength, optics.pitch(), optics.shape
     pitch = dx / 3  # every third plate sample lies on a pupil sample
     n = 2 * math.ceil(5 * optics.diameter / pitch / 2) + 1
-    plate = point_wave(emitters, amps, wavelength=lam, pitch=pitch, shape=(n, n),
-                       method="direct", band=0.5)
+    plate = point_wave(
+        emitters, amps, wavelength=lam, pitch=pitch, shape=(n, n), method="direct", band=0.5
+    )
     carried = angular_spectrum(plate, wavelength=lam, pitch=pitch, distance=d_c)
     c = (n - 1) // 2
     at = carried[c + 3 * (np.arange(h) - h // 2)][:, c + 3 * (np.arange(w) - w // 2)]
-    y, x = np.meshgrid((np.arange(h) - h // 2) * dy, (np.arange(w) - w // 2) * dx,
-                       indexing="ij")
+    y, x = np.meshgrid((np.arange(h) - h // 2) * dy, (np.arange(w) - w // 2) * dx, indexing="ij")
     iris = np.hypot(x, y) < optics.diameter / 2
     err = np.linalg.norm((at - o)[iris]) / np.linalg.norm(o[iris])
     print(f"camera hologram vs plate hologram carried to the pupil: {err:.2e}")
@@ -269,9 +280,13 @@ def test_a_ten_million_vertex_mesh_is_refused_by_render_camera(monkeypatch):
     per triangle (measured 920 at 10^6), 18.6 GiB for 2·10^7 triangles, refused against an
     8 GiB budget with both sizes named."""
     import holo_core.camera.raster as raster
+
     monkeypatch.setenv("HOLO_MEMORY_LIMIT", "8G")
     monkeypatch.setattr(raster, "across_shutter", never)
     cam = Camera(matrix_world=look_at((0, 0, 0.5), (0, 0, -1)), resolution=(64, 64))
-    with pytest.raises(InputError, match=r"rasterizing 20000000 triangles needs 1\d\.\d GiB of "
-                                         r"memory; 6.4 GiB is available"):
+    with pytest.raises(
+        InputError,
+        match=r"rasterizing 20000000 triangles needs 1\d\.\d GiB of "
+        r"memory; 6.4 GiB is available",
+    ):
         render_camera(huge_mesh(10**7), cam, via="incoherent", supersample=1)

@@ -15,14 +15,19 @@ CAMERA = Camera(matrix_world=look_at((0.0, -3.0, 0.0), (0, 0, 0)), resolution=SI
 def _card(dx=0.0):
     """A square card 1 m wide facing the camera at 3 m, shifted ``dx`` [m] along x."""
     v = np.array([[-0.5, 0, -0.5], [0.5, 0, -0.5], [0.5, 0, 0.5], [-0.5, 0, 0.5]])
-    return Mesh(vertices=v + (dx, 0, 0), triangles=np.array([[0, 1, 2], [0, 2, 3]]),
-                colours=np.full((4, 3), 0.7))
+    return Mesh(
+        vertices=v + (dx, 0, 0),
+        triangles=np.array([[0, 1, 2], [0, 2, 3]]),
+        colours=np.full((4, 3), 0.7),
+    )
 
 
 def _width(profile):
     """The 10-90 % width [px] of a falling edge profile from 1 to 0."""
-    lo, hi = np.interp(0.9, profile[::-1], np.arange(len(profile))[::-1]), \
-        np.interp(0.1, profile[::-1], np.arange(len(profile))[::-1])
+    lo, hi = (
+        np.interp(0.9, profile[::-1], np.arange(len(profile))[::-1]),
+        np.interp(0.1, profile[::-1], np.arange(len(profile))[::-1]),
+    )
     return hi - lo
 
 
@@ -36,8 +41,12 @@ def test_a_card_moving_eight_pixels_fades_over_eight_pixels():
     still = render_camera([_card()], CAMERA, via="incoherent")
     px = 1.0 / np.ptp(CAMERA.project(np.array([[0.5, 0, 0], [1.5, 0, 0]]))[0][:, 0])  # m/px
     start, end = _card(-4 * px), _card(4 * px)
-    moving = Mesh(vertices=_card().vertices, triangles=_card().triangles,
-                  colours=_card().colours, motion=np.stack([start.vertices, end.vertices]))
+    moving = Mesh(
+        vertices=_card().vertices,
+        triangles=_card().triangles,
+        colours=_card().colours,
+        motion=np.stack([start.vertices, end.vertices]),
+    )
     blurred = render_camera([moving], CAMERA, via="incoherent")
     rows = slice(24, 40)
     edge = CAMERA.project(np.array([[0.5, 0, 0]]))[0][0, 0]
@@ -49,8 +58,10 @@ def test_a_card_moving_eight_pixels_fades_over_eight_pixels():
     inner = (centres > edge - 3) & (centres < edge + 3)
     deviation = np.abs(profile - ramp)[inner].max()
     area = blurred.alpha.sum() / still.alpha.sum()
-    print(f"moving 8 px: 10-90 % width {width:.2f} px, largest step off the ramp "
-          f"{deviation:.3f}, coverage x {area:.4f}")
+    print(
+        f"moving 8 px: 10-90 % width {width:.2f} px, largest step off the ramp "
+        f"{deviation:.3f}, coverage x {area:.4f}"
+    )
     assert abs(width - 6.4) <= 0.5, width
     assert deviation <= 0.05, deviation
     assert abs(area - 1) <= 0.01, area
@@ -59,8 +70,12 @@ def test_a_card_moving_eight_pixels_fades_over_eight_pixels():
 def test_a_card_whose_motion_stands_still_renders_as_the_still_card():
     """Motion steps that do not move: bit for bit the still card's image."""
     card = _card()
-    standing = Mesh(vertices=card.vertices, triangles=card.triangles, colours=card.colours,
-                    motion=np.stack([card.vertices] * 3))
+    standing = Mesh(
+        vertices=card.vertices,
+        triangles=card.triangles,
+        colours=card.colours,
+        motion=np.stack([card.vertices] * 3),
+    )
     a = render_camera([card], CAMERA, via="incoherent")
     b = render_camera([standing], CAMERA, via="incoherent")
     assert np.array_equal(a.rgb, b.rgb) and np.array_equal(a.alpha, b.alpha)

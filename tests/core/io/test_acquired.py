@@ -35,8 +35,9 @@ def test_every_page_of_a_tiff_or_the_one_asked_for(tmp_path, pages):
     second = read_acquired(path, **OPTICS, page=1)
     assert np.array_equal(second.intensity[0], (pages[1] / 65535).astype(np.float32))
     every = read_acquired(path, **OPTICS, page="all")
-    assert [h.intensity[0].tolist() for h in every] == \
-        [(p / 65535).astype(np.float32).tolist() for p in pages]
+    assert [h.intensity[0].tolist() for h in every] == [
+        (p / 65535).astype(np.float32).tolist() for p in pages
+    ]
     with pytest.raises(InputError, match=r"page must be in \[0, 2\]"):
         read_acquired(path, **OPTICS, page=3)
 
@@ -61,8 +62,9 @@ def test_npy_with_its_metadata_beside_it(tmp_path, rng):
     np.save(tmp_path / "f.npy", frame)
     with pytest.raises(InputError, match=r"pitch must be given \[m\]: .*f.npy holds no pitch_m"):
         read_acquired(tmp_path / "f.npy", wavelength=LAM)
-    (tmp_path / "f.json").write_text(json.dumps({"pitch_m": PITCH, "wavelength_m": LAM,
-                                                 "reference_angle_rad": 0.02}))
+    (tmp_path / "f.json").write_text(
+        json.dumps({"pitch_m": PITCH, "wavelength_m": LAM, "reference_angle_rad": 0.02})
+    )
     h = read_acquired(tmp_path / "f.npy")
     assert (h.pitch, h.wavelengths, h.reference_angle) == (PITCH, (LAM,), 0.02)
     assert np.array_equal(h.intensity[0], frame)
@@ -80,8 +82,11 @@ def test_a_given_value_wins_and_the_difference_is_logged(tmp_path, rng, caplog):
 def test_metadata_in_the_wrong_unit_is_refused_naming_the_file(tmp_path, rng):
     np.save(tmp_path / "f.npy", rng.random((5, 7)))
     (tmp_path / "f.json").write_text(json.dumps({"pitch_m": 3.45, "wavelength_m": LAM}))
-    with pytest.raises(InputError, match=r"f.npy: metadata pitch_m must be in \[1e-12, 0.01\] "
-                                         r"\[m\] \(.*\); got 3.45 \(3.45 looks like micrometres"):
+    with pytest.raises(
+        InputError,
+        match=r"f.npy: metadata pitch_m must be in \[1e-12, 0.01\] "
+        r"\[m\] \(.*\); got 3.45 \(3.45 looks like micrometres",
+    ):
         read_acquired(tmp_path / "f.npy")
 
 
@@ -94,8 +99,10 @@ def test_hdf5_attributes_of_the_dataset_or_a_group_above(tmp_path, pages):
         d = g.create_dataset("frames", data=pages)
         d.attrs["pitch_m"] = PITCH
         f.create_dataset("dark", data=np.zeros((5, 7)))
-    with pytest.raises(InputError, match="holds 2 2-D or 3-D numeric datasets; pass dataset= "
-                                         "one of camera/frames, dark"):
+    with pytest.raises(
+        InputError,
+        match="holds 2 2-D or 3-D numeric datasets; pass dataset= one of camera/frames, dark",
+    ):
         read_acquired(path, page=0)
     h = read_acquired(path, dataset="camera/frames", page=2)
     assert (h.pitch, h.wavelengths) == (PITCH, (LAM,))
@@ -146,19 +153,29 @@ def test_written_and_read_back(tmp_path, rng, name):
     if name.endswith((".h5", ".mat")):
         pytest.importorskip("h5py")
     frame = rng.random((1, 5, 7)).astype(np.float32) * 3
-    h = Hologram(intensity=frame, wavelengths=(LAM,), pitch=PITCH, reference_angle=0.03,
-                 reference_azimuth=1.0)
+    h = Hologram(
+        intensity=frame,
+        wavelengths=(LAM,),
+        pitch=PITCH,
+        reference_angle=0.03,
+        reference_azimuth=1.0,
+    )
     back = read_acquired(write_acquired(tmp_path / name, h))
-    assert (back.pitch, back.wavelengths, back.reference_angle, back.reference_azimuth) == \
-        (PITCH, (LAM,), 0.03, 1.0)
+    assert (back.pitch, back.wavelengths, back.reference_angle, back.reference_azimuth) == (
+        PITCH,
+        (LAM,),
+        0.03,
+        1.0,
+    )
     tolerance = 3 / 65535 if name.endswith(".png") else 0  # 16 bits of the peak
     err = float(np.abs(back.intensity - frame).max())
     assert err <= tolerance * 0.5 + 1e-7, f"{name}: {err:.3g}"
 
 
 def test_writes_follow_the_suffix_or_refuse(tmp_path, rng):
-    h = Hologram(intensity=rng.random((1, 5, 7)).astype(np.float32), wavelengths=(LAM,),
-                 pitch=PITCH)
+    h = Hologram(
+        intensity=rng.random((1, 5, 7)).astype(np.float32), wavelengths=(LAM,), pitch=PITCH
+    )
     with pytest.raises(InputError, match=r"h.jpg: write_acquired writes .png, .tif"):
         write_acquired(tmp_path / "h.jpg", h)
     with pytest.raises(InputError, match=r"h.png: the file is written as OpenEXR; name it \*.exr"):
@@ -179,12 +196,12 @@ def test_scans_are_read_by_image_mode(tmp_path, rng):
     want = grey / 255.0
     rgb = Image.fromarray(np.repeat(grey[..., None], 3, 2))
     palette = rgb.convert("P", palette=Image.ADAPTIVE)
-    assert np.allclose(_scan(tmp_path, palette), want, atol=1e-6)                # the colours
+    assert np.allclose(_scan(tmp_path, palette), want, atol=1e-6)  # the colours
     la = Image.fromarray(np.stack([grey, 255 - grey], -1), "LA")
-    assert np.allclose(_scan(tmp_path, la), want, atol=1e-6)                     # alpha dropped
+    assert np.allclose(_scan(tmp_path, la), want, atol=1e-6)  # alpha dropped
     cmyk = _scan(tmp_path, rgb.convert("CMYK"), "s.tif")
     assert np.allclose(cmyk, want, atol=1 / 255)
-    sixteen = rng.integers(0, 65536, (6, 7)).astype(np.int32)                  # int32 TIFF
+    sixteen = rng.integers(0, 65536, (6, 7)).astype(np.int32)  # int32 TIFF
     assert np.allclose(_scan(tmp_path, Image.fromarray(sixteen), "i.tif"), sixteen / 65535)
     exr = write_exr(tmp_path / "s.exr", {c: want * (i + 1) for i, c in enumerate("RGB")})
     assert read_acquired(exr, pitch=5e-6, wavelength=532e-9).intensity.shape == (1, 6, 7)

@@ -28,28 +28,34 @@ def test_tiles_and_layout_round_trip_exactly(tmp_path, rng, fmt, quantity, bits)
     of its window, and writing what was read gives the same codes (nothing drifts)."""
     v = values(rng, quantity)
     path = tmp_path / "plate.json"
-    tiles_io.write_tiles(path, v, quantity=quantity, bit_depth=bits, tile=(16, 20), fmt=fmt,
-                         **SETTINGS)
+    tiles_io.write_tiles(
+        path, v, quantity=quantity, bit_depth=bits, tile=(16, 20), fmt=fmt, **SETTINGS
+    )
     back, layout = tiles_io.read_tiles(path)
     codes = tiles_io.to_codes(v, quantity, bits)
     assert np.array_equal(back, tiles_io.from_codes(codes, quantity))
     assert np.array_equal(tiles_io.to_codes(back, quantity, bits), codes)
     assert len(layout["tiles"]) == 3 * 3  # 37 rows in 16s, 53 cols in 20s
     for t in layout["tiles"]:
-        window = codes[t["row"]:t["row"] + t["rows"], t["col"]:t["col"] + t["cols"]]
+        window = codes[t["row"] : t["row"] + t["rows"], t["col"] : t["col"] + t["cols"]]
         assert np.array_equal(tiles_io.read_tile(tmp_path / t["file"]), window), t
 
 
 def test_the_layout_says_what_a_printer_needs(tmp_path, rng):
-    path = tiles_io.write_tiles(tmp_path / "p.json", values(rng, "phase"), quantity="phase",
-                                bit_depth=8, display="holoeye-gaea-4k", **SETTINGS)
+    path = tiles_io.write_tiles(
+        tmp_path / "p.json",
+        values(rng, "phase"),
+        quantity="phase",
+        bit_depth=8,
+        display="holoeye-gaea-4k",
+        **SETTINGS,
+    )
     layout = json.loads(path.read_text())
     assert (layout["pitch"], layout["wavelength"], layout["distance"]) == (3.74e-6, 633e-9, -0.02)
     assert layout["encoding"] == "double-phase" and layout["display"] == "holoeye-gaea-4k"
     assert layout["shape"] == [37, 53] and layout["bit_depth"] == 8
     assert layout["quantisation"]["step"] == 2 * math.pi / 65536
-    assert layout["tiles"] == [{"file": "p_r0_c0.png", "row": 0, "col": 0, "rows": 37,
-                                "cols": 53}]
+    assert layout["tiles"] == [{"file": "p_r0_c0.png", "row": 0, "col": 0, "rows": 37, "cols": 53}]
 
 
 def test_quantisation_is_the_nearest_level():
@@ -72,8 +78,7 @@ def test_a_failed_write_leaves_the_old_set(tmp_path, rng, monkeypatch):
     """The tiles and the layout are renamed together: a write that fails at its second tile
     leaves the earlier set whole and no temporary file."""
     path = tmp_path / "p.json"
-    tiles_io.write_tiles(path, values(rng, "phase"), quantity="phase", tile=(20, 60),
-                         **SETTINGS)
+    tiles_io.write_tiles(path, values(rng, "phase"), quantity="phase", tile=(20, 60), **SETTINGS)
     before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
     calls = []
 
@@ -82,29 +87,33 @@ def test_a_failed_write_leaves_the_old_set(tmp_path, rng, monkeypatch):
         if len(calls) == 2:
             raise OSError("disk full")
         return b"partial"
+
     monkeypatch.setattr(tiles_io, "tile_bytes", failing)
     with pytest.raises(OSError, match="disk full"):
-        tiles_io.write_tiles(path, values(rng, "phase"), quantity="phase", tile=(20, 60),
-                             **SETTINGS)
+        tiles_io.write_tiles(
+            path, values(rng, "phase"), quantity="phase", tile=(20, 60), **SETTINGS
+        )
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
 
 
-@pytest.mark.parametrize("change, field", [
-    ({"values": np.full((4, 4), 1.5)}, "amplitude values"),
-    ({"pitch": 3.74}, "pitch"),
-    ({"wavelength": 633}, "wavelength"),
-    ({"distance": float("nan")}, "distance"),
-    ({"tile": (0, 5)}, "tile"),
-    ({"fmt": "jpg"}, "fmt"),
-    ({"bit_depth": 17}, "bit_depth"),
-    ({"quantity": "intensity"}, "quantity"),
-    ({"encoding": ""}, "encoding"),
-    ({"values": np.ones((4, 4)) * 0.5j}, "values"),
-    ({"path": "p.png"}, "json"),
-])
+@pytest.mark.parametrize(
+    "change, field",
+    [
+        ({"values": np.full((4, 4), 1.5)}, "amplitude values"),
+        ({"pitch": 3.74}, "pitch"),
+        ({"wavelength": 633}, "wavelength"),
+        ({"distance": float("nan")}, "distance"),
+        ({"tile": (0, 5)}, "tile"),
+        ({"fmt": "jpg"}, "fmt"),
+        ({"bit_depth": 17}, "bit_depth"),
+        ({"quantity": "intensity"}, "quantity"),
+        ({"encoding": ""}, "encoding"),
+        ({"values": np.ones((4, 4)) * 0.5j}, "values"),
+        ({"path": "p.png"}, "json"),
+    ],
+)
 def test_bad_settings_are_refused_naming_the_field(tmp_path, change, field):
-    kw = dict(SETTINGS, path=tmp_path / "p.json", values=np.full((4, 4), 0.5),
-              quantity="amplitude")
+    kw = dict(SETTINGS, path=tmp_path / "p.json", values=np.full((4, 4), 0.5), quantity="amplitude")
     kw.update(change)
     if not isinstance(kw["path"], type(tmp_path)):
         kw["path"] = tmp_path / kw["path"]
@@ -114,13 +123,15 @@ def test_bad_settings_are_refused_naming_the_field(tmp_path, change, field):
 
 
 def test_damaged_sets_are_refused_naming_the_file(tmp_path, rng):
-    path = tiles_io.write_tiles(tmp_path / "p.json", values(rng, "phase"), quantity="phase",
-                                tile=(20, 60), **SETTINGS)
+    path = tiles_io.write_tiles(
+        tmp_path / "p.json", values(rng, "phase"), quantity="phase", tile=(20, 60), **SETTINGS
+    )
     layout = json.loads(path.read_text())
 
     def rewrite(**tile0):
         changed = dict(layout, tiles=[dict(layout["tiles"][0], **tile0)] + layout["tiles"][1:])
         path.write_text(json.dumps(changed))
+
     rewrite(file="../elsewhere.png")
     with pytest.raises(InputError, match="plain file name"):
         tiles_io.read_tiles(path)
@@ -149,12 +160,16 @@ def test_a_tile_listed_257_times_is_refused_not_counted_round(tmp_path, rng):
     """A uint8 coverage count wrapped at 256: one tile listed 257 times counted once and the
     layout passed. Each sample now belongs to one tile: the second listing is refused, before
     its file is read."""
-    path = tiles_io.write_tiles(tmp_path / "p.json", values(rng, "phase", (8, 8)),
-                                quantity="phase", **SETTINGS)
+    path = tiles_io.write_tiles(
+        tmp_path / "p.json", values(rng, "phase", (8, 8)), quantity="phase", **SETTINGS
+    )
     layout = json.loads(path.read_text())
     path.write_text(json.dumps(dict(layout, tiles=layout["tiles"] * 257)))
-    with pytest.raises(InputError, match=r"p.json: the tiles do not cover the 8x8 grid exactly "
-                                         r"once: tile p_r0_c0.png \(row 0, col 0\) covers"):
+    with pytest.raises(
+        InputError,
+        match=r"p.json: the tiles do not cover the 8x8 grid exactly "
+        r"once: tile p_r0_c0.png \(row 0, col 0\) covers",
+    ):
         tiles_io.read_tiles(path)
 
 

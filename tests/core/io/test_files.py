@@ -73,6 +73,9 @@ class _Unreachable(_Folders):
 def test_a_file_system_that_does_not_answer_is_refused_before_the_work(tmp_path):
     fsspec.register_implementation("holo-unreachable", _Unreachable, clobber=True)
     url = f"holo-unreachable://{tmp_path}/p.zarr"
-    with pytest.raises(StoreError, match=rf"^{url}: cannot be reached or written "
-                                         rf"\(ConnectionRefusedError: .*Connection refused"):
+    with pytest.raises(
+        StoreError,
+        match=rf"^{url}: cannot be reached or written "
+        rf"\(ConnectionRefusedError: .*Connection refused",
+    ):
         check_output(url)

@@ -18,11 +18,16 @@ FUZZ = Path(__file__).resolve().parents[3] / "tools" / "fuzz.py"
 CASES = int(os.environ.get("HOLO_FUZZ_CASES", "300"))
 
 
-@pytest.mark.parametrize("reader", ["hologram", "ply", "obj", "scan", "lab", "write", "api",
-                                    "store", "layout"])
+@pytest.mark.parametrize(
+    "reader", ["hologram", "ply", "obj", "scan", "lab", "write", "api", "store", "layout"]
+)
 def test_every_mutated_file_ends_in_a_result_or_the_clear_error(reader):
-    run = subprocess.run([sys.executable, str(FUZZ), reader, str(CASES), "20261122"],
-                         capture_output=True, text=True, timeout=60 + CASES)
+    run = subprocess.run(
+        [sys.executable, str(FUZZ), reader, str(CASES), "20261122"],
+        capture_output=True,
+        text=True,
+        timeout=60 + CASES,
+    )
     assert run.returncode == 0, run.stderr[-2000:]
     report = json.loads(run.stdout.strip().splitlines()[-1])
     print(json.dumps(report))

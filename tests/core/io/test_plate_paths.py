@@ -19,8 +19,9 @@ OURS, THEIRS = "0123456789abcdef", "fedcba9876543210"
 
 def plate(recording="") -> Hologram:
     wave = (np.arange(64 * 64).reshape(1, 64, 64) * (1 - 1j)).astype(np.complex64)
-    return Hologram(object_wave=wave, encoding="complex", wavelengths=(633e-9,), pitch=8e-6,
-                    recording=recording)
+    return Hologram(
+        object_wave=wave, encoding="complex", wavelengths=(633e-9,), pitch=8e-6, recording=recording
+    )
 
 
 def test_a_plate_file_carries_its_recording_and_is_current_only_as_it(tmp_path):
@@ -46,24 +47,35 @@ def test_a_damaged_plate_file_is_left_to_the_reader_which_names_it(tmp_path):
 def test_a_tiled_store_carries_its_recording_and_is_current_only_as_it(tmp_path):
     pytest.importorskip("zarr")
     from holo_core.io import store
+
     path = tmp_path / "p.exr"
     for recording, current in ((THEIRS, False), (OURS, True)):
         h = plate(recording)
-        with store.recording_into(Files(store_of(path)), h.info, 64,
-                                  {"digest": digest_of({"r": recording}), "parts": {}},
-                                  overwrite=True) as s:
+        with store.recording_into(
+            Files(store_of(path)),
+            h.info,
+            64,
+            {"digest": digest_of({"r": recording}), "parts": {}},
+            overwrite=True,
+        ) as s:
             s.write_tile(0, 0, h.object_wave)
         assert plate_current(path) and plate_current(path, OURS) == current
 
 
 def test_a_recording_that_is_not_a_digest_is_refused_by_name(tmp_path):
-    with pytest.raises(ValueError, match=r"recording must be the recording's digest \(up to 64 "
-                                         r"hexadecimal digits\) or ''; got 'not hex!'"):
+    with pytest.raises(
+        ValueError,
+        match=r"recording must be the recording's digest \(up to 64 "
+        r"hexadecimal digits\) or ''; got 'not hex!'",
+    ):
         plate("not hex!")
     path = write_hologram(tmp_path / "p.exr", plate(OURS))
     meta = json.loads(exr_attribute(path, "holo"))
     _, channels = read_exr(path)
     write_exr(path, channels, holo=json.dumps({**meta, "recording": 7}))
-    with pytest.raises(HologramFileError, match=rf"{path}: metadata recording must be the "
-                                                rf"recording's digest"):
+    with pytest.raises(
+        HologramFileError,
+        match=rf"{path}: metadata recording must be the "
+        rf"recording's digest",
+    ):
         read_hologram(path)

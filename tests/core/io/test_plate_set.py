@@ -20,16 +20,34 @@ def small_set(rng, shift=0.0) -> PlateSet:
     for k in range(2):
         pose = np.eye(4)
         pose[0, 3] = 0.05 * k + shift
-        zone = ViewingZone(centre=(0.0, 0.0, 0.3), half_extents=(0.02, 0.01, 0.005),
-                           pupil=0.01, pixel=1e-3)
-        parts.append(PathPart(plate=Plate(matrix_world=pose, width=0.06, height=0.04, zone=zone),
-                              stretch=(0.04 * k, 0.04 * k + 0.05), frames=(2 * k, 2 * k + 1)))
-        looks.append(tuple(Hologram(
-            object_wave=(rng.normal(size=(4, 6, 10)) + 1j * rng.normal(size=(4, 6, 10))
-                         ).astype(np.complex64),
-            encoding="complex", wavelengths=(5e-6,) * 3 + (5.5e-6,), pitch=2e-5, band=0.1,
-            channels=("R", "G", "B", "Z"), zone=zone, plate=pose, point_density=1e6)
-            for _ in range(2)))
+        zone = ViewingZone(
+            centre=(0.0, 0.0, 0.3), half_extents=(0.02, 0.01, 0.005), pupil=0.01, pixel=1e-3
+        )
+        parts.append(
+            PathPart(
+                plate=Plate(matrix_world=pose, width=0.06, height=0.04, zone=zone),
+                stretch=(0.04 * k, 0.04 * k + 0.05),
+                frames=(2 * k, 2 * k + 1),
+            )
+        )
+        looks.append(
+            tuple(
+                Hologram(
+                    object_wave=(
+                        rng.normal(size=(4, 6, 10)) + 1j * rng.normal(size=(4, 6, 10))
+                    ).astype(np.complex64),
+                    encoding="complex",
+                    wavelengths=(5e-6,) * 3 + (5.5e-6,),
+                    pitch=2e-5,
+                    band=0.1,
+                    channels=("R", "G", "B", "Z"),
+                    zone=zone,
+                    plate=pose,
+                    point_density=1e6,
+                )
+                for _ in range(2)
+            )
+        )
     return PlateSet(parts=tuple(parts), looks=tuple(looks), seed=4, recording="ab12")
 
 
@@ -40,8 +58,12 @@ def test_a_set_reads_back_as_it_was_written(tmp_path, rng):
     assert (back.seed, back.recording, len(back)) == (4, "ab12", 2)
     for a, b in zip(plates.parts, back.parts):
         assert np.array_equal(a.plate.matrix_world, b.plate.matrix_world)
-        assert (a.plate.width, a.plate.height, a.stretch, a.frames) == \
-            (b.plate.width, b.plate.height, b.stretch, b.frames)
+        assert (a.plate.width, a.plate.height, a.stretch, a.frames) == (
+            b.plate.width,
+            b.plate.height,
+            b.stretch,
+            b.frames,
+        )
         assert a.plate.zone.centre == b.plate.zone.centre
     for k in range(len(plates)):
         for ha, hb in zip(plates.part_looks(k), back.part_looks(k)):
@@ -81,8 +103,9 @@ def test_a_missing_damaged_or_foreign_part_is_refused_by_name(tmp_path, rng):
         read_plate_set(folder).part_looks(1)
     # ... and its digest written into this manifest: its plate is not the part's
     manifest = json.loads((folder / MANIFEST).read_text())
-    manifest["parts"][1]["files"][0] = json.loads((other / MANIFEST).read_text())[
-        "parts"][1]["files"][0]
+    manifest["parts"][1]["files"][0] = json.loads((other / MANIFEST).read_text())["parts"][1][
+        "files"
+    ][0]
     (folder / MANIFEST).write_text(json.dumps(manifest))
     opened = read_plate_set(folder)  # its bytes are the manifest's: its plate is checked
     with pytest.raises(HologramFileError, match=r"part 1 \(part001.look0.exr\) is foreign"):
@@ -102,15 +125,24 @@ def test_parts_kept_as_text_are_the_parts(rng):
     size, zone, stretch and frames are the same; a part malformed is refused naming it."""
     from holo_core.io.plate_set import parts_from_json, parts_to_json
     from holo_core.validate import InputError
+
     parts = small_set(rng).parts
     back = parts_from_json(parts_to_json(parts))
     for a, b in zip(back, parts, strict=True):
         assert np.array_equal(a.plate.matrix_world, b.plate.matrix_world)
-        assert (a.plate.width, a.plate.height, a.stretch, a.frames) == \
-            (b.plate.width, b.plate.height, b.stretch, b.frames)
+        assert (a.plate.width, a.plate.height, a.stretch, a.frames) == (
+            b.plate.width,
+            b.plate.height,
+            b.stretch,
+            b.frames,
+        )
         za, zb = a.plate.zone, b.plate.zone
-        assert (za.centre, za.half_extents, za.pupil, za.pixel) == \
-            (zb.centre, zb.half_extents, zb.pupil, zb.pixel)
+        assert (za.centre, za.half_extents, za.pupil, za.pixel) == (
+            zb.centre,
+            zb.half_extents,
+            zb.pupil,
+            zb.pixel,
+        )
     listed = json.loads(parts_to_json(parts))
     del listed[1]["zone"]
     with pytest.raises(InputError, match="part 1: not a plate set's part"):

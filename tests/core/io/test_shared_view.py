@@ -23,8 +23,7 @@ def _child(code: str, *args, wait=True):
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), *sys.path]))
     run = subprocess.run if wait else subprocess.Popen
     kwargs = {"capture_output": True, "timeout": 60} if wait else {}
-    return run([sys.executable, "-c", textwrap.dedent(code), *map(str, args)], env=env,
-               **kwargs)
+    return run([sys.executable, "-c", textwrap.dedent(code), *map(str, args)], env=env, **kwargs)
 
 
 WRITER = """

@@ -33,8 +33,9 @@ RECORDING = {"digest": digest_of({"scene": "a"}), "parts": {"scene": "a"}}
 
 def samples(seed=0) -> np.ndarray:
     rng = np.random.default_rng(seed)
-    return (rng.standard_normal((1, *SHAPE)) + 1j * rng.standard_normal((1, *SHAPE))) \
-        .astype(np.complex64)
+    return (rng.standard_normal((1, *SHAPE)) + 1j * rng.standard_normal((1, *SHAPE))).astype(
+        np.complex64
+    )
 
 
 def write(url, wave, tiles=None):
@@ -55,14 +56,20 @@ def test_the_loser_of_a_race_is_told_the_winner_is_writing_never_to_remove_it(tm
     fd = os.open(url / LOCK, os.O_RDWR | os.O_CREAT)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)
-        os.pwrite(fd, json.dumps({"host": "farm-7", "pid": 4242, "since": "now",
-                                  "recording": "winner"}).encode(), 0)
+        os.pwrite(
+            fd,
+            json.dumps(
+                {"host": "farm-7", "pid": 4242, "since": "now", "recording": "winner"}
+            ).encode(),
+            0,
+        )
         zarr.open_group(str(url), mode="a")  # the winner's group, half made
         before = sorted(p.name for p in url.rglob("*"))
         with pytest.raises(StoreError) as refused:
             write(url, samples())
-        assert "another recording is writing it (host farm-7, process 4242" in \
-            str(refused.value), str(refused.value)
+        assert "another recording is writing it (host farm-7, process 4242" in str(refused.value), (
+            str(refused.value)
+        )
         assert "remove" not in str(refused.value), str(refused.value)
         assert sorted(p.name for p in url.rglob("*")) == before
     finally:
@@ -95,9 +102,11 @@ def test_a_writer_killed_inside_a_chunk_leaves_no_temporary_file_after_the_resum
     writer is gone), and the store reads back as recorded."""
     url, wave = tmp_path / "p.zarr", samples()
     write(url, wave, tiles=[(0, 0)])
-    proc = subprocess.Popen([sys.executable, "-c", _KILLED_INSIDE_A_WRITE, str(url)],
-                            stdout=subprocess.PIPE, env={**os.environ,
-                                                         "PYTHONPATH": os.getcwd()})
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _KILLED_INSIDE_A_WRITE, str(url)],
+        stdout=subprocess.PIPE,
+        env={**os.environ, "PYTHONPATH": os.getcwd()},
+    )
     try:
         assert proc.stdout.readline().strip() == b"inside"
     finally:
@@ -134,8 +143,11 @@ def test_a_store_beyond_the_disks_room_is_refused_before_the_first_tile(small_di
     tile, naming the store, and the store this call made is removed again."""
     (small_disk / "filler").write_bytes(b"\0" * (900 * 1024))
     url = small_disk / "p.zarr"
-    with pytest.raises(StoreError, match=rf"{url}: the 6 tiles still to write need .* on "
-                                         rf"disk, and {url} has .* free"):
+    with pytest.raises(
+        StoreError,
+        match=rf"{url}: the 6 tiles still to write need .* on "
+        rf"disk, and {url} has .* free",
+    ):
         write(url, samples())
     assert not url.exists()
 
@@ -149,12 +161,14 @@ def test_a_disk_that_fills_mid_way_names_the_store_and_the_tile(small_disk):
         if (i, j) == (1, 1):
             fill(small_disk)
         real(plate, i, j, part)
+
     with pytest.MonkeyPatch.context() as m:
         m.setattr(store.PlateStore, "write_tile", fill_then_write)
         with pytest.raises(StoreError) as full:
             write(url, wave)
     message = str(full.value)
-    assert message.startswith(f"{url} (object_wave/c/0/1/1): tile (1, 1) cannot be written "
-                              f"(No space left on device)"), message
+    assert message.startswith(
+        f"{url} (object_wave/c/0/1/1): tile (1, 1) cannot be written (No space left on device)"
+    ), message
     assert ".tmp" not in message, message
     assert not list(url.rglob("*.tmp"))

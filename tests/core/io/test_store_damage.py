@@ -46,13 +46,30 @@ def write_store(url, positions, colours, *, seed=0, overwrite=False, checked=che
     """The plate of ``positions`` and ``colours`` written tile by tile into the store ``url``
     (its files as ``checked`` gives them) as the recording's tasks write it."""
     files = checked(url)
-    h = record_points(positions, colours, shape=SHAPE, pitch=PITCH, wavelengths=WAVELENGTHS,
-                      method="direct", seed=seed)
-    info = HologramInfo(shape=SHAPE, encoding="complex", wavelengths=WAVELENGTHS, pitch=PITCH,
-                        bounds=h.bounds)
-    recording = recorder._recording(np.asarray(positions, np.float64), colours, None, seed,
-                                    method="direct", shape=SHAPE, pitch=PITCH, band=None,
-                                    wavelengths=WAVELENGTHS, tile=TILE)
+    h = record_points(
+        positions,
+        colours,
+        shape=SHAPE,
+        pitch=PITCH,
+        wavelengths=WAVELENGTHS,
+        method="direct",
+        seed=seed,
+    )
+    info = HologramInfo(
+        shape=SHAPE, encoding="complex", wavelengths=WAVELENGTHS, pitch=PITCH, bounds=h.bounds
+    )
+    recording = recorder._recording(
+        np.asarray(positions, np.float64),
+        colours,
+        None,
+        seed,
+        method="direct",
+        shape=SHAPE,
+        pitch=PITCH,
+        band=None,
+        wavelengths=WAVELENGTHS,
+        tile=TILE,
+    )
     with store.recording_into(files, info, TILE, recording, overwrite=overwrite) as plate:
         for i, j in np.ndindex(*store.tile_grid(SHAPE, TILE)):
             r0, r1, c0, c1 = store.tile_window(SHAPE, TILE, i, j)
@@ -94,11 +111,13 @@ def test_a_whole_store_reads_back_as_recorded(pristine):
 
 # --- the damage cases: (what is done to a copy of the store, what the error must say) --------
 
+
 def _edit_json(key, change):
     def damage(url):
         doc = json.loads((url / key).read_text())
         change(doc)
         (url / key).write_text(json.dumps(doc))
+
     return damage
 
 
@@ -122,6 +141,7 @@ def _symlink(key, target):
     def damage(url):
         (url / key).unlink()
         os.symlink(target(url) if callable(target) else target, url / key)
+
     return damage
 
 
@@ -129,6 +149,7 @@ def _fifo(key):
     def damage(url):
         (url / key).unlink()
         os.mkfifo(url / key)
+
     return damage
 
 
@@ -136,6 +157,7 @@ def _folder(key):
     def damage(url):
         (url / key).unlink()
         (url / key).mkdir()
+
     return damage
 
 
@@ -144,6 +166,7 @@ def _flip(key, offset):
         data = bytearray((url / key).read_bytes())
         data[offset] ^= 0x40
         (url / key).write_bytes(bytes(data))
+
     return damage
 
 
@@ -171,103 +194,197 @@ def _swapped(url):
 TILE_NAMED = r"tile \(1, 2\)"
 CASES = {
     # a tile's samples
-    "chunk missing, flagged done": (_remove(CHUNK), TILE_NAMED + r" channel 1: its samples are "
-                                    r"missing"),
-    "chunk truncated": (_write(CHUNK, lambda u: (u / CHUNK).read_bytes()[:1000]),
-                        r"object_wave/c/1/1/2\): holds 1000 bytes; it must hold 32768"),
+    "chunk missing, flagged done": (
+        _remove(CHUNK),
+        TILE_NAMED + r" channel 1: its samples are "
+        r"missing",
+    ),
+    "chunk truncated": (
+        _write(CHUNK, lambda u: (u / CHUNK).read_bytes()[:1000]),
+        r"object_wave/c/1/1/2\): holds 1000 bytes; it must hold 32768",
+    ),
     "chunk emptied": (_write(CHUNK, b""), r"holds 0 bytes; it must hold 32768"),
-    "chunk one byte longer": (_write(CHUNK, lambda u: (u / CHUNK).read_bytes() + b"\0"),
-                              r"holds 32769 bytes"),
-    "chunk gzip-garbled": (_write(CHUNK, lambda u: gzip.compress((u / CHUNK).read_bytes())),
-                           r"object_wave/c/1/1/2\): holds \d+ bytes; it must hold 32768"),
-    "chunk garbage of its size": (_write(CHUNK, os.urandom(8 * TILE * TILE)),
-                                  TILE_NAMED + r" channel 1: its samples do not match"),
-    "chunk one bit flipped": (_flip(CHUNK, 4321), TILE_NAMED + r" channel 1: its samples do "
-                              r"not match"),
-    "chunk of another tile": (_write(CHUNK, _swapped), TILE_NAMED + r" channel 1: its "
-                              r"samples do not match"),
-    "edge chunk's padding written": (_flip(EDGE, 8 * TILE * TILE - 3),
-                                     r"tile \(3, 4\) channel 0: its samples do not match"),
-    "chunk symlinked outside": (_symlink(CHUNK, _outside), r"holds a symbolic link "
-                                r"object_wave/c/1/1/2"),
-    "chunk symlinked to /dev/zero": (_symlink(CHUNK, "/dev/zero"), r"holds a symbolic link "
-                                     r"object_wave/c/1/1/2"),
+    "chunk one byte longer": (
+        _write(CHUNK, lambda u: (u / CHUNK).read_bytes() + b"\0"),
+        r"holds 32769 bytes",
+    ),
+    "chunk gzip-garbled": (
+        _write(CHUNK, lambda u: gzip.compress((u / CHUNK).read_bytes())),
+        r"object_wave/c/1/1/2\): holds \d+ bytes; it must hold 32768",
+    ),
+    "chunk garbage of its size": (
+        _write(CHUNK, os.urandom(8 * TILE * TILE)),
+        TILE_NAMED + r" channel 1: its samples do not match",
+    ),
+    "chunk one bit flipped": (
+        _flip(CHUNK, 4321),
+        TILE_NAMED + r" channel 1: its samples do "
+        r"not match",
+    ),
+    "chunk of another tile": (
+        _write(CHUNK, _swapped),
+        TILE_NAMED + r" channel 1: its "
+        r"samples do not match",
+    ),
+    "edge chunk's padding written": (
+        _flip(EDGE, 8 * TILE * TILE - 3),
+        r"tile \(3, 4\) channel 0: its samples do not match",
+    ),
+    "chunk symlinked outside": (
+        _symlink(CHUNK, _outside),
+        r"holds a symbolic link "
+        r"object_wave/c/1/1/2",
+    ),
+    "chunk symlinked to /dev/zero": (
+        _symlink(CHUNK, "/dev/zero"),
+        r"holds a symbolic link "
+        r"object_wave/c/1/1/2",
+    ),
     "chunk a FIFO": (_fifo(CHUNK), r"holds a FIFO object_wave/c/1/1/2"),
     "chunk a folder": (_folder(CHUNK), r"object_wave/c/1/1/2\): is a folder, not a regular"),
     "chunk folder symlinked outside": (
-        lambda u: (shutil.move(u / "object_wave/c/1", u.parent / "c1"),
-                   os.symlink(u.parent / "c1", u / "object_wave/c/1")),
-        r"holds a symbolic link object_wave/c/1\b"),
+        lambda u: (
+            shutil.move(u / "object_wave/c/1", u.parent / "c1"),
+            os.symlink(u.parent / "c1", u / "object_wave/c/1"),
+        ),
+        r"holds a symbolic link object_wave/c/1\b",
+    ),
     # a tile's record
     "record missing": (_remove(RECORD), r"1 of 20 tiles are not written yet \(tile \(1, 2\)"),
-    "record truncated": (_write(RECORD, lambda u: (u / RECORD).read_bytes()[:7]),
-                         r"tile \(1, 2\)'s record holds 7 bytes; it must hold 24"),
-    "record of another recording": (_write(RECORD, _record_of_another_recording),
-                                    TILE_NAMED + r" and 0 more were written by another "
-                                    r"recording"),
-    "record's checksum flipped": (_flip(RECORD, 12), TILE_NAMED + r" channel 0: its samples "
-                                  r"do not match"),
-    "record symlinked to /dev/zero": (_symlink(RECORD, "/dev/zero"),
-                                      r"holds a symbolic link tiles_done/c/1/2/0"),
+    "record truncated": (
+        _write(RECORD, lambda u: (u / RECORD).read_bytes()[:7]),
+        r"tile \(1, 2\)'s record holds 7 bytes; it must hold 24",
+    ),
+    "record of another recording": (
+        _write(RECORD, _record_of_another_recording),
+        TILE_NAMED + r" and 0 more were written by another "
+        r"recording",
+    ),
+    "record's checksum flipped": (
+        _flip(RECORD, 12),
+        TILE_NAMED + r" channel 0: its samples "
+        r"do not match",
+    ),
+    "record symlinked to /dev/zero": (
+        _symlink(RECORD, "/dev/zero"),
+        r"holds a symbolic link tiles_done/c/1/2/0",
+    ),
     "record a FIFO": (_fifo(RECORD), r"holds a FIFO tiles_done/c/1/2/0"),
     # the group's metadata
-    "zarr.json missing": (_remove("zarr.json"), r"\(zarr.json\): not a tiled plate \(it is "
-                          r"missing\)"),
-    "zarr.json truncated": (_write("zarr.json", lambda u: (u / "zarr.json").read_bytes()[:50]),
-                            r"\(zarr.json\): damaged metadata \(JSONDecodeError"),
-    "zarr.json deeply nested": (_write("zarr.json", _deep()),
-                                r"\(zarr.json\): damaged metadata \(RecursionError"),
-    "zarr.json of 2 MiB": (_write("zarr.json", b" " * 2**21 + b"{}"),
-                           r"\(zarr.json\): holds 2097154 bytes, more than the 1048576"),
-    "zarr.json symlinked to /dev/zero": (_symlink("zarr.json", "/dev/zero"),
-                                         r"holds a symbolic link zarr.json"),
-    "zarr.json symlinked outside": (_symlink("zarr.json", _outside),
-                                    r"holds a symbolic link zarr.json"),
+    "zarr.json missing": (
+        _remove("zarr.json"),
+        r"\(zarr.json\): not a tiled plate \(it is "
+        r"missing\)",
+    ),
+    "zarr.json truncated": (
+        _write("zarr.json", lambda u: (u / "zarr.json").read_bytes()[:50]),
+        r"\(zarr.json\): damaged metadata \(JSONDecodeError",
+    ),
+    "zarr.json deeply nested": (
+        _write("zarr.json", _deep()),
+        r"\(zarr.json\): damaged metadata \(RecursionError",
+    ),
+    "zarr.json of 2 MiB": (
+        _write("zarr.json", b" " * 2**21 + b"{}"),
+        r"\(zarr.json\): holds 2097154 bytes, more than the 1048576",
+    ),
+    "zarr.json symlinked to /dev/zero": (
+        _symlink("zarr.json", "/dev/zero"),
+        r"holds a symbolic link zarr.json",
+    ),
+    "zarr.json symlinked outside": (
+        _symlink("zarr.json", _outside),
+        r"holds a symbolic link zarr.json",
+    ),
     "zarr.json a FIFO": (_fifo("zarr.json"), r"holds a FIFO zarr.json"),
     "zarr.json not UTF-8": (_write("zarr.json", b"\xff\xfe{}"), r"UnicodeDecodeError"),
     "zarr.json a list": (_write("zarr.json", b"[]"), r"damaged metadata \(not a JSON object"),
-    "hologram metadata missing": (_edit_json("zarr.json", lambda d: d["attributes"].pop(
-        "holo")), r"not a tiled plate \(a Zarr group without hologram metadata\)"),
-    "pitch -1": (_edit_json("zarr.json", lambda d: d["attributes"]["holo"].update(
-        pitch_m=-1)), r"metadata pitch_m must be in"),
-    "size changed": (_edit_json("zarr.json", lambda d: d["attributes"]["holo"].update(
-        size_px=[250, 299])), r"object_wave's shape is \[2, 250, 300\]; the plate's is "
-                             r"\[2, 250, 299\]"),
-    "encoding intensity": (_edit_json("zarr.json", lambda d: d["attributes"]["holo"].update(
-        encoding="intensity")), r"a tiled plate is complex"),
-    "tile 128": (_attrs(tile=128), r"object_wave's chunk_grid is .*64, 64.*; the plate's is "
-                 r".*128, 128"),
-    "tile not a number": (_attrs(tile="64"), r"tile must be an integer in \[64, 16384\]; got "
-                          r"'64'"),
+    "hologram metadata missing": (
+        _edit_json("zarr.json", lambda d: d["attributes"].pop("holo")),
+        r"not a tiled plate \(a Zarr group without hologram metadata\)",
+    ),
+    "pitch -1": (
+        _edit_json("zarr.json", lambda d: d["attributes"]["holo"].update(pitch_m=-1)),
+        r"metadata pitch_m must be in",
+    ),
+    "size changed": (
+        _edit_json("zarr.json", lambda d: d["attributes"]["holo"].update(size_px=[250, 299])),
+        r"object_wave's shape is \[2, 250, 300\]; the plate's is "
+        r"\[2, 250, 299\]",
+    ),
+    "encoding intensity": (
+        _edit_json("zarr.json", lambda d: d["attributes"]["holo"].update(encoding="intensity")),
+        r"a tiled plate is complex",
+    ),
+    "tile 128": (
+        _attrs(tile=128),
+        r"object_wave's chunk_grid is .*64, 64.*; the plate's is "
+        r".*128, 128",
+    ),
+    "tile not a number": (
+        _attrs(tile="64"),
+        r"tile must be an integer in \[64, 16384\]; got "
+        r"'64'",
+    ),
     "store format 1": (_attrs(store_format=1), r"store format 1; this reader reads format 2"),
-    "scene digest garbled": (_attrs(recording={"digest": "x" * 64}),
-                                 r"recording must name the scene's digest"),
+    "scene digest garbled": (
+        _attrs(recording={"digest": "x" * 64}),
+        r"recording must name the scene's digest",
+    ),
     # the arrays' metadata
-    "object_wave rewritten as float32": (_array("object_wave", data_type="float32"),
-                                         r"object_wave's data_type is 'float32'; the "
-                                         r"plate's is 'complex64'"),
-    "object_wave gzip codec": (_array("object_wave", codecs=[
-        {"name": "bytes", "configuration": {"endian": "little"}},
-        {"name": "gzip", "configuration": {"level": 1}}]), r"object_wave's codecs is"),
-    "object_wave big-endian": (_array("object_wave", codecs=[
-        {"name": "bytes", "configuration": {"endian": "big"}}]), r"object_wave's codecs"),
-    "object_wave fill value 1": (_array("object_wave", fill_value=[1.0, 0.0]),
-                                 r"object_wave's fill_value"),
-    "object_wave storage transformer": (_array("object_wave", storage_transformers=[
-        {"name": "x"}]), r"object_wave has storage transformers"),
-    "object_wave zarr.json deeply nested": (_write("object_wave/zarr.json", _deep()),
-                                            r"object_wave/zarr.json\): damaged metadata "
-                                            r"\(RecursionError"),
-    "tiles_done reshaped": (_array("tiles_done", shape=[5, 4, 3]), r"tiles_done's shape is "
-                            r"\[5, 4, 3\]; the plate's is \[4, 5, 3\]"),
-    "tiles_done retyped bool": (_array("tiles_done", data_type="bool"),
-                                r"tiles_done's data_type is 'bool'; the plate's is 'uint64'"),
-    "tiles_done retyped uint8": (_array("tiles_done", data_type="uint8"),
-                                 r"tiles_done's data_type is 'uint8'"),
-    "tiles_done zarr.json missing": (_remove("tiles_done/zarr.json"),
-                                     r"tiles_done/zarr.json\): not a tiled plate"),
-    "tiles_done zarr.json a FIFO": (_fifo("tiles_done/zarr.json"),
-                                    r"holds a FIFO tiles_done/zarr.json"),
+    "object_wave rewritten as float32": (
+        _array("object_wave", data_type="float32"),
+        r"object_wave's data_type is 'float32'; the "
+        r"plate's is 'complex64'",
+    ),
+    "object_wave gzip codec": (
+        _array(
+            "object_wave",
+            codecs=[
+                {"name": "bytes", "configuration": {"endian": "little"}},
+                {"name": "gzip", "configuration": {"level": 1}},
+            ],
+        ),
+        r"object_wave's codecs is",
+    ),
+    "object_wave big-endian": (
+        _array("object_wave", codecs=[{"name": "bytes", "configuration": {"endian": "big"}}]),
+        r"object_wave's codecs",
+    ),
+    "object_wave fill value 1": (
+        _array("object_wave", fill_value=[1.0, 0.0]),
+        r"object_wave's fill_value",
+    ),
+    "object_wave storage transformer": (
+        _array("object_wave", storage_transformers=[{"name": "x"}]),
+        r"object_wave has storage transformers",
+    ),
+    "object_wave zarr.json deeply nested": (
+        _write("object_wave/zarr.json", _deep()),
+        r"object_wave/zarr.json\): damaged metadata "
+        r"\(RecursionError",
+    ),
+    "tiles_done reshaped": (
+        _array("tiles_done", shape=[5, 4, 3]),
+        r"tiles_done's shape is "
+        r"\[5, 4, 3\]; the plate's is \[4, 5, 3\]",
+    ),
+    "tiles_done retyped bool": (
+        _array("tiles_done", data_type="bool"),
+        r"tiles_done's data_type is 'bool'; the plate's is 'uint64'",
+    ),
+    "tiles_done retyped uint8": (
+        _array("tiles_done", data_type="uint8"),
+        r"tiles_done's data_type is 'uint8'",
+    ),
+    "tiles_done zarr.json missing": (
+        _remove("tiles_done/zarr.json"),
+        r"tiles_done/zarr.json\): not a tiled plate",
+    ),
+    "tiles_done zarr.json a FIFO": (
+        _fifo("tiles_done/zarr.json"),
+        r"holds a FIFO tiles_done/zarr.json",
+    ),
 }
 
 
@@ -289,8 +406,13 @@ def held(url):
         for name in dirs + files:
             path = os.path.join(folder, name)
             mode = os.lstat(path).st_mode
-            content = (Path(path).read_bytes() if stat.S_ISREG(mode) else
-                       os.readlink(path) if stat.S_ISLNK(mode) else None)
+            content = (
+                Path(path).read_bytes()
+                if stat.S_ISREG(mode)
+                else os.readlink(path)
+                if stat.S_ISLNK(mode)
+                else None
+            )
             out[os.path.relpath(path, url)] = stat.S_IFMT(mode), content
     return out
 
@@ -306,8 +428,14 @@ def test_each_damage_changes_a_store_that_reads_back_unchanged(pristine, tmp_pat
         assert held(url) != before, case
 
 
-@pytest.mark.parametrize("case", [c for c in CASES if c.startswith(("chunk", "edge", "record"))
-                                  and "symlink" not in c and "FIFO" not in c])
+@pytest.mark.parametrize(
+    "case",
+    [
+        c
+        for c in CASES
+        if c.startswith(("chunk", "edge", "record")) and "symlink" not in c and "FIFO" not in c
+    ],
+)
 def test_a_damaged_tile_is_named_and_written_again_on_resuming(copy, case):
     """Resuming reads back every tile its record calls written: one whose samples do not match
     is written again (and its record), so the store reads back as recorded."""
@@ -338,11 +466,15 @@ def test_resuming_lists_only_the_damaged_tiles(copy):
 
 # --- a store belongs to one plate -------------------------------------------------------------
 
-@pytest.mark.parametrize("change, named", [
-    ({"seed": 4}, r"its seed differ"),
-    ({"colours": 0.5}, r"its colours differ"),
-    ({"positions": 1.01}, r"its geometry differ"),
-])
+
+@pytest.mark.parametrize(
+    "change, named",
+    [
+        ({"seed": 4}, r"its seed differ"),
+        ({"colours": 0.5}, r"its colours differ"),
+        ({"positions": 1.01}, r"its geometry differ"),
+    ],
+)
 def test_another_recording_never_mixes_into_a_store(copy, pristine, change, named):
     """Resuming with other colours, seed or geometry mixed the two scenes (exit 0); it is
     refused naming both recordings, and the store is left as it was."""
@@ -350,10 +482,13 @@ def test_another_recording_never_mixes_into_a_store(copy, pristine, change, name
     seed = change.get("seed", 0)
     positions = positions * change.get("positions", 1)
     colours = colours * change.get("colours", 1)
-    with pytest.raises(HologramFileError, match=named + r": the store holds recording "
-                                                r"[0-9a-f]{12} \(emitters 40, seed 0, method "
-                                                r"direct\), this call is recording "
-                                                r"[0-9a-f]{12}"):
+    with pytest.raises(
+        HologramFileError,
+        match=named + r": the store holds recording "
+        r"[0-9a-f]{12} \(emitters 40, seed 0, method "
+        r"direct\), this call is recording "
+        r"[0-9a-f]{12}",
+    ):
         write_store(copy, positions, colours, seed=seed)
     assert np.array_equal(open_plate_read(copy), pristine[1].object_wave)
     h = write_store(copy, positions, colours, seed=seed, overwrite=True)  # asked: replaced
@@ -382,13 +517,20 @@ def test_a_second_recording_into_a_locked_store_is_refused_naming_the_first(copy
     0. The first holds the store's lock (an flock, released by the system when its holder
     ends, killed or not); the second is refused, naming the holder."""
     import fcntl
+
     fd = os.open(copy / LOCK, os.O_RDWR)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)
-        os.pwrite(fd, json.dumps({"host": "h1", "pid": 4242, "since": "now",
-                                  "recording": "abc"}).encode(), 0)
-        with pytest.raises(HologramFileError, match=r"holo.lock\): another recording is "
-                                                    r"writing it \(host h1, process 4242"):
+        os.pwrite(
+            fd,
+            json.dumps({"host": "h1", "pid": 4242, "since": "now", "recording": "abc"}).encode(),
+            0,
+        )
+        with pytest.raises(
+            HologramFileError,
+            match=r"holo.lock\): another recording is "
+            r"writing it \(host h1, process 4242",
+        ):
             write_store(copy, *scene(seed=9))
     finally:
         os.close(fd)
@@ -398,8 +540,9 @@ def test_a_second_recording_into_a_locked_store_is_refused_naming_the_first(copy
 def test_a_lock_left_by_a_killed_recording_is_free(copy):
     """A holder killed with SIGKILL leaves its lock file naming it, but no lock: the next
     recording takes it."""
-    (copy / LOCK).write_text(json.dumps({"host": "h1", "pid": 999999, "since": "then",
-                                         "recording": "abc"}))
+    (copy / LOCK).write_text(
+        json.dumps({"host": "h1", "pid": 999999, "since": "then", "recording": "abc"})
+    )
     write_store(copy, *scene())
     assert (copy / LOCK).read_text() == ""
 
@@ -417,6 +560,7 @@ def test_a_recording_that_never_started_leaves_no_store_and_no_folder_it_made(tm
 
     def failing(*_, **__):
         raise RuntimeError("the cluster went away")
+
     for url, kept in ((tmp_path / "new.zarr", False), (tmp_path / "empty", True)):
         if kept:
             url.mkdir()
@@ -437,12 +581,16 @@ def test_a_store_at_a_url_is_written_read_and_locked_as_a_folder_is():
         assert np.array_equal(open_plate(url).object_wave[...], h.object_wave)
         files = Files(url)
         files.write(LOCK, b'{"host": "h2", "pid": 7, "since": "now", "recording": "x"}')
-        with pytest.raises(HologramFileError, match=r"another recording holds its lock \(host "
-                                                    r"h2, process 7.*remove "
-                                                    r"memory://holo-test/p.zarr/holo.lock"):
+        with pytest.raises(
+            HologramFileError,
+            match=r"another recording holds its lock \(host "
+            r"h2, process 7.*remove "
+            r"memory://holo-test/p.zarr/holo.lock",
+        ):
             _write_at_url(url, positions, colours)
     finally:
         import fsspec
+
         memory = fsspec.filesystem("memory")
         if memory.exists("/holo-test"):
             memory.rm("/holo-test", recursive=True)
@@ -473,8 +621,12 @@ def test_a_task_of_a_replaced_recording_writes_nothing(copy):
     checksums, so the two scenes never mix."""
     before = {p: p.read_bytes() for p in copy.rglob("*") if p.is_file()}
     points = (np.array([[0.0, 0.0, -0.02]]), np.ones((1, 2), complex))
-    with pytest.raises(InputError, match=r"now holds another recording; tile \(1, 2\) of "
-                                                r"recording 0123456789ab is not written"):
-        recorder.record_tile(points, {"urls": [str(copy)],
-                                      "recordings": ["0123456789ab" * 5 + "cdef"]}, 1, 2)
+    with pytest.raises(
+        InputError,
+        match=r"now holds another recording; tile \(1, 2\) of "
+        r"recording 0123456789ab is not written",
+    ):
+        recorder.record_tile(
+            points, {"urls": [str(copy)], "recordings": ["0123456789ab" * 5 + "cdef"]}, 1, 2
+        )
     assert {p: p.read_bytes() for p in copy.rglob("*") if p.is_file()} == before

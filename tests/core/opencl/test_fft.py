@@ -55,6 +55,7 @@ def test_a_stack_is_transformed_plane_by_plane(rng, backend):
     against NumPy's (the inverse's scale is a plane's H·W, not the stack's size)."""
     from holo_core.opencl import get_runtime
     from holo_core.opencl.fft import FFTW, HostNumpy
+
     rt = get_runtime()
     fft = (FFTW if backend == "fftw" else HostNumpy)(rt)
     a = _random(rng, (3, 40, 56))
@@ -94,11 +95,17 @@ print(hashlib.sha256(a.tobytes() + f.tobytes()).hexdigest())
 def _run(cache, threads, planner="measure"):
     """RUN in a process of its own with ``cache`` as its cache folder: (stdout, stderr, where
     its INFO log goes)."""
-    env = {**os.environ, "XDG_CACHE_HOME": str(cache), "HOLO_FFT_THREADS": str(threads),
-           "HOLO_FFTW_PLANNER": planner, "HOLO_FFT": "fftw"}
+    env = {
+        **os.environ,
+        "XDG_CACHE_HOME": str(cache),
+        "HOLO_FFT_THREADS": str(threads),
+        "HOLO_FFTW_PLANNER": planner,
+        "HOLO_FFT": "fftw",
+    }
     code = "import logging; logging.basicConfig(level=logging.INFO)\n" + RUN
-    r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
-                       text=True, timeout=600)
+    r = subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=600
+    )
     assert r.returncode == 0, r.stderr[-3000:]
     return r.stdout, r.stderr
 

@@ -38,14 +38,22 @@ def test_default_prefers_a_gpu_else_a_cpu(monkeypatch):
 
 def test_unknown_device_names_the_variable_and_the_choices(monkeypatch):
     monkeypatch.setenv("HOLO_DEVICE", "no-such-device")
-    with pytest.raises(ValueError, match=r"HOLO_DEVICE='no-such-device' names no usable device; "
-                                         r"allowed: 'gpu', 'cpu'.*Usable: \d+:\d+ "):
+    with pytest.raises(
+        ValueError,
+        match=r"HOLO_DEVICE='no-such-device' names no usable device; "
+        r"allowed: 'gpu', 'cpu'.*Usable: \d+:\d+ ",
+    ):
         choose_device()
 
 
 def test_devices_command_lists_each_status_and_what_it_would_use():
-    out = subprocess.run([sys.executable, "-m", "holo_core", "devices"], capture_output=True,
-                         text=True, check=True, cwd=ROOT).stdout
+    out = subprocess.run(
+        [sys.executable, "-m", "holo_core", "devices"],
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=ROOT,
+    ).stdout
     assert re.search(r"^\s*\d+:\d+ .*: usable\s+<- would use$", out, re.M), out
     assert len(re.findall(r"^\s*\d+:\d+ ", out, re.M)) == len(all_devices()), out
 
@@ -59,8 +67,11 @@ def _broken(monkeypatch, source):
 def test_a_device_whose_probe_fails_is_skipped_with_its_reason(monkeypatch, caplog):
     monkeypatch.delenv("HOLO_DEVICE", raising=False)
     _broken(monkeypatch, "__kernel void probe(__global float *x) { this is not C; }")
-    with pytest.raises(RuntimeError, match=r"no usable OpenCL device \(\d+:\d+ .*: "
-                                           r"(BuildProgramFailure|RuntimeError|LogicError)"):
+    with pytest.raises(
+        RuntimeError,
+        match=r"no usable OpenCL device \(\d+:\d+ .*: "
+        r"(BuildProgramFailure|RuntimeError|LogicError)",
+    ):
         choose_device()
     assert "skipped" in caplog.text
     assert all(status != "usable" and not chosen for _, status, chosen in device_table())
@@ -79,8 +90,7 @@ def test_a_device_with_a_wrong_probe_result_is_skipped(monkeypatch):
     assert rows and all(s.startswith("wrong probe result") for _, s in rows), rows
 
 
-def test_a_failed_device_gives_way_to_the_next_and_a_choice_of_it_lists_what_works(
-        monkeypatch):
+def test_a_failed_device_gives_way_to_the_next_and_a_choice_of_it_lists_what_works(monkeypatch):
     monkeypatch.delenv("HOLO_DEVICE", raising=False)
     usable = len(_usable())
     devices = sorted(all_devices(), key=lambda t: runtime._rank(t[2]))
@@ -89,8 +99,11 @@ def test_a_failed_device_gives_way_to_the_next_and_a_choice_of_it_lists_what_wor
     if usable > 1:
         assert choose_device().int_ptr != first.int_ptr
     spec = f"{devices[0][0]}:{devices[0][1]}"
-    with pytest.raises(ValueError, match=rf"HOLO_DEVICE='{spec}' names no usable device "
-                                         rf"\({spec} .*: broken on purpose\).*Usable: "):
+    with pytest.raises(
+        ValueError,
+        match=rf"HOLO_DEVICE='{spec}' names no usable device "
+        rf"\({spec} .*: broken on purpose\).*Usable: ",
+    ):
         choose_device(spec)
 
 
@@ -112,12 +125,30 @@ def test_core_and_physics_tests_never_load_blender(tmp_path):
         "import sys\n"
         "def pytest_sessionfinish(session):\n"
         f"    with open({str(tmp_path / 'bpy.txt')!r}, 'w') as f:\n"
-        "        f.write(str('bpy' in sys.modules))\n")
-    r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
-                        "-p", "spy", "tests/core/test_validation.py"],
-                       cwd=ROOT, capture_output=True, text=True,
-                       env={**os.environ, "PYTHONPATH": os.pathsep.join(
-                           [str(tmp_path)] + [p for p in [os.environ.get("PYTHONPATH")] if p])})
+        "        f.write(str('bpy' in sys.modules))\n"
+    )
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pytest",
+            "-q",
+            "-p",
+            "no:cacheprovider",
+            "-p",
+            "spy",
+            "tests/core/test_validation.py",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        env={
+            **os.environ,
+            "PYTHONPATH": os.pathsep.join(
+                [str(tmp_path)] + [p for p in [os.environ.get("PYTHONPATH")] if p]
+            ),
+        },
+    )
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     assert (tmp_path / "bpy.txt").read_text() == "False"
 
@@ -171,8 +202,9 @@ def cache_lock(tmp_path, monkeypatch):
 
 def _holder(lock):
     """A process holding ``lock`` as pyopencl does, until it is killed."""
-    holder = subprocess.Popen([sys.executable, "-c", HOLD_LOCK, str(lock)],
-                              stdout=subprocess.PIPE, text=True)
+    holder = subprocess.Popen(
+        [sys.executable, "-c", HOLD_LOCK, str(lock)], stdout=subprocess.PIPE, text=True
+    )
     assert holder.stdout.readline().strip() == "held"
     return holder
 
@@ -189,9 +221,15 @@ def test_a_killed_workers_cache_lock_costs_the_next_process_no_wait(cache_lock):
     it, however recent the kill (pyopencl waited a minute, then failed the build)."""
     _killed(_holder(cache_lock))
     assert cache_lock.exists()
-    run = subprocess.run([sys.executable, "-c", NEVER_WAIT], capture_output=True, text=True,
-                         timeout=300, check=False, cwd=ROOT,
-                         env={**os.environ, "HOLO_DEVICE": ""})
+    run = subprocess.run(
+        [sys.executable, "-c", NEVER_WAIT],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+        cwd=ROOT,
+        env={**os.environ, "HOLO_DEVICE": ""},
+    )
     assert run.returncode == 0 and "device" in run.stdout, run.stderr[-2000:]
     assert "stale OpenCL program-cache lock" in run.stderr, run.stderr[-2000:]
     assert not cache_lock.exists()
@@ -230,7 +268,8 @@ def test_a_gpu_keeps_one_copy_of_an_array_it_reads_while_the_array_lives(monkeyp
     rt.__dict__["is_cpu"] = False  # the cached property, as on a GPU
     rng = np.random.default_rng(3)
     a = (rng.standard_normal((3, 64, 48)) + 1j * rng.standard_normal((3, 64, 48))).astype(
-        np.complex64)
+        np.complex64
+    )
     buf = arrays.resident(rt, a)
     assert arrays.resident(rt, a) is buf and not a.flags.writeable
     back = np.empty_like(a)

@@ -25,8 +25,12 @@ def box_mean_64(image, r):
     """The (2r+1)² neighbourhood's mean, edges repeated, pixel by pixel in float64."""
     a = np.pad(np.asarray(image, np.float64), r, mode="edge")
     n = 2 * r + 1
-    return np.array([[a[i:i + n, j:j + n].mean() for j in range(image.shape[1])]
-                     for i in range(image.shape[0])])
+    return np.array(
+        [
+            [a[i : i + n, j : j + n].mean() for j in range(image.shape[1])]
+            for i in range(image.shape[0])
+        ]
+    )
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
@@ -41,8 +45,13 @@ def test_the_box_mean_keeps_the_images_type_and_equals_float64(rng, dtype, r):
 
 
 def camera():
-    return Camera(matrix_world=look_at((0.1, 0, 3.0), (0, 0, 0), up=(0, 1, 0)), lens=40,
-                  sensor_width=36, resolution=(W, H), shift_x=0.1)
+    return Camera(
+        matrix_world=look_at((0.1, 0, 3.0), (0, 0, 0), up=(0, 1, 0)),
+        lens=40,
+        sensor_width=36,
+        resolution=(W, H),
+        shift_x=0.1,
+    )
 
 
 def test_the_assembled_view_equals_its_formulas_in_float64(rng):
@@ -53,16 +62,22 @@ def test_the_assembled_view_equals_its_formulas_in_float64(rng):
     depth_phase = rng.uniform(-3, 3, (H, W))
     cross = (rng.random((H, W)) * np.exp(1j * depth_phase)).astype(np.complex64)
     colour, alpha, depth, shown, cover = assemble(
-        radiance, coverage, cross, camera=cam, supersample=1, wavelengths=WAVELENGTHS,
-        centre=CENTRE, exposure=exposure)
+        radiance,
+        coverage,
+        cross,
+        camera=cam,
+        supersample=1,
+        wavelengths=WAVELENGTHS,
+        centre=CENTRE,
+        exposure=exposure,
+    )
 
     lo, hi = COVERAGE_EDGE
     c64 = coverage.astype(np.float64)
     alpha64 = np.clip((np.maximum(c64, box_mean_64(c64, 1)) - lo) / (hi - lo), 0, 1)
     colour64 = radiance / np.maximum(c64, COVERAGE_FLOOR)[..., None] * exposure
     tx, ty = cam.pixel_tangents()
-    ray64 = from_cross_spectrum(cross.astype(np.complex128), wavelengths=WAVELENGTHS,
-                                centre=CENTRE)
+    ray64 = from_cross_spectrum(cross.astype(np.complex128), wavelengths=WAVELENGTHS, centre=CENTRE)
     depth64 = np.where(alpha64 > 0, ray64 / np.sqrt(1 + tx**2 + ty**2), BACKGROUND_DEPTH)
     for got in (colour, alpha, depth, shown, cover):
         assert got.dtype == np.float32 and got.shape[:2] == (H, W)
@@ -84,8 +99,10 @@ def looks_of(rng, n, colours=(0, 1, 2), partner=3):
     looks = []
     for _ in range(n):
         speckle = rng.exponential(size=(len(colours) + 1, H, W)) * 0.1 + 0.9
-        power = {c: (surface[..., i] * cover * speckle[i]).astype(np.float32)
-                 for i, c in enumerate(colours)}
+        power = {
+            c: (surface[..., i] * cover * speckle[i]).astype(np.float32)
+            for i, c in enumerate(colours)
+        }
         power[partner] = (cover * speckle[-1]).astype(np.float32)
         looks.append(Folded(power, None, None))
     return looks, list(colours), partner
@@ -95,16 +112,22 @@ def looks_of(rng, n, colours=(0, 1, 2), partner=3):
 def test_the_looks_radiance_and_speckle_contrast_equal_float64(rng, n):
     looks, colours, z = looks_of(rng, n)
     radiance = _radiance(looks, colours, "mean", 1)
-    ref = np.stack([np.mean([look.power[c].astype(np.float64) for look in looks], 0)
-                    for c in colours], -1)
+    ref = np.stack(
+        [np.mean([look.power[c].astype(np.float64) for look in looks], 0) for c in colours], -1
+    )
     assert radiance.dtype == np.float32 and rel_err(radiance, ref) < IN_PLACE
     coverage = np.mean([look.power[z] for look in looks], 0)
     contrast = _spread(looks, colours, z, coverage)
     if n == 1:
         assert np.isnan(contrast)
         return
-    lum = np.array([np.mean([look.power[c].astype(np.float64) for c in colours], 0)
-                    / np.maximum(look.power[z], 0.05) for look in looks])
+    lum = np.array(
+        [
+            np.mean([look.power[c].astype(np.float64) for c in colours], 0)
+            / np.maximum(look.power[z], 0.05)
+            for look in looks
+        ]
+    )
     solid = coverage >= 0.75
     ratio = lum.std(0)[solid] / np.sqrt(n) / lum.mean(0)[solid]
     assert abs(contrast - np.median(ratio)) < 1e-5 * np.median(ratio)

@@ -24,11 +24,13 @@ def brute_ssim(a, b, r):
     out = []
     for i in range(a.shape[0] - 10):
         for j in range(a.shape[1] - 10):
-            x, y = a[i:i + 11, j:j + 11], b[i:i + 11, j:j + 11]
+            x, y = a[i : i + 11, j : j + 11], b[i : i + 11, j : j + 11]
             mx, my = (w * x).sum(), (w * y).sum()
             vx, vy = (w * (x - mx) ** 2).sum(), (w * (y - my) ** 2).sum()
             cxy = (w * (x - mx) * (y - my)).sum()
-            out.append((2 * mx * my + c1) * (2 * cxy + c2) / ((mx**2 + my**2 + c1) * (vx + vy + c2)))
+            out.append(
+                (2 * mx * my + c1) * (2 * cxy + c2) / ((mx**2 + my**2 + c1) * (vx + vy + c2))
+            )
     return float(np.mean(out))
 
 

@@ -17,8 +17,9 @@ def test_the_crossings_counted_before_the_work_are_those_found(rng):
     eye, b = np.array([0.0, 0.0, 0.3]), 2e-3
     rotation = look_at(eye, (0, 0, -0.33), up=(0, 1, 0))[:3, :3]
     shape = (81, 81)  # every direction of the objects from the pupil, with a rim
-    found = sum(len(part[0]) for part in crossing_chunks([mesh], eye, rotation, b, shape,
-                                                        2_000_000))
+    found = sum(
+        len(part[0]) for part in crossing_chunks([mesh], eye, rotation, b, shape, 2_000_000)
+    )
     counted = crossing_count([mesh], eye, rotation, b)
     assert found > 100 * len(mesh.triangles)
     assert abs(counted / found - 1) < 0.01, (counted, found)
@@ -36,8 +37,10 @@ def test_a_ray_through_a_shared_edge_crosses_the_surface_once(rng, turn):
     spin = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # row vectors: v @ spin
     n, cell, z = 9, 2.5e-3, -0.25
     i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
-    vertices = np.stack([(j - n // 2) * cell, (i - n // 2) * cell, np.full(i.shape, z)],
-                        -1).reshape(-1, 3) @ spin
+    vertices = (
+        np.stack([(j - n // 2) * cell, (i - n // 2) * cell, np.full(i.shape, z)], -1).reshape(-1, 3)
+        @ spin
+    )
     triangles = []
     for r in range(n - 1):
         for q in range(n - 1):
@@ -49,8 +52,9 @@ def test_a_ray_through_a_shared_edge_crosses_the_surface_once(rng, turn):
     triangles = np.take_along_axis(triangles, orders[rng.integers(0, 6, len(triangles))], 1)
     sheet = Mesh(vertices=vertices, triangles=triangles)
     b, shape, rotation = 5e-4, (81, 81), np.eye(3)
-    ky, kx = np.meshgrid(np.arange(shape[0]) - shape[0] // 2,
-                         np.arange(shape[1]) - shape[1] // 2, indexing="ij")
+    ky, kx = np.meshgrid(
+        np.arange(shape[0]) - shape[0] // 2, np.arange(shape[1]) - shape[1] // 2, indexing="ij"
+    )
     tx, ty = bin_rays(kx, ky, b)
     for t in np.linspace(-0.01, 0.01, 9):  # pupils along a diagonal of the grid
         eye = np.array([t, t, 0.0]) @ spin + (0.0, 0.0, 0.3)
@@ -63,4 +67,8 @@ def test_a_ray_through_a_shared_edge_crosses_the_surface_once(rng, turn):
         inner = np.abs(cross @ spin[:2, :2].T).max(-1) < (n // 2) * cell - 1e-6
         found = count[ky % shape[0], kx % shape[1]]
         assert inner.sum() > 1000, inner.sum()
-        assert np.all(found[inner] == 1), (t, (found[inner] == 0).sum(), np.unique(found[inner], return_counts=True))
+        assert np.all(found[inner] == 1), (
+            t,
+            (found[inner] == 0).sum(),
+            np.unique(found[inner], return_counts=True),
+        )

@@ -26,8 +26,13 @@ def plate(rng, shape=(256, 256)):
     """16 point emitters of random brightness 2 cm behind a 2 mm plate."""
     n = 16
     positions = np.c_[rng.uniform(-4e-4, 4e-4, (n, 2)), np.full(n, DEPTH)]
-    return record_points(positions, rng.uniform(0.2, 1, (n, 1)), shape=shape,
-                         pitch=PLATE_PITCH, wavelengths=(WAVELENGTH,))
+    return record_points(
+        positions,
+        rng.uniform(0.2, 1, (n, 1)),
+        shape=shape,
+        pitch=PLATE_PITCH,
+        wavelengths=(WAVELENGTH,),
+    )
 
 
 def low_pass(u, pitch, cut=CUT):
@@ -38,8 +43,14 @@ def low_pass(u, pitch, cut=CUT):
 
 def view(u, pitch):
     """The intensity on the points' plane, the wave propagated back from the display."""
-    return np.abs(angular_spectrum(np.asarray(u, np.complex64), wavelength=WAVELENGTH,
-                                   pitch=pitch, distance=DEPTH)) ** 2
+    return (
+        np.abs(
+            angular_spectrum(
+                np.asarray(u, np.complex64), wavelength=WAVELENGTH, pitch=pitch, distance=DEPTH
+            )
+        )
+        ** 2
+    )
 
 
 def psnr(reference, image):
@@ -54,11 +65,15 @@ def test_an_exported_phase_hologram_views_like_the_plate(tmp_path, rng, method, 
     Nyquist frequency and propagated back 2 cm, the phase-only pattern shows the points as
     the complex plate does. Measured PSNR: double-phase 76.8 dB, error diffusion 53.1 dB."""
     h = plate(rng)
-    path, _ = slm.export(h, SLM, tmp_path / "slm.json", distance=DEPTH, method=method,
-                         tile=(200, 300))
+    path, _ = slm.export(
+        h, SLM, tmp_path / "slm.json", distance=DEPTH, method=method, tile=(200, 300)
+    )
     shown, layout = slm.read_phase_hologram(path)
-    assert (layout["wavelength"], layout["distance"], layout["encoding"]) == \
-        (WAVELENGTH, DEPTH, method)
+    assert (layout["wavelength"], layout["distance"], layout["encoding"]) == (
+        WAVELENGTH,
+        DEPTH,
+        method,
+    )
     assert shown.shape == SLM.shape and shown.pitch == SLM.pitch
     assert np.allclose(np.abs(shown.object_wave), 1, atol=1e-6)
     reference = view(slm.display_field(h, SLM), SLM.pitch)
@@ -71,9 +86,10 @@ def test_error_diffusion_beats_plain_phase_quantisation(rng):
     against 42.5 dB) than that of exp(i·arg c), which drops the amplitude."""
     u = slm.display_field(plate(rng), SLM)
     reference = view(u, SLM.pitch)
-    diffused, plain = (psnr(reference, view(low_pass(np.exp(1j * phase), SLM.pitch),
-                                            SLM.pitch))
-                       for phase in (slm.error_diffusion(u), np.angle(u)))
+    diffused, plain = (
+        psnr(reference, view(low_pass(np.exp(1j * phase), SLM.pitch), SLM.pitch))
+        for phase in (slm.error_diffusion(u), np.angle(u))
+    )
     assert diffused >= plain + 8, f"error diffusion {diffused:.1f} dB, arg c {plain:.1f} dB"
 
 
@@ -109,8 +125,9 @@ def test_a_bias_pattern_gives_back_the_wave(tmp_path, rng):
     1.3e-7 of its norm).
     Written as 16-bit tiles, the transmittance comes back within half a code."""
     h = plate(rng)
-    screen = slm.Display(name="film", resolution=(512, 512), pitch=4e-6, kind="amplitude",
-                         bit_depth=16)
+    screen = slm.Display(
+        name="film", resolution=(512, 512), pitch=4e-6, kind="amplitude", bit_depth=16
+    )
     path, t = slm.export(h, screen, tmp_path / "film.json", distance=DEPTH, fmt="tiff")
     assert t.min() >= 0 and t.max() <= 1
     back, layout = tiles_io.read_tiles(path)
@@ -132,8 +149,9 @@ def test_the_display_window_is_cut_around_the_plate_centre(rng):
     same = slm.Display(name="crop", resolution=(48, 64), pitch=PLATE_PITCH)
     assert np.array_equal(slm.display_field(h, same), h.object_wave[0, 224:288, 232:280])
     finer = slm.Display(name="fine", resolution=(60, 100), pitch=PLATE_PITCH / 2)
-    whole = resample(h.object_wave[0], pitch=PLATE_PITCH, out_shape=finer.shape,
-                     out_pitch=finer.pitch)
+    whole = resample(
+        h.object_wave[0], pitch=PLATE_PITCH, out_shape=finer.shape, out_pitch=finer.pitch
+    )
     err = np.linalg.norm(slm.display_field(h, finer) - whole) / np.linalg.norm(whole)
     assert err <= 1e-4, f"{err:.3g}"
 
@@ -153,14 +171,17 @@ def test_presets():
     assert slm.DISPLAYS["print-1um"].kind == "amplitude"
 
 
-@pytest.mark.parametrize("settings, field", [
-    ({"resolution": (0, 5)}, "display resolution"),
-    ({"resolution": 3840}, "display resolution"),
-    ({"pitch": 3.74}, "display pitch"),
-    ({"kind": "binary"}, "display kind"),
-    ({"bit_depth": 17}, "display bit_depth"),
-    ({"name": ""}, "display name"),
-])
+@pytest.mark.parametrize(
+    "settings, field",
+    [
+        ({"resolution": (0, 5)}, "display resolution"),
+        ({"resolution": 3840}, "display resolution"),
+        ({"pitch": 3.74}, "display pitch"),
+        ({"kind": "binary"}, "display kind"),
+        ({"bit_depth": 17}, "display bit_depth"),
+        ({"name": ""}, "display name"),
+    ],
+)
 def test_bad_displays_are_refused_naming_the_field(settings, field):
     with pytest.raises(InputError, match=field):
         slm.Display(**{"name": "x", "resolution": (64, 32), "pitch": 4e-6, **settings})
@@ -169,19 +190,22 @@ def test_bad_displays_are_refused_naming_the_field(settings, field):
 def test_bad_exports_are_refused_naming_the_field(tmp_path, rng):
     h = plate(rng, shape=(32, 32))
     small = slm.Display(name="s", resolution=(32, 32), pitch=PLATE_PITCH)
-    cases = [({"display": "no-such-slm"}, "display must be one of"),
-             ({"method": "bias"}, "method"),
-             ({"channel": 1}, "channel"),
-             ({"distance": float("nan")}, "distance"),
-             ({"path": tmp_path / "slm.png"}, "json"),
-             ({"tile": (0, 1)}, "tile"),
-             ({"fmt": "bmp"}, "fmt")]
+    cases = [
+        ({"display": "no-such-slm"}, "display must be one of"),
+        ({"method": "bias"}, "method"),
+        ({"channel": 1}, "channel"),
+        ({"distance": float("nan")}, "distance"),
+        ({"path": tmp_path / "slm.png"}, "json"),
+        ({"tile": (0, 1)}, "tile"),
+        ({"fmt": "bmp"}, "fmt"),
+    ]
     for change, field in cases:
         kw = {"display": small, "path": tmp_path / "slm.json", "distance": DEPTH, **change}
         with pytest.raises(InputError, match=field):
             slm.export(h, kw.pop("display"), kw.pop("path"), **kw)
-    intensity_only = Hologram(intensity=np.ones((1, 8, 8), np.float32), pitch=PLATE_PITCH,
-                              wavelengths=(WAVELENGTH,))
+    intensity_only = Hologram(
+        intensity=np.ones((1, 8, 8), np.float32), pitch=PLATE_PITCH, wavelengths=(WAVELENGTH,)
+    )
     with pytest.raises(InputError, match="no object_wave"):
         slm.for_display(intensity_only, small)
     assert not list(tmp_path.iterdir())
@@ -199,16 +223,23 @@ def test_bad_fields_are_refused_naming_the_field(tmp_path):
         slm.error_diffusion(c, max_amplitude=0.25)
     with pytest.raises(InputError, match="finite"):
         slm.error_diffusion(np.full((4, 4), np.nan))
-    path = tiles_io.write_tiles(tmp_path / "film.json", np.full((4, 4), 0.5),
-                                quantity="amplitude", pitch=4e-6, wavelength=WAVELENGTH,
-                                distance=DEPTH, encoding="bias")
+    path = tiles_io.write_tiles(
+        tmp_path / "film.json",
+        np.full((4, 4), 0.5),
+        quantity="amplitude",
+        pitch=4e-6,
+        wavelength=WAVELENGTH,
+        distance=DEPTH,
+        encoding="bias",
+    )
     with pytest.raises(InputError, match="not phases"):
         slm.read_phase_hologram(path)
 
 
 @pytest.mark.parametrize("method", ["double-phase", "bias"])
 def test_a_20000_squared_export_is_refused_with_its_size_before_the_plate_is_read(
-        tmp_path, rng, monkeypatch, method):
+    tmp_path, rng, monkeypatch, method
+):
     """A 20000² pattern passed 10 GB before it failed; its arrays (measured 88 bytes per
     display sample for double-phase) are now counted first: 35.8 GiB against an 8 GiB budget
     is refused, nothing read, nothing written."""
@@ -218,8 +249,11 @@ def test_a_20000_squared_export_is_refused_with_its_size_before_the_plate_is_rea
     h = plate(rng, (64, 64))
     read = []
     monkeypatch.setattr(slm, "resample", lambda *a, **k: read.append(1))
-    with pytest.raises(InputError, match=r"a 20000x20000 pattern for the display 'wall' needs "
-                                         r"3\d\.\d GiB of memory; \S+ GiB is available"):
+    with pytest.raises(
+        InputError,
+        match=r"a 20000x20000 pattern for the display 'wall' needs "
+        r"3\d\.\d GiB of memory; \S+ GiB is available",
+    ):
         slm.export(h, big, tmp_path / "wall.json", distance=DEPTH, method=method)
     assert not read and not list(tmp_path.iterdir())
 
@@ -240,12 +274,21 @@ def test_an_exported_carrier_plate_views_like_its_physical_field(tmp_path, rng):
     from holo_core.plate.carrier import physical_field
     from holo_core.plate.zone_sum import ZoneEmitters
     from holo_core.scene.plate import ViewingZone
-    display, depth, n = slm.Display(name="test-slm-4mm", resolution=(1024, 1024), pitch=4e-6,
-                                    kind="phase", bit_depth=8), -0.2, 16
-    em = ZoneEmitters(position=np.c_[rng.uniform(-4e-4, 4e-4, (n, 2)), np.full(n, depth)],
-                      amplitude=np.sqrt(rng.uniform(0.2, 1, (n, 1))) * np.exp(
-                          2j * np.pi * rng.random((n, 1))), visibility=np.full(n, -1, np.int32),
-                      table=np.zeros((0, 3, 3), np.uint8), grid=((-4e-3, 4e-3), (-4e-3, 4e-3)))
+
+    display, depth, n = (
+        slm.Display(
+            name="test-slm-4mm", resolution=(1024, 1024), pitch=4e-6, kind="phase", bit_depth=8
+        ),
+        -0.2,
+        16,
+    )
+    em = ZoneEmitters(
+        position=np.c_[rng.uniform(-4e-4, 4e-4, (n, 2)), np.full(n, depth)],
+        amplitude=np.sqrt(rng.uniform(0.2, 1, (n, 1))) * np.exp(2j * np.pi * rng.random((n, 1))),
+        visibility=np.full(n, -1, np.int32),
+        table=np.zeros((0, 3, 3), np.uint8),
+        grid=((-4e-3, 4e-3), (-4e-3, 4e-3)),
+    )
     zone = ViewingZone(centre=(0.0, 0.0, 0.3), half_extents=(0.004, 0.004, 0.001))
     h = carrier_plate(em, zone, WAVELENGTH)
     path, _ = slm.export(h, display, tmp_path / "slm.json", distance=depth)
@@ -259,11 +302,22 @@ def test_an_exported_carrier_plate_views_like_its_physical_field(tmp_path, rng):
 
     def seen(u):
         u = low_pass(u, display.pitch, cut)
-        return np.abs(angular_spectrum(np.asarray(u, np.complex64), wavelength=WAVELENGTH,
-                                       pitch=display.pitch, distance=depth)) ** 2
+        return (
+            np.abs(
+                angular_spectrum(
+                    np.asarray(u, np.complex64),
+                    wavelength=WAVELENGTH,
+                    pitch=display.pitch,
+                    distance=depth,
+                )
+            )
+            ** 2
+        )
 
     shown_view = seen(shown.object_wave[0])
     encoded, summed = psnr(seen(exported), shown_view), psnr(seen(direct), shown_view)
-    print(f"{h.shape}: against the field encoded {encoded:.1f} dB, against the direct sum "
-          f"{summed:.1f} dB; the fields differ by {rel_err(exported, direct):.2e}")
+    print(
+        f"{h.shape}: against the field encoded {encoded:.1f} dB, against the direct sum "
+        f"{summed:.1f} dB; the fields differ by {rel_err(exported, direct):.2e}"
+    )
     assert encoded >= 85 and summed >= 65, (encoded, summed)

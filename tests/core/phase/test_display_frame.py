@@ -34,20 +34,40 @@ def _point_wave(z0: float, *, n=N) -> np.ndarray:
 
 
 def _plate(path, wave):
-    h = Hologram(encoding="complex", object_wave=np.stack([wave] * 3).astype(np.complex64),
-                 wavelengths=(LAM,) * 3, pitch=PITCH)
+    h = Hologram(
+        encoding="complex",
+        object_wave=np.stack([wave] * 3).astype(np.complex64),
+        wavelengths=(LAM,) * 3,
+        pitch=PITCH,
+    )
     write_hologram(path, h)
     return path
 
 
 def _frame(tmp_path, hologram, **changes):
-    fields = dict(name="Display", frame=7, folder=str(tmp_path / "out"), resolution=(N, N),
-                  pitch=PITCH, bit_depth=8, phase_range=2 * math.pi, inverted=False,
-                  packing="grey8",
-                  lasers=(FrameLaser(name="green", wavelength=LAM, power=0.01,
-                                     hologram=str(hologram), channel=1),),
-                  scale=0.01, front=0.0, behind=8e-3, eye_distance=0.1, eye_box=1e-3,
-                  pupil=4e-3, distance=-4e-3, slices=3, digest="ab12")
+    fields = dict(
+        name="Display",
+        frame=7,
+        folder=str(tmp_path / "out"),
+        resolution=(N, N),
+        pitch=PITCH,
+        bit_depth=8,
+        phase_range=2 * math.pi,
+        inverted=False,
+        packing="grey8",
+        lasers=(
+            FrameLaser(name="green", wavelength=LAM, power=0.01, hologram=str(hologram), channel=1),
+        ),
+        scale=0.01,
+        front=0.0,
+        behind=8e-3,
+        eye_distance=0.1,
+        eye_box=1e-3,
+        pupil=4e-3,
+        distance=-4e-3,
+        slices=3,
+        digest="ab12",
+    )
     fields.update(changes)
     return DisplayFrame(**fields)
 
@@ -63,8 +83,13 @@ def test_a_point_behind_the_display_is_in_focus_at_its_depth(tmp_path):
     layout = make_frame(frame)
     folder = tmp_path / "out"
     names = sorted(p.name for p in folder.iterdir())
-    assert names == ["frame_0007.json", "frame_0007_520nm.json", "frame_0007_520nm.png",
-                     "frame_0007_stack.exr", "frame_0007_stack.png"], names
+    assert names == [
+        "frame_0007.json",
+        "frame_0007_520nm.json",
+        "frame_0007_520nm.png",
+        "frame_0007_stack.exr",
+        "frame_0007_stack.png",
+    ], names
     assert json.loads((folder / "frame_0007.json").read_text()) == layout
     codes, pattern = read_pattern(folder / "frame_0007_520nm.json")
     assert codes.shape == (N, N) and codes.max() < 256 and pattern["packing"] == "grey8"
@@ -95,10 +120,10 @@ def test_a_wave_recorded_in_front_is_carried_back_to_the_display(tmp_path):
     f = np.fft.fftfreq(2 * n, PITCH)
     arg = 1 / LAM**2 - f[None, :] ** 2 - f[:, None] ** 2
     padded = np.zeros((2 * n, 2 * n), complex)
-    padded[n // 2:n // 2 + n, n // 2:n // 2 + n] = wide
+    padded[n // 2 : n // 2 + n, n // 2 : n // 2 + n] = wide
     h = np.where(arg > 0, np.exp(2j * math.pi * np.sqrt(np.maximum(arg, 0)) * -3e-3), 0)
-    want = np.fft.ifft2(np.fft.fft2(padded) * h)[n // 2:n // 2 + n, n // 2:n // 2 + n]
-    want = want[pad:pad + N, pad:pad + N]
+    want = np.fft.ifft2(np.fft.fft2(padded) * h)[n // 2 : n // 2 + n, n // 2 : n // 2 + n]
+    want = want[pad : pad + N, pad : pad + N]
     want /= np.abs(want).max()
     error = np.abs(got - want).max()
     assert error < 1e-3, error
@@ -109,10 +134,17 @@ def test_a_table_for_one_laser_and_not_another_is_refused(tmp_path):
     path = _plate(tmp_path / "wave.exr", _point_wave(-4e-3))
     table = tmp_path / "red.txt"
     table.write_text("\n".join(str(2 * math.pi * k / 256) for k in range(256)))
-    lasers = (FrameLaser(name="red", wavelength=638e-9, power=0.01, hologram=str(path),
-                         channel=0, table=str(table)),
-              FrameLaser(name="green", wavelength=LAM, power=0.01, hologram=str(path),
-                         channel=1))
+    lasers = (
+        FrameLaser(
+            name="red",
+            wavelength=638e-9,
+            power=0.01,
+            hologram=str(path),
+            channel=0,
+            table=str(table),
+        ),
+        FrameLaser(name="green", wavelength=LAM, power=0.01, hologram=str(path), channel=1),
+    )
     with pytest.raises(InputError, match="not for green"):
         make_frame(_frame(tmp_path, path, lasers=lasers))
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

@@ -20,11 +20,13 @@ LAM, PITCH = 520e-9, 8e-6
 def smooth_field(rng, shape, band):
     """A field whose spectrum fills |f| <= ``band`` [cycles/sample]: amplitude 0.6 ± 0.3,
     phase ± 3 rad."""
+
     def real():
         fy, fx = np.fft.fftfreq(shape[0]), np.fft.fftfreq(shape[1])
         keep = fy[:, None] ** 2 + fx[None, :] ** 2 <= band**2
         r = np.fft.ifft2(rng.normal(size=shape) * keep).real
         return r / np.abs(r).max()
+
     return (0.6 + 0.3 * real()) * np.exp(3j * real())
 
 
@@ -47,18 +49,22 @@ def test_double_phase_through_the_filter_is_the_wave_and_its_checkerboards_edge(
     def filtered(f):
         pad = np.zeros(op.padded, complex)
         (r, c), (h, w) = op.top, op.shape
-        pad[r:r + h, c:c + w] = f
+        pad[r : r + h, c : c + w] = f
         fy, fx = grid.freqs(op.padded[0], PITCH), grid.freqs(op.padded[1], PITCH)
         cut = 0.5 / (2 * PITCH) * (1 + 1e-9)
         s = np.fft.fft2(pad) * ((np.abs(fy)[:, None] <= cut) & (np.abs(fx)[None, :] <= cut))
-        return np.fft.ifft2(s)[r:r + h, c:c + w]
+        return np.fft.ifft2(s)[r : r + h, c : c + w]
 
     c = filtered(u)
     assert np.abs(low_passed(u, op) - c).max() <= 1e-5
     c = c / np.abs(c).max()
     rows, cols = np.indices(d.shape)
-    term = np.where((rows + cols) % 2 == 0, 1, -1) * 1j * np.sqrt(1 - np.abs(c) ** 2) \
+    term = (
+        np.where((rows + cols) % 2 == 0, 1, -1)
+        * 1j
+        * np.sqrt(1 - np.abs(c) ** 2)
         * np.exp(1j * np.angle(c))
+    )
     got = filtered(shown)
     identity = np.linalg.norm(got - filtered(c) - filtered(term)) / np.linalg.norm(c)
     assert identity <= 1e-3, identity
@@ -100,8 +106,9 @@ def test_a_pattern_goes_through_the_lasers_table_and_stays_in_its_bits(rng):
     k = np.arange(1024)
     green = PhaseTable(wavelength=LAM, phases=2.5 * math.pi * (k / 1023) ** 1.2, source="g.npy")
     red = PhaseTable(wavelength=638e-9, phases=2.1 * math.pi * k / 1023, source="r.npy")
-    setup = SLMSetup(display=d, lasers=[Laser(wavelength=638e-9), Laser(wavelength=LAM)],
-                     tables=[red, green])
+    setup = SLMSetup(
+        display=d, lasers=[Laser(wavelength=638e-9), Laser(wavelength=LAM)], tables=[red, green]
+    )
     u = smooth_field(rng, d.shape, 1 / 16)
     p = encode(u, setup, wavelength=LAM)
     assert p.codes.max() <= 1023 and p.table == "g.npy"

@@ -21,9 +21,13 @@ WAVELENGTHS = (638e-9, 520e-9, 488e-9)
 
 def setup(**kw):
     d = Display(name="lab-slm", resolution=(96, 64), pitch=8e-6, bit_depth=10)
-    return SLMSetup(display=d, lasers=[Laser(wavelength=w, power=p) for w, p in
-                                       zip(WAVELENGTHS, (0.03, 0.02, 0.01))],
-                    depth_range=(-6e-3, -2e-3), slices=4, **kw)
+    return SLMSetup(
+        display=d,
+        lasers=[Laser(wavelength=w, power=p) for w, p in zip(WAVELENGTHS, (0.03, 0.02, 0.01))],
+        depth_range=(-6e-3, -2e-3),
+        slices=4,
+        **kw,
+    )
 
 
 def waves(rng, s):
@@ -37,14 +41,17 @@ def waves(rng, s):
 
 def test_a_frame_writes_each_lasers_pattern_and_the_stack(tmp_path, rng):
     k = np.arange(1024)
-    tables = [PhaseTable(wavelength=w, phases=2.4 * math.pi * k / 1024, source=f"{i}.npy")
-              for i, w in enumerate(WAVELENGTHS)]
+    tables = [
+        PhaseTable(wavelength=w, phases=2.4 * math.pi * k / 1024, source=f"{i}.npy")
+        for i, w in enumerate(WAVELENGTHS)
+    ]
     s = setup(tables=tables)
     f = export_frame(waves(rng, s), s, tmp_path, stem="frame_0007", distance=-4e-3, frame=7)
     names = sorted(p.name for p in tmp_path.iterdir())
-    assert names == sorted([f"frame_0007_{laser_name(w)}.{x}" for w in WAVELENGTHS
-                            for x in ("png", "json")] + ["frame_0007_stack.exr",
-                                                         "frame_0007_stack.png"])
+    assert names == sorted(
+        [f"frame_0007_{laser_name(w)}.{x}" for w in WAVELENGTHS for x in ("png", "json")]
+        + ["frame_0007_stack.exr", "frame_0007_stack.png"]
+    )
     for w, p, table in zip(WAVELENGTHS, f.patterns, tables):
         codes, layout = slm_io.read_pattern(tmp_path / f"frame_0007_{laser_name(w)}.json")
         assert np.array_equal(codes, p.codes) and layout["packing"] == "packed10"
@@ -75,8 +82,13 @@ def test_a_frame_is_bit_identical_whatever_came_before(tmp_path, rng):
     first, second = tmp_path / "a", tmp_path / "b"
     first.mkdir()
     second.mkdir()
-    kw = dict(stem="frame_0001", method="gradient-descent", iterations=6, slices_per_step=2,
-              simulate=False)
+    kw = dict(
+        stem="frame_0001",
+        method="gradient-descent",
+        iterations=6,
+        slices_per_step=2,
+        simulate=False,
+    )
     export_frame(one, s, first, **kw)
     export_frame(two, s, second, **kw)
     export_frame(one, s, second, **kw)

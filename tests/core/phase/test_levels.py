@@ -35,7 +35,9 @@ def test_codes_stay_in_the_bit_depth_and_within_half_a_step(rng, bits, inverted)
 
 def test_the_line_and_its_inversion():
     d = display(bit_depth=8)
-    assert response(d)[[0, 1, 255]] == pytest.approx([0, 2 * math.pi / 256, 255 * 2 * math.pi / 256])
+    assert response(d)[[0, 1, 255]] == pytest.approx(
+        [0, 2 * math.pi / 256, 255 * 2 * math.pi / 256]
+    )
     assert quantise([0.0, 2 * math.pi - 1e-3, math.pi], d).tolist() == [0, 0, 128]
     inv = display(bit_depth=8, inverted=True)
     assert quantise([math.pi / 2], inv).tolist() == [192]  # −192·2π/256 = −3π/2 ≡ π/2
@@ -46,8 +48,9 @@ def test_a_3pi_range_keeps_phases_inside_it_unwrapped():
     range, 3.5π, wraps to 1.5π."""
     d = display(bit_depth=8, phase_range=3 * math.pi)
     c = quantise([2.5 * math.pi, 0.5 * math.pi, 3.5 * math.pi], d)
-    assert shown(c, d) == pytest.approx([2.5 * math.pi, 0.5 * math.pi, 1.5 * math.pi],
-                                        abs=3 * math.pi / 256)
+    assert shown(c, d) == pytest.approx(
+        [2.5 * math.pi, 0.5 * math.pi, 1.5 * math.pi], abs=3 * math.pi / 256
+    )
     assert shown(c, d)[0] > 2 * math.pi
 
 
@@ -61,11 +64,15 @@ def test_a_measured_table_is_followed_code_by_code(rng):
     want = rng.uniform(-3 * math.pi, 3 * math.pi, 4000)
     got = quantise(want, display(bit_depth=8), table)
     inside = (want >= phases.min()) & (want <= phases.max())
-    distance = np.where(inside[:, None], np.abs(phases[None, :] - want[:, None]),
-                        wrapped_error(phases[None, :], want[:, None]))
+    distance = np.where(
+        inside[:, None],
+        np.abs(phases[None, :] - want[:, None]),
+        wrapped_error(phases[None, :], want[:, None]),
+    )
     brute = np.argmin(distance, axis=1)
-    assert np.allclose(distance[np.arange(want.size), got],
-                       distance[np.arange(want.size), brute], atol=1e-12)
+    assert np.allclose(
+        distance[np.arange(want.size), got], distance[np.arange(want.size), brute], atol=1e-12
+    )
     assert wrapped_error(phases[got], want).max() <= np.diff(phases).__abs__().max()
 
 
@@ -84,13 +91,21 @@ def test_the_binned_codes_are_the_bisections(rng, phase_range, inverted):
     million phases over ±5π, the codes' own phases and the midpoints between them (the ties)
     included, on the line and on a measured-like table (a random monotone curve)."""
     from holo_core.phase.levels import _nearest
+
     curve = response(display(bit_depth=8, phase_range=phase_range, inverted=inverted))
     table = np.sort(rng.uniform(0, phase_range, curve.size))
     for c in (curve, table):
         q = Quantiser(c)
         mids = (np.sort(c)[1:] + np.sort(c)[:-1]) / 2
-        t = np.concatenate([rng.uniform(-5 * np.pi, 5 * np.pi, 2_000_000), c, mids,
-                            np.nextafter(mids, np.inf), np.nextafter(mids, -np.inf)])
+        t = np.concatenate(
+            [
+                rng.uniform(-5 * np.pi, 5 * np.pi, 2_000_000),
+                c,
+                mids,
+                np.nextafter(mids, np.inf),
+                np.nextafter(mids, -np.inf),
+            ]
+        )
         inside = (t >= c.min()) & (t <= c.max())
         want = np.empty(t.shape, np.uint16)
         want[inside] = _nearest(t[inside], *q.inside)

@@ -19,8 +19,14 @@ def ring(radius, width=3.0):
 def test_far_field_error_never_grows():
     """Fienup's error reduction: with the far field (Aᴴ its inverse up to a constant) each
     iteration's error is at most the last one's."""
-    r = gerchberg_saxton(ring(12), wavelength=LAM, pitch=PITCH, distances=2.0,
-                         propagation="fraunhofer", iterations=30)
+    r = gerchberg_saxton(
+        ring(12),
+        wavelength=LAM,
+        pitch=PITCH,
+        distances=2.0,
+        propagation="fraunhofer",
+        iterations=30,
+    )
     steps = np.diff(r.errors)
     assert (steps <= 1e-5).all(), f"largest growth {steps.max():.3g}"
     assert r.errors[-1] < 0.5 * r.errors[0], r.errors[::10]
@@ -35,8 +41,9 @@ def test_the_gradient_is_the_derivative(rng):
     d = rng.normal(size=(N, N))
     _, grad = p.loss_and_gradient(phase)
     h = 1e-3
-    numeric = (p.loss_and_gradient(phase + h * d)[0] - p.loss_and_gradient(phase - h * d)[0]) \
-        / (2 * h)
+    numeric = (p.loss_and_gradient(phase + h * d)[0] - p.loss_and_gradient(phase - h * d)[0]) / (
+        2 * h
+    )
     analytic = float(np.sum(grad * d))
     assert abs(numeric - analytic) <= 2e-3 * abs(analytic), (numeric, analytic)
 
@@ -45,8 +52,9 @@ def test_two_planes_by_descent_and_by_projections():
     """Two rings 2 mm apart: Adam from a Gerchberg–Saxton start lowers the error further."""
     targets, z = [ring(8), ring(16)], [2e-3, 4e-3]
     gs = gerchberg_saxton(targets, wavelength=LAM, pitch=PITCH, distances=z, iterations=20)
-    gd = optimise_phase(targets, wavelength=LAM, pitch=PITCH, distances=z, iterations=60,
-                        phase=gs.phase)
+    gd = optimise_phase(
+        targets, wavelength=LAM, pitch=PITCH, distances=z, iterations=60, phase=gs.phase
+    )
     assert gs.errors[-1] < gs.errors[0], gs.errors[::5]
     assert gd.errors[-1] < 0.9 * gs.errors[-1], (gs.errors[-1], gd.errors[-1])
     fresh = optimise_phase(targets, wavelength=LAM, pitch=PITCH, distances=z, iterations=60)
@@ -57,7 +65,6 @@ def test_bad_problems_are_refused():
     with pytest.raises(InputError, match="pair up"):
         gerchberg_saxton([ring(8)], wavelength=LAM, pitch=PITCH, distances=[1e-3, 2e-3])
     with pytest.raises(InputError, match="propagation must be one of"):
-        gerchberg_saxton(ring(8), wavelength=LAM, pitch=PITCH, distances=1e-3,
-                         propagation="rs")
+        gerchberg_saxton(ring(8), wavelength=LAM, pitch=PITCH, distances=1e-3, propagation="rs")
     with pytest.raises(InputError, match="real amplitudes >= 0"):
         optimise_phase(-ring(8), wavelength=LAM, pitch=PITCH, distances=1e-3)

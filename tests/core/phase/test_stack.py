@@ -45,8 +45,9 @@ def test_a_gaussian_beam_spreads_as_the_analytic_one():
 
 def test_the_adjoint_is_the_adjoint(rng):
     """<A x, y> = <x, Aᴴ y> for A the display to one plane (pupil included)."""
-    op = Optics((40, 56), pitch=PITCH, wavelength=LAM, distances=[3e-3],
-                pupil=(0.5e-3, -0.2e-3, 2e-3, 0.1))
+    op = Optics(
+        (40, 56), pitch=PITCH, wavelength=LAM, distances=[3e-3], pupil=(0.5e-3, -0.2e-3, 2e-3, 0.1)
+    )
     x = (rng.normal(size=op.shape) + 1j * rng.normal(size=op.shape)).astype(np.complex64)
     y = (rng.normal(size=op.shape) + 1j * rng.normal(size=op.shape)).astype(np.complex64)
     ax = op.to_plane(op.spectrum(x), 0)
@@ -57,9 +58,9 @@ def test_the_adjoint_is_the_adjoint(rng):
 
 def test_a_pupil_outside_the_band_is_refused():
     from holo_core.validate import InputError
+
     with pytest.raises(InputError, match="outside the band"):
-        Optics((16, 16), pitch=PITCH, wavelength=LAM, distances=[0.0],
-               pupil=(20e-3, 0, 1e-3, 0.1))
+        Optics((16, 16), pitch=PITCH, wavelength=LAM, distances=[0.0], pupil=(20e-3, 0, 1e-3, 0.1))
 
 
 def test_the_comparison_is_the_slices_psnr_and_ssim(rng):
@@ -94,10 +95,17 @@ def test_an_eye_focused_on_a_point_sees_its_airy_pattern():
     from scipy.special import j1
 
     from holo_core.phase.stack import EyePupil
+
     shape, depth, a, d = (256, 256), -4e-3, 1e-3, 0.1
     u = _point_at((512, 512), depth)[128:384, 128:384]
-    op = Optics(shape, pitch=PITCH, wavelength=LAM, distances=[depth], band=1.0,
-                eye=EyePupil(diameter=a, distance=d))
+    op = Optics(
+        shape,
+        pitch=PITCH,
+        wavelength=LAM,
+        distances=[depth],
+        band=1.0,
+        eye=EyePupil(diameter=a, distance=d),
+    )
     seen = op.seen(u)[0]
     focus = seen / seen.max()
     r = _radius(shape)
@@ -115,10 +123,17 @@ def test_an_eye_focused_nearer_sees_a_point_as_its_cone_cut_by_the_plane():
     90 % of it within the disc's radius and the Airy pattern's, under 40 % within half its radius (a
     uniform disc: 25 %)."""
     from holo_core.phase.stack import EyePupil
+
     shape, depth, a, d = (256, 256), -4e-3, 4e-3, 0.1
     u = _point_at((512, 512), depth)[128:384, 128:384]
-    op = Optics(shape, pitch=PITCH, wavelength=LAM, distances=[depth + 3e-3], band=1.0,
-                eye=EyePupil(diameter=a, distance=d))
+    op = Optics(
+        shape,
+        pitch=PITCH,
+        wavelength=LAM,
+        distances=[depth + 3e-3],
+        band=1.0,
+        eye=EyePupil(diameter=a, distance=d),
+    )
     blur = op.seen(u)[0].astype(np.float64) ** 2
     r, radius = _radius(shape), a * 3e-3 / (d - depth) / 2
     inside = float(blur[r <= radius + 1.22 * LAM * (d - depth) / a].sum() / blur.sum())
@@ -138,13 +153,20 @@ def test_an_eye_sees_a_patch_only_where_its_light_heads_into_the_pupil(towards):
     front (frequency (e − x)/(λL)) the eye focused on it sees it (over 80 % of its light),
     aimed as far the other way (−(e − x)/(λL)) it sees under 1 %."""
     from holo_core.phase.stack import EyePupil
+
     shape, d, a, x0 = (256, 384), 0.1, 1e-3, 0.8e-3
     y, x = (grid.coords(n, PITCH) for n in shape)
     patch = (np.abs(y[:, None]) <= 0.2e-3) & (np.abs(x[None, :] - x0) <= 0.2e-3)
     f = (0 - x0) / (LAM * d) * (1 if towards else -1)
     u = patch * np.exp(2j * np.pi * f * x[None, :])
-    op = Optics(shape, pitch=PITCH, wavelength=LAM, distances=[0.0], band=1.0,
-                eye=EyePupil(diameter=a, distance=d))
+    op = Optics(
+        shape,
+        pitch=PITCH,
+        wavelength=LAM,
+        distances=[0.0],
+        band=1.0,
+        eye=EyePupil(diameter=a, distance=d),
+    )
     share = float((op.seen(u)[0] ** 2).sum() / (np.abs(op.stack(u)[0]) ** 2).sum())
     assert (share >= 0.8) if towards else (share <= 0.01), share
 
@@ -152,6 +174,12 @@ def test_an_eye_sees_a_patch_only_where_its_light_heads_into_the_pupil(towards):
 def test_an_eye_too_close_for_the_grid_is_refused():
     from holo_core.phase.stack import EyePupil
     from holo_core.validate import InputError
+
     with pytest.raises(InputError, match="eye: a pupil 10 mm"):
-        Optics((1080, 1920), pitch=PITCH, wavelength=LAM, distances=[-5e-3],
-               eye=EyePupil(diameter=4e-3, distance=0.01))
+        Optics(
+            (1080, 1920),
+            pitch=PITCH,
+            wavelength=LAM,
+            distances=[-5e-3],
+            eye=EyePupil(diameter=4e-3, distance=0.01),
+        )

@@ -19,8 +19,9 @@ def square(side, z, colour):
     """A square of ``side`` [m] facing the plate at depth ``z`` [m], of one linear colour."""
     h = side / 2
     v = np.array([[-h, -h, z], [h, -h, z], [h, h, z], [-h, h, z]])
-    return Mesh(vertices=v, triangles=np.array([[0, 1, 2], [0, 2, 3]]),
-                colours=np.tile(colour, (4, 1)))
+    return Mesh(
+        vertices=v, triangles=np.array([[0, 1, 2], [0, 2, 3]]), colours=np.tile(colour, (4, 1))
+    )
 
 
 def test_emitters_lie_on_the_surface_on_a_lattice_of_directions():
@@ -52,11 +53,11 @@ def test_no_emitter_shows_through_an_occluder(turn):
     c, s = np.cos(np.radians(turn)), np.sin(np.radians(turn))
     spin = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # row vectors: v @ spin
     front = square(0.02, -0.25, (1.0, 0.0, 0.0))
-    front = Mesh(vertices=front.vertices @ spin, triangles=front.triangles,
-                 colours=front.colours)
+    front = Mesh(vertices=front.vertices @ spin, triangles=front.triangles, colours=front.colours)
     e = zone_emitters([square(0.08, -0.3, (1.0, 1.0, 1.0)), front], ZONE, SPACING)
-    assert not (np.linalg.norm(e.position - (0.0, 0.0, -0.3), axis=1) < 1e-9).any(), \
+    assert not (np.linalg.norm(e.position - (0.0, 0.0, -0.3), axis=1) < 1e-9).any(), (
         "the back square's centre, hidden from the whole zone, is kept"
+    )
     back = np.isclose(e.position[:, 2], -0.3, atol=1e-9)
     (x0, dx), (y0, dy) = e.grid
     gy, gx = e.visibility.shape[1:]
@@ -85,12 +86,18 @@ def test_random_phases_follow_the_emitters_not_their_count():
     reference that the case moves emitters), most of them would change. The keys are
     distinct, and the phases uniform on [0, 2π): their mean phasor is within 4/√n of 0."""
     from holo_core.plate.recording import _phases, look_code
+
     back, front = square(0.08, -0.3, (1.0, 1.0, 1.0)), square(0.02, -0.25, (1.0, 0.0, 0.0))
     half = Mesh(vertices=front.vertices, triangles=front.triangles[:1], colours=front.colours)
     whole, cut = (zone_emitters([front_, back], ZONE, SPACING) for front_ in (front, half))
     where = {tuple(np.round(p, 12)): n for n, p in enumerate(cut.position)}
-    i, j = np.array([(n, where[tuple(np.round(p, 12))]) for n, p in enumerate(whole.position)
-                     if tuple(np.round(p, 12)) in where]).T
+    i, j = np.array(
+        [
+            (n, where[tuple(np.round(p, 12))])
+            for n, p in enumerate(whole.position)
+            if tuple(np.round(p, 12)) in where
+        ]
+    ).T
     assert len(whole) != len(cut) and len(i) > 0.5 * len(whole), (len(whole), len(cut), len(i))
     for code in (None, look_code(1, 2)):
         a, b = _phases(whole, 7, code), _phases(cut, 7, code)
@@ -110,13 +117,15 @@ def test_a_closed_meshs_outside_is_found_from_its_winding_and_a_card_has_none():
     outward, -1 with every triangle's winding reversed; a square card and the cube less one
     face are not closed (0)."""
     cube, sphere = ps.cube(), ps.sphere()
-    flipped = lambda m: Mesh(vertices=m.vertices, triangles=m.triangles[:, ::-1],  # noqa: E731
-                             colours=m.colours)
+    flipped = lambda m: Mesh(
+        vertices=m.vertices,
+        triangles=m.triangles[:, ::-1],  # noqa: E731
+        colours=m.colours,
+    )
     assert outward(cube) == -outward(flipped(cube)) != 0
     assert outward(sphere) == -outward(flipped(sphere)) != 0
     assert outward(square(0.04, -0.3, (1, 1, 1))) == 0
-    open_box = Mesh(vertices=cube.vertices, triangles=cube.triangles[2:],
-                    colours=cube.colours)
+    open_box = Mesh(vertices=cube.vertices, triangles=cube.triangles[2:], colours=cube.colours)
     assert outward(open_box) == 0
 
 
@@ -140,8 +149,13 @@ def test_no_zone_point_sees_a_closed_meshs_far_side():
     normal = normal @ r.T
     (x0, sx), (y0, sy) = e.grid
     gy, gx = e.visibility.shape[1:]
-    points = np.array([[ZONE.centre[0] + x0 + i * sx, ZONE.centre[1] + y0 + j * sy,
-                        ZONE.centre[2]] for j in range(gy) for i in range(gx)])
+    points = np.array(
+        [
+            [ZONE.centre[0] + x0 + i * sx, ZONE.centre[1] + y0 + j * sy, ZONE.centre[2]]
+            for j in range(gy)
+            for i in range(gx)
+        ]
+    )
     towards = points[None, :, :] - e.position[:, None, :]
     away = np.einsum("nj,npj->np", normal, towards) < 0  # (n, grid points)
     seen = e.visibility.reshape(len(e), -1)

@@ -66,12 +66,10 @@ def test_each_frame_is_viewed_from_the_part_that_holds_its_pupil(dolly_set):
     assert isinstance(dolly_set, PlateSet) and len(dolly_set) == 4
     for f, cam in enumerate(cameras()[::3]):
         k, beyond = part_for(dolly_set, cam)
-        assert beyond == 0 and dolly_set.parts[k].reach(cam.position,
-                                                         cam.aperture_diameter) == 0
+        assert beyond == 0 and dolly_set.parts[k].reach(cam.position, cam.aperture_diameter) == 0
         ours = render_view(dolly_set, cam)
         theirs = render_view(list(dolly_set.part_looks(k)), cam)
-        assert np.array_equal(ours.rgb, theirs.rgb) and np.array_equal(ours.depth,
-                                                                      theirs.depth)
+        assert np.array_equal(ours.rgb, theirs.rgb) and np.array_equal(ours.depth, theirs.depth)
 
 
 def test_one_pupil_sees_the_same_wave_from_either_part(dolly_set):
@@ -88,18 +86,22 @@ def test_one_pupil_sees_the_same_wave_from_either_part(dolly_set):
     cam = cameras()[3]
     views = [render_view(list(dolly_set.part_looks(k)), cam) for k in range(len(dolly_set))]
     agree = [psnr(views[a], views[b]) for a, b in ((0, 1), (1, 2), (2, 3), (0, 3))]
-    own = [record_looks(ps.meshes(), looks=2, plate=dolly_set.parts[k].plate, seed=3)
-           for k in (0, 3)]
+    own = [
+        record_looks(ps.meshes(), looks=2, plate=dolly_set.parts[k].plate, seed=3) for k in (0, 3)
+    ]
     apart = psnr(render_view(own[0], cam), render_view(own[1], cam))
-    print(f"parts against each other {np.round(agree, 1)} dB; with their own emitters "
-          f"{apart:.1f} dB")
+    print(
+        f"parts against each other {np.round(agree, 1)} dB; with their own emitters {apart:.1f} dB"
+    )
     assert min(agree) > 35 and apart < min(agree) - 6, (agree, apart)
     solid = [v.alpha > 0.5 for v in views]
     overlap = [(a & solid[0]).sum() / (a | solid[0]).sum() for a in solid[1:]]
     camera = render_camera(ps.meshes(), cam, via="incoherent").alpha > 0.5
     true = [(a & camera).sum() / (a | camera).sum() for a in solid]
-    print(f"silhouettes' IoU against part 0's: {np.round(overlap, 4)}; against the camera "
-          f"hologram's {np.round(true, 4)}")
+    print(
+        f"silhouettes' IoU against part 0's: {np.round(overlap, 4)}; against the camera "
+        f"hologram's {np.round(true, 4)}"
+    )
     assert min(overlap) > 0.97 and min(true) > 0.97, (overlap, true)
 
 
@@ -136,8 +138,10 @@ def test_a_second_recording_records_nothing_and_a_stopped_one_resumes(dolly_set,
         read_plate_set(folder)
     resumed = record_set(ps.meshes(), parts, looks=2, seed=3, folder=folder)
     after = {f.name: f.stat().st_mtime_ns for f in folder.glob("*.exr")}
-    assert {n for n in after if after[n] != stamps.get(n)} == {"part002.look0.exr",
-                                                                "part002.look1.exr"}
+    assert {n for n in after if after[n] != stamps.get(n)} == {
+        "part002.look0.exr",
+        "part002.look1.exr",
+    }
     for k in range(len(resumed)):
         for a, b in zip(resumed.part_looks(k), dolly_set.part_looks(k)):
             assert np.array_equal(a.object_wave, b.object_wave)
@@ -165,8 +169,9 @@ def test_a_recording_stopped_while_a_part_is_written_keeps_that_part(tmp_path, d
         record_set(ps.meshes(), parts, looks=2, seed=3, folder=folder, progress=stop)
     listed = json.loads((folder / MANIFEST).read_text())["parts"]
     assert [bool(e["files"]) for e in listed] == [True] + [False] * (len(parts) - 1)
-    assert sorted(f.name for f in folder.iterdir()) == sorted([
-        MANIFEST, "part000.look0.exr", "part000.look1.exr"])  # no temporary file left
+    assert sorted(f.name for f in folder.iterdir()) == sorted(
+        [MANIFEST, "part000.look0.exr", "part000.look1.exr"]
+    )  # no temporary file left
     written = {f.name: f.stat().st_mtime_ns for f in folder.glob("*.exr")}
     resumed = record_set(ps.meshes(), parts, looks=2, seed=3, folder=folder)
     assert all(folder.joinpath(n).stat().st_mtime_ns == t for n, t in written.items())
@@ -183,8 +188,9 @@ def test_a_frame_outside_every_part_warns_once_or_fails(dolly_set):
         warnings.simplefilter("always")
         render_set_view(dolly_set, far, frame=12)
     said = [w for w in caught if issubclass(w.category, OutsideZoneWarning)]
-    assert len(said) == 1 and "frame 12" in str(said[0].message) and \
-        "part 3" in str(said[0].message), [str(w.message) for w in caught]
+    assert (
+        len(said) == 1 and "frame 12" in str(said[0].message) and "part 3" in str(said[0].message)
+    ), [str(w.message) for w in caught]
     with pytest.raises(InputError, match=r"frame 12: .* outside every part"):
         render_set_view(dolly_set, far, frame=12, outside="fail")
 
@@ -214,21 +220,34 @@ def test_an_orbits_end_part_holds_every_surface_its_zone_sees():
     near side from behind through the cube, own points its three layers never reached: a
     bite out of the sphere (IoU 0.946)."""
     target = np.array([0.0, 0.0, -1.75])
-    meshes = [ps.cube(centre=np.array([-0.15, -0.08, -1.55]), size=0.5, angles=(0.35, 0.6)),
-              ps.sphere(centre=np.array([0.22, 0.1, -1.95]), radius=0.3, n=48)]
+    meshes = [
+        ps.cube(centre=np.array([-0.15, -0.08, -1.55]), size=0.5, angles=(0.35, 0.6)),
+        ps.sphere(centre=np.array([0.22, 0.1, -1.95]), radius=0.3, n=48),
+    ]
 
     def eye(degrees):
         a = np.radians(degrees)
-        return Camera(matrix_world=look_at(target + 3.5 * np.array([np.sin(a), 0, np.cos(a)]),
-                                           target, up=(0, 1, 0)),
-                      lens=40, sensor_width=36, resolution=(160, 90), fstop=2.8,
-                      focus_distance=3.5)
+        return Camera(
+            matrix_world=look_at(
+                target + 3.5 * np.array([np.sin(a), 0, np.cos(a)]), target, up=(0, 1, 0)
+            ),
+            lens=40,
+            sensor_width=36,
+            resolution=(160, 90),
+            fstop=2.8,
+            focus_distance=3.5,
+        )
 
     every = np.concatenate([m.vertices for m in meshes])
-    parts = parts_along([eye(a) for a in np.linspace(-45, 45, 19)],
-                        [every.min(0), every.max(0)], distance=1.75, stretch=0.5)
-    plans = [_part_plan(meshes, k, p, looks=1, depth=False, memory=None)
-             for k, p in enumerate(parts)]
+    parts = parts_along(
+        [eye(a) for a in np.linspace(-45, 45, 19)],
+        [every.min(0), every.max(0)],
+        distance=1.75,
+        stretch=0.5,
+    )
+    plans = [
+        _part_plan(meshes, k, p, looks=1, depth=False, memory=None) for k, p in enumerate(parts)
+    ]
     last = list(set_emitters(meshes, parts, plans, plans[0].plan.spacing))[-1]
     alone = zone_emitters(plans[-1].meshes, plans[-1].plan.zone, plans[-1].plan.spacing)
     m = parts[-1].plate.matrix_world

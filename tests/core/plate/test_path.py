@@ -21,8 +21,10 @@ DISTANCE = 1.75
 
 
 def shot_meshes():
-    return [cube(centre=np.array([-0.15, -0.08, -1.55]), size=0.5),
-            sphere(centre=np.array([0.22, 0.1, -1.95]), radius=0.3, n=24)]
+    return [
+        cube(centre=np.array([-0.15, -0.08, -1.55]), size=0.5),
+        sphere(centre=np.array([0.22, 0.1, -1.95]), radius=0.3, n=24),
+    ]
 
 
 def shot_box():
@@ -32,9 +34,14 @@ def shot_box():
 
 def shot_camera(eye, resolution=(1280, 720)):
     eye = np.asarray(eye, float)
-    return Camera(matrix_world=look_at(eye, TARGET, up=(0, 1, 0)), lens=40, sensor_width=36,
-                  resolution=resolution, fstop=2.8,
-                  focus_distance=float(np.linalg.norm(TARGET - eye)))
+    return Camera(
+        matrix_world=look_at(eye, TARGET, up=(0, 1, 0)),
+        lens=40,
+        sensor_width=36,
+        resolution=resolution,
+        fstop=2.8,
+        focus_distance=float(np.linalg.norm(TARGET - eye)),
+    )
 
 
 def dolly(length, step=0.05):
@@ -44,8 +51,7 @@ def dolly(length, step=0.05):
 
 def orbit(degrees, step=5.0, radius=3.5):
     angles = np.radians(np.linspace(-degrees / 2, degrees / 2, round(degrees / step) + 1))
-    return [shot_camera(TARGET + radius * np.array([np.sin(a), 0.0, np.cos(a)]))
-            for a in angles]
+    return [shot_camera(TARGET + radius * np.array([np.sin(a), 0.0, np.cos(a)])) for a in angles]
 
 
 def normal(part):
@@ -119,8 +125,10 @@ def test_a_dolly_gives_parts_side_by_side_each_facing_its_stretch():
     centres = np.array([p.plate.matrix_world[:3, 3] for p in parts])
     assert np.ptp(centres[:, 1]) < 1e-3 and np.all(np.diff(centres[:, 0]) > 0), centres
     for p in parts:
-        assert 0.5 < p.plate.width < 0.9 and 0.4 < p.plate.height < 0.7, (p.plate.width,
-                                                                        p.plate.height)
+        assert 0.5 < p.plate.width < 0.9 and 0.4 < p.plate.height < 0.7, (
+            p.plate.width,
+            p.plate.height,
+        )
 
 
 def test_an_orbit_gives_parts_facing_the_objects_at_the_plates_distance():
@@ -156,20 +164,37 @@ def test_the_set_costs_grow_linearly_with_the_path_where_one_plate_grows_faster(
     set_cost, one_cost = [], []
     for length in (0.4, 1.0, 2.0):
         cams = dolly(length)
-        plans = [plate_plan(meshes, plate=p.plate).plan
-                 for p in parts_along(cams, box, distance=DISTANCE)]
-        set_cost.append((sum(p.samples for p in plans) / length,
-                         sum(p.record_seconds() for p in plans) / length))
-        zone = ViewingZone.fit([c.position for c in cams], pupil=cams[0].aperture_diameter,
-                               margin=0.01, pixel=cams[0].pixel_angle())
+        plans = [
+            plate_plan(meshes, plate=p.plate).plan
+            for p in parts_along(cams, box, distance=DISTANCE)
+        ]
+        set_cost.append(
+            (
+                sum(p.samples for p in plans) / length,
+                sum(p.record_seconds() for p in plans) / length,
+            )
+        )
+        zone = ViewingZone.fit(
+            [c.position for c in cams],
+            pupil=cams[0].aperture_diameter,
+            margin=0.01,
+            pixel=cams[0].pixel_angle(),
+        )
         # tiled=None, as the runner plans: one plate this wide is recorded tile by tile, never
         # refused for the host's memory
-        one = plate_plan(meshes, plate=Plate(matrix_world=np.eye(4), width=1.2, height=1.2,
-                                             zone=zone), tiled=None).plan
+        one = plate_plan(
+            meshes,
+            plate=Plate(matrix_world=np.eye(4), width=1.2, height=1.2, zone=zone),
+            tiled=None,
+        ).plan
         one_cost.append((one.samples / length, one.record_seconds() / length))
     set_cost, one_cost = np.array(set_cost), np.array(one_cost)
-    print("a metre of path, the set (Mpx, s):", np.round(set_cost / (1e6, 1)).tolist(),
-          "one plate:", np.round(one_cost / (1e6, 1)).tolist())
+    print(
+        "a metre of path, the set (Mpx, s):",
+        np.round(set_cost / (1e6, 1)).tolist(),
+        "one plate:",
+        np.round(one_cost / (1e6, 1)).tolist(),
+    )
     spread = np.ptp(set_cost, 0) / set_cost.mean(0)
     assert (spread < 0.2).all(), spread
     growth = one_cost[1:] / one_cost[:-1]
@@ -186,8 +211,11 @@ def test_a_path_through_the_objects_or_behind_a_part_is_refused_naming_the_frame
         parts_along(through, box, distance=DISTANCE)
     # two frames either side of the objects: the path between them goes through
     across = [shot_camera((0.0, 0.0, 1.75)), shot_camera((0.0, 0.0, -4.0))]
-    with pytest.raises(InputError, match=r"frame 0: the path from its camera to frame 1's "
-                                         r"passes through the objects' box"):
+    with pytest.raises(
+        InputError,
+        match=r"frame 0: the path from its camera to frame 1's "
+        r"passes through the objects' box",
+    ):
         parts_along(across, box, distance=DISTANCE)
     # frames walking towards the objects until they pass the plates (1.75 m from them)
     walk = [shot_camera((0.0, 0.0, z)) for z in (1.75, 0.8, 0.2, -0.1)]
@@ -208,13 +236,17 @@ def test_the_set_is_planned_in_plain_words_from_the_parts_alone():
     meshes = shot_meshes()
     parts = parts_along(dolly(1.0), shot_box(), distance=DISTANCE)
     planned = plan_parts(parts, np.concatenate([m.vertices for m in meshes]), looks=2)
-    assert [p.shape for p in planned.plans] == [plate_plan(meshes, plate=p.plate).plan.shape
-                                                for p in parts]
+    assert [p.shape for p in planned.plans] == [
+        plate_plan(meshes, plate=p.plate).plan.shape for p in parts
+    ]
     words = planned.describe()
     print(words)
     assert words.startswith("12 part(s) along 1 m of path") and "GiB on disk" in words
     assert planned.disk_bytes() / 2**30 == pytest.approx(13.5, abs=0.1)
-    wide = plan_parts(parts_along(dolly(1.0), shot_box(), distance=DISTANCE, margin=0.05),
-                      np.concatenate([m.vertices for m in meshes]), looks=2)
+    wide = plan_parts(
+        parts_along(dolly(1.0), shot_box(), distance=DISTANCE, margin=0.05),
+        np.concatenate([m.vertices for m in meshes]),
+        looks=2,
+    )
     assert wide.disk_bytes() / 2**30 == pytest.approx(137, rel=0.01)
     assert planned.memory_bytes() < planned.disk_bytes() / 5  # one part at a time

@@ -20,12 +20,17 @@ from holo_core.scene.mesh import Mesh
 from holo_core.scene.plate import Plate
 
 W, H = 320, 180
-CAMERA = Camera(matrix_world=look_at((0, 0, 1.0), (0, 0, -1.5), up=(0, 1, 0)),
-                resolution=(W, H), lens=50)
+CAMERA = Camera(
+    matrix_world=look_at((0, 0, 1.0), (0, 0, -1.5), up=(0, 1, 0)), resolution=(W, H), lens=50
+)
 PLATE = Plate(matrix_world=np.eye(4), width=0.2, height=0.2)
-CARD = Mesh(vertices=np.array([[-0.05, -0.05, -1.5], [0.05, -0.05, -1.5], [0.05, 0.05, -1.5],
-                               [-0.05, 0.05, -1.5]]),
-            triangles=np.array([[0, 1, 2], [0, 2, 3]]), colours=np.ones((4, 3)))
+CARD = Mesh(
+    vertices=np.array(
+        [[-0.05, -0.05, -1.5], [0.05, -0.05, -1.5], [0.05, 0.05, -1.5], [-0.05, 0.05, -1.5]]
+    ),
+    triangles=np.array([[0, 1, 2], [0, 2, 3]]),
+    colours=np.ones((4, 3)),
+)
 POINT = (0.004, -0.003, -1.5)  # [m] off the axis and off a pixel's centre
 
 
@@ -35,9 +40,13 @@ def point_plate():
     planned = plate_plan([CARD], plate=PLATE, camera=CAMERA, looks=1)
     g = grid_points(planned.plan.zone)
     hx, hy = planned.plan.zone.half_extents[:2]
-    em = Emitters(position=np.array([POINT]), colour=np.ones((1, 3)), cell=np.zeros((1, 2), int),
-                  visibility=np.ones((1, *g), np.float32),
-                  grid=((-hx, 2 * hx / (g[1] - 1)), (-hy, 2 * hy / (g[0] - 1))))
+    em = Emitters(
+        position=np.array([POINT]),
+        colour=np.ones((1, 3)),
+        cell=np.zeros((1, 2), int),
+        visibility=np.ones((1, *g), np.float32),
+        grid=((-hx, 2 * hx / (g[1] - 1)), (-hy, 2 * hy / (g[0] - 1))),
+    )
     (h,) = prepare_plate(planned, codes=(None,), emitters=em).record()
     return h
 
@@ -68,7 +77,7 @@ def test_a_pinhole_view_is_sharp_on_a_grid_of_about_its_fine_pixels(point_plate)
     assert samples <= 2 * (2 * W) * (2 * H), view.info["pupil_samples"]
     img = view.rgb.mean(-1)
     i, j = np.unravel_index(np.argmax(img), img.shape)
-    (col, row), = CAMERA.project([POINT])[0]
+    ((col, row),) = CAMERA.project([POINT])[0]
     assert abs(j + 0.5 - col) <= 1 and abs(i + 0.5 - row) <= 1, ((j, i), (col, row))
 
     def fwhm(profile, k):
@@ -94,16 +103,22 @@ def test_smooth_phases_send_every_emitter_in_phase(phases):
     hx, hy = planned.plan.zone.half_extents[:2]
     pos = np.array([POINT, (0.01, 0.02, -1.5), (-0.03, 0.0, -1.5)])
     colour = np.array([[1.0, 0.25, 0.0], [0.5, 0.5, 0.5], [0.0, 1.0, 0.04]])
-    em = Emitters(position=pos, colour=colour, cell=np.zeros((3, 2), int),
-                  visibility=np.ones((3, *g), np.float32),
-                  grid=((-hx, 2 * hx / (g[1] - 1)), (-hy, 2 * hy / (g[0] - 1))))
+    em = Emitters(
+        position=pos,
+        colour=colour,
+        cell=np.zeros((3, 2), int),
+        visibility=np.ones((3, *g), np.float32),
+        grid=((-hx, 2 * hx / (g[1] - 1)), (-hy, 2 * hy / (g[0] - 1))),
+    )
     job = prepare_plate(planned, codes=(None,), emitters=em, phases=phases)
     reach = np.linalg.norm(pos - np.asarray(planned.plan.zone.centre), axis=1)
     (_, colours), (_, depth) = job.groups
     want = np.sqrt(colour) * reach[:, None]
     assert np.allclose(np.abs(colours.amplitude), want, rtol=1e-12)
-    arrive = [colours.amplitude * np.exp(2j * np.pi / lam * reach)[:, None]
-              for (lam, colours) in job.groups]
+    arrive = [
+        colours.amplitude * np.exp(2j * np.pi / lam * reach)[:, None]
+        for (lam, colours) in job.groups
+    ]
     angles = np.angle(np.concatenate([arrive[0][colour > 0], arrive[1][:, 0]]))
     if phases == "smooth":
         assert np.abs(angles).max() <= 1e-6, angles

@@ -34,8 +34,10 @@ def test_band_is_the_widest_turn_from_the_carrier_towards_the_zone(rng):
     lo, hi = np.array([-0.03, -0.02]), np.array([0.04, 0.03])
     band = zone_band(lo, hi, ZONE)
     c, e = np.asarray(ZONE.centre), np.asarray(ZONE.half_extents) * [1 + RIM, 1 + RIM, 1]
-    x = np.stack([rng.uniform(lo[0], hi[0], 100_000), rng.uniform(lo[1], hi[1], 100_000),
-                  np.zeros(100_000)], 1)
+    x = np.stack(
+        [rng.uniform(lo[0], hi[0], 100_000), rng.uniform(lo[1], hi[1], 100_000), np.zeros(100_000)],
+        1,
+    )
     z = c + rng.uniform(-1, 1, (100_000, 3)) * e
     unit = lambda v: v / np.linalg.norm(v, axis=1, keepdims=True)  # noqa: E731
     d = np.abs(unit(z - x) - unit(c - x))
@@ -48,8 +50,13 @@ def test_samples_follow_the_zone_not_the_widest_angle():
     """The demo's scale (objects 1 x 0.8 x 0.6 m, a 1 m plate halfway, 1280x720 at 40 mm f/2.8,
     a 10 cm dolly): the full-band plate needed 65536² samples (sin θ = 0.204 at 15.3 µm); the
     carrier plate asks the zone's band, a few tens of megapixels, with its views sharp."""
-    cam = Camera(matrix_world=look_at((0, 0, 1.75), (0, 0, -1.75), up=(0, 1, 0)), lens=40,
-                 resolution=(1280, 720), fstop=2.8, focus_distance=3.5)
+    cam = Camera(
+        matrix_world=look_at((0, 0, 1.75), (0, 0, -1.75), up=(0, 1, 0)),
+        lens=40,
+        resolution=(1280, 720),
+        fstop=2.8,
+        focus_distance=3.5,
+    )
     d, px = cam.aperture_diameter, cam.pixel_angle()
     zone = ViewingZone.fit([(-0.05, 0, 1.75), (0.05, 0, 1.75)], d, 0.01, px)
     box = [[-0.5, -0.4, -2.05], [0.5, 0.4, -1.45]]
@@ -68,8 +75,9 @@ def test_views_blur_where_the_camera_outresolves_the_plate():
     (three times the half pixel of a sharp view), and the plan says so."""
     zone = ViewingZone.around((0, 0, 0.3), 0.05 / 2.8, 0.01, pixel=1.125e-3)
     p = plan((0.1, 0.1), BOX, zone=zone, pixel_angle=1.125e-3)
-    v = plan_view(p, position=(0, 0, 0.3), pixel_angle=1.125e-3 / 3, pupil=0.05 / 2.8,
-                  resolution=(1920, 1080))
+    v = plan_view(
+        p, position=(0, 0, 0.3), pixel_angle=1.125e-3 / 3, pupil=0.05 / 2.8, resolution=(1920, 1080)
+    )
     assert not v.sharp and v.spot_px == pytest.approx(1.5, rel=1e-6), v
     assert "blurred" in v.describe()
 
@@ -111,27 +119,73 @@ def test_a_wavelength_too_long_for_the_plate_is_named():
 def test_importing_the_planner_loads_no_driver():
     """Blender's process calls the planner directly: importing it loads neither OpenCL nor an
     FFT library."""
-    code = ("import sys; import holo_core.plate.plan; "
-            "print(sorted(m for m in sys.modules if m.split('.')[0] in "
-            "('pyopencl', 'pyfftw', 'pyvkfft', 'holo_core') and ('opencl' in m or 'fft' in m)))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True, cwd=ROOT).stdout.strip()
+    code = (
+        "import sys; import holo_core.plate.plan; "
+        "print(sorted(m for m in sys.modules if m.split('.')[0] in "
+        "('pyopencl', 'pyfftw', 'pyvkfft', 'holo_core') and ('opencl' in m or 'fft' in m)))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT
+    ).stdout.strip()
     assert out == "[]", out
 
 
 def test_planner_on_the_command_line(capsys):
     """`python -m holo_core plan` gives its verdict first, in plain words and units: whether
     the views are sharp, the time, the samples, the disk and the memory."""
-    assert main(["plan", "--box", "1.0", "0.8", "0.6", "--distance", "1.45", "--plate-size",
-                 "1", "1", "--camera", "0", "0", "1.75", "--lens", "40", "--resolution", "1280",
-                 "720", "--dolly", "0.1", "--looks", "2"]) == 0
+    assert (
+        main(
+            [
+                "plan",
+                "--box",
+                "1.0",
+                "0.8",
+                "0.6",
+                "--distance",
+                "1.45",
+                "--plate-size",
+                "1",
+                "1",
+                "--camera",
+                "0",
+                "0",
+                "1.75",
+                "--lens",
+                "40",
+                "--resolution",
+                "1280",
+                "720",
+                "--dolly",
+                "0.1",
+                "--looks",
+                "2",
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     print(out)
     assert out.startswith("verdict     views of 1280 x 720 px through 40 mm f/2.8 are sharp")
     for word in ("Mpx", "µm apart", "GiB for 2 look(s)", "tile by tile", "per view"):
         assert word in out, word
-    assert main(["plan", "--box", "0.06", "0.05", "0.09", "--distance", "0.27",
-                 "--camera", "0.01", "-1e-3", "-0.3"]) == 2
+    assert (
+        main(
+            [
+                "plan",
+                "--box",
+                "0.06",
+                "0.05",
+                "0.09",
+                "--distance",
+                "0.27",
+                "--camera",
+                "0.01",
+                "-1e-3",
+                "-0.3",
+            ]
+        )
+        == 2
+    )
     assert "--camera must be in front of the plate" in capsys.readouterr().err
 
 
@@ -139,12 +193,21 @@ def test_complex_plate_file_keeps_its_zone(tmp_path, rng):
     """A complex plate, its viewing zone and its carrier go through the file bit-exactly; a
     version 3 file (no carrier, a zone without its pixel angle) and a version 2 file
     (intensity, no zone) still read."""
-    wave = (rng.standard_normal((4, 12, 20)) + 1j * rng.standard_normal((4, 12, 20))
-            ).astype(np.complex64)
-    h = Hologram(object_wave=wave, encoding="complex", wavelengths=(9e-6,) * 3 + (8.99e-6,),
-                 pitch=2.4e-5, channels=("R", "G", "B", "Z"), zone=ZONE, band=0.17,
-                 bounds=BOX, point_density=3e6,
-                 carrier=Carrier(centre=ZONE.centre, origin=(-0.01, 0.02), row_pitch=7e-5))
+    wave = (rng.standard_normal((4, 12, 20)) + 1j * rng.standard_normal((4, 12, 20))).astype(
+        np.complex64
+    )
+    h = Hologram(
+        object_wave=wave,
+        encoding="complex",
+        wavelengths=(9e-6,) * 3 + (8.99e-6,),
+        pitch=2.4e-5,
+        channels=("R", "G", "B", "Z"),
+        zone=ZONE,
+        band=0.17,
+        bounds=BOX,
+        point_density=3e6,
+        carrier=Carrier(centre=ZONE.centre, origin=(-0.01, 0.02), row_pitch=7e-5),
+    )
     back = read_hologram(write_hologram(tmp_path / "plate.exr", h))
     assert back.carrier == h.carrier and back.row_pitch == 7e-5
     assert back.encoding == "complex" and back.intensity is None
@@ -164,8 +227,11 @@ def test_complex_plate_file_keeps_its_zone(tmp_path, rng):
         del old[key]
     old["format_version"] = 2
     old["object_wave"] = False
-    write_exr(tmp_path / "v2.exr", {f"c{c}.H": np.abs(wave[c]) ** 2 for c in range(4)},
-              holo=json.dumps(old))
+    write_exr(
+        tmp_path / "v2.exr",
+        {f"c{c}.H": np.abs(wave[c]) ** 2 for c in range(4)},
+        holo=json.dumps(old),
+    )
     v2 = read_hologram(tmp_path / "v2.exr")
     assert v2.encoding == "intensity" and v2.zone is None and v2.shape == (12, 20)
 
@@ -175,6 +241,7 @@ def test_a_tiled_recordings_tiles_fit_the_plate():
     covered with at most 10 % more in whole tiles (tiles of 2048 kept 67 % more), never by
     tiles larger than TILE, and a plate of whole 2048-sample tiles keeps them."""
     from holo_core.plate.plan import TILE, fitted_tile
+
     for shape, most in (((2525, 11965), 0.10), ((2269, 74000), 0.15), ((4096, 4096), 0.0)):
         t = fitted_tile(shape)
         covered = -(-shape[0] // t) * -(-shape[1] // t) * t * t
@@ -184,21 +251,32 @@ def test_a_tiled_recordings_tiles_fit_the_plate():
     assert p.tile == fitted_tile(p.shape)
 
 
-@pytest.mark.parametrize("args, message", [
-    # zero-size objects said "wavelength must be > 0; got -1.25e-09"
-    (["--bounds", 0, 0, -0.3, 0, 0, -0.3],
-     r"error: bounds: the objects' box \(0 x 0 x 0 m\) has no size"),
-    (["--box", 1e-7, 1e-7, 1e-7],
-     r"the objects' box \(1e-07 x 1e-07 x 1e-07 m\) is smaller than the wavelength its views "
-     r"need \(λ = 1e-05 m\)"),
-    # a camera behind the plate said "zone half_extents must be >= 0"
-    (["--box", 0.01, 0.01, 0.01, "--camera", 0, 0, -0.1],
-     r"--camera must be in front of the plate \(z > 0 .*got \(0, 0, -0.1\) m, behind the plate"),
-    # a plate too small to sample printed 4.83e12 GiB with exit 0
-    (["--box", 0.01, 0.01, 0.01, "--plate-size", 1e-9, 1e-9],
-     r"plate_size 1e-09 x 1e-09 m: where the objects' light crosses it, it is narrower than one "
-     r"sample"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        # zero-size objects said "wavelength must be > 0; got -1.25e-09"
+        (
+            ["--bounds", 0, 0, -0.3, 0, 0, -0.3],
+            r"error: bounds: the objects' box \(0 x 0 x 0 m\) has no size",
+        ),
+        (
+            ["--box", 1e-7, 1e-7, 1e-7],
+            r"the objects' box \(1e-07 x 1e-07 x 1e-07 m\) is smaller than the wavelength its views "
+            r"need \(λ = 1e-05 m\)",
+        ),
+        # a camera behind the plate said "zone half_extents must be >= 0"
+        (
+            ["--box", 0.01, 0.01, 0.01, "--camera", 0, 0, -0.1],
+            r"--camera must be in front of the plate \(z > 0 .*got \(0, 0, -0.1\) m, behind the plate",
+        ),
+        # a plate too small to sample printed 4.83e12 GiB with exit 0
+        (
+            ["--box", 0.01, 0.01, 0.01, "--plate-size", 1e-9, 1e-9],
+            r"plate_size 1e-09 x 1e-09 m: where the objects' light crosses it, it is narrower than one "
+            r"sample",
+        ),
+    ],
+)
 def test_the_planner_names_what_the_user_gave(capsys, args, message):
     status, out, err = cli(capsys, "plan", *args)
     assert status == 2 and out == "" and err.count("\n") == 1, (status, out, err)
@@ -211,6 +289,7 @@ def test_the_surfaces_a_zone_sees_are_a_spheres_silhouette_and_a_cards_one_face(
     a card counts its one face from either side."""
     from holo_core.plate.plan import seen_area
     from holo_core.scene.mesh import Mesh
+
     ball = ps.sphere(centre=np.array([0.0, 0.0, -0.3]), radius=0.02, n=128)
     exact = np.pi * 0.02**2 / (0.3**2 - 0.02**2)
     assert seen_area([ball], (0.0, 0.0, 0.0)) == pytest.approx(exact, rel=0.01)
@@ -219,8 +298,9 @@ def test_the_surfaces_a_zone_sees_are_a_spheres_silhouette_and_a_cards_one_face(
     corners = [[-0.01, -0.01, -0.2], [0.01, -0.01, -0.2], [0.01, 0.01, -0.2], [-0.01, 0.01, -0.2]]
     card = Mesh(vertices=np.array(corners), triangles=np.array([[0, 1, 2], [0, 2, 3]]))
     for tri in (card.triangles, card.triangles[:, ::-1]):
-        assert seen_area([Mesh(vertices=card.vertices, triangles=tri)], (0.0, 0.0, 0.0)) == \
-            pytest.approx(0.02**2 / 0.2**2)
+        assert seen_area(
+            [Mesh(vertices=card.vertices, triangles=tri)], (0.0, 0.0, 0.0)
+        ) == pytest.approx(0.02**2 / 0.2**2)
 
 
 @pytest.mark.parametrize("scene", ["the plate scene", "a sphere"])
@@ -233,8 +313,12 @@ def test_the_plans_emitters_are_those_the_zone_finds(scene):
     from holo_core.plate.emitters import zone_emitters
     from holo_core.plate.recording import plate_plan
     from holo_core.scene.plate import Plate
-    meshes = ps.meshes() if scene == "the plate scene" else \
-        [ps.sphere(centre=np.array([0.0, 0.0, -0.35]), radius=0.03)]
+
+    meshes = (
+        ps.meshes()
+        if scene == "the plate scene"
+        else [ps.sphere(centre=np.array([0.0, 0.0, -0.35]), radius=0.03)]
+    )
     cam = ps.camera("centre")
     plate = Plate(matrix_world=np.eye(4), width=0.1, height=0.1)
     plate = Plate(matrix_world=np.eye(4), width=0.1, height=0.1, zone=plate.zone_for(cam, 0.005))

@@ -28,8 +28,7 @@ def test_two_wavelength_depth_of_a_point():
     """Eq. 26-30: the depth from the phase difference equals the true planar depth."""
     p = np.array([[0.05e-3, -0.03e-3, -3e-3]])
     lams, names = depth_pair(1e-3)
-    cam = camera(2e-3, 48, matrix_world=look_at(EYE + [0.3e-3, 0, 0], (0, 0, -3e-3),
-                                                 up=(0, 1, 0)))
+    cam = camera(2e-3, 48, matrix_world=look_at(EYE + [0.3e-3, 0, 0], (0, 0, -3e-3), up=(0, 1, 0)))
     for focus in (None, 6.5e-3):
         kw = {} if focus is None else dict(fstop=50e-3 / 0.1e-3, focus_distance=focus)
         cam_k = dataclasses.replace(cam, **kw)
@@ -64,7 +63,7 @@ def test_temporal_composition_lowers_speckle_as_one_over_sqrt_n(rng):
     corners = cam.project([[-half, -half, -3e-3], [half, half, -3e-3]])[0]
     (c0, r1), (c1, r0) = corners + [[4, -4], [-4, 4]]
     inner = np.zeros((100, 100), bool)
-    inner[int(r0):int(r1), int(c0):int(c1)] = True
+    inner[int(r0) : int(r1), int(c0) : int(c1)] = True
     one = np.mean([speckle.contrast(render_view(h, cam).rgb[..., 0], inner) for h in holos[:3]])
     eight = speckle.contrast(render_view(holos, cam).rgb[..., 0], inner)
     assert abs(one / eight / math.sqrt(8) - 1) <= SPECKLE_SQRT_N, (one, eight)

@@ -53,8 +53,9 @@ def test_device_sum_equals_float64_numpy(rng, obliquity):
     edge = edge / np.linalg.norm(edge, axis=1)[:, None] * (0.95 * g.cone * np.abs(z[20:]))[:, None]
     pos = np.c_[np.r_[near_axis, edge], z]
     amp = rng.uniform(0.5, 1, 40) * np.exp(2j * np.pi * rng.random(40))
-    o = point_wave(pos, amp, wavelength=LAM, pitch=PITCH, shape=shape, obliquity=obliquity,
-                   method="direct")
+    o = point_wave(
+        pos, amp, wavelength=LAM, pitch=PITCH, shape=shape, obliquity=obliquity, method="direct"
+    )
     err = max_rel(o, numpy_point_wave(pos, amp, shape, obliquity))
     assert err < POINT_SUM, f"OpenCL point sum vs float64 NumPy: max relative error {err:.2e}"
 
@@ -81,8 +82,7 @@ def test_colours_in_one_pass_equal_separate_passes(rng, method):
     together = point_wave(pos, amp, wavelength=LAM, pitch=PITCH, shape=shape, method=method)
     assert together.shape == (3,) + shape
     for c in (0, 2):
-        alone = point_wave(pos, amp[:, c], wavelength=LAM, pitch=PITCH, shape=shape,
-                           method=method)
+        alone = point_wave(pos, amp[:, c], wavelength=LAM, pitch=PITCH, shape=shape, method=method)
         err = max_rel(together[c], alone)
         assert err < 1e-5, f"colour {c} in one pass vs alone ({method}): {err:.2e}"
     assert not together[1].any()
@@ -96,6 +96,7 @@ def test_points_behind_the_hologram_are_refused():
 def test_math_of_the_safe_distance():
     """2 samples across the cone: |z| = 2p/tan θ, θ the cone's edge (CONE_FILL of Nyquist)."""
     from holo_core.plate.point_sources import CONE_FILL, Grid, safe_distance
+
     p, lam = 8e-6, 633e-9
     s = CONE_FILL * lam / (2 * p)
     assert math.isclose(safe_distance(Grid((8, 8), p, lam)), 2 * p * math.sqrt(1 - s * s) / s)

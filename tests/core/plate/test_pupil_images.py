@@ -24,7 +24,7 @@ from holo_core.scene.plate import Plate
 
 def radial_profile(img, centre, step):
     """Mean of ``img`` in rings of width ``step`` px around ``centre`` (col, row)."""
-    yy, xx = np.mgrid[0:img.shape[0], 0:img.shape[1]] + 0.5
+    yy, xx = np.mgrid[0 : img.shape[0], 0 : img.shape[1]] + 0.5
     ring = (np.hypot(xx - centre[0], yy - centre[1]) / step).astype(int)
     sums = np.bincount(ring.ravel(), img.ravel())
     counts = np.bincount(ring.ravel())
@@ -36,24 +36,28 @@ def test_projection_follows_blenders_view_plane():
     (0.36, 0) lies on the right edge of a 1920-wide image; vertical fit, shift and pixel
     aspect move it as BKE_camera_params_compute_viewplane does."""
     cam = Camera(resolution=(1920, 1080))
-    (col, row), = cam.project([[0.36, 0.0, -1.0]])[0]
+    ((col, row),) = cam.project([[0.36, 0.0, -1.0]])[0]
     assert abs(col - 1920) < 1e-9 and abs(row - 540) < 1e-9
-    (col, row), = cam.project([[0.0, 0.09, -1.0]])[0]  # 0.09·50/36·1920 = 240 px above centre
+    ((col, row),) = cam.project([[0.0, 0.09, -1.0]])[0]  # 0.09·50/36·1920 = 240 px above centre
     assert abs(row - 300) < 1e-9
     tall = Camera(resolution=(1080, 1920), sensor_fit="VERTICAL", sensor_height=24.0)
-    (col, row), = tall.project([[0.0, 0.24, -1.0]])[0]  # 0.24·50/24·1920 = 960 px: top edge
+    ((col, row),) = tall.project([[0.0, 0.24, -1.0]])[0]  # 0.24·50/24·1920 = 960 px: top edge
     assert abs(row) < 1e-9
     shifted = Camera(resolution=(1920, 1080), shift_x=0.1)  # 0.1 of the width: 192 px
     assert abs(shifted.project([[0, 0, -1.0]])[0][0, 0] - (960 - 192)) < 1e-9
     wide = Camera(resolution=(1000, 1000), pixel_aspect=(2.0, 1.0))  # pixels twice as wide
-    (col, row), = wide.project([[0.0, 0.18, -1.0]])[0]  # 0.18·50/36·1000 = 250 → 500 rows
+    ((col, row),) = wide.project([[0.0, 0.18, -1.0]])[0]  # 0.18·50/36·1000 = 250 → 500 rows
     assert abs(row - (500 - 500)) < 1e-9
 
 
 def test_direction_cosines_invert_the_projection(rng):
     """Eq. 22: each pixel's (α, β, γ) points back along the ray to the point it shows."""
-    cam = Camera(matrix_world=look_at((1, 2, 3), (0, 0, 0)), resolution=(64, 48), shift_y=0.05,
-                 sensor_fit="VERTICAL")
+    cam = Camera(
+        matrix_world=look_at((1, 2, 3), (0, 0, 0)),
+        resolution=(64, 48),
+        shift_y=0.05,
+        sensor_fit="VERTICAL",
+    )
     alpha, beta, gamma = cam.direction_cosines()
     ray = -np.stack([alpha, beta, gamma], -1) @ cam.rotation.T
     world = cam.position + 2.5 * ray.reshape(-1, 3)
@@ -66,13 +70,18 @@ def test_point_through_pinhole_lands_on_its_pixel():
     """A point recorded, reconstructed and seen through an off-axis, rotated pinhole camera
     peaks within 0.5 px of the camera's projection (Eq. 22)."""
     p = np.array([[0.12e-3, -0.08e-3, -3e-3]])
-    cam = Camera(matrix_world=look_at((0.4e-3, 0.2e-3, 4e-3), (0, 0, -3e-3), up=(0, 1, 0)),
-                 lens=50, sensor_width=50 * 48 * 4e-3, resolution=(48, 40), shift_x=0.05)
+    cam = Camera(
+        matrix_world=look_at((0.4e-3, 0.2e-3, 4e-3), (0, 0, -3e-3), up=(0, 1, 0)),
+        lens=50,
+        sensor_width=50 * 48 * 4e-3,
+        resolution=(48, 40),
+        shift_x=0.05,
+    )
     img = render_view(point_hologram(p), cam).rgb[..., 0]
     expected = cam.project(p)[0][0]
     i, j = np.unravel_index(np.argmax(img), img.shape)
-    win = img[i - 2:i + 3, j - 2:j + 3]
-    rows, cols = np.mgrid[i - 2:i + 3, j - 2:j + 3] + 0.5
+    win = img[i - 2 : i + 3, j - 2 : j + 3]
+    rows, cols = np.mgrid[i - 2 : i + 3, j - 2 : j + 3] + 0.5
     got = np.array([(win * cols).sum(), (win * rows).sum()]) / win.sum()
     assert np.abs(got - expected).max() <= PIXEL_POSITION, (got, expected)
 
@@ -96,8 +105,13 @@ def test_focused_point_is_an_airy_disc(two_depths):
     prof, counts = radial_profile(img, cam.project(p[:1])[0][0], 0.5)
     dark = np.argmax(prof < 0.1 * prof.max())
     first = dark + np.argmax(np.diff(prof[dark:80]) > 0)  # the first rise: past the first zero
-    k = first - 1 + 0.5 * (prof[first - 1] - prof[first + 1]) / (
-        prof[first - 1] - 2 * prof[first] + prof[first + 1])
+    k = (
+        first
+        - 1
+        + 0.5
+        * (prof[first - 1] - prof[first + 1])
+        / (prof[first - 1] - 2 * prof[first] + prof[first + 1])
+    )
     radius = (k + 0.5) * 0.5 * pixel
     airy = 1.22 * LAM / d
     assert abs(radius / airy - 1) <= AIRY_RADIUS, (radius, airy)
@@ -124,8 +138,12 @@ def checkerboard(squares=24):
     tex = (np.add.outer(np.arange(squares), np.arange(squares)) % 2).astype(float)
     tex = np.repeat(0.1 + 0.8 * tex[..., None], 3, -1)
     v = np.array([[-0.1, -0.1, -0.02], [0.1, -0.1, -0.02], [0.1, 0.1, -0.3], [-0.1, 0.1, -0.3]])
-    return Mesh(vertices=v, triangles=np.array([[0, 1, 2], [0, 2, 3]]),
-                uvs=np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]]), texture=tex)
+    return Mesh(
+        vertices=v,
+        triangles=np.array([[0, 1, 2], [0, 2, 3]]),
+        uvs=np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]]),
+        texture=tex,
+    )
 
 
 def raster(mesh, cam):
@@ -142,7 +160,9 @@ def raster(mesh, cam):
     inside = (u >= 0) & (u <= 1) & (v >= 0) & (v <= 1)
     tex = mesh.texture[..., 0]
     n = tex.shape[0]
-    texel = tex[np.clip(((1 - v) * n).astype(int), 0, n - 1), np.clip((u * n).astype(int), 0, n - 1)]
+    texel = tex[
+        np.clip(((1 - v) * n).astype(int), 0, n - 1), np.clip((u * n).astype(int), 0, n - 1)
+    ]
     return np.where(inside, texel, 0.0)
 
 
@@ -178,31 +198,36 @@ def test_lower_resolution_is_served_by_the_wavelength():
 def small_plate():
     """A point 3 cm behind a 0.5 mm plate of 64² at 8 µm, seen from 2 cm: the plate's light
     reaches 2.2 mm across on the pupil's plane."""
-    return record_points([[0, 0, -0.03]], [[1.0]], shape=(64, 64), pitch=8e-6,
-                         wavelengths=(633e-9,))
+    return record_points(
+        [[0, 0, -0.03]], [[1.0]], shape=(64, 64), pitch=8e-6, wavelengths=(633e-9,)
+    )
 
 
 def _pupil_view(h, diameter, monkeypatch, *, crop=True):
     """(rgb at exposure 1, the pupil grid's samples per side) of a pinhole-less view through
     a pupil of ``diameter`` [m]."""
     from holo_core.plate import pupil_images
+
     grids = []
     real = pupil_images.pupil_grid
-    monkeypatch.setattr(pupil_images, "pupil_grid",
-                        lambda *a: grids.append(real(*a)) or grids[-1])
+    monkeypatch.setattr(pupil_images, "pupil_grid", lambda *a: grids.append(real(*a)) or grids[-1])
     if not crop:
         monkeypatch.setattr(pupil_images, "lit_diameter", lambda h, p, r, d: d)
-    cam = Camera(matrix_world=look_at((0, 0, 0.02), (0, 0, -0.03)), lens=50, sensor_width=2,
-                 resolution=(16, 16))
+    cam = Camera(
+        matrix_world=look_at((0, 0, 0.02), (0, 0, -0.03)),
+        lens=50,
+        sensor_width=2,
+        resolution=(16, 16),
+    )
     with pytest.warns(UserWarning, match="no depth channel"):
-        rgb = render_view(h, cam, aperture=Pupil(diameter=diameter), supersample=1,
-                          exposure=1.0).rgb
+        rgb = render_view(
+            h, cam, aperture=Pupil(diameter=diameter), supersample=1, exposure=1.0
+        ).rgb
     monkeypatch.undo()
     return rgb, grids[-1][0]
 
 
-def test_a_pupil_larger_than_the_plates_light_is_read_where_light_arrives(small_plate,
-                                                                         monkeypatch):
+def test_a_pupil_larger_than_the_plates_light_is_read_where_light_arrives(small_plate, monkeypatch):
     """A 4 mm pupil before the plate's 2.2 mm of light: its grid cut to the light (675
     samples a side instead of 1215) gives the same view (measured 1.8e-3 of the peak: the
     spectrum read on another bin spacing)."""

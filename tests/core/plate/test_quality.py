@@ -26,11 +26,19 @@ def closeup_plan(around_camera=False):
     Fit Zone to Camera around the centre camera with a 5 cm margin, room to look around
     (a plate of 27.5 Mpx, 1.64 GiB for two looks, where the shot's is 1 Mpx)."""
     cams = [camera(eye) for eye in ("left", "centre", "right")]
-    zone = PLATE.zone_for(cams[1], 0.05) if around_camera else ViewingZone.fit(
-        [c.position for c in cams], pupil=cams[0].aperture_diameter, margin=SHOT_ZONE_MARGIN,
-        pixel=cams[0].pixel_angle())
-    plate = Plate(matrix_world=PLATE.matrix_world, width=PLATE.width, height=PLATE.height,
-                  zone=zone)
+    zone = (
+        PLATE.zone_for(cams[1], 0.05)
+        if around_camera
+        else ViewingZone.fit(
+            [c.position for c in cams],
+            pupil=cams[0].aperture_diameter,
+            margin=SHOT_ZONE_MARGIN,
+            pixel=cams[0].pixel_angle(),
+        )
+    )
+    plate = Plate(
+        matrix_world=PLATE.matrix_world, width=PLATE.width, height=PLATE.height, zone=zone
+    )
     return plate_plan(meshes(), plate=plate).plan
 
 
@@ -39,8 +47,9 @@ def shot_plan(scale=0.5):
     across 3.5 m away, 40 mm f/2.8, its zone fitted to a 10 cm dolly with a 1 cm margin."""
     pixel = 36 / 40 / round(1280 * scale)
     pupil = 0.040 / 2.8
-    zone = ViewingZone.fit([(-0.05, 0, 1.75), (0.05, 0, 1.75)], pupil=pupil, margin=0.01,
-                           pixel=pixel)
+    zone = ViewingZone.fit(
+        [(-0.05, 0, 1.75), (0.05, 0, 1.75)], pupil=pupil, margin=0.01, pixel=pixel
+    )
     box = [[-0.59, -0.51, -2.25], [0.52, 0.40, -1.12]]  # the cube and the sphere
     return plan((1.0, 1.0), box, zone=zone, pixel_angle=pixel)
 
@@ -71,8 +80,7 @@ def test_the_table_is_the_simulation():
     """Two entries of SPECKLE_DB made again (24 px, two draws as the table): the same draws,
     so the same figures within 0.05 dB."""
     for key in ((1, 2, 2), (3, 4, 4)):
-        again = 10 * math.log10(uniform_surface_variance(float(key[0]), key[1], key[2],
-                                                         pixels=24))
+        again = 10 * math.log10(uniform_surface_variance(float(key[0]), key[1], key[2], pixels=24))
         assert again == pytest.approx(SPECKLE_DB[key], abs=0.05), (key, again)
 
 
@@ -98,14 +106,20 @@ def test_the_closeup_asks_more_than_the_shot():
     assert shot.psnr >= 30, shot
     assert (close.looks, close.supersample) == (9, 4), close
     assert close.blur > 2 > shot.blur, (close.blur, shot.blur)
-    measured = {(2, 2): (26.78, 27.47), (4, 2): (28.25, 29.00), (2, 4): (28.03, 28.74),
-                (4, 4): (29.28, 29.95), (9, 2): (29.40, 29.87),  # closeup.json, three cameras
-                (9, 4): (30.20, 30.61)}
+    measured = {
+        (2, 2): (26.78, 27.47),
+        (4, 2): (28.25, 29.00),
+        (2, 4): (28.03, 28.74),
+        (4, 4): (29.28, 29.95),
+        (9, 2): (29.40, 29.87),  # closeup.json, three cameras
+        (9, 4): (30.20, 30.61),
+    }
     for (n, s), (lo, hi) in measured.items():
         predicted = choose(closeup_plan(), resolution=(640, 360), looks=n, supersample=s).psnr
         gap = max(lo - predicted, predicted - hi, 0.0)
-        print(f"close-up {n} looks, supersample {s}: predicted {predicted:.2f}, measured "
-              f"{lo}-{hi} dB")
+        print(
+            f"close-up {n} looks, supersample {s}: predicted {predicted:.2f}, measured {lo}-{hi} dB"
+        )
         assert gap <= 1.0, (n, s, predicted, lo, hi)
 
 
@@ -144,8 +158,9 @@ def test_choose_refuses_bad_settings():
 def test_blurs_follow_the_thin_lens():
     """D·|1/z − 1/f| over the pixel angle: a point 1 m away seen by a 10 mm pupil focused at
     0.5 m blurs by 0.01 · 1 / 1e-3 = 10 px."""
-    blurs = quality.view_blurs([[0, 0, -1.0], [0, 0, -1.0]], (0, 0, 0), pupil=0.01,
-                               pixel_angle=1e-3, focus=0.5, count=3)
+    blurs = quality.view_blurs(
+        [[0, 0, -1.0], [0, 0, -1.0]], (0, 0, 0), pupil=0.01, pixel_angle=1e-3, focus=0.5, count=3
+    )
     assert np.allclose(blurs, 10.0), blurs
 
 
@@ -167,8 +182,10 @@ def test_auto_fits_the_disk_budget():
     replace(p, looks=4).check_budget(memory=budget[0], disk=budget[1], tiled=True, held=4)
     with pytest.raises(InputError, match="disk budget"):
         replace(p, looks=9).check_budget(memory=budget[0], disk=budget[1], held=9)
-    assert held.capped() == (f"Auto chose 4 looks, the most the Disk Budget of 4 GiB holds; "
-                             f"9 would reach {free.psnr:.1f} dB"), held.capped()
+    assert held.capped() == (
+        f"Auto chose 4 looks, the most the Disk Budget of 4 GiB holds; "
+        f"9 would reach {free.psnr:.1f} dB"
+    ), held.capped()
     assert held.unbudgeted == free.planned
     # a budget that holds 9 looks changes nothing
     assert choose(p, resolution=(640, 360), budget=(8 * GIB, 100 * GIB)).looks == 9
@@ -198,8 +215,7 @@ def test_tiny_views_stay_at_the_coded_pair():
     tiny = shot_plan(32 / 1280)
 
     def best(p, n):
-        return max(choose(p, resolution=(32, 24), looks=n, supersample=s).psnr
-                   for s in (2, 3, 4))
+        return max(choose(p, resolution=(32, 24), looks=n, supersample=s).psnr for s in (2, 3, 4))
 
     gain = best(tiny, 4) - best(tiny, 2)
     c = choose(tiny, resolution=(32, 24))
@@ -218,6 +234,8 @@ def test_autos_looks_do_not_follow_the_render_resolution(plan_of, target):
     final frame at twice it, chooses the same looks (only the supersampling may differ), so a
     change of the render's size never records the plate again."""
     p = plan_of()
-    chosen = {choose(p, resolution=r, target=target).looks for r in ((320, 180), (640, 360), (1280, 720),
-                                                      (3840, 2160))}
+    chosen = {
+        choose(p, resolution=r, target=target).looks
+        for r in ((320, 180), (640, 360), (1280, 720), (3840, 2160))
+    }
     assert len(chosen) == 1, chosen

@@ -19,15 +19,16 @@ def test_dc_suppression_removes_the_reference_term(rng):
     """Fig. 7: the reference term R(|O|² + |R|²) is the reconstruction's component along R."""
     shape, z = (256, 256), -0.05
     ref = Reference(angle=0.03, beam_ratio=4.0)
-    holo = record_points(cloud(rng, z), np.ones((6, 1)), shape=shape, pitch=PITCH,
-                         wavelengths=(LAM,), reference=ref)
+    holo = record_points(
+        cloud(rng, z), np.ones((6, 1)), shape=shape, pitch=PITCH, wavelengths=(LAM,), reference=ref
+    )
     r = reference_wave(shape, wavelength=LAM, pitch=PITCH, reference=ref)
 
     def reference_energy(u):  # energy in the 3x3 spectral bins around R's carrier
         s = np.fft.fft2(u * np.conj(r))
         s = np.fft.fftshift(s)
         c = np.array(shape) // 2
-        return float((np.abs(s[c[0] - 1:c[0] + 2, c[1] - 1:c[1] + 2]) ** 2).sum())
+        return float((np.abs(s[c[0] - 1 : c[0] + 2, c[1] - 1 : c[1] + 2]) ** 2).sum())
 
     plain = reference_energy(reconstruct(holo, dc_suppression=False))
     suppressed = reference_energy(reconstruct(holo, dc_suppression=True))
@@ -45,8 +46,14 @@ def test_off_axis_reference_separates_the_twin_image(rng):
     band = np.hypot(fx, fy) <= f_obj
 
     def twin_in_band(angle):
-        holo = record_points(pts, np.ones((4, 1)), shape=shape, pitch=PITCH, wavelengths=(LAM,),
-                             reference=Reference(angle=angle, beam_ratio=25.0))
+        holo = record_points(
+            pts,
+            np.ones((4, 1)),
+            shape=shape,
+            pitch=PITCH,
+            wavelengths=(LAM,),
+            reference=Reference(angle=angle, beam_ratio=25.0),
+        )
         err = np.fft.fft2(reconstruct(holo) - holo.object_wave[0]) * band
         return float(np.linalg.norm(err) / np.linalg.norm(np.fft.fft2(holo.object_wave[0])))
 
@@ -80,8 +87,9 @@ def test_the_reference_wave_is_its_plane_wave():
     assert r.dtype == np.complex64 and r.shape == shape
     assert np.abs(r - 2.0 * np.exp(1j * phase)).max() <= 2.0 * 1e-6
     far = reference_wave((1, 21), wavelength=lam, pitch=0.01, reference=ref)  # x = ±0.1 m
-    want = np.exp(1j * np.remainder(2 * np.pi / lam * math.sin(0.3) * math.cos(1.1) * 0.1,
-                                    2 * np.pi))
+    want = np.exp(
+        1j * np.remainder(2 * np.pi / lam * math.sin(0.3) * math.cos(1.1) * 0.1, 2 * np.pi)
+    )
     assert abs(far[0, 20] - want) <= 1e-6 and abs(far[0, 0] - np.conj(want)) <= 1e-6
     o = np.exp(1j * np.linspace(0, 5, shape[1]))[None, :] * np.ones(shape)
     assert np.allclose(interfere(o, r), np.abs(o + r.astype(np.complex128)) ** 2, rtol=1e-5)

@@ -18,7 +18,7 @@ from holo_core.plate.looks import record_plate
 from holo_core.plate.view import render_view
 from holo_core.scene.hologram import Hologram
 
-SCALE = 0.25   # the plate scene's camera at 160x90: a plate of about 640x640 samples
+SCALE = 0.25  # the plate scene's camera at 160x90: a plate of about 640x640 samples
 
 
 @pytest.fixture(scope="module")
@@ -54,9 +54,17 @@ def full_band(h: Hologram, fine: float) -> Hologram:
         cx, cy, cz = h.carrier.centre
         r = np.sqrt((xs[None] - cx) ** 2 + (ys[:, None] - cy) ** 2 + cz * cz)
         waves[c][np.ix_(inside_y, inside_x)] = b * np.exp(-2j * np.pi / lam * r)
-    return Hologram(object_wave=waves, encoding="complex", wavelengths=h.wavelengths,
-                    pitch=fine, channels=h.channels, point_density=h.point_density,
-                    zone=h.zone, bounds=h.bounds, plate=h.plate)
+    return Hologram(
+        object_wave=waves,
+        encoding="complex",
+        wavelengths=h.wavelengths,
+        pitch=fine,
+        channels=h.channels,
+        point_density=h.point_density,
+        zone=h.zone,
+        bounds=h.bounds,
+        plate=h.plate,
+    )
 
 
 def test_views_of_the_carrier_and_the_full_band_plate_agree(plate):
@@ -70,15 +78,19 @@ def test_views_of_the_carrier_and_the_full_band_plate_agree(plate):
     other = full_band(plate, fine)
     cam = camera("left", SCALE)
     a, b = render_view(plate, cam, supersample=2), render_view(other, cam, supersample=2)
-    shapes = [v.coverage > 0.5 * np.median(v.coverage[v.coverage > 0.25 * v.coverage.max()])
-              for v in (a, b)]
+    shapes = [
+        v.coverage > 0.5 * np.median(v.coverage[v.coverage > 0.25 * v.coverage.max()])
+        for v in (a, b)
+    ]
     inside = shapes[0] & shapes[1]
     err = a.rgb[inside] - b.rgb[inside]
     p = 20 * np.log10(b.rgb[inside].max() / np.sqrt(np.mean(err**2)))
     j = (shapes[0] & shapes[1]).sum() / (shapes[0] | shapes[1]).sum()
     dz = float(np.median(np.abs(a.depth[inside] - b.depth[inside])))
-    print(f"carrier against full band: PSNR {p:.1f} dB, IoU {j:.4f}, depth {dz * 1e3:.2f} "
-          f"mm, coverage ratio {np.median(a.coverage[inside] / b.coverage[inside]):.3f}")
+    print(
+        f"carrier against full band: PSNR {p:.1f} dB, IoU {j:.4f}, depth {dz * 1e3:.2f} "
+        f"mm, coverage ratio {np.median(a.coverage[inside] / b.coverage[inside]):.3f}"
+    )
     assert p >= 30 and j >= 0.97 and dz <= 1e-3, (p, j, dz)
 
 
@@ -88,6 +100,7 @@ def test_a_view_reads_the_samples_in_place_as_it_would_copy_them(plate):
     bit for bit."""
     from holo_core.opencl import get_runtime
     from holo_core.opencl.arrays import host_buffer
+
     rt = get_runtime()
     assert plate.object_wave.ctypes.data % 4096 == 0
     raw = np.empty(plate.object_wave.nbytes + 8, np.uint8)
@@ -108,6 +121,7 @@ def test_views_over_a_move_keep_one_stack_of_spectra(plate):
     as needed, not one kept per shape met (205 MiB each on the shot of bench/shot.py)."""
     from holo_core.opencl import get_runtime
     from holo_core.optics.imaging import SPECTRA
+
     rt = get_runtime()
     for eye in ("left", "centre", "right"):
         render_view(plate, camera(eye, SCALE), supersample=2)
@@ -129,7 +143,8 @@ def test_a_views_pixels_fold_on_the_device_as_the_fine_images_do_on_the_host(pla
     near, far = np.percentile(a.depth[a.alpha > 0], [1, 99])
     seen = b.depth[b.alpha > 0]
     assert np.isfinite(seen).all() and np.median(np.abs(seen - a.depth[a.alpha > 0])) < 0.1 * (
-        far - near), (near, far)
+        far - near
+    ), (near, far)
 
 
 def test_views_in_finer_depth_layers_converge(plate, monkeypatch):
@@ -142,6 +157,7 @@ def test_views_in_finer_depth_layers_converge(plate, monkeypatch):
     8.2e-4 here); their alpha likewise (1.5e-2 and 2e-3 at most: a pixel whose alpha lies
     that near 0.5 may cross it)."""
     from holo_core.plate import to_pupil
+
     cam = camera("left", SCALE)
     made, counts, views = to_pupil._Gather._layers, [], []
 

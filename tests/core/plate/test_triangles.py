@@ -19,8 +19,9 @@ def rs_point_sources(src, amp, normal, area, shape, pitch, lam):
     ``amp`` on a surface of ``normal``, each standing for ``area`` [m²]: float64, on z = 0."""
     y, x = np.meshgrid(grid.coords(shape[0], pitch), grid.coords(shape[1], pitch), indexing="ij")
     x, y, k, out = x.ravel(), y.ravel(), 2 * np.pi / lam, np.zeros(x.size, complex)
-    for s, a in zip(np.array_split(src, max(1, len(src) // 512)),
-                    np.array_split(amp, max(1, len(src) // 512))):
+    for s, a in zip(
+        np.array_split(src, max(1, len(src) // 512)), np.array_split(amp, max(1, len(src) // 512))
+    ):
         dx, dy, dz = x - s[:, :1], y - s[:, 1:2], -s[:, 2:]
         r = np.sqrt(dx * dx + dy * dy + dz * dz)
         cos = (dx * normal[0] + dy * normal[1] + dz * normal[2]) / r
@@ -37,8 +38,11 @@ def test_triangle_equals_dense_point_sum(tilt_deg, diffuse):
     t = np.radians(tilt_deg)
     flat = np.array([[-60e-6, -50e-6, 0], [60e-6, -50e-6, 0], [5e-6, 60e-6, 0]])
     tilt_x = np.array([[1, 0, 0], [0, np.cos(t), -np.sin(t)], [0, np.sin(t), np.cos(t)]])
-    prim = Primitive(corners=flat @ tilt_x.T + [0, 0, -0.01],
-                     uvs=np.array([[0, 0], [1, 0], [0.5, 1]]), texture=np.ones((2, 2, 3)))
+    prim = Primitive(
+        corners=flat @ tilt_x.T + [0, 0, -0.01],
+        uvs=np.array([[0, 0], [1, 0], [0.5, 1]]),
+        texture=np.ones((2, 2, 3)),
+    )
     u = primitive_wave(prim, wavelength=lam, pitch=pitch, shape=shape, diffuse=diffuse)
     m, centre = prim.frame()
     q = surface_pitch(prim, wavelength=lam, pitch=pitch)
@@ -57,10 +61,12 @@ def test_triangles_radiate_as_the_points_of_the_same_surface(tilt_deg):
     plate = Plate(matrix_world=np.eye(4), width=0.1, height=0.1)
     mesh = square(0.04, -0.3, tilt_deg)
     points = record_hologram(mesh, plate=plate, resolution=256, depth=False, method="auto")
-    triangles = record_hologram((), triangles=[mesh], plate=plate, resolution=256, depth=False,
-                                method="auto")
-    ratio = np.mean(np.abs(triangles.object_wave[0]) ** 2) / \
-        np.mean(np.abs(points.object_wave[0]) ** 2)
+    triangles = record_hologram(
+        (), triangles=[mesh], plate=plate, resolution=256, depth=False, method="auto"
+    )
+    ratio = np.mean(np.abs(triangles.object_wave[0]) ** 2) / np.mean(
+        np.abs(points.object_wave[0]) ** 2
+    )
     assert 0.8 <= ratio <= 1.25, f"triangles' mean power over the points': {ratio:.3f}"
 
 
@@ -69,7 +75,14 @@ def test_triangle_recording_reports_progress_per_primitive():
     fraction per primitive and wavelength, rising, where they once reported none."""
     plate = Plate(matrix_world=np.eye(4), width=0.1, height=0.1)
     seen = []
-    record_hologram((), triangles=[square(0.04, -0.3)], plate=plate, resolution=128,
-                    depth=False, method="auto", progress=seen.append)
+    record_hologram(
+        (),
+        triangles=[square(0.04, -0.3)],
+        plate=plate,
+        resolution=128,
+        depth=False,
+        method="auto",
+        progress=seen.append,
+    )
     assert len(seen) >= 2 and seen == sorted(seen) and 0.1 <= seen[-1] <= 1.0, seen
     assert sum(0.1 <= f < 1.0 for f in seen) >= 2, "no report while the triangles ran"

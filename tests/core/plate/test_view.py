@@ -65,8 +65,7 @@ def views(recorded):
             warnings.simplefilter("error", OutsideZoneWarning)
             warnings.simplefilter("error", SoftViewWarning)  # the cameras it was made for
             plate = render_view(recorded, cam, supersample=SUPERSAMPLE)
-        out[eye] = plate, render_camera(meshes(), cam, via="incoherent",
-                                        supersample=SUPERSAMPLE)
+        out[eye] = plate, render_camera(meshes(), cam, via="incoherent", supersample=SUPERSAMPLE)
     return out
 
 
@@ -74,8 +73,11 @@ def test_a_view_softer_than_the_plate_was_made_for_is_said(recorded):
     """A camera stopped down to f/5.6 where the plate was recorded for f/2.8: its view resolves
     a pixel, not half of one, and says so with the plate's own pixels and pupil (the cameras
     it was made for say nothing: the views above turn the warning into an error)."""
-    with pytest.warns(SoftViewWarning, match=r"resolves 1(\.0)? px where a sharp view resolves "
-                      r"0\.5.* recorded for pixels of .* through a pupil of 0\.0179 m"):
+    with pytest.warns(
+        SoftViewWarning,
+        match=r"resolves 1(\.0)? px where a sharp view resolves "
+        r"0\.5.* recorded for pixels of .* through a pupil of 0\.0179 m",
+    ):
         render_view(recorded, camera("centre", fstop=5.6, crop=True), supersample=SUPERSAMPLE)
 
 
@@ -103,13 +105,17 @@ def test_occlusion_boundary_shows_parallax(views):
     (within 25 %; measured 125 against 139 pixels)."""
     areas, ious = {}, {}
     for eye, (plate, cam) in views.items():
-        for name, mask in (("cube", lambda v: (v.alpha >= 0.5) & (v.depth < NEAR)),
-                           ("sphere", lambda v: (v.alpha >= 0.5) & (v.depth >= NEAR))):
+        for name, mask in (
+            ("cube", lambda v: (v.alpha >= 0.5) & (v.depth < NEAR)),
+            ("sphere", lambda v: (v.alpha >= 0.5) & (v.depth >= NEAR)),
+        ):
             ious[eye, name] = iou(mask(plate), mask(cam))
         areas[eye] = [int(((v.alpha >= 0.5) & (v.depth >= NEAR)).sum()) for v in (plate, cam)]
     change = [areas["right"][i] - areas["left"][i] for i in (0, 1)]
-    print(f"visible sphere pixels, right view minus left: plate {change[0]}, camera "
-          f"{change[1]}; IoU {', '.join(f'{k[0]} {k[1]} {v:.3f}' for k, v in ious.items())}")
+    print(
+        f"visible sphere pixels, right view minus left: plate {change[0]}, camera "
+        f"{change[1]}; IoU {', '.join(f'{k[0]} {k[1]} {v:.3f}' for k, v in ious.items())}"
+    )
     assert min(ious.values()) >= 0.92, ious
     assert abs(change[1]) >= 50, change  # the geometry has parallax to show
     assert abs(change[0] / change[1] - 1) <= 0.25, change
@@ -127,8 +133,14 @@ def test_speckle_of_the_views(views):
         ref = cam.rgb.mean(-1)
         # pixels whose camera-hologram neighbourhood is flat: inside a checker square
         pad = np.pad(ref, 1, mode="edge")
-        spread = np.max([np.abs(pad[1 + dy:1 + dy + ref.shape[0], 1 + dx:1 + dx + ref.shape[1]]
-                                - ref) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], 0)
+        spread = np.max(
+            [
+                np.abs(pad[1 + dy : 1 + dy + ref.shape[0], 1 + dx : 1 + dx + ref.shape[1]] - ref)
+                for dy in (-1, 0, 1)
+                for dx in (-1, 0, 1)
+            ],
+            0,
+        )
         flat = solid & (spread < 0.02 * ref.max())
         contrast = float(np.std(lum[flat] / ref[flat]))
         print(f"{eye}: speckle contrast {contrast:.3f} over {flat.sum()} pixels")
@@ -145,12 +157,12 @@ def test_coded_looks_cancel_the_cross_terms_of_neighbouring_emitters(recorded, v
     assert look_code(0, 1) is None and look_code(2, 3) is None
     with pytest.raises(InputError, match="look must be an integer in \\[0, 1\\]"):
         look_code(2, 2)
-    second = record_plate(meshes(), plate=PLATE, camera=camera("centre"), zone_margin=MARGIN,
-                          code=look_code(1, 2))
+    second = record_plate(
+        meshes(), plate=PLATE, camera=camera("centre"), zone_margin=MARGIN, code=look_code(1, 2)
+    )
     for eye, position in EYES.items():
         one, reference = views[eye]
-        pair = render_view([recorded, second], camera(position, crop=True),
-                           supersample=SUPERSAMPLE)
+        pair = render_view([recorded, second], camera(position, crop=True), supersample=SUPERSAMPLE)
         gain = [psnr(v, reference, (reference.alpha >= 1) & (v.alpha >= 1)) for v in (pair, one)]
         print(f"{eye}: PSNR {gain[1]:.2f} dB (one look), {gain[0]:.2f} dB (the coded pair)")
         assert gain[0] - gain[1] >= 1.0, (eye, gain)
@@ -163,10 +175,16 @@ def test_camera_outside_the_zone_is_warned_by_name():
     pose = np.eye(4)
     pose[:3, 3] = (1.0, 2.0, 3.0)
     rng = np.random.default_rng(3)
-    wave = (rng.standard_normal((1, 64, 64)) + 1j * rng.standard_normal((1, 64, 64)))
-    h = Hologram(object_wave=wave.astype(np.complex64), encoding="complex", wavelengths=(5e-5,),
-                 pitch=3e-4, zone=zone, plate=pose, bounds=[[-0.01, -0.01, -0.31],
-                                                            [0.01, 0.01, -0.29]])
+    wave = rng.standard_normal((1, 64, 64)) + 1j * rng.standard_normal((1, 64, 64))
+    h = Hologram(
+        object_wave=wave.astype(np.complex64),
+        encoding="complex",
+        wavelengths=(5e-5,),
+        pitch=3e-4,
+        zone=zone,
+        plate=pose,
+        bounds=[[-0.01, -0.01, -0.31], [0.01, 0.01, -0.29]],
+    )
     inside = Camera(matrix_world=look_at((1.0, 2.0, 3.3), (1.0, 2.0, 2.7)), resolution=(16, 16))
     outside = Camera(matrix_world=look_at((1.05, 2.0, 3.3), (1.0, 2.0, 2.7)), resolution=(16, 16))
     with warnings.catch_warnings():
@@ -178,16 +196,21 @@ def test_camera_outside_the_zone_is_warned_by_name():
         render_view(h, outside)
     said = [str(w.message) for w in caught if w.category is OutsideZoneWarning]
     assert len(said) == 1, [str(w.message) for w in caught]
-    assert re.search(r"reaches 0\.03\d* m beyond the plate's viewing zone, the box centred at "
-                     r"\(0, 0, 0\.3\) m in the plate's frame", said[0]), said
+    assert re.search(
+        r"reaches 0\.03\d* m beyond the plate's viewing zone, the box centred at "
+        r"\(0, 0, 0\.3\) m in the plate's frame",
+        said[0],
+    ), said
     assert "(1, 2, 3.3) m in the world" in said[0], said
 
 
 def test_render_settings_are_checked(point_hologram):
     cam = pinhole.camera()
-    for kwargs, problem in [({"exposure": float("nan")}, "exposure"),
-                            ({"exposure": -1.0}, "exposure"),
-                            ({"opacity_threshold": float("nan")}, "opacity_threshold")]:
+    for kwargs, problem in [
+        ({"exposure": float("nan")}, "exposure"),
+        ({"exposure": -1.0}, "exposure"),
+        ({"opacity_threshold": float("nan")}, "opacity_threshold"),
+    ]:
         with pytest.raises(InputError, match=problem):
             render_view(point_hologram, cam, **kwargs)
     other = Hologram(intensity=point_hologram.intensity, wavelengths=(532e-9,), pitch=1e-6)
@@ -204,11 +227,18 @@ def test_a_camera_outside_the_viewing_zone_warns_that_the_view_is_black(point_ho
     for degrees in (30, 60, 89):
         a = math.radians(degrees)
         eye = 8e-3 * np.array([math.sin(a), 0, math.cos(a)])
-        cam = Camera(matrix_world=look_at(eye, (0, 0, -3e-3)), lens=50, resolution=(16, 16),
-                     sensor_width=50 * 16 * 4e-3)
-        with pytest.warns(EmptyViewWarning, match=r"the view is black: the camera is "
-                                                  r"\d+\.\d° off the plate's normal.*"
-                                                  r"within 18.5°"):
+        cam = Camera(
+            matrix_world=look_at(eye, (0, 0, -3e-3)),
+            lens=50,
+            resolution=(16, 16),
+            sensor_width=50 * 16 * 4e-3,
+        )
+        with pytest.warns(
+            EmptyViewWarning,
+            match=r"the view is black: the camera is "
+            r"\d+\.\d° off the plate's normal.*"
+            r"within 18.5°",
+        ):
             view = render_view(point_hologram, cam)
         assert not view.rgb.any() and not view.alpha.any()
 
@@ -227,10 +257,20 @@ def test_an_exposure_that_overflows_the_view_is_refused_by_name():
     takes its pixels past float32's largest number: the project's error naming the exposure
     (it once ended in a TypeError of the view's own variables)."""
     from holo_core.plate.points import record_points
-    h = record_points([[0, 0, -3e-3]], [[1.0, 1.0]], shape=(128, 128), pitch=1e-6,
-                      wavelengths=(633e-9, 0.98 * 633e-9), channels=("R", "Z"),
-                      point_density=1e6)
+
+    h = record_points(
+        [[0, 0, -3e-3]],
+        [[1.0, 1.0]],
+        shape=(128, 128),
+        pitch=1e-6,
+        wavelengths=(633e-9, 0.98 * 633e-9),
+        channels=("R", "Z"),
+        point_density=1e6,
+    )
     assert h.depth_channel() == 1 and h.point_density
-    with pytest.raises(InputError, match=r"exposure must keep the view's pixels within "
-                                         r"float32 \(finite\); got 1e\+38"):
+    with pytest.raises(
+        InputError,
+        match=r"exposure must keep the view's pixels within "
+        r"float32 \(finite\); got 1e\+38",
+    ):
         render_view(h, pinhole.camera(), exposure=1e38)

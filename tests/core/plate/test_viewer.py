@@ -40,8 +40,14 @@ def psnr_db(a, b, inside) -> float:
 @pytest.fixture(scope="module")
 def looks():
     """Two coded looks of the plate, named by a recording digest."""
-    return record_looks(ps.meshes(), looks=2, plate=PLATE, camera=ps.camera("centre",
-                        scale=SCALE), zone_margin=0.01, recording=DIGEST)
+    return record_looks(
+        ps.meshes(),
+        looks=2,
+        plate=PLATE,
+        camera=ps.camera("centre", scale=SCALE),
+        zone_margin=0.01,
+        recording=DIGEST,
+    )
 
 
 def wandering():
@@ -131,8 +137,9 @@ def test_where_says_how_far_and_which_way_a_pupil_leaves_the_zone(looks):
     assert "+x (right) side" in why and "20 mm" in why, why
     nearer = ps.camera((0.0, 0.0, 0.25), scale=SCALE)
     assert "nearer the plate" in viewer.where(nearer), viewer.where(nearer)
-    behind = dataclasses.replace(beside, matrix_world=ps.look_at(
-        np.array([0.0, 0.0, -0.5]), ps.TARGET, up=(0, 1, 0)))
+    behind = dataclasses.replace(
+        beside, matrix_world=ps.look_at(np.array([0.0, 0.0, -0.5]), ps.TARGET, up=(0, 1, 0))
+    )
     assert "in front of the hologram" in viewer.where(behind)
     with pytest.raises(OutsideZoneError, match="20 mm past its"):
         viewer.view(beside)
@@ -187,8 +194,9 @@ def test_a_plate_set_is_viewed_from_the_part_that_holds_the_pupil(tmp_path):
     nearest part."""
     cams = [ps.camera((x, 0.0, 0.3), scale=SCALE) for x in (-0.03, 0.0, 0.03)]
     every = np.concatenate([m.vertices for m in ps.meshes()])
-    parts = parts_along(cams, np.array([every.min(0), every.max(0)]), distance=0.32,
-                        stretch=0.04, margin=0.005)
+    parts = parts_along(
+        cams, np.array([every.min(0), every.max(0)]), distance=0.32, stretch=0.04, margin=0.005
+    )
     plates = record_set(ps.meshes(), parts, looks=2, seed=3, folder=tmp_path / "set")
     for source in (plates, tmp_path / "set"):
         with PlateViewer(source, scene=plates.recording, supersample=1) as viewer:
@@ -206,6 +214,7 @@ def test_the_widget_says_what_it_needs_and_its_moves_keep_the_camera(looks):
     (1 cm across, 5° of yaw) puts the camera 1 cm along its own x axis and turns its view
     axis by 5°."""
     from holo_core.plate.viewer_widget import moved
+
     cam = ps.camera("centre", scale=SCALE)
     try:
         import ipywidgets  # noqa: F401

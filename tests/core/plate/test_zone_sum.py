@@ -10,24 +10,37 @@ from zone_reference import reference
 from holo_core.plate.zone_sum import ZoneEmitters, ZoneSum, ZoneWindow, footprints, zone_sum
 
 WAVELENGTH = 5e-6
-WINDOW = ZoneWindow(origin=(-0.03, -0.025), pitch=2.3e-5, row_pitch=3.1e-5, shape=(448, 704),
-                    centre=(0.01, -0.005, 0.3), half_extents=(0.03, 0.02, 0.01), rim=0.15)
+WINDOW = ZoneWindow(
+    origin=(-0.03, -0.025),
+    pitch=2.3e-5,
+    row_pitch=3.1e-5,
+    shape=(448, 704),
+    centre=(0.01, -0.005, 0.3),
+    half_extents=(0.03, 0.02, 0.01),
+    rim=0.15,
+)
 
 
 def emitters(rng, n, table, shared=False):
     """``n`` emitters with random amplitudes of three channels, or ``shared``: the channels of
     an emitter one wave times real shares (a plate's colours: √I_c, some of them 0), which
     the kernel sums with a real multiply a channel (ZoneSum.shaded)."""
-    pos = np.stack([rng.uniform(-0.02, 0.02, n), rng.uniform(-0.02, 0.02, n),
-                    rng.uniform(-0.35, -0.25, n)], 1)
+    pos = np.stack(
+        [rng.uniform(-0.02, 0.02, n), rng.uniform(-0.02, 0.02, n), rng.uniform(-0.35, -0.25, n)], 1
+    )
     if shared:
         shares = rng.uniform(0, 1, (n, 3)) * (rng.uniform(size=(n, 3)) > 0.2)
         amp = shares * (rng.normal(size=n) + 1j * rng.normal(size=n))[:, None]
     else:
         amp = rng.normal(size=(n, 3)) + 1j * rng.normal(size=(n, 3))
     rows = np.where(np.arange(n) % 2 == 0, np.arange(n) // 2, -1).astype(np.int32)
-    return ZoneEmitters(position=pos, amplitude=amp, visibility=rows, table=table,
-                        grid=((-0.035, 0.0175), (-0.024, 0.012)))
+    return ZoneEmitters(
+        position=pos,
+        amplitude=amp,
+        visibility=rows,
+        table=table,
+        grid=((-0.035, 0.0175), (-0.024, 0.012)),
+    )
 
 
 @pytest.mark.parametrize("tables", ["smooth", "hidden", "rough"])
@@ -64,8 +77,13 @@ def test_a_partner_wavelength_summed_in_the_same_pass_equals_float64_numpy(rng, 
     table = np.full((n // 2, 3, 5), 255, np.uint8)
     table[:, :, :2] = 96
     em = emitters(rng, n, table, shared)
-    depth = ZoneEmitters(position=em.position, amplitude=em.amplitude[:, :1] * 1j,
-                         visibility=em.visibility, table=table, grid=em.grid)
+    depth = ZoneEmitters(
+        position=em.position,
+        amplitude=em.amplitude[:, :1] * 1j,
+        visibility=em.visibility,
+        table=table,
+        grid=em.grid,
+    )
     pair = ZoneSum(em, WINDOW, WAVELENGTH, partner=(0.98 * WAVELENGTH, depth))
     assert pair.shaded == shared
     both = pair.region(0, 0, *WINDOW.shape)
@@ -86,15 +104,29 @@ def test_looks_mixed_from_classes_equal_float64_numpy(rng, shared):
     classes = rng.integers(0, 3, n).astype(np.int32)
     mixing = np.exp(2j * np.pi * np.array([[0, 0, 0], [0, 1, 2], [1, 3, 2], [3, 1, 0]]) / 4)
     looks = [mixing[look, classes][:, None] * base.amplitude for look in range(4)]
-    em = ZoneEmitters(position=base.position, amplitude=np.concatenate(looks, 1),
-                      visibility=base.visibility, table=base.table, grid=base.grid,
-                      classes=classes, mixing=mixing)
+    em = ZoneEmitters(
+        position=base.position,
+        amplitude=np.concatenate(looks, 1),
+        visibility=base.visibility,
+        table=base.table,
+        grid=base.grid,
+        classes=classes,
+        mixing=mixing,
+    )
     got = zone_sum(em, WINDOW, WAVELENGTH)
     for look, a in enumerate(looks):
-        want = reference(ZoneEmitters(position=base.position, amplitude=a,
-                                      visibility=base.visibility, table=base.table,
-                                      grid=base.grid), WINDOW, WAVELENGTH)
-        err = rel_err(got[3 * look:3 * look + 3], want)
+        want = reference(
+            ZoneEmitters(
+                position=base.position,
+                amplitude=a,
+                visibility=base.visibility,
+                table=base.table,
+                grid=base.grid,
+            ),
+            WINDOW,
+            WAVELENGTH,
+        )
+        err = rel_err(got[3 * look : 3 * look + 3], want)
         assert err <= ZONE_SUM, (look, err)
 
 
@@ -104,10 +136,19 @@ def test_regions_tile_the_whole_window(rng):
     em = emitters(rng, 40, np.full((20, 3, 5), 200, np.uint8))
     whole = ZoneSum(em, WINDOW, WAVELENGTH)
     full = whole.region(0, 0, *WINDOW.shape)
-    parts = np.concatenate([np.concatenate([whole.region(r, c, 256, 256)[:, :min(256, 448 - r),
-                                                                         :min(256, 704 - c)]
-                                            for c in range(0, 704, 256)], 2)
-                            for r in range(0, 448, 256)], 1)
+    parts = np.concatenate(
+        [
+            np.concatenate(
+                [
+                    whole.region(r, c, 256, 256)[:, : min(256, 448 - r), : min(256, 704 - c)]
+                    for c in range(0, 704, 256)
+                ],
+                2,
+            )
+            for r in range(0, 448, 256)
+        ],
+        1,
+    )
     assert np.array_equal(full, parts[:, :448, :704])
 
 
@@ -115,8 +156,15 @@ def test_footprint_is_the_cone_towards_the_zone():
     """An emitter straight behind the zone's centre at the zone's distance lights the zone's
     box (with its rim) scaled by one half on the plate halfway: its footprint's columns and
     rows span (1 + rim)·(half width + depth parallax) around its foot."""
-    win = ZoneWindow(origin=(-0.05, -0.05), pitch=1e-4, row_pitch=2e-4, shape=(500, 1000),
-                     centre=(0.0, 0.0, 0.3), half_extents=(0.02, 0.01, 0.0), rim=0.1)
+    win = ZoneWindow(
+        origin=(-0.05, -0.05),
+        pitch=1e-4,
+        row_pitch=2e-4,
+        shape=(500, 1000),
+        centre=(0.0, 0.0, 0.3),
+        half_extents=(0.02, 0.01, 0.0),
+        rim=0.1,
+    )
     c0, c1, r0, r1 = footprints(np.array([[0.0, 0.0, -0.3]]), win)[0]
     assert (c1 - c0) * 1e-4 == pytest.approx(2 * 0.022 / 2, abs=3e-4)
     assert (r1 - r0) * 2e-4 == pytest.approx(2 * 0.011 / 2, abs=5e-4)
@@ -141,20 +189,32 @@ def test_the_depth_partner_carried_by_the_colours_equals_float64_numpy(rng):
     mixing = np.array([[1, 1], [1, -1]], complex)
     looks = [mixing[look, classes][:, None] * colours for look in range(2)]
     depths = [mixing[look, classes][:, None] * wave[:, None] for look in range(2)]
-    shared = dict(position=base.position, visibility=base.visibility, table=base.table,
-                  grid=base.grid, classes=classes, mixing=mixing)
+    shared = dict(
+        position=base.position,
+        visibility=base.visibility,
+        table=base.table,
+        grid=base.grid,
+        classes=classes,
+        mixing=mixing,
+    )
     lam2 = WAVELENGTH * (1 - 2.3e-6)
-    pair = ZoneSum(ZoneEmitters(amplitude=np.concatenate(looks, 1), **shared), WINDOW,
-                   WAVELENGTH, partner=(lam2, ZoneEmitters(amplitude=np.concatenate(depths, 1),
-                                                           **shared)))
+    pair = ZoneSum(
+        ZoneEmitters(amplitude=np.concatenate(looks, 1), **shared),
+        WINDOW,
+        WAVELENGTH,
+        partner=(lam2, ZoneEmitters(amplitude=np.concatenate(depths, 1), **shared)),
+    )
     assert pair.shaded and pair.partner_lerp
     got = pair.region(0, 0, *WINDOW.shape)
-    single = dict(position=base.position, visibility=base.visibility, table=base.table,
-                  grid=base.grid)
+    single = dict(
+        position=base.position, visibility=base.visibility, table=base.table, grid=base.grid
+    )
     for look in range(2):
         errs = []
-        for planes, a, lam in ((slice(3 * look, 3 * look + 3), looks[look], WAVELENGTH),
-                               (slice(6 + look, 7 + look), depths[look], lam2)):
+        for planes, a, lam in (
+            (slice(3 * look, 3 * look + 3), looks[look], WAVELENGTH),
+            (slice(6 + look, 7 + look), depths[look], lam2),
+        ):
             want = reference(ZoneEmitters(amplitude=a, **single), WINDOW, lam)
             errs.append(rel_err(got[planes], want))
             print(f"look {look}, λ {lam:.9g}: relative error {errs[-1]:.2e}")
@@ -167,14 +227,25 @@ def _under_a_sample():
     a·exp(ik(|z| + |x − Z|))/|z| at the sample each sits behind, whose ray meets the zone,
     0 at every other, whose rays miss it by metres.)"""
     pitch, n = 1.58e-4, 16
-    win = ZoneWindow(origin=(-8 * pitch, -8 * pitch), pitch=pitch, row_pitch=pitch,
-                     shape=(n, n), centre=(0.0, 0.0, 0.7), half_extents=(1e-3, 1e-3, 1e-3),
-                     rim=0.15)
+    win = ZoneWindow(
+        origin=(-8 * pitch, -8 * pitch),
+        pitch=pitch,
+        row_pitch=pitch,
+        shape=(n, n),
+        centre=(0.0, 0.0, 0.7),
+        half_extents=(1e-3, 1e-3, 1e-3),
+        rim=0.15,
+    )
     at = [(8, 8, -1e-3), (3, 11, -3e-3), (12, 2, -10e-3)]  # (row, col, z)
     pos = np.array([((c - 8) * pitch, (r - 8) * pitch, z) for r, c, z in at])
     amp = np.array([[1.0 + 0.5j], [0.3 - 0.8j], [-0.6 + 0.2j]])
-    em = ZoneEmitters(position=pos, amplitude=amp, visibility=np.full(3, -1, np.int32),
-                      table=np.zeros((0, 2, 2), np.uint8), grid=((0.0, 1.0), (0.0, 1.0)))
+    em = ZoneEmitters(
+        position=pos,
+        amplitude=amp,
+        visibility=np.full(3, -1, np.int32),
+        table=np.zeros((0, 2, 2), np.uint8),
+        grid=((0.0, 1.0), (0.0, 1.0)),
+    )
     k = 2 * np.pi / WAVELENGTH
     want = np.zeros((n, n), complex)
     for (r, c, z), a in zip(at, amp[:, 0]):
@@ -192,10 +263,13 @@ def test_emitters_whose_footprint_is_under_a_sample_give_finite_samples_there_al
     assert np.array_equal(np.abs(got) > 0, np.abs(want) > 0), np.argwhere(np.abs(got) > 0)
 
 
-@pytest.mark.xfail(strict=True, reason="the row recurrence expands r over a 32-sample segment "
-                   "about its centre: invalid where the segment is wider than the emitter's "
-                   "distance (here 5 mm against 1 to 10 mm); such emitters need their samples "
-                   "evaluated directly")
+@pytest.mark.xfail(
+    strict=True,
+    reason="the row recurrence expands r over a 32-sample segment "
+    "about its centre: invalid where the segment is wider than the emitter's "
+    "distance (here 5 mm against 1 to 10 mm); such emitters need their samples "
+    "evaluated directly",
+)
 def test_emitters_whose_footprint_is_under_a_sample_have_the_definitions_value():
     """Within ZONE_SUM of the peak of the definition's value (:func:`_under_a_sample`)."""
     got, want = _under_a_sample()

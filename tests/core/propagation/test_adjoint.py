@@ -13,8 +13,10 @@ from holo_core.validate import InputError
 
 LAM, PITCH = 633e-9, 2e-6
 CASES = {
-    "angular_spectrum": (angular_spectrum, {"distance": 3e-3, "offset": (2e-5, -1e-5),
-                                            "padding": 2}),
+    "angular_spectrum": (
+        angular_spectrum,
+        {"distance": 3e-3, "offset": (2e-5, -1e-5), "padding": 2},
+    ),
     "angular_spectrum backwards": (angular_spectrum, {"distance": -1e-3}),
     "fresnel": (fresnel, {"distance": 0.02, "offset": (1e-5, 0.0)}),
     "fraunhofer": (fraunhofer, {"distance": 0.5}),

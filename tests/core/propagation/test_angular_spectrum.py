@@ -41,13 +41,16 @@ def _alias_free_half_width(z, pitch, source_half_width):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("fresnel_number, padding, bound", [
-    (5.0, 2, ASM_VS_RS["fresnel 1-5"]),
-    (2.0, 2, ASM_VS_RS["fresnel 1-5"]),
-    (1.0, 2, ASM_VS_RS["fresnel 1-5"]),
-    (0.25, 2, ASM_VS_RS["fresnel 0.25"]),
-    (0.25, 4, ASM_VS_RS["fresnel 0.25 padded 4x"]),
-])
+@pytest.mark.parametrize(
+    "fresnel_number, padding, bound",
+    [
+        (5.0, 2, ASM_VS_RS["fresnel 1-5"]),
+        (2.0, 2, ASM_VS_RS["fresnel 1-5"]),
+        (1.0, 2, ASM_VS_RS["fresnel 1-5"]),
+        (0.25, 2, ASM_VS_RS["fresnel 0.25"]),
+        (0.25, 4, ASM_VS_RS["fresnel 0.25 padded 4x"]),
+    ],
+)
 def test_square_aperture_matches_rayleigh_sommerfeld(fresnel_number, padding, bound):
     # 250 µm square, 512² at 2 µm, 633 nm; N_F = a²/(λz) with a the half width
     n, pitch, a = 512, 2e-6, 125e-6
@@ -62,8 +65,15 @@ def test_square_aperture_matches_rayleigh_sommerfeld(fresnel_number, padding, bo
     first = (n - step * (m - 1)) // 2
     sub = asm[first::step, first::step][:m, :m]
     centre = coords(n, pitch)[first::step][:m].mean()
-    ref = rayleigh_sommerfeld(field, wavelength=LAM, pitch=pitch, distance=z,
-                              out_shape=(m, m), out_pitch=step * pitch, offset=(centre, centre))
+    ref = rayleigh_sommerfeld(
+        field,
+        wavelength=LAM,
+        pitch=pitch,
+        distance=z,
+        out_shape=(m, m),
+        out_pitch=step * pitch,
+        offset=(centre, centre),
+    )
     assert rel_err(sub, ref) <= bound, (fresnel_number, padding, m, rel_err(sub, ref))
 
 
@@ -75,7 +85,7 @@ def test_airy_first_zero_of_focused_circular_aperture():
     lens = np.exp(-1j * k * np.sqrt(x**2 + y**2 + f**2))  # Eq. 24
     field = np.where(x**2 + y**2 <= radius**2, lens, 0)
     focus = angular_spectrum(field, wavelength=LAM, pitch=pitch, distance=f)
-    row = focus[n // 2, n // 2:]  # odd n: sample n//2 is on the axis
+    row = focus[n // 2, n // 2 :]  # odd n: sample n//2 is on the axis
     signed = np.real(row * np.conj(row[0])) / abs(row[0])
     i = int(np.argmax(signed < 0))
     zero = (i - 1 + signed[i - 1] / (signed[i - 1] - signed[i])) * pitch
@@ -93,7 +103,7 @@ def test_offset_equals_propagation_then_shift():
     plain = angular_spectrum(field, wavelength=LAM, pitch=pitch, distance=2e-3)
     # output sample (i, j) of the offset plane sits where the plain one has (i+dy, j+dx)
     a = shifted[20:-20, 20:-20]
-    b = plain[20 + shift[1]:shape[0] - 20 + shift[1], 20 + shift[0]:shape[1] - 20 + shift[0]]
+    b = plain[20 + shift[1] : shape[0] - 20 + shift[1], 20 + shift[0] : shape[1] - 20 + shift[0]]
     assert rel_err(a, b) <= FLOAT32_PIPELINE, rel_err(a, b)
 
 
@@ -129,16 +139,24 @@ def test_light_travels_towards_plus_z_and_offset_is_x_y():
     pitch, shape, z, angle = 1e-6, (128, 256), 2e-3, 0.02
     x, y = mesh(shape, pitch)
     beam = gaussian_beam(x, y, 0.0, w0=15e-6, wavelength=LAM) * np.exp(
-        1j * 2 * np.pi * np.sin(angle) / LAM * x)
+        1j * 2 * np.pi * np.sin(angle) / LAM * x
+    )
     out = np.abs(angular_spectrum(beam, wavelength=LAM, pitch=pitch, distance=z)) ** 2
     x_mean = np.sum(out * x) / np.sum(out)
     assert abs(x_mean - z * np.tan(angle)) < 0.5 * pitch, (x_mean, z * np.tan(angle))
     # offset (x0, y0) = (+30 µm, 0): a beam centred at x = +30 µm lands at the centre column
     beam = gaussian_beam(x - 30e-6, y, 0.0, w0=10e-6, wavelength=LAM)
-    out = np.abs(angular_spectrum(beam, wavelength=LAM, pitch=pitch, distance=1e-4,
-                                  offset=(30e-6, 0.0))) ** 2
+    out = (
+        np.abs(
+            angular_spectrum(beam, wavelength=LAM, pitch=pitch, distance=1e-4, offset=(30e-6, 0.0))
+        )
+        ** 2
+    )
     row, col = np.unravel_index(np.argmax(out), out.shape)
-    assert abs(coords(shape[1], pitch)[col]) <= pitch / 2 and abs(coords(shape[0], pitch)[row]) <= pitch / 2
+    assert (
+        abs(coords(shape[1], pitch)[col]) <= pitch / 2
+        and abs(coords(shape[0], pitch)[row]) <= pitch / 2
+    )
 
 
 def test_device_pipeline_equals_float64_numpy(rng, rt):
@@ -150,9 +168,9 @@ def test_device_pipeline_equals_float64_numpy(rng, rt):
     padded = padded_shape(shape, 2)
     r0, c0 = (padded[0] - shape[0]) // 2, (padded[1] - shape[1]) // 2
     big = np.zeros(padded, complex)
-    big[r0:r0 + shape[0], c0:c0 + shape[1]] = field
+    big[r0 : r0 + shape[0], c0 : c0 + shape[1]] = field
     tf = transfer_function(padded, wavelength=LAM, pitch=pitch, distance=z, offset=offset)
-    ref = np.fft.ifft2(np.fft.fft2(big) * tf)[r0:r0 + shape[0], c0:c0 + shape[1]]
+    ref = np.fft.ifft2(np.fft.fft2(big) * tf)[r0 : r0 + shape[0], c0 : c0 + shape[1]]
     assert rel_err(out.get(), ref) <= FLOAT32_PIPELINE, rel_err(out.get(), ref)
     host = angular_spectrum(field, wavelength=LAM, pitch=pitch, distance=z, offset=offset)
     assert isinstance(host, np.ndarray) and np.array_equal(host, out.get())
@@ -169,6 +187,7 @@ def test_transfer_function_is_stable_for_large_kz():
 
 def test_unlimited_transfer_beyond_alias_free_distance_warns_with_the_limit():
     from holo_core.validate import SamplingWarning
+
     field = np.ones((64, 64), np.complex64)
     with pytest.warns(SamplingWarning, match=r"alias-free limit \d"):
         angular_spectrum(field, wavelength=LAM, pitch=2e-6, distance=1.0, band_limit=False)

@@ -27,8 +27,7 @@ def test_a_field_carries_its_optics_and_stays_on_the_device(rt):
     out = angular_spectrum(f, distance=1e-3, offset=(1e-5, 0.0))
     assert out.on_device and out.wavelength == LAM and out.pitch == (PITCH, PITCH)
     assert np.allclose(out.pose[:3, 3], (1e-5, 0.0, 1e-3)), out.pose
-    want = angular_spectrum(beam(), wavelength=LAM, pitch=PITCH, distance=1e-3,
-                            offset=(1e-5, 0.0))
+    want = angular_spectrum(beam(), wavelength=LAM, pitch=PITCH, distance=1e-3, offset=(1e-5, 0.0))
     assert np.array_equal(out.samples.get(), want)
     with pytest.raises(InputError, match="wavelength comes with the Field"):
         angular_spectrum(f, wavelength=LAM, distance=1e-3)
@@ -121,7 +120,11 @@ def test_field_checks_and_summary(rt):
 def test_a_batch_over_an_empty_field_is_the_projects_error():
     """A batch of two wavelengths over a 0x0 field is the project's error naming the field's
     shape, not a failed reshape."""
-    with pytest.raises(InputError, match=r"field must be \(\.\.\., H, W\) with H, W >= 1; got "
-                                         r"shape \(0, 0\)"):
-        angular_spectrum(np.zeros((0, 0), np.complex64), wavelength=[633e-9, 532e-9],
-                         pitch=1e-6, distance=1e-4)
+    with pytest.raises(
+        InputError,
+        match=r"field must be \(\.\.\., H, W\) with H, W >= 1; got "
+        r"shape \(0, 0\)",
+    ):
+        angular_spectrum(
+            np.zeros((0, 0), np.complex64), wavelength=[633e-9, 532e-9], pitch=1e-6, distance=1e-4
+        )

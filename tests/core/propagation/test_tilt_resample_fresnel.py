@@ -32,11 +32,14 @@ def test_tilted_plane_wave_becomes_a_normal_plane_wave():
     assert np.all(np.abs(np.abs(centre) - 1) < 1e-2), (np.abs(centre).min(), np.abs(centre).max())
 
 
-@pytest.mark.parametrize("rotation, padding", [
-    (rot_y(np.radians(20)), 2),
-    (rot_y(np.radians(20)), 4),
-    (rot_x(np.radians(-12)) @ rot_y(np.radians(8)), 2),
-])
+@pytest.mark.parametrize(
+    "rotation, padding",
+    [
+        (rot_y(np.radians(20)), 2),
+        (rot_y(np.radians(20)), 4),
+        (rot_x(np.radians(-12)) @ rot_y(np.radians(8)), 2),
+    ],
+)
 def test_tilted_gaussian_beam_is_untilted_on_the_plane_normal_to_it(rotation, padding):
     # the beam travels along the rotated z axis with its waist at the origin; on z = 0 it is
     # sampled from the analytic beam in its own coordinates (p_beam = Mᵀ p)
@@ -66,13 +69,20 @@ def test_resample_round_trips_band_limited_fields():
     pitch = 1.0e-6
     x, y = mesh((64, 48), pitch)
     field = np.exp(-(x**2 + y**2) / (8e-6) ** 2) * np.exp(1j * 0.3e6 * x)
-    for shape, out_pitch in (((128, 96), pitch / 2), ((43, 32), 1.5 * pitch),
-                             ((100, 80), pitch), ((40, 30), pitch)):
+    for shape, out_pitch in (
+        ((128, 96), pitch / 2),
+        ((43, 32), 1.5 * pitch),
+        ((100, 80), pitch),
+        ((40, 30), pitch),
+    ):
         there = resample(field, pitch=pitch, out_shape=shape, out_pitch=out_pitch)
         back = resample(there, pitch=out_pitch, out_shape=(64, 48), out_pitch=pitch)
         # cutting in space keeps only what the small grid held
-        inside = (np.abs(x) < 14 * pitch) & (np.abs(y) < 19 * pitch) if shape == (40, 30) \
+        inside = (
+            (np.abs(x) < 14 * pitch) & (np.abs(y) < 19 * pitch)
+            if shape == (40, 30)
             else np.ones_like(x, bool)
+        )
         err = rel_err(back[inside], field[inside])
         assert err <= 1e-4, (shape, out_pitch, err)
 
@@ -114,9 +124,10 @@ def test_fraunhofer_equals_rayleigh_sommerfeld_in_the_far_field():
 
     # paraxial centre (ρ <= 3.5 mm: the dropped k·ρ⁴/(8z³) term stays below 2e-3 rad)
     m = 8
-    ref = rayleigh_sommerfeld(aperture, wavelength=LAM, pitch=pitch, distance=z,
-                              out_shape=(m, m), out_pitch=px)
-    got = far[n // 2 - m // 2:n // 2 + m // 2, n // 2 - m // 2:n // 2 + m // 2]
+    ref = rayleigh_sommerfeld(
+        aperture, wavelength=LAM, pitch=pitch, distance=z, out_shape=(m, m), out_pitch=px
+    )
+    got = far[n // 2 - m // 2 : n // 2 + m // 2, n // 2 - m // 2 : n // 2 + m // 2]
     assert rel_err(got, ref) <= 2e-3, rel_err(got, ref)
 
 
@@ -124,16 +135,24 @@ def test_the_far_field_pitch_is_x_then_y():
     """A 64-row, 96-column field: the far field's x pitch (along its 96 columns) is
     λz/(96·pitch), its y pitch λz/(64·pitch), as every pitch pair is (x, y)."""
     pitch, z = 2e-6, 0.5
-    _, (px, py) = fraunhofer(np.ones((64, 96), np.complex64), wavelength=LAM, pitch=pitch,
-                             distance=z)
+    _, (px, py) = fraunhofer(
+        np.ones((64, 96), np.complex64), wavelength=LAM, pitch=pitch, distance=z
+    )
     assert (px, py) == pytest.approx((LAM * z / (96 * pitch), LAM * z / (64 * pitch)))
 
 
 def test_rayleigh_sommerfeld_kernel_equals_float64_numpy(rng):
     pitch, z = 1e-6, 300e-6
     field = rng.normal(size=(12, 10)) + 1j * rng.normal(size=(12, 10))
-    out = rayleigh_sommerfeld(field, wavelength=LAM, pitch=pitch, distance=-z,
-                              out_shape=(9, 7), out_pitch=1.5e-6, offset=(3e-6, -2e-6))
+    out = rayleigh_sommerfeld(
+        field,
+        wavelength=LAM,
+        pitch=pitch,
+        distance=-z,
+        out_shape=(9, 7),
+        out_pitch=1.5e-6,
+        offset=(3e-6, -2e-6),
+    )
     xs, ys = mesh((12, 10), pitch)
     xo, yo = mesh((9, 7), 1.5e-6)
     dx = (xo.ravel() + 3e-6)[:, None] - xs.ravel()[None, :]
@@ -159,5 +178,6 @@ def test_rayleigh_sommerfeld_defaults_to_the_source_grid(rng):
 
 def test_direct_sum_warns_where_it_is_aliased():
     from holo_core.validate import SamplingWarning
+
     with pytest.warns(SamplingWarning, match="needs \\|distance\\| >= "):
         rayleigh_sommerfeld(np.ones((64, 64)), wavelength=LAM, pitch=2e-6, distance=1e-4)

@@ -19,13 +19,15 @@ def test_area_uniform_sampling_with_vertex_colours(rng):
 
 
 def test_obj_and_ply_read_the_same_mesh(tmp_path):
-    (tmp_path / "q.obj").write_text("v 0 0 -1 1 0 0\nv 1 0 -1 0 1 0\nv 1 1 -1 0 0 1\n"
-                                    "v 0 1 -1 1 1 1\nf 1 2 3 4\n")
+    (tmp_path / "q.obj").write_text(
+        "v 0 0 -1 1 0 0\nv 1 0 -1 0 1 0\nv 1 1 -1 0 0 1\nv 0 1 -1 1 1 1\nf 1 2 3 4\n"
+    )
     (tmp_path / "q.ply").write_text(
         "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
         "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
         "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
-        "0 0 -1 255 0 0\n1 0 -1 0 255 0\n1 1 -1 0 0 255\n0 1 -1 255 255 255\n4 0 1 2 3\n")
+        "0 0 -1 255 0 0\n1 0 -1 0 255 0\n1 1 -1 0 0 255\n0 1 -1 255 255 255\n4 0 1 2 3\n"
+    )
     a, b = read_mesh(tmp_path / "q.obj"), read_mesh(tmp_path / "q.ply")
     assert np.array_equal(a.triangles, [[0, 1, 2], [0, 2, 3]])
     assert np.array_equal(a.triangles, b.triangles) and np.allclose(a.vertices, b.vertices)
