@@ -126,7 +126,7 @@ def _plate_for(args, bounds):
     import numpy as np
 
     from .plate.plan import plan as plan_plate
-    from .plate.plan import window_on_plate
+    from .plate.zone_light import window_on_plate
     from .scene.plate import Plate
 
     bounds = np.asarray(bounds, np.float64)

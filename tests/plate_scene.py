@@ -16,6 +16,7 @@ CUBE_CENTRE, CUBE_SIZE = np.array([-0.008, -0.003, -0.30]), 0.036
 SPHERE_CENTRE, SPHERE_RADIUS = np.array([0.016, 0.008, -0.355]), 0.024
 PLATE = Plate(matrix_world=np.eye(4), width=0.1, height=0.1)
 EYES = {"left": (-0.02, 0.0, 0.3), "centre": (0.0, 0.0, 0.3), "right": (0.02, 0.0, 0.3)}
+SMALL = 0.25  # the cameras at 160x90: a plate for them holds about 640x640 samples
 
 
 def rotation(ax, ay):

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from holo_core.plate.plan import RIM, window_on_plate, zone_band
+from holo_core.plate.zone_light import RIM, window_on_plate, zone_band
 from holo_core.plate.zone_sum import ZoneEmitters, ZoneWindow, zone_sum
 from holo_core.scene.hologram import Hologram
 from holo_core.scene.plate import Carrier

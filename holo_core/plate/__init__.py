@@ -3,6 +3,8 @@ viewed by any camera in that zone.
 
 - ``plan.py``: a plate's samples, wavelengths, emitters and costs, from its zone and the views
   it serves (pure arithmetic: no driver)
+- ``zone_light.py``: the light from the objects to the zone as it crosses the plate: the
+  window, its band, the surfaces the zone sees (pure arithmetic: no driver)
 - ``quality.py``: the looks and supersampling its views need to reach a quality target,
   predicted from their defocus and the objects' size in pixels (pure arithmetic: no driver)
 - ``carrier.py``: the spherical carrier converging on the zone that the samples are stored
@@ -27,6 +29,8 @@ viewed by any camera in that zone.
   objects through, and the pupil's grid
 - ``to_pupil.py``: the plate's light carried to a camera's entrance pupil (a carrier plate's
   by demodulation, decimation and a non-uniform FFT; a full-band one by the angular spectrum)
+- ``gather.py``: a carrier plate's decimated samples summed onto the pupil's plane waves (the
+  non-uniform FFT's spread, layer by layer in depth)
 - ``pupil_images.py``: each look's images at the pixels, by the camera hologram's own pupil
   stage: the carrier plate's route and the full-band plate's
 - ``composition.py``: the looks' images composed into the view: radiance, alpha, depth

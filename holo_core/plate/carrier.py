@@ -32,7 +32,7 @@ from ..scene.field import Field
 from ..scene.hologram import Hologram
 from ..scene.plate import Carrier
 from ..validate import InputError
-from .plan import RIM
+from .zone_light import RIM
 
 TAPS = 32  # samples a side of the interpolation kernel
 # half the kernel's transition band, a fraction of f_N: the zone's soft rim, the part of B's band

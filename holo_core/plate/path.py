@@ -29,7 +29,8 @@ from ..scene.mesh import Mesh, outward
 from ..scene.plate import SHOT_ZONE_MARGIN, Plate, ViewingZone, box_corners
 from ..scene.plate_set import PathPart, PlateSet, reach_beyond
 from ..validate import InputError, shown
-from .plan import CHANNELS, LOOKS, plan, seen_area
+from .plan import CHANNELS, LOOKS, plan
+from .zone_light import seen_area
 
 DEFAULT_STRETCH = 0.1  # [m] of path a part holds (the 10 cm dolly one plate serves well)
 WINDOW_PAD = 0.02  # fraction of the window added on each side of a part's plate
@@ -303,7 +304,7 @@ def plan_parts(parts, points, *, looks: int = LOOKS, meshes=None) -> SetPlan:
     (N, 3) [m] (the world: their vertices, or their box's corners), ``looks`` looks a part
     (pure arithmetic, as :func:`holo_core.plate.plan.plan`); ``meshes`` (the world), where
     known, count each part's emitters from the surfaces its zone sees, else its box does
-    (:func:`holo_core.plate.plan.seen_area`)."""
+    (:func:`holo_core.plate.zone_light.seen_area`)."""
     parts = tuple(parts)
     if not parts or not all(isinstance(p, PathPart) for p in parts):
         raise InputError("parts must be a non-empty sequence of PathPart (parts_along)")

@@ -23,7 +23,8 @@ from ..scene.mesh import Mesh, outward
 from ..scene.plate import DEFAULT_ZONE_MARGIN, Carrier, Plate, ViewingZone
 from ..validate import InputError
 from .emitters import Emitters, random_phases, zone_emitters, zone_frame
-from .plan import LAYERS, LOOKS, RIM, PlatePlan, plan, seen_area
+from .plan import LAYERS, LOOKS, PlatePlan, plan
+from .zone_light import RIM, seen_area
 from .zone_sum import ZoneEmitters, ZoneSum, ZoneWindow
 
 log = logging.getLogger(__name__)

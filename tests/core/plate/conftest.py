@@ -30,3 +30,13 @@ def emitters():
         table=np.zeros((0, 3, 5), np.uint8),
         grid=((-0.03, 0.015), (-0.02, 0.01)),
     )
+
+
+@pytest.fixture(scope="session")
+def carrier_plate():
+    """The plate scene's plate against its carrier, for the cameras at SMALL (160x90), its zone 25 mm beyond the pupil."""
+    from plate_scene import PLATE, SMALL, camera, meshes
+
+    from holo_core.plate.looks import record_plate
+
+    return record_plate(meshes(), plate=PLATE, camera=camera("centre", SMALL), zone_margin=0.025)

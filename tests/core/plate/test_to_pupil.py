@@ -12,18 +12,15 @@ import math
 import numpy as np
 import pytest
 from accuracy import rel_err
-from plate_scene import PLATE, camera, meshes
+from plate_scene import SMALL, camera
 
-from holo_core.plate.looks import record_plate
 from holo_core.plate.view import render_view
 from holo_core.scene.hologram import Hologram
 
-SCALE = 0.25  # the plate scene's camera at 160x90: a plate of about 640x640 samples
-
 
 @pytest.fixture(scope="module")
-def plate():
-    return record_plate(meshes(), plate=PLATE, camera=camera("centre", SCALE), zone_margin=0.025)
+def plate(carrier_plate):
+    return carrier_plate
 
 
 def dirichlet(new, old, pitch) -> np.ndarray:
@@ -76,7 +73,7 @@ def test_views_of_the_carrier_and_the_full_band_plate_agree(plate):
     by its own emitter model; the colour and the coverage's shape do not depend on it.)"""
     fine = min(plate.wavelengths) / (2 * 0.45)
     other = full_band(plate, fine)
-    cam = camera("left", SCALE)
+    cam = camera("left", SMALL)
     a, b = render_view(plate, cam, supersample=2), render_view(other, cam, supersample=2)
     shapes = [
         v.coverage > 0.5 * np.median(v.coverage[v.coverage > 0.25 * v.coverage.max()])
@@ -109,7 +106,7 @@ def test_a_view_reads_the_samples_in_place_as_it_would_copy_them(plate):
     assert host_buffer(rt, moved) is None
     if rt.is_cpu:
         assert host_buffer(rt, plate.object_wave) is not None
-    cam = camera("left", SCALE)
+    cam = camera("left", SMALL)
     a = render_view(plate, cam, supersample=2)
     b = render_view(dataclasses.replace(plate, object_wave=moved), cam, supersample=2)
     assert np.array_equal(a.rgb, b.rgb) and np.array_equal(a.depth, b.depth)
@@ -124,7 +121,7 @@ def test_views_over_a_move_keep_one_stack_of_spectra(plate):
 
     rt = get_runtime()
     for eye in ("left", "centre", "right"):
-        render_view(plate, camera(eye, SCALE), supersample=2)
+        render_view(plate, camera(eye, SMALL), supersample=2)
     stacks = [k for k in rt.cache if isinstance(k, tuple) and SPECTRA in k]
     assert stacks == [("workspace", SPECTRA)], stacks
 
@@ -135,7 +132,7 @@ def test_a_views_pixels_fold_on_the_device_as_the_fine_images_do_on_the_host(pla
     themselves on the host. With one look the maximum is the mean: both views' radiance and
     colour agree to float32 rounding, and the brightest look's depth lies within the objects'
     depths seen from the camera."""
-    cam = camera("left", SCALE)
+    cam = camera("left", SMALL)
     a = render_view(plate, cam, supersample=2)
     b = render_view(plate, cam, supersample=2, composition="max", depth_estimate="brightest")
     assert rel_err(b.radiance, a.radiance) < 1e-5 and rel_err(b.rgb, a.rgb) < 1e-5
@@ -145,36 +142,3 @@ def test_a_views_pixels_fold_on_the_device_as_the_fine_images_do_on_the_host(pla
     assert np.isfinite(seen).all() and np.median(np.abs(seen - a.depth[a.alpha > 0])) < 0.1 * (
         far - near
     ), (near, far)
-
-
-def test_views_in_finer_depth_layers_converge(plate, monkeypatch):
-    """The gather's depth layers (spaced in 1/z so that each one's curvature errs by at most
-    LAYER_PHASE at the pupil's rim), each spread, transformed and curved by its own distance
-    on the device, converge as they get finer: against a thousandth of LAYER_PHASE (35
-    layers here), the default's one layer (a quarter wave at the rim for the samples farthest
-    from it) is within 1e-2 and a three-hundredth's (11 layers)
-    less than half as far (the error falls as the phase error, to first order: 3.2e-3 and
-    8.2e-4 here); their alpha likewise (1.5e-2 and 2e-3 at most: a pixel whose alpha lies
-    that near 0.5 may cross it)."""
-    from holo_core.plate import to_pupil
-
-    cam = camera("left", SCALE)
-    made, counts, views = to_pupil._Gather._layers, [], []
-
-    def layers(self, wavelength):
-        out = made(self, wavelength)
-        counts.append(len(out))
-        return out
-
-    monkeypatch.setattr(to_pupil._Gather, "_layers", layers)
-    for share in (1, 300, 1000):
-        monkeypatch.setattr(to_pupil, "LAYER_PHASE", math.pi / 2 / share)
-        views.append(render_view(plate, cam, supersample=2))
-    assert counts[0] == 1 and counts[-1] > 10, counts
-    one, fine, finer = views
-    far = rel_err(one.radiance, finer.radiance)
-    assert far < 1e-2 and rel_err(fine.radiance, finer.radiance) < 0.5 * far
-    edge = [np.abs(v.alpha - finer.alpha).max() for v in (one, fine)]
-    flips = [int(((v.alpha > 0.5) != (finer.alpha > 0.5)).sum()) for v in (one, fine)]
-    print(f"alpha apart at most {np.round(edge, 5)}, pixels across 0.5 {flips}")
-    assert edge[0] < 2e-2 and edge[1] < 0.5 * edge[0], edge
