@@ -28,8 +28,9 @@ from holo_core.acquired.framing import default_camera, stated_plane
 from holo_core.io.hologram import HologramFileError, read_hologram
 from holo_core.io.plate_set import parts_from_json, parts_to_json
 from holo_core.plate.path import parts_along, plan_parts
-from holo_core.plate.plan import plan, plan_view, seen_area, summary
+from holo_core.plate.plan import plan, plan_view, summary
 from holo_core.plate.quality import choose
+from holo_core.plate.zone_light import seen_area
 from holo_core.scene.hologram import Hologram
 from holo_core.scene.mesh import Mesh
 from holo_core.scene.plate import ViewingZone, box_corners
