@@ -4,6 +4,7 @@ the planner and Blender's process use parts of it without loading the OpenCL dri
 from __future__ import annotations
 
 import sys
+import types
 from importlib import import_module
 
 
@@ -23,3 +24,21 @@ def lazy_names(package: str, api: dict, packages=()):
         return sorted({*vars(sys.modules[package]), *api, *packages})
 
     return __getattr__, __dir__
+
+
+def lazy_package(package: str, api: dict) -> None:
+    """Make the imported package ``package`` serve each name of ``api`` from the submodule it
+    maps to, on first use, even where a submodule of the same name has been imported since
+    (PEP 562's ``__getattr__`` then no longer asks: the import sets the module as the
+    package's attribute)."""
+
+    class LazyPackage(types.ModuleType):
+        def __getattribute__(self, name):
+            if name in api:
+                return getattr(import_module(api[name], package), name)
+            return super().__getattribute__(name)
+
+        def __dir__(self):
+            return sorted({*super().__dir__(), *api})
+
+    sys.modules[package].__class__ = LazyPackage

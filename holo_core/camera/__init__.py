@@ -9,6 +9,14 @@ of an arbitrarily placed camera).
 - ``render.py``: the image, its coverage and its depth
 """
 
-from .render import render_camera
-
 __all__ = ["render_camera"]
+
+
+def __getattr__(name):
+    # the renderer imports its module (and the OpenCL driver) on first use: the optics and
+    # the raster are pure arithmetic, and Blender's process reads them for the estimates
+    if name == "render_camera":
+        from .render import render_camera
+
+        return render_camera
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -45,9 +45,7 @@ viewed by any camera in that zone.
   moves
 """
 
-import sys
-import types
-from importlib import import_module
+from ..lazy import lazy_package
 
 # the names below import their modules on first use: the planner (plan.py) is pure arithmetic,
 # and Blender's process imports it without the OpenCL driver the recorder and the viewer load
@@ -70,17 +68,4 @@ _API = {
 __all__ = sorted(_API)
 
 
-class _Package(types.ModuleType):
-    """The package whose API names are its functions, also where a module of the same name
-    was imported and set as the package's attribute."""
-
-    def __getattribute__(self, name):
-        if name in _API:
-            return getattr(import_module(_API[name], __name__), name)
-        return super().__getattribute__(name)
-
-    def __dir__(self):
-        return sorted({*super().__dir__(), *_API})
-
-
-sys.modules[__name__].__class__ = _Package
+lazy_package(__name__, _API)
