@@ -9,14 +9,17 @@ pass of it, each run as the add-on runs them, in worker processes:
 2. in a new worker with that cache now warm;
 3. twice in one worker (the second run: the work alone).
 
-1 − 2 is the first time's set-up, 2 − 3 a worker's start. Then the stages, each timed on its
-own in a process with that warm cache (:func:`stage_rates`), on the small reference and on
-one with twice its pixels a side and a five times wider zone: the emitters found, the zone
-sum, the files, the view, a camera pass with Speckle: Exact and with 2 and 10 looks, each fitted as a fixed cost and
-a rate; 3 less the camera pass's stages is a job's own cost. Everything is taken as on an idle machine: each time divided by the
+1 − 2 is the first time's set-up (the camera pass's less its FFT plans, which the estimates
+count from the lengths a job transforms), 2 − 3 a worker's start. Then the stages, each
+timed on its own in a process with that warm cache (:func:`stage_rates`), on the small
+reference and on one with twice its pixels a side and a five times wider zone: the emitters
+found, the zone sum, the files, the view, a camera pass with Speckle: Exact and with 2 and
+10 looks, each fitted as a fixed cost and a rate (:func:`_fit`); 3 less the camera pass's
+stages is a job's own cost; and FFTW's measuring of a few lengths' plans
+(:func:`plan_rate`). Everything is taken as on an idle machine: each time divided by the
 load's slowdown as it began (:func:`holo_core.estimate.slowdown`), which the estimates
 multiply back by the load of their time. Cycles' radiance is not measured here (no
-Blender): its default stays. About two minutes on a 2-core CPU; the user's own caches are
+Blender): its default stays. About a minute on a 2-core CPU; the user's own caches are
 left as they were.
 """
 
@@ -146,15 +149,49 @@ def _stages(meshes, cam, plate, folder: Path) -> tuple[dict, dict]:
     fine = cam.resolution[0] * cam.resolution[1] * 2**2  # the default supersampling
     names = ("emitters", "zone sum", "files", "view", "exact", "camera 2", "camera 10")
     work = dict(zip(names, (p.emitters, p.pairs(), p.disk_bytes(), v.seconds, fine, fine, fine)))
-    return work, dict(zip(names, d))
+    seconds = dict(zip(names, d))
+    # the emitters' own: the triangles' share is the estimate's constant (TRIANGLE_SECONDS)
+    seconds["emitters"] = max(seconds["emitters"] - p.triangles * estimate.TRIANGLE_SECONDS, 0.0)
+    return work, seconds
 
 
 def _fit(small, large, default_rate) -> tuple[float, float]:
-    """(seconds a unit, fixed seconds) through two (work, seconds); the default's rate where
-    the larger did not take longer (noise from other work)."""
+    """(seconds a unit, fixed seconds) through two (work, seconds). Where the larger took
+    less than twice the smaller's time, both are mostly fixed cost and their difference
+    mostly noise: the rate is then the larger's time over its work (an upper bound: its
+    fixed cost counted as work), which a job of much more work than the references reads
+    truly (bench/estimates.py's shot writes 12 times the larger reference's bytes); the
+    default's rate where the larger did not take longer at all."""
     (u0, t0), (u1, t1) = small, large
-    rate = (t1 - t0) / (u1 - u0) if u1 > u0 and t1 > t0 else default_rate
+    if not (u1 > u0 and t1 > t0):
+        rate = default_rate
+    elif t1 < 2 * t0:
+        rate = t1 / u1
+    else:
+        rate = (t1 - t0) / (u1 - u0)
     return rate, max(t0 - rate * u0, 0.0)
+
+
+PLAN_LENGTHS = (480, 1080, 1440, 2500, 3645)  # FFT lengths few and many ways to factor
+
+
+def plan_rate(lengths=PLAN_LENGTHS) -> float:
+    """:attr:`~holo_core.estimate.Calibration.fft_plan_seconds`: FFTW's measuring of a
+    column pass's and a row pass's problem of each of ``lengths``, from no wisdom, per
+    problem and τ(L)^1.5 (:func:`holo_core.estimate.fft_plans`). It forgets this process's
+    wisdom: the last step of a process."""
+    import pyfftw
+
+    seconds = units = 0.0
+    for n in lengths:
+        for shape, axis in (((n, 16), 0), ((16, n), 1)):
+            pyfftw.forget_wisdom()
+            a = pyfftw.empty_aligned(shape, np.complex64)
+            t = time.perf_counter()
+            pyfftw.FFTW(a, a, axes=(axis,), flags=("FFTW_MEASURE",), threads=1)
+            seconds += time.perf_counter() - t
+            units += estimate.divisors(n) ** 1.5
+    return seconds / units
 
 
 def stage_rates(*, say=log.info) -> dict:
@@ -181,6 +218,8 @@ def stage_rates(*, say=log.info) -> dict:
     # the camera pass: a look's fine pixels from 2 against 10 looks (the larger: more of
     # them), then the pass's own rate and fixed cost from the two sizes' passes of 2 looks
     work, secs = large
+    k = estimate.slowdown()  # as on an idle machine, as every stage
+    planned = plan_rate() / k
     look = max(secs["camera 10"] - secs["camera 2"], 0.0) / 8 / work["camera 2"]
     once = [(w["camera 2"], t["camera 2"] - 2 * look * w["camera 2"]) for w, t in (small, large)]
     fits["camera 2"] = _fit(*once, d.camera_pixel_seconds)
@@ -197,6 +236,7 @@ def stage_rates(*, say=log.info) -> dict:
         "camera_fixed": fits["camera 2"][1],
         "exact_pixel_seconds": fits["exact"][0],
         "exact_fixed": fits["exact"][1],
+        "fft_plan_seconds": planned,
     }
 
 
@@ -258,7 +298,12 @@ def measure(*, device: str | None = None, say=log.info) -> estimate.Calibration:
         process_plate_seconds=max(0.0, warm["plate"] - work["plate"]),
         process_camera_seconds=max(0.0, warm["camera"] - work["camera"]),
         first_plate_seconds=max(0.0, cold["plate"] - warm["plate"]),
-        first_camera_seconds=max(0.0, cold["camera"] - warm["camera"]),
+        first_camera_seconds=0.0,
+    )
+    # the camera pass's FFT plans are counted apart, from the lengths a job transforms
+    plans = estimate.fft_plans(estimate.camera_lengths(jobs["camera"]), measured)
+    measured = replace(
+        measured, first_camera_seconds=max(0.0, cold["camera"] - warm["camera"] - plans)
     )
     return measured  # Cycles' radiance is not measured here: the default's (idle) rates stay
 

@@ -4,8 +4,9 @@ pays the first time (a fresh cache). Pure arithmetic and small files: it imports
 or FFT driver, so Blender's process and the planner call it.
 
 - Work, each stage a fixed cost (``*_fixed``: its launches, its buffers) and a rate. A
-  plate's recording: its emitters found (``emitter_seconds`` each) and the zone sum's pairs
-  (emitter, sample) at ``pairs_per_second``; its files written at ``write_bytes_per_second``;
+  plate's recording: its emitters found (``emitter_seconds`` each, and TRIANGLE_SECONDS a
+  triangle they are found among) and the zone sum's pairs (emitter, sample, and each
+  sample's own: :meth:`holo_core.plate.plan.PlatePlan.pairs`) at ``pairs_per_second``; its files written at ``write_bytes_per_second``;
   a view: the plan's view seconds (:func:`holo_core.plate.plan.plan_view`, its window
   samples and fine pixels at the development machine's rates) times ``view_factor``. A camera
   pass with Speckle: Exact (one incoherent pass): its fine pixels (W·H·s²) at
@@ -18,15 +19,19 @@ or FFT driver, so Blender's process and the planner call it.
   new worker: a render's first frame, each frame of a farm; a render's later frames share
   the worker that made the first.
 - The first time on this machine (``first_plate_seconds``, ``first_camera_seconds``): the programs compiled and the FFT plans
-  measured, where the kernel cache is cold. Whether it is warm is known from the cache:
+  measured, where the kernel cache is cold; a camera pass's FFT plans counted apart, from
+  the lengths it transforms (:func:`fft_plans`: FFTW's measuring of a length takes from
+  0.01 s to 0.8 s by the ways it factors, more than the rest of a camera pass's first time
+  at 640x360). Whether it is warm is known from the cache:
   a worker leaves a stamp (this version, this device, the route) beside the FFT wisdom once a
   job of the route has run, and the stamp counts while the kernel cache it filled is there.
-  An image size the FFT wisdom has not seen measures its plans once more, on a warm cache
+  An image size the FFT wisdom has not seen measures its plans once more on a warm cache
   too: that is not counted (seconds for a new size, once).
 
-- The load. Every part is as on an idle machine, times :func:`slowdown`: 1 + the load
-  average over the CPUs, as the estimate is made (a job that would use every CPU gets its
-  fair share beside other work); the words give the factor where it is 1.2 or more.
+- The load. Every part is as on an idle machine, times :func:`slowdown`: 1 + the CPUs other
+  work keeps busy as the estimate is made (sampled for a tenth of a second), over the CPUs
+  (a job that would use every CPU gets its fair share beside other work); the words give
+  the factor where it is 1.2 or more.
 
 The rates are a :class:`Calibration`: measured on this machine by ``python -m holo_core
 calibrate`` and kept in the user cache directory (``holo/estimates.json``, beside the FFT
@@ -42,6 +47,7 @@ import json
 import logging
 import math
 import os
+import time
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 
@@ -58,6 +64,13 @@ PART_SECONDS = 1.5
 # a lattice; 0.8 s a 1 m dolly part's 443k emitters, bench/shot.py --set)
 VISIBILITY_SECONDS = 2e-6
 STAMP = "warm-{kind}-{key}.stamp"
+# [s] a triangle the emitters are found among: its crossings with the zone centre's rays,
+# whatever emitters it holds (the development machine: the shot's 36,876 triangles 0.37 s)
+TRIANGLE_SECONDS = 1e-5
+FFT_PROBLEMS = 1.5  # plans measured a transform length (the demo's camera pass: 9 for 6 lengths)
+# [s] the present load is sampled over this long: 10 clock ticks a CPU, the estimate a tenth
+# of a second later
+LOAD_SAMPLE = 0.1
 KINDS = ("plate", "camera")
 
 
@@ -84,6 +97,7 @@ class Calibration:
     process_camera_seconds: float
     first_plate_seconds: float
     first_camera_seconds: float
+    fft_plan_seconds: float
 
     def __post_init__(self):
         for f in fields(self):
@@ -133,6 +147,7 @@ DEFAULT = Calibration(
     process_camera_seconds=1.2,
     first_plate_seconds=8.0,
     first_camera_seconds=1.5,
+    fft_plan_seconds=2.0e-3,
 )
 
 
@@ -190,21 +205,61 @@ def duration(seconds: float) -> str:
     return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.2g} h"
 
 
+def _cpus() -> set[int] | None:
+    return os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else None
+
+
+def _cpu_ticks(cpus: set[int]) -> dict[int, tuple[int, int]] | None:
+    """(busy, all) clock ticks of each of ``cpus`` since boot, from /proc/stat (None where
+    the system has none)."""
+    try:
+        with open("/proc/stat", encoding="ascii") as f:
+            lines = f.read().splitlines()
+    except OSError:
+        return None
+    ticks = {}
+    for line in lines:
+        name, *values = line.split()
+        if name.startswith("cpu") and name[3:].isdigit() and int(name[3:]) in cpus:
+            t = [int(v) for v in values[:8]]  # user nice system idle iowait irq softirq steal
+            ticks[int(name[3:])] = (sum(t) - t[3] - t[4], sum(t))
+    return ticks or None
+
+
+def busy_cpus(seconds: float = LOAD_SAMPLE) -> float | None:
+    """How many of this process's CPUs other work keeps busy now: their busy share over
+    ``seconds`` [s] of /proc/stat, summed (this process sleeps meanwhile); None where the
+    system has no /proc/stat."""
+    cpus = _cpus()
+    before = _cpu_ticks(cpus) if cpus else None
+    if before is None:
+        return None
+    time.sleep(seconds)
+    after = _cpu_ticks(cpus) or {}
+    busy = 0.0
+    for c, (b0, t0) in before.items():
+        b1, t1 = after.get(c, (b0, t0))
+        busy += (b1 - b0) / (t1 - t0) if t1 > t0 else 0.0
+    return busy
+
+
 def slowdown(load: float | None = None, cpus: int | None = None) -> float:
-    """The factor other work puts on a job's time: 1 + ``load`` / ``cpus`` (the 1-minute
-    load average before the job, default the system's now, over the CPUs this process may
-    use): a job that would use every CPU gets a fair share of them."""
+    """The factor other work puts on a job's time: 1 + ``load`` / ``cpus``, ``load`` the
+    CPUs other work keeps busy (default: :func:`busy_cpus` now; where the system cannot say,
+    the 1-minute load average), over the CPUs this process may use: a job that would use
+    every CPU gets a fair share of them. The load average is not the default because it
+    counts the work of the jobs that have just ended (a farm's previous frame, a bench's
+    previous run) as if it went on."""
+    if load is None:
+        load = busy_cpus()
     if load is None:
         try:
             load = os.getloadavg()[0]
         except OSError:  # no load average (Windows): taken as idle
             load = 0.0
     if cpus is None:
-        cpus = (
-            len(os.sched_getaffinity(0))
-            if hasattr(os, "sched_getaffinity")
-            else (os.cpu_count() or 1)
-        )
+        mine = _cpus()
+        cpus = len(mine) if mine else (os.cpu_count() or 1)
     return 1.0 + max(float(load), 0.0) / max(cpus, 1)
 
 
@@ -349,13 +404,59 @@ def _loaded(est: Estimate, load_average) -> Estimate:
     )
 
 
-def _setup(kind, cal, calibrated, device, cache_dir, warm) -> Estimate:
+def _setup(kind, cal, calibrated, device, cache_dir, warm, plans=0.0) -> Estimate:
+    """A new worker's set-up and, on a cold cache, the first time's (``plans``: its FFT
+    plans' seconds where they are counted apart)."""
     warm = is_warm(kind, device=device, cache_dir=cache_dir) if warm is None else warm
     return Estimate(
         process=cal.process_seconds(kind),
-        first=0.0 if warm else cal.first_seconds(kind),
+        first=0.0 if warm else cal.first_seconds(kind) + plans,
         calibrated=calibrated,
     )
+
+
+def _found(p, cal: Calibration) -> float:
+    """Seconds finding the emitters of the plan ``p``: their count, and the triangles they
+    are found among (TRIANGLE_SECONDS each, where the plan knows them)."""
+    return cal.emitters_fixed + p.emitters * cal.emitter_seconds + p.triangles * TRIANGLE_SECONDS
+
+
+def divisors(n: int) -> int:
+    """How many divisors the integer ``n`` >= 1 has."""
+    count, k = 0, 1
+    while k * k <= n:
+        if n % k == 0:
+            count += 1 if k * k == n else 2
+        k += 1
+    return count
+
+
+def fft_plans(lengths, cal: Calibration) -> float:
+    """Seconds FFTW takes to measure the plans of transforms of ``lengths`` (each once): per
+    length FFT_PROBLEMS problems (a pass's blocks: a full one and the last), each
+    ``cal.fft_plan_seconds`` × τ(L)^1.5, τ the number of divisors (the planner tries the
+    ways a length factors: over the 7-smooth lengths 100-4000 on the development machine
+    within a factor 1.5 rms of its measure, whatever the length)."""
+    return FFT_PROBLEMS * cal.fft_plan_seconds * sum(divisors(n) ** 1.5 for n in set(lengths))
+
+
+def camera_lengths(j) -> tuple[int, ...]:
+    """The FFT lengths the camera pass of the job ``j`` transforms
+    (:func:`holo_core.camera.optics.transform_lengths` of the optics it will choose for its
+    emitters' depths); none where no emitter lies in front of its camera (the job refuses
+    that itself)."""
+    from .camera.optics import choose_optics, transform_lengths
+    from .camera.raster import depth_range
+    from .validate import InputError
+
+    meshes = list(j.points + j.triangles)
+    try:
+        optics = choose_optics(
+            j.camera, depth_range(meshes, j.camera), supersample=j.route.supersample
+        )
+    except InputError:
+        return ()
+    return transform_lengths(optics, j.route.speckle)
 
 
 def plate(
@@ -380,7 +481,7 @@ def plate(
     work = [("job", cal.job_seconds)]
     if record:
         work += [
-            ("emitters", cal.emitters_fixed + p.emitters * cal.emitter_seconds),
+            ("emitters", _found(p, cal)),
             ("zone sum", cal.zone_sum_fixed + p.pairs(channels) / cal.pairs_per_second),
             ("files", p.disk_bytes(channels) / cal.write_bytes_per_second),
         ]
@@ -403,7 +504,7 @@ def plate_set(
     writing that outlasts the next sum counted; the last part's whole), their digest on the
     CPU beside the sum."""
     cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
-    found = max(cal.emitters_fixed + p.emitters * cal.emitter_seconds for p in s.plans)
+    found = max(_found(p, cal) for p in s.plans)
     seen = sum(p.emitters * VISIBILITY_SECONDS for p in s.plans)
     sums = [cal.zone_sum_fixed + p.pairs(channels) / cal.pairs_per_second for p in s.plans]
     files = [p.disk_bytes(channels) / cal.write_bytes_per_second for p in s.plans]
@@ -432,11 +533,13 @@ def camera(
     warm=None,
     calibration=None,
     load_average=None,
+    lengths=(),
 ) -> Estimate:
     """The estimate of a camera pass of ``resolution`` (W, H) pixels and ``supersample``
     fine pixels a pixel, with ``speckle`` 'EXACT' (one incoherent pass) or 'LOOKS'
     (``samples`` looks), in a new worker (``warm``, ``calibration``, ``load_average``: as
-    :func:`plate`'s)."""
+    :func:`plate`'s); ``lengths``: the FFT lengths it transforms (:func:`camera_lengths`),
+    whose plans a cold cache measures."""
     cal, calibrated = calibration or load(device=device, cache_dir=cache_dir)
     fine = resolution[0] * resolution[1] * supersample**2
     passed = (
@@ -446,8 +549,10 @@ def camera(
         + fine * (cal.camera_pixel_seconds + samples * cal.camera_look_seconds)
     )
     work = (("job", cal.job_seconds), ("camera pass", passed))
+    plans = fft_plans(lengths, cal)
     return _loaded(
-        replace(_setup("camera", cal, calibrated, device, cache_dir, warm), work=work), load_average
+        replace(_setup("camera", cal, calibrated, device, cache_dir, warm, plans), work=work),
+        load_average,
     )
 
 
@@ -496,6 +601,7 @@ def job(
             samples=j.route.samples,
             supersample=j.route.supersample,
             speckle=j.route.speckle,
+            lengths=camera_lengths(j),
             **common,
         )
     else:

@@ -34,11 +34,11 @@ from ..opencl.arrays import by_rows, empty, fill, read
 from ..opencl.kernel import BUFFER, kernel
 from ..optics import imaging
 from ..optics.imaging import ES_TABLE, IRIS_TAPER
-from ..propagation.grid import embedded, next_fast_len
+from ..propagation.grid import embedded
 from ..propagation.tilt import cached_array, es_table, es_transform
 from ..scene.camera import Camera
 from . import recording
-from .optics import PupilOptics
+from .optics import READ_PADDING, PupilOptics, read_shape
 from .raster import Emitters
 
 PROGRAM = associated(__file__)
@@ -59,8 +59,8 @@ EMBED_DEAPODIZED = kernel(PROGRAM, "embed_deapodized", Q=BUFFER, H=int32, W=int3
 # complex buffers of the padded grid on the device: 3 accumulators, 2 PSFs, and a map of a quarter
 # of its size
 BUFFERS = 5.25
-READ_PADDING = 1.5  # the images' grid is padded by this much for the ES read ...
-READ_TAPS, READ_BETA = 6, 2.03  # ... with these taps and this β per tap (FINUFFT's for 1.5x)
+# the read (its grid padded by READ_PADDING) with these taps and this β per tap (FINUFFT's for 1.5x)
+READ_TAPS, READ_BETA = 6, 2.03
 
 
 class IncoherentImages:
@@ -78,7 +78,7 @@ class IncoherentImages:
         self.map = empty(rt, (h, w))
         self.pupil, self.ones = empty(rt, (h, w)), empty(rt, (h, w))
         self.flat = [rt.to_device(np.ones(n), np.float32) for n in (h, w)]
-        self.read_shape = tuple(next_fast_len(math.ceil(READ_PADDING * n)) for n in self.shape)
+        self.read_shape = read_shape(self.shape)
         self.read = empty(rt, self.read_shape)
         self.deapodize = [
             rt.to_device(1 / es_transform(_signed(n) / m, READ_TAPS, READ_BETA), np.float32)

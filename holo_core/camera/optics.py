@@ -30,6 +30,8 @@ SUPERSAMPLE = 2  # fine pixels per pixel (per axis): the pupil resolves one fine
 LAYER_PHASE = math.pi / 2
 MAX_LAYERS = 512
 EDGE_BINS = 8  # bins beyond the field of view and its blur: the read's taps and a guard
+# the incoherent route's images' grid (twice the pupil's) is padded by this much for the ES read
+READ_PADDING = 1.5
 
 
 @dataclass(frozen=True, slots=True, kw_only=True)
@@ -133,3 +135,21 @@ def choose_optics(
     )
     log.info("optics: %s", optics.describe())
     return optics
+
+
+def read_shape(shape) -> tuple[int, int]:
+    """The incoherent route's read grid: its images' grid ``shape`` (rows, cols) padded by
+    READ_PADDING to fast FFT sizes."""
+    return tuple(grid.next_fast_len(math.ceil(READ_PADDING * n)) for n in shape)
+
+
+def transform_lengths(optics: PupilOptics, speckle: str = "EXACT") -> tuple[int, ...]:
+    """The lengths of the FFTs a camera pass with ``optics`` transforms, each once (what its
+    FFT plans are measured for the first time: :mod:`holo_core.estimate`): the pupil's grid
+    (h, w) and its images' twice as fine; with ``speckle`` 'EXACT' (the incoherent route)
+    the images' read grid too."""
+    h, w = optics.shape
+    shapes = [(h, w), (2 * h, 2 * w)]
+    if speckle == "EXACT":
+        shapes.append(read_shape((2 * h, 2 * w)))
+    return tuple(dict.fromkeys(n for shape in shapes for n in shape))

@@ -334,6 +334,7 @@ def plan_parts(parts, points, *, looks: int = LOOKS, meshes=None) -> SetPlan:
                 pixel_angle=zone.pixel,
                 looks=looks,
                 seen=seen,
+                triangles=0 if shapes is None else sum(len(m.triangles) for m in shapes),
             )
         )
     centres = [

@@ -43,14 +43,27 @@ SAMPLE_BYTES = 8  # complex64
 # zone sum's pairs (emitter, sample) per second, per channel group (three colours cost one),
 # as this plan counts them (the emitters from the surfaces the zone sees, the footprints the
 # cones' whole: the sum skips their faded rims, and pays for the tiles they cut)
-# one look, its depth partner in the colours' pass, the colours one amplitude an emitter: the shot's
-# part of a 10 cm dolly at the 5 mm margin, 3.3e10 pairs (two coded looks) summed in 14.5 s
-PAIRS_PER_SECOND = 2.2e9
+# and each sample's own (PlatePlan.pairs); the colours one amplitude an emitter: the shot's
+# plate of bench/estimates.py at 0.5 and 1.0 (two coded looks), 6.4e9 and 5.6e10 pairs summed
+# in 3.3 s and 25.7 s
+PAIRS_PER_SECOND = 2.1e9
 # a further independent look in the same pass, of a look's time (its channels: on the shot's plate
 # two looks took 34.6 s, apart 51.5 s)
 FURTHER_LOOK = 0.35
 FURTHER_CODED = 0.12  # a further coded look (2 or m² looks): its classes' set-up and mixing
 COLOURS_ONLY = 0.8  # no depth partner: the colours' recurrence alone
+# where the depth partner rides on the colours' recurrence (its light turns from theirs by at
+# most PARTNER_TURN [rad] over a segment of SEG columns: zone_sum.py), a pair costs this much
+# (the shot's plate of bench/estimates.py at 1.0 against 0.5)
+PARTNER_RIDES = 0.7
+SEG = 32  # columns per work item of the zone sum: its recurrence's segment
+# [rad] the most (k2 - k)·|Δr| may turn over a segment for the partner to ride on the colours'
+# recurrence (linear between its ends: 1.25e-5 off)
+PARTNER_TURN = 0.01
+# a sample's own cost in the zone sum, in pairs: its work item scans its block's list of
+# emitters and writes each channel once, whatever lights it (the shot's plate at 0.25 and 0.5
+# fitted together; it holds for the sphere's at two zones)
+SAMPLE_PAIRS = 260
 VIEW_SAMPLE_SECONDS = 3.9e-9  # per window sample and channel of a view: read, filter, gather
 FINE_PIXEL_SECONDS = 7e-8  # per fine pixel and look of a view: spectra, image, assembly
 
@@ -67,7 +80,8 @@ class PlatePlan:
     band : the samples' band in direction cosine (x, y) (the zone's angle seen from the plate)
     pitch, row_pitch : the samples' spacing along x and y [m]; origin : (x, y) [m] of sample
         (0, 0); shape : (rows, cols)
-    emitters : the estimated emitter count; footprint : the mean samples an emitter lights
+    emitters : the estimated emitter count; footprint : the mean samples an emitter lights;
+        triangles : the meshes' triangles the emitters are found among (0: not known)
     looks : coded looks to record; tile : samples a side of a tiled recording's tile
     """
 
@@ -84,6 +98,7 @@ class PlatePlan:
     shape: tuple
     emitters: int
     footprint: float
+    triangles: int = 0
     looks: int = LOOKS
     tile: int = TILE
 
@@ -120,12 +135,22 @@ class PlatePlan:
         held = self.tile**2 if tiled else self.samples
         return 2 * SAMPLE_BYTES * channels * held + per_emitter * self.emitters
 
+    @property
+    def partner_rides(self) -> bool:
+        """Whether the depth partner's light rides on the colours' recurrence in the zone
+        sum (it turns from theirs by at most PARTNER_TURN over a segment)."""
+        k, k2 = (2 * math.pi / lam for lam in (self.wavelength, self.depth_wavelength))
+        return abs(k2 - k) * SEG * self.pitch <= PARTNER_TURN
+
     def pairs(self, channels=CHANNELS) -> float:
-        """The zone sum's work, every look in one pass: pairs (emitter, sample) of one look
-        with its channels, the further looks counted at their share of one."""
+        """The zone sum's work, every look in one pass, in pairs (emitter, sample) of one
+        look with its channels: the emitters' footprints (cheaper where the partner rides on
+        the colours, or there is none) and each sample's own SAMPLE_PAIRS, the further looks
+        counted at their share of one."""
         coded = self.looks == 2 or math.isqrt(self.looks) ** 2 == self.looks
         further = FURTHER_CODED if coded else FURTHER_LOOK
-        pairs = self.emitters * self.footprint * (1.0 if channels > 3 else COLOURS_ONLY)
+        pair = COLOURS_ONLY if channels <= 3 else PARTNER_RIDES if self.partner_rides else 1.0
+        pairs = self.emitters * self.footprint * pair + SAMPLE_PAIRS * self.samples
         return (1 + further * (self.looks - 1)) * pairs
 
     def record_seconds(self, channels=CHANNELS) -> float:
@@ -306,12 +331,14 @@ def plan(
     wavelength=None,
     tile: int | None = None,
     seen: float | None = None,
+    triangles: int = 0,
 ) -> PlatePlan:
     """The plan of a plate of ``plate_size`` (width, height) [m] for objects in the box
     ``bounds`` (2, 3) [m] (the plate's frame, z < 0) seen from ``zone``, whose views have
     pixels of ``pixel_angle`` [rad] (module docstring). ``wavelength`` [m] overrides λ1.
     ``seen``: the area of the surfaces the zone's centre sees (:func:`.zone_light.seen_area`, in squared
-    direction tangents), where the meshes are known, counts the emitters; else the box does."""
+    direction tangents), where the meshes are known, counts the emitters; else the box does;
+    ``triangles``: the meshes' triangles, where known (the emitters are found among them)."""
     width, height = validate.pair("plate_size", plate_size, "m")
     validate.positive("plate width", width, "m")
     validate.positive("plate height", height, "m")
@@ -391,6 +418,7 @@ def plan(
         shape=shape,
         emitters=emitters,
         footprint=footprint,
+        triangles=int(triangles),
         looks=looks,
         tile=tile or fitted_tile(shape),
     )

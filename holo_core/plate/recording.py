@@ -235,6 +235,7 @@ def plate_plan(
         looks=looks,
         tile=tile,
         seen=seen_area(local, zone.centre, sides),
+        triangles=sum(len(m.triangles) for m in local),
     )
     count = crossing_count(
         local, np.asarray(zone.centre, np.float64), zone_frame(zone, bounds), p.spacing

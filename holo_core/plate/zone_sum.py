@@ -29,6 +29,7 @@ from ..opencl import get_runtime
 from ..opencl.arrays import read
 from ..opencl.kernel import BUFFER, REAL, kernel
 from ..opencl.runtime import associated
+from .plan import PARTNER_TURN, SEG
 
 PROGRAM = associated(__file__)
 # the kernels' signatures as tables (their arguments in the .cl file's order)
@@ -45,12 +46,8 @@ MIX_CLASSES = kernel(PROGRAM, "mix_classes", out=BUFFER, sums=BUFFER, mixing=BUF
                      looks=int32, classes=int32, plane=int64)
 # fmt: on
 
-SEG = 32  # columns per work item: the recurrence's segment
 BLOCK = 256  # emitters are listed per BLOCK x BLOCK samples
 SHARED_PHASE = 1e-6  # an emitter's channels whose amplitudes' phases agree to this share one
-# [rad] the most (k2 - k)·|Δr| may turn over a segment for the partner to ride on the colours'
-# recurrence (linear between its ends: 1.25e-5 off)
-PARTNER_TURN = 0.01
 
 
 @dataclass(frozen=True, slots=True, kw_only=True, eq=False)

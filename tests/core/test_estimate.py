@@ -5,9 +5,14 @@ measured times is bench/estimates.py's: no timed test.)"""
 
 import json
 import logging
+import os
+import subprocess
+import sys
 from dataclasses import asdict, replace
+from pathlib import Path
 
 import numpy as np
+import plate_scene
 import pytest
 
 from holo_core import estimate
@@ -15,6 +20,7 @@ from holo_core.estimate import DEFAULT, Calibration, Estimate
 from holo_core.plate.plan import plan, plan_view, summary
 from holo_core.scene.plate import ViewingZone
 
+ROOT = Path(__file__).resolve().parents[2]
 BOX = np.array([[-0.02, -0.015, -0.33], [0.025, 0.02, -0.28]])
 ZONE = ViewingZone(centre=(0.01, -0.005, 0.3), half_extents=(0.04, 0.03, 0.02), pupil=0.05 / 2.8)
 MEASURED = replace(
@@ -176,6 +182,29 @@ def test_other_work_on_the_machine_scales_every_part_by_its_fair_share(cache):
     assert "idle" not in idle.words(), idle.words()
 
 
+@pytest.mark.skipif(not Path("/proc/stat").is_file(), reason="the CPUs' ticks are Linux's")
+def test_the_present_load_counts_other_work_now_not_the_minute_before():
+    """busy_cpus: a process spinning on one CPU while the sample is taken counts as about one
+    busy CPU (other work on the machine may add to it, never take from it); once it has
+    ended it no longer counts, where the 1-minute load average would still hold most of it."""
+    import subprocess
+    import sys
+    import time
+
+    cpus = len(os.sched_getaffinity(0))
+    spin = subprocess.Popen(
+        [sys.executable, "-c", "import time\nt = time.time()\nwhile time.time() - t < 3: pass"]
+    )
+    try:
+        time.sleep(0.5)
+        busy = estimate.busy_cpus(0.5)
+    finally:
+        spin.wait()
+    assert 0.7 <= busy <= cpus + 1e-9, busy
+    after = estimate.busy_cpus(0.5)
+    assert 0.0 <= after <= cpus + 1e-9 and after < busy - 0.4, (busy, after)
+
+
 def test_the_words_say_the_set_up_apart():
     est = Estimate(work=(("a", 3.0), ("b", 1.6)), process=2.4, first=4.0, calibrated=True)
     assert est.words() == (
@@ -232,6 +261,49 @@ def test_a_camera_pass_costs_its_fine_pixels_once_and_each_look():
         rel=1e-12,
     )
     assert est.process == MEASURED.process_camera_seconds and est.first == 0.0
+
+
+def test_a_cold_camera_pass_counts_the_plans_of_the_lengths_it_transforms():
+    """FFTW's measuring of a length grows with the ways it factors (τ(L)^1.5 a problem, and
+    FFT_PROBLEMS problems a length): 1440 = 2⁵·3²·5 (36 divisors) costs 36^1.5 / 4^1.5 = 27
+    times 343 = 7³; each length counts once, and only where the cache is cold."""
+    assert [estimate.divisors(n) for n in (1, 7, 343, 1440, 3600)] == [1, 2, 4, 36, 45]
+    one = estimate.fft_plans([343], MEASURED)
+    assert one == pytest.approx(estimate.FFT_PROBLEMS * MEASURED.fft_plan_seconds * 8)
+    assert estimate.fft_plans([1440, 1440], MEASURED) == pytest.approx(27 * one)
+    kw = {"samples": 16, "supersample": 2, "calibration": (MEASURED, True), "load_average": 0}
+    cold = estimate.camera((640, 360), warm=False, lengths=(343, 1440), **kw)
+    assert cold.first == pytest.approx(MEASURED.first_camera_seconds + 28 * one)
+    assert estimate.camera((640, 360), warm=True, lengths=(343, 1440), **kw).first == 0.0
+
+
+def test_a_camera_jobs_lengths_are_its_optics_grids_found_without_a_driver():
+    """A camera job's FFT lengths are those of the optics its emitters' depths choose (the
+    pupil's grid, its images' twice as fine, and their read grid for Speckle: Exact), found
+    by pure arithmetic: the estimate, in Blender's process, loads neither OpenCL nor FFTW."""
+    code = (
+        "import sys\n"
+        "sys.path.insert(0, 'tests')\n"
+        "import plate_scene\n"
+        "from holo_core import estimate\n"
+        "from holo_core.job import CameraRoute, Job, Output\n"
+        "job = Job(camera=plate_scene.camera(scale=0.25), route=CameraRoute(),\n"
+        "          triangles=tuple(plate_scene.meshes()), output=Output(folder='out'))\n"
+        "print(list(estimate.camera_lengths(job)))\n"
+        "print(sorted(m for m in sys.modules if m.split('.')[0] in "
+        "('pyopencl', 'pyfftw', 'pyvkfft', 'holo_core') and ('opencl' in m or 'fft' in m)))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT
+    ).stdout.splitlines()
+    assert out[1] == "[]", out
+    lengths = eval(out[0])
+    from holo_core.camera.optics import choose_optics, read_shape
+    from holo_core.camera.raster import depth_range
+
+    cam = plate_scene.camera(scale=0.25)
+    h, w = choose_optics(cam, depth_range(plate_scene.meshes(), cam)).shape
+    assert lengths == list(dict.fromkeys([h, w, 2 * h, 2 * w, *read_shape((2 * h, 2 * w))]))
 
 
 def test_a_sets_parts_add_up_and_each_parts_files_are_written_beside_the_next_sum(cache):
