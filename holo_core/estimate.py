@@ -48,6 +48,7 @@ import logging
 import math
 import os
 import time
+import warnings
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 
@@ -71,6 +72,7 @@ FFT_PROBLEMS = 1.5  # plans measured a transform length (the demo's camera pass:
 # [s] the present load is sampled over this long: 10 clock ticks a CPU, the estimate a tenth
 # of a second later
 LOAD_SAMPLE = 0.1
+RECENT = 1.0  # [s] a load figure this young serves the next estimate as it is
 KINDS = ("plate", "camera")
 
 
@@ -226,21 +228,39 @@ def _cpu_ticks(cpus: set[int]) -> dict[int, tuple[int, int]] | None:
     return ticks or None
 
 
-def busy_cpus(seconds: float = LOAD_SAMPLE) -> float | None:
-    """How many of this process's CPUs other work keeps busy now: their busy share over
-    ``seconds`` [s] of /proc/stat, summed (this process sleeps meanwhile); None where the
-    system has no /proc/stat."""
+_said = None  # the last (monotonic [s], busy CPUs)
+
+
+def _own_ticks() -> float:
+    """Clock ticks this process has run, its threads and the children it has waited for."""
+    t = os.times()
+    return (t.user + t.system + t.children_user + t.children_system) * os.sysconf("SC_CLK_TCK")
+
+
+def busy_cpus(seconds: float | None = None) -> float | None:
+    """How many of this process's CPUs other work keeps busy now: the busy ticks of
+    /proc/stat over ``seconds`` [s] less this process's own, over the span (None where the
+    system has no /proc/stat). None: the figure said less than RECENT ago (the parts of one
+    estimate share one), else sampled over LOAD_SAMPLE. Not the ticks since an earlier
+    reading: a process's children it has not waited for (Blender's worker) would count as
+    other work, as the load average counts the jobs that have just ended."""
+    global _said
+    now = time.monotonic()
+    if seconds is None and _said is not None and now - _said[0] < RECENT:
+        return _said[1]
     cpus = _cpus()
     before = _cpu_ticks(cpus) if cpus else None
     if before is None:
         return None
-    time.sleep(seconds)
+    own = _own_ticks()
+    time.sleep(LOAD_SAMPLE if seconds is None else seconds)
     after = _cpu_ticks(cpus) or {}
-    busy = 0.0
-    for c, (b0, t0) in before.items():
-        b1, t1 = after.get(c, (b0, t0))
-        busy += (b1 - b0) / (t1 - t0) if t1 > t0 else 0.0
-    return busy
+    own = _own_ticks() - own
+    busy = sum(after.get(c, v)[0] - v[0] for c, v in before.items()) - own
+    span = sum(after.get(c, v)[1] - v[1] for c, v in before.items()) / len(before)
+    figure = max(busy, 0.0) / span if span > 0 else 0.0
+    _said = (time.monotonic(), figure)
+    return figure
 
 
 def slowdown(load: float | None = None, cpus: int | None = None) -> float:
@@ -404,13 +424,16 @@ def _loaded(est: Estimate, load_average) -> Estimate:
     )
 
 
+def _warm(kind, device, cache_dir, warm) -> bool:
+    return is_warm(kind, device=device, cache_dir=cache_dir) if warm is None else warm
+
+
 def _setup(kind, cal, calibrated, device, cache_dir, warm, plans=0.0) -> Estimate:
     """A new worker's set-up and, on a cold cache, the first time's (``plans``: its FFT
     plans' seconds where they are counted apart)."""
-    warm = is_warm(kind, device=device, cache_dir=cache_dir) if warm is None else warm
     return Estimate(
         process=cal.process_seconds(kind),
-        first=0.0 if warm else cal.first_seconds(kind) + plans,
+        first=0.0 if _warm(kind, device, cache_dir, warm) else cal.first_seconds(kind) + plans,
         calibrated=calibrated,
     )
 
@@ -451,9 +474,11 @@ def camera_lengths(j) -> tuple[int, ...]:
 
     meshes = list(j.points + j.triangles)
     try:
-        optics = choose_optics(
-            j.camera, depth_range(meshes, j.camera), supersample=j.route.supersample
-        )
+        with warnings.catch_warnings():  # the pass warns of its own sampling itself
+            warnings.simplefilter("ignore")
+            optics = choose_optics(
+                j.camera, depth_range(meshes, j.camera), supersample=j.route.supersample
+            )
     except InputError:
         return ()
     return transform_lengths(optics, j.route.speckle)
@@ -601,7 +626,7 @@ def job(
             samples=j.route.samples,
             supersample=j.route.supersample,
             speckle=j.route.speckle,
-            lengths=camera_lengths(j),
+            lengths=() if _warm("camera", device, cache_dir, warm) else camera_lengths(j),
             **common,
         )
     else:

@@ -9,14 +9,10 @@ of an arbitrarily placed camera).
 - ``render.py``: the image, its coverage and its depth
 """
 
-__all__ = ["render_camera"]
+from ..lazy import lazy_names
 
-
-def __getattr__(name):
-    # the renderer imports its module (and the OpenCL driver) on first use: the optics and
-    # the raster are pure arithmetic, and Blender's process reads them for the estimates
-    if name == "render_camera":
-        from .render import render_camera
-
-        return render_camera
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+# the renderer imports its module (and the OpenCL driver) on first use: the optics and the
+# raster are pure arithmetic, and Blender's process reads them for the estimates
+_API = {"render_camera": ".render"}
+__all__ = sorted(_API)
+__getattr__, __dir__ = lazy_names(__name__, _API)

@@ -138,13 +138,13 @@ def choose_optics(
 
 
 def read_shape(shape) -> tuple[int, int]:
-    """The incoherent route's read grid: its images' grid ``shape`` (rows, cols) padded by
-    READ_PADDING to fast FFT sizes."""
+    """The incoherent route's read grid (rows, cols) [samples]: its images' grid ``shape``
+    (rows, cols) [samples] padded by READ_PADDING to fast FFT sizes."""
     return tuple(grid.next_fast_len(math.ceil(READ_PADDING * n)) for n in shape)
 
 
 def transform_lengths(optics: PupilOptics, speckle: str = "EXACT") -> tuple[int, ...]:
-    """The lengths of the FFTs a camera pass with ``optics`` transforms, each once (what its
+    """The lengths [samples] of the FFTs a camera pass with ``optics`` transforms, each once (what its
     FFT plans are measured for the first time: :mod:`holo_core.estimate`): the pupil's grid
     (h, w) and its images' twice as fine; with ``speckle`` 'EXACT' (the incoherent route)
     the images' read grid too."""
