@@ -8,7 +8,7 @@ Zone to Camera around the centre camera, ``--margin`` 5 cm, the add-on's earlier
 the side cameras' pupils leave by 2 mm). Four coded looks of one seed are recorded (as two
 pairs, so that the recording holds half of them at a time: the checkerboard pair is looks 0
 and 3 of the four). For each setting (2 or 4 looks, Supersample 2 or the view's Nyquist rate,
-:func:`holo_core.plate.view.nyquist_supersample`) and for the plan's own choice
+:func:`holo_core.plate.window.nyquist_supersample`) and for the plan's own choice
 (:func:`holo_core.plate.quality.choose`, what Auto renders: its looks recorded apart) the
 views of the three cameras are compared with their camera holograms (Speckle: Exact, the
 add-on's default camera pass, and the same at supersample 4, taken as converged: the default
@@ -40,10 +40,12 @@ from plate_scene import PLATE, camera, meshes  # noqa: E402
 
 from holo_core.camera.render import render_camera  # noqa: E402
 from holo_core.io.image import write_png  # noqa: E402
+from holo_core.plate.look_codes import look_code  # noqa: E402
 from holo_core.plate.looks import record_planned  # noqa: E402
 from holo_core.plate.quality import choose, reference_view, speckle_variance  # noqa: E402
-from holo_core.plate.recording import look_code, plate_plan  # noqa: E402
-from holo_core.plate.view import nyquist_supersample, render_view  # noqa: E402
+from holo_core.plate.recording import plate_plan  # noqa: E402
+from holo_core.plate.view import render_view  # noqa: E402
+from holo_core.plate.window import nyquist_supersample  # noqa: E402
 from holo_core.scene.plate import SHOT_ZONE_MARGIN, Plate, ViewingZone  # noqa: E402
 
 CONVERGED = 4  # the camera hologram's supersampling taken as converged (beside its default)

@@ -16,7 +16,8 @@ import warnings
 import numpy as np
 
 from holo_core.opencl import get_runtime
-from holo_core.plate.point_sources import Grid, cone_weight, point_wave
+from holo_core.plate.point_sources import point_wave
+from holo_core.plate.point_sum import Grid, cone_weight
 from holo_core.propagation import grid
 
 sys.path.insert(0, os.path.dirname(__file__))

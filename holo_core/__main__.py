@@ -153,8 +153,8 @@ def _record_zone(args, mesh, out, tiled) -> int:
     """The plate of meshes: its zone and reference view from the camera options, the plate
     (z = 0 of the world, the mesh behind it) as large as the light to the zone needs."""
     from .io.hologram import write_hologram
+    from .plate.look_codes import look_code
     from .plate.looks import record_plate
-    from .plate.recording import look_code
 
     v = mesh.vertices
     plate, cam, p = _plate_for(args, [v.min(0), v.max(0)])
@@ -286,7 +286,8 @@ def plan(args) -> int:
 
     import numpy as np
 
-    from .plate.plan import plan_view, summary
+    from .plate.plan import plan_view
+    from .plate.plan_summary import summary
 
     if args.bounds is not None:  # where they are: no move
         bounds = np.reshape(args.bounds, (2, 3))

@@ -28,7 +28,8 @@ from holo_core.acquired.framing import default_camera, stated_plane
 from holo_core.io.hologram import HologramFileError, read_hologram
 from holo_core.io.plate_set import parts_from_json, parts_to_json
 from holo_core.plate.path import parts_along, plan_parts
-from holo_core.plate.plan import plan, plan_view, summary
+from holo_core.plate.plan import plan, plan_view
+from holo_core.plate.plan_summary import summary
 from holo_core.plate.quality import choose
 from holo_core.plate.zone_light import seen_area
 from holo_core.scene.hologram import Hologram
@@ -340,7 +341,7 @@ def budget(h) -> tuple[float, float]:
 
 
 def plan_summary(context) -> list[str]:
-    """The planner's verdict and figures (:func:`holo_core.plate.plan.summary`) for the
+    """The planner's verdict and figures (:func:`holo_core.plate.plan_summary.summary`) for the
     selected plate, the holographic objects, the scene camera and the recording settings,
     in the plate's frame; the planner runs here, in Blender's process (pure arithmetic). A
     plate made a set of parts: :func:`set_summary`."""

@@ -1,4 +1,4 @@
-/* What the per-segment recurrence kernels share (plate/point_sources.cl, plate/zone_sum.cl): a
+/* What the per-segment recurrence kernels share (plate/point_sum.cl, plate/zone_sum.cl): a
  * work item's VEC rows as the lanes of a float vector (floatv; VEC must be defined), REAL
  * (double where the device has it) for the exact phases, and the short series that stand in
  * for exp and sincos, whose arguments there are small. */

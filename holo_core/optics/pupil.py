@@ -7,7 +7,7 @@ the pinhole that balances the two for its own sampling:
 
 - :func:`camera_pupil` (full-band plates' views): λ/D spans ``PINHOLE_SAMPLES`` pixels,
   D ≤ √(λ·r); a carrier plate's views take the smallest pupil as sharp as the plate's own,
-  λ/D a fine pixel (:func:`holo_core.plate.view.pinhole_view_pupil`);
+  λ/D a fine pixel (:func:`holo_core.plate.window.pinhole_view_pupil`);
 - :func:`pinhole_wavelength` (plate sampling): the λ at which both blurs reach two pixels,
   λ = 4Δ²r;
 - :func:`defocus_limited_diameter` (camera holograms): the widest pupil, focused in the middle

@@ -3,6 +3,7 @@ viewed by any camera in that zone.
 
 - ``plan.py``: a plate's samples, wavelengths, emitters and costs, from its zone and the views
   it serves (pure arithmetic: no driver)
+- ``plan_summary.py``: the plan in plain words, the verdict first
 - ``zone_light.py``: the light from the objects to the zone as it crosses the plate: the
   window, its band, the surfaces the zone sees (pure arithmetic: no driver)
 - ``quality.py``: the looks and supersampling its views need to reach a quality target,
@@ -13,20 +14,25 @@ viewed by any camera in that zone.
   points each is seen from (depth buffers over the zone)
 - ``zone_sum.py``: the samples as a sum of the emitters' waves towards the zone (Eq. 3)
 - ``recording.py``: a plate of meshes planned once, its emitters and amplitudes prepared for
-  the sums, its coded looks
+  the sums
+- ``look_codes.py``: each look's emitter phases: coded looks of one seed, or seeds of their own
 - ``looks.py``: the looks of a plate of meshes recorded in one pass, in memory or into stores
 - ``tiles.py``: plates larger than memory, recorded tile by tile as Dask tasks into a tiled
   store (plates of meshes against their carrier; point sums)
+- ``tile_tasks.py``: a tiled recording's tasks, one a tile, as a Dask worker runs them
 - ``reference.py``: the plane reference wave and H = |O + R|² (Eq. 4, 16)
 - ``sampling.py``: the point sums' pitch, wavelengths and band (Sect. V)
-- ``point_sources.py``: the object wave of point emitters on the plate (Eq. 16-18)
+- ``point_sources.py``: the object wave of point emitters on the plate (Eq. 16-18), by the
+  cheaper of two sums:
+- ``point_sum.py``: every point–pixel pair inside each point's cone, on the device
+- ``recording_planes.py``: wavefront recording planes carried to the plate
 - ``triangles.py``: the object wave of textured triangles, by spectrum rotation (Sect. IV-C)
 - ``points.py``: point sums (complex, or against their reference, Eq. 19) of points and
   textured triangles
 - ``record.py``: a scene onto a plate, as a plate of meshes or a point sum (researchers')
 - ``reconstruction.py``: R'·H with the DC term suppressed (Sect. VI)
 - ``window.py``: the camera in the plate's frame, the part of the plate its pupil sees the
-  objects through, and the pupil's grid
+  objects through, the pupil's grid and a pinhole's pupil
 - ``to_pupil.py``: the plate's light carried to a camera's entrance pupil (a carrier plate's
   by demodulation, decimation and a non-uniform FFT; a full-band one by the angular spectrum)
 - ``gather.py``: a carrier plate's decimated samples summed onto the pupil's plane waves (the
@@ -41,6 +47,8 @@ viewed by any camera in that zone.
 - ``parts.py``: the parts recorded from one set of emitters
 - ``viewer.py``: a plate (or set, or their files) held for the views of a moving camera:
   full, coarse, and whether the pupil lies inside the zone
+- ``inside_zone.py``: whether a pupil lies inside the zone, and how far beyond it, in words
+- ``coarse_view.py``: a coarse view's camera (larger pixels, the same rays) and its upsampling
 - ``view_plans.py``: what a held plate's views share, planned once and reused as the camera
   moves
 """

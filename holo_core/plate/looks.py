@@ -158,7 +158,7 @@ def record_looks(
         World-space surfaces [m]; colours are linear RGB intensities.
     looks : int
         How many looks, >= 1: the coded looks of ``seed``
-        (:func:`~holo_core.plate.recording.look_code`) where ``looks`` allows (a square
+        (:func:`~holo_core.plate.look_codes.look_code`) where ``looks`` allows (a square
         number), else seeds ``seed``, ``seed`` + 1, ….
     plate, camera, zone, zone_margin, wavelength, depth, seed
         As for :func:`record_plate` (lengths [m]).

@@ -41,9 +41,10 @@ from ..scene.mesh import Mesh, outward
 from ..scene.plate_set import PathPart, PlateSet
 from ..validate import InputError
 from .emitters import Emitters, grid_points, surface_points, visibility, zone_frame
+from .look_codes import look_code
 from .path import lattice_parts
 from .plan import LAYERS
-from .recording import PlannedPlate, look_code, mesh_list, plate_plan, prepare_plate
+from .recording import PlannedPlate, mesh_list, plate_plan, prepare_plate
 
 log = logging.getLogger(__name__)
 
@@ -73,7 +74,7 @@ def record_set(
     parts : sequence of PathPart
         The parts, from :func:`holo_core.plate.path.parts_along`.
     looks : int
-        Coded looks of ``seed`` (:func:`holo_core.plate.recording.look_code`) per part, all
+        Coded looks of ``seed`` (:func:`holo_core.plate.look_codes.look_code`) per part, all
         parts from one set of emitters (module docstring).
     seed : int
         The emitters' random phases' seed.

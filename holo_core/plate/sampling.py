@@ -28,7 +28,7 @@ from .. import validate
 from ..optics.depth import DEPTH_MARGIN, partner_wavelength
 from ..optics.pupil import pinhole_wavelength
 from ..validate import InputError
-from .point_sources import CONE_RIM
+from .point_sum import CONE_RIM
 
 log = logging.getLogger(__name__)
 DEFAULT_BAND = 0.25  # sin θ of the viewing zone without a camera

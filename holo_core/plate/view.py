@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import jobs, memory, validate
 from ..acquired.framing import stated_plane
-from ..optics.pupil import Pupil, camera_pupil, intensity_supersample
+from ..optics.pupil import Pupil, camera_pupil
 from ..propagation.tilt import tilt_reach
 from ..scene.camera import Camera
 from ..scene.hologram import Hologram
@@ -32,9 +32,8 @@ from ..validate import MAX_SUPERSAMPLE, InputError, shown
 from ..view import BACKGROUND_DEPTH, RenderResult
 from .composition import black_view, compose
 from .path import part_for
-from .plan import SUPERSAMPLE, pinhole_pupil
 from .pupil_images import HOLOGRAM_SAMPLE_BYTES, carrier_looks, full_band_looks
-from .window import camera_in_plate
+from .window import camera_in_plate, nyquist_supersample, pinhole_view_pupil
 
 log = logging.getLogger(__name__)
 
@@ -317,68 +316,6 @@ def render_set_view(
 
 
 BESIDE = "the camera sees the objects beside the plate, not through it"
-
-
-def pinhole_view_pupil(h: Hologram, camera: Camera, rotation, position, *, apodize=True) -> Pupil:
-    """A pinhole camera's pupil on the carrier plate ``h``: the smallest that makes the view
-    sharp, the plate's own resolution rule.
-
-    A pupil of diameter D resolves the angle λ/D (Sect. VII-A); a sharp view resolves a fine
-    pixel b = Δ/s of its pixels Δ [rad] (s = ``SUPERSAMPLE``, the plate's reference view and
-    the emitters' spacing, :mod:`holo_core.plate.plan`), so D = λ/b = s·λ/Δ: with Δ = p/f a
-    pixel's pitch p on the sensor over the focal length f, D = s·λ·f/p. A wider pupil resolves
-    no more of the pixels but its spectrum needs bins of λ/D each (the pupil grid's samples
-    grow as D², a billion and more where a flat object lets defocus allow any width), and a
-    narrower one blurs. Focused in the middle of the objects' depths in 1/z, the pupil
-    defocuses a depth z by D·|1/z − 1/focus| ≤ D·δ; where that outgrows b (deep objects, a
-    long λ), D = √(λ/δ), which balances the two blurs (λ/D = D·δ, the least blur a pinhole
-    has; the view then warns that it is soft). Within the zone, where the plate sends light;
-    a camera at its edge keeps λ/Δ (the spot one pixel), the light beyond is not there.
-
-    Parameters
-    ----------
-    h : Hologram
-        A carrier plate (its ``bounds``, ``zone`` and first colour's wavelength λ [m]).
-    camera : Camera
-        The pinhole camera (its pixel angle Δ [rad]).
-    rotation, position : ndarray
-        The camera's axes (3, 3) and pupil centre (3,) [m] in the plate's frame
-        (:func:`holo_core.plate.window.camera_in_plate`).
-    apodize : bool
-        The pupil's cosine window (Fig. 9).
-
-    Returns
-    -------
-    Pupil
-        Its diameter [m] and focus [m].
-    """
-    lam = h.wavelengths[h.colour_channels()[0]]
-    fine = camera.pixel_angle() / SUPERSAMPLE
-    wide, focus = pinhole_pupil(h.bounds, position, fine, rotation)  # widest within b
-    defocus = fine / wide  # δ [1/m], the largest |1/z − 1/focus| over the objects' box
-    diameter = min(lam / fine, math.sqrt(lam / defocus))
-    if h.zone is not None:
-        room = np.asarray(h.zone.half_extents[:2]) - np.abs(
-            position[:2] - np.asarray(h.zone.centre[:2])
-        )
-        diameter = min(diameter, max(2 * float(room.min()), lam / camera.pixel_angle()))
-    return Pupil(diameter=diameter, focus=focus, apodize=apodize)
-
-
-def nyquist_supersample(h: Hologram, camera: Camera, pinhole: Pupil | None = None) -> int:
-    """The supersampling at which a view of ``h`` through ``camera``'s pupil samples its
-    intensity at the Nyquist rate (:func:`holo_core.optics.pupil.intensity_supersample`;
-    below it the view is measurably softer: docs, Performance): the camera's lens, or a
-    pinhole's on a carrier plate (``pinhole``, where the caller made it already, else
-    :func:`pinhole_view_pupil`). A pinhole's on a full-band plate is sized to that already
-    (λ/D is two fine pixels, :func:`camera_pupil`): 1."""
-    if camera.fstop is not None:
-        diameter = camera.aperture_diameter
-    elif h.carrier is not None:
-        diameter = (pinhole or pinhole_view_pupil(h, camera, *camera_in_plate(h, camera))).diameter
-    else:
-        return 1
-    return intensity_supersample(diameter, camera.pixel_angle(), min(h.wavelengths))
 
 
 class OutsideZoneWarning(UserWarning):

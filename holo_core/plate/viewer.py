@@ -13,7 +13,6 @@ identity (path, size, modification time, inode) and read again when it changes.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +25,8 @@ from ..scene.hologram import Hologram
 from ..scene.plate_set import PlateSet
 from ..validate import InputError
 from ..view import RenderResult
+from .coarse_view import coarser, upsampled
+from .inside_zone import INSIDE, beyond_words, zone_sentence
 from .path import part_for
 from .view_plans import ViewPlans
 
@@ -42,7 +43,6 @@ RENDER_OPTIONS = (
     "depth_estimate",
 )
 COARSE_PIXELS = 320 * 180  # a coarse view's pixels at most, upsampled to the camera's
-INSIDE = 1e-9  # [m] a pupil reaching less than this beyond the zone lies inside it
 
 
 class OutsideZoneError(InputError):
@@ -413,90 +413,3 @@ def _check_scene(recording: str, scene: str | None, name: str) -> None:
             f"(this scene's): another recording's plate is never viewed; record "
             f"the plate again"
         )
-
-
-def zone_sentence(h: Hologram, camera: Camera) -> str | None:
-    """Why ``camera``'s pupil lies outside ``h``'s viewing zone (a sentence), or None inside
-    it (or where ``h`` has no zone and its light reaches the camera)."""
-    from .view import unseen_light
-    from .window import camera_in_plate
-
-    try:
-        rotation, position = camera_in_plate(h, camera)
-    except InputError as e:
-        return str(e)
-    if h.zone is None:
-        return unseen_light(h, rotation, position)
-    pupil = camera.aperture_diameter or 0.0
-    if h.zone.distance_outside(position, pupil / 2) <= INSIDE:
-        return None
-    return (
-        f"the camera's pupil lies outside the plate's viewing zone: "
-        f"{beyond_words(h.zone, position, pupil)} ({h.zone.describe()}); move the camera "
-        f"inside it or record the plate for a zone that holds it"
-    )
-
-
-def beyond_words(zone, position, pupil: float) -> str:
-    """How far and which way a pupil of diameter ``pupil`` [m] at ``position`` (3,) [m] (the
-    plate's frame) reaches beyond ``zone``, in words."""
-    d = np.asarray(position, np.float64) - zone.centre
-    over = np.abs(d) - zone.half_extents + np.array([pupil / 2, pupil / 2, 0.0])
-    sides = (
-        ("+x (right)", "-x (left)"),
-        ("+y (up)", "-y (down)"),
-        ("farther from the plate", "nearer the plate"),
-    )
-    ways = [
-        f"{_length(over[i])} {'past its ' if i < 2 else ''}"
-        f"{sides[i][0] if d[i] > 0 else sides[i][1]}{' side' if i < 2 else ''}"
-        for i in range(3)
-        if over[i] > INSIDE
-    ]
-    total = zone.distance_outside(position, pupil / 2)
-    return f"it reaches {_length(total)} beyond the zone, {' and '.join(ways)}"
-
-
-def _length(metres: float) -> str:
-    return f"{metres * 1e3:.3g} mm" if metres < 0.1 else f"{metres:.3g} m"
-
-
-def coarser(camera: Camera, factor: int) -> Camera:
-    """``camera`` with pixels ``factor`` times larger each way: ⌈W/factor⌉ × ⌈H/factor⌉ of
-    them, pixel (i, j) spanning the camera's pixels factor·i … factor·(i + 1) − 1 (the same
-    rays; the last row and column may reach beyond the image)."""
-    if factor == 1:
-        return camera
-    w, h = camera.resolution
-    s, dx, dy, ycor = camera._plane()
-    ws, hs = -(-w // factor), -(-h // factor)
-    # the same pixel centres' tangents at factor times the pixel: sensor, then shifts, fitted
-    # horizontally (tangent = (col − W/2 + dx)/s; Camera._plane)
-    sx = ws / 2 + (dx - w / 2) / factor
-    sy = (0.5 * ycor * h + dy) / factor - 0.5 * ycor * hs
-    return replace(
-        camera,
-        resolution=(ws, hs),
-        sensor_fit="HORIZONTAL",
-        sensor_width=camera.lens * ws * factor / s,
-        shift_x=sx / ws,
-        shift_y=sy / ws,
-    )
-
-
-def upsampled(a: np.ndarray, factor: int, shape) -> np.ndarray:
-    """``a`` (h, w, ...) of pixels ``factor`` times larger (:func:`coarser`) resampled
-    bilinearly at the (H, W) = ``shape`` pixels' centres, the edges held."""
-    if factor == 1:
-        return a
-    out = a
-    for axis, n in enumerate(shape):
-        at = (np.arange(n) + 0.5) / factor - 0.5
-        at = np.clip(at, 0, a.shape[axis] - 1)
-        i0 = np.floor(at).astype(int)
-        i1 = np.minimum(i0 + 1, a.shape[axis] - 1)
-        t = (at - i0).astype(a.dtype)
-        t = t.reshape((-1,) + (1,) * (out.ndim - axis - 1))
-        lo, hi = np.take(out, i0, axis=axis), np.take(out, i1, axis=axis)
-        out = lo + (hi - lo) * t
-    return out

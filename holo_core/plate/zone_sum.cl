@@ -11,7 +11,7 @@
  * each emitter the phase k(r - |z|) is exact at the tile's centre (in REAL: double where the
  * device has it), each row's difference to it in float; along a row it follows its second-order
  * expansion about the segment centre by a recurrence (two complex multiplies per sample:
- * E <- E·D, D <- D·C, as in point_sources.cl). The window varies over millimetres, the tile
+ * E <- E·D, D <- D·C, as in point_sum.cl). The window varies over millimetres, the tile
  * spans a fraction of one: it is evaluated at the segment's two ends and taken linearly in
  * between.
  *

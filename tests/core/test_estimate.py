@@ -17,7 +17,8 @@ import pytest
 
 from holo_core import estimate
 from holo_core.estimate import DEFAULT, Calibration, Estimate
-from holo_core.plate.plan import plan, plan_view, summary
+from holo_core.plate.plan import plan, plan_view
+from holo_core.plate.plan_summary import summary
 from holo_core.scene.plate import ViewingZone
 
 ROOT = Path(__file__).resolve().parents[2]

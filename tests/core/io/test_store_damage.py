@@ -27,7 +27,6 @@ from holo_core.io.tiled_wave import open_plate  # noqa: E402
 from holo_core.plate import tiles as recorder  # noqa: E402
 from holo_core.plate.points import record_points  # noqa: E402
 from holo_core.scene.hologram import HologramInfo  # noqa: E402
-from holo_core.validate import InputError  # noqa: E402
 
 SHAPE, PITCH, TILE, WAVELENGTHS = (250, 300), 8e-6, 64, (633e-9, 532e-9)
 CHUNK, RECORD = "object_wave/c/1/1/2", "tiles_done/c/1/2/0"  # tile (1, 2)
@@ -613,20 +612,3 @@ def test_a_device_in_a_store_is_refused_unread(copy, key):
         pytest.skip("this system does not let a test make a device node")
     with pytest.raises(HologramFileError, match=rf"{copy}: holds a character device {key}"):
         open_plate_read(copy)
-
-
-def test_a_task_of_a_replaced_recording_writes_nothing(copy):
-    """A task of recording A still queued when the store was replaced by recording B (with
-    overwrite) finds B's digest and leaves the store alone; its tile would also fail B's
-    checksums, so the two scenes never mix."""
-    before = {p: p.read_bytes() for p in copy.rglob("*") if p.is_file()}
-    points = (np.array([[0.0, 0.0, -0.02]]), np.ones((1, 2), complex))
-    with pytest.raises(
-        InputError,
-        match=r"now holds another recording; tile \(1, 2\) of "
-        r"recording 0123456789ab is not written",
-    ):
-        recorder.record_tile(
-            points, {"urls": [str(copy)], "recordings": ["0123456789ab" * 5 + "cdef"]}, 1, 2
-        )
-    assert {p: p.read_bytes() for p in copy.rglob("*") if p.is_file()} == before

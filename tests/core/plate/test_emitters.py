@@ -85,7 +85,7 @@ def test_random_phases_follow_the_emitters_not_their_count():
     for plain and coded looks. Drawn in list order instead (the earlier rule, here as the
     reference that the case moves emitters), most of them would change. The keys are
     distinct, and the phases uniform on [0, 2π): their mean phasor is within 4/√n of 0."""
-    from holo_core.plate.recording import _phases, look_code
+    from holo_core.plate.look_codes import emitter_phases, look_code
 
     back, front = square(0.08, -0.3, (1.0, 1.0, 1.0)), square(0.02, -0.25, (1.0, 0.0, 0.0))
     half = Mesh(vertices=front.vertices, triangles=front.triangles[:1], colours=front.colours)
@@ -100,16 +100,16 @@ def test_random_phases_follow_the_emitters_not_their_count():
     ).T
     assert len(whole) != len(cut) and len(i) > 0.5 * len(whole), (len(whole), len(cut), len(i))
     for code in (None, look_code(1, 2)):
-        a, b = _phases(whole, 7, code), _phases(cut, 7, code)
+        a, b = emitter_phases(whole, 7, code), emitter_phases(cut, 7, code)
         assert np.array_equal(a[i], b[j]), np.abs(a[i] - b[j]).max()
     by_order = [np.random.default_rng(7).uniform(0, 2 * np.pi, len(e)) for e in (whole, cut)]
     moved = np.mean(by_order[0][i] != by_order[1][j])
     assert moved > 0.5, moved
     assert len(np.unique(whole.key)) == len(whole)
-    p = _phases(whole, 7, None)
+    p = emitter_phases(whole, 7, None)
     assert p.min() >= 0 and p.max() < 2 * np.pi
     assert abs(np.exp(1j * p).mean()) < 4 / np.sqrt(len(p)), abs(np.exp(1j * p).mean())
-    assert not np.array_equal(p, _phases(whole, 8, None))  # another seed, other phases
+    assert not np.array_equal(p, emitter_phases(whole, 8, None))  # another seed, other phases
 
 
 def test_a_closed_meshs_outside_is_found_from_its_winding_and_a_card_has_none():

@@ -21,8 +21,8 @@ import pytest
 from plate_scene import PLATE, camera, meshes
 
 from holo_core.plate.carrier import physical_field, window
+from holo_core.plate.look_codes import look_code
 from holo_core.plate.looks import record_looks, record_plate
-from holo_core.plate.recording import look_code
 from holo_core.plate.view import render_view
 from holo_core.validate import InputError
 
@@ -392,8 +392,8 @@ def test_looks_recorded_together_in_tiles_equal_them_in_memory(scheduler, tmp_pa
     pair's, fill the two new stores and leave the pair's as they were, each new look within
     float32 rounding (1e-5 of the largest sample) of the look recorded alone (the looks
     together are summed by classes of equal code shifts and mixed)."""
+    from holo_core.plate.look_codes import look_code
     from holo_core.plate.looks import record_looks
-    from holo_core.plate.recording import look_code
 
     urls = [tmp_path / f"look{k}.zarr" for k in range(2)]
     tiled = record_looks(meshes(), looks=2, urls=urls, tile=TILE, scheduler=scheduler, **SCENE)

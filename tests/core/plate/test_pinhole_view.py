@@ -1,4 +1,4 @@
-"""A pinhole camera's view of a carrier plate (holo_core.plate.view.pinhole_view_pupil): the
+"""A pinhole camera's view of a carrier plate (holo_core.plate.window.pinhole_view_pupil): the
 smallest pupil that makes the view sharp, λ/D a fine pixel (half a pixel), so its pupil grid
 holds about as many samples as the view has fine pixels, and a point's image is about a pixel
 wide. A flat object (no depth range, so defocus allows any pupil) is the case that asked a
@@ -13,8 +13,8 @@ import pytest
 
 from holo_core.plate.emitters import Emitters, grid_points
 from holo_core.plate.recording import plate_plan, prepare_plate
-from holo_core.plate.view import nyquist_supersample, pinhole_view_pupil, render_view
-from holo_core.plate.window import camera_in_plate
+from holo_core.plate.view import render_view
+from holo_core.plate.window import camera_in_plate, nyquist_supersample, pinhole_view_pupil
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.mesh import Mesh
 from holo_core.scene.plate import Plate

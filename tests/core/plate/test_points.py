@@ -7,7 +7,7 @@ import pytest
 from huge import never
 from point_sums import square
 
-from holo_core.plate.point_sources import Grid, cone_weight
+from holo_core.plate.point_sum import Grid, cone_weight
 from holo_core.plate.points import record_points
 from holo_core.plate.record import record_hologram
 from holo_core.plate.sampling import choose

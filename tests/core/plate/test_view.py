@@ -24,8 +24,8 @@ from plate_scene import camera, meshes
 
 from holo_core.camera.render import render_camera
 from holo_core.plate.composition import SoftViewWarning
+from holo_core.plate.look_codes import look_code
 from holo_core.plate.looks import record_plate
-from holo_core.plate.recording import look_code
 from holo_core.plate.view import EmptyViewWarning, NoDepthWarning, OutsideZoneWarning, render_view
 from holo_core.scene.camera import Camera, look_at
 from holo_core.scene.hologram import Hologram
@@ -152,11 +152,6 @@ def test_coded_looks_cancel_the_cross_terms_of_neighbouring_emitters(recorded, v
     emitters shifted by π on every other lattice cell) has in its mean intensity no cross
     terms between emitters of the four nearest cells: against each camera's camera hologram
     the pair's view gains at least 1 dB over its first look alone (measured 2.0-2.8 dB)."""
-    assert [look_code(k, 4) for k in range(4)] == [(0, 2), (1, 2), (2, 2), (3, 2)]
-    assert [look_code(k, 2) for k in range(2)] == [(0, 2), (3, 2)]
-    assert look_code(0, 1) is None and look_code(2, 3) is None
-    with pytest.raises(InputError, match="look must be an integer in \\[0, 1\\]"):
-        look_code(2, 2)
     second = record_plate(
         meshes(), plate=PLATE, camera=camera("centre"), zone_margin=MARGIN, code=look_code(1, 2)
     )

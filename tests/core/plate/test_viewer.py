@@ -22,7 +22,7 @@ from holo_core.plate.looks import record_looks
 from holo_core.plate.parts import record_set
 from holo_core.plate.path import parts_along
 from holo_core.plate.view import OutsideZoneWarning, render_set_view, render_view
-from holo_core.plate.viewer import OutsideZoneError, coarser, upsampled
+from holo_core.plate.viewer import OutsideZoneError
 from holo_core.scene.plate import Plate
 from holo_core.validate import InputError
 
@@ -95,8 +95,7 @@ def test_a_coarse_view_is_close_to_the_full_one(looks):
     supersampled 2x): the silhouette (alpha > 0.5) agrees on IoU >= 0.9, the mean radiance
     inside both within 10 %, and their 4x4 blocks' colour within 12 dB PSNR, a loose bound:
     one look unsupersampled keeps its speckle (10.9 dB pixel by pixel here, 15.8 dB in
-    blocks). Its upsampling keeps the rays: a 2x coarser camera's pixel centres sit on the
-    mean of the fine pixels' 2x2 block, and a linear ramp is upsampled exactly."""
+    blocks)."""
     cam = ps.camera("centre", scale=SCALE)
     with PlateViewer(looks, supersample=2) as viewer:
         full, quick = viewer.view(cam), viewer.view(cam, coarse=True)
@@ -110,17 +109,6 @@ def test_a_coarse_view_is_close_to_the_full_one(looks):
     both = blocks(inside.astype(float)) >= 1
     q = psnr_db(blocks(quick.rgb), blocks(full.rgb), both)
     assert q >= 12, q
-    small = coarser(cam, 2)
-    tx, ty = cam.pixel_tangents()
-    sx, sy = small.pixel_tangents()
-    w, h = cam.resolution
-    block = tx.reshape(h // 2, 2, w // 2, 2).mean((1, 3))
-    assert np.allclose(sx, block, atol=1e-12, rtol=0), np.abs(sx - block).max()
-    block = ty.reshape(h // 2, 2, w // 2, 2).mean((1, 3))
-    assert np.allclose(sy, block, atol=1e-12, rtol=0), np.abs(sy - block).max()
-    ramp = np.arange(4.0)[None, :] * np.ones((3, 1))  # linear in the coarse pixel's centre
-    up = upsampled(ramp, 2, (6, 8))
-    assert np.allclose(up[0, 1:7], (np.arange(1, 7) + 0.5) / 2 - 0.5), up[0]
 
 
 def test_where_says_how_far_and_which_way_a_pupil_leaves_the_zone(looks):

@@ -12,7 +12,7 @@
  * (float64).
  *
  * Each point reaches only the disc rho <= cone*|z| its pitch samples alias-free, with a smooth
- * rim (see point_sources.py, cone_weight). Points are read in [first, last), or, when
+ * rim (see point_sum.py, cone_weight). Points are read in [first, last), or, when
  * `binned`, sorted by the tile holding their centre, from the bins within (reach_x, reach_y)
  * tiles of this one (bin b's points start at bin_start[b]).
  * CHANNELS waves with the same wavelength and points (colours) share the geometry: each adds
