@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 
 import numpy as np
 
@@ -96,7 +97,52 @@ def aligned_zeros(shape, dtype=np.complex64) -> np.ndarray:
     made so are read in place by a CPU OpenCL device (:func:`holo_core.opencl.arrays.
     host_buffer`), a view then copying none of them."""
     dtype = np.dtype(dtype)
-    nbytes = math.prod(shape) * dtype.itemsize
-    raw = np.zeros(nbytes + PAGE, np.uint8)
+    return _aligned(np.zeros(math.prod(shape) * dtype.itemsize + PAGE, np.uint8), shape, dtype)
+
+
+def _aligned(raw: np.ndarray, shape, dtype) -> np.ndarray:
     start = -raw.ctypes.data % PAGE
-    return raw[start : start + nbytes].view(dtype).reshape(shape)
+    return raw[start : start + math.prod(shape) * dtype.itemsize].view(dtype).reshape(shape)
+
+
+SLACK = 0.25  # HostBuffers' new buffers are this much larger than asked
+
+
+class HostBuffers:
+    """Page-aligned host arrays (as :func:`aligned_zeros`, their contents left as they are)
+    handed out and handed back, so that recordings of like size one after another (a plate
+    set's parts) fill the same memory. Memory a process touches for the first time the
+    operating system maps and zeroes page by page: about 0.2 s a GiB on a bare machine, and
+    up to 9 s on a virtual machine that hands freed memory back to its host (the development
+    machine: 43 % of the shot's recording process in the kernel's page clearing). At most
+    ``kept`` buffers wait for reuse; handing back is thread-safe (a writer thread's)."""
+
+    def __init__(self, kept: int = 4):
+        self.kept = kept
+        self._free: list[np.ndarray] = []
+        self._lock = threading.Lock()
+
+    def take(self, shape, dtype=np.complex64) -> np.ndarray:
+        """An array of ``shape`` and ``dtype``: a handed-back buffer large enough (the
+        smallest such), else a new one of zeros, SLACK larger."""
+        dtype = np.dtype(dtype)
+        need = math.prod(shape) * dtype.itemsize + PAGE
+        with self._lock:
+            fits = [i for i, b in enumerate(self._free) if b.nbytes >= need]
+            if fits:  # (by place: arrays compare element by element)
+                raw = self._free.pop(min(fits, key=lambda i: self._free[i].nbytes))
+                return _aligned(raw, shape, dtype)
+        # a new buffer SLACK larger, that the next parts (a little larger or smaller) fit: its
+        # pages beyond what they use are never touched, and so cost no memory
+        return _aligned(np.zeros(int(need * (1 + SLACK)), np.uint8), shape, dtype)
+
+    def give(self, array: np.ndarray) -> None:
+        """Hand ``array`` (one :meth:`take` gave) back: the caller holds no view of it any
+        more. Beyond ``kept``, the smallest is let go."""
+        raw = array
+        while raw.base is not None:
+            raw = raw.base
+        with self._lock:
+            self._free.append(raw)
+            while len(self._free) > self.kept:
+                self._free.pop(min(range(len(self._free)), key=lambda i: self._free[i].nbytes))

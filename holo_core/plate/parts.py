@@ -167,9 +167,14 @@ def record_set(
     shared = set_emitters(world, parts, plans, spacing, sides)
     codes = tuple(look_code(k, looks) for k in range(looks))
 
+    # the parts' samples fill the same host memory part after part, once a part is written
+    buffers = memory.HostBuffers(kept=2 * looks) if folder is not None else None
+
     def write(k, held):  # a part's files, then the manifest naming every part written so far
         recorded[k] = write_part(folder, k, held)
         write_manifest(folder, parts, recorded, seed=seed, recording=digest, looks=looks)
+        for h in held:
+            buffers.give(h.object_wave)
 
     # a part is written while the next is recorded where both fit the memory: the writes wait
     # on the disk (1 GiB a part took 3-6 s, a sixth of a part's time), the sum on the CPU
@@ -184,7 +189,7 @@ def record_set(
                 continue  # written by a recording that stopped
             done = jobs.scaled(progress, k / len(parts), (k + 1) / len(parts))
             recording = prepare_plate(plans[k], codes=codes, seed=seed, emitters=em)
-            held = tuple(recording.record(done))
+            held = tuple(recording.record(done, buffers))
             log.info(
                 "part %d of %d: %d emitters of the set's %d, %s",
                 k + 1,

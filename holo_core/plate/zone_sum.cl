@@ -11,9 +11,11 @@
  * each emitter the phase k(r - |z|) is exact at the tile's centre (in REAL: double where the
  * device has it), each row's difference to it in float; along a row it follows its second-order
  * expansion about the segment centre by a recurrence (two complex multiplies per sample:
- * E <- E·D, D <- D·C, as in point_sum.cl). The window varies over millimetres, the tile
- * spans a fraction of one: it is evaluated at the segment's two ends and taken linearly in
- * between.
+ * E <- E·D, D <- D·C, as in point_sum.cl). The window is a factor along x times one along y
+ * (each of its box's axes with its rim): the one along y is a row's own, the segment's whole;
+ * the one along x is 1 where it is at both of the segment's ends (the rim is millimetres wide,
+ * a segment a fraction of one), else evaluated at each sample. The visibility varies over
+ * centimetres: evaluated at the segment's two ends and taken linearly in between.
  *
  * Emitters are listed per block of BLOCK×BLOCK samples of the region computed (list[start[b] ..
  * start[b+1]), b counted from the region's first block): a work item reads its block's list
@@ -127,9 +129,9 @@ static floatv rim_weight(floatv u, floatv inner, float rim)
 /* the emitter's window towards the zone where its ray through (x, y) reaches the zone's
  * centre plane, xi = p + s·(x - p) (s = (Z_z - z_j) / -z_j), relative to the zone's centre:
  * its box widened by the parallax of the box's depth, with a soft rim */
-#define WINDOW(x, y) (rim_weight((floatv)(xjf + s * ((x) - xjf)), ex + ez * fabs((x) - xjf) * inv_depth, \
-                              rim_x) \
-                   * rim_weight(yjf + s * ((y) - yjf), ey + ez * fabs((y) - yjf) * inv_depth, rim_y))
+#define WINDOW_X(x) rim_weight((floatv)(xjf + s * ((x) - xjf)), ex + ez * fabs((x) - xjf) * inv_depth, \
+                               rim_x)
+#define WINDOW_Y(y) rim_weight(yjf + s * ((y) - yjf), ey + ez * fabs((y) - yjf) * inv_depth, rim_y)
 
 /* the emitter's visibility from the zone point its ray through (x, y) reaches: bilinear over
  * the zone's GRID_Y x GRID_X points (table row ``row``), clamped to the grid's edge */
@@ -249,8 +251,12 @@ __kernel void zone_sum(__global float2 *out, int first_plane, int row_first, int
             floatv vb = visibility(xb, yr, xjf, yjf, s, vis, row, g0x, g0y, gsx, gsy);
             vstep = (vb - va) * (1.0f / (SEG > 1 ? SEG - 1 : 1));
         }
-        floatv wa = WINDOW(xa, yr), wb = WINDOW(xb, yr);
-        int flat = all(wa == 1.0f) && all(wb == 1.0f);
+        /* the window's factor along y is a row's own (the lanes' y), the whole segment's;
+         * along x it is 1 where both ends are (short footprints: most segments are in the
+         * rim along y alone, and cost no window at each sample) */
+        floatv wy = WINDOW_Y(yr);
+        int flat_x = all(WINDOW_X(xa) == 1.0f) && all(WINDOW_X(xb) == 1.0f);
+        int flat = flat_x && all(wy == 1.0f);
 #if SHADED
         float a[ALL];
         for (int c = 0; c < ALL; c++)
@@ -270,9 +276,16 @@ __kernel void zone_sum(__global float2 *out, int first_plane, int row_first, int
             a[c] = amp2[j * (ALL - CHANNELS) + c - CHANNELS];
 #endif
         floatv vt = va;
+        if (flat_x) {
+            for (int m = 0; m < SEG; m++) {
+                LIGHT(m, vt * wy);
+                vt += vstep;
+                STEP;
+            }
+            continue;
+        }
         for (int m = 0; m < SEG; m++) {
-            floatv wt = flat ? vt : vt * WINDOW(xa + m * p, yr);
-            LIGHT(m, wt);
+            LIGHT(m, vt * (WINDOW_X(xa + m * p) * wy));
             vt += vstep;
             STEP;
         }
