@@ -6,20 +6,22 @@ or FFT driver, so Blender's process and the planner call it.
 - Work, each stage a fixed cost (``*_fixed``: its launches, its buffers) and a rate. A
   plate's recording: its emitters found (``emitter_seconds`` each, and TRIANGLE_SECONDS a
   triangle they are found among) and the zone sum's pairs (emitter, sample, and each
-  sample's own: :meth:`holo_core.plate.plan.PlatePlan.pairs`) at ``pairs_per_second``; its files written at ``write_bytes_per_second``;
-  a view: the plan's view seconds (:func:`holo_core.plate.plan.plan_view`, its window
-  samples and fine pixels at the development machine's rates) times ``view_factor``. A camera
-  pass with Speckle: Exact (one incoherent pass): its fine pixels (W·H·s²) at
-  ``exact_pixel_seconds``; with Looks: its fine pixels once (``camera_pixel_seconds``) and
-  for each look (``camera_look_seconds``: a look's pupil fields and transforms are the
-  grid's, whatever the emitters; the calibration's two sizes agree within 10 %). The renderer's radiance (Lighting: Scene):
-  Cycles' start and its pixels. Every job: ``job_seconds`` (handing it over, the pass written).
-- A worker process's set-up (``process_plate_seconds``, ``process_camera_seconds``): Python, the core, the OpenCL context, the
-  programs read from the kernel cache, the FFT plans read from their wisdom. Paid by every
-  new worker: a render's first frame, each frame of a farm; a render's later frames share
-  the worker that made the first.
-- The first time on this machine (``first_plate_seconds``, ``first_camera_seconds``): the programs compiled and the FFT plans
-  measured, where the kernel cache is cold; a camera pass's FFT plans counted apart, from
+  sample's own: :meth:`holo_core.plate.plan.PlatePlan.pairs`) at ``pairs_per_second``; its
+  files written at ``write_bytes_per_second``; a view: the plan's view seconds
+  (:func:`holo_core.plate.plan.plan_view`, its window samples and fine pixels at the
+  development machine's rates) times ``view_factor``. A camera pass with Speckle: Exact (one
+  incoherent pass): its fine pixels (W·H·s²) at ``exact_pixel_seconds``; with Looks: its
+  fine pixels once (``camera_pixel_seconds``) and for each look (``camera_look_seconds``: a
+  look's pupil fields and transforms are the grid's, whatever the emitters; the
+  calibration's two sizes agree within 10 %). The renderer's radiance (Lighting: Scene):
+  Cycles' start and its pixels. Every job: ``job_seconds`` (handing it over, the pass
+  written).
+- A worker process's set-up (``process_plate_seconds``, ``process_camera_seconds``): Python,
+  the core, the OpenCL context, the programs read from the kernel cache, the FFT plans read
+  from their wisdom. Paid by every new worker: a render's first frame, each frame of a farm;
+  a render's later frames share the worker that made the first.
+- The first time on this machine (``first_plate_seconds``, ``first_camera_seconds``): the
+  programs compiled and the FFT plans measured, where the kernel cache is cold; a camera pass's FFT plans counted apart, from
   the lengths it transforms (:func:`fft_plans`: FFTW's measuring of a length takes from
   0.01 s to 0.8 s by the ways it factors, more than the rest of a camera pass's first time
   at 640x360). Whether it is warm is known from the cache:
@@ -621,12 +623,13 @@ def job(
         "load_average": load_average,
     }
     if isinstance(j.route, CameraRoute):
+        common["warm"] = _warm("camera", device, cache_dir, warm)  # the cache read once
         est = camera(
             j.camera.resolution,
             samples=j.route.samples,
             supersample=j.route.supersample,
             speckle=j.route.speckle,
-            lengths=() if _warm("camera", device, cache_dir, warm) else camera_lengths(j),
+            lengths=() if common["warm"] else camera_lengths(j),
             **common,
         )
     else:

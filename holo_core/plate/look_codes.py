@@ -42,8 +42,8 @@ def look_seed(seed: int, codes, look: int) -> int:
 
 def emitter_phases(em, seed: int, code, smooth: bool = False) -> np.ndarray:
     """The emitters' random phases [rad] of ``seed`` (0 where ``smooth``), shifted by ``code``
-    (k, m): 2π·(k1·i +
-    k2·j)/m on the lattice cells (i, j) they lie in (k = k1·m + k2; :func:`~holo_core.plate.looks.record_plate`).
+    (k, m): 2π·(k1·i + k2·j)/m on the lattice cells (i, j) they lie in (k = k1·m + k2;
+    :func:`~holo_core.plate.looks.record_plate`).
     Each emitter's is drawn from its own key (:func:`~holo_core.plate.emitters.random_phases`),
     so emitters gained or lost near a silhouette leave the others' phases, and a set several
     plates share sends each pupil the same wave from every plate."""
@@ -81,8 +81,8 @@ def code_steps(em, code) -> np.ndarray:
 
 
 def look_code(k: int, n: int):
-    """``code`` of look ``k`` of ``n`` looks of one plate (:func:`~holo_core.plate.looks.record_plate`, one seed for
-    all): n = m² gives the m² looks whose mean has no cross terms between emitters of
+    """``code`` of look ``k`` of ``n`` looks of one plate
+    (:func:`~holo_core.plate.looks.record_plate`, one seed for all): n = m² gives the m² looks whose mean has no cross terms between emitters of
     neighbouring lattice cells, n = 2 the checkerboard pair (looks 0 and 3 of m = 2), whose
     mean has none between the four nearest cells (on the plate scene: 28.0–28.5 dB against
     29.3–30.0 for four and 25.6–26.1 for one). Other n: None (independent random phases, one

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from .. import estimate as estimate_mod
 from .. import memory as memory_mod
-from .plan import CHANNELS, PlatePlan, ViewPlan, duration
+from .plan import CHANNELS, PlatePlan, ViewPlan
 
 
 def summary(
@@ -49,7 +49,8 @@ def summary(
     lines = [
         f"verdict     views of {resolution[0]} x {resolution[1]} px through {lens} are {verdict}",
         f"time        the first frame (the plate recorded, its files written, its view) "
-        f"{first.words()}; each later view about {duration(later_view)} in the same worker",
+        f"{first.words()}; each later view about {estimate_mod.duration(later_view)} in the "
+        f"same worker",
         f"plate       {p.size[0] * 1e3:.4g} x {p.size[1] * 1e3:.4g} mm of the {plate_size[0]:g} "
         f"x {plate_size[1]:g} m plate (where the objects' light reaches the zone): {cols} x "
         f"{rows} samples ({rows * cols / 1e6:.3g} Mpx), {p.pitch * 1e6:.3g} x "
