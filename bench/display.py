@@ -163,9 +163,9 @@ def main(argv=None):
     )
     parser.add_argument(
         "--clip",
-        type=float,
-        default=0.05,
-        help="clip_fraction of the double-phase (and the warm starts)",
+        type=lambda v: v if v == "auto" else float(v),
+        default="auto",
+        help="clip_fraction of the double-phase (and the warm starts): a fraction or 'auto'",
     )
     parser.add_argument("--skip-1080p", action="store_true")
     parser.add_argument(
@@ -267,12 +267,12 @@ def main(argv=None):
                 for _ in WAVELENGTHS
             ]
         figures.update(hd_times(waves, iterations=100, clip=args.clip, steps=args.hd_steps))
-    figures["protocol"] = (
+    figures[f"protocol{suffix}"] = (
         f"{PITCH * 1e6:g} um, {'/'.join(f'{w * 1e9:.0f}' for w in WAVELENGTHS)}"
         f" nm, {shape[1]}x{shape[0]} computed at 2x and cropped, {slices} "
         f"slices over +-{HALF_DEPTH * 1e3:g} mm, 8-bit, band 0.5; GD "
         f"{iterations} steps of {args.slices_per_step} slices, GS "
-        f"{gs_iterations} plane visits, clip_fraction {args.clip:g}"
+        f"{gs_iterations} plane visits, clip_fraction {args.clip}"
         + (
             ""
             if eye is None
@@ -280,7 +280,7 @@ def main(argv=None):
             f"{EYE * 1e3:g} mm in front, the points in phase there"
         )
     )
-    figures["out"] = str(out)
+    figures[f"out{suffix}"] = str(out)
     if args.part:
         args.part.write_text(json.dumps(figures, indent=1) + "\n")
         print(f"figures of this part written to {args.part}")

@@ -30,6 +30,22 @@ def smooth_field(rng, shape, band):
     return (0.6 + 0.3 * real()) * np.exp(3j * real())
 
 
+def filter_of(op):
+    """The display's half-Nyquist filter on ``op``'s padded grid, in float64 NumPy: a field
+    on the display's window to its filtered field there."""
+
+    def filtered(f):
+        pad = np.zeros(op.padded, complex)
+        (r, c), (h, w) = op.top, op.shape
+        pad[r : r + h, c : c + w] = f
+        fy, fx = grid.freqs(op.padded[0], PITCH), grid.freqs(op.padded[1], PITCH)
+        cut = 0.5 / (2 * PITCH) * (1 + 1e-9)
+        s = np.fft.fft2(pad) * ((np.abs(fy)[:, None] <= cut) & (np.abs(fx)[None, :] <= cut))
+        return np.fft.ifft2(s)[r : r + h, c : c + w]
+
+    return filtered
+
+
 def test_double_phase_through_the_filter_is_the_wave_and_its_checkerboards_edge(rng):
     """A 16-bit pattern of a field band-limited to 1/32 cycle per sample, through the
     half-Nyquist filter: the mean of each checkerboard pair is the band-limited wave c/m and
@@ -43,18 +59,9 @@ def test_double_phase_through_the_filter_is_the_wave_and_its_checkerboards_edge(
     d = Display(name="lab", resolution=(96, 64), pitch=PITCH, bit_depth=16)
     u = smooth_field(rng, d.shape, 1 / 32)
     op = Optics(d.shape, pitch=PITCH, wavelength=LAM, distances=[0.0])
-    p = encode(u, d, wavelength=LAM, optics=op)
+    p = encode(u, d, wavelength=LAM, optics=op, clip_fraction=0)
     shown = np.exp(1j * p.phase.astype(np.float64))
-
-    def filtered(f):
-        pad = np.zeros(op.padded, complex)
-        (r, c), (h, w) = op.top, op.shape
-        pad[r : r + h, c : c + w] = f
-        fy, fx = grid.freqs(op.padded[0], PITCH), grid.freqs(op.padded[1], PITCH)
-        cut = 0.5 / (2 * PITCH) * (1 + 1e-9)
-        s = np.fft.fft2(pad) * ((np.abs(fy)[:, None] <= cut) & (np.abs(fx)[None, :] <= cut))
-        return np.fft.ifft2(s)[r : r + h, c : c + w]
-
+    filtered = filter_of(op)
     c = filtered(u)
     assert np.abs(low_passed(u, op) - c).max() <= 1e-5
     c = c / np.abs(c).max()
@@ -70,6 +77,47 @@ def test_double_phase_through_the_filter_is_the_wave_and_its_checkerboards_edge(
     assert identity <= 1e-3, identity
     leak = np.linalg.norm(got - c) / np.linalg.norm(c)
     assert leak <= 0.05, leak
+
+
+def bright_points_case(rng):
+    """A 64×96 plane 3 mm behind the display, a random texture on a checkerboard of 16-sample
+    squares (dark between), in one phase (a smooth-phase display hologram's scene; its wave
+    fills the grid's band), with six points 8 times as bright: unclipped, they leave the
+    rest at a fraction of the pattern's modulation."""
+    d = Display(name="lab", resolution=(96, 64), pitch=PITCH, bit_depth=16)
+    rows, cols = np.indices(d.shape)
+    obj = rng.random(d.shape) * (((rows // 16 + cols // 16) % 2) == 0).astype(complex)
+    obj.flat[rng.choice(obj.size, 6, replace=False)] *= 8
+    op = Optics(d.shape, pitch=PITCH, wavelength=LAM, distances=[3e-3], band=1.0)
+    return d, op.to_plane(op.spectrum(obj), 0)
+
+
+def test_double_phase_clips_to_the_pattern_the_filter_passes_closest(rng):
+    """'auto' (the default) against a scan of 41 fractions from 0 to 0.4, each pattern
+    through the float64 filter: the fraction it finds gives the pattern's in-band fidelity
+    (one minus the relative error after the best complex scale) within 0.001 of the scan's
+    best (measured: the same to 1e-4, at 0.08 to 0.10 over four seeds), and the focal stack
+    2 to 6 mm behind gains at least 2 dB over the unclipped pattern (measured 2.4 to 3.1)."""
+    d, u = bright_points_case(rng)
+    op = Optics(d.shape, pitch=PITCH, wavelength=LAM, distances=[0.0])
+    filtered = filter_of(op)
+    wanted = filtered(u)
+
+    def fidelity(fraction):
+        p = encode(u, d, wavelength=LAM, optics=op, clip_fraction=fraction)
+        got = filtered(np.exp(1j * p.phase.astype(np.float64)))
+        return abs(np.vdot(wanted, got)) ** 2 / (np.vdot(wanted, wanted) * np.vdot(got, got)).real
+
+    scan = [fidelity(q) for q in np.linspace(0, 0.4, 41)]
+    auto = fidelity("auto")
+    assert auto >= max(scan) - 0.001, (auto, max(scan), int(np.argmax(scan)))
+    stack = Optics(d.shape, pitch=PITCH, wavelength=LAM, distances=np.linspace(-6e-3, -2e-3, 5))
+    ref = stack.stack(u)
+    psnr = {}
+    for fraction in (0, "auto"):
+        p = encode(u, d, wavelength=LAM, optics=stack, clip_fraction=fraction)
+        psnr[fraction] = compare(stack.stack(np.exp(1j * p.phase)), ref).mean_psnr_db
+    assert psnr["auto"] >= psnr[0] + 2, psnr
 
 
 def stack_case(rng):
@@ -127,3 +175,6 @@ def test_bad_input_is_refused():
         encode(np.ones((6, 8)), d, wavelength=LAM, band=0.8)
     with pytest.raises(InputError, match="method must be one of"):
         encode(np.ones((6, 8)), d, wavelength=LAM, method="error-diffusion")
+    for fraction in (0.5, -0.1, "best", float("nan")):
+        with pytest.raises(InputError, match="clip_fraction"):
+            encode(np.ones((6, 8)), d, wavelength=LAM, clip_fraction=fraction)
