@@ -278,7 +278,7 @@ def _double_phase(u, optics: Optics, clip) -> np.ndarray:
 def best_clip_fraction(c, optics: Optics, *, largest=MOST_CLIPPED, trials=CLIP_TRIALS) -> float:
     """The clip fraction in [0, ``largest``] whose double-phase pattern of the band-limited
     wave ``c`` comes through the display's filter closest to ``c`` (a golden-section search,
-    and the unclipped pattern: ``trials`` patterns and the winner's again).
+    and the unclipped pattern: ``trials`` patterns).
 
     Closeness is the in-band fidelity |<S_p, S_c>|² / (‖S_p‖²‖S_c‖²) of the pattern's spectrum
     S_p and the wave's S_c on the filter's block (through its pupil): one minus the relative
@@ -309,12 +309,13 @@ def best_clip_fraction(c, optics: Optics, *, largest=MOST_CLIPPED, trials=CLIP_T
         s = optics.spectrum(pattern) * keep
         return abs(np.vdot(wanted, s)) ** 2 / (wanted_energy * float(np.vdot(s, s).real))
 
-    best = _golden_maximum(fidelity, 0.0, largest, trials - 1)
-    return best if fidelity(best) > fidelity(0.0) else 0.0
+    best, value = _golden_maximum(fidelity, 0.0, largest, trials - 1)
+    return best if value > fidelity(0.0) else 0.0
 
 
-def _golden_maximum(f, lo: float, hi: float, trials: int) -> float:
-    """Where in [lo, hi] the unimodal ``f`` is largest, to (hi − lo)·0.618^(trials − 1)."""
+def _golden_maximum(f, lo: float, hi: float, trials: int) -> tuple[float, float]:
+    """Where in [lo, hi] the unimodal ``f`` is largest, to (hi − lo)·0.618^(trials − 1), and
+    its value there."""
     x1, x2 = hi - GOLDEN * (hi - lo), lo + GOLDEN * (hi - lo)
     f1, f2 = f(x1), f(x2)
     for _ in range(trials - 2):
@@ -326,7 +327,7 @@ def _golden_maximum(f, lo: float, hi: float, trials: int) -> float:
             lo, x1, f1 = x1, x2, f2
             x2 = lo + GOLDEN * (hi - lo)
             f2 = f(x2)
-    return x1 if f1 > f2 else x2
+    return (x1, f1) if f1 > f2 else (x2, f2)
 
 
 def _descend(phase, a, optics, curve, quantise, iterations, rate, per_step, quantised, seed):
